@@ -1,0 +1,32 @@
+# vibkit: two commands do everything on a fresh clone with Python 3.11.
+#   make demo   creates .venv, installs, simulates the shipped scenes, analyses the field data, writes reports/
+#   make test   creates .venv, installs, runs the whole test suite
+PYTHON ?= python3.11
+VENV   ?= .venv
+BIN    := $(VENV)/bin
+STAMP  := $(VENV)/.installed
+
+.PHONY: demo test bench install clean
+
+$(BIN)/python:
+	@command -v $(PYTHON) >/dev/null 2>&1 || { echo "error: $(PYTHON) not found; set PYTHON=/path/to/python3.11" >&2; exit 1; }
+	$(PYTHON) -m venv $(VENV)
+
+$(STAMP): pyproject.toml | $(BIN)/python
+	$(BIN)/python -m pip install --quiet --upgrade pip
+	$(BIN)/python -m pip install --quiet -e '.[test]'
+	@touch $(STAMP)
+
+install: $(STAMP)
+
+test: $(STAMP)
+	$(BIN)/python -m pytest -q
+
+demo: $(STAMP)
+	$(BIN)/python -m vibkit.demo
+
+bench: $(STAMP)
+	$(BIN)/vibkit bench
+
+clean:
+	rm -rf $(VENV) build *.egg-info
