@@ -1,0 +1,416 @@
+"""Chain closure (the position problem) and its velocity and acceleration recursions.
+
+The chain has p rollers on the guide and p links of pitch L; the last link joins roller p back to
+roller 1. Given roller 1's undeformed-guide coordinate ``s0_1`` and a trial tensioner displacement
+delta, the chain is *walked* link by link: roller i+1 is the first point of the guide ahead of
+roller i at exactly distance L (a closed-form line-circle or circle-circle intersection). One more
+step from roller p lands on a "ghost" of roller 1; the chain closes when the ghost falls on roller 1,
+``h(delta) = s0_ghost - (s0_1 + P0) = 0``. Newton's method on this scalar equation uses the exact
+derivative from the sensitivity recursion below, so each configuration costs O(p) with no p-by-p
+solve, and every link but the closing one is exact to rounding by construction.
+
+Velocities. With u_i = r_{i+1} - r_i, the differentiated constraint u_i . (v_{i+1} - v_i) = 0 and
+v_i = r_s,i sdot_i + r_d,i deltadot give the affine recursion
+``sdot_{i+1} = [u_i.r_s,i sdot_i + u_i.(r_d,i - r_d,{i+1}) deltadot] / (u_i.r_s,{i+1})``,
+so sdot_i = alpha_i sdot_1 + beta_i deltadot; the closing link fixes deltadot = c sdot_1, and each
+roller velocity is v_i = J_i sdot_1. Accelerations follow from u_i.(a_{i+1} - a_i) + |v_{i+1} - v_i|^2 = 0
+the same way: a_i = J_i sddot_1 + h_i. Both satisfy the differentiated constraints to rounding.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numba as nb
+import numpy as np
+
+from .guide import CUMD, LEN0, S0, SIGP, Guide, circle_hit, local_point, locate, point_partials
+from .params import ChainParams
+
+__all__ = ["Chain", "Configuration", "ClosureError"]
+
+
+class ClosureError(ValueError):
+    """The chain cannot close on its guide (too long or too short for the tensioner's travel)."""
+
+
+# --------------------------------------------------------------------------------------------
+# compiled kernels
+
+@nb.njit(cache=True)
+def walk(tab, p0, s0_1, delta, pitch, n, s0, kk, lam, xs, zs):
+    """Walk n links from roller 1 at s0_1 (n+1 points: rollers 1..n and the ghost of roller 1).
+
+    Returns the ghost residual h = s0[n] - (s0_1 + P0) [m], or NaN when a link finds no guide
+    point at distance ``pitch`` (delta outside what the guide allows).
+    """
+    nseg = tab.shape[0]
+    wraps = math.floor(s0_1 / p0)
+    s = s0_1 - wraps * p0
+    k = locate(tab, s)
+    sig = 1.0 + tab[k, SIGP] * delta
+    lam0 = sig * (s - tab[k, S0])
+    x, z, _ = local_point(tab, k, lam0, delta)
+    s0[0] = s0_1
+    kk[0] = k
+    lam[0] = lam0
+    xs[0] = x
+    zs[0] = z
+    for i in range(1, n + 1):
+        qx, qz = xs[i - 1], zs[i - 1]
+        k = kk[i - 1]
+        lo = lam[i - 1]
+        found = -1.0
+        for _ in range(nseg + 1):
+            found = circle_hit(tab, k, delta, qx, qz, pitch, lo)
+            if found != -1.0:
+                break
+            k += 1
+            lo = 0.0
+            if k == nseg:
+                k = 0
+                wraps += 1
+        if found == -1.0:
+            return math.nan
+        sig = 1.0 + tab[k, SIGP] * delta
+        kk[i] = k
+        lam[i] = found
+        s0[i] = wraps * p0 + tab[k, S0] + found / sig
+        x, z, _ = local_point(tab, k, found, delta)
+        xs[i] = x
+        zs[i] = z
+    return s0[n] - (s0_1 + p0)
+
+
+@nb.njit(cache=True)
+def fill_partials(tab, p0, s0, kk, lam, delta, m, part):
+    """Partial derivatives of r at the first m points of a walk (see guide.point_partials)."""
+    for i in range(m):
+        k = kk[i]
+        s0loc = s0[i] - p0 * math.floor(s0[i] / p0) - tab[k, S0]
+        if s0loc < -1e-9:  # point found a hair before its segment's start across the wrap
+            s0loc += p0
+        point_partials(tab, k, lam[i], s0loc, delta, part[i])
+
+
+@nb.njit(cache=True)
+def sensitivity(part, xs, zs, m, alpha, beta):
+    """alpha_i = d s0_i / d s0_1 at fixed delta and beta_i = d s0_i / d delta at fixed s0_1."""
+    alpha[0] = 1.0
+    beta[0] = 0.0
+    for i in range(m - 1):
+        ux = xs[i + 1] - xs[i]
+        uz = zs[i + 1] - zs[i]
+        us_i = ux * part[i, 2] + uz * part[i, 3]
+        us_j = ux * part[i + 1, 2] + uz * part[i + 1, 3]
+        ud = ux * (part[i, 4] - part[i + 1, 4]) + uz * (part[i, 5] - part[i + 1, 5])
+        alpha[i + 1] = us_i * alpha[i] / us_j
+        beta[i + 1] = (us_i * beta[i] + ud) / us_j
+
+
+@nb.njit(cache=True)
+def solve_closure(tab, p0, lt, s0_1, delta0, pitch, n, s0, kk, lam, xs, zs, part, alpha, beta, tol):
+    """Newton's method on the ghost residual h(delta), safeguarded by bisection.
+
+    Returns (delta, iterations, status): status 0 converged, 1 no bracket / walk failed,
+    2 iteration limit.
+    """
+    lo, hi = -lt * (1.0 - 1e-9), lt * (1.0 - 1e-9)
+    have_lo, have_hi = False, False
+    d = delta0
+    for it in range(100):
+        h = walk(tab, p0, s0_1, d, pitch, n, s0, kk, lam, xs, zs)
+        if math.isnan(h):
+            # shrink towards the middle of the known interval
+            if have_lo and have_hi:
+                d = 0.5 * (lo + hi)
+                continue
+            return d, it, 1
+        if abs(h) <= tol:
+            return d, it, 0
+        if h < 0.0:
+            lo, have_lo = d, True
+        else:
+            hi, have_hi = d, True
+        fill_partials(tab, p0, s0, kk, lam, d, n + 1, part)
+        sensitivity(part, xs, zs, n + 1, alpha, beta)
+        dh = beta[n]
+        step = -h / dh if dh != 0.0 else 0.0
+        dn = d + step
+        if not (dn > lo and dn < hi) or dh <= 0.0:
+            if have_lo and have_hi:
+                dn = 0.5 * (lo + hi)
+            elif h < 0.0:
+                dn = 0.5 * (d + hi)
+            else:
+                dn = 0.5 * (d + lo)
+        if abs(dn - d) < 1e-16:
+            return dn, it, 0 if abs(h) < 1e3 * tol else 2
+        d = dn
+    return d, 100, 2
+
+
+@nb.njit(cache=True)
+def closure_residual(xs, zs, n, pitch):
+    """max over the n links (the last one closing on roller 1) of | |r_{i+1} - r_i| - L |. [m]"""
+    worst = 0.0
+    for i in range(n):
+        j = i + 1 if i + 1 < n else 0
+        d = abs(math.hypot(xs[j] - xs[i], zs[j] - zs[i]) - pitch)
+        if d > worst:
+            worst = d
+    return worst
+
+
+@nb.njit(cache=True)
+def velocity_coefficients(part, xs, zs, n, alpha, beta, jac, gam):
+    """c = d delta/d s0_1, gamma_i = d s0_i/d s0_1 and J_i = d r_i/d s0_1 (fills jac (n,2), gam (n,)).
+
+    Expects alpha, beta from ``sensitivity`` over the n rollers; the closing link joins roller n to 1.
+    """
+    ux = xs[0] - xs[n - 1]
+    uz = zs[0] - zs[n - 1]
+    ur1 = ux * part[0, 2] + uz * part[0, 3]
+    urp = ux * part[n - 1, 2] + uz * part[n - 1, 3]
+    ud = ux * (part[0, 4] - part[n - 1, 4]) + uz * (part[0, 5] - part[n - 1, 5])
+    den = ud - urp * beta[n - 1]
+    c = (urp * alpha[n - 1] - ur1) / den
+    for i in range(n):
+        g = alpha[i] + beta[i] * c
+        gam[i] = g
+        jac[i, 0] = part[i, 2] * g + part[i, 4] * c
+        jac[i, 1] = part[i, 3] * g + part[i, 5] * c
+    return c
+
+
+@nb.njit(cache=True)
+def acceleration_terms(part, xs, zs, n, alpha, beta, gam, c, sdot1, hacc, eta, sd):
+    """Velocity-dependent acceleration h_i (fills hacc (n,2)) and e, with
+    a_i = J_i sddot_1 + h_i and deltaddot = c sddot_1 + e, at roller-1 speed sdot1 [m/s]."""
+    ddot = c * sdot1
+    # w_i = r_ss sdot^2 + 2 r_sd sdot ddot + r_dd ddot^2, stored temporarily in hacc
+    for i in range(n):
+        s = gam[i] * sdot1
+        sd[i] = s
+        hacc[i, 0] = part[i, 6] * s * s + 2.0 * part[i, 8] * s * ddot + part[i, 10] * ddot * ddot
+        hacc[i, 1] = part[i, 7] * s * s + 2.0 * part[i, 9] * s * ddot + part[i, 11] * ddot * ddot
+    eta[0] = 0.0
+    for i in range(n - 1):
+        ux = xs[i + 1] - xs[i]
+        uz = zs[i + 1] - zs[i]
+        dvx = (part[i + 1, 2] * sd[i + 1] + part[i + 1, 4] * ddot) - (part[i, 2] * sd[i] + part[i, 4] * ddot)
+        dvz = (part[i + 1, 3] * sd[i + 1] + part[i + 1, 5] * ddot) - (part[i, 3] * sd[i] + part[i, 5] * ddot)
+        us_i = ux * part[i, 2] + uz * part[i, 3]
+        us_j = ux * part[i + 1, 2] + uz * part[i + 1, 3]
+        uw = ux * (hacc[i, 0] - hacc[i + 1, 0]) + uz * (hacc[i, 1] - hacc[i + 1, 1])
+        eta[i + 1] = (us_i * eta[i] + uw - (dvx * dvx + dvz * dvz)) / us_j
+    p = n - 1
+    ux = xs[0] - xs[p]
+    uz = zs[0] - zs[p]
+    dvx = (part[0, 2] * sd[0] + part[0, 4] * ddot) - (part[p, 2] * sd[p] + part[p, 4] * ddot)
+    dvz = (part[0, 3] * sd[0] + part[0, 5] * ddot) - (part[p, 3] * sd[p] + part[p, 5] * ddot)
+    urp = ux * part[p, 2] + uz * part[p, 3]
+    ud = ux * (part[0, 4] - part[p, 4]) + uz * (part[0, 5] - part[p, 5])
+    den = ud - urp * beta[p]
+    kk = ux * (hacc[0, 0] - hacc[p, 0]) + uz * (hacc[0, 1] - hacc[p, 1]) - urp * eta[p] + dvx * dvx + dvz * dvz
+    e = -kk / den
+    for i in range(n):
+        t = beta[i] * e + eta[i]
+        hacc[i, 0] += part[i, 2] * t + part[i, 4] * e
+        hacc[i, 1] += part[i, 3] * t + part[i, 5] * e
+    return e
+
+
+@nb.njit(cache=True)
+def sweep_kernel(tab, p0, lt, s0_values, delta0, pitch, n, tol, deltas, resid, status):
+    """Kinematic sweep: closure at every s0_1 in ``s0_values``, each seeded by the previous delta."""
+    s0 = np.empty(n + 1)
+    kk = np.empty(n + 1, dtype=np.int64)
+    lam = np.empty(n + 1)
+    xs = np.empty(n + 1)
+    zs = np.empty(n + 1)
+    part = np.empty((n + 1, 12))
+    alpha = np.empty(n + 1)
+    beta = np.empty(n + 1)
+    d = delta0
+    for j in range(s0_values.size):
+        d, _, st = solve_closure(tab, p0, lt, s0_values[j], d, pitch, n, s0, kk, lam, xs, zs, part, alpha, beta,
+                                 tol)
+        deltas[j] = d
+        status[j] = st
+        resid[j] = closure_residual(xs, zs, n, pitch)
+        if st != 0:
+            return j
+    return s0_values.size
+
+
+# --------------------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Configuration:
+    """One closed configuration of the chain.
+
+    Attributes
+    ----------
+    s0 : ndarray (p,)
+        Undeformed-guide coordinate of each roller (unwrapped, increasing). [m]
+    position : ndarray (p, 2)
+        Roller centres (x, z). [m]
+    delta : float
+        Tensioner displacement. [m]
+    segment : ndarray (p,)
+        Index (0-13) of the guide segment holding each roller.
+    closure_residual : float
+        max over links of | |r_{i+1} - r_i| - L |. [m]
+    """
+
+    s0: np.ndarray
+    position: np.ndarray
+    delta: float
+    segment: np.ndarray
+    closure_residual: float
+    lam: np.ndarray
+    partials: np.ndarray
+
+
+class Chain:
+    """A closed roller chain on a guide: closure, velocities and accelerations.
+
+    Parameters
+    ----------
+    guide : Guide
+    chain : ChainParams
+    tol : float
+        Tolerance on the closing link's ghost residual. [m]
+    """
+
+    def __init__(self, guide: Guide, chain: ChainParams, *, tol: float = 1e-13):
+        self.guide = guide
+        self.params = chain
+        self.n = chain.n_rollers
+        self.pitch = chain.link_pitch
+        self.tol = tol
+        self._lt = guide.params.tensioner_length
+        n = self.n
+        self._s0 = np.empty(n + 1)
+        self._kk = np.empty(n + 1, dtype=np.int64)
+        self._lam = np.empty(n + 1)
+        self._xs = np.empty(n + 1)
+        self._zs = np.empty(n + 1)
+        self._part = np.empty((n + 1, 12))
+        self._alpha = np.empty(n + 1)
+        self._beta = np.empty(n + 1)
+        self._delta_guess = None
+
+    # -- position problem -------------------------------------------------------------------
+    def find_delta_bracket(self, s0_1: float) -> float:
+        """A starting delta for s0_1 found by scanning the tensioner's travel; raises ClosureError."""
+        lt = self._lt
+        grid = np.linspace(-lt, lt, 81)[1:-1]
+        hs = np.array([walk(self.guide.table, self.guide.p0, s0_1, d, self.pitch, self.n, self._s0, self._kk,
+                            self._lam, self._xs, self._zs) for d in grid])
+        ok = np.isfinite(hs)
+        sign_change = np.nonzero(ok[:-1] & ok[1:] & (np.sign(hs[:-1]) != np.sign(hs[1:])))[0]
+        if sign_change.size == 0:
+            length = self.n * self.pitch
+            raise ClosureError(
+                f"a chain of {self.n} links of pitch {self.pitch:.6g} m ({length:.6g} m) cannot close on this guide: "
+                f"its perimeter is {self.guide.p0:.6g} m less 2*delta, with delta within the tensioner travel "
+                f"(-{lt:.6g}, {lt:.6g}) m; change chain.n_rollers or the guide")
+        i = sign_change[0]
+        return float(0.5 * (grid[i] + grid[i + 1]))
+
+    def configure(self, s0_1: float, delta_guess: float | None = None) -> Configuration:
+        """Close the chain with roller 1 at undeformed-guide coordinate s0_1 [m]."""
+        g = self.guide
+        guess = delta_guess if delta_guess is not None else self._delta_guess
+        if guess is None:
+            guess = self.find_delta_bracket(s0_1)
+        d, _, st = solve_closure(g.table, g.p0, self._lt, float(s0_1), float(guess), self.pitch, self.n, self._s0,
+                                 self._kk, self._lam, self._xs, self._zs, self._part, self._alpha, self._beta,
+                                 self.tol)
+        if st != 0:
+            guess = self.find_delta_bracket(s0_1)
+            d, _, st = solve_closure(g.table, g.p0, self._lt, float(s0_1), guess, self.pitch, self.n, self._s0,
+                                     self._kk, self._lam, self._xs, self._zs, self._part, self._alpha,
+                                     self._beta, self.tol)
+            if st != 0:
+                raise ClosureError(f"chain closure did not converge at s0_1 = {s0_1:.9g} m (status {st})")
+        self._delta_guess = d
+        n = self.n
+        fill_partials(g.table, g.p0, self._s0, self._kk, self._lam, d, n, self._part)
+        return Configuration(
+            s0=self._s0[:n].copy(),
+            position=np.column_stack([self._xs[:n], self._zs[:n]]),
+            delta=float(d),
+            segment=self._kk[:n].copy(),
+            closure_residual=float(closure_residual(self._xs, self._zs, n, self.pitch)),
+            lam=self._lam[:n].copy(),
+            partials=self._part[:n].copy(),
+        )
+
+    # -- velocities and accelerations -------------------------------------------------------
+    def jacobian(self, conf: Configuration):
+        """J (p, 2) = d r_i / d s0_1, gamma (p,) = d s0_i / d s0_1, c = d delta / d s0_1, and alpha, beta."""
+        n = self.n
+        alpha, beta = np.empty(n), np.empty(n)
+        xs, zs = conf.position[:, 0].copy(), conf.position[:, 1].copy()
+        sensitivity(conf.partials, xs, zs, n, alpha, beta)
+        jac, gam = np.empty((n, 2)), np.empty(n)
+        c = velocity_coefficients(conf.partials, xs, zs, n, alpha, beta, jac, gam)
+        return jac, gam, float(c), alpha, beta
+
+    def motion(self, conf: Configuration, s0dot_1: float, s0ddot_1: float):
+        """Roller velocities and accelerations for roller-1 rates s0dot_1 [m/s], s0ddot_1 [m/s^2].
+
+        Returns a dict with ``velocity`` (p,2), ``acceleration`` (p,2), ``s0dot`` (p,), ``delta_dot``,
+        ``delta_ddot``, ``jacobian`` (p,2), ``h`` (p,2), ``c``, ``e``.
+        """
+        n = self.n
+        jac, gam, c, alpha, beta = self.jacobian(conf)
+        xs, zs = conf.position[:, 0].copy(), conf.position[:, 1].copy()
+        hacc, eta, sd = np.empty((n, 2)), np.empty(n), np.empty(n)
+        e = acceleration_terms(conf.partials, xs, zs, n, alpha, beta, gam, c, float(s0dot_1), hacc, eta, sd)
+        return {
+            "velocity": jac * s0dot_1,
+            "acceleration": jac * s0ddot_1 + hacc,
+            "s0dot": gam * s0dot_1,
+            "delta_dot": c * s0dot_1,
+            "delta_ddot": c * s0ddot_1 + e,
+            "jacobian": jac,
+            "h": hacc,
+            "c": c,
+            "e": float(e),
+        }
+
+    # -- sweep ------------------------------------------------------------------------------
+    def sweep(self, s0_values: np.ndarray, delta_guess: float | None = None):
+        """delta and closure residual at each s0_1 in s0_values (one compiled loop). [m]"""
+        s0_values = np.ascontiguousarray(s0_values, dtype=float)
+        guess = delta_guess if delta_guess is not None else self.find_delta_bracket(float(s0_values[0]))
+        deltas = np.empty(s0_values.size)
+        resid = np.empty(s0_values.size)
+        status = np.zeros(s0_values.size, dtype=np.int64)
+        g = self.guide
+        done = sweep_kernel(g.table, g.p0, self._lt, s0_values, guess, self.pitch, self.n, self.tol, deltas, resid,
+                            status)
+        if done < s0_values.size:
+            raise ClosureError(
+                f"chain closure failed at s0_1 = {s0_values[done]:.9g} m (status {status[done]}) during the sweep")
+        return deltas, resid
+
+    def s_deformed(self, s0: float, delta: float) -> tuple[float, float, float]:
+        """Deformed arc length s of a point at s0, with ds/ds0 and ds/ddelta there (one loop)."""
+        tab, p0 = self.guide.table, self.guide.p0
+        s0w = s0 - p0 * math.floor(s0 / p0)
+        k = locate(tab, s0w)
+        sig = 1.0 + tab[k, SIGP] * delta
+        loc = s0w - tab[k, S0]
+        s = tab[k, S0] + tab[k, CUMD] * delta + sig * loc
+        return s, sig, tab[k, CUMD] + tab[k, SIGP] * loc
+
+
+def segment_length_table(guide: Guide) -> np.ndarray:
+    """Undeformed segment lengths (for reports). [m]"""
+    return guide.table[:, LEN0].copy()

@@ -1,0 +1,313 @@
+"""The guide: the closed path of lines and arcs followed by the roller centres (model.md section 1).
+
+The guide is data: a table of 14 segments (line or arc) joined with a continuous tangent. The
+tensioner displacement ``delta`` shortens the two telescopic runs (segments 1 and 13) and moves the
+lower head (segment 14) by ``delta`` along x; everything else is fixed.
+
+Two arc-length coordinates are used:
+
+``s0``
+    arc length on the *undeformed* guide, period P0 (the study's coordinate). On the telescopic
+    runs it is mapped linearly onto the shortened run, so ``s0`` has a fixed period whatever delta.
+``s``
+    arc length on the *deformed* guide, measured from the top of the lower head at (delta, R),
+    period P0 - 2 delta.
+
+For a segment k with undeformed start ``s0_k``, the local arc length is
+``lam = sigma_k(delta) (s0 - s0_k)`` with ``sigma = 1`` (fixed) or ``(Lt - delta)/Lt`` (telescopic),
+and the point is ``r = A_k + B_k delta + f_k(lam)`` where ``f_k`` is the line or arc from the
+segment's start heading. The kernels below return r and its first and second partial derivatives
+with respect to s0 and delta, which is all the chain closure and its velocity and acceleration
+recursions need.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba as nb
+import numpy as np
+
+from .params import GuideParams
+
+__all__ = ["Guide", "SEGMENT_NAMES"]
+
+SEGMENT_NAMES = (
+    "tensioner, top run",
+    "lower landing, top run",
+    "lower transition",
+    "incline, top run",
+    "upper transition",
+    "upper landing, top run",
+    "upper head (drive sprocket)",
+    "upper landing, return run",
+    "upper transition, return",
+    "incline, return run",
+    "lower transition, return",
+    "lower landing, return run",
+    "tensioner, return run",
+    "lower head (tensioner carriage)",
+)
+
+# columns of the segment table
+S0, LEN0, KAPPA, PHI0, AX, AZ, BX, BZ, SIGP, CUMD = range(10)
+NCOL = 10
+
+
+def build_table(p: GuideParams) -> np.ndarray:
+    """Segment table (14 x 10 float64) of the guide; see module docstring for the columns."""
+    lt, l1, l2, rt, a, ll, rr = (p.tensioner_length, p.lower_landing, p.upper_landing, p.transition_radius,
+                                 p.incline_angle, p.incline_length, p.head_radius)
+    # (kind length-or-radius, turn) as in model.md section 1
+    segs = [
+        ("line", lt, 0.0, True),
+        ("line", l1, 0.0, False),
+        ("arc", rt, +a, False),
+        ("line", ll, 0.0, False),
+        ("arc", rt, -a, False),
+        ("line", l2, 0.0, False),
+        ("arc", rr, -math.pi, False),
+        ("line", l2, 0.0, False),
+        ("arc", rt, +a, False),
+        ("line", ll, 0.0, False),
+        ("arc", rt, -a, False),
+        ("line", l1, 0.0, False),
+        ("line", lt, 0.0, True),
+        ("arc", rr, -math.pi, False),
+    ]
+    tab = np.zeros((len(segs), NCOL))
+    x, z, phi, s0, cumd = 0.0, rr, 0.0, 0.0, 0.0
+    for k, (kind, size, turn, tele) in enumerate(segs):
+        if kind == "line":
+            length, kappa = size, 0.0
+        else:
+            length, kappa = size * abs(turn), math.copysign(1.0 / size, turn)
+        tab[k] = (s0, length, kappa, phi, x, z, 0.0, 0.0, (-1.0 / lt) if tele else 0.0, cumd)
+        if k in (0, 13):  # the start of the top tensioner run and of the lower head move with delta
+            tab[k, BX] = 1.0
+        # advance the undeformed pose
+        if kappa == 0.0:
+            x += length * math.cos(phi)
+            z += length * math.sin(phi)
+        else:
+            phi1 = phi + kappa * length
+            x += (math.sin(phi1) - math.sin(phi)) / kappa
+            z += (math.cos(phi) - math.cos(phi1)) / kappa
+            phi = phi1
+        s0 += length
+        cumd += length * tab[k, SIGP]
+    if abs(x) > 1e-9 or abs(z - rr) > 1e-9 or abs(math.remainder(phi, 2 * math.pi)) > 1e-12:
+        raise ValueError(
+            f"guide does not close: it ends at ({x:.6g}, {z:.6g}) m heading {math.degrees(phi):.6g} deg "
+            f"instead of (0, {rr:.6g}) m heading 0 deg; check incline_length against the rise")
+    return tab
+
+
+# --------------------------------------------------------------------------------------------
+# compiled kernels (all take the segment table ``tab`` and the period ``p0``)
+
+@nb.njit(cache=True)
+def locate(tab, s0):
+    """Segment index holding s0 (already reduced to [0, P0))."""
+    n = tab.shape[0]
+    lo, hi = 0, n - 1
+    while lo < hi:
+        mid = (lo + hi + 1) // 2
+        if tab[mid, S0] <= s0:
+            lo = mid
+        else:
+            hi = mid - 1
+    return lo
+
+
+@nb.njit(cache=True)
+def local_point(tab, k, lam, delta):
+    """Position, unit tangent angle and left normal on segment k at local arc length lam."""
+    kap = tab[k, KAPPA]
+    phi0 = tab[k, PHI0]
+    x0 = tab[k, AX] + tab[k, BX] * delta
+    z0 = tab[k, AZ] + tab[k, BZ] * delta
+    if kap == 0.0:
+        c, s = math.cos(phi0), math.sin(phi0)
+        return x0 + lam * c, z0 + lam * s, phi0
+    phi = phi0 + kap * lam
+    return (x0 + (math.sin(phi) - math.sin(phi0)) / kap,
+            z0 + (math.cos(phi0) - math.cos(phi)) / kap, phi)
+
+
+@nb.njit(cache=True)
+def point_partials(tab, k, lam, s0loc, delta, out):
+    """r and its partial derivatives at local arc length lam of segment k.
+
+    ``s0loc`` is s0 - s0_k. Fills ``out`` (length 12) with
+    x, z, rs_x, rs_z, rd_x, rd_z, rss_x, rss_z, rsd_x, rsd_z, rdd_x, rdd_z.
+    """
+    x, z, phi = local_point(tab, k, lam, delta)
+    kap = tab[k, KAPPA]
+    sigp = tab[k, SIGP]
+    sig = 1.0 + sigp * delta
+    tx, tz = math.cos(phi), math.sin(phi)
+    nx, nz = -tz, tx
+    lam_d = sigp * s0loc
+    out[0] = x
+    out[1] = z
+    out[2] = sig * tx
+    out[3] = sig * tz
+    out[4] = tab[k, BX] + lam_d * tx
+    out[5] = tab[k, BZ] + lam_d * tz
+    out[6] = sig * sig * kap * nx
+    out[7] = sig * sig * kap * nz
+    out[8] = sigp * tx + sig * kap * lam_d * nx
+    out[9] = sigp * tz + sig * kap * lam_d * nz
+    out[10] = kap * lam_d * lam_d * nx
+    out[11] = kap * lam_d * lam_d * nz
+
+
+@nb.njit(cache=True)
+def seg_length(tab, k, delta):
+    return tab[k, LEN0] * (1.0 + tab[k, SIGP] * delta)
+
+
+@nb.njit(cache=True)
+def circle_hit(tab, k, delta, qx, qz, radius, lam_lo):
+    """Smallest local arc length lam >= lam_lo on segment k whose point is at ``radius`` from q.
+
+    Returns -1.0 when the segment holds no such point. Exact (closed form) for lines and arcs.
+    """
+    tol = 1e-12
+    length = seg_length(tab, k, delta)
+    kap = tab[k, KAPPA]
+    phi0 = tab[k, PHI0]
+    x0 = tab[k, AX] + tab[k, BX] * delta
+    z0 = tab[k, AZ] + tab[k, BZ] * delta
+    best = -1.0
+    if kap == 0.0:
+        tx, tz = math.cos(phi0), math.sin(phi0)
+        wx, wz = x0 - qx, z0 - qz
+        b = tx * wx + tz * wz
+        c = wx * wx + wz * wz - radius * radius
+        disc = b * b - c
+        if disc < 0.0:
+            return -1.0
+        sq = math.sqrt(disc)
+        for lam in (-b - sq, -b + sq):
+            if lam >= lam_lo - tol and lam <= length + tol:
+                if best < 0.0 or lam < best:
+                    best = lam
+        return best
+    rho = 1.0 / abs(kap)
+    cx = x0 - math.sin(phi0) / kap
+    cz = z0 + math.cos(phi0) / kap
+    dx, dz = qx - cx, qz - cz
+    d = math.sqrt(dx * dx + dz * dz)
+    if d > rho + radius or d < abs(rho - radius) or d == 0.0:
+        return -1.0
+    a = (rho * rho - radius * radius + d * d) / (2.0 * d)
+    h2 = rho * rho - a * a
+    h = math.sqrt(h2) if h2 > 0.0 else 0.0
+    ex, ez = dx / d, dz / d
+    full = 2.0 * math.pi * rho
+    found = False
+    for sgn in (-1.0, 1.0):
+        px = cx + a * ex - sgn * h * ez
+        pz = cz + a * ez + sgn * h * ex
+        phi = math.atan2(kap * (px - cx), -kap * (pz - cz))
+        lam = (phi - phi0) / kap
+        lam = lam - full * math.floor(lam / full)
+        if lam > full - 1e-9:
+            lam -= full
+        if lam >= lam_lo - tol and lam <= length + tol:
+            if not found or lam < best:
+                best = lam
+                found = True
+    return best if found else -1.0
+
+
+# --------------------------------------------------------------------------------------------
+
+class Guide:
+    """The guide of one escalator, deformed by the tensioner displacement delta.
+
+    Parameters
+    ----------
+    params : GuideParams
+        Geometry of the guide.
+
+    Examples
+    --------
+    >>> from vibkit.params import reference_guide
+    >>> g = Guide(reference_guide())
+    >>> round(g.perimeter(0.0), 4)
+    21.2751
+    """
+
+    def __init__(self, params: GuideParams):
+        self.params = params
+        self.table = build_table(params)
+        self.p0 = float(self.table[:, LEN0].sum())
+
+    def perimeter(self, delta: float = 0.0) -> float:
+        """Perimeter of the deformed guide P0 - 2 delta. [m]"""
+        self._check_delta(delta)
+        return self.p0 - 2.0 * delta
+
+    def _check_delta(self, delta):
+        lt = self.params.tensioner_length
+        d = np.asarray(delta)
+        if np.any(d >= lt) or np.any(d <= -lt):
+            raise ValueError(f"delta must lie in (-{lt}, {lt}) m (the tensioner travel), got {delta!r}")
+
+    def segment_lengths(self, delta: float = 0.0) -> np.ndarray:
+        """Length of each of the 14 segments on the deformed guide. [m]"""
+        self._check_delta(delta)
+        return self.table[:, LEN0] * (1.0 + self.table[:, SIGP] * delta)
+
+    def s0_to_s(self, s0, delta: float = 0.0):
+        """Undeformed-guide coordinate s0 to deformed arc length s (both wrapped to one loop). [m]"""
+        self._check_delta(delta)
+        s0 = np.mod(np.asarray(s0, dtype=float), self.p0)
+        k = np.searchsorted(self.table[:, S0], s0, side="right") - 1
+        sig = 1.0 + self.table[k, SIGP] * delta
+        return self.table[k, S0] + self.table[k, CUMD] * delta + sig * (s0 - self.table[k, S0])
+
+    def s_to_s0(self, s, delta: float = 0.0):
+        """Deformed arc length s to the undeformed-guide coordinate s0. [m]"""
+        self._check_delta(delta)
+        s = np.mod(np.asarray(s, dtype=float), self.perimeter(delta))
+        starts = self.table[:, S0] + self.table[:, CUMD] * delta
+        k = np.searchsorted(starts, s, side="right") - 1
+        sig = 1.0 + self.table[k, SIGP] * delta
+        return self.table[k, S0] + (s - starts[k]) / sig
+
+    def _frame(self, s, delta):
+        s0 = self.s_to_s0(s, delta)
+        s0 = np.atleast_1d(s0)
+        out = np.empty((s0.size, 12))
+        kap = np.empty(s0.size)
+        for j, v in enumerate(s0):
+            k = locate(self.table, v)
+            sig = 1.0 + self.table[k, SIGP] * delta
+            point_partials(self.table, k, sig * (v - self.table[k, S0]), v - self.table[k, S0], delta, out[j])
+            kap[j] = self.table[k, KAPPA]
+        return out, kap
+
+    def position(self, s, delta: float = 0.0) -> np.ndarray:
+        """Point (x, z) of the guide at deformed arc length s; shape (..., 2). [m]"""
+        out, _ = self._frame(s, delta)
+        return out[:, 0:2].reshape(np.shape(s) + (2,))
+
+    def tangent(self, s, delta: float = 0.0) -> np.ndarray:
+        """Unit tangent (direction of travel) at deformed arc length s; shape (..., 2)."""
+        out, _ = self._frame(s, delta)
+        t = out[:, 2:4] / np.hypot(out[:, 2], out[:, 3])[:, None]
+        return t.reshape(np.shape(s) + (2,))
+
+    def curvature(self, s, delta: float = 0.0) -> np.ndarray:
+        """Signed curvature at deformed arc length s (positive turning left). [1/m]"""
+        _, kap = self._frame(s, delta)
+        return kap.reshape(np.shape(s))
+
+    def segment_at(self, s, delta: float = 0.0):
+        """Index (0-13) of the segment holding deformed arc length s."""
+        s0 = np.atleast_1d(self.s_to_s0(s, delta))
+        return np.array([locate(self.table, v) for v in s0]).reshape(np.shape(s))
