@@ -21,7 +21,7 @@ def __getattr__(name):  # lazy: `import vibkit` stays cheap (no numba, no obspy)
 
         return load_scene
     if name == "simulate":
-        from .simulate import simulate
+        from .simulation import simulate
 
         return simulate
     if name == "read_recording":

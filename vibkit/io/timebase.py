@@ -1,0 +1,185 @@
+"""Time stamps as found: order, gaps (bursts), jitter, and the resampling policy.
+
+A recording's time stamps are checked, never silently changed:
+
+* time going backwards and repeated stamps are errors (with the file line)
+  unless the caller asks for a repair (sort, drop repeats), which is recorded;
+* a step longer than ``gap_factor`` median periods starts a new segment
+  (a burst); segments are numbered, never bridged;
+* the jitter of the steps inside segments is measured and reported;
+* samples are resampled only when asked (``resample="linear"``), per segment.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import RecordingError
+
+__all__ = ["TimeDiagnosis", "check_order", "diagnose", "resample_linear"]
+
+
+@dataclass(frozen=True)
+class TimeDiagnosis:
+    """What the time stamps of a recording look like.
+
+    Attributes
+    ----------
+    period_s : float
+        Median step between samples inside segments. [s]
+    jitter_rms : float
+        RMS deviation of the steps inside segments from ``period_s``, as a
+        fraction of ``period_s``. [1]
+    jitter_max : float
+        Largest such deviation, as a fraction of ``period_s``. [1]
+    segment : numpy.ndarray
+        int32 burst number of each sample (0, 1, 2 ...).
+    gaps_s : numpy.ndarray
+        Length of each gap between segments. [s]
+    """
+
+    period_s: float
+    jitter_rms: float
+    jitter_max: float
+    segment: np.ndarray
+    gaps_s: np.ndarray
+
+    @property
+    def n_segments(self) -> int:
+        return int(self.segment[-1]) + 1 if self.segment.size else 0
+
+
+def check_order(t, lines, *, path, column, repair):
+    """Refuse (or, if asked, repair) time going backwards and repeated stamps.
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        Time of each sample. [s]
+    lines : numpy.ndarray or None
+        File line of each sample (for messages), or None.
+    path : str
+        File name for messages.
+    column : str
+        Time column name for messages.
+    repair : bool
+        False: raise :class:`RecordingError` at the first offending line.
+        True: sort by time (stable) and keep the first of repeated stamps.
+
+    Returns
+    -------
+    keep : numpy.ndarray
+        Indices of the samples to keep, in time order.
+    notes : list of str
+        Decisions taken, for the history.
+
+    Raises
+    ------
+    RecordingError
+        Time not finite, going backwards or repeated (``repair=False``).
+    """
+    t = np.asarray(t, dtype=float)
+    n = t.size
+    line_of = (lambda i: None) if lines is None else (lambda i: int(lines[i]))
+    bad = np.flatnonzero(~np.isfinite(t))
+    if bad.size:
+        i = bad[0]
+        raise RecordingError(path, line_of(i), f"time in column '{column}' is not a finite number")
+    dt = np.diff(t)
+    back = np.flatnonzero(dt < 0)
+    dup = np.flatnonzero(dt == 0)
+    if not repair:
+        if back.size and (not dup.size or back[0] < dup[0]):
+            i = back[0] + 1
+            raise RecordingError(
+                path, line_of(i),
+                f"time goes backwards in column '{column}': {t[i]:.9g} s after {t[i - 1]:.9g} s "
+                "(expected increasing time; pass repair_time=True to sort)")
+        if dup.size:
+            i = dup[0] + 1
+            raise RecordingError(
+                path, line_of(i),
+                f"time stamp {t[i]:.9g} s in column '{column}' repeats the previous row "
+                "(expected increasing time; pass repair_time=True to drop repeats)")
+        return np.arange(n), []
+    notes = []
+    order = np.argsort(t, kind="stable")
+    if back.size:
+        notes.append(f"time repaired: {back.size} backward step(s) in column '{column}', rows sorted by time")
+    ts = t[order]
+    first = np.r_[True, np.diff(ts) > 0]
+    if not first.all():
+        notes.append(f"time repaired: {int((~first).sum())} repeated stamp(s) dropped, first kept")
+    return order[first], notes
+
+
+def diagnose(t, *, gap_factor=5.0) -> TimeDiagnosis:
+    """Split time stamps into segments at gaps and measure their jitter.
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        Strictly increasing times, at least two. [s]
+    gap_factor : float
+        A step longer than ``gap_factor`` median steps is a gap between bursts.
+
+    Returns
+    -------
+    TimeDiagnosis
+
+    Notes
+    -----
+    With steps :math:`\\Delta t_i` inside segments and their median
+    :math:`T`, the jitter is :math:`\\sqrt{\\overline{(\\Delta t_i - T)^2}} / T`.
+    """
+    t = np.asarray(t, dtype=float)
+    dt = np.diff(t)
+    t0 = float(np.median(dt))
+    gap = dt > gap_factor * t0
+    inside = dt[~gap]
+    period = float(np.median(inside))
+    dev = (inside - period) / period
+    jitter_rms = float(np.sqrt(np.mean(dev**2)))
+    jitter_max = float(np.max(np.abs(dev)))
+    segment = np.r_[0, np.cumsum(gap)].astype(np.int32)
+    return TimeDiagnosis(period, jitter_rms, jitter_max, segment, dt[gap].astype(float))
+
+
+def resample_linear(t, columns, segment, fs):
+    """Resample each segment onto a uniform grid by linear interpolation.
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        Strictly increasing times. [s]
+    columns : dict of str to numpy.ndarray
+        Values at ``t``; NaN samples are left out of the interpolation.
+    segment : numpy.ndarray
+        Segment number of each sample.
+    fs : float
+        Target sample rate. [Hz]
+
+    Returns
+    -------
+    t_new : numpy.ndarray
+        ``t_start + k / fs`` inside each segment. [s]
+    columns_new : dict of str to numpy.ndarray
+    segment_new : numpy.ndarray
+        int32 segment number of each new sample.
+    """
+    ts, segs = [], []
+    out = {k: [] for k in columns}
+    for s in np.unique(segment):
+        m = segment == s
+        tt = t[m]
+        n = int(np.floor((tt[-1] - tt[0]) * fs * (1 + 1e-12))) + 1
+        grid = tt[0] + np.arange(n) / fs
+        ts.append(grid)
+        segs.append(np.full(n, s, dtype=np.int32))
+        for k, v in columns.items():
+            vv = v[m]
+            ok = np.isfinite(vv)
+            out[k].append(np.interp(grid, tt[ok], vv[ok]) if ok.sum() >= 1 else np.full(n, np.nan))
+    return np.concatenate(ts), {k: np.concatenate(v) for k, v in out.items()}, np.concatenate(segs)

@@ -1,0 +1,71 @@
+"""Building result datasets: every variable carries ``units`` and ``long_name``."""
+
+from __future__ import annotations
+
+import datetime as _dt
+
+import numpy as np
+import xarray as xr
+
+from . import __version__
+
+__all__ = ["VARIABLES", "make_dataset"]
+
+# name -> (units, long_name)
+VARIABLES = {
+    "delta": ("m", "tensioner displacement delta"),
+    "delta_dot": ("m/s", "tensioner velocity"),
+    "delta_ddot": ("m/s^2", "tensioner acceleration"),
+    "s1": ("m", "roller 1 arc length on the deformed guide"),
+    "s0": ("m", "roller 1 coordinate on the undeformed guide (unwrapped)"),
+    "closure_residual": ("m", "max over links of | |r_i+1 - r_i| - L |"),
+    "link_tension": ("N", "link tension (2 lambda L)"),
+    "drive_force": ("N", "force along the guide that drags roller 1"),
+    "chain_speed": ("m/s", "roller 1 speed"),
+    "sprocket_angle": ("rad", "sprocket angle theta"),
+    "sprocket_speed": ("rad/s", "sprocket angular speed"),
+    "motor_torque": ("N m", "motor torque on the sprocket"),
+    "indentation": ("m", "largest roller indentation on each tooth"),
+    "contact_force": ("N", "sum of roller normal forces on each tooth"),
+    "roller_position": ("m", "roller centre position"),
+    "roller_velocity": ("m/s", "roller velocity"),
+    "roller_acceleration": ("m/s^2", "roller acceleration"),
+    "tensioner_displacement": ("m", "carriage displacement sensor (delta minus its mean)"),
+    "accel_step": ("m/s^2", "accelerometer on a step, along the guide tangent"),
+    "kinetic_energy": ("J", "kinetic energy of chain, carriage and sprocket"),
+    "potential_energy": ("J", "gravitational potential energy of the rollers"),
+    "contact_energy": ("J", "elastic energy stored in roller-tooth contacts"),
+    "spring_energy": ("J", "elastic energy of the tensioner spring"),
+}
+
+
+def make_dataset(coords: dict, data: dict, attrs: dict, scene) -> xr.Dataset:
+    """Dataset from ``data`` (name -> (dims, array)) with units/long_name from :data:`VARIABLES`."""
+    ds = xr.Dataset(coords=coords)
+    for name, (dims, arr) in data.items():
+        units, long_name = VARIABLES.get(name, ("1", name))
+        ds[name] = xr.DataArray(np.asarray(arr), dims=dims, attrs={"units": units, "long_name": long_name})
+    for name, (units, long_name) in {"time": ("s", "time"), "advance": ("m", "roller 1 coordinate s0 on the undeformed guide"),
+                                     "link": ("1", "link number (link j joins roller j and j+1)"),
+                                     "roller": ("1", "roller number"), "tooth": ("1", "tooth number"),
+                                     "axis": ("1", "component")}.items():
+        if name in ds.coords:
+            ds[name].attrs.update({"units": units, "long_name": long_name})
+    base = {
+        "vibkit_version": __version__,
+        "scene_name": scene.name,
+        "scene_source": scene.source,
+        "scene": scene.text,
+        "analysis": scene.analysis,
+        "link_pitch_m": scene.chain.link_pitch,
+        "n_rollers": scene.chain.n_rollers,
+        "sprocket_teeth": scene.sprocket.teeth,
+        "history": f"simulated by vibkit {__version__}",
+    }
+    base.update(attrs)
+    ds.attrs.update(base)
+    return ds
+
+
+def utc_now() -> str:
+    return _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")

@@ -1,0 +1,404 @@
+"""Scenes: TOML files that say which escalator, which analysis, which effects and which outputs.
+
+``load_scene(path) -> Scene`` reads and validates a scene once, at the boundary; an unknown key, a
+missing value or a non-physical number is a :class:`SceneError` that names the file and the key.
+A scene asks only for the effects and outputs it needs; :func:`vibkit.simulate` assembles,
+evaluates and stores only those.
+
+Layout (see ``sim/*.toml`` for complete examples)::
+
+    [scene]        name, analysis = "kinematics" | "inverse" | "forward", description
+    [guide]        tensioner_length, lower_landing, upper_landing, transition_radius,
+                   incline_angle_deg, incline_length, head_radius (or "sprocket")
+    [chain]        link_pitch, roller_radius, roller_mass, n_rollers (or "fill")
+    [sprocket]     teeth, base_width, tip_width, tooth_height, mass, inertia
+    [kinematics]   start, stop, step                      (analysis = "kinematics")
+    [motion]       speed, duration, step, start           (analysis = "inverse")
+    [run]          duration, output_step, start, initial_speed, seed   (analysis = "forward")
+    [effects.*]    gravity, contact, motor, passengers, tensioner, rolling_resistance
+    [solver]       method, rtol, atol, max_step
+    [outputs]      variables, rollers, step_accelerometer
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from .params import ChainParams, GuideParams, SprocketParams, reference_chain, reference_guide, reference_sprocket
+
+__all__ = ["Scene", "SceneError", "load_scene", "parse_scene", "EFFECTS", "OUTPUTS"]
+
+ANALYSES = ("kinematics", "inverse", "forward")
+
+EFFECTS = {
+    "gravity": {"enabled": bool, "g": float},
+    "contact": {"stiffness": float, "exponent": float, "damping": float},
+    "motor": {"kp": float, "ki": float, "speed": float, "torque_limit": float},
+    "passengers": {"mass": list, "step": list, "board": list, "alight": list},
+    "tensioner": {"stiffness": float, "preload": float, "mass": float},
+    "rolling_resistance": {"coefficient": float},
+}
+
+OUTPUTS = {
+    "kinematics": {"delta", "s1", "roller_position", "closure_residual"},
+    "inverse": {"delta", "delta_dot", "delta_ddot", "link_tension", "drive_force", "closure_residual",
+                "chain_speed", "sprocket_angle", "sprocket_speed", "roller_position", "roller_velocity",
+                "roller_acceleration", "energy"},
+    "forward": {"delta", "delta_dot", "sprocket_angle", "sprocket_speed", "motor_torque", "chain_speed",
+                "link_tension", "indentation", "contact_force", "roller_position", "roller_velocity",
+                "roller_acceleration", "closure_residual", "tensioner_displacement", "accel_step", "energy",
+                "s0"},
+}
+
+SECTIONS = {
+    "scene": {"name": str, "analysis": str, "description": str},
+    "guide": {"tensioner_length": float, "lower_landing": float, "upper_landing": float,
+              "transition_radius": float, "incline_angle_deg": float, "incline_length": float,
+              "head_radius": (float, str)},
+    "chain": {"link_pitch": float, "roller_radius": float, "roller_mass": float, "n_rollers": (int, str)},
+    "sprocket": {"teeth": int, "base_width": float, "tip_width": float, "tooth_height": float, "mass": float,
+                 "inertia": float},
+    "kinematics": {"start": float, "stop": float, "step": float},
+    "motion": {"speed": float, "duration": float, "step": float, "start": float},
+    "run": {"duration": float, "output_step": float, "start": float, "initial_speed": float, "seed": int},
+    "solver": {"method": str, "rtol": float, "atol": float, "max_step": float, "first_step": float},
+    "outputs": {"variables": list, "rollers": list, "step_accelerometer": int},
+}
+
+
+class SceneError(ValueError):
+    """A scene file that cannot be used; the message names the file and the key."""
+
+
+@dataclass(frozen=True, kw_only=True)
+class Scene:
+    """A validated scene.
+
+    Attributes
+    ----------
+    name, analysis, description : str
+    guide, chain, sprocket : parameter dataclasses (SI)
+    sections : dict
+        The analysis-specific sections (``kinematics``, ``motion``, ``run``, ``solver``) as plain dicts.
+    effects : dict
+        Effect name -> options, only the effects the scene asks for.
+    outputs : dict
+        ``variables`` (tuple of names), ``rollers`` (tuple of 1-based roller numbers),
+        ``step_accelerometer`` (1-based step number or None).
+    source : str
+        The file the scene came from (or "<string>").
+    text : str
+        The TOML text, stored in results for provenance.
+    """
+
+    name: str
+    analysis: str
+    description: str
+    guide: GuideParams
+    chain: ChainParams
+    sprocket: SprocketParams
+    sections: dict = field(default_factory=dict)
+    effects: dict = field(default_factory=dict)
+    outputs: dict = field(default_factory=dict)
+    source: str = "<string>"
+    text: str = ""
+
+    def section(self, name: str) -> dict:
+        return self.sections.get(name, {})
+
+
+def _err(src, key, msg):
+    return SceneError(f"{src}: [{key}] {msg}" if not key.startswith("[") else f"{src}: {key} {msg}")
+
+
+def _check_type(src, where, value, typ):
+    types = typ if isinstance(typ, tuple) else (typ,)
+    if float in types and isinstance(value, int) and not isinstance(value, bool):
+        value = float(value)
+    if bool not in types and isinstance(value, bool):
+        raise SceneError(f"{src}: {where} expected {'/'.join(t.__name__ for t in types)}, got a boolean")
+    if not isinstance(value, types):
+        raise SceneError(f"{src}: {where} expected {'/'.join(t.__name__ for t in types)}, "
+                         f"got {type(value).__name__} {value!r}")
+    if isinstance(value, float) and not math.isfinite(value):
+        raise SceneError(f"{src}: {where} must be finite, got {value!r}")
+    return value
+
+
+def _section(src, data, name, schema):
+    raw = data.get(name, {})
+    if not isinstance(raw, dict):
+        raise SceneError(f"{src}: [{name}] must be a table")
+    out = {}
+    for key, value in raw.items():
+        if key not in schema:
+            known = ", ".join(sorted(schema))
+            raise SceneError(f"{src}: unknown key '{name}.{key}' (known keys of [{name}]: {known})")
+        out[key] = _check_type(src, f"'{name}.{key}'", value, schema[key])
+    return out
+
+
+def _positive(src, where, value):
+    if not value > 0:
+        raise SceneError(f"{src}: '{where}' must be positive, got {value!r}")
+
+
+def parse_scene(text: str, source: str = "<string>") -> Scene:
+    """Validate a scene given as TOML text (see :func:`load_scene`)."""
+    src = source
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise SceneError(f"{src}: not valid TOML: {exc}") from None
+    allowed = set(SECTIONS) | {"effects"}
+    for key in data:
+        if key not in allowed:
+            raise SceneError(f"{src}: unknown section [{key}] (known: {', '.join(sorted(allowed))})")
+    sec = {name: _section(src, data, name, schema) for name, schema in SECTIONS.items()}
+
+    scene_sec = sec["scene"]
+    if "analysis" not in scene_sec:
+        raise SceneError(f"{src}: missing value 'scene.analysis' (one of {', '.join(ANALYSES)})")
+    analysis = scene_sec["analysis"]
+    if analysis not in ANALYSES:
+        raise SceneError(f"{src}: 'scene.analysis' must be one of {', '.join(ANALYSES)}, got {analysis!r}")
+
+    guide, chain, sprocket = _parameters(src, sec)
+
+    effects = _effects(src, data.get("effects", {}), analysis)
+    outputs = _outputs(src, sec["outputs"], analysis, chain)
+    _analysis_sections(src, sec, analysis)
+    return Scene(name=scene_sec.get("name", Path(source).stem), analysis=analysis,
+                 description=scene_sec.get("description", ""), guide=guide, chain=chain, sprocket=sprocket,
+                 sections={k: sec[k] for k in ("kinematics", "motion", "run", "solver")}, effects=effects,
+                 outputs=outputs, source=source, text=text)
+
+
+def _parameters(src, sec):
+    ref_g, ref_c, ref_s = reference_guide(), reference_chain(), reference_sprocket()
+    # sprocket
+    s = sec["sprocket"]
+    for key in ("base_width", "tip_width", "tooth_height", "mass", "inertia"):
+        if key in s:
+            _positive(src, f"sprocket.{key}", s[key])
+    if "teeth" in s and s["teeth"] < 3:
+        raise SceneError(f"{src}: 'sprocket.teeth' must be an integer >= 3, got {s['teeth']!r}")
+    sprocket = SprocketParams(**{k: s.get(k, getattr(ref_s, k)) for k in
+                                 ("teeth", "base_width", "tip_width", "tooth_height", "mass", "inertia")})
+    # chain
+    c = sec["chain"]
+    for key in ("link_pitch", "roller_radius", "roller_mass"):
+        if key in c:
+            _positive(src, f"chain.{key}", c[key])
+    pitch = c.get("link_pitch", ref_c.link_pitch)
+    # guide
+    g = sec["guide"]
+    for key in ("tensioner_length", "lower_landing", "upper_landing", "transition_radius", "incline_length"):
+        if key in g:
+            _positive(src, f"guide.{key}", g[key])
+    head = g.get("head_radius", "sprocket")
+    if isinstance(head, str):
+        if head != "sprocket":
+            raise SceneError(f"{src}: 'guide.head_radius' must be a length [m] or \"sprocket\", got {head!r}")
+        head = sprocket.pitch_radius(pitch)
+    else:
+        _positive(src, "guide.head_radius", head)
+    angle = g.get("incline_angle_deg", math.degrees(ref_g.incline_angle))
+    if not 0 < angle < 90:
+        raise SceneError(f"{src}: 'guide.incline_angle_deg' must be in (0, 90) deg, got {angle!r}")
+    guide = GuideParams(
+        tensioner_length=g.get("tensioner_length", ref_g.tensioner_length),
+        lower_landing=g.get("lower_landing", ref_g.lower_landing),
+        upper_landing=g.get("upper_landing", ref_g.upper_landing),
+        transition_radius=g.get("transition_radius", ref_g.transition_radius),
+        incline_angle=math.radians(angle),
+        incline_length=g.get("incline_length", ref_g.incline_length),
+        head_radius=head)
+    n = c.get("n_rollers", "fill")
+    if isinstance(n, str):
+        if n != "fill":
+            raise SceneError(f"{src}: 'chain.n_rollers' must be an integer or \"fill\", got {n!r}")
+        n = int(math.floor(guide.perimeter / pitch))
+    if n < 3:
+        raise SceneError(f"{src}: 'chain.n_rollers' must be an integer >= 3, got {n!r}")
+    chain = ChainParams(link_pitch=pitch, roller_radius=c.get("roller_radius", ref_c.roller_radius),
+                        roller_mass=c.get("roller_mass", ref_c.roller_mass), n_rollers=n)
+    # the chain must close within the tensioner travel: P0 - 2 delta ~ n L with |delta| < Lt
+    slack = (guide.perimeter - n * pitch) / 2.0
+    if not -guide.tensioner_length < slack < guide.tensioner_length:
+        raise SceneError(
+            f"{src}: 'chain.n_rollers' = {n} links of {pitch:.6g} m cannot close on a guide of perimeter "
+            f"{guide.perimeter:.6g} m: the tensioner would need delta = {slack:.4g} m, outside its travel "
+            f"(-{guide.tensioner_length:g}, {guide.tensioner_length:g}) m")
+    return guide, chain, sprocket
+
+
+def _effects(src, raw, analysis):
+    if not isinstance(raw, dict):
+        raise SceneError(f"{src}: [effects] must be a table")
+    effects = {}
+    for name, opts in raw.items():
+        if name not in EFFECTS:
+            raise SceneError(f"{src}: unknown effect 'effects.{name}' (known effects: {', '.join(EFFECTS)})")
+        if isinstance(opts, bool):
+            opts = {} if opts else None
+        if opts is None:
+            continue
+        if not isinstance(opts, dict):
+            raise SceneError(f"{src}: 'effects.{name}' must be true/false or a table of options")
+        checked = {}
+        for key, value in opts.items():
+            if key not in EFFECTS[name]:
+                raise SceneError(f"{src}: unknown key 'effects.{name}.{key}' "
+                                 f"(known: {', '.join(EFFECTS[name])})")
+            checked[key] = _check_type(src, f"'effects.{name}.{key}'", value, EFFECTS[name][key])
+        if checked.get("enabled", True) is False:
+            continue
+        effects[name] = checked
+    if analysis == "kinematics" and effects:
+        raise SceneError(f"{src}: [effects] have no meaning in a kinematics scene (got {', '.join(effects)})")
+    allowed = {"inverse": {"gravity", "passengers", "tensioner"}}.get(analysis)
+    if allowed is not None:
+        extra = set(effects) - allowed
+        if extra:
+            raise SceneError(f"{src}: effect(s) {', '.join(sorted(extra))} not available in an {analysis} scene "
+                             f"(available: {', '.join(sorted(allowed))})")
+    _validate_effects(src, effects)
+    return effects
+
+
+def _validate_effects(src, eff):
+    if "contact" in eff:
+        o = eff["contact"]
+        if "stiffness" not in o:
+            raise SceneError(f"{src}: missing value 'effects.contact.stiffness' [N/m^exponent]")
+        _positive(src, "effects.contact.stiffness", o["stiffness"])
+        o.setdefault("exponent", 1.5)
+        _positive(src, "effects.contact.exponent", o["exponent"])
+        o.setdefault("damping", 0.0)
+        if o["damping"] < 0:
+            raise SceneError(f"{src}: 'effects.contact.damping' must be >= 0 [s/m], got {o['damping']!r}")
+    if "motor" in eff:
+        o = eff["motor"]
+        for key in ("kp", "speed"):
+            if key not in o:
+                raise SceneError(f"{src}: missing value 'effects.motor.{key}'")
+        _positive(src, "effects.motor.kp", o["kp"])
+        o.setdefault("ki", 0.0)
+        if o["ki"] < 0:
+            raise SceneError(f"{src}: 'effects.motor.ki' must be >= 0 [N m], got {o['ki']!r}")
+        if "torque_limit" in o:
+            _positive(src, "effects.motor.torque_limit", o["torque_limit"])
+    if "tensioner" in eff:
+        o = eff["tensioner"]
+        o.setdefault("stiffness", 0.0)
+        o.setdefault("preload", 0.0)
+        o.setdefault("mass", 0.0)
+        for key in ("stiffness", "preload", "mass"):
+            if o[key] < 0:
+                raise SceneError(f"{src}: 'effects.tensioner.{key}' must be >= 0, got {o[key]!r}")
+    if "rolling_resistance" in eff:
+        o = eff["rolling_resistance"]
+        if "coefficient" not in o:
+            raise SceneError(f"{src}: missing value 'effects.rolling_resistance.coefficient'")
+        if not 0 <= o["coefficient"] < 1:
+            raise SceneError(f"{src}: 'effects.rolling_resistance.coefficient' must be in [0, 1), "
+                             f"got {o['coefficient']!r}")
+    if "gravity" in eff:
+        eff["gravity"].setdefault("g", 9.81)
+        eff["gravity"].pop("enabled", None)
+        _positive(src, "effects.gravity.g", eff["gravity"]["g"])
+    if "passengers" in eff:
+        o = eff["passengers"]
+        for key in ("mass", "step", "board", "alight"):
+            if key not in o:
+                raise SceneError(f"{src}: missing value 'effects.passengers.{key}' (a list, one entry per passenger)")
+        n = len(o["mass"])
+        for key in ("step", "board", "alight"):
+            if len(o[key]) != n:
+                raise SceneError(f"{src}: 'effects.passengers.{key}' has {len(o[key])} entries, "
+                                 f"'effects.passengers.mass' has {n}")
+        for i in range(n):
+            m, st, b, a = o["mass"][i], o["step"][i], o["board"][i], o["alight"][i]
+            if not isinstance(m, (int, float)) or m <= 0:
+                raise SceneError(f"{src}: 'effects.passengers.mass[{i}]' must be positive [kg], got {m!r}")
+            if not isinstance(st, int) or st < 1:
+                raise SceneError(f"{src}: 'effects.passengers.step[{i}]' must be a step number >= 1, got {st!r}")
+            for key, v in (("board", b), ("alight", a)):
+                if not isinstance(v, (int, float)):
+                    raise SceneError(f"{src}: 'effects.passengers.{key}[{i}]' must be a time [s] or a place "
+                                     f"given as a number, got {v!r}")
+            if not a > b:
+                raise SceneError(f"{src}: passenger {i} alights (t = {a}) before boarding (t = {b})")
+
+
+def _outputs(src, o, analysis, chain):
+    allowed = OUTPUTS[analysis]
+    variables = o.get("variables", ["delta", "closure_residual"])
+    for v in variables:
+        if not isinstance(v, str) or v not in allowed:
+            raise SceneError(f"{src}: unknown output {v!r} in 'outputs.variables' for a {analysis} scene "
+                             f"(available: {', '.join(sorted(allowed))})")
+    rollers = o.get("rollers", [])
+    for r in rollers:
+        if not isinstance(r, int) or not 1 <= r <= chain.n_rollers:
+            raise SceneError(f"{src}: 'outputs.rollers' entries must be roller numbers 1..{chain.n_rollers}, got {r!r}")
+    if any(v.startswith("roller_") for v in variables) and not rollers:
+        raise SceneError(f"{src}: roller outputs asked for but 'outputs.rollers' lists no roller")
+    step = o.get("step_accelerometer")
+    if "accel_step" in variables and step is None:
+        raise SceneError(f"{src}: output 'accel_step' needs 'outputs.step_accelerometer' (a step number)")
+    if step is not None and not 1 <= step <= chain.n_rollers // 3:
+        raise SceneError(f"{src}: 'outputs.step_accelerometer' must be a step 1..{chain.n_rollers // 3}, got {step!r}")
+    return {"variables": tuple(dict.fromkeys(variables)), "rollers": tuple(rollers), "step_accelerometer": step}
+
+
+def _analysis_sections(src, sec, analysis):
+    need = {"kinematics": ("kinematics", ("start", "stop", "step")),
+            "inverse": ("motion", ("speed", "duration", "step")),
+            "forward": ("run", ("duration", "output_step"))}[analysis]
+    name, keys = need
+    for key in keys:
+        if key not in sec[name]:
+            raise SceneError(f"{src}: missing value '{name}.{key}' (needed by a {analysis} scene)")
+    for key in ("step", "duration", "output_step"):
+        if key in sec[name]:
+            _positive(src, f"{name}.{key}", sec[name][key])
+    if analysis == "kinematics" and not sec[name]["stop"] > sec[name]["start"]:
+        raise SceneError(f"{src}: 'kinematics.stop' must be greater than 'kinematics.start'")
+    if analysis == "inverse" and sec["motion"]["speed"] == 0:
+        raise SceneError(f"{src}: 'motion.speed' must be non-zero [m/s]")
+    for key in ("rtol", "atol", "max_step", "first_step"):
+        if key in sec["solver"]:
+            _positive(src, f"solver.{key}", sec["solver"][key])
+
+
+def load_scene(path) -> Scene:
+    """Read and validate a TOML scene file.
+
+    Parameters
+    ----------
+    path : str or Path
+
+    Returns
+    -------
+    Scene
+
+    Raises
+    ------
+    SceneError
+        The file is missing, not TOML, or has an unknown key, a missing value or a non-physical
+        number; the message names the file and the key.
+    """
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise SceneError(f"{p}: no such scene file") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise SceneError(f"{p}: cannot read scene file ({exc})") from None
+    return parse_scene(text, str(p))
+

@@ -1,0 +1,118 @@
+"""Argument checks shared by the signal functions.
+
+Every public function validates at its boundary and raises :class:`ValueError` naming the
+parameter and what was expected.  NaN policy (one rule for the whole package):
+
+* ``nan_policy="raise"`` (default): a NaN sample is an error naming the first bad index.
+* ``nan_policy="interpolate"``: NaN samples are replaced by linear interpolation between the
+  nearest finite neighbours (constant extrapolation at the ends).  The count is reported by
+  :func:`fill_nan` so callers can record it.
+
+An all-NaN or empty input is always an error; NaN never reaches an FFT.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+NAN_POLICIES = ("raise", "interpolate")
+
+
+def check_fs(fs, name: str = "fs") -> float:
+    """Return ``fs`` as a positive finite float or raise ``ValueError``."""
+    try:
+        value = float(fs)
+    except (TypeError, ValueError):
+        raise ValueError(f"Parameter {name}={fs!r} must be a positive number [Hz].") from None
+    if not np.isfinite(value) or value <= 0.0:
+        raise ValueError(f"Parameter {name}={fs!r} must be a positive finite number [Hz].")
+    return value
+
+
+def as_signal(x, name: str = "x", *, axis: int = -1, min_samples: int = 1) -> np.ndarray:
+    """Return ``x`` as a float64 array with at least ``min_samples`` along ``axis``."""
+    arr = np.asarray(x)
+    if arr.dtype.kind not in "biuf":
+        raise ValueError(f"Parameter {name} must be a real numeric array, got dtype {arr.dtype}.")
+    arr = arr.astype(np.float64, copy=False)
+    if arr.ndim == 0:
+        raise ValueError(f"Parameter {name} must be an array with at least one dimension.")
+    try:
+        n = arr.shape[axis]
+    except IndexError:
+        raise ValueError(f"Parameter axis={axis} is out of range for {name} with shape {arr.shape}.") from None
+    if n == 0 or arr.size == 0:
+        raise ValueError(f"Parameter {name} is empty; expected at least {min_samples} samples.")
+    if n < min_samples:
+        raise ValueError(f"Parameter {name} has {n} samples along axis {axis}; expected at least {min_samples}.")
+    if np.isinf(arr).any():
+        raise ValueError(f"Parameter {name} contains infinite values.")
+    finite = np.isfinite(arr)
+    if not finite.any():
+        raise ValueError(f"Parameter {name} is all NaN; nothing to analyse.")
+    return arr
+
+
+def fill_nan(x: np.ndarray, name: str = "x", *, nan_policy: str = "raise", axis: int = -1) -> np.ndarray:
+    """Apply the package NaN policy along ``axis`` and return an array without NaN."""
+    if nan_policy not in NAN_POLICIES:
+        raise ValueError(f"Parameter nan_policy={nan_policy!r} must be one of {NAN_POLICIES}.")
+    bad = np.isnan(x)
+    if not bad.any():
+        return x
+    if nan_policy == "raise":
+        first = np.unravel_index(int(np.argmax(bad)), x.shape)
+        raise ValueError(
+            f"Parameter {name} contains {int(bad.sum())} NaN samples (first at index {first}); "
+            "pass nan_policy='interpolate' to fill them, or remove them."
+        )
+    moved = np.moveaxis(x, axis, -1)
+    out = np.array(moved, dtype=np.float64, copy=True)
+    flat = out.reshape(-1, out.shape[-1])
+    idx = np.arange(flat.shape[-1])
+    for row in flat:
+        good = ~np.isnan(row)
+        if not good.any():
+            raise ValueError(f"Parameter {name} has a channel that is all NaN; nothing to interpolate.")
+        if not good.all():
+            row[~good] = np.interp(idx[~good], idx[good], row[good])
+    return np.moveaxis(flat.reshape(out.shape), -1, axis)
+
+
+def check_band(band, fs: float, name: str = "band") -> tuple[float, float]:
+    """Return ``(fmin, fmax)`` with ``0 <= fmin < fmax <= fs/2`` or raise ``ValueError``."""
+    try:
+        fmin, fmax = (float(v) for v in band)
+    except (TypeError, ValueError):
+        raise ValueError(f"Parameter {name}={band!r} must be a pair (fmin, fmax) [Hz].") from None
+    nyq = fs / 2.0
+    if not (np.isfinite(fmin) and np.isfinite(fmax)) or fmin < 0 or fmax <= fmin:
+        raise ValueError(f"Parameter {name}={band!r} must satisfy 0 <= fmin < fmax [Hz].")
+    if fmax > nyq:
+        raise ValueError(f"Parameter {name}={band!r} reaches above the Nyquist frequency {nyq:g} Hz (fs={fs:g} Hz).")
+    return fmin, fmax
+
+
+def check_positive_int(value, name: str, *, minimum: int = 1) -> int:
+    """Return ``value`` as an int ``>= minimum`` or raise ``ValueError``."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < minimum:
+        raise ValueError(f"Parameter {name}={value!r} must be an integer >= {minimum}.")
+    return int(value)
+
+
+def check_window_length(nperseg: int, n: int, name: str = "nperseg") -> int:
+    """Check that a window of ``nperseg`` samples fits in a record of ``n`` samples."""
+    nperseg = check_positive_int(nperseg, name, minimum=2)
+    if nperseg > n:
+        raise ValueError(f"Parameter {name}={nperseg} is longer than the signal ({n} samples); expected <= {n}.")
+    return nperseg
+
+
+def check_resolution(n: int, fs: float, resolution_hz: float, name: str = "x") -> None:
+    """Raise if a record of ``n`` samples cannot resolve ``resolution_hz``."""
+    duration = n / fs
+    if resolution_hz * duration < 1.0:
+        raise ValueError(
+            f"Parameter {name} is {duration:.4g} s long; a resolution of {resolution_hz:.4g} Hz needs at least "
+            f"{1.0 / resolution_hz:.4g} s."
+        )

@@ -1,0 +1,439 @@
+"""Hampel identifier and filter with MATLAB's semantics, outlier events, false-alarm calibration.
+
+MATLAB ``[y, j, xmedian, xsigma] = hampel(x, k, nsigma)``: for every sample ``i`` the window is
+``x[i-k : i+k+1]`` truncated at the ends of the record (never padded); ``xmedian`` is the median of
+the window, ``xsigma = 1.4826 * median(|window - xmedian|)``; sample ``i`` is an outlier when
+``|x[i] - xmedian[i]| > nsigma * xsigma[i]`` and is then replaced by ``xmedian[i]``.
+
+NaN policy: NaN samples are ignored inside windows (medians of the finite samples only).  A NaN
+sample is never an outlier; it stays NaN in ``filtered`` unless ``fill_nan=True``, which replaces
+it by its window median.  A window without finite samples gives NaN median and sigma.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+from typing import NamedTuple
+
+import numba
+import numpy as np
+
+from ._checks import as_signal, check_fs, check_positive_int
+
+__all__ = [
+    "hampel",
+    "HampelResult",
+    "hampel_events",
+    "OutlierEvent",
+    "hampel_false_alarm_rate",
+    "hampel_n_sigma_for_rate",
+    "MAD_SCALE",
+]
+
+MAD_SCALE = 1.4826
+"""Scale making the MAD a consistent estimator of a Gaussian standard deviation (MATLAB's value)."""
+
+
+@numba.njit(cache=True, nogil=True)
+def _insert(buf, count, value):
+    j = count
+    while j > 0 and buf[j - 1] > value:
+        buf[j] = buf[j - 1]
+        j -= 1
+    buf[j] = value
+    return count + 1
+
+
+@numba.njit(cache=True, nogil=True)
+def _remove(buf, count, value):
+    # value is present (not NaN); find its position by binary search, shift left.
+    lo = 0
+    hi = count
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if buf[mid] < value:
+            lo = mid + 1
+        else:
+            hi = mid
+    for j in range(lo, count - 1):
+        buf[j] = buf[j + 1]
+    return count - 1
+
+
+@numba.njit(cache=True, nogil=True)
+def _replace(buf, count, old, new):
+    # Remove ``old`` (present) and insert ``new`` in one pass over the sorted buffer.
+    lo = 0
+    hi = count
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if buf[mid] < old:
+            lo = mid + 1
+        else:
+            hi = mid
+    j = lo
+    if new > old:
+        while j + 1 < count and buf[j + 1] < new:
+            buf[j] = buf[j + 1]
+            j += 1
+    else:
+        while j > 0 and buf[j - 1] > new:
+            buf[j] = buf[j - 1]
+            j -= 1
+    buf[j] = new
+
+
+@numba.njit(cache=True, nogil=True)
+def _hampel_range(x, k, n_sigma, scale, fill_nan, y, outlier, med_out, sig_out, start, stop):
+    n = x.shape[0]
+    buf = np.empty(2 * k + 1)
+    count = 0
+    # Prime the window of sample ``start``: x[start-k .. start+k], truncated.
+    for j in range(max(0, start - k), min(start + k + 1, n)):
+        v = x[j]
+        if v == v:
+            count = _insert(buf, count, v)
+    for i in range(start, stop):
+        if i > start:
+            add = i + k
+            rem = i - k - 1
+            va = x[add] if add < n else np.nan
+            vr = x[rem] if rem >= 0 else np.nan
+            if va == va and vr == vr:
+                _replace(buf, count, vr, va)
+            else:
+                if vr == vr:
+                    count = _remove(buf, count, vr)
+                if va == va:
+                    count = _insert(buf, count, va)
+        xi = x[i]
+        if count == 0:
+            med_out[i] = np.nan
+            sig_out[i] = np.nan
+            y[i] = xi
+            outlier[i] = False
+            continue
+        half = count // 2
+        odd = count % 2 == 1
+        if odd:
+            m = buf[half]
+        else:
+            m = (buf[half - 1] + buf[half]) / 2.0
+        # Deviations |buf - m| form two ascending runs: walking down from p-1 and up from p,
+        # where p is the first index with buf[p] >= m (p <= half).  Merge them to rank ``half``.
+        p = half
+        while p > 0 and buf[p - 1] >= m:
+            p -= 1
+        left = p - 1
+        right = p
+        prev = 0.0
+        cur = 0.0
+        for _r in range(half + 1):
+            if left >= 0 and (right >= count or m - buf[left] <= buf[right] - m):
+                d = m - buf[left]
+                left -= 1
+            else:
+                d = buf[right] - m
+                right += 1
+            prev = cur
+            cur = d
+        mad = cur if odd else (prev + cur) / 2.0
+        s = scale * mad
+        med_out[i] = m
+        sig_out[i] = s
+        if xi != xi:
+            outlier[i] = False
+            y[i] = m if fill_nan else xi
+        elif abs(xi - m) > n_sigma * s:
+            outlier[i] = True
+            y[i] = m
+        else:
+            outlier[i] = False
+            y[i] = xi
+
+
+@numba.njit(cache=True, nogil=True, parallel=True)
+def _hampel_core(x, k, n_sigma, scale, fill_nan, y, outlier, med_out, sig_out, n_chunks):
+    n = x.shape[0]
+    size = (n + n_chunks - 1) // n_chunks
+    for c in numba.prange(n_chunks):
+        start = c * size
+        stop = min(n, start + size)
+        if start < stop:
+            _hampel_range(x, k, n_sigma, scale, fill_nan, y, outlier, med_out, sig_out, start, stop)
+
+
+class HampelResult(NamedTuple):
+    """Result of :func:`hampel`, in MATLAB's output order.
+
+    Attributes
+    ----------
+    filtered : ndarray
+        Signal with outliers replaced by their window median. [x]
+    is_outlier : ndarray of bool
+        Outlier mask.
+    median : ndarray
+        Window medians. [x]
+    sigma : ndarray
+        Window standard deviations estimated as 1.4826 MAD. [x]
+    """
+
+    filtered: np.ndarray
+    is_outlier: np.ndarray
+    median: np.ndarray
+    sigma: np.ndarray
+
+
+def _resolve_n_sigma(half_window, n_sigma, false_alarm_rate):
+    if false_alarm_rate is not None:
+        if n_sigma is not None:
+            raise ValueError("Give either n_sigma or false_alarm_rate, not both.")
+        return hampel_n_sigma_for_rate(half_window, false_alarm_rate)
+    if n_sigma is None:
+        n_sigma = 3.0
+    try:
+        n_sigma = float(n_sigma)
+    except (TypeError, ValueError):
+        raise ValueError(f"Parameter n_sigma={n_sigma!r} must be a non-negative number.") from None
+    if not np.isfinite(n_sigma) or n_sigma < 0:
+        raise ValueError(f"Parameter n_sigma={n_sigma!r} must be a non-negative finite number.")
+    return n_sigma
+
+
+def hampel(x, half_window=3, n_sigma=None, *, false_alarm_rate=None, fill_nan=False, axis=-1):
+    """Hampel filter exactly as MATLAB's ``hampel(x, k, nsigma)``.
+
+    Parameters
+    ----------
+    x : array_like
+        Signal. [x]
+    half_window : int, optional
+        ``k``: the window holds ``2k + 1`` samples, truncated at the ends.  MATLAB default 3.
+    n_sigma : float, optional
+        Threshold in estimated standard deviations.  MATLAB default 3.  On Gaussian noise the
+        real per-sample false-alarm rate is much higher than the asymptotic ``2 Phi(-n_sigma)``
+        because median and MAD come from only ``2k + 1`` samples: see
+        :func:`hampel_false_alarm_rate` (e.g. about 2.8 % for ``k = 3``, ``n_sigma = 3``).
+    false_alarm_rate : float, optional
+        Instead of ``n_sigma``: the per-sample probability of flagging Gaussian white noise;
+        ``n_sigma`` is then set by :func:`hampel_n_sigma_for_rate`.
+    fill_nan : bool, optional
+        Replace NaN samples by their window median in ``filtered``.
+    axis : int, optional
+        Time axis.
+
+    Returns
+    -------
+    HampelResult
+        ``(filtered, is_outlier, median, sigma)``.
+
+    Raises
+    ------
+    ValueError
+        Empty or all-NaN input, ``half_window`` not a positive integer or longer than the signal,
+        negative ``n_sigma``, both ``n_sigma`` and ``false_alarm_rate``.
+
+    Notes
+    -----
+    Runs in ``O(n k)`` with a sorted sliding window (numba), exact to the last bit against the
+    direct definition (``numpy.median`` on each truncated window).
+
+    References
+    ----------
+    F. R. Hampel, J. Amer. Statist. Assoc. 69 (1974) 383-393.
+    MathWorks, ``hampel`` (Signal Processing Toolbox) documentation.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> y, j, _, _ = hampel(np.array([1.0, 1.1, 0.9, 10.0, 1.0, 1.05, 0.95]), 2, 3)
+    >>> j.nonzero()[0].tolist()
+    [3]
+    """
+    x = as_signal(x, axis=axis)
+    k = check_positive_int(half_window, "half_window")
+    n = x.shape[axis]
+    if 2 * k + 1 > n:
+        raise ValueError(
+            f"Parameter half_window={k} gives a window of {2 * k + 1} samples, longer than the signal "
+            f"({n} samples); expected half_window <= {(n - 1) // 2}."
+        )
+    ns = _resolve_n_sigma(k, n_sigma, false_alarm_rate)
+    moved = np.ascontiguousarray(np.moveaxis(x, axis, -1))
+    flat = moved.reshape(-1, n)
+    y = np.empty_like(flat)
+    mask = np.empty(flat.shape, dtype=np.bool_)
+    med = np.empty_like(flat)
+    sig = np.empty_like(flat)
+    # Independent chunks (each primes its own window) run on numba's threads for long records.
+    n_chunks = 1 if n < 50_000 else 4 * numba.get_num_threads()
+    for r in range(flat.shape[0]):
+        _hampel_core(flat[r], k, ns, MAD_SCALE, bool(fill_nan), y[r], mask[r], med[r], sig[r], n_chunks)
+    shape = moved.shape
+
+    def back(a):
+        return np.moveaxis(a.reshape(shape), -1, axis)
+
+    return HampelResult(back(y), back(mask), back(med), back(sig))
+
+
+@dataclass(frozen=True)
+class OutlierEvent:
+    """One run of consecutive outlier samples (a spike), as found by :func:`hampel_events`.
+
+    Attributes
+    ----------
+    index : int
+        Sample of the largest deviation in the run.
+    time_s : float
+        Its time. [s]
+    value : float
+        Its value. [x]
+    deviation : float
+        ``value - median`` at that sample (signed size of the spike). [x]
+    size_sigma : float
+        ``|deviation| / sigma``: how many local standard deviations (inf when sigma is 0).
+    start, stop : int
+        First and one-past-last sample of the run.
+    duration_s : float
+        ``(stop - start) / fs``. [s]
+    """
+
+    index: int
+    time_s: float
+    value: float
+    deviation: float
+    size_sigma: float
+    start: int
+    stop: int
+    duration_s: float
+
+
+def hampel_events(x, fs, *, half_window=3, n_sigma=None, false_alarm_rate=None, t0=0.0, max_gap=0):
+    """Outliers of a 1-D signal as events: in field data a spike may be a damaged link, not noise.
+
+    Parameters
+    ----------
+    x : array_like, 1-D
+        Signal. [x]
+    fs : float
+        Sampling frequency. [Hz]
+    half_window, n_sigma, false_alarm_rate :
+        As :func:`hampel`.
+    t0 : float, optional
+        Time of the first sample. [s]
+    max_gap : int, optional
+        Outlier samples separated by at most ``max_gap`` clean samples belong to one event.
+
+    Returns
+    -------
+    list of OutlierEvent
+        In time order.
+    """
+    fs = check_fs(fs)
+    x = as_signal(x)
+    if x.ndim != 1:
+        raise ValueError(f"Parameter x must be 1-D for hampel_events, got shape {x.shape}.")
+    if isinstance(max_gap, bool) or not isinstance(max_gap, (int, np.integer)) or max_gap < 0:
+        raise ValueError(f"Parameter max_gap={max_gap!r} must be a non-negative integer.")
+    res = hampel(x, half_window, n_sigma, false_alarm_rate=false_alarm_rate)
+    idx = np.flatnonzero(res.is_outlier)
+    events = []
+    if idx.size == 0:
+        return events
+    breaks = np.flatnonzero(np.diff(idx) > max_gap + 1)
+    starts = np.concatenate(([0], breaks + 1))
+    stops = np.concatenate((breaks + 1, [idx.size]))
+    dev_all = x - res.median
+    for a, b in zip(starts, stops):
+        run = idx[a:b]
+        i = int(run[np.argmax(np.abs(dev_all[run]))])
+        dev = float(dev_all[i])
+        s = float(res.sigma[i])
+        size = abs(dev) / s if s > 0 else float("inf")
+        start, stop = int(run[0]), int(run[-1]) + 1
+        events.append(
+            OutlierEvent(i, float(t0) + i / fs, float(x[i]), dev, size, start, stop, (stop - start) / fs)
+        )
+    return events
+
+
+_MC_SEED = 20240531
+
+
+@lru_cache(maxsize=64)
+def _interior_statistic(k: int, n_windows: int) -> np.ndarray:
+    """Sorted ``|x_c - median| / (1.4826 MAD)`` of the centre sample of Gaussian windows."""
+    rng = np.random.default_rng(_MC_SEED + k)
+    out = np.empty(n_windows)
+    chunk = max(1, 2_000_000 // (2 * k + 1))
+    for a in range(0, n_windows, chunk):
+        b = min(n_windows, a + chunk)
+        w = rng.standard_normal((b - a, 2 * k + 1))
+        med = np.median(w, axis=1)
+        mad = np.median(np.abs(w - med[:, None]), axis=1)
+        out[a:b] = np.abs(w[:, k] - med) / (MAD_SCALE * mad)
+    out.sort()
+    return out
+
+
+def _n_windows(rate: float) -> int:
+    return int(min(4_000_000, max(400_000, 400.0 / rate)))
+
+
+def hampel_false_alarm_rate(half_window, n_sigma):
+    """Per-sample probability that :func:`hampel` flags Gaussian white noise (interior samples).
+
+    Parameters
+    ----------
+    half_window : int
+        ``k`` of the window.
+    n_sigma : float
+        Threshold.
+
+    Returns
+    -------
+    float
+        False-alarm probability, Monte Carlo with a fixed seed (400,000 windows; relative
+        standard error about ``1 / sqrt(400000 p)``).
+
+    Notes
+    -----
+    The centre sample belongs to its own window and median and MAD come from ``2k + 1`` samples,
+    so the rate exceeds the asymptotic ``2 Phi(-n_sigma)`` (0.27 % at 3 sigma): about 2.8 % for
+    ``k = 3`` and 1.1 % for ``k = 10`` at ``n_sigma = 3``.  Samples within ``k`` of the ends use
+    shorter windows and have other rates.
+    """
+    k = check_positive_int(half_window, "half_window")
+    ns = _resolve_n_sigma(k, n_sigma, None)
+    stat = _interior_statistic(k, _n_windows(1e-3))
+    return float(1.0 - np.searchsorted(stat, ns, side="right") / stat.size)
+
+
+def hampel_n_sigma_for_rate(half_window, false_alarm_rate):
+    """Threshold ``n_sigma`` at which :func:`hampel` flags Gaussian white noise at a given rate.
+
+    Parameters
+    ----------
+    half_window : int
+        ``k`` of the window.
+    false_alarm_rate : float
+        Per-sample probability, in ``[1e-4, 0.5]``.
+
+    Returns
+    -------
+    float
+        ``n_sigma``: the ``1 - rate`` quantile of the interior statistic
+        ``|x_c - median| / (1.4826 MAD)`` (Monte Carlo, fixed seed, at least 400 expected
+        exceedances).
+    """
+    k = check_positive_int(half_window, "half_window")
+    try:
+        rate = float(false_alarm_rate)
+    except (TypeError, ValueError):
+        raise ValueError(f"Parameter false_alarm_rate={false_alarm_rate!r} must be a number in [1e-4, 0.5].") from None
+    if not 1e-4 <= rate <= 0.5:
+        raise ValueError(f"Parameter false_alarm_rate={false_alarm_rate!r} must lie in [1e-4, 0.5].")
+    stat = _interior_statistic(k, _n_windows(rate))
+    return float(np.quantile(stat, 1.0 - rate))
