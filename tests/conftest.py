@@ -1,0 +1,23 @@
+import os
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+SIM = ROOT / "sim"
+
+os.environ.setdefault("MPLBACKEND", "Agg")
+
+
+@pytest.fixture(scope="session")
+def reference_scene():
+    from vibkit.scene import load_scene
+
+    return load_scene(SIM / "thesis-kinematics.toml")
+
+
+@pytest.fixture(scope="session")
+def model(reference_scene):
+    from vibkit.model import EscalatorModel
+
+    return EscalatorModel(reference_scene)

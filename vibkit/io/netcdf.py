@@ -1,0 +1,146 @@
+"""vibkit's own results on disk: netCDF4/HDF5 through h5netcdf (built on h5py).
+
+``write_result`` writes any vibkit Dataset (simulation result or recording)
+atomically: to a temporary file in the target's folder, then ``os.replace``,
+so a reader never sees half a file.  ``read_netcdf`` opens one back, loads it
+into memory and adds the provenance attrs of a recording.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+import warnings
+
+import numpy as np
+import xarray as xr
+
+from .errors import RecordingError
+from .recording import sha256_of
+
+__all__ = ["read_netcdf", "write_result"]
+
+_ATTR_TYPES = (str, int, float, np.integer, np.floating)
+
+
+def _check_attrs(where: str, attrs: dict) -> None:
+    for key, value in attrs.items():
+        if isinstance(value, (bool, np.bool_)) or value is None:
+            raise ValueError(f"attr {key!r} of {where} is {value!r}; netCDF attrs must be strings or numbers "
+                             "(write booleans as 0/1)")
+        if isinstance(value, _ATTR_TYPES):
+            continue
+        if isinstance(value, (list, tuple, np.ndarray)):
+            arr = np.asarray(value)
+            if arr.ndim == 1 and (arr.dtype.kind in "iuf" or arr.dtype.kind == "U"):
+                continue
+        raise ValueError(f"attr {key!r} of {where} has type {type(value).__name__}; netCDF attrs must be "
+                         "strings, numbers or 1-D arrays of them")
+
+
+def write_result(ds: xr.Dataset, path) -> str:
+    """Write a Dataset to netCDF4/HDF5, atomically.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A simulation result or a recording; attrs must be strings or numbers.
+    path : str or os.PathLike
+        Target file (conventionally ``*.nc``). Its folder must exist.
+
+    Returns
+    -------
+    str
+        The path written.
+
+    Raises
+    ------
+    ValueError
+        An attr that netCDF cannot store (named), or a missing folder.
+    """
+    if not isinstance(ds, xr.Dataset):
+        raise ValueError(f"ds must be an xarray.Dataset, got {type(ds).__name__}")
+    path = os.fspath(path)
+    folder = os.path.dirname(os.path.abspath(path))
+    if not os.path.isdir(folder):
+        raise ValueError(f"cannot write {path}: folder {folder} does not exist")
+    _check_attrs("the dataset", ds.attrs)
+    for name, var in ds.variables.items():
+        _check_attrs(f"variable {name!r}", var.attrs)
+    fd, tmp = tempfile.mkstemp(prefix="." + os.path.basename(path) + ".", suffix=".tmp", dir=folder)
+    os.close(fd)
+    try:
+        ds.to_netcdf(tmp, engine="h5netcdf")
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+        raise
+    return path
+
+
+def read_netcdf(path, data: bytes, *, channel=None) -> xr.Dataset:
+    """Read a netCDF4/HDF5 file (e.g. one written by :func:`write_result`).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+    data : bytes
+        The file's bytes (for the sha256).
+    channel : str or list of str, optional
+        Keep only these data variables (plus ``segment``).
+
+    Returns
+    -------
+    xarray.Dataset
+        In memory, with ``source_file``, ``sha256``, ``reader``, ``history``
+        and ``sample_rate_hz`` (when it has a ``time`` coordinate) set.
+
+    Raises
+    ------
+    RecordingError
+        The file is not netCDF/HDF5 that xarray can read, or lacks the channel.
+    """
+    is_hdf5 = data[:8] == b"\x89HDF\r\n\x1a\n"
+    engine = "h5netcdf" if is_hdf5 else "scipy"
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            with xr.open_dataset(path, engine=engine, decode_times=False, decode_timedelta=False) as f:
+                ds = f.load()
+    except Exception as exc:  # any failure of the backend means: not a readable netCDF file
+        kind = "netCDF4/HDF5" if is_hdf5 else "netCDF"
+        raise RecordingError(path, None, f"cannot read as {kind}: {type(exc).__name__}: {exc}") from None
+    prior = str(ds.attrs.get("history", ""))
+    history = [f"read with xarray ({engine}); {len(ds.data_vars)} variable(s)"]
+    history += [f"backend warning: {w.message}" for w in caught]
+    if channel is not None:
+        wanted = [channel] if isinstance(channel, str) else list(channel)
+        missing = [w for w in wanted if w not in ds.data_vars]
+        if missing:
+            raise RecordingError(path, None, f"no variable {missing[0]!r}; variables: "
+                                 + ", ".join(repr(str(v)) for v in ds.data_vars))
+        keep = list(dict.fromkeys(wanted + (["segment"] if "segment" in ds.data_vars else [])))
+        ds = ds[keep]
+        history.append("kept variable(s) " + ", ".join(repr(w) for w in wanted))
+    if not ds.data_vars:
+        raise RecordingError(path, None, "holds no data variables")
+    rate = ds.attrs.get("sample_rate_hz")
+    if "time" in ds.coords and ds["time"].size > 1 and rate is None:
+        t = np.asarray(ds["time"].values, dtype=float)
+        dt = np.diff(t)
+        if np.all(np.isfinite(dt)) and np.all(dt > 0):
+            rate = float(1.0 / np.median(dt))
+            history.append(f"sample rate {rate:.6g} Hz from the median time step")
+    attrs = dict(ds.attrs)
+    if "source_file" in attrs and attrs["source_file"] != os.path.basename(os.fspath(path)):
+        attrs["original_source_file"] = attrs["source_file"]
+        attrs["original_sha256"] = attrs.get("sha256", "")
+    attrs["source_file"] = os.path.basename(os.fspath(path))
+    attrs["sha256"] = sha256_of(data)
+    attrs["reader"] = "vibkit.io.netcdf"
+    if rate is not None:
+        attrs["sample_rate_hz"] = float(rate)
+    attrs["history"] = "\n".join(([prior] if prior else []) + history)
+    ds.attrs = attrs
+    return ds
