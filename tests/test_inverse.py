@@ -1,0 +1,75 @@
+"""Inverse dynamics: power balance, consistency with the kinematics, tensions (issue 2)."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import vibkit
+from vibkit.scene import load_scene
+
+SIM = Path(__file__).resolve().parents[1] / "sim"
+
+
+@pytest.fixture(scope="module")
+def inverse():
+    return vibkit.simulate(SIM / "thesis-inverse.toml", duration=1.5, progress=False)
+
+
+def test_result_layout(inverse):
+    ds = inverse
+    for name in ("delta", "link_tension", "drive_force", "closure_residual"):
+        assert name in ds
+        assert ds[name].attrs["units"] and ds[name].attrs["long_name"]
+    assert ds.link_tension.dims == ("time", "link")
+    assert ds.sizes["link"] == 159
+    assert ds.time.attrs["units"] == "s"
+    assert float(ds.time[1] - ds.time[0]) == pytest.approx(0.005)
+
+
+def test_closure_holds(inverse):
+    assert float(inverse.closure_residual.max()) <= 1e-12
+
+
+def test_power_balance_exact(inverse):
+    """F v = d/dt (kinetic + potential) at every instant (no friction)."""
+    ds = inverse
+    scale = float(np.abs(ds.drive_force).max()) * 0.5
+    assert ds.attrs["power_balance_max_W"] < 1e-9 * max(scale, 1.0)
+
+
+def test_power_balance_finite_difference(model):
+    """The same balance against a central difference of the energy, over a 10 ms window in which
+    no roller crosses a segment joint (accelerations jump there)."""
+    from dataclasses import replace
+
+    ch = model.chain
+    joints = np.append(model.guide.table[:, 0], model.guide.p0)
+    for start in 3.2 + np.arange(0.0, 0.4 / 3, 2e-3):
+        s0 = np.mod(ch.configure(float(model.guide.s_to_s0(start, 0.0332))).s0, model.guide.p0)
+        if np.min(np.abs(s0[:, None] - joints[None, :])) > 0.008:
+            break
+    else:
+        raise AssertionError("no joint-free window")
+    scene = load_scene(SIM / "thesis-inverse.toml")
+    sections = dict(scene.sections)
+    sections["motion"] = {"speed": 0.5, "duration": 0.01, "step": 0.0005, "start": float(start)}
+    ds = vibkit.simulate(replace(scene, sections=sections), progress=False)
+    E = (ds.kinetic_energy + ds.potential_energy).values
+    t = ds.time.values
+    dEdt = (E[2:] - E[:-2]) / (t[2:] - t[:-2])
+    power = (ds.drive_force * 0.5).values[1:-1]
+    np.testing.assert_allclose(dEdt, power, rtol=1e-4, atol=1e-3)
+
+
+def test_same_delta_as_kinematics(inverse, model):
+    """delta depends on the chain's position only: the kinematic closure at roller 1's s0 gives the
+    same delta as the inverse dynamics at that instant."""
+    ch = model.chain
+    for j in (0, 37, 150, 300):
+        s_target = 0.5 * float(inverse.time[j])
+        # roller 1's s0 from its deformed arc length, iterating the fixed point s0 = s_to_s0(s, delta(s0))
+        d = float(inverse.delta[j])
+        s0 = float(model.guide.s_to_s0(s_target, d))
+        conf = ch.configure(s0)
+        assert conf.delta == pytest.approx(d, abs=1e-12)

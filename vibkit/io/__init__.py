@@ -1,0 +1,156 @@
+"""Read field recordings and write vibkit results.
+
+:func:`read_recording` turns a file into a recording (an :class:`xarray.Dataset`
+following vibkit's data contract), choosing the reader by content and suffix:
+
+* netCDF4/HDF5 (vibkit's own results; signature ``\\x89HDF``) and netCDF3
+  (``CDF\\x01``) -> :mod:`vibkit.io.netcdf`;
+* waveform formats obspy reads (miniSEED, SAC, ...: by suffix, or binary content
+  that is not HDF5) -> :mod:`vibkit.io.seismic`;
+* text (CSV, TSV, logger and spreadsheet exports) -> :mod:`vibkit.io.csv`.
+
+Every dataset carries ``source_file``, ``sha256``, ``reader``,
+``sample_rate_hz`` and ``history`` (each decision on its own line).
+A file that cannot be read honestly raises :class:`RecordingError`, whose
+``str()`` is one line naming the file, the line and what was expected.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+
+from .errors import RecordingError
+from .netcdf import write_result
+
+__all__ = ["read_recording", "write_result", "RecordingError", "SEISMIC_SUFFIXES", "NETCDF_SUFFIXES"]
+
+#: suffixes sent to obspy whatever their content
+SEISMIC_SUFFIXES = (".mseed", ".miniseed", ".msd", ".seed", ".sac", ".gse", ".gse2", ".segy", ".sgy",
+                    ".su", ".ah", ".css", ".knet", ".sh", ".q")
+#: suffixes sent to xarray whatever their content
+NETCDF_SUFFIXES = (".nc", ".nc4", ".netcdf", ".h5", ".hdf5", ".he5", ".cdf")
+_HDF5 = b"\x89HDF\r\n\x1a\n"
+
+
+def _check_options(sample_rate, resample, gap_factor, delimiter, decimal):
+    if sample_rate is not None:
+        try:
+            fs = float(sample_rate)
+        except (TypeError, ValueError):
+            fs = math.nan
+        if not (math.isfinite(fs) and fs > 0):
+            raise ValueError(f"sample_rate must be a positive number of Hz, got {sample_rate!r}")
+    if resample not in (None, "linear"):
+        raise ValueError(f"resample must be None (keep the samples as they are) or 'linear', got {resample!r}")
+    try:
+        gf = float(gap_factor)
+    except (TypeError, ValueError):
+        gf = math.nan
+    if not (math.isfinite(gf) and gf > 1):
+        raise ValueError(f"gap_factor must be a number of sample periods > 1, got {gap_factor!r}")
+    if delimiter is not None and delimiter not in (",", ";", "\t", "|", " "):
+        raise ValueError(f"delimiter must be one of ',', ';', '\\t', '|', ' ' (whitespace), got {delimiter!r}")
+    if decimal is not None and decimal not in (".", ","):
+        raise ValueError(f"decimal must be '.' or ',', got {decimal!r}")
+
+
+def read_recording(path, *, channel=None, sample_rate=None, time_column=None, time_unit=None, units=None,
+                   resample=None, gap_factor=5.0, repair_time=False, delimiter=None, decimal=None,
+                   encoding=None):
+    """Read a field recording (or a vibkit result) into an xarray Dataset.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        CSV/text export, waveform file (miniSEED, SAC ...) or netCDF4/HDF5.
+    channel : str or list of str, optional
+        Keep only these channels, matched (case-insensitively) against the
+        column header as found, its name without unit, or the variable name;
+        for waveform files the trace id, its variable name or channel code.
+    sample_rate : float, optional
+        Nominal sample rate. [Hz]  Required for a text file with no time column
+        and no sample rate in its header; otherwise it overrides the nominal
+        rate (used by ``resample="linear"``).
+    time_column : str, int or False, optional
+        The time column by name or 0-based index; False: the file has none.
+        Default: the first column named like time (``time``, ``Time (s)``,
+        ``Tiempo (ms)``, ``timestamp`` ...).
+    time_unit : str, optional
+        Unit of a numeric time column ("s", "ms", "us" ...), overriding the header.
+    units : str or dict, optional
+        Unit of every channel (str) or per channel (dict name -> unit), overriding
+        the header: "m/s^2", "g", "mm", "m", "mm/s", "counts" or scaled counts
+        such as "g/2048" (one count is 1/2048 g).
+    resample : {None, "linear"}
+        None keeps the samples and their time stamps as they are; "linear"
+        resamples each segment to the nominal rate by linear interpolation.
+    gap_factor : float
+        A time step longer than this many median periods splits the recording
+        into segments (bursts), which are never bridged.
+    repair_time : bool
+        False (default): time going backwards or repeated stamps are errors.
+        True: sort by time and drop repeated stamps (first kept), recorded.
+    delimiter : str, optional
+        Text files: force the delimiter (",", ";", "\\t", "|", " " for whitespace).
+    decimal : {".", ","}, optional
+        Text files: force the decimal mark.
+    encoding : str, optional
+        Text files: force the encoding (default: UTF-8, else cp1252).
+
+    Returns
+    -------
+    xarray.Dataset
+        Dimension ``time``; coordinate ``time`` [s]; one float64 variable per
+        channel in SI units (attrs ``units``, ``long_name``, ``quantity``,
+        ``column``); int32 ``segment`` when made of bursts; attrs
+        ``source_file``, ``sha256``, ``reader``, ``sample_rate_hz`` [Hz],
+        ``history`` and the metadata found in the file.
+
+    Raises
+    ------
+    RecordingError
+        The file is missing, empty, binary garbage or malformed (header only,
+        text in numbers, ragged rows, time going backwards, one sample, all NaN
+        ...); the message names the file and, where one applies, the line.
+    ValueError
+        An option is invalid (the message names it).
+
+    Examples
+    --------
+    >>> ds = read_recording("data/field/leon-tensioner.csv")  # doctest: +SKIP
+    >>> ds["tensioner_displacement"].attrs["units"]  # doctest: +SKIP
+    'm'
+    """
+    _check_options(sample_rate, resample, gap_factor, delimiter, decimal)
+    if not isinstance(path, (str, os.PathLike)):
+        raise ValueError(f"path must be a file path (str or os.PathLike), got {type(path).__name__}")
+    spath = os.fspath(path)
+    if not os.path.exists(spath):
+        raise RecordingError(spath, None, "file not found")
+    if os.path.isdir(spath):
+        raise RecordingError(spath, None, "is a folder, expected a file")
+    try:
+        with open(spath, "rb") as f:
+            data = f.read()
+    except OSError as exc:
+        raise RecordingError(spath, None, f"cannot be read: {exc.strerror or exc}") from None
+    if not data:
+        raise RecordingError(spath, None, "file is empty (0 bytes); expected a recording")
+    suffix = os.path.splitext(spath)[1].lower()
+    common = dict(channel=channel, sample_rate=sample_rate, resample=resample, gap_factor=gap_factor,
+                  repair_time=repair_time)
+    if data.startswith(_HDF5) or data[:4] in (b"CDF\x01", b"CDF\x02") or suffix in NETCDF_SUFFIXES:
+        from .netcdf import read_netcdf
+
+        return read_netcdf(spath, data, channel=channel)
+    head = data[:65536]
+    looks_binary = b"\x00" in head
+    if suffix in SEISMIC_SUFFIXES or looks_binary:
+        from .seismic import read_seismic
+
+        return read_seismic(spath, data, units=units, **common)
+    from .csv import read_csv
+
+    return read_csv(spath, data, time_column=time_column, time_unit=time_unit, units=units,
+                    delimiter=delimiter, decimal=decimal, encoding=encoding, **common)
