@@ -55,6 +55,11 @@ _SCALE = re.compile(r"([0-9]+(?:[.,][0-9]*)?(?:[eE][+-]?[0-9]+)?)\s*,?\s*(?:coun
                     r"(?:/|per)\s*([^\s,;]+)", re.IGNORECASE)
 
 
+def _pct(fraction: float) -> str:
+    """A fraction as a short percentage; round-off below 1e-6 % shows as 0."""
+    return "0" if abs(fraction) < 1e-8 else f"{100 * fraction:.2g}"
+
+
 def _kind(cell: str, dec: str) -> str:
     """'num', 'missing', 'stamp' or 'text'."""
     if cell.lower() in _MISSING:
@@ -185,7 +190,7 @@ def _meta_pair(line: str, delim: str, dec: str):
     seps = [":", "=", "\t"] + ([delim] if delim not in (" ", "\t") else [])
     pos = [(s.find(c), c) for c in seps if s.find(c) > 0]
     if not pos:
-        return None, s
+        return None, (s.rstrip(delim + " ") if delim != " " else s)
     p, _ = min(pos)
     key = s[:p].strip().strip('"').strip()
     value = s[p + 1:].strip()
@@ -194,7 +199,7 @@ def _meta_pair(line: str, delim: str, dec: str):
     value = value.strip('"').strip()
     if (not key or len(key) > 48 or len(key.split()) > 5 or not re.search(r"[A-Za-z]", key)
             or not value):
-        return None, s
+        return None, (s.rstrip(delim + " ") if delim != " " else s)
     for dm in (dec, "."):
         if _NUM[dm].fullmatch(value):
             v = value.replace(",", ".")
@@ -266,29 +271,25 @@ def _parse_stamps(cells):
     first = s.iloc[0]
     if _STAMP_ISO.fullmatch(first):
         t = pd.to_datetime(s.str.replace(",", ".", regex=False), format="ISO8601", utc=True, errors="coerce")
-        ns = t.astype("int64").to_numpy()
         kind = "ISO 8601 timestamps"
         ok = t.notna().to_numpy()
     elif _STAMP_DMY.fullmatch(first):
         norm = s.str.replace(r"^([0-9]{1,2})[/.-]([0-9]{1,2})[/.-]([0-9]{4})[ T]", r"\3-\2-\1 ", regex=True)
         norm = norm.str.replace(",", ".", regex=False)
         t = pd.to_datetime(norm, format="ISO8601", errors="coerce")
-        ns = t.astype("int64").to_numpy()
         kind = "day/month/year timestamps"
         ok = t.notna().to_numpy()
     elif _STAMP_TOD.fullmatch(first):
         norm = s.str.replace(r"^([0-9]{1,2}:[0-9]{2}:[0-9]{2})[.,:]([0-9]+)$", r"\1.\2", regex=True)
         t = pd.to_timedelta(norm.where(norm.str.fullmatch(r"[0-9]{1,2}:[0-9]{2}:[0-9]{2}(\.[0-9]+)?"), None),
                             errors="coerce")
-        ns = t.astype("int64").to_numpy()
         kind = "time-of-day stamps"
         ok = t.notna().to_numpy()
     else:
         return None
     if not ok[0]:
         return None
-    secs = (ns - ns[0]) / 1e9
-    secs[~ok] = np.nan
+    secs = (t - t.iloc[0]).dt.total_seconds().to_numpy(dtype=float, na_value=np.nan)
     return secs, str(first), kind, ok
 
 
@@ -519,10 +520,10 @@ def read_csv(path, data: bytes, *, channel=None, sample_rate=None, time_column=N
                 f = parse_time_unit(time_unit)
                 if f is None:
                     raise ValueError(f"time_unit={time_unit!r} is not a time unit (expected s, ms, us, ns, min, h)")
-                history.append(f"time column '{tname}' in {time_unit} (given) -> s" + ("" if f == 1 else f" (x {f:g})"))
+                history.append(f"time column '{tname}' in {time_unit} (given)" + ("" if f == 1 else f" -> s (x {f:g})"))
             elif unit_text is not None and parse_time_unit(unit_text) is not None:
                 f = parse_time_unit(unit_text)
-                history.append(f"time column '{tname}' in {unit_text} -> s" + ("" if f == 1 else f" (x {f:g})"))
+                history.append(f"time column '{tname}' in {unit_text}" + ("" if f == 1 else f" -> s (x {f:g})"))
             elif unit_text is not None:
                 raise RecordingError(path, header_line, f"time column '{tname}' has unit '{unit_text}'; "
                                      "expected s, ms, us or time stamps (pass time_unit=)")
@@ -659,7 +660,7 @@ def read_csv(path, data: bytes, *, channel=None, sample_rate=None, time_column=N
             fs = measured
             src = None
         if src is None:
-            history.append(f"sample rate {fs:.6g} Hz from the median time step")
+            history.append(f"sample rate {fs:.6g} Hz from the mean time step inside segments")
         else:
             history.append(f"sample rate {fs:.6g} Hz ({src}); the time stamps give {measured:.6g} Hz")
             if abs(measured / fs - 1) > 0.01:
@@ -671,8 +672,8 @@ def read_csv(path, data: bytes, *, channel=None, sample_rate=None, time_column=N
                            "not bridged")
             segment = diag.segment
         policy = "resampled below" if resample == "linear" else "kept as is"
-        history.append(f"jitter rms {100 * diag.jitter_rms:.2g} % of the period "
-                       f"(max {100 * diag.jitter_max:.2g} %), {policy}")
+        history.append(f"jitter rms {_pct(diag.jitter_rms)} % of the period "
+                       f"(max {_pct(diag.jitter_max)} %), {policy}")
         if resample == "linear":
             cols_in = {ch.name: ch.values for ch in channels}
             seg_in = diag.segment

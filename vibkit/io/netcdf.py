@@ -38,6 +38,12 @@ def _check_attrs(where: str, attrs: dict) -> None:
                          "strings, numbers or 1-D arrays of them")
 
 
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
 def write_result(ds: xr.Dataset, path) -> str:
     """Write a Dataset to netCDF4/HDF5, atomically.
 
@@ -71,6 +77,7 @@ def write_result(ds: xr.Dataset, path) -> str:
     os.close(fd)
     try:
         ds.to_netcdf(tmp, engine="h5netcdf")
+        os.chmod(tmp, 0o666 & ~_umask())
         os.replace(tmp, path)
     except BaseException:
         if os.path.exists(tmp):

@@ -22,12 +22,13 @@ __all__ = ["read_seismic"]
 
 
 def _load(path):
-    try:
-        import obspy
-    except ImportError as exc:  # pragma: no cover - obspy is a declared dependency
-        raise RecordingError(path, None, f"reading waveform files needs obspy ({exc})") from None
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
+        try:  # obspy's import warns about importlib.metadata on some Pythons; not our user's concern
+            import obspy
+        except ImportError as exc:  # pragma: no cover - obspy is a declared dependency
+            raise RecordingError(path, None, f"reading waveform files needs obspy ({exc})") from None
+        caught.clear()
         try:
             st = obspy.read(str(path))
         except Exception as exc:  # obspy raises TypeError/ValueError/... for what it cannot read

@@ -28,7 +28,8 @@ class TimeDiagnosis:
     Attributes
     ----------
     period_s : float
-        Median step between samples inside segments. [s]
+        Mean step between samples inside segments (their total duration over
+        their number of steps). [s]
     jitter_rms : float
         RMS deviation of the steps inside segments from ``period_s``, as a
         fraction of ``period_s``. [1]
@@ -131,7 +132,7 @@ def diagnose(t, *, gap_factor=5.0) -> TimeDiagnosis:
 
     Notes
     -----
-    With steps :math:`\\Delta t_i` inside segments and their median
+    With steps :math:`\\Delta t_i` inside segments and their mean
     :math:`T`, the jitter is :math:`\\sqrt{\\overline{(\\Delta t_i - T)^2}} / T`.
     """
     t = np.asarray(t, dtype=float)
@@ -139,7 +140,7 @@ def diagnose(t, *, gap_factor=5.0) -> TimeDiagnosis:
     t0 = float(np.median(dt))
     gap = dt > gap_factor * t0
     inside = dt[~gap]
-    period = float(np.median(inside))
+    period = float(np.mean(inside))  # = segment durations / steps: immune to rounding of the stamps
     dev = (inside - period) / period
     jitter_rms = float(np.sqrt(np.mean(dev**2)))
     jitter_max = float(np.max(np.abs(dev)))
