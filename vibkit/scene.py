@@ -64,7 +64,8 @@ SECTIONS = {
     "kinematics": {"start": float, "stop": float, "step": float},
     "motion": {"speed": float, "duration": float, "step": float, "start": float},
     "run": {"duration": float, "output_step": float, "start": float, "initial_speed": float, "seed": int},
-    "solver": {"method": str, "rtol": float, "atol": float, "max_step": float, "first_step": float},
+    "solver": {"method": str, "rtol": float, "atol": float, "max_step": float, "first_step": float,
+               "max_wall_time": float},
     "outputs": {"variables": list, "rollers": list, "step_accelerometer": int},
 }
 

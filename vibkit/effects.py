@@ -1,0 +1,213 @@
+"""Force elements a scene can switch on, and the compiled right-hand side of the forward dynamics.
+
+Only the effects a scene lists are evaluated: each is guarded by a flag, so a scene without contact
+never visits the sprocket's teeth, one without passengers never looks at the clock, and so on.
+
+Effects (``[effects.*]`` in a scene):
+
+gravity
+    m g on every roller, along -z.
+contact
+    roller-tooth penalty contact on both flanks, f = k psi^e (1 + 1.5 c psidot) (:mod:`vibkit.sprocket`).
+motor
+    speed controller on the sprocket, M = kp (thetadot_ref - thetadot) + ki * integral, limited to
+    +-torque_limit with conditional integration (no wind-up); thetadot_ref = -speed / R^P.
+passengers
+    m g shared by the three rollers of a step while boarding <= t < alighting.
+tensioner
+    carriage spring (preload + stiffness delta, opposing delta) and carriage mass.
+rolling_resistance
+    mu m g on every roller, opposing its velocity (regularised below 1 mm/s so the force is smooth).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba as nb
+import numpy as np
+
+from .chain import acceleration_terms, fill_partials, sensitivity, solve_closure, velocity_coefficients
+from .dynamics import reduced_equation
+from .sprocket import contact_kernel
+
+__all__ = ["pack_parameters", "evaluate", "FP", "IP"]
+
+# float parameter slots
+FP = {name: i for i, name in enumerate((
+    "p0", "lt", "pitch", "g", "k", "expo", "damp", "kp", "ki", "wref", "tlim", "k_s", "preload", "m_c", "mu_rr",
+    "inertia", "r_d", "cx", "cz", "root_r", "psi", "head_lo", "head_hi", "tol"))}
+# integer parameter slots
+IP = {name: i for i, name in enumerate(("n", "nteeth", "gravity", "contact", "motor", "passengers", "tensioner",
+                                        "rolling"))}
+
+
+class Work:
+    """Scratch arrays of one model (allocated once, reused by every evaluation)."""
+
+    def __init__(self, n, nteeth):
+        self.arrays = (
+            np.empty(n + 1), np.empty(n + 1, dtype=np.int64), np.empty(n + 1), np.empty(n + 1), np.empty(n + 1),
+            np.empty((n + 1, 12)), np.empty(n + 1), np.empty(n + 1), np.empty((n, 2)), np.empty(n),
+            np.empty((n, 2)), np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n, dtype=np.int64),
+            np.zeros(nteeth), np.zeros(nteeth), np.zeros(8),
+        )
+
+
+def pack_parameters(model, effects: dict):
+    """Parameter arrays for the compiled kernels from a model and the scene's effects."""
+    n = model.n
+    fp = np.zeros(len(FP))
+    ip = np.zeros(len(IP), dtype=np.int64)
+    geo = model.geometry
+    fp[FP["p0"]] = model.guide.p0
+    fp[FP["lt"]] = model.guide.params.tensioner_length
+    fp[FP["pitch"]] = model.pitch
+    fp[FP["inertia"]] = model.sprocket.inertia
+    fp[FP["r_d"]] = model.scene.chain.roller_radius
+    fp[FP["cx"]], fp[FP["cz"]] = model.centre
+    fp[FP["root_r"]] = geo["root_radius"]
+    fp[FP["psi"]] = geo["tooth_pitch"]
+    fp[FP["head_lo"]], fp[FP["head_hi"]] = model.head_s0
+    fp[FP["tol"]] = 1e-13
+    ip[IP["n"]] = n
+    ip[IP["nteeth"]] = model.sprocket.teeth
+    if "gravity" in effects:
+        ip[IP["gravity"]] = 1
+        fp[FP["g"]] = effects["gravity"].get("g", 9.81)
+    if "contact" in effects:
+        ip[IP["contact"]] = 1
+        o = effects["contact"]
+        fp[FP["k"]], fp[FP["expo"]], fp[FP["damp"]] = o["stiffness"], o.get("exponent", 1.5), o.get("damping", 0.0)
+    if "motor" in effects:
+        ip[IP["motor"]] = 1
+        o = effects["motor"]
+        fp[FP["kp"]], fp[FP["ki"]] = o["kp"], o.get("ki", 0.0)
+        fp[FP["wref"]] = -o["speed"] / geo["pitch_radius"]
+        fp[FP["tlim"]] = o.get("torque_limit", math.inf)
+    pm = np.zeros(0)
+    ps = np.zeros(0, dtype=np.int64)
+    pb = np.zeros(0)
+    pa = np.zeros(0)
+    if "passengers" in effects:
+        ip[IP["passengers"]] = 1
+        o = effects["passengers"]
+        pm = np.asarray(o["mass"], dtype=float)
+        ps = np.asarray(o["step"], dtype=np.int64)
+        pb = np.asarray(o["board"], dtype=float)
+        pa = np.asarray(o["alight"], dtype=float)
+        if "gravity" not in effects:
+            fp[FP["g"]] = 9.81
+    if "tensioner" in effects:
+        ip[IP["tensioner"]] = 1
+        o = effects["tensioner"]
+        fp[FP["k_s"]], fp[FP["preload"]], fp[FP["m_c"]] = o["stiffness"], o["preload"], o["mass"]
+    if "rolling_resistance" in effects:
+        ip[IP["rolling"]] = 1
+        fp[FP["mu_rr"]] = effects["rolling_resistance"]["coefficient"]
+        if "gravity" not in effects:
+            fp[FP["g"]] = 9.81
+    return (model.guide.table, model.corners_local, fp, ip, model.mass.copy(), pm, ps, pb, pa)
+
+
+@nb.njit(cache=True)
+def evaluate(t, y, dy, prm, ws, want_teeth):
+    """Right-hand side of the forward dynamics; fills ``dy`` and returns a status code.
+
+    State y = [s0_1, s0dot_1, theta, thetadot, integral of the speed error]. On return the work
+    arrays ``ws`` hold the closed configuration, velocities and forces at (t, y), and ``ws[18]``
+    holds [delta, deltadot, deltaddot, motor torque, contact torque, contact energy, max indentation,
+    active contacts]. Status 0 is success; 1 means the chain could not be closed (the state left
+    the tensioner's travel).
+    """
+    tab, loc, fp, ip, mass, pm, ps, pb, pa = prm
+    (s0, kk, lam, xs, zs, part, alpha, beta, jac, gam, hacc, eta, sd, fx, fz, cand, ind_t, frc_t, info) = ws
+    n = ip[0]
+    p0, lt, pitch = fp[0], fp[1], fp[2]
+    sdot = y[1]
+    delta, it, st = solve_closure(tab, p0, lt, y[0], info[0], pitch, n, s0, kk, lam, xs, zs, part, alpha, beta,
+                                  fp[23])
+    if st != 0:
+        return 1
+    fill_partials(tab, p0, s0, kk, lam, delta, n, part)
+    sensitivity(part, xs, zs, n, alpha, beta)
+    c = velocity_coefficients(part, xs, zs, n, alpha, beta, jac, gam)
+    e = acceleration_terms(part, xs, zs, n, alpha, beta, gam, c, sdot, hacc, eta, sd)
+    g = fp[3]
+    for i in range(n):
+        fx[i] = 0.0
+        fz[i] = -mass[i] * g if ip[2] == 1 else 0.0
+    if ip[5] == 1:
+        for jp in range(pm.size):
+            if pb[jp] <= t < pa[jp]:
+                base = 3 * (ps[jp] - 1)
+                for r in range(3):
+                    fz[(base + r) % n] -= pm[jp] * g / 3.0
+    if ip[7] == 1:
+        mu = fp[14]
+        for i in range(n):
+            vx = jac[i, 0] * sdot
+            vz = jac[i, 1] * sdot
+            sp = math.sqrt(vx * vx + vz * vz + 1e-6)
+            fx[i] -= mu * mass[i] * g * vx / sp
+            fz[i] -= mu * mass[i] * g * vz / sp
+    torque_c = 0.0
+    energy_c = 0.0
+    worst = 0.0
+    active = 0
+    if want_teeth:
+        for j in range(ind_t.size):
+            ind_t[j] = 0.0
+            frc_t[j] = 0.0
+    if ip[3] == 1:
+        ncand = 0
+        lo, hi = fp[21], fp[22]
+        for i in range(n):
+            sw = s0[i] - p0 * math.floor(s0[i] / p0)
+            if lo <= sw <= hi:
+                cand[ncand] = i
+                ncand += 1
+        # roller velocities of the candidates (for damping): v = J sdot, stored in eta/sd scratch
+        for jj in range(ncand):
+            i = cand[jj]
+            eta[i] = jac[i, 0] * sdot
+            sd[i] = jac[i, 1] * sdot
+        torque_c, energy_c, worst, active = contact_kernel(
+            xs, zs, eta, sd, cand, ncand, y[2], y[3], fp[17], fp[18], loc, fp[19], fp[20], ip[1], fp[16], fp[4],
+            fp[5], fp[6], fx, fz, ind_t, frc_t, want_teeth)
+    f_c = 0.0
+    m_c = 0.0
+    if ip[6] == 1:
+        f_c = -(fp[12] + fp[11] * delta)
+        m_c = fp[13]
+    m_eff, q = reduced_equation(jac, hacc, fx, fz, mass, c, e, m_c, f_c)
+    sddot = q / m_eff
+    motor = 0.0
+    derr = 0.0
+    if ip[4] == 1:
+        err = fp[9] - y[3]
+        motor = fp[7] * err + fp[8] * y[4]
+        lim = fp[10]
+        derr = err
+        if motor > lim:
+            motor = lim
+            if err > 0.0:
+                derr = 0.0
+        elif motor < -lim:
+            motor = -lim
+            if err < 0.0:
+                derr = 0.0
+    dy[0] = sdot
+    dy[1] = sddot
+    dy[2] = y[3]
+    dy[3] = (motor + torque_c) / fp[15]
+    dy[4] = derr
+    info[0] = delta
+    info[1] = c * sdot
+    info[2] = c * sddot + e
+    info[3] = motor
+    info[4] = torque_c
+    info[5] = energy_c
+    info[6] = worst
+    info[7] = active
+    return 0
