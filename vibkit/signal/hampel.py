@@ -214,7 +214,7 @@ def hampel(x, half_window=3, n_sigma=None, *, false_alarm_rate=None, fill_nan=Fa
         Threshold in estimated standard deviations.  MATLAB default 3.  On Gaussian noise the
         real per-sample false-alarm rate is much higher than the asymptotic ``2 Phi(-n_sigma)``
         because median and MAD come from only ``2k + 1`` samples: see
-        :func:`hampel_false_alarm_rate` (e.g. about 2.8 % for ``k = 3``, ``n_sigma = 3``).
+        :func:`hampel_false_alarm_rate` (e.g. about 4.8 % for ``k = 3``, ``n_sigma = 3``).
     false_alarm_rate : float, optional
         Instead of ``n_sigma``: the per-sample probability of flagging Gaussian white noise;
         ``n_sigma`` is then set by :func:`hampel_n_sigma_for_rate`.
@@ -401,8 +401,8 @@ def hampel_false_alarm_rate(half_window, n_sigma):
     Notes
     -----
     The centre sample belongs to its own window and median and MAD come from ``2k + 1`` samples,
-    so the rate exceeds the asymptotic ``2 Phi(-n_sigma)`` (0.27 % at 3 sigma): about 2.8 % for
-    ``k = 3`` and 1.1 % for ``k = 10`` at ``n_sigma = 3``.  Samples within ``k`` of the ends use
+    so the rate exceeds the asymptotic ``2 Phi(-n_sigma)`` (0.27 % at 3 sigma): about 4.8 % for
+    ``k = 3``, 2.8 % for ``k = 5`` and 1.4 % for ``k = 10`` at ``n_sigma = 3``.  Samples within ``k`` of the ends use
     shorter windows and have other rates.
     """
     k = check_positive_int(half_window, "half_window")
