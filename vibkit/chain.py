@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numba as nb
 import numpy as np
 
-from .guide import CUMD, LEN0, S0, SIGP, Guide, circle_hit, local_point, locate, point_partials
+from .guide import CUMD, LEN0, S0, TRAVEL, Guide, circle_hit, local_inverse, local_map, local_point, locate, point_partials
 from .params import ChainParams
 
 __all__ = ["Chain", "Configuration", "ClosureError"]
@@ -49,8 +49,7 @@ def walk(tab, p0, s0_1, delta, pitch, n, s0, kk, lam, xs, zs):
     wraps = math.floor(s0_1 / p0)
     s = s0_1 - wraps * p0
     k = locate(tab, s)
-    sig = 1.0 + tab[k, SIGP] * delta
-    lam0 = sig * (s - tab[k, S0])
+    lam0 = local_map(tab, k, s - tab[k, S0], delta)[0]
     x, z, _ = local_point(tab, k, lam0, delta)
     s0[0] = s0_1
     kk[0] = k
@@ -73,10 +72,9 @@ def walk(tab, p0, s0_1, delta, pitch, n, s0, kk, lam, xs, zs):
                 wraps += 1
         if found == -1.0:
             return math.nan
-        sig = 1.0 + tab[k, SIGP] * delta
         kk[i] = k
         lam[i] = found
-        s0[i] = wraps * p0 + tab[k, S0] + found / sig
+        s0[i] = wraps * p0 + tab[k, S0] + local_inverse(tab, k, found, delta)
         x, z, _ = local_point(tab, k, found, delta)
         xs[i] = x
         zs[i] = z
@@ -116,7 +114,7 @@ def solve_closure(tab, p0, lt, s0_1, delta0, pitch, n, s0, kk, lam, xs, zs, part
     Returns (delta, iterations, status): status 0 converged, 1 no bracket / walk failed,
     2 iteration limit.
     """
-    lo, hi = -lt * (1.0 - 1e-9), lt * (1.0 - 1e-9)
+    lo, hi = -lt * TRAVEL * (1.0 - 1e-9), lt * TRAVEL * (1.0 - 1e-9)
     have_lo, have_hi = False, False
     d = delta0
     for it in range(100):
@@ -306,7 +304,7 @@ class Chain:
     # -- position problem -------------------------------------------------------------------
     def find_delta_bracket(self, s0_1: float) -> float:
         """A starting delta for s0_1 found by scanning the tensioner's travel; raises ClosureError."""
-        lt = self._lt
+        lt = self._lt * TRAVEL
         grid = np.linspace(-lt, lt, 81)[1:-1]
         hs = np.array([walk(self.guide.table, self.guide.p0, s0_1, d, self.pitch, self.n, self._s0, self._kk,
                             self._lam, self._xs, self._zs) for d in grid])
@@ -400,15 +398,14 @@ class Chain:
                 f"chain closure failed at s0_1 = {s0_values[done]:.9g} m (status {status[done]}) during the sweep")
         return deltas, resid
 
-    def s_deformed(self, s0: float, delta: float) -> tuple[float, float, float]:
-        """Deformed arc length s of a point at s0, with ds/ds0 and ds/ddelta there (one loop)."""
+    def s_deformed(self, s0: float, delta: float):
+        """Deformed arc length s of a point at s0 (one loop), with ds/ds0, ds/ddelta, d2s/ds0^2 and
+        d2s/ds0 ddelta there."""
         tab, p0 = self.guide.table, self.guide.p0
         s0w = s0 - p0 * math.floor(s0 / p0)
         k = locate(tab, s0w)
-        sig = 1.0 + tab[k, SIGP] * delta
-        loc = s0w - tab[k, S0]
-        s = tab[k, S0] + tab[k, CUMD] * delta + sig * loc
-        return s, sig, tab[k, CUMD] + tab[k, SIGP] * loc
+        lam, ls, ld, lss, lsd = local_map(tab, k, s0w - tab[k, S0], delta)
+        return tab[k, S0] + tab[k, CUMD] * delta + lam, ls, tab[k, CUMD] + ld, lss, lsd
 
 
 def segment_length_table(guide: Guide) -> np.ndarray:

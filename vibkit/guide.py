@@ -13,10 +13,16 @@ Two arc-length coordinates are used:
     arc length on the *deformed* guide, measured from the top of the lower head at (delta, R),
     period P0 - 2 delta.
 
-For a segment k with undeformed start ``s0_k``, the local arc length is
-``lam = sigma_k(delta) (s0 - s0_k)`` with ``sigma = 1`` (fixed) or ``(Lt - delta)/Lt`` (telescopic),
-and the point is ``r = A_k + B_k delta + f_k(lam)`` where ``f_k`` is the line or arc from the
-segment's start heading. The kernels below return r and its first and second partial derivatives
+For a segment k with undeformed start ``s0_k``, the local arc length is ``lam = s0 - s0_k`` on
+fixed segments. On the two telescopic runs (undeformed length Lt, deformed length Lt - delta) it is
+``lam = s - delta w(s / Lt)`` with s = s0 - s0_k and w a smooth ramp (w(0) = 0, w(1) = 1,
+w'(0) = w'(1) = 0, w' = 1/(1 - eps) in the middle, cosine ramps of width eps = 0.1 at the ends).
+The study maps s0 *linearly* onto the shortened run (w(u) = u); that makes dr/ds0 jump at the four
+ends of the telescopic runs, so a roller crossing them changes its speed discontinuously in that
+coordinate and the reduced dynamics does not conserve energy. With the ramp, r(s0, delta) is C1 in
+both arguments everywhere, for |delta| < (1 - eps) Lt. Positions, and so every physical result, do
+not depend on this choice of coordinate. The point is ``r = A_k + B_k delta + f_k(lam)`` where
+``f_k`` is the line or arc from the segment's start heading. The kernels below return r and its first and second partial derivatives
 with respect to s0 and delta, which is all the chain closure and its velocity and acceleration
 recursions need.
 """
@@ -120,6 +126,53 @@ def locate(tab, s0):
     return lo
 
 
+RAMP = 0.1  # width of the cosine ramps at the ends of a telescopic run, as a fraction of Lt
+TRAVEL = 1.0 - RAMP  # |delta| / Lt must stay below this for the coordinate map to be monotonic
+
+
+@nb.njit(cache=True)
+def tele_ramp(u):
+    """w(u), w'(u), w''(u) of the telescopic map (see module docstring), u in [0, 1]."""
+    eps = RAMP
+    a = 1.0 / (1.0 - eps)
+    if u < eps:
+        x = math.pi * u / eps
+        return a * 0.5 * (u - eps / math.pi * math.sin(x)), a * 0.5 * (1.0 - math.cos(x)), \
+            a * 0.5 * math.pi / eps * math.sin(x)
+    if u > 1.0 - eps:
+        v = 1.0 - u
+        x = math.pi * v / eps
+        return 1.0 - a * 0.5 * (v - eps / math.pi * math.sin(x)), a * 0.5 * (1.0 - math.cos(x)), \
+            -a * 0.5 * math.pi / eps * math.sin(x)
+    return a * (0.5 * eps + (u - eps)), a, 0.0
+
+
+@nb.njit(cache=True)
+def local_map(tab, k, s0loc, delta):
+    """lam and its partials (lam_s, lam_d, lam_ss, lam_sd) at s0loc = s0 - s0_k on segment k."""
+    if tab[k, SIGP] == 0.0:
+        return s0loc, 1.0, 0.0, 0.0, 0.0
+    lt = tab[k, LEN0]
+    w, w1, w2 = tele_ramp(s0loc / lt)
+    return s0loc - delta * w, 1.0 - delta * w1 / lt, -w, -delta * w2 / (lt * lt), -w1 / lt
+
+
+@nb.njit(cache=True)
+def local_inverse(tab, k, lam, delta):
+    """s0loc whose local arc length is lam on segment k (Newton on the monotonic map)."""
+    if tab[k, SIGP] == 0.0:
+        return lam
+    lt = tab[k, LEN0]
+    x = lam * lt / (lt - delta)
+    for _ in range(50):
+        f, fs, _, _, _ = local_map(tab, k, x, delta)
+        dx = (f - lam) / fs
+        x -= dx
+        if abs(dx) < 1e-15 * (1.0 + abs(x)):
+            break
+    return x
+
+
 @nb.njit(cache=True)
 def local_point(tab, k, lam, delta):
     """Position, unit tangent angle and left normal on segment k at local arc length lam."""
@@ -137,30 +190,28 @@ def local_point(tab, k, lam, delta):
 
 @nb.njit(cache=True)
 def point_partials(tab, k, lam, s0loc, delta, out):
-    """r and its partial derivatives at local arc length lam of segment k.
+    """r and its partial derivatives with respect to s0 and delta on segment k.
 
-    ``s0loc`` is s0 - s0_k. Fills ``out`` (length 12) with
-    x, z, rs_x, rs_z, rd_x, rd_z, rss_x, rss_z, rsd_x, rsd_z, rdd_x, rdd_z.
+    ``s0loc`` is s0 - s0_k and ``lam`` its local arc length (``local_map``). Fills ``out``
+    (length 12) with x, z, rs_x, rs_z, rd_x, rd_z, rss_x, rss_z, rsd_x, rsd_z, rdd_x, rdd_z.
     """
     x, z, phi = local_point(tab, k, lam, delta)
     kap = tab[k, KAPPA]
-    sigp = tab[k, SIGP]
-    sig = 1.0 + sigp * delta
+    _, ls, ld, lss, lsd = local_map(tab, k, s0loc, delta)
     tx, tz = math.cos(phi), math.sin(phi)
     nx, nz = -tz, tx
-    lam_d = sigp * s0loc
     out[0] = x
     out[1] = z
-    out[2] = sig * tx
-    out[3] = sig * tz
-    out[4] = tab[k, BX] + lam_d * tx
-    out[5] = tab[k, BZ] + lam_d * tz
-    out[6] = sig * sig * kap * nx
-    out[7] = sig * sig * kap * nz
-    out[8] = sigp * tx + sig * kap * lam_d * nx
-    out[9] = sigp * tz + sig * kap * lam_d * nz
-    out[10] = kap * lam_d * lam_d * nx
-    out[11] = kap * lam_d * lam_d * nz
+    out[2] = ls * tx
+    out[3] = ls * tz
+    out[4] = tab[k, BX] + ld * tx
+    out[5] = tab[k, BZ] + ld * tz
+    out[6] = lss * tx + ls * ls * kap * nx
+    out[7] = lss * tz + ls * ls * kap * nz
+    out[8] = lsd * tx + ls * ld * kap * nx
+    out[9] = lsd * tz + ls * ld * kap * nz
+    out[10] = kap * ld * ld * nx
+    out[11] = kap * ld * ld * nz
 
 
 @nb.njit(cache=True)
@@ -252,10 +303,10 @@ class Guide:
         return self.p0 - 2.0 * delta
 
     def _check_delta(self, delta):
-        lt = self.params.tensioner_length
+        lim = TRAVEL * self.params.tensioner_length
         d = np.asarray(delta)
-        if np.any(d >= lt) or np.any(d <= -lt):
-            raise ValueError(f"delta must lie in (-{lt}, {lt}) m (the tensioner travel), got {delta!r}")
+        if np.any(d >= lim) or np.any(d <= -lim):
+            raise ValueError(f"delta must lie in (-{lim:.4g}, {lim:.4g}) m (the tensioner travel), got {delta!r}")
 
     def segment_lengths(self, delta: float = 0.0) -> np.ndarray:
         """Length of each of the 14 segments on the deformed guide. [m]"""
@@ -266,18 +317,24 @@ class Guide:
         """Undeformed-guide coordinate s0 to deformed arc length s (both wrapped to one loop). [m]"""
         self._check_delta(delta)
         s0 = np.mod(np.asarray(s0, dtype=float), self.p0)
-        k = np.searchsorted(self.table[:, S0], s0, side="right") - 1
-        sig = 1.0 + self.table[k, SIGP] * delta
-        return self.table[k, S0] + self.table[k, CUMD] * delta + sig * (s0 - self.table[k, S0])
+        flat = np.atleast_1d(s0)
+        out = np.empty(flat.size)
+        for j, v in enumerate(flat):
+            k = locate(self.table, v)
+            out[j] = self.table[k, S0] + self.table[k, CUMD] * delta + local_map(self.table, k, v - self.table[k, S0],
+                                                                                  delta)[0]
+        return out.reshape(np.shape(s0))
 
     def s_to_s0(self, s, delta: float = 0.0):
         """Deformed arc length s to the undeformed-guide coordinate s0. [m]"""
         self._check_delta(delta)
         s = np.mod(np.asarray(s, dtype=float), self.perimeter(delta))
         starts = self.table[:, S0] + self.table[:, CUMD] * delta
-        k = np.searchsorted(starts, s, side="right") - 1
-        sig = 1.0 + self.table[k, SIGP] * delta
-        return self.table[k, S0] + (s - starts[k]) / sig
+        flat = np.atleast_1d(s)
+        k = np.searchsorted(starts, flat, side="right") - 1
+        out = np.array([self.table[kk, S0] + local_inverse(self.table, kk, v - starts[kk], delta)
+                        for kk, v in zip(k, flat)])
+        return out.reshape(np.shape(s))
 
     def _frame(self, s, delta):
         s0 = self.s_to_s0(s, delta)
@@ -286,8 +343,8 @@ class Guide:
         kap = np.empty(s0.size)
         for j, v in enumerate(s0):
             k = locate(self.table, v)
-            sig = 1.0 + self.table[k, SIGP] * delta
-            point_partials(self.table, k, sig * (v - self.table[k, S0]), v - self.table[k, S0], delta, out[j])
+            loc = v - self.table[k, S0]
+            point_partials(self.table, k, local_map(self.table, k, loc, delta)[0], loc, delta, out[j])
             kap[j] = self.table[k, KAPPA]
         return out, kap
 

@@ -15,7 +15,6 @@ import math
 import numpy as np
 
 from .dynamics import link_multipliers
-from .guide import SIGP
 from .progress import Progress
 from .results import make_dataset
 
@@ -28,13 +27,13 @@ def _solve_s0(model, s_target, s0_guess):
     s0 = s0_guess
     for _ in range(30):
         conf = chain.configure(s0)
-        s, sig, sd = chain.s_deformed(s0, conf.delta)
+        s, sig, sd, lss, lsd = chain.s_deformed(s0, conf.delta)
         per = model.guide.p0 - 2.0 * conf.delta
         f = math.remainder(s - s_target, per)
         jac, gam, c, alpha, beta = chain.jacobian(conf)
         dsd = sig + sd * c
         if abs(f) < 1e-13:
-            return s0, conf, (sig, sd, c, dsd)
+            return s0, conf, (sig, sd, c, dsd, lss, lsd)
         s0 -= f / dsd
     raise RuntimeError(f"inverse dynamics: could not place roller 1 at s = {s_target:.9g} m")
 
@@ -85,17 +84,16 @@ def inverse_dynamics(model, *, speed, duration, step, start=0.0, effects=None, o
     bar = Progress(nt, "inverse dynamics", enabled=progress)
     for j, tj in enumerate(t):
         s_target = start + speed * tj
-        s0, conf, (sig, sd, c, dsd) = _solve_s0(model, s_target, s0)
+        s0, conf, (sig, sd, c, dsd, lss, lsd) = _solve_s0(model, s_target, s0)
         if theta0 is None:
             theta0 = model.meshed_angle(conf)
         s0dot = speed / dsd
-        # deformed-arc-length constraint differentiated twice: sig s0dd + sd dd + 2 sig' s0d dd_dot = 0
-        k1 = conf.segment[0]
-        sigp = model.guide.table[k1, SIGP]
+        # the imposed s(s0_1, delta) = s_start + v t differentiated twice:
+        # sig s0dd + sd deltadd + lss s0d^2 + 2 lsd s0d deltad = 0, with deltadd = c s0dd + e
         mo = model.chain.motion(conf, s0dot, 0.0)
         e = mo["e"]
         ddot = c * s0dot
-        s0ddot = -(sd * e + 2.0 * sigp * s0dot * ddot) / dsd
+        s0ddot = -(sd * e + lss * s0dot ** 2 + 2.0 * lsd * s0dot * ddot) / dsd
         mo = model.chain.motion(conf, s0dot, s0ddot)
         vel, acc = mo["velocity"], mo["acceleration"]
         fx = np.zeros(n)

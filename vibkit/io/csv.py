@@ -100,11 +100,12 @@ def _is_comment(line: str, delim: str) -> bool:
     return s.startswith(_COMMENT) or (delim != ";" and s.startswith(";"))
 
 
-def _data_like(cells, n, dec) -> bool:
+def _data_like(cells, n, dec, numcols) -> bool:
+    """A data row: n cells, every numeric column holding a number, a stamp or nothing, one number at least."""
     if len(cells) != n:
         return False
     kinds = [_kind(c, dec) for c in cells]
-    return "text" not in kinds and "num" in kinds
+    return "num" in kinds and all(k != "text" for k, isnum in zip(kinds, numcols) if isnum)
 
 
 def _decode(path, data: bytes, encoding):
@@ -134,7 +135,7 @@ def _decode(path, data: bytes, encoding):
 
 
 def _sniff(lines, delimiter, decimal):
-    """Choose delimiter, decimal mark and field count from the data at the end of the file."""
+    """Choose delimiter, decimal mark, field count and numeric columns from the end of the file."""
     body = [ln for ln in lines if ln.strip() and not ln.lstrip().startswith(_COMMENT)]
     tail = body[-200:]
     if not tail:
@@ -151,29 +152,32 @@ def _sniff(lines, delimiter, decimal):
         freq, n = max((f, k) for k, f in counts.items())
         decs = (decimal,) if decimal is not None else ((".",) if d == "," else (".", ","))
         for dec in decs:
-            same = [r for r in rows if len(r) == n]
-            numeric = 0
+            kinds = [[_kind(c, dec) for c in r] for r in rows if len(r) == n]
+            kinds = [k for k in kinds if 2 * k.count("num") > n]  # mostly numbers: not headers or notes
+            n_num = sum(k.count("num") for k in kinds)
+            numcols = []
             for j in range(n):
-                kinds = [_kind(r[j], dec) for r in same]
-                good = sum(k != "text" for k in kinds)
-                if "num" in kinds and good >= 0.9 * len(kinds):
-                    numeric += 1
-            header_match = _header_matches(lines, split, n, dec, d)
-            score = (freq >= 0.9 * len(rows), header_match, numeric, n, -order, dec == ".")
+                col = [k[j] for k in kinds]
+                numcols.append("num" in col and sum(x != "text" for x in col) >= 0.9 * len(col))
+            if not any(numcols):
+                continue
+            header_match = _header_matches(lines, split, n, dec, d, numcols)
+            # a header row that splits like the data first, then the most numbers read
+            score = (header_match, n_num, freq, -order, dec == ".")
             if best is None or score > best[0]:
-                best = (score, d, dec, n, trailing)
+                best = (score, d, dec, n, trailing, numcols)
     if best is None:
         return None
     return best[1:]
 
 
-def _header_matches(lines, split, n, dec, d) -> bool:
+def _header_matches(lines, split, n, dec, d, numcols) -> bool:
     prev = None
     for ln in lines:
         if not ln.strip() or _is_comment(ln, d):
             continue
         cells = split(ln)
-        if _data_like(cells, n, dec):
+        if _data_like(cells, n, dec, numcols):
             if prev is None:
                 return False
             return len(prev) == n and all(_kind(c, dec) in ("text", "missing") for c in prev)
@@ -321,9 +325,17 @@ def read_csv(path, data: bytes, *, channel=None, sample_rate=None, time_column=N
 
     sniff = _sniff(lines, delimiter, decimal)
     if sniff is None:
+        body = [i for i, ln in enumerate(lines) if ln.strip() and not ln.lstrip().startswith(_COMMENT)]
         last = max(i for i, ln in enumerate(lines) if ln.strip()) + 1
-        raise RecordingError(path, last, "found only comment lines; expected rows of numbers")
-    d, dec, n, trailing = sniff
+        if not body:
+            raise RecordingError(path, last, "found only comment lines; expected rows of numbers")
+        for i in body:
+            cells = [c.strip('"') for c in re.split(r"[,;\t| ]+", lines[i].strip())]
+            if all(c.lower() in _MISSING for c in cells):
+                raise RecordingError(path, i + 1, "all values are missing (NaN or empty); "
+                                                  "expected rows of numbers")
+        raise RecordingError(path, last, "no data rows found (expected rows of numbers below the header)")
+    d, dec, n, trailing, numcols = sniff
     split = _Splitter(d, trailing)
 
     # first data row
@@ -335,7 +347,7 @@ def read_csv(path, data: bytes, *, channel=None, sample_rate=None, time_column=N
         cells = split(ln)
         if all(c == "" for c in cells):
             continue
-        if _data_like(cells, n, dec):
+        if _data_like(cells, n, dec, numcols):
             first = i
             break
         nonblank.append((i, cells))

@@ -32,8 +32,9 @@ def _load(path):
         try:
             st = obspy.read(str(path))
         except Exception as exc:  # obspy raises TypeError/ValueError/... for what it cannot read
-            raise RecordingError(path, None, "not a waveform format obspy reads, nor text or netCDF/HDF5 "
-                                 f"({type(exc).__name__}: {exc})") from None
+            detail = "" if "Unknown format" in str(exc) else f" ({type(exc).__name__}: {exc})"
+            raise RecordingError(path, None, "binary content that is neither text, netCDF/HDF5 nor a waveform "
+                                 f"format obspy reads{detail}") from None
     return st, [f"obspy warning: {w.message}" for w in caught]
 
 
