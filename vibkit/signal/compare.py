@@ -40,7 +40,8 @@ class HarmonicComparison:
     frequency_ratio : float
         ``frequency_meas_hz / frequency_sim_hz``.
     frequency_ratio_ci : (float, float)
-        Confidence interval of the ratio (Cramer-Rao sigmas, normal).
+        Simultaneous confidence interval of the ratio (Cramer-Rao sigmas, normal, Bonferroni over
+        the harmonics of the table).
     order_sim, order_meas : float
         Harmonic frequency over its own signal's fundamental: departs from ``order`` for a
         component that is not a true harmonic.
@@ -172,7 +173,8 @@ def compare_spectra(
     Fundamental and harmonic amplitudes come from :func:`vibkit.signal.link_pass_estimate`
     (harmonic least squares) on each signal.  Each harmonic's own frequency is re-estimated with
     the other fitted harmonics subtracted, its sigma the Cramer-Rao bound; the ratio's interval is
-    ``ratio (1 +- z sqrt((s_m/f_m)**2 + (s_s/f_s)**2))``.  Amplitude sigmas are
+    ``ratio (1 +- z sqrt((s_m/f_m)**2 + (s_s/f_s)**2))`` with ``z`` the Bonferroni-corrected normal
+    quantile, so the family-wise false-mismatch rate is at most ``1 - confidence``.  Amplitude sigmas are
     ``noise_std sqrt(2/N)``.  The order spectra assume constant speed within each record (use
     :func:`vibkit.signal.track_phase` and :func:`vibkit.signal.order_spectrum` otherwise).
     """
@@ -190,7 +192,9 @@ def compare_spectra(
     k = min(len(es.harmonics), len(em.harmonics))
     rs = _per_harmonic(xs, fs_sim, es)[:k]
     rm = _per_harmonic(xm, fs_meas, em)[:k]
-    z = float(scipy.stats.norm.ppf(0.5 + float(confidence) / 2.0))
+    # Simultaneous (Bonferroni) intervals over the k harmonics: the chance that any row of a
+    # matching pair is flagged stays below 1 - confidence.
+    z = float(scipy.stats.norm.ppf(1.0 - (1.0 - float(confidence)) / (2.0 * k)))
     table = []
     scores = []
     for i in range(k):

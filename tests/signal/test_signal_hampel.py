@@ -1,0 +1,113 @@
+"""Hampel filter: identical to a plain reference loop (MATLAB definition), events, false-alarm mode."""
+
+import numpy as np
+import pytest
+from scipy.stats import norm
+
+from vibkit.signal import hampel, hampel_events, hampel_false_alarm_rate, hampel_n_sigma_for_rate
+
+
+def reference_hampel(x, k, n_sigma):
+    """Direct transcription of MATLAB's definition (NaN ignored inside windows)."""
+    n = x.size
+    y, j = x.copy(), np.zeros(n, bool)
+    med, sig = np.empty(n), np.empty(n)
+    for i in range(n):
+        w = x[max(0, i - k) : i + k + 1]
+        w = w[~np.isnan(w)]
+        if w.size == 0:
+            med[i] = sig[i] = np.nan
+            continue
+        m = np.median(w)
+        s = 1.4826 * np.median(np.abs(w - m))
+        med[i], sig[i] = m, s
+        if not np.isnan(x[i]) and abs(x[i] - m) > n_sigma * s:
+            j[i], y[i] = True, m
+    return y, j, med, sig
+
+
+def test_identical_to_reference_on_random_data_with_outliers_and_edges():
+    rng = np.random.default_rng(0)
+    for trial in range(60):
+        n = int(rng.integers(5, 400))
+        k = int(rng.integers(1, (n - 1) // 2 + 1))
+        x = rng.standard_normal(n)
+        x[rng.random(n) < 0.05] *= 25.0
+        if trial % 3 == 0:
+            x[rng.random(n) < 0.1] = np.nan
+        if trial % 4 == 0:
+            x = np.round(x)  # ties and zero MAD
+        ns = float(rng.uniform(0, 4))
+        got = hampel(x, k, ns)
+        want = reference_hampel(x, k, ns)
+        for a, b in zip(got, want):
+            np.testing.assert_array_equal(a, b)
+
+
+def test_identical_to_reference_long_record_chunked():
+    rng = np.random.default_rng(1)
+    x = rng.standard_normal(120_000)
+    x[::997] += 40.0
+    x[::1009] = np.nan
+    got = hampel(x, 4, 3.0)
+    want = reference_hampel(x[:3000], 4, 3.0)
+    np.testing.assert_array_equal(got.filtered[:2996], want[0][:2996])
+    tail = reference_hampel(x[-3000:], 4, 3.0)
+    np.testing.assert_array_equal(got.filtered[-2996:], tail[0][-2996:])
+    spikes = np.arange(0, x.size, 997)
+    assert got.is_outlier[spikes[1:-1]].all()
+
+
+def test_axis_and_fill_nan():
+    rng = np.random.default_rng(2)
+    x = rng.standard_normal((3, 50))
+    x[1, 10] = np.nan
+    r = hampel(x.T, 3, 3, axis=0)
+    for i in range(3):
+        np.testing.assert_array_equal(r.filtered[:, i], reference_hampel(x[i], 3, 3)[0])
+    f = hampel(x[1], 3, 3, fill_nan=True).filtered
+    assert f[10] == reference_hampel(x[1], 3, 3)[2][10]
+
+
+def test_events_report_spikes_with_time_and_size():
+    rng = np.random.default_rng(3)
+    fs = 100.0
+    x = 0.01 * rng.standard_normal(2000)
+    x[500] += 1.0
+    x[1200:1202] -= 0.8
+    ev = hampel_events(x, fs, half_window=5, n_sigma=20.0, t0=10.0)
+    assert [e.index for e in ev] == [500, 1200] or [e.index for e in ev] == [500, 1201]
+    assert ev[0].time_s == pytest.approx(15.0)
+    assert ev[0].deviation == pytest.approx(1.0, abs=0.05) and ev[0].size_sigma > 50
+    assert ev[1].stop - ev[1].start == 2 and ev[1].deviation < 0
+
+
+def test_false_alarm_rate_is_what_n_sigma_really_gives():
+    rng = np.random.default_rng(4)
+    x = rng.standard_normal(400_000)
+    for k in (3, 10):
+        observed = np.mean(hampel(x, k, 3.0).is_outlier[k:-k])
+        stated = hampel_false_alarm_rate(k, 3.0)
+        assert observed == pytest.approx(stated, rel=0.05)
+        assert stated > 2 * norm.sf(3.0)  # well above the asymptotic 0.27 %
+    ns = hampel_n_sigma_for_rate(3, 0.01)
+    observed = np.mean(hampel(x, 3, false_alarm_rate=0.01).is_outlier[3:-3])
+    assert observed == pytest.approx(0.01, rel=0.1)
+    assert hampel_false_alarm_rate(3, ns) == pytest.approx(0.01, rel=0.02)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        (dict(x=np.ones(5), half_window=3), "half_window"),
+        (dict(x=np.ones(5), half_window=0), "half_window"),
+        (dict(x=np.ones(9), half_window=2, n_sigma=-1), "n_sigma"),
+        (dict(x=np.array([]), half_window=1), "empty"),
+        (dict(x=np.full(9, np.nan), half_window=1), "all NaN"),
+        (dict(x=np.ones(9), half_window=1, n_sigma=2, false_alarm_rate=0.01), "either"),
+        (dict(x=np.ones(9), half_window=1, false_alarm_rate=0.9), "false_alarm_rate"),
+    ],
+)
+def test_bad_arguments(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        hampel(**kwargs)

@@ -1,0 +1,119 @@
+"""Order tracking, order spectra, Vold-Kalman filter."""
+
+import numpy as np
+import pytest
+
+from vibkit.signal import (
+    order_map,
+    order_spectrum,
+    phase_from_shaft_angle,
+    phase_from_tacho,
+    resample_to_angle,
+    track_phase,
+    vold_kalman,
+)
+from vibkit.signal.orders import _vk_banded, _vk_solve, _vk_sparse
+
+FS = 2050.0
+
+
+def wandering(seconds=60.0, seed=3):
+    rng = np.random.default_rng(seed)
+    t = np.arange(int(FS * seconds)) / FS
+    f_inst = 3.75 * (1 + 0.01 * np.sin(2 * np.pi * t / 15 + 0.3))  # +-1 %
+    phi = 2 * np.pi * np.cumsum(f_inst) / FS
+    s = 1.0 * np.cos(phi) + 0.6 * np.cos(2 * phi + 1) + 0.3 * np.cos(3 * phi + 2)
+    x = s + rng.standard_normal(t.size) * np.std(s)  # 0 dB: noise power = signal power
+    return t, f_inst, phi, x
+
+
+def test_track_phase_recovers_wandering_link_pass_to_0p05_percent():
+    t, f_inst, _, x = wandering()
+    tr = track_phase(x, FS, band=(3.0, 4.5))
+    edge = int(6.0 * FS)  # filter end effects: about 1 / bandwidth_hz (5.3 s) at each end
+    rel = (tr.frequency_hz[edge:-edge] - f_inst[edge:-edge]) / f_inst[edge:-edge]
+    assert np.sqrt(np.mean(rel**2)) < 5e-4
+
+
+def test_order_spectrum_from_tracked_phase_has_sharp_orders():
+    _, _, _, x = wandering()
+    tr = track_phase(x, FS, band=(3.0, 4.5))
+    ang = resample_to_angle(x, FS, tr.phase_rad, samples_per_cycle=32)
+    o, a = order_spectrum(ang)
+    for k, amp in ((1, 1.0), (2, 0.6), (3, 0.3)):
+        i = np.argmin(np.abs(o - k))
+        assert a[i] == pytest.approx(amp, rel=0.05)
+
+
+def test_known_shaft_angle_resampling_is_exact_for_orders():
+    teeth = 28
+    t = np.arange(int(20 * FS)) / FS
+    theta = 2 * np.pi * (3.75 / teeth) * (t + 0.5 * t**2 / 20)  # accelerating shaft
+    link = phase_from_shaft_angle(theta, teeth=teeth)
+    x = 0.8 * np.cos(2 * link) + 0.1 * np.cos(link)
+    ang = resample_to_angle(x, FS, link, samples_per_cycle=16)
+    o, a = order_spectrum(ang)
+    assert a[np.argmin(np.abs(o - 2))] == pytest.approx(0.8, rel=1e-3)
+    assert a[np.argmin(np.abs(o - 1))] == pytest.approx(0.1, rel=1e-2)
+    ang_shaft = resample_to_angle(x, FS, theta, samples_per_cycle=8 * teeth)  # orders up to 4 Z
+    o2, a2 = order_spectrum(ang_shaft)
+    assert o2[np.argmax(a2)] == pytest.approx(2 * teeth)
+
+
+def test_phase_from_tacho_linear_for_constant_speed():
+    pulses = np.arange(0, 10, 0.25)
+    t = np.linspace(0, 9.75, 100)
+    np.testing.assert_allclose(phase_from_tacho(pulses, t, pulses_per_cycle=2), 2 * np.pi * t / 0.5, atol=1e-9)
+    with pytest.raises(ValueError, match="pulse_times"):
+        phase_from_tacho(pulses[::-1], t)
+
+
+def test_order_map_shape_and_peak():
+    t = np.arange(int(30 * FS)) / FS
+    phi = 2 * np.pi * 3.75 * t
+    o, tm, s = order_map(np.cos(3 * phi), FS, phi, samples_per_cycle=16, cycles_per_frame=8)
+    assert s.shape == (o.size, tm.size)
+    assert np.all(o[np.argmax(s, axis=0)] == 3)
+    assert np.all(np.diff(tm) > 0) and 0 < tm[0] < tm[-1] < 30
+
+
+def test_vold_kalman_extracts_order_amplitude_and_phase():
+    rng = np.random.default_rng(5)
+    t = np.arange(int(40 * FS)) / FS
+    phi = 2 * np.pi * 3.75 * (t + 0.002 * t**2)
+    x = np.cos(phi) + 0.7 * np.cos(2 * phi + 0.3) + rng.standard_normal(t.size)
+    v = vold_kalman(x, FS, phi, order=2, bandwidth_hz=0.2)
+    inner = slice(int(5 * FS), -int(5 * FS))
+    assert np.mean(v.amplitude[inner]) == pytest.approx(0.7, rel=0.02)
+    assert np.angle(np.mean(v.envelope[inner])) == pytest.approx(0.3, abs=0.03)
+    resid = v.waveform[inner] - 0.7 * np.cos(2 * phi[inner] + 0.3)
+    assert np.std(resid) < 0.05
+
+
+def test_vk_solvers_agree():
+    rng = np.random.default_rng(6)
+    y = rng.standard_normal(5000) + 1j * rng.standard_normal(5000)
+    r2 = 1e6
+    a = _vk_solve(y, r2)
+    import scipy.linalg
+    import scipy.sparse.linalg
+
+    b = scipy.linalg.solveh_banded(_vk_banded(y.size, r2), y)
+    c = scipy.sparse.linalg.spsolve(_vk_sparse(y.size, r2), y)
+    np.testing.assert_allclose(a, b, rtol=1e-8, atol=1e-10)
+    np.testing.assert_allclose(a, c, rtol=1e-8, atol=1e-10)
+
+
+@pytest.mark.parametrize(
+    ("call", "match"),
+    [
+        (lambda: resample_to_angle(np.ones(100), FS, -np.arange(100.0)), "phase"),
+        (lambda: resample_to_angle(np.ones(100), FS, np.arange(100.0) * 1e-3), "cycle"),
+        (lambda: vold_kalman(np.ones(100), FS, np.arange(100.0), bandwidth_hz=0.0), "bandwidth_hz"),
+        (lambda: vold_kalman(np.ones(100), FS, np.arange(100.0), bandwidth_hz=1.0, solver="x"), "solver"),
+        (lambda: track_phase(np.random.default_rng(0).standard_normal(20000), FS, band=(3.0, 2000.0)), "Nyquist"),
+    ],
+)
+def test_bad_arguments(call, match):
+    with pytest.raises(ValueError, match=match):
+        call()
