@@ -100,6 +100,12 @@ def _is_comment(line: str, delim: str) -> bool:
     return s.startswith(_COMMENT) or (delim != ";" and s.startswith(";"))
 
 
+def _mostly_numbers(kinds) -> bool:
+    """A row that reads as data whatever its columns: numbers outnumber text, few cells are text."""
+    num, stamp, text = kinds.count("num"), kinds.count("stamp"), kinds.count("text")
+    return num >= 1 and text < num + stamp and 2 * text < len(kinds)
+
+
 def _data_like(cells, n, dec, numcols) -> bool:
     """A data row: n cells, every numeric column holding a number, a stamp or nothing, one number at least."""
     if len(cells) != n:
@@ -153,7 +159,7 @@ def _sniff(lines, delimiter, decimal):
         decs = (decimal,) if decimal is not None else ((".",) if d == "," else (".", ","))
         for dec in decs:
             kinds = [[_kind(c, dec) for c in r] for r in rows if len(r) == n]
-            kinds = [k for k in kinds if 2 * k.count("num") > n]  # mostly numbers: not headers or notes
+            kinds = [k for k in kinds if _mostly_numbers(k)]  # not headers, notes or metadata
             n_num = sum(k.count("num") for k in kinds)
             numcols = []
             for j in range(n):
