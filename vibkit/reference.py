@@ -29,9 +29,11 @@ A property of the study's coordinates worth knowing when comparing: the map s0 -
 but not continuously differentiable where a telescopic tensioner run (whose points are mapped
 linearly, the study's eqs. 4-5 to 4-8) meets a fixed segment, so a roller crossing such a joint
 with a continuous s0dot changes its physical speed by the factor (Lt - delta)/Lt; the constraint
-then holds only through Baumgarte's correction for a short while. The independent-coordinate
-formulation of :mod:`vibkit.forward` has no such jumps (its roller velocities come from the
-closure at every instant).
+then holds only through Baumgarte's correction for a short while (the link lengths err by about
+0.2 mm at the default alpha = beta = 50 1/s). vibkit's guide uses a C1 map instead
+(:func:`vibkit.guide.local_map`); ``coordinate_map="vibkit"`` runs the same equations in that
+coordinate, which separates the study's equations (checked to integration accuracy) from its choice
+of coordinate (a small, stated disagreement).
 """
 
 from __future__ import annotations
@@ -45,23 +47,26 @@ import scipy.sparse as sp
 from scipy.sparse.linalg import splu
 
 from .effects import FP, IP, pack_parameters
-from .guide import BX, BZ, KAPPA, S0, SIGP, local_point, locate
+from .guide import BX, BZ, KAPPA, S0, SIGP, local_inverse, local_map, local_point, locate, point_partials
 from .integrate import IntegrationError
 from .results import make_dataset
 from .sprocket import contact_kernel
 
 __all__ = ["StudyFormulation", "run_study", "BAUMGARTE_ALPHA", "BAUMGARTE_BETA", "STUDY_SETTINGS"]
 
-BAUMGARTE_ALPHA = 10.0
+BAUMGARTE_ALPHA = 50.0
 """Default Baumgarte damping constant alpha. [1/s]
 
 The study names alpha and beta but gives no values (its section 7.2.3 asks for values "not too
-large, not too small"); alpha = beta makes the constraint error critically damped,
-e'' + 2 alpha e' + beta^2 e = 0, with a time constant of 0.1 s, short against the 0.27 s link-pass
-period and long against the integrator's 1 ms step limit.
+large, not too small"). alpha = beta makes the constraint error critically damped,
+e'' + 2 alpha e' + beta^2 e = 0, with a time constant of 20 ms: short against the 0.27 s link-pass
+period, long against the 1 ms step limit. On the first second of ``sim/thesis-forward.toml`` the
+link-length error then stays below about 0.2 mm; it scales as 1/alpha (1 mm at alpha = 10, 0.06 mm
+at 200), while the Baumgarte forces that correct it grow with alpha (their imprint on the link
+tensions is about 6 N at alpha = 10, 18 N at 50 and 54 N at 200, against tensions of 3.5 kN).
 """
 
-BAUMGARTE_BETA = 10.0
+BAUMGARTE_BETA = 50.0
 """Default Baumgarte stiffness constant beta (natural frequency of the constraint error). [1/s]"""
 
 STUDY_SETTINGS = {"rtol": 1e-3, "atol": 1e-3, "max_step": 1e-3}
@@ -73,8 +78,7 @@ _SOLVE_IVP_METHODS = ("BDF", "Radau", "LSODA", "RK45", "RK23", "DOP853")
 _P0, _PITCH, _G, _K, _EXPO, _DAMP = FP["p0"], FP["pitch"], FP["g"], FP["k"], FP["expo"], FP["damp"]
 _KP, _KI, _WREF, _TLIM = FP["kp"], FP["ki"], FP["wref"], FP["tlim"]
 _KS, _PRELOAD, _MC, _MURR, _INERTIA = FP["k_s"], FP["preload"], FP["m_c"], FP["mu_rr"], FP["inertia"]
-_RD, _CX, _CZ, _ROOT, _PSI, _HLO, _HHI = FP["r_d"], FP["cx"], FP["cz"], FP["root_r"], FP["psi"], FP["head_lo"], \
-    FP["head_hi"]
+_RD, _CX, _CZ, _ROOT, _PSI = FP["r_d"], FP["cx"], FP["cz"], FP["root_r"], FP["psi"]
 _N, _NTEETH, _GRAV, _CONTACT, _MOTOR, _PASS, _TENS, _ROLL = IP["n"], IP["nteeth"], IP["gravity"], IP["contact"], \
     IP["motor"], IP["passengers"], IP["tensioner"], IP["rolling"]
 
@@ -143,15 +147,20 @@ def study_partials(tab, k, s0loc, delta, out):
 
 
 @nb.njit(cache=True)
-def _kinematics(tab, p0, q, qd, p, part, vel, wq):
+def _kinematics(tab, p0, q, qd, p, linear, part, vel, wq):
     """Roller positions and partials (part (p, 12)), velocities (vel (p, 2)) and the
-    quadratic-velocity accelerations w_i (wq (p, 2)) at coordinates q and rates qd."""
+    quadratic-velocity accelerations w_i (wq (p, 2)) at coordinates q and rates qd, with the
+    study's linear map (``linear``) or vibkit's smooth one (:func:`vibkit.guide.local_map`)."""
     delta = q[p]
     ddot = qd[p]
     for i in range(p):
         s0w = q[i] - p0 * math.floor(q[i] / p0)
         k = locate(tab, s0w)
-        study_partials(tab, k, s0w - tab[k, S0], delta, part[i])
+        s0loc = s0w - tab[k, S0]
+        if linear:
+            study_partials(tab, k, s0loc, delta, part[i])
+        else:
+            point_partials(tab, k, local_map(tab, k, s0loc, delta)[0], s0loc, delta, part[i])
         sd = qd[i]
         vel[i, 0] = part[i, 2] * sd + part[i, 4] * ddot
         vel[i, 1] = part[i, 3] * sd + part[i, 5] * ddot
@@ -160,7 +169,7 @@ def _kinematics(tab, p0, q, qd, p, part, vel, wq):
 
 
 @nb.njit(cache=True)
-def _assemble(t, y, prm, alpha, beta, ws, data, rhs):
+def _assemble(t, y, prm, linear, alpha, beta, ws, data, rhs):
     """Fill the KKT values ``data`` (pattern of :func:`_kkt_pattern`) and right-hand side ``rhs``.
 
     State y = [q (n), qdot (n), integral of the sprocket speed error]. Returns
@@ -174,7 +183,7 @@ def _assemble(t, y, prm, alpha, beta, ws, data, rhs):
     p0, pitch = fp[_P0], fp[_PITCH]
     q = y[:n]
     qd = y[n:2 * n]
-    _kinematics(tab, p0, q, qd, p, part, vel, wq)
+    _kinematics(tab, p0, q, qd, p, linear, part, vel, wq)
     for i in range(p):
         xs[i] = part[i, 0]
         zs[i] = part[i, 1]
@@ -197,19 +206,22 @@ def _assemble(t, y, prm, alpha, beta, ws, data, rhs):
             fz[i] -= mu * mass[i] * g * vel[i, 1] / sp_
     torque_c = 0.0
     if ip[_CONTACT] == 1:
+        # candidates: the rollers whose circle can reach a tooth (centre within root + height + r_d)
         ncand = 0
-        lo, hi = fp[_HLO], fp[_HHI]
+        reach = fp[_ROOT] + loc[1, 1] + fp[_RD] + 1e-9
         for i in range(p):
-            sw = q[i] - p0 * math.floor(q[i] / p0)
-            if lo <= sw <= hi:
+            dxc = xs[i] - fp[_CX]
+            dzc = zs[i] - fp[_CZ]
+            if dxc * dxc + dzc * dzc < reach * reach:
                 cand[ncand] = i
                 ncand += 1
         for i in range(p):
             vx[i] = vel[i, 0]
             vz[i] = vel[i, 1]
-        torque_c, _, _, _ = contact_kernel(
-            xs, zs, vx, vz, cand, ncand, y[p + 1], y[n + p + 1], fp[_CX], fp[_CZ], loc, fp[_ROOT], fp[_PSI], ip[_NTEETH],
-            fp[_RD], fp[_K], fp[_EXPO], fp[_DAMP], fx, fz, ind_t, frc_t, False)
+        # the kernel's first return value is the torque on the sprocket (the others are diagnostics)
+        torque_c = contact_kernel(
+            xs, zs, vx, vz, cand, ncand, y[p + 1], y[n + p + 1], fp[_CX], fp[_CZ], loc, fp[_ROOT], fp[_PSI],
+            ip[_NTEETH], fp[_RD], fp[_K], fp[_EXPO], fp[_DAMP], fx, fz, ind_t, frc_t, False)[0]
     f_c = 0.0
     m_c = 0.0
     if ip[_TENS] == 1:
@@ -301,6 +313,11 @@ class StudyFormulation:
         tensioner, rolling_resistance).
     alpha, beta : float
         Baumgarte constants of C'' + 2 alpha C' + beta^2 C = 0. [1/s]
+    coordinate_map : {"study", "vibkit"}
+        How s0 maps onto the telescopic runs: "study" is the study's linear map (dr/ds0 jumps at
+        the four ends of the runs, see module docstring); "vibkit" is the C1 map of
+        :func:`vibkit.guide.local_map`, the coordinate of :mod:`vibkit.forward`. The equations are
+        the same; only the coordinate differs.
 
     Attributes
     ----------
@@ -321,7 +338,10 @@ class StudyFormulation:
     delta, theta), an ordering in which the sparse LU makes almost no fill-in.
     """
 
-    def __init__(self, model, effects: dict, *, alpha: float = BAUMGARTE_ALPHA, beta: float = BAUMGARTE_BETA):
+    def __init__(self, model, effects: dict, *, alpha: float = BAUMGARTE_ALPHA, beta: float = BAUMGARTE_BETA,
+                 coordinate_map: str = "study"):
+        if coordinate_map not in ("study", "vibkit"):
+            raise ValueError(f"coordinate_map must be 'study' or 'vibkit', got {coordinate_map!r}")
         for name, value in (("alpha", alpha), ("beta", beta)):
             if isinstance(value, bool) or not (isinstance(value, (int, float)) and math.isfinite(value)
                                                and value >= 0):
@@ -330,6 +350,8 @@ class StudyFormulation:
         self.effects = effects
         self.alpha = float(alpha)
         self.beta = float(beta)
+        self.coordinate_map = coordinate_map
+        self.linear = coordinate_map == "study"
         self.prm = pack_parameters(model, effects)
         self.p = model.n
         self.n = self.p + 2
@@ -370,7 +392,8 @@ class StudyFormulation:
         y = np.ascontiguousarray(y, dtype=float)
         if y.shape != (self.size,):
             raise ValueError(f"state y must have shape ({self.size},), got {y.shape}")
-        return _assemble(float(t), y, self.prm, self.alpha, self.beta, self.work, self._data, self._rhs)
+        return _assemble(float(t), y, self.prm, self.linear, self.alpha, self.beta, self.work, self._data,
+                         self._rhs)
 
     def kkt(self, t: float, y: np.ndarray):
         """The augmented system at (t, y), ordered [q, lambda].
@@ -429,12 +452,15 @@ class StudyFormulation:
         k = conf.segment
         loc_vibkit = wrapped - tab[k, S0]
         loc_vibkit[loc_vibkit < -1e-9] += p0
-        sig = 1.0 + tab[k, SIGP] * conf.delta
-        y[:p] = conf.s0 - loc_vibkit + conf.lam / sig
+        if self.linear:
+            loc_study = conf.lam / (1.0 + tab[k, SIGP] * conf.delta)
+        else:
+            loc_study = np.array([local_inverse(tab, kk, lam, conf.delta) for kk, lam in zip(k, conf.lam)])
+        y[:p] = conf.s0 - loc_vibkit + loc_study
         y[p] = conf.delta
         y[p + 1] = y_ind[2]
         part = np.empty((p, 12))
-        _kinematics(tab, p0, y[:n], np.zeros(n), p, part, np.empty((p, 2)), np.empty((p, 2)))
+        _kinematics(tab, p0, y[:n], np.zeros(n), p, self.linear, part, np.empty((p, 2)), np.empty((p, 2)))
         v = jac * y_ind[1]
         ddot = c * y_ind[1]
         rs, rd = part[:, 2:4], part[:, 4:6]
@@ -491,7 +517,8 @@ class StudyFormulation:
 
 
 def run_study(scene, *, duration, rtol=1e-3, atol=1e-3, max_step=1e-3, method="BDF", alpha=BAUMGARTE_ALPHA,
-              beta=BAUMGARTE_BETA, output_step=None, first_step=None, max_wall_time=math.inf):
+              beta=BAUMGARTE_BETA, coordinate_map="study", output_step=None, first_step=None,
+              max_wall_time=math.inf):
     """Integrate a forward scene with the study's formulation (all p + 2 coordinates, Baumgarte).
 
     Parameters
@@ -511,6 +538,9 @@ def run_study(scene, *, duration, rtol=1e-3, atol=1e-3, max_step=1e-3, method="B
         A ``solve_ivp`` method; "BDF" (variable order 1-5, like ode15s) by default.
     alpha, beta : float
         Baumgarte constants. [1/s]
+    coordinate_map : {"study", "vibkit"}
+        The study's linear map of s0 on the telescopic runs, or vibkit's C1 map (see
+        :class:`StudyFormulation`).
     output_step : float, optional
         Spacing of the output times; the scene's ``run.output_step`` by default. [s]
     first_step : float, optional
@@ -564,7 +594,7 @@ def run_study(scene, *, duration, rtol=1e-3, atol=1e-3, max_step=1e-3, method="B
     if not dt > 0:
         raise ValueError(f"output_step must be positive [s], got {dt!r}")
     model = EscalatorModel(scene)
-    form = StudyFormulation(model, scene.effects, alpha=alpha, beta=beta)
+    form = StudyFormulation(model, scene.effects, alpha=alpha, beta=beta, coordinate_map=coordinate_map)
     y0 = form.initial_state(start=run.get("start", 0.0), speed=run.get("initial_speed", 0.0))
     t_out = np.arange(0.0, duration + 0.5 * dt, dt)
     t_out = t_out[t_out <= duration * (1 + 1e-12)]
@@ -609,6 +639,7 @@ def _dataset(form, sol, wall, method, rtol, atol, max_step):
         "formulation": "study: p + 2 coordinates, Lagrange multipliers, Baumgarte stabilisation",
         "baumgarte_alpha_per_s": form.alpha,
         "baumgarte_beta_per_s": form.beta,
+        "coordinate_map": form.coordinate_map,
         "chain_speed_m_s": float(nominal),
         "link_pass_frequency_hz": model.link_pass_frequency(nominal) if nominal else 0.0,
         "closure_residual_max": float(out["closure_residual"].max()),
