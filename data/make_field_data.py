@@ -93,8 +93,8 @@ def leon() -> bytes:
              + 0.06 * np.sin(6 * np.pi * f0 * t + phases[2]))
     x = 0.050 * shape / (shape.max() - shape.min())  # 0.05 mm peak to peak [mm]
     x += rng.normal(0.0, 0.0015, t.size)  # sensor noise [mm] (assumed)
-    for tk, sign in zip(np.sort(rng.uniform(2.0, dur - 2.0, 6)), rng.choice([-1.0, 1.0], 6)):
-        x += sign * 0.075 * np.exp(-0.5 * ((t - tk) / 0.012) ** 2)  # knocks: ~0.1 mm excursions
+    for tk in np.sort(rng.uniform(2.0, dur - 2.0, 6)):
+        x += 0.06 * np.exp(-0.5 * ((t - tk) / 0.012) ** 2)  # knocks: ~0.1 mm peak to peak locally
     lines = [
         f"# {RECON}",
         "# Leon shopping centre escalator; empty; displacement of the tensioner carriage.",
@@ -102,7 +102,7 @@ def leon() -> bytes:
         "# speed 0.49 m/s; fundamental 3.54 Hz (link pitch 0.49 / 3.54 = 0.1384 m); about 0.05 mm",
         "# peak to peak; with occasional 0.1 mm spikes put down to knocks; rubbing or worn links.",
         "# Sample rate (200 Hz); length (40 s); harmonic content; noise (0.0015 mm rms) and the six",
-        "# spikes (Gaussian; 12 ms; 0.075 mm) are assumptions of the reconstruction.",
+        "# spikes (Gaussian; 12 ms; +0.06 mm) are assumptions of the reconstruction.",
         f"# {GENERATED} (seed 20200802)",
         "# provenance: reconstruction from a published summary (model.md section 10)",
         "# chain_speed_m_s: 0.49",

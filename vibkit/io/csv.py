@@ -154,12 +154,14 @@ def _sniff(lines, delimiter, decimal):
         rows = [split(ln) for ln in tail if not _is_comment(ln, d)]
         if not rows:
             continue
-        counts = Counter(len(r) for r in rows)
-        freq, n = max((f, k) for k, f in counts.items())
         decs = (decimal,) if decimal is not None else ((".",) if d == "," else (".", ","))
         for dec in decs:
-            kinds = [[_kind(c, dec) for c in r] for r in rows if len(r) == n]
+            kinds = [[_kind(c, dec) for c in r] for r in rows]
             kinds = [k for k in kinds if _mostly_numbers(k)]  # not headers, notes or metadata
+            if not kinds:
+                continue
+            freq, n = max((f, k) for k, f in Counter(len(k) for k in kinds).items())
+            kinds = [k for k in kinds if len(k) == n]
             n_num = sum(k.count("num") for k in kinds)
             numcols = []
             for j in range(n):
