@@ -50,7 +50,7 @@ class Work:
             np.empty(n + 1), np.empty(n + 1, dtype=np.int64), np.empty(n + 1), np.empty(n + 1), np.empty(n + 1),
             np.empty((n + 1, 12)), np.empty(n + 1), np.empty(n + 1), np.empty((n, 2)), np.empty(n),
             np.empty((n, 2)), np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n, dtype=np.int64),
-            np.zeros(nteeth), np.zeros(nteeth), np.zeros(8),
+            np.zeros(nteeth), np.zeros(nteeth), np.zeros(10),
         )
 
 
@@ -117,7 +117,7 @@ def evaluate(t, y, dy, prm, ws, want_teeth):
     State y = [s0_1, s0dot_1, theta, thetadot, integral of the speed error]. On return the work
     arrays ``ws`` hold the closed configuration, velocities and forces at (t, y), and ``ws[18]``
     holds [delta, deltadot, deltaddot, motor torque, contact torque, contact energy, max indentation,
-    active contacts]. Status 0 is success; 1 means the chain could not be closed (the state left
+    active contacts, driving-flank force, back-flank force]. Status 0 is success; 1 means the chain could not be closed (the state left
     the tensioner's travel).
     """
     tab, loc, fp, ip, mass, pm, ps, pb, pa = prm
@@ -155,16 +155,21 @@ def evaluate(t, y, dy, prm, ws, want_teeth):
     energy_c = 0.0
     worst = 0.0
     active = 0
+    f_drive = 0.0
+    f_back = 0.0
     if want_teeth:
         for j in range(ind_t.size):
             ind_t[j] = 0.0
             frc_t[j] = 0.0
     if ip[3] == 1:
+        # candidates: rollers whose circle can reach a tooth tip (centre closer than root + h + r_d)
         ncand = 0
-        lo, hi = fp[21], fp[22]
+        reach = fp[19] + loc[1, 1] + fp[16] + 1e-9
+        reach2 = reach * reach
         for i in range(n):
-            sw = s0[i] - p0 * math.floor(s0[i] / p0)
-            if lo <= sw <= hi:
+            dxc = xs[i] - fp[17]
+            dzc = zs[i] - fp[18]
+            if dxc * dxc + dzc * dzc < reach2:
                 cand[ncand] = i
                 ncand += 1
         # roller velocities of the candidates (for damping): v = J sdot, stored in eta/sd scratch
@@ -172,7 +177,7 @@ def evaluate(t, y, dy, prm, ws, want_teeth):
             i = cand[jj]
             eta[i] = jac[i, 0] * sdot
             sd[i] = jac[i, 1] * sdot
-        torque_c, energy_c, worst, active = contact_kernel(
+        torque_c, energy_c, worst, active, f_drive, f_back = contact_kernel(
             xs, zs, eta, sd, cand, ncand, y[2], y[3], fp[17], fp[18], loc, fp[19], fp[20], ip[1], fp[16], fp[4],
             fp[5], fp[6], fx, fz, ind_t, frc_t, want_teeth)
     f_c = 0.0
@@ -210,4 +215,6 @@ def evaluate(t, y, dy, prm, ws, want_teeth):
     info[5] = energy_c
     info[6] = worst
     info[7] = active
+    info[8] = f_drive
+    info[9] = f_back
     return 0

@@ -100,6 +100,7 @@ def _post_process(fm, t, y, outputs, stats):
     delta = np.empty(nt)
     ddot = np.empty(nt)
     motor = np.empty(nt)
+    flank = np.empty((nt, 2))
     resid = np.empty(nt)
     speed = np.empty(nt)
     ke = np.empty(nt)
@@ -129,6 +130,7 @@ def _post_process(fm, t, y, outputs, stats):
             raise IntegrationError("the chain could not be closed", float(t[j]), y[j])
         sdot, sddot = y[j, 1], dy[1]
         delta[j], ddot[j], motor[j] = info[0], info[1], info[3]
+        flank[j] = info[8], info[9]
         ce[j] = info[5]
         resid[j] = closure_residual(xs, zs, n, model.pitch)
         vx = jac[:, 0] * sdot
@@ -167,6 +169,9 @@ def _post_process(fm, t, y, outputs, stats):
     for name, arr in simple.items():
         if name in want:
             data[name] = (("time",), arr)
+    if "flank_force" in want:
+        data["drive_flank_force"] = (("time",), flank[:, 0])
+        data["back_flank_force"] = (("time",), flank[:, 1])
     if "tensioner_displacement" in want:
         data["tensioner_displacement"] = (("time",), delta - delta.mean())
     if need_tension:

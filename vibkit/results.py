@@ -25,6 +25,8 @@ VARIABLES = {
     "sprocket_angle": ("rad", "sprocket angle theta"),
     "sprocket_speed": ("rad/s", "sprocket angular speed"),
     "motor_torque": ("N m", "motor torque on the sprocket"),
+    "drive_flank_force": ("N", "sum of roller normal forces on the driving flanks (CD)"),
+    "back_flank_force": ("N", "sum of roller normal forces on the back flanks (AB)"),
     "indentation": ("m", "largest roller indentation on each tooth"),
     "contact_force": ("N", "sum of roller normal forces on each tooth"),
     "roller_position": ("m", "roller centre position"),

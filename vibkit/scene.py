@@ -48,7 +48,7 @@ OUTPUTS = {
                 "chain_speed", "sprocket_angle", "sprocket_speed", "roller_position", "roller_velocity",
                 "roller_acceleration", "energy"},
     "forward": {"delta", "delta_dot", "sprocket_angle", "sprocket_speed", "motor_torque", "chain_speed",
-                "link_tension", "indentation", "contact_force", "roller_position", "roller_velocity",
+                "link_tension", "indentation", "contact_force", "flank_force", "roller_position", "roller_velocity",
                 "roller_acceleration", "closure_residual", "tensioner_displacement", "accel_step", "energy",
                 "s0"},
 }

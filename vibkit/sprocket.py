@@ -91,13 +91,16 @@ def contact_kernel(xs, zs, vx, vz, candidates, ncand, theta, omega, cx, cz, loc,
 
     Adds the contact force on each candidate roller to ``fx, fz`` [N] and returns
     (torque on the sprocket [N m], contact potential energy [J], max indentation [m],
-    number of active contacts). With ``want_teeth`` it also fills ``ind_tooth`` (max indentation
+    number of active contacts, sum of normal forces on driving flanks CD [N], the same on back
+    flanks AB [N]). With ``want_teeth`` it also fills ``ind_tooth`` (max indentation
     per tooth) [m] and ``force_tooth`` (sum of normal forces per tooth) [N].
     """
     torque = 0.0
     energy = 0.0
     worst = 0.0
     active = 0
+    f_drive = 0.0
+    f_back = 0.0
     for jj in range(ncand):
         i = candidates[jj]
         px, pz = xs[i], zs[i]
@@ -105,7 +108,7 @@ def contact_kernel(xs, zs, vx, vz, candidates, ncand, theta, omega, cx, cz, loc,
         phi = math.atan2(-dx, dz)
         rel = phi - theta
         j0 = math.floor(rel / psi)
-        for tj in (j0, j0 + 1):
+        for tj in (j0 - 1, j0, j0 + 1, j0 + 2):
             th = theta + psi * tj
             c, s = math.cos(th), math.sin(th)
             tooth = tj % nteeth
@@ -145,8 +148,12 @@ def contact_kernel(xs, zs, vx, vz, candidates, ncand, theta, omega, cx, cz, loc,
                 if pen > worst:
                     worst = pen
                 active += 1
+                if flank == 1:
+                    f_drive += f
+                else:
+                    f_back += f
                 if want_teeth:
                     if pen > ind_tooth[tooth]:
                         ind_tooth[tooth] = pen
                     force_tooth[tooth] += f
-    return torque, energy, worst, active
+    return torque, energy, worst, active, f_drive, f_back
