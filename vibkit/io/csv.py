@@ -42,6 +42,8 @@ _NUM = {
     ".": re.compile(r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?"),
     ",": re.compile(r"[+-]?(?:[0-9]+(?:,[0-9]*)?|,[0-9]+)(?:[eE][+-]?[0-9]+)?"),
 }
+_NOT_NUMBER_CHAR = {".": re.compile(r"[^0-9eE+\-.\n]"), ",": re.compile(r"[^0-9eE+\-,\n]")}
+_MAYBE_COMMENT = "#%/!; \t"
 _MISSING = frozenset({"", "nan", "-nan", "+nan", "na", "n/a", "#n/a", "null", "none"})
 _STAMP_ISO = re.compile(
     r"[0-9]{4}-[0-9]{2}-[0-9]{2}[T ][0-9]{2}:[0-9]{2}(?::[0-9]{2}(?:[.,][0-9]+)?)?(?:Z|[+-][0-9]{2}:?[0-9]{2})?")
@@ -49,6 +51,7 @@ _STAMP_DMY = re.compile(
     r"[0-9]{1,2}[/.-][0-9]{1,2}[/.-][0-9]{4}[ T][0-9]{1,2}:[0-9]{2}(?::[0-9]{2}(?:[.,][0-9]+)?)?")
 _STAMP_TOD = re.compile(r"[0-9]{1,2}:[0-9]{2}:[0-9]{2}(?:[.,:][0-9]+)?")
 _COMMENT = ("#", "%", "//", "!")
+_CONTROL = re.compile("[\x00-\x08\x0b\x0e-\x1f\x7f-\x9f]")
 _RATE_KEY = re.compile(r"sampl\w*[\s_-]*(?:rate|freq)|samplerate|^fs\b|frecuencia\s*de\s*muestreo"
                        r"|sampling|muestreo|abtastrate", re.IGNORECASE)
 _SCALE = re.compile(r"([0-9]+(?:[.,][0-9]*)?(?:[eE][+-]?[0-9]+)?)\s*,?\s*(?:counts?|lsb|cts|digits)\s*"
@@ -133,7 +136,7 @@ def _decode(path, data: bytes, encoding):
         except UnicodeDecodeError:
             text, notes = data.decode("latin-1"), ["encoding latin-1 (the file is neither UTF-8 nor cp1252)"]
     sample = text[:65536]
-    ctrl = sum(1 for c in sample if (ord(c) < 32 and c not in "\t\n\r\f") or 0x7F <= ord(c) < 0xA0)
+    ctrl = len(_CONTROL.findall(sample))
     if sample and ctrl > max(2, 0.01 * len(sample)):
         raise RecordingError(path, None, f"binary content ({ctrl} control bytes in the first {len(sample)}); "
                                          "expected a text file, netCDF/HDF5 or a waveform format obspy reads")
@@ -142,8 +145,13 @@ def _decode(path, data: bytes, encoding):
 
 def _sniff(lines, delimiter, decimal):
     """Choose delimiter, decimal mark, field count and numeric columns from the end of the file."""
-    body = [ln for ln in lines if ln.strip() and not ln.lstrip().startswith(_COMMENT)]
-    tail = body[-200:]
+    tail = []
+    for ln in reversed(lines):  # the last 200 lines that may hold data
+        if ln.strip() and not ln.lstrip().startswith(_COMMENT):
+            tail.append(ln)
+            if len(tail) == 200:
+                break
+    tail.reverse()
     if not tail:
         return None
     delims = DELIMITERS if delimiter is None else (delimiter,)
@@ -262,6 +270,16 @@ def _match_column(want, headers, names, vars_):
 
 
 def _parse_numbers(cells, dec):
+    """Values, missing mask, indices of non-numbers, indices of infinities."""
+    joined = "\n".join(cells)
+    if not _NOT_NUMBER_CHAR[dec].search(joined):  # fast path: only digits, signs, exponents, marks
+        try:
+            vals = np.array(joined.replace(",", ".").split("\n") if dec == "," else cells, dtype=np.float64)
+        except ValueError:  # e.g. an empty cell or '1e': the cell-by-cell path below says which
+            pass
+        else:
+            empty = np.empty(0, dtype=np.intp)
+            return vals, np.zeros(len(cells), dtype=bool), empty, np.flatnonzero(np.isinf(vals))
     s = pd.Series(cells, dtype=object)
     low = s.str.lower()
     missing = low.isin(_MISSING).to_numpy()
@@ -418,8 +436,17 @@ def read_csv(path, data: bytes, *, channel=None, sample_rate=None, time_column=N
 
     # data rows
     rows, rownums, after = [], [], []
+    plain = d != " " and not trailing  # fast path: split, strip only lines with spaces
     for i in range(first, len(lines)):
         ln = lines[i]
+        if plain and ln and ln[0] not in _MAYBE_COMMENT and '"' not in ln:
+            cells = ln.split(d)
+            if " " in ln or "\t" in ln:
+                cells = [c.strip() for c in cells]
+            if len(cells) == n and any(cells):
+                rows.append(cells)
+                rownums.append(i + 1)
+                continue
         if not ln.strip():
             continue
         if _is_comment(ln, d):
@@ -431,9 +458,9 @@ def read_csv(path, data: bytes, *, channel=None, sample_rate=None, time_column=N
                 free.append(value)
             continue
         cells = split(ln)
+        if all(c == "" for c in cells):  # spreadsheets pad with empty rows (';;')
+            continue
         if len(cells) != n:
-            if all(c == "" for c in cells):
-                continue
             like = f" (as in the header on line {header_line})" if header_line else ""
             raise RecordingError(path, i + 1, f"expected {n} fields{like}, found {len(cells)}")
         rows.append(cells)
