@@ -267,7 +267,7 @@ def hampel(x, half_window=3, n_sigma=None, *, false_alarm_rate=None, fill_nan=Fa
     med = np.empty_like(flat)
     sig = np.empty_like(flat)
     # Independent chunks (each primes its own window) run on numba's threads for long records.
-    n_chunks = 1 if n < 50_000 else 4 * numba.get_num_threads()
+    n_chunks = 1 if n < 200_000 else 4 * numba.get_num_threads()
     for r in range(flat.shape[0]):
         _hampel_core(flat[r], k, ns, MAD_SCALE, bool(fill_nan), y[r], mask[r], med[r], sig[r], n_chunks)
     shape = moved.shape

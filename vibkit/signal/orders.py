@@ -19,7 +19,7 @@ import scipy.signal
 import scipy.sparse
 import scipy.sparse.linalg
 
-from ._checks import as_signal, check_band, check_fs, check_positive_int, fill_nan
+from ._checks import as_signal, check_band, check_fs, check_positive_int, decimate_for_band, fill_nan
 from .peaks import find_fundamental
 from .spectral import amplitude_spectrum
 
@@ -157,6 +157,9 @@ def track_phase(x, fs, *, band, n_harmonics=3, frame_s=None, bandwidth_hz=None, 
     fund = find_fundamental(x, fs, band=band)
     f0 = fund.frequency_hz
     kmax = max(1, min(kmax, int((0.45 * fs) // (f0 * (1 + max_deviation)))))
+    # Track on a decimated copy (only the harmonics matter), return at the original rate.
+    fs_full, n_full = fs, x.size
+    x, fs, q = decimate_for_band(x, fs, (kmax + 1) * f0 * (1 + max_deviation), oversample=6.0)
     h_star = int(np.argmax(fund.harmonic_snr_db[:kmax])) + 1
     if frame_s is None:
         frame_s = 8.0 / f0
@@ -216,6 +219,10 @@ def track_phase(x, fs, *, band, n_harmonics=3, frame_s=None, bandwidth_hz=None, 
     # 3. frequency from the phase derivative
     freq = np.gradient(phase, 1.0 / fs) / (2.0 * np.pi)
     freq = _lowpass(freq, fs, bw, padtype="odd")  # the phase is smooth: odd extension keeps the end slope
+    if q > 1:
+        t_full = np.arange(n_full) / fs_full
+        phase = scipy.interpolate.CubicSpline(t, phase)(t_full)
+        freq = np.interp(t_full, t, freq)
     return PhaseTrack(phase, freq, tf, ridge, tuple(used))
 
 
@@ -256,7 +263,8 @@ def resample_to_angle(x, fs, phase, *, samples_per_cycle=32, antialias=True, nan
         Angle samples per reference cycle; orders up to ``samples_per_cycle / 2`` are kept.
     antialias : bool, optional
         Low-pass at ``0.4 samples_per_cycle f_min`` before resampling when that is below
-        ``0.4 fs``, with ``f_min`` the slowest reference frequency.
+        ``0.4 fs``, with ``f_min`` the slowest reference frequency (the signal is first
+        decimated to about four times that frequency, which keeps the spline cheap).
     nan_policy : {"raise", "interpolate"}, optional
 
     Returns
@@ -279,17 +287,21 @@ def resample_to_angle(x, fs, phase, *, samples_per_cycle=32, antialias=True, nan
         raise ValueError("Parameter phase must increase strictly at every sample (no NaN); reverse the sign of a decreasing angle.")
     spc = check_positive_int(samples_per_cycle, "samples_per_cycle", minimum=4)
     t = np.arange(x.size) / fs
+    t_full = t
     c = ph / (2.0 * np.pi)
     if antialias:
         f_min = float(np.min(np.diff(c))) * fs
         cutoff = 0.4 * spc * f_min
         if cutoff < 0.4 * fs:
-            x = _lowpass(x, fs, cutoff, order=8)
+            # decimate first (cheap spline), then cut at the angle-domain Nyquist
+            x, fs_d, q = decimate_for_band(x, fs, cutoff, oversample=4.0)
+            t = t[::q]
+            x = _lowpass(x, fs_d, cutoff, order=8)
     start, stop = np.ceil(c[0]), np.floor(c[-1])
     if stop - start < 1:
         raise ValueError("Parameter phase covers less than one complete reference cycle; expected at least one.")
     grid = start + np.arange(int((stop - start) * spc)) / spc
-    tg = np.interp(grid, c, t)
+    tg = np.interp(grid, c, t_full)
     spline = scipy.interpolate.CubicSpline(t, x)
     return AngleSignal(grid, spline(tg), tg, spc)
 

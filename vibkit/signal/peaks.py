@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.ndimage
 
-from ._checks import as_signal, check_band, check_fs, check_positive_int, fill_nan
+from ._checks import as_signal, check_band, check_fs, check_positive_int, decimate_for_band, fill_nan
 from .estimate import FrequencyEstimate, harmonic_ls, interpolated_dft
 
 __all__ = ["find_fundamental", "Fundamental", "link_pass_estimate", "LinkPassEstimate", "Harmonic"]
@@ -37,7 +37,8 @@ class Fundamental:
     harmonic_snr_db : ndarray
         Power over noise floor near each multiple ``h f`` (h = 1, 2, ...). [dB]
     bin_hz : float
-        Bin width of the record, ``fs / N``. [Hz]
+        Bin width of the search spectrum (the record, or its Welch segments when longer than
+        ``max(20 / band[0], 8)`` s). [Hz]
     """
 
     frequency_hz: float
@@ -51,11 +52,20 @@ _TIE = 1.0
 
 def _score_table(x, fs, band, f_top, threshold_db):
     n = x.size
-    nfft = 1 << int(np.ceil(np.log2(4 * n)))
-    w = np.hanning(n)
-    p = np.abs(np.fft.rfft((x - x.mean()) * w, nfft)) ** 2
+    # Long records: Welch-average segments of max(20 periods of band[0], 8 s); the search needs
+    # no more resolution than that and the averaged noise floor is steadier.
+    nseg = min(n, int(round(fs * max(20.0 / band[0], 8.0))))
+    nfft = 1 << int(np.ceil(np.log2(4 * nseg)))
+    w = np.hanning(nseg)
+    step = max(1, nseg // 2)
+    starts = range(0, n - nseg + 1, step)
+    p = np.zeros(nfft // 2 + 1)
+    for a in starts:
+        seg = x[a : a + nseg]
+        p += np.abs(np.fft.rfft((seg - seg.mean()) * w, nfft)) ** 2
+    p /= len(starts)
     f = np.fft.rfftfreq(nfft, 1.0 / fs)
-    df = fs / n
+    df = fs / nseg
     sel = (f >= band[0] / 2.0) & (f <= f_top)
     noise = np.median(p[sel]) / np.log(2.0)
     if noise <= 0:
@@ -69,13 +79,14 @@ def _score_table(x, fs, band, f_top, threshold_db):
 
 
 def _scores(cands, f, pmax, f_top, thr):
-    """Harmonic evidence: sum over multiples of ``max(0, log(p / thr))``."""
-    out = np.empty(cands.size)
-    for i, c in enumerate(cands):
-        hf = c * np.arange(1, int(f_top // c) + 1)
-        p = np.interp(hf, f, pmax)
-        out[i] = np.sum(np.maximum(np.log(np.maximum(p, 1e-300) / thr), 0.0))
-    return out
+    """Harmonic evidence: sum over multiples up to ``f_top`` of ``max(0, log(p / thr))``."""
+    cands = np.asarray(cands, dtype=float)
+    hmax = int(f_top // cands.min())
+    hf = cands[:, None] * np.arange(1, hmax + 1)[None, :]
+    p = np.interp(hf.ravel(), f, pmax).reshape(hf.shape)
+    ev = np.maximum(np.log(np.maximum(p, 1e-300) / thr), 0.0)
+    ev[hf > f_top] = 0.0
+    return ev.sum(axis=1)
 
 
 def find_fundamental(x, fs, *, band, f_top=None, threshold_db=6.0, nan_policy="raise"):
@@ -195,9 +206,10 @@ class LinkPassEstimate:
         Its standard deviation (Cramer-Rao bound with fitted amplitudes and noise). [Hz]
     harmonics : list of Harmonic
     noise_std : float
-        Residual standard deviation. [x]
+        Residual standard deviation of the analysed signal (after decimation to about five times
+        the highest harmonic, so in-band noise only). [x]
     snr_db : float
-        Harmonic power over noise. [dB]
+        Harmonic power over that noise. [dB]
     method : str
     warnings : list of str
     estimate : FrequencyEstimate
@@ -252,6 +264,8 @@ def link_pass_estimate(x, fs, *, band=(2.0, 6.0), n_harmonics=5, method="harmoni
     kmax = check_positive_int(n_harmonics, "n_harmonics")
     fund = find_fundamental(x, fs, band=band)
     warnings = []
+    # Only the harmonics matter: decimate long, fast-sampled records (the CRB is unchanged).
+    x, fs, _q = decimate_for_band(x, fs, (kmax + 0.5) * fund.frequency_hz)
     k_fit = min(kmax, int((fs / 2.0 * 0.999) // fund.frequency_hz))
     if k_fit < kmax:
         warnings.append(f"only {k_fit} of n_harmonics={kmax} lie below Nyquist ({fs / 2:g} Hz)")
@@ -263,7 +277,8 @@ def link_pass_estimate(x, fs, *, band=(2.0, 6.0), n_harmonics=5, method="harmoni
     if np.max(snr) < 10.0:
         warnings.append(f"strongest harmonic only {np.max(snr):.1f} dB above the noise floor")
     fh = h_star * fund.frequency_hz
-    ide = interpolated_dft(x, fs, f_guess=fh)
+    half = min(fund.bin_hz, fh / 2.0)
+    ide = interpolated_dft(x, fs, band=(fh - half, min(fh + half, fs / 2.0)))
     if abs(ide.frequency_hz - fh) > fund.bin_hz:
         ide_f = fh
         warnings.append("interpolated DFT left the harmonic's bin; kept the harmonic-sum value")
