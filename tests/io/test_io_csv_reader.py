@@ -240,3 +240,12 @@ def test_options_are_validated():
                          ({"decimal": ";"}, "decimal")]:
         with pytest.raises(ValueError, match=word):
             read_recording("whatever.csv", **kwargs)
+
+
+def test_units_row_below_the_header(tmp_path):
+    text = "Time;Accel;Disp\n[ms];[g];[mm]\n0;0,5;1\n10;1,0;2\n20;1,5;3\n"
+    ds = read_recording(write(tmp_path, text))
+    np.testing.assert_allclose(ds["time"].values, [0, 0.01, 0.02])
+    np.testing.assert_allclose(ds["accel"].values, np.array([0.5, 1.0, 1.5]) * G)
+    np.testing.assert_allclose(ds["disp"].values, [1e-3, 2e-3, 3e-3])
+    assert "units row on line 2" in ds.attrs["history"]

@@ -105,7 +105,9 @@ def read_recording(path, *, channel=None, sample_rate=None, time_column=None, ti
         channel in SI units (attrs ``units``, ``long_name``, ``quantity``,
         ``column``); int32 ``segment`` when made of bursts; attrs
         ``source_file``, ``sha256``, ``reader``, ``sample_rate_hz`` [Hz],
-        ``history`` and the metadata found in the file.
+        ``history`` and the metadata found in the file; files with a time
+        column also get ``segment_count`` and ``time_jitter_rms_percent``,
+        timestamped ones ``start_time``.
 
     Raises
     ------

@@ -7,7 +7,8 @@ dataset's ``history``:
 * delimiter (``,`` ``;`` tab ``|`` or whitespace) and decimal comma (``0,49``);
 * metadata lines above the header (``key: value``, ``key;value``, ``;Tag, ...``
   comment lines), kept as attrs, and free comment text;
-* the header row (or a ``Headers`` metadata line as GCDC loggers write);
+* the header row (or a ``Headers`` metadata line as GCDC loggers write), and a
+  row of units below it (``s;g;mm``) when there is one;
 * the time column (s, ms, us, timestamps) or, with none, the sample rate from the
   header or the ``sample_rate`` option;
 * units from column names (``(m/s^2)``, ``[g]``, ``_mm``, ``gFz``), converted to SI;
@@ -101,6 +102,12 @@ class _Splitter:
 def _is_comment(line: str, delim: str) -> bool:
     s = line.lstrip()
     return s.startswith(_COMMENT) or (delim != ";" and s.startswith(";"))
+
+
+def _is_unit_cell(cell: str) -> bool:
+    """An empty cell or a unit alone ('s', '[ms]', '(g)', 'mm'), as in a units row below the header."""
+    u = cell.strip("()[]{} ")
+    return not u or parse_unit(u) is not None or parse_time_unit(u) is not None
 
 
 def _mostly_numbers(kinds) -> bool:
@@ -397,6 +404,12 @@ def read_csv(path, data: bytes, *, channel=None, sample_rate=None, time_column=N
 
     # header row
     header, header_line, meta_lines = None, None, []
+    unit_row, unit_line = None, None
+    if (len(nonblank) > 1 and len(nonblank[-1][1]) == n and len(nonblank[-2][1]) == n
+            and any(nonblank[-1][1]) and all(_is_unit_cell(c) for c in nonblank[-1][1])
+            and all(_kind(c, dec) in ("text", "missing") for c in nonblank[-2][1])):
+        unit_line, unit_row = nonblank[-1][0] + 1, nonblank[-1][1]  # a row of units below the names
+        nonblank = nonblank[:-1]
     if nonblank:
         hi, hcells = nonblank[-1]
         kinds = [_kind(c, dec) for c in hcells]
@@ -409,7 +422,7 @@ def read_csv(path, data: bytes, *, channel=None, sample_rate=None, time_column=N
             col = nonblank[-2][1][j]
             raise RecordingError(path, hi + 1, f"expected a number in column '{col}', found '{hcells[j]}'")
     for i in range(first):
-        if lines[i].strip() and i + 1 != header_line:
+        if lines[i].strip() and i + 1 not in (header_line, unit_line):
             meta_lines.append(i)
 
     # metadata
@@ -480,6 +493,12 @@ def read_csv(path, data: bytes, *, channel=None, sample_rate=None, time_column=N
         split_names = [(f"channel_{j}", None, None) for j in range(n)]
     else:
         split_names = [split_name_unit(h) if h else (f"channel_{j}", None, None) for j, h in enumerate(header)]
+    if unit_row is not None and header_line is not None:
+        for j, u in enumerate(unit_row):
+            u = u.strip("()[]{} ")
+            if u and split_names[j][1] is None:
+                split_names[j] = (split_names[j][0], u, None)
+        history.append(f"units row on line {unit_line}")
     names = [s[0] for s in split_names]
     vars_ = unique_names([safe_name(nm, f"channel_{j}") for j, nm in enumerate(names)])
     vars_ = [v + "_channel" if v in ("time", "segment") else v for v in vars_]
