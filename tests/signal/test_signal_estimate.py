@@ -105,3 +105,13 @@ def test_link_pass_estimate_one_call():
 def test_bad_arguments(call, match):
     with pytest.raises(ValueError, match=match):
         call()
+
+
+@pytest.mark.parametrize("f0", [2.3, 3.75, 5.1])
+def test_noise_free_simulated_signal(f0):
+    # simulations are (nearly) noise free: leakage must not be taken for harmonics
+    t = np.arange(20000) / 2000.0
+    x = 0.3 * np.cos(2 * np.pi * f0 * t) + np.cos(4 * np.pi * f0 * t) + 0.1 * np.cos(6 * np.pi * f0 * t + 1)
+    r = link_pass_estimate(x, 2000.0, band=(2.0, 6.0), n_harmonics=3)
+    assert r.fundamental_hz == pytest.approx(f0, rel=1e-6)
+    assert [h.amplitude for h in r.harmonics] == pytest.approx([0.3, 1.0, 0.1], rel=1e-3)

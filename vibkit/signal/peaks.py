@@ -48,6 +48,7 @@ class Fundamental:
 
 
 _TIE = 1.0
+_DYNAMIC_RANGE_DB = 80.0
 
 
 def _score_table(x, fs, band, f_top, threshold_db):
@@ -67,14 +68,16 @@ def _score_table(x, fs, band, f_top, threshold_db):
     f = np.fft.rfftfreq(nfft, 1.0 / fs)
     df = fs / nseg
     sel = (f >= band[0] / 2.0) & (f <= f_top)
-    noise = np.median(p[sel]) / np.log(2.0)
-    if noise <= 0:
-        noise = np.finfo(float).tiny
+    # Noise floor: median of the power (exponential noise: median = ln 2 x mean), but not below
+    # _DYNAMIC_RANGE_DB under the strongest peak, so that noise-free (simulated) signals do not
+    # turn window leakage and rounding into "detected" harmonics.
+    floor = float(np.max(p[sel])) * 10.0 ** (-_DYNAMIC_RANGE_DB / 10.0)
+    noise = max(np.median(p[sel]) / np.log(2.0), floor, np.finfo(float).tiny)
     half = max(1, int(round(df / (f[1] - f[0]))))
     pmax = scipy.ndimage.maximum_filter1d(p, size=2 * half + 1, mode="nearest") / noise
     # Threshold relative to the median of the max-filtered noise (the max over +-1 bin lifts the
     # noise by about 3 dB): noise multiples then exceed it with probability below 0.2 %.
-    thr = 10.0 ** (threshold_db / 10.0) * float(np.median(pmax[sel]))
+    thr = 10.0 ** (threshold_db / 10.0) * max(float(np.median(pmax[sel])), 1.0)
     return f, pmax, p / noise, df, thr
 
 

@@ -179,7 +179,14 @@ def hampel_da(da, half_window=3, n_sigma=None, **kwargs):
             "is_outlier": ("time", mask, {"units": "1", "long_name": "Hampel outlier flag"}),
         },
         coords={"time": da["time"]},
-        attrs={"hampel_half_window": int(half_window), "hampel_n_sigma": float(n_sigma if n_sigma is not None else 3.0)},
+        attrs={
+            "hampel_half_window": int(half_window),
+            "hampel_threshold": (
+                f"false_alarm_rate={kwargs['false_alarm_rate']}"
+                if kwargs.get("false_alarm_rate") is not None
+                else f"n_sigma={n_sigma if n_sigma is not None else 3.0}"
+            ),
+        },
     )
 
 
