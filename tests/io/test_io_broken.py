@@ -94,6 +94,11 @@ def test_ragged_row_short(write):
     expect(write(bad), 4, "expected 2 fields (as in the header on line 1), found 1")
 
 
+def test_ragged_first_data_row(write):
+    bad = GOOD.replace("0.00,0.1", "0.00")
+    expect(write(bad), 2, "expected 2 fields, found 1")
+
+
 def test_ragged_row_long(write):
     bad = GOOD.replace("0.02,0.3", "0.02,0.3,7")
     expect(write(bad), 4, "expected 2 fields", "found 3")

@@ -162,7 +162,7 @@ def _sniff(lines, delimiter, decimal):
     if not tail:
         return None
     delims = DELIMITERS if delimiter is None else (delimiter,)
-    best = None
+    found = []
     for order, d in enumerate(delims):
         trailing = d != " " and sum(ln.rstrip().endswith(d) for ln in tail) >= 0.9 * len(tail)
         split = _Splitter(d, trailing)
@@ -185,13 +185,14 @@ def _sniff(lines, delimiter, decimal):
             if not any(numcols):
                 continue
             header_match = _header_matches(lines, split, n, dec, d, numcols)
-            # a header row that splits like the data first, then the most numbers read
-            score = (header_match, n_num, freq, -order, dec == ".")
-            if best is None or score > best[0]:
-                best = (score, d, dec, n, trailing, numcols)
-    if best is None:
+            found.append((n_num, header_match, freq, -order, dec == ".", (d, dec, n, trailing, numcols)))
+    if not found:
         return None
-    return best[1:]
+    most = max(f[0] for f in found)
+    # among readings that find at least half the numbers of the best one, prefer a header row that
+    # splits like the data ("0,49" under a one-column header is a decimal comma), then more numbers
+    best = max(found, key=lambda f: (2 * f[0] >= most, f[1], f[0], f[2], f[3], f[4]))
+    return best[5]
 
 
 def _header_matches(lines, split, n, dec, d, numcols) -> bool:
@@ -421,6 +422,8 @@ def read_csv(path, data: bytes, *, channel=None, sample_rate=None, time_column=N
             j = kinds.index("text")
             col = nonblank[-2][1][j]
             raise RecordingError(path, hi + 1, f"expected a number in column '{col}', found '{hcells[j]}'")
+        elif len(hcells) != n and _mostly_numbers(kinds):  # a ragged first data row
+            raise RecordingError(path, hi + 1, f"expected {n} fields, found {len(hcells)}")
     for i in range(first):
         if lines[i].strip() and i + 1 not in (header_line, unit_line):
             meta_lines.append(i)
