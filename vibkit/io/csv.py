@@ -613,7 +613,7 @@ def read_csv(path, data: bytes, *, channel=None, sample_rate=None, time_column=N
         time_attrs["column"] = tname
 
     # channels
-    channels, chan_lines = [], []
+    channels = []
     for j in chan_idx:
         head = header_disp[j]
         nm, unit_text, note = split_names[j]
@@ -684,7 +684,6 @@ def read_csv(path, data: bytes, *, channel=None, sample_rate=None, time_column=N
             attrs["original_units"] = unit.text
             ch_units, quantity = unit.si, unit.quantity
         channels.append(Channel(vars_[j], vals, ch_units, nm, quantity, attrs))
-        chan_lines.append(j)
     if not channels:
         raise RecordingError(path, header_line, "no numeric data column found")
 
