@@ -42,6 +42,7 @@ def atomic_write(path: Path, data: bytes) -> None:
     try:
         with os.fdopen(fd, "wb") as fh:
             fh.write(data)
+        os.chmod(tmp, 0o644)
         os.replace(tmp, path)
     except BaseException:
         if os.path.exists(tmp):
@@ -69,6 +70,7 @@ def machine_info():
         "python": platform.python_version(),
         "numpy": np.__version__,
         "scipy": scipy.__version__,
+        "load_avg_1min_at_start": round(os.getloadavg()[0], 2),
     }
 
 
@@ -263,7 +265,12 @@ def write_accuracy(acc):
         ax.semilogy(xv, [r["rms_interpolated_dft_hz"] for r in rows], "s-", label="interpolated DFT (RMS)")
         ax.semilogy(xv, [r["crb_single_tone_hz"] for r in rows], "k:", label="single-tone CRB")
         if sweep == "length":
+            from matplotlib.ticker import NullFormatter
+
             ax.set_xscale("log")
+            ax.set_xticks(xv)
+            ax.set_xticklabels([f"{v:g}" for v in xv])
+            ax.xaxis.set_minor_formatter(NullFormatter())
         ax.set_xlabel(label)
         ax.set_ylabel("frequency error [Hz]")
         ax.grid(True, which="both", alpha=0.3)
