@@ -179,6 +179,21 @@ def _combine(values, sigmas):
     return float(np.mean(v)), float(np.std(v) / math.sqrt(v.size))
 
 
+def _order_amplitude(x, fs, f0, spc):
+    from .signal import order_spectrum, resample_to_angle
+
+    phase = 2.0 * np.pi * f0 * np.arange(x.size) / fs
+    return order_spectrum(resample_to_angle(x, fs, phase, samples_per_cycle=spc))
+
+
+def _max_in_bins(o, a, grid, step):
+    idx = np.clip(np.round((o - grid[0]) / step).astype(int), -1, grid.size)
+    out = np.interp(grid, o, a)
+    ok = (idx >= 0) & (idx < grid.size)
+    np.maximum.at(out, idx[ok], a[ok])
+    return out
+
+
 def compare(recording, result, *, channel=None, variable=None, n_harmonics=5, band=None, confidence=0.95,
             freq_tol=0.01, amp_tol_db=3.0, pitch_tolerance=0.005, duration=None, progress=False):
     """Compare a recording with a simulation in the order domain.
@@ -293,9 +308,15 @@ def compare(recording, result, *, channel=None, variable=None, n_harmonics=5, ba
                           if det_s and det_m else 0.0)
     score = float(np.mean(scores)) if scores else 0.0
     c0 = runs[0][1]
-    orders = c0.orders
-    a_sim = c0.amplitude_sim
-    a_meas = np.mean([np.interp(orders, c.orders, c.amplitude_meas) for _, c in runs], axis=0)
+    # order spectra on a common axis; each fine spectrum is reduced by its maximum within every
+    # coarse bin, so peaks survive whatever the record lengths
+    spc = int(2 ** np.ceil(np.log2(2 * (k + 1) + 2)))
+    spec_s = _order_amplitude(sim.x, sim.fs, c0.fundamental_sim_hz, spc)
+    spec_m = [_order_amplitude(b.x, b.fs, c.fundamental_meas_hz, spc) for b, c in runs]
+    step = max(o[1] - o[0] for o, _ in [spec_s] + spec_m)
+    orders = np.arange(0.5, k + 0.5 + step / 2, step)
+    a_sim = _max_in_bins(*spec_s, orders, step)
+    a_meas = np.mean([_max_in_bins(o, a, orders, step) for o, a in spec_m], axis=0)
     floor = 1e-12 * max(a_sim.max(), a_meas.max(), 1e-300)
     lsd = float(np.sqrt(np.mean((20 * np.log10((a_meas + floor) / (a_sim + floor))) ** 2)))
     f_sim = float(c0.fundamental_sim_hz)
