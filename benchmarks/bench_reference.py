@@ -15,7 +15,8 @@ Each wall time covers the whole call (integration and the derived outputs, link 
 included, at the scene's 5 ms output step) after a short warm-up run that compiles the numba
 kernels. BLAS is limited to one thread (set before numpy is imported): on a small shared machine
 a multi-threaded BLAS makes BDF's 323 x 323 dense LU many times slower, which would flatter
-vibkit unfairly. Writes ``benchmarks/results/reference_comparison.csv`` and ``.md``.
+vibkit unfairly. Writes ``benchmarks/results/reference_comparison.csv`` and ``.md`` (44 s), or
+``reference_comparison_<duration>s.*`` for other durations.
 """
 
 from __future__ import annotations
@@ -107,7 +108,7 @@ def run(duration: float) -> dict:
     }
 
 
-def write(res: dict, note: str) -> None:
+def write(res: dict, note: str, stem: str) -> None:
     o, s, d, r = res["ours"], res["study"], res["diff"], res["ranges"]
     ratio = s["wall"] / o["wall"]
     ratio_solver = s["solver_wall"] / o["solver_wall"]
@@ -133,7 +134,7 @@ def write(res: dict, note: str) -> None:
     w.writerow(["quantity", "value", "unit", "note"])
     for name, value, unit, text in rows:
         w.writerow([name, f"{value:.6g}", unit, text])
-    _atomic_write(RESULTS / "reference_comparison.csv", buf.getvalue())
+    _atomic_write(RESULTS / f"{stem}.csv", buf.getvalue())
     md = [
         "# vibkit's formulation against the study's (issue 3)",
         "",
@@ -167,7 +168,7 @@ def write(res: dict, note: str) -> None:
         "phase, so the delta difference grows towards the size of its ripple (not analysed further here).",
         "",
     ]
-    _atomic_write(RESULTS / "reference_comparison.md", "\n".join(md))
+    _atomic_write(RESULTS / f"{stem}.md", "\n".join(md))
 
 
 def main(argv=None) -> int:
@@ -183,8 +184,10 @@ def main(argv=None) -> int:
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     res = run(duration)
     res["load"] = load
-    write(res, note)
-    print((RESULTS / "reference_comparison.md").read_text())
+    # the study's 44 s is the reference result; other durations get their own files
+    stem = "reference_comparison" if duration == 44.0 else f"reference_comparison_{duration:g}s"
+    write(res, note, stem)
+    print((RESULTS / f"{stem}.md").read_text())
     return 0
 
 

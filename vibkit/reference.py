@@ -75,7 +75,7 @@ STUDY_SETTINGS = {"rtol": 1e-3, "atol": 1e-3, "max_step": 1e-3}
 _SOLVE_IVP_METHODS = ("BDF", "Radau", "LSODA", "RK45", "RK23", "DOP853")
 
 # parameter slots of vibkit.effects.pack_parameters (module constants, frozen into the compiled code)
-_P0, _PITCH, _G, _K, _EXPO, _DAMP = FP["p0"], FP["pitch"], FP["g"], FP["k"], FP["expo"], FP["damp"]
+_P0, _G, _K, _EXPO, _DAMP = FP["p0"], FP["g"], FP["k"], FP["expo"], FP["damp"]
 _KP, _KI, _WREF, _TLIM = FP["kp"], FP["ki"], FP["wref"], FP["tlim"]
 _KS, _PRELOAD, _MC, _MURR, _INERTIA = FP["k_s"], FP["preload"], FP["m_c"], FP["mu_rr"], FP["inertia"]
 _RD, _CX, _CZ, _ROOT, _PSI = FP["r_d"], FP["cx"], FP["cz"], FP["root_r"], FP["psi"]
@@ -169,18 +169,19 @@ def _kinematics(tab, p0, q, qd, p, linear, part, vel, wq):
 
 
 @nb.njit(cache=True)
-def _assemble(t, y, prm, linear, alpha, beta, ws, data, rhs):
+def _assemble(t, y, prm, pitches, linear, alpha, beta, ws, data, rhs):
     """Fill the KKT values ``data`` (pattern of :func:`_kkt_pattern`) and right-hand side ``rhs``.
 
     State y = [q (n), qdot (n), integral of the sprocket speed error]. Returns
     (motor torque [N m], contact torque [N m], speed-error rate for the integral state [rad/s]).
     ``ws`` = (part, vel, wq, fx, fz, cand, ind_t, frc_t, xs, zs, vx, vz).
     """
-    tab, loc, fp, ip, mass, pm, ps, pb, pa = prm
+    # the first nine entries of vibkit.effects.pack_parameters (later ones, if any, are not needed)
+    tab, loc, fp, ip, mass, pm, ps, pb, pa = prm[0], prm[1], prm[2], prm[3], prm[4], prm[5], prm[6], prm[7], prm[8]
     part, vel, wq, fx, fz, cand, ind_t, frc_t, xs, zs, vx, vz = ws
     p = ip[_N]
     n = p + 2
-    p0, pitch = fp[_P0], fp[_PITCH]
+    p0 = fp[_P0]
     q = y[:n]
     qd = y[n:2 * n]
     _kinematics(tab, p0, q, qd, p, linear, part, vel, wq)
@@ -271,7 +272,7 @@ def _assemble(t, y, prm, linear, alpha, beta, ws, data, rhs):
         uz = part[jn, 1] - part[j, 1]
         dvx = vel[jn, 0] - vel[j, 0]
         dvz = vel[jn, 1] - vel[j, 1]
-        c_j = ux * ux + uz * uz - pitch * pitch
+        c_j = ux * ux + uz * uz - pitches[j] * pitches[j]
         cdot = 2.0 * (ux * dvx + uz * dvz)
         gam = -2.0 * (dvx * dvx + dvz * dvz) - 2.0 * (ux * (wq[jn, 0] - wq[j, 0]) + uz * (wq[jn, 1] - wq[j, 1]))
         a0 = -2.0 * (ux * part[j, 2] + uz * part[j, 3])
@@ -289,11 +290,11 @@ def _assemble(t, y, prm, linear, alpha, beta, ws, data, rhs):
 
 
 @nb.njit(cache=True)
-def _closure_residual(part, p, pitch):
+def _closure_residual(part, p, pitches):
     worst = 0.0
     for i in range(p):
         j = i + 1 if i + 1 < p else 0
-        d = abs(math.hypot(part[j, 0] - part[i, 0], part[j, 1] - part[i, 1]) - pitch)
+        d = abs(math.hypot(part[j, 0] - part[i, 0], part[j, 1] - part[i, 1]) - pitches[i])
         if d > worst:
             worst = d
     return worst
@@ -353,6 +354,12 @@ class StudyFormulation:
         self.coordinate_map = coordinate_map
         self.linear = coordinate_map == "study"
         self.prm = pack_parameters(model, effects)
+        # link j joins roller j and j + 1; its length (all equal unless the chain models worn links)
+        pitches = getattr(model.chain, "pitches", None)
+        self.pitches = np.ascontiguousarray(pitches if pitches is not None else np.full(model.n, model.pitch),
+                                            dtype=float)
+        if self.pitches.shape != (model.n,):
+            raise ValueError(f"link pitches must have shape ({model.n},), got {self.pitches.shape}")
         self.p = model.n
         self.n = self.p + 2
         self.size = 2 * self.n + 1
@@ -392,8 +399,8 @@ class StudyFormulation:
         y = np.ascontiguousarray(y, dtype=float)
         if y.shape != (self.size,):
             raise ValueError(f"state y must have shape ({self.size},), got {y.shape}")
-        return _assemble(float(t), y, self.prm, self.linear, self.alpha, self.beta, self.work, self._data,
-                         self._rhs)
+        return _assemble(float(t), y, self.prm, self.pitches, self.linear, self.alpha, self.beta, self.work,
+                         self._data, self._rhs)
 
     def kkt(self, t: float, y: np.ndarray):
         """The augmented system at (t, y), ordered [q, lambda].
@@ -508,11 +515,11 @@ class StudyFormulation:
             "sprocket_speed": float(y[n + p + 1]),
             "sprocket_acceleration": float(qdd[p + 1]),
             "motor_torque": float(extras[0]),
-            "link_tension": 2.0 * lam * self.model.pitch,
+            "link_tension": 2.0 * lam * self.pitches,
             "roller_position": pos,
             "roller_velocity": vel.copy(),
             "roller_acceleration": acc,
-            "closure_residual": float(_closure_residual(part, p, self.model.pitch)),
+            "closure_residual": float(_closure_residual(part, p, self.pitches)),
             "constraint_velocity": float(np.abs(2.0 * np.sum(u * dv, axis=1)).max()),
         }
 
