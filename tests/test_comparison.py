@@ -1,0 +1,83 @@
+"""Recording-vs-simulation comparison: round trip through a file, known pitch mismatch, bursts."""
+
+import numpy as np
+import pytest
+import xarray as xr
+
+import vibkit
+from vibkit.comparison import compare
+
+
+@pytest.fixture(scope="module")
+def leon_short(tmp_path_factory):
+    res = vibkit.simulate("sim/leon.toml", duration=4.0, progress=False)
+    path = tmp_path_factory.mktemp("cmp") / "leon.nc"
+    from vibkit.io import write_result
+
+    write_result(res, path)
+    return res, path
+
+
+def test_round_trip_perfect_agreement(leon_short):
+    res, path = leon_short
+    rec = vibkit.read_recording(path)
+    c = compare(rec, res)
+    assert c.variable == "delta" and c.channel == "delta"
+    assert c.score == pytest.approx(1.0, abs=1e-12)
+    for h in c.harmonics:
+        assert h["frequency_ratio"] == pytest.approx(1.0, abs=1e-12)
+        assert h["amplitude_diff_db"] == pytest.approx(0.0, abs=1e-9)
+    assert c.log_spectral_distance_db == pytest.approx(0.0, abs=1e-9)
+    assert c.pitch_consistent and c.pitch_ratio == pytest.approx(1.0, abs=1e-12)
+    # the scene's pitch is what the simulated signal implies (0.49 m/s over 3.675 Hz)
+    assert c.pitch_sim_m == pytest.approx(0.4 / 3, rel=2e-3)
+
+
+def test_leon_pitch_not_consistent(leon_short):
+    res, _ = leon_short
+    c = compare(vibkit.read_recording("data/field/leon-tensioner.csv"), res)
+    assert c.channel == "tensioner_displacement" and c.variable == "delta"
+    # recording: 0.49 / 3.54 = 138.4 mm; scene: 133.3 mm -> ratio 1.038
+    assert c.pitch_ratio == pytest.approx(0.1384 / (0.4 / 3), rel=2e-3)
+    assert not c.pitch_consistent
+    assert c.harmonics[0]["frequency_ratio"] == pytest.approx(3.54 / 3.675, rel=2e-3)
+    assert c.harmonics[0]["frequency_mismatch"]
+    assert c.score < 0.05
+
+
+def _synthetic(t, f, amps, seg=None, rng=None):
+    x = sum(a * np.cos(2 * np.pi * (k + 1) * f * t + 0.3 * k) for k, a in enumerate(amps))
+    if rng is not None:
+        x = x + 1e-3 * rng.standard_normal(t.size)
+    ds = xr.Dataset({"delta": ("time", x, {"units": "m", "long_name": "d"})},
+                    coords={"time": ("time", t, {"units": "s"})}, attrs={"chain_speed_m_s": 0.5})
+    if seg is not None:
+        ds["segment"] = ("time", seg.astype(np.int32))
+    return ds
+
+
+def test_bursts_and_known_amplitude_difference():
+    rng = np.random.default_rng(0)
+    t_sim = np.arange(4000) / 200.0
+    sim = _synthetic(t_sim, 3.75, [1.0, 0.5, 0.25])
+    t = np.concatenate([np.arange(2000) / 500.0 + 6.0 * i for i in range(3)])  # three 4 s bursts
+    seg = np.repeat(np.arange(3), 2000)
+    rec = _synthetic(t, 3.75, [2.0, 0.5, 0.125], seg, rng)  # +6.02 dB, 0 dB, -6.02 dB
+    c = compare(rec, sim, n_harmonics=3)
+    assert [h["amplitude_diff_db"] for h in c.harmonics] == pytest.approx([6.02, 0.0, -6.02], abs=0.1)
+    for h in c.harmonics:
+        lo, hi = h["amplitude_diff_db_ci"]
+        assert lo <= h["amplitude_diff_db"] <= hi
+        assert h["frequency_ratio"] == pytest.approx(1.0, abs=1e-3)
+    assert c.pitch_consistent
+    # score rule: mean of exp(-(d/3 dB)^2 / 2) over three harmonics
+    expect = np.mean([np.exp(-0.5 * (d / 3.0) ** 2) for d in (6.02, 0.0, -6.02)])
+    assert c.score == pytest.approx(expect, abs=0.02)
+
+
+def test_no_matching_variable(leon_short):
+    res, _ = leon_short
+    t = np.arange(2000) / 200.0
+    rec = xr.Dataset({"v": ("time", np.sin(2 * np.pi * 3.7 * t), {"units": "K"})}, coords={"time": t})
+    with pytest.raises(ValueError, match="no variable to compare"):
+        compare(rec, res)
