@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numba as nb
 import numpy as np
 
-from .guide import CUMD, LEN0, S0, TRAVEL, Guide, circle_hit, local_inverse, local_map, local_point, locate, point_partials
+from .guide import CUMD, LEN0, S0, TRAVEL, Guide, circle_hit, local_frame, local_inverse, local_map, locate, point_partials
 from .params import ChainParams
 
 __all__ = ["Chain", "Configuration", "ClosureError"]
@@ -39,18 +39,19 @@ class ClosureError(ValueError):
 # compiled kernels
 
 @nb.njit(cache=True)
-def walk(tab, p0, s0_1, delta, pitch, n, s0, kk, lam, xs, zs):
+def walk(tab, p0, s0_1, delta, pitches, n, s0, kk, lam, xs, zs):
     """Walk n links from roller 1 at s0_1 (n+1 points: rollers 1..n and the ghost of roller 1).
 
-    Returns the ghost residual h = s0[n] - (s0_1 + P0) [m], or NaN when a link finds no guide
-    point at distance ``pitch`` (delta outside what the guide allows).
+    ``pitches[i]`` is the length of the link from roller i+1 to roller i+2 (the last one closes on
+    roller 1). Returns the ghost residual h = s0[n] - (s0_1 + P0) [m], or NaN when a link finds no
+    guide point at its pitch (delta outside what the guide allows).
     """
     nseg = tab.shape[0]
     wraps = math.floor(s0_1 / p0)
     s = s0_1 - wraps * p0
     k = locate(tab, s)
     lam0 = local_map(tab, k, s - tab[k, S0], delta)[0]
-    x, z, _ = local_point(tab, k, lam0, delta)
+    x, z, _, _ = local_frame(tab, k, lam0, delta)
     s0[0] = s0_1
     kk[0] = k
     lam[0] = lam0
@@ -62,7 +63,7 @@ def walk(tab, p0, s0_1, delta, pitch, n, s0, kk, lam, xs, zs):
         lo = lam[i - 1]
         found = -1.0
         for _ in range(nseg + 1):
-            found = circle_hit(tab, k, delta, qx, qz, pitch, lo)
+            found = circle_hit(tab, k, delta, qx, qz, pitches[i - 1], lo)
             if found != -1.0:
                 break
             k += 1
@@ -75,7 +76,7 @@ def walk(tab, p0, s0_1, delta, pitch, n, s0, kk, lam, xs, zs):
         kk[i] = k
         lam[i] = found
         s0[i] = wraps * p0 + tab[k, S0] + local_inverse(tab, k, found, delta)
-        x, z, _ = local_point(tab, k, found, delta)
+        x, z, _, _ = local_frame(tab, k, found, delta)
         xs[i] = x
         zs[i] = z
     return s0[n] - (s0_1 + p0)
@@ -108,23 +109,29 @@ def sensitivity(part, xs, zs, m, alpha, beta):
 
 
 @nb.njit(cache=True)
-def solve_closure(tab, p0, lt, s0_1, delta0, pitch, n, s0, kk, lam, xs, zs, part, alpha, beta, tol):
+def solve_closure(tab, p0, lt, s0_1, delta0, pitches, n, s0, kk, lam, xs, zs, part, alpha, beta, tol):
     """Newton's method on the ghost residual h(delta), safeguarded by bisection.
 
-    Returns (delta, iterations, status): status 0 converged, 1 no bracket / walk failed,
-    2 iteration limit.
+    Returns (delta, iterations, status): status 0 converged, 2 iteration limit (the walk failing at
+    every trial delta ends there too).
     """
     lo, hi = -lt * TRAVEL * (1.0 - 1e-9), lt * TRAVEL * (1.0 - 1e-9)
     have_lo, have_hi = False, False
     d = delta0
     for it in range(100):
-        h = walk(tab, p0, s0_1, d, pitch, n, s0, kk, lam, xs, zs)
+        h = walk(tab, p0, s0_1, d, pitches, n, s0, kk, lam, xs, zs)
         if math.isnan(h):
-            # shrink towards the middle of the known interval
+            # the walk found no guide point at a link's pitch: delta is off the feasible range;
+            # retreat towards the known side of the bracket, or towards the middle of the travel
             if have_lo and have_hi:
                 d = 0.5 * (lo + hi)
-                continue
-            return d, it, 1
+            elif have_lo:
+                d = 0.5 * (d + lo)
+            elif have_hi:
+                d = 0.5 * (d + hi)
+            else:
+                d = 0.5 * d
+            continue
         if abs(h) <= tol:
             return d, it, 0
         if h < 0.0:
@@ -136,7 +143,11 @@ def solve_closure(tab, p0, lt, s0_1, delta0, pitch, n, s0, kk, lam, xs, zs, part
         dh = beta[n]
         step = -h / dh if dh != 0.0 else 0.0
         dn = d + step
-        if not (dn > lo and dn < hi) or dh <= 0.0:
+        # Newton can cycle where the ghost roller sits on a curvature joint (h is only C1 there):
+        # after a few iterations every other step bisects the bracket, which always converges
+        if it >= 6 and have_lo and have_hi and it % 2 == 0:
+            dn = 0.5 * (lo + hi)
+        elif not (dn > lo and dn < hi) or dh <= 0.0:
             if have_lo and have_hi:
                 dn = 0.5 * (lo + hi)
             elif h < 0.0:
@@ -150,12 +161,12 @@ def solve_closure(tab, p0, lt, s0_1, delta0, pitch, n, s0, kk, lam, xs, zs, part
 
 
 @nb.njit(cache=True)
-def closure_residual(xs, zs, n, pitch):
-    """max over the n links (the last one closing on roller 1) of | |r_{i+1} - r_i| - L |. [m]"""
+def closure_residual(xs, zs, n, pitches):
+    """max over the n links (the last one closing on roller 1) of | |r_{i+1} - r_i| - L_i |. [m]"""
     worst = 0.0
     for i in range(n):
         j = i + 1 if i + 1 < n else 0
-        d = abs(math.hypot(xs[j] - xs[i], zs[j] - zs[i]) - pitch)
+        d = abs(math.hypot(xs[j] - xs[i], zs[j] - zs[i]) - pitches[i])
         if d > worst:
             worst = d
     return worst
@@ -221,7 +232,7 @@ def acceleration_terms(part, xs, zs, n, alpha, beta, gam, c, sdot1, hacc, eta, s
 
 
 @nb.njit(cache=True)
-def sweep_kernel(tab, p0, lt, s0_values, delta0, pitch, n, tol, deltas, resid, status):
+def sweep_kernel(tab, p0, lt, s0_values, delta0, pitches, n, tol, deltas, resid, status):
     """Kinematic sweep: closure at every s0_1 in ``s0_values``, each seeded by the previous delta."""
     s0 = np.empty(n + 1)
     kk = np.empty(n + 1, dtype=np.int64)
@@ -233,11 +244,11 @@ def sweep_kernel(tab, p0, lt, s0_values, delta0, pitch, n, tol, deltas, resid, s
     beta = np.empty(n + 1)
     d = delta0
     for j in range(s0_values.size):
-        d, _, st = solve_closure(tab, p0, lt, s0_values[j], d, pitch, n, s0, kk, lam, xs, zs, part, alpha, beta,
+        d, _, st = solve_closure(tab, p0, lt, s0_values[j], d, pitches, n, s0, kk, lam, xs, zs, part, alpha, beta,
                                  tol)
         deltas[j] = d
         status[j] = st
-        resid[j] = closure_residual(xs, zs, n, pitch)
+        resid[j] = closure_residual(xs, zs, n, pitches)
         if st != 0:
             return j
     return s0_values.size
@@ -288,6 +299,7 @@ class Chain:
         self.params = chain
         self.n = chain.n_rollers
         self.pitch = chain.link_pitch
+        self.pitches = chain.pitches()
         self.tol = tol
         self._lt = guide.params.tensioner_length
         n = self.n
@@ -306,12 +318,12 @@ class Chain:
         """A starting delta for s0_1 found by scanning the tensioner's travel; raises ClosureError."""
         lt = self._lt * TRAVEL
         grid = np.linspace(-lt, lt, 81)[1:-1]
-        hs = np.array([walk(self.guide.table, self.guide.p0, s0_1, d, self.pitch, self.n, self._s0, self._kk,
+        hs = np.array([walk(self.guide.table, self.guide.p0, s0_1, d, self.pitches, self.n, self._s0, self._kk,
                             self._lam, self._xs, self._zs) for d in grid])
         ok = np.isfinite(hs)
         sign_change = np.nonzero(ok[:-1] & ok[1:] & (np.sign(hs[:-1]) != np.sign(hs[1:])))[0]
         if sign_change.size == 0:
-            length = self.n * self.pitch
+            length = float(self.pitches.sum())
             raise ClosureError(
                 f"a chain of {self.n} links of pitch {self.pitch:.6g} m ({length:.6g} m) cannot close on this guide: "
                 f"its perimeter is {self.guide.p0:.6g} m less 2*delta, with delta within the tensioner travel "
@@ -325,12 +337,12 @@ class Chain:
         guess = delta_guess if delta_guess is not None else self._delta_guess
         if guess is None:
             guess = self.find_delta_bracket(s0_1)
-        d, _, st = solve_closure(g.table, g.p0, self._lt, float(s0_1), float(guess), self.pitch, self.n, self._s0,
+        d, _, st = solve_closure(g.table, g.p0, self._lt, float(s0_1), float(guess), self.pitches, self.n, self._s0,
                                  self._kk, self._lam, self._xs, self._zs, self._part, self._alpha, self._beta,
                                  self.tol)
         if st != 0:
             guess = self.find_delta_bracket(s0_1)
-            d, _, st = solve_closure(g.table, g.p0, self._lt, float(s0_1), guess, self.pitch, self.n, self._s0,
+            d, _, st = solve_closure(g.table, g.p0, self._lt, float(s0_1), guess, self.pitches, self.n, self._s0,
                                      self._kk, self._lam, self._xs, self._zs, self._part, self._alpha,
                                      self._beta, self.tol)
             if st != 0:
@@ -343,7 +355,7 @@ class Chain:
             position=np.column_stack([self._xs[:n], self._zs[:n]]),
             delta=float(d),
             segment=self._kk[:n].copy(),
-            closure_residual=float(closure_residual(self._xs, self._zs, n, self.pitch)),
+            closure_residual=float(closure_residual(self._xs, self._zs, n, self.pitches)),
             lam=self._lam[:n].copy(),
             partials=self._part[:n].copy(),
         )
@@ -391,7 +403,7 @@ class Chain:
         resid = np.empty(s0_values.size)
         status = np.zeros(s0_values.size, dtype=np.int64)
         g = self.guide
-        done = sweep_kernel(g.table, g.p0, self._lt, s0_values, guess, self.pitch, self.n, self.tol, deltas, resid,
+        done = sweep_kernel(g.table, g.p0, self._lt, s0_values, guess, self.pitches, self.n, self.tol, deltas, resid,
                             status)
         if done < s0_values.size:
             raise ClosureError(

@@ -107,7 +107,7 @@ def pack_parameters(model, effects: dict):
         fp[FP["mu_rr"]] = effects["rolling_resistance"]["coefficient"]
         if "gravity" not in effects:
             fp[FP["g"]] = 9.81
-    return (model.guide.table, model.corners_local, fp, ip, model.mass.copy(), pm, ps, pb, pa)
+    return (model.guide.table, model.corners_local, fp, ip, model.mass.copy(), pm, ps, pb, pa, model.chain.pitches)
 
 
 @nb.njit(cache=True)
@@ -120,12 +120,12 @@ def evaluate(t, y, dy, prm, ws, want_teeth):
     active contacts, driving-flank force, back-flank force]. Status 0 is success; 1 means the chain could not be closed (the state left
     the tensioner's travel).
     """
-    tab, loc, fp, ip, mass, pm, ps, pb, pa = prm
+    tab, loc, fp, ip, mass, pm, ps, pb, pa, pitches = prm
     (s0, kk, lam, xs, zs, part, alpha, beta, jac, gam, hacc, eta, sd, fx, fz, cand, ind_t, frc_t, info) = ws
     n = ip[0]
-    p0, lt, pitch = fp[0], fp[1], fp[2]
+    p0, lt = fp[0], fp[1]
     sdot = y[1]
-    delta, it, st = solve_closure(tab, p0, lt, y[0], info[0], pitch, n, s0, kk, lam, xs, zs, part, alpha, beta,
+    delta, it, st = solve_closure(tab, p0, lt, y[0], info[0], pitches, n, s0, kk, lam, xs, zs, part, alpha, beta,
                                   fp[23])
     if st != 0:
         return 1

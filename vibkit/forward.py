@@ -132,7 +132,7 @@ def _post_process(fm, t, y, outputs, stats):
         delta[j], ddot[j], motor[j] = info[0], info[1], info[3]
         flank[j] = info[8], info[9]
         ce[j] = info[5]
-        resid[j] = closure_residual(xs, zs, n, model.pitch)
+        resid[j] = closure_residual(xs, zs, n, model.chain.pitches)
         vx = jac[:, 0] * sdot
         vz = jac[:, 1] * sdot
         speed[j] = math.hypot(vx[0], vz[0])
@@ -154,7 +154,7 @@ def _post_process(fm, t, y, outputs, stats):
                 f_c = -(pre + k_s * delta[j])
                 rd_res = float(np.sum(part[:n, 4] * resx + part[:n, 5] * resz)) + m_c * dd2 - f_c
                 link_multipliers(part, xs, zs, n, rs_res, rd_res, 0.0, 0.0, 0.0, lam_buf, False)
-                tension[j] = 2.0 * lam_buf * model.pitch
+                tension[j] = 2.0 * lam_buf * model.chain.pitches
             if need_roller:
                 rp[j, :, 0], rp[j, :, 1] = xs[rollers], zs[rollers]
                 rv[j, :, 0], rv[j, :, 1] = vx[rollers], vz[rollers]

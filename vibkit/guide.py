@@ -56,8 +56,8 @@ SEGMENT_NAMES = (
 )
 
 # columns of the segment table
-S0, LEN0, KAPPA, PHI0, AX, AZ, BX, BZ, SIGP, CUMD = range(10)
-NCOL = 10
+S0, LEN0, KAPPA, PHI0, AX, AZ, BX, BZ, SIGP, CUMD, COS0, SIN0 = range(12)
+NCOL = 12
 
 
 def build_table(p: GuideParams) -> np.ndarray:
@@ -88,7 +88,8 @@ def build_table(p: GuideParams) -> np.ndarray:
             length, kappa = size, 0.0
         else:
             length, kappa = size * abs(turn), math.copysign(1.0 / size, turn)
-        tab[k] = (s0, length, kappa, phi, x, z, 0.0, 0.0, (-1.0 / lt) if tele else 0.0, cumd)
+        tab[k] = (s0, length, kappa, phi, x, z, 0.0, 0.0, (-1.0 / lt) if tele else 0.0, cumd, math.cos(phi),
+                  math.sin(phi))
         if k in (0, 13):  # the start of the top tensioner run and of the lower head move with delta
             tab[k, BX] = 1.0
         # advance the undeformed pose
@@ -159,17 +160,35 @@ def local_map(tab, k, s0loc, delta):
 
 @nb.njit(cache=True)
 def local_inverse(tab, k, lam, delta):
-    """s0loc whose local arc length is lam on segment k (Newton on the monotonic map)."""
+    """s0loc whose local arc length is lam on segment k.
+
+    On a telescopic run the map is monotonic but strongly curved near the ends of the travel, so
+    Newton's method is safeguarded by bisection on [0, Lt] (a local arc length slightly outside
+    the run, as the walk's tolerance allows, is extrapolated linearly).
+    """
     if tab[k, SIGP] == 0.0:
         return lam
     lt = tab[k, LEN0]
-    x = lam * lt / (lt - delta)
-    for _ in range(50):
+    if lam <= 0.0:
+        return lam
+    length = lt - delta
+    if lam >= length:
+        return lt + (lam - length)
+    lo, hi = 0.0, lt
+    x = lam * lt / length
+    for _ in range(200):
         f, fs, _, _, _ = local_map(tab, k, x, delta)
-        dx = (f - lam) / fs
-        x -= dx
-        if abs(dx) < 1e-15 * (1.0 + abs(x)):
-            break
+        f -= lam
+        if f > 0.0:
+            hi = x
+        else:
+            lo = x
+        xn = x - f / fs if fs > 0.0 else 0.5 * (lo + hi)
+        if not (lo < xn < hi):
+            xn = 0.5 * (lo + hi)
+        if abs(xn - x) <= 1e-16 * lt or hi - lo <= 1e-16 * lt:
+            return xn
+        x = xn
     return x
 
 
@@ -189,16 +208,32 @@ def local_point(tab, k, lam, delta):
 
 
 @nb.njit(cache=True)
+def local_frame(tab, k, lam, delta):
+    """Position and unit tangent (x, z, tx, tz) on segment k at local arc length lam.
+
+    Same as :func:`local_point` with the tangent instead of its angle; no trigonometry on lines.
+    """
+    kap = tab[k, KAPPA]
+    x0 = tab[k, AX] + tab[k, BX] * delta
+    z0 = tab[k, AZ] + tab[k, BZ] * delta
+    c0, s0 = tab[k, COS0], tab[k, SIN0]
+    if kap == 0.0:
+        return x0 + lam * c0, z0 + lam * s0, c0, s0
+    phi = tab[k, PHI0] + kap * lam
+    c, s = math.cos(phi), math.sin(phi)
+    return x0 + (s - s0) / kap, z0 + (c0 - c) / kap, c, s
+
+
+@nb.njit(cache=True)
 def point_partials(tab, k, lam, s0loc, delta, out):
     """r and its partial derivatives with respect to s0 and delta on segment k.
 
     ``s0loc`` is s0 - s0_k and ``lam`` its local arc length (``local_map``). Fills ``out``
     (length 12) with x, z, rs_x, rs_z, rd_x, rd_z, rss_x, rss_z, rsd_x, rsd_z, rdd_x, rdd_z.
     """
-    x, z, phi = local_point(tab, k, lam, delta)
+    x, z, tx, tz = local_frame(tab, k, lam, delta)
     kap = tab[k, KAPPA]
     _, ls, ld, lss, lsd = local_map(tab, k, s0loc, delta)
-    tx, tz = math.cos(phi), math.sin(phi)
     nx, nz = -tz, tx
     out[0] = x
     out[1] = z
@@ -233,7 +268,7 @@ def circle_hit(tab, k, delta, qx, qz, radius, lam_lo):
     z0 = tab[k, AZ] + tab[k, BZ] * delta
     best = -1.0
     if kap == 0.0:
-        tx, tz = math.cos(phi0), math.sin(phi0)
+        tx, tz = tab[k, COS0], tab[k, SIN0]
         wx, wz = x0 - qx, z0 - qz
         b = tx * wx + tz * wz
         c = wx * wx + wz * wz - radius * radius
@@ -247,8 +282,8 @@ def circle_hit(tab, k, delta, qx, qz, radius, lam_lo):
                     best = lam
         return best
     rho = 1.0 / abs(kap)
-    cx = x0 - math.sin(phi0) / kap
-    cz = z0 + math.cos(phi0) / kap
+    cx = x0 - tab[k, SIN0] / kap
+    cz = z0 + tab[k, COS0] / kap
     dx, dz = qx - cx, qz - cz
     d = math.sqrt(dx * dx + dz * dz)
     if d > rho + radius or d < abs(rho - radius) or d == 0.0:

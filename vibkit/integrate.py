@@ -67,7 +67,7 @@ def _dopri5_chunk(t, y, h, k1, t_stop, t_out, idx, y_out, prm, ws, rtol, atol, m
     """Advance from t to t_stop, writing the dense output at t_out[idx:] <= t_stop.
 
     Returns (status, t, h, idx): status 0 ok, 1 closure failure, 2 step size collapse,
-    3 non-finite state, 4 too many steps. ``counters`` accumulates [steps, rejected, evaluations].
+    3 non-finite state, 4 too many steps, 5 paused after 4096 steps (call again). ``counters`` accumulates [steps, rejected, evaluations].
     """
     m = y.size
     k2 = np.empty(m)
@@ -154,6 +154,8 @@ def _dopri5_chunk(t, y, h, k1, t_stop, t_out, idx, y_out, prm, ws, rtol, atol, m
                 return 2, t, h, idx
         if counters[0] + counters[1] > 50_000_000:
             return 4, t, h, idx
+        if (counters[0] + counters[1]) % 4096 == 0:
+            return 5, t, h, idx  # pause: lets the caller check its wall-time budget and draw progress
     return 0, t, h, idx
 
 
@@ -194,7 +196,7 @@ def integrate(prm, ws, y0, t_out, *, method="dopri5", rtol=1e-6, atol=1e-9, max_
             t_stop = min(t + chunk, t_out[-1])
             status, t, h, idx = _dopri5_chunk(t, y, h, k1, t_stop, t_out, idx, y_out, prm, ws, rtol, atol,
                                              max_step, counters)
-            if status != 0:
+            if status not in (0, 5):
                 bar.close()
                 raise IntegrationError(f"dopri5: {_closure_message(status)}", t, y)
             bar.update(t)

@@ -62,7 +62,6 @@ def inverse_dynamics(model, *, speed, duration, step, start=0.0, effects=None, o
     """
     effects = effects or {}
     n = model.n
-    L = model.pitch
     t = np.arange(0.0, duration + 0.5 * step, step)
     g = effects.get("gravity", {}).get("g", 0.0) if "gravity" in effects else 0.0
     tens = effects.get("tensioner", {})
@@ -109,7 +108,7 @@ def inverse_dynamics(model, *, speed, duration, step, start=0.0, effects=None, o
         rd_res = float(np.sum(part[:, 4] * resx + part[:, 5] * resz)) + m_c * dd - f_c
         xs, zs = conf.position[:, 0].copy(), conf.position[:, 1].copy()
         mu, _ = link_multipliers(part, xs, zs, n, rs_res, rd_res, 0.0, sig, sd, lam, True)
-        tension[j] = 2.0 * lam * L
+        tension[j] = 2.0 * lam * model.chain.pitches
         out["delta"][j] = conf.delta
         out["delta_dot"][j] = mo["delta_dot"]
         out["delta_ddot"][j] = dd

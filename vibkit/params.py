@@ -95,17 +95,35 @@ class ChainParams:
         Point mass per roller (a third of a step plus one pitch of chain). [kg]
     n_rollers : int
         Number of rollers p (= number of links; the chain is closed).
+    worn_links : tuple of (int, float)
+        Links whose pitch differs from ``link_pitch``: (1-based link number, pitch [m]). Link j
+        joins roller j to roller j+1; link p closes the chain on roller 1.
     """
 
     link_pitch: float
     roller_radius: float
     roller_mass: float
     n_rollers: int
+    worn_links: tuple = ()
 
     def __post_init__(self):
         _positive(self, "link_pitch", "roller_radius", "roller_mass")
         if not isinstance(self.n_rollers, int) or self.n_rollers < 3:
             raise ValueError(f"ChainParams.n_rollers must be an integer >= 3, got {self.n_rollers!r}")
+        for link, pitch in self.worn_links:
+            if not (isinstance(link, int) and 1 <= link <= self.n_rollers):
+                raise ValueError(f"ChainParams.worn_links: link number must be 1..{self.n_rollers}, got {link!r}")
+            if not (math.isfinite(pitch) and pitch > 0):
+                raise ValueError(f"ChainParams.worn_links: pitch of link {link} must be positive, got {pitch!r}")
+
+    def pitches(self):
+        """Pitch of every link, link j joining roller j to j+1 (the last closing on roller 1). [m]"""
+        import numpy as np
+
+        out = np.full(self.n_rollers, float(self.link_pitch))
+        for link, pitch in self.worn_links:
+            out[link - 1] = pitch
+        return out
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -58,7 +58,8 @@ SECTIONS = {
     "guide": {"tensioner_length": float, "lower_landing": float, "upper_landing": float,
               "transition_radius": float, "incline_angle_deg": float, "incline_length": float,
               "head_radius": (float, str)},
-    "chain": {"link_pitch": float, "roller_radius": float, "roller_mass": float, "n_rollers": (int, str)},
+    "chain": {"link_pitch": float, "roller_radius": float, "roller_mass": float, "n_rollers": (int, str),
+              "worn_link": int, "worn_link_pitch": float},
     "sprocket": {"teeth": int, "base_width": float, "tip_width": float, "tooth_height": float, "mass": float,
                  "inertia": float},
     "kinematics": {"start": float, "stop": float, "step": float},
@@ -225,15 +226,26 @@ def _parameters(src, sec):
         n = int(math.floor(guide.perimeter / pitch))
     if n < 3:
         raise SceneError(f"{src}: 'chain.n_rollers' must be an integer >= 3, got {n!r}")
+    worn = ()
+    if ("worn_link" in c) != ("worn_link_pitch" in c):
+        raise SceneError(f"{src}: 'chain.worn_link' and 'chain.worn_link_pitch' go together (link number, pitch [m])")
+    if "worn_link" in c:
+        if not 1 <= c["worn_link"] <= n:
+            raise SceneError(f"{src}: 'chain.worn_link' must be a link number 1..{n}, got {c['worn_link']!r}")
+        _positive(src, "chain.worn_link_pitch", c["worn_link_pitch"])
+        worn = ((c["worn_link"], c["worn_link_pitch"]),)
     chain = ChainParams(link_pitch=pitch, roller_radius=c.get("roller_radius", ref_c.roller_radius),
-                        roller_mass=c.get("roller_mass", ref_c.roller_mass), n_rollers=n)
-    # the chain must close within the tensioner travel: P0 - 2 delta ~ n L with |delta| < Lt
-    slack = (guide.perimeter - n * pitch) / 2.0
-    if not -guide.tensioner_length < slack < guide.tensioner_length:
+                        roller_mass=c.get("roller_mass", ref_c.roller_mass), n_rollers=n, worn_links=worn)
+    # the chain must close within the tensioner travel: P0 - 2 delta ~ sum of pitches, |delta| < travel
+    from .guide import TRAVEL
+
+    slack = (guide.perimeter - float(chain.pitches().sum())) / 2.0
+    travel = TRAVEL * guide.tensioner_length
+    if not -travel < slack < travel:
         raise SceneError(
             f"{src}: 'chain.n_rollers' = {n} links of {pitch:.6g} m cannot close on a guide of perimeter "
             f"{guide.perimeter:.6g} m: the tensioner would need delta = {slack:.4g} m, outside its travel "
-            f"(-{guide.tensioner_length:g}, {guide.tensioner_length:g}) m")
+            f"(-{travel:.4g}, {travel:.4g}) m")
     return guide, chain, sprocket
 
 
