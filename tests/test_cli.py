@@ -1,0 +1,154 @@
+"""The command line through main([...]): every command, its --json, its errors and exit codes."""
+
+import json
+import os
+import sys
+
+from pathlib import Path
+
+import pytest
+
+from vibkit.cli import main
+
+LEON = "data/field/leon-tensioner.csv"
+LP = "data/field/las-palmas-accelerometer.csv"
+
+
+@pytest.fixture(scope="module")
+def leon_nc(tmp_path_factory):
+    out = tmp_path_factory.mktemp("cli") / "leon.nc"
+    assert main(["simulate", "sim/leon.toml", "-o", str(out), "--duration", "4"]) == 0
+    return out
+
+
+def _json(capsys):
+    out = capsys.readouterr().out
+    return json.loads(out)
+
+
+def test_simulate_json(tmp_path, capsys):
+    out = tmp_path / "k.nc"
+    assert main(["simulate", "sim/thesis-kinematics.toml", "-o", str(out), "--duration", "0.05", "--json"]) == 0
+    d = _json(capsys)
+    assert d["schema"] == "vibkit.simulate/1"
+    assert d["variables"]["delta"]["units"] == "m"
+    assert d["closure_residual_max_m"] < 1e-9
+    assert out.exists()
+
+
+def test_simulate_refuses_to_overwrite_input(tmp_path, capsys):
+    scene = tmp_path / "s.toml"
+    scene.write_text(Path("sim/thesis-kinematics.toml").read_text())
+    assert main(["simulate", str(scene), "-o", str(scene)]) == 1
+    err = capsys.readouterr().err
+    assert "refusing to overwrite" in err and "Traceback" not in err
+    assert "[kinematics]" in scene.read_text()
+
+
+def test_spectrum_table_and_json(capsys):
+    assert main(["spectrum", LEON]) == 0
+    out = capsys.readouterr().out
+    assert "link-pass fundamental 3.539" in out and "amplitude [m]" in out
+    assert main(["spectrum", LEON, "--json", "--band", "2.5:6"]) == 0
+    d = _json(capsys)
+    assert d["schema"] == "vibkit.spectrum/1"
+    assert d["fundamental_hz"] == pytest.approx(3.54, abs=0.005)
+    assert d["peaks"][1]["frequency_hz"] == pytest.approx(2 * d["fundamental_hz"])
+
+
+def test_pitch_json_keys(capsys):
+    assert main(["pitch", LEON, "--speed", "0.49", "--speed-uncertainty", "0.1%", "--nominal-pitch", "0.133333",
+                 "--json"]) == 0
+    d = _json(capsys)
+    assert d["schema"] == "vibkit.pitch/1"
+    for key in ("fundamental_hz", "fundamental_sigma_hz", "pitch_m", "pitch_sigma_m", "elongation_percent",
+                "harmonics", "warnings", "hypotheses"):
+        assert key in d
+    assert d["pitch_m"] == pytest.approx(0.1384, abs=2e-4)
+    assert d["speed_sigma_m_s"] == pytest.approx(0.00049)
+    assert d["pitch_sigma_m"] >= d["pitch_m"] * 1e-3  # the speed's 0.1 % dominates
+    assert d["verdict"] == "replace"
+    assert {"frequency_hz", "amplitude", "order"} <= set(d["harmonics"][0])
+
+
+def test_pitch_table_bursts(capsys):
+    assert main(["pitch", LP, "--speed", "0.52", "--limits", "1,2,4", "--nominal-pitch", "0.13333"]) == 0
+    cap = capsys.readouterr()
+    assert "(6 burst(s))" in cap.out and "f is the link pass" in cap.out and "step pass" in cap.out
+    assert "by construction" in cap.err
+
+
+def test_pitch_no_time_column_needs_sample_rate(capsys):
+    f = "data/field/layouts/no-time-column.txt"  # 1 s at 2050 Hz: three periods need a band above 3 Hz
+    assert main(["pitch", f, "--speed", "0.52", "--sample-rate", "2050", "--band", "3.5:6", "--json"]) == 0
+    d = _json(capsys)
+    assert abs(d["fundamental_hz"] - 3.9) < 3 * d["fundamental_sigma_hz"]
+
+
+def test_compare_result_file(leon_nc, capsys):
+    assert main(["compare", str(leon_nc), str(leon_nc), "--json"]) == 0
+    d = _json(capsys)
+    assert d["schema"] == "vibkit.compare/1"
+    assert d["score"] == pytest.approx(1.0) and d["pitch_consistent"] is True
+    assert main(["compare", LEON, str(leon_nc)]) == 0
+    out = capsys.readouterr().out
+    assert "NOT consistent" in out
+
+
+def test_report_json(leon_nc, tmp_path, capsys):
+    out = tmp_path / "r.pdf"
+    assert main(["report", LEON, "-o", str(out), "--json"]) == 0
+    d = _json(capsys)
+    assert d["schema"] == "vibkit.report/1" and "verdict" in d["pages"] and out.exists()
+
+
+@pytest.mark.parametrize("argv", [["pitch", LEON], ["nonsense"], ["pitch", LEON, "--speed", "-1"],
+                                  ["pitch", LEON, "--speed", "0.5", "--band", "6:2"], []])
+def test_usage_errors_exit_2(argv, capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(argv)
+    assert exc.value.code == 2
+
+
+@pytest.mark.parametrize("argv, text", [
+    (["pitch", "missing.csv", "--speed", "0.5"], "file not found"),
+    (["pitch", LEON, "--speed", "0.5", "--channel", "nope"], "channel 'nope'"),
+    (["pitch", LEON, "--speed", "0.5", "--speed-uncertainty", "abc"], "--speed-uncertainty"),
+    (["simulate", "missing.toml", "-o", "x.nc"], "missing.toml"),
+    (["compare", LEON, "missing.toml"], "file not found"),
+    (["report", LEON, "-o", "out.txt"], ".pdf"),
+])
+def test_data_errors_exit_1_one_line(argv, text, capsys, tmp_path, monkeypatch):
+    assert main(argv) == 1
+    err = capsys.readouterr().err
+    assert text in err and "Traceback" not in err
+    assert err.count("\n") == 1
+
+
+def test_bench(tmp_path, capsys):
+    b = tmp_path / "benchmarks"
+    b.mkdir()
+    (b / "bench_ok.py").write_text("import sys\nprint('quick' if '--quick' in sys.argv else 'full')\n")
+    (b / "bench_bad.py").write_text("raise SystemExit(3)\n")
+    assert main(["bench", "--root", str(tmp_path), "--quick", "--only", "ok", "--json"]) == 0
+    d = _json(capsys)
+    assert d["schema"] == "vibkit.bench/1" and d["results"][0]["last_line"] == "quick"
+    assert main(["bench", "--root", str(tmp_path)]) == 1
+    assert "1 of 2" in capsys.readouterr().err
+    assert main(["bench", "--root", str(tmp_path / "nowhere")]) == 1
+
+
+def test_help_shows_example(capsys):
+    for cmd in ("simulate", "spectrum", "pitch", "compare", "report", "bench"):
+        with pytest.raises(SystemExit) as exc:
+            main([cmd, "--help"])
+        assert exc.value.code == 0
+        assert f"vibkit {cmd}" in capsys.readouterr().out
+
+
+def test_python_m_vibkit():
+    import subprocess
+
+    r = subprocess.run([sys.executable, "-m", "vibkit", "--version"], capture_output=True, text=True,
+                       env={**os.environ, "NO_COLOR": "1"})
+    assert r.returncode == 0 and r.stdout.startswith("vibkit ")
