@@ -10,8 +10,10 @@ from __future__ import annotations
 
 import math
 
+import numba as nb
 import numpy as np
 
+from .chain import closure_residual
 from .dynamics import link_multipliers
 from .effects import Work, evaluate, pack_parameters
 from .integrate import IntegrationError, integrate
@@ -74,12 +76,86 @@ def forward_dynamics(model, *, duration=None, progress=True, method=None, rtol=N
     y0, d0 = initial_state(model, start=run.get("start", 0.0), speed=run.get("initial_speed", 0.0))
     fm.info[0] = d0
     method = method or solver.get("method", "dopri5")
-    rtol = rtol or solver.get("rtol", 1e-7)
-    atol = atol or solver.get("atol", 1e-9)
+    rtol = rtol or solver.get("rtol", 1e-5)
+    atol = atol or solver.get("atol", 1e-7)
     y_out, stats = integrate(fm.prm, fm.work.arrays, y0, t_out, method=method, rtol=rtol, atol=atol,
                              max_step=solver.get("max_step", math.inf), first_step=solver.get("first_step"),
                              max_wall_time=solver.get("max_wall_time", math.inf), progress=progress)
     return _post_process(fm, t_out, y_out, outputs, stats)
+
+NSCAL = 12  # delta, deltadot, motor, residual, speed, KE, PE, contact E, spring E, accel, drive/back flank
+
+
+@nb.njit(cache=True)
+def _observe(t, y, prm, ws, inertia, need_tension, need_teeth, need_accel, mid, ridx, scal, tension, ind, cf, rk):
+    """Every output quantity at the output states, in one compiled loop (see _post_process).
+
+    Returns (status, index): status 0 ok, 1 closure failure, 2 non-finite state at ``index``.
+    """
+    fp = prm[2]
+    mass = prm[4]
+    pitches = prm[9]
+    g = fp[3] if prm[3][2] == 1 else 0.0
+    k_s, pre, m_c = fp[11], fp[12], fp[13]
+    (s0a, kk, lam, xs, zs, part, alpha, beta, jac, gam, hacc, eta, sd, fx, fz, cand, ind_t, frc_t, info) = ws
+    n = mass.size
+    dy = np.empty(5)
+    lam_buf = np.empty(n)
+    rs_res = np.empty(n)
+    for j in range(t.size):
+        for i in range(5):
+            if not math.isfinite(y[j, i]):
+                return 2, j
+        if evaluate(t[j], y[j], dy, prm, ws, need_teeth) != 0:
+            return 1, j
+        sdot, sddot = y[j, 1], dy[1]
+        d = info[0]
+        scal[j, 0] = d
+        scal[j, 1] = info[1]
+        scal[j, 2] = info[3]
+        scal[j, 3] = closure_residual(xs, zs, n, pitches)
+        scal[j, 4] = math.hypot(jac[0, 0], jac[0, 1]) * abs(sdot)
+        ke = 0.0
+        pe = 0.0
+        for i in range(n):
+            ke += mass[i] * (jac[i, 0] ** 2 + jac[i, 1] ** 2)
+            pe += mass[i] * zs[i]
+        scal[j, 5] = 0.5 * ke * sdot * sdot + 0.5 * m_c * info[1] ** 2 + 0.5 * inertia * y[j, 3] ** 2
+        scal[j, 6] = g * pe
+        scal[j, 7] = info[5]
+        scal[j, 8] = pre * d + 0.5 * k_s * d * d
+        scal[j, 10] = info[8]
+        scal[j, 11] = info[9]
+        if need_teeth:
+            for q in range(ind_t.size):
+                ind[j, q] = ind_t[q]
+                cf[j, q] = frc_t[q]
+        if need_accel:
+            ax = jac[mid, 0] * sddot + hacc[mid, 0]
+            az = jac[mid, 1] * sddot + hacc[mid, 1]
+            tx, tz = part[mid, 2], part[mid, 3]
+            scal[j, 9] = (ax * tx + az * tz) / math.hypot(tx, tz)
+        else:
+            scal[j, 9] = 0.0
+        for q in range(ridx.size):
+            i = ridx[q]
+            rk[j, q, 0] = xs[i]
+            rk[j, q, 1] = zs[i]
+            rk[j, q, 2] = jac[i, 0] * sdot
+            rk[j, q, 3] = jac[i, 1] * sdot
+            rk[j, q, 4] = jac[i, 0] * sddot + hacc[i, 0]
+            rk[j, q, 5] = jac[i, 1] * sddot + hacc[i, 1]
+        if need_tension:
+            rd = m_c * info[2] + (pre + k_s * d)
+            for i in range(n):
+                resx = mass[i] * (jac[i, 0] * sddot + hacc[i, 0]) - fx[i]
+                resz = mass[i] * (jac[i, 1] * sddot + hacc[i, 1]) - fz[i]
+                rs_res[i] = part[i, 2] * resx + part[i, 3] * resz
+                rd += part[i, 4] * resx + part[i, 5] * resz
+            link_multipliers(part, xs, zs, n, rs_res, rd, 0.0, 0.0, 0.0, lam_buf, False)
+            for i in range(n):
+                tension[j, i] = 2.0 * lam_buf[i] * pitches[i]
+    return 0, 0
 
 
 def _post_process(fm, t, y, outputs, stats):
@@ -96,73 +172,22 @@ def _post_process(fm, t, y, outputs, stats):
     need_roller = bool({"roller_position", "roller_velocity", "roller_acceleration"} & want) and rollers.size
     need_accel = "accel_step" in want and step is not None
     ws = fm.work.arrays
-    s0a, kk, lam, xs, zs, part, alpha, beta, jac, gam, hacc, eta, sd, fx, fz, cand, ind_t, frc_t, info = ws
-    delta = np.empty(nt)
-    ddot = np.empty(nt)
-    motor = np.empty(nt)
-    flank = np.empty((nt, 2))
-    resid = np.empty(nt)
-    speed = np.empty(nt)
-    ke = np.empty(nt)
-    pe = np.empty(nt)
-    ce = np.empty(nt)
-    se = np.empty(nt)
-    tension = np.empty((nt, n)) if need_tension else None
-    ind = np.empty((nt, model.sprocket.teeth)) if need_teeth else None
-    cf = np.empty((nt, model.sprocket.teeth)) if need_teeth else None
-    rp = np.empty((nt, rollers.size, 2)) if need_roller else None
-    rv = np.empty((nt, rollers.size, 2)) if need_roller else None
-    ra = np.empty((nt, rollers.size, 2)) if need_roller else None
-    acc_step = np.empty(nt) if need_accel else None
-    fp = fm.prm[2]
-    g = fp[3] if fm.prm[3][2] else 0.0
-    k_s, pre, m_c = fp[11], fp[12], fp[13]
-    lam_buf = np.empty(n)
-    dy = np.empty(5)
-    from .chain import closure_residual
-
-    mid = model.step_rollers(step)[1] if need_accel else 0
-    for j in range(nt):
-        if not np.all(np.isfinite(y[j])):
-            raise IntegrationError("non-finite state in the output", float(t[j]), y[j])
-        st = evaluate(float(t[j]), y[j], dy, fm.prm, ws, need_teeth)
-        if st != 0:
-            raise IntegrationError("the chain could not be closed", float(t[j]), y[j])
-        sdot, sddot = y[j, 1], dy[1]
-        delta[j], ddot[j], motor[j] = info[0], info[1], info[3]
-        flank[j] = info[8], info[9]
-        ce[j] = info[5]
-        resid[j] = closure_residual(xs, zs, n, model.chain.pitches)
-        vx = jac[:, 0] * sdot
-        vz = jac[:, 1] * sdot
-        speed[j] = math.hypot(vx[0], vz[0])
-        ke[j] = 0.5 * float(np.sum(model.mass * (vx * vx + vz * vz))) + 0.5 * m_c * ddot[j] ** 2 \
-            + 0.5 * model.sprocket.inertia * y[j, 3] ** 2
-        pe[j] = g * float(np.sum(model.mass * zs[:n]))
-        se[j] = pre * delta[j] + 0.5 * k_s * delta[j] ** 2
-        if need_teeth:
-            ind[j] = ind_t
-            cf[j] = frc_t
-        if need_tension or need_roller or need_accel:
-            ax = jac[:, 0] * sddot + hacc[:, 0]
-            az = jac[:, 1] * sddot + hacc[:, 1]
-            if need_tension:
-                resx = model.mass * ax - fx[:n]
-                resz = model.mass * az - fz[:n]
-                rs_res = part[:n, 2] * resx + part[:n, 3] * resz
-                dd2 = info[2]
-                f_c = -(pre + k_s * delta[j])
-                rd_res = float(np.sum(part[:n, 4] * resx + part[:n, 5] * resz)) + m_c * dd2 - f_c
-                link_multipliers(part, xs, zs, n, rs_res, rd_res, 0.0, 0.0, 0.0, lam_buf, False)
-                tension[j] = 2.0 * lam_buf * model.chain.pitches
-            if need_roller:
-                rp[j, :, 0], rp[j, :, 1] = xs[rollers], zs[rollers]
-                rv[j, :, 0], rv[j, :, 1] = vx[rollers], vz[rollers]
-                ra[j, :, 0], ra[j, :, 1] = ax[rollers], az[rollers]
-            if need_accel:
-                tx, tz = part[mid, 2], part[mid, 3]
-                nrm = math.hypot(tx, tz)
-                acc_step[j] = (ax[mid] * tx + az[mid] * tz) / nrm
+    mid = int(model.step_rollers(step)[1]) if need_accel else 0
+    nteeth = model.sprocket.teeth
+    scal = np.empty((nt, NSCAL))
+    tension = np.empty((nt, n) if need_tension else (0, n))
+    ind = np.empty((nt, nteeth) if need_teeth else (0, nteeth))
+    cf = np.empty((nt, nteeth) if need_teeth else (0, nteeth))
+    ridx = rollers.astype(np.int64) if need_roller else np.zeros(0, dtype=np.int64)
+    rk = np.empty((nt, ridx.size, 6))
+    status, bad = _observe(t, y, fm.prm, ws, model.sprocket.inertia, need_tension, need_teeth, need_accel, mid, ridx,
+                           scal, tension, ind, cf, rk)
+    if status != 0:
+        what = "non-finite state in the output" if status == 2 else "the chain could not be closed"
+        raise IntegrationError(what, float(t[bad]), y[bad])
+    delta, ddot, motor, resid, speed, ke, pe, ce, se, acc_step = (scal[:, i] for i in range(10))
+    flank = scal[:, 10:12]
+    rp, rv, ra = rk[:, :, 0:2], rk[:, :, 2:4], rk[:, :, 4:6]
     data = {}
     simple = {"delta": delta, "delta_dot": ddot, "sprocket_angle": y[:, 2], "sprocket_speed": y[:, 3],
               "motor_torque": motor, "chain_speed": speed, "closure_residual": resid, "s0": y[:, 0]}
