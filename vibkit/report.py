@@ -94,7 +94,11 @@ class atomic_path:
 def _texts(fig):
     import matplotlib.text
 
-    return [t.get_text() for t in fig.findobj(matplotlib.text.Text) if t.get_text() and t.get_visible()]
+    out = [t.get_text() for t in fig.findobj(matplotlib.text.Text) if t.get_text() and t.get_visible()]
+    for ax in fig.axes:
+        for tab in ax.tables:
+            out += [c.get_text().get_text() for _, c in sorted(tab.get_celld().items()) if c.get_text().get_text()]
+    return out
 
 
 def _fmt(v, unit="", digits=4):

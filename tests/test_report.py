@@ -1,0 +1,65 @@
+"""The PDF report: its pages and their text, reproducible bytes, refusal to overwrite inputs."""
+
+import re
+from pathlib import Path
+
+import pytest
+
+from vibkit.report import report_date, write_report
+
+LEON = "data/field/leon-tensioner.csv"
+
+
+def _page_count(path):
+    return len(re.findall(rb"/Type\s*/Page\b", Path(path).read_bytes()))
+
+
+@pytest.fixture(scope="module")
+def leon_report(tmp_path_factory):
+    out = tmp_path_factory.mktemp("rep") / "leon.pdf"
+    return write_report(LEON, out, scene="sim/leon.toml", duration=4.0)
+
+
+def test_pages_and_text(leon_report):
+    rep = leon_report
+    titles = [t for t, _ in rep.pages]
+    assert titles == ["cover", "verdict", "time signal", "spectrum", "spectrogram", "order spectrum",
+                      "simulation against recording", "harmonics", "data quality", "parameters"]
+    assert _page_count(rep.path) == len(titles)
+    text = {t: "\n".join(x) for t, x in rep.pages}
+    assert "leon-tensioner.csv" in text["cover"] and rep.summary["sha256"][:32] in text["cover"]
+    assert "Leon shopping centre" in text["cover"]
+    # verdict: the published link-pass and pitch, elongation against the catalogue pitch
+    assert re.search(r"3\.53\d+ Hz", text["verdict"])
+    assert re.search(r"138\.4\d \+- [0-9.]+ mm", text["verdict"])
+    assert "REPLACE" in text["verdict"] and "NOT consistent" in text["verdict"]
+    assert "frequency [Hz]" in text["spectrum"] and "amplitude [m]" in text["spectrum"]
+    assert "time [s]" in text["time signal"] and "6 spike(s)" in text["time signal"]  # the six spikes
+    assert "order [cycles per link]" in text["order spectrum"]
+    assert "simulation (delta)" in text["simulation against recording"]
+    assert "6 metadata line(s) above the data kept as attrs" in text["data quality"]
+    assert rep.summary["spikes"] == 6
+
+
+def test_reproducible_bytes(tmp_path, monkeypatch):
+    monkeypatch.setenv("SOURCE_DATE_EPOCH", "1700000000")
+    a, b = tmp_path / "a.pdf", tmp_path / "b.pdf"
+    ra = write_report(LEON, a)
+    write_report(LEON, b)
+    assert a.read_bytes() == b.read_bytes()
+    assert "2023-11-14" in "\n".join(ra.pages[0][1])
+    assert report_date().year == 2023
+
+
+def test_refuses_to_overwrite_input(tmp_path):
+    src = tmp_path / "rec.pdf"
+    src.write_bytes(Path(LEON).read_bytes())
+    with pytest.raises(ValueError, match="input"):
+        write_report(src, src)
+    assert src.read_bytes() == Path(LEON).read_bytes()
+
+
+def test_bad_source_date_epoch(monkeypatch):
+    monkeypatch.setenv("SOURCE_DATE_EPOCH", "yesterday")
+    with pytest.raises(ValueError, match="SOURCE_DATE_EPOCH"):
+        report_date()
