@@ -1,0 +1,201 @@
+"""What accuracy costs in time: work-precision of every integrator and formulation, and of the
+kinematic sweep.
+
+Forward dynamics: the no-load scene (``sim/thesis-forward.toml``; 44 s, or 4 s with --quick) run by
+every method over a ladder of tolerances; errors against a reference computed by vibkit's dopri5 at
+rtol 1e-11: delta, chain speed, link tension (max abs over time and links), link-pass frequency
+(relative, from the mean sprocket speed over the steady part) and the closure residual; wall time
+of the whole call. The study's formulation (all coordinates, Baumgarte, BDF) runs at its own
+settings and one tighter one.
+
+Kinematics: delta against the closure tolerance and against the sweep step.
+
+Run: ``python benchmarks/work_precision.py [--quick]``; writes benchmarks/results/work_precision.csv,
+work_precision.md, work_precision.png and kinematic_precision.csv.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import time
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _common import RESULTS, machine, markdown_table, today, write_csv, write_text  # noqa: E402
+
+import vibkit  # noqa: E402
+from vibkit.chain import Chain  # noqa: E402
+from vibkit.guide import Guide  # noqa: E402
+from vibkit.integrate import IntegrationError  # noqa: E402
+from vibkit.params import reference_chain, reference_guide  # noqa: E402
+from vibkit.scene import load_scene  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+OUTPUTS = ("delta", "chain_speed", "sprocket_speed", "link_tension", "closure_residual")
+
+
+def scene_for(duration):
+    scene = load_scene(ROOT / "sim" / "thesis-forward.toml")
+    out = dict(scene.outputs, variables=OUTPUTS)
+    sections = dict(scene.sections)
+    sections["run"] = dict(sections["run"], duration=duration, output_step=0.01)
+    return replace(scene, outputs=out, sections=sections)
+
+
+def run_ours(scene, method, rtol, budget):
+    sections = dict(scene.sections)
+    sections["solver"] = {"method": method, "rtol": rtol, "atol": rtol * 1e-2, "max_wall_time": budget}
+    t0 = time.perf_counter()
+    ds = vibkit.simulate(replace(scene, sections=sections), progress=False)
+    return ds, time.perf_counter() - t0
+
+
+def errors(ds, ref, steady_from):
+    st = ds.time.values >= steady_from
+    f = 28 * abs(float(ds.sprocket_speed.values[st].mean())) / (2 * math.pi)
+    f_ref = 28 * abs(float(ref.sprocket_speed.values[st].mean())) / (2 * math.pi)
+    return {
+        "err_delta_m": float(np.abs(ds.delta - ref.delta).max()),
+        "err_chain_speed_m_s": float(np.abs(ds.chain_speed - ref.chain_speed).max()),
+        "err_link_tension_N": float(np.abs(ds.link_tension - ref.link_tension).max()),
+        "err_link_pass_rel": abs(f / f_ref - 1.0),
+        "closure_residual_m": float(ds.closure_residual.max()),
+    }
+
+
+def forward(quick):
+    duration = 4.0 if quick else 44.0
+    scene = scene_for(duration)
+    print(f"reference: dopri5 at rtol 1e-11 over {duration:g} s ...", file=sys.stderr, flush=True)
+    ref, t_ref = run_ours(scene, "dopri5", 1e-11, math.inf)
+    ladders = {
+        "dopri5": [1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9],
+        "dop853": [1e-4, 1e-6, 1e-8] if not quick else [1e-4, 1e-6],
+        "rk45": [1e-4, 1e-6] if not quick else [1e-4],
+        "bdf": [1e-4, 1e-6] if not quick else [1e-4],
+        "radau": [1e-4, 1e-6] if not quick else [1e-4],
+        "lsoda": [1e-4, 1e-6] if not quick else [1e-4],
+    }
+    budget = 120.0 if not quick else 30.0
+    rows = []
+    for method, tols in ladders.items():
+        for rtol in tols:
+            print(f"{method} rtol {rtol:g} ...", file=sys.stderr, flush=True)
+            try:
+                ds, wall = run_ours(scene, method, rtol, budget)
+            except IntegrationError as exc:
+                rows.append({"formulation": "vibkit", "method": method, "tolerance": rtol, "wall_time_s": float("nan"),
+                             "realtime_factor": float("nan"), "note": str(exc).split(" at t")[0]})
+                continue
+            row = {"formulation": "vibkit", "method": method, "tolerance": rtol, "wall_time_s": wall,
+                   "realtime_factor": duration / wall}
+            row.update(errors(ds, ref, 2.0 if quick else 10.0))
+            row["evaluations"] = int(ds.attrs["solver_evaluations"])
+            rows.append(row)
+    # the study's formulation (Baumgarte, BDF), at its own settings (RelTol = AbsTol = MaxStep = 1e-3)
+    from vibkit.reference import run_study
+
+    study_cases = [1e-3] if not quick else [1e-3]
+    study_duration = duration if not quick else duration
+    for rtol in study_cases:
+        print(f"study formulation BDF rtol {rtol:g} over {study_duration:g} s ...", file=sys.stderr, flush=True)
+        t0 = time.perf_counter()
+        try:
+            ds = run_study(scene, duration=study_duration, rtol=rtol, atol=rtol, max_step=1e-3, output_step=0.01,
+                           max_wall_time=900.0)
+            wall = time.perf_counter() - t0
+            row = {"formulation": "study (Baumgarte)", "method": "BDF", "tolerance": rtol, "wall_time_s": wall,
+                   "realtime_factor": study_duration / wall}
+            row.update(errors(ds, ref, 2.0 if quick else 10.0))
+            row["evaluations"] = int(ds.attrs.get("solver_evaluations", -1))
+            rows.append(row)
+        except IntegrationError as exc:
+            rows.append({"formulation": "study (Baumgarte)", "method": "BDF", "tolerance": rtol,
+                         "wall_time_s": float("nan"), "note": str(exc)})
+    keys = ["formulation", "method", "tolerance", "wall_time_s", "realtime_factor", "err_delta_m",
+            "err_chain_speed_m_s", "err_link_tension_N", "err_link_pass_rel", "closure_residual_m", "evaluations",
+            "note"]
+    rows = [{k: r.get(k, "") for k in keys} for r in rows]
+    return rows, duration, t_ref
+
+
+def kinematics(quick):
+    ch = Chain(Guide(reference_guide()), reference_chain())
+    L = ch.pitch
+    s = np.arange(3.0, 3.0 + L, 1e-5)
+    ch.tol = 1e-15
+    exact, _ = ch.sweep(s)
+    rows = []
+    for tol in (1e-6, 1e-8, 1e-10, 1e-12, 1e-13):
+        ch.tol = tol
+        t0 = time.perf_counter()
+        d, _ = ch.sweep(s)
+        wall = time.perf_counter() - t0
+        rows.append({"study": "closure tolerance", "value": tol, "err_delta_m": float(np.abs(d - exact).max()),
+                     "us_per_configuration": wall / s.size * 1e6})
+    ch.tol = 1e-13
+    fine_mean, fine_ptp = exact.mean(), np.ptp(exact)
+    for step in (1e-2, 1e-3, 1e-4, 1e-5):
+        grid = np.arange(3.0, 3.0 + L, step)
+        d, _ = ch.sweep(grid)
+        # delta between the samples, by linear interpolation, against the 0.01 mm sweep
+        interp = np.interp(s, grid, d, period=None)
+        rows.append({"study": "sweep step [m]", "value": step, "err_delta_m": float(np.abs(interp - exact).max()),
+                     "err_mean_m": abs(d.mean() - fine_mean), "err_peak_to_peak_m": abs(np.ptp(d) - fine_ptp)})
+    keys = ["study", "value", "err_delta_m", "us_per_configuration", "err_mean_m", "err_peak_to_peak_m"]
+    return [{k: r.get(k, "") for k in keys} for r in rows]
+
+
+def plot(rows, path, duration):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 3, figsize=(13, 4.2))
+    labels = {}
+    for r in rows:
+        if not isinstance(r["wall_time_s"], float) or not math.isfinite(r["wall_time_s"]) or r["err_delta_m"] == "":
+            continue
+        labels.setdefault(f"{r['formulation']} {r['method']}", []).append(r)
+    for ax, key, unit in zip(axes, ("err_delta_m", "err_link_tension_N", "err_link_pass_rel"),
+                             ("delta error [m]", "link tension error [N]", "link-pass frequency error [-]")):
+        for name, rs in labels.items():
+            x = [r["wall_time_s"] for r in rs]
+            y = [max(r[key], 1e-16) for r in rs]
+            ax.loglog(x, y, "o-", label=name)
+        ax.set_xlabel("wall time [s]")
+        ax.set_ylabel(unit)
+        ax.grid(True, which="both", alpha=0.3)
+    axes[0].legend(fontsize=7)
+    fig.suptitle(f"Work-precision, no-load forward scene, {duration:g} s simulated ({today()})")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--quick", action="store_true", help="4 s scene and shorter ladders (CI)")
+    args = ap.parse_args(argv)
+    suffix = "_quick" if args.quick else ""
+    krows = kinematics(args.quick)
+    write_csv(RESULTS / f"kinematic_precision{suffix}.csv", krows)
+    rows, duration, t_ref = forward(args.quick)
+    write_csv(RESULTS / f"work_precision{suffix}.csv", rows)
+    md = [f"# Work-precision\n\n{machine()}; {today()}; no-load forward scene, {duration:g} s simulated; "
+          f"reference dopri5 rtol 1e-11 ({t_ref:.1f} s).\n", markdown_table(rows), "",
+          "## Kinematic sweep: delta against closure tolerance and sweep step (one pitch on the incline)\n",
+          markdown_table(krows), ""]
+    write_text(RESULTS / f"work_precision{suffix}.md", "\n".join(md))
+    plot(rows, RESULTS / f"work_precision{suffix}.png", duration)
+    print("\n".join(md))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
