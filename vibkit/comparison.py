@@ -102,7 +102,8 @@ class Comparison:
         In [0, 1]; see ``rule``.
     rule : str
     speed_sim_m_s, speed_meas_m_s : float
-        [m/s]; the recording's speed is the scene's unless the recording states one.
+        [m/s]; the simulation's is its mean ``chain_speed`` when stored (else its nominal speed);
+        the recording's is its stated ``chain_speed_m_s``, else the scene's nominal speed.
     pitch_sim_m, pitch_meas_m : float
         Pitch implied by each signal, speed / fundamental. [m]
     pitch_ratio, pitch_ratio_sigma : float
@@ -253,13 +254,18 @@ def compare(recording, result, *, channel=None, variable=None, n_harmonics=5, ba
     elif variable not in result.data_vars or result[variable].dims != ("time",):
         raise ValueError(f"variable {variable!r} is not a time variable of the simulation result")
     notes = []
-    v_sim = float(result.attrs.get("chain_speed_m_s", 0.0) or 0.0)
+    v_nom = float(result.attrs.get("chain_speed_m_s", 0.0) or 0.0)
+    v_sim = v_nom
+    if "chain_speed" in result.data_vars and result["chain_speed"].dims == ("time",):
+        # a controlled drive droops below its set speed: the simulated chain's own mean speed
+        v_sim = float(np.abs(result["chain_speed"].values[result.sizes["time"] // 4:]).mean())
+        notes.append(f"simulated chain speed {v_sim:.5g} m/s (mean after the first quarter; set {v_nom:g} m/s)")
     v_meas = float(recording.attrs.get("chain_speed_m_s", 0.0) or 0.0)
     if not v_sim > 0:
         v_sim = v_meas
     if not v_meas > 0:
-        v_meas = v_sim
-        notes.append(f"the recording states no speed: taken as the simulation's {v_sim:g} m/s")
+        v_meas = v_nom if v_nom > 0 else v_sim
+        notes.append(f"the recording states no speed: taken as the scene's nominal {v_meas:g} m/s")
     if band is None:
         if not v_sim > 0:
             raise ValueError("neither the result nor the recording states a chain speed; give band=(low, high) [Hz]")
