@@ -66,10 +66,13 @@ def inverse_dynamics(model, *, speed, duration, step, start=0.0, effects=None, o
     g = effects.get("gravity", {}).get("g", 0.0) if "gravity" in effects else 0.0
     tens = effects.get("tensioner", {})
     k_s, pre, m_c = tens.get("stiffness", 0.0), tens.get("preload", 0.0), tens.get("mass", 0.0)
-    want = set(outputs) | {"delta", "link_tension", "drive_force", "closure_residual"}
+    want = set(outputs) | {"delta"}
+    # what has to be computed for what was asked: positions always; motion for rates and forces
+    need_motion = bool(want - {"delta", "closure_residual", "sprocket_angle", "sprocket_speed", "roller_position"})
+    need_forces = bool(want & {"link_tension", "drive_force", "energy"})
     ridx = np.asarray(rollers, dtype=int) - 1
     nt = t.size
-    out = {name: np.empty(nt) for name in ("delta", "delta_dot", "delta_ddot", "drive_force", "closure_residual",
+    out = {name: np.full(nt, np.nan) for name in ("delta", "delta_dot", "delta_ddot", "drive_force", "closure_residual",
                                              "chain_speed", "kinetic_energy", "potential_energy", "power_balance",
                                              "spring_energy")}
     tension = np.empty((nt, n))
@@ -86,6 +89,13 @@ def inverse_dynamics(model, *, speed, duration, step, start=0.0, effects=None, o
         s0, conf, (sig, sd, c, dsd, lss, lsd) = _solve_s0(model, s_target, s0)
         if theta0 is None:
             theta0 = model.meshed_angle(conf)
+        out["delta"][j] = conf.delta
+        out["closure_residual"][j] = conf.closure_residual
+        if ridx.size:
+            rpos[j] = conf.position[ridx]
+        if not need_motion:
+            bar.update(j + 1)
+            continue
         s0dot = speed / dsd
         # the imposed s(s0_1, delta) = s_start + v t differentiated twice:
         # sig s0dd + sd deltadd + lss s0d^2 + 2 lsd s0d deltad = 0, with deltadd = c s0dd + e
@@ -95,6 +105,16 @@ def inverse_dynamics(model, *, speed, duration, step, start=0.0, effects=None, o
         s0ddot = -(sd * e + lss * s0dot ** 2 + 2.0 * lsd * s0dot * ddot) / dsd
         mo = model.chain.motion(conf, s0dot, s0ddot)
         vel, acc = mo["velocity"], mo["acceleration"]
+        dd = mo["delta_ddot"]
+        out["delta_dot"][j] = mo["delta_dot"]
+        out["delta_ddot"][j] = dd
+        out["chain_speed"][j] = math.hypot(*vel[0])
+        if ridx.size:
+            rvel[j] = vel[ridx]
+            racc[j] = acc[ridx]
+        if not need_forces:
+            bar.update(j + 1)
+            continue
         fx = np.zeros(n)
         fz = -model.mass * g
         if "passengers" in effects:
@@ -103,18 +123,12 @@ def inverse_dynamics(model, *, speed, duration, step, start=0.0, effects=None, o
         resz = model.mass * acc[:, 1] - fz
         part = conf.partials
         rs_res = part[:, 2] * resx + part[:, 3] * resz
-        dd = mo["delta_ddot"]
         f_c = -(pre + k_s * conf.delta)
         rd_res = float(np.sum(part[:, 4] * resx + part[:, 5] * resz)) + m_c * dd - f_c
         xs, zs = conf.position[:, 0].copy(), conf.position[:, 1].copy()
         mu, _ = link_multipliers(part, xs, zs, n, rs_res, rd_res, 0.0, sig, sd, lam, True)
         tension[j] = 2.0 * lam * model.chain.pitches
-        out["delta"][j] = conf.delta
-        out["delta_dot"][j] = mo["delta_dot"]
-        out["delta_ddot"][j] = dd
         out["drive_force"][j] = -mu
-        out["closure_residual"][j] = conf.closure_residual
-        out["chain_speed"][j] = math.hypot(*vel[0])
         out["kinetic_energy"][j] = 0.5 * float(np.sum(model.mass * (vel ** 2).sum(axis=1))) \
             + 0.5 * m_c * mo["delta_dot"] ** 2 + 0.5 * model.sprocket.inertia * omega ** 2
         out["potential_energy"][j] = g * float(np.sum(model.mass * conf.position[:, 1]))
@@ -123,10 +137,6 @@ def inverse_dynamics(model, *, speed, duration, step, start=0.0, effects=None, o
         dEdt = float(np.sum(model.mass * (vel * acc).sum(axis=1))) + g * float(np.sum(model.mass * vel[:, 1])) \
             + (m_c * dd + pre + k_s * conf.delta) * mo["delta_dot"]
         out["power_balance"][j] = -mu * speed - dEdt
-        if ridx.size:
-            rpos[j] = conf.position[ridx]
-            rvel[j] = vel[ridx]
-            racc[j] = acc[ridx]
         bar.update(j + 1)
     bar.close()
     data = {}
@@ -144,7 +154,9 @@ def inverse_dynamics(model, *, speed, duration, step, start=0.0, effects=None, o
         data["potential_energy"] = (("time",), out["potential_energy"])
         if k_s or pre:
             data["spring_energy"] = (("time",), out["spring_energy"])
-    coords = {"time": t, "link": np.arange(1, n + 1)}
+    coords = {"time": t}
+    if "link_tension" in want:
+        coords["link"] = np.arange(1, n + 1)
     if ridx.size and any(v.startswith("roller_") for v in want):
         coords["roller"] = np.asarray(rollers)
         coords["axis"] = ["x", "z"]
@@ -154,7 +166,7 @@ def inverse_dynamics(model, *, speed, duration, step, start=0.0, effects=None, o
     attrs = {
         "chain_speed_m_s": float(speed),
         "closure_residual_max": float(out["closure_residual"].max()),
-        "power_balance_max_W": float(np.abs(out["power_balance"]).max()),
+        "power_balance_max_W": float(np.abs(out["power_balance"]).max()) if need_forces else float("nan"),
         "link_pass_frequency_hz": model.link_pass_frequency(speed),
     }
     ds = make_dataset(coords, data, attrs, model.scene)
