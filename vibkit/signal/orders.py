@@ -19,7 +19,7 @@ import scipy.signal
 import scipy.sparse
 import scipy.sparse.linalg
 
-from ._checks import as_signal, check_band, check_fs, check_positive_int, decimate_for_band, fill_nan
+from ._checks import as_signal, check_fs, check_positive_int, decimate_for_band, fill_nan
 from .peaks import find_fundamental
 from .spectral import amplitude_spectrum
 
