@@ -7,6 +7,7 @@ BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
 .PHONY: demo test bench install clean
+# `make bench` regenerates benchmarks/results/ (about 30 min on 2 cores; `vibkit bench --quick` for a smoke run)
 
 $(BIN)/python:
 	@command -v $(PYTHON) >/dev/null 2>&1 || { echo "error: $(PYTHON) not found; set PYTHON=/path/to/python3.11" >&2; exit 1; }
@@ -25,7 +26,11 @@ test: $(STAMP)
 demo: $(STAMP)
 	$(BIN)/python -m vibkit.demo
 
-bench: $(STAMP)
+$(VENV)/.bench: $(STAMP)
+	$(BIN)/python -m pip install --quiet -e '.[test,bench]'
+	@touch $(VENV)/.bench
+
+bench: $(VENV)/.bench
 	$(BIN)/vibkit bench
 
 clean:

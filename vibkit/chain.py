@@ -31,6 +31,11 @@ from .params import ChainParams
 __all__ = ["Chain", "Configuration", "ClosureError"]
 
 
+def closure_tolerance(p0: float, n: int) -> float:
+    """Smallest meaningful tolerance on the ghost residual of a walk of n links round P0 [m]."""
+    return max(1e-13, np.finfo(float).eps * p0 * math.sqrt(n))
+
+
 class ClosureError(ValueError):
     """The chain cannot close on its guide (too long or too short for the tensioner's travel)."""
 
@@ -233,7 +238,14 @@ def acceleration_terms(part, xs, zs, n, alpha, beta, gam, c, sdot1, hacc, eta, s
 
 @nb.njit(cache=True)
 def sweep_kernel(tab, p0, lt, s0_values, delta0, pitches, n, tol, deltas, resid, status):
-    """Kinematic sweep: closure at every s0_1 in ``s0_values``, each seeded by the previous delta."""
+    """Kinematic sweep: closure at every s0_1 in ``s0_values``.
+
+    Along a fine sweep delta is smooth almost everywhere, so each configuration starts from the
+    linear extrapolation of the last two and takes one chord-Newton step with the last exact
+    derivative dh/ddelta: two walks and no partial derivatives. Whenever that does not meet the
+    tolerance (a curvature joint, a coarse step) the full safeguarded Newton takes over and
+    refreshes the derivative.
+    """
     s0 = np.empty(n + 1)
     kk = np.empty(n + 1, dtype=np.int64)
     lam = np.empty(n + 1)
@@ -243,14 +255,35 @@ def sweep_kernel(tab, p0, lt, s0_values, delta0, pitches, n, tol, deltas, resid,
     alpha = np.empty(n + 1)
     beta = np.empty(n + 1)
     d = delta0
+    d_prev = delta0
+    slope = 0.0  # dh/ddelta from the last full Newton solve; 0 = unknown
     for j in range(s0_values.size):
-        d, _, st = solve_closure(tab, p0, lt, s0_values[j], d, pitches, n, s0, kk, lam, xs, zs, part, alpha, beta,
-                                 tol)
+        guess = 2.0 * d - d_prev if j >= 2 else d
+        done = False
+        if slope > 0.0:
+            h = walk(tab, p0, s0_values[j], guess, pitches, n, s0, kk, lam, xs, zs)
+            if not math.isnan(h):
+                if abs(h) <= tol:
+                    done = True
+                    dn = guess
+                else:
+                    dn = guess - h / slope
+                    h = walk(tab, p0, s0_values[j], dn, pitches, n, s0, kk, lam, xs, zs)
+                    done = (not math.isnan(h)) and abs(h) <= tol
+        if not done:
+            dn, _, st = solve_closure(tab, p0, lt, s0_values[j], guess, pitches, n, s0, kk, lam, xs, zs, part,
+                                      alpha, beta, tol)
+            status[j] = st
+            if st != 0:
+                deltas[j] = dn
+                return j
+            slope = beta[n]
+        else:
+            status[j] = 0
+        d_prev = d
+        d = dn
         deltas[j] = d
-        status[j] = st
         resid[j] = closure_residual(xs, zs, n, pitches)
-        if st != 0:
-            return j
     return s0_values.size
 
 
@@ -300,6 +333,9 @@ class Chain:
         self.n = chain.n_rollers
         self.pitch = chain.link_pitch
         self.pitches = chain.pitches()
+        # a walk of p links accumulates rounding of about eps * P0 * sqrt(p): the tolerance on the
+        # ghost residual never asks for less (it is 1e-13 m up to a few hundred rollers)
+        self.tol = max(tol, closure_tolerance(guide.p0, chain.n_rollers))
         self.tol = tol
         self._lt = guide.params.tensioner_length
         n = self.n

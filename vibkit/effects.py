@@ -69,7 +69,7 @@ def pack_parameters(model, effects: dict):
     fp[FP["root_r"]] = geo["root_radius"]
     fp[FP["psi"]] = geo["tooth_pitch"]
     fp[FP["head_lo"]], fp[FP["head_hi"]] = model.head_s0
-    fp[FP["tol"]] = 1e-13
+    fp[FP["tol"]] = model.chain.tol
     ip[IP["n"]] = n
     ip[IP["nteeth"]] = model.sprocket.teeth
     if "gravity" in effects:
