@@ -25,7 +25,8 @@ from dataclasses import dataclass
 import numba as nb
 import numpy as np
 
-from .guide import CUMD, LEN0, S0, TRAVEL, Guide, circle_hit, local_frame, local_inverse, local_map, locate, point_partials
+from .guide import (CUMD, KAPPA, LEN0, S0, TRAVEL, Guide, circle_hit, local_frame, local_inverse, local_map, locate,
+                    point_partials, seg_length)
 from .params import ChainParams
 
 __all__ = ["Chain", "Configuration", "ClosureError"]
@@ -66,18 +67,31 @@ def walk(tab, p0, s0_1, delta, pitches, n, s0, kk, lam, xs, zs):
         qx, qz = xs[i - 1], zs[i - 1]
         k = kk[i - 1]
         lo = lam[i - 1]
-        found = -1.0
-        for _ in range(nseg + 1):
-            found = circle_hit(tab, k, delta, qx, qz, pitches[i - 1], lo)
-            if found != -1.0:
-                break
+        pitch = pitches[i - 1]
+        # the usual case first: the next roller on the same line or arc, one chord further on
+        kap = tab[k, KAPPA]
+        if kap == 0.0:
+            found = lo + pitch
+        else:
+            rho = 1.0 / abs(kap)
+            found = lo + 2.0 * rho * math.asin(pitch / (2.0 * rho)) if pitch < 2.0 * rho else math.inf
+        if found > seg_length(tab, k, delta):
+            found = -1.0
             k += 1
             lo = 0.0
             if k == nseg:
                 k = 0
                 wraps += 1
-        if found == -1.0:
-            return math.nan
+            for _ in range(nseg + 1):
+                found = circle_hit(tab, k, delta, qx, qz, pitch, lo)
+                if found != -1.0:
+                    break
+                k += 1
+                if k == nseg:
+                    k = 0
+                    wraps += 1
+            if found == -1.0:
+                return math.nan
         kk[i] = k
         lam[i] = found
         s0[i] = wraps * p0 + tab[k, S0] + local_inverse(tab, k, found, delta)
