@@ -27,9 +27,10 @@ def scene(*edits, run="", solver="", outputs='["delta", "sprocket_speed", "chain
         start = text.index("[effects]")
         end = text.index("[solver]")
         text = text[:start] + "[effects]\n" + effects + "\n\n" + text[end:]
+    assert 'initial_speed = 0.0  # start at rest [m/s]' in text
     text = text.replace('initial_speed = 0.0  # start at rest [m/s]', run or 'initial_speed = 0.5')
-    if solver:
-        text = text.replace('rtol = 1e-7', solver)
+    start, end = text.index("[solver]"), text.index("[outputs]")
+    text = text[:start] + '[solver]\nmethod = "dopri5"\n' + (solver or "rtol = 1e-7") + "\n\n" + text[end:]
     start = text.index("[outputs]")
     text = text[:start] + f"[outputs]\nvariables = {outputs}\nstep_accelerometer = 2\n"
     return parse_scene(text, "<hard case>")

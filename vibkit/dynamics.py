@@ -23,7 +23,7 @@ import numpy as np
 __all__ = ["link_multipliers", "reduced_equation"]
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def link_multipliers(part, xs, zs, n, rs_res, rd_res, q_delta, drive_s, drive_d, lam, with_drive):
     """Multipliers lambda_j of the closure constraints (fills ``lam`` (n,)).
 
@@ -89,7 +89,7 @@ def link_multipliers(part, xs, zs, n, rs_res, rd_res, q_delta, drive_s, drive_d,
     return mu, residual
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def reduced_equation(jac, hacc, fx, fz, mass, c, e, m_c, f_c):
     """Generalised mass and force of the chain's coordinate s0_1 (see module docstring)."""
     m_eff = m_c * c * c

@@ -110,7 +110,7 @@ def pack_parameters(model, effects: dict):
     return (model.guide.table, model.corners_local, fp, ip, model.mass.copy(), pm, ps, pb, pa, model.chain.pitches)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def evaluate(t, y, dy, prm, ws, want_teeth):
     """Right-hand side of the forward dynamics; fills ``dy`` and returns a status code.
 

@@ -77,7 +77,7 @@ def forward_dynamics(model, *, duration=None, progress=True, method=None, rtol=N
     fm.info[0] = d0
     method = method or solver.get("method", "dopri5")
     rtol = rtol or solver.get("rtol", 1e-5)
-    atol = atol or solver.get("atol", 1e-7)
+    atol = atol or solver.get("atol", rtol * 1e-2)
     y_out, stats = integrate(fm.prm, fm.work.arrays, y0, t_out, method=method, rtol=rtol, atol=atol,
                              max_step=solver.get("max_step", math.inf), first_step=solver.get("first_step"),
                              max_wall_time=solver.get("max_wall_time", math.inf), progress=progress)
@@ -86,7 +86,7 @@ def forward_dynamics(model, *, duration=None, progress=True, method=None, rtol=N
 NSCAL = 12  # delta, deltadot, motor, residual, speed, KE, PE, contact E, spring E, accel, drive/back flank
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def _observe(t, y, prm, ws, inertia, need_tension, need_teeth, need_accel, mid, ridx, scal, tension, ind, cf, rk):
     """Every output quantity at the output states, in one compiled loop (see _post_process).
 

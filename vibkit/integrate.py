@@ -62,7 +62,7 @@ D1, D3, D4, D5, D6, D7 = (-12715105075 / 11282082432, 87487479700 / 32700410799,
                           701980252875 / 199316789632, -1453857185 / 822651844, 69997945 / 29380423)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def _dopri5_chunk(t, y, h, k1, t_stop, t_out, idx, y_out, prm, ws, rtol, atol, max_step, counters):
     """Advance from t to t_stop, writing the dense output at t_out[idx:] <= t_stop.
 
@@ -194,8 +194,12 @@ def integrate(prm, ws, y0, t_out, *, method="dopri5", rtol=1e-6, atol=1e-9, max_
         chunk = max(t_out[-1] / 100.0, 0.05)
         while t < t_out[-1]:
             t_stop = min(t + chunk, t_out[-1])
-            status, t, h, idx = _dopri5_chunk(t, y, h, k1, t_stop, t_out, idx, y_out, prm, ws, rtol, atol,
-                                             max_step, counters)
+            try:
+                status, t, h, idx = _dopri5_chunk(t, y, h, k1, t_stop, t_out, idx, y_out, prm, ws, rtol, atol,
+                                                 max_step, counters)
+            except (ZeroDivisionError, FloatingPointError, ValueError) as exc:  # a degenerate state
+                bar.close()
+                raise IntegrationError(f"dopri5: the state became degenerate ({exc})", t, y) from None
             if status not in (0, 5):
                 bar.close()
                 raise IntegrationError(f"dopri5: {_closure_message(status)}", t, y)
