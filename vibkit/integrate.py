@@ -63,11 +63,13 @@ D1, D3, D4, D5, D6, D7 = (-12715105075 / 11282082432, 87487479700 / 32700410799,
 
 
 @nb.njit(cache=True, error_model="numpy")
-def _dopri5_chunk(t, y, h, k1, t_stop, t_out, idx, y_out, prm, ws, rtol, atol, max_step, counters):
+def _dopri5_chunk(t, y, h, k1, t_stop, t_out, idx, y_out, prm, ws, rtol, atol, max_step, counters, ctl):
     """Advance from t to t_stop, writing the dense output at t_out[idx:] <= t_stop.
 
     Returns (status, t, h, idx): status 0 ok, 1 closure failure, 2 step size collapse,
-    3 non-finite state, 4 too many steps, 5 paused after 4096 steps (call again). ``counters`` accumulates [steps, rejected, evaluations].
+    3 non-finite state, 4 too many steps, 5 paused after 4096 steps (call again).
+    ``ctl`` carries the step-size controller's memory between calls: [previous error, last step
+    rejected]. The controller is Hairer's PI (Lund) stabilisation of DOPRI5 (beta = 0.04). ``counters`` accumulates [steps, rejected, evaluations].
     """
     m = y.size
     k2 = np.empty(m)
@@ -145,11 +147,19 @@ def _dopri5_chunk(t, y, h, k1, t_stop, t_out, idx, y_out, prm, ws, rtol, atol, m
                 y[i] = y1[i]
                 k1[i] = k7[i]
             counters[0] += 1
-            fac = 0.9 * err ** -0.2 if err > 0.0 else 5.0
-            h = h * min(5.0, max(0.2, fac)) if not last else h
+            if not last:
+                e = max(err, 1e-10)
+                fac = 0.9 * e ** (-0.2 + 0.75 * 0.04) * max(ctl[0], 1e-4) ** 0.04
+                fac = min(10.0, max(0.2, fac))
+                if ctl[1] > 0.0:  # no growth right after a rejection
+                    fac = min(fac, 1.0)
+                h = h * fac
+            ctl[0] = err
+            ctl[1] = 0.0
         else:
             counters[1] += 1
-            h = h * max(0.2, 0.9 * err ** -0.2)
+            h = h * max(0.2, 0.9 * err ** (-0.2 + 0.75 * 0.04))
+            ctl[1] = 1.0
             if h < hmin:
                 return 2, t, h, idx
         if counters[0] + counters[1] > 50_000_000:
@@ -184,6 +194,7 @@ def integrate(prm, ws, y0, t_out, *, method="dopri5", rtol=1e-6, atol=1e-9, max_
     bar = Progress(t_out[-1], label, enabled=progress)
     if method == "dopri5":
         counters = np.zeros(3, dtype=np.int64)
+        ctl = np.array([1e-4, 0.0])
         k1 = np.empty_like(y)
         if evaluate(0.0, y, k1, prm, ws, False) != 0:
             raise IntegrationError(_closure_message(1), 0.0, y)
@@ -196,7 +207,7 @@ def integrate(prm, ws, y0, t_out, *, method="dopri5", rtol=1e-6, atol=1e-9, max_
             t_stop = min(t + chunk, t_out[-1])
             try:
                 status, t, h, idx = _dopri5_chunk(t, y, h, k1, t_stop, t_out, idx, y_out, prm, ws, rtol, atol,
-                                                 max_step, counters)
+                                                 max_step, counters, ctl)
             except (ZeroDivisionError, FloatingPointError, ValueError) as exc:  # a degenerate state
                 bar.close()
                 raise IntegrationError(f"dopri5: the state became degenerate ({exc})", t, y) from None
