@@ -173,7 +173,8 @@ def solve_closure(tab, p0, lt, s0_1, delta0, pitches, n, s0, kk, lam, xs, zs, pa
                 dn = 0.5 * (d + hi)
             else:
                 dn = 0.5 * (d + lo)
-        if abs(dn - d) < 1e-16:
+        # stalled at the resolution of delta: rounding in a long walk keeps |h| just above tol
+        if abs(dn - d) <= 8.0 * 2.220446049250313e-16 * max(abs(d), 1e-3):
             return dn, it, 0 if abs(h) < 1e3 * tol else 2
         d = dn
     return d, 100, 2
@@ -350,7 +351,6 @@ class Chain:
         # a walk of p links accumulates rounding of about eps * P0 * sqrt(p): the tolerance on the
         # ghost residual never asks for less (it is 1e-13 m up to a few hundred rollers)
         self.tol = max(tol, closure_tolerance(guide.p0, chain.n_rollers))
-        self.tol = tol
         self._lt = guide.params.tensioner_length
         n = self.n
         self._s0 = np.empty(n + 1)
