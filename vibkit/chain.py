@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numba as nb
 import numpy as np
 
-from .guide import (CUMD, KAPPA, LEN0, S0, TRAVEL, Guide, circle_hit, local_frame, local_inverse, local_map, locate,
+from .guide import (AX, AZ, BX, BZ, COS0, CUMD, KAPPA, LEN0, S0, SIGP, SIN0, TRAVEL, Guide, circle_hit, local_frame, local_inverse, local_map, locate,
                     point_partials, seg_length)
 from .params import ChainParams
 
@@ -63,35 +63,71 @@ def walk(tab, p0, s0_1, delta, pitches, n, s0, kk, lam, xs, zs):
     lam[0] = lam0
     xs[0] = x
     zs[0] = z
+    # chord angle on the current arc, recomputed only when the pitch or the radius changes
+    last_pitch = -1.0
+    last_rho = -1.0
+    cd, sd = 1.0, 0.0
+    step = 0.0
     for i in range(1, n + 1):
         qx, qz = xs[i - 1], zs[i - 1]
         k = kk[i - 1]
         lo = lam[i - 1]
         pitch = pitches[i - 1]
-        # the usual case first: the next roller on the same line or arc, one chord further on
+        # the usual case first, in closed form and without trigonometry: the next roller on the
+        # same line (one pitch further on) or the same arc (the previous one rotated by the chord angle)
         kap = tab[k, KAPPA]
+        length = seg_length(tab, k, delta)
         if kap == 0.0:
             found = lo + pitch
+            if found <= length:
+                kk[i] = k
+                lam[i] = found
+                if tab[k, SIGP] == 0.0:
+                    s0[i] = s0[i - 1] + pitch
+                else:
+                    s0[i] = wraps * p0 + tab[k, S0] + local_inverse(tab, k, found, delta)
+                xs[i] = qx + pitch * tab[k, COS0]
+                zs[i] = qz + pitch * tab[k, SIN0]
+                continue
         else:
             rho = 1.0 / abs(kap)
-            found = lo + 2.0 * rho * math.asin(pitch / (2.0 * rho)) if pitch < 2.0 * rho else math.inf
-        if found > seg_length(tab, k, delta):
-            found = -1.0
+            if pitch != last_pitch or rho != last_rho:
+                last_pitch, last_rho = pitch, rho
+                if pitch < 2.0 * rho:
+                    half = math.asin(pitch / (2.0 * rho))
+                    step = 2.0 * rho * half
+                    cd, sd = math.cos(2.0 * half), math.sin(2.0 * half)
+                else:
+                    step = math.inf
+            found = lo + step
+            if found <= length:
+                # centre of the arc (it moves with delta only through the segment's start point)
+                cx = tab[k, AX] + tab[k, BX] * delta - tab[k, SIN0] / kap
+                cz = tab[k, AZ] + tab[k, BZ] * delta + tab[k, COS0] / kap
+                rx, rz = qx - cx, qz - cz
+                sg = sd if kap > 0.0 else -sd
+                kk[i] = k
+                lam[i] = found
+                s0[i] = s0[i - 1] + step
+                xs[i] = cx + cd * rx - sg * rz
+                zs[i] = cz + sg * rx + cd * rz
+                continue
+        found = -1.0
+        k += 1
+        lo = 0.0
+        if k == nseg:
+            k = 0
+            wraps += 1
+        for _ in range(nseg + 1):
+            found = circle_hit(tab, k, delta, qx, qz, pitch, lo)
+            if found != -1.0:
+                break
             k += 1
-            lo = 0.0
             if k == nseg:
                 k = 0
                 wraps += 1
-            for _ in range(nseg + 1):
-                found = circle_hit(tab, k, delta, qx, qz, pitch, lo)
-                if found != -1.0:
-                    break
-                k += 1
-                if k == nseg:
-                    k = 0
-                    wraps += 1
-            if found == -1.0:
-                return math.nan
+        if found == -1.0:
+            return math.nan
         kk[i] = k
         lam[i] = found
         s0[i] = wraps * p0 + tab[k, S0] + local_inverse(tab, k, found, delta)
