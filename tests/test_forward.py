@@ -56,14 +56,31 @@ def test_closure_at_every_output_step(startup):
     assert float(startup.closure_residual.max()) <= 1e-9
 
 
+def mean_frequency(x, fs, f0):
+    """Average frequency of the component of x near f0 over the record: the unwrapped phase of
+    its analytic signal (band-passed +-30 %), end minus start, over 2 pi T. [Hz]"""
+    from scipy.signal import butter, hilbert, sosfiltfilt
+
+    sos = butter(4, [0.7 * f0, 1.3 * f0], btype="band", fs=fs, output="sos")
+    phase = np.unwrap(np.angle(hilbert(sosfiltfilt(sos, x - x.mean()))))
+    trim = int(2 * fs)  # filter end effects
+    return (phase[-trim] - phase[trim]) / (2 * np.pi * (x.size - 2 * trim) / fs)
+
+
 def test_delta_follows_tooth_mesh_frequency():
-    """In steady running delta's dominant frequency is Z |thetadot| / (2 pi), within 0.1 %."""
-    ds = vibkit.simulate(variant(run={"initial_speed": 0.5}, outputs=["delta", "sprocket_speed"]), duration=12.0,
+    """In steady running delta's dominant frequency is Z |thetadot| / (2 pi), within 0.1 %.
+
+    Over a window of T seconds the chain can lead or lag the sprocket by at most the tooth
+    backlash (about 6.5 mm), so the two frequencies may differ by 0.0065 / (v T): 0.06 % over 20 s.
+    The spectral peak of a 10 s record scatters by about as much, because the undamped chain
+    surges within the backlash (frequency modulation), hence the average-phase measure."""
+    ds = vibkit.simulate(variant(run={"initial_speed": 0.5}, outputs=["delta", "sprocket_speed"]), duration=24.0,
                          progress=False)
     steady = ds.time.values >= 2.0
-    f = peak_frequency(ds.delta.values[steady], 1 / 0.005)
     mesh = 28 * abs(ds.sprocket_speed.values[steady].mean()) / (2 * np.pi)
+    f = mean_frequency(ds.delta.values[steady], 1 / 0.005, mesh)
     assert f == pytest.approx(mesh, rel=1e-3)
+    assert peak_frequency(ds.delta.values[steady], 1 / 0.005) == pytest.approx(mesh, rel=3e-3)
     # 3.742 Hz with the reference P controller (model.md section 9), a little under v / L = 3.75 Hz
     assert mesh == pytest.approx(3.742, rel=1e-3)
 
