@@ -13,7 +13,7 @@ import math
 import numba as nb
 import numpy as np
 
-from .chain import closure_residual
+from .chain import closure_residual, solve_closure
 from .dynamics import link_multipliers
 from .effects import Work, evaluate, pack_parameters
 from .integrate import IntegrationError, integrate
@@ -87,7 +87,8 @@ NSCAL = 12  # delta, deltadot, motor, residual, speed, KE, PE, contact E, spring
 
 
 @nb.njit(cache=True, error_model="numpy")
-def _observe(t, y, prm, ws, inertia, need_tension, need_teeth, need_accel, mid, ridx, scal, tension, ind, cf, rk):
+def _observe(t, y, prm, ws, inertia, light, need_tension, need_teeth, need_accel, mid, ridx, scal, tension, ind, cf,
+             rk):
     """Every output quantity at the output states, in one compiled loop (see _post_process).
 
     Returns (status, index): status 0 ok, 1 closure failure, 2 non-finite state at ``index``.
@@ -106,6 +107,21 @@ def _observe(t, y, prm, ws, inertia, need_tension, need_teeth, need_accel, mid, 
         for i in range(5):
             if not math.isfinite(y[j, i]):
                 return 2, j
+        if light:
+            # positions only (delta, closure residual; torque from the state): no forces needed
+            d, _, st = solve_closure(prm[0], fp[0], fp[1], y[j, 0], info[0], pitches, n, s0a, kk, lam, xs, zs, part,
+                                     alpha, beta, fp[23])
+            if st != 0:
+                return 1, j
+            info[0] = d
+            scal[j, 0] = d
+            scal[j, 3] = closure_residual(xs, zs, n, pitches)
+            if prm[3][4] == 1:
+                m = fp[7] * (fp[9] - y[j, 3]) + fp[8] * y[j, 4]
+                scal[j, 2] = min(max(m, -fp[10]), fp[10])
+            else:
+                scal[j, 2] = 0.0
+            continue
         if evaluate(t[j], y[j], dy, prm, ws, need_teeth) != 0:
             return 1, j
         sdot, sddot = y[j, 1], dy[1]
@@ -180,8 +196,12 @@ def _post_process(fm, t, y, outputs, stats):
     cf = np.empty((nt, nteeth) if need_teeth else (0, nteeth))
     ridx = rollers.astype(np.int64) if need_roller else np.zeros(0, dtype=np.int64)
     rk = np.empty((nt, ridx.size, 6))
-    status, bad = _observe(t, y, fm.prm, ws, model.sprocket.inertia, need_tension, need_teeth, need_accel, mid, ridx,
-                           scal, tension, ind, cf, rk)
+    # outputs that need only positions and the state skip the forces altogether
+    light = want <= {"delta", "closure_residual", "sprocket_angle", "sprocket_speed", "motor_torque", "s0",
+                     "tensioner_displacement"}
+    scal[:] = np.nan
+    status, bad = _observe(t, y, fm.prm, ws, model.sprocket.inertia, light, need_tension, need_teeth, need_accel, mid,
+                           ridx, scal, tension, ind, cf, rk)
     if status != 0:
         what = "non-finite state in the output" if status == 2 else "the chain could not be closed"
         raise IntegrationError(what, float(t[bad]), y[bad])
