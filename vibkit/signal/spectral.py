@@ -255,17 +255,7 @@ def welch_psd(
     P. D. Welch, IEEE Trans. Audio Electroacoust. 15 (1967) 70-73.
     D. B. Percival, A. T. Walden, Spectral Analysis for Physical Applications, CUP 1993.
     """
-    fs = check_fs(fs)
-    x = as_signal(x, axis=axis, min_samples=2)
-    x = fill_nan(x, nan_policy=nan_policy, axis=axis)
-    n = x.shape[axis]
-    if nperseg is None:
-        nperseg = min(n, 256)
-    nperseg = check_window_length(nperseg, n)
-    if noverlap is None:
-        noverlap = nperseg // 2
-    if isinstance(noverlap, bool) or not isinstance(noverlap, (int, np.integer)) or not 0 <= noverlap < nperseg:
-        raise ValueError(f"Parameter noverlap={noverlap!r} must be an integer in [0, nperseg={nperseg}).")
+    fs, x, n, nperseg, noverlap = _segments(x, fs, nperseg, noverlap, nan_policy, axis)
     if not 0.0 < float(confidence) < 1.0:
         raise ValueError(f"Parameter confidence={confidence!r} must lie in (0, 1).")
     f, pxx = scipy.signal.welch(
@@ -311,17 +301,7 @@ def spectrogram(x, fs, *, nperseg=None, noverlap=None, window="hann", scaling="a
     sxx : ndarray
         Spectrogram, frequency then time as the last two axes.
     """
-    fs = check_fs(fs)
-    x = as_signal(x, axis=axis, min_samples=2)
-    x = fill_nan(x, nan_policy=nan_policy, axis=axis)
-    n = x.shape[axis]
-    if nperseg is None:
-        nperseg = min(n, 256)
-    nperseg = check_window_length(nperseg, n)
-    if noverlap is None:
-        noverlap = nperseg // 2
-    if isinstance(noverlap, bool) or not isinstance(noverlap, (int, np.integer)) or not 0 <= noverlap < nperseg:
-        raise ValueError(f"Parameter noverlap={noverlap!r} must be an integer in [0, nperseg={nperseg}).")
+    fs, x, n, nperseg, noverlap = _segments(x, fs, nperseg, noverlap, nan_policy, axis)
     if scaling not in ("amplitude", "density"):
         raise ValueError(f"Parameter scaling={scaling!r} must be 'amplitude' or 'density'.")
     if scaling == "density":
@@ -337,3 +317,19 @@ def spectrogram(x, fs, *, nperseg=None, noverlap=None, window="hann", scaling="a
     if nperseg % 2 == 0:
         mag[..., -1, :] /= 2.0
     return f, t, mag
+
+
+def _segments(x, fs, nperseg, noverlap, nan_policy, axis):
+    """Checked (fs, x, n, nperseg, noverlap) shared by the segment-averaging spectra."""
+    fs = check_fs(fs)
+    x = as_signal(x, axis=axis, min_samples=2)
+    x = fill_nan(x, nan_policy=nan_policy, axis=axis)
+    n = x.shape[axis]
+    if nperseg is None:
+        nperseg = min(n, 256)
+    nperseg = check_window_length(nperseg, n)
+    if noverlap is None:
+        noverlap = nperseg // 2
+    if isinstance(noverlap, bool) or not isinstance(noverlap, (int, np.integer)) or not 0 <= noverlap < nperseg:
+        raise ValueError(f"Parameter noverlap={noverlap!r} must be an integer in [0, nperseg={nperseg}).")
+    return fs, x, n, nperseg, noverlap
