@@ -138,3 +138,15 @@ def test_back_flanks_take_load_when_passenger_steps_off():
     assert float(ds.back_flank_force.values[loaded].max()) == 0.0
     assert float(ds.drive_flank_force.values[loaded].min()) > 0.0
     assert float(ds.back_flank_force.values[t > 2.0].max()) > 1.0
+
+
+def test_same_delta_as_the_kinematics():
+    """delta is fixed by the closure: the forward dynamics gives the kinematic delta of the chain
+    position it reaches (roller 1's s0), to the closure tolerance."""
+    from vibkit.model import EscalatorModel
+
+    sc = variant(run={"initial_speed": 0.5}, outputs=["delta", "s0"])
+    ds = vibkit.simulate(sc, duration=1.0, progress=False)
+    chain = EscalatorModel(sc).chain
+    for j in (0, 57, 133, 200):
+        assert float(ds.delta[j]) == pytest.approx(chain.configure(float(ds.s0[j])).delta, abs=1e-12)
