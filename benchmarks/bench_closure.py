@@ -143,7 +143,8 @@ def main(argv=None):
     ap.add_argument("--quick", action="store_true", help="fewer sizes and configurations (CI)")
     args = ap.parse_args(argv)
     rows, sweep = run(args.quick)
-    write_csv(RESULTS / "closure.csv", rows)
+    name = "closure_quick" if args.quick else "closure"  # a quick run never overwrites the full results
+    write_csv(RESULTS / f"{name}.csv", rows)
     md = [f"# Closure benchmark\n\n{machine()}; {today()}; {'quick' if args.quick else 'full'} run.\n",
           "Time per configuration [us]: vibkit's link-by-link walk (Newton on delta alone, compiled) and the "
           "study's all-coordinates solve (dense Newton with the analytic Jacobian; scipy.optimize.root 'hybr', "
@@ -151,7 +152,7 @@ def main(argv=None):
           f"Full-loop kinematic sweep of the reference escalator (p = 159): {sweep['configurations']} configurations "
           f"at {sweep['step_m'] * 1e3:.1f} mm in {sweep['wall_s']:.2f} s ({sweep['us_per_configuration']:.1f} us each), "
           f"closure residual at most {sweep['closure_residual_max_m']:.2g} m, mean delta {sweep['delta_mean_mm']:.3f} mm.\n"]
-    write_text(RESULTS / "closure.md", "\n".join(md))
+    write_text(RESULTS / f"{name}.md", "\n".join(md))
     try:
         import matplotlib
 
@@ -170,7 +171,7 @@ def main(argv=None):
         ax.legend()
         ax.grid(True, which="both", alpha=0.3)
         fig.tight_layout()
-        fig.savefig(RESULTS / "closure.png", dpi=110)
+        fig.savefig(RESULTS / f"{name}.png", dpi=110)
     except ImportError:
         pass
     return 0

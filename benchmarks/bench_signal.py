@@ -245,12 +245,12 @@ def accuracy(quick):
     return out
 
 
-def write_accuracy(acc):
+def write_accuracy(acc, suffix=""):
     buf = io.StringIO()
     w = csv.DictWriter(buf, fieldnames=list(acc[0].keys()))
     w.writeheader()
     w.writerows(acc)
-    atomic_write(RESULTS / "signal_estimator_accuracy.csv", buf.getvalue().encode())
+    atomic_write(RESULTS / f"signal_estimator_accuracy{suffix}.csv", buf.getvalue().encode())
     import matplotlib
 
     matplotlib.use("Agg")
@@ -281,7 +281,7 @@ def write_accuracy(acc):
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=110)
     plt.close(fig)
-    atomic_write(RESULTS / "signal_estimator_accuracy.png", buf.getvalue())
+    atomic_write(RESULTS / f"signal_estimator_accuracy{suffix}.png", buf.getvalue())
 
 
 def main(argv=None):
@@ -290,6 +290,7 @@ def main(argv=None):
     args = p.parse_args(argv)
     info = machine_info()
     rows = []
+    suffix = "_quick" if args.quick else ""  # a quick run never overwrites the full results
     bench_hampel(rows, args.quick)
     bench_vk(rows, args.quick)
     bench_pipeline(rows, args.quick)
@@ -299,16 +300,16 @@ def main(argv=None):
     w.writerow(["benchmark", "n_samples", "implementation", "seconds", "ratio_to_first_of_group"])
     for r in rows:
         w.writerow([r[0], r[1], r[2], f"{r[3]:.6g}", f"{r[4]:.4g}"])
-    atomic_write(RESULTS / "signal_benchmark.csv", buf.getvalue().encode())
+    atomic_write(RESULTS / f"signal_benchmark{suffix}.csv", buf.getvalue().encode())
     md = ["# vibkit.signal benchmark", "", ", ".join(f"{k}: {v}" for k, v in info.items()), ""]
     md += ["| benchmark | samples | implementation | time [s] | ratio |", "|---|---:|---|---:|---:|"]
     md += [f"| {r[0]} | {r[1]:,} | {r[2]} | {r[3]:.4g} | {r[4]:.3g} |" for r in rows]
     md += ["", "Ratio: time of the row over the first row of its group (vibkit's implementation), "
            "so > 1 means vibkit is faster; pipeline stages: share of the total.", ""]
-    atomic_write(RESULTS / "signal_benchmark.md", "\n".join(md).encode())
+    atomic_write(RESULTS / f"signal_benchmark{suffix}.md", "\n".join(md).encode())
     print("\n".join(md))
     acc = accuracy(args.quick)
-    write_accuracy(acc)
+    write_accuracy(acc, suffix)
     for r in acc:
         print(r)
     return 0
