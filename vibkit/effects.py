@@ -36,7 +36,7 @@ __all__ = ["pack_parameters", "evaluate", "FP", "IP"]
 # float parameter slots
 FP = {name: i for i, name in enumerate((
     "p0", "lt", "pitch", "g", "k", "expo", "damp", "kp", "ki", "wref", "tlim", "k_s", "preload", "m_c", "mu_rr",
-    "inertia", "r_d", "cx", "cz", "root_r", "psi", "head_lo", "head_hi", "tol"))}
+    "inertia", "r_d", "cx", "cz", "root_r", "psi", "tol"))}
 # integer parameter slots
 IP = {name: i for i, name in enumerate(("n", "nteeth", "gravity", "contact", "motor", "passengers", "tensioner",
                                         "rolling"))}
@@ -68,7 +68,6 @@ def pack_parameters(model, effects: dict):
     fp[FP["cx"]], fp[FP["cz"]] = model.centre
     fp[FP["root_r"]] = geo["root_radius"]
     fp[FP["psi"]] = geo["tooth_pitch"]
-    fp[FP["head_lo"]], fp[FP["head_hi"]] = model.head_s0
     fp[FP["tol"]] = model.chain.tol
     ip[IP["n"]] = n
     ip[IP["nteeth"]] = model.sprocket.teeth
@@ -126,7 +125,7 @@ def evaluate(t, y, dy, prm, ws, want_teeth):
     p0, lt = fp[0], fp[1]
     sdot = y[1]
     delta, it, st = solve_closure(tab, p0, lt, y[0], info[0], pitches, n, s0, kk, lam, xs, zs, part, alpha, beta,
-                                  fp[23])
+                                  fp[21])
     if st != 0:
         return 1
     fill_partials(tab, p0, s0, kk, lam, delta, n, part)

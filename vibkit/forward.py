@@ -110,7 +110,7 @@ def _observe(t, y, prm, ws, inertia, light, need_tension, need_teeth, need_accel
         if light:
             # positions only (delta, closure residual; torque from the state): no forces needed
             d, _, st = solve_closure(prm[0], fp[0], fp[1], y[j, 0], info[0], pitches, n, s0a, kk, lam, xs, zs, part,
-                                     alpha, beta, fp[23])
+                                     alpha, beta, fp[21])
             if st != 0:
                 return 1, j
             info[0] = d

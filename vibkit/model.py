@@ -12,7 +12,6 @@ from .sprocket import local_corners, mesh_phase, tooth_geometry
 
 __all__ = ["EscalatorModel"]
 
-UPPER_HEAD = 6  # index of segment 7 (the drive sprocket) in the guide table
 
 
 class EscalatorModel:
@@ -34,9 +33,6 @@ class EscalatorModel:
         self.centre = np.array(scene.guide.sprocket_centre)
         self.geometry = tooth_geometry(self.sprocket, self.pitch, scene.chain.roller_radius)
         self.corners_local = local_corners(self.sprocket, self.pitch, scene.chain.roller_radius)
-        tab = self.guide.table
-        # undeformed-guide interval where a roller may touch a tooth: the head arc and one pitch either side
-        self.head_s0 = (tab[UPPER_HEAD, 0] - 1.5 * self.pitch, tab[UPPER_HEAD, 0] + tab[UPPER_HEAD, 1] + 1.5 * self.pitch)
 
     @property
     def pitch_radius(self) -> float:
