@@ -13,7 +13,6 @@ from .sprocket import local_corners, mesh_phase, tooth_geometry
 __all__ = ["EscalatorModel"]
 
 
-
 class EscalatorModel:
     """Guide + chain + sprocket of one scene, with the derived quantities the analyses share.
 
