@@ -31,7 +31,7 @@ from .chain import acceleration_terms, fill_partials, sensitivity, solve_closure
 from .dynamics import reduced_equation
 from .sprocket import contact_kernel
 
-__all__ = ["pack_parameters", "evaluate", "FP", "IP"]
+__all__ = ["pack_parameters", "evaluate", "motor_torque", "FP", "IP"]
 
 # float parameter slots
 FP = {name: i for i, name in enumerate((
@@ -107,6 +107,26 @@ def pack_parameters(model, effects: dict):
         if "gravity" not in effects:
             fp[FP["g"]] = 9.81
     return (model.guide.table, model.corners_local, fp, ip, model.mass.copy(), pm, ps, pb, pa, model.chain.pitches)
+
+
+@nb.njit(cache=True, error_model="numpy")
+def motor_torque(err, integral, kp, ki, limit):
+    """Speed controller: M = kp err + ki integral, limited to +-limit [N m], and the rate of the
+    error integral, held at zero while the limit is pushed further (no wind-up).
+
+    ``err`` = thetadot_ref - thetadot [rad/s]; ``integral`` its time integral [rad].
+    """
+    motor = kp * err + ki * integral
+    derr = err
+    if motor > limit:
+        motor = limit
+        if err > 0.0:
+            derr = 0.0
+    elif motor < -limit:
+        motor = -limit
+        if err < 0.0:
+            derr = 0.0
+    return motor, derr
 
 
 @nb.njit(cache=True, error_model="numpy")
@@ -189,18 +209,7 @@ def evaluate(t, y, dy, prm, ws, want_teeth):
     motor = 0.0
     derr = 0.0
     if ip[4] == 1:
-        err = fp[9] - y[3]
-        motor = fp[7] * err + fp[8] * y[4]
-        lim = fp[10]
-        derr = err
-        if motor > lim:
-            motor = lim
-            if err > 0.0:
-                derr = 0.0
-        elif motor < -lim:
-            motor = -lim
-            if err < 0.0:
-                derr = 0.0
+        motor, derr = motor_torque(fp[9] - y[3], y[4], fp[7], fp[8], fp[10])
     dy[0] = sdot
     dy[1] = sddot
     dy[2] = y[3]

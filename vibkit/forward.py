@@ -15,7 +15,7 @@ import numpy as np
 
 from .chain import closure_residual, solve_closure
 from .dynamics import link_multipliers
-from .effects import Work, evaluate, pack_parameters
+from .effects import Work, evaluate, motor_torque, pack_parameters
 from .integrate import IntegrationError, integrate
 from .results import make_dataset
 
@@ -117,8 +117,7 @@ def _observe(t, y, prm, ws, inertia, light, need_tension, need_teeth, need_accel
             scal[j, 0] = d
             scal[j, 3] = closure_residual(xs, zs, n, pitches)
             if prm[3][4] == 1:
-                m = fp[7] * (fp[9] - y[j, 3]) + fp[8] * y[j, 4]
-                scal[j, 2] = min(max(m, -fp[10]), fp[10])
+                scal[j, 2] = motor_torque(fp[9] - y[j, 3], y[j, 4], fp[7], fp[8], fp[10])[0]
             else:
                 scal[j, 2] = 0.0
             continue

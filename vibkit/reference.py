@@ -46,7 +46,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.linalg import splu
 
-from .effects import FP, IP, pack_parameters
+from .effects import FP, IP, motor_torque, pack_parameters
 from .guide import BX, BZ, KAPPA, S0, SIGP, local_inverse, local_map, local_point, locate, point_partials
 from .integrate import IntegrationError
 from .results import make_dataset
@@ -231,18 +231,7 @@ def _assemble(t, y, prm, pitches, linear, alpha, beta, ws, data, rhs):
     motor = 0.0
     derr = 0.0
     if ip[_MOTOR] == 1:
-        err = fp[_WREF] - qd[p + 1]
-        motor = fp[_KP] * err + fp[_KI] * y[2 * n]
-        lim = fp[_TLIM]
-        derr = err
-        if motor > lim:
-            motor = lim
-            if err > 0.0:
-                derr = 0.0
-        elif motor < -lim:
-            motor = -lim
-            if err < 0.0:
-                derr = 0.0
+        motor, derr = motor_torque(fp[_WREF] - qd[p + 1], y[2 * n], fp[_KP], fp[_KI], fp[_TLIM])
     # mass matrix and generalised forces Q + Q_v
     k = 0
     mdd = m_c
