@@ -1,0 +1,54 @@
+"""Where parallel work runs: a Dask ``distributed`` client, a local cluster by default.
+
+Sweeps (:mod:`vibkit.sweep`) and fleet scans (:mod:`vibkit.fleet`) both submit their runs through
+:func:`dask_client`, so a user who already runs a Dask cluster points vibkit at it with one address
+(``--scheduler tcp://host:8786``, or Dask's own configuration ``scheduler-address`` /
+``DASK_SCHEDULER_ADDRESS``), and everyone else gets one worker process per core.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+
+__all__ = ["dask_client", "default_workers"]
+
+
+def default_workers() -> int:
+    """Worker processes of a local cluster: one per core this process may use."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # pragma: no cover - not Linux
+        return max(1, os.cpu_count() or 1)
+
+
+@contextlib.contextmanager
+def dask_client(scheduler: str | None = None, *, n_workers: int | None = None):
+    """A ``distributed.Client``, closed (and its local cluster shut down) on exit.
+
+    Parameters
+    ----------
+    scheduler : str, optional
+        Address of a running Dask scheduler (``tcp://host:8786``). Without it, Dask's configuration
+        (``scheduler-address``, also read from ``DASK_SCHEDULER_ADDRESS``) is used; failing that, a
+        local cluster of worker *processes* (one thread each: the compiled kernels hold the GIL).
+    n_workers : int, optional
+        Processes of the local cluster (default: one per core). Ignored with a scheduler address.
+    """
+    try:
+        import dask
+        from distributed import Client, LocalCluster
+    except ImportError as exc:  # pragma: no cover - a declared dependency
+        raise ImportError("vibkit needs dask.distributed for sweeps and fleet scans: "
+                          "pip install distributed") from exc
+    address = scheduler or dask.config.get("scheduler-address", None)
+    if address:
+        with Client(address) as client:
+            yield client
+        return
+    if n_workers is not None and int(n_workers) < 1:
+        raise ValueError(f"n_workers must be >= 1, got {n_workers!r}")
+    n = int(n_workers) if n_workers else default_workers()
+    with LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
+                      silence_logs="error") as cluster, Client(cluster) as client:
+        yield client
