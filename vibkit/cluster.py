@@ -9,6 +9,7 @@ Sweeps (:mod:`vibkit.sweep`) and fleet scans (:mod:`vibkit.fleet`) both submit t
 from __future__ import annotations
 
 import contextlib
+import logging
 import os
 
 __all__ = ["dask_client", "default_workers"]
@@ -50,5 +51,5 @@ def dask_client(scheduler: str | None = None, *, n_workers: int | None = None):
         raise ValueError(f"n_workers must be >= 1, got {n_workers!r}")
     n = int(n_workers) if n_workers else default_workers()
     with LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
-                      silence_logs="error") as cluster, Client(cluster) as client:
+                      silence_logs=logging.ERROR) as cluster, Client(cluster) as client:
         yield client
