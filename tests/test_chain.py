@@ -113,3 +113,35 @@ def test_other_chain_lengths_close(p):
     s0 = np.linspace(0, g.p0, 301)
     _, resid = ch.sweep(s0)
     assert resid.max() <= 1e-12
+
+
+@pytest.mark.parametrize("worn", [False, True])
+def test_crossing_table_puts_a_roller_on_a_breakpoint(worn):
+    """Every value of the crossing table closes the chain with some roller on a breakpoint of the
+    guide (to the closure's rounding), with equal pitches and with one worn link; and between two
+    values no roller crosses one."""
+    from dataclasses import replace
+
+    from vibkit.chain import Chain
+    from vibkit.guide import Guide
+    from vibkit.params import reference_chain, reference_guide
+
+    guide = Guide(reference_guide())
+    params = reference_chain()
+    if worn:
+        params = replace(params, worn_links=((40, 1.03 * params.link_pitch),))
+    chain = Chain(guide, params)
+    cross = chain.crossing_table()
+    bps = guide.breakpoints()
+    p0 = guide.p0
+
+    def distance(s0_1):
+        s0 = chain.configure(float(s0_1)).s0
+        return np.abs(np.mod(s0[:, None] - bps[None, :] + 0.5 * p0, p0) - 0.5 * p0).min()
+
+    for v in cross[:: max(1, cross.size // 60)]:
+        assert distance(v) < 1e-11
+    # between consecutive values the rollers' segments do not change (sampled)
+    for a, b in zip(cross[100:110], cross[101:111]):
+        segs = [chain.configure(float(x)).segment for x in np.linspace(a, b, 5)[1:-1]]
+        assert all(np.array_equal(segs[0], s) for s in segs[1:])

@@ -480,6 +480,51 @@ class Chain:
             "e": float(e),
         }
 
+    # -- where the rollers cross the guide's breakpoints ------------------------------------
+    def crossing_table(self, breakpoints: np.ndarray | None = None, rollers_at=()) -> np.ndarray:
+        """Values of s0_1 in [0, P0) at which some roller sits on a breakpoint of the guide. [m]
+
+        The configuration is a function of s0_1 alone, so the instants at which a roller crosses a
+        curvature jump are the instants at which s0_1 crosses one of these values. With equal
+        pitches the chain with roller 1 on breakpoint b is the chain with roller j on it, relabelled:
+        the values for breakpoint b are the s0 of every roller in that one configuration. With
+        per-link pitches each value is refined by Newton's method from there.
+
+        ``rollers_at`` adds, for pairs (roller index from 0, place s0 [m]), the values of s0_1 at
+        which that roller passes that place (where a passenger boards or alights).
+        """
+        p0 = self.guide.p0
+        n = self.n
+        bps = self.guide.breakpoints() if breakpoints is None else np.asarray(breakpoints, dtype=float)
+        uniform = bool(np.all(self.pitches == self.pitches[0]))
+        out = []
+        for b in bps:
+            vals = np.mod(self.configure(float(b)).s0, p0)
+            if not uniform:
+                # with roller 1 at vals[j] it is roller (n - j) mod n that sits on b
+                vals = np.array([self._crossing(int((n - j) % n), float(b), float(v)) for j, v in enumerate(vals)])
+            out.append(vals)
+        for k, place in rollers_at:
+            vals = np.mod(self.configure(float(place)).s0, p0)
+            out.append([self._crossing(int(k), float(place), float(vals[(n - int(k)) % n]))])
+        tab = np.unique(np.mod(np.concatenate(out), p0))
+        # rollers that cross breakpoints together (the guide's symmetries) give one value
+        keep = np.concatenate([[True], np.diff(tab) > 1e-12 * p0])
+        return np.ascontiguousarray(tab[keep])
+
+    def _crossing(self, k, b, x):
+        """s0_1 near x at which roller k (from 0) sits at undeformed coordinate b, by Newton's
+        method with d s0_k / d s0_1 from the velocity recursion. [m]"""
+        p0 = self.guide.p0
+        for _ in range(30):
+            conf = self.configure(x)
+            f = float(np.mod(conf.s0[k] - b + 0.5 * p0, p0) - 0.5 * p0)
+            if abs(f) < 1e-13:
+                break
+            _, gam, _, _, _ = self.jacobian(conf)
+            x -= f / float(gam[k])
+        return x % p0
+
     # -- sweep ------------------------------------------------------------------------------
     def sweep(self, s0_values: np.ndarray, delta_guess: float | None = None):
         """delta and closure residual at each s0_1 in s0_values (one compiled loop). [m]"""

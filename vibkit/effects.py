@@ -13,7 +13,9 @@ motor
     speed controller on the sprocket, M = kp (thetadot_ref - thetadot) + ki * integral, limited to
     +-torque_limit with conditional integration (no wind-up); thetadot_ref = -speed / R^P.
 passengers
-    m g shared by the three rollers of a step while boarding <= t < alighting.
+    m g shared by the three rollers of a step while it is aboard: by place (the default), while
+    the step's middle roller is between the boarding and alighting places (found during the run,
+    the integrator ends a step where it passes them); or between two given times.
 tensioner
     carriage spring (preload + stiffness delta, opposing delta) and carriage mass.
 rolling_resistance
@@ -36,7 +38,7 @@ __all__ = ["pack_parameters", "evaluate", "motor_torque", "FP", "IP"]
 # float parameter slots
 FP = {name: i for i, name in enumerate((
     "p0", "lt", "pitch", "g", "k", "expo", "damp", "kp", "ki", "wref", "tlim", "k_s", "preload", "m_c", "mu_rr",
-    "inertia", "r_d", "cx", "cz", "root_r", "psi", "tol"))}
+    "inertia", "r_d", "cx", "cz", "root_r", "psi", "tol", "reach"))}
 # integer parameter slots
 IP = {name: i for i, name in enumerate(("n", "nteeth", "gravity", "contact", "motor", "passengers", "tensioner",
                                         "rolling"))}
@@ -54,7 +56,7 @@ class Work:
         )
 
 
-def pack_parameters(model, effects: dict):
+def pack_parameters(model, effects: dict, *, start: float = 0.0):
     """Parameter arrays for the compiled kernels from a model and the scene's effects."""
     n = model.n
     fp = np.zeros(len(FP))
@@ -69,6 +71,10 @@ def pack_parameters(model, effects: dict):
     fp[FP["root_r"]] = geo["root_radius"]
     fp[FP["psi"]] = geo["tooth_pitch"]
     fp[FP["tol"]] = model.chain.tol
+    # contact candidates: roller centres within reach of a tooth's farthest corner (the tip corners
+    # B and C lie beyond R^F + h: sqrt((R^F + h)^2 + (tip width / 2)^2))
+    loc = model.corners_local
+    fp[FP["reach"]] = float(np.max(np.hypot(loc[:, 0], geo["root_radius"] + loc[:, 1]))) + model.scene.chain.roller_radius
     ip[IP["n"]] = n
     ip[IP["nteeth"]] = model.sprocket.teeth
     if "gravity" in effects:
@@ -89,12 +95,11 @@ def pack_parameters(model, effects: dict):
     pb = np.zeros(0)
     pa = np.zeros(0)
     if "passengers" in effects:
-        ip[IP["passengers"]] = 1
         o = effects["passengers"]
+        by_place, pb, pa = model.passenger_schedule(o, start)
+        ip[IP["passengers"]] = 2 if by_place else 1
         pm = np.asarray(o["mass"], dtype=float)
         ps = np.asarray(o["step"], dtype=np.int64)
-        pb = np.asarray(o["board"], dtype=float)
-        pa = np.asarray(o["alight"], dtype=float)
         if "gravity" not in effects:
             fp[FP["g"]] = 9.81
     if "tensioner" in effects:
@@ -156,10 +161,12 @@ def evaluate(t, y, dy, prm, ws, want_teeth):
     for i in range(n):
         fx[i] = 0.0
         fz[i] = -mass[i] * g if ip[2] == 1 else 0.0
-    if ip[5] == 1:
+    if ip[5] != 0:
         for jp in range(pm.size):
-            if pb[jp] <= t < pa[jp]:
-                base = 3 * (ps[jp] - 1)
+            base = 3 * (ps[jp] - 1)
+            # by time (1), or by the place of the step's middle roller (2: unwrapped s0)
+            where = t if ip[5] == 1 else s0[(base + 1) % n]
+            if pb[jp] <= where < pa[jp]:
                 for r in range(3):
                     fz[(base + r) % n] -= pm[jp] * g / 3.0
     if ip[7] == 1:
@@ -181,9 +188,10 @@ def evaluate(t, y, dy, prm, ws, want_teeth):
             ind_t[j] = 0.0
             frc_t[j] = 0.0
     if ip[3] == 1:
-        # candidates: rollers whose circle can reach a tooth tip (centre closer than root + h + r_d)
+        # candidates: rollers whose circle can reach a tooth (centre closer than the farthest
+        # corner's radius + r_d)
         ncand = 0
-        reach = fp[19] + loc[1, 1] + fp[16] + 1e-9
+        reach = fp[22] + 1e-9
         reach2 = reach * reach
         for i in range(n):
             dxc = xs[i] - fp[17]

@@ -332,6 +332,23 @@ class Guide:
         self.table = build_table(params)
         self.p0 = float(self.table[:, LEN0].sum())
 
+    def breakpoints(self, *, smooth_joints: bool = True) -> np.ndarray:
+        """Undeformed coordinates s0 where the guide's second derivatives are not smooth. [m]
+
+        Every segment start (a curvature jump between a line and an arc, or the end of a telescopic
+        run) and the four inner ends of the telescopic runs' cosine ramps. They do not move with
+        delta. The acceleration of a roller jumps (or its rate does) when it crosses one, so the
+        forward integrator ends its steps there (:meth:`vibkit.chain.Chain.crossing_table`).
+        """
+        tab = self.table
+        jump = tab[:, KAPPA] != np.roll(tab[:, KAPPA], 1)
+        pts = list(tab[jump, S0])
+        if smooth_joints:
+            pts += list(tab[~jump, S0])
+            for k in np.flatnonzero(tab[:, SIGP] != 0.0):
+                pts += [tab[k, S0] + RAMP * tab[k, LEN0], tab[k, S0] + (1.0 - RAMP) * tab[k, LEN0]]
+        return np.unique(np.mod(np.asarray(pts), self.p0))
+
     def perimeter(self, delta: float = 0.0) -> float:
         """Perimeter of the deformed guide P0 - 2 delta. [m]"""
         self._check_delta(delta)

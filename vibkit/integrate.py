@@ -66,13 +66,82 @@ D1, D3, D4, D5, D6, D7 = (-12715105075 / 11282082432, 87487479700 / 32700410799,
 
 
 @nb.njit(cache=True, error_model="numpy")
-def _dopri5_chunk(t, y, h, k1, t_stop, t_out, idx, y_out, prm, ws, rtol, atol, max_step, counters, ctl):
-    """Advance from t to t_stop, writing the dense output at t_out[idx:] <= t_stop.
+def _next_crossing(s, direction, cross, p0, gap):
+    """The first crossing value beyond s in ``direction`` (+1 or -1), farther than ``gap``. [m]
+
+    ``cross`` holds the crossing values of one period ``p0`` (sorted, in [0, p0)); the result is
+    an absolute coordinate (the period added as many times as s holds it).
+    """
+    m = math.floor(s / p0)
+    r = s - m * p0
+    if direction > 0:
+        j = np.searchsorted(cross, r + gap, side="right")
+        if j < cross.size:
+            return m * p0 + cross[j]
+        return (m + 1.0) * p0 + cross[0]
+    j = np.searchsorted(cross, r - gap, side="left") - 1
+    if j >= 0:
+        return m * p0 + cross[j]
+    return (m - 1.0) * p0 + cross[cross.size - 1]
+
+
+@nb.njit(cache=True, error_model="numpy")
+def _time_to(dist, v, a):
+    """Smallest positive h with v h + a h^2 / 2 = dist (inf if never). [s]"""
+    disc = v * v + 2.0 * a * dist
+    if disc < 0.0:
+        return math.inf
+    r = math.sqrt(disc)
+    den = v + r if v >= 0.0 else v - r
+    if den != 0.0:
+        h = 2.0 * dist / den
+        if h > 0.0:
+            return h
+    if a != 0.0:
+        h = (-v + r) / a if a > 0.0 else (-v - r) / a
+        if h > 0.0:
+            return h
+    return math.inf
+
+
+@nb.njit(cache=True, error_model="numpy")
+def _dense_component(th, y0, y1, k1, k7, h, r5):
+    r2 = y1 - y0
+    r3 = h * k1 - r2
+    r4 = r2 - h * k7 - r3
+    return y0 + th * (r2 + (1.0 - th) * (r3 + th * (r4 + (1.0 - th) * r5)))
+
+
+@nb.njit(cache=True, error_model="numpy")
+def _side(pos, has_lo, lo, has_hi, hi, direction, tiny):
+    """A stage's y[0] kept on the smooth side of the breakpoints that bound the step."""
+    if has_hi and (pos - hi) * direction > -tiny:
+        pos = hi - direction * tiny
+    if has_lo and (pos - lo) * direction < tiny:
+        pos = lo + direction * tiny
+    return pos
+
+
+@nb.njit(cache=True, error_model="numpy")
+def _dopri5_chunk(t, y, h, k1, t_stop, t_out, idx, y_out, prm, ws, rtol, atol, max_step, counters, ctl, cross,
+                  p0, gap, pause):
+    """Advance from t towards t_stop, writing the dense output at t_out[idx:] <= t_stop.
 
     Returns (status, t, h, idx): status 0 ok, 1 closure failure, 2 step size collapse,
-    3 non-finite state, 4 too many steps, 5 paused after 4096 steps (call again).
-    ``ctl`` carries the step-size controller's memory between calls: [previous error, last step
-    rejected]. The controller is Hairer's PI (Lund) stabilisation of DOPRI5 (beta = 0.04). ``counters`` accumulates [steps, rejected, evaluations].
+    3 non-finite state, 4 too many steps, 5 paused after ``pause`` steps (call again: the step
+    sequence does not depend on where the pauses fall).
+    ``ctl`` carries the controller's memory between calls: [previous error, last step rejected,
+    step size before a breakpoint cut it, the step starts on a breakpoint, that breakpoint, its
+    direction]. The step-size controller is Hairer's PI (Lund) stabilisation of DOPRI5
+    (beta = 0.04). ``counters`` accumulates [steps, rejected, evaluations, breakpoint steps].
+
+    Breakpoints: ``cross`` holds the values of y[0] (one period ``p0``, sorted) at which the
+    right-hand side is not smooth (a roller on a curvature jump of the guide, a passenger's step at
+    a landing). No step straddles one. A step that would reach the next one is cut to end on it
+    (predicted from the velocity and acceleration of y[0]; located on the dense output and taken
+    again if it passes it by more than ``gap`` [m]); every stage of that step evaluates the
+    right-hand side on the near side of the breakpoint, and every stage of the next one on the far
+    side. So each step integrates a smooth function and keeps the method's order.
     """
     m = y.size
     k2 = np.empty(m)
@@ -83,37 +152,81 @@ def _dopri5_chunk(t, y, h, k1, t_stop, t_out, idx, y_out, prm, ws, rtol, atol, m
     k7 = np.empty(m)
     yt = np.empty(m)
     y1 = np.empty(m)
+    nev = cross.size
+    taken = 0
+    tiny = 1e-11  # [m] how far on its side of a breakpoint a stage is evaluated
     while t < t_stop:
         hmin = 1e-12 * max(1.0, abs(t))
+        hnat = max(h, ctl[2])  # the step the error controller wants, before a breakpoint cut it
         if h > max_step:
             h = max_step
+        has_hi = False
+        sc = 0.0
+        direction = 1.0
+        if nev > 0:
+            v = k1[0]
+            direction = 1.0 if (v > 0.0 or (v == 0.0 and k1[1] >= 0.0)) else -1.0
+            if ctl[3] > 0.0 and ctl[5] != direction:
+                ctl[3] = 0.0  # the motion reversed: the breakpoint behind no longer bounds the step
+            if ctl[3] == 0.0:
+                # starting on a breakpoint (at t = 0, after a time event or a reversal): take the
+                # right-hand side on the far side
+                s_on = _next_crossing(y[0] - 2.0 * gap * direction, direction, cross, p0, 0.0)
+                if abs(y[0] - s_on) <= gap:
+                    ctl[3] = 1.0
+                    ctl[4] = s_on
+                    ctl[5] = direction
+                    for i in range(m):
+                        yt[i] = y[i]
+                    yt[0] = _side(yt[0], True, s_on, False, 0.0, direction, tiny)
+                    if evaluate(t, yt, k1, prm, ws, False) != 0:
+                        return 1, t, h, idx
+                    counters[2] += 1
+            sc = _next_crossing(y[0], direction, cross, p0, gap)
+            hc = _time_to(sc - y[0], v, k1[1])
+            if hc <= h:
+                h = hc
+                ctl[2] = hnat
+            # a step that ends on (or within a micrometre of) the breakpoint keeps its stages on
+            # the near side of it
+            if (y[0] + h * (v + 0.5 * h * k1[1]) - sc) * direction > -1e-6:
+                has_hi = True
+        has_lo = ctl[3] > 0.0
+        lo = ctl[4]
         last = False
         if t + h >= t_stop:
             h = t_stop - t
             last = True
         for i in range(m):
             yt[i] = y[i] + h * A21 * k1[i]
+        yt[0] = _side(yt[0], has_lo, lo, has_hi, sc, direction, tiny)
         if evaluate(t + h / 5, yt, k2, prm, ws, False) != 0:
             return 1, t, h, idx
         for i in range(m):
             yt[i] = y[i] + h * (A31 * k1[i] + A32 * k2[i])
+        yt[0] = _side(yt[0], has_lo, lo, has_hi, sc, direction, tiny)
         if evaluate(t + 0.3 * h, yt, k3, prm, ws, False) != 0:
             return 1, t, h, idx
         for i in range(m):
             yt[i] = y[i] + h * (A41 * k1[i] + A42 * k2[i] + A43 * k3[i])
+        yt[0] = _side(yt[0], has_lo, lo, has_hi, sc, direction, tiny)
         if evaluate(t + 0.8 * h, yt, k4, prm, ws, False) != 0:
             return 1, t, h, idx
         for i in range(m):
             yt[i] = y[i] + h * (A51 * k1[i] + A52 * k2[i] + A53 * k3[i] + A54 * k4[i])
+        yt[0] = _side(yt[0], has_lo, lo, has_hi, sc, direction, tiny)
         if evaluate(t + h * 8 / 9, yt, k5, prm, ws, False) != 0:
             return 1, t, h, idx
         for i in range(m):
             yt[i] = y[i] + h * (A61 * k1[i] + A62 * k2[i] + A63 * k3[i] + A64 * k4[i] + A65 * k5[i])
+        yt[0] = _side(yt[0], has_lo, lo, has_hi, sc, direction, tiny)
         if evaluate(t + h, yt, k6, prm, ws, False) != 0:
             return 1, t, h, idx
         for i in range(m):
             y1[i] = y[i] + h * (B1 * k1[i] + B3 * k3[i] + B4 * k4[i] + B5 * k5[i] + B6 * k6[i])
-        if evaluate(t + h, y1, k7, prm, ws, False) != 0:
+            yt[i] = y1[i]
+        yt[0] = _side(yt[0], has_lo, lo, has_hi, sc, direction, tiny)
+        if evaluate(t + h, yt, k7, prm, ws, False) != 0:
             return 1, t, h, idx
         counters[2] += 6
         err = 0.0
@@ -121,10 +234,10 @@ def _dopri5_chunk(t, y, h, k1, t_stop, t_out, idx, y_out, prm, ws, rtol, atol, m
             # positions and angles (components 0 and 2) grow without bound: their tolerance is
             # taken against a fixed 1 m / 1 rad so that the accuracy does not loosen over time
             if i == 0 or i == 2:
-                sc = atol + rtol
+                sc_i = atol + rtol
             else:
-                sc = atol + rtol * max(abs(y[i]), abs(y1[i]))
-            ei = h * (E1 * k1[i] + E3 * k3[i] + E4 * k4[i] + E5 * k5[i] + E6 * k6[i] + E7 * k7[i]) / sc
+                sc_i = atol + rtol * max(abs(y[i]), abs(y1[i]))
+            ei = h * (E1 * k1[i] + E3 * k3[i] + E4 * k4[i] + E5 * k5[i] + E6 * k6[i] + E7 * k7[i]) / sc_i
             err += ei * ei
         err = math.sqrt(err / m)
         if not math.isfinite(err):
@@ -133,6 +246,32 @@ def _dopri5_chunk(t, y, h, k1, t_stop, t_out, idx, y_out, prm, ws, rtol, atol, m
             h *= 0.25
             counters[1] += 1
             continue
+        if err <= 1.0 and nev > 0:
+            # did the step pass a breakpoint by more than the gap? then end it there and redo it
+            s_hit = sc if has_hi else _next_crossing(y[0], direction, cross, p0, gap)
+            over = (y1[0] - s_hit) * direction
+            back = _next_crossing(y[0], -direction, cross, p0, gap)
+            if (y1[0] - back) * direction < -gap:
+                over = gap + 1.0  # moved backwards past one (a reversal within the step)
+                s_hit = back
+            if over > gap:
+                r5 = h * (D1 * k1[0] + D3 * k3[0] + D4 * k4[0] + D5 * k5[0] + D6 * k6[0] + D7 * k7[0])
+                lo_t, hi_t = 0.0, 1.0
+                f_lo = y[0] - s_hit
+                for _ in range(60):
+                    mid = 0.5 * (lo_t + hi_t)
+                    f_mid = _dense_component(mid, y[0], y1[0], k1[0], k7[0], h, r5) - s_hit
+                    if (f_mid > 0.0) == (f_lo > 0.0):
+                        lo_t = mid
+                        f_lo = f_mid
+                    else:
+                        hi_t = mid
+                    if (hi_t - lo_t) * h <= 1e-15 * max(1.0, abs(t)):
+                        break
+                counters[1] += 1
+                ctl[2] = hnat
+                h = max(lo_t * h, hmin)
+                continue
         if err <= 1.0:
             # dense output for the output times inside (t, t + h]
             tn = t + h
@@ -150,6 +289,23 @@ def _dopri5_chunk(t, y, h, k1, t_stop, t_out, idx, y_out, prm, ws, rtol, atol, m
                 y[i] = y1[i]
                 k1[i] = k7[i]
             counters[0] += 1
+            taken += 1
+            ctl[3] = 0.0
+            if has_hi and abs(y[0] - sc) <= gap:
+                # on the breakpoint: the next step starts from the right-hand side on its far side
+                counters[3] += 1
+                ctl[3] = 1.0
+                ctl[4] = sc
+                ctl[5] = direction
+                for i in range(m):
+                    yt[i] = y[i]
+                yt[0] = _side(yt[0], True, sc, False, 0.0, direction, tiny)
+                if evaluate(t, yt, k1, prm, ws, False) != 0:
+                    return 1, t, h, idx
+                counters[2] += 1
+            elif has_lo:
+                # the previous step ended on a breakpoint: this one's k7 was taken on the far side
+                pass
             if not last:
                 e = max(err, 1e-10)
                 fac = 0.9 * e ** (-0.2 + 0.75 * 0.04) * max(ctl[0], 1e-4) ** 0.04
@@ -157,17 +313,25 @@ def _dopri5_chunk(t, y, h, k1, t_stop, t_out, idx, y_out, prm, ws, rtol, atol, m
                 if ctl[1] > 0.0:  # no growth right after a rejection
                     fac = min(fac, 1.0)
                 h = h * fac
-            ctl[0] = err
+                if ctl[2] > 0.0:
+                    # the step was cut by a breakpoint, not by the error: go on with the step the
+                    # controller had before the cut
+                    h = max(h, ctl[2])
+                ctl[0] = err
+            else:
+                h = hnat  # cut to end on t_stop: the next call goes on with the step it had
+            ctl[2] = 0.0
             ctl[1] = 0.0
         else:
             counters[1] += 1
             h = h * max(0.2, 0.9 * err ** (-0.2 + 0.75 * 0.04))
             ctl[1] = 1.0
+            ctl[2] = 0.0
             if h < hmin:
                 return 2, t, h, idx
         if counters[0] + counters[1] > 50_000_000:
             return 4, t, h, idx
-        if (counters[0] + counters[1]) % 4096 == 0:
+        if taken >= pause:
             return 5, t, h, idx  # pause: lets the caller check its wall-time budget and draw progress
     return 0, t, h, idx
 
@@ -178,7 +342,8 @@ def _closure_message(status):
 
 
 def integrate(prm, ws, y0, t_out, *, method="dopri5", rtol=1e-6, atol=1e-9, max_step=math.inf, first_step=None,
-              max_wall_time=math.inf, progress=True, label="forward dynamics"):
+              max_wall_time=math.inf, progress=True, label="forward dynamics", events=None, event_gap=1e-6,
+              t_events=None):
     """State at the output times ``t_out`` (increasing, starting at 0) of the forward dynamics.
 
     Returns
@@ -196,8 +361,15 @@ def integrate(prm, ws, y0, t_out, *, method="dopri5", rtol=1e-6, atol=1e-9, max_
     t0 = time.perf_counter()
     bar = Progress(t_out[-1], label, enabled=progress)
     if method == "dopri5":
-        counters = np.zeros(3, dtype=np.int64)
-        ctl = np.array([1e-4, 0.0])
+        counters = np.zeros(4, dtype=np.int64)
+        ctl = np.array([1e-4, 0.0, 0.0, 0.0, 0.0, 1.0])
+        cross = np.ascontiguousarray(events[0], dtype=float) if events is not None else np.zeros(0)
+        period = float(events[1]) if events is not None else 1.0
+        # times at which the right-hand side jumps (passengers by time): steps end on them, the
+        # last output time among them so that a run's steps do not depend on its length
+        stops = np.unique(np.concatenate([np.asarray(t_events if t_events is not None else [], dtype=float)]))
+        stops = stops[(stops > 0.0) & (stops < t_out[-1])]
+        stops = np.append(stops, t_out[-1])
         k1 = np.empty_like(y)
         if evaluate(0.0, y, k1, prm, ws, False) != 0:
             raise IntegrationError(_closure_message(1), 0.0, y)
@@ -205,12 +377,20 @@ def integrate(prm, ws, y0, t_out, *, method="dopri5", rtol=1e-6, atol=1e-9, max_
         idx = 1
         t = 0.0
         h = first_step or min(1e-3, max_step)
-        chunk = max(t_out[-1] / 100.0, 0.05)
+        js = 0
         while t < t_out[-1]:
-            t_stop = min(t + chunk, t_out[-1])
+            while stops[js] <= t:
+                js += 1
             try:
-                status, t, h, idx = _dopri5_chunk(t, y, h, k1, t_stop, t_out, idx, y_out, prm, ws, rtol, atol,
-                                                 max_step, counters, ctl)
+                # pauses every 256 steps for the wall-time budget and the progress bar; the steps
+                # themselves never depend on where the pauses fall, nor on the output times
+                status, t, h, idx = _dopri5_chunk(t, y, h, k1, stops[js], t_out, idx, y_out, prm, ws, rtol, atol,
+                                                 max_step, counters, ctl, cross, period, event_gap, 256)
+                if status == 0 and t < t_out[-1]:
+                    # a time event: the right-hand side changes here; start again from its new value
+                    if evaluate(t, y, k1, prm, ws, False) != 0:
+                        raise IntegrationError(_closure_message(1), t, y)
+                    counters[2] += 1
             except (ZeroDivisionError, FloatingPointError, ValueError) as exc:  # a degenerate state
                 bar.close()
                 raise IntegrationError(f"dopri5: the state became degenerate ({exc})", t, y) from None
@@ -222,7 +402,8 @@ def integrate(prm, ws, y0, t_out, *, method="dopri5", rtol=1e-6, atol=1e-9, max_
                 bar.close()
                 raise IntegrationError(f"dopri5: wall-time budget of {max_wall_time:g} s exceeded", t, y)
         bar.close()
-        stats = {"steps": int(counters[0]), "rejected": int(counters[1]), "evaluations": int(counters[2] + 1)}
+        stats = {"steps": int(counters[0]), "rejected": int(counters[1]), "evaluations": int(counters[2] + 1),
+                 "event_steps": int(counters[3])}
     elif method.startswith("cvode"):
         try:
             from sksundae.cvode import CVODE

@@ -81,6 +81,7 @@ def inverse_dynamics(model, *, speed, duration, step, start=0.0, effects=None, o
     racc = np.empty((nt, ridx.size, 2))
     omega = -speed / model.pitch_radius
     s0 = float(model.guide.s_to_s0(start, 0.0))
+    schedule = model.passenger_schedule(effects["passengers"], s0) if "passengers" in effects else None
     lam = np.empty(n)
     theta0 = None
     bar = Progress(nt, "inverse dynamics", enabled=progress)
@@ -118,7 +119,7 @@ def inverse_dynamics(model, *, speed, duration, step, start=0.0, effects=None, o
         fx = np.zeros(n)
         fz = -model.mass * g
         if "passengers" in effects:
-            model.passenger_forces(effects["passengers"], tj, g if g else 9.81, fz)
+            model.passenger_forces(effects["passengers"], tj, g if g else 9.81, fz, s0=conf.s0, schedule=schedule)
         resx = model.mass * acc[:, 0] - fx
         resz = model.mass * acc[:, 1] - fz
         part = conf.partials

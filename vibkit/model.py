@@ -52,11 +52,53 @@ class EscalatorModel:
     def gravity_forces(self, g: float) -> tuple[np.ndarray, np.ndarray]:
         return np.zeros(self.n), -self.mass * g
 
-    def passenger_forces(self, opts: dict, t: float, g: float, fz: np.ndarray) -> None:
-        """Add each passenger's weight, shared by the three rollers of its step, while aboard."""
-        for m, step, board, alight in zip(opts["mass"], opts["step"], opts["board"], opts["alight"]):
-            if board <= t < alight:
-                fz[self.step_rollers(step)] -= m * g / 3.0
+    def place(self, name: str) -> float:
+        """Undeformed-guide coordinate of a named place of the guide. [m]
+
+        ``"lower_landing"`` and ``"upper_landing"``: the middle of the landing's top run, where
+        passengers step on and off (model.md section 7).
+        """
+        seg = {"lower_landing": 1, "upper_landing": 5}[name]
+        tab = self.guide.table
+        return float(tab[seg, 0] + 0.5 * tab[seg, 1])
+
+    def passenger_schedule(self, opts: dict, start: float):
+        """Where or when each passenger is aboard: (by_place, board, alight) arrays.
+
+        By place (the default): board and alight are the unwrapped undeformed coordinates that the
+        middle roller of the passenger's step passes when it reaches the boarding and alighting
+        places on the ride that is under way at ``start`` or the first one after it [m]; a step
+        already between the two at the start carries its passenger from t = 0. By time: the times
+        given in the scene [s].
+        """
+        board, alight = list(opts["board"]), list(opts["alight"])
+        if not isinstance(board[0], str):
+            return False, np.asarray(board, dtype=float), np.asarray(alight, dtype=float)
+        conf = self.chain.configure(float(start))
+        p0 = self.guide.p0
+        b_abs, a_abs = [], []
+        for step, b, a in zip(opts["step"], board, alight):
+            u0 = float(conf.s0[int(self.step_rollers(step)[1])])
+            sb, sa = self.place(b), self.place(a)
+            if sa <= sb:
+                sa += p0
+            j = math.floor((u0 - sa) / p0) + 1  # the smallest ride whose alighting lies ahead
+            b_abs.append(sb + j * p0)
+            a_abs.append(sa + j * p0)
+        return True, np.asarray(b_abs), np.asarray(a_abs)
+
+    def passenger_forces(self, opts: dict, t: float, g: float, fz: np.ndarray, *, s0=None, schedule=None) -> None:
+        """Add each passenger's weight, shared by the three rollers of its step, while aboard.
+
+        ``schedule`` is :meth:`passenger_schedule`'s result; by place, ``s0`` holds the rollers'
+        unwrapped undeformed coordinates (a :class:`~vibkit.chain.Configuration`'s ``s0``).
+        """
+        by_place, board, alight = schedule if schedule is not None else (False, opts["board"], opts["alight"])
+        for m, step, b, a in zip(opts["mass"], opts["step"], board, alight):
+            rollers = self.step_rollers(step)
+            where = s0[rollers[1]] if by_place else t
+            if b <= where < a:
+                fz[rollers] -= m * g / 3.0
 
     def wrap_angle(self, theta: float) -> float:
         return math.remainder(theta, 2 * math.pi)

@@ -342,6 +342,9 @@ class StudyFormulation:
         self.beta = float(beta)
         self.coordinate_map = coordinate_map
         self.linear = coordinate_map == "study"
+        if "passengers" in effects and isinstance(list(effects["passengers"]["board"])[0], str):
+            raise ValueError("the study's formulation takes passengers by time (effects.passengers.board and "
+                             "alight in seconds), not by place")
         self.prm = pack_parameters(model, effects)
         # link j joins roller j and j + 1; its length (all equal unless the chain models worn links)
         pitches = getattr(model.chain, "pitches", None)

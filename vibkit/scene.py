@@ -66,9 +66,13 @@ SECTIONS = {
     "motion": {"speed": float, "duration": float, "step": float, "start": float},
     "run": {"duration": float, "output_step": float, "start": float, "initial_speed": float, "seed": int},
     "solver": {"method": str, "rtol": float, "atol": float, "max_step": float, "first_step": float,
-               "max_wall_time": float},
+               "max_wall_time": float, "events": bool},
     "outputs": {"variables": list, "rollers": list, "step_accelerometer": int},
 }
+
+
+# places of the guide where passengers board and alight (vibkit.model.EscalatorModel.place)
+PLACES = ("lower_landing", "upper_landing")
 
 
 class SceneError(ValueError):
@@ -326,10 +330,13 @@ def _validate_effects(src, eff):
         _positive(src, "effects.gravity.g", eff["gravity"]["g"])
     if "passengers" in eff:
         o = eff["passengers"]
-        for key in ("mass", "step", "board", "alight"):
+        for key in ("mass", "step"):
             if key not in o:
                 raise SceneError(f"{src}: missing value 'effects.passengers.{key}' (a list, one entry per passenger)")
         n = len(o["mass"])
+        # by place unless times are given: a step boards at the lower landing, alights at the upper
+        o.setdefault("board", ["lower_landing"] * n)
+        o.setdefault("alight", ["upper_landing"] * n)
         for key in ("step", "board", "alight"):
             if len(o[key]) != n:
                 raise SceneError(f"{src}: 'effects.passengers.{key}' has {len(o[key])} entries, "
@@ -341,11 +348,25 @@ def _validate_effects(src, eff):
             if not isinstance(st, int) or st < 1:
                 raise SceneError(f"{src}: 'effects.passengers.step[{i}]' must be a step number >= 1, got {st!r}")
             for key, v in (("board", b), ("alight", a)):
-                if not isinstance(v, (int, float)):
-                    raise SceneError(f"{src}: 'effects.passengers.{key}[{i}]' must be a time [s] or a place "
-                                     f"given as a number, got {v!r}")
-            if not a > b:
-                raise SceneError(f"{src}: passenger {i} alights (t = {a}) before boarding (t = {b})")
+                if isinstance(v, str):
+                    if v not in PLACES:
+                        raise SceneError(f"{src}: 'effects.passengers.{key}[{i}]' must be a place "
+                                         f"({', '.join(repr(p) for p in PLACES)}) or a time [s], got {v!r}")
+                elif isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+                    raise SceneError(f"{src}: 'effects.passengers.{key}[{i}]' must be a place "
+                                     f"({', '.join(repr(p) for p in PLACES)}) or a time [s], got {v!r}")
+        kinds = {isinstance(v, str) for v in list(o["board"]) + list(o["alight"])}
+        if len(kinds) > 1:
+            raise SceneError(f"{src}: 'effects.passengers.board' and 'alight' must all be places or all be "
+                             f"times [s], not a mix")
+        if kinds == {str}:
+            for i, (b, a) in enumerate(zip(o["board"], o["alight"])):
+                if b == a:
+                    raise SceneError(f"{src}: passenger {i} boards and alights at the same place {b!r}")
+        else:
+            for i, (b, a) in enumerate(zip(o["board"], o["alight"])):
+                if not a > b:
+                    raise SceneError(f"{src}: passenger {i} alights (t = {a}) before boarding (t = {b})")
 
 
 def _outputs(src, o, analysis, chain):
