@@ -5,8 +5,12 @@ Forward dynamics: the no-load scene (``sim/thesis-forward.toml``; 44 s, or 4 s w
 every method over a ladder of tolerances; errors against a reference computed by vibkit's dopri5 at
 rtol 1e-11: delta, chain speed, link tension (max abs over time and links), link-pass frequency
 (relative, from roller 1's mean advance over the steady part) and the closure residual; wall time
-of the whole call. The study's formulation (all coordinates, Baumgarte, BDF) runs at its own
-settings and one tighter one.
+of the whole call. Then what users see of the physics (issue 10): the contact history (episodes of
+tooth contact, sampled at 200 Hz, and the time of the last one: converged, 23 and 7.87 s), the
+sprocket speed ripple after 8 s (converged 2e-4 %), and the energy error of the conservative scene
+(no motor, no damping, started at 0.5 m/s; 44 s) run at the same settings. dopri5 runs with its
+steps ended on the guide's breakpoints (the default) and, for comparison, stepping over them. The
+study's formulation (all coordinates, Baumgarte, BDF) runs at its own settings.
 
 Kinematics: delta against the closure tolerance and against the sweep step.
 
@@ -36,23 +40,57 @@ from vibkit.params import reference_chain, reference_guide  # noqa: E402
 from vibkit.scene import load_scene  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
-OUTPUTS = ("delta", "chain_speed", "sprocket_speed", "link_tension", "closure_residual", "s0")
+OUTPUTS = ("delta", "chain_speed", "sprocket_speed", "link_tension", "closure_residual", "s0", "contact_force")
+CONSERVATIVE = {"gravity": {"g": 9.81}, "contact": {"stiffness": 1e6, "exponent": 1.5, "damping": 0.0}}
 
 
 def scene_for(duration):
     scene = load_scene(ROOT / "sim" / "thesis-forward.toml")
     out = dict(scene.outputs, variables=OUTPUTS)
     sections = dict(scene.sections)
-    sections["run"] = dict(sections["run"], duration=duration, output_step=0.01)
+    sections["run"] = dict(sections["run"], duration=duration, output_step=0.005)
     return replace(scene, outputs=out, sections=sections)
 
 
-def run_ours(scene, method, rtol, budget):
+def conservative_for(scene):
     sections = dict(scene.sections)
-    sections["solver"] = {"method": method, "rtol": rtol, "atol": rtol * 1e-2, "max_wall_time": budget}
+    sections["run"] = dict(sections["run"], initial_speed=0.5)
+    return replace(scene, effects=CONSERVATIVE, sections=sections,
+                   outputs=dict(scene.outputs, variables=("energy",)))
+
+
+def run_ours(scene, method, rtol, budget, events=True):
+    sections = dict(scene.sections)
+    sections["solver"] = {"method": method, "rtol": rtol, "atol": rtol * 1e-2, "max_wall_time": budget,
+                          "events": events}
     t0 = time.perf_counter()
     ds = vibkit.simulate(replace(scene, sections=sections), progress=False)
     return ds, time.perf_counter() - t0
+
+
+def contact_history(ds):
+    """Episodes of tooth contact (runs of output samples where any tooth carries force) and the time
+    of the last contact. [-], [s]"""
+    on = (np.abs(ds.contact_force.values) > 0).any(axis=1)
+    n = int(on[0]) + int(np.count_nonzero(np.diff(on.astype(int)) == 1))
+    return n, float(ds.time.values[np.flatnonzero(on)[-1]]) if on.any() else float("nan")
+
+
+def physics(ds):
+    n, last = contact_history(ds)
+    w = ds.sprocket_speed.sel(time=slice(8.0, None)).values
+    ripple = 100.0 * float((w.max() - w.min()) / abs(w.mean())) if w.size else float("nan")
+    return {"contact_episodes": n, "last_contact_s": last, "ripple_percent": ripple}
+
+
+def energy_error(scene, method, rtol, budget, events=True):
+    """Largest change of kinetic + gravitational + contact energy over the conservative run. [J]"""
+    try:
+        ds, _ = run_ours(conservative_for(scene), method, rtol, budget, events)
+    except (IntegrationError, ValueError):
+        return float("nan")
+    e = (ds.kinetic_energy + ds.potential_energy + ds.contact_energy).values
+    return float(np.abs(e - e[0]).max())
 
 
 def link_pass(ds, steady_from):
@@ -84,32 +122,39 @@ def forward(quick):
     scene = scene_for(duration)
     print(f"reference: dopri5 at rtol 1e-11 over {duration:g} s ...", file=sys.stderr, flush=True)
     ref, t_ref = run_ours(scene, "dopri5", 1e-11, math.inf)
-    ladders = {
-        "dopri5": [1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9],
-        "dop853": [1e-4, 1e-6, 1e-8] if not quick else [1e-4, 1e-6],
-        "rk45": [1e-4, 1e-6] if not quick else [1e-4],
-        "bdf": [1e-4, 1e-6] if not quick else [1e-4],
-        "radau": [1e-4, 1e-6] if not quick else [1e-4],
-        "lsoda": [1e-4, 1e-6] if not quick else [1e-4],
-        "cvode-bdf": [1e-4, 1e-6] if not quick else [1e-4],
-        "cvode-adams": [1e-4, 1e-6] if not quick else [1e-4],
-    }
-    budget = 120.0 if not quick else 30.0
+    ladders = [("dopri5", True, [1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9] if not quick else [1e-5, 1e-6]),
+               ("dopri5", False, [1e-5, 1e-7, 1e-9] if not quick else [1e-6]),
+               ("dop853", False, [1e-4, 1e-6, 1e-8] if not quick else [1e-6]),
+               ("rk45", False, [1e-4, 1e-6] if not quick else [1e-4]),
+               ("bdf", False, [1e-4, 1e-6] if not quick else [1e-4]),
+               ("radau", False, [1e-4, 1e-6] if not quick else [1e-4]),
+               ("lsoda", False, [1e-4, 1e-6] if not quick else [1e-4]),
+               ("cvode-bdf", False, [1e-4, 1e-6, 1e-8] if not quick else [1e-4]),
+               ("cvode-adams", False, [1e-4, 1e-6, 1e-8] if not quick else [1e-4])]
+    budget = 300.0 if not quick else 60.0
     rows = []
-    for method, tols in ladders.items():
+    for method, events, tols in ladders:
+        label = method + ("" if events or method != "dopri5" else " (steps over breakpoints)")
         for rtol in tols:
-            print(f"{method} rtol {rtol:g} ...", file=sys.stderr, flush=True)
+            print(f"{label} rtol {rtol:g} ...", file=sys.stderr, flush=True)
             try:
-                ds, wall = run_ours(scene, method, rtol, budget)
+                ds, wall = run_ours(scene, method, rtol, budget, events)
             except (IntegrationError, ValueError) as exc:  # ValueError: an optional solver not installed
-                rows.append({"formulation": "vibkit", "method": method, "tolerance": rtol, "wall_time_s": float("nan"),
+                rows.append({"formulation": "vibkit", "method": label, "tolerance": rtol, "wall_time_s": float("nan"),
                              "realtime_factor": float("nan"), "note": str(exc).split(" at t")[0]})
                 continue
-            row = {"formulation": "vibkit", "method": method, "tolerance": rtol, "wall_time_s": wall,
+            row = {"formulation": "vibkit", "method": label, "tolerance": rtol, "wall_time_s": wall,
                    "realtime_factor": duration / wall}
             row.update(errors(ds, ref, 2.0 if quick else 10.0))
+            row.update(physics(ds))
+            row["energy_error_J"] = energy_error(scene, method, rtol, budget, events)
             row["evaluations"] = int(ds.attrs["solver_evaluations"])
             rows.append(row)
+    ref_row = {"formulation": "vibkit (reference)", "method": "dopri5", "tolerance": 1e-11, "wall_time_s": t_ref,
+               "realtime_factor": duration / t_ref, "evaluations": int(ref.attrs["solver_evaluations"])}
+    ref_row.update(physics(ref))
+    ref_row["energy_error_J"] = energy_error(scene, "dopri5", 1e-11, math.inf)
+    rows.append(ref_row)
     # the study's formulation (Baumgarte, BDF), at its own settings (RelTol = AbsTol = MaxStep = 1e-3)
     from vibkit.reference import run_study
 
@@ -125,14 +170,16 @@ def forward(quick):
             row = {"formulation": "study (Baumgarte)", "method": "BDF", "tolerance": rtol, "wall_time_s": wall,
                    "realtime_factor": study_duration / wall}
             row.update(errors(ds, ref, 2.0 if quick else 10.0))
+            if "contact_force" in ds:
+                row.update(physics(ds))
             row["evaluations"] = int(ds.attrs.get("solver_evaluations", -1))
             rows.append(row)
         except IntegrationError as exc:
             rows.append({"formulation": "study (Baumgarte)", "method": "BDF", "tolerance": rtol,
                          "wall_time_s": float("nan"), "note": str(exc)})
     keys = ["formulation", "method", "tolerance", "wall_time_s", "realtime_factor", "err_delta_m",
-            "err_chain_speed_m_s", "err_link_tension_N", "err_link_pass_rel", "closure_residual_m", "evaluations",
-            "note"]
+            "err_chain_speed_m_s", "err_link_tension_N", "err_link_pass_rel", "closure_residual_m",
+            "contact_episodes", "last_contact_s", "ripple_percent", "energy_error_J", "evaluations", "note"]
     rows = [{k: r.get(k, "") for k in keys} for r in rows]
     return rows, duration, t_ref
 
@@ -170,15 +217,17 @@ def plot(rows, path, duration):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(1, 3, figsize=(13, 4.2))
+    fig, axes = plt.subplots(1, 4, figsize=(17, 4.2))
     labels = {}
     for r in rows:
         if not isinstance(r["wall_time_s"], float) or not math.isfinite(r["wall_time_s"]) or r["err_delta_m"] == "":
             continue
         labels.setdefault(f"{r['formulation']} {r['method']}", []).append(r)
-    for ax, key, unit in zip(axes, ("err_delta_m", "err_link_tension_N", "err_link_pass_rel"),
-                             ("delta error [m]", "link tension error [N]", "link-pass frequency error [-]")):
+    for ax, key, unit in zip(axes, ("err_delta_m", "err_link_tension_N", "err_link_pass_rel", "energy_error_J"),
+                             ("delta error [m]", "link tension error [N]", "link-pass frequency error [-]",
+                              "energy error, conservative scene [J]")):
         for name, rs in labels.items():
+            rs = [r for r in rs if isinstance(r.get(key), float) and math.isfinite(r[key])]
             x = [r["wall_time_s"] for r in rs]
             y = [max(r[key], 1e-16) for r in rs]
             ax.loglog(x, y, "o-", label=name)
