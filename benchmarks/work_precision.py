@@ -117,7 +117,7 @@ def errors(ds, ref, steady_from):
     }
 
 
-def forward(quick):
+def forward(quick, skip_study=False):
     duration = 4.0 if quick else 44.0
     scene = scene_for(duration)
     print(f"reference: dopri5 at rtol 1e-11 over {duration:g} s ...", file=sys.stderr, flush=True)
@@ -158,7 +158,7 @@ def forward(quick):
     # the study's formulation (Baumgarte, BDF), at its own settings (RelTol = AbsTol = MaxStep = 1e-3)
     from vibkit.reference import run_study
 
-    study_cases = [1e-3] if not quick else [1e-3]
+    study_cases = [] if skip_study else [1e-3]
     study_duration = duration if not quick else duration
     for rtol in study_cases:
         print(f"study formulation BDF rtol {rtol:g} over {study_duration:g} s ...", file=sys.stderr, flush=True)
@@ -243,11 +243,13 @@ def plot(rows, path, duration):
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--quick", action="store_true", help="4 s scene and shorter ladders (CI)")
+    ap.add_argument("--skip-study", action="store_true",
+                    help="leave out the study's formulation (about 150 s; benchmarks/bench_reference.py times it)")
     args = ap.parse_args(argv)
     suffix = "_quick" if args.quick else ""
     krows = kinematics(args.quick)
     write_csv(RESULTS / f"kinematic_precision{suffix}.csv", krows)
-    rows, duration, t_ref = forward(args.quick)
+    rows, duration, t_ref = forward(args.quick, args.skip_study)
     write_csv(RESULTS / f"work_precision{suffix}.csv", rows)
     md = [f"# Work-precision\n\n{machine()}; {today()}; no-load forward scene, {duration:g} s simulated; "
           f"reference dopri5 rtol 1e-11 ({t_ref:.1f} s).\n", markdown_table(rows), "",
