@@ -18,6 +18,7 @@ from .dynamics import link_multipliers
 from .effects import Work, evaluate, motor_torque, pack_parameters
 from .integrate import IntegrationError, integrate
 from .results import make_dataset
+from .sprocket import contact_kernel
 
 __all__ = ["forward_dynamics", "initial_state", "ForwardModel"]
 
@@ -160,6 +161,28 @@ def _observe(t, y, prm, ws, inertia, light, need_tension, need_teeth, need_accel
                 scal[j, 2] = motor_torque(fp[9] - y[j, 3], y[j, 4], fp[7], fp[8], fp[10])[0]
             else:
                 scal[j, 2] = 0.0
+            if need_teeth:
+                # undamped contact forces need the positions only (the caller checked the damping)
+                ncand = 0
+                reach = fp[22] + 1e-9
+                for i in range(n):
+                    dxc = xs[i] - fp[17]
+                    dzc = zs[i] - fp[18]
+                    fx[i] = 0.0
+                    fz[i] = 0.0
+                    if dxc * dxc + dzc * dzc < reach * reach:
+                        cand[ncand] = i
+                        eta[i] = 0.0
+                        sd[i] = 0.0
+                        ncand += 1
+                for q in range(ind_t.size):
+                    ind_t[q] = 0.0
+                    frc_t[q] = 0.0
+                contact_kernel(xs, zs, eta, sd, cand, ncand, y[j, 2], y[j, 3], fp[17], fp[18], prm[1], fp[19],
+                               fp[20], prm[3][1], fp[16], fp[4], fp[5], 0.0, fx, fz, ind_t, frc_t, True)
+                for q in range(ind_t.size):
+                    ind[j, q] = ind_t[q]
+                    cf[j, q] = frc_t[q]
             continue
         if evaluate(t[j], y[j], dy, prm, ws, need_teeth) != 0:
             return 1, j
@@ -237,7 +260,9 @@ def _post_process(fm, t, y, outputs, stats):
     rk = np.empty((nt, ridx.size, 6))
     # outputs that need only positions and the state skip the forces altogether
     light = want <= {"delta", "closure_residual", "sprocket_angle", "sprocket_speed", "motor_torque", "s0",
-                     "tensioner_displacement"}
+                     "tensioner_displacement", "indentation", "contact_force"}
+    if need_teeth and fm.effects["contact"].get("damping", 0.0) != 0.0:
+        light = False  # damped contact forces need the rollers' velocities
     scal[:] = np.nan
     status, bad = _observe(t, y, fm.prm, ws, model.sprocket.inertia, light, need_tension, need_teeth, need_accel, mid,
                            ridx, scal, tension, ind, cf, rk)
