@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -26,13 +27,18 @@ CASES = {
     "kinematics only": ({}, ["delta"], "no force at all: the chain coasts (closure walk + reduced dynamics)"),
     "gravity": ({"gravity": {"g": 9.81}}, ["delta"], "gravity on every roller"),
     "contact, no load": ({"gravity": {"g": 9.81}, "contact": {"stiffness": 1e6, "exponent": 1.5, "damping": 0.0},
-                          "motor": {"kp": 600.0, "speed": 0.5, "ki": 0.0}}, ["delta", "sprocket_speed"],
-                         "the study's no-load scene, two outputs"),
+                          "motor": {"kp": 600.0, "speed": 0.5, "ki": 0.0}}, ["delta", "sprocket_speed", "contact_force"],
+                         "the study's no-load scene: delta, sprocket speed, contact forces (issue 10)"),
+    "contact, no load, stepping over breakpoints": (
+        {"gravity": {"g": 9.81}, "contact": {"stiffness": 1e6, "exponent": 1.5, "damping": 0.0},
+         "motor": {"kp": 600.0, "speed": 0.5, "ki": 0.0}}, ["delta", "sprocket_speed", "contact_force"],
+        "the same, steps not ended on the guide's breakpoints (wrong contact history: README)"),
     "contact, no load, default outputs": (None, None, "sim/thesis-forward.toml as shipped (link tensions etc.)"),
     "contact + passengers": ({"gravity": {"g": 9.81}, "contact": {"stiffness": 1e6, "exponent": 1.5, "damping": 0.0},
                               "motor": {"kp": 6000.0, "speed": 0.5, "ki": 0.0},
-                              "passengers": {"mass": [70.0, 90.0], "step": [3, 53], "board": [0.0, 2.2],
-                                             "alight": [14.95, 17.35]}}, ["delta", "sprocket_speed"],
+                              "passengers": {"mass": [70.0, 90.0], "step": [3, 53],
+                                             "board": ["lower_landing"] * 2, "alight": ["upper_landing"] * 2}},
+                             ["delta", "sprocket_speed"],
                              "two passengers (the study's chapter 7.4)"),
 }
 
@@ -41,19 +47,21 @@ import json, resource, sys, time
 from dataclasses import replace
 import vibkit
 from vibkit.scene import load_scene
-effects, outputs, duration = json.loads(sys.argv[1])
+effects, outputs, duration, over = json.loads(sys.argv[1])
 scene = load_scene(sys.argv[2])
 if effects is not None:
     scene = replace(scene, effects=effects)
 if outputs is not None:
     scene = replace(scene, outputs=dict(scene.outputs, variables=tuple(outputs)))
 run = dict(scene.sections["run"], initial_speed=0.5 if effects is not None and "motor" not in effects else 0.0)
-scene = replace(scene, sections=dict(scene.sections, run=run))
+solver = dict(scene.sections["solver"], events=not over)
+scene = replace(scene, sections=dict(scene.sections, run=run, solver=solver))
 vibkit.simulate(scene, duration=0.5, progress=False)  # warm-up: compiled kernels from the cache
 t0 = time.perf_counter()
 ds = vibkit.simulate(scene, duration=duration, progress=False)
 wall = time.perf_counter() - t0
 print(json.dumps({"wall": wall, "integration": ds.attrs["solver_wall_time_s"], "steps": ds.attrs["solver_steps"],
+                  "evaluations": ds.attrs["solver_evaluations"],
                   "maxrss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
                   "closure": float(ds.closure_residual.max()) if "closure_residual" in ds else float("nan"),
                   "nbytes_mb": ds.nbytes / 2**20}))
@@ -69,16 +77,17 @@ def main(argv=None):
     rows = []
     for name, (effects, outputs, what) in CASES.items():
         print(f"{name} ...", file=sys.stderr, flush=True)
-        out = subprocess.run([sys.executable, "-c", CHILD, json.dumps([effects, outputs, duration]), scene],
+        out = subprocess.run([sys.executable, "-c", CHILD, json.dumps([effects, outputs, duration, "stepping over" in name]), scene],
                              capture_output=True, text=True, check=True)
         res = json.loads(out.stdout.strip().splitlines()[-1])
         rows.append({"case": name, "simulated_s": duration, "wall_s": res["wall"], "integration_s": res["integration"],
-                     "realtime_factor": duration / res["wall"], "steps": res["steps"],
+                     "realtime_factor": duration / res["wall"], "steps": res["steps"], "evaluations": res["evaluations"],
                      "peak_memory_MB": res["maxrss_mb"], "result_MB": res["nbytes_mb"], "what": what})
         print(rows[-1], file=sys.stderr, flush=True)
     write_csv(RESULTS / ("forward_quick.csv" if args.quick else "forward.csv"), rows)
     md = (f"# Forward dynamics speed\n\n{machine()}; {today()}; {duration:g} s simulated, dopri5 at the "
-          f"scene's tolerance (rtol 1e-5), one core, each case in a fresh process after a warm-up.\n\n"
+          f"scene's tolerance (rtol 1e-6), one core, each case in a fresh process after a warm-up; "
+          f"load average {os.getloadavg()[0]:.1f} at the end.\n\n"
           + markdown_table(rows) + "\n")
     write_text(RESULTS / ("forward_quick.md" if args.quick else "forward.md"), md)
     print(md)
