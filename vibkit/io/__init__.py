@@ -226,7 +226,9 @@ def read_recording(path, *, channel=None, sample_rate=None, time_column=None, ti
 
         return read_netcdf(spath, data, channel=channel, repair_time=repair_time)
     head = data[:65536]
-    text_bom = data.startswith(_BOMS) and suffix not in SEISMIC_SUFFIXES
+    from .csv import utf16_without_bom
+
+    text_bom = (data.startswith(_BOMS) or utf16_without_bom(head) is not None) and suffix not in SEISMIC_SUFFIXES
     looks_binary = b"\x00" in head and not text_bom and encoding is None
     if suffix in SEISMIC_SUFFIXES or looks_binary:
         from .seismic import read_seismic

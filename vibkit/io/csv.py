@@ -145,6 +145,23 @@ def _data_like(cells, n, dec, numcols) -> bool:
     return "num" in kinds and all(k != "text" for k, isnum in zip(kinds, numcols) if isnum)
 
 
+def utf16_without_bom(data: bytes):
+    """'utf-16-le' or 'utf-16-be' when text looks like UTF-16 without a byte-order mark, else None.
+
+    ASCII text in UTF-16 has a zero in every other byte (odd bytes for little
+    endian): at least 90 % of those zero and under 10 % of the others.
+    """
+    head = data[:65536]
+    if len(head) < 8 or len(head) % 2 or b"\x00" not in head:
+        return None
+    even, odd = head[0::2], head[1::2]
+    if odd.count(0) >= 0.9 * len(odd) and even.count(0) < 0.1 * len(even):
+        return "utf-16-le"
+    if even.count(0) >= 0.9 * len(even) and odd.count(0) < 0.1 * len(odd):
+        return "utf-16-be"
+    return None
+
+
 def _decode(path, data: bytes, encoding):
     if encoding is not None:
         try:
@@ -158,15 +175,17 @@ def _decode(path, data: bytes, encoding):
             except UnicodeDecodeError as exc:
                 raise RecordingError(path, None, f"starts with a {codec.upper()} byte-order mark but cannot be "
                                      f"decoded as {codec.upper()} ({exc.reason} at byte {exc.start})") from None
+    codec = utf16_without_bom(data)
+    if codec is not None:
+        try:
+            return data.decode(codec), [f"encoding {codec.upper()} (no byte-order mark; every other byte is zero)"]
+        except UnicodeDecodeError as exc:
+            raise RecordingError(path, None, f"looks like {codec.upper()} text without a byte-order mark but "
+                                 f"cannot be decoded as such ({exc.reason} at byte {exc.start}); "
+                                 "pass encoding=") from None
     head = data[:65536]
     nul = head.find(b"\x00")
     if nul >= 0:
-        even, odd = head[0::2], head[1::2]
-        if len(head) >= 8 and (odd.count(0) > 0.9 * len(odd) > 0 and even.count(0) < 0.1 * len(even)
-                               or even.count(0) > 0.9 * len(even) > 0 and odd.count(0) < 0.1 * len(odd)):
-            le = odd.count(0) > even.count(0)
-            raise RecordingError(path, None, "looks like UTF-16 text without a byte-order mark; pass "
-                                 f"encoding='utf-16-{'le' if le else 'be'}' (or save it as UTF-8)")
         raise RecordingError(path, None, f"binary content (NUL byte at offset {nul}); "
                                          "expected a text file, netCDF/HDF5 or a waveform format obspy reads")
     try:
@@ -313,7 +332,9 @@ def _match_column(want, headers, names, vars_):
 
 def _parse_numbers(cells, dec):
     """Values, missing mask, indices of non-numbers, indices of infinities."""
-    if isinstance(cells, np.ndarray) and cells.dtype.kind == "f":  # parsed by the fast path
+    if isinstance(cells, np.ndarray) and cells.dtype.kind in "fiu":  # parsed by the fast path
+        if cells.dtype.kind != "f":  # long integers (epoch ns) kept exact for the time column
+            return cells, np.zeros(cells.size, dtype=bool), np.empty(0, dtype=np.intp), np.empty(0, dtype=np.intp)
         return cells, np.isnan(cells), np.empty(0, dtype=np.intp), np.flatnonzero(np.isinf(cells))
     joined = "\n".join(cells)
     if not _NOT_NUMBER_CHAR[dec].search(joined):  # fast path: only digits, signs, exponents, marks
@@ -392,13 +413,15 @@ def _fast_rows(path, data, first, n, d, dec, trailing, first_cells, split, encod
     nlines = data.count(b"\n", offset) + (0 if data.endswith(b"\n") or offset >= len(data) else 1)
     ncols = n + (1 if trailing else 0)
     objcols = [j for j in range(n) if _kind(first_cells[j], dec) in ("stamp", "text")]
-    dtype = {j: (object if j in objcols else np.float64) for j in range(ncols)}
+    # integers too long for float64 (epoch ns, us) are read exactly, as int64
+    intcols = [j for j in range(n) if j not in objcols and re.fullmatch(r"[+-]?[0-9]{16,19}", first_cells[j])]
+    dtype = {j: (object if j in objcols else np.int64 if j in intcols else np.float64) for j in range(ncols)}
     buf = _io.BytesIO(data)
     buf.seek(offset)
     try:
         df = pd.read_csv(buf, sep=r"\s+" if d == " " else d, decimal=dec, header=None, names=list(range(ncols)),
                          index_col=False, dtype=dtype, keep_default_na=False,
-                         na_values={j: _NA_STRINGS for j in range(ncols) if j not in objcols},
+                         na_values={j: _NA_STRINGS for j in range(ncols) if j not in objcols + intcols},
                          skip_blank_lines=False, engine="c", quotechar='"', encoding=encoding)
     except (ValueError, TypeError, UnicodeDecodeError, pd.errors.ParserError, OverflowError):
         raise _Fallback from None
@@ -406,7 +429,8 @@ def _fast_rows(path, data, first, n, d, dec, trailing, first_cells, split, encod
         buf.close()
     if len(df) != nlines:
         raise _Fallback
-    cols = [df[j].to_numpy(dtype=np.float64 if j not in objcols else object, copy=False) for j in range(n)]
+    cols = [df[j].to_numpy(dtype=object if j in objcols else np.int64 if j in intcols else np.float64, copy=False)
+            for j in range(n)]
     if trailing:
         last = df[ncols - 1].to_numpy(dtype=np.float64)
         if not np.all(np.isnan(last)):
@@ -416,6 +440,8 @@ def _fast_rows(path, data, first, n, d, dec, trailing, first_cells, split, encod
     for j, c in enumerate(cols):
         if j in objcols:
             flagged |= (c == "")
+        elif j in intcols:
+            continue
         else:
             nan = np.isnan(c)
             if np.isinf(c).any():
@@ -465,7 +491,7 @@ def _epoch_unit(path, vals, tname, line):
     k = min(vals.size, 100_001)
     steps = np.diff(vals[:k])
     step = float(np.median(steps)) * f if steps.size else math.nan
-    if not (math.isfinite(step) and 1e-7 <= step <= 1e4):  # 10 MHz to one sample every 3 hours
+    if step > 0 and not 1e-7 <= step <= 1e4:  # 10 MHz to one sample every 3 hours (repeats: check_order)
         raise RecordingError(path, line, f"time column '{tname}' has no unit and holds {v0:.17g}, a Unix epoch "
                              f"time in {unit} by its size, but its steps ({step / f:.6g} {unit}) do not give a "
                              "sample rate between 1e-4 Hz and 10 MHz; pass time_unit= (s, ms, us, ns)")
@@ -509,7 +535,7 @@ def read_csv(path, data: bytes, *, channel=None, sample_rate=None, time_column=N
 
 def _decode_head(path, data, encoding):
     """(text of the first complete lines, notes, codec for the rest, bytes to parse) for the fast path."""
-    if encoding is not None or data.startswith(tuple(b for b, _ in _BOMS)):
+    if encoding is not None or data.startswith(tuple(b for b, _ in _BOMS)) or utf16_without_bom(data):
         text, notes = _decode(path, data, encoding)  # transcoded whole: pandas reads the UTF-8 bytes
         return text, notes, "utf-8", text.encode("utf-8"), True
     if len(data) <= _HEAD_BYTES:
@@ -772,8 +798,8 @@ def _read_csv(path, data: bytes, *, fast, channel=None, sample_rate=None, time_c
     if tcol is not None:
         tname = header_disp[tcol]
         tcells = cols[tcol]
-        numeric = isinstance(tcells, np.ndarray) and tcells.dtype.kind == "f"
-        if numeric and np.isnan(tcells).any():
+        numeric = isinstance(tcells, np.ndarray) and tcells.dtype.kind in "fiu"
+        if numeric and tcells.dtype.kind == "f" and np.isnan(tcells).any():
             raise _Fallback  # the line-by-line reader quotes the cell
         stamps = None if numeric or _NUM[dec].fullmatch(tcells[0]) else _parse_stamps(tcells)
         if stamps is not None:
