@@ -408,9 +408,11 @@ def _fast_rows(path, data, first, n, d, dec, trailing, first_cells, split, encod
     pandas cannot convert ...), so the two readers give the same dataset.
     """
     offset = _line_offset(data, first)
-    if data.count(b"\r", offset) != data.count(b"\r\n", offset):
+    if data.find(b"\r", offset) >= 0 and data.count(b"\r", offset) != data.count(b"\r\n", offset):
         raise _Fallback  # lone CR line ends
-    nlines = data.count(b"\n", offset) + (0 if data.endswith(b"\n") or offset >= len(data) else 1)
+    # without quotes (which may hold line ends) every line is one row of pandas: no need to count them
+    quoted = data.find(b'"', offset) >= 0
+    nlines = (data.count(b"\n", offset) + (0 if data.endswith(b"\n") or offset >= len(data) else 1)) if quoted else None
     ncols = n + (1 if trailing else 0)
     objcols = [j for j in range(n) if _kind(first_cells[j], dec) in ("stamp", "text")]
     # integers too long for float64 (epoch ns, us) are read exactly, as int64
@@ -427,7 +429,9 @@ def _fast_rows(path, data, first, n, d, dec, trailing, first_cells, split, encod
         raise _Fallback from None
     finally:
         buf.close()
-    if len(df) != nlines:
+    if nlines is None:
+        nlines = len(df)
+    elif len(df) != nlines:
         raise _Fallback
     cols = [df[j].to_numpy(dtype=object if j in objcols else np.int64 if j in intcols else np.float64, copy=False)
             for j in range(n)]
