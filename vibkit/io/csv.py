@@ -477,10 +477,10 @@ def _fast_rows(path, data, first, n, d, dec, trailing, first_cells, split, encod
         if drop:
             keep = np.ones(nlines, dtype=bool)
             keep[drop] = False
-    rownums = np.arange(first + 1, first + 1 + nlines)
+    rownums = range(first + 1, first + 1 + nlines)  # file line of each row, without an array
     if keep is not None:
         cols = [c[keep] for c in cols]
-        rownums = rownums[keep]
+        rownums = np.arange(first + 1, first + 1 + nlines)[keep]
     return cols, rownums
 
 
@@ -962,7 +962,7 @@ def _read_csv(path, data: bytes, *, fast, channel=None, sample_rate=None, time_c
     else:
         keep, notes = check_order(t, rownums, path=path, column=header_disp[tcol], repair=repair_time)
         history += notes
-        if keep.size != t.size or np.any(keep != np.arange(t.size)):
+        if repair_time and (keep.size != t.size or np.any(keep != np.arange(t.size))):  # unrepaired: all kept
             t = t[keep]
             for ch in channels:
                 ch.values = ch.values[keep]

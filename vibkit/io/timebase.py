@@ -139,12 +139,17 @@ def diagnose(t, *, gap_factor=5.0) -> TimeDiagnosis:
     dt = np.diff(t)
     t0 = float(np.median(dt))
     gap = dt > gap_factor * t0
-    inside = dt[~gap]
+    segment = np.zeros(t.size, dtype=np.int32)
+    if gap.any():
+        inside = dt[~gap]
+        np.cumsum(gap, dtype=np.int32, out=segment[1:])
+    else:  # one segment: no copies (long recordings)
+        inside = dt
     period = float(np.mean(inside))  # = segment durations / steps: immune to rounding of the stamps
-    dev = (inside - period) / period
-    jitter_rms = float(np.sqrt(np.mean(dev**2)))
-    jitter_max = float(np.max(np.abs(dev)))
-    segment = np.r_[0, np.cumsum(gap)].astype(np.int32)
+    dev = inside - period  # in place from here: a day at 2 kHz is 170 M steps
+    dev /= period
+    jitter_max = float(max(abs(dev.max()), abs(dev.min())))
+    jitter_rms = float(np.sqrt(np.dot(dev, dev) / dev.size))
     return TimeDiagnosis(period, jitter_rms, jitter_max, segment, dt[gap].astype(float))
 
 
