@@ -125,6 +125,12 @@ def _is_comment(line: str, delim: str) -> bool:
     return s.startswith(_COMMENT) or (delim != ";" and s.startswith(";"))
 
 
+def _hash_header(line: str, delim: str, n: int, split) -> bool:
+    """A header whose first column is named '#' (a sample counter): '#,time (s),x (mm)', not a comment."""
+    s = line.lstrip()
+    return delim != " " and s.startswith("#" + delim) and len(split(s)) == n
+
+
 def _is_unit_cell(cell: str) -> bool:
     """An empty cell or a unit alone ('s', '[ms]', '(g)', 'mm'), as in a units row below the header."""
     u = cell.strip("()[]{} ")
@@ -597,7 +603,7 @@ def _read_csv(path, data: bytes, *, fast, channel=None, sample_rate=None, time_c
     first = None
     nonblank = []  # (index, cells) of non-comment, non-blank lines before the data
     for i, ln in enumerate(lines):
-        if not ln.strip() or _is_comment(ln, d):
+        if not ln.strip() or _is_comment(ln, d) and not _hash_header(ln, d, n, split):
             continue
         cells = split(ln)
         if all(c == "" for c in cells):
