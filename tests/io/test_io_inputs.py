@@ -244,3 +244,36 @@ def test_netcdf_fill_values_become_nan_with_a_note(tmp_path):
     ds = read_recording(p)
     np.testing.assert_array_equal(np.isnan(ds["x"].values), [False, True, False, True, False])
     assert "(_FillValue/missing_value -999) read as NaN" in ds.attrs["history"]
+
+
+# ------------------------------------------------------------------------------ clock jumps (repair_time)
+
+
+def hms(s):
+    s %= 86400
+    return f"{int(s // 3600):02d}:{int(s // 60 % 60):02d}:{s % 60:06.3f}"
+
+
+def test_midnight_crossing_refused_then_unwrapped(tmp_path):
+    t = 86400 - 1.0 + np.arange(400) / FS  # 23:59:59.000 for 2 s
+    p = write(tmp_path, "time,x (m)\n" + "".join(f"{hms(a)},{k}\n" for k, a in enumerate(t)))
+    one_line_error(p, lambda: read_recording(p), "time goes backwards", "crossing midnight", "repair_time=True",
+                   line=202)
+    ds = read_recording(p, repair_time=True)
+    np.testing.assert_allclose(ds["time"].values, np.arange(400) / FS, atol=1e-9)  # order kept, nothing sorted
+    np.testing.assert_array_equal(ds["x"].values, np.arange(400))
+    assert "the clock went back by 86400 s at line 202 (crossing midnight)" in ds.attrs["history"]
+
+
+def test_dst_fall_back_unwrapped_and_other_backward_steps_sorted(tmp_path):
+    t = np.arange(400) / FS
+    local = np.where(t < 1.0, 3599.0 + t, t - 1.0)  # 00:59:59 ... then back to 00:00:00
+    p = write(tmp_path, "time (s),x (m)\n" + "".join(f"{a:.3f},{k}\n" for k, a in enumerate(local)))
+    ds = read_recording(p, repair_time=True)
+    np.testing.assert_allclose(ds["time"].values, 3599.0 + t, atol=1e-9)  # stamps as found, jump undone
+    assert "(set back by an hour (daylight saving))" in ds.attrs["history"]
+    # a plain swap of two rows is no clock jump: sorted as before
+    p = write(tmp_path, "time (s),x (m)\n0,0\n0.2,2\n0.1,1\n0.3,3\n", "swap.csv")
+    ds = read_recording(p, repair_time=True)
+    np.testing.assert_array_equal(ds["x"].values, [0, 1, 2, 3])
+    assert "backward step(s)" in ds.attrs["history"] and "clock went back" not in ds.attrs["history"]

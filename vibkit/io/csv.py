@@ -966,7 +966,7 @@ def _read_csv(path, data: bytes, *, fast, channel=None, sample_rate=None, time_c
         t = np.arange(nrows) / fs
         jitter = 0.0
     else:
-        keep, notes = check_order(t, rownums, path=path, column=header_disp[tcol], repair=repair_time)
+        keep, notes, t = check_order(t, rownums, path=path, column=header_disp[tcol], repair=repair_time)
         history += notes
         if repair_time and (keep.size != t.size or np.any(keep != np.arange(t.size))):  # unrepaired: all kept
             t = t[keep]

@@ -126,13 +126,15 @@ def _check_time(path, ds, repair, history):
         raise RecordingError(path, None, f"time in variable 'time' is not a finite number at index {bad[0]} "
                              f"({tv.size} samples; {bad.size} such); expected seconds")
     try:
-        keep, notes = check_order(tv, None, path=path, column="time", repair=repair)
+        keep, notes, tv = check_order(tv, None, path=path, column="time", repair=repair)
     except RecordingError as err:
         dt = np.diff(tv)
         i = int(np.flatnonzero(dt <= 0)[0]) + 1
         msg = err.message.replace("in column 'time'", "in variable 'time'")
         raise RecordingError(path, None, f"{msg} (at index {i})") from None
     history += notes
+    if repair and not np.array_equal(tv, np.asarray(t.values, dtype=float)):  # clock jumps undone
+        ds = ds.assign_coords(time=("time", tv, dict(t.attrs)))
     if keep.size != tv.size or np.any(keep != np.arange(tv.size)):
         ds = ds.isel(time=keep)
     return ds

@@ -109,7 +109,7 @@ def read_seismic(path, data: bytes, *, channel=None, units=None, sample_rate=Non
                 attrs["original_units"] = u_text
                 ch = Channel(names[i], v * unit.factor, unit.si, f"trace {i}", unit.quantity, attrs)
         channels.append(ch)
-    keep, notes = check_order(times, None, path=path, column="trace times", repair=repair_time)
+    keep, notes, times = check_order(times, None, path=path, column="trace times", repair=repair_time)
     history += notes
     times = times[keep]
     for ch in channels:
