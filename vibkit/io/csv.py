@@ -400,7 +400,7 @@ def _line_offset(data: bytes, index: int) -> int:
     for _ in range(index):
         pos = data.find(b"\n", pos + 1)
         if pos < 0:
-            raise _Fallback
+            raise _Fallback("fewer lines than expected")
     return pos + 1
 
 
@@ -415,7 +415,7 @@ def _fast_rows(path, data, first, n, d, dec, trailing, first_cells, split, encod
     """
     offset = _line_offset(data, first)
     if data.find(b"\r", offset) >= 0 and data.count(b"\r", offset) != data.count(b"\r\n", offset):
-        raise _Fallback  # lone CR line ends
+        raise _Fallback("lone CR line ends")  # lone CR line ends
     # without quotes (which may hold line ends) every line is one row of pandas: no need to count them
     quoted = data.find(b'"', offset) >= 0
     nlines = (data.count(b"\n", offset) + (0 if data.endswith(b"\n") or offset >= len(data) else 1)) if quoted else None
@@ -432,19 +432,19 @@ def _fast_rows(path, data, first, n, d, dec, trailing, first_cells, split, encod
                          na_values={j: _NA_STRINGS for j in range(ncols) if j not in objcols + intcols},
                          skip_blank_lines=False, engine="c", quotechar='"', encoding=encoding)
     except (ValueError, TypeError, UnicodeDecodeError, pd.errors.ParserError, OverflowError):
-        raise _Fallback from None
+        raise _Fallback("a row pandas' reader cannot take") from None
     finally:
         buf.close()
     if nlines is None:
         nlines = len(df)
     elif len(df) != nlines:
-        raise _Fallback
+        raise _Fallback("quoted line ends")
     cols = [df[j].to_numpy(dtype=object if j in objcols else np.int64 if j in intcols else np.float64, copy=False)
             for j in range(n)]
     if trailing:
         last = df[ncols - 1].to_numpy(dtype=np.float64)
         if not np.all(np.isnan(last)):
-            raise _Fallback
+            raise _Fallback("text after the last delimiter")
     del df
     flagged = np.zeros(nlines, dtype=bool)
     for j, c in enumerate(cols):
@@ -455,13 +455,13 @@ def _fast_rows(path, data, first, n, d, dec, trailing, first_cells, split, encod
         else:
             nan = np.isnan(c)
             if np.isinf(c).any():
-                raise _Fallback  # the line-by-line reader names the cell
+                raise _Fallback("an infinite value")  # the line-by-line reader names the cell
             flagged |= nan
     rows = np.flatnonzero(flagged)
     keep = None
     if rows.size:
         if rows.size > _MAX_ROWS_TO_CHECK:
-            raise _Fallback
+            raise _Fallback("many rows with missing values")
         ends = np.flatnonzero(np.frombuffer(data, dtype=np.uint8, offset=offset) == 10) + offset
         drop = []
         for i in rows:
@@ -472,7 +472,7 @@ def _fast_rows(path, data, first, n, d, dec, trailing, first_cells, split, encod
                 drop.append(i)
                 continue
             if _is_comment(ln, d):
-                raise _Fallback  # comment lines among the data: the line-by-line reader records them
+                raise _Fallback("comment lines among the data")  # comment lines among the data: the line-by-line reader records them
             cells = split(ln)
             if all(c == "" for c in cells):
                 drop.append(i)
@@ -539,8 +539,13 @@ def read_csv(path, data: bytes, *, channel=None, sample_rate=None, time_column=N
               decimal=decimal, encoding=encoding)
     try:
         return _read_csv(path, data, fast=True, **kw)
-    except _Fallback:
-        return _read_csv(path, data, fast=False, **kw)
+    except _Fallback as why:
+        try:
+            return _read_csv(path, data, fast=False, **kw)
+        except MemoryError:
+            raise RecordingError(path, None, f"not enough memory: {len(data) / 1e6:.0f} MB of rows need the "
+                                 f"line-by-line reader ({why}); remove that from the file or read it in "
+                                 "parts") from None
 
 
 def _decode_head(path, data, encoding):
@@ -555,7 +560,7 @@ def _decode_head(path, data, encoding):
     head = data[:_HEAD_BYTES]
     head = head[:head.rfind(b"\n") + 1]
     if not head:
-        raise _Fallback
+        raise _Fallback("no complete line in the first MiB")
     text, notes = _decode(path, head, None)
     codec = "utf-8" if not notes else notes[0].split()[1]
     return text, notes, codec, data, False
@@ -572,7 +577,7 @@ def _read_csv(path, data: bytes, *, fast, channel=None, sample_rate=None, time_c
         except RecordingError:
             if len(data) <= _HEAD_BYTES:
                 raise
-            raise _Fallback from None
+            raise _Fallback("the first MiB cannot be laid out alone") from None
     else:
         text, notes = _decode(path, data, encoding)
     history += notes
@@ -584,7 +589,7 @@ def _read_csv(path, data: bytes, *, fast, channel=None, sample_rate=None, time_c
 
     sniff = _sniff(lines, delimiter, decimal)
     if sniff is None and not complete:
-        raise _Fallback
+        raise _Fallback("the first MiB cannot be laid out alone")
     if sniff is None:
         body = [i for i, ln in enumerate(lines) if ln.strip() and not ln.lstrip().startswith(_COMMENT)]
         last = max(i for i, ln in enumerate(lines) if ln.strip()) + 1
@@ -613,7 +618,7 @@ def _read_csv(path, data: bytes, *, fast, channel=None, sample_rate=None, time_c
             break
         nonblank.append((i, cells))
     if first is None and not complete:
-        raise _Fallback
+        raise _Fallback("the first MiB cannot be laid out alone")
     if first is None:
         allmiss = [i for i, c in nonblank if len(c) == n and all(_kind(x, dec) == "missing" for x in c)]
         if allmiss:
@@ -686,7 +691,7 @@ def _read_csv(path, data: bytes, *, fast, channel=None, sample_rate=None, time_c
                                    header_line)
         nrows = len(rownums)
         if nrows < 2:
-            raise _Fallback
+            raise _Fallback("fewer than 2 rows")
         history.append(f"{nrows} data rows from line {first + 1} parsed by pandas' C reader")
     plain = d != " " and not trailing  # fast path: split, strip only lines with spaces
     for i in range(first, len(lines) if not fast else first):
@@ -810,7 +815,7 @@ def _read_csv(path, data: bytes, *, fast, channel=None, sample_rate=None, time_c
         tcells = cols[tcol]
         numeric = isinstance(tcells, np.ndarray) and tcells.dtype.kind in "fiu"
         if numeric and tcells.dtype.kind == "f" and np.isnan(tcells).any():
-            raise _Fallback  # the line-by-line reader quotes the cell
+            raise _Fallback("a missing time")  # the line-by-line reader quotes the cell
         stamps = None if numeric or _NUM[dec].fullmatch(tcells[0]) else _parse_stamps(tcells)
         if stamps is not None:
             t, start, kind, ok = stamps
@@ -903,7 +908,7 @@ def _read_csv(path, data: bytes, *, fast, channel=None, sample_rate=None, time_c
             u_text = override[j]
             unit = parse_unit(u_text) if isinstance(u_text, str) else None
             if unit is None:
-                raise ValueError(f"units[{head!r}]={u_text!r} is not a unit vibkit knows; expected e.g. "
+                raise ValueError(f"units[{head!r}]={u_text!r} (for {path}) is not a unit vibkit knows; expected e.g. "
                                  "'m/s^2', 'g', 'mm', 'm', 'mm/s', 'counts' or a scaled one like 'g/2048'")
             source = f"{u_text} (given)"
         elif unit_text is not None:
