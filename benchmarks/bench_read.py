@@ -169,7 +169,8 @@ def main(argv=None) -> int:
             if n == sizes[-1]:
                 pitch = run_worker("pitch", path)
                 out = pitch["output"]
-                print(f"    vibkit pitch end to end: {pitch['process_wall_s']:.1f} s, peak {pitch['peak_rss_mb']:.0f} MB,"
+                print(f"    vibkit pitch end to end: {pitch['process_wall_s']:.1f} s, "
+                      f"peak {pitch['peak_rss_mb']:.0f} MB,"
                       f" link pass {out.get('fundamental_hz')} Hz", flush=True)
             path.unlink()
     load1 = os.getloadavg()[0]

@@ -415,10 +415,12 @@ def _fast_rows(path, data, first, n, d, dec, trailing, first_cells, split, encod
     """
     offset = _line_offset(data, first)
     if data.find(b"\r", offset) >= 0 and data.count(b"\r", offset) != data.count(b"\r\n", offset):
-        raise _Fallback("lone CR line ends")  # lone CR line ends
+        raise _Fallback("lone CR line ends")
     # without quotes (which may hold line ends) every line is one row of pandas: no need to count them
     quoted = data.find(b'"', offset) >= 0
-    nlines = (data.count(b"\n", offset) + (0 if data.endswith(b"\n") or offset >= len(data) else 1)) if quoted else None
+    nlines = None
+    if quoted:
+        nlines = data.count(b"\n", offset) + (0 if data.endswith(b"\n") or offset >= len(data) else 1)
     ncols = n + (1 if trailing else 0)
     objcols = [j for j in range(n) if _kind(first_cells[j], dec) in ("stamp", "text")]
     # integers too long for float64 (epoch ns, us) are read exactly, as int64
@@ -472,7 +474,7 @@ def _fast_rows(path, data, first, n, d, dec, trailing, first_cells, split, encod
                 drop.append(i)
                 continue
             if _is_comment(ln, d):
-                raise _Fallback("comment lines among the data")  # comment lines among the data: the line-by-line reader records them
+                raise _Fallback("comment lines among the data")  # the line-by-line reader records them
             cells = split(ln)
             if all(c == "" for c in cells):
                 drop.append(i)
