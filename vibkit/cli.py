@@ -360,8 +360,8 @@ def _parser():
             sp.add_argument("--time-unit", choices=("s", "ms", "us", "ns", "min", "h"),
                             help="unit of a numeric time column (overrides the header and the epoch guess)")
             sp.add_argument("--repair-time", action="store_true",
-                            help="sort rows by time and drop repeated stamps (a clock set back at midnight or "
-                                 "a DST change) instead of refusing the file; recorded in the history")
+                            help="undo a clock set back at midnight or by a DST change, sort other backward "
+                                 "rows and drop repeated stamps instead of refusing the file (in the history)")
         sp.add_argument("--json", action="store_true", help="JSON on stdout (with a schema version)")
 
     s = add("simulate", "simulate a scene and write the result (netCDF4/HDF5)")
