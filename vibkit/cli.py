@@ -162,7 +162,12 @@ def _cmd_simulate(a):
 def _read(a):
     import vibkit
 
-    return vibkit.read_recording(a.recording, sample_rate=getattr(a, "sample_rate", None))
+    tc = getattr(a, "time_column", None)
+    if tc is not None:  # a 0-based index, 'none' (the file has no time column) or a name as the file writes it
+        tc = int(tc) if tc.strip().isdigit() else False if tc.strip().lower() == "none" else tc
+    return vibkit.read_recording(a.recording, sample_rate=getattr(a, "sample_rate", None), time_column=tc,
+                                 time_unit=getattr(a, "time_unit", None),
+                                 repair_time=bool(getattr(a, "repair_time", False)))
 
 
 def _cmd_spectrum(a):
@@ -346,8 +351,17 @@ def _parser():
     def common(sp, *, rec=True):
         if rec:
             sp.add_argument("recording", help="recording file (CSV/text, miniSEED ..., netCDF)")
-            sp.add_argument("--channel", help="channel to analyse (default: the first)")
+            sp.add_argument("--channel", help="channel to analyse, named as the file writes it or as vibkit does "
+                                                   "(default: the first that is not a sample counter)")
             sp.add_argument("--sample-rate", type=_positive, help="sample rate for files without time [Hz]")
+        if rec and not sp.prog.endswith(" report"):  # report reads the file itself (vibkit.report)
+            sp.add_argument("--time-column", metavar="NAME|INDEX|none",
+                            help="time column by name or 0-based index; 'none': the file has no time column")
+            sp.add_argument("--time-unit", choices=("s", "ms", "us", "ns", "min", "h"),
+                            help="unit of a numeric time column (overrides the header and the epoch guess)")
+            sp.add_argument("--repair-time", action="store_true",
+                            help="undo a clock set back at midnight or by a DST change, sort other backward "
+                                 "rows and drop repeated stamps instead of refusing the file (in the history)")
         sp.add_argument("--json", action="store_true", help="JSON on stdout (with a schema version)")
 
     s = add("simulate", "simulate a scene and write the result (netCDF4/HDF5)")

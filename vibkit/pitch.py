@@ -72,22 +72,17 @@ class Burst:
 
 
 def pick_channel(recording, channel=None) -> str:
-    """Name of the channel to analyse: ``channel`` if given, else the first data variable.
+    """Name of the channel to analyse: ``channel`` (vibkit's name or the file's header), else the first
+    that is not a sample counter (see :func:`vibkit.io.resolve_channel`).
 
     Raises
     ------
     ValueError
         ``channel`` is not a channel of the recording, or the recording has no channel.
     """
-    names = [str(v) for v in recording.data_vars if v != "segment" and recording[v].dims == ("time",)]
-    if not names:
-        raise ValueError(f"recording {recording.attrs.get('source_file', '')!r} has no 1-D channel along 'time'")
-    if channel is None:
-        return names[0]
-    for n in names:
-        if n.lower() == str(channel).lower():
-            return n
-    raise ValueError(f"channel {channel!r} is not in the recording (channels: {', '.join(names)})")
+    from .io.channels import resolve_channel
+
+    return resolve_channel(recording, channel)
 
 
 def uniform_bursts(recording, channel, *, min_samples=16):

@@ -19,11 +19,19 @@ from __future__ import annotations
 
 import math
 import os
+import re
+import stat
 
+from .channels import resolve_channel
 from .errors import RecordingError
 from .netcdf import write_result
 
-__all__ = ["read_recording", "write_result", "RecordingError", "SEISMIC_SUFFIXES", "NETCDF_SUFFIXES"]
+__all__ = ["read_recording", "write_result", "resolve_channel", "RecordingError", "SEISMIC_SUFFIXES",
+           "NETCDF_SUFFIXES", "DEFAULT_MAX_RECORDING_BYTES", "max_recording_bytes"]
+
+#: largest recording read unless ``max_bytes=`` or ``VIBKIT_MAX_RECORDING_BYTES`` says otherwise [bytes] (4 GiB)
+DEFAULT_MAX_RECORDING_BYTES = 4 * 1024**3
+_MAX_ENV = "VIBKIT_MAX_RECORDING_BYTES"
 
 #: suffixes sent to obspy whatever their content
 SEISMIC_SUFFIXES = (".mseed", ".miniseed", ".msd", ".seed", ".sac", ".gse", ".gse2", ".segy", ".sgy",
@@ -31,6 +39,79 @@ SEISMIC_SUFFIXES = (".mseed", ".miniseed", ".msd", ".seed", ".sac", ".gse", ".gs
 #: suffixes sent to xarray whatever their content
 NETCDF_SUFFIXES = (".nc", ".nc4", ".netcdf", ".h5", ".hdf5", ".he5", ".cdf")
 _HDF5 = b"\x89HDF\r\n\x1a\n"
+_BOMS = (b"\xff\xfe\x00\x00", b"\x00\x00\xfe\xff", b"\xff\xfe", b"\xfe\xff")  # UTF-32/UTF-16 text
+
+
+def _gib(n: int) -> str:
+    return f"{n / 1024**3:.3g} GiB" if n >= 1024**3 else f"{n / 1024**2:.3g} MiB" if n >= 1024**2 else f"{n} bytes"
+
+
+def max_recording_bytes(max_bytes=None) -> int:
+    """The size limit for a recording file. [bytes]
+
+    ``max_bytes`` if given, else the environment variable
+    ``VIBKIT_MAX_RECORDING_BYTES`` (an integer number of bytes), else
+    :data:`DEFAULT_MAX_RECORDING_BYTES` (4 GiB).
+
+    Raises
+    ------
+    ValueError
+        ``max_bytes`` or the environment variable is not a positive integer (named).
+    """
+    if max_bytes is None:
+        env = os.environ.get(_MAX_ENV, "").strip()
+        if not env:
+            return DEFAULT_MAX_RECORDING_BYTES
+        try:
+            value = int(float(env)) if re.fullmatch(r"[0-9]+(\.0*)?(e[+]?[0-9]+)?", env, re.I) else -1
+        except (ValueError, OverflowError):
+            value = -1
+        if value <= 0:
+            raise ValueError(f"environment variable {_MAX_ENV}={env!r}: expected a positive number of bytes")
+        return value
+    if isinstance(max_bytes, bool) or not isinstance(max_bytes, (int, float)) or not max_bytes > 0 \
+            or not math.isfinite(max_bytes):
+        raise ValueError(f"max_bytes must be a positive number of bytes, got {max_bytes!r}")
+    return int(max_bytes)
+
+
+def _open_checked(spath: str, limit: int):
+    """Open a regular file for reading, refusing anything else before it is opened."""
+    if not os.path.lexists(spath):
+        raise RecordingError(spath, None, "file not found")
+    try:
+        st = os.stat(spath)
+    except OSError as exc:
+        raise RecordingError(spath, None, f"cannot be read: {exc.strerror or exc}") from None
+    mode = st.st_mode
+    if stat.S_ISDIR(mode):
+        raise RecordingError(spath, None, "is a folder, expected a file")
+    if not stat.S_ISREG(mode):
+        kind = ("a named pipe (FIFO)" if stat.S_ISFIFO(mode) else "a character device" if stat.S_ISCHR(mode)
+                else "a block device" if stat.S_ISBLK(mode) else "a socket" if stat.S_ISSOCK(mode)
+                else "not a regular file")
+        raise RecordingError(spath, None, f"is {kind}, not a regular file; expected a recording file on disk")
+    if st.st_size > limit:
+        raise RecordingError(spath, None, f"is {_gib(st.st_size)}, larger than the {_gib(limit)} limit for a "
+                             f"recording (raise it with max_bytes= or the environment variable {_MAX_ENV})")
+    try:
+        fd = os.open(spath, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_NOCTTY", 0))
+    except OSError as exc:
+        raise RecordingError(spath, None, f"cannot be read: {exc.strerror or exc}") from None
+    try:  # the path may have been swapped between stat and open
+        st2 = os.fstat(fd)
+        if not stat.S_ISREG(st2.st_mode):
+            raise RecordingError(spath, None, "is not a regular file; expected a recording file on disk")
+        with os.fdopen(fd, "rb", closefd=False) as f:
+            data = f.read(limit + 1)  # bounded: a file that grows (or /proc) cannot exhaust memory
+    except OSError as exc:
+        raise RecordingError(spath, None, f"cannot be read: {exc.strerror or exc}") from None
+    finally:
+        os.close(fd)
+    if len(data) > limit:
+        raise RecordingError(spath, None, f"holds more than the {_gib(limit)} limit for a recording "
+                             f"(raise it with max_bytes= or the environment variable {_MAX_ENV})")
+    return data
 
 
 def _check_options(sample_rate, resample, gap_factor, delimiter, decimal):
@@ -57,7 +138,7 @@ def _check_options(sample_rate, resample, gap_factor, delimiter, decimal):
 
 def read_recording(path, *, channel=None, sample_rate=None, time_column=None, time_unit=None, units=None,
                    resample=None, gap_factor=5.0, repair_time=False, delimiter=None, decimal=None,
-                   encoding=None):
+                   encoding=None, max_bytes=None):
     """Read a field recording (or a vibkit result) into an xarray Dataset.
 
     Parameters
@@ -96,7 +177,13 @@ def read_recording(path, *, channel=None, sample_rate=None, time_column=None, ti
     decimal : {".", ","}, optional
         Text files: force the decimal mark.
     encoding : str, optional
-        Text files: force the encoding (default: UTF-8, else cp1252).
+        Text files: force the encoding (default: UTF-8, else cp1252; UTF-16/32
+        when the file starts with a byte-order mark).
+    max_bytes : int, optional
+        Refuse files larger than this. [bytes]  Default: the environment
+        variable ``VIBKIT_MAX_RECORDING_BYTES``, else 4 GiB.  Only regular
+        files are read: a folder, FIFO, device or socket is refused before it
+        is opened.
 
     Returns
     -------
@@ -128,15 +215,7 @@ def read_recording(path, *, channel=None, sample_rate=None, time_column=None, ti
     if not isinstance(path, (str, os.PathLike)):
         raise ValueError(f"path must be a file path (str or os.PathLike), got {type(path).__name__}")
     spath = os.fspath(path)
-    if not os.path.exists(spath):
-        raise RecordingError(spath, None, "file not found")
-    if os.path.isdir(spath):
-        raise RecordingError(spath, None, "is a folder, expected a file")
-    try:
-        with open(spath, "rb") as f:
-            data = f.read()
-    except OSError as exc:
-        raise RecordingError(spath, None, f"cannot be read: {exc.strerror or exc}") from None
+    data = _open_checked(spath, max_recording_bytes(max_bytes))
     if not data:
         raise RecordingError(spath, None, "file is empty (0 bytes); expected a recording")
     suffix = os.path.splitext(spath)[1].lower()
@@ -145,9 +224,12 @@ def read_recording(path, *, channel=None, sample_rate=None, time_column=None, ti
     if data.startswith(_HDF5) or data[:4] in (b"CDF\x01", b"CDF\x02") or suffix in NETCDF_SUFFIXES:
         from .netcdf import read_netcdf
 
-        return read_netcdf(spath, data, channel=channel)
+        return read_netcdf(spath, data, channel=channel, repair_time=repair_time)
     head = data[:65536]
-    looks_binary = b"\x00" in head
+    from .csv import utf16_without_bom
+
+    text_bom = (data.startswith(_BOMS) or utf16_without_bom(head) is not None) and suffix not in SEISMIC_SUFFIXES
+    looks_binary = b"\x00" in head and not text_bom and encoding is None
     if suffix in SEISMIC_SUFFIXES or looks_binary:
         from .seismic import read_seismic
 

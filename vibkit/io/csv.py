@@ -22,14 +22,18 @@ naming the file, the line and what was expected.
 from __future__ import annotations
 
 import csv as _csv
+import io as _io
+import itertools
 import math
 import re
 from collections import Counter
+from datetime import datetime, timezone
 
 import numpy as np
 import pandas as pd
 
 from .errors import RecordingError
+from .channels import COUNTER_ATTR, is_counter_name, is_counter_ramp
 from .recording import Channel, build_recording, metadata_attrs, safe_name, unique_names
 from .timebase import check_order, diagnose, resample_linear
 from .units import is_time_name, parse_time_unit, parse_unit, split_name_unit
@@ -57,6 +61,23 @@ _RATE_KEY = re.compile(r"sampl\w*[\s_-]*(?:rate|freq)|samplerate|^fs\b|frecuenci
                        r"|sampling|muestreo|abtastrate", re.IGNORECASE)
 _SCALE = re.compile(r"([0-9]+(?:[.,][0-9]*)?(?:[eE][+-]?[0-9]+)?)\s*,?\s*(?:counts?|lsb|cts|digits)\s*"
                     r"(?:/|per)\s*([^\s,;]+)", re.IGNORECASE)
+
+
+#: text files larger than this are laid out from their first bytes and parsed by pandas' C reader
+_HEAD_BYTES = 1 << 20
+#: rows holding a missing value that the fast path checks one by one before handing over to the slow path
+_MAX_ROWS_TO_CHECK = 100_000
+#: the missing-value words of _MISSING in every mix of case, as pandas' reader matches them exactly
+_NA_STRINGS = sorted({"".join(c) for w in _MISSING for c in itertools.product(*[(ch.lower(), ch.upper()) for ch in w])})
+#: plausible Unix epoch times [s]: 1979-07 to 2103-02; each unit's range is 1000x the next, so they never overlap
+_EPOCH_RANGE_S = (3e8, 4.2e9)
+_EPOCH_UNITS = (("s", 1.0), ("ms", 1e-3), ("us", 1e-6), ("ns", 1e-9))
+_BOMS = ((b"\xff\xfe\x00\x00", "utf-32"), (b"\x00\x00\xfe\xff", "utf-32"), (b"\xff\xfe", "utf-16"),
+         (b"\xfe\xff", "utf-16"))
+
+
+class _Fallback(Exception):
+    """The fast path cannot read this file exactly as the line-by-line path would: use that one."""
 
 
 def _pct(fraction: float) -> str:
@@ -104,6 +125,12 @@ def _is_comment(line: str, delim: str) -> bool:
     return s.startswith(_COMMENT) or (delim != ";" and s.startswith(";"))
 
 
+def _hash_header(line: str, delim: str, n: int, split) -> bool:
+    """A header whose first column is named '#' (a sample counter): '#,time (s),x (mm)', not a comment."""
+    s = line.lstrip()
+    return delim != " " and s.startswith("#" + delim) and len(split(s)) == n
+
+
 def _is_unit_cell(cell: str) -> bool:
     """An empty cell or a unit alone ('s', '[ms]', '(g)', 'mm'), as in a units row below the header."""
     u = cell.strip("()[]{} ")
@@ -124,12 +151,44 @@ def _data_like(cells, n, dec, numcols) -> bool:
     return "num" in kinds and all(k != "text" for k, isnum in zip(kinds, numcols) if isnum)
 
 
+def utf16_without_bom(data: bytes):
+    """'utf-16-le' or 'utf-16-be' when text looks like UTF-16 without a byte-order mark, else None.
+
+    ASCII text in UTF-16 has a zero in every other byte (odd bytes for little
+    endian): at least 90 % of those zero and under 10 % of the others.
+    """
+    head = data[:65536]
+    if len(head) < 8 or len(head) % 2 or b"\x00" not in head:
+        return None
+    even, odd = head[0::2], head[1::2]
+    if odd.count(0) >= 0.9 * len(odd) and even.count(0) < 0.1 * len(even):
+        return "utf-16-le"
+    if even.count(0) >= 0.9 * len(even) and odd.count(0) < 0.1 * len(odd):
+        return "utf-16-be"
+    return None
+
+
 def _decode(path, data: bytes, encoding):
     if encoding is not None:
         try:
             return data.decode(encoding), [f"encoding {encoding} (given)"]
         except (UnicodeDecodeError, LookupError) as exc:
             raise RecordingError(path, None, f"cannot decode as {encoding}: {exc}") from None
+    for bom, codec in _BOMS:
+        if data.startswith(bom):
+            try:
+                return data.decode(codec), [f"encoding {codec.upper()} (byte-order mark)"]
+            except UnicodeDecodeError as exc:
+                raise RecordingError(path, None, f"starts with a {codec.upper()} byte-order mark but cannot be "
+                                     f"decoded as {codec.upper()} ({exc.reason} at byte {exc.start})") from None
+    codec = utf16_without_bom(data)
+    if codec is not None:
+        try:
+            return data.decode(codec), [f"encoding {codec.upper()} (no byte-order mark; every other byte is zero)"]
+        except UnicodeDecodeError as exc:
+            raise RecordingError(path, None, f"looks like {codec.upper()} text without a byte-order mark but "
+                                 f"cannot be decoded as such ({exc.reason} at byte {exc.start}); "
+                                 "pass encoding=") from None
     head = data[:65536]
     nul = head.find(b"\x00")
     if nul >= 0:
@@ -279,6 +338,10 @@ def _match_column(want, headers, names, vars_):
 
 def _parse_numbers(cells, dec):
     """Values, missing mask, indices of non-numbers, indices of infinities."""
+    if isinstance(cells, np.ndarray) and cells.dtype.kind in "fiu":  # parsed by the fast path
+        if cells.dtype.kind != "f":  # long integers (epoch ns) kept exact for the time column
+            return cells, np.zeros(cells.size, dtype=bool), np.empty(0, dtype=np.intp), np.empty(0, dtype=np.intp)
+        return cells, np.isnan(cells), np.empty(0, dtype=np.intp), np.flatnonzero(np.isinf(cells))
     joined = "\n".join(cells)
     if not _NOT_NUMBER_CHAR[dec].search(joined):  # fast path: only digits, signs, exponents, marks
         try:
@@ -331,6 +394,122 @@ def _parse_stamps(cells):
     return secs, str(first), kind, ok
 
 
+def _line_offset(data: bytes, index: int) -> int:
+    """Byte offset of 0-based line ``index`` in data whose lines end with LF or CRLF."""
+    pos = -1
+    for _ in range(index):
+        pos = data.find(b"\n", pos + 1)
+        if pos < 0:
+            raise _Fallback("fewer lines than expected")
+    return pos + 1
+
+
+def _fast_rows(path, data, first, n, d, dec, trailing, first_cells, split, encoding, header_line):
+    """The data rows from line ``first`` on, parsed by pandas' C reader.
+
+    Returns the columns (float64 arrays, or object arrays of the cells as found
+    for columns whose first cell is not a number) and the 1-based file line of
+    each row.  Raises :class:`_Fallback` for anything the line-by-line reader
+    treats in its own way (comment lines, lone CR line ends, infinities, rows
+    pandas cannot convert ...), so the two readers give the same dataset.
+    """
+    offset = _line_offset(data, first)
+    if data.find(b"\r", offset) >= 0 and data.count(b"\r", offset) != data.count(b"\r\n", offset):
+        raise _Fallback("lone CR line ends")
+    # without quotes (which may hold line ends) every line is one row of pandas: no need to count them
+    quoted = data.find(b'"', offset) >= 0
+    nlines = None
+    if quoted:
+        nlines = data.count(b"\n", offset) + (0 if data.endswith(b"\n") or offset >= len(data) else 1)
+    ncols = n + (1 if trailing else 0)
+    objcols = [j for j in range(n) if _kind(first_cells[j], dec) in ("stamp", "text")]
+    # integers too long for float64 (epoch ns, us) are read exactly, as int64
+    intcols = [j for j in range(n) if j not in objcols and re.fullmatch(r"[+-]?[0-9]{16,19}", first_cells[j])]
+    dtype = {j: (object if j in objcols else np.int64 if j in intcols else np.float64) for j in range(ncols)}
+    buf = _io.BytesIO(data)
+    buf.seek(offset)
+    try:
+        df = pd.read_csv(buf, sep=r"\s+" if d == " " else d, decimal=dec, header=None, names=list(range(ncols)),
+                         index_col=False, dtype=dtype, keep_default_na=False,
+                         na_values={j: _NA_STRINGS for j in range(ncols) if j not in objcols + intcols},
+                         skip_blank_lines=False, engine="c", quotechar='"', encoding=encoding)
+    except (ValueError, TypeError, UnicodeDecodeError, pd.errors.ParserError, OverflowError):
+        raise _Fallback("a row pandas' reader cannot take") from None
+    finally:
+        buf.close()
+    if nlines is None:
+        nlines = len(df)
+    elif len(df) != nlines:
+        raise _Fallback("quoted line ends")
+    cols = [df[j].to_numpy(dtype=object if j in objcols else np.int64 if j in intcols else np.float64, copy=False)
+            for j in range(n)]
+    if trailing:
+        last = df[ncols - 1].to_numpy(dtype=np.float64)
+        if not np.all(np.isnan(last)):
+            raise _Fallback("text after the last delimiter")
+    del df
+    flagged = np.zeros(nlines, dtype=bool)
+    for j, c in enumerate(cols):
+        if j in objcols:
+            flagged |= (c == "")
+        elif j in intcols:
+            continue
+        else:
+            nan = np.isnan(c)
+            if np.isinf(c).any():
+                raise _Fallback("an infinite value")  # the line-by-line reader names the cell
+            flagged |= nan
+    rows = np.flatnonzero(flagged)
+    keep = None
+    if rows.size:
+        if rows.size > _MAX_ROWS_TO_CHECK:
+            raise _Fallback("many rows with missing values")
+        ends = np.flatnonzero(np.frombuffer(data, dtype=np.uint8, offset=offset) == 10) + offset
+        drop = []
+        for i in rows:
+            start = offset if i == 0 else int(ends[i - 1]) + 1
+            end = int(ends[i]) if i < ends.size else len(data)
+            ln = data[start:end].decode(encoding, errors="replace").rstrip("\r")
+            if not ln.strip():
+                drop.append(i)
+                continue
+            if _is_comment(ln, d):
+                raise _Fallback("comment lines among the data")  # the line-by-line reader records them
+            cells = split(ln)
+            if all(c == "" for c in cells):
+                drop.append(i)
+                continue
+            if len(cells) != n:
+                like = f" (as in the header on line {header_line})" if header_line else ""
+                raise RecordingError(path, first + i + 1, f"expected {n} fields{like}, found {len(cells)}")
+        if drop:
+            keep = np.ones(nlines, dtype=bool)
+            keep[drop] = False
+    rownums = range(first + 1, first + 1 + nlines)  # file line of each row, without an array
+    if keep is not None:
+        cols = [c[keep] for c in cols]
+        rownums = np.arange(first + 1, first + 1 + nlines)[keep]
+    return cols, rownums
+
+
+def _epoch_unit(path, vals, tname, line):
+    """(factor to s, unit) when a unitless time column holds Unix epoch times, else None."""
+    v0 = float(vals[0])
+    for unit, f in _EPOCH_UNITS:
+        if _EPOCH_RANGE_S[0] <= abs(v0) * f <= _EPOCH_RANGE_S[1]:
+            break
+    else:
+        return None
+    k = min(vals.size, 100_001)
+    steps = np.diff(vals[:k])
+    step = float(np.median(steps)) * f if steps.size else math.nan
+    if step > 0 and not 1e-7 <= step <= 1e4:  # 10 MHz to one sample every 3 hours (repeats: check_order)
+        raise RecordingError(path, line, f"time column '{tname}' has no unit and holds {v0:.17g}, a Unix epoch "
+                             f"time in {unit} by its size, but its steps ({step / f:.6g} {unit}) do not give a "
+                             "sample rate between 1e-4 Hz and 10 MHz; pass time_unit= (s, ms, us, ns)")
+    return f, unit
+
+
 def read_csv(path, data: bytes, *, channel=None, sample_rate=None, time_column=None, time_unit=None,
              units=None, resample=None, gap_factor=5.0, repair_time=False, delimiter=None, decimal=None,
              encoding=None):
@@ -347,9 +526,62 @@ def read_csv(path, data: bytes, *, channel=None, sample_rate=None, time_column=N
     ------
     RecordingError
         The file cannot be read without guessing (message names file and line).
+
+    Notes
+    -----
+    The layout (encoding, delimiter, decimal mark, metadata, header, units row,
+    first data row) is worked out from the first MiB; the data rows are then
+    parsed by pandas' C reader.  Anything that reader cannot take exactly as the
+    line-by-line reader would (comment lines among the data, text in numbers,
+    ragged long rows, infinities, lone CR line ends) sends the file through the
+    line-by-line reader, which says where and what.
     """
+    kw = dict(channel=channel, sample_rate=sample_rate, time_column=time_column, time_unit=time_unit, units=units,
+              resample=resample, gap_factor=gap_factor, repair_time=repair_time, delimiter=delimiter,
+              decimal=decimal, encoding=encoding)
+    try:
+        return _read_csv(path, data, fast=True, **kw)
+    except _Fallback as why:
+        try:
+            return _read_csv(path, data, fast=False, **kw)
+        except MemoryError:
+            raise RecordingError(path, None, f"not enough memory: {len(data) / 1e6:.0f} MB of rows need the "
+                                 f"line-by-line reader ({why}); remove that from the file or read it in "
+                                 "parts") from None
+
+
+def _decode_head(path, data, encoding):
+    """(text of the first complete lines, notes, codec for the rest, bytes to parse) for the fast path."""
+    if encoding is not None or data.startswith(tuple(b for b, _ in _BOMS)) or utf16_without_bom(data):
+        text, notes = _decode(path, data, encoding)  # transcoded whole: pandas reads the UTF-8 bytes
+        return text, notes, "utf-8", text.encode("utf-8"), True
+    if len(data) <= _HEAD_BYTES:
+        text, notes = _decode(path, data, None)
+        codec = "utf-8" if not notes else notes[0].split()[1]
+        return text, notes, codec, data, True
+    head = data[:_HEAD_BYTES]
+    head = head[:head.rfind(b"\n") + 1]
+    if not head:
+        raise _Fallback("no complete line in the first MiB")
+    text, notes = _decode(path, head, None)
+    codec = "utf-8" if not notes else notes[0].split()[1]
+    return text, notes, codec, data, False
+
+
+def _read_csv(path, data: bytes, *, fast, channel=None, sample_rate=None, time_column=None, time_unit=None,
+              units=None, resample=None, gap_factor=5.0, repair_time=False, delimiter=None, decimal=None,
+              encoding=None):
     history = []
-    text, notes = _decode(path, data, encoding)
+    pdata, complete = data, True
+    if fast:
+        try:
+            text, notes, codec, pdata, complete = _decode_head(path, data, encoding)
+        except RecordingError:
+            if len(data) <= _HEAD_BYTES:
+                raise
+            raise _Fallback("the first MiB cannot be laid out alone") from None
+    else:
+        text, notes = _decode(path, data, encoding)
     history += notes
     lines = re.split(r"\r\n|\r|\n", text)
     if lines and lines[-1] == "":
@@ -358,6 +590,8 @@ def read_csv(path, data: bytes, *, channel=None, sample_rate=None, time_column=N
         raise RecordingError(path, None, "file holds only blank lines; expected a header and rows of numbers")
 
     sniff = _sniff(lines, delimiter, decimal)
+    if sniff is None and not complete:
+        raise _Fallback("the first MiB cannot be laid out alone")
     if sniff is None:
         body = [i for i, ln in enumerate(lines) if ln.strip() and not ln.lstrip().startswith(_COMMENT)]
         last = max(i for i, ln in enumerate(lines) if ln.strip()) + 1
@@ -376,7 +610,7 @@ def read_csv(path, data: bytes, *, channel=None, sample_rate=None, time_column=N
     first = None
     nonblank = []  # (index, cells) of non-comment, non-blank lines before the data
     for i, ln in enumerate(lines):
-        if not ln.strip() or _is_comment(ln, d):
+        if not ln.strip() or _is_comment(ln, d) and not _hash_header(ln, d, n, split):
             continue
         cells = split(ln)
         if all(c == "" for c in cells):
@@ -385,6 +619,8 @@ def read_csv(path, data: bytes, *, channel=None, sample_rate=None, time_column=N
             first = i
             break
         nonblank.append((i, cells))
+    if first is None and not complete:
+        raise _Fallback("the first MiB cannot be laid out alone")
     if first is None:
         allmiss = [i for i, c in nonblank if len(c) == n and all(_kind(x, dec) == "missing" for x in c)]
         if allmiss:
@@ -452,8 +688,15 @@ def read_csv(path, data: bytes, *, channel=None, sample_rate=None, time_column=N
 
     # data rows
     rows, rownums, after = [], [], []
+    if fast:
+        cols, rownums = _fast_rows(path, pdata, first, n, d, dec, trailing, split(lines[first]), split, codec,
+                                   header_line)
+        nrows = len(rownums)
+        if nrows < 2:
+            raise _Fallback("fewer than 2 rows")
+        history.append(f"{nrows} data rows from line {first + 1} parsed by pandas' C reader")
     plain = d != " " and not trailing  # fast path: split, strip only lines with spaces
-    for i in range(first, len(lines)):
+    for i in range(first, len(lines) if not fast else first):
         ln = lines[i]
         if plain and ln and ln[0] not in _MAYBE_COMMENT and '"' not in ln:
             cells = ln.split(d)
@@ -484,10 +727,13 @@ def read_csv(path, data: bytes, *, channel=None, sample_rate=None, time_column=N
     if after:
         history.append(f"{len(after)} comment line(s) among or after the data skipped (line {after[0]}"
                        + (f" ... {after[-1]})" if len(after) > 1 else ")"))
-    rownums = np.asarray(rownums)
-    if len(rows) < 2:
-        raise RecordingError(path, int(rownums[0]), "only one data row; expected at least 2 samples")
-    cols = list(zip(*rows))
+    if not fast:
+        rownums = np.asarray(rownums)
+        if len(rows) < 2:
+            raise RecordingError(path, int(rownums[0]), "only one data row; expected at least 2 samples")
+        cols = list(zip(*rows))
+        nrows = len(rows)
+        del rows
 
     # names
     if header is None:
@@ -518,7 +764,8 @@ def read_csv(path, data: bytes, *, channel=None, sample_rate=None, time_column=N
     elif time_column is not None:
         if isinstance(time_column, (int, np.integer)) and not isinstance(time_column, bool):
             if not 0 <= int(time_column) < n:
-                raise ValueError(f"time_column={time_column} is out of range: the file has {n} columns")
+                raise RecordingError(path, header_line, f"time_column={time_column} is out of range: the file has "
+                                     f"{n} column(s), numbered from 0")
             tcol = int(time_column)
         else:
             tcol = _match_column(time_column, header_disp, names, vars_)
@@ -568,7 +815,10 @@ def read_csv(path, data: bytes, *, channel=None, sample_rate=None, time_column=N
     if tcol is not None:
         tname = header_disp[tcol]
         tcells = cols[tcol]
-        stamps = None if _NUM[dec].fullmatch(tcells[0]) else _parse_stamps(tcells)
+        numeric = isinstance(tcells, np.ndarray) and tcells.dtype.kind in "fiu"
+        if numeric and tcells.dtype.kind == "f" and np.isnan(tcells).any():
+            raise _Fallback("a missing time")  # the line-by-line reader quotes the cell
+        stamps = None if numeric or _NUM[dec].fullmatch(tcells[0]) else _parse_stamps(tcells)
         if stamps is not None:
             t, start, kind, ok = stamps
             if not ok.all():
@@ -588,7 +838,8 @@ def read_csv(path, data: bytes, *, channel=None, sample_rate=None, time_column=N
             if time_unit is not None:
                 f = parse_time_unit(time_unit)
                 if f is None:
-                    raise ValueError(f"time_unit={time_unit!r} is not a time unit (expected s, ms, us, ns, min, h)")
+                    raise ValueError(f"time_unit={time_unit!r} is not a time unit (expected s, ms, us, ns, min, h) "
+                                 f"for {path}")
                 history.append(f"time column '{tname}' in {time_unit} (given)" + ("" if f == 1 else f" -> s (x {f:g})"))
             elif unit_text is not None and parse_time_unit(unit_text) is not None:
                 f = parse_time_unit(unit_text)
@@ -604,12 +855,22 @@ def read_csv(path, data: bytes, *, channel=None, sample_rate=None, time_column=N
                     history.append(f"time column '{tname}' has no unit; read as ms because its steps match "
                                    f"the header's sample rate {rate_meta[0]:g} Hz")
                 else:
-                    history.append(f"time column '{tname}' has no unit; read as s")
-            t = vals * f
-            if t.size and abs(t[0]) > 1e6:
-                extra_attrs["time_offset_s"] = float(t[0])
-                history.append(f"time shifted by {t[0]:.6f} s so that it starts at 0 (epoch-like values)")
-                t = t - t[0]
+                    epoch = _epoch_unit(path, vals, tname, int(rownums[0]))
+                    if epoch is None:
+                        history.append(f"time column '{tname}' has no unit; read as s")
+                    else:
+                        f, eunit = epoch
+                        start = datetime.fromtimestamp(float(vals[0]) * f, tz=timezone.utc)
+                        history.append(f"time column '{tname}' has no unit; its values ({vals[0]:.17g} ...) are "
+                                       f"Unix epoch times in {eunit} by their size and steps; read as {eunit} "
+                                       f"(start {start.isoformat()}; pass time_unit= to override)")
+                        extra_attrs.setdefault("start_time", start.isoformat())
+            if vals.size and abs(vals[0]) * f > 1e6:
+                extra_attrs["time_offset_s"] = float(vals[0] * f)
+                history.append(f"time shifted by {vals[0] * f:.6f} s so that it starts at 0 (epoch-like values)")
+                t = (vals - vals[0]) * f
+            else:
+                t = vals * f
         time_attrs["column"] = tname
 
     # channels
@@ -639,12 +900,17 @@ def read_csv(path, data: bytes, *, channel=None, sample_rate=None, time_column=N
             continue
         if nmiss:
             history.append(f"column '{head}': {nmiss} missing value(s) kept as NaN")
-        attrs = {"column": head}
+        attrs = {"column": head, "source_name": head}
+        named = is_counter_name(nm) and unit_text is None and np.all(np.isnan(vals) | (vals == np.round(vals)))
+        if named or is_counter_ramp(vals):
+            attrs[COUNTER_ATTR] = 1
+            why = "its name" if named else "a +1 integer ramp"
+            history.append(f"column '{head}' counts samples ({why}); never the default channel")
         if j in override:
             u_text = override[j]
             unit = parse_unit(u_text) if isinstance(u_text, str) else None
             if unit is None:
-                raise ValueError(f"units[{head!r}]={u_text!r} is not a unit vibkit knows; expected e.g. "
+                raise ValueError(f"units[{head!r}]={u_text!r} (for {path}) is not a unit vibkit knows; expected e.g. "
                                  "'m/s^2', 'g', 'mm', 'm', 'mm/s', 'counts' or a scaled one like 'g/2048'")
             source = f"{u_text} (given)"
         elif unit_text is not None:
@@ -704,12 +970,12 @@ def read_csv(path, data: bytes, *, channel=None, sample_rate=None, time_column=N
         else:
             raise RecordingError(path, header_line, "no time column and no sample rate in the header; "
                                  "expected a time column (time_column=) or a sample rate (sample_rate=)")
-        t = np.arange(len(rows)) / fs
+        t = np.arange(nrows) / fs
         jitter = 0.0
     else:
-        keep, notes = check_order(t, rownums, path=path, column=header_disp[tcol], repair=repair_time)
+        keep, notes, t = check_order(t, rownums, path=path, column=header_disp[tcol], repair=repair_time)
         history += notes
-        if keep.size != t.size or np.any(keep != np.arange(t.size)):
+        if repair_time and (keep.size != t.size or np.any(keep != np.arange(t.size))):  # unrepaired: all kept
             t = t[keep]
             for ch in channels:
                 ch.values = ch.values[keep]

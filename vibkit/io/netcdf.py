@@ -17,10 +17,14 @@ import xarray as xr
 
 from .errors import RecordingError
 from .recording import sha256_of
+from .timebase import check_order
 
 __all__ = ["read_netcdf", "write_result"]
 
 _ATTR_TYPES = (str, int, float, np.integer, np.floating)
+#: netCDF's default fill value of float and double variables (NC_FILL_FLOAT/NC_FILL_DOUBLE), written by
+#: loggers and netCDF libraries where no value was stored
+NC_DEFAULT_FILL = 9.969209968386869e36
 
 
 def _check_attrs(where: str, attrs: dict) -> None:
@@ -86,7 +90,57 @@ def write_result(ds: xr.Dataset, path) -> str:
     return path
 
 
-def read_netcdf(path, data: bytes, *, channel=None) -> xr.Dataset:
+def _mask_fill_values(ds, history):
+    """Turn fill values into NaN, in place, and say how many per variable."""
+    for name in list(ds.variables):
+        var = ds[name]
+        if var.dtype.kind != "f" or name == "time":
+            continue
+        declared = [var.encoding.get(k) for k in ("_FillValue", "missing_value") if var.encoding.get(k) is not None]
+        vals = var.values
+        nan_before = int(np.count_nonzero(np.isnan(vals)))
+        default = np.isclose(np.abs(vals), NC_DEFAULT_FILL, rtol=1e-6, atol=0)
+        ndef = int(np.count_nonzero(default))
+        if ndef:
+            vals = np.where(default, np.nan, vals)
+            ds[name] = var.copy(data=vals)
+            history.append(f"variable '{name}': {ndef} value(s) equal to netCDF's default fill value "
+                           f"{NC_DEFAULT_FILL:.6g} read as NaN (missing)")
+        if declared and nan_before:
+            fills = ", ".join(f"{float(np.ravel(v)[0]):.6g}" for v in declared)
+            history.append(f"variable '{name}': {nan_before} fill value(s) (_FillValue/missing_value {fills}) "
+                           "read as NaN (missing)")
+
+
+def _check_time(path, ds, repair, history):
+    """The time coordinate's checks of the text reader: finite, increasing, no repeats (or repaired)."""
+    t = ds["time"]
+    if t.ndim != 1 or t.size < 2:
+        return ds
+    if t.dtype.kind not in "iuf":
+        raise RecordingError(path, None, f"coordinate 'time' has type {t.dtype}; expected numbers of seconds")
+    tv = np.asarray(t.values, dtype=float)
+    tv = np.where(np.isclose(np.abs(tv), NC_DEFAULT_FILL, rtol=1e-6, atol=0), np.nan, tv)
+    bad = np.flatnonzero(~np.isfinite(tv))
+    if bad.size:
+        raise RecordingError(path, None, f"time in variable 'time' is not a finite number at index {bad[0]} "
+                             f"({tv.size} samples; {bad.size} such); expected seconds")
+    try:
+        keep, notes, tv = check_order(tv, None, path=path, column="time", repair=repair)
+    except RecordingError as err:
+        dt = np.diff(tv)
+        i = int(np.flatnonzero(dt <= 0)[0]) + 1
+        msg = err.message.replace("in column 'time'", "in variable 'time'")
+        raise RecordingError(path, None, f"{msg} (at index {i})") from None
+    history += notes
+    if repair and not np.array_equal(tv, np.asarray(t.values, dtype=float)):  # clock jumps undone
+        ds = ds.assign_coords(time=("time", tv, dict(t.attrs)))
+    if keep.size != tv.size or np.any(keep != np.arange(tv.size)):
+        ds = ds.isel(time=keep)
+    return ds
+
+
+def read_netcdf(path, data: bytes, *, channel=None, repair_time=False) -> xr.Dataset:
     """Read a netCDF4/HDF5 file (e.g. one written by :func:`write_result`).
 
     Parameters
@@ -96,6 +150,9 @@ def read_netcdf(path, data: bytes, *, channel=None) -> xr.Dataset:
         The file's bytes (for the sha256).
     channel : str or list of str, optional
         Keep only these data variables (plus ``segment``).
+    repair_time : bool
+        As in :func:`vibkit.io.read_recording`: time going backwards or
+        repeated stamps are errors unless True (sorted, repeats dropped).
 
     Returns
     -------
@@ -106,7 +163,8 @@ def read_netcdf(path, data: bytes, *, channel=None) -> xr.Dataset:
     Raises
     ------
     RecordingError
-        The file is not netCDF/HDF5 that xarray can read, or lacks the channel.
+        The file is not netCDF/HDF5 that xarray can read, lacks the channel, or
+        its time is not finite, goes backwards or repeats (``repair_time=False``).
     """
     is_hdf5 = data[:8] == b"\x89HDF\r\n\x1a\n"
     engine = "h5netcdf" if is_hdf5 else "scipy"
@@ -121,6 +179,9 @@ def read_netcdf(path, data: bytes, *, channel=None) -> xr.Dataset:
     prior = str(ds.attrs.get("history", ""))
     history = [f"read with xarray ({engine}); {len(ds.data_vars)} variable(s)"]
     history += [f"backend warning: {w.message}" for w in caught]
+    _mask_fill_values(ds, history)
+    if "time" in ds.coords:
+        ds = _check_time(path, ds, repair_time, history)
     if channel is not None:
         wanted = [channel] if isinstance(channel, str) else list(channel)
         missing = [w for w in wanted if w not in ds.data_vars]

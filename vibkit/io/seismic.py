@@ -99,7 +99,7 @@ def read_seismic(path, data: bytes, *, channel=None, units=None, sample_rate=Non
         else:
             unit = parse_unit(u_text)
             if unit is None:
-                raise ValueError(f"units for trace {i}: {u_text!r} is not a unit vibkit knows; expected e.g. "
+                raise ValueError(f"units for trace {i} of {path}: {u_text!r} is not a unit vibkit knows; expected e.g. "
                                  "'m/s^2', 'g', 'm', 'counts' or a scaled one like 'g/2048'")
             if unit.factor is None:
                 history.append(f"trace {i} in {u_text} (given), kept in counts")
@@ -109,7 +109,7 @@ def read_seismic(path, data: bytes, *, channel=None, units=None, sample_rate=Non
                 attrs["original_units"] = u_text
                 ch = Channel(names[i], v * unit.factor, unit.si, f"trace {i}", unit.quantity, attrs)
         channels.append(ch)
-    keep, notes = check_order(times, None, path=path, column="trace times", repair=repair_time)
+    keep, notes, times = check_order(times, None, path=path, column="trace times", repair=repair_time)
     history += notes
     times = times[keep]
     for ch in channels:

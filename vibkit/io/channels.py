@@ -1,0 +1,106 @@
+"""Which channel of a recording a user means: by vibkit's name or as the file wrote it.
+
+A reader renames columns into safe variable names (``"vz_ms"`` -> ``vz``,
+``"Acceleration x (m/s^2)"`` -> ``acceleration_x``) and keeps the header as
+found in the variable's attrs (``source_name``, ``column``).  A user names a
+channel as the file writes it, so :func:`resolve_channel` accepts the variable
+name, the header as found and the name without its unit, case-insensitively.
+
+Columns that count samples (``index``, ``sample number``, ``#``, ``n``, or a
+strict +1 integer ramp) carry ``sample_counter = 1`` and are never chosen by
+default.
+"""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+
+__all__ = ["resolve_channel", "is_counter_name", "is_counter_ramp", "COUNTER_ATTR"]
+
+#: variable attr marking a column that counts samples
+COUNTER_ATTR = "sample_counter"
+_COUNTER_NAME = re.compile(
+    r"^(?:#|n|nr|no\.?|num|number|idx|index|row|record|count|counter"
+    r"|(?:sample|muestra|punto|data ?point)s?(?:[ _-]?(?:#|n|nr|no\.?|num|number|index|idx|count|counter))?"
+    r"|(?:#|n|nr|no\.?|num|number|index|idx)[ _-]?(?:de[ _-])?(?:sample|muestra|point|row)s?)$",
+    re.IGNORECASE)
+
+
+def _norm(text) -> str:
+    return " ".join(str(text).split()).lower()
+
+
+def is_counter_name(name: str) -> bool:
+    """Whether a column name says it counts samples (``index``, ``sample number``, ``#``, ``n`` ...)."""
+    return bool(_COUNTER_NAME.match(str(name).strip().strip("\"'").strip()))
+
+
+def is_counter_ramp(values) -> bool:
+    """Whether values are a strict +1 integer ramp (0, 1, 2 ... or k, k+1 ...), at least 3 long."""
+    v = np.asarray(values)
+    if v.ndim != 1 or v.size < 3 or v.dtype.kind not in "iuf":
+        return False
+    if v.dtype.kind == "f" and (not np.isfinite(v[0]) or v[0] != np.round(v[0]) or abs(v[0]) > 2**52):
+        return False
+    if v[1] - v[0] != 1 or v[-1] - v[0] != v.size - 1:  # cheap tests first: long recordings
+        return False
+    return bool(np.all(np.diff(v) == 1))
+
+
+def _channels(recording):
+    return [str(v) for v in recording.data_vars if v != "segment" and recording[v].dims == ("time",)]
+
+
+def _where(recording) -> str:
+    src = recording.attrs.get("source_file", "")
+    return f"{src}: " if src else ""
+
+
+def resolve_channel(recording, channel=None) -> str:
+    """The variable name of the channel to analyse.
+
+    Parameters
+    ----------
+    recording : xarray.Dataset
+        A recording (see :func:`vibkit.read_recording`).
+    channel : str, optional
+        The variable name, or the column header as the file writes it
+        (``"vz_ms"``, ``"Acceleration x (m/s^2)"``), or that header without its
+        unit; case and runs of blanks do not matter.  Default: the first channel
+        that is not a sample counter.
+
+    Returns
+    -------
+    str
+        A data variable of ``recording`` along ``time``.
+
+    Raises
+    ------
+    ValueError
+        No such channel (the message names the file and lists the channels with
+        the names the file wrote), no channel at all, or only sample counters.
+    """
+    names = _channels(recording)
+    where = _where(recording)
+    if not names:
+        raise ValueError(f"{where}recording has no 1-D channel along 'time'")
+    if channel is None:
+        for n in names:
+            if not int(recording[n].attrs.get(COUNTER_ATTR, 0)):
+                return n
+        raise ValueError(f"{where}the only channel(s) {', '.join(repr(n) for n in names)} count samples "
+                         "(index, sample number); name one with channel= to analyse it anyway")
+    want = _norm(channel)
+    for keys in (("__name__",), ("source_name", "column"), ("long_name",)):  # most specific first
+        for n in names:
+            attrs = recording[n].attrs
+            cands = [n if k == "__name__" else attrs.get(k) for k in keys]
+            if any(c is not None and _norm(c) == want for c in cands):
+                return n
+    listed = []
+    for n in names:
+        src = recording[n].attrs.get("source_name")
+        listed.append(n if not src or _norm(src) == n.lower() else f"{n} (file: {src!r})")
+    raise ValueError(f"{where}channel {channel!r} is not in the recording (channels: {', '.join(listed)})")
