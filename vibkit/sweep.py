@@ -50,8 +50,8 @@ PENDING = -1
 
 #: per-run summaries: name -> (units, long_name)
 SUMMARIES = {
-    "link_pass_frequency": ("Hz", "link-pass frequency: forward, roller 1's advance after the start-up / time / "
-                                  "mean pitch; inverse, imposed speed / mean pitch"),
+    "link_pass_frequency": ("Hz", "link-pass frequency: forward, roller 1's advance along the guide after the "
+                                  "start-up / time / mean pitch; inverse, imposed speed / mean pitch"),
     "delta_mean": ("m", "mean tensioner displacement delta after the start-up"),
     "delta_ripple": ("m", "peak-to-peak of delta after the start-up"),
     "peak_link_tension": ("N", "largest link tension of the run (needs the link_tension output)"),
@@ -515,9 +515,11 @@ def summarize(ds, scene, *, settle: float | None = None) -> dict:
 
     Notes
     -----
-    Link-pass frequency f = (s0(T) - s0(t_s)) / (T - t_s) / L_mean: roller 1's advance on the
-    undeformed guide after the start-up, over the mean link pitch (one loop of the guide is one
-    pass of every link). A contact episode is one interval in which a tooth carries force, counted
+    Link-pass frequency f = (s(T) - s(t_s)) / (T - t_s) / L_mean: roller 1's advance along the
+    deformed guide after the start-up (its arc length s from s0 and delta, loops counted), over the
+    mean link pitch (one loop of the chain is one pass of every link). Roller 1's coordinate s0 on
+    the undeformed guide alone would not do over short windows: on the telescopic runs it moves
+    up to (Lt + delta) / Lt = 8 % slower or faster than the roller. A contact episode is one interval in which a tooth carries force, counted
     per tooth; the back-flank episodes likewise on the sum of the back-flank forces.
     """
     import numpy as np
@@ -531,10 +533,16 @@ def summarize(ds, scene, *, settle: float | None = None) -> dict:
     steady = t >= (t[0] + ts) if axis == "time" else np.ones(t.size, bool)
     if steady.sum() < 2:
         steady = np.ones(t.size, bool)
-    if scene.analysis == "forward" and "s0" in ds:
+    if scene.analysis == "forward" and "s0" in ds and "delta" in ds:
+        from .guide import Guide
+
         s0 = np.asarray(ds["s0"].values)[steady]
+        d = np.asarray(ds["delta"].values)[steady]
         tt = t[steady]
-        out["link_pass_frequency"] = float(abs(s0[-1] - s0[0]) / (tt[-1] - tt[0]) / mean_pitch)
+        g = Guide(scene.guide)
+        loops = math.floor(s0[-1] / g.p0) - math.floor(s0[0] / g.p0)
+        advance = float(g.s0_to_s(s0[-1], d[-1]) - g.s0_to_s(s0[0], d[0])) + loops * g.perimeter(0.5 * (d[0] + d[-1]))
+        out["link_pass_frequency"] = abs(advance) / (tt[-1] - tt[0]) / mean_pitch
     elif scene.analysis == "inverse":
         out["link_pass_frequency"] = abs(float(scene.section("motion")["speed"])) / mean_pitch
     if "delta" in ds:
@@ -997,6 +1005,7 @@ def sweep(scene, vary: dict, *, output=None, samples: int | None = None, seed: i
     if max_runs is not None:
         tasks = tasks[:int(max_runs)]
     report = _Report(len(plan.points), len(records), enabled=progress)
+    report.failed = sum(r["status"] != STATUS["ok"] for r in records.values())
     if reused:
         report.line(f"sweep: resuming {output}: {reused} of {len(plan.points)} runs already done")
     computed = 0
