@@ -975,6 +975,8 @@ def sweep(scene, vary: dict, *, output=None, samples: int | None = None, seed: i
     plan = plan_sweep(scene, vary, samples=samples, seed=seed, keep=keep, settle=settle, duration=duration)
     if max_runs is not None and (isinstance(max_runs, bool) or int(max_runs) != max_runs or max_runs < 0):
         raise SweepError(f"max_runs must be a whole number >= 0, got {max_runs!r}")
+    if n_workers is not None and (isinstance(n_workers, bool) or int(n_workers) != n_workers or n_workers < 1):
+        raise SweepError(f"n_workers must be a whole number >= 1, got {n_workers!r}")
     store = _Store(output, plan, force=force) if output is not None else None
     if store is not None and store.complete:
         if (store.path / "runs").exists() or not (store.path / ".zmetadata").exists():
