@@ -105,7 +105,8 @@ def main(argv=None):
                          "wall_s": wall, "runs_per_s": n_runs / wall, "vs_loop": loop / wall,
                          "per_run_overhead_ms": 1e3 * (wall * workers - loop) / n_runs, "in_worker_s": in_worker})
             rows.append({"how": "vibkit.sweep on a warm cluster (in memory, no store)", "workers": workers,
-                         "runs": n_runs, "wall_s": wall_mem, "runs_per_s": n_runs / wall_mem, "vs_loop": loop / wall_mem,
+                         "runs": n_runs, "wall_s": wall_mem, "runs_per_s": n_runs / wall_mem,
+                         "vs_loop": loop / wall_mem,
                          "per_run_overhead_ms": 1e3 * (wall_mem * workers - loop) / n_runs,
                          "in_worker_s": in_worker_mem})
     finally:
@@ -119,7 +120,9 @@ def main(argv=None):
           f"{', '.join(f'{v:.2f}' for v in load_after)} (the machine is shared with other jobs).\n\n"
           f"`vs_loop` is the plain loop's wall time over this row's (above 1: faster than the loop); "
           f"`per_run_overhead_ms` is (wall x workers - loop) / runs, the cost per run of Dask, the store and "
-          f"the workers beyond the simulation itself; `in_worker_s` is the sum of the runs' own wall times measured in the workers (parse, simulate, summarise): what is left of `wall_s x workers` is Dask's and the driver's.\n\n" + markdown_table(rows) + "\n")
+          f"the workers beyond the simulation itself; `in_worker_s` is the sum of the runs' own wall "
+          f"times measured in the workers (parse, simulate, summarise): what is left of `wall_s x workers` is "
+          f"Dask's and the driver's.\n\n" + markdown_table(rows) + "\n")
     write_text(RESULTS / f"{stem}.md", md)
     print(md)
     return 0

@@ -229,7 +229,8 @@ def test_cli_json(scene_file, tmp_path, capsys):
 
 
 def test_cli_bad_vary_syntax_is_a_usage_error(scene_file, tmp_path, capsys):
-    for bad in ("chain.link_pitch", "chain.link_pitch=0.13:x:3", "chain.link_pitch=0.13:0.14:0", "chain.link_pitch=1,,2"):
+    for bad in ("chain.link_pitch", "chain.link_pitch=0.13:x:3", "chain.link_pitch=0.13:0.14:0",
+                "chain.link_pitch=1,,2"):
         with pytest.raises(SystemExit) as exc:
             main(["sweep", str(scene_file), "--vary", bad, "-o", str(tmp_path / "x.zarr")])
         assert exc.value.code == 2

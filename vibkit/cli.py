@@ -371,13 +371,15 @@ def _cmd_sweep(a):
     else:
         print(f"scene     {a.scene} ({ds.attrs['sweep']}: {', '.join(f'{k}={v}' for k, v in summary['dims'].items())})")
         print(f"output    {summary['output']}" + ("" if complete else " (incomplete: run the same command to resume)"))
-        print(f"runs      {summary['runs']}: {summary['ok']} ok, {summary['failed']} failed, {summary['invalid']} invalid"
+        print(f"runs      {summary['runs']}: {summary['ok']} ok, {summary['failed']} failed, "
+              f"{summary['invalid']} invalid"
               + (f", {summary['pending']} pending" if summary["pending"] else "")
               + f" ({summary['computed']} computed now, {summary['reused']} from the store)")
         print(f"wall time {wall:.1f} s")
         shown = runs[:40]
         print(_table([[*(f"{v:.6g}" if isinstance(v, float) else v for v in r["values"].values()), r["status"],
-                       f"{r['link_pass_frequency']:.5f}", f"{1e3 * r['delta_mean']:.4f}", f"{1e3 * r['delta_ripple']:.4f}",
+                       f"{r['link_pass_frequency']:.5f}", f"{1e3 * r['delta_mean']:.4f}",
+                       f"{1e3 * r['delta_ripple']:.4f}",
                        f"{r['peak_link_tension']:.1f}", f"{r['wall_time']:.2f}"] for r in shown],
                      (*keys, "status", "link pass [Hz]", "delta [mm]", "ripple [mm]", "peak tension [N]", "wall [s]")))
         if len(runs) > len(shown):

@@ -186,7 +186,8 @@ def _key_type(key: str, base_data: dict, source: str):
         if len(parts) != 2 or parts[0] not in SECTIONS or parts[1] not in SECTIONS[parts[0]]:
             if len(parts) == 2 and parts[0] in SECTIONS:
                 known = ", ".join(f"{parts[0]}.{k}" for k in SECTIONS[parts[0]])
-                raise SweepError(f"{source}: cannot vary unknown scene key '{key}' (known keys of [{parts[0]}]: {known})")
+                raise SweepError(f"{source}: cannot vary unknown scene key '{key}' "
+                                 f"(known keys of [{parts[0]}]: {known})")
             raise SweepError(f"{source}: cannot vary unknown scene key '{key}' (keys are dotted like chain.link_pitch, "
                              f"effects.contact.stiffness; sections: {', '.join(SECTIONS)}, effects)")
         typ = SECTIONS[parts[0]][parts[1]]
@@ -413,7 +414,7 @@ def plan_sweep(scene, vary: dict, *, samples: int | None = None, seed: int | Non
     """Check and expand a sweep's definition (no run is started); see :func:`sweep`."""
     import tomllib
 
-    from .scene import OUTPUTS, Scene, SceneError, load_scene, parse_scene
+    from .scene import OUTPUTS, Scene, load_scene
 
     base = scene if isinstance(scene, Scene) else load_scene(scene)
     text, source = base.text, base.source
@@ -477,12 +478,6 @@ def plan_sweep(scene, vary: dict, *, samples: int | None = None, seed: int | Non
         points = tuple({a.key: cols[j][i] for j, a in enumerate(axes)} for i in range(samples))
     plan = SweepPlan(text=text, source=source, analysis=base.analysis, axes=tuple(axes), samples=samples, seed=seed,
                      points=points, shape=shape, keep=keep, settle=settle, duration=duration)
-    # one varied scene through the loader: a systematic problem (e.g. the analysis) shows before any run
-    for p in points[:1]:
-        try:
-            parse_scene(varied_text(text, p), _source_of(source, p))
-        except SceneError:
-            pass  # recorded per run (a varied value the loader refuses)
     return plan
 
 
@@ -518,9 +513,10 @@ def summarize(ds, scene, *, settle: float | None = None) -> dict:
     Link-pass frequency f = (s(T) - s(t_s)) / (T - t_s) / L_mean: roller 1's advance along the
     deformed guide after the start-up (its arc length s from s0 and delta, loops counted), over the
     mean link pitch (one loop of the chain is one pass of every link). Roller 1's coordinate s0 on
-    the undeformed guide alone would not do over short windows: on the telescopic runs it moves
-    up to (Lt + delta) / Lt = 8 % slower or faster than the roller. A contact episode is one interval in which a tooth carries force, counted
-    per tooth; the back-flank episodes likewise on the sum of the back-flank forces.
+    the undeformed guide alone would not do over short windows: on the telescopic runs its rate
+    differs from the roller's speed by up to about delta / Lt (8 %). A contact episode is one
+    interval in which a tooth carries force, counted per tooth; the back-flank episodes likewise,
+    on the sum of the back-flank forces.
     """
     import numpy as np
 
@@ -857,7 +853,8 @@ def _assemble(plan, records, *, complete):
         "runs": n,
         "runs_ok": counts["ok"], "runs_failed": counts["failed"], "runs_invalid": counts["invalid"],
         "runs_pending": int(np.count_nonzero(status == PENDING)),
-        "settle_s": "a quarter of each forward run" if plan.settle is None else float(plan.settle),
+        "start_up_excluded": ("a quarter of each forward run" if plan.settle is None
+                              else f"the first {plan.settle:g} s of each run"),
         "history": f"swept by vibkit {__version__}",
     })
     if plan.samples is not None:
