@@ -968,6 +968,21 @@ def sweep(scene, vary: dict, *, output=None, samples: int | None = None, seed: i
     SweepError
         A key the scene loader does not know, a malformed value list, an output to keep that the
         scene does not give, or a store that holds another sweep (without ``force``).
+
+    Notes
+    -----
+    The local cluster's workers are separate processes that import the calling script again: a
+    script that calls ``sweep`` needs the usual ``if __name__ == "__main__":`` guard. A remote
+    cluster's workers need vibkit installed; they only receive scene texts and return numbers (the
+    driver writes the store). Each worker loads the compiled kernels on its first run (a few
+    seconds; that run's ``wall_time`` includes it).
+
+    Examples
+    --------
+    >>> ds = vibkit.sweep("sim/thesis-forward.toml",                        # doctest: +SKIP
+    ...                   {"chain.link_pitch": "0.1333:0.1373:9", "effects.contact.stiffness": "1e5,1e6,1e7"},
+    ...                   duration=10.0, keep=["delta"], output="sweep.zarr")
+    >>> ds.delta_ripple.plot(x="chain.link_pitch", hue="effects.contact.stiffness")  # doctest: +SKIP
     """
     plan = plan_sweep(scene, vary, samples=samples, seed=seed, keep=keep, settle=settle, duration=duration)
     if max_runs is not None and (isinstance(max_runs, bool) or int(max_runs) != max_runs or max_runs < 0):
