@@ -242,3 +242,39 @@ def test_cli_unknown_key_names_it(scene_file, tmp_path, capsys):
     err = capsys.readouterr().err
     assert "chain.pitch" in err and "Traceback" not in err
     assert not (tmp_path / "x.zarr").exists()
+
+
+class _Stream:
+    def __init__(self, tty):
+        self.tty, self.text = tty, ""
+
+    def isatty(self):
+        return self.tty
+
+    def write(self, s):
+        self.text += s
+
+    def flush(self):
+        pass
+
+
+def test_progress_lines_when_piped_a_bar_on_a_terminal_nothing_when_quiet(monkeypatch):
+    rec = {"status": 0}
+    piped = _Stream(False)
+    rep = SW._Report(4, 1, enabled=True, stream=piped, every=0.0)
+    for _ in range(3):
+        rep.update(rec)
+    rep.close()
+    lines = piped.text.splitlines()
+    assert lines[-1].startswith("sweep: 4/4 runs done (0 failed)") and len(lines) == 3 and "\r" not in piped.text
+    monkeypatch.setenv("TERM", "xterm")
+    tty = _Stream(True)
+    rep = SW._Report(4, 0, enabled=True, stream=tty)
+    rep.update(rec)
+    rep.close()
+    assert "\r" in tty.text and "100.0%" in tty.text
+    quiet = _Stream(True)
+    rep = SW._Report(4, 0, enabled=False, stream=quiet)
+    rep.update(rec)
+    rep.close()
+    assert quiet.text == ""
