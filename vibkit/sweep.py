@@ -658,8 +658,8 @@ class _Store:
             tmp = self.path.with_name(self.path.name + f".{os.getpid()}.partial")
             if tmp.exists():
                 shutil.rmtree(tmp)
-            zarr.open_group(str(tmp), mode="w", attributes={"vibkit_sweep": json.dumps(definition),
-                                                            "vibkit_sweep_state": "running"}, **_zkw())
+            root = zarr.open_group(str(tmp), mode="w", **_zkw())
+            root.attrs.update({"vibkit_sweep": json.dumps(definition), "vibkit_sweep_state": "running"})
             os.replace(tmp, self.path)  # the store appears whole, with its definition
         self.complete = self._state() == "complete"
 
