@@ -651,7 +651,7 @@ class _Store:
             if existing != definition:
                 if not force:
                     raise SweepError(f"{self.path}: holds a different sweep ({_differences(existing, definition)}); "
-                                     f"give a new output, or force to discard it")
+                                     f"give a new output, or force=True (--force) to discard it")
                 shutil.rmtree(self.path)
         if not self.path.exists():
             self.path.parent.mkdir(parents=True, exist_ok=True)
