@@ -12,7 +12,11 @@ Everything is SI inside: metres, kilograms, seconds, radians, newtons.
 
 __version__ = "0.1.0"
 
-__all__ = ["__version__", "load_scene", "simulate", "read_recording", "compare"]
+__all__ = ["__version__", "load_scene", "simulate", "read_recording", "compare", "sweep"]
+
+# eager (the module imports only the standard library): a lazy name would be replaced by the module
+# object the first time someone runs `import vibkit.sweep`; this way `vibkit.sweep` is the function
+from .sweep import sweep  # noqa: E402
 
 
 def __getattr__(name):  # lazy: `import vibkit` stays cheap (no numba, no obspy)

@@ -50,6 +50,7 @@ def dask_client(scheduler: str | None = None, *, n_workers: int | None = None):
     if n_workers is not None and int(n_workers) < 1:
         raise ValueError(f"n_workers must be >= 1, got {n_workers!r}")
     n = int(n_workers) if n_workers else default_workers()
-    with LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
+    # dashboard on a free port: the default 8787 is often taken (another cluster, another user)
+    with LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0",
                       silence_logs=logging.ERROR) as cluster, Client(cluster) as client:
         yield client

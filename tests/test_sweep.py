@@ -1,0 +1,297 @@
+"""Sweeps (vibkit.sweep, `vibkit sweep`): equal to single runs bit for bit, resumable, failures recorded."""
+
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+
+import vibkit
+from vibkit.cli import main
+from vibkit.scene import parse_scene
+from vibkit.sweep import SweepError, plan_sweep
+
+SW = sys.modules["vibkit.sweep"]  # the module (vibkit.sweep is the function)
+
+# the no-load forward scene from rest with a stiff P controller (at speed within 0.5 s), 2 s: short; from rest
+# the teeth take load at once
+SCENE = """
+[scene]
+name = "sweep-test"
+analysis = "forward"
+
+[chain]
+link_pitch = 0.13333333333333333
+n_rollers = 159
+
+[run]
+duration = 2.0
+output_step = 0.005
+start = 0.0
+initial_speed = 0.0
+
+[effects]
+gravity = true
+contact = { stiffness = 1.0e6, exponent = 1.5 }
+motor = { kp = 6000.0, speed = 0.5 }
+
+[solver]
+method = "dopri5"
+rtol = 1e-5
+atol = 1e-7
+
+[outputs]
+variables = ["delta", "link_tension", "contact_force", "closure_residual", "chain_speed"]
+"""
+
+PITCHES = (0.1333, 0.1335, 0.1337)
+STIFFNESS = (1e5, 1e6, 1e7)
+VARY = {"chain.link_pitch": "0.1333:0.1337:3", "effects.contact.stiffness": "1e5,1e6,1e7"}
+
+
+def _variant(pitch, k):
+    return (SCENE.replace("link_pitch = 0.13333333333333333", f"link_pitch = {pitch!r}")
+            .replace("stiffness = 1.0e6", f"stiffness = {k!r}"))
+
+
+@pytest.fixture(scope="module")
+def scene_file(tmp_path_factory):
+    p = tmp_path_factory.mktemp("sweep") / "scene.toml"
+    p.write_text(SCENE)
+    return p
+
+
+@pytest.fixture(scope="module")
+def threaded_client():
+    """An in-process cluster (2 threads): lets a test count the simulations the workers run."""
+    from distributed import Client
+
+    with Client(processes=False, n_workers=2, threads_per_worker=1, dashboard_address=":0") as c:
+        yield c
+
+
+@pytest.fixture(scope="module")
+def grid(scene_file, tmp_path_factory):
+    """The 3x3 sweep on a 2-process local cluster, streamed to a store."""
+    out = tmp_path_factory.mktemp("sweep") / "grid.zarr"
+    ds = vibkit.sweep(scene_file, VARY, output=out, keep=["delta", "link_tension"], n_workers=2, progress=False)
+    return ds, out
+
+
+def test_grid_equals_single_runs_bit_for_bit(grid):
+    ds, out = grid
+    assert ds["delta"].dims == ("chain.link_pitch", "effects.contact.stiffness", "time")
+    np.testing.assert_array_equal(ds["chain.link_pitch"].values, PITCHES)
+    assert ds["chain.link_pitch"].attrs["units"] == "m"
+    assert (ds["status"].values == 0).all() and ds.attrs["runs_ok"] == 9
+    for i, pitch in enumerate(PITCHES):
+        for j, k in enumerate(STIFFNESS):
+            ref = vibkit.simulate(parse_scene(_variant(pitch, k)), progress=False)
+            got = ds.isel({"chain.link_pitch": i, "effects.contact.stiffness": j})
+            np.testing.assert_array_equal(got["delta"].values, ref["delta"].values)
+            np.testing.assert_array_equal(got["link_tension"].values, ref["link_tension"].values)
+            assert float(got["peak_link_tension"]) == float(ref["link_tension"].max())
+            assert float(got["closure_residual_max"]) == float(ref["closure_residual"].max()) < 1e-9
+            steady = ref["time"] >= 0.5  # the default start-up: a quarter of the run
+            d = ref["delta"].where(steady, drop=True).values
+            assert float(got["delta_mean"]) == pytest.approx(d.mean(), rel=1e-12)
+            assert float(got["delta_ripple"]) == pytest.approx(d.max() - d.min(), rel=1e-12)
+            # roller 1's advance along the guide over time is its mean speed, about the motor's 0.5 m/s
+            v = ref["chain_speed"].where(steady, drop=True).values.mean()
+            assert float(got["link_pass_frequency"]) == pytest.approx(v / pitch, rel=2e-3)
+            assert float(got["link_pass_frequency"]) == pytest.approx(0.5 / pitch, rel=0.02)  # 1.5 s of rattle
+            # the teeth push the chain up to speed, then rattles within the backlash
+            on = ref["contact_force"].values > 0
+            assert float(got["contact_episodes"]) == on[0].sum() + (on[1:] & ~on[:-1]).sum() >= 1
+            assert 0 < float(got["last_contact_time"]) == ref["time"].values[on.any(axis=1)][-1]
+    # the store reads back the same numbers, consolidated, the per-run groups gone
+    back = xr.open_zarr(out)
+    xr.testing.assert_identical(back["delta"].load(), ds["delta"].load())
+    assert not (Path(out) / "runs").exists()
+
+
+def test_rerun_of_a_complete_store_computes_nothing(grid, scene_file):
+    ds, out = grid
+    again = vibkit.sweep(scene_file, VARY, output=out, keep=["delta", "link_tension"], progress=False)
+    assert again.attrs["runs_computed"] == 0
+    xr.testing.assert_identical(again["delta"].load(), ds["delta"].load())
+
+
+def test_interrupted_sweep_resumes_without_recomputing(scene_file, tmp_path, grid, threaded_client, monkeypatch):
+    calls = []
+    real = SW._simulate
+
+    def counting(scene, duration):
+        calls.append((scene.chain.link_pitch, scene.effects["contact"]["stiffness"]))
+        return real(scene, duration)
+
+    monkeypatch.setattr(SW, "_simulate", counting)
+    out = tmp_path / "resume.zarr"
+    part = vibkit.sweep(scene_file, VARY, output=out, keep=["delta"], client=threaded_client, progress=False,
+                        max_runs=4)
+    assert len(calls) == 4 and part.attrs["runs_pending"] == 5
+    assert (part["status"].values == -1).sum() == 5
+    # a run whose data reached the disk but whose done flag did not (killed mid-write) is redone
+    runs = sorted((out / "runs").glob("r0*"))
+    assert len(runs) == 4
+    zattrs = runs[0] / ".zattrs"
+    attrs = json.loads(zattrs.read_text())
+    attrs.pop("done")
+    zattrs.write_text(json.dumps(attrs))
+    calls.clear()
+    full = vibkit.sweep(scene_file, VARY, output=out, keep=["delta"], client=threaded_client, progress=False)
+    assert len(calls) == 9 - 4 + 1 and len(set(calls)) == len(calls)
+    assert full.attrs["runs_computed"] == 6 and full.attrs["runs_reused"] == 3
+    np.testing.assert_array_equal(full["delta"].values, grid[0]["delta"].values)
+
+
+def test_a_different_sweep_on_the_store_is_refused_unless_forced(grid, scene_file, threaded_client):
+    _, out = grid
+    other = {"chain.link_pitch": "0.1333:0.1337:2"}
+    with pytest.raises(SweepError, match="holds a different sweep"):
+        vibkit.sweep(scene_file, other, output=out, client=threaded_client, progress=False)
+    ds = vibkit.sweep(scene_file, other, output=out, client=threaded_client, progress=False, force=True)
+    assert ds.sizes["chain.link_pitch"] == 2 and ds.attrs["runs_ok"] == 2
+
+
+def test_not_a_sweep_store_is_never_touched(scene_file, tmp_path):
+    target = tmp_path / "mine.zarr"
+    target.mkdir()
+    (target / "notes.txt").write_text("keep me")
+    with pytest.raises(SweepError, match="not a vibkit sweep store"):
+        vibkit.sweep(scene_file, VARY, output=target, force=True, progress=False)
+    assert (target / "notes.txt").read_text() == "keep me"
+
+
+def test_failures_are_recorded_and_the_others_complete(scene_file, threaded_client):
+    # a negative stiffness is refused by the scene loader; a 1 ns wall-time budget stops the integrator
+    ds = vibkit.sweep(scene_file, {"effects.contact.stiffness": "-1e6,1e6", "solver.max_wall_time": [1e-9, 100.0]},
+                      client=threaded_client, progress=False)
+    st = ds["status"].values
+    meanings = dict(zip(ds["status"].attrs["flag_values"], ds["status"].attrs["flag_meanings"].split()))
+    assert meanings[st[0, 0]] == meanings[st[0, 1]] == "invalid"
+    assert "'effects.contact.stiffness' must be positive" in str(ds["error"].values[0, 0])
+    assert meanings[st[1, 0]] == "failed" and "wall-time budget" in str(ds["error"].values[1, 0])
+    assert np.isnan(ds["delta_mean"].values[1, 0])
+    assert meanings[st[1, 1]] == "ok" and ds["error"].values[1, 1] == ""
+    assert np.isfinite(ds["delta_mean"].values[1, 1])
+
+
+def test_monte_carlo_is_reproducible(scene_file, threaded_client):
+    vary = {"chain.link_pitch": "0.1330:0.1340", "effects.motor.kp": "300,600,1200"}
+    a = plan_sweep(scene_file, vary, samples=50, seed=7)
+    b = plan_sweep(scene_file, vary, samples=50, seed=7)
+    c = plan_sweep(scene_file, vary, samples=50, seed=8)
+    pa = [p["chain.link_pitch"] for p in a.points]
+    assert a.points == b.points and pa != [p["chain.link_pitch"] for p in c.points]
+    assert all(0.1330 <= v <= 0.1340 for v in pa)
+    assert {p["effects.motor.kp"] for p in a.points} == {300.0, 600.0, 1200.0}
+    ds = vibkit.sweep(scene_file, vary, samples=3, seed=7, duration=0.5, client=threaded_client, progress=False)
+    assert ds["status"].dims == ("sample",)
+    assert ds["chain.link_pitch"].dims == ("sample",)
+    assert list(ds["chain.link_pitch"].values) == [p["chain.link_pitch"] for p in
+                                                   plan_sweep(scene_file, vary, samples=3, seed=7).points]
+    assert ds.attrs["seed"] == 7 and (ds["status"].values == 0).all()
+
+
+@pytest.mark.parametrize("vary, match", [
+    ({"chain.pitch": "1,2"}, "'chain.pitch'"),
+    ({"effects.contact.stifness": "1,2"}, "'effects.contact.stifness'"),
+    ({"gear.teeth": "20,28"}, "'gear.teeth'"),
+    ({"effects.passengers.mass": "1,2"}, "effects.passengers"),  # the scene has no passengers
+    ({"sprocket.teeth": "27.5,28"}, "whole number"),
+    ({"chain.link_pitch": "0.13:0.14"}, "A:B:N"),
+    ({"chain.link_pitch": "0.1333,0.1333"}, "values repeat"),
+])
+def test_bad_keys_and_values_are_named_before_any_run(scene_file, vary, match):
+    with pytest.raises(SweepError, match=match):
+        plan_sweep(scene_file, vary)
+
+
+def test_cli_json(scene_file, tmp_path, capsys):
+    out = tmp_path / "cli.zarr"
+    argv = ["sweep", str(scene_file), "--vary", "chain.link_pitch=0.1333:0.1337:2", "--vary",
+            "effects.contact.stiffness=-1,1e6", "--duration", "1", "-o", str(out), "--workers", "2", "--json",
+            "--quiet"]
+    assert main(argv) == 0
+    captured = capsys.readouterr()
+    d = json.loads(captured.out)
+    assert d["schema"] == "vibkit.sweep/1"
+    assert d["runs"] == 4 and d["ok"] == 2 and d["invalid"] == 2 and d["complete"]
+    assert d["dims"] == {"chain.link_pitch": 2, "effects.contact.stiffness": 2}
+    ok = [r for r in d["run_results"] if r["status"] == "ok"]
+    assert all(r["link_pass_frequency"] == pytest.approx(0.5 / r["values"]["chain.link_pitch"], rel=0.03) for r in ok)
+    assert captured.err == ""
+    ds = xr.open_zarr(out)
+    assert ds["delta_ripple"].attrs["units"] == "m"
+
+
+def test_cli_bad_vary_syntax_is_a_usage_error(scene_file, tmp_path, capsys):
+    for bad in ("chain.link_pitch", "chain.link_pitch=0.13:x:3", "chain.link_pitch=0.13:0.14:0",
+                "chain.link_pitch=1,,2"):
+        with pytest.raises(SystemExit) as exc:
+            main(["sweep", str(scene_file), "--vary", bad, "-o", str(tmp_path / "x.zarr")])
+        assert exc.value.code == 2
+    assert "expected" in capsys.readouterr().err
+
+
+def test_cli_unknown_key_names_it(scene_file, tmp_path, capsys):
+    assert main(["sweep", str(scene_file), "--vary", "chain.pitch=1,2", "-o", str(tmp_path / "x.zarr")]) == 1
+    err = capsys.readouterr().err
+    assert "chain.pitch" in err and "Traceback" not in err
+    assert not (tmp_path / "x.zarr").exists()
+
+
+class _Stream:
+    def __init__(self, tty):
+        self.tty, self.text = tty, ""
+
+    def isatty(self):
+        return self.tty
+
+    def write(self, s):
+        self.text += s
+
+    def flush(self):
+        pass
+
+
+def test_progress_lines_when_piped_a_bar_on_a_terminal_nothing_when_quiet(monkeypatch):
+    rec = {"status": 0}
+    piped = _Stream(False)
+    rep = SW._Report(4, 1, enabled=True, stream=piped, every=0.0)
+    for _ in range(3):
+        rep.update(rec)
+    rep.close()
+    lines = piped.text.splitlines()
+    assert lines[-1].startswith("sweep: 4/4 runs done (0 failed)") and len(lines) == 3 and "\r" not in piped.text
+    monkeypatch.setenv("TERM", "xterm")
+    tty = _Stream(True)
+    rep = SW._Report(4, 0, enabled=True, stream=tty)
+    rep.update(rec)
+    rep.close()
+    assert "\r" in tty.text and "100.0%" in tty.text
+    quiet = _Stream(True)
+    rep = SW._Report(4, 0, enabled=False, stream=quiet)
+    rep.update(rec)
+    rep.close()
+    assert quiet.text == ""
+
+
+@pytest.mark.parametrize("path", sorted((Path(__file__).resolve().parents[1] / "sim").glob("*.toml")), ids=lambda p: p.stem)
+def test_varied_scene_text_reads_back_equal(path):
+    """The varied scenes are written back as TOML: every shipped scene survives the round trip."""
+    import tomllib
+
+    text = path.read_text()
+    data = tomllib.loads(text)
+    assert tomllib.loads(SW.to_toml(data)) == data
+    a, b = parse_scene(text), parse_scene(SW.varied_text(text, {}))
+    assert (a.guide, a.chain, a.sprocket, a.effects, a.outputs, a.sections) == \
+        (b.guide, b.chain, b.sprocket, b.effects, b.outputs, b.sections)
+    c = parse_scene(SW.varied_text(text, {"chain.link_pitch": 0.1335}))
+    assert c.chain.link_pitch == 0.1335
+    if data["guide"].get("head_radius") == "sprocket":  # the head follows the sprocket's pitch radius
+        assert c.guide.head_radius == c.sprocket.pitch_radius(0.1335) != a.guide.head_radius
