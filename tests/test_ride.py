@@ -142,3 +142,16 @@ def test_cli_ride_of_a_scene_simulates_it(capsys):
     assert d["kind"] == "simulation" and [a["axis"] for a in d["axes"]] == ["x", "z"]
     assert d["segment"]["method"] == "speed channel"
     assert all(math.isfinite(a["weighted"]["a95"]) and a["weighted"]["a95"] > 0 for a in d["axes"])
+
+
+def test_report_has_a_ride_quality_page(ride_csv, tmp_path):
+    from vibkit.report import write_report
+
+    path, _, _ = ride_csv
+    rep = write_report(path, tmp_path / "ride.pdf", channel="az")
+    titles = [t for t, _ in rep.pages]
+    assert "ride quality (recording)" in titles and "ride quality (simulation)" not in titles
+    text = "\n".join(dict(rep.pages)["ride quality (recording)"])
+    rq = ride_quality_from_recording(path)
+    assert "A95" in text and "10 Hz A95" in text and "time [s] (shaded: ride segment)" in text
+    assert f"{rq.axis('z').weighted.a95:.4g}" in text and "Wk" in text
