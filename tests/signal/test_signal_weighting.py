@@ -83,13 +83,16 @@ def test_filter_magnitude_within_0p1_db_from_0p5_to_80_hz(fs):
         assert np.max(np.abs(err)) < 0.1, f"{name} at fs={fs}: {np.max(np.abs(err)):.3f} dB at {f[sel][np.argmax(np.abs(err))]:.2f} Hz"
 
 
-@pytest.mark.parametrize("fs", [4096.0, 8192.0])
+@pytest.mark.parametrize("fs", [2000.0, 4096.0])
 def test_sos_design_at_and_above_internal_rate(fs):
     f = np.geomspace(0.5, 80, 300)
     for name in NAMES:
         _, h = scipy.signal.sosfreqz(frequency_weighting_sos(name, fs), worN=f, fs=fs)
-        err = 20 * np.log10(np.abs(h) / np.abs(frequency_weighting_response(f, name)))
-        assert np.max(np.abs(err)) < (0.05 if name == "Wf" else 0.01), name
+        ha = frequency_weighting_response(f, name)
+        keep = np.abs(ha) > 1e-6  # Wf: down to -120 dB
+        err = 20 * np.log10(np.abs(h[keep]) / np.abs(ha[keep]))
+        # bilinear warping error ~ (f / fs)^2: 0.031 dB at 2000 Hz, a quarter of it at 4096 Hz
+        assert np.max(np.abs(err)) < 0.035 * (2000.0 / fs) ** 2, name
 
 
 def test_sos_design_alone_is_not_enough_at_low_rates():
