@@ -467,7 +467,7 @@ def _parser():
     s = add("ride", "ride quality of a step-riding accelerometer: ISO 2631-1 weighted max pk-pk, A95, r.m.s.")
     s.add_argument("input", metavar="RECORDING_OR_SCENE", help="recording file, or a scene .toml (simulated)")
     s.add_argument("--channels", help="recording channels for x,y,z (travel, lateral, vertical; - skips one), "
-                   "or AXIS=NAME pairs (default: names ending in x, y, z)")
+                   "or AXIS=NAME pairs (default: names ending in x, y, z); write --channels=-,-,az when x is skipped")
     s.add_argument("--segment", help="ride segment START:END [s] from the first sample (default: detected)")
     s.add_argument("--weighting", help="Wk, Wd ... for every axis, or x=Wd,y=Wd,z=Wk (the default)")
     s.add_argument("--scene", help="also simulate this scene's step and report it next to the recording")

@@ -83,10 +83,9 @@ def half_cycle_peaks(x) -> tuple[np.ndarray, np.ndarray]:
     runmax = np.maximum.reduceat(ax, starts)
     run_id = np.repeat(np.arange(starts.size), np.diff(np.concatenate([starts, [x.size]])))
     hit = ax == runmax[run_id]
-    first = np.full(starts.size, -1)
-    hit_idx = np.flatnonzero(hit)
-    order = np.unique(run_id[hit_idx], return_index=True)[1]
-    first[run_id[hit_idx[order]]] = hit_idx[order]
+    hit_idx = np.flatnonzero(hit)  # sorted, so its run ids never decrease; every run has a hit
+    rid = run_id[hit_idx]
+    first = hit_idx[np.concatenate([[True], rid[1:] != rid[:-1]])]
     first = first[1:-1]  # drop the incomplete first and last runs
     return x[first], first
 
