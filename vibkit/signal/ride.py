@@ -27,10 +27,11 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import numba as nb
 import numpy as np
 import scipy.signal
 
-from ._checks import as_signal, check_fs
+from ._checks import as_signal, check_fs, fill_nan
 
 __all__ = [
     "LOWPASS_HZ",
@@ -47,6 +48,33 @@ __all__ = [
 #: corner of the low-pass that ISO 18738 applies to lift acceleration and that meters offer as the
 #: "unweighted" vibration channel [Hz]
 LOWPASS_HZ = 10.0
+
+
+@nb.njit(cache=True)
+def _half_cycle_peak_index(x):  # pragma: no cover - compiled
+    """Index of the largest |x| (first if tied) of every complete run of one sign, in one pass."""
+    n = x.size
+    out = np.empty(n, dtype=np.int64)  # up to one run per sample
+    k = 0
+    cur = 0.0  # sign of the current run (0 before the first non-zero sample)
+    best = -1.0
+    best_i = -1
+    complete = False  # the current run started at a sign change (not at the record's start)
+    for i in range(n):
+        v = x[i]
+        s = 1.0 if v > 0 else (-1.0 if v < 0 else 0.0)
+        if s != 0.0 and s != cur:
+            if cur != 0.0 and complete:
+                out[k] = best_i
+                k += 1
+            complete = cur != 0.0
+            cur = s
+            best = -1.0
+        a = abs(v)
+        if a > best:
+            best = a
+            best_i = i
+    return out[:k]
 
 
 def half_cycle_peaks(x) -> tuple[np.ndarray, np.ndarray]:
@@ -67,26 +95,8 @@ def half_cycle_peaks(x) -> tuple[np.ndarray, np.ndarray]:
     x = as_signal(x)
     if x.ndim != 1:
         raise ValueError(f"Parameter x must be 1-D, got shape {x.shape}.")
-    sign = np.sign(x)
-    # zeros join the run before them (a leading zero joins the first non-zero run)
-    nz = np.flatnonzero(sign)
-    if nz.size == 0:
-        return np.zeros(0), np.zeros(0, dtype=int)
-    idx = np.maximum.accumulate(np.where(sign != 0, np.arange(x.size), 0))
-    sign = sign[idx]
-    sign[: nz[0]] = sign[nz[0]]
-    starts = np.concatenate([[0], np.flatnonzero(np.diff(sign) != 0) + 1])
-    if starts.size < 3:  # fewer than one complete half-cycle between the incomplete ends
-        return np.zeros(0), np.zeros(0, dtype=int)
-    ax = np.abs(x)
-    # argmax of |x| within each run: reduceat on the max, then the first index attaining it
-    runmax = np.maximum.reduceat(ax, starts)
-    run_id = np.repeat(np.arange(starts.size), np.diff(np.concatenate([starts, [x.size]])))
-    hit = ax == runmax[run_id]
-    hit_idx = np.flatnonzero(hit)  # sorted, so its run ids never decrease; every run has a hit
-    rid = run_id[hit_idx]
-    first = hit_idx[np.concatenate([[True], rid[1:] != rid[:-1]])]
-    first = first[1:-1]  # drop the incomplete first and last runs
+    x = fill_nan(x)
+    first = _half_cycle_peak_index(x)
     return x[first], first
 
 
