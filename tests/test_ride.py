@@ -155,3 +155,22 @@ def test_report_has_a_ride_quality_page(ride_csv, tmp_path):
     rq = ride_quality_from_recording(path)
     assert "A95" in text and "10 Hz A95" in text and "time [s] (shaded: ride segment)" in text
     assert f"{rq.axis('z').weighted.a95:.4g}" in text and "Wk" in text
+
+
+def test_cli_ride_recording_with_a_scene_beside_it(ride_csv, capsys):
+    path, _, _ = ride_csv
+    assert main(["ride", str(path), "--scene", "sim/las-palmas.toml", "--duration", "4", "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["kind"] == "recording" and d["simulation"]["kind"] == "simulation"
+    assert d["simulation"]["source"] == "sim/las-palmas.toml"
+    assert main(["ride", "sim/las-palmas.toml", "--scene", "sim/las-palmas.toml"]) == 1
+    assert "already a scene" in capsys.readouterr().err
+
+
+def test_a_constant_axis_gives_nan_and_a_note_not_an_error():
+    from vibkit.ride import ride_quality
+
+    t = np.arange(0, 20, 1 / FS)
+    rq = ride_quality({"y": np.zeros(t.size), "z": 9.8 + 0.1 * np.sin(2 * np.pi * 5 * t)}, FS, segment=(4, 18))
+    assert math.isnan(rq.axis("y").weighted.a95) and rq.axis("y").weighted.n_values == 0
+    assert rq.axis("z").weighted.a95 > 0 and any("axis y" in n for n in rq.notes)

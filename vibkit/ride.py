@@ -155,8 +155,15 @@ def parse_channels(text) -> dict:
     return out
 
 
-def _metrics(x, fs, i0, i1):
-    return peak_to_peak(x[i0:i1], fs)
+def _metrics(x, fs, i0, i1, notes, label):
+    """Peak-to-peak summary over the segment; NaN (with a note) for a signal without two half-cycles."""
+    try:
+        return peak_to_peak(x[i0:i1], fs)
+    except ValueError:
+        notes.append(f"{label}: fewer than two complete half-cycles in the segment (a constant channel?): no values")
+        nan = float("nan")
+        return PeakToPeak(max=nan, a95=nan, rms=float(np.sqrt(np.mean(x[i0:i1] ** 2))), peak=nan, n_values=0,
+                          time_of_max_s=nan)
 
 
 def ride_quality(signals: dict, fs, *, segment=None, weightings=None, source="", kind="recording",
@@ -236,7 +243,8 @@ def ride_quality(signals: dict, fs, *, segment=None, weightings=None, source="",
         lp = lowpass_10hz(x0, fs)
         weighted[ax] = y
         axes.append(AxisRide(axis=ax, channel=(channel_names or {}).get(ax, ax), weighting=wt,
-                             weighted=_metrics(y, fs, i0, i1), lowpass=_metrics(lp, fs, i0, i1)))
+                             weighted=_metrics(y, fs, i0, i1, notes, f"axis {ax} weighted"),
+                             lowpass=_metrics(lp, fs, i0, i1, notes, f"axis {ax} 10 Hz")))
     sp = None
     if speed is not None:
         s = np.asarray(speed, dtype=float)
