@@ -175,3 +175,13 @@ def test_a_constant_axis_gives_nan_and_a_note_not_an_error():
     rq = ride_quality({"y": np.zeros(t.size), "z": 9.8 + 0.1 * np.sin(2 * np.pi * 5 * t)}, FS, segment=(4, 18))
     assert math.isnan(rq.axis("y").weighted.a95) and rq.axis("y").weighted.n_values == 0
     assert rq.axis("z").weighted.a95 > 0 and any("axis y" in n for n in rq.notes)
+
+
+def test_a_vibkit_result_file_takes_the_simulation_path(tmp_path, capsys):
+    t = np.arange(0, 10, 1 / 400.0)
+    ds = xr.Dataset({"accel_step": ("time", 0.05 * np.sin(2 * np.pi * 3.9 * t), {"units": "m/s^2"})},
+                    coords={"time": ("time", t, {"units": "s"})}, attrs={"analysis": "forward", "scene_name": "x"})
+    rq = ride_quality_from_recording(ds)
+    assert rq.kind == "simulation" and rq.axes[0].axis == "tangential"
+    assert rq.axes[0].lowpass.a95 == pytest.approx(0.1 * abs(1 / math.sqrt(1 + (3.9 / 10) ** 8))
+                                                   / math.sqrt(1 + (0.4 / 3.9) ** 4), rel=0.01)

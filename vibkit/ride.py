@@ -276,7 +276,9 @@ def ride_quality_from_recording(recording, *, channels=None, segment=None, weigh
     Parameters
     ----------
     recording : str, os.PathLike or xarray.Dataset
-        A file :func:`vibkit.read_recording` reads, or its result.
+        A file :func:`vibkit.read_recording` reads, or its result.  A vibkit simulation result
+        (``vibkit simulate -o result.nc``) goes to :func:`ride_quality_from_simulation` unless
+        ``channels`` are given.
     channels : dict or str, optional
         Axis -> channel (``{"x": "ax", "z": "az"}``) or the ``--channels`` text (:func:`parse_channels`);
         default: channels whose names end in x, y, z.
@@ -305,6 +307,10 @@ def ride_quality_from_recording(recording, *, channels=None, segment=None, weigh
     rec = recording if not isinstance(recording, (str, os.PathLike)) else read_recording(recording,
                                                                                         sample_rate=sample_rate)
     src = os.fspath(recording) if isinstance(recording, (str, os.PathLike)) else rec.attrs.get("source_file", "")
+    if (channels is None and rec.attrs.get("analysis") in ("forward", "inverse")
+            and ("roller_acceleration" in rec or "accel_step" in rec)):
+        # a vibkit result file: the simulation path (its step roller, or accel_step)
+        return ride_quality_from_simulation(rec, segment=segment, weightings=weightings, source=src)
     names = [str(v) for v in rec.data_vars if v != "segment" and rec[v].dims == ("time",)]
     if not names:
         raise ValueError(f"{src}: the recording has no channel along time")
