@@ -394,7 +394,7 @@ _EPILOG = {
              "--nominal-pitch 0.13333\n  vibkit pitch logger.txt --sample-rate 2050 --speed 0.52 --json",
     "compare": "example:\n  vibkit compare data/field/leon-tensioner.csv sim/leon.toml --duration 10",
     "report": "example:\n  vibkit report data/field/leon-tensioner.csv --scene sim/leon.toml -o reports/leon.pdf",
-    "ride": "examples:\n  vibkit ride step.csv --channels ax,ay,az --json\n  vibkit ride sim/las-palmas.toml --duration 15\n"
+    "ride": "examples:\n  vibkit ride data/field/layouts/phyphox.csv --segment 0.5:3 --json\n  vibkit ride sim/las-palmas.toml --duration 15\n"
             "  vibkit ride step.csv --scene sim/las-palmas.toml --segment 3:25 --weighting x=Wd,y=Wd,z=Wk",
     "bench": "example:\n  vibkit bench --quick --only signal",
 }

@@ -129,4 +129,6 @@ def test_bad_input_is_a_clear_error():
         frequency_weighting(np.array([0.0, np.nan, 1.0]), 100.0, "Wk")
     with pytest.raises(ValueError, match="f2"):
         Weighting(name="bad", f1=10.0, f2=5.0, f3=1.0, f4=1.0, q4=1.0, f5=1.0, q5=1.0, f6=1.0, q6=1.0, k=1.0)
+    with pytest.raises(ValueError, match="at least 2"):
+        frequency_weighting(np.ones(1), 200.0, "Wk")
     assert get_weighting("wk") is WEIGHTINGS["Wk"]

@@ -314,7 +314,7 @@ def frequency_weighting(x, fs, weighting, *, axis=-1, nan_policy="raise"):
     """
     fs = check_fs(fs)
     w = get_weighting(weighting)
-    x = as_signal(x, axis=axis)
+    x = as_signal(x, axis=axis, min_samples=2)
     x = fill_nan(x, nan_policy=nan_policy, axis=axis)
     factor = oversampling_factor(fs)
     sos = frequency_weighting_sos(w, fs * factor)
