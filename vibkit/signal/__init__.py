@@ -29,7 +29,9 @@ from .orders import (
     vold_kalman,
 )
 from .peaks import Fundamental, Harmonic, LinkPassEstimate, find_fundamental, link_pass_estimate
+from .ride import PeakToPeak, RideSegment, a95, detect_ride_segment, half_cycle_peaks, lowpass_10hz, peak_to_peak, peak_to_peak_values
 from .spectral import WelchResult, amplitude_spectrum, spectrogram, study_power_spectrum, welch_psd
+from .weighting import WEIGHTINGS, Weighting, frequency_weighting, frequency_weighting_response, frequency_weighting_sos
 from .xr import (
     CombinedEstimate,
     amplitude_spectrum_da,
@@ -42,6 +44,19 @@ from .xr import (
 )
 
 __all__ = [
+    "WEIGHTINGS",
+    "PeakToPeak",
+    "RideSegment",
+    "Weighting",
+    "a95",
+    "detect_ride_segment",
+    "frequency_weighting",
+    "frequency_weighting_response",
+    "frequency_weighting_sos",
+    "half_cycle_peaks",
+    "lowpass_10hz",
+    "peak_to_peak",
+    "peak_to_peak_values",
     "AngleSignal",
     "CombinedEstimate",
     "FrequencyEstimate",

@@ -1,0 +1,187 @@
+"""Ride quality of recordings and simulations through one path; the ``vibkit ride`` command."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from vibkit.cli import main
+from vibkit.ride import parse_channels, parse_segment, ride_quality_from_recording, ride_quality_from_simulation
+from vibkit.signal import frequency_weighting_response
+
+from .signal.test_signal_ride import synthetic_ride
+
+FS = 500.0
+AMP_Z, F_Z = 0.08, 6.3
+AMP_X, F_X = 0.05, 2.0
+
+
+def _ride_arrays(fs=FS):
+    ax, az, start, end = synthetic_ride(fs, noise=0.0)
+    t = np.arange(az.size) / fs
+    ax = ax + AMP_X * np.sin(2 * np.pi * F_X * t)
+    az = az + AMP_Z * np.sin(2 * np.pi * F_Z * t)
+    ay = 0.01 * np.sin(2 * np.pi * 3.1 * t)
+    return t, ax, ay, az, start, end
+
+
+@pytest.fixture(scope="module")
+def ride_csv(tmp_path_factory):
+    t, ax, ay, az, start, end = _ride_arrays()
+    p = tmp_path_factory.mktemp("ride") / "step-ride.csv"
+    with open(p, "w") as fh:
+        fh.write("# synthetic step ride for tests\ntime (s),ax (m/s^2),ay (m/s^2),az (m/s^2),speed (m/s)\n")
+        for row in zip(t, ax, ay, az, np.full(t.size, 0.5)):
+            fh.write(",".join(f"{v:.7f}" for v in row) + "\n")
+    return p, start, end
+
+
+def test_recording_ride_quality_has_the_known_values(ride_csv):
+    path, start, end = ride_csv
+    rq = ride_quality_from_recording(path)
+    assert [a.axis for a in rq.axes] == ["x", "y", "z"] and rq.axis("z").channel == "az"
+    assert rq.segment.start_s == pytest.approx(start, abs=0.2) and rq.segment.end_s == pytest.approx(end, abs=0.2)
+    # the known values on the straight incline (the detected segment reaches into the transition arcs,
+    # whose abrupt curvature steps ring through the weightings and add 2-3 % to A95 here)
+    rq = ride_quality_from_recording(path, segment=(9.0, 17.0))
+    z, x = rq.axis("z"), rq.axis("x")
+    assert z.weighted.a95 == pytest.approx(2 * AMP_Z * abs(frequency_weighting_response(F_Z, "Wk")), rel=0.02)
+    assert x.weighted.a95 == pytest.approx(2 * AMP_X * abs(frequency_weighting_response(F_X, "Wd")), rel=0.03)
+    assert z.weighted.rms == pytest.approx(AMP_Z * abs(frequency_weighting_response(F_Z, "Wk")) / math.sqrt(2),
+                                           rel=0.03)
+    assert rq.speed_m_s == pytest.approx(0.5)
+
+
+def test_simulation_dataset_goes_through_the_same_path():
+    # a Dataset shaped like vibkit.simulate's output with the step roller's motion (x, z world axes)
+    t, ax, ay, az, start, end = _ride_arrays()
+    vz = np.cumsum(az - 9.80665 - 0.003) / FS  # synthetic_ride adds a 0.003 m/s^2 sensor offset
+    acc = np.stack([ax, az - 9.80665], axis=-1)[:, None, :]  # kinematic acceleration (no gravity)
+    vel = np.stack([np.full(t.size, 0.5), vz], axis=-1)[:, None, :]
+    ds = xr.Dataset({"roller_acceleration": (("time", "roller", "axis"), acc),
+                     "roller_velocity": (("time", "roller", "axis"), vel)},
+                    coords={"time": t, "roller": [8], "axis": ["x", "z"]},
+                    attrs={"step_accelerometer": 3, "scene_name": "synthetic"})
+    sim = ride_quality_from_simulation(ds)
+    rec = ride_quality_from_recording(_dataset_recording(t, ax, ay, az))
+    assert sim.kind == "simulation" and sim.segment.method == "speed channel"
+    assert sim.segment.start_s == pytest.approx(start, abs=0.05) and sim.segment.end_s == pytest.approx(end, abs=0.05)
+    for axis in ("x", "z"):
+        assert sim.axis(axis).weighted.a95 == pytest.approx(rec.axis(axis).weighted.a95, rel=0.01)
+    # accel_step alone: one tangential axis over the whole record
+    ds2 = xr.Dataset({"accel_step": ("time", ax)}, coords={"time": t})
+    one = ride_quality_from_simulation(ds2)
+    assert [a.axis for a in one.axes] == ["tangential"] and one.segment.method == "given"
+    with pytest.raises(ValueError, match="neither"):
+        ride_quality_from_simulation(xr.Dataset({"delta": ("time", ax)}, coords={"time": t}))
+
+
+def _dataset_recording(t, ax, ay, az):
+    attrs = {"units": "m/s^2", "quantity": "acceleration"}
+    return xr.Dataset({"ax": ("time", ax, attrs), "ay": ("time", ay, attrs), "az": ("time", az, attrs)},
+                      coords={"time": t}, attrs={"source_file": "synthetic"})
+
+
+def test_parsers():
+    assert parse_channels("ax,-,az") == {"x": "ax", "z": "az"}
+    assert parse_channels("z=acc") == {"z": "acc"}
+    assert parse_segment("2.5:14") == (2.5, 14.0)
+    for bad in ("a,b,c,d", "q=acc", "x=a,b"):
+        with pytest.raises(ValueError, match="channels"):
+            parse_channels(bad)
+    for bad in ("3", "5:2", "a:b"):
+        with pytest.raises(ValueError, match="segment"):
+            parse_segment(bad)
+
+
+def test_cli_ride_json(ride_csv, capsys):
+    path, start, end = ride_csv
+    assert main(["ride", str(path), "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["schema"] == "vibkit.ride/1" and d["kind"] == "recording"
+    z = [a for a in d["axes"] if a["axis"] == "z"][0]
+    assert z["weighting"] == "Wk" and z["units"] == "m/s^2"
+    assert z["weighted"]["a95"] == pytest.approx(2 * AMP_Z * abs(frequency_weighting_response(F_Z, "Wk")), rel=0.04)
+    assert d["segment"]["start_s"] == pytest.approx(start, abs=0.2)
+
+
+def test_cli_ride_options_and_table(ride_csv, capsys):
+    path, _, _ = ride_csv
+    assert main(["ride", str(path), "--segment", "12:20", "--channels=-,-,az", "--weighting", "z=Wb"]) == 0
+    out = capsys.readouterr().out
+    assert "12.00-20.00 s" in out and "Wb" in out and "\nz     az" in out and "\nx " not in out
+
+
+@pytest.mark.parametrize("args,msg", [
+    (["--weighting", "Wq"], "weighting='Wq'"),
+    (["--channels", "nope,-,-"], "channel 'nope'"),
+    (["--segment", "9:3"], "segment"),
+    (["--segment", "900:1000"], "after the end"),
+    (["--channels", "speed,-,-"], "not an acceleration"),
+])
+def test_cli_ride_bad_input_is_one_line(ride_csv, capsys, args, msg):
+    path, _, _ = ride_csv
+    assert main(["ride", str(path)] + args) == 1
+    err = capsys.readouterr().err
+    assert msg in err and "Traceback" not in err and err.count("\n") == 1
+
+
+def test_cli_ride_needs_axes_or_a_file(capsys, tmp_path):
+    assert main(["ride", "data/field/las-palmas-accelerometer.csv"]) == 1
+    assert "--channels" in capsys.readouterr().err
+    assert main(["ride", str(tmp_path / "missing.csv")]) == 1
+    assert main(["ride", "sim/leon.toml"]) == 1
+    assert "step_accelerometer" in capsys.readouterr().err
+
+
+def test_cli_ride_of_a_scene_simulates_it(capsys):
+    assert main(["ride", "sim/las-palmas.toml", "--duration", "3", "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["kind"] == "simulation" and [a["axis"] for a in d["axes"]] == ["x", "z"]
+    assert d["segment"]["method"] == "speed channel"
+    assert all(math.isfinite(a["weighted"]["a95"]) and a["weighted"]["a95"] > 0 for a in d["axes"])
+
+
+def test_report_has_a_ride_quality_page(ride_csv, tmp_path):
+    from vibkit.report import write_report
+
+    path, _, _ = ride_csv
+    # a short spike window keeps the report's Hampel calibration quick (it is not what is tested here)
+    rep = write_report(path, tmp_path / "ride.pdf", channel="az", hampel_half_window_s=0.01)
+    titles = [t for t, _ in rep.pages]
+    assert "ride quality (recording)" in titles and "ride quality (simulation)" not in titles
+    text = "\n".join(dict(rep.pages)["ride quality (recording)"])
+    rq = ride_quality_from_recording(path)
+    assert "A95" in text and "10 Hz A95" in text and "time [s] (shaded: ride segment)" in text
+    assert f"{rq.axis('z').weighted.a95:.4g}" in text and "Wk" in text
+
+
+def test_cli_ride_recording_with_a_scene_beside_it(ride_csv, capsys):
+    path, _, _ = ride_csv
+    assert main(["ride", str(path), "--scene", "sim/las-palmas.toml", "--duration", "3", "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["kind"] == "recording" and d["simulation"]["kind"] == "simulation"
+    assert d["simulation"]["source"] == "sim/las-palmas.toml"
+    assert main(["ride", "sim/las-palmas.toml", "--scene", "sim/las-palmas.toml"]) == 1
+    assert "already a scene" in capsys.readouterr().err
+
+
+def test_a_constant_axis_gives_nan_and_a_note_not_an_error():
+    from vibkit.ride import ride_quality
+
+    t = np.arange(0, 20, 1 / FS)
+    rq = ride_quality({"y": np.zeros(t.size), "z": 9.8 + 0.1 * np.sin(2 * np.pi * 5 * t)}, FS, segment=(4, 18))
+    assert math.isnan(rq.axis("y").weighted.a95) and rq.axis("y").weighted.n_values == 0
+    assert rq.axis("z").weighted.a95 > 0 and any("axis y" in n for n in rq.notes)
+
+
+def test_a_vibkit_result_file_takes_the_simulation_path(tmp_path, capsys):
+    t = np.arange(0, 10, 1 / 400.0)
+    ds = xr.Dataset({"accel_step": ("time", 0.05 * np.sin(2 * np.pi * 3.9 * t), {"units": "m/s^2"})},
+                    coords={"time": ("time", t, {"units": "s"})}, attrs={"analysis": "forward", "scene_name": "x"})
+    rq = ride_quality_from_recording(ds)
+    assert rq.kind == "simulation" and rq.axes[0].axis == "tangential"
+    assert rq.axes[0].lowpass.a95 == pytest.approx(0.1 * abs(1 / math.sqrt(1 + (3.9 / 10) ** 8))
+                                                   / math.sqrt(1 + (0.4 / 3.9) ** 4), rel=0.01)

@@ -1,0 +1,479 @@
+"""Ride quality of a step-riding accelerometer, as escalator ride-quality meters report it.
+
+One result type, :class:`RideQuality`, from three entry points that share one path
+(:func:`ride_quality`, arrays in):
+
+* :func:`ride_quality_from_recording`: a recording (any file :func:`vibkit.read_recording` reads)
+  with x, y, z step acceleration channels (x along the travel, y lateral, z vertical);
+* :func:`ride_quality_from_simulation`: a simulation Dataset with the acceleration of a step
+  roller (``roller_acceleration``: x horizontal, z vertical, as a sensor on the step tread sees them,
+  gravity added) or only ``accel_step`` (along the guide tangent);
+* :func:`simulate_ride`: a scene (TOML) simulated with the step roller's motion added to its outputs.
+
+For each axis: the ISO 2631-1 weighted signal (Wd for x and y, Wk for z, as ISO 18738 takes them) and
+its max peak-to-peak, A95, r.m.s. and peak over the ride segment; and the same on the 10 Hz
+low-passed (unweighted) signal.  Definitions: :mod:`vibkit.signal.ride`,
+:mod:`vibkit.signal.weighting`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import os
+import re
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .signal.ride import LOWPASS_HZ, PeakToPeak, RideSegment, detect_ride_segment, lowpass_10hz, peak_to_peak
+from .signal.weighting import frequency_weighting, get_weighting
+
+__all__ = ["AxisRide", "RideQuality", "DEFAULT_WEIGHTINGS", "ride_quality", "ride_quality_from_recording",
+           "ride_quality_from_simulation", "simulate_ride", "parse_channels", "parse_segment"]
+
+#: ISO 2631-1 / ISO 18738: horizontal axes Wd, vertical Wk (an axis along the guide tangent: Wd)
+DEFAULT_WEIGHTINGS = {"x": "Wd", "y": "Wd", "z": "Wk", "tangential": "Wd"}
+G = 9.80665  # [m/s^2]
+#: weighted signal discarded at the start of a record while the 0.4 Hz high-pass settles [s]
+SETTLE_S = 2.0
+
+
+@dataclass(frozen=True)
+class AxisRide:
+    """Ride-quality values of one axis over the ride segment.
+
+    Attributes
+    ----------
+    axis : str
+        ``"x"``, ``"y"``, ``"z"`` or ``"tangential"``.
+    channel : str
+        The recording channel or simulation variable it came from.
+    weighting : str
+        ISO 2631-1 weighting applied (``"Wd"``, ``"Wk"`` ...).
+    weighted : PeakToPeak
+        Max pk-pk, A95, r.m.s., peak of the weighted acceleration. [m/s^2]
+    lowpass : PeakToPeak
+        The same of the 0.4-10 Hz band-passed, unweighted acceleration. [m/s^2]
+    """
+
+    axis: str
+    channel: str
+    weighting: str
+    weighted: PeakToPeak
+    lowpass: PeakToPeak
+
+    def as_dict(self) -> dict:
+        return {"axis": self.axis, "channel": self.channel, "weighting": self.weighting, "units": "m/s^2",
+                "weighted": self.weighted.as_dict(), "lowpass_10hz": self.lowpass.as_dict()}
+
+
+@dataclass(frozen=True)
+class RideQuality:
+    """Ride quality of one ride.
+
+    Attributes
+    ----------
+    source : str
+        File, scene or description.
+    kind : str
+        ``"recording"`` or ``"simulation"``.
+    fs : float
+        Sample rate. [Hz]
+    segment : RideSegment
+        The ride segment assessed (times from the start of the record). [s]
+    axes : tuple of AxisRide
+    speed_m_s : float or None
+        Mean speed over the segment, from a speed channel or the metadata. [m/s]
+    time : numpy.ndarray
+        Time of every sample of the record. [s]
+    weighted : dict
+        Axis -> weighted acceleration over the whole record (for plots). [m/s^2]
+    notes : list of str
+    """
+
+    source: str
+    kind: str
+    fs: float
+    segment: RideSegment
+    axes: tuple
+    speed_m_s: float | None = None
+    time: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
+    weighted: dict = field(default_factory=dict, repr=False)
+    notes: list = field(default_factory=list)
+
+    def axis(self, name) -> AxisRide:
+        for a in self.axes:
+            if a.axis == name:
+                return a
+        raise KeyError(f"no axis {name!r} (axes: {', '.join(a.axis for a in self.axes)})")
+
+    def as_dict(self) -> dict:
+        return {"source": self.source, "kind": self.kind, "sample_rate_hz": self.fs,
+                "segment": {"start_s": self.segment.start_s, "end_s": self.segment.end_s,
+                            "duration_s": self.segment.duration_s, "method": self.segment.method,
+                            "note": self.segment.note},
+                "speed_m_s": self.speed_m_s, "axes": [a.as_dict() for a in self.axes],
+                "definitions": {"pk_pk": "sum of the magnitudes of adjacent half-cycle peaks (one per zero crossing)",
+                                "a95": "smallest pk-pk value that 95 % of the pk-pk values do not exceed",
+                                "weighted": "ISO 2631-1 weighting (x, y: Wd; z: Wk)",
+                                "lowpass_10hz": f"unweighted, 0.4 Hz high-pass and {LOWPASS_HZ:g} Hz low-pass"},
+                "notes": list(self.notes)}
+
+
+def parse_segment(text) -> tuple[float, float]:
+    """``"START:END"`` [s] -> ``(start, end)``; raises ValueError naming the text."""
+    try:
+        a, b = (float(v) for v in str(text).split(":"))
+    except ValueError:
+        raise ValueError(f"segment {text!r}: expected START:END in seconds, e.g. 2.5:14") from None
+    if not (math.isfinite(a) and math.isfinite(b) and 0 <= a < b):
+        raise ValueError(f"segment {text!r}: expected 0 <= START < END [s]")
+    return a, b
+
+
+def parse_channels(text) -> dict:
+    """``"ax,ay,az"`` (x, y, z in order; ``-`` skips one) or ``"z=acc,x=ax"`` -> {axis: channel}."""
+    out = {}
+    items = [s.strip() for s in str(text).split(",")]
+    if any("=" in s for s in items):
+        for s in items:
+            if "=" not in s:
+                raise ValueError(f"channels {text!r}: mix of AXIS=NAME and plain names; use one form")
+            k, v = (p.strip() for p in s.split("=", 1))
+            if k.lower() not in ("x", "y", "z") or not v:
+                raise ValueError(f"channels {text!r}: {s!r} must be x=NAME, y=NAME or z=NAME")
+            out[k.lower()] = v
+        return out
+    if not 1 <= len(items) <= 3:
+        raise ValueError(f"channels {text!r}: expected up to three names for x,y,z (use - to skip one)")
+    for k, v in zip("xyz", items):
+        if v and v != "-":
+            out[k] = v
+    if not out:
+        raise ValueError(f"channels {text!r}: no channel named")
+    return out
+
+
+def _metrics(x, fs, i0, i1, notes, label):
+    """Peak-to-peak summary over the segment; NaN (with a note) for a signal without two half-cycles."""
+    try:
+        return peak_to_peak(x[i0:i1], fs)
+    except ValueError:
+        notes.append(f"{label}: fewer than two complete half-cycles in the segment (a constant channel?): no values")
+        nan = float("nan")
+        return PeakToPeak(max=nan, a95=nan, rms=float(np.sqrt(np.mean(x[i0:i1] ** 2))), peak=nan, n_values=0,
+                          time_of_max_s=nan)
+
+
+def ride_quality(signals: dict, fs, *, segment=None, weightings=None, source="", kind="recording",
+                 channel_names=None, speed=None, detect=None, notes=None) -> RideQuality:
+    """Ride quality from acceleration arrays.
+
+    Parameters
+    ----------
+    signals : dict
+        Axis name (``"x"``, ``"y"``, ``"z"``, ``"tangential"``) -> acceleration samples. [m/s^2]
+    fs : float
+        Sample rate. [Hz]
+    segment : (float, float) or RideSegment, optional
+        Ride segment [s]; default: found by :func:`vibkit.signal.ride.detect_ride_segment` from the
+        ``z`` (vertical speed) and ``x``/``tangential`` (gravity component) signals.
+    weightings : dict, optional
+        Axis -> weighting name (default :data:`DEFAULT_WEIGHTINGS`).
+    source, kind : str
+    channel_names : dict, optional
+        Axis -> channel name (for the report).
+    speed : array_like or float, optional
+        Speed channel (or a number) [m/s]: its mean over the segment is reported.
+    detect : callable, optional
+        ``detect(fs) -> RideSegment`` overriding the default detection.
+    notes : list of str, optional
+
+    Returns
+    -------
+    RideQuality
+
+    Raises
+    ------
+    ValueError
+        No signal, unequal lengths, a segment outside the record or too short, no incline found.
+    """
+    if not signals:
+        raise ValueError("ride_quality needs at least one acceleration axis")
+    w = dict(DEFAULT_WEIGHTINGS)
+    w.update(weightings or {})
+    notes = list(notes or [])
+    arrs = {k: np.asarray(v, dtype=float) for k, v in signals.items()}
+    n = {a.size for a in arrs.values()}
+    if len(n) != 1:
+        raise ValueError(f"acceleration axes have different lengths {sorted(n)}")
+    n = n.pop()
+    dur = n / fs
+    if segment is None:
+        if detect is not None:
+            seg = detect(fs)
+        else:
+            seg = detect_ride_segment(fs, vertical=arrs.get("z"), along=arrs.get("x", arrs.get("tangential")))
+    elif isinstance(segment, RideSegment):
+        seg = segment
+    else:
+        a, b = segment
+        if not (0 <= a < b):
+            raise ValueError(f"segment {a:g}:{b:g} s: expected 0 <= START < END")
+        if a >= dur:
+            raise ValueError(f"segment {a:g}:{b:g} s starts after the end of the record ({dur:.4g} s)")
+        if b > dur * (1 + 1e-9) + 1 / fs:
+            notes.append(f"segment end {b:g} s is past the end of the record; cut to {dur:.4g} s")
+            b = dur
+        seg = RideSegment(start_s=float(a), end_s=float(b), method="given")
+    i0, i1 = int(round(seg.start_s * fs)), int(round(seg.end_s * fs))
+    if seg.start_s < SETTLE_S:
+        notes.append(f"the segment starts {seg.start_s:.3g} s into the record: the weighting's 0.4 Hz high-pass "
+                     f"is still settling there (record at least {SETTLE_S:g} s before the ride)")
+    if i1 - i0 < max(8, int(fs / 2)):
+        raise ValueError(f"ride segment {seg.start_s:.4g}-{seg.end_s:.4g} s is too short (need at least 0.5 s)")
+    axes = []
+    weighted = {}
+    for ax, x in arrs.items():
+        name = w.get(ax, "Wd")
+        wt = get_weighting(name).name
+        x0 = x - np.mean(x[: max(1, min(n, int(fs)))])  # start the filters near rest (gravity off)
+        y = frequency_weighting(x0, fs, wt)
+        lp = lowpass_10hz(x0, fs)
+        weighted[ax] = y
+        axes.append(AxisRide(axis=ax, channel=(channel_names or {}).get(ax, ax), weighting=wt,
+                             weighted=_metrics(y, fs, i0, i1, notes, f"axis {ax} weighted"),
+                             lowpass=_metrics(lp, fs, i0, i1, notes, f"axis {ax} 10 Hz")))
+    sp = None
+    if speed is not None:
+        s = np.asarray(speed, dtype=float)
+        sp = float(s) if s.ndim == 0 else float(np.nanmean(np.abs(s[i0:i1])))
+    return RideQuality(source=str(source), kind=kind, fs=float(fs), segment=seg, axes=tuple(axes), speed_m_s=sp,
+                       time=np.arange(n) / fs, weighted=weighted, notes=notes)
+
+
+_AXIS_RE = re.compile(r"([xyz])$")
+
+
+def _auto_channels(rec, names):
+    found = {}
+    for nm in names:
+        m = _AXIS_RE.search(nm.lower())
+        if m:
+            found.setdefault(m.group(1), []).append(nm)
+    if found and all(len(v) == 1 for v in found.values()):
+        return {k: v[0] for k, v in sorted(found.items())}
+    raise ValueError(f"cannot tell the x, y, z channels of {rec.attrs.get('source_file', 'the recording')!r} from "
+                     f"their names ({', '.join(names)}); say which with --channels x,y,z "
+                     f"(e.g. --channels {names[0]},-,- or --channels z={names[0]})")
+
+
+def ride_quality_from_recording(recording, *, channels=None, segment=None, weightings=None, sample_rate=None,
+                                speed_channel=None) -> RideQuality:
+    """Ride quality of a recording of a step-riding accelerometer.
+
+    Parameters
+    ----------
+    recording : str, os.PathLike or xarray.Dataset
+        A file :func:`vibkit.read_recording` reads, or its result.  A vibkit simulation result
+        (``vibkit simulate -o result.nc``) goes to :func:`ride_quality_from_simulation` unless
+        ``channels`` are given.
+    channels : dict or str, optional
+        Axis -> channel (``{"x": "ax", "z": "az"}``) or the ``--channels`` text (:func:`parse_channels`);
+        default: channels whose names end in x, y, z.
+    segment : (float, float), optional
+        Ride segment [s] from the first sample; default: detected.
+    weightings : dict, optional
+        Axis -> weighting (default x, y: Wd; z: Wk).
+    sample_rate : float, optional
+        For files without a time column. [Hz]
+    speed_channel : str, optional
+        A speed channel [m/s] (default: a channel in m/s named like ``speed``).
+
+    Returns
+    -------
+    RideQuality
+
+    Raises
+    ------
+    ValueError
+        A channel that is not in the recording or not an acceleration in m/s^2; a recording in bursts
+        whose longest burst is too short; the errors of :func:`ride_quality`.
+    """
+    from .io import read_recording
+    from .pitch import uniform_bursts
+
+    rec = recording if not isinstance(recording, (str, os.PathLike)) else read_recording(recording,
+                                                                                        sample_rate=sample_rate)
+    src = os.fspath(recording) if isinstance(recording, (str, os.PathLike)) else rec.attrs.get("source_file", "")
+    if (channels is None and rec.attrs.get("analysis") in ("forward", "inverse")
+            and ("roller_acceleration" in rec or "accel_step" in rec)):
+        # a vibkit result file: the simulation path (its step roller, or accel_step)
+        return ride_quality_from_simulation(rec, segment=segment, weightings=weightings, source=src)
+    names = [str(v) for v in rec.data_vars if v != "segment" and rec[v].dims == ("time",)]
+    if not names:
+        raise ValueError(f"{src}: the recording has no channel along time")
+    chans = parse_channels(channels) if isinstance(channels, str) else dict(channels or {})
+    if not chans:
+        chans = _auto_channels(rec, names)
+    lower = {n.lower(): n for n in names}
+    for ax, ch in list(chans.items()):
+        if ch.lower() not in lower:
+            raise ValueError(f"{src}: channel {ch!r} (axis {ax}) is not in the recording (channels: {', '.join(names)})")
+        ch = chans[ax] = lower[ch.lower()]
+        units = str(rec[ch].attrs.get("units", ""))
+        if units not in ("m/s^2", "m s-2", "m/s2"):
+            raise ValueError(f"{src}: channel {ch!r} is in {units or 'unknown units'!r}, not an acceleration in m/s^2 "
+                             "(the reader converts g; give units to the reader for raw counts)")
+    notes = []
+    bursts = {ax: uniform_bursts(rec, ch) for ax, ch in chans.items()}
+    first = next(iter(bursts.values()))
+    if not first:
+        raise ValueError(f"{src}: no burst of uniformly sampled data long enough to assess")
+    k = int(np.argmax([b.x.size for b in first]))
+    if len(first) > 1:
+        notes.append(f"the recording has {len(first)} bursts; the longest ({first[k].x.size / first[k].fs:.3g} s "
+                     f"from t = {first[k].t0:.4g} s) is assessed, times from its start")
+    fs = first[k].fs
+    sig = {ax: b[k].x for ax, b in bursts.items()}
+    if any(b[k].resampled for b in bursts.values()):
+        notes.append("irregular time stamps: resampled linearly to a uniform grid (weighting above ~fs/4 is softened)")
+    speed = None
+    sp_names = [speed_channel] if speed_channel else [n for n in names if "speed" in n.lower()
+                                                      and str(rec[n].attrs.get("units", "")) == "m/s"]
+    if sp_names and sp_names[0]:
+        if sp_names[0].lower() not in lower:
+            raise ValueError(f"{src}: speed channel {speed_channel!r} is not in the recording")
+        sb = uniform_bursts(rec, lower[sp_names[0].lower()])
+        speed = sb[k].x if len(sb) > k and sb[k].x.size == sig[next(iter(sig))].size else None
+    if speed is None and float(rec.attrs.get("chain_speed_m_s", 0) or 0) > 0:
+        speed = float(rec.attrs["chain_speed_m_s"])
+    return ride_quality(sig, fs, segment=segment, weightings=weightings, source=src, kind="recording",
+                        channel_names=chans, speed=speed, notes=notes)
+
+
+def _step_roller(ds):
+    step = ds.attrs.get("step_accelerometer")
+    if "roller" not in ds.coords or "roller_acceleration" not in ds:
+        return None
+    rollers = [int(r) for r in ds["roller"].values]
+    if step is not None and 3 * int(step) - 1 in rollers:
+        return 3 * int(step) - 1
+    return rollers[0]
+
+
+def ride_quality_from_simulation(ds, *, segment=None, weightings=None, source=None) -> RideQuality:
+    """Ride quality of a simulated step: the same path as a recording.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A forward or inverse result (``vibkit.simulate``) with ``roller_acceleration`` of a roller of
+        the step (preferred: axes x horizontal and z vertical, gravity added as an accelerometer on
+        the step tread measures it; the segment from the roller's vertical speed when
+        ``roller_velocity`` is there) or with ``accel_step`` (one axis along the guide tangent; the
+        whole record is the segment unless given).
+    segment : (float, float), optional
+        [s] from the first output time.
+    weightings : dict, optional
+    source : str, optional
+
+    Returns
+    -------
+    RideQuality
+
+    Raises
+    ------
+    ValueError
+        The Dataset has neither output, is not along time, or is not uniformly sampled.
+    """
+    if "time" not in ds.dims:
+        raise ValueError("ride quality needs a result along time (an inverse or forward analysis)")
+    t = np.asarray(ds["time"].values, dtype=float)
+    dt = np.diff(t)
+    if t.size < 16 or not np.allclose(dt, dt.mean(), rtol=1e-6):
+        raise ValueError("the simulation's output times are not uniformly spaced (or too few)")
+    fs = 1.0 / float(dt.mean())
+    src = source or str(ds.attrs.get("scene_source", ds.attrs.get("scene_name", "simulation")))
+    roller = _step_roller(ds)
+    notes = []
+    detect = None
+    speed = ds.attrs.get("chain_speed_m_s") or None
+    if roller is not None:
+        acc = ds["roller_acceleration"].sel(roller=roller)
+        sig = {"x": acc.sel(axis="x").values, "z": acc.sel(axis="z").values + G}
+        names = {"x": f"roller_acceleration[{roller}, x]", "z": f"roller_acceleration[{roller}, z] + g"}
+        notes.append(f"simulated step: roller {roller} (middle roller of step {ds.attrs.get('step_accelerometer', '?')}); "
+                     "no lateral axis in a planar model")
+        if "roller_velocity" in ds and segment is None:
+            vz = ds["roller_velocity"].sel(roller=roller, axis="z").values
+            vel = ds["roller_velocity"].sel(roller=roller).values
+            speed = np.hypot(vel[:, 0], vel[:, 1])
+
+            def detect(fs_):
+                k = int(np.argmax(np.abs(vz)))
+                peak = float(vz[k])
+                if abs(peak) < 0.05:
+                    raise ValueError(f"the simulated step does not ride an incline in {t[-1] - t[0]:.3g} s (vertical "
+                                     f"speed at most {abs(peak):.2g} m/s): simulate longer (--duration)")
+                run = np.sign(peak) * vz > 0.5 * abs(peak)
+                d = np.diff(np.concatenate([[0], run.astype(np.int8), [0]]))
+                s0, s1 = np.flatnonzero(d == 1), np.flatnonzero(d == -1)
+                j = int(np.argmax(s1 - s0))
+                note = f"vertical speed {peak:+.3g} m/s of the simulated roller"
+                if s0[j] == 0 or s1[j] == vz.size:
+                    note += "; the incline reaches an end of the simulated time (simulate longer: --duration)"
+                return RideSegment(start_s=s0[j] / fs_, end_s=s1[j] / fs_, method="speed channel", plateau=peak,
+                                   note=note)
+    elif "accel_step" in ds:
+        sig = {"tangential": ds["accel_step"].values}
+        names = {"tangential": "accel_step"}
+        notes.append("only accel_step (along the guide tangent, no gravity): one axis; add roller outputs for x and z")
+        if segment is None:
+            segment = (0.0, float(t[-1] - t[0]))
+            notes.append("no incline detection without the step's vertical motion: the whole simulated time is assessed")
+    else:
+        raise ValueError("the simulation has neither 'roller_acceleration' nor 'accel_step' among its outputs "
+                         "(use vibkit.ride.simulate_ride, which adds them)")
+    return ride_quality(sig, fs, segment=segment, weightings=weightings, source=src, kind="simulation",
+                        channel_names=names, speed=speed, detect=detect, notes=notes)
+
+
+def simulate_ride(scene, *, duration=None, segment=None, weightings=None, progress=False) -> RideQuality:
+    """Simulate a scene with its step accelerometer's roller motion as outputs, then assess the ride.
+
+    Parameters
+    ----------
+    scene : str, os.PathLike or Scene
+        An inverse or forward scene with ``outputs.step_accelerometer``.
+    duration : float, optional
+        Simulated time [s] (default the scene's); it must cover the step's ride up the incline.
+    segment, weightings
+        As :func:`ride_quality`.
+    progress : bool
+
+    Returns
+    -------
+    RideQuality
+
+    Raises
+    ------
+    SceneError, ValueError
+        A kinematics scene, or no ``outputs.step_accelerometer``.
+    """
+    from .scene import Scene, load_scene
+    from .simulation import simulate
+
+    sc = scene if isinstance(scene, Scene) else load_scene(scene)
+    if sc.analysis not in ("inverse", "forward"):
+        raise ValueError(f"{sc.source}: ride quality needs an inverse or forward scene, not {sc.analysis}")
+    step = sc.outputs.get("step_accelerometer")
+    if step is None:
+        raise ValueError(f"{sc.source}: the scene names no step ('outputs.step_accelerometer'); add one")
+    roller = 3 * int(step) - 1
+    out = dict(sc.outputs)
+    out["variables"] = tuple(dict.fromkeys(tuple(out["variables"]) + ("roller_acceleration", "roller_velocity")))
+    out["rollers"] = tuple(dict.fromkeys(tuple(out["rollers"]) + (roller,)))
+    ds = simulate(dataclasses.replace(sc, outputs=out), duration=duration, progress=progress)
+    return ride_quality_from_simulation(ds, segment=segment, weightings=weightings, source=sc.source)
