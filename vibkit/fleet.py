@@ -131,13 +131,13 @@ def parse_date(text, *, what="date") -> _dt.datetime:
     m = _DMY.fullmatch(t)
     if m:
         t = f"{m.group(3)}-{int(m.group(2)):02d}-{int(m.group(1)):02d}" + (f"T{m.group(4)}" if m.group(4) else "")
+    if re.match(r"^[0-9]{1,2}:[0-9]{2}", t):
+        raise FleetError(f"{what} {s!r} has no calendar date (a time of day only)")
     try:
         d = _dt.datetime.fromisoformat(t)
     except ValueError:
         raise FleetError(f"{what} {s!r} is not an ISO 8601 date (expected e.g. 2026-11-23 or "
                          "2026-11-23T10:15:00+01:00)") from None
-    if not re.match(r"^[0-9]{4}-?[0-9]{2}", t):  # fromisoformat also reads a bare time of day as today
-        raise FleetError(f"{what} {s!r} has no calendar date")
     if d.tzinfo is None:
         d = d.replace(tzinfo=_dt.timezone.utc)
     d = d.astimezone(_dt.timezone.utc)
@@ -350,7 +350,7 @@ def forecast_limits(fit, limits_percent=DEFAULT_LIMITS_PERCENT, *, latest_elonga
             out.append(LimitForecast(lim, "forecast", _unix_to_iso(cross(a, b)), _unix_to_iso(min(corners)),
                                      _unix_to_iso(max(corners))))
         elif b + k * sb > 0:
-            out.append(LimitForecast(lim, "not before", None, _unix_to_iso(cross(a - k * sa, b + k * sb)), None))
+            out.append(LimitForecast(lim, "not before", None, _unix_to_iso(cross(a + k * sa, b + k * sb)), None))
         else:
             out.append(LimitForecast(lim, "none"))
     return tuple(out)

@@ -660,8 +660,9 @@ def write_fleet_report(trends, measurements, out_path, *, limits_percent=None, d
                 slope = ("no trend" if tr.slope_percent_per_year is None else
                          f"{tr.slope_percent_per_year:+.2f} +- {tr.slope_sigma_percent_per_year:.2f} %/yr")
                 ax.set_title(f"#{tr.rank} {tr.unit}: {slope}", loc="left")
-                ax.xaxis.set_major_locator(mdates.AutoDateLocator(maxticks=4))
-                ax.xaxis.set_major_formatter(mdates.DateFormatter("%Y-%m"))
+                loc = mdates.AutoDateLocator(minticks=2, maxticks=6)
+                ax.xaxis.set_major_locator(loc)
+                ax.xaxis.set_major_formatter(mdates.ConciseDateFormatter(loc))
                 ax.set_ylim(min(-0.2, min(m.elongation_percent for m in ms) - 0.2),
                             max(limits[-1] * 1.15, max(m.elongation_percent for m in ms) + 0.2))
                 if i % ncol == 0:
