@@ -913,6 +913,8 @@ class FleetDB:
             unit's.
         """
         spath = os.fspath(recording)
+        if not os.path.exists(spath):
+            raise FleetError(f"{spath}: file not found; expected a recording")
         if os.path.isfile(spath):
             old = self.find(_file_sha256(spath))
             if old is not None:
@@ -1046,7 +1048,14 @@ class FleetDB:
         from .cluster import dask_client
 
         ctx = contextlib.nullcontext(client) if client is not None else dask_client(scheduler, n_workers=n_workers)
-        with ctx as cl:
+        try:
+            cl = ctx.__enter__()
+        except (OSError, RuntimeError, TimeoutError, ValueError) as exc:
+            where = f"the Dask scheduler at {scheduler}" if scheduler else "a local Dask cluster"
+            raise FleetError(f"cannot start or reach {where}: {' '.join(str(exc).split()) or type(exc).__name__} "
+                             "(--workers 0 analyses in this process, without Dask)") from None
+        with contextlib.ExitStack() as stack:
+            stack.push(ctx)
             futs = {}
             for i, job in enumerate(jobs):
                 f = cl.submit(_analyse_job, job, key=f"vibkit-fleet-{job.sha256}-{i}", pure=False)
