@@ -634,10 +634,11 @@ def write_fleet_report(trends, measurements, out_path, *, limits_percent=None, d
         with atomic_path(out, ".pdf") as tmp, PdfPages(tmp, metadata=meta) as pdf:
             fig = plt.figure(figsize=_WIDE)
             _page_title(fig, "Fleet: step-chain elongation against date",
-                        f"{len(trends)} unit(s), {len(measurements)} measurement(s); limits "
-                        f"{' / '.join(f'{v:g}' for v in limits)} %; error bars 1 sigma; lines: weighted "
-                        f"least-squares trend; database {os.path.basename(str(database))}; "
-                        f"{date:%Y-%m-%d}, vibkit {__version__}")
+                        f"{len(trends)} unit(s), {len(measurements)} measurement(s), most urgent first; limits "
+                        f"{' / '.join(f'{v:g}' for v in limits)} % (dashed); database "
+                        f"{os.path.basename(str(database))}; {date:%Y-%m-%d}, vibkit {__version__}")
+            fig.text(0.06, 0.035, "points: measurements with 1-sigma error bars; line: weighted least-squares trend; "
+                     "bar: 2-sigma interval of the date the next limit is reached", fontsize=7.5, color="0.3")
             gs = fig.add_gridspec(nrow, ncol, left=0.06, right=0.98, top=0.90, bottom=0.08, hspace=0.55, wspace=0.25)
             for i, tr in enumerate(shown):
                 ax = fig.add_subplot(gs[i // ncol, i % ncol])
@@ -650,15 +651,21 @@ def write_fleet_report(trends, measurements, out_path, *, limits_percent=None, d
                 if fit is not None and fit.slope_percent_per_year > 0:
                     nxt = [f for f in tr.forecasts if f.status == "forecast" and f.date_utc]
                     if nxt:
-                        t_end = max(t_end, min(utc(nxt[0].date_utc).timestamp(), t_end + 5 * 365.25 * 86400))
+                        t_end = max(t_end, min(utc(nxt[0].latest_utc or nxt[0].date_utc).timestamp(),
+                                               t_end + 5 * 365.25 * 86400))
                 if fit is not None:
                     tt = np.linspace(ms[0].date_unix_s, t_end, 50)
                     ax.plot([_dt.datetime.fromtimestamp(v, tz=_dt.timezone.utc) for v in tt], fit.elongation_at(tt),
                             color="tab:blue", lw=1.0)
                 for lim, c in zip(limits, colors):
                     ax.axhline(lim, color=c, lw=0.9, ls="--")
+                # the next limit's forecast interval, as a bar on its line
+                nxt = [f for f in tr.forecasts if f.status == "forecast" and f.earliest_utc and f.latest_utc]
+                if nxt and utc(nxt[0].latest_utc).timestamp() <= t_end + 1.0:
+                    ax.plot([utc(nxt[0].earliest_utc), utc(nxt[0].latest_utc)], [nxt[0].limit_percent] * 2,
+                            color="tab:blue", lw=3.0, alpha=0.5, solid_capstyle="butt")
                 slope = ("no trend" if tr.slope_percent_per_year is None else
-                         f"{tr.slope_percent_per_year:+.2f} +- {tr.slope_sigma_percent_per_year:.2f} %/yr")
+                         f"{tr.slope_percent_per_year:+.3f} +- {tr.slope_sigma_percent_per_year:.3f} %/yr")
                 ax.set_title(f"#{tr.rank} {tr.unit}: {slope}", loc="left")
                 loc = mdates.AutoDateLocator(minticks=2, maxticks=6)
                 ax.xaxis.set_major_locator(loc)
@@ -669,7 +676,7 @@ def write_fleet_report(trends, measurements, out_path, *, limits_percent=None, d
                     ax.set_ylabel("elongation [%]")
                 ax.grid(True, lw=0.3, alpha=0.5)
             if len(trends) > n:
-                fig.text(0.06, 0.02, f"{len(trends) - n} less urgent unit(s) not drawn; `vibkit fleet status` lists "
+                fig.text(0.06, 0.015, f"{len(trends) - n} less urgent unit(s) not drawn; `vibkit fleet status` lists "
                          "all of them", fontsize=8, color="0.3")
             pages.append(("fleet", _texts(fig)))
             pdf.savefig(fig)
