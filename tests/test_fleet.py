@@ -327,6 +327,23 @@ def test_bad_rows_reported_not_fatal(tmp_path, capsys):
     assert "nothing added" in capsys.readouterr().err
 
 
+def test_scan_named_file_any_suffix_and_repeated_line(tmp_path):
+    d = tmp_path / "visits"
+    (d / "E9").mkdir(parents=True)
+    synth(d / "E9" / "visit.log.bak", NOMINAL * 1.01, 21, duration=10.0)  # not a recording suffix: named exactly
+    synth(d / "E9" / "other.csv", NOMINAL * 1.01, 22, duration=10.0)
+    cat = tmp_path / "units.csv"
+    cat.write_text("file,unit,speed_m_s,date,nominal_pitch_m\n"
+                   "./E9/visit.log.bak,E9,0.5,2025-01-01,0.133333\n"
+                   "E9/other.csv,E9,0.5,2025-02-01,\n"
+                   "other.csv,E9,0.5,2025-03-01,\n")  # the same file again (by its base name)
+    with FleetDB(tmp_path / "f.sqlite") as db:
+        res = db.scan(d, cat, parallel=False)
+        assert len(res.added) == 2 and not res.failed and not res.skipped
+        assert res.notes == ["catalogue line 4: 'other.csv' is also on line 3, which is used"]
+        assert [m.date_utc[:10] for m in db.measurements("E9")] == ["2025-01-01", "2025-02-01"]
+
+
 @pytest.mark.parametrize("text, match", [
     ("file,unit,speed_m_s,date\nx.csv,U,0.5,\n", r"line 1: missing column\(s\) nominal_pitch_m"),
     ("# comment\nfile,unit,speed_m_s,date,nominal_pitch_m,colour\n", r"line 2: unknown column\(s\) 'colour'"),

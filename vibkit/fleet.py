@@ -49,6 +49,7 @@ import io
 import json
 import math
 import os
+import posixpath
 import re
 import sqlite3
 from dataclasses import asdict, dataclass, field
@@ -602,7 +603,7 @@ def read_catalogue(path):
                 raise FleetError(f"{spath}, line {n}: unit {v['unit']!r} has nominal_pitch_m {nom:g} here but "
                                  f"{prev[0]:g} on line {prev[1]}")
             nominal.setdefault(v["unit"], (nom, n))
-        rows.append(CatalogueRow(n, v["file"].replace("\\", "/"), v["unit"], speed, ssig, date, nom,
+        rows.append(CatalogueRow(n, posixpath.normpath(v["file"].replace("\\", "/")), v["unit"], speed, ssig, date, nom,
                                  v.get("channel") or None))
     if not rows:
         raise FleetError(f"{spath}: catalogue has a header but no line")
@@ -975,6 +976,10 @@ class FleetDB:
         exclude = {os.path.abspath(os.fspath(catalogue)), os.path.abspath(self.path),
                    os.path.abspath(self.path) + "-wal", os.path.abspath(self.path) + "-shm"}
         files = _candidate_files(d, exclude)
+        # a file the catalogue names exactly is a recording whatever its suffix
+        named = [r.file for r in rows if not r.is_glob and os.path.isfile(os.path.join(d, r.file))
+                 and os.path.abspath(os.path.join(d, r.file)) not in exclude]
+        files = sorted(set(files) | {os.path.normpath(f).replace(os.sep, "/") for f in named})
         unit_nominal = {}
         for r in rows:
             if r.nominal_pitch_m is not None:
@@ -1012,6 +1017,10 @@ class FleetDB:
             if r.line not in used:
                 if r.is_glob:
                     res.notes.append(f"catalogue line {r.line}: {r.file!r} matches no recording")
+                elif any(r.file in (f, f.rsplit("/", 1)[-1]) for f in files):
+                    f = next(f for f in files if r.file in (f, f.rsplit("/", 1)[-1]))
+                    res.notes.append(f"catalogue line {r.line}: {r.file!r} is also on line "
+                                     f"{_match(f, rows).line}, which is used")
                 else:
                     fail(os.path.join(d, r.file), f"file not found (catalogue line {r.line})")
         bar = Progress(len(jobs), "fleet scan", enabled=progress)
