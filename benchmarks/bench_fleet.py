@@ -12,7 +12,8 @@ each) are scanned into a fresh database by:
   (:func:`vibkit.cluster.dask_client`), the cluster started and its workers warmed up (vibkit
   imported, kernels loaded) before the clock starts; the start-up is reported on its own.
 
-Each case is the best of ``--repeat`` runs, side by side in one process.  Writes (atomically)
+Each case is the best of ``--repeat`` rounds, the cases taking turns within a round (one process,
+the same varying load for all).  Writes (atomically)
 ``benchmarks/results/fleet.{md,csv}`` (``fleet_quick.*`` with ``--quick``) with the machine, the
 date and the load average (the machine may be shared: read the ratios with it).
 """
@@ -20,6 +21,7 @@ date and the load average (the machine may be shared: read the ratios with it).
 from __future__ import annotations
 
 import argparse
+import contextlib
 import datetime as dt
 import os
 import platform
@@ -92,37 +94,38 @@ def main(argv=None):
         def fresh_db(tag, k):
             return FleetDB(tmp / f"{tag}-{k}.sqlite")
 
-        def record(case, n_workers, wall, start_s=None):
-            rows.append({"case": case, "workers": n_workers, "recordings": n, "wall_s": wall,
-                         "recordings_per_s": n / wall, "cluster_start_s": start_s,
-                         "load_avg_1min_after": round(os.getloadavg()[0], 2)})
-            print(f"{case:>16}: {wall:7.2f} s, {n / wall:6.2f} recordings/s", file=sys.stderr)
-
-        best = min(_timed(lambda: [_analyse_job(j) for j in jobs]) for _ in range(repeat))
-        record("analysis only", 0, best)
-
         def scan_plain(k):
             with fresh_db("plain", k) as db:
                 res = db.scan(rec, cat, parallel=False)
             assert len(res.added) == n, res.failed[:3]
 
-        best = min(_timed(lambda k=k: scan_plain(k)) for k in range(repeat))
-        record("plain loop", 0, best)
+        def scan_dask(k, w, client):
+            with fresh_db(f"dask{w}", k) as db:
+                res = db.scan(rec, cat, client=client)
+            assert len(res.added) == n, res.failed[:3]
 
-        for w in workers:
-            t0 = time.perf_counter()
-            with dask_client(n_workers=w) as client:
-                client.wait_for_workers(w)
-                client.run(_analyse_job, jobs[0])  # every worker imports vibkit and loads the kernels
-                start = time.perf_counter() - t0
-
-                def scan_dask(k, w=w, client=client):
-                    with fresh_db(f"dask{w}", k) as db:
-                        res = db.scan(rec, cat, client=client)
-                    assert len(res.added) == n, res.failed[:3]
-
-                best = min(_timed(lambda k=k: scan_dask(k)) for k in range(repeat))
-            record(f"dask {w}", w, best, start)
+        with contextlib.ExitStack() as stack:
+            clients, starts = {}, {}
+            for w in workers:
+                t0 = time.perf_counter()
+                c = stack.enter_context(dask_client(n_workers=w))
+                c.wait_for_workers(w)
+                c.run(_analyse_job, jobs[0])  # every worker imports vibkit and loads the kernels
+                clients[w], starts[w] = c, time.perf_counter() - t0
+            cases = [("analysis only", 0, lambda k: [_analyse_job(j) for j in jobs]), ("plain loop", 0, scan_plain)]
+            cases += [(f"dask {w}", w, lambda k, w=w: scan_dask(k, w, clients[w])) for w in workers]
+            times = {c[0]: [] for c in cases}
+            loads = {c[0]: [] for c in cases}
+            for k in range(repeat):  # round robin: every case sees the same (shared, varying) load
+                for name, _, fn in cases:
+                    times[name].append(_timed(lambda: fn(k)))
+                    loads[name].append(os.getloadavg()[0])
+                    print(f"round {k + 1}: {name:>14}: {times[name][-1]:7.2f} s", file=sys.stderr)
+        for name, w, _ in cases:
+            best = min(times[name])
+            rows.append({"case": name, "workers": w, "recordings": n, "wall_s": best, "recordings_per_s": n / best,
+                         "cluster_start_s": starts.get(w) if name.startswith("dask") else None,
+                         "load_avg_1min_mean": round(float(np.mean(loads[name])), 2)})
     load1 = os.getloadavg()
     base = next(r["wall_s"] for r in rows if r["case"] == "plain loop")
     for r in rows:
@@ -136,7 +139,7 @@ def main(argv=None):
         "",
         f"{n} synthetic recordings ({duration:g} s at {FS:g} Hz, CSV, {size_kb:.0f} kB "
         "each), scanned into a fresh SQLite database (WAL, synchronous=FULL, one transaction per recording); "
-        f"best of {repeat}; Dask cases with the cluster already started and warmed up (start-up in its own "
+        f"best of {repeat} rounds, the cases taking turns within each round; Dask cases with the cluster already started and warmed up (start-up in its own "
         "column). Ratio: plain loop wall / case wall (> 1 is faster).",
         "",
         f"Machine: {machine()}; vibkit {vibkit.__version__}; numpy {np.__version__}; {platform.platform()}.",
@@ -148,7 +151,7 @@ def main(argv=None):
     table = markdown_table([{"case": r["case"], "workers": r["workers"], "wall [s]": r["wall_s"],
                              "recordings/s": r["recordings_per_s"], "ratio vs plain loop": r["ratio_vs_plain_loop"],
                              "cluster start [s]": "-" if r["cluster_start_s"] is None else r["cluster_start_s"],
-                             "load avg after": r["load_avg_1min_after"]}
+                             "load avg (1 min)": r["load_avg_1min_mean"]}
                             for r in rows])
     write_text(RESULTS / f"fleet{suffix}.md", "\n".join(head) + "\n" + table + "\n")
     print(table)
