@@ -959,6 +959,8 @@ class FleetDB:
         -----
         Only this process writes the database, one transaction per recording (WAL journal,
         ``synchronous=FULL``): a killed scan leaves complete rows, and the next scan skips them.
+        A local cluster spawns its worker processes: a script that calls ``scan`` needs the
+        ``if __name__ == "__main__":`` guard (or ``parallel=False``).
         """
         from .progress import Progress
 
