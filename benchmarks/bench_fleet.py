@@ -139,7 +139,8 @@ def main(argv=None):
         "",
         f"{n} synthetic recordings ({duration:g} s at {FS:g} Hz, CSV, {size_kb:.0f} kB "
         "each), scanned into a fresh SQLite database (WAL, synchronous=FULL, one transaction per recording); "
-        f"best of {repeat} rounds, the cases taking turns within each round; Dask cases with the cluster already started and warmed up (start-up in its own "
+        f"best of {repeat} rounds, the cases taking turns within each round; Dask cases with the cluster already "
+        "started and warmed up (start-up in its own "
         "column). Ratio: plain loop wall / case wall (> 1 is faster).",
         "",
         f"Machine: {machine()}; vibkit {vibkit.__version__}; numpy {np.__version__}; {platform.platform()}.",

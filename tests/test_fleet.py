@@ -347,7 +347,8 @@ def test_scan_named_file_any_suffix_and_repeated_line(tmp_path):
 @pytest.mark.parametrize("text, match", [
     ("file,unit,speed_m_s,date\nx.csv,U,0.5,\n", r"line 1: missing column\(s\) nominal_pitch_m"),
     ("# comment\nfile,unit,speed_m_s,date,nominal_pitch_m,colour\n", r"line 2: unknown column\(s\) 'colour'"),
-    ("file,unit,speed_m_s,date,nominal_pitch_m\na.csv,U,0.5,,0.1333\nb.csv,U,0.5\n", r"line 3: 3 cell\(s\), expected 5"),
+    ("file,unit,speed_m_s,date,nominal_pitch_m\na.csv,U,0.5,,0.1333\nb.csv,U,0.5\n",
+     r"line 3: 3 cell\(s\), expected 5"),
     ("file,unit,speed_m_s,date,nominal_pitch_m\na.csv,U,fast,,0.1333\n", "line 2: column speed_m_s: expected a number"),
     ("file,unit,speed_m_s,date,nominal_pitch_m\na.csv,U,0.5,,133.33\n", "line 2: .*not 133.33"),
     ("file,unit,speed_m_s,date,nominal_pitch_m\na.csv,U,0.5,tomorrow,\n", "line 2: date 'tomorrow'"),

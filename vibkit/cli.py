@@ -334,7 +334,8 @@ def _fleet_db(a, *, create=True):
 
 
 def _fmt_measurement(m):
-    return (f"#{m.id} unit {m.unit} {m.date_utc[:10]}: pitch {1000 * m.pitch_m:.3f} +- {1000 * m.pitch_sigma_m:.3f} mm, "
+    return (f"#{m.id} unit {m.unit} {m.date_utc[:10]}: "
+            f"pitch {1000 * m.pitch_m:.3f} +- {1000 * m.pitch_sigma_m:.3f} mm, "
             f"elongation {m.elongation_percent:+.3f} +- {m.elongation_sigma_percent:.3f} % "
             f"(SNR {'n/a' if m.snr_db is None else f'{m.snr_db:.0f} dB'})")
 

@@ -477,7 +477,7 @@ def analyse_recording(path, *, unit, speed, speed_sigma=0.0, nominal_pitch, date
             raise FleetError(f"{spath}: the recording has no start time; give the measurement date "
                              "(--date, or the catalogue's date column) as ISO 8601, e.g. 2026-11-23")
         try:
-            d = parse_date(start, what=f"the recording's start time")
+            d = parse_date(start, what="the recording's start time")
         except FleetError as exc:
             raise FleetError(f"{spath}: {exc}; give the measurement date (--date, or the catalogue's date column)") \
                 from None
