@@ -128,7 +128,7 @@ def parse_date(text, *, what="date") -> _dt.datetime:
     s = str(text).strip()
     if not s:
         raise FleetError(f"{what} is empty; expected ISO 8601 such as 2026-11-23 or 2026-11-23T10:15:00Z")
-    t = s.replace(",", ".")
+    t = re.sub(r",\s*", " ", re.sub(r"(?<=[0-9]),(?=[0-9])", ".", s))  # decimal comma; "date, time"
     m = _DMY.fullmatch(t)
     if m:
         t = f"{m.group(3)}-{int(m.group(2)):02d}-{int(m.group(1)):02d}" + (f"T{m.group(4)}" if m.group(4) else "")
@@ -482,7 +482,10 @@ def analyse_recording(path, *, unit, speed, speed_sigma=0.0, nominal_pitch, date
             raise FleetError(f"{spath}: {exc}; give the measurement date (--date, or the catalogue's date column)") \
                 from None
         source = "recording start time"
-    est = estimate_pitch(rec, speed=speed, speed_sigma=speed_sigma, channel=channel, nominal_pitch=nominal_pitch)
+    try:
+        est = estimate_pitch(rec, speed=speed, speed_sigma=speed_sigma, channel=channel, nominal_pitch=nominal_pitch)
+    except ValueError as exc:
+        raise FleetError(f"{spath}: {' '.join(str(exc).split())}") from None
     detected = getattr(est, "detected", None)
     if detected is None:  # before PitchEstimate carried a verdict: no harmonic above its 3-sigma level
         detected = any(h.get("detected", False) for h in est.harmonics)
