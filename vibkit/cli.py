@@ -392,6 +392,9 @@ def _cmd_sweep(a):
         for r in runs:
             if r["error"]:
                 _msg(f"run {', '.join(f'{k}={v}' for k, v in r['values'].items())}: {r['status']}: {r['error']}")
+    return 0
+
+
 def _weightings(text):
     """``Wk`` (every axis) or ``x=Wd,y=Wd,z=Wk`` -> {axis: name} (None: the defaults)."""
     if not text:
@@ -457,6 +460,9 @@ def _cmd_ride(a):
         for r in (rq, sim):
             for n in ([] if r is None else r.notes + ([r.segment.note] if r.segment.note else [])):
                 _msg(f"note: {n}")
+    return 0
+
+
 def _workers(text):
     try:
         v = int(text)
