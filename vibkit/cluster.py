@@ -51,6 +51,9 @@ def dask_client(scheduler: str | None = None, *, n_workers: int | None = None):
         raise ValueError(f"n_workers must be >= 1, got {n_workers!r}")
     n = int(n_workers) if n_workers else default_workers()
     # dashboard on a free port: the default 8787 is often taken (another cluster, another user)
+    # no dashboard: the scheduler's HTTP server would otherwise bind port 8787 (or warn and leak a
+    # socket when another process holds it)
     with LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0",
+                      scheduler_kwargs={"dashboard": False, "dashboard_address": ":0"},
                       silence_logs=logging.ERROR) as cluster, Client(cluster) as client:
         yield client
