@@ -54,6 +54,7 @@ def _private_temp_dir() -> str | None:
     path = os.path.join(tempfile.gettempdir(), f"vibkit-numba-{uid}")
     try:
         os.mkdir(path, 0o700)
+        _STATE["created"] = True
     except FileExistsError:
         pass
     except OSError:
@@ -125,8 +126,9 @@ def configure(pkg_dir: str | None = None) -> str | None:
     if path is not None:
         _STATE["dir"] = path
         _set_numba_cache_dir(path)
-        print(f"vibkit: note: the package folder and the home cache are not writable; compiled kernels "
-              f"are cached in {path}", file=sys.stderr)
+        if _STATE.get("created"):  # said once, when the folder is made
+            print(f"vibkit: note: the package folder and the home cache are not writable; compiled kernels "
+                  f"are cached in {path}", file=sys.stderr)
         return path
     _disable_numba_cache(f"no writable folder for the kernel cache (package {pkg_dir}, home, "
                          f"{tempfile.gettempdir()})")
