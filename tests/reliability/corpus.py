@@ -71,6 +71,9 @@ class Case:
         Signal sent to the child once it prints ``READY`` on stdout; forces a subprocess.
     subprocess_only : bool
         Never run in-process (a regression could hang the test process).
+    heavy : bool
+        Left out of the test suite for its cost (a whole report takes 10-40 s here); what it shows is
+        tested more cheaply elsewhere (named in ``note``).  The table runs it.
     note : str
         What the case shows, for the table.
     """
@@ -89,6 +92,7 @@ class Case:
     prelude: str = ""
     send_signal: int | None = None
     subprocess_only: bool = False
+    heavy: bool = False
     note: str = ""
 
     @property
@@ -226,7 +230,7 @@ CASES = [
          note="the stale .fresh.nc.vibkit-tmp-PID is removed"),
     Case("simulate, new output", "output", SIMULATE + ["{w}/new.nc"], files=TINY, expect="ok", outputs=("{w}/new.nc",)),
     Case("report, new output", "output", ["report", "{w}/rec.csv", "-o", "{w}/new.pdf"], files=REC, expect="ok",
-         outputs=("{w}/new.pdf",)),
+         outputs=("{w}/new.pdf",), heavy=True, note="tested in test_readonly_install.py and test_report.py"),
     Case("SIGTERM during the write", "output", SIMULATE + ["{w}/term.nc"], files=TINY, prelude=SLOW_COMMIT,
          send_signal=signal.SIGTERM, expect="interrupted", absent=("{w}/term.nc",)),
     Case("Ctrl-C during the write", "output", SIMULATE + ["{w}/int.nc"], files=TINY, prelude=SLOW_COMMIT,
@@ -236,7 +240,8 @@ CASES = [
     Case("disk full (simulate)", "output", SIMULATE + ["{w}/full.nc"], files=TINY, prelude=DISK_FULL,
          expect_in=("No space left",), absent=("{w}/full.nc",)),
     Case("disk full (report)", "output", ["report", "{w}/rec.csv", "-o", "{w}/full.pdf"], files=REC,
-         prelude=DISK_FULL, expect_in=("No space left",), absent=("{w}/full.pdf",)),
+         prelude=DISK_FULL, expect_in=("No space left",), absent=("{w}/full.pdf",), heavy=True,
+         note="the PDF is made in memory; write tested in test_safe_output.py"),
     # ------------------------------------------------------------------ limits: checked before work
     Case("--duration 1e9", "limits", ["simulate", str(SIM / "leon.toml"), "-o", "{w}/x.nc", "--duration", "1e9"],
          expect_in=("limit", "--duration")),
