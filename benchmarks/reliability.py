@@ -66,6 +66,11 @@ def main(argv=None) -> int:
     ap.add_argument("--quick", action="store_true", help="leave out the heavy cases; write *_quick.* files")
     ap.add_argument("--only", help="run only cases whose name contains this (no files written)")
     ap.add_argument("--timeout", type=float, default=300.0, help="seconds before a case counts as a hang")
+    ap.add_argument("--code", help="run the vibkit package found in this folder instead (e.g. an older version "
+                                   "unpacked with `git archive COMMIT vibkit | tar -x -C DIR`); writes "
+                                   "reliability_<label>.{md,csv}; cases that write near system paths "
+                                   "(/dev/null ...) or inject faults into new modules are not run")
+    ap.add_argument("--label", default="before", help="label of a --code run (default: before)")
     a = ap.parse_args(argv)
 
     corpus = _corpus()
@@ -74,12 +79,17 @@ def main(argv=None) -> int:
         cases = [c for c in cases if not c.heavy]
     if a.only:
         cases = [c for c in cases if a.only in c.name]
+    left_out = []
+    if a.code:
+        left_out = [c.name for c in cases if corpus.touches_system(c) or c.prelude]
+        cases = [c for c in cases if c.name not in left_out]
     rows = []
     t_all = time.perf_counter()
     with tempfile.TemporaryDirectory(prefix="vibkit-reliability-") as top:
         for i, case in enumerate(cases, 1):
             t0 = time.perf_counter()
-            res = corpus.run_case(case, Path(top) / f"case{i:03d}", inprocess=False, timeout=a.timeout)
+            res = corpus.run_case(case, Path(top) / f"case{i:03d}", inprocess=False, timeout=a.timeout,
+                                  code_root=os.path.abspath(a.code) if a.code else None)
             res["wall_s"] = time.perf_counter() - t0
             res["expect"] = case.expect
             res["note"] = case.note
@@ -107,13 +117,18 @@ def main(argv=None) -> int:
             print(f"{k}: {v}")
         return 1 if failed else 0
 
-    suffix = "_quick" if a.quick else ""
+    suffix = ("_quick" if a.quick else "") + (f"_{a.label}" if a.code else "")
     RESULTS.mkdir(parents=True, exist_ok=True)
     date = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
-    lines = [f"# Reliability: bad inputs through `vibkit.cli.main`{' (quick)' if a.quick else ''}", "",
-             f"Written by `python benchmarks/reliability.py{' --quick' if a.quick else ''}` on {date}; "
+    cmdline = "python benchmarks/reliability.py" + (" --quick" if a.quick else "") + \
+        (f" --code {a.code} --label {a.label}" if a.code else "")
+    lines = [f"# Reliability: bad inputs through `vibkit.cli.main`{' (quick)' if a.quick else ''}"
+             f"{f' ({a.label})' if a.code else ''}", "",
+             f"Written by `{cmdline}` on {date}; "
              f"{_machine()}; {wall:.0f} s in all. Each case runs in a fresh process in its own folder; the corpus is "
-             "`tests/reliability/corpus.py` (+ `corpus_*.py`).", "",
+             "`tests/reliability/corpus.py` (+ `corpus_*.py`)."
+             + (f" Code run: `{a.code}` ({a.label}); not run against it (system paths or fault injection into "
+                f"new modules): {', '.join(left_out) or 'none'}." if a.code else ""), "",
              "| | count |", "|---|---:|"]
     lines += [f"| {k} | {v} |" for k, v in summary]
     items = sorted({r["item"] for r in rows})

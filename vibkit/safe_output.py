@@ -281,9 +281,14 @@ def _commit(tmp: str, path: str, *, overwrite: bool, inputs) -> None:
 def write_bytes(data, path, *, overwrite: bool = False, inputs=(), chunk: int = 1 << 22) -> str:
     """Write ``data`` (bytes-like) to ``path`` atomically (see :func:`atomic_output`); returns the path."""
     view = memoryview(data).cast("B")
-    with atomic_output(path, overwrite=overwrite, inputs=inputs) as tmp:
-        with open(tmp, "wb") as f:
-            for i in range(0, len(view), chunk):
-                f.write(view[i:i + chunk])
-            f.flush()
+    try:
+        with atomic_output(path, overwrite=overwrite, inputs=inputs) as tmp:
+            with open(tmp, "wb") as f:
+                for i in range(0, len(view), chunk):
+                    f.write(view[i:i + chunk])
+                f.flush()
+    except OSError as exc:
+        if exc.errno is not None and not exc.filename:  # name the file the user asked for (disk full ...)
+            raise OSError(exc.errno, exc.strerror or str(exc), os.fspath(path)) from None
+        raise
     return os.fspath(path)
