@@ -69,7 +69,8 @@ def main(argv=None) -> int:
     ap.add_argument("--code", help="run the vibkit package found in this folder instead (e.g. an older version "
                                    "unpacked with `git archive COMMIT vibkit | tar -x -C DIR`); writes "
                                    "reliability_<label>.{md,csv}; cases that write near system paths "
-                                   "(/dev/null ...) or inject faults into new modules are not run")
+                                   "(/dev/null ...) or inject faults into new modules are not run, and "
+                                   "--force/--overwrite are dropped (older code had no such flag)")
     ap.add_argument("--label", default="before", help="label of a --code run (default: before)")
     a = ap.parse_args(argv)
 

@@ -401,6 +401,8 @@ def run_subprocess(case: Case, work: Path, *, timeout: float = 300.0, python: st
     ``code_root``: the folder holding the ``vibkit`` package to run (default this repository).
     """
     argv = [_sub(a, work) for a in case.argv]
+    if code_root is not None:  # older code has no --force: it replaced files without asking
+        argv = [a for a in argv if a not in ("--force", "--overwrite")]
     env = dict(os.environ, **case.env)
     env.setdefault("VIBKIT_PROGRESS_INTERVAL", "1e9")
     root = str(code_root or ROOT)
