@@ -54,10 +54,18 @@ def _interpreter(env):
 
 
 def _install(target: Path) -> str:
-    """Non-editable install of the repository into ``target``; returns how it was done."""
+    """Non-editable install of the repository into ``target``; returns how it was done.
+
+    Built from a copy of the sources, so that the build leaves nothing (``build/``, ``*.egg-info``)
+    in the repository."""
+    src = target.parent / "src"
+    shutil.copytree(ROOT / "vibkit", src / "vibkit", ignore=shutil.ignore_patterns("__pycache__"))
+    for name in ("pyproject.toml", "README.md", "LICENSE"):
+        if (ROOT / name).exists():
+            shutil.copy(ROOT / name, src / name)
     base = [sys.executable, "-m", "pip", "install", "--quiet", "--no-deps", "--no-compile", "--target", str(target)]
     for extra in (["--no-build-isolation"], []):
-        proc = subprocess.run(base + extra + [str(ROOT)], capture_output=True, text=True)
+        proc = subprocess.run(base + extra + [str(src)], capture_output=True, text=True)
         if proc.returncode == 0 and (target / "vibkit" / "__init__.py").exists():
             return "pip install --target" + (" --no-build-isolation" if extra else "")
         shutil.rmtree(target, ignore_errors=True)
