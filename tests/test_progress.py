@@ -71,3 +71,27 @@ def test_no_line_before_the_interval(monkeypatch):
     bar.update(2)
     bar.close()
     assert piped.getvalue() == ""
+
+
+def test_kinematic_sweep_shows_lines_when_piped(monkeypatch, capfd):
+    """Long kinematic sweeps are not silent off a terminal; pieces of a chunked compiled sweep give
+    the same delta as one piece (warm-started from the last), to the closure tolerance."""
+    from pathlib import Path
+
+    import numpy as np
+
+    import vibkit.kinematics as kin
+    from vibkit.model import EscalatorModel
+    from vibkit.scene import load_scene
+
+    monkeypatch.setenv("VIBKIT_PROGRESS_INTERVAL", "1e-9")
+    model = EscalatorModel(load_scene(Path(__file__).resolve().parents[1] / "sim" / "thesis-kinematics.toml"))
+    whole = kin.kinematic_sweep(model, 3.0, 3.05, 0.001)
+    monkeypatch.setattr(kin, "PROGRESS_CHUNK", 7)
+    pieces = kin.kinematic_sweep(model, 3.0, 3.05, 0.001, progress=True)
+    np.testing.assert_allclose(pieces.delta.values, whole.delta.values, rtol=0, atol=1e-12)
+    err = capfd.readouterr().err
+    assert "kinematic sweep: " in err and "kinematic sweep: done" in err
+    kin.kinematic_sweep(model, 3.0, 3.05, 0.001, rollers=(1,), outputs=("delta", "roller_position"), progress=True)
+    err = capfd.readouterr().err
+    assert "kinematic sweep: 0.0 %" in err and "kinematic sweep: done" in err

@@ -66,7 +66,8 @@ def simulate(scene, *, duration: float | None = None, progress: bool = True, max
 
         k = scene.section("kinematics")
         stop = k["stop"] if duration is None else k["start"] + duration
-        return kinematic_sweep(model, k["start"], stop, k["step"], rollers=rollers, outputs=outputs)
+        return kinematic_sweep(model, k["start"], stop, k["step"], rollers=rollers, outputs=outputs,
+                               progress=progress)
     if scene.analysis == "inverse":
         from .inverse import inverse_dynamics
 
