@@ -103,7 +103,8 @@ def test_report_json(leon_nc, tmp_path, capsys):
 
 
 @pytest.mark.parametrize("argv", [["pitch", LEON], ["nonsense"], ["pitch", LEON, "--speed", "-1"],
-                                  ["pitch", LEON, "--speed", "0.5", "--band", "6:2"], []])
+                                  ["pitch", LEON, "--speed", "0.5", "--band", "6:2"], [],
+                                  ["pitch", LEON, "--speed", "0.5", "--speed-uncertainty", "abc"]])
 def test_usage_errors_exit_2(argv, capsys):
     with pytest.raises(SystemExit) as exc:
         main(argv)
@@ -113,7 +114,6 @@ def test_usage_errors_exit_2(argv, capsys):
 @pytest.mark.parametrize("argv, text", [
     (["pitch", "missing.csv", "--speed", "0.5"], "file not found"),
     (["pitch", LEON, "--speed", "0.5", "--channel", "nope"], "channel 'nope'"),
-    (["pitch", LEON, "--speed", "0.5", "--speed-uncertainty", "abc"], "--speed-uncertainty"),
     (["simulate", "missing.toml", "-o", "x.nc"], "missing.toml"),
     (["compare", LEON, "missing.toml"], "file not found"),
     (["report", LEON, "-o", "out.txt"], ".pdf"),

@@ -1,4 +1,5 @@
-"""Long work shows progress on a terminal and is quiet when piped."""
+"""Long work shows progress on a terminal; piped, it is quiet for short work and prints a line every few
+seconds for long work (a service or cron job must not run silently for minutes)."""
 
 import io
 
@@ -36,9 +37,61 @@ def test_quiet_when_piped_or_disabled(monkeypatch):
     assert tty.getvalue() == ""
 
 
-def test_simulation_is_quiet_on_a_pipe(capfd):
-    """pytest's captured stderr is not a terminal: a forward run prints nothing there."""
+def test_simulation_is_quiet_on_a_pipe(capfd, monkeypatch):
+    """pytest's captured stderr is not a terminal: a short forward run prints nothing there (the
+    interval is raised so that a first compilation of the kernels cannot count as long work)."""
     from pathlib import Path
 
+    monkeypatch.setenv("VIBKIT_PROGRESS_INTERVAL", "1e9")
     vibkit.simulate(Path(__file__).resolve().parents[1] / "sim" / "thesis-forward.toml", duration=0.2)
     assert capfd.readouterr().err == ""
+
+
+def test_lines_when_piped_and_long(monkeypatch):
+    """Not a terminal: one line per interval with the fraction done, then a closing line; no bar."""
+    import time
+
+    monkeypatch.setenv("VIBKIT_PROGRESS_INTERVAL", "0.05")
+    piped = io.StringIO()
+    bar = Progress(4, "work", stream=piped)
+    for i in range(1, 5):
+        time.sleep(0.06)
+        bar.update(i)
+    bar.close()
+    lines = piped.getvalue().splitlines()
+    assert lines[0] == "work: 25.0 % after 0 s"
+    assert lines[-2].startswith("work: 100.0 % after") and lines[-1].startswith("work: done after")
+    assert len(lines) == 5 and "\r" not in piped.getvalue() and "#" not in piped.getvalue()
+
+
+def test_no_line_before_the_interval(monkeypatch):
+    monkeypatch.setenv("VIBKIT_PROGRESS_INTERVAL", "1e9")
+    piped = io.StringIO()
+    bar = Progress(4, "work", stream=piped)
+    bar.update(2)
+    bar.close()
+    assert piped.getvalue() == ""
+
+
+def test_kinematic_sweep_shows_lines_when_piped(monkeypatch, capfd):
+    """Long kinematic sweeps are not silent off a terminal; pieces of a chunked compiled sweep give
+    the same delta as one piece (warm-started from the last), to the closure tolerance."""
+    from pathlib import Path
+
+    import numpy as np
+
+    import vibkit.kinematics as kin
+    from vibkit.model import EscalatorModel
+    from vibkit.scene import load_scene
+
+    monkeypatch.setenv("VIBKIT_PROGRESS_INTERVAL", "1e-9")
+    model = EscalatorModel(load_scene(Path(__file__).resolve().parents[1] / "sim" / "thesis-kinematics.toml"))
+    whole = kin.kinematic_sweep(model, 3.0, 3.05, 0.001)
+    monkeypatch.setattr(kin, "PROGRESS_CHUNK", 7)
+    pieces = kin.kinematic_sweep(model, 3.0, 3.05, 0.001, progress=True)
+    np.testing.assert_allclose(pieces.delta.values, whole.delta.values, rtol=0, atol=1e-12)
+    err = capfd.readouterr().err
+    assert "kinematic sweep: " in err and "kinematic sweep: done" in err
+    kin.kinematic_sweep(model, 3.0, 3.05, 0.001, rollers=(1,), outputs=("delta", "roller_position"), progress=True)
+    err = capfd.readouterr().err
+    assert "kinematic sweep: 0.0 %" in err and "kinematic sweep: done" in err

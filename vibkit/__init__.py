@@ -18,6 +18,11 @@ __all__ = ["__version__", "load_scene", "simulate", "read_recording", "compare",
 # object the first time someone runs `import vibkit.sweep`; this way `vibkit.sweep` is the function
 from .sweep import sweep  # noqa: E402
 
+# a read-only install (root installs, a service account runs) must still find a writable kernel cache
+from .kernel_cache import configure as _configure_kernel_cache  # noqa: E402
+
+_configure_kernel_cache()
+
 
 def __getattr__(name):  # lazy: `import vibkit` stays cheap (no numba, no obspy)
     if name == "load_scene":

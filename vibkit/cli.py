@@ -8,6 +8,7 @@ traceback), 2 usage error (argparse).
 from __future__ import annotations
 
 import argparse
+import errno
 import json
 import math
 import os
@@ -119,11 +120,39 @@ def _speed_sigma(text, speed):
     return v
 
 
-def _check_output(out, inputs):
-    out = os.fspath(out)
-    for p in inputs:
-        if p and os.path.exists(out) and os.path.exists(p) and os.path.samefile(out, p):
-            raise CLIError(f"output {out!r} is an input file; refusing to overwrite it")
+def _speed_uncertainty(text):
+    """argparse type of --speed-uncertainty: m/s or a percentage; a bad value is a usage error (exit 2)."""
+    try:
+        _speed_sigma(text, 1.0)
+    except CLIError as exc:
+        raise argparse.ArgumentTypeError(str(exc).split(": ", 1)[-1]) from None
+    return text
+
+
+def _byte_size(text):
+    from vibkit.budget import parse_bytes
+
+    try:
+        return parse_bytes(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def _seconds_or_none(text):
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number of seconds, got {text!r}") from None
+    if math.isnan(v) or v < 0:
+        raise argparse.ArgumentTypeError(f"expected a number of seconds >= 0 (0: no limit), got {text!r}")
+    return math.inf if v == 0 else v
+
+
+def _check_output(out, inputs, force=False):
+    """Refuse an unsafe -o before any work (see :mod:`vibkit.safe_output`)."""
+    from vibkit.safe_output import check_output_path
+
+    check_output_path(out, overwrite=force, inputs=[p for p in inputs if p])
 
 
 # ---------------------------------------------------------------------------------------------- commands
@@ -133,12 +162,13 @@ def _cmd_simulate(a):
     import vibkit
     from vibkit.io import write_result
 
-    _check_output(a.output, [a.scene])
+    _check_output(a.output, [a.scene], a.force)
     scene = vibkit.load_scene(a.scene)
     t0 = time.perf_counter()
-    ds = vibkit.simulate(scene, duration=a.duration, progress=sys.stderr.isatty())
+    ds = vibkit.simulate(scene, duration=a.duration, progress=True, max_result_bytes=a.max_result_bytes,
+                         max_wall_time=a.max_wall_time)
     wall = time.perf_counter() - t0
-    path = write_result(ds, a.output)
+    path = write_result(ds, a.output, overwrite=a.force, inputs=[a.scene])
     resid = float(ds["closure_residual"].max()) if "closure_residual" in ds else \
         float(ds.attrs.get("closure_residual_max", float("nan")))
     summary = {"scene": scene.name, "analysis": scene.analysis, "output": os.fspath(path),
@@ -240,7 +270,7 @@ def _cmd_compare(a):
     if not os.path.exists(target):
         raise CLIError(f"{target}: file not found (expected a scene .toml or a result file)")
     comp = compare(rec, target, channel=a.channel, n_harmonics=a.harmonics, band=a.band, duration=a.duration,
-                   progress=sys.stderr.isatty())
+                   progress=True)
     del vibkit
     if a.json:
         d = comp.as_dict()
@@ -267,11 +297,11 @@ def _cmd_compare(a):
 def _cmd_report(a):
     from vibkit.report import write_report
 
-    _check_output(a.output, [a.recording, a.scene])
+    _check_output(a.output, [a.recording, a.scene], a.force)
     sigma = _speed_sigma(a.speed_uncertainty, a.speed) if (a.speed_uncertainty and a.speed) else 0.0
     rep = write_report(a.recording, a.output, scene=a.scene, speed=a.speed, speed_sigma=sigma, channel=a.channel,
                        nominal_pitch=a.nominal_pitch, limits_percent=a.limits, sample_rate=a.sample_rate,
-                       duration=a.duration, band=a.band, progress=sys.stderr.isatty())
+                       duration=a.duration, band=a.band, progress=True, overwrite=a.force)
     if a.json:
         _print_json("report", {"output": rep.path, "pages": [t for t, _ in rep.pages], "summary": rep.summary})
     else:
@@ -642,8 +672,16 @@ def _parser():
 
     s = add("simulate", "simulate a scene and write the result (netCDF4/HDF5)")
     s.add_argument("scene", help="scene file (.toml)")
-    s.add_argument("-o", "--output", required=True, help="result file to write (.nc)")
+    s.add_argument("-o", "--output", required=True, help="result file to write (.nc); a new path unless --force")
+    s.add_argument("--force", "--overwrite", dest="force", action="store_true",
+                   help="replace an existing result file (never an input, a link, a device or a read-only file)")
     s.add_argument("--duration", type=_positive, help="override the scene's duration [s] (kinematics: [m])")
+    s.add_argument("--max-result-bytes", type=_byte_size, metavar="SIZE",
+                   help="refuse runs whose result would be larger, e.g. 500MB (default: the scene's "
+                        "[solver] max_result_bytes, $VIBKIT_MAX_RESULT_BYTES or 2GiB; 0: no limit)")
+    s.add_argument("--max-wall-time", type=_seconds_or_none, metavar="SECONDS",
+                   help="stop a forward integration after this long (default: the scene's [solver] max_wall_time, "
+                        "$VIBKIT_MAX_WALL_TIME or 600 s; 0: no limit)")
     common(s, rec=False)
     s.set_defaults(func=_cmd_simulate)
 
@@ -656,7 +694,8 @@ def _parser():
     s = add("pitch", "link pitch from a recording's link-pass frequency and the chain speed")
     common(s)
     s.add_argument("--speed", type=_positive, required=True, help="chain speed measured on the steps [m/s]")
-    s.add_argument("--speed-uncertainty", help="speed standard deviation, in m/s or in %% (e.g. 0.1%%)")
+    s.add_argument("--speed-uncertainty", type=_speed_uncertainty,
+                   help="speed standard deviation, in m/s or in %% (e.g. 0.1%%)")
     s.add_argument("--nominal-pitch", type=_positive, help="nominal link pitch [m]: gives elongation and verdict")
     s.add_argument("--limits", type=_limits, default=(1.5, 2.0, 3.0),
                    help="elongation limits watch,plan,replace [%%] (default 1.5,2,3)")
@@ -675,9 +714,11 @@ def _parser():
     s = add("report", "write the multi-page PDF diagnostic report of a recording")
     common(s)
     s.add_argument("--scene", help="scene describing the escalator and sensor (simulated and compared)")
-    s.add_argument("-o", "--output", required=True, help="PDF to write")
+    s.add_argument("-o", "--output", required=True, help="PDF to write; a new path unless --force")
+    s.add_argument("--force", "--overwrite", dest="force", action="store_true",
+                   help="replace an existing PDF (never an input, a link, a device or a read-only file)")
     s.add_argument("--speed", type=_positive, help="chain speed [m/s] (default: recording's or scene's)")
-    s.add_argument("--speed-uncertainty", help="speed standard deviation, in m/s or in %%")
+    s.add_argument("--speed-uncertainty", type=_speed_uncertainty, help="speed standard deviation, in m/s or in %%")
     s.add_argument("--nominal-pitch", type=_positive, help="nominal link pitch [m] (default: the scene's)")
     s.add_argument("--limits", type=_limits, default=(1.5, 2.0, 3.0), help="elongation limits [%%]")
     s.add_argument("--band", type=_band, help="link-pass search band LOW:HIGH [Hz]")
@@ -774,21 +815,38 @@ def main(argv=None) -> int:
     argv : list of str, optional
         Arguments (default ``sys.argv[1:]``).
     """
-    from vibkit.integrate import IntegrationError
-    from vibkit.io import RecordingError
-    from vibkit.scene import SceneError
-
+    # parse first: --help and --version import nothing heavy and compile nothing
     args = _parser().parse_args(argv)
+    from vibkit.safe_output import Interrupted, handle_termination
+
     try:
-        return int(args.func(args))
-    except (SceneError, RecordingError, IntegrationError, ValueError, OSError) as exc:
+        with handle_termination():  # SIGTERM runs the same clean-up as Ctrl-C
+            return int(args.func(args))
+    except Interrupted as exc:
+        _msg(f"vibkit {args.command}: interrupted (signal {exc.signum}); nothing was written")
+        return 128 + exc.signum
+    except KeyboardInterrupt:
+        _msg(f"vibkit {args.command}: interrupted; nothing was written")
+        return 130
+    except Exception as exc:
+        if not _is_user_error(exc):
+            raise
         text = " ".join(str(exc).split()) or type(exc).__name__
+        if isinstance(exc, OSError) and getattr(exc, "strerror", None):
+            where = f"{exc.filename}: " if getattr(exc, "filename", None) else ""
+            text = f"{where}{exc.strerror}" + (" (the disk is full; nothing was written)"
+                                              if exc.errno == errno.ENOSPC else "")
         prefix = "\033[31merror\033[0m" if _color() else "error"
         _msg(f"vibkit {args.command}: {prefix}: {text}")
         return 1
-    except KeyboardInterrupt:
-        _msg("vibkit: interrupted")
-        return 130
+
+
+def _is_user_error(exc) -> bool:
+    """A bad input, a failed run or a refused output: reported in one line (exit 1), not a traceback."""
+    if isinstance(exc, (ValueError, OSError, MemoryError)):
+        return True
+    integrate = sys.modules.get("vibkit.integrate")  # only if it was imported can it have raised
+    return integrate is not None and isinstance(exc, integrate.IntegrationError)
 
 
 if __name__ == "__main__":  # pragma: no cover

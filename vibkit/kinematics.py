@@ -4,12 +4,18 @@ from __future__ import annotations
 
 import numpy as np
 
+from .progress import Progress
 from .results import make_dataset
 
 __all__ = ["kinematic_sweep"]
 
 
-def kinematic_sweep(model, start: float, stop: float, step: float, *, rollers=(), outputs=("delta",)):
+#: a compiled sweep longer than this many configurations runs in pieces so that progress can be shown
+PROGRESS_CHUNK = 1_000_000
+
+
+def kinematic_sweep(model, start: float, stop: float, step: float, *, rollers=(), outputs=("delta",),
+                    progress=False):
     """delta (and optionally roller positions) as roller 1 advances from ``start`` to ``stop``.
 
     Parameters
@@ -21,6 +27,9 @@ def kinematic_sweep(model, start: float, stop: float, step: float, *, rollers=()
         1-based roller numbers whose positions are stored (output ``roller_position``).
     outputs : sequence of str
         Names among ``delta``, ``s1``, ``roller_position``, ``closure_residual``.
+    progress : bool
+        Show progress on stderr (see :class:`vibkit.progress.Progress`); a compiled sweep of more
+        than :data:`PROGRESS_CHUNK` configurations then runs in pieces, each warm-started from the last.
 
     Returns
     -------
@@ -39,7 +48,9 @@ def kinematic_sweep(model, start: float, stop: float, step: float, *, rollers=()
         s1 = np.empty(advance.size) if want_s1 else None
         idx = np.asarray(rollers, dtype=int) - 1
         guess = None
+        bar = Progress(advance.size, "kinematic sweep", enabled=progress)
         for j, a in enumerate(advance):
+            bar.update(j)
             conf = chain.configure(a, guess)
             guess = conf.delta
             deltas[j] = conf.delta
@@ -48,8 +59,19 @@ def kinematic_sweep(model, start: float, stop: float, step: float, *, rollers=()
                 pos[j] = conf.position[idx]
             if want_s1:
                 s1[j] = chain.s_deformed(a, conf.delta)[0]
-    else:
+        bar.close()
+    elif not progress or advance.size <= PROGRESS_CHUNK:
         deltas, resid = chain.sweep(advance)
+    else:
+        bar = Progress(advance.size, "kinematic sweep", enabled=True)
+        deltas, resid = np.empty(advance.size), np.empty(advance.size)
+        guess = None
+        for i in range(0, advance.size, PROGRESS_CHUNK):
+            sl = slice(i, min(i + PROGRESS_CHUNK, advance.size))
+            deltas[sl], resid[sl] = chain.sweep(advance[sl], delta_guess=guess)
+            guess = float(deltas[sl.stop - 1])
+            bar.update(sl.stop)
+        bar.close()
     data = {"delta": (("advance",), deltas)}
     if "closure_residual" in outputs:
         data["closure_residual"] = (("advance",), resid)

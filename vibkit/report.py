@@ -13,7 +13,6 @@ from __future__ import annotations
 import datetime as _dt
 import math
 import os
-import tempfile
 import textwrap
 from dataclasses import dataclass, field
 
@@ -69,25 +68,46 @@ def report_date() -> _dt.datetime:
 
 
 class atomic_path:
-    """Context manager yielding a temporary path next to ``path``; on success it replaces ``path``."""
+    """Context manager yielding a temporary path next to ``path``; on success it replaces ``path``.
 
-    def __init__(self, path, suffix=""):
+    A thin wrapper of :func:`vibkit.safe_output.atomic_output` (regular files only, fsync, rename,
+    the temporary file removed on any error or signal).
+    """
+
+    def __init__(self, path, suffix="", *, overwrite=True, inputs=()):
         self.path = os.fspath(path)
         self.suffix = suffix
+        self._cm = None
+        self._kw = {"overwrite": overwrite, "inputs": inputs}
 
     def __enter__(self):
-        d = os.path.dirname(os.path.abspath(self.path))
-        os.makedirs(d, exist_ok=True)
-        fd, self.tmp = tempfile.mkstemp(prefix=".tmp-", suffix=self.suffix, dir=d)
-        os.close(fd)
+        from .safe_output import atomic_output
+
+        self._cm = atomic_output(self.path, **self._kw)
+        self.tmp = self._cm.__enter__()
         return self.tmp
 
     def __exit__(self, exc_type, exc, tb):
+        return self._cm.__exit__(exc_type, exc, tb)
+
+
+class _pdf_in_memory:
+    """Collect a PDF in memory; on success write it to ``path`` atomically (a full disk leaves nothing)."""
+
+    def __init__(self, path, *, overwrite, inputs):
+        self.path, self.overwrite, self.inputs = path, overwrite, inputs
+
+    def __enter__(self):
+        import io
+
+        self.buf = io.BytesIO()
+        return self.buf
+
+    def __exit__(self, exc_type, exc, tb):
         if exc_type is None:
-            os.chmod(self.tmp, 0o644)
-            os.replace(self.tmp, self.path)
-        elif os.path.exists(self.tmp):
-            os.remove(self.tmp)
+            from .safe_output import write_bytes
+
+            write_bytes(self.buf.getbuffer(), self.path, overwrite=self.overwrite, inputs=self.inputs)
         return False
 
 
@@ -286,7 +306,7 @@ def _family_fit(x, fs, band):
 
 def write_report(recording, out_path, *, scene=None, speed=None, speed_sigma=0.0, channel=None,
                  nominal_pitch=None, limits_percent=None, sample_rate=None, duration=None, band=None,
-                 hampel_half_window_s=0.1, hampel_false_alarm_rate=1e-4, progress=False) -> Report:
+                 hampel_half_window_s=0.1, hampel_false_alarm_rate=1e-4, progress=False, overwrite=True) -> Report:
     """Write the PDF diagnostic report of a recording.
 
     Parameters
@@ -316,6 +336,8 @@ def write_report(recording, out_path, *, scene=None, speed=None, speed_sigma=0.0
         Half window of the spike detector [s] (longer than a spike: a knock lasts tens of ms).
     hampel_false_alarm_rate : float
         Per-sample false-alarm probability of the spike detector on Gaussian noise.
+    overwrite : bool
+        Replace an existing regular file ``out_path`` (default True; the CLI passes ``--force``).
 
     Returns
     -------
@@ -346,6 +368,9 @@ def write_report(recording, out_path, *, scene=None, speed=None, speed_sigma=0.0
     for p in inputs:
         if os.path.exists(out) and os.path.samefile(out, p):
             raise ValueError(f"output {out!r} is an input file; refusing to overwrite it")
+    from .safe_output import check_output_path
+
+    check_output_path(out, overwrite=overwrite, inputs=inputs)  # before any work
     limits = tuple(limits_percent) if limits_percent is not None else DEFAULT_LIMITS_PERCENT
     rec = read_recording(recording, sample_rate=sample_rate)
     ch = pick_channel(rec, channel)
@@ -431,7 +456,7 @@ def write_report(recording, out_path, *, scene=None, speed=None, speed_sigma=0.0
             "CreationDate": date, "ModDate": date}
     with matplotlib.rc_context({"pdf.compression": 6, "font.size": 9, "axes.titlesize": 10,
                                 "svg.hashsalt": "vibkit", "path.simplify": True}):
-        with atomic_path(out, ".pdf") as tmp, PdfPages(tmp, metadata=meta) as pdf:
+        with _pdf_in_memory(out, overwrite=overwrite, inputs=inputs) as buf, PdfPages(buf, metadata=meta) as pdf:
 
             def emit(fig, title):
                 pages.append((title, _texts(fig)))

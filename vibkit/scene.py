@@ -33,6 +33,32 @@ __all__ = ["Scene", "SceneError", "load_scene", "parse_scene", "EFFECTS", "OUTPU
 
 ANALYSES = ("kinematics", "inverse", "forward")
 
+#: the integrators of :mod:`vibkit.integrate` (kept equal to ``integrate.METHODS`` by a test; listed
+#: here so that loading a scene does not import the compiled kernels)
+SOLVER_METHODS = ("dopri5", "rk45", "dop853", "bdf", "radau", "lsoda", "cvode-bdf", "cvode-adams")
+
+#: a scene is a small text file; anything larger is not one
+MAX_SCENE_BYTES = 1 << 20
+
+#: plausible ranges [lo, hi] of numbers that a typo can make absurd (the message gives the range)
+RANGES = {
+    "effects.contact.stiffness": (0.0, 1e16, "N/m^exponent (steel about 1e10)"),
+    "effects.contact.exponent": (1.0, 3.0, "(1 linear, 1.5 Hertz)"),
+    "effects.contact.damping": (0.0, 1e3, "s/m"),
+    "effects.motor.kp": (0.0, 1e8, "N m s/rad"),
+    "effects.motor.ki": (0.0, 1e9, "N m/rad"),
+    "effects.motor.speed": (-10.0, 10.0, "m/s"),
+    "effects.motor.torque_limit": (0.0, 1e8, "N m"),
+    "effects.gravity.g": (0.0, 1000.0, "m/s^2"),
+    "effects.tensioner.stiffness": (0.0, 1e12, "N/m"),
+    "effects.tensioner.preload": (0.0, 1e9, "N"),
+    "effects.tensioner.mass": (0.0, 1e6, "kg"),
+    "solver.rtol": (1e-14, 0.1, ""),
+    "solver.atol": (0.0, 1.0, ""),
+    "motion.speed": (-10.0, 10.0, "m/s"),
+    "run.initial_speed": (-10.0, 10.0, "m/s"),
+}
+
 EFFECTS = {
     "gravity": {"enabled": bool, "g": float},
     "contact": {"stiffness": float, "exponent": float, "damping": float},
@@ -66,7 +92,7 @@ SECTIONS = {
     "motion": {"speed": float, "duration": float, "step": float, "start": float},
     "run": {"duration": float, "output_step": float, "start": float, "initial_speed": float, "seed": int},
     "solver": {"method": str, "rtol": float, "atol": float, "max_step": float, "first_step": float,
-               "max_wall_time": float, "events": bool},
+               "max_wall_time": float, "max_result_bytes": (float, str), "events": bool},
     "outputs": {"variables": list, "rollers": list, "step_accelerometer": int},
 }
 
@@ -155,6 +181,8 @@ def _positive(src, where, value):
 def parse_scene(text: str, source: str = "<string>") -> Scene:
     """Validate a scene given as TOML text (see :func:`load_scene`)."""
     src = source
+    if text.startswith("\ufeff"):  # a UTF-8 byte-order mark (Windows editors write one)
+        text = text[1:]
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
@@ -177,6 +205,10 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
     effects = _effects(src, data.get("effects", {}), analysis)
     outputs = _outputs(src, sec["outputs"], analysis, chain)
     _analysis_sections(src, sec, analysis)
+    _validate_passenger_numbers(src, effects.get("passengers"), chain)
+    _check_ranges(src, sec, effects)
+    _check_sprocket_geometry(src, sec["sprocket"], sprocket, chain)
+    _reduce_start(src, sec, analysis, guide)
     return Scene(name=scene_sec.get("name", Path(source).stem), analysis=analysis,
                  description=scene_sec.get("description", ""), guide=guide, chain=chain, sprocket=sprocket,
                  sections={k: sec[k] for k in ("kinematics", "motion", "run", "solver")}, effects=effects,
@@ -378,7 +410,7 @@ def _outputs(src, o, analysis, chain):
                              f"(available: {', '.join(sorted(allowed))})")
     rollers = o.get("rollers", [])
     for r in rollers:
-        if not isinstance(r, int) or not 1 <= r <= chain.n_rollers:
+        if not isinstance(r, int) or isinstance(r, bool) or not 1 <= r <= chain.n_rollers:
             raise SceneError(f"{src}: 'outputs.rollers' entries must be roller numbers 1..{chain.n_rollers}, got {r!r}")
     if any(v.startswith("roller_") for v in variables) and not rollers:
         raise SceneError(f"{src}: roller outputs asked for but 'outputs.rollers' lists no roller")
@@ -405,9 +437,19 @@ def _analysis_sections(src, sec, analysis):
         raise SceneError(f"{src}: 'kinematics.stop' must be greater than 'kinematics.start'")
     if analysis == "inverse" and sec["motion"]["speed"] == 0:
         raise SceneError(f"{src}: 'motion.speed' must be non-zero [m/s]")
-    for key in ("rtol", "atol", "max_step", "first_step"):
+    for key in ("rtol", "atol", "max_step", "first_step", "max_wall_time"):
         if key in sec["solver"]:
             _positive(src, f"solver.{key}", sec["solver"][key])
+    method = sec["solver"].get("method")
+    if method is not None and method.lower() not in SOLVER_METHODS:
+        raise SceneError(f"{src}: 'solver.method' must be one of {', '.join(SOLVER_METHODS)}, got {method!r}")
+    if "max_result_bytes" in sec["solver"]:
+        from .budget import parse_bytes
+
+        try:
+            parse_bytes(sec["solver"]["max_result_bytes"])
+        except ValueError as exc:
+            raise SceneError(f"{src}: 'solver.max_result_bytes': {exc}") from None
 
 
 def load_scene(path) -> Scene:
@@ -428,6 +470,7 @@ def load_scene(path) -> Scene:
         number; the message names the file and the key.
     """
     p = Path(path)
+    _check_scene_file(p)
     try:
         text = p.read_text(encoding="utf-8")
     except FileNotFoundError:
@@ -436,3 +479,91 @@ def load_scene(path) -> Scene:
         raise SceneError(f"{p}: cannot read scene file ({exc})") from None
     return parse_scene(text, str(p))
 
+
+
+def _check_scene_file(p: Path) -> None:
+    """A scene must be a regular file of reasonable size: a FIFO or a device would block or never end."""
+    import stat
+
+    try:
+        st = p.stat()
+    except FileNotFoundError:
+        raise SceneError(f"{p}: no such scene file") from None
+    except OSError as exc:
+        raise SceneError(f"{p}: cannot read scene file ({exc.strerror or exc})") from None
+    if stat.S_ISDIR(st.st_mode):
+        raise SceneError(f"{p}: is a folder, expected a scene file (.toml)")
+    if not stat.S_ISREG(st.st_mode):
+        raise SceneError(f"{p}: is not a regular file (a FIFO, device or socket); expected a scene file (.toml)")
+    if st.st_size > MAX_SCENE_BYTES:
+        raise SceneError(f"{p}: is {st.st_size} bytes; a scene is a small TOML file (at most {MAX_SCENE_BYTES} "
+                         "bytes)")
+
+
+def _validate_passenger_numbers(src, o, chain) -> None:
+    """Passengers' masses finite and positive, steps whole numbers on the chain (1 .. n_rollers // 3)."""
+    if not o:
+        return
+    n_steps = chain.n_rollers // 3
+    for i, m in enumerate(o.get("mass", [])):
+        if isinstance(m, bool) or not isinstance(m, (int, float)) or not math.isfinite(m) or m <= 0:
+            raise SceneError(f"{src}: 'effects.passengers.mass[{i}]' must be a finite positive mass [kg], "
+                             f"got {m!r}")
+    for i, st in enumerate(o.get("step", [])):
+        if isinstance(st, bool) or not isinstance(st, int) or not 1 <= st <= n_steps:
+            raise SceneError(f"{src}: 'effects.passengers.step[{i}]' must be a step number 1..{n_steps} "
+                             f"(the chain has {chain.n_rollers} rollers, 3 per step), got {st!r}")
+
+
+def _check_ranges(src, sec, effects) -> None:
+    values = {}
+    for name, opts in effects.items():
+        for key, v in opts.items():
+            values[f"effects.{name}.{key}"] = v
+    for name in ("solver", "motion", "run"):
+        for key, v in sec[name].items():
+            values[f"{name}.{key}"] = v
+    for key, (lo, hi, unit) in RANGES.items():
+        v = values.get(key)
+        if isinstance(v, (int, float)) and not isinstance(v, bool) and not lo <= v <= hi:
+            raise SceneError(f"{src}: '{key}' = {v!r} is outside the plausible range [{lo:g}, {hi:g}] {unit}".rstrip())
+
+
+def _check_sprocket_geometry(src, given, sprocket, chain) -> None:
+    """The tooth must fit the chain it drives: shorter than a link, narrower than a link, tip <= base."""
+    pitch = chain.link_pitch
+    r = sprocket.pitch_radius(pitch)
+    if sprocket.tooth_height >= min(pitch, r):
+        raise SceneError(f"{src}: 'sprocket.tooth_height' = {sprocket.tooth_height:g} m is not plausible for a "
+                         f"sprocket of pitch radius {r:.4g} m driving links of {pitch:g} m (expected less than "
+                         f"{min(pitch, r):.4g} m)")
+    if sprocket.base_width >= pitch:
+        raise SceneError(f"{src}: 'sprocket.base_width' = {sprocket.base_width:g} m must be less than the link "
+                         f"pitch {pitch:g} m (a tooth sits between two rollers)")
+    if sprocket.tip_width > sprocket.base_width:
+        raise SceneError(f"{src}: 'sprocket.tip_width' = {sprocket.tip_width:g} m must not exceed "
+                         f"'sprocket.base_width' = {sprocket.base_width:g} m (a trapezoidal tooth)")
+
+
+#: starting positions beyond this many guide perimeters are refused (kinematics) [-]
+MAX_START_LOOPS = 100
+
+
+def _reduce_start(src, sec, analysis, guide) -> None:
+    """Bring a start position to within one loop of the guide (the same configuration, full accuracy).
+
+    ``run.start`` and ``motion.start`` are reduced modulo the guide's perimeter; a kinematic sweep's
+    ``start``/``stop`` (its output coordinate) must lie within :data:`MAX_START_LOOPS` perimeters.
+    """
+    perimeter = guide.perimeter
+    for name in ("run", "motion"):
+        if "start" in sec[name]:
+            sec[name]["start"] = math.fmod(sec[name]["start"], perimeter)
+    if analysis == "kinematics":
+        bound = MAX_START_LOOPS * perimeter
+        for key in ("start", "stop"):
+            v = sec["kinematics"].get(key)
+            if v is not None and abs(v) > bound:
+                raise SceneError(f"{src}: 'kinematics.{key}' = {v:g} m is more than {MAX_START_LOOPS} loops of "
+                                 f"the guide ({bound:.6g} m): positions that far lose accuracy; give the advance "
+                                 f"within one loop (perimeter {perimeter:.6g} m)")

@@ -2,13 +2,16 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 from .model import EscalatorModel
 from .scene import Scene, load_scene
 
 __all__ = ["simulate"]
 
 
-def simulate(scene, *, duration: float | None = None, progress: bool = True):
+def simulate(scene, *, duration: float | None = None, progress: bool = True, max_result_bytes=None,
+             max_wall_time=None):
     """Run a scene.
 
     Parameters
@@ -19,18 +22,42 @@ def simulate(scene, *, duration: float | None = None, progress: bool = True):
         Overrides the scene's length: the time span of an inverse or forward run [s], or the range
         of advance of a kinematic sweep [m].
     progress : bool
-        Draw a progress bar on a terminal (never when stderr is not a terminal).
+        Show progress on stderr: a bar on a terminal, else one line every few seconds once the
+        work has lasted more than a few seconds.
+    max_result_bytes : float or str, optional
+        Refuse, before any work, a run whose result arrays would be larger [bytes]; default the
+        scene's ``[solver] max_result_bytes``, else ``$VIBKIT_MAX_RESULT_BYTES``, else 2 GiB
+        (see :mod:`vibkit.budget`).
+    max_wall_time : float, optional
+        Wall-time budget of a forward integration [s]; default the scene's
+        ``[solver] max_wall_time``, else ``$VIBKIT_MAX_WALL_TIME``, else 600 s.
 
     Returns
     -------
     xarray.Dataset
         Kinematics: dimension ``advance`` [m]; inverse and forward dynamics: dimension ``time`` [s].
         Every variable carries ``units`` and ``long_name``; attrs carry the scene text and version.
+
+    Raises
+    ------
+    vibkit.budget.BudgetError
+        The run would exceed its result-size limit (or a step count past reason).
+    vibkit.integrate.IntegrationError
+        The integration failed or ran past its wall-time budget.
     """
     if not isinstance(scene, Scene):
         scene = load_scene(scene)
     if duration is not None and not duration > 0:
         raise ValueError(f"duration must be positive, got {duration!r}")
+    from . import budget
+
+    budget.check_run(scene, duration=duration, limit_bytes=max_result_bytes)
+    if scene.analysis == "forward":
+        wall = budget.max_wall_time(scene, max_wall_time)
+        if scene.section("solver").get("max_wall_time") != wall:
+            sections = dict(scene.sections)
+            sections["solver"] = {**scene.section("solver"), "max_wall_time": wall}
+            scene = dataclasses.replace(scene, sections=sections)
     model = EscalatorModel(scene)
     outputs = scene.outputs["variables"]
     rollers = scene.outputs["rollers"]
@@ -39,7 +66,8 @@ def simulate(scene, *, duration: float | None = None, progress: bool = True):
 
         k = scene.section("kinematics")
         stop = k["stop"] if duration is None else k["start"] + duration
-        return kinematic_sweep(model, k["start"], stop, k["step"], rollers=rollers, outputs=outputs)
+        return kinematic_sweep(model, k["start"], stop, k["step"], rollers=rollers, outputs=outputs,
+                               progress=progress)
     if scene.analysis == "inverse":
         from .inverse import inverse_dynamics
 
@@ -48,5 +76,15 @@ def simulate(scene, *, duration: float | None = None, progress: bool = True):
                                 start=m.get("start", 0.0), effects=scene.effects, outputs=outputs,
                                 rollers=rollers, progress=progress)
     from .forward import forward_dynamics
+    from .integrate import IntegrationError
 
-    return forward_dynamics(model, duration=duration, progress=progress)
+    try:
+        return forward_dynamics(model, duration=duration, progress=progress)
+    except IntegrationError as exc:
+        if "wall-time budget" not in str(exc):
+            raise
+        hint = IntegrationError(f"{scene.source}: {exc}; raise the budget with [solver] max_wall_time, "
+                                "VIBKIT_MAX_WALL_TIME or --max-wall-time (0: none), or check the scene "
+                                "(a stiff contact or a tiny max_step makes the steps small)")
+        hint.t, hint.y = exc.t, exc.y
+        raise hint from None

@@ -9,7 +9,6 @@ into memory and adds the provenance attrs of a recording.
 from __future__ import annotations
 
 import os
-import tempfile
 import warnings
 
 import numpy as np
@@ -42,14 +41,12 @@ def _check_attrs(where: str, attrs: dict) -> None:
                          "strings, numbers or 1-D arrays of them")
 
 
-def _umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
+def write_result(ds: xr.Dataset, path, *, overwrite: bool = True, inputs=()) -> str:
+    """Write a Dataset to netCDF4/HDF5, atomically (see :mod:`vibkit.safe_output`).
 
-
-def write_result(ds: xr.Dataset, path) -> str:
-    """Write a Dataset to netCDF4/HDF5, atomically.
+    The file is built in memory and then written to a temporary file in the target's folder,
+    flushed and renamed, so a reader never sees half a file, a full disk leaves nothing behind and
+    no HDF5 handle is left open on a failed write.
 
     Parameters
     ----------
@@ -57,6 +54,11 @@ def write_result(ds: xr.Dataset, path) -> str:
         A simulation result or a recording; attrs must be strings or numbers.
     path : str or os.PathLike
         Target file (conventionally ``*.nc``). Its folder must exist.
+    overwrite : bool
+        Replace an existing regular file (default True; the CLI passes its ``--force``).
+        Folders, devices, FIFOs and symbolic links are never written through or replaced.
+    inputs : iterable of paths
+        Files that must not be replaced (the command's inputs).
 
     Returns
     -------
@@ -66,27 +68,22 @@ def write_result(ds: xr.Dataset, path) -> str:
     Raises
     ------
     ValueError
-        An attr that netCDF cannot store (named), or a missing folder.
+        An attr that netCDF cannot store (named), a missing folder, or an unsafe target
+        (:class:`vibkit.safe_output.OutputError`).
+    OSError
+        The write failed (disk full ...); nothing is left behind.
     """
+    from ..safe_output import check_output_path, write_bytes
+
     if not isinstance(ds, xr.Dataset):
         raise ValueError(f"ds must be an xarray.Dataset, got {type(ds).__name__}")
     path = os.fspath(path)
-    folder = os.path.dirname(os.path.abspath(path))
-    if not os.path.isdir(folder):
-        raise ValueError(f"cannot write {path}: folder {folder} does not exist")
+    check_output_path(path, overwrite=overwrite, inputs=inputs)
     _check_attrs("the dataset", ds.attrs)
     for name, var in ds.variables.items():
         _check_attrs(f"variable {name!r}", var.attrs)
-    fd, tmp = tempfile.mkstemp(prefix="." + os.path.basename(path) + ".", suffix=".tmp", dir=folder)
-    os.close(fd)
-    try:
-        ds.to_netcdf(tmp, engine="h5netcdf")
-        os.chmod(tmp, 0o666 & ~_umask())
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.remove(tmp)
-        raise
+    data = ds.to_netcdf(engine="h5netcdf")  # in memory: the HDF5 library never holds a file of ours
+    write_bytes(data, path, overwrite=overwrite, inputs=inputs)
     return path
 
 

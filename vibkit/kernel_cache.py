@@ -1,0 +1,140 @@
+"""Where numba keeps vibkit's compiled kernels, so that a read-only install still runs.
+
+vibkit's kernels are compiled with ``cache=True``.  Numba puts the cache in the package's own
+``__pycache__`` when it can write there (a checkout, an editable or a user install), and otherwise
+in a user-wide folder under ``$HOME``; when neither can be written (a package installed by root,
+run by a service account, cron job or container user without a home) numba raises
+``RuntimeError: cannot cache function ...: no locator available`` at import, and every command
+fails.  :func:`configure` runs when ``vibkit`` is imported (before any kernel module) and, only
+when the package folder is not writable, points numba's ``CACHE_DIR`` at the first of
+
+1. ``$NUMBA_CACHE_DIR`` if the user set it (left alone);
+2. ``$XDG_CACHE_HOME/vibkit/numba``, else ``~/.cache/vibkit/numba``;
+3. ``<tempdir>/vibkit-numba-<uid>`` (created 0700 and used only if it is ours and not a link);
+
+that can be created and written.  If none can, kernels are compiled in memory at every run
+(no cache) and one line on stderr says so.  This module never imports numba unless that last
+case needs it, so ``vibkit --version`` stays cheap.
+"""
+
+from __future__ import annotations
+
+import os
+import stat
+import sys
+import tempfile
+
+__all__ = ["configure", "cache_dir"]
+
+_STATE = {"dir": None, "configured": False}
+
+
+def _writable_dir(path: str) -> bool:
+    """True when ``path`` is (or can be made) a folder we can create files in."""
+    try:
+        os.makedirs(path, exist_ok=True)
+        with tempfile.TemporaryFile(dir=path):
+            pass
+    except OSError:
+        return False
+    return True
+
+
+def _package_writable(pkg_dir: str) -> bool:
+    for d in (pkg_dir, os.path.join(pkg_dir, "signal")):
+        cache = os.path.join(d, "__pycache__")
+        target = cache if os.path.isdir(cache) else d
+        if not os.access(target, os.W_OK | os.X_OK):
+            return False
+    return True
+
+
+def _private_temp_dir() -> str | None:
+    uid = os.getuid() if hasattr(os, "getuid") else 0
+    path = os.path.join(tempfile.gettempdir(), f"vibkit-numba-{uid}")
+    try:
+        os.mkdir(path, 0o700)
+        _STATE["created"] = True
+    except FileExistsError:
+        pass
+    except OSError:
+        return None
+    try:
+        st = os.lstat(path)
+    except OSError:
+        return None
+    # another user could have made it first (and planted pickles numba would load): refuse that
+    if not stat.S_ISDIR(st.st_mode) or (hasattr(os, "getuid") and st.st_uid != uid) or st.st_mode & 0o022:
+        return None
+    return path if _writable_dir(path) else None
+
+
+def _candidates():
+    xdg = os.environ.get("XDG_CACHE_HOME", "")
+    if xdg and os.path.isabs(xdg):
+        yield os.path.join(xdg, "vibkit", "numba")
+    home = os.path.expanduser("~")
+    if home and home != "~" and os.path.isabs(home):
+        yield os.path.join(home, ".cache", "vibkit", "numba")
+
+
+def _disable_numba_cache(reason: str) -> None:
+    """Last resort: compile in memory (``cache=True`` becomes a no-op) and say so once."""
+    from numba.core import dispatcher
+    from numba.core.caching import NullCache
+
+    def enable_caching(self):
+        self._cache = NullCache()
+
+    dispatcher.Dispatcher.enable_caching = enable_caching
+    print(f"vibkit: note: {reason}; compiled kernels are not cached (each run compiles them again, "
+          "about a minute); set NUMBA_CACHE_DIR or XDG_CACHE_HOME to a writable folder", file=sys.stderr)
+
+
+def _set_numba_cache_dir(path: str) -> None:
+    os.environ["NUMBA_CACHE_DIR"] = path
+    numba_config = sys.modules.get("numba.core.config")
+    if numba_config is not None:
+        numba_config.CACHE_DIR = path
+
+
+def configure(pkg_dir: str | None = None) -> str | None:
+    """Choose where numba caches vibkit's kernels (see the module docstring); idempotent.
+
+    Parameters
+    ----------
+    pkg_dir : str, optional
+        The vibkit package folder (default: this module's folder).
+
+    Returns
+    -------
+    str or None
+        The cache folder chosen when it is not numba's default, else None.
+    """
+    if _STATE["configured"]:
+        return _STATE["dir"]
+    _STATE["configured"] = True
+    pkg_dir = pkg_dir or os.path.dirname(os.path.abspath(__file__))
+    if os.environ.get("NUMBA_CACHE_DIR") or _package_writable(pkg_dir):
+        return None
+    for path in _candidates():
+        if _writable_dir(path):
+            _STATE["dir"] = path
+            _set_numba_cache_dir(path)
+            return path
+    path = _private_temp_dir()
+    if path is not None:
+        _STATE["dir"] = path
+        _set_numba_cache_dir(path)
+        if _STATE.get("created"):  # said once, when the folder is made
+            print(f"vibkit: note: the package folder and the home cache are not writable; compiled kernels "
+                  f"are cached in {path}", file=sys.stderr)
+        return path
+    _disable_numba_cache(f"no writable folder for the kernel cache (package {pkg_dir}, home, "
+                         f"{tempfile.gettempdir()})")
+    return None
+
+
+def cache_dir() -> str | None:
+    """The folder chosen by :func:`configure` (None: numba's default, next to the sources)."""
+    return _STATE["dir"]
