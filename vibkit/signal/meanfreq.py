@@ -10,10 +10,10 @@ divided by the time, ``(phi(T) - phi(0)) / (2 pi T)``, with ``phi`` the unwrappe
 ridge, then demodulation of each harmonic, combined with weights ``h**2 A_h**2``) and returns the
 total phase over the time.
 
-Uncertainty: the total phase is the difference of two phase estimates, each with variance
-``var(phi) = 4 sigma**2 B / (fs sum_h h**2 A_h**2)`` (``sigma`` the noise standard deviation, ``B`` the
-tracking bandwidth, ``A_h`` the harmonic amplitudes), so
-``sigma_f = sqrt(2 var(phi)) / (2 pi T)``.
+The tracker's filters are not trusted at the ends of the record: the phase there is corrected by a
+least-squares fit of the harmonic family around the tracked phase over the first and last six
+periods (``_end_phase``), whose covariance gives the two end-phase variances, and
+``sigma_f = sqrt(var(phi_0) + var(phi_T)) / (2 pi T)``.
 
 Stationarity: the tracked instantaneous frequency's spread (standard deviation over the record,
 ends excluded) times the record length says how many spectral bins the line wanders over.
@@ -68,6 +68,51 @@ class MeanFrequency:
     noise_spread_hz: float
 
 
+END_PERIODS = 6
+
+
+def _end_phase(x, phase, fs, f0, k, *, start):
+    """Correction of the tracked phase at one end of the record, and its variance. [rad], [rad^2]
+
+    In the first (last) ``END_PERIODS`` periods, ``x`` is fitted by least squares with
+    ``c + sum_h (a_h + a'_h u) cos(h phase) + (b_h + b'_h u) sin(h phase)`` (``u`` the time from the
+    end): the tracked phase is right up to a slowly varying error, whose value at the end is
+    ``-atan2(b_h, a_h) / h`` for every harmonic (combined with weights ``h^2 R_h^2``).  The filters
+    of the tracker are not trusted at the ends; this fit is.
+    """
+    m = int(min(x.size // 3, max(16, round(END_PERIODS * fs / f0))))
+    sl = slice(0, m) if start else slice(x.size - m, x.size)
+    xs, ph = x[sl], phase[sl]
+    u = (np.arange(m) - (0 if start else m - 1)) / fs
+    cols = [np.ones(m)]
+    for h in range(1, k + 1):
+        c, s_ = np.cos(h * ph), np.sin(h * ph)
+        cols += [c, s_, u * c, u * s_]
+    mat = np.column_stack(cols)
+    coef, *_ = np.linalg.lstsq(mat, xs, rcond=None)
+    r = xs - mat @ coef
+    dof = max(m - mat.shape[1], 1)
+    s2 = float(r @ r) / dof
+    try:
+        cov = np.linalg.inv(mat.T @ mat) * s2
+    except np.linalg.LinAlgError:
+        return 0.0, math.inf
+    num, wsum = 0.0, 0.0
+    for h in range(1, k + 1):
+        i = 1 + 4 * (h - 1)
+        a, b = coef[i], coef[i + 1]
+        r2 = a * a + b * b
+        if not r2 > 0:
+            continue
+        var_h = 0.5 * (cov[i, i] + cov[i + 1, i + 1]) / r2 / h**2
+        d = float(np.angle(np.exp(-1j * np.arctan2(b, a)))) / h
+        num += d / var_h
+        wsum += 1.0 / var_h
+    if wsum == 0:
+        return 0.0, math.inf
+    return num / wsum, 1.0 / wsum
+
+
 def mean_link_pass_frequency(x, fs, *, f0, amplitudes, noise_std, n_harmonics=3, max_deviation=0.05,
                              bandwidth_hz=None):
     """Mean link-pass frequency over a record from the total tracked phase.
@@ -106,13 +151,16 @@ def mean_link_pass_frequency(x, fs, *, f0, amplitudes, noise_std, n_harmonics=3,
     tr = track_phase(x, fs, band=band, n_harmonics=kmax, bandwidth_hz=bw, max_deviation=max_deviation)
     n = x.size
     span = (n - 1) / fs
-    dphi = float(tr.phase_rad[-1] - tr.phase_rad[0])
+    k_fit = max(1, min(len(tr.harmonics_used), int((0.45 * fs) // (f0 * (1 + max_deviation)))))
+    d0, v0 = _end_phase(x, tr.phase_rad, fs, f0, k_fit, start=True)
+    d1, v1 = _end_phase(x, tr.phase_rad, fs, f0, k_fit, start=False)
+    dphi = float(tr.phase_rad[-1] + d1 - tr.phase_rad[0] - d0)
     f_mean = dphi / (2.0 * np.pi * span)
+    sigma = math.sqrt(v0 + v1) / (2.0 * np.pi * span)
     a = np.asarray(amplitudes, dtype=float)[: len(tr.harmonics_used)]
     h = np.arange(1, a.size + 1)
     s2 = float(np.sum(h**2 * a**2))
     var_phi = 4.0 * float(noise_std) ** 2 * bw / (fs * s2) if s2 > 0 else math.inf
-    sigma = math.sqrt(2.0 * var_phi) / (2.0 * np.pi * span)
     edge = min(int(fs / bw), n // 4)
     fi = tr.frequency_hz[edge:n - edge] if n - 2 * edge > 8 else tr.frequency_hz
     spread = float(np.std(fi))
