@@ -349,7 +349,7 @@ def detect_link_pass(x, fs, *, band, n_harmonics=5, p_fa=1e-3, f_top=None):
     # scale first: huge or tiny values must not overflow or underflow in the squares
     level = float(np.max(np.abs(segs)))
     if not level > 0:
-        return none("the record is all zeros: no vibration at all")
+        return none("the record is constant (every sample equal, or all zeros): no vibration at all")
     segs = scipy.signal.detrend(segs / level, axis=1, type="linear")
     scale = float(np.max(np.abs(segs)))
     if not scale > 1e-9:
