@@ -12,7 +12,7 @@ total phase over the time.
 
 The tracker's filters are not trusted at the ends of the record: the phase there is corrected by a
 least-squares fit of the harmonic family around the tracked phase over the first and last six
-periods (``_end_phase``), whose covariance gives the two end-phase variances, and
+whole periods (``_end_phase``), whose covariance gives the two end-phase variances, and
 ``sigma_f = sqrt(var(phi_0) + var(phi_T)) / (2 pi T)``.
 
 Stationarity: the tracked instantaneous frequency's spread (standard deviation over the record,
@@ -69,18 +69,44 @@ class MeanFrequency:
 
 
 END_PERIODS = 6
+#: harmonics fitted at the ends at most (whole periods keep the others nearly orthogonal)
+END_HARMONICS = 6
 
 
-def _end_phase(x, phase, fs, f0, k, *, start):
+def _harmonic_phases(xs, ph, k):
+    """Least squares ``c + sum_h a_h cos(h ph) + b_h sin(h ph)``: per-harmonic phase of the signal
+    relative to ``h ph`` [rad], its variance [rad^2] and the amplitude."""
+    cols = [np.ones(xs.size)]
+    for h in range(1, k + 1):
+        cols += [np.cos(h * ph), np.sin(h * ph)]
+    mat = np.column_stack(cols)
+    g = mat.T @ mat
+    try:
+        coef = np.linalg.solve(g, mat.T @ xs)
+        ginv = np.linalg.inv(g)
+    except np.linalg.LinAlgError:
+        return None
+    r = xs - mat @ coef
+    s2 = float(r @ r) / max(xs.size - mat.shape[1], 1)
+    a, b = coef[1::2], coef[2::2]
+    r2 = a * a + b * b
+    var = 0.5 * (np.diag(ginv)[1::2] + np.diag(ginv)[2::2]) * s2 / np.maximum(r2, 1e-300)
+    return -np.arctan2(b, a), var, np.sqrt(r2)
+
+
+def _end_phase(x, phase, fs, k, ref, amp, *, start):
     """Correction of the tracked phase at one end of the record, and its variance. [rad], [rad^2]
 
-    In the first (last) ``END_PERIODS`` periods, ``x`` is fitted by least squares with
+    Over the first (last) ``END_PERIODS`` whole periods of the tracked phase, ``x`` is fitted with
     ``c + sum_h (a_h + a'_h u) cos(h phase) + (b_h + b'_h u) sin(h phase)`` (``u`` the time from the
-    end): the tracked phase is right up to a slowly varying error, whose value at the end is
-    ``-atan2(b_h, a_h) / h`` for every harmonic (combined with weights ``h^2 R_h^2``).  The filters
-    of the tracker are not trusted at the ends; this fit is.
+    end): the tracked phase is right up to a slowly varying error, whose value at the end is, for
+    every harmonic, its phase ``-atan2(b_h, a_h)`` there minus its record-wide value ``ref``, over
+    ``h`` (combined with weights ``h^2 A_h^2``, ``A_h`` the record-wide amplitudes ``amp``).  The tracker's filters are not trusted at the ends;
+    this fit is.
     """
-    m = int(min(x.size // 3, max(16, round(END_PERIODS * fs / f0))))
+    cyc = (phase - phase[0]) if start else (phase[-1] - phase)[::-1]
+    m = int(np.searchsorted(cyc, 2 * np.pi * END_PERIODS))
+    m = max(16, min(m, x.size // 3))
     sl = slice(0, m) if start else slice(x.size - m, x.size)
     xs, ph = x[sl], phase[sl]
     u = (np.arange(m) - (0 if start else m - 1)) / fs
@@ -89,23 +115,24 @@ def _end_phase(x, phase, fs, f0, k, *, start):
         c, s_ = np.cos(h * ph), np.sin(h * ph)
         cols += [c, s_, u * c, u * s_]
     mat = np.column_stack(cols)
-    coef, *_ = np.linalg.lstsq(mat, xs, rcond=None)
-    r = xs - mat @ coef
-    dof = max(m - mat.shape[1], 1)
-    s2 = float(r @ r) / dof
+    g = mat.T @ mat
     try:
-        cov = np.linalg.inv(mat.T @ mat) * s2
+        coef = np.linalg.solve(g, mat.T @ xs)
+        ginv = np.linalg.inv(g)
     except np.linalg.LinAlgError:
         return 0.0, math.inf
+    r = xs - mat @ coef
+    s2 = float(r @ r) / max(m - mat.shape[1], 1)
     num, wsum = 0.0, 0.0
     for h in range(1, k + 1):
         i = 1 + 4 * (h - 1)
         a, b = coef[i], coef[i + 1]
         r2 = a * a + b * b
-        if not r2 > 0:
+        # the record-wide amplitude, not the local one: a harmonic that is only noise gets no weight
+        var_h = 0.5 * (ginv[i, i] + ginv[i + 1, i + 1]) * s2 / max(amp[h - 1] ** 2, 1e-300) / h**2
+        if not (r2 > 0 and np.isfinite(var_h) and var_h > 0):
             continue
-        var_h = 0.5 * (cov[i, i] + cov[i + 1, i + 1]) / r2 / h**2
-        d = float(np.angle(np.exp(-1j * np.arctan2(b, a)))) / h
+        d = float(np.angle(np.exp(1j * (-np.arctan2(b, a) - ref[h - 1])))) / h
         num += d / var_h
         wsum += 1.0 / var_h
     if wsum == 0:
@@ -126,7 +153,8 @@ def mean_link_pass_frequency(x, fs, *, f0, amplitudes, noise_std, n_harmonics=3,
     f0 : float
         Approximate mean fundamental (e.g. from the spectral estimate). [Hz]
     amplitudes : array_like
-        Harmonic amplitudes ``A_1 .. A_K`` (from a harmonic fit), for the sigma. [x]
+        Harmonic amplitudes ``A_1 .. A_K`` (from a harmonic fit); ``K`` (at most ``END_HARMONICS``)
+        harmonics are fitted at the ends. [x]
     noise_std : float
         Noise standard deviation at ``fs``, for the sigma. [x]
     n_harmonics : int, optional
@@ -151,9 +179,12 @@ def mean_link_pass_frequency(x, fs, *, f0, amplitudes, noise_std, n_harmonics=3,
     tr = track_phase(x, fs, band=band, n_harmonics=kmax, bandwidth_hz=bw, max_deviation=max_deviation)
     n = x.size
     span = (n - 1) / fs
-    k_fit = max(1, min(len(tr.harmonics_used), int((0.45 * fs) // (f0 * (1 + max_deviation)))))
-    d0, v0 = _end_phase(x, tr.phase_rad, fs, f0, k_fit, start=True)
-    d1, v1 = _end_phase(x, tr.phase_rad, fs, f0, k_fit, start=False)
+    k_fit = max(1, min(END_HARMONICS, np.size(amplitudes), int((0.45 * fs) // (f0 * (1 + max_deviation)))))
+    glob = _harmonic_phases(x, tr.phase_rad, k_fit)
+    if glob is None:
+        raise ValueError("the harmonic family could not be fitted around the tracked phase")
+    d0, v0 = _end_phase(x, tr.phase_rad, fs, k_fit, glob[0], glob[2], start=True)
+    d1, v1 = _end_phase(x, tr.phase_rad, fs, k_fit, glob[0], glob[2], start=False)
     dphi = float(tr.phase_rad[-1] + d1 - tr.phase_rad[0] - d0)
     f_mean = dphi / (2.0 * np.pi * span)
     sigma = math.sqrt(v0 + v1) / (2.0 * np.pi * span)
