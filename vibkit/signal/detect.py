@@ -35,6 +35,7 @@ Gaussian sigma, or ``1e6`` times when the MAD is zero) are not measurements.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 
@@ -135,6 +136,12 @@ def flag_invalid(x, *, fill_threshold=FILL_THRESHOLD, absurd_factor=ABSURD_FACTO
 # ------------------------------------------------------------------------------------------- the test
 
 
+@functools.lru_cache(maxsize=256)
+def _gamma_median(k):
+    return float(scipy.stats.gamma.median(k, scale=1.0 / k))
+
+
+@functools.lru_cache(maxsize=256)
 def _floor_rel_sd(k, n_window):
     """Relative standard deviation of the running-median floor of a k-segment average."""
     law = scipy.stats.gamma(k, scale=1.0 / k)
@@ -177,6 +184,11 @@ def harmonic_sum_pvalue(t, n_harmonics, k, floor_rel_sd=0.0):
 
 def harmonic_sum_threshold(p_fa, n_harmonics, k, floor_rel_sd=0.0):
     """Threshold ``t`` with :func:`harmonic_sum_pvalue` ``(t) = p_fa``."""
+    return _threshold(float(p_fa), int(n_harmonics), int(k), float(floor_rel_sd))
+
+
+@functools.lru_cache(maxsize=256)
+def _threshold(p_fa, n_harmonics, k, floor_rel_sd):
     import scipy.optimize
 
     lo = 0.0
@@ -318,8 +330,10 @@ def detect_link_pass(x, fs, *, band, n_harmonics=5, p_fa=1e-3, f_top=None):
     verified by Monte Carlo in the tests and in ``benchmarks/bench_pitch.py``.
     """
     fs = check_fs(fs)
-    pieces = [np.asarray(x, dtype=float)] if np.ndim(x) == 1 and not isinstance(x, list) else \
-        [np.asarray(p, dtype=float) for p in x]
+    if isinstance(x, (list, tuple)):
+        pieces = [np.asarray(p, dtype=float) for p in x]
+    else:
+        pieces = [np.asarray(x, dtype=float)]
     pieces = [p for p in pieces if p.size]
     if not pieces or any(p.ndim != 1 for p in pieces):
         raise ValueError("Parameter x must be a 1-D array or a list of 1-D arrays.")
@@ -364,7 +378,7 @@ def detect_link_pass(x, fs, *, band, n_harmonics=5, p_fa=1e-3, f_top=None):
     if not float(np.max(p_all[1:])) > 0:
         return none("the record has no variation")
     half = max(_HALF_MIN, int(round(_HALF_PERIODS * fmin / df)))
-    law_med = float(scipy.stats.gamma.median(k_all, scale=1.0 / k_all))
+    law_med = _gamma_median(k_all)
     floor = scipy.ndimage.median_filter(p_all, size=2 * half + 1, mode="reflect") / law_med
     floor = np.maximum(floor, 1e-12 * float(np.max(p_all)) + np.finfo(float).tiny)
     ia, ib = np.arange(0, k_all, 2), np.arange(1, k_all, 2)
@@ -398,7 +412,7 @@ def detect_link_pass(x, fs, *, band, n_harmonics=5, p_fa=1e-3, f_top=None):
     h_top = max(1, int(f_top // f_best))
     kb = _harmonic_bins(f_best, df, h_top, f.size)
     orders = np.arange(1, kb.size + 1)
-    lim = float(scipy.stats.gamma.isf(p_fa / max(kb.size, 1), k_all, scale=1.0 / k_all)) * (1 + 3 * s_rel)
+    lim = float(scipy.special.gammainccinv(k_all, p_fa / max(kb.size, 1))) / k_all * (1 + 3 * s_rel)
     near = np.maximum(r_all[kb], np.maximum(r_all[np.maximum(kb - 1, 0)], r_all[np.minimum(kb + 1, f.size - 1)]))
     sig = tuple(int(o) for o in orders[near > lim])
     base = dict(p_value=p_value, p_fa=p_fa, statistic=t, threshold=thr, n_segments=k_all, segment_s=seg_s,
