@@ -261,3 +261,14 @@ def test_detects_a_weak_family():
     x = np.cos(2 * np.pi * 3.75 * t) + 0.5 * np.cos(2 * np.pi * 7.5 * t) + np.sqrt(10 * 0.625) * rng.standard_normal(t.size)
     det = detect_link_pass(x, 100.0, band=(2.45, 6.125))
     assert det.detected and det.frequency_hz == pytest.approx(3.75, abs=0.15)
+
+
+def test_false_alarm_rate_of_short_records_is_at_most_the_stated_one():
+    """Records too short for two segments are tested once per piece, Bonferroni over the candidate
+    bin tuples: conservative (rate at most the stated one, within binomial noise)."""
+    rng = np.random.default_rng(77)
+    n_rec = 1000
+    dets = [detect_link_pass(rng.standard_normal(200), 100.0, band=(2.45, 6.125), p_fa=0.05) for _ in range(n_rec)]
+    assert all(d.extra["test"].startswith("bonferroni") for d in dets)
+    _, hi = scipy.stats.binom.interval(0.999, n_rec, 0.05)
+    assert sum(d.detected for d in dets) <= hi

@@ -222,7 +222,8 @@ def _cmd_pitch(a):
         return 0
     print(f"{a.recording}: channel {est.channel}, speed {est.speed_m_s:g} +- {est.speed_sigma_m_s:.2g} m/s")
     print(f"link-pass frequency  {est.fundamental_hz:.5f} +- {est.fundamental_sigma_hz:.2g} Hz "
-          f"({len(est.per_burst)} burst(s), {est.method})")
+          f"({len(est.per_burst)} burst(s))")
+    print(f"method               {est.method}")
     print(f"link pitch           {1000 * est.pitch_m:.3f} +- {1000 * est.pitch_sigma_m:.3f} mm")
     if est.nominal_pitch_m is not None:
         print(f"elongation           {est.elongation_percent:+.2f} +- {est.elongation_sigma_percent:.2f} % "

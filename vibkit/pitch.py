@@ -415,6 +415,8 @@ def _prepared(bursts, band):
     return out, scale
 
 
+#: spectral and mean-phase estimates further apart than this many combined sigmas: not stationary
+DISAGREE_SIGMAS = 5.0
 #: shortest burst for the mean-phase estimate, in periods of the fundamental
 MIN_TRACK_PERIODS = 40
 
@@ -438,13 +440,13 @@ def _choose_method(e, mp):
 
     The mean-phase estimate is used when the frequency wanders: the tracked instantaneous frequency
     spreads over more than half a spectral bin (``spread x T > 0.5``) and more than twice what noise
-    alone gives, or the two estimates disagree by more than three combined sigmas.
+    alone gives, or the two estimates disagree by more than ``DISAGREE_SIGMAS`` combined sigmas.
     """
     if mp is None:
         return "spectral", "record too short to track the phase; spectral estimate"
     dis = abs(mp.frequency_hz - e.fundamental_hz) / math.hypot(mp.sigma_hz, e.fundamental_sigma_hz)
     wander = mp.spread_bins > 0.5 and mp.spread_hz > 2.0 * mp.noise_spread_hz
-    if wander or dis > 3.0:
+    if wander or dis > DISAGREE_SIGMAS:
         why = (f"not stationary: the tracked frequency spreads {mp.spread_hz:.3g} Hz (std), "
                f"{mp.spread_bins:.2g} spectral bins over {mp.span_s:.4g} s (noise alone: {mp.noise_spread_hz:.2g} Hz); "
                f"spectral and mean-phase estimates differ by {dis:.1f} sigma: mean link-pass frequency from the total "

@@ -3,8 +3,8 @@ and the flagging of samples that are not measurements.
 
 Detection (:func:`detect_link_pass`)
 -----------------------------------
-The record (or its bursts) is cut into ``K`` non-overlapping segments of ``max(20 / band[0], 8)``
-seconds (shorter for short bursts), each linearly detrended and Hann-windowed.  Their periodograms
+The record (or its bursts) is cut into ``K >= 2`` non-overlapping segments of ``max(20 / band[0], 8)``
+seconds (shorter for short records and bursts, down to three periods of ``band[0]``), each linearly detrended and Hann-windowed.  Their periodograms
 are averaged and divided by a robust local noise floor (running median over +-``W`` bins, scaled by
 the median-to-mean ratio of the averaged periodogram's law).  Under the null hypothesis (Gaussian
 noise whose spectrum is smooth on the scale of ``W`` bins, no periodic component), a normalised
@@ -65,6 +65,8 @@ ABSURD_FACTOR = 1e3
 _TIE = 1.0
 #: running-median floor: +- max(_HALF_MIN bins, _HALF_PERIODS x band[0]) around each bin
 _HALF_MIN = 10
+#: shortest test segment, in periods of band[0] (the record must hold two)
+MIN_SEGMENT_PERIODS = 3.0
 _HALF_PERIODS = 1.0
 
 
@@ -250,20 +252,29 @@ class LinkPassDetection:
                 "frequency_hz": self.frequency_hz, "p_value": self.p_value, "p_fa": self.p_fa,
                 "statistic": self.statistic, "threshold": self.threshold, "n_segments": self.n_segments,
                 "segment_s": self.segment_s, "n_harmonics": self.n_harmonics,
-                "significant_orders": list(self.significant_orders)}
+                "significant_orders": list(self.significant_orders), **self.extra}
 
 
 def _segments(pieces, fs, fmin):
-    """Cut pieces into equal non-overlapping segments: (K, nseg) array, or None when too short."""
+    """Cut pieces into equal non-overlapping segments.
+
+    Returns ``(segs, nseg, split)``: a (K, nseg) array (None when too short) and whether there are
+    at least two segments of ``MIN_SEGMENT_PERIODS`` for the split-half test (else one segment per
+    piece of the longest piece's length, for the Bonferroni test).
+    """
     target = int(round(fs * max(20.0 / fmin, 8.0)))
     lens = sorted((p.size for p in pieces), reverse=True)
+    shortest = max(16, int(math.ceil(MIN_SEGMENT_PERIODS * fs / fmin)))
     nseg = target
     if sum(n // nseg for n in lens) < 2:
         nseg = min(target, max(lens[0] // 2, lens[1] if len(lens) > 1 else 0))
-    if nseg < 3.0 * fs / fmin or nseg < 16:
-        return None, nseg
+    split = nseg >= shortest
+    if not split:
+        nseg = lens[0]
+        if nseg < shortest:
+            return None, nseg, False
     rows = [p[i * nseg:(i + 1) * nseg] for p in pieces for i in range(p.size // nseg)]
-    return np.array(rows, dtype=float), nseg
+    return np.array(rows, dtype=float), nseg, split
 
 
 def _search(r, f, df, fmin, fmax, f_top):
@@ -322,7 +333,7 @@ def detect_link_pass(x, fs, *, band, n_harmonics=5, p_fa=1e-3, f_top=None):
     Raises
     ------
     ValueError
-        Bad arguments, or a record too short to hold two segments of three periods of ``band[0]``.
+        Bad arguments, or a record shorter than three periods of ``band[0]``.
 
     Notes
     -----
@@ -347,12 +358,12 @@ def detect_link_pass(x, fs, *, band, n_harmonics=5, p_fa=1e-3, f_top=None):
     p_fa = float(p_fa)
     f_top = min(10.0 * fmax, 0.45 * fs) if f_top is None else float(f_top)
     f_top = max(f_top, fmax)
-    segs, nseg = _segments(pieces, fs, fmin)
+    segs, nseg, split = _segments(pieces, fs, fmin)
     if segs is None:
         longest = max(p.size for p in pieces) / fs
         raise ValueError(f"the record is too short to test for a link-pass family down to {fmin:.4g} Hz: two "
-                         f"segments of three periods ({6.0 / fmin:.3g} s) are needed, the longest piece has "
-                         f"{longest:.3g} s")
+                         f"segments of {MIN_SEGMENT_PERIODS:g} periods ({2 * MIN_SEGMENT_PERIODS / fmin:.3g} s) are "
+                         f"needed, the longest piece has {longest:.3g} s")
     k_all = segs.shape[0]
     seg_s = nseg / fs
 
@@ -385,7 +396,24 @@ def detect_link_pass(x, fs, *, band, n_harmonics=5, p_fa=1e-3, f_top=None):
     s_rel = _floor_rel_sd(k_all, 2 * half + 1)
     n_h = max(1, min(int(n_harmonics), int(f_top // fmax)))
     tests = []
-    for search_idx, test_idx in ((ia, ib), (ib, ia)):
+    if not split:
+        # one segment per piece: no independent half to test on.  Bonferroni over every distinct
+        # tuple of harmonic bins that a fundamental in the band can use (few: the bins are wide).
+        r = p_all / floor
+        h_top = n_h
+        cands = np.arange(fmin, fmax + df / (4 * h_top), df / (2.0 * h_top))
+        kk = np.rint(np.outer(cands, np.arange(1, h_top + 1)) / df).astype(int)
+        kk = kk[np.all((kk >= 1) & (kk < f.size - 1), axis=1)]
+        if kk.size:
+            tuples = np.unique(kk, axis=0)
+            sums = r[tuples].sum(axis=1)
+            i = int(np.argmax(sums))
+            m_tests = tuples.shape[0]
+            t = float(sums[i])
+            pv = min(1.0, m_tests * float(harmonic_sum_pvalue(t, h_top, k_all, s_rel))) / 2.0
+            thr = harmonic_sum_threshold(p_fa / m_tests, h_top, k_all, s_rel)
+            tests.append((pv, t, thr, float(tuples[i, 0] * df), h_top))
+    for search_idx, test_idx in ((ia, ib), (ib, ia)) if split else ():
         r_s = pw[search_idx].mean(axis=0) / floor
         r_t = pw[test_idx].mean(axis=0) / floor
         fc, _ = _search(r_s, f, df, fmin, fmax, f_top)
@@ -416,7 +444,8 @@ def detect_link_pass(x, fs, *, band, n_harmonics=5, p_fa=1e-3, f_top=None):
     near = np.maximum(r_all[kb], np.maximum(r_all[np.maximum(kb - 1, 0)], r_all[np.minimum(kb + 1, f.size - 1)]))
     sig = tuple(int(o) for o in orders[near > lim])
     base = dict(p_value=p_value, p_fa=p_fa, statistic=t, threshold=thr, n_segments=k_all, segment_s=seg_s,
-                n_harmonics=hh, significant_orders=sig)
+                n_harmonics=hh, significant_orders=sig,
+                extra={"test": "split-half" if split else "bonferroni (one segment per piece)"})
     if not detected:
         return LinkPassDetection(False, "no link-pass found",
                                  f"no harmonic family in {fmin:.4g}-{fmax:.4g} Hz: harmonic sum {t:.3g} under the "
