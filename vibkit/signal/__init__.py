@@ -6,6 +6,8 @@ Functions follow scipy.signal conventions (array, ``fs`` [Hz], keyword-only opti
 numpy, scipy, xarray and numba only -- never the simulator.
 """
 
+from .detect import InvalidSamples, LinkPassDetection, detect_link_pass, flag_invalid
+from .meanfreq import MeanFrequency, mean_link_pass_frequency
 from .compare import HarmonicComparison, SpectrumComparison, common_spectrograms, compare_spectra
 from .estimate import FrequencyEstimate, crb_harmonic, crb_single_tone, harmonic_ls, interpolated_dft
 from .hampel import (
@@ -42,6 +44,12 @@ from .xr import (
 )
 
 __all__ = [
+    "InvalidSamples",
+    "LinkPassDetection",
+    "MeanFrequency",
+    "detect_link_pass",
+    "flag_invalid",
+    "mean_link_pass_frequency",
     "AngleSignal",
     "CombinedEstimate",
     "FrequencyEstimate",
