@@ -430,7 +430,7 @@ def _burst_mean_phase(b, e):
         return None
     try:
         return mean_link_pass_frequency(b.x, b.fs, f0=f0, amplitudes=[h.amplitude for h in e.harmonics],
-                                        noise_std=e.noise_std, n_harmonics=min(3, len(e.harmonics)))
+                                        n_harmonics=min(3, len(e.harmonics)))
     except ValueError:
         return None
 

@@ -55,7 +55,8 @@ class MeanFrequency:
     bandwidth_hz : float
         Tracking bandwidth. [Hz]
     noise_spread_hz : float
-        The spread that noise alone would give (no wander). [Hz]
+        The spread that noise alone would give (no wander), from the noise around the tracked
+        family. [Hz]
     """
 
     frequency_hz: float
@@ -91,7 +92,7 @@ def _harmonic_phases(xs, ph, k):
     a, b = coef[1::2], coef[2::2]
     r2 = a * a + b * b
     var = 0.5 * (np.diag(ginv)[1::2] + np.diag(ginv)[2::2]) * s2 / np.maximum(r2, 1e-300)
-    return -np.arctan2(b, a), var, np.sqrt(r2)
+    return -np.arctan2(b, a), var, np.sqrt(r2), s2
 
 
 def _end_phase(x, phase, fs, k, ref, amp, *, start):
@@ -140,7 +141,7 @@ def _end_phase(x, phase, fs, k, ref, amp, *, start):
     return num / wsum, 1.0 / wsum
 
 
-def mean_link_pass_frequency(x, fs, *, f0, amplitudes, noise_std, n_harmonics=3, max_deviation=0.05,
+def mean_link_pass_frequency(x, fs, *, f0, amplitudes=None, n_harmonics=3, max_deviation=0.05,
                              bandwidth_hz=None):
     """Mean link-pass frequency over a record from the total tracked phase.
 
@@ -152,11 +153,9 @@ def mean_link_pass_frequency(x, fs, *, f0, amplitudes, noise_std, n_harmonics=3,
         Sampling frequency. [Hz]  Decimate long, fast records first (only the harmonics matter).
     f0 : float
         Approximate mean fundamental (e.g. from the spectral estimate). [Hz]
-    amplitudes : array_like
-        Harmonic amplitudes ``A_1 .. A_K`` (from a harmonic fit); ``K`` (at most ``END_HARMONICS``)
-        harmonics are fitted at the ends. [x]
-    noise_std : float
-        Noise standard deviation at ``fs``, for the sigma. [x]
+    amplitudes : array_like, optional
+        Harmonic amplitudes ``A_1 .. A_K`` of a spectral fit: only their number ``K`` is used, as the
+        number of harmonics fitted (at most ``END_HARMONICS``). [x]
     n_harmonics : int, optional
         Harmonics combined in the phase.
     max_deviation : float, optional
@@ -179,7 +178,8 @@ def mean_link_pass_frequency(x, fs, *, f0, amplitudes, noise_std, n_harmonics=3,
     tr = track_phase(x, fs, band=band, n_harmonics=kmax, bandwidth_hz=bw, max_deviation=max_deviation)
     n = x.size
     span = (n - 1) / fs
-    k_fit = max(1, min(END_HARMONICS, np.size(amplitudes), int((0.45 * fs) // (f0 * (1 + max_deviation)))))
+    n_amp = END_HARMONICS if amplitudes is None else np.size(amplitudes)
+    k_fit = max(1, min(END_HARMONICS, n_amp, int((0.45 * fs) // (f0 * (1 + max_deviation)))))
     glob = _harmonic_phases(x, tr.phase_rad, k_fit)
     if glob is None:
         raise ValueError("the harmonic family could not be fitted around the tracked phase")
@@ -188,10 +188,11 @@ def mean_link_pass_frequency(x, fs, *, f0, amplitudes, noise_std, n_harmonics=3,
     dphi = float(tr.phase_rad[-1] + d1 - tr.phase_rad[0] - d0)
     f_mean = dphi / (2.0 * np.pi * span)
     sigma = math.sqrt(v0 + v1) / (2.0 * np.pi * span)
-    a = np.asarray(amplitudes, dtype=float)[: len(tr.harmonics_used)]
+    # noise around the *tracked* family (a fixed-frequency fit's residual holds the wander itself)
+    a, noise_var = glob[2], glob[3]
     h = np.arange(1, a.size + 1)
     s2 = float(np.sum(h**2 * a**2))
-    var_phi = 4.0 * float(noise_std) ** 2 * bw / (fs * s2) if s2 > 0 else math.inf
+    var_phi = 4.0 * noise_var * bw / (fs * s2) if s2 > 0 else math.inf
     edge = min(int(fs / bw), n // 4)
     fi = tr.frequency_hz[edge:n - edge] if n - 2 * edge > 8 else tr.frequency_hz
     spread = float(np.std(fi))
