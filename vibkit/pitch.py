@@ -177,14 +177,11 @@ def _split_at_gaps(idx, bad, t, max_gap_s):
     b = bad[idx]
     if not b.any():
         return [idx]
-    pieces, start, i, n = [], 0, 0, idx.size
-    while i < n:
-        if not b[i]:
-            i += 1
-            continue
-        j = i
-        while j < n and b[j]:
-            j += 1
+    n = idx.size
+    edges = np.diff(np.concatenate(([0], b.view(np.int8), [0])))
+    starts, stops = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)  # runs b[i:j]
+    pieces, start = [], 0
+    for i, j in zip(starts, stops):
         t_lo = t[idx[i - 1]] if i > 0 else t[idx[i]]
         t_hi = t[idx[j]] if j < n else t[idx[j - 1]]
         if t_hi - t_lo > max_gap_s or i == 0 or j == n:
@@ -192,7 +189,6 @@ def _split_at_gaps(idx, bad, t, max_gap_s):
             if i > start:
                 pieces.append(idx[start:i])
             start = j
-        i = j
     if start < n:
         pieces.append(idx[start:])
     return pieces
