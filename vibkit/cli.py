@@ -106,6 +106,16 @@ def _positive(text):
     return v
 
 
+def _teeth(text):
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number of sprocket teeth, got {text!r}") from None
+    if v < 3:
+        raise argparse.ArgumentTypeError(f"a sprocket has at least 3 teeth, got {text!r}")
+    return v
+
+
 def _speed_sigma(text, speed):
     t = text.strip()
     try:
@@ -208,9 +218,14 @@ def _cmd_spectrum(a):
     band = a.band or (2.5, 6.0)
     est = estimate_pitch(rec, speed=1.0, channel=ch, band=band, n_harmonics=a.harmonics)
     units = str(rec[ch].attrs.get("units", "1"))
+    if not est.detected:
+        return _not_found("spectrum", a, est, {"file": a.recording, "channel": ch, "units": units,
+                                               "band_hz": list(band)})
     peaks = [{"order": h["order"], "frequency_hz": h["frequency_hz"], "amplitude": h["amplitude"],
               "units": units, "detected": h["detected"]} for h in est.harmonics]
-    payload = {"file": a.recording, "channel": ch, "units": units, "band_hz": list(band),
+    payload = {"status": est.status, "file": a.recording, "channel": ch, "units": units, "band_hz": list(band),
+               "method": est.method, "method_reason": est.method_reason, "detection": est.detection,
+               "invalid_samples": est.invalid_samples,
                "fundamental_hz": est.fundamental_hz, "fundamental_sigma_hz": est.fundamental_sigma_hz,
                "snr_db": est.snr_db, "peaks": peaks, "warnings": est.warnings}
     if a.json:
@@ -233,6 +248,8 @@ def _cmd_pitch(a):
     sigma = _speed_sigma(a.speed_uncertainty, a.speed) if a.speed_uncertainty else 0.0
     est = estimate_pitch(rec, speed=a.speed, speed_sigma=sigma, channel=a.channel, band=a.band,
                          nominal_pitch=a.nominal_pitch, limits_percent=a.limits, teeth=a.teeth)
+    if not est.detected:
+        return _not_found("pitch", a, est, {"file": a.recording})
     if a.json:
         d = est.as_dict()
         d["file"] = a.recording
@@ -241,6 +258,7 @@ def _cmd_pitch(a):
     print(f"{a.recording}: channel {est.channel}, speed {est.speed_m_s:g} +- {est.speed_sigma_m_s:.2g} m/s")
     print(f"link-pass frequency  {est.fundamental_hz:.5f} +- {est.fundamental_sigma_hz:.2g} Hz "
           f"({len(est.per_burst)} burst(s))")
+    print(f"method               {est.method}")
     print(f"link pitch           {1000 * est.pitch_m:.3f} +- {1000 * est.pitch_sigma_m:.3f} mm")
     if est.nominal_pitch_m is not None:
         print(f"elongation           {est.elongation_percent:+.2f} +- {est.elongation_sigma_percent:.2f} % "
@@ -258,7 +276,23 @@ def _cmd_pitch(a):
         _msg(f"warning: {w}")
     for n in est.notes:
         _msg(f"note: {n}")
+    _msg(f"note: method {est.method}: {est.method_reason}")
     return 0
+
+
+def _not_found(cmd, a, est, extra):
+    """No link-pass family in the band: say so (JSON with the status, no number), exit 1."""
+    if a.json:
+        d = est.as_dict()
+        d.update(extra)
+        _print_json(cmd, d)
+    else:
+        print(f"{a.recording}: channel {est.channel}: no link-pass found")
+    band = est.band_hz
+    _msg(f"vibkit {cmd}: no link-pass found in {band[0]:.4g}-{band[1]:.4g} Hz: {est.detection.get('reason', '')}")
+    for w in est.warnings[1:]:
+        _msg(f"warning: {w}")
+    return 1
 
 
 def _cmd_compare(a):
@@ -700,7 +734,7 @@ def _parser():
     s.add_argument("--limits", type=_limits, default=(1.5, 2.0, 3.0),
                    help="elongation limits watch,plan,replace [%%] (default 1.5,2,3)")
     s.add_argument("--band", type=_band, help="search band LOW:HIGH [Hz] (default speed / 80-200 mm)")
-    s.add_argument("--teeth", type=int, default=28, help="sprocket teeth, for the shaft hypothesis (default 28)")
+    s.add_argument("--teeth", type=_teeth, default=28, help="sprocket teeth, for the shaft hypothesis (default 28)")
     s.set_defaults(func=_cmd_pitch)
 
     s = add("compare", "compare a recording with a scene (simulated) or a result file, harmonic by harmonic")

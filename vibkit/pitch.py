@@ -22,6 +22,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .signal.detect import FILL_THRESHOLD, flag_invalid
+
 __all__ = [
     "CATALOGUE_PITCHES_M",
     "DEFAULT_LIMITS_PERCENT",
@@ -45,6 +47,13 @@ DEFAULT_PITCH_RANGE_M = (0.08, 0.2)
 STEP_LENGTH_M = 0.4
 #: jitter (max |dt - mean dt| over mean dt) above which a burst is resampled to a uniform grid
 JITTER_RESAMPLE = 0.01
+#: longest run of invalid samples interpolated; longer runs split the burst [s]
+MAX_GAP_S = 0.1
+#: false-alarm probability of the link-pass detection test
+DEFAULT_P_FA = 1e-3
+#: status strings
+STATUS_OK = "ok"
+STATUS_NOT_FOUND = "no link-pass found"
 
 
 @dataclass(frozen=True)
@@ -62,6 +71,9 @@ class Burst:
         Samples. [channel units]
     resampled : bool
         True when the time stamps were irregular and the burst was resampled linearly.
+    invalid : dict
+        Invalid samples found in this burst's span and repaired by interpolation (counts by kind:
+        ``non_finite``, ``fill_value``, ``absurd``, ``total``); see :func:`uniform_bursts`.
     """
 
     segment: int
@@ -69,6 +81,7 @@ class Burst:
     fs: float
     x: np.ndarray
     resampled: bool
+    invalid: dict = field(default_factory=dict)
 
 
 def pick_channel(recording, channel=None) -> str:
@@ -85,7 +98,7 @@ def pick_channel(recording, channel=None) -> str:
     return resolve_channel(recording, channel)
 
 
-def uniform_bursts(recording, channel, *, min_samples=16):
+def uniform_bursts(recording, channel, *, min_samples=16, max_gap_s=None):
     """Split a recording's channel into bursts, each uniformly sampled.
 
     A burst whose time steps depart from their mean by more than 1 % (phone clocks, loggers with
@@ -100,11 +113,17 @@ def uniform_bursts(recording, channel, *, min_samples=16):
         Data variable along ``time``.
     min_samples : int
         Bursts shorter than this are dropped.
+    max_gap_s : float, optional
+        Invalid samples (:func:`vibkit.signal.detect.flag_invalid`: non-finite, fill values
+        ``|x| >= 1e30``, absurd values) are replaced by linear interpolation when they run over at
+        most this time; a longer run, or one at an end of a burst, is cut out and splits the burst
+        (never bridged). [s]  Default :data:`MAX_GAP_S`.
 
     Returns
     -------
     list of Burst
     """
+    max_gap_s = MAX_GAP_S if max_gap_s is None else float(max_gap_s)
     da = recording[channel]
     t = np.asarray(recording["time"].values, dtype=float)
     x = np.asarray(da.values, dtype=float)
@@ -113,26 +132,61 @@ def uniform_bursts(recording, channel, *, min_samples=16):
     else:
         seg = np.zeros(t.size, dtype=int)
     out = []
+    bad_all = flag_invalid(x) if x.size else None
     for s in np.unique(seg):
         idx = np.flatnonzero(seg == s)
         if idx.size < min_samples:
             continue
-        ts, xs = t[idx], x[idx]
-        ok = np.isfinite(xs)
-        if not ok.all():
-            xs = np.interp(ts, ts[ok], xs[ok]) if ok.sum() >= 2 else xs
-        span = ts[-1] - ts[0]
-        if not span > 0:
-            continue
-        dt = span / (ts.size - 1)
-        jitter = float(np.max(np.abs(np.diff(ts) - dt)) / dt)
-        if jitter > JITTER_RESAMPLE:
-            grid = ts[0] + dt * np.arange(ts.size)
-            xs = np.interp(grid, ts, xs)
-        out.append(Burst(int(s), float(ts[0]), 1.0 / dt, xs, jitter > JITTER_RESAMPLE))
+        for piece in _split_at_gaps(idx, bad_all.mask, t, max_gap_s):
+            ts, xs = t[piece], x[piece].copy()
+            bad = bad_all.mask[piece]
+            if bad.all() or piece.size < min_samples:
+                continue
+            counts = {}
+            if bad.any():
+                counts = {"non_finite": int(np.sum(bad & ~np.isfinite(xs))),
+                          "fill_value": int(np.sum(bad & np.isfinite(xs) & (np.abs(xs) >= FILL_THRESHOLD))),
+                          "total": int(bad.sum())}
+                counts["absurd"] = counts["total"] - counts["non_finite"] - counts["fill_value"]
+                ok = ~bad
+                xs[bad] = np.interp(ts[bad], ts[ok], xs[ok])
+            span = ts[-1] - ts[0]
+            if not span > 0:
+                continue
+            dt = span / (ts.size - 1)
+            jitter = float(np.max(np.abs(np.diff(ts) - dt)) / dt)
+            if jitter > JITTER_RESAMPLE:
+                grid = ts[0] + dt * np.arange(ts.size)
+                xs = np.interp(grid, ts, xs)
+            out.append(Burst(int(s), float(ts[0]), 1.0 / dt, xs, jitter > JITTER_RESAMPLE, counts))
     if not out:
-        raise ValueError(f"channel {channel!r}: no burst with at least {min_samples} samples")
+        if bad_all is not None and bad_all.count == x.size:
+            raise ValueError(f"channel {channel!r}: every sample is invalid ({bad_all.non_finite} non-finite, "
+                             f"{bad_all.fill_value} fill values |x| >= {FILL_THRESHOLD:g}, {bad_all.absurd} absurd)")
+        raise ValueError(f"channel {channel!r}: no burst with at least {min_samples} valid samples")
     return out
+
+
+def _split_at_gaps(idx, bad, t, max_gap_s):
+    """Indices ``idx`` cut where invalid samples run longer than ``max_gap_s`` (the run dropped)."""
+    b = bad[idx]
+    if not b.any():
+        return [idx]
+    n = idx.size
+    edges = np.diff(np.concatenate(([0], b.view(np.int8), [0])))
+    starts, stops = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)  # runs b[i:j]
+    pieces, start = [], 0
+    for i, j in zip(starts, stops):
+        t_lo = t[idx[i - 1]] if i > 0 else t[idx[i]]
+        t_hi = t[idx[j]] if j < n else t[idx[j - 1]]
+        if t_hi - t_lo > max_gap_s or i == 0 or j == n:
+            # a long gap, or invalid samples at an end (nothing to interpolate towards): cut them out
+            if i > start:
+                pieces.append(idx[start:i])
+            start = j
+    if start < n:
+        pieces.append(idx[start:])
+    return pieces
 
 
 @dataclass(frozen=True)
@@ -169,7 +223,13 @@ class Hypothesis:
 
 @dataclass(frozen=True)
 class PitchEstimate:
-    """Result of :func:`estimate_pitch` (all SI; see :meth:`as_dict` for the JSON form)."""
+    """Result of :func:`estimate_pitch` (all SI; see :meth:`as_dict` for the JSON form).
+
+    ``detected`` / ``status`` say whether a link-pass family was found at all (``"ok"`` or
+    ``"no link-pass found"``; then every frequency and pitch field is NaN).  ``method`` is
+    ``"spectral"`` (harmonic least squares, stationary record) or ``"mean-phase"`` (total tracked phase
+    over the time, when the frequency wanders), with ``method_reason``.
+    """
 
     channel: str
     speed_m_s: float
@@ -192,10 +252,28 @@ class PitchEstimate:
     snr_db: float = float("nan")
     chi2_per_dof: float = float("nan")
     extra: dict = field(default_factory=dict)
+    detected: bool = True
+    status: str = STATUS_OK
+    detection: dict = field(default_factory=dict)
+    method: str = "spectral"
+    method_reason: str = ""
+    invalid_samples: dict = field(default_factory=dict)
 
     def as_dict(self) -> dict:
-        """Plain JSON-ready dict (keys carry units)."""
+        """Plain JSON-ready dict (keys carry units).
+
+        Without a detected link-pass family (``status == "no link-pass found"``) the dict has no
+        frequency, pitch or elongation keys at all: there is no number to report.
+        """
+        head = {"status": self.status, "detected": self.detected, "detection": dict(self.detection),
+                "invalid_samples": dict(self.invalid_samples)}
+        if not self.detected:
+            return {"channel": self.channel, **head, "speed_m_s": self.speed_m_s, "band_hz": list(self.band_hz),
+                    "warnings": list(self.warnings), "notes": list(self.notes)}
         d = {
+            **head,
+            "method": self.method,
+            "method_reason": self.method_reason,
             "channel": self.channel,
             "speed_m_s": self.speed_m_s,
             "speed_sigma_m_s": self.speed_sigma_m_s,
@@ -304,9 +382,75 @@ def _hypotheses(bursts, f0, speed, teeth, pitch_range):
     return rows
 
 
+def _dropped_samples(recording, name, bursts):
+    """Samples of the channel not in any burst because they were invalid and cut out."""
+    n_total = int(np.asarray(recording[name].values).size)
+    mask = flag_invalid(np.asarray(recording[name].values, dtype=float)).mask
+    interpolated = sum(b.invalid.get("total", 0) for b in bursts)
+    return max(0, int(mask.sum()) - interpolated) if n_total else 0
+
+
+def _prepared(bursts, band):
+    """Bursts scaled to unit size (no overflow or underflow in squares) and decimated to what the
+    harmonics need (``10 band[1]`` kept); returns ``(bursts, scale)`` with ``x_original = scale x``."""
+    from .signal._checks import decimate_for_band
+
+    scale = max(float(np.max(np.abs(b.x - np.median(b.x)))) for b in bursts)
+    if not (scale > 0 and math.isfinite(scale)):
+        scale = 1.0
+    out = []
+    for b in bursts:
+        x = (b.x - np.median(b.x)) / scale
+        x, fs, _q = decimate_for_band(x, b.fs, 10.0 * band[1], oversample=2.5)
+        out.append(Burst(b.segment, b.t0, fs, x, b.resampled, b.invalid))
+    return out, scale
+
+
+#: spectral and mean-phase estimates further apart than this many combined sigmas: not stationary
+DISAGREE_SIGMAS = 5.0
+#: shortest burst for the mean-phase estimate, in periods of the fundamental
+MIN_TRACK_PERIODS = 40
+
+
+def _burst_mean_phase(b, e):
+    """Mean-phase estimate of one burst (None when too short or when tracking fails)."""
+    from .signal.meanfreq import mean_link_pass_frequency
+
+    f0 = e.fundamental_hz
+    if b.x.size / b.fs * f0 < MIN_TRACK_PERIODS:
+        return None
+    try:
+        return mean_link_pass_frequency(b.x, b.fs, f0=f0, amplitudes=[h.amplitude for h in e.harmonics],
+                                        n_harmonics=min(3, len(e.harmonics)))
+    except ValueError:
+        return None
+
+
+def _choose_method(e, mp):
+    """``("spectral" | "mean-phase", why)`` for one burst.
+
+    The mean-phase estimate is used when the frequency wanders: the tracked instantaneous frequency
+    spreads over more than half a spectral bin (``spread x T > 0.5``) and more than twice what noise
+    alone gives, or the two estimates disagree by more than ``DISAGREE_SIGMAS`` combined sigmas.
+    """
+    if mp is None:
+        return "spectral", "record too short to track the phase; spectral estimate"
+    dis = abs(mp.frequency_hz - e.fundamental_hz) / math.hypot(mp.sigma_hz, e.fundamental_sigma_hz)
+    wander = mp.spread_bins > 0.5 and mp.spread_hz > 2.0 * mp.noise_spread_hz
+    if wander or dis > DISAGREE_SIGMAS:
+        why = (f"not stationary: the tracked frequency spreads {mp.spread_hz:.3g} Hz (std), "
+               f"{mp.spread_bins:.2g} spectral bins over {mp.span_s:.4g} s (noise alone: {mp.noise_spread_hz:.2g} Hz); "
+               f"spectral and mean-phase estimates differ by {dis:.1f} sigma: mean link-pass frequency from the total "
+               f"tracked phase ({mp.cycles:.1f} link passes)")
+        return "mean-phase", why
+    return "spectral", (f"stationary: the tracked frequency spreads {mp.spread_bins:.2g} spectral bins over "
+                        f"{mp.span_s:.4g} s (noise alone: {mp.noise_spread_hz:.2g} Hz) and agrees with the spectral "
+                        f"estimate ({dis:.1f} sigma): harmonic least squares (Cramer-Rao sigma)")
+
+
 def estimate_pitch(recording, *, speed, speed_sigma=0.0, channel=None, band=None, nominal_pitch=None,
                    limits_percent=DEFAULT_LIMITS_PERCENT, pitch_range=DEFAULT_PITCH_RANGE_M, n_harmonics=5,
-                   teeth=28):
+                   teeth=28, p_fa=DEFAULT_P_FA):
     """Link pitch from a recording's link-pass frequency and an independently measured speed.
 
     Parameters
@@ -331,7 +475,11 @@ def estimate_pitch(recording, *, speed, speed_sigma=0.0, channel=None, band=None
     n_harmonics : int
         Harmonics fitted.
     teeth : int
-        Sprocket teeth, for the shaft-frequency hypothesis.
+        Sprocket teeth (>= 3), for the shaft-frequency hypothesis.
+    p_fa : float
+        False-alarm probability of the detection test run first
+        (:func:`vibkit.signal.detect.detect_link_pass`): without a harmonic family in the band the
+        result has ``detected = False``, ``status = "no link-pass found"`` and NaN numbers.
 
     Returns
     -------
@@ -345,6 +493,10 @@ def estimate_pitch(recording, *, speed, speed_sigma=0.0, channel=None, band=None
 
     Notes
     -----
+    Invalid samples (non-finite, fill values ``|x| >= 1e30``, absurd) are excluded as
+    :func:`uniform_bursts` says, and counted in ``invalid_samples`` and a warning.  Each burst long
+    enough (40 periods) is also tracked in phase; its mean link-pass frequency (total phase over the
+    time) replaces the spectral estimate when the frequency wanders (see ``_choose_method``).
     ``L = v / f``; ``sigma_L = L sqrt((sigma_f/f)^2 + (sigma_v/v)^2)``.  Bursts are estimated
     separately (never bridged) and combined as ``f = sum(w_i f_i) / sum(w_i)``, ``w_i = 1/sigma_i^2``.
     The elongation is ``100 (L / L_nominal - 1)`` [%].
@@ -358,6 +510,7 @@ def estimate_pitch(recording, *, speed, speed_sigma=0.0, channel=None, band=None
     0.1333
     """
     from .signal import link_pass_estimate
+    from .signal.detect import detect_link_pass
 
     speed = float(speed)
     if not (math.isfinite(speed) and speed > 0):
@@ -369,6 +522,10 @@ def estimate_pitch(recording, *, speed, speed_sigma=0.0, channel=None, band=None
     if not 0 < lo_p < hi_p:
         raise ValueError(f"pitch_range must be (min, max) with 0 < min < max [m], got {pitch_range!r}")
     limits = _check_limits(limits_percent)
+    if isinstance(teeth, bool) or not isinstance(teeth, (int, np.integer)) or teeth < 3:
+        raise ValueError(f"teeth must be an integer >= 3 (sprocket teeth), got {teeth!r}")
+    if not 0 < float(p_fa) < 0.5:
+        raise ValueError(f"p_fa must lie in (0, 0.5), got {p_fa!r}")
     if nominal_pitch is not None and not float(nominal_pitch) > 0:
         raise ValueError(f"nominal_pitch must be a positive length [m], got {nominal_pitch!r}")
     if band is None:
@@ -377,14 +534,38 @@ def estimate_pitch(recording, *, speed, speed_sigma=0.0, channel=None, band=None
     if len(band) != 2 or not 0 < band[0] < band[1]:
         raise ValueError(f"band must be (low, high) with 0 < low < high [Hz], got {band!r}")
     name = pick_channel(recording, channel)
-    bursts = uniform_bursts(recording, name)
+    raw_bursts = uniform_bursts(recording, name)
     warnings, notes = [], []
-    nyq = min(b.fs for b in bursts) / 2
+    nyq = min(b.fs for b in raw_bursts) / 2
     if band[1] >= nyq:
         raise ValueError(f"band {band[0]:.4g}-{band[1]:.4g} Hz reaches the Nyquist frequency {nyq:.4g} Hz of "
                          f"channel {name!r}")
-    if any(b.resampled for b in bursts):
+    if any(b.resampled for b in raw_bursts):
         warnings.append("irregular time stamps: bursts resampled linearly to a uniform grid before the spectrum")
+    invalid = {k: sum(b.invalid.get(k, 0) for b in raw_bursts) for k in ("non_finite", "fill_value", "absurd", "total")}
+    n_dropped = _dropped_samples(recording, name, raw_bursts)
+    if invalid["total"] or n_dropped:
+        invalid["dropped"] = n_dropped
+        warnings.append(f"{invalid['total'] + n_dropped} invalid sample(s) ({invalid['non_finite']} non-finite, "
+                        f"{invalid['fill_value']} fill values |x| >= {FILL_THRESHOLD:g}, {invalid['absurd']} absurd) "
+                        f"excluded: {invalid['total']} in runs of at most {MAX_GAP_S:g} s interpolated, "
+                        f"{n_dropped} in longer runs or at the ends cut out (the record split there)")
+    bursts, scale = _prepared(raw_bursts, band)
+    units = str(recording[name].attrs.get("units", "1"))
+    common = dict(channel=name, speed_m_s=speed, speed_sigma_m_s=speed_sigma, band_hz=band, limits_percent=limits,
+                  extra={"units": units}, invalid_samples=invalid)
+    # 1. is there a link-pass family at all?
+    fs_det = float(np.median([b.fs for b in bursts]))
+    det = detect_link_pass([b.x for b in bursts if abs(b.fs / fs_det - 1) < 0.01], fs_det, band=band,
+                           n_harmonics=n_harmonics, p_fa=p_fa)
+    if not det.detected:
+        warnings.insert(0, det.reason)
+        nan = float("nan")
+        return PitchEstimate(fundamental_hz=nan, fundamental_sigma_hz=nan, pitch_m=nan, pitch_sigma_m=nan,
+                             harmonics=[], per_burst=[], hypotheses=[], warnings=warnings, notes=notes,
+                             detected=False, status=STATUS_NOT_FOUND, detection=det.as_dict(), method="none",
+                             method_reason="no link-pass family detected", **common)
+    # 2. estimate, burst by burst
     ests, skipped = [], []
     for b in bursts:
         try:
@@ -392,14 +573,31 @@ def estimate_pitch(recording, *, speed, speed_sigma=0.0, channel=None, band=None
         except ValueError as exc:
             skipped.append(f"burst {b.segment}: {exc}")
             continue
-        ests.append((b, e))
+        ests.append((b, e, _burst_mean_phase(b, e)))
     if not ests:
         raise ValueError(f"channel {name!r}: no burst long enough to estimate a link-pass frequency in "
                          f"{band[0]:.3g}-{band[1]:.3g} Hz ({'; '.join(skipped)})")
     if skipped:
         warnings.append(f"{len(skipped)} burst(s) too short, skipped")
-    f = np.array([e.fundamental_hz for _, e in ests])
-    s = np.array([e.fundamental_sigma_hz for _, e in ests])
+    f_sel, s_sel, methods, reasons = [], [], [], []
+    for b, e, mp in ests:
+        m, why = _choose_method(e, mp)
+        methods.append(m)
+        reasons.append(why)
+        if m == "mean-phase":
+            f_sel.append(mp.frequency_hz)
+            s_sel.append(mp.sigma_hz)
+        else:
+            f_sel.append(e.fundamental_hz)
+            s_sel.append(e.fundamental_sigma_hz)
+    method = methods[0] if len(set(methods)) == 1 else "mixed"
+    method_reason = reasons[0] if len(ests) == 1 else "; ".join(f"burst {b.segment}: {r}" for (b, _, _), r in
+                                                                 zip(ests, reasons))
+    f = np.array(f_sel)
+    s = np.array(s_sel)
+    if abs(float(np.median(f)) / det.frequency_hz - 1) > 2 * det.segment_s ** -1 / det.frequency_hz + 0.02:
+        warnings.append(f"the detection test found its family at {det.frequency_hz:.4g} Hz, the estimate is "
+                        f"{float(np.median(f)):.4g} Hz: check the band")
     if np.all(s > 0):
         w = 1.0 / s**2
         f0 = float(np.sum(w * f) / np.sum(w))
@@ -413,7 +611,7 @@ def estimate_pitch(recording, *, speed, speed_sigma=0.0, channel=None, band=None
         sf *= math.sqrt(chi2)
         warnings.append(f"burst estimates scatter {math.sqrt(chi2):.1f} x more than their sigmas (speed drift?); "
                         "sigma widened accordingly")
-    for _, e in ests:
+    for _, e, _ in ests:
         for wmsg in e.warnings:
             if wmsg not in warnings:
                 warnings.append(wmsg)
@@ -435,23 +633,28 @@ def estimate_pitch(recording, *, speed, speed_sigma=0.0, channel=None, band=None
                  f"construction: one sprocket turn always moves Z = {teeth} links, whatever their length; "
                  "measure the speed on the steps or handrail")
     # harmonics: weighted mean amplitude over bursts
-    k = min(len(e.harmonics) for _, e in ests)
+    k = min(len(e.harmonics) for _, e, _ in ests)
     harm = []
     for i in range(k):
-        amps = np.array([e.harmonics[i].amplitude for _, e in ests])
-        det = any(e.harmonics[i].detected for _, e in ests)
+        amps = np.array([e.harmonics[i].amplitude for _, e, _ in ests]) * scale
+        hdet = any(e.harmonics[i].detected for _, e, _ in ests)
         harm.append({"order": i + 1, "frequency_hz": (i + 1) * f0,
-                     "amplitude": float(np.sum(w * amps) / np.sum(w)), "detected": bool(det)})
-    units = str(recording[name].attrs.get("units", "1"))
-    per = [{"segment": b.segment, "t0_s": b.t0, "duration_s": b.x.size / b.fs, "fs_hz": b.fs,
-            "fundamental_hz": e.fundamental_hz, "fundamental_sigma_hz": e.fundamental_sigma_hz,
-            "snr_db": e.snr_db, "resampled": b.resampled} for b, e in ests]
-    snr = float(np.mean([e.snr_db for _, e in ests]))
-    res = dict(channel=name, speed_m_s=speed, speed_sigma_m_s=speed_sigma, fundamental_hz=f0,
-               fundamental_sigma_hz=sf, pitch_m=pitch, pitch_sigma_m=psig, band_hz=band, harmonics=harm,
-               per_burst=per, hypotheses=_hypotheses([b for b, _ in ests], f0, speed, int(teeth), (lo_p, hi_p)),
-               warnings=warnings, notes=notes, limits_percent=limits, snr_db=snr, chi2_per_dof=chi2,
-               extra={"units": units})
+                     "amplitude": float(np.sum(w * amps) / np.sum(w)), "detected": bool(hdet)})
+    per = []
+    for (b, e, mp), m, fb, sb in zip(ests, methods, f_sel, s_sel):
+        row = {"segment": b.segment, "t0_s": b.t0, "duration_s": b.x.size / b.fs, "fs_hz": b.fs,
+               "fundamental_hz": fb, "fundamental_sigma_hz": sb, "method": m,
+               "spectral_hz": e.fundamental_hz, "spectral_sigma_hz": e.fundamental_sigma_hz,
+               "snr_db": e.snr_db, "resampled": b.resampled}
+        if mp is not None:
+            row.update(mean_phase_hz=mp.frequency_hz, mean_phase_sigma_hz=mp.sigma_hz,
+                       tracked_spread_hz=mp.spread_hz, tracked_spread_bins=mp.spread_bins)
+        per.append(row)
+    snr = float(np.mean([e.snr_db for _, e, _ in ests]))
+    res = dict(fundamental_hz=f0, fundamental_sigma_hz=sf, pitch_m=pitch, pitch_sigma_m=psig, harmonics=harm,
+               per_burst=per, hypotheses=_hypotheses([b for b, _, _ in ests], f0, speed, int(teeth), (lo_p, hi_p)),
+               warnings=warnings, notes=notes, snr_db=snr, chi2_per_dof=chi2, detection=det.as_dict(),
+               method=method, method_reason=method_reason, **common)
     if nominal_pitch is not None:
         nom = float(nominal_pitch)
         el = 100.0 * (pitch / nom - 1.0)

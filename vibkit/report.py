@@ -399,8 +399,17 @@ def write_report(recording, out_path, *, scene=None, speed=None, speed_sigma=0.0
         f0 = pitch.fundamental_hz
     else:
         # frequency only: the same burst-combined estimator, with a unit "speed"
-        f0 = estimate_pitch(rec, speed=1.0, channel=ch, band=band or (2.5, 6.0)).fundamental_hz
+        fonly = estimate_pitch(rec, speed=1.0, channel=ch, band=band or (2.5, 6.0))
+        f0 = fonly.fundamental_hz
         notes.append("no speed known: link-pass frequency only, no pitch (give --speed)")
+    found = pitch.detected if pitch is not None else fonly.detected
+    if not found:
+        why = (pitch if pitch is not None else fonly).detection.get("reason", "")
+        notes.insert(0, f"NO LINK-PASS FOUND: {why}; no frequency, pitch or elongation can be given")
+        # the pages below mark harmonics of f0: show the search band's centre, unmarked
+        band_used = (pitch if pitch is not None else fonly).band_hz
+        f0 = float(np.sqrt(band_used[0] * band_used[1]))
+        pitch = None
     comp = None
     if sc is not None:
         from .comparison import compare
@@ -437,7 +446,8 @@ def write_report(recording, out_path, *, scene=None, speed=None, speed_sigma=0.0
         "sha256": rec.attrs.get("sha256", ""),
         "channel": ch,
         "units": units,
-        "link_pass_hz": f0,
+        "link_pass_hz": f0 if found else None,
+        "status": "ok" if found else "no link-pass found",
         "rms": rms,
         "peak_to_peak": p2p,
         "spikes": len(events),
@@ -488,7 +498,8 @@ def write_report(recording, out_path, *, scene=None, speed=None, speed_sigma=0.0
             fig = plt.figure(figsize=_PAGE)
             _page_title(fig, "Verdict", f"{summary['file']}, channel {ch}")
             ax = fig.add_axes((0.06, 0.30, 0.88, 0.62))
-            rows = [["link-pass frequency", f"{f0:.5g} Hz" + (f" +- {pitch.fundamental_sigma_hz:.2g} Hz" if pitch else "")]]
+            rows = [["link-pass frequency", (f"{f0:.5g} Hz" + (f" +- {pitch.fundamental_sigma_hz:.2g} Hz" if pitch else ""))
+                     if found else "NO LINK-PASS FOUND (no pitch, no verdict)"]]
             if pitch is not None:
                 rows += [["speed", f"{pitch.speed_m_s:.4g} +- {pitch.speed_sigma_m_s:.2g} m/s"],
                          ["link pitch", f"{1000 * pitch.pitch_m:.2f} +- {1000 * pitch.pitch_sigma_m:.2f} mm"]]
@@ -532,8 +543,8 @@ def write_report(recording, out_path, *, scene=None, speed=None, speed_sigma=0.0
             fig.subplots_adjust(left=0.08, right=0.97, top=0.88, bottom=0.1)
             _page_title(fig, "Spectrum", "Hann-windowed amplitude spectrum averaged over bursts; dotted: "
                         "link-pass harmonics")
-            nh = len(pitch.harmonics) if pitch else 5
-            fmax = min((nh + 2) * f0, min(b.fs for b in bursts) / 2)
+            nh = len(pitch.harmonics) if pitch else (5 if found else 0)
+            fmax = min((max(nh, 5) + 2) * f0, min(b.fs for b in bursts) / 2)
             nfft = 1 << int(np.ceil(np.log2(max(b.x.size for b in bursts))))
             acc = None
             for b in bursts:

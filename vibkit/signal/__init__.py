@@ -6,6 +6,8 @@ Functions follow scipy.signal conventions (array, ``fs`` [Hz], keyword-only opti
 numpy, scipy, xarray and numba only -- never the simulator.
 """
 
+from .detect import InvalidSamples, LinkPassDetection, detect_link_pass, flag_invalid
+from .meanfreq import MeanFrequency, mean_link_pass_frequency
 from .compare import HarmonicComparison, SpectrumComparison, common_spectrograms, compare_spectra
 from .estimate import FrequencyEstimate, crb_harmonic, crb_single_tone, harmonic_ls, interpolated_dft
 from .hampel import (
@@ -57,6 +59,12 @@ __all__ = [
     "lowpass_10hz",
     "peak_to_peak",
     "peak_to_peak_values",
+    "InvalidSamples",
+    "LinkPassDetection",
+    "MeanFrequency",
+    "detect_link_pass",
+    "flag_invalid",
+    "mean_link_pass_frequency",
     "AngleSignal",
     "CombinedEstimate",
     "FrequencyEstimate",
