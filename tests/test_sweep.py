@@ -226,6 +226,10 @@ def test_cli_json(scene_file, tmp_path, capsys):
     assert captured.err == ""
     ds = xr.open_zarr(out)
     assert ds["delta_ripple"].attrs["units"] == "m"
+    # the same command again finds the finished store and computes nothing (its folder is no clobber)
+    assert main(argv) == 0
+    again = json.loads(capsys.readouterr().out)
+    assert again["runs"] == 4 and again["ok"] == 2 and again["complete"]
 
 
 def test_cli_bad_vary_syntax_is_a_usage_error(scene_file, tmp_path, capsys):

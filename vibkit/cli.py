@@ -400,7 +400,10 @@ def _cmd_sweep(a):
 
     import vibkit
 
-    _check_output(a.output, [a.scene])
+    # a Zarr store is a folder, re-used to resume: only refuse one that is the scene itself (the
+    # library refuses a folder that is not this sweep's store unless --force)
+    if os.path.exists(a.output) and os.path.exists(a.scene) and os.path.samefile(a.output, a.scene):
+        raise CLIError(f"output {a.output!r} is the scene file; refusing to overwrite it")
     vary = {}
     for key, spec in a.vary:
         if key in vary:
@@ -632,10 +635,9 @@ def _cmd_fleet_status(a):
 def _cmd_fleet_report(a):
     from vibkit.report import write_fleet_report
 
-    if os.path.exists(a.output) and not a.force:
-        raise CLIError(f"{a.output} exists; give --force to replace it")
+    _check_output(a.output, [], a.force)
     with _fleet_db(a, create=False) as db:
-        _check_output(a.output, [db.path])
+        _check_output(a.output, [db.path], a.force)
         trends = db.status(limits_percent=a.limits)
         meas = db.measurements()
         path = db.path
