@@ -414,7 +414,10 @@ def run_subprocess(case: Case, work: Path, *, timeout: float = 300.0, python: st
         except subprocess.TimeoutExpired as exc:
             return None, exc.stdout or "", (exc.stderr or "") if isinstance(exc.stderr, str) else ""
         return p.returncode, p.stdout, p.stderr
-    proc = subprocess.Popen(cmd, env=env, cwd=work, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    # a person's Ctrl-C: the child gets SIGINT's default disposition even where this process was
+    # started in the background (there SIGINT is ignored, and a child would inherit that)
+    proc = subprocess.Popen(cmd, env=env, cwd=work, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     t0 = time.monotonic()
     line = ""
     while time.monotonic() - t0 < timeout:
