@@ -123,6 +123,20 @@ def _side(pos, has_lo, lo, has_hi, hi, direction, tiny):
 
 
 @nb.njit(cache=True, error_model="numpy")
+def _start_past(t, y, yt, k1, s_b, direction, tiny, prm, ws, ctl, counters):
+    """The next step starts on breakpoint s_b: remember it (``ctl[3:6]``) and take k1, the
+    right-hand side at (t, y), on its far side. Returns evaluate's status."""
+    ctl[3] = 1.0
+    ctl[4] = s_b
+    ctl[5] = direction
+    for i in range(y.size):
+        yt[i] = y[i]
+    yt[0] = _side(yt[0], True, s_b, False, 0.0, direction, tiny)
+    counters[2] += 1
+    return evaluate(t, yt, k1, prm, ws, False)
+
+
+@nb.njit(cache=True, error_model="numpy")
 def _dopri5_chunk(t, y, h, k1, t_stop, t_out, idx, y_out, prm, ws, rtol, atol, max_step, counters, ctl, cross,
                   p0, gap, pause):
     """Advance from t towards t_stop, writing the dense output at t_out[idx:] <= t_stop.
@@ -173,15 +187,8 @@ def _dopri5_chunk(t, y, h, k1, t_stop, t_out, idx, y_out, prm, ws, rtol, atol, m
                 # right-hand side on the far side
                 s_on = _next_crossing(y[0] - 2.0 * gap * direction, direction, cross, p0, 0.0)
                 if abs(y[0] - s_on) <= gap:
-                    ctl[3] = 1.0
-                    ctl[4] = s_on
-                    ctl[5] = direction
-                    for i in range(m):
-                        yt[i] = y[i]
-                    yt[0] = _side(yt[0], True, s_on, False, 0.0, direction, tiny)
-                    if evaluate(t, yt, k1, prm, ws, False) != 0:
+                    if _start_past(t, y, yt, k1, s_on, direction, tiny, prm, ws, ctl, counters) != 0:
                         return 1, t, h, idx
-                    counters[2] += 1
             sc = _next_crossing(y[0], direction, cross, p0, gap)
             hc = _time_to(sc - y[0], v, k1[1])
             if hc <= h:
@@ -294,18 +301,8 @@ def _dopri5_chunk(t, y, h, k1, t_stop, t_out, idx, y_out, prm, ws, rtol, atol, m
             if has_hi and abs(y[0] - sc) <= gap:
                 # on the breakpoint: the next step starts from the right-hand side on its far side
                 counters[3] += 1
-                ctl[3] = 1.0
-                ctl[4] = sc
-                ctl[5] = direction
-                for i in range(m):
-                    yt[i] = y[i]
-                yt[0] = _side(yt[0], True, sc, False, 0.0, direction, tiny)
-                if evaluate(t, yt, k1, prm, ws, False) != 0:
+                if _start_past(t, y, yt, k1, sc, direction, tiny, prm, ws, ctl, counters) != 0:
                     return 1, t, h, idx
-                counters[2] += 1
-            elif has_lo:
-                # the previous step ended on a breakpoint: this one's k7 was taken on the far side
-                pass
             if not last:
                 e = max(err, 1e-10)
                 fac = 0.9 * e ** (-0.2 + 0.75 * 0.04) * max(ctl[0], 1e-4) ** 0.04

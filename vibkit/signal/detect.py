@@ -46,6 +46,7 @@ import scipy.special
 import scipy.stats
 
 from ._checks import check_fs
+from .peaks import climb_from_subharmonic
 
 __all__ = [
     "FILL_THRESHOLD",
@@ -62,7 +63,6 @@ __all__ = [
 FILL_THRESHOLD = 1e30
 #: a sample further from the median than this many robust sigmas is absurd (not a measurement)
 ABSURD_FACTOR = 1e3
-_TIE = 1.0
 #: running-median floor: +- max(_HALF_MIN bins, _HALF_PERIODS x band[0]) around each bin
 _HALF_MIN = 10
 #: shortest test segment, in periods of band[0] (the record must hold two)
@@ -289,17 +289,7 @@ def _search(r, f, df, fmin, fmax, f_top):
     ev = np.maximum(np.log(np.maximum(p, 1e-300) / thr), 0.0)
     ev[hf > f_top] = 0.0
     sc = ev.sum(axis=1)
-    i = int(np.argmax(sc))
-    moved = True
-    while moved:
-        moved = False
-        for m in (2, 3, 5):
-            near = np.flatnonzero(np.abs(cands - m * cands[i]) <= df / 2)
-            if near.size:
-                j = int(near[np.argmax(sc[near])])
-                if sc[j] >= sc[i] - _TIE:
-                    i, moved = j, True
-                    break
+    i = climb_from_subharmonic(cands, sc, df)
     return float(cands[i]), float(sc[i])
 
 

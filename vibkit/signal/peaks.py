@@ -92,6 +92,26 @@ def _scores(cands, f, pmax, f_top, thr):
     return ev.sum(axis=1)
 
 
+def climb_from_subharmonic(cands, sc, df):
+    """Index of the best candidate frequency once moved off a subharmonic.
+
+    A subharmonic collects every harmonic of the truth: move up to m times the best candidate
+    (m = 2, 3, 5) while that scores within ``_TIE`` (one e-fold of evidence) of it. ``df`` is the
+    frequency resolution [Hz]: a candidate within df / 2 of m f counts as m f.
+    """
+    i = int(np.argmax(sc))
+    moved = True
+    while moved:
+        moved = False
+        for m in (2, 3, 5):
+            near = np.flatnonzero(np.abs(cands - m * cands[i]) <= df / 2)
+            if near.size:
+                j = int(near[np.argmax(sc[near])])
+                if sc[j] >= sc[i] - _TIE:
+                    i, moved = j, True
+                    break
+    return i
+
 def find_fundamental(x, fs, *, band, f_top=None, threshold_db=6.0, nan_policy="raise"):
     """Fundamental of a harmonic family within a plausible band, without octave errors.
 
@@ -147,19 +167,7 @@ def find_fundamental(x, fs, *, band, f_top=None, threshold_db=6.0, nan_policy="r
     step = df / (2.0 * h_max)
     cands = np.arange(fmin, fmax + step / 2, step)
     sc = _scores(cands, f, pmax, f_top, thr)
-    i = int(np.argmax(sc))
-    # A subharmonic collects every harmonic of the truth: move up to m times the best candidate
-    # while that scores within ``_TIE`` (one e-fold of evidence) of it.
-    moved = True
-    while moved:
-        moved = False
-        for m in (2, 3, 5):
-            near = np.flatnonzero(np.abs(cands - m * cands[i]) <= df / 2)
-            if near.size:
-                j = int(near[np.argmax(sc[near])])
-                if sc[j] >= sc[i] - _TIE:
-                    i, moved = j, True
-                    break
+    i = climb_from_subharmonic(cands, sc, df)
     # The tolerant (max-filtered) score is flat within about a bin / h; refine on the raw
     # zero-padded spectrum over +-half a bin around the coarse best.
     c0 = cands[i]
