@@ -111,3 +111,13 @@ def test_false_alarm_rate_is_what_n_sigma_really_gives():
 def test_bad_arguments(kwargs, match):
     with pytest.raises(ValueError, match=match):
         hampel(**kwargs)
+
+
+def test_rate_of_a_wide_window_at_a_small_false_alarm_rate():
+    """k = 50 (a 0.1 s half window at 500 Hz, as the report uses) at 1e-3: the threshold from the
+    conditional tail probability flags white noise at the stated rate (2,000 expected flags in
+    2,000,000 samples: binomial sd 2.2 %)."""
+    rng = np.random.default_rng(11)
+    x = rng.standard_normal(2_000_000)
+    observed = np.mean(hampel(x, 50, false_alarm_rate=1e-3).is_outlier[50:-50])
+    assert observed == pytest.approx(1e-3, rel=0.08)

@@ -12,6 +12,8 @@ it by its window median.  A window without finite samples gives NaN median and s
 
 from __future__ import annotations
 
+import math
+
 from dataclasses import dataclass
 from functools import lru_cache
 from typing import NamedTuple
@@ -382,6 +384,47 @@ def _n_windows(rate: float) -> int:
     return int(min(4_000_000, max(400_000, 400.0 / rate)))
 
 
+_RB_DRAWS = 200_000  # draws of a window's 2k other samples for the conditional (Rao-Blackwell) estimate
+
+
+@lru_cache(maxsize=64)
+def _window_others(k: int):
+    """Medians and MADs that the 2k non-centre samples of Gaussian windows leave to a far centre.
+
+    Returns (m_hi, d_hi, m_lo, d_lo), one value per draw: with the others sorted o_1 <= ... <= o_2k,
+    a centre above o_{k+1} has the window median m_hi = o_{k+1}, and one far enough from it the MAD
+    d_hi = the (k+1)-th smallest |o_i - m_hi|; likewise below o_k with m_lo = o_k.
+    """
+    rng = np.random.default_rng(_MC_SEED + 7919 * k)
+    out = np.empty((4, _RB_DRAWS))
+    chunk = max(1, 4_000_000 // (2 * k))
+    for a in range(0, _RB_DRAWS, chunk):
+        b = min(_RB_DRAWS, a + chunk)
+        o = np.sort(rng.standard_normal((b - a, 2 * k)), axis=1)
+        for row, col in ((0, k), (2, k - 1)):
+            m = o[:, col]
+            out[row, a:b] = m
+            out[row + 1, a:b] = np.partition(np.abs(o - m[:, None]), k, axis=1)[:, k]
+    return out
+
+
+def _tail_probability(k: int, n_sigma: float) -> float:
+    """P(|x_c - median| > n_sigma 1.4826 MAD) for the centre of a Gaussian window, n_sigma > 1/1.4826.
+
+    Exact given the other 2k samples: beyond that threshold the centre is outside the window's
+    middle and its own deviation is above the MAD, so median and MAD are the others' (see
+    :func:`_window_others`) and the probability is that of a normal sample beyond
+    m_hi + n_sigma 1.4826 d_hi or below m_lo - n_sigma 1.4826 d_lo; averaging that conditional
+    probability over the others (Rao-Blackwellisation) needs far fewer draws than counting
+    exceedances (200,000 draws give about 0.3 % relative error at a rate of 1e-4).
+    """
+    from scipy.special import ndtr
+
+    m_hi, d_hi, m_lo, d_lo = _window_others(k)
+    c = n_sigma * MAD_SCALE
+    return float(np.mean(ndtr(-(m_hi + c * d_hi)) + ndtr(m_lo - c * d_lo)))
+
+
 def hampel_false_alarm_rate(half_window, n_sigma):
     """Per-sample probability that :func:`hampel` flags Gaussian white noise (interior samples).
 
@@ -395,8 +438,9 @@ def hampel_false_alarm_rate(half_window, n_sigma):
     Returns
     -------
     float
-        False-alarm probability, Monte Carlo with a fixed seed (400,000 windows; relative
-        standard error about ``1 / sqrt(400000 p)``).
+        False-alarm probability: for ``n_sigma > 1 / 1.4826`` the mean over 200,000 draws (fixed
+        seed) of the exact probability given a window's other samples (:func:`_tail_probability`);
+        below, a plain Monte Carlo count over 400,000 windows.
 
     Notes
     -----
@@ -407,6 +451,8 @@ def hampel_false_alarm_rate(half_window, n_sigma):
     """
     k = check_positive_int(half_window, "half_window")
     ns = _resolve_n_sigma(k, n_sigma, None)
+    if ns * MAD_SCALE > 1.0:
+        return _tail_probability(k, ns)
     stat = _interior_statistic(k, _n_windows(1e-3))
     return float(1.0 - np.searchsorted(stat, ns, side="right") / stat.size)
 
@@ -425,8 +471,8 @@ def hampel_n_sigma_for_rate(half_window, false_alarm_rate):
     -------
     float
         ``n_sigma``: the ``1 - rate`` quantile of the interior statistic
-        ``|x_c - median| / (1.4826 MAD)`` (Monte Carlo, fixed seed, at least 400 expected
-        exceedances).
+        ``|x_c - median| / (1.4826 MAD)``, found by bisection on :func:`hampel_false_alarm_rate`'s
+        tail probability (milliseconds to a second, whatever the rate).
     """
     k = check_positive_int(half_window, "half_window")
     try:
@@ -435,5 +481,16 @@ def hampel_n_sigma_for_rate(half_window, false_alarm_rate):
         raise ValueError(f"Parameter false_alarm_rate={false_alarm_rate!r} must be a number in [1e-4, 0.5].") from None
     if not 1e-4 <= rate <= 0.5:
         raise ValueError(f"Parameter false_alarm_rate={false_alarm_rate!r} must lie in [1e-4, 0.5].")
+    if _tail_probability(k, 1.0001 / MAD_SCALE) > rate:
+        # the usual case: the threshold lies in the range where the tail probability is exact given
+        # the other samples; bisect the monotone tail probability (in log n_sigma)
+        lo, hi = math.log(1.0001 / MAD_SCALE), math.log(100.0)
+        for _ in range(60):
+            mid = 0.5 * (lo + hi)
+            if _tail_probability(k, math.exp(mid)) > rate:
+                lo = mid
+            else:
+                hi = mid
+        return float(math.exp(0.5 * (lo + hi)))
     stat = _interior_statistic(k, _n_windows(rate))
     return float(np.quantile(stat, 1.0 - rate))
