@@ -8,7 +8,9 @@ and returns the state at the requested output times. Methods:
     together with the right-hand side: no Python call per step. Adaptive explicit, high order.
     The error of the coordinates s0_1 and theta, which grow without bound, is measured against
     a fixed 1 m and 1 rad (rtol is then an absolute tolerance on them), so the accuracy of a long
-    run does not loosen as the chain goes round.
+    run does not loosen as the chain goes round. With ``events`` every step ends on the values of
+    s0_1 where the right-hand side is not smooth (a roller on a curvature jump of the guide), and
+    with ``t_events`` on given times, so no step straddles a jump (see :func:`_dopri5_chunk`).
 ``"rk45"``, ``"dop853"``
     scipy.integrate.solve_ivp's explicit methods (Python loop; the RHS is still compiled).
 ``"bdf"``, ``"radau"``, ``"lsoda"``
@@ -343,11 +345,22 @@ def integrate(prm, ws, y0, t_out, *, method="dopri5", rtol=1e-6, atol=1e-9, max_
               t_events=None):
     """State at the output times ``t_out`` (increasing, starting at 0) of the forward dynamics.
 
+    Parameters
+    ----------
+    events : (ndarray, float), optional
+        dopri5 only: the sorted values of y[0] in one period where the right-hand side is not
+        smooth, and the period [m] (:meth:`vibkit.chain.Chain.crossing_table`, P0).
+    event_gap : float
+        How far from such a value a step may end and count as ending on it. [m]
+    t_events : array_like, optional
+        dopri5 only: times at which the right-hand side jumps; steps end on them. [s]
+
     Returns
     -------
     y_out : ndarray (len(t_out), 5)
     stats : dict
-        ``steps``, ``rejected``, ``evaluations``, ``wall_time_s``, ``method``.
+        ``steps``, ``rejected``, ``evaluations``, ``wall_time_s``, ``method``, and for dopri5
+        ``event_steps`` (steps that ended on a breakpoint).
     """
     method = method.lower()
     if method not in METHODS:
