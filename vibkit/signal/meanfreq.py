@@ -74,6 +74,18 @@ END_PERIODS = 6
 END_HARMONICS = 6
 
 
+def _least_squares(mat, xs):
+    """Normal-equation fit of xs on the columns of mat: (coefficients, (mat^T mat)^-1, residual),
+    or None when the columns are degenerate."""
+    g = mat.T @ mat
+    try:
+        coef = np.linalg.solve(g, mat.T @ xs)
+        ginv = np.linalg.inv(g)
+    except np.linalg.LinAlgError:
+        return None
+    return coef, ginv, xs - mat @ coef
+
+
 def _harmonic_phases(xs, ph, k):
     """Least squares ``c + sum_h a_h cos(h ph) + b_h sin(h ph)``: per-harmonic phase of the signal
     relative to ``h ph`` [rad], its variance [rad^2] and the amplitude."""
@@ -81,13 +93,10 @@ def _harmonic_phases(xs, ph, k):
     for h in range(1, k + 1):
         cols += [np.cos(h * ph), np.sin(h * ph)]
     mat = np.column_stack(cols)
-    g = mat.T @ mat
-    try:
-        coef = np.linalg.solve(g, mat.T @ xs)
-        ginv = np.linalg.inv(g)
-    except np.linalg.LinAlgError:
+    fit = _least_squares(mat, xs)
+    if fit is None:
         return None
-    r = xs - mat @ coef
+    coef, ginv, r = fit
     s2 = float(r @ r) / max(xs.size - mat.shape[1], 1)
     a, b = coef[1::2], coef[2::2]
     r2 = a * a + b * b
@@ -116,13 +125,10 @@ def _end_phase(x, phase, fs, k, ref, amp, *, start):
         c, s_ = np.cos(h * ph), np.sin(h * ph)
         cols += [c, s_, u * c, u * s_]
     mat = np.column_stack(cols)
-    g = mat.T @ mat
-    try:
-        coef = np.linalg.solve(g, mat.T @ xs)
-        ginv = np.linalg.inv(g)
-    except np.linalg.LinAlgError:
+    fit = _least_squares(mat, xs)
+    if fit is None:
         return 0.0, math.inf
-    r = xs - mat @ coef
+    coef, ginv, r = fit
     s2 = float(r @ r) / max(m - mat.shape[1], 1)
     num, wsum = 0.0, 0.0
     for h in range(1, k + 1):
