@@ -21,9 +21,9 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import RESULTS, best_of, machine, markdown_table, today, write_csv, write_text  # noqa: E402
 
-from vibkit.chain import Chain  # noqa: E402
-from vibkit.guide import Guide, local_map, locate, point_partials  # noqa: E402
-from vibkit.params import ChainParams, reference_chain, reference_guide  # noqa: E402
+from vibkit.model.chain import Chain  # noqa: E402
+from vibkit.model.guide import Guide, local_map, locate, point_partials  # noqa: E402
+from vibkit.model.params import ChainParams, reference_chain, reference_guide  # noqa: E402
 
 L = 0.4 / 3
 

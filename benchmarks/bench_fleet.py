@@ -9,7 +9,7 @@ each) are scanned into a fresh database by:
 * ``plain loop``: ``FleetDB.scan(parallel=False)``: hashing, analysis and one committed
   transaction per recording, all in this process (the baseline);
 * ``dask N``: ``FleetDB.scan`` on a local Dask cluster of N worker processes
-  (:func:`vibkit.cluster.dask_client`), the cluster started and its workers warmed up (vibkit
+  (:func:`vibkit.runtime.cluster.dask_client`), the cluster started and its workers warmed up (vibkit
   imported, kernels loaded) before the clock starts; the start-up is reported on its own.
 
 Each case is the best of ``--repeat`` rounds, the cases taking turns within a round (one process,
@@ -75,8 +75,8 @@ def main(argv=None):
     workers = [int(w) for w in a.workers.split(",") if w.strip()]
 
     import vibkit
-    from vibkit.cluster import dask_client
-    from vibkit.fleet import FleetDB, _analyse_job, _Job, _file_sha256
+    from vibkit.runtime.cluster import dask_client
+    from vibkit.fleet.history import FleetDB, _analyse_job, _Job, _file_sha256
 
     load0 = os.getloadavg()
     rows = []

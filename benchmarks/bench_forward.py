@@ -46,7 +46,7 @@ CHILD = r"""
 import json, resource, sys, time
 from dataclasses import replace
 import vibkit
-from vibkit.scene import load_scene
+from vibkit.model.scene import load_scene
 effects, outputs, duration, over = json.loads(sys.argv[1])
 scene = load_scene(sys.argv[2])
 if effects is not None:

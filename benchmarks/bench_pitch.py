@@ -24,7 +24,7 @@ import xarray as xr
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import RESULTS, machine, markdown_table, today, write_csv, write_text  # noqa: E402
 
-from vibkit.pitch import estimate_pitch  # noqa: E402
+from vibkit.diagnose.pitch import estimate_pitch  # noqa: E402
 from vibkit.signal import link_pass_estimate  # noqa: E402
 from vibkit.signal.detect import detect_link_pass  # noqa: E402
 

@@ -6,9 +6,9 @@
 
 Both run the same scene from the same closed, meshed state at rest for the same duration:
 
-* vibkit: :func:`vibkit.forward.forward_dynamics`, the 2-DOF system in the independent coordinate,
+* vibkit: :func:`vibkit.analyses.forward.forward_dynamics`, the 2-DOF system in the independent coordinate,
   compiled dopri5 at the accuracy the scene ships (rtol 1e-6, atol 1e-8);
-* the study: :func:`vibkit.reference.run_study`, p + 2 = 161 coordinates, sparse KKT solve with
+* the study: :func:`vibkit.analyses.reference.run_study`, p + 2 = 161 coordinates, sparse KKT solve with
   Baumgarte (alpha = beta = 50 1/s), scipy's BDF with the study's RelTol = AbsTol = MaxStep = 1e-3.
 
 Each wall time covers the whole call (integration and the derived outputs, link tensions
@@ -42,10 +42,10 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from vibkit import __version__  # noqa: E402
-from vibkit.forward import forward_dynamics  # noqa: E402
-from vibkit.model import EscalatorModel  # noqa: E402
-from vibkit.reference import BAUMGARTE_ALPHA, BAUMGARTE_BETA, STUDY_SETTINGS, run_study  # noqa: E402
-from vibkit.scene import load_scene  # noqa: E402
+from vibkit.analyses.forward import forward_dynamics  # noqa: E402
+from vibkit.model.escalator import EscalatorModel  # noqa: E402
+from vibkit.analyses.reference import BAUMGARTE_ALPHA, BAUMGARTE_BETA, STUDY_SETTINGS, run_study  # noqa: E402
+from vibkit.model.scene import load_scene  # noqa: E402
 
 SCENE = ROOT / "sim" / "thesis-forward.toml"
 RESULTS = ROOT / "benchmarks" / "results"
@@ -172,7 +172,7 @@ def write(res: dict, note: str, stem: str) -> None:
 
 
 def _rtol(solver):
-    from vibkit.forward import DEFAULT_RTOL
+    from vibkit.analyses.forward import DEFAULT_RTOL
 
     return solver.get("rtol", DEFAULT_RTOL)
 

@@ -8,7 +8,7 @@ Writes (atomically) benchmarks/results/ride.{md,csv} (``ride_quick.*`` with --qu
   against the strongest plain baseline, ``scipy.signal.sosfilt`` of the same four second-order
   sections at the record's own rate (what a bilinear-only design would cost, and be 0.1 dB wrong
   near Nyquist at low rates);
-* the whole ride-quality computation (:func:`vibkit.ride.ride_quality`: both weightings, the 10 Hz
+* the whole ride-quality computation (:func:`vibkit.diagnose.ride.ride_quality`: both weightings, the 10 Hz
   channel, half-cycle peak-to-peak, A95, r.m.s.) on a 10-minute, 3-axis, 2 kHz record, and the
   peak-to-peak step alone.
 
@@ -29,7 +29,7 @@ import scipy.signal
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import RESULTS, best_of, machine, markdown_table, today, write_csv, write_text  # noqa: E402
 
-from vibkit.ride import ride_quality  # noqa: E402
+from vibkit.diagnose.ride import ride_quality  # noqa: E402
 from vibkit.signal import frequency_weighting, frequency_weighting_sos, peak_to_peak  # noqa: E402
 from vibkit.signal.weighting import oversampling_factor  # noqa: E402
 

@@ -1,10 +1,10 @@
-"""Sweep throughput: runs per second of ``vibkit.sweep`` on 1 and 2 local worker processes, against a
+"""Sweep throughput: runs per second of ``vibkit.sweep.run`` on 1 and 2 local worker processes, against a
 plain Python loop of ``vibkit.simulate`` over the same varied scenes in this process.
 
 The runs are short on purpose (the no-load forward scene, a few seconds simulated, delta only), so
 that what Dask and the Zarr store add per run shows. Three numbers per worker count:
 
-* end to end: the whole ``vibkit.sweep`` call with a fresh local cluster (start-up, workers loading
+* end to end: the whole ``vibkit.sweep.run`` call with a fresh local cluster (start-up, workers loading
   the compiled kernels, every run streamed to a Zarr store, consolidation);
 * warm: the same sweep submitted to a cluster that is already up and warmed (one run per worker
   before the clock starts), still writing the store: the steady throughput;
@@ -37,7 +37,7 @@ SCENE = ROOT / "sim" / "thesis-forward.toml"
 def _scene_text(duration):
     import tomllib
 
-    from vibkit.sweep import to_toml
+    from vibkit.sweep.run import to_toml
 
     data = tomllib.loads(SCENE.read_text())
     data["run"]["duration"] = duration
@@ -53,8 +53,8 @@ def main(argv=None):
     import vibkit
     from distributed import Client, LocalCluster
 
-    from vibkit.scene import parse_scene
-    from vibkit.sweep import plan_sweep, varied_text
+    from vibkit.model.scene import parse_scene
+    from vibkit.sweep.run import plan_sweep, varied_text
 
     n_runs, duration = (8, 1.0) if args.quick else (24, 4.0)
     tmp = Path(tempfile.mkdtemp(prefix="bench_sweep_"))

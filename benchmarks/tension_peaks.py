@@ -30,8 +30,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import RESULTS, machine, markdown_table, today, write_text  # noqa: E402
 
 import vibkit  # noqa: E402
-from vibkit.model import EscalatorModel  # noqa: E402
-from vibkit.scene import load_scene  # noqa: E402
+from vibkit.model.escalator import EscalatorModel  # noqa: E402
+from vibkit.model.scene import load_scene  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -87,7 +87,7 @@ def main(argv=None):
             rows.append({"formulation": "vibkit (exact closure)", "k_N_m^1.5": k, "window_s": f"{tt[0]:.2f}-{tt[-1]:.2f}",
                          "peak_hz": fr, "order": order, "amplitude_N": amp})
     if not args.quick:
-        from vibkit.reference import run_study
+        from vibkit.analyses.reference import run_study
 
         scene = scene_with(1e6, dt=0.002)
         for cmap, label in (("study", "study (Baumgarte, linear map)"), ("vibkit", "study (Baumgarte, C1 map)")):

@@ -33,11 +33,11 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import RESULTS, machine, markdown_table, today, write_csv, write_text  # noqa: E402
 
 import vibkit  # noqa: E402
-from vibkit.chain import Chain  # noqa: E402
-from vibkit.guide import Guide  # noqa: E402
-from vibkit.integrate import IntegrationError  # noqa: E402
-from vibkit.params import reference_chain, reference_guide  # noqa: E402
-from vibkit.scene import load_scene  # noqa: E402
+from vibkit.model.chain import Chain  # noqa: E402
+from vibkit.model.guide import Guide  # noqa: E402
+from vibkit.analyses.integrate import IntegrationError  # noqa: E402
+from vibkit.model.params import reference_chain, reference_guide  # noqa: E402
+from vibkit.model.scene import load_scene  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 OUTPUTS = ("delta", "chain_speed", "sprocket_speed", "link_tension", "closure_residual", "s0", "contact_force")
@@ -156,7 +156,7 @@ def forward(quick, skip_study=False):
     ref_row["energy_error_J"] = energy_error(scene, "dopri5", 1e-11, math.inf)
     rows.append(ref_row)
     # the study's formulation (Baumgarte, BDF), at its own settings (RelTol = AbsTol = MaxStep = 1e-3)
-    from vibkit.reference import run_study
+    from vibkit.analyses.reference import run_study
 
     study_cases = [] if skip_study else [1e-3]
     study_duration = duration if not quick else duration

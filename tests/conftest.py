@@ -11,13 +11,13 @@ os.environ.setdefault("MPLBACKEND", "Agg")
 
 @pytest.fixture(scope="session")
 def reference_scene():
-    from vibkit.scene import load_scene
+    from vibkit.model.scene import load_scene
 
     return load_scene(SIM / "thesis-kinematics.toml")
 
 
 @pytest.fixture(scope="session")
 def model(reference_scene):
-    from vibkit.model import EscalatorModel
+    from vibkit.model.escalator import EscalatorModel
 
     return EscalatorModel(reference_scene)

@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from vibkit.chain import Chain, ClosureError
-from vibkit.guide import Guide
-from vibkit.params import ChainParams, reference_chain, reference_guide
+from vibkit.model.chain import Chain, ClosureError
+from vibkit.model.guide import Guide
+from vibkit.model.params import ChainParams, reference_chain, reference_guide
 
 L = 0.4 / 3
 
@@ -122,9 +122,9 @@ def test_crossing_table_puts_a_roller_on_a_breakpoint(worn):
     values no roller crosses one."""
     from dataclasses import replace
 
-    from vibkit.chain import Chain
-    from vibkit.guide import Guide
-    from vibkit.params import reference_chain, reference_guide
+    from vibkit.model.chain import Chain
+    from vibkit.model.guide import Guide
+    from vibkit.model.params import reference_chain, reference_guide
 
     guide = Guide(reference_guide())
     params = reference_chain()

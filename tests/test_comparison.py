@@ -5,7 +5,7 @@ import pytest
 import xarray as xr
 
 import vibkit
-from vibkit.comparison import compare
+from vibkit.diagnose.comparison import compare
 
 
 @pytest.fixture(scope="module")

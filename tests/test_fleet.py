@@ -1,4 +1,4 @@
-"""Fleet history (vibkit.fleet, vibkit fleet ...): trends of synthetic units with known elongation rates,
+"""Fleet history (vibkit.fleet.history, vibkit fleet ...): trends of synthetic units with known elongation rates,
 forecasts, duplicates, bad rows, a killed scan, the command line."""
 
 import datetime as dt
@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from vibkit.cli import main
-from vibkit.fleet import (SECONDS_PER_YEAR, DuplicateRecordingError, FleetDB, FleetError, TrendFit, fit_trend,
+from vibkit.fleet.history import (SECONDS_PER_YEAR, DuplicateRecordingError, FleetDB, FleetError, TrendFit, fit_trend,
                           forecast_limits, parse_date, read_catalogue, resolve_db_path)
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -430,7 +430,7 @@ def test_cli_status_json_and_report(fleet, tmp_path, capsys):
 
 
 def test_fleet_page_draws_units_and_limits(fleet, tmp_path):
-    from vibkit.report import write_fleet_report
+    from vibkit.diagnose.report import write_fleet_report
 
     with FleetDB(fleet["db"], create=False) as db:
         trends, meas = db.status(), db.measurements()
@@ -441,7 +441,7 @@ def test_fleet_page_draws_units_and_limits(fleet, tmp_path):
     assert "1 less urgent unit(s) not drawn" in joined and "1.5 / 2 / 3 %" in joined
 
 
-# vibkit.cluster's local scheduler binds its HTTP server to port 8787 by default (dashboard off): where
+# vibkit.runtime.cluster's local scheduler binds its HTTP server to port 8787 by default (dashboard off): where
 # another cluster holds the port, distributed warns and leaks the socket of its first try
 @pytest.mark.filterwarnings("ignore:Port 8787 is already in use:UserWarning")
 @pytest.mark.filterwarnings("ignore::ResourceWarning")

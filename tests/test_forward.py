@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import vibkit
-from vibkit.scene import load_scene
+from vibkit.model.scene import load_scene
 
 SIM = Path(__file__).resolve().parents[1] / "sim"
 R_P = 0.4 / 3 / (2 * np.sin(np.pi / 28))
@@ -206,7 +206,7 @@ def test_back_flanks_take_load_when_passenger_steps_off():
 def test_same_delta_as_the_kinematics():
     """delta is fixed by the closure: the forward dynamics gives the kinematic delta of the chain
     position it reaches (roller 1's s0), to the closure tolerance."""
-    from vibkit.model import EscalatorModel
+    from vibkit.model.escalator import EscalatorModel
 
     sc = variant(run={"initial_speed": 0.5}, outputs=["delta", "s0"])
     ds = vibkit.simulate(sc, duration=1.0, progress=False)
@@ -218,7 +218,7 @@ def test_same_delta_as_the_kinematics():
 def test_passengers_board_and_alight_at_the_landings():
     """model.md section 7: a step boards at the lower landing and alights at the upper landing. The
     schedule is a place on the guide for the step's middle roller, not a time from another run."""
-    from vibkit.model import EscalatorModel
+    from vibkit.model.escalator import EscalatorModel
 
     sc = load_scene(SIM / "thesis-passengers.toml")
     model = EscalatorModel(sc)
@@ -266,8 +266,8 @@ def test_passenger_scene_speed_drop():
 def test_contact_candidates_reach_the_tooth_tips():
     """Rollers are searched within the tip corners' radius + r_d: sqrt((R^F + h)^2 + (tip/2)^2) + r_d
     = 0.66574 m for the reference sprocket, not R^F + h + r_d = 0.66543 m (issue 10)."""
-    from vibkit.effects import FP, pack_parameters
-    from vibkit.model import EscalatorModel
+    from vibkit.model.effects import FP, pack_parameters
+    from vibkit.model.escalator import EscalatorModel
 
     model = EscalatorModel(load_scene(SIM / "thesis-forward.toml"))
     fp = pack_parameters(model, {})[2]

@@ -5,9 +5,9 @@ import math
 import numpy as np
 import pytest
 
-from vibkit.guide import Guide
-from vibkit.params import reference_chain, reference_guide, reference_sprocket
-from vibkit.sprocket import tooth_geometry
+from vibkit.model.guide import Guide
+from vibkit.model.params import reference_chain, reference_guide, reference_sprocket
+from vibkit.model.sprocket import tooth_geometry
 
 
 def test_reference_numbers():

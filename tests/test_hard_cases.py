@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 import vibkit
-from vibkit.integrate import IntegrationError
-from vibkit.scene import SceneError, parse_scene
+from vibkit.analyses.integrate import IntegrationError
+from vibkit.model.scene import SceneError, parse_scene
 
 SIM = Path(__file__).resolve().parents[1] / "sim"
 BASE = (SIM / "thesis-forward.toml").read_text()
@@ -76,7 +76,7 @@ def test_ten_loops_without_drift():
               ("lower_landing = 0.8", "lower_landing = 0.2"), ("upper_landing = 0.8", "upper_landing = 0.2"),
               ("transition_radius = 1.5", "transition_radius = 0.5"),
               run="initial_speed = 1.0", effects="gravity = true", solver="rtol = 1e-8")
-    from vibkit.model import EscalatorModel
+    from vibkit.model.escalator import EscalatorModel
 
     loop = EscalatorModel(s).guide.p0
     ds = vibkit.simulate(s, duration=10 * loop / 1.0, progress=False)

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 import vibkit
-from vibkit.integrate import METHODS
-from vibkit.scene import load_scene
+from vibkit.analyses.integrate import METHODS
+from vibkit.model.scene import load_scene
 
 SIM = Path(__file__).resolve().parents[1] / "sim"
 

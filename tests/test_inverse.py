@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import vibkit
-from vibkit.scene import load_scene
+from vibkit.model.scene import load_scene
 
 SIM = Path(__file__).resolve().parents[1] / "sim"
 

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from vibkit.pitch import elongation_verdict, estimate_pitch
+from vibkit.diagnose.pitch import elongation_verdict, estimate_pitch
 
 
 def _rec(t, x, seg=None, units="m/s^2"):

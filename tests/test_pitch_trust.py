@@ -10,7 +10,7 @@ import scipy.stats
 import xarray as xr
 
 from vibkit.cli import main
-from vibkit.pitch import STATUS_NOT_FOUND, estimate_pitch
+from vibkit.diagnose.pitch import STATUS_NOT_FOUND, estimate_pitch
 from vibkit.signal.detect import detect_link_pass, flag_invalid, harmonic_sum_pvalue, harmonic_sum_threshold
 
 LEON = "data/field/leon-tensioner.csv"

@@ -4,7 +4,7 @@ seconds for long work (a service or cron job must not run silently for minutes).
 import io
 
 import vibkit
-from vibkit.progress import Progress
+from vibkit.runtime.progress import Progress
 
 
 class FakeTTY(io.StringIO):
@@ -80,9 +80,9 @@ def test_kinematic_sweep_shows_lines_when_piped(monkeypatch, capfd):
 
     import numpy as np
 
-    import vibkit.kinematics as kin
-    from vibkit.model import EscalatorModel
-    from vibkit.scene import load_scene
+    import vibkit.analyses.kinematics as kin
+    from vibkit.model.escalator import EscalatorModel
+    from vibkit.model.scene import load_scene
 
     monkeypatch.setenv("VIBKIT_PROGRESS_INTERVAL", "1e-9")
     model = EscalatorModel(load_scene(Path(__file__).resolve().parents[1] / "sim" / "thesis-kinematics.toml"))

@@ -1,4 +1,4 @@
-"""The study's formulation (vibkit.reference) against vibkit's independent-coordinate forward dynamics.
+"""The study's formulation (vibkit.analyses.reference) against vibkit's independent-coordinate forward dynamics.
 
 Three levels, from exact to stated:
 
@@ -20,10 +20,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from vibkit.forward import ForwardModel, forward_dynamics, initial_state
-from vibkit.model import EscalatorModel
-from vibkit.reference import STUDY_SETTINGS, StudyFormulation, run_study
-from vibkit.scene import load_scene
+from vibkit.analyses.forward import ForwardModel, forward_dynamics, initial_state
+from vibkit.model.escalator import EscalatorModel
+from vibkit.analyses.reference import STUDY_SETTINGS, StudyFormulation, run_study
+from vibkit.model.scene import load_scene
 
 SIM = Path(__file__).resolve().parents[1] / "sim"
 DURATION = 1.5  # [s]: roller 1 leaves the top tensioner run (s0 = Lt) at about 1.42 s

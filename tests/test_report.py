@@ -5,7 +5,7 @@ from pathlib import Path
 
 import pytest
 
-from vibkit.report import report_date, write_report
+from vibkit.diagnose.report import report_date, write_report
 
 LEON = "data/field/leon-tensioner.csv"
 

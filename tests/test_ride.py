@@ -8,7 +8,7 @@ import pytest
 import xarray as xr
 
 from vibkit.cli import main
-from vibkit.ride import parse_channels, parse_segment, ride_quality_from_recording, ride_quality_from_simulation
+from vibkit.diagnose.ride import parse_channels, parse_segment, ride_quality_from_recording, ride_quality_from_simulation
 from vibkit.signal import frequency_weighting_response
 
 from .signal.test_signal_ride import synthetic_ride
@@ -145,7 +145,7 @@ def test_cli_ride_of_a_scene_simulates_it(capsys):
 
 
 def test_report_has_a_ride_quality_page(ride_csv, tmp_path):
-    from vibkit.report import write_report
+    from vibkit.diagnose.report import write_report
 
     path, _, _ = ride_csv
     # a short spike window keeps the report's Hampel calibration quick (it is not what is tested here)
@@ -169,7 +169,7 @@ def test_cli_ride_recording_with_a_scene_beside_it(ride_csv, capsys):
 
 
 def test_a_constant_axis_gives_nan_and_a_note_not_an_error():
-    from vibkit.ride import ride_quality
+    from vibkit.diagnose.ride import ride_quality
 
     t = np.arange(0, 20, 1 / FS)
     rq = ride_quality({"y": np.zeros(t.size), "z": 9.8 + 0.1 * np.sin(2 * np.pi * 5 * t)}, FS, segment=(4, 18))

@@ -4,7 +4,7 @@ from pathlib import Path
 
 import pytest
 
-from vibkit.scene import SceneError, load_scene
+from vibkit.model.scene import SceneError, load_scene
 
 SIM = Path(__file__).resolve().parents[1] / "sim"
 

@@ -1,4 +1,4 @@
-"""Sweeps (vibkit.sweep, `vibkit sweep`): equal to single runs bit for bit, resumable, failures recorded."""
+"""Sweeps (vibkit.sweep.run, `vibkit sweep`): equal to single runs bit for bit, resumable, failures recorded."""
 
 import json
 import sys
@@ -10,10 +10,10 @@ import xarray as xr
 
 import vibkit
 from vibkit.cli import main
-from vibkit.scene import parse_scene
-from vibkit.sweep import SweepError, plan_sweep
+from vibkit.model.scene import parse_scene
+from vibkit.sweep.run import SweepError, plan_sweep
 
-SW = sys.modules["vibkit.sweep"]  # the module (vibkit.sweep is the function)
+SW = sys.modules["vibkit.sweep.run"]  # the module (vibkit.sweep.run is the function)
 
 # the no-load forward scene from rest with a stiff P controller (at speed within 0.5 s), 2 s: short; from rest
 # the teeth take load at once

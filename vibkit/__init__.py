@@ -2,10 +2,13 @@
 
 Three layers, imports pointing one way:
 
-* physics: :mod:`vibkit.guide`, :mod:`vibkit.chain`, :mod:`vibkit.sprocket`, :mod:`vibkit.dynamics`
-  and the orchestrator :func:`vibkit.simulate`;
-* signals: :mod:`vibkit.signal` (numpy, scipy, xarray only; never the simulator);
-* data and people: :mod:`vibkit.io`, :func:`vibkit.compare`, :mod:`vibkit.report`, :mod:`vibkit.cli`.
+* :mod:`vibkit.model`: the escalator (guide, chain, sprocket, effects, scenes);
+* :mod:`vibkit.analyses`: what solves it (kinematics, inverse and forward dynamics) and :func:`vibkit.simulate`;
+* :mod:`vibkit.signal` and :mod:`vibkit.io`: signals and recordings (never the model);
+* :mod:`vibkit.diagnose`: pitch, comparison, ride quality, reports; :mod:`vibkit.fleet`, :mod:`vibkit.sweep`;
+* :mod:`vibkit.cli`: the command line; :mod:`vibkit.runtime`: guards every layer shares.
+
+The data path: scene -> model -> analyses -> Dataset -> signal -> diagnose -> report.
 
 Everything is SI inside: metres, kilograms, seconds, radians, newtons.
 """
@@ -16,21 +19,21 @@ __all__ = ["__version__", "load_scene", "simulate", "read_recording", "compare",
 
 # eager (the module imports only the standard library): a lazy name would be replaced by the module
 # object the first time someone runs `import vibkit.sweep`; this way `vibkit.sweep` is the function
-from .sweep import sweep  # noqa: E402
+from .sweep.run import sweep  # noqa: E402
 
 # a read-only install (root installs, a service account runs) must still find a writable kernel cache
-from .kernel_cache import configure as _configure_kernel_cache  # noqa: E402
+from .runtime.kernel_cache import configure as _configure_kernel_cache  # noqa: E402
 
 _configure_kernel_cache()
 
 
 def __getattr__(name):  # lazy: `import vibkit` stays cheap (no numba, no obspy)
     if name == "load_scene":
-        from .scene import load_scene
+        from .model.scene import load_scene
 
         return load_scene
     if name == "simulate":
-        from .simulation import simulate
+        from .analyses.simulation import simulate
 
         return simulate
     if name == "read_recording":
@@ -38,7 +41,7 @@ def __getattr__(name):  # lazy: `import vibkit` stays cheap (no numba, no obspy)
 
         return read_recording
     if name == "compare":
-        from .comparison import compare
+        from .diagnose.comparison import compare
 
         return compare
     raise AttributeError(f"module 'vibkit' has no attribute {name!r}")

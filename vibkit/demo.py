@@ -27,7 +27,7 @@ def _plot(ds, path, variables, xdim):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from .report import atomic_path
+    from .diagnose.report import atomic_path
 
     fig, axes = plt.subplots(len(variables), 1, figsize=(9, 3 * len(variables)), sharex=True, squeeze=False)
     for ax, (name, sel) in zip(axes[:, 0], variables):
@@ -47,7 +47,7 @@ def main(argv=None) -> int:
     """Run the demo; returns 0, or 1 with a one-line message on failure."""
     from . import simulate
     from .io import write_result
-    from .report import write_report
+    from .diagnose.report import write_report
 
     p = argparse.ArgumentParser(prog="python -m vibkit.demo", description=__doc__.splitlines()[0])
     p.add_argument("--root", default=str(Path(__file__).resolve().parent.parent), help="repository root")

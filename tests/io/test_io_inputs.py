@@ -10,7 +10,7 @@ import xarray as xr
 
 from vibkit.io import (DEFAULT_MAX_RECORDING_BYTES, RecordingError, max_recording_bytes, read_recording,
                        resolve_channel, write_result)
-from vibkit.pitch import pick_channel
+from vibkit.diagnose.pitch import pick_channel
 
 FS = 200.0
 T = np.arange(400) / FS

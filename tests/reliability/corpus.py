@@ -168,7 +168,7 @@ def _stale_temp(name):
 # the child prints READY and waits inside the final step of a write (after the data, before the rename)
 SLOW_COMMIT = """
 import sys, time
-import vibkit.safe_output as _so
+import vibkit.runtime.safe_output as _so
 _orig = _so._commit
 def _slow(*a, **k):
     print("READY", flush=True)
@@ -180,7 +180,7 @@ _so._commit = _slow
 # a disk that fills after 4 kB: every write of the safe-output module fails with ENOSPC
 DISK_FULL = """
 import errno, io, os
-import vibkit.safe_output as _so
+import vibkit.runtime.safe_output as _so
 class _Full(io.FileIO):
     written = 0
     def write(self, b):

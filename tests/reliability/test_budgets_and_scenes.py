@@ -8,7 +8,7 @@ import pytest
 
 import vibkit
 from vibkit import budget
-from vibkit.scene import SceneError, load_scene, parse_scene
+from vibkit.model.scene import SceneError, load_scene, parse_scene
 
 SIM = Path(__file__).resolve().parents[2] / "sim"
 
@@ -74,7 +74,7 @@ def test_wall_time_default_and_precedence(monkeypatch):
 
 def test_wall_time_budget_stops_with_a_clear_error():
     scene = parse_scene(_text("thesis-forward", **{"method = \"dopri5\"": "method = \"dopri5\"\nmax_step = 1e-5"}), "slow.toml")
-    from vibkit.integrate import IntegrationError
+    from vibkit.analyses.integrate import IntegrationError
 
     with pytest.raises(IntegrationError, match=r"slow.toml: dopri5: wall-time budget of 0.2 s exceeded.*max_wall_time"):
         vibkit.simulate(scene, max_wall_time=0.2, progress=False)
@@ -148,7 +148,7 @@ def test_far_start_reduced_to_one_loop_with_full_accuracy():
 
 
 def test_scene_methods_match_the_integrators():
-    from vibkit.integrate import METHODS
-    from vibkit.scene import SOLVER_METHODS
+    from vibkit.analyses.integrate import METHODS
+    from vibkit.model.scene import SOLVER_METHODS
 
     assert tuple(SOLVER_METHODS) == tuple(METHODS)

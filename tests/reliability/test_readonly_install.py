@@ -194,7 +194,7 @@ def test_home_cache_preferred_and_no_cache_last_resort(readonly):
     os.chmod(xdg, 0o1777)
     ro = dict(readonly, env=dict(readonly["env"], XDG_CACHE_HOME=str(xdg)))
     proc = _run(ro, """
-        from vibkit.kernel_cache import cache_dir
+        from vibkit.runtime.kernel_cache import cache_dir
         print(cache_dir())
     """)
     assert proc.returncode == 0, proc.stderr

@@ -1,4 +1,4 @@
-"""vibkit.safe_output: regular files only, no clobbering, atomic, nothing left behind (issue 12)."""
+"""vibkit.runtime.safe_output: regular files only, no clobbering, atomic, nothing left behind (issue 12)."""
 
 import errno
 import io
@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-import vibkit.safe_output as so
+import vibkit.runtime.safe_output as so
 from vibkit.io import write_result
 
 
@@ -122,7 +122,7 @@ def test_report_pdf_in_memory_then_disk_full(tmp_path, monkeypatch):
     import matplotlib.pyplot as plt
     from matplotlib.backends.backend_pdf import PdfPages
 
-    from vibkit.report import _pdf_in_memory
+    from vibkit.diagnose.report import _pdf_in_memory
 
     out = tmp_path / "r.pdf"
     with _pdf_in_memory(out, overwrite=False, inputs=()) as buf, PdfPages(buf) as pdf:

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from vibkit.ride import ride_quality
+from vibkit.diagnose.ride import ride_quality
 from vibkit.signal import a95, detect_ride_segment, half_cycle_peaks, peak_to_peak, peak_to_peak_values
 
 

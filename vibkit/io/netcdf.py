@@ -42,7 +42,7 @@ def _check_attrs(where: str, attrs: dict) -> None:
 
 
 def write_result(ds: xr.Dataset, path, *, overwrite: bool = True, inputs=()) -> str:
-    """Write a Dataset to netCDF4/HDF5, atomically (see :mod:`vibkit.safe_output`).
+    """Write a Dataset to netCDF4/HDF5, atomically (see :mod:`vibkit.runtime.safe_output`).
 
     The file is built in memory and then written to a temporary file in the target's folder,
     flushed and renamed, so a reader never sees half a file, a full disk leaves nothing behind and
@@ -69,11 +69,11 @@ def write_result(ds: xr.Dataset, path, *, overwrite: bool = True, inputs=()) -> 
     ------
     ValueError
         An attr that netCDF cannot store (named), a missing folder, or an unsafe target
-        (:class:`vibkit.safe_output.OutputError`).
+        (:class:`vibkit.runtime.safe_output.OutputError`).
     OSError
         The write failed (disk full ...); nothing is left behind.
     """
-    from ..safe_output import check_output_path, write_bytes
+    from ..runtime.safe_output import check_output_path, write_bytes
 
     if not isinstance(ds, xr.Dataset):
         raise ValueError(f"ds must be an xarray.Dataset, got {type(ds).__name__}")

@@ -5,7 +5,7 @@ These are the quantities that escalator and lift ride-quality meters report (ISO
 ISO 18738-2 for escalators and moving walks, now the ISO 8103 series), computed on the signal
 weighted with :func:`vibkit.signal.weighting.frequency_weighting` (Wk vertical, Wd horizontal,
 ISO 2631-1) or on a 10 Hz low-passed signal.  Pure numpy/scipy; the recording-level orchestration
-is :mod:`vibkit.ride`.
+is :mod:`vibkit.diagnose.ride`.
 
 Definitions.  The ISO 18738 texts (and ISO/DIS 18738:2001, of which only the cover is public)
 were not available to us: what follows is the convention as ride-quality practice describes it

@@ -24,7 +24,7 @@ import stat
 import sys
 import tempfile
 
-__all__ = ["configure", "cache_dir"]
+__all__ = ["configure", "cache_dir", "remove_orphans"]
 
 _STATE = {"dir": None, "configured": False}
 
@@ -40,8 +40,12 @@ def _writable_dir(path: str) -> bool:
     return True
 
 
+#: the subpackages whose modules hold ``cache=True`` kernels
+KERNEL_PACKAGES = ("model", "analyses", "signal")
+
+
 def _package_writable(pkg_dir: str) -> bool:
-    for d in (pkg_dir, os.path.join(pkg_dir, "signal")):
+    for d in (pkg_dir, *(os.path.join(pkg_dir, sub) for sub in KERNEL_PACKAGES)):
         cache = os.path.join(d, "__pycache__")
         target = cache if os.path.isdir(cache) else d
         if not os.access(target, os.W_OK | os.X_OK):
@@ -114,8 +118,11 @@ def configure(pkg_dir: str | None = None) -> str | None:
     if _STATE["configured"]:
         return _STATE["dir"]
     _STATE["configured"] = True
-    pkg_dir = pkg_dir or os.path.dirname(os.path.abspath(__file__))
-    if os.environ.get("NUMBA_CACHE_DIR") or _package_writable(pkg_dir):
+    pkg_dir = pkg_dir or os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    if os.environ.get("NUMBA_CACHE_DIR"):
+        return None
+    if _package_writable(pkg_dir):
+        remove_orphans(pkg_dir)
         return None
     for path in _candidates():
         if _writable_dir(path):
@@ -133,6 +140,33 @@ def configure(pkg_dir: str | None = None) -> str | None:
     _disable_numba_cache(f"no writable folder for the kernel cache (package {pkg_dir}, home, "
                          f"{tempfile.gettempdir()})")
     return None
+
+
+def remove_orphans(pkg_dir: str) -> list[str]:
+    """Delete numba cache files in the package's ``__pycache__`` folders whose module is gone.
+
+    Numba names a kernel's cache ``<module>.<function>-<line>.py<ver>.nbi`` (and ``.nbc``) in the
+    ``__pycache__`` beside the module's source. When a module moves (``vibkit/chain.py`` became
+    ``vibkit/model/chain.py``) an upgrade in place leaves the old files behind: never loaded again,
+    but dead weight that would mislead whoever inspects the cache. Returns the paths removed.
+    """
+    removed = []
+    for root, dirs, files in os.walk(pkg_dir):
+        if os.path.basename(root) != "__pycache__":
+            continue
+        src_dir = os.path.dirname(root)
+        for name in files:
+            if not name.endswith((".nbi", ".nbc")):
+                continue
+            module = name.split(".", 1)[0]
+            if os.path.exists(os.path.join(src_dir, module + ".py")):
+                continue
+            try:
+                os.remove(os.path.join(root, name))
+            except OSError:
+                continue
+            removed.append(os.path.join(root, name))
+    return removed
 
 
 def cache_dir() -> str | None:

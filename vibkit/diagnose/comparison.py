@@ -32,23 +32,23 @@ _BY_UNITS = {
 
 
 def as_result(result, *, duration=None, progress=False):
-    """A simulation result from a Dataset, a :class:`vibkit.scene.Scene`, a scene ``.toml`` or a result file.
+    """A simulation result from a Dataset, a :class:`vibkit.model.scene.Scene`, a scene ``.toml`` or a result file.
 
     A scene is simulated (``duration`` [s] overrides its length); a result file is read with
     :func:`vibkit.read_recording`.
     """
     import xarray as xr
 
-    from .scene import Scene
+    from ..model.scene import Scene
 
     if isinstance(result, xr.Dataset):
         return result
     if isinstance(result, Scene) or (isinstance(result, (str, os.PathLike)) and str(result).endswith(".toml")):
-        from .simulation import simulate
+        from ..analyses.simulation import simulate
 
         return simulate(result, duration=duration, progress=progress)
     if isinstance(result, (str, os.PathLike)):
-        from .io import read_recording
+        from ..io import read_recording
 
         return read_recording(result)
     raise ValueError(f"result must be a Dataset, a Scene or a path (.toml scene or result file), "
@@ -181,7 +181,7 @@ def _combine(values, sigmas):
 
 
 def _order_amplitude(x, fs, f0, spc):
-    from .signal import order_spectrum, resample_to_angle
+    from ..signal import order_spectrum, resample_to_angle
 
     phase = 2.0 * np.pi * f0 * np.arange(x.size) / fs
     return order_spectrum(resample_to_angle(x, fs, phase, samples_per_cycle=spc))
@@ -237,9 +237,9 @@ def compare(recording, result, *, channel=None, variable=None, n_harmonics=5, ba
     >>> vibkit.compare(res, res).score                            # doctest: +SKIP
     1.0
     """
-    from .io import read_recording
+    from ..io import read_recording
     from .pitch import DEFAULT_PITCH_RANGE_M, pick_channel, uniform_bursts
-    from .signal import compare_spectra
+    from ..signal import compare_spectra
 
     if not 0 < float(confidence) < 1:
         raise ValueError(f"confidence must lie in (0, 1), got {confidence!r}")

@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .signal.detect import FILL_THRESHOLD, flag_invalid
+from ..signal.detect import FILL_THRESHOLD, flag_invalid
 
 __all__ = [
     "CATALOGUE_PITCHES_M",
@@ -93,7 +93,7 @@ def pick_channel(recording, channel=None) -> str:
     ValueError
         ``channel`` is not a channel of the recording, or the recording has no channel.
     """
-    from .io.channels import resolve_channel
+    from ..io.channels import resolve_channel
 
     return resolve_channel(recording, channel)
 
@@ -393,7 +393,7 @@ def _dropped_samples(recording, name, bursts):
 def _prepared(bursts, band):
     """Bursts scaled to unit size (no overflow or underflow in squares) and decimated to what the
     harmonics need (``10 band[1]`` kept); returns ``(bursts, scale)`` with ``x_original = scale x``."""
-    from .signal._checks import decimate_for_band
+    from ..signal._checks import decimate_for_band
 
     scale = max(float(np.max(np.abs(b.x - np.median(b.x)))) for b in bursts)
     if not (scale > 0 and math.isfinite(scale)):
@@ -414,7 +414,7 @@ MIN_TRACK_PERIODS = 40
 
 def _burst_mean_phase(b, e):
     """Mean-phase estimate of one burst (None when too short or when tracking fails)."""
-    from .signal.meanfreq import mean_link_pass_frequency
+    from ..signal.meanfreq import mean_link_pass_frequency
 
     f0 = e.fundamental_hz
     if b.x.size / b.fs * f0 < MIN_TRACK_PERIODS:
@@ -509,8 +509,8 @@ def estimate_pitch(recording, *, speed, speed_sigma=0.0, channel=None, band=None
     >>> round(estimate_pitch(rec, speed=0.5).pitch_m, 4)
     0.1333
     """
-    from .signal import link_pass_estimate
-    from .signal.detect import detect_link_pass
+    from ..signal import link_pass_estimate
+    from ..signal.detect import detect_link_pass
 
     speed = float(speed)
     if not (math.isfinite(speed) and speed > 0):

@@ -6,7 +6,7 @@ steps.  :func:`check_run` estimates the memory the result arrays need (samples x
 the columns being those the analysis allocates for the outputs asked for) and the least number of
 integrator steps, and raises :class:`BudgetError` naming the file, the key and the limit before any
 work is done.  The forward dynamics also get a wall-time budget by default
-(:func:`max_wall_time`); the integrator stops with :class:`vibkit.integrate.IntegrationError`
+(:func:`max_wall_time`); the integrator stops with :class:`vibkit.analyses.integrate.IntegrationError`
 when it is exceeded.
 
 Limits, the first given wins:

@@ -24,8 +24,8 @@ unless ``force=True``. The workers never touch the store, so a remote Dask clust
 shared file system.
 
 This module imports only the standard library at load time (``vibkit/__init__`` imports its
-``sweep`` function eagerly, so that ``vibkit.sweep`` is always the function; the module itself is
-``sys.modules["vibkit.sweep"]``, and ``from vibkit.sweep import parse_vary`` works as usual).
+``sweep`` function eagerly, so that ``vibkit.sweep.run`` is always the function; the module itself is
+``sys.modules["vibkit.sweep.run"]``, and ``from vibkit.sweep.run import parse_vary`` works as usual).
 """
 
 from __future__ import annotations
@@ -163,7 +163,7 @@ def _split_spec(key, spec):
 
 
 def _scene_schema():
-    from .scene import EFFECTS, SECTIONS
+    from ..model.scene import EFFECTS, SECTIONS
 
     return SECTIONS, EFFECTS
 
@@ -414,7 +414,7 @@ def plan_sweep(scene, vary: dict, *, samples: int | None = None, seed: int | Non
     """Check and expand a sweep's definition (no run is started); see :func:`sweep`."""
     import tomllib
 
-    from .scene import OUTPUTS, Scene, load_scene
+    from ..model.scene import OUTPUTS, Scene, load_scene
 
     base = scene if isinstance(scene, Scene) else load_scene(scene)
     text, source = base.text, base.source
@@ -530,7 +530,7 @@ def summarize(ds, scene, *, settle: float | None = None) -> dict:
     if steady.sum() < 2:
         steady = np.ones(t.size, bool)
     if scene.analysis == "forward" and "s0" in ds and "delta" in ds:
-        from .guide import Guide
+        from ..model.guide import Guide
 
         s0 = np.asarray(ds["s0"].values)[steady]
         d = np.asarray(ds["delta"].values)[steady]
@@ -568,7 +568,7 @@ def summarize(ds, scene, *, settle: float | None = None) -> dict:
 
 def _simulate(scene, duration):
     """One run (a module-level name, so that tests can count the calls in a threaded cluster)."""
-    from .simulation import simulate
+    from ..analyses.simulation import simulate
 
     return simulate(scene, duration=duration, progress=False)
 
@@ -578,8 +578,8 @@ def _run_one(task: dict) -> dict:
     t0 = time.perf_counter()
     rec = {"index": task["index"], "status": STATUS["ok"], "error": "", "summary": {}, "kept": {}, "pid": os.getpid()}
     try:
-        from .integrate import IntegrationError
-        from .scene import OUTPUTS, SceneError, parse_scene
+        from ..analyses.integrate import IntegrationError
+        from ..model.scene import OUTPUTS, SceneError, parse_scene
 
         try:
             scene = parse_scene(task["text"], task["source"])
@@ -787,7 +787,7 @@ def _assemble(plan, records, *, complete):
     import numpy as np
     import xarray as xr
 
-    from . import __version__
+    from .. import __version__
 
     n = len(plan.points)
     dims = plan.dims
@@ -872,7 +872,7 @@ class _Report:
     """A bar on a terminal; a line every ``every`` seconds otherwise; nothing when disabled."""
 
     def __init__(self, total, done0, *, enabled, stream=None, every=5.0):
-        from .progress import Progress
+        from ..runtime.progress import Progress
 
         self.stream = stream or sys.stderr
         self.total, self.done0, self.done, self.failed = total, done0, done0, 0
@@ -926,7 +926,7 @@ def sweep(scene, vary: dict, *, output=None, samples: int | None = None, seed: i
     Parameters
     ----------
     scene : Scene or str or Path
-        The base scene (a TOML file or a :class:`~vibkit.scene.Scene` from ``load_scene``).
+        The base scene (a TOML file or a :class:`~vibkit.model.scene.Scene` from ``load_scene``).
     vary : dict
         Dotted scene key -> values: ``"A:B:N"`` (N values from A to B), ``"a,b,c"`` or a sequence
         of values; with ``samples``, ``"A:B"`` (drawn uniformly) or a list (drawn among).
@@ -1000,7 +1000,7 @@ def sweep(scene, vary: dict, *, output=None, samples: int | None = None, seed: i
     reused = len(records)
     todo = [i for i in range(len(plan.points)) if i not in records]
     # validate every varied scene now: a value the loader refuses is that run's result
-    from .scene import SceneError, parse_scene
+    from ..model.scene import SceneError, parse_scene
 
     tasks = []
     for i in todo:
@@ -1026,7 +1026,7 @@ def sweep(scene, vary: dict, *, output=None, samples: int | None = None, seed: i
     if tasks:
         import contextlib
 
-        from .cluster import dask_client
+        from ..runtime.cluster import dask_client
 
         ctx = contextlib.nullcontext(client) if client is not None else dask_client(scheduler, n_workers=n_workers)
         try:

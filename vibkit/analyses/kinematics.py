@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .progress import Progress
+from ..runtime.progress import Progress
 from .results import make_dataset
 
 __all__ = ["kinematic_sweep"]
@@ -28,7 +28,7 @@ def kinematic_sweep(model, start: float, stop: float, step: float, *, rollers=()
     outputs : sequence of str
         Names among ``delta``, ``s1``, ``roller_position``, ``closure_residual``.
     progress : bool
-        Show progress on stderr (see :class:`vibkit.progress.Progress`); a compiled sweep of more
+        Show progress on stderr (see :class:`vibkit.runtime.progress.Progress`); a compiled sweep of more
         than :data:`PROGRESS_CHUNK` configurations then runs in pieces, each warm-started from the last.
 
     Returns

@@ -7,7 +7,7 @@ import datetime as _dt
 import numpy as np
 import xarray as xr
 
-from . import __version__
+from .. import __version__
 
 __all__ = ["VARIABLES", "make_dataset"]
 

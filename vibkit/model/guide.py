@@ -321,7 +321,7 @@ class Guide:
 
     Examples
     --------
-    >>> from vibkit.params import reference_guide
+    >>> from vibkit.model.params import reference_guide
     >>> g = Guide(reference_guide())
     >>> round(g.perimeter(0.0), 4)
     21.2751
@@ -338,7 +338,7 @@ class Guide:
         Every segment start (a curvature jump between a line and an arc, or the end of a telescopic
         run) and the four inner ends of the telescopic runs' cosine ramps. They do not move with
         delta. The acceleration of a roller jumps (or its rate does) when it crosses one, so the
-        forward integrator ends its steps there (:meth:`vibkit.chain.Chain.crossing_table`).
+        forward integrator ends its steps there (:meth:`vibkit.model.chain.Chain.crossing_table`).
         """
         tab = self.table
         jump = tab[:, KAPPA] != np.roll(tab[:, KAPPA], 1)

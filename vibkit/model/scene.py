@@ -33,7 +33,7 @@ __all__ = ["Scene", "SceneError", "load_scene", "parse_scene", "EFFECTS", "OUTPU
 
 ANALYSES = ("kinematics", "inverse", "forward")
 
-#: the integrators of :mod:`vibkit.integrate` (kept equal to ``integrate.METHODS`` by a test; listed
+#: the integrators of :mod:`vibkit.analyses.integrate` (kept equal to ``integrate.METHODS`` by a test; listed
 #: here so that loading a scene does not import the compiled kernels)
 SOLVER_METHODS = ("dopri5", "rk45", "dop853", "bdf", "radau", "lsoda", "cvode-bdf", "cvode-adams")
 
@@ -97,7 +97,7 @@ SECTIONS = {
 }
 
 
-# places of the guide where passengers board and alight (vibkit.model.EscalatorModel.place)
+# places of the guide where passengers board and alight (vibkit.model.escalator.EscalatorModel.place)
 PLACES = ("lower_landing", "upper_landing")
 
 
@@ -444,7 +444,7 @@ def _analysis_sections(src, sec, analysis):
     if method is not None and method.lower() not in SOLVER_METHODS:
         raise SceneError(f"{src}: 'solver.method' must be one of {', '.join(SOLVER_METHODS)}, got {method!r}")
     if "max_result_bytes" in sec["solver"]:
-        from .budget import parse_bytes
+        from ..runtime.budget import parse_bytes
 
         try:
             parse_bytes(sec["solver"]["max_result_bytes"])

@@ -9,7 +9,7 @@ angle), the p closure constraints C_i = |r_{i+1} - r_i|^2 - L^2 (the last one jo
 roller 1) enforced with Lagrange multipliers at the acceleration level, Baumgarte stabilisation
 against drift, and Matlab's ode15s (a variable-order BDF/NDF method) with
 RelTol = AbsTol = MaxStep = 1e-3. This module is a faithful port of that formulation: it is the
-independent check of :mod:`vibkit.forward` (which integrates the 2-DOF system in the independent
+independent check of :mod:`vibkit.analyses.forward` (which integrates the 2-DOF system in the independent
 coordinate s0_1, closing the chain link by link at every evaluation) and the baseline of the speed
 comparison in ``benchmarks/bench_reference.py``.
 
@@ -31,7 +31,7 @@ linearly, the study's eqs. 4-5 to 4-8) meets a fixed segment, so a roller crossi
 with a continuous s0dot changes its physical speed by the factor (Lt - delta)/Lt; the constraint
 then holds only through Baumgarte's correction for a short while (the link lengths err by about
 0.2 mm at the default alpha = beta = 50 1/s). vibkit's guide uses a C1 map instead
-(:func:`vibkit.guide.local_map`); ``coordinate_map="vibkit"`` runs the same equations in that
+(:func:`vibkit.model.guide.local_map`); ``coordinate_map="vibkit"`` runs the same equations in that
 coordinate, which separates the study's equations (checked to integration accuracy) from its choice
 of coordinate (a small, stated disagreement).
 """
@@ -46,11 +46,11 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.linalg import splu
 
-from .effects import FP, IP, motor_torque, pack_parameters
-from .guide import BX, BZ, KAPPA, S0, SIGP, local_inverse, local_map, local_point, locate, point_partials
+from ..model.effects import FP, IP, motor_torque, pack_parameters
+from ..model.guide import BX, BZ, KAPPA, S0, SIGP, local_inverse, local_map, local_point, locate, point_partials
 from .integrate import IntegrationError
 from .results import make_dataset
-from .sprocket import contact_kernel
+from ..model.sprocket import contact_kernel
 
 __all__ = ["StudyFormulation", "run_study", "BAUMGARTE_ALPHA", "BAUMGARTE_BETA", "STUDY_SETTINGS"]
 
@@ -74,7 +74,7 @@ STUDY_SETTINGS = {"rtol": 1e-3, "atol": 1e-3, "max_step": 1e-3}
 
 _SOLVE_IVP_METHODS = ("BDF", "Radau", "LSODA", "RK45", "RK23", "DOP853")
 
-# parameter slots of vibkit.effects.pack_parameters (module constants, frozen into the compiled code)
+# parameter slots of vibkit.model.effects.pack_parameters (module constants, frozen into the compiled code)
 _P0, _G, _K, _EXPO, _DAMP = FP["p0"], FP["g"], FP["k"], FP["expo"], FP["damp"]
 _KP, _KI, _WREF, _TLIM = FP["kp"], FP["ki"], FP["wref"], FP["tlim"]
 _KS, _PRELOAD, _MC, _MURR, _INERTIA = FP["k_s"], FP["preload"], FP["m_c"], FP["mu_rr"], FP["inertia"]
@@ -122,7 +122,7 @@ def study_partials(tab, k, s0loc, delta, out):
     On a telescopic run (undeformed length Lt) the local arc length is lam = sigma s0loc with
     sigma = (Lt - delta)/Lt (the study's eqs. 4-5 to 4-8 and 5-1, 5-13); on fixed segments lam = s0loc.
     Fills ``out`` (12) with x, z, r_s, r_d, r_ss, r_sd, r_dd (x and z of each), as
-    :func:`vibkit.guide.point_partials` does for vibkit's own map.
+    :func:`vibkit.model.guide.point_partials` does for vibkit's own map.
     """
     sigp = tab[k, SIGP]
     sig = 1.0 + sigp * delta
@@ -150,7 +150,7 @@ def study_partials(tab, k, s0loc, delta, out):
 def _kinematics(tab, p0, q, qd, p, linear, part, vel, wq):
     """Roller positions and partials (part (p, 12)), velocities (vel (p, 2)) and the
     quadratic-velocity accelerations w_i (wq (p, 2)) at coordinates q and rates qd, with the
-    study's linear map (``linear``) or vibkit's smooth one (:func:`vibkit.guide.local_map`)."""
+    study's linear map (``linear``) or vibkit's smooth one (:func:`vibkit.model.guide.local_map`)."""
     delta = q[p]
     ddot = qd[p]
     for i in range(p):
@@ -176,7 +176,7 @@ def _assemble(t, y, prm, pitches, linear, alpha, beta, ws, data, rhs):
     (motor torque [N m], contact torque [N m], speed-error rate for the integral state [rad/s]).
     ``ws`` = (part, vel, wq, fx, fz, cand, ind_t, frc_t, xs, zs, vx, vz).
     """
-    # the first nine entries of vibkit.effects.pack_parameters (later ones, if any, are not needed)
+    # the first nine entries of vibkit.model.effects.pack_parameters (later ones, if any, are not needed)
     tab, loc, fp, ip, mass, pm, ps, pb, pa = prm[0], prm[1], prm[2], prm[3], prm[4], prm[5], prm[6], prm[7], prm[8]
     part, vel, wq, fx, fz, cand, ind_t, frc_t, xs, zs, vx, vz = ws
     p = ip[_N]
@@ -306,7 +306,7 @@ class StudyFormulation:
     coordinate_map : {"study", "vibkit"}
         How s0 maps onto the telescopic runs: "study" is the study's linear map (dr/ds0 jumps at
         the four ends of the runs, see module docstring); "vibkit" is the C1 map of
-        :func:`vibkit.guide.local_map`, the coordinate of :mod:`vibkit.forward`. The equations are
+        :func:`vibkit.model.guide.local_map`, the coordinate of :mod:`vibkit.analyses.forward`. The equations are
         the same; only the coordinate differs.
 
     Attributes
@@ -435,10 +435,10 @@ class StudyFormulation:
     # -- states -----------------------------------------------------------------------------------
     def state_from_independent(self, y_ind) -> np.ndarray:
         """The study's state of the chain described by vibkit's state y_ind = [s0_1, s0dot_1, theta,
-        thetadot, integral] (:mod:`vibkit.forward`).
+        thetadot, integral] (:mod:`vibkit.analyses.forward`).
 
         The conversion goes through the physical configuration: the chain is closed link by link
-        (:meth:`vibkit.chain.Chain.configure`), each roller's study coordinate follows from its
+        (:meth:`vibkit.model.chain.Chain.configure`), each roller's study coordinate follows from its
         segment and local arc length, and its rate from its velocity, s0dot_i = (v_i - r_d,i deltadot).r_s,i
         / |r_s,i|^2. So C = 0 and Phi_q qdot = 0 to rounding, whatever coordinate map vibkit's guide uses.
         """
@@ -473,7 +473,7 @@ class StudyFormulation:
     def initial_state(self, *, start: float = 0.0, speed: float = 0.0) -> np.ndarray:
         """Closed, meshed state with roller 1 at ``start`` [m of undeformed guide] moving at ``speed`` [m/s].
 
-        The same initial condition as :func:`vibkit.forward.initial_state` (the sprocket meshes the
+        The same initial condition as :func:`vibkit.analyses.forward.initial_state` (the sprocket meshes the
         rollers on the head midway between teeth and turns with the chain), in the study's coordinates.
         """
         from .forward import initial_state
@@ -555,7 +555,7 @@ def run_study(scene, *, duration, rtol=1e-3, atol=1e-3, max_step=1e-3, method="B
         ``sprocket_speed`` [rad/s], ``sprocket_angle`` [rad], ``motor_torque`` [N m],
         ``link_tension`` (time, link) [N] = 2 lambda L, ``closure_residual`` [m] and
         ``constraint_velocity`` [m^2/s] (max |dC_i/dt|), with the same names and units as
-        :func:`vibkit.forward.forward_dynamics`. Attrs record the formulation, alpha, beta, the
+        :func:`vibkit.analyses.forward.forward_dynamics`. Attrs record the formulation, alpha, beta, the
         solver's evaluations (finite-difference Jacobian columns included), Jacobians, LU
         decompositions and wall time.
 
@@ -576,8 +576,8 @@ def run_study(scene, *, duration, rtol=1e-3, atol=1e-3, max_step=1e-3, method="B
     The study (``/work/shared/seed/000_76101f58a02dc30d.txt``), chapters 5-7, eqs. 6-8 to 6-14 and 7-14;
     J. Baumgarte, Comput. Methods Appl. Mech. Eng. 1 (1972) 1-16.
     """
-    from .model import EscalatorModel
-    from .scene import Scene, load_scene
+    from ..model.escalator import EscalatorModel
+    from ..model.scene import Scene, load_scene
 
     if not isinstance(scene, Scene):
         scene = load_scene(scene)
@@ -596,7 +596,7 @@ def run_study(scene, *, duration, rtol=1e-3, atol=1e-3, max_step=1e-3, method="B
     model = EscalatorModel(scene)
     form = StudyFormulation(model, scene.effects, alpha=alpha, beta=beta, coordinate_map=coordinate_map)
     y0 = form.initial_state(start=run.get("start", 0.0), speed=run.get("initial_speed", 0.0))
-    t_out = np.arange(0.0, duration + 0.5 * dt, dt)  # the grid of vibkit.forward.forward_dynamics
+    t_out = np.arange(0.0, duration + 0.5 * dt, dt)  # the grid of vibkit.analyses.forward.forward_dynamics
     from scipy.integrate import solve_ivp
 
     t0 = time.perf_counter()
@@ -656,5 +656,5 @@ def _dataset(form, sol, wall, method, rtol, atol, max_step):
     ds = make_dataset(coords, data, attrs, scene)
     ds["constraint_velocity"].attrs.update({"units": "m^2/s",
                                             "long_name": "max over links of |dC_i/dt|, C_i = |r_i+1 - r_i|^2 - L^2"})
-    ds.attrs["history"] += "\nintegrated with the study's formulation (vibkit.reference.run_study)"
+    ds.attrs["history"] += "\nintegrated with the study's formulation (vibkit.analyses.reference.run_study)"
     return ds

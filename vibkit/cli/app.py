@@ -140,7 +140,7 @@ def _speed_uncertainty(text):
 
 
 def _byte_size(text):
-    from vibkit.budget import parse_bytes
+    from vibkit.runtime.budget import parse_bytes
 
     try:
         return parse_bytes(text)
@@ -159,8 +159,8 @@ def _seconds_or_none(text):
 
 
 def _check_output(out, inputs, force=False):
-    """Refuse an unsafe -o before any work (see :mod:`vibkit.safe_output`)."""
-    from vibkit.safe_output import check_output_path
+    """Refuse an unsafe -o before any work (see :mod:`vibkit.runtime.safe_output`)."""
+    from vibkit.runtime.safe_output import check_output_path
 
     check_output_path(out, overwrite=force, inputs=[p for p in inputs if p])
 
@@ -211,7 +211,7 @@ def _read(a):
 
 
 def _cmd_spectrum(a):
-    from vibkit.pitch import estimate_pitch, pick_channel
+    from vibkit.diagnose.pitch import estimate_pitch, pick_channel
 
     rec = _read(a)
     ch = pick_channel(rec, a.channel)
@@ -242,7 +242,7 @@ def _cmd_spectrum(a):
 
 
 def _cmd_pitch(a):
-    from vibkit.pitch import estimate_pitch
+    from vibkit.diagnose.pitch import estimate_pitch
 
     rec = _read(a)
     sigma = _speed_sigma(a.speed_uncertainty, a.speed) if a.speed_uncertainty else 0.0
@@ -297,7 +297,7 @@ def _not_found(cmd, a, est, extra):
 
 def _cmd_compare(a):
     import vibkit
-    from vibkit.comparison import compare
+    from vibkit.diagnose.comparison import compare
 
     rec = _read(a)
     target = a.scene_or_result
@@ -329,7 +329,7 @@ def _cmd_compare(a):
 
 
 def _cmd_report(a):
-    from vibkit.report import write_report
+    from vibkit.diagnose.report import write_report
 
     _check_output(a.output, [a.recording, a.scene], a.force)
     sigma = _speed_sigma(a.speed_uncertainty, a.speed) if (a.speed_uncertainty and a.speed) else 0.0
@@ -387,7 +387,7 @@ def _cmd_bench(a):
 
 
 def _vary(text):
-    from vibkit.sweep import parse_vary
+    from vibkit.sweep.run import parse_vary
 
     try:
         return parse_vary(text)
@@ -487,7 +487,7 @@ def _ride_rows(rq):
 
 
 def _cmd_ride(a):
-    from vibkit.ride import parse_channels, parse_segment, ride_quality_from_recording, simulate_ride
+    from vibkit.diagnose.ride import parse_channels, parse_segment, ride_quality_from_recording, simulate_ride
 
     segment = parse_segment(a.segment) if a.segment else None
     weightings = _weightings(a.weighting)
@@ -541,7 +541,7 @@ def _workers(text):
 
 
 def _fleet_db(a, *, create=True):
-    from vibkit.fleet import FleetDB
+    from vibkit.fleet.history import FleetDB
 
     return FleetDB(a.db, create=create)
 
@@ -633,7 +633,7 @@ def _cmd_fleet_status(a):
 
 
 def _cmd_fleet_report(a):
-    from vibkit.report import write_fleet_report
+    from vibkit.diagnose.report import write_fleet_report
 
     _check_output(a.output, [], a.force)
     with _fleet_db(a, create=False) as db:
@@ -696,7 +696,7 @@ def _parser():
             sp.add_argument("--channel", help="channel to analyse, named as the file writes it or as vibkit does "
                                                    "(default: the first that is not a sample counter)")
             sp.add_argument("--sample-rate", type=_positive, help="sample rate for files without time [Hz]")
-        if rec and not sp.prog.endswith(" report"):  # report reads the file itself (vibkit.report)
+        if rec and not sp.prog.endswith(" report"):  # report reads the file itself (vibkit.diagnose.report)
             sp.add_argument("--time-column", metavar="NAME|INDEX|none",
                             help="time column by name or 0-based index; 'none': the file has no time column")
             sp.add_argument("--time-unit", choices=("s", "ms", "us", "ns", "min", "h"),
@@ -853,7 +853,7 @@ def main(argv=None) -> int:
     """
     # parse first: --help and --version import nothing heavy and compile nothing
     args = _parser().parse_args(argv)
-    from vibkit.safe_output import Interrupted, handle_termination
+    from vibkit.runtime.safe_output import Interrupted, handle_termination
 
     try:
         with handle_termination():  # SIGTERM runs the same clean-up as Ctrl-C
@@ -881,7 +881,7 @@ def _is_user_error(exc) -> bool:
     """A bad input, a failed run or a refused output: reported in one line (exit 1), not a traceback."""
     if isinstance(exc, (ValueError, OSError, MemoryError)):
         return True
-    integrate = sys.modules.get("vibkit.integrate")  # only if it was imported can it have raised
+    integrate = sys.modules.get("vibkit.analyses.integrate")  # only if it was imported can it have raised
     return integrate is not None and isinstance(exc, integrate.IntegrationError)
 
 

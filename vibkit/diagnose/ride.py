@@ -26,8 +26,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .signal.ride import LOWPASS_HZ, PeakToPeak, RideSegment, detect_ride_segment, lowpass_10hz, peak_to_peak
-from .signal.weighting import frequency_weighting, get_weighting
+from ..signal.ride import LOWPASS_HZ, PeakToPeak, RideSegment, detect_ride_segment, lowpass_10hz, peak_to_peak
+from ..signal.weighting import frequency_weighting, get_weighting
 
 __all__ = ["AxisRide", "RideQuality", "DEFAULT_WEIGHTINGS", "ride_quality", "ride_quality_from_recording",
            "ride_quality_from_simulation", "simulate_ride", "parse_channels", "parse_segment"]
@@ -301,7 +301,7 @@ def ride_quality_from_recording(recording, *, channels=None, segment=None, weigh
         A channel that is not in the recording or not an acceleration in m/s^2; a recording in bursts
         whose longest burst is too short; the errors of :func:`ride_quality`.
     """
-    from .io import read_recording
+    from ..io import read_recording
     from .pitch import uniform_bursts
 
     rec = recording if not isinstance(recording, (str, os.PathLike)) else read_recording(recording,
@@ -435,7 +435,7 @@ def ride_quality_from_simulation(ds, *, segment=None, weightings=None, source=No
             notes.append("no incline detection without the step's vertical motion: the whole simulated time is assessed")
     else:
         raise ValueError("the simulation has neither 'roller_acceleration' nor 'accel_step' among its outputs "
-                         "(use vibkit.ride.simulate_ride, which adds them)")
+                         "(use vibkit.diagnose.ride.simulate_ride, which adds them)")
     return ride_quality(sig, fs, segment=segment, weightings=weightings, source=src, kind="simulation",
                         channel_names=names, speed=speed, detect=detect, notes=notes)
 
@@ -462,8 +462,8 @@ def simulate_ride(scene, *, duration=None, segment=None, weightings=None, progre
     SceneError, ValueError
         A kinematics scene, or no ``outputs.step_accelerometer``.
     """
-    from .scene import Scene, load_scene
-    from .simulation import simulate
+    from ..model.scene import Scene, load_scene
+    from ..analyses.simulation import simulate
 
     sc = scene if isinstance(scene, Scene) else load_scene(scene)
     if sc.analysis not in ("inverse", "forward"):

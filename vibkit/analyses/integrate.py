@@ -32,8 +32,8 @@ import time
 import numba as nb
 import numpy as np
 
-from .effects import evaluate
-from .progress import Progress
+from ..model.effects import evaluate
+from ..runtime.progress import Progress
 
 __all__ = ["integrate", "IntegrationError", "METHODS"]
 
@@ -349,7 +349,7 @@ def integrate(prm, ws, y0, t_out, *, method="dopri5", rtol=1e-6, atol=1e-9, max_
     ----------
     events : (ndarray, float), optional
         dopri5 only: the sorted values of y[0] in one period where the right-hand side is not
-        smooth, and the period [m] (:meth:`vibkit.chain.Chain.crossing_table`, P0).
+        smooth, and the period [m] (:meth:`vibkit.model.chain.Chain.crossing_table`, P0).
     event_gap : float
         How far from such a value a step may end and count as ending on it. [m]
     t_events : array_like, optional

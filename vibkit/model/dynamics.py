@@ -1,7 +1,7 @@
 """Equations of motion of the chain in its independent coordinate, and the link tensions.
 
 The chain has two degrees of freedom: roller 1's undeformed-guide coordinate s0_1 (every roller
-position and delta follow from the closure, :mod:`vibkit.chain`) and the sprocket angle theta.
+position and delta follow from the closure, :mod:`vibkit.model.chain`) and the sprocket angle theta.
 With r_i = r_i(s0_1), v_i = J_i sdot and a_i = J_i sddot + h_i, the virtual power of the chain gives
 the one-row equation
 

@@ -1,7 +1,7 @@
 """Forward dynamics: the motor drives the sprocket, the teeth drive the chain, nothing imposes motion.
 
 The chain is integrated in its independent coordinate s0_1 (roller 1 on the undeformed guide), with
-every roller and delta recovered by walking the closure at each evaluation (:mod:`vibkit.chain`),
+every roller and delta recovered by walking the closure at each evaluation (:mod:`vibkit.model.chain`),
 so the chain is closed to rounding at every step and no stabilisation constant exists. The state
 is y = [s0_1, s0dot_1, theta, thetadot, integral of the speed error].
 """
@@ -13,12 +13,12 @@ import math
 import numba as nb
 import numpy as np
 
-from .chain import closure_residual, solve_closure
-from .dynamics import link_multipliers
-from .effects import Work, evaluate, motor_torque, pack_parameters
+from ..model.chain import closure_residual, solve_closure
+from ..model.dynamics import link_multipliers
+from ..model.effects import Work, evaluate, motor_torque, pack_parameters
 from .integrate import IntegrationError, integrate
 from .results import make_dataset
-from .sprocket import contact_kernel
+from ..model.sprocket import contact_kernel
 
 __all__ = ["forward_dynamics", "initial_state", "ForwardModel"]
 

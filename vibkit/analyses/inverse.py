@@ -14,8 +14,8 @@ import math
 
 import numpy as np
 
-from .dynamics import link_multipliers
-from .progress import Progress
+from ..model.dynamics import link_multipliers
+from ..runtime.progress import Progress
 from .results import make_dataset
 
 __all__ = ["inverse_dynamics"]
@@ -54,7 +54,7 @@ def inverse_dynamics(model, *, speed, duration, step, start=0.0, effects=None, o
     effects : dict
         ``gravity`` and ``passengers`` as in the scene (others are rejected at scene load).
     outputs : sequence of str
-        Names from :data:`vibkit.scene.OUTPUTS` ``["inverse"]``.
+        Names from :data:`vibkit.model.scene.OUTPUTS` ``["inverse"]``.
 
     Returns
     -------

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import dataclasses
 
-from .model import EscalatorModel
-from .scene import Scene, load_scene
+from ..model.escalator import EscalatorModel
+from ..model.scene import Scene, load_scene
 
 __all__ = ["simulate"]
 
@@ -27,7 +27,7 @@ def simulate(scene, *, duration: float | None = None, progress: bool = True, max
     max_result_bytes : float or str, optional
         Refuse, before any work, a run whose result arrays would be larger [bytes]; default the
         scene's ``[solver] max_result_bytes``, else ``$VIBKIT_MAX_RESULT_BYTES``, else 2 GiB
-        (see :mod:`vibkit.budget`).
+        (see :mod:`vibkit.runtime.budget`).
     max_wall_time : float, optional
         Wall-time budget of a forward integration [s]; default the scene's
         ``[solver] max_wall_time``, else ``$VIBKIT_MAX_WALL_TIME``, else 600 s.
@@ -40,16 +40,16 @@ def simulate(scene, *, duration: float | None = None, progress: bool = True, max
 
     Raises
     ------
-    vibkit.budget.BudgetError
+    vibkit.runtime.budget.BudgetError
         The run would exceed its result-size limit (or a step count past reason).
-    vibkit.integrate.IntegrationError
+    vibkit.analyses.integrate.IntegrationError
         The integration failed or ran past its wall-time budget.
     """
     if not isinstance(scene, Scene):
         scene = load_scene(scene)
     if duration is not None and not duration > 0:
         raise ValueError(f"duration must be positive, got {duration!r}")
-    from . import budget
+    from ..runtime import budget
 
     budget.check_run(scene, duration=duration, limit_bytes=max_result_bytes)
     if scene.analysis == "forward":

@@ -8,7 +8,7 @@ Effects (``[effects.*]`` in a scene):
 gravity
     m g on every roller, along -z.
 contact
-    roller-tooth penalty contact on both flanks, f = k psi^e (1 + 1.5 c psidot) (:mod:`vibkit.sprocket`).
+    roller-tooth penalty contact on both flanks, f = k psi^e (1 + 1.5 c psidot) (:mod:`vibkit.model.sprocket`).
 motor
     speed controller on the sprocket, M = kp (thetadot_ref - thetadot) + ki * integral, limited to
     +-torque_limit with conditional integration (no wind-up); thetadot_ref = -speed / R^P.

@@ -91,7 +91,7 @@ class EscalatorModel:
         """Add each passenger's weight, shared by the three rollers of its step, while aboard.
 
         ``schedule`` is :meth:`passenger_schedule`'s result; by place, ``s0`` holds the rollers'
-        unwrapped undeformed coordinates (a :class:`~vibkit.chain.Configuration`'s ``s0``).
+        unwrapped undeformed coordinates (a :class:`~vibkit.model.chain.Configuration`'s ``s0``).
         """
         by_place, board, alight = schedule if schedule is not None else (False, opts["board"], opts["alight"])
         for m, step, b, a in zip(opts["mass"], opts["step"], board, alight):

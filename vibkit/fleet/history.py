@@ -2,13 +2,13 @@
 
 Maintenance firms measure each escalator (a *unit*) again and again.  :class:`FleetDB` keeps every
 measurement in an embedded SQLite database (standard library; WAL journal, one transaction per
-measurement): the link-pass estimate of :func:`vibkit.pitch.estimate_pitch`, the pitch and the
+measurement): the link-pass estimate of :func:`vibkit.diagnose.pitch.estimate_pitch`, the pitch and the
 elongation with their standard deviations, quality figures (SNR, warnings) and provenance (SHA-256
 of the file, its path, vibkit's version, the time of analysis).  A file already stored (same
 SHA-256) is refused, so re-running a scan skips what it has done.
 
 :meth:`FleetDB.scan` analyses a folder of recordings on a Dask cluster
-(:func:`vibkit.cluster.dask_client`); the workers only analyse, the calling process alone writes,
+(:func:`vibkit.runtime.cluster.dask_client`); the workers only analyse, the calling process alone writes,
 one committed transaction per recording, so a killed scan leaves complete rows only.
 
 :meth:`FleetDB.status` fits, per unit, the elongation against time by weighted least squares
@@ -56,7 +56,7 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from .pitch import DEFAULT_LIMITS_PERCENT, elongation_verdict
+from ..diagnose.pitch import DEFAULT_LIMITS_PERCENT, elongation_verdict
 
 __all__ = [
     "DB_ENV",
@@ -458,7 +458,7 @@ def analyse_recording(path, *, unit, speed, speed_sigma=0.0, nominal_pitch, date
     """
     import vibkit
     from vibkit.io import read_recording
-    from vibkit.pitch import estimate_pitch
+    from vibkit.diagnose.pitch import estimate_pitch
 
     unit = str(unit).strip()
     if not unit:
@@ -942,7 +942,7 @@ class FleetDB:
         catalogue : str or os.PathLike
             CSV catalogue (columns in the module docstring).
         scheduler : str, optional
-            Dask scheduler address; default a local cluster (see :func:`vibkit.cluster.dask_client`).
+            Dask scheduler address; default a local cluster (see :func:`vibkit.runtime.cluster.dask_client`).
         n_workers : int, optional
             Worker processes of the local cluster.
         client : distributed.Client, optional
@@ -965,7 +965,7 @@ class FleetDB:
         A local cluster spawns its worker processes: a script that calls ``scan`` needs the
         ``if __name__ == "__main__":`` guard (or ``parallel=False``).
         """
-        from .progress import Progress
+        from ..runtime.progress import Progress
 
         d = os.fspath(directory)
         if not os.path.isdir(d):
@@ -1059,7 +1059,7 @@ class FleetDB:
 
         from distributed import as_completed
 
-        from .cluster import dask_client
+        from ..runtime.cluster import dask_client
 
         ctx = contextlib.nullcontext(client) if client is not None else dask_client(scheduler, n_workers=n_workers)
         try:
@@ -1102,7 +1102,7 @@ class FleetDB:
         -------
         list of UnitTrend
         """
-        from .pitch import _check_limits
+        from ..diagnose.pitch import _check_limits
 
         limits = _check_limits(limits_percent)
         by_unit = {}
@@ -1127,7 +1127,7 @@ class UnitTrend:
     latest_elongation_percent, latest_elongation_sigma_percent : float
         [%]
     latest_verdict : str
-        :func:`vibkit.pitch.elongation_verdict` of the latest elongation.
+        :func:`vibkit.diagnose.pitch.elongation_verdict` of the latest elongation.
     slope_percent_per_year, slope_sigma_percent_per_year : float or None
         Elongation rate and its standard deviation (None with one measurement or one date). [%/year]
     chi2_per_dof : float or None

@@ -1,6 +1,6 @@
 """Where parallel work runs: a Dask ``distributed`` client, a local cluster by default.
 
-Sweeps (:mod:`vibkit.sweep`) and fleet scans (:mod:`vibkit.fleet`) both submit their runs through
+Sweeps (:mod:`vibkit.sweep.run`) and fleet scans (:mod:`vibkit.fleet.history`) both submit their runs through
 :func:`dask_client`, so a user who already runs a Dask cluster points vibkit at it with one address
 (``--scheduler tcp://host:8786``, or Dask's own configuration ``scheduler-address`` /
 ``DASK_SCHEDULER_ADDRESS``), and everyone else gets one worker process per core.

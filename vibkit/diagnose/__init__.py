@@ -1,0 +1,7 @@
+"""Diagnostics of recordings and simulations: link pitch, comparison, ride quality, reports.
+
+* :mod:`~vibkit.diagnose.pitch`: link-pass detection, pitch and elongation verdicts;
+* :mod:`~vibkit.diagnose.comparison`: a simulation against a field recording, scored;
+* :mod:`~vibkit.diagnose.ride`: ride quality (weighted accelerations, peak to peak);
+* :mod:`~vibkit.diagnose.report`: multi-page PDF diagnostic reports.
+"""
