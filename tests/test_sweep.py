@@ -13,7 +13,7 @@ from vibkit.cli import main
 from vibkit.model.scene import parse_scene
 from vibkit.sweep.run import SweepError, plan_sweep
 
-SW = sys.modules["vibkit.sweep.run"]  # the module (vibkit.sweep.run is the function)
+SW = sys.modules["vibkit.sweep.run"]  # the module (vibkit.sweep is the function)
 
 # the no-load forward scene from rest with a stiff P controller (at speed within 0.5 s), 2 s: short; from rest
 # the teeth take load at once

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import vibkit
-from vibkit import budget
+from vibkit.runtime import budget
 from vibkit.model.scene import SceneError, load_scene, parse_scene
 
 SIM = Path(__file__).resolve().parents[2] / "sim"
