@@ -76,7 +76,9 @@ def main(argv=None):
 
     import vibkit
     from vibkit.runtime.cluster import dask_client
-    from vibkit.fleet.history import FleetDB, _analyse_job, _Job, _file_sha256
+    from vibkit.fleet import FleetDB
+    from vibkit.fleet.measurement import _file_sha256
+    from vibkit.fleet.scan import _analyse_job, _Job
 
     load0 = os.getloadavg()
     rows = []

@@ -1,4 +1,4 @@
-"""Fleet history (vibkit.fleet.history, vibkit fleet ...): trends of synthetic units with known elongation rates,
+"""Fleet history (vibkit.fleet, vibkit fleet ...): trends of synthetic units with known elongation rates,
 forecasts, duplicates, bad rows, a killed scan, the command line."""
 
 import datetime as dt
@@ -16,8 +16,9 @@ import numpy as np
 import pytest
 
 from vibkit.cli import main
-from vibkit.fleet.history import (SECONDS_PER_YEAR, DuplicateRecordingError, FleetDB, FleetError, TrendFit, fit_trend,
-                          forecast_limits, parse_date, read_catalogue, resolve_db_path)
+from vibkit.fleet import (DuplicateRecordingError, FleetDB, FleetError, TrendFit, fit_trend, forecast_limits,
+                          parse_date, read_catalogue, resolve_db_path)
+from vibkit.fleet.trends import SECONDS_PER_YEAR
 
 ROOT = Path(__file__).resolve().parents[1]
 SPEED = 0.5  # m/s
@@ -512,3 +513,15 @@ def test_killed_scan_leaves_complete_rows(tmp_path):
         assert len(res.skipped) == len(ms) and len(res.added) == n - len(ms) and not res.failed
         all_rows = fdb.measurements()
         assert len(all_rows) == n == len({m.sha256 for m in all_rows})
+
+
+def test_history_name_keeps_the_public_names():
+    import vibkit.fleet as fleet
+    import vibkit.fleet.history as history
+
+    assert history.__all__ == fleet.__all__
+    for name in fleet.__all__ + ["SECONDS_PER_YEAR", "CATALOGUE_OPTIONAL", "RECORDING_SUFFIXES", "SCHEMA_VERSION",
+                                 "APPLICATION_ID", "unit_trend", "rank_units"]:
+        assert hasattr(history, name), name
+    for name in fleet.__all__:
+        assert getattr(history, name) is getattr(fleet, name)

@@ -1,0 +1,145 @@
+"""The catalogue of a scan: which unit, speed, date and nominal pitch each recording of a folder has.
+
+The catalogue is a CSV file (``#`` starts a comment line) with these columns, in any order (header
+names are case-insensitive):
+
+========================  ========  ============================================================
+column                    required  meaning
+========================  ========  ============================================================
+``file``                  yes       file name, path relative to the scanned folder, or a glob
+                                    (``E07/*.csv``); an exact name wins over a glob, else the
+                                    first matching line
+``unit``                  yes       escalator identifier
+``speed_m_s``             yes       chain (step) speed measured on the steps or handrail [m/s]
+``date``                  yes       measurement date, ISO 8601 (``2026-11-23``,
+                                    ``2026-11-23T10:15:00+01:00``); empty: the recording's start
+                                    time; dates without a time zone are UTC
+``nominal_pitch_m``       yes       nominal link pitch [m]; empty: the unit's value from another
+                                    line of the catalogue or from the database
+``speed_sigma_m_s``       no        standard deviation of the speed [m/s] (default 0)
+``channel``               no        channel to analyse (default: the first)
+========================  ========  ============================================================
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+import os
+import posixpath
+from dataclasses import dataclass
+
+from .dates import _iso, parse_date
+from .errors import FleetError
+
+__all__ = ["CATALOGUE_COLUMNS", "CatalogueRow", "read_catalogue"]
+
+#: required and optional catalogue columns
+CATALOGUE_COLUMNS = ("file", "unit", "speed_m_s", "date", "nominal_pitch_m")
+CATALOGUE_OPTIONAL = ("speed_sigma_m_s", "channel")
+
+
+@dataclass(frozen=True)
+class CatalogueRow:
+    """One line of a scan catalogue (see the module docstring for the columns)."""
+
+    line: int
+    file: str
+    unit: str
+    speed_m_s: float
+    speed_sigma_m_s: float = 0.0
+    date: str | None = None
+    nominal_pitch_m: float | None = None
+    channel: str | None = None
+
+    @property
+    def is_glob(self) -> bool:
+        return any(c in self.file for c in "*?[")
+
+
+def _number(text, path, line, col, *, lo, hi, unit, hint=""):
+    try:
+        v = float(text)
+    except ValueError:
+        raise FleetError(f"{path}, line {line}: column {col}: expected a number [{unit}], got {text!r}") from None
+    if not (math.isfinite(v) and lo <= v <= hi) or (lo == 0 and v == 0 and col != "speed_sigma_m_s"):
+        raise FleetError(f"{path}, line {line}: column {col}: {text!r} is outside {lo:g}-{hi:g} {unit}{hint}")
+    return v
+
+
+def read_catalogue(path):
+    """Read and validate a scan catalogue (CSV); a list of :class:`CatalogueRow`.
+
+    Raises
+    ------
+    FleetError
+        Missing file, missing or unknown columns, a line with too few or too many cells, an empty
+        file/unit/speed, a value that is not a number or not plausible, a bad date, or two nominal
+        pitches for one unit; the message names the file and the line.
+    """
+    spath = os.fspath(path)
+    try:
+        with open(spath, "rb") as fh:
+            raw = fh.read()
+    except FileNotFoundError:
+        raise FleetError(f"{spath}: catalogue not found") from None
+    except OSError as exc:
+        raise FleetError(f"{spath}: catalogue cannot be read: {exc.strerror or exc}") from None
+    try:
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError:
+        text = raw.decode("cp1252", errors="replace")
+    lines = [(i, ln) for i, ln in enumerate(text.splitlines(), 1) if ln.strip() and not ln.lstrip().startswith("#")]
+    if not lines:
+        raise FleetError(f"{spath}: catalogue is empty; expected a header line with columns "
+                         f"{', '.join(CATALOGUE_COLUMNS)}")
+    head_line, head = lines[0]
+    delim = ";" if head.count(";") > head.count(",") else ","
+    cells = lambda s: next(csv.reader(io.StringIO(s), delimiter=delim, skipinitialspace=True))  # noqa: E731
+    header = [c.strip().lower() for c in cells(head)]
+    missing = [c for c in CATALOGUE_COLUMNS if c not in header]
+    if missing:
+        raise FleetError(f"{spath}, line {head_line}: missing column(s) {', '.join(missing)}; a catalogue has the "
+                         f"columns {', '.join(CATALOGUE_COLUMNS)} (optional: {', '.join(CATALOGUE_OPTIONAL)})")
+    unknown = [c for c in header if c not in CATALOGUE_COLUMNS + CATALOGUE_OPTIONAL]
+    if unknown:
+        raise FleetError(f"{spath}, line {head_line}: unknown column(s) {', '.join(map(repr, unknown))}; known: "
+                         f"{', '.join(CATALOGUE_COLUMNS + CATALOGUE_OPTIONAL)}")
+    if len(set(header)) != len(header):
+        raise FleetError(f"{spath}, line {head_line}: a column appears twice")
+    rows, nominal = [], {}
+    for n, ln in lines[1:]:
+        c = [v.strip() for v in cells(ln)]
+        if len(c) != len(header):
+            raise FleetError(f"{spath}, line {n}: {len(c)} cell(s), expected {len(header)} "
+                             f"({', '.join(header)}); a missing value is an empty cell between commas")
+        v = dict(zip(header, c))
+        for col in ("file", "unit", "speed_m_s"):
+            if not v[col]:
+                raise FleetError(f"{spath}, line {n}: column {col} is empty")
+        if os.path.isabs(v["file"]) or ".." in v["file"].replace("\\", "/").split("/"):
+            raise FleetError(f"{spath}, line {n}: file {v['file']!r} must be relative to the scanned folder")
+        speed = _number(v["speed_m_s"], spath, n, "speed_m_s", lo=0.0, hi=10.0, unit="m/s")
+        ssig = _number(v["speed_sigma_m_s"], spath, n, "speed_sigma_m_s", lo=0.0, hi=speed, unit="m/s") \
+            if v.get("speed_sigma_m_s") else 0.0
+        date = None
+        if v["date"]:
+            try:
+                date = _iso(parse_date(v["date"]))
+            except FleetError as exc:
+                raise FleetError(f"{spath}, line {n}: {exc}") from None
+        nom = None
+        if v["nominal_pitch_m"]:
+            nom = _number(v["nominal_pitch_m"], spath, n, "nominal_pitch_m", lo=0.0, hi=1.0, unit="m",
+                          hint=" (metres: 0.13333, not 133.33)")
+            prev = nominal.get(v["unit"])
+            if prev is not None and not math.isclose(prev[0], nom, rel_tol=1e-9):
+                raise FleetError(f"{spath}, line {n}: unit {v['unit']!r} has nominal_pitch_m {nom:g} here but "
+                                 f"{prev[0]:g} on line {prev[1]}")
+            nominal.setdefault(v["unit"], (nom, n))
+        rows.append(CatalogueRow(n, posixpath.normpath(v["file"].replace("\\", "/")), v["unit"], speed, ssig, date, nom,
+                                 v.get("channel") or None))
+    if not rows:
+        raise FleetError(f"{spath}: catalogue has a header but no line")
+    return rows

@@ -1,0 +1,71 @@
+"""Measurement dates: parsing (ISO 8601, day/month/year) and the UTC text the database stores.
+
+Dates are stored as UTC ISO 8601 text and as seconds since 1970 (``date_unix_s``).
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import math
+import re
+
+from .errors import FleetError
+
+__all__ = ["parse_date"]
+
+
+_DMY = re.compile(r"([0-9]{1,2})[/.-]([0-9]{1,2})[/.-]([0-9]{4})(?:[ T](.*))?")
+
+
+def parse_date(text, *, what="date") -> _dt.datetime:
+    """A timezone-aware UTC datetime from ISO 8601 text (or day/month/year as loggers write it).
+
+    A date without time is midnight; a time without zone is UTC.  Dates before 1900 or more than a
+    day in the future are refused (a measurement cannot be in the future).
+
+    Raises
+    ------
+    FleetError
+        Not a date (a time of day alone is not one), or an implausible one; ``what`` names it.
+    """
+    s = str(text).strip()
+    if not s:
+        raise FleetError(f"{what} is empty; expected ISO 8601 such as 2026-11-23 or 2026-11-23T10:15:00Z")
+    t = re.sub(r",\s*", " ", re.sub(r"(?<=[0-9]),(?=[0-9])", ".", s))  # decimal comma; "date, time"
+    m = _DMY.fullmatch(t)
+    if m:
+        t = f"{m.group(3)}-{int(m.group(2)):02d}-{int(m.group(1)):02d}" + (f"T{m.group(4)}" if m.group(4) else "")
+    if re.match(r"^[0-9]{1,2}:[0-9]{2}", t):
+        raise FleetError(f"{what} {s!r} has no calendar date (a time of day only)")
+    try:
+        d = _dt.datetime.fromisoformat(t)
+    except ValueError:
+        raise FleetError(f"{what} {s!r} is not an ISO 8601 date (expected e.g. 2026-11-23 or "
+                         "2026-11-23T10:15:00+01:00)") from None
+    if d.tzinfo is None:
+        d = d.replace(tzinfo=_dt.timezone.utc)
+    d = d.astimezone(_dt.timezone.utc)
+    if d.year < 1900:
+        raise FleetError(f"{what} {s!r} is before 1900; expected the date of the measurement")
+    if d > _dt.datetime.now(_dt.timezone.utc) + _dt.timedelta(days=1):
+        raise FleetError(f"{what} {s!r} lies in the future; expected the date of the measurement")
+    return d
+
+
+def _iso(d: _dt.datetime) -> str:
+    return d.astimezone(_dt.timezone.utc).isoformat(timespec="seconds").replace("+00:00", "Z")
+
+
+def _unix_to_date(sec):
+    """UTC datetime of seconds since 1970, or None outside the calendar datetime can hold."""
+    try:
+        if not math.isfinite(sec):
+            return None
+        return _dt.datetime(1970, 1, 1, tzinfo=_dt.timezone.utc) + _dt.timedelta(seconds=float(sec))
+    except (OverflowError, ValueError):
+        return None
+
+
+def _unix_to_iso(sec):
+    d = _unix_to_date(sec)
+    return None if d is None else _iso(d)

@@ -1,0 +1,129 @@
+"""One measurement: the analysis of a recording (pitch, elongation, quality, provenance) as a record."""
+
+from __future__ import annotations
+
+import datetime as _dt
+import hashlib
+import math
+import os
+from dataclasses import asdict, dataclass
+
+from .dates import _iso, parse_date
+from .errors import FleetError
+
+__all__ = ["Measurement", "analyse_recording"]
+
+
+@dataclass(frozen=True)
+class Measurement:
+    """One stored measurement (a row of the database).  Lengths [m], speeds [m/s], elongation [%]."""
+
+    id: int | None
+    unit: str
+    date_utc: str
+    date_unix_s: float
+    date_source: str
+    speed_m_s: float
+    speed_sigma_m_s: float
+    nominal_pitch_m: float
+    channel: str
+    fundamental_hz: float
+    fundamental_sigma_hz: float
+    pitch_m: float
+    pitch_sigma_m: float
+    elongation_percent: float
+    elongation_sigma_percent: float
+    snr_db: float | None
+    warnings: tuple
+    sha256: str
+    path: str
+    size_bytes: int
+    vibkit_version: str
+    analysed_utc: str
+
+    def as_dict(self) -> dict:
+        d = asdict(self)
+        d["warnings"] = list(self.warnings)
+        return d
+
+
+
+def _file_sha256(path):
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for chunk in iter(lambda: fh.read(1 << 20), b""):
+            h.update(chunk)
+    return h.hexdigest()
+
+
+def analyse_recording(path, *, unit, speed, speed_sigma=0.0, nominal_pitch, date=None, channel=None):
+    """Read and analyse one recording; the :class:`Measurement` it gives (not stored, ``id`` None).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The recording (any format :func:`vibkit.read_recording` reads).
+    unit : str
+        Escalator identifier.
+    speed, speed_sigma : float
+        Chain speed and its standard deviation. [m/s]
+    nominal_pitch : float
+        Nominal link pitch. [m]
+    date : str or datetime, optional
+        Measurement date (ISO 8601); default the recording's start time.
+    channel : str, optional
+
+    Raises
+    ------
+    FleetError
+        No date (neither given nor in the recording), or no link-pass found in the recording.
+    RecordingError, ValueError
+        The file cannot be read, or an option is invalid.
+    """
+    import vibkit
+    from vibkit.io import read_recording
+    from vibkit.diagnose.pitch import estimate_pitch
+
+    unit = str(unit).strip()
+    if not unit:
+        raise FleetError("unit must be a non-empty identifier")
+    if nominal_pitch is None or not (math.isfinite(float(nominal_pitch)) and float(nominal_pitch) > 0):
+        raise FleetError(f"nominal_pitch must be a positive length [m], got {nominal_pitch!r}")
+    spath = os.fspath(path)
+    rec = read_recording(spath, channel=channel)
+    if isinstance(date, _dt.datetime):
+        d, source = (date if date.tzinfo else date.replace(tzinfo=_dt.timezone.utc)), "given"
+    elif date is not None and str(date).strip():
+        d, source = parse_date(date), "given"
+    else:
+        start = rec.attrs.get("start_time")
+        if start is None:
+            raise FleetError(f"{spath}: the recording has no start time; give the measurement date "
+                             "(--date, or the catalogue's date column) as ISO 8601, e.g. 2026-11-23")
+        try:
+            d = parse_date(start, what="the recording's start time")
+        except FleetError as exc:
+            raise FleetError(f"{spath}: {exc}; give the measurement date (--date, or the catalogue's date column)") \
+                from None
+        source = "recording start time"
+    try:
+        est = estimate_pitch(rec, speed=speed, speed_sigma=speed_sigma, channel=channel, nominal_pitch=nominal_pitch)
+    except ValueError as exc:
+        raise FleetError(f"{spath}: {' '.join(str(exc).split())}") from None
+    detected = getattr(est, "detected", None)
+    if detected is None:  # before PitchEstimate carried a verdict: no harmonic above its 3-sigma level
+        detected = any(h.get("detected", False) for h in est.harmonics)
+    if not detected:
+        status = getattr(est, "status", "no link-pass found")
+        raise FleetError(f"{spath}: {status} (SNR {est.snr_db:.1f} dB); nothing stored")
+    snr = float(est.snr_db) if math.isfinite(est.snr_db) else None
+    return Measurement(
+        id=None, unit=unit, date_utc=_iso(d), date_unix_s=d.timestamp(), date_source=source,
+        speed_m_s=float(est.speed_m_s), speed_sigma_m_s=float(est.speed_sigma_m_s),
+        nominal_pitch_m=float(est.nominal_pitch_m), channel=str(est.channel), fundamental_hz=float(est.fundamental_hz),
+        fundamental_sigma_hz=float(est.fundamental_sigma_hz), pitch_m=float(est.pitch_m),
+        pitch_sigma_m=float(est.pitch_sigma_m), elongation_percent=float(est.elongation_percent),
+        elongation_sigma_percent=float(est.elongation_sigma_percent), snr_db=snr, warnings=tuple(est.warnings),
+        sha256=str(rec.attrs["sha256"]), path=os.path.abspath(spath), size_bytes=os.path.getsize(spath),
+        vibkit_version=vibkit.__version__,
+        analysed_utc=_iso(_dt.datetime.now(_dt.timezone.utc)))

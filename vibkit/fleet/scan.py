@@ -1,0 +1,230 @@
+"""Scanning a folder of recordings: match each file to its catalogue line, analyse on Dask workers, store.
+
+The workers only analyse (:func:`_analyse_job`); the calling process alone writes, one committed
+transaction per recording, so a killed scan leaves complete rows only.
+"""
+
+from __future__ import annotations
+
+import fnmatch
+import os
+from dataclasses import dataclass, field
+
+from .catalogue import read_catalogue
+from .errors import DuplicateRecordingError, FleetError
+from .measurement import _file_sha256, analyse_recording
+
+__all__ = ["RECORDING_SUFFIXES", "ScanResult", "scan_folder"]
+
+#: file suffixes a scan treats as recordings
+RECORDING_SUFFIXES = (".csv", ".txt", ".tsv", ".dat", ".log", ".nc", ".nc4", ".h5", ".hdf5", ".mseed", ".miniseed",
+                      ".msd", ".seed", ".sac")
+
+
+@dataclass(frozen=True)
+class _Job:
+    path: str
+    unit: str
+    speed_m_s: float
+    speed_sigma_m_s: float
+    nominal_pitch_m: float
+    date: str | None
+    channel: str | None
+    sha256: str
+
+
+def _analyse_job(job):
+    """Worker side of a scan: analyse one recording; never raises (a failure is a message)."""
+    try:
+        m = analyse_recording(job.path, unit=job.unit, speed=job.speed_m_s, speed_sigma=job.speed_sigma_m_s,
+                              nominal_pitch=job.nominal_pitch_m, date=job.date, channel=job.channel)
+        return {"ok": True, "measurement": m}
+    except (ValueError, OSError) as exc:  # RecordingError and FleetError are ValueErrors
+        msg = " ".join(str(exc).split()) or type(exc).__name__
+        if not msg.startswith(job.path):
+            msg = f"{job.path}: {msg}"
+        return {"ok": False, "error": msg}
+    except Exception as exc:  # noqa: BLE001 - a bad file must never stop the scan
+        return {"ok": False, "error": f"{job.path}: unexpected {type(exc).__name__}: {' '.join(str(exc).split())}"}
+
+
+@dataclass
+class ScanResult:
+    """What :meth:`FleetDB.scan` did.
+
+    Attributes
+    ----------
+    added : list of Measurement
+    skipped : list of (str, str)
+        Files already stored (same SHA-256), with the reason.
+    failed : list of (str, str)
+        Files (or catalogue lines) that could not be added, with the reason.
+    notes : list of str
+    """
+
+    added: list = field(default_factory=list)
+    skipped: list = field(default_factory=list)
+    failed: list = field(default_factory=list)
+    notes: list = field(default_factory=list)
+
+    def as_dict(self) -> dict:
+        return {"added": len(self.added), "skipped_duplicates": len(self.skipped), "failed": len(self.failed),
+                "added_files": [m.path for m in self.added],
+                "skipped_files": [{"file": p, "reason": r} for p, r in self.skipped],
+                "failed_files": [{"file": p, "reason": r} for p, r in self.failed], "notes": list(self.notes)}
+
+
+def _candidate_files(directory, exclude):
+    out = []
+    for root, dirs, files in os.walk(directory):
+        dirs[:] = sorted(d for d in dirs if not d.startswith("."))
+        for f in sorted(files):
+            if f.startswith(".") or os.path.splitext(f)[1].lower() not in RECORDING_SUFFIXES:
+                continue
+            full = os.path.join(root, f)
+            if os.path.abspath(full) in exclude:
+                continue
+            out.append(os.path.relpath(full, directory).replace(os.sep, "/"))
+    return sorted(out)
+
+
+def _match(rel, rows):
+    base = rel.rsplit("/", 1)[-1]
+    exact = [r for r in rows if not r.is_glob and r.file in (rel, base)]
+    if exact:
+        return exact[0]
+    for r in rows:
+        if r.is_glob and (fnmatch.fnmatchcase(rel, r.file) or fnmatch.fnmatchcase(base, r.file)):
+            return r
+    return None
+
+
+def scan_folder(db, directory, catalogue, *, scheduler=None, n_workers=None, client=None, parallel=True,
+                on_failure=None, progress=False):
+    """Add every recording of a folder that a catalogue describes to ``db``; see :meth:`FleetDB.scan`.
+
+    ``db`` stores the measurements: its ``find``, ``nominal_pitch`` and ``insert`` are called from
+    this process only, and the files at ``db.path`` (and its ``-wal``/``-shm`` companions) are not
+    scanned.
+    """
+    from ..runtime.progress import Progress
+
+    d = os.fspath(directory)
+    if not os.path.isdir(d):
+        raise FleetError(f"{d}: not a folder; expected the folder of recordings to scan")
+    rows = read_catalogue(catalogue)
+    res = ScanResult()
+
+    def fail(name, why):
+        res.failed.append((name, why))
+        if on_failure is not None:
+            on_failure(name, why)
+
+    exclude = {os.path.abspath(os.fspath(catalogue)), os.path.abspath(db.path),
+               os.path.abspath(db.path) + "-wal", os.path.abspath(db.path) + "-shm"}
+    files = _candidate_files(d, exclude)
+    # a file the catalogue names exactly is a recording whatever its suffix
+    named = [r.file for r in rows if not r.is_glob and os.path.isfile(os.path.join(d, r.file))
+             and os.path.abspath(os.path.join(d, r.file)) not in exclude]
+    files = sorted(set(files) | {os.path.normpath(f).replace(os.sep, "/") for f in named})
+    unit_nominal = {}
+    for r in rows:
+        if r.nominal_pitch_m is not None:
+            unit_nominal.setdefault(r.unit, r.nominal_pitch_m)
+    used = set()
+    jobs, seen = [], {}
+    for rel in files:
+        full = os.path.join(d, rel)
+        r = _match(rel, rows)
+        if r is None:
+            fail(full, "unknown unit: no catalogue line matches this file")
+            continue
+        used.add(r.line)
+        try:
+            sha = _file_sha256(full)
+        except OSError as exc:
+            fail(full, f"cannot be read: {exc.strerror or exc}")
+            continue
+        old = db.find(sha)
+        if old is not None:
+            res.skipped.append((full, f"already stored as measurement #{old.id} of unit {old.unit!r}"))
+            continue
+        if sha in seen:
+            res.skipped.append((full, f"same content (sha256) as {seen[sha]} in this scan"))
+            continue
+        seen[sha] = full
+        nom = r.nominal_pitch_m or unit_nominal.get(r.unit) or db.nominal_pitch(r.unit)
+        if nom is None:
+            fail(full, f"unit {r.unit!r} has no nominal pitch (catalogue line {r.line}: fill nominal_pitch_m "
+                       "on one line of the unit)")
+            continue
+        jobs.append(_Job(os.path.abspath(full), r.unit, r.speed_m_s, r.speed_sigma_m_s, nom, r.date, r.channel,
+                         sha))
+    for r in rows:
+        if r.line not in used:
+            if r.is_glob:
+                res.notes.append(f"catalogue line {r.line}: {r.file!r} matches no recording")
+            elif any(r.file in (f, f.rsplit("/", 1)[-1]) for f in files):
+                f = next(f for f in files if r.file in (f, f.rsplit("/", 1)[-1]))
+                res.notes.append(f"catalogue line {r.line}: {r.file!r} is also on line "
+                                 f"{_match(f, rows).line}, which is used")
+            else:
+                fail(os.path.join(d, r.file), f"file not found (catalogue line {r.line})")
+    bar = Progress(len(jobs), "fleet scan", enabled=progress)
+
+    def take(job, outcome):
+        if not outcome["ok"]:
+            fail(job.path, outcome["error"])
+            return
+        try:
+            res.added.append(db.insert(outcome["measurement"]))
+        except DuplicateRecordingError as exc:
+            res.skipped.append((job.path, str(exc)))
+        except FleetError as exc:
+            fail(job.path, str(exc))
+
+    try:
+        if not jobs:
+            pass
+        elif not parallel:
+            for i, job in enumerate(jobs, 1):
+                take(job, _analyse_job(job))
+                bar.update(i)
+        else:
+            _scan_dask(jobs, take, bar, client=client, scheduler=scheduler, n_workers=n_workers)
+    finally:
+        bar.close()
+    return res
+
+
+def _scan_dask(jobs, take, bar, *, client, scheduler, n_workers):
+    import contextlib
+
+    from distributed import as_completed
+
+    from ..runtime.cluster import dask_client
+
+    ctx = contextlib.nullcontext(client) if client is not None else dask_client(scheduler, n_workers=n_workers)
+    try:
+        cl = ctx.__enter__()
+    except (OSError, RuntimeError, TimeoutError, ValueError) as exc:
+        where = f"the Dask scheduler at {scheduler}" if scheduler else "a local Dask cluster"
+        raise FleetError(f"cannot start or reach {where}: {' '.join(str(exc).split()) or type(exc).__name__} "
+                         "(--workers 0 analyses in this process, without Dask)") from None
+    with contextlib.ExitStack() as stack:
+        stack.push(ctx)
+        futs = {}
+        for i, job in enumerate(jobs):
+            f = cl.submit(_analyse_job, job, key=f"vibkit-fleet-{job.sha256}-{i}", pure=False)
+            futs[f] = job
+        for n, f in enumerate(as_completed(list(futs)), 1):
+            job = futs.pop(f)
+            try:
+                outcome = f.result()
+            except Exception as exc:  # noqa: BLE001 - a lost worker fails one row, not the scan
+                outcome = {"ok": False, "error": f"{job.path}: analysis lost ({type(exc).__name__}: "
+                                                 f"{' '.join(str(exc).split())})"}
+            f.release()
+            take(job, outcome)
+            bar.update(n)
+

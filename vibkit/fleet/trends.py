@@ -1,0 +1,302 @@
+"""Elongation trends of a unit and forecasts of when it reaches each limit (pure functions, no database).
+
+:func:`fit_trend` fits the elongation against time by weighted least squares, :func:`forecast_limits`
+gives the dates at which each elongation limit will be reached, :func:`unit_trend` sums a unit's
+measurements up as a :class:`UnitTrend` and :func:`rank_units` ranks the units by urgency.  Trends
+are in percent per Julian year (365.25 days).
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import math
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from ..diagnose.pitch import DEFAULT_LIMITS_PERCENT, elongation_verdict
+from .dates import _unix_to_iso
+
+__all__ = ["LimitForecast", "SECONDS_PER_YEAR", "TrendFit", "UnitTrend", "fit_trend", "forecast_limits", "rank_units",
+           "unit_trend"]
+
+SECONDS_PER_YEAR = 365.25 * 86400.0
+
+
+@dataclass(frozen=True)
+class TrendFit:
+    """Weighted least-squares line ``e(t) = e_ref + slope (t - t_ref)`` of elongation against time.
+
+    Attributes
+    ----------
+    n : int
+        Measurements fitted.
+    t_ref_unix_s : float
+        Reference time: the weighted mean of the times (there intercept and slope are uncorrelated).
+        [s since 1970]
+    elongation_ref_percent, elongation_ref_sigma_percent : float
+        Fitted elongation at ``t_ref`` and its standard deviation. [%]
+    slope_percent_per_year, slope_sigma_percent_per_year : float
+        Elongation rate and its standard deviation. [%/year]
+    chi2_per_dof : float
+        Weighted residual sum over ``n - 2`` (NaN for two measurements).
+    sigma_scale : float
+        Factor applied to the sigmas: ``max(1, sqrt(chi2_per_dof))`` (1 for two measurements).
+    """
+
+    n: int
+    t_ref_unix_s: float
+    elongation_ref_percent: float
+    elongation_ref_sigma_percent: float
+    slope_percent_per_year: float
+    slope_sigma_percent_per_year: float
+    chi2_per_dof: float
+    sigma_scale: float
+
+    def elongation_at(self, t_unix_s):
+        """Fitted elongation at times [s since 1970]. [%]"""
+        return self.elongation_ref_percent + self.slope_percent_per_year * (
+            (np.asarray(t_unix_s, dtype=float) - self.t_ref_unix_s) / SECONDS_PER_YEAR)
+
+
+def fit_trend(t_unix_s, elongation_percent, sigma_percent) -> TrendFit:
+    """Weighted least-squares trend of elongation against time, with the slope's uncertainty.
+
+    Parameters
+    ----------
+    t_unix_s : array_like
+        Measurement times. [s since 1970]
+    elongation_percent : array_like
+        Elongations. [%]
+    sigma_percent : array_like
+        Their standard deviations (> 0). [%]
+
+    Returns
+    -------
+    TrendFit
+
+    Raises
+    ------
+    ValueError
+        Fewer than two measurements, arrays of different lengths, non-finite values, a sigma that is
+        not positive, or all measurements at the same time.
+
+    Notes
+    -----
+    With weights ``w_i = 1 / sigma_i^2``, ``t_ref = sum(w t) / sum(w)`` and ``tau = (t - t_ref)`` in
+    years:
+
+        slope = sum(w tau e) / sum(w tau^2),   e_ref = sum(w e) / sum(w),
+        sigma_slope^2 = 1 / sum(w tau^2),      sigma_ref^2 = 1 / sum(w).
+
+    When the residuals scatter more than the sigmas allow (``chi2 / (n - 2) > 1``: speed errors,
+    sensor moved between visits), both sigmas are multiplied by ``sqrt(chi2 / (n - 2))`` (the Birge
+    ratio); they are never reduced.
+    """
+    t = np.asarray(t_unix_s, dtype=float).ravel()
+    e = np.asarray(elongation_percent, dtype=float).ravel()
+    s = np.asarray(sigma_percent, dtype=float).ravel()
+    if not t.size == e.size == s.size:
+        raise ValueError(f"t_unix_s, elongation_percent and sigma_percent must have the same length, got "
+                         f"{t.size}, {e.size}, {s.size}")
+    if t.size < 2:
+        raise ValueError(f"a trend needs at least two measurements, got {t.size}")
+    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(e)) and np.all(np.isfinite(s))):
+        raise ValueError("t_unix_s, elongation_percent and sigma_percent must be finite")
+    if np.any(s <= 0):
+        raise ValueError(f"sigma_percent must be > 0, got {s[s <= 0][0]!r}")
+    w = 1.0 / s**2
+    t_ref = float(np.sum(w * t) / np.sum(w))
+    tau = (t - t_ref) / SECONDS_PER_YEAR
+    stt = float(np.sum(w * tau**2))
+    if not stt > 0 or np.ptp(t) < 1.0:
+        raise ValueError("a trend needs measurements at different times (all share one date)")
+    e_ref = float(np.sum(w * e) / np.sum(w))
+    slope = float(np.sum(w * tau * (e - e_ref)) / stt)
+    chi2 = float(np.sum(w * (e - e_ref - slope * tau) ** 2))
+    dof = t.size - 2
+    chi2_dof = chi2 / dof if dof > 0 else float("nan")
+    scale = max(1.0, math.sqrt(chi2_dof)) if dof > 0 else 1.0
+    return TrendFit(int(t.size), t_ref, e_ref, scale / math.sqrt(float(np.sum(w))), slope, scale / math.sqrt(stt),
+                    chi2_dof, scale)
+
+
+@dataclass(frozen=True)
+class LimitForecast:
+    """When a unit reaches one elongation limit.
+
+    Attributes
+    ----------
+    limit_percent : float
+        [%]
+    status : str
+        ``"reached"`` (the latest measurement is at or over the limit), ``"forecast"`` (the slope is
+        significantly positive: a date and an interval), ``"not before"`` (the slope is not
+        significantly positive but may be: only the earliest date is known) or ``"none"`` (no
+        growth within the uncertainty, or fewer than two measurements).
+    date_utc : str or None
+        Forecast date where the fitted line reaches the limit (``"forecast"``).
+    earliest_utc, latest_utc : str or None
+        The interval from the slope's (and the intercept's) ``coverage_sigma`` bounds.
+    """
+
+    limit_percent: float
+    status: str
+    date_utc: str | None = None
+    earliest_utc: str | None = None
+    latest_utc: str | None = None
+
+    def urgency_unix_s(self):
+        """Date used to rank units: the forecast, else the earliest date; +inf without one."""
+        d = self.date_utc or self.earliest_utc
+        return _dt.datetime.fromisoformat(d).timestamp() if d else math.inf
+
+
+def forecast_limits(fit, limits_percent=DEFAULT_LIMITS_PERCENT, *, latest_elongation_percent=None,
+                    coverage_sigma=2.0):
+    """Dates at which the fitted trend reaches each elongation limit, with an interval.
+
+    Parameters
+    ----------
+    fit : TrendFit or None
+        The unit's trend (None: fewer than two measurements, every limit not reached is ``"none"``).
+    limits_percent : sequence of float
+        Elongation limits. [%]
+    latest_elongation_percent : float, optional
+        The latest measured elongation; a limit it reaches is ``"reached"``. [%]
+    coverage_sigma : float
+        Half-width of the intervals in standard deviations (2: about 95 %).
+
+    Returns
+    -------
+    tuple of LimitForecast
+
+    Notes
+    -----
+    The slope is *significantly positive* when ``slope > k sigma_slope`` (``k = coverage_sigma``).
+    Then the forecast is ``t_ref + (L - e_ref) / slope`` and the interval the extreme crossing times
+    of the lines with ``e_ref +- k sigma_ref`` and ``slope +- k sigma_slope``.  When only
+    ``slope + k sigma_slope > 0``, the limit is reached *not before* the crossing of the steepest of
+    those lines; when even that is not positive, no date is given.
+    """
+    k = float(coverage_sigma)
+    if not (math.isfinite(k) and k > 0):
+        raise ValueError(f"coverage_sigma must be > 0, got {coverage_sigma!r}")
+    out = []
+    for lim in limits_percent:
+        lim = float(lim)
+        if latest_elongation_percent is not None and latest_elongation_percent >= lim:
+            out.append(LimitForecast(lim, "reached"))
+            continue
+        if fit is None:
+            out.append(LimitForecast(lim, "none"))
+            continue
+        b, sb = fit.slope_percent_per_year, fit.slope_sigma_percent_per_year
+        a, sa = fit.elongation_ref_percent, fit.elongation_ref_sigma_percent
+        year = SECONDS_PER_YEAR
+
+        def cross(a_, b_):
+            return fit.t_ref_unix_s + (lim - a_) / b_ * year
+
+        if b > k * sb:
+            corners = [cross(a_, b_) for a_ in (a - k * sa, a + k * sa) for b_ in (b - k * sb, b + k * sb)]
+            out.append(LimitForecast(lim, "forecast", _unix_to_iso(cross(a, b)), _unix_to_iso(min(corners)),
+                                     _unix_to_iso(max(corners))))
+        elif b + k * sb > 0:
+            out.append(LimitForecast(lim, "not before", None, _unix_to_iso(cross(a + k * sa, b + k * sb)), None))
+        else:
+            out.append(LimitForecast(lim, "none"))
+    return tuple(out)
+
+
+@dataclass(frozen=True)
+class UnitTrend:
+    """The state of one unit: latest measurement, elongation trend and limit forecasts.
+
+    Attributes
+    ----------
+    unit : str
+    n_measurements : int
+    first_date_utc, latest_date_utc : str
+    nominal_pitch_m : float
+        [m]
+    latest_elongation_percent, latest_elongation_sigma_percent : float
+        [%]
+    latest_verdict : str
+        :func:`vibkit.diagnose.pitch.elongation_verdict` of the latest elongation.
+    slope_percent_per_year, slope_sigma_percent_per_year : float or None
+        Elongation rate and its standard deviation (None with one measurement or one date). [%/year]
+    chi2_per_dof : float or None
+    over_limit_percent : float or None
+        The highest limit the latest measurement reaches. [%]
+    forecasts : tuple of LimitForecast
+    rank : int
+        1 = most urgent.
+    """
+
+    unit: str
+    n_measurements: int
+    first_date_utc: str
+    latest_date_utc: str
+    nominal_pitch_m: float
+    latest_elongation_percent: float
+    latest_elongation_sigma_percent: float
+    latest_verdict: str
+    slope_percent_per_year: float | None
+    slope_sigma_percent_per_year: float | None
+    chi2_per_dof: float | None
+    over_limit_percent: float | None
+    forecasts: tuple
+    fit: TrendFit | None = None
+    rank: int = 0
+
+    def as_dict(self) -> dict:
+        d = {k: getattr(self, k) for k in self.__dataclass_fields__ if k not in ("forecasts", "fit")}
+        d["forecasts"] = [asdict(f) for f in self.forecasts]
+        if self.fit is not None:
+            d["trend_reference_utc"] = _unix_to_iso(self.fit.t_ref_unix_s)
+            d["elongation_at_reference_percent"] = self.fit.elongation_ref_percent
+            d["elongation_at_reference_sigma_percent"] = self.fit.elongation_ref_sigma_percent
+        return d
+
+
+def unit_trend(unit, measurements, *, limits_percent=DEFAULT_LIMITS_PERCENT, coverage_sigma=2.0) -> UnitTrend:
+    """The :class:`UnitTrend` of one unit's measurements (any order)."""
+    ms = sorted(measurements, key=lambda m: (m.date_unix_s, m.id or 0))
+    last = ms[-1]
+    fit = None
+    if len(ms) >= 2:
+        try:
+            fit = fit_trend([m.date_unix_s for m in ms], [m.elongation_percent for m in ms],
+                            [m.elongation_sigma_percent for m in ms])
+        except ValueError:  # one date only
+            fit = None
+    reached = [lim for lim in limits_percent if last.elongation_percent >= lim]
+    fc = forecast_limits(fit, limits_percent, latest_elongation_percent=last.elongation_percent,
+                         coverage_sigma=coverage_sigma)
+    return UnitTrend(
+        unit=str(unit), n_measurements=len(ms), first_date_utc=ms[0].date_utc, latest_date_utc=last.date_utc,
+        nominal_pitch_m=last.nominal_pitch_m, latest_elongation_percent=last.elongation_percent,
+        latest_elongation_sigma_percent=last.elongation_sigma_percent,
+        latest_verdict=elongation_verdict(last.elongation_percent, limits_percent),
+        slope_percent_per_year=None if fit is None else fit.slope_percent_per_year,
+        slope_sigma_percent_per_year=None if fit is None else fit.slope_sigma_percent_per_year,
+        chi2_per_dof=None if fit is None or math.isnan(fit.chi2_per_dof) else fit.chi2_per_dof,
+        over_limit_percent=max(reached) if reached else None, forecasts=fc, fit=fit)
+
+
+def rank_units(trends):
+    """Sort by urgency: units over a limit first (highest limit, then largest elongation), then by the
+    earliest forecast date of a limit not yet reached, then units without a forecast (largest
+    elongation first); ``rank`` set from 1."""
+    def key(u):
+        if u.over_limit_percent is not None:
+            return (0, -u.over_limit_percent, -u.latest_elongation_percent, u.unit)
+        when = min((f.urgency_unix_s() for f in u.forecasts if f.status != "reached"), default=math.inf)
+        if math.isfinite(when):
+            return (1, when, 0.0, u.unit)
+        return (2, -u.latest_elongation_percent, 0.0, u.unit)
+
+    out = sorted(trends, key=key)
+    return [UnitTrend(**{**{k: getattr(u, k) for k in u.__dataclass_fields__}, "rank": i})
+            for i, u in enumerate(out, 1)]
