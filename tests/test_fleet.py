@@ -383,7 +383,8 @@ def test_database_location_and_refusals(tmp_path, monkeypatch, capsys):
     assert resolve_db_path() == str(tmp_path / "env.sqlite")
     assert resolve_db_path("sqlite:///rel/f.sqlite") == "rel/f.sqlite"
     assert resolve_db_path("sqlite:////abs/f.sqlite") == "/abs/f.sqlite"
-    for url, match in (("postgresql://host/db", "scheme 'postgresql' is not supported yet"),
+    assert resolve_db_path("postgresql://tech@fleet.example/fleet") == "postgresql://tech@fleet.example/fleet"
+    for url, match in (("mysql://host/db", "scheme 'mysql' is not supported"),
                        ("sqlite://", "sqlite:///path")):
         with pytest.raises(FleetError, match=match):
             resolve_db_path(url)

@@ -104,8 +104,8 @@ def scan_folder(db, directory, catalogue, *, scheduler=None, n_workers=None, cli
     """Add every recording of a folder that a catalogue describes to ``db``; see :meth:`FleetDB.scan`.
 
     ``db`` stores the measurements: its ``find``, ``nominal_pitch`` and ``insert`` are called from
-    this process only, and the files at ``db.path`` (and its ``-wal``/``-shm`` companions) are not
-    scanned.
+    this process only, and the files of ``db.local_files`` (a SQLite file and its ``-wal``/``-shm``
+    companions) are not scanned.
     """
     from ..runtime.progress import Progress
 
@@ -120,8 +120,7 @@ def scan_folder(db, directory, catalogue, *, scheduler=None, n_workers=None, cli
         if on_failure is not None:
             on_failure(name, why)
 
-    exclude = {os.path.abspath(os.fspath(catalogue)), os.path.abspath(db.path),
-               os.path.abspath(db.path) + "-wal", os.path.abspath(db.path) + "-shm"}
+    exclude = {os.path.abspath(os.fspath(catalogue)), *getattr(db, "local_files", ())}
     files = _candidate_files(d, exclude)
     # a file the catalogue names exactly is a recording whatever its suffix
     named = [r.file for r in rows if not r.is_glob and os.path.isfile(os.path.join(d, r.file))
