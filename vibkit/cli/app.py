@@ -387,7 +387,7 @@ def _cmd_bench(a):
 
 
 def _vary(text):
-    from vibkit.sweep.run import parse_vary
+    from vibkit.sweep.plan import parse_vary
 
     try:
         return parse_vary(text)
