@@ -68,8 +68,12 @@ class PostgresStore(Store):
             raise
 
     def _tables(self):
-        r = self._con.execute("SELECT to_regclass('measurement') IS NOT NULL, to_regclass(%s) IS NOT NULL",
-                              (_META,)).fetchone()
+        """Whether ``measurement`` and the meta table exist in the current schema (an MVCC query of the
+        catalogue: it sees what another creator committed a moment ago)."""
+        r = self._con.execute("SELECT count(*) FILTER (WHERE c.relname = 'measurement'), "
+                              "count(*) FILTER (WHERE c.relname = %s) FROM pg_class c JOIN pg_namespace n "
+                              "ON n.oid = c.relnamespace WHERE n.nspname = current_schema() "
+                              "AND c.relname IN ('measurement', %s)", (_META, _META)).fetchone()
         return bool(r[0]), bool(r[1])
 
     def _prepare(self, create, db_env):
