@@ -297,20 +297,27 @@ def test_bad_rows_reported_not_fatal(tmp_path, capsys):
     synth(d / "noise.csv", NOMINAL, 13, amps=(), duration=10.0)  # no link-pass
     (d / "garbage.csv").write_text("this is not,a recording\nat,all\n")  # unreadable
     synth(d / "stray.csv", NOMINAL, 14, duration=10.0)  # no catalogue line: unknown unit
+    synth(d / "E22-2026-01-01.csv", NOMINAL * 1.01, 15, duration=10.0)  # no date but in its name
     cat = tmp_path / "units.csv"
     cat.write_text("file,unit,speed_m_s,date,nominal_pitch_m\n"
                    "good*.csv,U1,0.5,,0.133333\n"  # glob; no date: ...
                    "good1.csv,U1,0.5,2025-01-01,\n"  # ... except the exact line wins for good1
                    "noise.csv,U2,0.5,2025-01-01,0.133333\n"
                    "garbage.csv,U2,0.5,2025-01-01,\n"
-                   "missing.csv,U3,0.5,2025-01-01,0.1016\n")
+                   "missing.csv,U3,0.5,2025-01-01,0.1016\n"
+                   "E22-*.csv,E22,0.5,,0.133333\n")
     db = tmp_path / "f.sqlite"
+    # some files failed, others stored: the documented exit code 3, and a summary line
     assert main(["fleet", "scan", str(d), "--catalogue", str(cat), "--db", str(db), "--workers", "0",
-                 "--json"]) == 0
+                 "--json"]) == 3
     out, err = capsys.readouterr()
     s = json.loads(out)
     assert s["schema"] == "vibkit.fleet.scan/1"
-    assert (s["added"], s["skipped_duplicates"], s["failed"]) == (1, 0, 5)
+    assert (s["added"], s["skipped_duplicates"], s["failed"]) == (2, 0, 5)
+    with FleetDB(db) as fdb:
+        (m,) = fdb.measurements("E22")
+    assert m.date_utc == "2026-01-01T00:00:00Z" and m.date_source == "file name"
+    assert "vibkit fleet scan: 2 added (0 flagged), 0 already stored, 5 failed" in err
     failed = {Path(r["file"]).name: r["reason"] for r in s["failed_files"]}
     assert set(failed) == {"good2.csv", "noise.csv", "garbage.csv", "stray.csv", "missing.csv"}
     assert "no start time" in failed["good2.csv"] and "--date" in failed["good2.csv"]

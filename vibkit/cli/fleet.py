@@ -10,9 +10,12 @@ from .output import CLIError, check_output, msg, print_json, table
 EPILOG = ("examples:\n  vibkit fleet add E07-2026-11-23.csv --unit E07 --speed 0.5 --nominal-pitch 0.13333\n"
           "  vibkit fleet scan visits/ --catalogue visits/units.csv --workers 2\n"
           "  vibkit fleet status --json\n  vibkit fleet report -o fleet.pdf\n"
-          "database: --db PATH (or sqlite:///PATH), else $VIBKIT_FLEET_DB, else ./vibkit-fleet.sqlite\n"
-          "catalogue columns: file (name or glob), unit, speed_m_s, date (ISO 8601; empty: the recording's "
-          "start time),\n  nominal_pitch_m (empty: the unit's), optional speed_sigma_m_s, channel")
+          "  vibkit fleet migrate --from vibkit-fleet.sqlite --to postgresql://tech@fleet-server/fleet\n"
+          "database: --db PATH (or sqlite:///PATH) or postgresql://user@host/dbname, else $VIBKIT_FLEET_DB, "
+          "else ./vibkit-fleet.sqlite\n"
+          "exit codes: 0 done; 1 error; 3 scan: some files failed (others were stored)\n"
+          "catalogue columns: file (name or glob), unit, speed_m_s, date (ISO 8601; empty: an ISO date in the "
+          "file name,\n  else the recording's start time), nominal_pitch_m (empty: the unit's), optional speed_sigma_m_s, channel")
 
 
 def add_parser(subparsers):
@@ -22,8 +25,8 @@ def add_parser(subparsers):
 
     def fleet_sub(name, help_):
         sp = add_command(fsub, name, help_, EPILOG)
-        sp.add_argument("--db", help="fleet database: a path or sqlite:///PATH (default $VIBKIT_FLEET_DB, "
-                        "else ./vibkit-fleet.sqlite)")
+        sp.add_argument("--db", help="fleet database: a path, sqlite:///PATH or postgresql://user@host/dbname "
+                        "(default $VIBKIT_FLEET_DB, else ./vibkit-fleet.sqlite)")
         add_json(sp)
         return sp
 
@@ -35,6 +38,8 @@ def add_parser(subparsers):
     f.add_argument("--date", help="measurement date, ISO 8601 (default: the recording's start time)")
     f.add_argument("--nominal-pitch", type=positive, help="nominal link pitch [m] (required for a new unit)")
     add_channel(f, "channel to analyse (default: the first)")
+    f.add_argument("--replaced", action="store_true", help="the unit's chain was replaced since its previous "
+                   "measurement: a new trend segment starts here")
     f.set_defaults(func=run_add)
 
     f = fleet_sub("scan", "add every recording of a folder that a catalogue describes, in parallel (Dask)")
@@ -50,12 +55,23 @@ def add_parser(subparsers):
     add_limits(f)
     f.set_defaults(func=run_status)
 
-    f = fleet_sub("report", "one PDF page: elongation against date per unit, with the limits")
+    f = fleet_sub("report", "PDF: the work list (page 1), then elongation against date per unit")
     f.add_argument("-o", "--output", required=True, help="PDF to write")
     f.add_argument("--force", action="store_true", help="replace an existing output file")
     add_limits(f, "elongation limits [%%]")
     f.set_defaults(func=run_report)
+
+    f = add_command(fsub, "migrate", "copy every measurement of one fleet database into another (e.g. a SQLite "
+                    "file to PostgreSQL), in one transaction; again: copies only what is missing", EPILOG)
+    f.add_argument("--from", dest="source", required=True, help="the existing database (path or URL)")
+    f.add_argument("--to", dest="target", required=True, help="the receiving database (created if missing)")
+    add_json(f)
+    f.set_defaults(func=run_migrate)
     return s
+
+
+#: exit code of ``fleet scan`` when some files failed and others were stored (or already were)
+SCAN_SOME_FAILED = 3
 
 
 def _fleet_db(a, *, create=True):
@@ -75,13 +91,15 @@ def run_add(a):
     sigma = speed_sigma(a.speed_uncertainty, a.speed) if a.speed_uncertainty else 0.0
     with _fleet_db(a) as db:
         m = db.add(a.recording, unit=a.unit, speed=a.speed, speed_sigma=sigma, date=a.date,
-                   nominal_pitch=a.nominal_pitch, channel=a.channel)
+                   nominal_pitch=a.nominal_pitch, channel=a.channel, replaced=a.replaced)
         path = db.path
     if a.json:
         print_json("fleet.add", {"database": path, "measurement": m.as_dict()})
     else:
         print(f"stored {_fmt_measurement(m)}")
         msg(f"note: database {path}; date from {m.date_source}")
+    if m.quality != "ok":
+        msg(f"warning: stored flagged {m.quality}, left out of the trend: {m.quality_reason}")
     for w in m.warnings:
         msg(f"warning: {w}")
     return 0
@@ -104,13 +122,18 @@ def run_scan(a):
               f"  [database {path}]")
         for m in res.added:
             print(f"  added {_fmt_measurement(m)}")
+    flagged = sum(1 for m in res.added if m.quality != "ok")
+    msg(f"vibkit fleet scan: {len(res.added)} added ({flagged} flagged), {len(res.skipped)} already stored, "
+        f"{len(res.failed)} failed")
     if not res.added and not res.skipped:
         raise CLIError(f"nothing added from {a.directory}: {len(res.failed)} file(s) failed"
                        if res.failed else f"{a.directory}: no recording found (suffixes .csv, .txt, .nc, .mseed ...)")
-    return 0
+    return SCAN_SOME_FAILED if res.failed else 0
 
 
 def _fmt_forecast(f):
+    if f is None:
+        return "all reached"
     if f.status == "reached":
         return "reached"
     if f.status == "forecast":
@@ -120,7 +143,27 @@ def _fmt_forecast(f):
         return f"{f.date_utc[:7]} ({lo}..{hi})"
     if f.status == "not before":
         return f"not before {f.earliest_utc[:7]}" if f.earliest_utc else "-"
+    if f.status == "implausible":
+        return "none (implausible rate)"
     return "-"
+
+
+def work_list_rows(trends):
+    """The work list's rows: rank, unit, latest elongation, rate, verdict, next limit and its date, flags."""
+    rows = []
+    for t in trends:
+        slope = "-" if t.slope_percent_per_year is None else \
+            f"{t.slope_percent_per_year:+.2f} +- {t.slope_sigma_percent_per_year:.2f}"
+        nxt = t.next_limit()
+        verdict = t.latest_verdict if t.rate_verdict != "implausible" else f"{t.latest_verdict}; rate implausible"
+        rows.append([t.rank, t.unit, f"{t.latest_elongation_percent:+.2f} +- {t.latest_elongation_sigma_percent:.2f}",
+                     t.latest_date_utc[:10], slope, verdict, "-" if nxt is None else f"{nxt.limit_percent:g} %",
+                     _fmt_forecast(nxt), "; ".join(t.flags) or "-"])
+    return rows
+
+
+WORK_LIST_HEADER = ["rank", "unit", "elongation [%]", "measured", "rate [%/year]", "verdict", "next limit",
+                    "reached on (2-sigma)", "flags"]
 
 
 def run_status(a):
@@ -136,17 +179,9 @@ def run_status(a):
     if not trends:
         print(f"{path}: no measurement stored yet")
         return 0
-    rows = []
-    for t in trends:
-        slope = "-" if t.slope_percent_per_year is None else \
-            f"{t.slope_percent_per_year:+.3f} +- {t.slope_sigma_percent_per_year:.3f}"
-        rows.append([t.rank, t.unit, t.n_measurements, t.latest_date_utc[:10],
-                     f"{t.latest_elongation_percent:+.3f} +- {t.latest_elongation_sigma_percent:.3f}", t.latest_verdict,
-                     slope] + [_fmt_forecast(f) for f in t.forecasts])
-    print(table(rows, ["rank", "unit", "n", "latest", "elongation [%]", "verdict", "trend [%/year]"]
-                + [f"{f.limit_percent:g} % on" for f in trends[0].forecasts]))
-    msg("note: forecast dates with their 2-sigma interval (year-month); 'not before' where the trend is not "
-        "significantly positive")
+    print(table(work_list_rows(trends), WORK_LIST_HEADER))
+    msg("note: most urgent first; latest usable elongation and the rate with 1 sigma; the next limit's date with its "
+        "2-sigma interval (year-month); flagged measurements and outliers are left out of the trends")
     return 0
 
 
@@ -170,7 +205,19 @@ def run_report(a):
     return 0
 
 
-_RUN = {"add": run_add, "scan": run_scan, "status": run_status, "report": run_report}
+def run_migrate(a):
+    from vibkit.fleet.storage import migrate
+
+    r = migrate(a.source, a.target)
+    if a.json:
+        print_json("fleet.migrate", r)
+    else:
+        print(f"copied {r['copied']}, skipped {r['skipped']} (already there); {r['target']} holds "
+              f"{r['target_total']} measurement(s)")
+    return 0
+
+
+_RUN = {"add": run_add, "scan": run_scan, "status": run_status, "report": run_report, "migrate": run_migrate}
 
 
 def run(a):

@@ -1,5 +1,8 @@
 """Scanning a folder of recordings: match each file to its catalogue line, analyse on Dask workers, store.
 
+A recording's date is the catalogue's; where the catalogue has none, an ISO date in the file name
+(``E22-2026-01-01.csv``: ``date_source`` "file name"); else the recording's start time.
+
 The workers only analyse (:func:`_analyse_job`); the calling process alone writes, one committed
 transaction per recording, so a killed scan leaves complete rows only.
 """
@@ -8,9 +11,11 @@ from __future__ import annotations
 
 import fnmatch
 import os
+import re
 from dataclasses import dataclass, field
 
 from .catalogue import read_catalogue
+from .dates import _iso, parse_date
 from .errors import DuplicateRecordingError, FleetError
 from .measurement import _file_sha256, analyse_recording
 
@@ -31,13 +36,15 @@ class _Job:
     date: str | None
     channel: str | None
     sha256: str
+    date_source: str = "given"
 
 
 def _analyse_job(job):
     """Worker side of a scan: analyse one recording; never raises (a failure is a message)."""
     try:
         m = analyse_recording(job.path, unit=job.unit, speed=job.speed_m_s, speed_sigma=job.speed_sigma_m_s,
-                              nominal_pitch=job.nominal_pitch_m, date=job.date, channel=job.channel)
+                              nominal_pitch=job.nominal_pitch_m, date=job.date, channel=job.channel,
+                              date_source=job.date_source)
         return {"ok": True, "measurement": m}
     except (ValueError, OSError) as exc:  # RecordingError and FleetError are ValueErrors
         msg = " ".join(str(exc).split()) or type(exc).__name__
@@ -72,6 +79,19 @@ class ScanResult:
                 "added_files": [m.path for m in self.added],
                 "skipped_files": [{"file": p, "reason": r} for p, r in self.skipped],
                 "failed_files": [{"file": p, "reason": r} for p, r in self.failed], "notes": list(self.notes)}
+
+
+_NAME_DATE = re.compile(r"(?<![0-9])([0-9]{4}-[0-9]{2}-[0-9]{2})(?![0-9])")
+
+
+def date_from_name(name):
+    """The ISO 8601 date (``YYYY-MM-DD``) in a file name, as UTC text, or None (none, or not a real date)."""
+    for m in _NAME_DATE.finditer(os.path.basename(name)):
+        try:
+            return _iso(parse_date(m.group(1)))
+        except FleetError:
+            continue
+    return None
 
 
 def _candidate_files(directory, exclude):
@@ -157,8 +177,11 @@ def scan_folder(db, directory, catalogue, *, scheduler=None, n_workers=None, cli
             fail(full, f"unit {r.unit!r} has no nominal pitch (catalogue line {r.line}: fill nominal_pitch_m "
                        "on one line of the unit)")
             continue
-        jobs.append(_Job(os.path.abspath(full), r.unit, r.speed_m_s, r.speed_sigma_m_s, nom, r.date, r.channel,
-                         sha))
+        date, source = r.date, "given"
+        if date is None and date_from_name(rel) is not None:
+            date, source = date_from_name(rel), "file name"
+        jobs.append(_Job(os.path.abspath(full), r.unit, r.speed_m_s, r.speed_sigma_m_s, nom, date, r.channel,
+                         sha, source))
     for r in rows:
         if r.line not in used:
             if r.is_glob:
