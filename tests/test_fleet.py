@@ -438,16 +438,30 @@ def test_cli_status_json_and_report(fleet, tmp_path, capsys):
     assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".tmp")] == []
 
 
-def test_fleet_page_draws_units_and_limits(fleet, tmp_path):
+def test_fleet_page_draws_units_and_limits(fleet, tmp_path, monkeypatch):
     from vibkit.diagnose.report import write_fleet_report
 
     with FleetDB(fleet["db"], create=False) as db:
         trends, meas = db.status(), db.measurements()
+    monkeypatch.delenv("SOURCE_DATE_EPOCH", raising=False)
     rep = write_fleet_report(trends[:3], meas, tmp_path / "p.pdf", database="fleet.sqlite", max_units=2)
-    (title, texts), = rep.pages
-    joined = " ".join(texts)
-    assert "#1 E-worn" in joined and "#2 E-fast" in joined and "E-slow" not in joined
-    assert "1 less urgent unit(s) not drawn" in joined and "1.5 / 2 / 3 %" in joined
+    (t1, work), (t2, units) = rep.pages
+    assert (t1, t2) == ("work list", "fleet units")
+    # page 1: the work list, every unit, ranked, with the next limit and its interval
+    for row, unit in enumerate(["E-worn", "E-fast", "E-slow"]):
+        i = work.index(unit)
+        assert work[i - 1] == str(row + 1)
+    assert "3 %" in work and "reached on (2-sigma)" in work
+    joined = " ".join(units)
+    assert "#1 E-worn" in joined and "OVER 2 %" in joined and "#2 E-fast" in joined and "E-slow" not in joined
+    assert "1 less urgent unit(s) not drawn" in joined and "1.5 %\nwatch" in joined and "3 %\nreplace" in joined
+    assert "measurement (1 sigma)" in joined and "(2-sigma" in joined  # the legend names the interval drawn
+    # the report's date is today's, unless SOURCE_DATE_EPOCH asks for reproducible bytes
+    assert dt.datetime.now(dt.timezone.utc).strftime("%Y-%m-%d") in " ".join(work)
+    monkeypatch.setenv("SOURCE_DATE_EPOCH", "1767225600")
+    a = write_fleet_report(trends, meas, tmp_path / "a.pdf").path
+    b = write_fleet_report(trends, meas, tmp_path / "b.pdf").path
+    assert Path(a).read_bytes() == Path(b).read_bytes()
 
 
 # vibkit.runtime.cluster's local scheduler binds its HTTP server to port 8787 by default (dashboard off): where
@@ -461,7 +475,7 @@ def test_scan_on_dask_gives_the_plain_loop_numbers(fleet, tmp_path, capsys):
                    f"E-fast_[0-2].csv,E-fast,{SPEED},2024-01-01,{NOMINAL}\n")
     db = tmp_path / "dask.sqlite"
     assert main(["fleet", "scan", str(fleet["dir"]), "--catalogue", str(cat), "--db", str(db), "--workers", "1",
-                 "--json"]) == 0
+                 "--json"]) == 3  # the other units' files failed
     out, err = capsys.readouterr()
     s = json.loads(out)
     assert (s["added"], s["skipped_duplicates"]) == (3, 0)

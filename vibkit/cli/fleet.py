@@ -131,41 +131,6 @@ def run_scan(a):
     return SCAN_SOME_FAILED if res.failed else 0
 
 
-def _fmt_forecast(f):
-    if f is None:
-        return "all reached"
-    if f.status == "reached":
-        return "reached"
-    if f.status == "forecast":
-        if f.date_utc is None:
-            return "after 9999"
-        lo, hi = (f.earliest_utc or "?")[:7], (f.latest_utc or "after 9999")[:7]
-        return f"{f.date_utc[:7]} ({lo}..{hi})"
-    if f.status == "not before":
-        return f"not before {f.earliest_utc[:7]}" if f.earliest_utc else "-"
-    if f.status == "implausible":
-        return "none (implausible rate)"
-    return "-"
-
-
-def work_list_rows(trends):
-    """The work list's rows: rank, unit, latest elongation, rate, verdict, next limit and its date, flags."""
-    rows = []
-    for t in trends:
-        slope = "-" if t.slope_percent_per_year is None else \
-            f"{t.slope_percent_per_year:+.2f} +- {t.slope_sigma_percent_per_year:.2f}"
-        nxt = t.next_limit()
-        verdict = t.latest_verdict if t.rate_verdict != "implausible" else f"{t.latest_verdict}; rate implausible"
-        rows.append([t.rank, t.unit, f"{t.latest_elongation_percent:+.2f} +- {t.latest_elongation_sigma_percent:.2f}",
-                     t.latest_date_utc[:10], slope, verdict, "-" if nxt is None else f"{nxt.limit_percent:g} %",
-                     _fmt_forecast(nxt), "; ".join(t.flags) or "-"])
-    return rows
-
-
-WORK_LIST_HEADER = ["rank", "unit", "elongation [%]", "measured", "rate [%/year]", "verdict", "next limit",
-                    "reached on (2-sigma)", "flags"]
-
-
 def run_status(a):
     with _fleet_db(a, create=False) as db:
         trends = db.status(limits_percent=a.limits, units=a.unit or None)
@@ -179,6 +144,8 @@ def run_status(a):
     if not trends:
         print(f"{path}: no measurement stored yet")
         return 0
+    from vibkit.diagnose.report.fleet import WORK_LIST_HEADER, work_list_rows
+
     print(table(work_list_rows(trends), WORK_LIST_HEADER))
     msg("note: most urgent first; latest usable elongation and the rate with 1 sigma; the next limit's date with its "
         "2-sigma interval (year-month); flagged measurements and outliers are left out of the trends")
@@ -201,7 +168,8 @@ def run_report(a):
         print_json("fleet.report", {"output": rep.path, "database": path, "pages": [t for t, _ in rep.pages],
                                     "units": len(trends), "units_drawn": rep.summary["units_drawn"]})
     else:
-        print(f"wrote {rep.path} (1 page, {rep.summary['units_drawn']} of {len(trends)} units drawn)")
+        print(f"wrote {rep.path} ({len(rep.pages)} page(s): the work list, then {rep.summary['units_drawn']} of "
+              f"{len(trends)} units drawn)")
     return 0
 
 
