@@ -464,6 +464,76 @@ def test_fleet_page_draws_units_and_limits(fleet, tmp_path, monkeypatch):
     assert Path(a).read_bytes() == Path(b).read_bytes()
 
 
+def _overlaps(fig):
+    """Pairs of texts (figure texts, panel titles, limit labels, legends, tick labels) whose boxes overlap."""
+    fig.canvas.draw()
+    r = fig.canvas.get_renderer()
+    boxes = [(f"fig:{t.get_text()[:30]}", t.get_window_extent(r)) for t in fig.texts if t.get_text()]
+    for k, ax in enumerate(fig.axes):
+        items = [ax.title, ax._left_title, *ax.texts, *ax.get_xticklabels(), *ax.get_yticklabels(), ax.yaxis.label]
+        boxes += [(f"ax{k}:{t.get_text()[:30]}", t.get_window_extent(r)) for t in items
+                  if t.get_text() and t.get_visible()]
+        if ax.get_legend() is not None:
+            boxes.append((f"ax{k}:legend", ax.get_legend().get_window_extent(r)))
+    fig_box = fig.bbox
+    out = [name for name, b in boxes if b.x0 < fig_box.x0 - 1 or b.x1 > fig_box.x1 + 1 or b.y0 < fig_box.y0 - 1
+           or b.y1 > fig_box.y1 + 1]
+    for i in range(len(boxes)):
+        for j in range(i + 1, len(boxes)):
+            (na, a), (nb, b) = boxes[i], boxes[j]
+            if a.width and b.width and a.overlaps(b):
+                out.append((na, nb))
+    return out
+
+
+def test_fleet_pages_have_no_overlapping_text(fleet):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from vibkit.diagnose.report.fleet import FleetContext, fleet_page
+
+    with FleetDB(fleet["db"], create=False) as db:
+        trends, meas = db.status(), db.measurements()
+    by_unit = {}
+    for m in meas:
+        by_unit.setdefault(m.unit, []).append(m)
+    found = []
+
+    class Doc:
+        def emit(self, fig, title):
+            found.extend((title, o) for o in _overlaps(fig))
+            plt.close(fig)
+
+    ctx = FleetContext(trends, trends, meas, by_unit, (1.5, 2.0, 3.0), "fleet.sqlite",
+                       dt.datetime(2026, 11, 23, tzinfo=dt.timezone.utc))
+    with matplotlib.rc_context({"font.size": 7, "axes.titlesize": 8}):
+        fleet_page(Doc(), ctx)
+    assert found == []
+
+
+def test_cli_add_replaced_starts_a_segment(tmp_path, capsys):
+    db = str(tmp_path / "f.sqlite")
+    rates = [(0, 1.6), (1, 1.9), (2, 0.2)]  # (years, elongation %): the third after a replacement
+    for k, (y, e) in enumerate(rates):
+        rec = synth(tmp_path / f"v{k}.csv", NOMINAL * (1 + e / 100), 300 + k, duration=10.0)
+        args = ["fleet", "add", str(rec), "--unit", "R1", "--speed", "0.5", "--nominal-pitch", str(NOMINAL),
+                "--date", (T0 + dt.timedelta(days=365 * y)).date().isoformat(), "--db", db]
+        assert main(args + (["--replaced"] if k == 2 else [])) == 0
+    capsys.readouterr()
+    assert main(["fleet", "status", "--db", db, "--json"]) == 0
+    (u,) = json.loads(capsys.readouterr().out)["units"]
+    assert len(u["replacements"]) == 1 and "given" in u["replacements"][0]["reason"]
+    assert u["n_used"] == 1 and u["slope_percent_per_year"] is None and u["over_limit_percent"] is None
+    assert u["latest_elongation_percent"] == pytest.approx(0.2, abs=4 * u["latest_elongation_sigma_percent"])
+    with FleetDB(db) as fdb:
+        assert [m.replaced for m in fdb.measurements("R1")] == [False, False, True]
+    assert main(["fleet", "status", "--db", db]) == 0
+    out = capsys.readouterr().out
+    assert "chain replaced" in out and "R1" in out
+
+
 # vibkit.runtime.cluster's local scheduler binds its HTTP server to port 8787 by default (dashboard off): where
 # another cluster holds the port, distributed warns and leaks the socket of its first try
 @pytest.mark.filterwarnings("ignore:Port 8787 is already in use:UserWarning")
