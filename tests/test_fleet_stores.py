@@ -198,6 +198,16 @@ def test_postgres_refusals(pg_server):
     with pytest.raises(FleetError, match="cannot connect to the PostgreSQL server.*PGPASSWORD"):
         FleetDB(bad)
     assert main(["fleet", "status", "--db", bad]) == 1
+    # the connection lost mid-session (server restarted, network): one clear error, nothing half-stored
+    url2 = _fresh_pg_url(pg_server)
+    with FleetDB(url2) as db:
+        with psycopg.connect(url2, autocommit=True) as con:
+            con.execute("SELECT pg_terminate_backend(pid) FROM pg_stat_activity WHERE application_name = "
+                        "'vibkit fleet' AND datname = current_database()")
+        with pytest.raises(FleetError, match="connection was lost|query failed"):
+            db.insert(fake(9, "E9", 0.0, 0.4))
+    with FleetDB(url2) as db:
+        assert db.measurements() == []
 
 
 def _synth(path, pitch_m, seed, fs=200.0, duration=10.0):

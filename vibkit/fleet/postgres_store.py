@@ -115,7 +115,10 @@ class PostgresStore(Store):
             yield
 
     def execute(self, sql, args=()):
-        return self._con.execute(sql, args)
+        try:
+            return self._con.execute(sql, args)
+        except self._psycopg.Error as exc:
+            raise FleetError(f"{self.location}: query failed on the PostgreSQL server: {_one_line(exc)}") from None
 
     def _insert_row(self, values):
         r = self._con.execute(f"INSERT INTO measurement ({', '.join(COLUMNS)}) VALUES "
@@ -124,6 +127,12 @@ class PostgresStore(Store):
 
     def _is_unique_violation(self, exc):
         return isinstance(exc, self._psycopg.errors.UniqueViolation)
+
+    def _as_fleet_error(self, exc):
+        if isinstance(exc, self._psycopg.Error):
+            return FleetError(f"{self.location}: the PostgreSQL server refused the measurement or the connection was "
+                              f"lost: {_one_line(exc)} (nothing of it was stored)")
+        return None
 
     def integrity_check(self) -> str:
         """``"ok"`` when the table's indexes (the ``sha256`` uniqueness among them) are valid."""

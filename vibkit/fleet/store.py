@@ -42,6 +42,10 @@ class Store:
     def _is_unique_violation(self, exc) -> bool:  # pragma: no cover - abstract
         return False
 
+    def _as_fleet_error(self, exc):
+        """A :class:`FleetError` for a database error of this store (None: not one of them)."""
+        return None
+
     def integrity_check(self) -> str:  # pragma: no cover - abstract
         raise NotImplementedError
 
@@ -105,7 +109,10 @@ class Store:
             raise
         except Exception as exc:
             if not self._is_unique_violation(exc):
-                raise
+                err = self._as_fleet_error(exc)
+                if err is None:
+                    raise
+                raise err from None
             old = self.find(m.sha256)  # stored by another process between our check and our insert
             if old is None:  # pragma: no cover - the row that collided was rolled back since
                 raise FleetError(f"{m.path}: another process stored the same file at the same moment and "
