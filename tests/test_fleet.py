@@ -617,3 +617,10 @@ def test_history_name_keeps_the_public_names():
         assert hasattr(history, name), name
     for name in fleet.__all__:
         assert getattr(history, name) is getattr(fleet, name)
+
+
+@pytest.mark.parametrize("sub", [[], ["add"], ["scan"], ["status"], ["report"], ["migrate"]])
+def test_fleet_help_pages(sub, capsys):
+    with pytest.raises(SystemExit) as ei:
+        main(["fleet", *sub, "--help"])
+    assert ei.value.code == 0 and "usage: vibkit fleet" in capsys.readouterr().out

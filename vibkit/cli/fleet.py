@@ -1,4 +1,4 @@
-"""``vibkit fleet``: measurement history of a fleet of escalators (add, scan, status, report)."""
+"""``vibkit fleet``: measurement history of a fleet of escalators (add, scan, status, report, migrate)."""
 
 from __future__ import annotations
 
@@ -19,7 +19,7 @@ EPILOG = ("examples:\n  vibkit fleet add E07-2026-11-23.csv --unit E07 --speed 0
 
 
 def add_parser(subparsers):
-    s = add_command(subparsers, "fleet", "measurement history of a fleet of escalators: add, scan, status, report",
+    s = add_command(subparsers, "fleet", "measurement history of a fleet of escalators: add, scan, status, report, migrate",
                     EPILOG)
     fsub = s.add_subparsers(dest="fleet_command", metavar="SUBCOMMAND", required=True)
 
@@ -50,7 +50,7 @@ def add_parser(subparsers):
                    "core; 0: analyse in this process)")
     f.set_defaults(func=run_scan)
 
-    f = fleet_sub("status", "per unit: latest elongation, trend [%/year] and limit forecasts, most urgent first")
+    f = fleet_sub("status", "the work list: per unit the latest elongation, the rate per year, the next limit and its date, flags; most urgent first")
     f.add_argument("--unit", action="append", help="only this unit (repeatable)")
     add_limits(f)
     f.set_defaults(func=run_status)
