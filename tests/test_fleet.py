@@ -470,7 +470,10 @@ def _overlaps(fig):
     r = fig.canvas.get_renderer()
     boxes = [(f"fig:{t.get_text()[:30]}", t.get_window_extent(r)) for t in fig.texts if t.get_text()]
     for k, ax in enumerate(fig.axes):
-        items = [ax.title, ax._left_title, *ax.texts, *ax.get_xticklabels(), *ax.get_yticklabels(), ax.yaxis.label]
+        ticks = []
+        for axis, (lo, hi) in ((ax.xaxis, ax.get_xlim()), (ax.yaxis, ax.get_ylim())):
+            ticks += [t.label1 for t in axis.get_major_ticks() if min(lo, hi) <= t.get_loc() <= max(lo, hi)]
+        items = [ax.title, ax._left_title, *ax.texts, *ticks, ax.yaxis.label]
         boxes += [(f"ax{k}:{t.get_text()[:30]}", t.get_window_extent(r)) for t in items
                   if t.get_text() and t.get_visible()]
         if ax.get_legend() is not None:
