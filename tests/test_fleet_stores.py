@@ -307,10 +307,15 @@ def test_version_1_sqlite_file_is_upgraded_and_flagged(tmp_path):
     con.close()
 
 
-def test_environment_variable_names_the_server(pg_server, monkeypatch):
-    url = _fresh_pg_url(pg_server)
+def test_environment_variable_names_the_server(pg_server, monkeypatch, tmp_path, capsys):
+    url = _fresh_pg_url(pg_server).replace("postgresql://postgres:@", "postgresql://postgres:secret@")
     monkeypatch.setenv("VIBKIT_FLEET_DB", url)
     with FleetDB() as db:
         assert db.kind == "postgresql" and db.local_files == ()
+        assert "secret" not in db.path and "postgres:***@" in db.path  # the password is never printed
         db.insert(fake(5, "E5", 0.0, 0.4))
+        db.insert(fake(6, "E5", 1.0, 0.6))
     assert main(["fleet", "status"]) == 0
+    assert main(["fleet", "report", "-o", str(tmp_path / "f.pdf")]) == 0
+    out = capsys.readouterr().out
+    assert "E5" in out and "secret" not in out and (tmp_path / "f.pdf").read_bytes()[:5] == b"%PDF-"
