@@ -114,6 +114,18 @@ def test_lone_low_point_is_an_outlier_not_a_replacement():
     assert abs(tr.slope_percent_per_year - 0.4) < 3 * tr.slope_sigma_percent_per_year
 
 
+@pytest.mark.parametrize("seed", range(5))
+def test_lone_high_point_is_an_outlier_not_a_replacement(seed):
+    # 0.3 %/year, visits every 0.4 years, one visit 0.6 % (8.5 combined sigmas) too high: the step down after
+    # it is not a chain replacement
+    years = np.arange(7) * 0.4
+    ms = line_unit(0.5, 0.3, years, seed=20 + seed)
+    ms[3] = meas(ms[3].id, years[3], ms[3].elongation_percent + 0.6)
+    tr = unit_trend("U", ms)
+    assert tr.replacements == () and [o["id"] for o in tr.outliers] == [ms[3].id]
+    assert tr.n_used == 6 and abs(tr.slope_percent_per_year - 0.3) < 3 * tr.slope_sigma_percent_per_year
+
+
 def test_replaced_flag_starts_a_segment_without_a_drop():
     # a used chain fitted: no drop, but the technician said so (fleet add --replaced)
     old = line_unit(0.5, 0.6, np.linspace(0, 2.0, 5), seed=7)
@@ -178,3 +190,14 @@ def test_screen_unit_labels_every_point():
     scr = screen_unit(ms)
     assert set(scr.labels) == {m.id for m in ms} and scr.labels[77] == "implausible"
     assert math.isclose(len(scr.used), 7)
+
+
+@pytest.mark.parametrize("rate, spacing", [(0.0, 0.25), (0.3, 0.4)])
+def test_few_false_alarms_on_clean_units(rate, spacing):
+    # 300 units of 8 visits with nothing wrong: at most 1 % get a replacement, an outlier or an implausible rate
+    # (expected: 7 steps x P(z > 4 sigma) = 2e-4 replacements a unit; outliers at 5 sigma rarer still)
+    alarms = 0
+    for s in range(300):
+        tr = unit_trend("U", line_unit(0.5, rate, np.arange(8) * spacing, seed=5000 + s))
+        alarms += bool(tr.replacements or tr.outliers or tr.rate_verdict == "implausible")
+    assert alarms <= 3

@@ -7,7 +7,8 @@ A unit's measurements (by date) are screened in three steps (:func:`screen_unit`
 2. a chain is never shorter than it was: a measurement marked ``replaced``, or one whose elongation
    lies more than ``drop_sigma`` combined standard deviations below the previous one, starts a new
    *segment* (a chain replacement).  A lone low point that the next measurement contradicts (back
-   at the old level) is an outlier, not a replacement;
+   at the old level), or a lone high point that the one after it contradicts, is an outlier, not
+   a replacement;
 3. in the current (latest) segment, with at least four points, the point furthest from the line
    fitted to the others is an *outlier* when it lies more than ``outlier_sigma`` (5) standard
    deviations from it (its sigma and the line's prediction sigma combined, both widened by the
@@ -25,8 +26,9 @@ from .trends import SECONDS_PER_YEAR, fit_trend
 
 __all__ = ["Screening", "screen_unit"]
 
-#: a drop below the previous point by more than this many combined sigmas starts a new segment
-DROP_SIGMA = 3.0
+#: a drop below the previous point by more than this many combined sigmas starts a new segment (a real
+#: replacement drops 1-3 % against sigmas of 0.05-0.1 %: tens of sigmas)
+DROP_SIGMA = 4.0
 #: a point more than this many sigmas from the trend of the others is an outlier
 OUTLIER_SIGMA = 5.0
 
@@ -44,7 +46,7 @@ class Screening:
         ``"implausible"`` or ``"earlier segment"``.
     outliers : list of (Measurement, float)
         Outliers with their distance from the trend of the others in sigmas (``nan`` for a lone low
-        point contradicted by the next one: its distance is from the previous point).
+        or high point that its neighbours contradict, found by the step test).
     segment_starts : list of (Measurement, str)
         Measurements that start a new segment, with the reason.
     """
@@ -95,7 +97,7 @@ def screen_unit(measurements, *, drop_sigma=DROP_SIGMA, outlier_sigma=OUTLIER_SI
             out.labels[_key(m)] = m.quality
         else:
             good.append(m)
-    segments, prev, lone = [[]], None, set()
+    segments, prev = [[]], None
     for i, m in enumerate(good):
         if m.replaced and segments[-1]:
             out.segment_starts.append((m, "chain replaced (given when it was added)"))
@@ -107,10 +109,18 @@ def screen_unit(measurements, *, drop_sigma=DROP_SIGMA, outlier_sigma=OUTLIER_SI
                 nxt = good[i + 1] if i + 1 < len(good) else None
                 if nxt is not None and not nxt.replaced and not _drop(prev, nxt, drop_sigma)[1] \
                         and _drop(nxt, m, drop_sigma)[1]:
-                    lone.add(_key(m))  # the next point is back at the old level: m alone is wrong
-                    out.outliers.append((m, float("nan")))
+                    out.outliers.append((m, float("nan")))  # the next point is back at the old level
                     out.labels[_key(m)] = "outlier"
                     continue
+                seg = segments[-1]
+                pp = seg[-2] if len(seg) >= 2 else None
+                if pp is not None and _drop(prev, pp, drop_sigma)[1] and not _drop(pp, m, drop_sigma)[1]:
+                    # prev rose above the point before it and m is back at that level: prev alone is wrong
+                    seg.pop()
+                    out.outliers.append((prev, float("nan")))
+                    out.labels[_key(prev)] = "outlier"
+                    dropped = False
+            if dropped:
                 out.segment_starts.append((m, f"elongation fell from {prev.elongation_percent:+.2f} to "
                                               f"{m.elongation_percent:+.2f} % ({z:.1f} sigma): chain replaced?"))
                 segments.append([])

@@ -78,8 +78,15 @@ class SQLiteStore(Store):
         con.execute("PRAGMA synchronous=FULL")
         con.execute("PRAGMA foreign_keys=ON")
         if "measurement" not in tables or ver < SCHEMA_VERSION:
-            with self.write_transaction(()):
-                self._create_or_upgrade()
+            try:
+                with self.write_transaction(()):
+                    self._create_or_upgrade()
+            except sqlite3.OperationalError as exc:
+                if "readonly" not in str(exc).replace(" ", "").lower():
+                    raise
+                raise FleetError(f"{self.path}: written by an older vibkit (schema {ver}); this one upgrades it to "
+                                 f"schema {SCHEMA_VERSION} in place, which needs write access to the file and its "
+                                 "folder (run any fleet command once where it may write)") from None
 
     def _create_or_upgrade(self):
         """Inside the write lock: create the table, or bring a version-1 file to the current schema."""
