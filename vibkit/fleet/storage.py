@@ -256,7 +256,8 @@ class FleetDB:
         d["id"] = rid
         return Measurement(**d)
 
-    def add(self, recording, *, unit, speed, speed_sigma=0.0, date=None, nominal_pitch=None, channel=None):
+    def add(self, recording, *, unit, speed, speed_sigma=0.0, date=None, nominal_pitch=None, channel=None,
+            read_options=None):
         """Analyse a recording and store its measurement.
 
         Parameters
@@ -271,6 +272,8 @@ class FleetDB:
         nominal_pitch : float, optional
             Nominal link pitch [m]; default the unit's stored value (required for a new unit).
         channel : str, optional
+        read_options : dict, optional
+            More :func:`vibkit.read_recording` arguments (``time_unit``, ``units``, ``repair_time`` ...).
 
         Returns
         -------
@@ -296,7 +299,7 @@ class FleetDB:
         if nom is None:
             raise FleetError(f"unit {str(unit)!r} is new: give its nominal link pitch (--nominal-pitch, in m)")
         m = analyse_recording(spath, unit=unit, speed=speed, speed_sigma=speed_sigma, nominal_pitch=nom, date=date,
-                              channel=channel)
+                              channel=channel, read_options=read_options)
         return self.insert(m)
 
     def scan(self, directory, catalogue, *, scheduler=None, n_workers=None, client=None, parallel=True,
