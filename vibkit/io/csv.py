@@ -292,9 +292,12 @@ def _held_samples(t, channels, row_rate, history, extra_attrs):
             rates[ch.name] = r
     if rates:
         lo = min(rates.values())
+        every = len(rates) == len(channels)
         history.append(f"held samples: rows come at {row_rate:.4g} Hz but the values of "
                        + ", ".join(f"{k} change {v:.3g}" for k, v in rates.items())
                        + f" times a second (repeated between updates); true update rate {lo:.3g} Hz, so nothing "
-                       f"above its Nyquist frequency {lo / 2:.3g} Hz is in the data")
-        extra_attrs["update_rate_hz"] = float(lo)
-        extra_attrs["nyquist_hz"] = float(lo / 2)
+                       f"above its Nyquist frequency {lo / 2:.3g} Hz is in "
+                       + ("the data" if every else "those channels (attrs update_rate_hz, nyquist_hz)"))
+        if every:
+            extra_attrs["update_rate_hz"] = float(lo)
+            extra_attrs["nyquist_hz"] = float(lo / 2)
