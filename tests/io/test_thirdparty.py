@@ -3,7 +3,7 @@
 ``expected.json`` holds, per file, the sample rate, the time column and its unit, the channels and their
 units as the file or its documentation states them (see SOURCES.md).  vibkit converts units to SI, so a
 channel's unit is compared through :func:`vibkit.io.units.parse_unit` (``g`` -> ``m/s^2``).  Columns that
-count samples stay in the dataset marked ``sample_counter`` (never analysed by default) and are not channels.
+count samples (PicoQuake's ``count``) and other clocks (Sensor Logger's ``seconds_elapsed``) are no channels.
 """
 
 from __future__ import annotations
@@ -36,7 +36,7 @@ def read_facts(name, **options):
     ds = read_recording(ROOT / name, **options)
     chans = {}
     for v in ds.data_vars:
-        if v == "segment" or ds[v].attrs.get("sample_counter"):
+        if v == "segment":
             continue
         a = ds[v].attrs
         name = a.get("trace_id") or a.get("source_name") or v
@@ -102,5 +102,5 @@ def test_physics_toolbox_held_samples_give_the_true_update_rate():
 def test_picoquake_rate_from_its_config_comment():
     ds = read_recording(ROOT / "picoquake_car_vibration.csv")
     assert "header line 4, 'data_rate'" in ds.attrs["history"]
-    assert ds["count"].attrs["sample_counter"] == 1
+    assert ds["count"].attrs["sample_counter"] == 1 and "count" in ds.coords and "count" not in ds.data_vars
     assert ds["a_x"].attrs["original_units"] == "g" and ds["g_x"].attrs["original_units"] == "deg/s"

@@ -131,7 +131,9 @@ def _build_channels(path, cols, rownums, dec, chan_idx, explicit, override, coln
         if named or is_counter_ramp(vals):
             attrs[COUNTER_ATTR] = 1
             why = "its name" if named else "a +1 integer ramp"
-            history.append(f"column '{head}' counts samples ({why}); never the default channel")
+            history.append(f"column '{head}' counts samples ({why}); kept as a coordinate, not a channel")
+            if explicit:
+                attrs["requested"] = 1
         if j in override:
             u_text = override[j]
             unit = parse_unit(u_text) if isinstance(u_text, str) else None

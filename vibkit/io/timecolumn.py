@@ -30,7 +30,7 @@ _EPOCH_UNITS = (("s", 1.0), ("ms", 1e-3), ("us", 1e-6), ("ns", 1e-9))
 
 #: names of clock columns besides ``time``: elapsed seconds, epoch, microcontroller clocks
 _CLOCK_NAME = re.compile(r"^(?:epoch?|unix[ _-]?time|(?:seconds|secs|time)?[ _-]?elapsed(?:[ _-]?(?:time|s|ms))?"
-                         r"|micros|millis|timestamp|time ?stamp|uptime|clock)$", re.IGNORECASE)
+                         r"|micros|millis|timestamp|time ?stamp)$", re.IGNORECASE)
 
 
 def _is_clock_name(nm, ut):
