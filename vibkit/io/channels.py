@@ -101,7 +101,7 @@ def resolve_channel(recording, channel=None) -> str:
         raise ValueError(f"{where}the only channel(s) {', '.join(repr(n) for n in names)} count samples "
                          "(index, sample number); name one with channel= to analyse it anyway")
     want = _norm(channel)
-    for keys in (("__name__",), ("source_name", "column"), ("long_name",)):  # most specific first
+    for keys in (("__name__",), ("source_name", "column", "trace_id"), ("channel_code",), ("long_name",)):
         for n in names:
             attrs = recording[n].attrs
             cands = [n if k == "__name__" else attrs.get(k) for k in keys]

@@ -119,7 +119,7 @@ def read_seismic(path, data: bytes, *, channel=None, units=None, sample_rate=Non
             for k, u in units.items():
                 if k in (i, names[i], i.split(".")[-1]):
                     u_text = u
-        attrs = {"trace_id": i, "original_units": "counts"}
+        attrs = {"trace_id": i, "channel_code": i.split(".")[-1], "original_units": "counts"}
         cal = _calibration(g[0])
         if u_text is None and cal is not None:
             f, si, q, what = cal
