@@ -181,6 +181,11 @@ def test_a_repeated_stamp_elsewhere_is_still_refused_naming_the_flag(tmp_path, r
         read_recording(p)
     rc, _, err = run("pitch", p, "--speed", "0.5")
     assert rc == 1 and "pass --repair-time to drop repeats" in err
+    rc, _, err = run("ride", p)  # ride suggests --repair-time, and takes it
+    assert rc == 1 and "pass --repair-time to drop repeats" in err
+    rc, out, err = run("ride", p, "--repair-time", "--segment", "0.5:7", "--json")
+    assert rc == 0, err
+    assert json.loads(out)["sample_rate_hz"] == pytest.approx(100.0, rel=0.01)
 
 
 # ------------------------------------------------------------------------------------------ Physics Toolbox
