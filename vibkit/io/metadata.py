@@ -15,7 +15,8 @@ from .units import parse_unit
 
 __all__ = []
 
-_RATE_KEY = re.compile(r"sampl\w*[\s_-]*(?:rate|freq)|samplerate|^fs\b|frecuencia\s*de\s*muestreo|^data[\s_-]*rate$|^odr$"
+_RATE_KEY = re.compile(r"sampl\w*[\s_-]*(?:rate|freq)|samplerate|^fs\b|frecuencia\s*de\s*muestreo"
+                       r"|^data[\s_-]*rate$|^odr$"
                        r"|sampling|muestreo|abtastrate", re.IGNORECASE)
 _SCALE = re.compile(r"([0-9]+(?:[.,][0-9]*)?(?:[eE][+-]?[0-9]+)?)\s*,?\s*(?:counts?|lsb|cts|digits)\s*"
                     r"(?:/|per)\s*([^\s,;]+)", re.IGNORECASE)
