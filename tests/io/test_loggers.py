@@ -53,6 +53,7 @@ def test_metawear_numeric_clock_preferred_over_the_text_stamp(tmp_path, header):
     p.write_text(f"{header},x-axis (g),y-axis (g),z-axis (g)\n" + "".join(rows))
     ds = read_recording(p)
     assert ds["time"].attrs["column"] == header.split(",")[0]
+    assert ds.attrs["start_time"] == "2022-08-05T20:26:13.153000+00:00"  # epoch 1659731173153 ms, UTC
     assert ds.attrs["sample_rate_hz"] == pytest.approx(fs, rel=0.01)
     assert list(ds.data_vars) == ["x_axis", "y_axis", "z_axis"]
     assert ds["z_axis"].attrs["units"] == "m/s^2" and ds["z_axis"].attrs["original_units"] == "g"

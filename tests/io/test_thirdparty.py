@@ -104,3 +104,12 @@ def test_picoquake_rate_from_its_config_comment():
     assert "header line 4, 'data_rate'" in ds.attrs["history"]
     assert ds["count"].attrs["sample_counter"] == 1 and "count" in ds.coords and "count" not in ds.data_vars
     assert ds["a_x"].attrs["original_units"] == "g" and ds["g_x"].attrs["original_units"] == "deg/s"
+
+
+def test_held_samples_said_on_the_command_line(capsys):
+    from vibkit.cli import main
+
+    main(["spectrum", str(ROOT / "physicstoolbox_multi_gforce_linacc_gyro_daily.csv")])
+    err = capsys.readouterr().err
+    assert "values held between updates (rows at 43.96 Hz, updates at 14.7 Hz)" in err
+    assert "nothing above 7.33 Hz (their Nyquist frequency)" in err

@@ -220,11 +220,24 @@ def read_recording(a):
     from vibkit.io import RecordingError
 
     try:
-        return vibkit.read_recording(a.recording, **reader_options(a))
+        rec = vibkit.read_recording(a.recording, **reader_options(a))
     except RecordingError:
         if not getattr(a, "channel", None):
             raise
-    return vibkit.read_recording(a.recording, **reader_options(a, channel=True))
+        rec = vibkit.read_recording(a.recording, **reader_options(a, channel=True))
+    _note_held_samples(rec)
+    return rec
+
+
+def _note_held_samples(rec):
+    """Say on stderr which channels hold their values between updates, and the Nyquist frequency that follows."""
+    from .output import msg
+
+    held = {str(v): float(rec[v].attrs["update_rate_hz"]) for v in rec.data_vars if "update_rate_hz" in rec[v].attrs}
+    if held:
+        lo = min(held.values())
+        msg(f"note: {', '.join(held)}: values held between updates (rows at {rec.attrs['sample_rate_hz']:.4g} Hz, "
+            f"updates at {lo:.3g} Hz): nothing above {lo / 2:.3g} Hz (their Nyquist frequency) is in the data")
 
 
 _PY_ARG = re.compile(r"\b(" + "|".join(READER_FLAGS) + r")=(\{[^}]*\}|True\b|False\b)?( ?)")

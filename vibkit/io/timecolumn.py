@@ -141,6 +141,9 @@ def _read_time(path, tcells, tname, unit_text, dec, rownums, header_line, time_u
                                    f"Unix epoch times in {eunit} by their size and steps; read as {eunit} "
                                    f"(start {start.isoformat()}; pass time_unit= to override)")
                     extra_attrs.setdefault("start_time", start.isoformat())
+        if vals.size and "start_time" not in extra_attrs and _EPOCH_RANGE_S[0] <= vals[0] * f <= _EPOCH_RANGE_S[1]:
+            # a Unix epoch column with its unit in the header (MetaWear 'epoc (ms)')
+            extra_attrs["start_time"] = datetime.fromtimestamp(float(vals[0]) * f, tz=timezone.utc).isoformat()
         if vals.size and abs(vals[0]) * f > 1e6:
             extra_attrs["time_offset_s"] = float(vals[0] * f)
             history.append(f"time shifted by {vals[0] * f:.6f} s so that it starts at 0 (epoch-like values)")
