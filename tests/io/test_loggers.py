@@ -270,11 +270,13 @@ def _options(argv):
     return {o for a in sp._actions for o in a.option_strings}
 
 
-@pytest.mark.parametrize("cmd", [["spectrum"], ["pitch"], ["compare"], ["report"], ["ride"], ["fleet", "add"]])
+@pytest.mark.parametrize("cmd", [["spectrum"], ["pitch"], ["compare"], ["report"], ["ride"], ["fleet", "add"],
+                                 ["fleet", "scan"]])
 def test_every_command_that_reads_a_recording_takes_the_reader_options(cmd):
     opts = _options(cmd)
     assert READER_FLAGS <= opts, READER_FLAGS - opts
-    assert ("--channel" in opts) == (cmd != ["ride"])  # ride names its axes with --channels
+    # ride names its axes with --channels, a fleet scan's catalogue names each file's channel
+    assert ("--channel" in opts) == (cmd not in (["ride"], ["fleet", "scan"]))
 
 
 def test_units_option_on_the_command_line(tmp_path, run):
@@ -298,3 +300,17 @@ def test_cli_message_names_flags_not_python_arguments():
         "pass --repair-time to repair"
     assert cli_message("kept (pass units={'ax': 'g/<counts per g>'})") == "kept (pass --units ax=g/<counts per g>)"
     assert cli_message("no time column (time_column=False given)") == "no time column (--time-column none given)"
+
+
+def test_fleet_scan_applies_the_reader_options_to_every_file(tmp_path, run):
+    (tmp_path / "visits").mkdir()
+    for k, name in enumerate(("a.csv", "b.csv")):
+        arduino(tmp_path / "visits" / name, 120_000 + 7 * k, 50, n=200)  # unit unclear without --time-unit
+    (tmp_path / "cat.csv").write_text("file,unit,speed_m_s,date,nominal_pitch_m\n*.csv,E1,0.5,2026-01-01,0.13333\n")
+    db = tmp_path / "f.sqlite"
+    rc, _, err = run("fleet", "scan", tmp_path / "visits", "--catalogue", tmp_path / "cat.csv", "--db", db,
+                     "--workers", "0")
+    assert rc == 1 and err.count("pass --time-unit (s, ms, us)") == 2, err
+    rc, _, err = run("fleet", "scan", tmp_path / "visits", "--catalogue", tmp_path / "cat.csv", "--db", db,
+                     "--workers", "0", "--time-unit", "ms")
+    assert "--time-unit" not in err and "cannot tell its unit" not in err, err  # read; no link-pass is fine

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import sys
 
-from .options import add_command, add_json, add_limits, add_recording, positive, reader_options, speed_sigma, workers
+from .options import (add_command, add_json, add_limits, add_recording, cli_message, positive, reader_options,
+                      speed_sigma, workers)
 from .output import CLIError, check_output, msg, print_json, table
 
 EPILOG = ("examples:\n  vibkit fleet add E07-2026-11-23.csv --unit E07 --speed 0.5 --nominal-pitch 0.13333\n"
@@ -42,6 +43,7 @@ def add_parser(subparsers):
     f.add_argument("--scheduler", help="address of a running Dask scheduler (default: a local cluster)")
     f.add_argument("--workers", type=workers, help="worker processes of the local cluster (default: one per "
                    "core; 0: analyse in this process)")
+    add_recording(f, positional=False, channel=False)  # for every file; the catalogue's channel column per file
     f.set_defaults(func=run_scan)
 
     f = fleet_sub("status", "per unit: latest elongation, trend [%/year] and limit forecasts, most urgent first")
@@ -89,11 +91,13 @@ def run_add(a):
 
 def run_scan(a):
     def failed(name, why):
+        why = cli_message(why)
         msg(f"vibkit fleet scan: failed: {why if why.startswith(name) else f'{name}: {why}'}")
 
     with _fleet_db(a) as db:
         res = db.scan(a.directory, a.catalogue, scheduler=a.scheduler, n_workers=a.workers or None,
-                      parallel=a.workers != 0, on_failure=failed, progress=sys.stderr.isatty())
+                      parallel=a.workers != 0, on_failure=failed, progress=sys.stderr.isatty(),
+                      read_options=reader_options(a))
         path = db.path
     for n in res.notes:
         msg(f"note: {n}")

@@ -303,7 +303,7 @@ class FleetDB:
         return self.insert(m)
 
     def scan(self, directory, catalogue, *, scheduler=None, n_workers=None, client=None, parallel=True,
-             on_failure=None, progress=False):
+             on_failure=None, progress=False, read_options=None):
         """Add every recording of a folder that a catalogue describes; analyses run on Dask workers.
 
         Parameters
@@ -325,6 +325,9 @@ class FleetDB:
             Called as ``on_failure(file, reason)`` for each failed file as it happens.
         progress : bool
             Draw a progress bar on a terminal.
+        read_options : dict, optional
+            :func:`vibkit.read_recording` arguments for every file (``time_unit``, ``units`` ...); the
+            catalogue's ``channel`` column names each file's channel.
 
         Returns
         -------
@@ -338,7 +341,8 @@ class FleetDB:
         ``if __name__ == "__main__":`` guard (or ``parallel=False``).
         """
         return scan_folder(self, directory, catalogue, scheduler=scheduler, n_workers=n_workers, client=client,
-                           parallel=parallel, on_failure=on_failure, progress=progress)
+                           parallel=parallel, on_failure=on_failure, progress=progress,
+                           read_options=read_options)
 
     # ----------------------------------------------------------------------------------- status
     def status(self, *, limits_percent=DEFAULT_LIMITS_PERCENT, coverage_sigma=2.0, units=None):
