@@ -65,7 +65,7 @@ def _file_sha256(path):
 
 
 def analyse_recording(path, *, unit, speed, speed_sigma=0.0, nominal_pitch, date=None, channel=None, replaced=False,
-                      date_source="given"):
+                      date_source="given", read_options=None):
     """Read and analyse one recording; the :class:`Measurement` it gives (not stored, ``id`` None).
 
     Parameters
@@ -81,6 +81,8 @@ def analyse_recording(path, *, unit, speed, speed_sigma=0.0, nominal_pitch, date
     date : str or datetime, optional
         Measurement date (ISO 8601); default the recording's start time.
     channel : str, optional
+    read_options : dict, optional
+        More :func:`vibkit.read_recording` arguments (``time_unit``, ``units``, ``repair_time`` ...).
     replaced : bool
         The chain was replaced since the unit's previous measurement (a new trend segment starts).
     date_source : str
@@ -106,7 +108,7 @@ def analyse_recording(path, *, unit, speed, speed_sigma=0.0, nominal_pitch, date
     if nominal_pitch is None or not (math.isfinite(float(nominal_pitch)) and float(nominal_pitch) > 0):
         raise FleetError(f"nominal_pitch must be a positive length [m], got {nominal_pitch!r}")
     spath = os.fspath(path)
-    rec = read_recording(spath, channel=channel)
+    rec = read_recording(spath, **{**(read_options or {}), "channel": channel})
     if isinstance(date, _dt.datetime):
         d, source = (date if date.tzinfo else date.replace(tzinfo=_dt.timezone.utc)), str(date_source)
     elif date is not None and str(date).strip():

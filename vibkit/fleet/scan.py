@@ -36,6 +36,7 @@ class _Job:
     date: str | None
     channel: str | None
     sha256: str
+    read_options: dict | None = None
     date_source: str = "given"
 
 
@@ -44,7 +45,7 @@ def _analyse_job(job):
     try:
         m = analyse_recording(job.path, unit=job.unit, speed=job.speed_m_s, speed_sigma=job.speed_sigma_m_s,
                               nominal_pitch=job.nominal_pitch_m, date=job.date, channel=job.channel,
-                              date_source=job.date_source)
+                              read_options=job.read_options, date_source=job.date_source)
         return {"ok": True, "measurement": m}
     except (ValueError, OSError) as exc:  # RecordingError and FleetError are ValueErrors
         msg = " ".join(str(exc).split()) or type(exc).__name__
@@ -120,7 +121,7 @@ def _match(rel, rows):
 
 
 def scan_folder(db, directory, catalogue, *, scheduler=None, n_workers=None, client=None, parallel=True,
-                on_failure=None, progress=False):
+                on_failure=None, progress=False, read_options=None):
     """Add every recording of a folder that a catalogue describes to ``db``; see :meth:`FleetDB.scan`.
 
     ``db`` stores the measurements: its ``find``, ``nominal_pitch`` and ``insert`` are called from
@@ -181,7 +182,7 @@ def scan_folder(db, directory, catalogue, *, scheduler=None, n_workers=None, cli
         if date is None and date_from_name(rel) is not None:
             date, source = date_from_name(rel), "file name"
         jobs.append(_Job(os.path.abspath(full), r.unit, r.speed_m_s, r.speed_sigma_m_s, nom, date, r.channel,
-                         sha, source))
+                         sha, read_options, source))
     for r in rows:
         if r.line not in used:
             if r.is_glob:

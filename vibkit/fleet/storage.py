@@ -174,7 +174,7 @@ class FleetDB:
         return self._store.insert_many(measurements)
 
     def add(self, recording, *, unit, speed, speed_sigma=0.0, date=None, nominal_pitch=None, channel=None,
-            replaced=False):
+            replaced=False, read_options=None):
         """Analyse a recording and store its measurement.
 
         Parameters
@@ -191,6 +191,8 @@ class FleetDB:
         channel : str, optional
         replaced : bool
             The unit's chain was replaced since its previous measurement: a new trend segment starts.
+        read_options : dict, optional
+            More :func:`vibkit.read_recording` arguments (``time_unit``, ``units``, ``repair_time`` ...).
 
         Returns
         -------
@@ -217,11 +219,11 @@ class FleetDB:
         if nom is None:
             raise FleetError(f"unit {str(unit)!r} is new: give its nominal link pitch (--nominal-pitch, in m)")
         m = analyse_recording(spath, unit=unit, speed=speed, speed_sigma=speed_sigma, nominal_pitch=nom, date=date,
-                              channel=channel, replaced=replaced)
+                              channel=channel, replaced=replaced, read_options=read_options)
         return self.insert(m)
 
     def scan(self, directory, catalogue, *, scheduler=None, n_workers=None, client=None, parallel=True,
-             on_failure=None, progress=False):
+             on_failure=None, progress=False, read_options=None):
         """Add every recording of a folder that a catalogue describes; analyses run on Dask workers.
 
         Parameters
@@ -243,6 +245,9 @@ class FleetDB:
             Called as ``on_failure(file, reason)`` for each failed file as it happens.
         progress : bool
             Draw a progress bar on a terminal.
+        read_options : dict, optional
+            :func:`vibkit.read_recording` arguments for every file (``time_unit``, ``units`` ...); the
+            catalogue's ``channel`` column names each file's channel.
 
         Returns
         -------
@@ -258,7 +263,8 @@ class FleetDB:
         ``if __name__ == "__main__":`` guard (or ``parallel=False``).
         """
         return scan_folder(self, directory, catalogue, scheduler=scheduler, n_workers=n_workers, client=client,
-                           parallel=parallel, on_failure=on_failure, progress=progress)
+                           parallel=parallel, on_failure=on_failure, progress=progress,
+                           read_options=read_options)
 
     # ----------------------------------------------------------------------------------- status
     def status(self, *, limits_percent=DEFAULT_LIMITS_PERCENT, coverage_sigma=2.0, units=None):
