@@ -163,7 +163,7 @@ def write(res: dict, note: str, stem: str) -> None:
         "",
         "The differences come from the study's loose tolerances and its coordinate (its linear map of s0 on",
         "the telescopic runs makes roller speeds jump at their ends; Baumgarte then pulls the links back);",
-        "`tests/test_reference.py` shows the same equations in vibkit's C1 coordinate agreeing to",
+        "`tests/analyses/test_reference.py` shows the same equations in vibkit's C1 coordinate agreeing to",
         "integration accuracy. Over long runs the loose tolerances also let the two chains drift apart in",
         "phase, so the delta difference grows towards the size of its ripple (not analysed further here).",
         "",

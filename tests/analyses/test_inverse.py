@@ -8,7 +8,7 @@ import pytest
 import vibkit
 from vibkit.model.scene import load_scene
 
-SIM = Path(__file__).resolve().parents[1] / "sim"
+SIM = Path(__file__).resolve().parents[2] / "sim"
 
 
 @pytest.fixture(scope="module")

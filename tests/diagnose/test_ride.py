@@ -11,7 +11,7 @@ from vibkit.cli import main
 from vibkit.diagnose.ride import parse_channels, parse_segment, ride_quality_from_recording, ride_quality_from_simulation
 from vibkit.signal import frequency_weighting_response
 
-from .signal.test_signal_ride import synthetic_ride
+from ..signal.test_signal_ride import synthetic_ride
 
 FS = 500.0
 AMP_Z, F_Z = 0.08, 6.3

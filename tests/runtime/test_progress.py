@@ -43,7 +43,7 @@ def test_simulation_is_quiet_on_a_pipe(capfd, monkeypatch):
     from pathlib import Path
 
     monkeypatch.setenv("VIBKIT_PROGRESS_INTERVAL", "1e9")
-    vibkit.simulate(Path(__file__).resolve().parents[1] / "sim" / "thesis-forward.toml", duration=0.2)
+    vibkit.simulate(Path(__file__).resolve().parents[2] / "sim" / "thesis-forward.toml", duration=0.2)
     assert capfd.readouterr().err == ""
 
 
@@ -85,7 +85,7 @@ def test_kinematic_sweep_shows_lines_when_piped(monkeypatch, capfd):
     from vibkit.model.scene import load_scene
 
     monkeypatch.setenv("VIBKIT_PROGRESS_INTERVAL", "1e-9")
-    model = EscalatorModel(load_scene(Path(__file__).resolve().parents[1] / "sim" / "thesis-kinematics.toml"))
+    model = EscalatorModel(load_scene(Path(__file__).resolve().parents[2] / "sim" / "thesis-kinematics.toml"))
     whole = kin.kinematic_sweep(model, 3.0, 3.05, 0.001)
     monkeypatch.setattr(kin, "PROGRESS_CHUNK", 7)
     pieces = kin.kinematic_sweep(model, 3.0, 3.05, 0.001, progress=True)

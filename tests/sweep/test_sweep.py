@@ -285,7 +285,7 @@ def test_progress_lines_when_piped_a_bar_on_a_terminal_nothing_when_quiet(monkey
     assert quiet.text == ""
 
 
-@pytest.mark.parametrize("path", sorted((Path(__file__).resolve().parents[1] / "sim").glob("*.toml")), ids=lambda p: p.stem)
+@pytest.mark.parametrize("path", sorted((Path(__file__).resolve().parents[2] / "sim").glob("*.toml")), ids=lambda p: p.stem)
 def test_varied_scene_text_reads_back_equal(path):
     """The varied scenes are written back as TOML: every shipped scene survives the round trip."""
     import tomllib

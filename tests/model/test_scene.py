@@ -6,7 +6,7 @@ import pytest
 
 from vibkit.model.scene import SceneError, load_scene
 
-SIM = Path(__file__).resolve().parents[1] / "sim"
+SIM = Path(__file__).resolve().parents[2] / "sim"
 
 
 def _write(tmp_path, text, name="bad.toml"):

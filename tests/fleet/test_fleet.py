@@ -20,7 +20,7 @@ from vibkit.fleet import (DuplicateRecordingError, FleetDB, FleetError, TrendFit
                           parse_date, read_catalogue, resolve_db_path)
 from vibkit.fleet.trends import SECONDS_PER_YEAR
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 SPEED = 0.5  # m/s
 NOMINAL = 0.4 / 3  # m
 FS = 200.0  # Hz

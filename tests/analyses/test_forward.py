@@ -9,7 +9,7 @@ import pytest
 import vibkit
 from vibkit.model.scene import load_scene
 
-SIM = Path(__file__).resolve().parents[1] / "sim"
+SIM = Path(__file__).resolve().parents[2] / "sim"
 R_P = 0.4 / 3 / (2 * np.sin(np.pi / 28))
 W_REF = -0.5 / R_P
 

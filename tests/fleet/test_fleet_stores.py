@@ -22,7 +22,7 @@ from vibkit.cli import main
 from vibkit.fleet import DuplicateRecordingError, FleetDB, FleetError, Measurement
 from vibkit.fleet.storage import migrate
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 NOMINAL = 0.4 / 3
 T0 = dt.datetime(2023, 1, 15, tzinfo=dt.timezone.utc)
 

@@ -25,7 +25,7 @@ from vibkit.model.escalator import EscalatorModel
 from vibkit.analyses.reference import STUDY_SETTINGS, StudyFormulation, run_study
 from vibkit.model.scene import load_scene
 
-SIM = Path(__file__).resolve().parents[1] / "sim"
+SIM = Path(__file__).resolve().parents[2] / "sim"
 DURATION = 1.5  # [s]: roller 1 leaves the top tensioner run (s0 = Lt) at about 1.42 s
 CONVERGED = 1.0  # [s]
 OUTPUTS = ["delta", "chain_speed", "sprocket_speed", "link_tension", "closure_residual", "s0"]

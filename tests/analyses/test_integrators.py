@@ -10,7 +10,7 @@ import vibkit
 from vibkit.analyses.integrate import METHODS
 from vibkit.model.scene import load_scene
 
-SIM = Path(__file__).resolve().parents[1] / "sim"
+SIM = Path(__file__).resolve().parents[2] / "sim"
 
 
 def scene(method, rtol, *, effects=None, speed=0.5, **solver):

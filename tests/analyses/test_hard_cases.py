@@ -13,7 +13,7 @@ import vibkit
 from vibkit.analyses.integrate import IntegrationError
 from vibkit.model.scene import SceneError, parse_scene
 
-SIM = Path(__file__).resolve().parents[1] / "sim"
+SIM = Path(__file__).resolve().parents[2] / "sim"
 BASE = (SIM / "thesis-forward.toml").read_text()
 
 
