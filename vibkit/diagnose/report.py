@@ -399,13 +399,13 @@ def write_report(recording, out_path, *, scene=None, speed=None, speed_sigma=0.0
         f0 = pitch.fundamental_hz
     else:
         # frequency only: the same burst-combined estimator, with a unit "speed"
-        fonly = estimate_pitch(rec, speed=1.0, channel=ch, band=band or (2.5, 6.0))
+        fonly = estimate_pitch(rec, speed=1.0, channel=ch, band=band or (2.5, 6.0), frequency_only=True)
         f0 = fonly.fundamental_hz
         notes.append("no speed known: link-pass frequency only, no pitch (give --speed)")
-    found = pitch.detected if pitch is not None else fonly.detected
+    decided = pitch if pitch is not None else fonly  # the shared decision (vibkit.diagnose.decision)
+    found = decided.has_link_pass
     if not found:
-        why = (pitch if pitch is not None else fonly).detection.get("reason", "")
-        notes.insert(0, f"NO LINK-PASS FOUND: {why}; no frequency, pitch or elongation can be given")
+        notes.insert(0, f"{decided.status.upper()}: {decided.reason}; no frequency, pitch or elongation can be given")
         # the pages below mark harmonics of f0: show the search band's centre, unmarked
         band_used = (pitch if pitch is not None else fonly).band_hz
         f0 = float(np.sqrt(band_used[0] * band_used[1]))
@@ -447,7 +447,8 @@ def write_report(recording, out_path, *, scene=None, speed=None, speed_sigma=0.0
         "channel": ch,
         "units": units,
         "link_pass_hz": f0 if found else None,
-        "status": "ok" if found else "no link-pass found",
+        "status": decided.status,
+        "reason": decided.reason,
         "rms": rms,
         "peak_to_peak": p2p,
         "spikes": len(events),
