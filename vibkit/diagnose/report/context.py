@@ -177,12 +177,13 @@ def analyse(recording, *, scene=None, speed=None, speed_sigma=0.0, channel=None,
         pitch = None
     comp = None
     result = None
-    if sc is not None and found:  # no comparison of a link pass the recording does not carry
+    if sc is not None:
         from ..comparison import compare
         from ...analyses.simulation import simulate
 
         result = simulate(sc, duration=duration, progress=progress)
-        comp = compare(rec, result, channel=ch)
+        if found:  # no comparison of a link pass the recording does not carry
+            comp = compare(rec, result, channel=ch)
     # statistics
     x_all = np.concatenate([b.x for b in bursts])
     rms = float(np.sqrt(np.mean((x_all - x_all.mean()) ** 2)))
