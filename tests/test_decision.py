@@ -243,3 +243,16 @@ def test_units_are_usage_errors_in_every_command(capsys):
             main(argv)
         assert exc.value.code == 2
         assert "did you mean" in capsys.readouterr().err
+
+
+def test_compare_refuses_a_recording_without_the_link_pass(tmp_path, capsys):
+    """compare uses the same decision: noise against a result file is refused, exit 1, nothing compared."""
+    p = tmp_path / "noise.csv"
+    t = np.arange(int(30 * FS)) / FS
+    np.savetxt(p, np.column_stack([t, np.random.default_rng(7).standard_normal(t.size)]), delimiter=",",
+               header="time_s,tensioner_displacement_m", comments="")
+    rec = vibkit.read_recording(str(p))
+    with pytest.raises(ValueError, match="no link-pass found"):
+        vibkit.compare(rec, vibkit.read_recording(LEON))
+    assert main(["compare", str(p), LEON]) == 1
+    assert "no link-pass found" in capsys.readouterr().err
