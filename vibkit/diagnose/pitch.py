@@ -476,6 +476,9 @@ def estimate_pitch(recording, *, speed, speed_sigma=0.0, channel=None, band=None
     Returns
     -------
     PitchEstimate
+        ``status`` and ``decision`` from :func:`vibkit.diagnose.decision.decide`: a refusal (``"no
+        link-pass found"``, ``"implausible"``) has NaN frequency and pitch and no verdict; ``"inconclusive"``
+        keeps its numbers with the verdict ``"inconclusive"``.
 
     Raises
     ------
@@ -663,6 +666,8 @@ def estimate_pitch(recording, *, speed, speed_sigma=0.0, channel=None, band=None
                              harmonics=[], per_burst=[], hypotheses=[], warnings=warnings, notes=notes, detected=True,
                              status=dec.status, detection=det.as_dict(), method=method, method_reason=method_reason,
                              decision=dec, **common)
+    if dec.status == STATUS_INCONCLUSIVE:
+        warnings.insert(0, f"inconclusive: {dec.reason}")
     res.update(decision=dec, status=dec.status)
     if nominal_pitch is not None and not frequency_only:
         nom = float(nominal_pitch)

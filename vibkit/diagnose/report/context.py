@@ -145,9 +145,11 @@ def analyse(recording, *, scene=None, speed=None, speed_sigma=0.0, channel=None,
         sc = scene if isinstance(scene, Scene) else load_scene(scene)
     notes = []
     if speed is None:
-        if float(rec.attrs.get("chain_speed_m_s", 0) or 0) > 0:
-            speed = float(rec.attrs["chain_speed_m_s"])
-            notes.append(f"speed {speed:g} m/s from the recording's metadata")
+        from ..channels import speed_from_recording
+
+        speed, source = speed_from_recording(rec)
+        if speed is not None:
+            notes.append(f"speed {speed:g} m/s from the recording's metadata ({source})")
         elif _scene_speed(sc):
             speed = _scene_speed(sc)
             notes.append(f"speed {speed:g} m/s from the scene (the recording states none): the pitch then "
