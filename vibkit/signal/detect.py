@@ -465,8 +465,8 @@ def detect_link_pass(x, fs, *, band, n_harmonics=5, p_fa=1e-3, f_top=None):
         f_best = fg
         sig = tuple(o // g for o in sig)
         base["significant_orders"] = sig
-    # a family with a significant line at f/m (m = 2, 3) and a line at a fractional order j/m (f/2, 3f/2,
-    # f/3 ...) at least as strong as its line at f has its fundamental at f/m, below the band (a gait at 1.6-2.2 Hz seen from its
+    # a family with a line at a fractional order j/m (m = 2, 3: f/2, 3f/2, f/3 ...) at least as strong as
+    # its line at f has its fundamental at f/m, below the band (a gait at 1.6-2.2 Hz seen from its
     # 2nd or 3rd harmonic; a modulated tone whose lines fall on a comb of f/2)
     k1 = int(round(f_best / df))
     p_one = float(np.max(r_all[max(k1 - 1, 0):k1 + 2]))
@@ -475,8 +475,10 @@ def detect_link_pass(x, fs, *, band, n_harmonics=5, p_fa=1e-3, f_top=None):
             continue
         ks = [int(round(j * f_best / m / df)) for j in range(1, 3 * m) if j % m and j * f_best / m < f_top]
         p_sub = [float(np.max(r_all[k - 1:k + 2])) if 1 <= k < f.size - 1 else 0.0 for k in ks]
-        # the subharmonic f/m itself must be there, and the fractional lines as strong as the line at f
-        if p_sub and p_sub[0] > lim and max(p_sub) >= p_one:
+        # a significant fractional line as strong as the line at f; for thirds the line at f/3 itself must be
+        # there too (a structural mode near 4f/3 of a chain is not a subharmonic family; a carrier at exactly
+        # 3f/2 between two sidebands at f and 2f is)
+        if p_sub and max(p_sub) > lim and max(p_sub) >= p_one and (m == 2 or p_sub[0] > lim):
             base["extra"]["subharmonic"] = m
             return LinkPassDetection(False, "no link-pass found",
                                      f"a periodic signal is present, but its line at {f_best / m:.4g} Hz (f/{m}) is as "
