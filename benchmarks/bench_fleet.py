@@ -1,9 +1,10 @@
-"""Benchmark of ``vibkit fleet scan``: recordings per second, a plain loop against Dask workers.
+"""Benchmark of ``vibkit fleet scan``: recordings per second, a plain loop against Dask workers, on both stores.
 
-Run:  python benchmarks/bench_fleet.py [--quick] [--workers 1,2]
+Run:  python benchmarks/bench_fleet.py [--quick] [--workers 1,2] [--stores sqlite,postgresql]
 
 Synthetic recordings (link-pass harmonics plus white noise, 30 s at 200 Hz, CSV, about 150 kB
-each) are scanned into a fresh database by:
+each) are scanned into a fresh database (a SQLite file, or a new database on a PostgreSQL server
+that this script starts with pgserver) by:
 
 * ``analysis only``: read + estimate_pitch in a loop, nothing stored (what the workers do);
 * ``plain loop``: ``FleetDB.scan(parallel=False)``: hashing, analysis and one committed
@@ -68,11 +69,14 @@ def main(argv=None):
     ap.add_argument("--quick", action="store_true", help="a smoke run: few recordings, one repeat")
     ap.add_argument("--workers", default="1,2", help="worker counts of the Dask cases (default 1,2)")
     ap.add_argument("--repeat", type=int, help="runs per case (best kept; default 3, quick 1)")
+    ap.add_argument("--stores", default="sqlite,postgresql", help="stores scanned into (default sqlite,postgresql; "
+                    "postgresql needs pgserver and psycopg)")
     a = ap.parse_args(argv)
     n = 12 if a.quick else 96
     duration = 30.0
     repeat = a.repeat or (1 if a.quick else 3)
     workers = [int(w) for w in a.workers.split(",") if w.strip()]
+    stores = [x.strip() for x in a.stores.split(",") if x.strip()]
 
     import vibkit
     from vibkit.runtime.cluster import dask_client
@@ -93,20 +97,39 @@ def main(argv=None):
         jobs = [_Job(str(p), "U", SPEED, 0.0, NOMINAL, "2024-01-01", None, _file_sha256(p)) for p in files]
         _analyse_job(jobs[0])  # loads the compiled kernels in this process
 
-        def fresh_db(tag, k):
-            return FleetDB(tmp / f"{tag}-{k}.sqlite")
+        made = [0]
 
-        def scan_plain(k):
-            with fresh_db("plain", k) as db:
+        def fresh_db(store):
+            made[0] += 1
+            if store == "sqlite":
+                return FleetDB(tmp / f"f{made[0]}.sqlite")
+            import psycopg
+
+            with psycopg.connect(server.get_uri(), autocommit=True) as con:
+                con.execute(f"CREATE DATABASE bench_{made[0]}")
+            return FleetDB(server.get_uri(f"bench_{made[0]}"))
+
+        def scan_plain(store):
+            with fresh_db(store) as db:
                 res = db.scan(rec, cat, parallel=False)
             assert len(res.added) == n, res.failed[:3]
 
-        def scan_dask(k, w, client):
-            with fresh_db(f"dask{w}", k) as db:
+        def scan_dask(store, w, client):
+            with fresh_db(store) as db:
                 res = db.scan(rec, cat, client=client)
             assert len(res.added) == n, res.failed[:3]
 
+        server = None
         with contextlib.ExitStack() as stack:
+            if "postgresql" in stores:
+                import warnings
+
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore")
+                    import pgserver
+
+                    server = pgserver.get_server(tempfile.mkdtemp(prefix="vibkit-pg-bench-"), cleanup_mode="delete")
+                stack.callback(server.cleanup)
             clients, starts = {}, {}
             for w in workers:
                 t0 = time.perf_counter()
@@ -114,22 +137,24 @@ def main(argv=None):
                 c.wait_for_workers(w)
                 c.run(_analyse_job, jobs[0])  # every worker imports vibkit and loads the kernels
                 clients[w], starts[w] = c, time.perf_counter() - t0
-            cases = [("analysis only", 0, lambda k: [_analyse_job(j) for j in jobs]), ("plain loop", 0, scan_plain)]
-            cases += [(f"dask {w}", w, lambda k, w=w: scan_dask(k, w, clients[w])) for w in workers]
+            cases = [("analysis only", 0, lambda k: [_analyse_job(j) for j in jobs])]
+            for st in stores:
+                cases += [(f"plain loop, {st}", 0, lambda k, st=st: scan_plain(st))]
+                cases += [(f"dask {w}, {st}", w, lambda k, w=w, st=st: scan_dask(st, w, clients[w])) for w in workers]
             times = {c[0]: [] for c in cases}
             loads = {c[0]: [] for c in cases}
             for k in range(repeat):  # round robin: every case sees the same (shared, varying) load
                 for name, _, fn in cases:
                     times[name].append(_timed(lambda: fn(k)))
                     loads[name].append(os.getloadavg()[0])
-                    print(f"round {k + 1}: {name:>14}: {times[name][-1]:7.2f} s", file=sys.stderr)
+                    print(f"round {k + 1}: {name:>24}: {times[name][-1]:7.2f} s", file=sys.stderr)
         for name, w, _ in cases:
             best = min(times[name])
             rows.append({"case": name, "workers": w, "recordings": n, "wall_s": best, "recordings_per_s": n / best,
                          "cluster_start_s": starts.get(w) if name.startswith("dask") else None,
                          "load_avg_1min_mean": round(float(np.mean(loads[name])), 2)})
     load1 = os.getloadavg()
-    base = next(r["wall_s"] for r in rows if r["case"] == "plain loop")
+    base = next(r["wall_s"] for r in rows if r["case"].startswith("plain loop"))
     for r in rows:
         r["ratio_vs_plain_loop"] = base / r["wall_s"]
         r["load_avg_1min_start"] = round(load0[0], 2)
@@ -140,10 +165,11 @@ def main(argv=None):
         "# Fleet scan throughput",
         "",
         f"{n} synthetic recordings ({duration:g} s at {FS:g} Hz, CSV, {size_kb:.0f} kB "
-        "each), scanned into a fresh SQLite database (WAL, synchronous=FULL, one transaction per recording); "
+        "each), scanned into a fresh database: a SQLite file (WAL, synchronous=FULL) or a PostgreSQL database "
+        "(pgserver on this machine, Unix socket), one transaction per recording; "
         f"best of {repeat} rounds, the cases taking turns within each round; Dask cases with the cluster already "
         "started and warmed up (start-up in its own "
-        "column). Ratio: plain loop wall / case wall (> 1 is faster).",
+        "column). Ratio: the first store's plain loop wall / case wall (> 1 is faster).",
         "",
         f"Machine: {machine()}; vibkit {vibkit.__version__}; numpy {np.__version__}; {platform.platform()}.",
         f"Date: {dt.datetime.now(dt.timezone.utc).isoformat(timespec='seconds')}. Load average (1/5/15 min) at "

@@ -297,20 +297,27 @@ def test_bad_rows_reported_not_fatal(tmp_path, capsys):
     synth(d / "noise.csv", NOMINAL, 13, amps=(), duration=10.0)  # no link-pass
     (d / "garbage.csv").write_text("this is not,a recording\nat,all\n")  # unreadable
     synth(d / "stray.csv", NOMINAL, 14, duration=10.0)  # no catalogue line: unknown unit
+    synth(d / "E22-2026-01-01.csv", NOMINAL * 1.01, 15, duration=10.0)  # no date but in its name
     cat = tmp_path / "units.csv"
     cat.write_text("file,unit,speed_m_s,date,nominal_pitch_m\n"
                    "good*.csv,U1,0.5,,0.133333\n"  # glob; no date: ...
                    "good1.csv,U1,0.5,2025-01-01,\n"  # ... except the exact line wins for good1
                    "noise.csv,U2,0.5,2025-01-01,0.133333\n"
                    "garbage.csv,U2,0.5,2025-01-01,\n"
-                   "missing.csv,U3,0.5,2025-01-01,0.1016\n")
+                   "missing.csv,U3,0.5,2025-01-01,0.1016\n"
+                   "E22-*.csv,E22,0.5,,0.133333\n")
     db = tmp_path / "f.sqlite"
+    # some files failed, others stored: the documented exit code 3, and a summary line
     assert main(["fleet", "scan", str(d), "--catalogue", str(cat), "--db", str(db), "--workers", "0",
-                 "--json"]) == 0
+                 "--json"]) == 3
     out, err = capsys.readouterr()
     s = json.loads(out)
     assert s["schema"] == "vibkit.fleet.scan/1"
-    assert (s["added"], s["skipped_duplicates"], s["failed"]) == (1, 0, 5)
+    assert (s["added"], s["skipped_duplicates"], s["failed"]) == (2, 0, 5)
+    with FleetDB(db) as fdb:
+        (m,) = fdb.measurements("E22")
+    assert m.date_utc == "2026-01-01T00:00:00Z" and m.date_source == "file name"
+    assert "vibkit fleet scan: 2 added (0 flagged), 0 already stored, 5 failed" in err
     failed = {Path(r["file"]).name: r["reason"] for r in s["failed_files"]}
     assert set(failed) == {"good2.csv", "noise.csv", "garbage.csv", "stray.csv", "missing.csv"}
     assert "no start time" in failed["good2.csv"] and "--date" in failed["good2.csv"]
@@ -383,7 +390,8 @@ def test_database_location_and_refusals(tmp_path, monkeypatch, capsys):
     assert resolve_db_path() == str(tmp_path / "env.sqlite")
     assert resolve_db_path("sqlite:///rel/f.sqlite") == "rel/f.sqlite"
     assert resolve_db_path("sqlite:////abs/f.sqlite") == "/abs/f.sqlite"
-    for url, match in (("postgresql://host/db", "scheme 'postgresql' is not supported yet"),
+    assert resolve_db_path("postgresql://tech@fleet.example/fleet") == "postgresql://tech@fleet.example/fleet"
+    for url, match in (("mysql://host/db", "scheme 'mysql' is not supported"),
                        ("sqlite://", "sqlite:///path")):
         with pytest.raises(FleetError, match=match):
             resolve_db_path(url)
@@ -430,16 +438,103 @@ def test_cli_status_json_and_report(fleet, tmp_path, capsys):
     assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".tmp")] == []
 
 
-def test_fleet_page_draws_units_and_limits(fleet, tmp_path):
+def test_fleet_page_draws_units_and_limits(fleet, tmp_path, monkeypatch):
     from vibkit.diagnose.report import write_fleet_report
 
     with FleetDB(fleet["db"], create=False) as db:
         trends, meas = db.status(), db.measurements()
+    monkeypatch.delenv("SOURCE_DATE_EPOCH", raising=False)
     rep = write_fleet_report(trends[:3], meas, tmp_path / "p.pdf", database="fleet.sqlite", max_units=2)
-    (title, texts), = rep.pages
-    joined = " ".join(texts)
-    assert "#1 E-worn" in joined and "#2 E-fast" in joined and "E-slow" not in joined
-    assert "1 less urgent unit(s) not drawn" in joined and "1.5 / 2 / 3 %" in joined
+    (t1, work), (t2, units) = rep.pages
+    assert (t1, t2) == ("work list", "fleet units")
+    # page 1: the work list, every unit, ranked, with the next limit and its interval
+    for row, unit in enumerate(["E-worn", "E-fast", "E-slow"]):
+        i = work.index(unit)
+        assert work[i - 1] == str(row + 1)
+    assert "3 %" in work and "reached on (2-sigma)" in work
+    joined = " ".join(units)
+    assert "#1 E-worn" in joined and "OVER 2 %" in joined and "#2 E-fast" in joined and "E-slow" not in joined
+    assert "1 less urgent unit(s) not drawn" in joined and "1.5 %\nwatch" in joined and "3 %\nreplace" in joined
+    assert "measurement (1 sigma)" in joined and "(2-sigma" in joined  # the legend names the interval drawn
+    # the report's date is today's, unless SOURCE_DATE_EPOCH asks for reproducible bytes
+    assert dt.datetime.now(dt.timezone.utc).strftime("%Y-%m-%d") in " ".join(work)
+    monkeypatch.setenv("SOURCE_DATE_EPOCH", "1767225600")
+    a = write_fleet_report(trends, meas, tmp_path / "a.pdf").path
+    b = write_fleet_report(trends, meas, tmp_path / "b.pdf").path
+    assert Path(a).read_bytes() == Path(b).read_bytes()
+
+
+def _overlaps(fig):
+    """Pairs of texts (figure texts, panel titles, limit labels, legends, tick labels) whose boxes overlap."""
+    fig.canvas.draw()
+    r = fig.canvas.get_renderer()
+    boxes = [(f"fig:{t.get_text()[:30]}", t.get_window_extent(r)) for t in fig.texts if t.get_text()]
+    for k, ax in enumerate(fig.axes):
+        ticks = []
+        for axis, (lo, hi) in ((ax.xaxis, ax.get_xlim()), (ax.yaxis, ax.get_ylim())):
+            ticks += [t.label1 for t in axis.get_major_ticks() if min(lo, hi) <= t.get_loc() <= max(lo, hi)]
+        items = [ax.title, ax._left_title, *ax.texts, *ticks, ax.yaxis.label]
+        boxes += [(f"ax{k}:{t.get_text()[:30]}", t.get_window_extent(r)) for t in items
+                  if t.get_text() and t.get_visible()]
+        if ax.get_legend() is not None:
+            boxes.append((f"ax{k}:legend", ax.get_legend().get_window_extent(r)))
+    fig_box = fig.bbox
+    out = [name for name, b in boxes if b.x0 < fig_box.x0 - 1 or b.x1 > fig_box.x1 + 1 or b.y0 < fig_box.y0 - 1
+           or b.y1 > fig_box.y1 + 1]
+    for i in range(len(boxes)):
+        for j in range(i + 1, len(boxes)):
+            (na, a), (nb, b) = boxes[i], boxes[j]
+            if a.width and b.width and a.overlaps(b):
+                out.append((na, nb))
+    return out
+
+
+def test_fleet_pages_have_no_overlapping_text(fleet):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from vibkit.diagnose.report.fleet import FleetContext, fleet_page
+
+    with FleetDB(fleet["db"], create=False) as db:
+        trends, meas = db.status(), db.measurements()
+    by_unit = {}
+    for m in meas:
+        by_unit.setdefault(m.unit, []).append(m)
+    found = []
+
+    class Doc:
+        def emit(self, fig, title):
+            found.extend((title, o) for o in _overlaps(fig))
+            plt.close(fig)
+
+    ctx = FleetContext(trends, trends, meas, by_unit, (1.5, 2.0, 3.0), "fleet.sqlite",
+                       dt.datetime(2026, 11, 23, tzinfo=dt.timezone.utc))
+    with matplotlib.rc_context({"font.size": 7, "axes.titlesize": 8}):
+        fleet_page(Doc(), ctx)
+    assert found == []
+
+
+def test_cli_add_replaced_starts_a_segment(tmp_path, capsys):
+    db = str(tmp_path / "f.sqlite")
+    rates = [(0, 1.6), (1, 1.9), (2, 0.2)]  # (years, elongation %): the third after a replacement
+    for k, (y, e) in enumerate(rates):
+        rec = synth(tmp_path / f"v{k}.csv", NOMINAL * (1 + e / 100), 300 + k, duration=10.0)
+        args = ["fleet", "add", str(rec), "--unit", "R1", "--speed", "0.5", "--nominal-pitch", str(NOMINAL),
+                "--date", (T0 + dt.timedelta(days=365 * y)).date().isoformat(), "--db", db]
+        assert main(args + (["--replaced"] if k == 2 else [])) == 0
+    capsys.readouterr()
+    assert main(["fleet", "status", "--db", db, "--json"]) == 0
+    (u,) = json.loads(capsys.readouterr().out)["units"]
+    assert len(u["replacements"]) == 1 and "given" in u["replacements"][0]["reason"]
+    assert u["n_used"] == 1 and u["slope_percent_per_year"] is None and u["over_limit_percent"] is None
+    assert u["latest_elongation_percent"] == pytest.approx(0.2, abs=4 * u["latest_elongation_sigma_percent"])
+    with FleetDB(db) as fdb:
+        assert [m.replaced for m in fdb.measurements("R1")] == [False, False, True]
+    assert main(["fleet", "status", "--db", db]) == 0
+    out = capsys.readouterr().out
+    assert "chain replaced" in out and "R1" in out
 
 
 # vibkit.runtime.cluster's local scheduler binds its HTTP server to port 8787 by default (dashboard off): where
@@ -453,7 +548,7 @@ def test_scan_on_dask_gives_the_plain_loop_numbers(fleet, tmp_path, capsys):
                    f"E-fast_[0-2].csv,E-fast,{SPEED},2024-01-01,{NOMINAL}\n")
     db = tmp_path / "dask.sqlite"
     assert main(["fleet", "scan", str(fleet["dir"]), "--catalogue", str(cat), "--db", str(db), "--workers", "1",
-                 "--json"]) == 0
+                 "--json"]) == 3  # the other units' files failed
     out, err = capsys.readouterr()
     s = json.loads(out)
     assert (s["added"], s["skipped_duplicates"]) == (3, 0)
@@ -525,3 +620,10 @@ def test_history_name_keeps_the_public_names():
         assert hasattr(history, name), name
     for name in fleet.__all__:
         assert getattr(history, name) is getattr(fleet, name)
+
+
+@pytest.mark.parametrize("sub", [[], ["add"], ["scan"], ["status"], ["report"], ["migrate"]])
+def test_fleet_help_pages(sub, capsys):
+    with pytest.raises(SystemExit) as ei:
+        main(["fleet", *sub, "--help"])
+    assert ei.value.code == 0 and "usage: vibkit fleet" in capsys.readouterr().out

@@ -1,41 +1,45 @@
-"""``vibkit fleet``: measurement history of a fleet of escalators (add, scan, status, report)."""
+"""``vibkit fleet``: measurement history of a fleet of escalators (add, scan, status, report, migrate)."""
 
 from __future__ import annotations
 
 import sys
 
-from .options import (add_channel, add_command, add_json, add_limits, chain_speed, pitch_length, speed_sigma,
-                      workers)
+from .options import (add_command, add_json, add_limits, add_recording, chain_speed, cli_message, pitch_length,
+                      reader_options, speed_sigma, workers)
 from .output import CLIError, check_output, msg, print_json, table
 
 EPILOG = ("examples:\n  vibkit fleet add E07-2026-11-23.csv --unit E07 --speed 0.5 --nominal-pitch 0.13333\n"
           "  vibkit fleet scan visits/ --catalogue visits/units.csv --workers 2\n"
           "  vibkit fleet status --json\n  vibkit fleet report -o fleet.pdf\n"
-          "database: --db PATH (or sqlite:///PATH), else $VIBKIT_FLEET_DB, else ./vibkit-fleet.sqlite\n"
-          "catalogue columns: file (name or glob), unit, speed_m_s, date (ISO 8601; empty: the recording's "
-          "start time),\n  nominal_pitch_m (empty: the unit's), optional speed_sigma_m_s, channel")
+          "  vibkit fleet migrate --from vibkit-fleet.sqlite --to postgresql://tech@fleet-server/fleet\n"
+          "database: --db PATH (or sqlite:///PATH) or postgresql://user@host/dbname, else $VIBKIT_FLEET_DB, "
+          "else ./vibkit-fleet.sqlite\n"
+          "exit codes: 0 done; 1 error; 3 scan: some files failed (others were stored)\n"
+          "catalogue columns: file (name or glob), unit, speed_m_s, date (ISO 8601; empty: an ISO date in the "
+          "file name,\n  else the recording's start time), nominal_pitch_m (empty: the unit's), optional speed_sigma_m_s, channel")
 
 
 def add_parser(subparsers):
-    s = add_command(subparsers, "fleet", "measurement history of a fleet of escalators: add, scan, status, report",
+    s = add_command(subparsers, "fleet", "measurement history of a fleet of escalators: add, scan, status, report, migrate",
                     EPILOG)
     fsub = s.add_subparsers(dest="fleet_command", metavar="SUBCOMMAND", required=True)
 
     def fleet_sub(name, help_):
         sp = add_command(fsub, name, help_, EPILOG)
-        sp.add_argument("--db", help="fleet database: a path or sqlite:///PATH (default $VIBKIT_FLEET_DB, "
-                        "else ./vibkit-fleet.sqlite)")
+        sp.add_argument("--db", help="fleet database: a path, sqlite:///PATH or postgresql://user@host/dbname "
+                        "(default $VIBKIT_FLEET_DB, else ./vibkit-fleet.sqlite)")
         add_json(sp)
         return sp
 
     f = fleet_sub("add", "analyse one recording and store its pitch and elongation")
-    f.add_argument("recording", help="recording file (CSV/text, miniSEED ..., netCDF)")
+    add_recording(f)
     f.add_argument("--unit", required=True, help="escalator identifier")
     f.add_argument("--speed", type=chain_speed, required=True, help="chain speed measured on the steps [m/s]")
     f.add_argument("--speed-uncertainty", help="speed standard deviation, in m/s or in %% (e.g. 0.1%%)")
     f.add_argument("--date", help="measurement date, ISO 8601 (default: the recording's start time)")
     f.add_argument("--nominal-pitch", type=pitch_length, help="nominal link pitch [m] (required for a new unit)")
-    add_channel(f, "channel to analyse (default: the first)")
+    f.add_argument("--replaced", action="store_true", help="the unit's chain was replaced since its previous "
+                   "measurement: a new trend segment starts here")
     f.set_defaults(func=run_add)
 
     f = fleet_sub("scan", "add every recording of a folder that a catalogue describes, in parallel (Dask)")
@@ -44,19 +48,31 @@ def add_parser(subparsers):
     f.add_argument("--scheduler", help="address of a running Dask scheduler (default: a local cluster)")
     f.add_argument("--workers", type=workers, help="worker processes of the local cluster (default: one per "
                    "core; 0: analyse in this process)")
+    add_recording(f, positional=False, channel=False)  # for every file; the catalogue's channel column per file
     f.set_defaults(func=run_scan)
 
-    f = fleet_sub("status", "per unit: latest elongation, trend [%/year] and limit forecasts, most urgent first")
+    f = fleet_sub("status", "the work list: per unit the latest elongation, the rate per year, the next limit and its date, flags; most urgent first")
     f.add_argument("--unit", action="append", help="only this unit (repeatable)")
     add_limits(f)
     f.set_defaults(func=run_status)
 
-    f = fleet_sub("report", "one PDF page: elongation against date per unit, with the limits")
+    f = fleet_sub("report", "PDF: the work list (page 1), then elongation against date per unit")
     f.add_argument("-o", "--output", required=True, help="PDF to write")
     f.add_argument("--force", action="store_true", help="replace an existing output file")
     add_limits(f, "elongation limits [%%]")
     f.set_defaults(func=run_report)
+
+    f = add_command(fsub, "migrate", "copy every measurement of one fleet database into another (e.g. a SQLite "
+                    "file to PostgreSQL), in one transaction; again: copies only what is missing", EPILOG)
+    f.add_argument("--from", dest="source", required=True, help="the existing database (path or URL)")
+    f.add_argument("--to", dest="target", required=True, help="the receiving database (created if missing)")
+    add_json(f)
+    f.set_defaults(func=run_migrate)
     return s
+
+
+#: exit code of ``fleet scan`` when some files failed and others were stored (or already were)
+SCAN_SOME_FAILED = 3
 
 
 def _fleet_db(a, *, create=True):
@@ -76,13 +92,16 @@ def run_add(a):
     sigma = speed_sigma(a.speed_uncertainty, a.speed) if a.speed_uncertainty else 0.0
     with _fleet_db(a) as db:
         m = db.add(a.recording, unit=a.unit, speed=a.speed, speed_sigma=sigma, date=a.date,
-                   nominal_pitch=a.nominal_pitch, channel=a.channel)
+                   nominal_pitch=a.nominal_pitch, channel=a.channel, replaced=a.replaced,
+                   read_options=reader_options(a))
         path = db.path
     if a.json:
         print_json("fleet.add", {"database": path, "measurement": m.as_dict()})
     else:
         print(f"stored {_fmt_measurement(m)}")
         msg(f"note: database {path}; date from {m.date_source}")
+    if m.quality != "ok":
+        msg(f"warning: stored flagged {m.quality}, left out of the trend: {m.quality_reason}")
     for w in m.warnings:
         msg(f"warning: {w}")
     return 0
@@ -90,11 +109,13 @@ def run_add(a):
 
 def run_scan(a):
     def failed(name, why):
+        why = cli_message(why)
         msg(f"vibkit fleet scan: failed: {why if why.startswith(name) else f'{name}: {why}'}")
 
     with _fleet_db(a) as db:
         res = db.scan(a.directory, a.catalogue, scheduler=a.scheduler, n_workers=a.workers or None,
-                      parallel=a.workers != 0, on_failure=failed, progress=sys.stderr.isatty())
+                      parallel=a.workers != 0, on_failure=failed, progress=sys.stderr.isatty(),
+                      read_options=reader_options(a))
         path = db.path
     for n in res.notes:
         msg(f"note: {n}")
@@ -105,23 +126,13 @@ def run_scan(a):
               f"  [database {path}]")
         for m in res.added:
             print(f"  added {_fmt_measurement(m)}")
+    flagged = sum(1 for m in res.added if m.quality != "ok")
+    msg(f"vibkit fleet scan: {len(res.added)} added ({flagged} flagged), {len(res.skipped)} already stored, "
+        f"{len(res.failed)} failed")
     if not res.added and not res.skipped:
         raise CLIError(f"nothing added from {a.directory}: {len(res.failed)} file(s) failed"
                        if res.failed else f"{a.directory}: no recording found (suffixes .csv, .txt, .nc, .mseed ...)")
-    return 0
-
-
-def _fmt_forecast(f):
-    if f.status == "reached":
-        return "reached"
-    if f.status == "forecast":
-        if f.date_utc is None:
-            return "after 9999"
-        lo, hi = (f.earliest_utc or "?")[:7], (f.latest_utc or "after 9999")[:7]
-        return f"{f.date_utc[:7]} ({lo}..{hi})"
-    if f.status == "not before":
-        return f"not before {f.earliest_utc[:7]}" if f.earliest_utc else "-"
-    return "-"
+    return SCAN_SOME_FAILED if res.failed else 0
 
 
 def run_status(a):
@@ -137,17 +148,11 @@ def run_status(a):
     if not trends:
         print(f"{path}: no measurement stored yet")
         return 0
-    rows = []
-    for t in trends:
-        slope = "-" if t.slope_percent_per_year is None else \
-            f"{t.slope_percent_per_year:+.3f} +- {t.slope_sigma_percent_per_year:.3f}"
-        rows.append([t.rank, t.unit, t.n_measurements, t.latest_date_utc[:10],
-                     f"{t.latest_elongation_percent:+.3f} +- {t.latest_elongation_sigma_percent:.3f}", t.latest_verdict,
-                     slope] + [_fmt_forecast(f) for f in t.forecasts])
-    print(table(rows, ["rank", "unit", "n", "latest", "elongation [%]", "verdict", "trend [%/year]"]
-                + [f"{f.limit_percent:g} % on" for f in trends[0].forecasts]))
-    msg("note: forecast dates with their 2-sigma interval (year-month); 'not before' where the trend is not "
-        "significantly positive")
+    from vibkit.diagnose.report.fleet import WORK_LIST_HEADER, work_list_rows
+
+    print(table(work_list_rows(trends), WORK_LIST_HEADER))
+    msg("note: most urgent first; latest usable elongation and the rate with 1 sigma; the next limit's date with its "
+        "2-sigma interval (year-month); flagged measurements and outliers are left out of the trends")
     return 0
 
 
@@ -167,11 +172,24 @@ def run_report(a):
         print_json("fleet.report", {"output": rep.path, "database": path, "pages": [t for t, _ in rep.pages],
                                     "units": len(trends), "units_drawn": rep.summary["units_drawn"]})
     else:
-        print(f"wrote {rep.path} (1 page, {rep.summary['units_drawn']} of {len(trends)} units drawn)")
+        print(f"wrote {rep.path} ({len(rep.pages)} page(s): the work list, then {rep.summary['units_drawn']} of "
+              f"{len(trends)} units drawn)")
     return 0
 
 
-_RUN = {"add": run_add, "scan": run_scan, "status": run_status, "report": run_report}
+def run_migrate(a):
+    from vibkit.fleet.storage import migrate
+
+    r = migrate(a.source, a.target)
+    if a.json:
+        print_json("fleet.migrate", r)
+    else:
+        print(f"copied {r['copied']}, skipped {r['skipped']} (already there); {r['target']} holds "
+              f"{r['target_total']} measurement(s)")
+    return 0
+
+
+_RUN = {"add": run_add, "scan": run_scan, "status": run_status, "report": run_report, "migrate": run_migrate}
 
 
 def run(a):

@@ -12,8 +12,9 @@ column                    required  meaning
 ``unit``                  yes       escalator identifier
 ``speed_m_s``             yes       chain (step) speed measured on the steps or handrail [m/s]
 ``date``                  yes       measurement date, ISO 8601 (``2026-11-23``,
-                                    ``2026-11-23T10:15:00+01:00``); empty: the recording's start
-                                    time; dates without a time zone are UTC
+                                    ``2026-11-23T10:15:00+01:00``); empty: an ISO date in the
+                                    file name (``E22-2026-01-01.csv``), else the recording's
+                                    start time; dates without a time zone are UTC
 ``nominal_pitch_m``       yes       nominal link pitch [m]; empty: the unit's value from another
                                     line of the catalogue or from the database
 ``speed_sigma_m_s``       no        standard deviation of the speed [m/s] (default 0)

@@ -10,13 +10,19 @@ from dataclasses import asdict, dataclass
 
 from .dates import _iso, parse_date
 from .errors import FleetError
+from .quality import measurement_quality
 
 __all__ = ["Measurement", "analyse_recording"]
 
 
 @dataclass(frozen=True)
 class Measurement:
-    """One stored measurement (a row of the database).  Lengths [m], speeds [m/s], elongation [%]."""
+    """One stored measurement (a row of the database).  Lengths [m], speeds [m/s], elongation [%].
+
+    ``quality`` is ``"ok"``, ``"inconclusive"`` or ``"implausible"`` (:mod:`vibkit.fleet.quality`;
+    ``quality_reason`` says why); only ``"ok"`` measurements enter a trend.  ``replaced``: the chain was
+    replaced before this measurement, which starts a new trend segment.
+    """
 
     id: int | None
     unit: str
@@ -40,12 +46,14 @@ class Measurement:
     size_bytes: int
     vibkit_version: str
     analysed_utc: str
+    quality: str = "ok"
+    quality_reason: str = ""
+    replaced: bool = False
 
     def as_dict(self) -> dict:
         d = asdict(self)
         d["warnings"] = list(self.warnings)
         return d
-
 
 
 def _file_sha256(path):
@@ -56,7 +64,8 @@ def _file_sha256(path):
     return h.hexdigest()
 
 
-def analyse_recording(path, *, unit, speed, speed_sigma=0.0, nominal_pitch, date=None, channel=None):
+def analyse_recording(path, *, unit, speed, speed_sigma=0.0, nominal_pitch, date=None, channel=None, replaced=False,
+                      date_source="given", read_options=None):
     """Read and analyse one recording; the :class:`Measurement` it gives (not stored, ``id`` None).
 
     Parameters
@@ -72,6 +81,15 @@ def analyse_recording(path, *, unit, speed, speed_sigma=0.0, nominal_pitch, date
     date : str or datetime, optional
         Measurement date (ISO 8601); default the recording's start time.
     channel : str, optional
+    read_options : dict, optional
+        More :func:`vibkit.read_recording` arguments (``time_unit``, ``units``, ``repair_time`` ...).
+    replaced : bool
+        The chain was replaced since the unit's previous measurement (a new trend segment starts).
+    date_source : str
+        Where ``date`` came from (stored as ``date_source``; e.g. ``"file name"``).
+
+    The measurement carries its quality flag (:func:`vibkit.fleet.quality.measurement_quality`):
+    implausible and inconclusive ones are stored flagged and left out of trends.
 
     Raises
     ------
@@ -90,11 +108,11 @@ def analyse_recording(path, *, unit, speed, speed_sigma=0.0, nominal_pitch, date
     if nominal_pitch is None or not (math.isfinite(float(nominal_pitch)) and float(nominal_pitch) > 0):
         raise FleetError(f"nominal_pitch must be a positive length [m], got {nominal_pitch!r}")
     spath = os.fspath(path)
-    rec = read_recording(spath, channel=channel)
+    rec = read_recording(spath, **{**(read_options or {}), "channel": channel})
     if isinstance(date, _dt.datetime):
-        d, source = (date if date.tzinfo else date.replace(tzinfo=_dt.timezone.utc)), "given"
+        d, source = (date if date.tzinfo else date.replace(tzinfo=_dt.timezone.utc)), str(date_source)
     elif date is not None and str(date).strip():
-        d, source = parse_date(date), "given"
+        d, source = parse_date(date), str(date_source)
     else:
         start = rec.attrs.get("start_time")
         if start is None:
@@ -113,6 +131,8 @@ def analyse_recording(path, *, unit, speed, speed_sigma=0.0, nominal_pitch, date
     if not est.has_link_pass:  # the shared decision (vibkit.diagnose.decision): no link pass, or implausible
         raise FleetError(f"{spath}: {est.status}: {est.reason}; nothing stored")
     snr = float(est.snr_db) if math.isfinite(est.snr_db) else None
+    quality, why = measurement_quality(est.elongation_percent, est.elongation_sigma_percent,
+                                       decision=getattr(est, "decision", None))
     return Measurement(
         id=None, unit=unit, date_utc=_iso(d), date_unix_s=d.timestamp(), date_source=source,
         speed_m_s=float(est.speed_m_s), speed_sigma_m_s=float(est.speed_sigma_m_s),
@@ -122,4 +142,5 @@ def analyse_recording(path, *, unit, speed, speed_sigma=0.0, nominal_pitch, date
         elongation_sigma_percent=float(est.elongation_sigma_percent), snr_db=snr, warnings=tuple(est.warnings),
         sha256=str(rec.attrs["sha256"]), path=os.path.abspath(spath), size_bytes=os.path.getsize(spath),
         vibkit_version=vibkit.__version__,
-        analysed_utc=_iso(_dt.datetime.now(_dt.timezone.utc)))
+        analysed_utc=_iso(_dt.datetime.now(_dt.timezone.utc)), quality=quality, quality_reason=why,
+        replaced=bool(replaced))

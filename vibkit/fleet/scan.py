@@ -1,5 +1,8 @@
 """Scanning a folder of recordings: match each file to its catalogue line, analyse on Dask workers, store.
 
+A recording's date is the catalogue's; where the catalogue has none, an ISO date in the file name
+(``E22-2026-01-01.csv``: ``date_source`` "file name"); else the recording's start time.
+
 The workers only analyse (:func:`_analyse_job`); the calling process alone writes, one committed
 transaction per recording, so a killed scan leaves complete rows only.
 """
@@ -8,9 +11,11 @@ from __future__ import annotations
 
 import fnmatch
 import os
+import re
 from dataclasses import dataclass, field
 
 from .catalogue import read_catalogue
+from .dates import _iso, parse_date
 from .errors import DuplicateRecordingError, FleetError
 from .measurement import _file_sha256, analyse_recording
 
@@ -31,13 +36,16 @@ class _Job:
     date: str | None
     channel: str | None
     sha256: str
+    read_options: dict | None = None
+    date_source: str = "given"
 
 
 def _analyse_job(job):
     """Worker side of a scan: analyse one recording; never raises (a failure is a message)."""
     try:
         m = analyse_recording(job.path, unit=job.unit, speed=job.speed_m_s, speed_sigma=job.speed_sigma_m_s,
-                              nominal_pitch=job.nominal_pitch_m, date=job.date, channel=job.channel)
+                              nominal_pitch=job.nominal_pitch_m, date=job.date, channel=job.channel,
+                              read_options=job.read_options, date_source=job.date_source)
         return {"ok": True, "measurement": m}
     except (ValueError, OSError) as exc:  # RecordingError and FleetError are ValueErrors
         msg = " ".join(str(exc).split()) or type(exc).__name__
@@ -74,6 +82,19 @@ class ScanResult:
                 "failed_files": [{"file": p, "reason": r} for p, r in self.failed], "notes": list(self.notes)}
 
 
+_NAME_DATE = re.compile(r"(?<![0-9])([0-9]{4}-[0-9]{2}-[0-9]{2})(?![0-9])")
+
+
+def date_from_name(name):
+    """The ISO 8601 date (``YYYY-MM-DD``) in a file name, as UTC text, or None (none, or not a real date)."""
+    for m in _NAME_DATE.finditer(os.path.basename(name)):
+        try:
+            return _iso(parse_date(m.group(1)))
+        except FleetError:
+            continue
+    return None
+
+
 def _candidate_files(directory, exclude):
     out = []
     for root, dirs, files in os.walk(directory):
@@ -100,12 +121,12 @@ def _match(rel, rows):
 
 
 def scan_folder(db, directory, catalogue, *, scheduler=None, n_workers=None, client=None, parallel=True,
-                on_failure=None, progress=False):
+                on_failure=None, progress=False, read_options=None):
     """Add every recording of a folder that a catalogue describes to ``db``; see :meth:`FleetDB.scan`.
 
     ``db`` stores the measurements: its ``find``, ``nominal_pitch`` and ``insert`` are called from
-    this process only, and the files at ``db.path`` (and its ``-wal``/``-shm`` companions) are not
-    scanned.
+    this process only, and the files of ``db.local_files`` (a SQLite file and its ``-wal``/``-shm``
+    companions) are not scanned.
     """
     from ..runtime.progress import Progress
 
@@ -120,8 +141,7 @@ def scan_folder(db, directory, catalogue, *, scheduler=None, n_workers=None, cli
         if on_failure is not None:
             on_failure(name, why)
 
-    exclude = {os.path.abspath(os.fspath(catalogue)), os.path.abspath(db.path),
-               os.path.abspath(db.path) + "-wal", os.path.abspath(db.path) + "-shm"}
+    exclude = {os.path.abspath(os.fspath(catalogue)), *getattr(db, "local_files", ())}
     files = _candidate_files(d, exclude)
     # a file the catalogue names exactly is a recording whatever its suffix
     named = [r.file for r in rows if not r.is_glob and os.path.isfile(os.path.join(d, r.file))
@@ -158,8 +178,11 @@ def scan_folder(db, directory, catalogue, *, scheduler=None, n_workers=None, cli
             fail(full, f"unit {r.unit!r} has no nominal pitch (catalogue line {r.line}: fill nominal_pitch_m "
                        "on one line of the unit)")
             continue
-        jobs.append(_Job(os.path.abspath(full), r.unit, r.speed_m_s, r.speed_sigma_m_s, nom, r.date, r.channel,
-                         sha))
+        date, source = r.date, "given"
+        if date is None and date_from_name(rel) is not None:
+            date, source = date_from_name(rel), "file name"
+        jobs.append(_Job(os.path.abspath(full), r.unit, r.speed_m_s, r.speed_sigma_m_s, nom, date, r.channel,
+                         sha, read_options, source))
     for r in rows:
         if r.line not in used:
             if r.is_glob:

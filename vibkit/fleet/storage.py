@@ -1,80 +1,53 @@
-"""The fleet database: every measurement of every unit in one embedded SQLite file.
+"""The fleet database: every measurement of every unit, in a SQLite file or on a PostgreSQL server.
 
-:class:`FleetDB` keeps every measurement in an embedded SQLite database (standard library; WAL
-journal, one transaction per measurement): the link-pass estimate of
+:class:`FleetDB` keeps every measurement: the link-pass estimate of
 :func:`vibkit.diagnose.pitch.estimate_pitch`, the pitch and the elongation with their standard
-deviations, quality figures (SNR, warnings) and provenance (SHA-256 of the file, its path,
-vibkit's version, the time of analysis).  A file already stored (same SHA-256) is refused, so
-re-running a scan skips what it has done.  The trend maths lives in :mod:`vibkit.fleet.trends`,
-the scan machinery in :mod:`vibkit.fleet.scan`.
+deviations, quality figures (SNR, warnings, the quality flag of :mod:`vibkit.fleet.quality`) and
+provenance (SHA-256 of the file, its path, vibkit's version, the time of analysis).  A file already
+stored (same SHA-256) is refused, so re-running a scan skips what it has done.  One transaction per
+measurement.  Where the rows live: an embedded SQLite file (:mod:`vibkit.fleet.sqlite_store`, the
+default) or a PostgreSQL server (:mod:`vibkit.fleet.postgres_store`, ``postgresql://...``) that many
+technicians' processes write at once.  :func:`migrate` copies a history from one to the other.  The
+trend maths lives in :mod:`vibkit.fleet.trends`, the scan machinery in :mod:`vibkit.fleet.scan`.
 """
 
 from __future__ import annotations
 
-import json
-import math
 import os
 import re
-import sqlite3
-from dataclasses import asdict
 
 from ..diagnose.pitch import DEFAULT_LIMITS_PERCENT
 from .errors import DuplicateRecordingError, FleetError
 from .measurement import Measurement, _file_sha256, analyse_recording
 from .scan import scan_folder
+from .schema import APPLICATION_ID, SCHEMA_VERSION  # noqa: F401 - public through vibkit.fleet.history
 from .trends import rank_units, unit_trend
 
-__all__ = ["DB_ENV", "DEFAULT_DB_NAME", "FleetDB", "resolve_db_path"]
+__all__ = ["DB_ENV", "DEFAULT_DB_NAME", "FleetDB", "is_server_url", "migrate", "resolve_db_path"]
 
-#: environment variable naming the fleet database (a path or a ``sqlite:///path`` URL)
+#: environment variable naming the fleet database (a path, a ``sqlite:///path`` or a ``postgresql://`` URL)
 DB_ENV = "VIBKIT_FLEET_DB"
 #: database file used when neither ``--db`` nor :data:`DB_ENV` names one (current directory)
 DEFAULT_DB_NAME = "vibkit-fleet.sqlite"
-SCHEMA_VERSION = 1
-#: SQLite ``PRAGMA application_id`` of a vibkit fleet database ("VBKF")
-APPLICATION_ID = 0x56424B46
-_SQLITE_MAGIC = b"SQLite format 3\x00"
+_SERVER_SCHEMES = ("postgresql", "postgres")
 
-_COLUMNS = tuple(f for f in Measurement.__dataclass_fields__ if f != "id")
 
-_SCHEMA = """
-CREATE TABLE IF NOT EXISTS measurement (
-    id INTEGER PRIMARY KEY,
-    unit TEXT NOT NULL CHECK (length(unit) > 0),
-    date_utc TEXT NOT NULL,
-    date_unix_s REAL NOT NULL,
-    date_source TEXT NOT NULL,
-    speed_m_s REAL NOT NULL CHECK (speed_m_s > 0),
-    speed_sigma_m_s REAL NOT NULL CHECK (speed_sigma_m_s >= 0),
-    nominal_pitch_m REAL NOT NULL CHECK (nominal_pitch_m > 0),
-    channel TEXT NOT NULL,
-    fundamental_hz REAL NOT NULL,
-    fundamental_sigma_hz REAL NOT NULL,
-    pitch_m REAL NOT NULL,
-    pitch_sigma_m REAL NOT NULL,
-    elongation_percent REAL NOT NULL,
-    elongation_sigma_percent REAL NOT NULL,
-    snr_db REAL,
-    warnings TEXT NOT NULL,
-    sha256 TEXT NOT NULL UNIQUE CHECK (length(sha256) = 64),
-    path TEXT NOT NULL,
-    size_bytes INTEGER NOT NULL,
-    vibkit_version TEXT NOT NULL,
-    analysed_utc TEXT NOT NULL
-);
-CREATE INDEX IF NOT EXISTS measurement_unit_date ON measurement (unit, date_unix_s);
-"""
+def is_server_url(spec) -> bool:
+    """Whether ``spec`` names a PostgreSQL server (``postgresql://`` or ``postgres://``)."""
+    m = re.match(r"^([A-Za-z][A-Za-z0-9+.-]*)://", os.fspath(spec))
+    return bool(m) and m.group(1).lower() in _SERVER_SCHEMES
 
 
 def resolve_db_path(db=None) -> str:
-    """The database file: ``db`` if given, else ``$VIBKIT_FLEET_DB``, else ``./vibkit-fleet.sqlite``.
+    """The database: ``db`` if given, else ``$VIBKIT_FLEET_DB``, else ``./vibkit-fleet.sqlite``.
 
-    ``db`` may be a path or a ``sqlite:///relative/path`` / ``sqlite:////absolute/path`` URL.
+    ``db`` may be a path, a ``sqlite:///relative/path`` / ``sqlite:////absolute/path`` URL (the file
+    path is returned) or a ``postgresql://`` URL (returned as it is).
 
     Raises
     ------
     FleetError
-        A URL of another scheme (server databases are not supported yet) or an in-memory one.
+        A URL of another scheme, or an in-memory SQLite one.
     """
     spec = db if db not in (None, "") else (os.environ.get(DB_ENV) or DEFAULT_DB_NAME)
     spec = os.fspath(spec)
@@ -82,9 +55,12 @@ def resolve_db_path(db=None) -> str:
     if not m:
         return spec
     scheme = m.group(1).lower()
+    if scheme in _SERVER_SCHEMES:
+        return spec
     if scheme != "sqlite":
-        raise FleetError(f"database URL {spec!r}: scheme {scheme!r} is not supported yet; vibkit's fleet database "
-                         "is a SQLite file (a path, or sqlite:///relative/path, sqlite:////absolute/path)")
+        raise FleetError(f"database URL {spec!r}: scheme {scheme!r} is not supported; vibkit's fleet database "
+                         "is a SQLite file (a path, or sqlite:///relative/path, sqlite:////absolute/path) or a "
+                         "PostgreSQL server (postgresql://user@host/dbname)")
     if not spec.startswith("sqlite:///") or len(spec) == len("sqlite:///"):
         raise FleetError(f"database URL {spec!r}: expected sqlite:///path (an in-memory database would lose "
                          "every measurement)")
@@ -92,21 +68,39 @@ def resolve_db_path(db=None) -> str:
     return path.split("?", 1)[0]
 
 
+def _open_store(spec, create):
+    if is_server_url(spec):
+        from .postgres_store import PostgresStore
+
+        return PostgresStore(spec, create=create, db_env=DB_ENV)
+    from .sqlite_store import SQLiteStore
+
+    return SQLiteStore(spec, create=create, db_env=DB_ENV)
+
+
 class FleetDB:
-    """The measurement history of a fleet, in one SQLite file.
+    """The measurement history of a fleet, in a SQLite file or on a PostgreSQL server.
 
     Parameters
     ----------
     path : str or os.PathLike, optional
-        Database file or ``sqlite:///path`` URL (see :func:`resolve_db_path`).
+        Database file, ``sqlite:///path`` or ``postgresql://`` URL (see :func:`resolve_db_path`).
     create : bool
-        Create the database if it does not exist (``False``: a missing database is an error).
+        Create the database (the file, or the tables on the server) if it does not exist
+        (``False``: a missing database is an error).
+
+    Attributes
+    ----------
+    path : str
+        The file, or the server URL without its password.
+    kind : str
+        ``"sqlite"`` or ``"postgresql"``.
 
     Raises
     ------
     FleetError
-        Missing database with ``create=False``, a file that is not a SQLite database, a SQLite
-        database of another application or of a newer vibkit.
+        Missing database with ``create=False``, a file that is not a SQLite database, a database of
+        another application or of a newer vibkit, a server that cannot be reached.
 
     Examples
     --------
@@ -117,65 +111,18 @@ class FleetDB:
     """
 
     def __init__(self, path=None, *, create=True):
-        self.path = resolve_db_path(path)
-        p = self.path
-        if os.path.isdir(p):
-            raise FleetError(f"{p}: is a folder; expected the fleet database file")
-        exists = os.path.exists(p) and os.path.getsize(p) > 0
-        if not exists and not create:
-            raise FleetError(f"{p}: no fleet database here (vibkit fleet add or scan creates one; --db or "
-                             f"{DB_ENV} names another)")
-        if exists:
-            with open(p, "rb") as fh:
-                if fh.read(16) != _SQLITE_MAGIC:
-                    raise FleetError(f"{p}: not a SQLite database; expected a vibkit fleet database")
-        parent = os.path.dirname(os.path.abspath(p))
-        if not os.path.isdir(parent):
-            raise FleetError(f"{p}: folder {parent} does not exist")
-        try:
-            self._con = sqlite3.connect(p, timeout=60.0, isolation_level=None)
-        except sqlite3.Error as exc:
-            raise FleetError(f"{p}: cannot open the database: {exc}") from None
-        try:
-            self._prepare(exists)
-        except sqlite3.DatabaseError as exc:
-            self._con.close()
-            raise FleetError(f"{p}: not a usable fleet database: {exc}") from None
-        except FleetError:
-            self._con.close()
-            raise
+        self._store = _open_store(resolve_db_path(path), create)
+        self.path = self._store.location
+        self.kind = self._store.dialect
 
-    def _prepare(self, exists):
-        con = self._con
-        app = con.execute("PRAGMA application_id").fetchone()[0]
-        ver = con.execute("PRAGMA user_version").fetchone()[0]
-        tables = [r[0] for r in con.execute("SELECT name FROM sqlite_master WHERE type = 'table'")]
-        if app not in (0, APPLICATION_ID) or (app == 0 and tables and "measurement" not in tables):
-            raise FleetError(f"{self.path}: a SQLite database of another application (tables: "
-                             f"{', '.join(tables) or 'none'}); refusing to write into it")
-        if ver > SCHEMA_VERSION:
-            raise FleetError(f"{self.path}: written by a newer vibkit (schema {ver}, this one reads {SCHEMA_VERSION})")
-        mode = con.execute("PRAGMA journal_mode=WAL").fetchone()[0]
-        if str(mode).lower() != "wal":  # pragma: no cover - file systems without shared memory
-            raise FleetError(f"{self.path}: SQLite cannot use its WAL journal here (mode {mode!r})")
-        con.execute("PRAGMA synchronous=FULL")
-        con.execute("PRAGMA foreign_keys=ON")
-        if "measurement" not in tables:
-            con.execute("BEGIN IMMEDIATE")
-            try:
-                for stmt in _SCHEMA.strip().split(";"):
-                    if stmt.strip():
-                        con.execute(stmt)
-                con.execute(f"PRAGMA application_id={APPLICATION_ID}")
-                con.execute(f"PRAGMA user_version={SCHEMA_VERSION}")
-                con.execute("COMMIT")
-            except BaseException:
-                con.execute("ROLLBACK")
-                raise
+    @property
+    def local_files(self):
+        """Files of the database on this machine (a scan leaves them out); none for a server."""
+        return self._store.local_files
 
     # context manager
     def close(self):
-        self._con.close()
+        self._store.close()
 
     def __enter__(self):
         return self
@@ -185,47 +132,33 @@ class FleetDB:
         return False
 
     # ---------------------------------------------------------------------------------- queries
-    def _rows(self, where="", args=()):
-        cur = self._con.execute(f"SELECT id, {', '.join(_COLUMNS)} FROM measurement {where}", args)
-        out = []
-        for r in cur.fetchall():
-            d = dict(zip(("id",) + _COLUMNS, r))
-            d["warnings"] = tuple(json.loads(d["warnings"]))
-            out.append(Measurement(**d))
-        return out
-
     def measurements(self, unit=None):
         """Stored measurements, by unit then date (of one unit if given)."""
         if unit is None:
-            return self._rows("ORDER BY unit, date_unix_s, id")
-        return self._rows("WHERE unit = ? ORDER BY date_unix_s, id", (str(unit),))
+            return self._store.rows("ORDER BY unit, date_unix_s, id")
+        return self._store.rows("WHERE unit = ? ORDER BY date_unix_s, id", (str(unit),))
 
     def find(self, sha256):
         """The stored measurement of a file with this SHA-256, or None."""
-        r = self._rows("WHERE sha256 = ?", (str(sha256),))
-        return r[0] if r else None
+        return self._store.find(sha256)
 
     def units(self):
         """Unit identifiers, sorted."""
-        return [r[0] for r in self._con.execute("SELECT DISTINCT unit FROM measurement ORDER BY unit")]
+        return self._store.units()
 
     def nominal_pitch(self, unit):
         """The nominal pitch stored for a unit [m], or None for a new unit."""
-        r = self._con.execute("SELECT nominal_pitch_m FROM measurement WHERE unit = ? ORDER BY id DESC LIMIT 1",
-                              (str(unit),)).fetchone()
-        return None if r is None else float(r[0])
+        return self._store.nominal_pitch(unit)
 
     def integrity_check(self) -> str:
-        """SQLite's ``PRAGMA integrity_check`` (``"ok"`` when the file is sound)."""
-        return str(self._con.execute("PRAGMA integrity_check").fetchone()[0])
+        """``"ok"`` when the store is sound (SQLite's ``PRAGMA integrity_check``; PostgreSQL: valid indexes)."""
+        return self._store.integrity_check()
 
     # ---------------------------------------------------------------------------------- writing
-    def _duplicate_message(self, what, m):
-        return (f"{what}: already stored (same sha256) as measurement #{m.id} of unit {m.unit!r} dated "
-                f"{m.date_utc[:10]}, from {m.path}")
-
     def insert(self, m: Measurement) -> Measurement:
         """Store one analysed measurement in its own transaction; the stored row (with its id).
+
+        Safe when other processes (on other machines, for PostgreSQL) insert at the same time.
 
         Raises
         ------
@@ -234,29 +167,14 @@ class FleetDB:
         FleetError
             The unit is stored with another nominal pitch.
         """
-        con = self._con
-        con.execute("BEGIN IMMEDIATE")
-        try:
-            old = self.find(m.sha256)
-            if old is not None:
-                raise DuplicateRecordingError(self._duplicate_message(m.path, old), old)
-            nom = self.nominal_pitch(m.unit)
-            if nom is not None and not math.isclose(nom, m.nominal_pitch_m, rel_tol=1e-9):
-                raise FleetError(f"unit {m.unit!r} is stored with nominal pitch {nom:g} m, not "
-                                 f"{m.nominal_pitch_m:g} m; one unit has one nominal pitch")
-            vals = [json.dumps(list(m.warnings)) if c == "warnings" else getattr(m, c) for c in _COLUMNS]
-            cur = con.execute(f"INSERT INTO measurement ({', '.join(_COLUMNS)}) VALUES "
-                              f"({', '.join('?' * len(_COLUMNS))})", vals)
-            rid = cur.lastrowid
-            con.execute("COMMIT")
-        except BaseException:
-            con.execute("ROLLBACK")
-            raise
-        d = asdict(m)
-        d["id"] = rid
-        return Measurement(**d)
+        return self._store.insert(m)
 
-    def add(self, recording, *, unit, speed, speed_sigma=0.0, date=None, nominal_pitch=None, channel=None):
+    def insert_many(self, measurements):
+        """Store measurements in one transaction, leaving out those already stored; ``(added, skipped)``."""
+        return self._store.insert_many(measurements)
+
+    def add(self, recording, *, unit, speed, speed_sigma=0.0, date=None, nominal_pitch=None, channel=None,
+            replaced=False, read_options=None):
         """Analyse a recording and store its measurement.
 
         Parameters
@@ -271,11 +189,16 @@ class FleetDB:
         nominal_pitch : float, optional
             Nominal link pitch [m]; default the unit's stored value (required for a new unit).
         channel : str, optional
+        replaced : bool
+            The unit's chain was replaced since its previous measurement: a new trend segment starts.
+        read_options : dict, optional
+            More :func:`vibkit.read_recording` arguments (``time_unit``, ``units``, ``repair_time`` ...).
 
         Returns
         -------
         Measurement
-            The stored row.
+            The stored row, with its quality flag (an implausible or inconclusive one is stored
+            flagged and left out of the trend).
 
         Raises
         ------
@@ -291,16 +214,16 @@ class FleetDB:
         if os.path.isfile(spath):
             old = self.find(_file_sha256(spath))
             if old is not None:
-                raise DuplicateRecordingError(self._duplicate_message(spath, old), old)
+                raise DuplicateRecordingError(self._store.duplicate_message(spath, old), old)
         nom = nominal_pitch if nominal_pitch is not None else self.nominal_pitch(unit)
         if nom is None:
             raise FleetError(f"unit {str(unit)!r} is new: give its nominal link pitch (--nominal-pitch, in m)")
         m = analyse_recording(spath, unit=unit, speed=speed, speed_sigma=speed_sigma, nominal_pitch=nom, date=date,
-                              channel=channel)
+                              channel=channel, replaced=replaced, read_options=read_options)
         return self.insert(m)
 
     def scan(self, directory, catalogue, *, scheduler=None, n_workers=None, client=None, parallel=True,
-             on_failure=None, progress=False):
+             on_failure=None, progress=False, read_options=None):
         """Add every recording of a folder that a catalogue describes; analyses run on Dask workers.
 
         Parameters
@@ -322,6 +245,9 @@ class FleetDB:
             Called as ``on_failure(file, reason)`` for each failed file as it happens.
         progress : bool
             Draw a progress bar on a terminal.
+        read_options : dict, optional
+            :func:`vibkit.read_recording` arguments for every file (``time_unit``, ``units`` ...); the
+            catalogue's ``channel`` column names each file's channel.
 
         Returns
         -------
@@ -329,13 +255,16 @@ class FleetDB:
 
         Notes
         -----
-        Only this process writes the database, one transaction per recording (WAL journal,
+        Only this process writes the database, one transaction per recording (SQLite: WAL journal,
         ``synchronous=FULL``): a killed scan leaves complete rows, and the next scan skips them.
+        Several scans (and adds) may run at once, on one machine for SQLite, on many for PostgreSQL:
+        each file is stored once, the others are skipped as duplicates.
         A local cluster spawns its worker processes: a script that calls ``scan`` needs the
         ``if __name__ == "__main__":`` guard (or ``parallel=False``).
         """
         return scan_folder(self, directory, catalogue, scheduler=scheduler, n_workers=n_workers, client=client,
-                           parallel=parallel, on_failure=on_failure, progress=progress)
+                           parallel=parallel, on_failure=on_failure, progress=progress,
+                           read_options=read_options)
 
     # ----------------------------------------------------------------------------------- status
     def status(self, *, limits_percent=DEFAULT_LIMITS_PERCENT, coverage_sigma=2.0, units=None):
@@ -363,3 +292,45 @@ class FleetDB:
                 by_unit.setdefault(m.unit, []).append(m)
         out = [unit_trend(u, ms, limits_percent=limits, coverage_sigma=coverage_sigma) for u, ms in by_unit.items()]
         return rank_units(out)
+
+
+def migrate(source, target):
+    """Copy every measurement of one fleet database into another (e.g. a SQLite file to PostgreSQL).
+
+    Parameters
+    ----------
+    source : str or os.PathLike
+        The existing database (path or URL); opened without creating anything.
+    target : str or os.PathLike
+        The database that receives the rows (created if missing).
+
+    Returns
+    -------
+    dict
+        ``source``, ``target`` (URLs without password), ``copied``, ``skipped`` (already in the
+        target: same SHA-256) and ``target_total``.
+
+    Notes
+    -----
+    One transaction on the target: a failed or interrupted migration copies nothing, and running it
+    again copies only what is missing.  Rows keep every field (provenance, quality flag, replaced)
+    except ``id``, which the target numbers.
+
+    Raises
+    ------
+    FleetError
+        Source and target are the same, a database cannot be opened, or a unit's nominal pitch differs
+        between them (nothing copied).
+    """
+    src_spec, dst_spec = resolve_db_path(source), resolve_db_path(target)
+    if not is_server_url(src_spec) and not is_server_url(dst_spec) and os.path.exists(dst_spec) \
+            and os.path.exists(src_spec) and os.path.samefile(src_spec, dst_spec):
+        raise FleetError(f"{src_spec}: source and target of the migration are the same database")
+    with FleetDB(src_spec, create=False) as src:
+        rows = sorted(src.measurements(), key=lambda m: m.id)
+        with FleetDB(dst_spec) as dst:
+            if src.path == dst.path and src.kind == dst.kind:
+                raise FleetError(f"{src.path}: source and target of the migration are the same database")
+            added, skipped = dst.insert_many(rows)
+            return {"source": src.path, "target": dst.path, "copied": added, "skipped": skipped,
+                    "target_total": len(dst.measurements())}

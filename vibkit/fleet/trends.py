@@ -2,8 +2,12 @@
 
 :func:`fit_trend` fits the elongation against time by weighted least squares, :func:`forecast_limits`
 gives the dates at which each elongation limit will be reached, :func:`unit_trend` sums a unit's
-measurements up as a :class:`UnitTrend` and :func:`rank_units` ranks the units by urgency.  Trends
-are in percent per Julian year (365.25 days).
+measurements up as a :class:`UnitTrend` and :func:`rank_units` ranks the units by urgency (the work
+list).  Only the measurements that :func:`vibkit.fleet.segments.screen_unit` keeps are fitted: flagged
+ones (implausible, inconclusive), outliers (> 5 sigma from the trend of the others) and those before a
+chain replacement are shown and listed, never fitted.  A rate that is negative beyond its uncertainty
+(a chain that gets shorter) is reported ``"implausible"`` and not forecast.  Trends are in percent per
+Julian year (365.25 days).
 """
 
 from __future__ import annotations
@@ -21,6 +25,8 @@ __all__ = ["LimitForecast", "SECONDS_PER_YEAR", "TrendFit", "UnitTrend", "fit_tr
            "unit_trend"]
 
 SECONDS_PER_YEAR = 365.25 * 86400.0
+#: a rate below zero by more than this many of its sigmas is implausible (a chain does not shorten)
+IMPLAUSIBLE_RATE_SIGMA = 3.0
 
 
 @dataclass(frozen=True)
@@ -132,8 +138,9 @@ class LimitForecast:
     status : str
         ``"reached"`` (the latest measurement is at or over the limit), ``"forecast"`` (the slope is
         significantly positive: a date and an interval), ``"not before"`` (the slope is not
-        significantly positive but may be: only the earliest date is known) or ``"none"`` (no
-        growth within the uncertainty, or fewer than two measurements).
+        significantly positive but may be: only the earliest date is known), ``"none"`` (no
+        growth within the uncertainty, or fewer than two measurements) or ``"implausible"`` (the
+        rate is negative beyond its uncertainty: no forecast from it).
     date_utc : str or None
         Forecast date where the fitted line reaches the limit (``"forecast"``).
     earliest_utc, latest_utc : str or None
@@ -232,6 +239,24 @@ class UnitTrend:
     forecasts : tuple of LimitForecast
     rank : int
         1 = most urgent.
+    rate_verdict : str
+        ``"growing"`` (rate > 2 sigma), ``"flat"`` (not significantly positive), ``"implausible"``
+        (negative beyond 3 sigma: a measurement problem; re-measure), ``"too few"`` (fewer than two
+        usable measurements at different dates).
+    n_used : int
+        Measurements fitted (the current segment, without flagged ones and outliers).
+    segment_start_utc : str or None
+        Date of the chain replacement that starts the current segment (None: one segment).
+    outliers : tuple of dict
+        ``id``, ``date_utc``, ``elongation_percent``, ``sigma_percent``, ``deviation_sigma``.
+    flagged : tuple of dict
+        Measurements left out for their quality: ``id``, ``date_utc``, ``quality``, ``reason``.
+    replacements : tuple of dict
+        ``id``, ``date_utc``, ``reason`` of every measurement that starts a segment.
+    point_labels : tuple of (int, str)
+        ``(id, label)`` of every measurement (see :class:`vibkit.fleet.segments.Screening`).
+    flags : tuple of str
+        Short notes for the work list (outliers, flagged, replaced, implausible rate, latest flagged).
     """
 
     unit: str
@@ -249,10 +274,29 @@ class UnitTrend:
     forecasts: tuple
     fit: TrendFit | None = None
     rank: int = 0
+    rate_verdict: str = "too few"
+    n_used: int = 0
+    segment_start_utc: str | None = None
+    outliers: tuple = ()
+    flagged: tuple = ()
+    replacements: tuple = ()
+    point_labels: tuple = ()
+    flags: tuple = ()
+
+    def next_limit(self):
+        """The first limit not yet reached, as its :class:`LimitForecast` (None when all are reached)."""
+        return next((f for f in self.forecasts if f.status != "reached"), None)
 
     def as_dict(self) -> dict:
-        d = {k: getattr(self, k) for k in self.__dataclass_fields__ if k not in ("forecasts", "fit")}
+        skip = ("forecasts", "fit", "outliers", "flagged", "replacements", "point_labels", "flags")
+        d = {k: getattr(self, k) for k in self.__dataclass_fields__ if k not in skip}
         d["forecasts"] = [asdict(f) for f in self.forecasts]
+        nxt = self.next_limit()
+        d["next_limit"] = None if nxt is None else asdict(nxt)
+        d["flags"] = list(self.flags)
+        d["outliers"] = [dict(o) for o in self.outliers]
+        d["flagged"] = [dict(o) for o in self.flagged]
+        d["replacements"] = [dict(o) for o in self.replacements]
         if self.fit is not None:
             d["trend_reference_utc"] = _unix_to_iso(self.fit.t_ref_unix_s)
             d["elongation_at_reference_percent"] = self.fit.elongation_ref_percent
@@ -260,42 +304,97 @@ class UnitTrend:
         return d
 
 
+def _finite_or_none(x):
+    return None if x is None or not math.isfinite(x) else float(x)
+
+
 def unit_trend(unit, measurements, *, limits_percent=DEFAULT_LIMITS_PERCENT, coverage_sigma=2.0) -> UnitTrend:
-    """The :class:`UnitTrend` of one unit's measurements (any order)."""
+    """The :class:`UnitTrend` of one unit's measurements (any order).
+
+    The measurements are screened first (:func:`vibkit.fleet.segments.screen_unit`); the latest
+    elongation is the latest fitted one (the latest measurement when none is usable).
+    """
+    from .segments import screen_unit
+
     ms = sorted(measurements, key=lambda m: (m.date_unix_s, m.id or 0))
-    last = ms[-1]
+    scr = screen_unit(ms)
+    used = scr.used
     fit = None
-    if len(ms) >= 2:
+    if len(used) >= 2:
         try:
-            fit = fit_trend([m.date_unix_s for m in ms], [m.elongation_percent for m in ms],
-                            [m.elongation_sigma_percent for m in ms])
+            fit = fit_trend([m.date_unix_s for m in used], [m.elongation_percent for m in used],
+                            [m.elongation_sigma_percent for m in used])
         except ValueError:  # one date only
             fit = None
+    last = used[-1] if used else ms[-1]
+    flags = []
+    if fit is None:
+        rate = "too few"
+    elif fit.slope_percent_per_year + IMPLAUSIBLE_RATE_SIGMA * fit.slope_sigma_percent_per_year < 0:
+        rate = "implausible"
+        flags.append(f"rate {fit.slope_percent_per_year:+.2f} %/year: a chain does not shorten; re-measure")
+    elif fit.slope_percent_per_year > coverage_sigma * fit.slope_sigma_percent_per_year:
+        rate = "growing"
+    else:
+        rate = "flat"
     reached = [lim for lim in limits_percent if last.elongation_percent >= lim]
-    fc = forecast_limits(fit, limits_percent, latest_elongation_percent=last.elongation_percent,
+    fc = forecast_limits(None if rate == "implausible" else fit, limits_percent,
+                         latest_elongation_percent=last.elongation_percent if used else None,
                          coverage_sigma=coverage_sigma)
+    if rate == "implausible":
+        fc = tuple(f if f.status == "reached" else LimitForecast(f.limit_percent, "implausible") for f in fc)
+    outliers = tuple({"id": m.id, "date_utc": m.date_utc, "elongation_percent": m.elongation_percent,
+                      "sigma_percent": m.elongation_sigma_percent, "deviation_sigma": _finite_or_none(z)}
+                     for m, z in scr.outliers)
+    flagged = tuple({"id": m.id, "date_utc": m.date_utc, "quality": m.quality, "reason": m.quality_reason}
+                    for m in ms if m.quality != "ok")
+    repl = tuple({"id": m.id, "date_utc": m.date_utc, "reason": why} for m, why in scr.segment_starts)
+    if outliers:
+        flags.append(f"{len(outliers)} outlier(s) left out: " + ", ".join(o["date_utc"][:10] for o in outliers))
+    for q in ("implausible", "inconclusive"):
+        n = sum(1 for f in flagged if f["quality"] == q)
+        if n:
+            flags.append(f"{n} {q} measurement(s) left out")
+    if repl:
+        flags.append(f"chain replaced {repl[-1]['date_utc'][:10]} (new segment)")
+    if not used:
+        flags.append("no usable measurement: the latest is flagged")
+    elif ms[-1] is not last:
+        flags.append(f"latest measurement ({ms[-1].date_utc[:10]}) not used")
+    seg_start = repl[-1]["date_utc"] if repl else None
     return UnitTrend(
         unit=str(unit), n_measurements=len(ms), first_date_utc=ms[0].date_utc, latest_date_utc=last.date_utc,
         nominal_pitch_m=last.nominal_pitch_m, latest_elongation_percent=last.elongation_percent,
         latest_elongation_sigma_percent=last.elongation_sigma_percent,
-        latest_verdict=elongation_verdict(last.elongation_percent, limits_percent),
+        latest_verdict=elongation_verdict(last.elongation_percent, limits_percent) if used else "inconclusive",
         slope_percent_per_year=None if fit is None else fit.slope_percent_per_year,
         slope_sigma_percent_per_year=None if fit is None else fit.slope_sigma_percent_per_year,
         chi2_per_dof=None if fit is None or math.isnan(fit.chi2_per_dof) else fit.chi2_per_dof,
-        over_limit_percent=max(reached) if reached else None, forecasts=fc, fit=fit)
+        over_limit_percent=max(reached) if reached and used else None, forecasts=fc, fit=fit,
+        rate_verdict=rate, n_used=len(used), segment_start_utc=seg_start, outliers=outliers, flagged=flagged,
+        replacements=repl, point_labels=tuple((m.id, scr.labels.get(m.id if m.id is not None else id(m), "ok"))
+                                              for m in ms),
+        flags=tuple(flags))
 
 
 def rank_units(trends):
-    """Sort by urgency: units over a limit first (highest limit, then largest elongation), then by the
-    earliest forecast date of a limit not yet reached, then units without a forecast (largest
-    elongation first); ``rank`` set from 1."""
+    """Sort by urgency (the work list): units over a limit first (highest limit, then largest
+    elongation), then by the earliest forecast date of a limit not yet reached, then units whose
+    measurements need a visit (an implausible rate, or no usable measurement; largest elongation
+    first), then by the earliest "not before" date, then the rest (largest elongation first);
+    ``rank`` set from 1."""
     def key(u):
         if u.over_limit_percent is not None:
             return (0, -u.over_limit_percent, -u.latest_elongation_percent, u.unit)
-        when = min((f.urgency_unix_s() for f in u.forecasts if f.status != "reached"), default=math.inf)
+        dated = [f.urgency_unix_s() for f in u.forecasts if f.status == "forecast"]
+        if dated:
+            return (1, min(dated), 0.0, u.unit)
+        if u.rate_verdict == "implausible" or u.n_used == 0:
+            return (2, -u.latest_elongation_percent, 0.0, u.unit)
+        when = min((f.urgency_unix_s() for f in u.forecasts if f.status == "not before"), default=math.inf)
         if math.isfinite(when):
-            return (1, when, 0.0, u.unit)
-        return (2, -u.latest_elongation_percent, 0.0, u.unit)
+            return (3, when, 0.0, u.unit)
+        return (4, -u.latest_elongation_percent, 0.0, u.unit)
 
     out = sorted(trends, key=key)
     return [UnitTrend(**{**{k: getattr(u, k) for k in u.__dataclass_fields__}, "rank": i})

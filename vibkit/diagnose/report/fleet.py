@@ -1,5 +1,6 @@
-"""The fleet report: one PDF page of elongation against date per unit, the limits as lines, the next
-limit's forecast interval as a bar (:func:`write_fleet_report`, drawn by :func:`fleet_page`)."""
+"""The fleet report: page 1 the work list (a table ranked by urgency), then elongation against date per
+unit: measurements, outliers and flagged ones marked, the fitted trend, the limits labelled, and the
+next limit's forecast date with its 2-sigma interval drawn (:func:`write_fleet_report`)."""
 
 from __future__ import annotations
 
@@ -10,32 +11,63 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .common import _WIDE, PageSink, Report, _page_title, atomic_path, report_date
+from .common import _WIDE, PageSink, Report, atomic_path
 
-__all__ = ["FLEET_PAGE_MAX_UNITS", "FleetContext", "fleet_page", "write_fleet_report"]
+__all__ = ["FLEET_PAGE_MAX_UNITS", "FleetContext", "WORK_LIST_HEADER", "fleet_page", "work_list_rows",
+           "write_fleet_report"]
 
-#: units drawn on the fleet page (the most urgent ones; the rest are listed by ``vibkit fleet status``)
+#: units drawn (the most urgent ones; the work list on page 1 lists them all)
 FLEET_PAGE_MAX_UNITS = 24
+_PER_PAGE = 4  # unit panels per page
+_ROWS_PER_TABLE = 22
+_LIMIT_NAMES = ("watch", "plan", "replace")
+_LIMIT_COLORS = ("#d4a017", "#e0661b", "#b2182b")
+
+#: the work list's columns (``vibkit fleet status`` and page 1 of the fleet report)
+WORK_LIST_HEADER = ["rank", "unit", "elongation [%]", "measured", "rate [%/year]", "verdict", "next limit",
+                    "reached on (2-sigma)", "flags"]
+
+
+def fmt_forecast(f):
+    """A limit forecast in a few words (year-month dates)."""
+    if f is None:
+        return "all reached"
+    if f.status == "reached":
+        return "reached"
+    if f.status == "forecast":
+        if f.date_utc is None:
+            return "after 9999"
+        lo, hi = (f.earliest_utc or "?")[:7], (f.latest_utc or "after 9999")[:7]
+        return f"{f.date_utc[:7]} ({lo}..{hi})"
+    if f.status == "not before":
+        return f"not before {f.earliest_utc[:7]}" if f.earliest_utc else "-"
+    if f.status == "implausible":
+        return "none (implausible rate)"
+    return "-"
+
+
+def work_list_rows(trends, *, flags_width=None):
+    """The work list's rows (:data:`WORK_LIST_HEADER`) of ranked :class:`vibkit.fleet.trends.UnitTrend`."""
+    rows = []
+    for t in trends:
+        slope = "-" if t.slope_percent_per_year is None else \
+            f"{t.slope_percent_per_year:+.2f} +- {t.slope_sigma_percent_per_year:.2f}"
+        nxt = t.next_limit()
+        verdict = t.latest_verdict if t.rate_verdict != "implausible" else f"{t.latest_verdict}; rate implausible"
+        flags = "; ".join(t.flags) or "-"
+        if flags_width and len(flags) > flags_width:
+            flags = flags[: flags_width - 3] + "..."
+        rows.append([str(t.rank), t.unit,
+                     f"{t.latest_elongation_percent:+.2f} +- {t.latest_elongation_sigma_percent:.2f}",
+                     t.latest_date_utc[:10], slope, verdict, "-" if nxt is None else f"{nxt.limit_percent:g} %",
+                     fmt_forecast(nxt), flags])
+    return rows
 
 
 @dataclass
 class FleetContext:
-    """What the fleet page draws.
-
-    Attributes
-    ----------
-    trends : list of vibkit.fleet.history.UnitTrend
-        All units, ranked (most urgent first).
-    shown : list of vibkit.fleet.history.UnitTrend
-        The units drawn (the first ``max_units``).
-    measurements : list of vibkit.fleet.history.Measurement
-    by_unit : dict
-        Unit name to its measurements.
-    limits : tuple of float
-        Elongation limits [%].
-    database : str
-    date : datetime.datetime
-    """
+    """What the fleet pages draw: ``trends`` (all, ranked), ``shown`` (drawn), ``measurements``, ``by_unit``,
+    ``limits`` [%], ``database`` and ``date`` (of the report)."""
 
     trends: list
     shown: list
@@ -50,92 +82,184 @@ def _utc(text):
     return _dt.datetime.fromisoformat(text.replace("Z", "+00:00"))
 
 
-def fleet_page(doc, ctx) -> None:
-    """Elongation against date, one panel per drawn unit, most urgent first."""
+def _dt_of(sec):
+    return _dt.datetime.fromtimestamp(sec, tz=_dt.timezone.utc)
+
+
+def _title(fig, title, subtitle):
+    fig.text(0.04, 0.975, title, fontsize=14, fontweight="bold", ha="left", va="top")
+    fig.text(0.04, 0.93, subtitle, fontsize=8, color="0.3", ha="left", va="top")
+
+
+def _subtitle(ctx):
+    from ... import __version__
+
+    return (f"{len(ctx.trends)} unit(s), {len(ctx.measurements)} measurement(s); limits "
+            f"{' / '.join(f'{v:g}' for v in ctx.limits)} % ({' / '.join(_LIMIT_NAMES)}); database "
+            f"{os.path.basename(str(ctx.database)) or ctx.database}; {ctx.date:%Y-%m-%d %H:%M} UTC, vibkit {__version__}")
+
+
+def work_list_page(doc, ctx, rows, part, parts):
+    import matplotlib.pyplot as plt
+
+    fig = plt.figure(figsize=_WIDE)
+    _title(fig, "Fleet work list: most urgent first" + (f" ({part}/{parts})" if parts > 1 else ""), _subtitle(ctx))
+    ax = fig.add_axes([0.04, 0.10, 0.92, 0.80])
+    ax.axis("off")
+    widths = [0.03, 0.07, 0.08, 0.07, 0.08, 0.11, 0.055, 0.135, 0.37]
+    tab = ax.table(cellText=rows, colLabels=WORK_LIST_HEADER, colWidths=widths, loc="upper left", cellLoc="left")
+    tab.auto_set_font_size(False)
+    tab.set_fontsize(7)
+    tab.scale(1.0, 1.3)
+    by_unit = {t.unit: t for t in ctx.trends}
+    for (r, c), cell in tab.get_celld().items():
+        cell.set_linewidth(0.3)
+        if r == 0:
+            cell.set_text_props(fontweight="bold")
+            cell.set_facecolor("0.9")
+        elif by_unit[rows[r - 1][1]].over_limit_percent is not None:
+            cell.set_facecolor("#f6d5d5")  # over a limit now
+        elif by_unit[rows[r - 1][1]].flags:
+            cell.set_facecolor("#fff3cd")  # something to look at
+    fig.text(0.04, 0.05, "elongation: the latest usable measurement +- 1 sigma; rate: weighted least squares over the "
+             "current chain (after the last replacement), +- 1 sigma; red: over a limit now; yellow: flags (outliers, "
+             "flagged measurements, replacements, an implausible rate) - left out of the trend.", fontsize=7,
+             color="0.3", wrap=True)
+    doc.emit(fig, "work list")
+
+
+def _draw_unit(ax, tr, ms, limits, ctx):
+    labels = dict(tr.point_labels)
+    styles = {"ok": dict(fmt="o", color="k", ms=3, label="measurement (1 sigma)"),
+              "earlier segment": dict(fmt="o", color="0.65", ms=3, label="before the chain was replaced"),
+              "outlier": dict(fmt="x", color="#c00000", ms=6, label="outlier (> 5 sigma), left out"),
+              "inconclusive": dict(fmt="s", color="#8a6d00", ms=3.5, mfc="none", label="inconclusive, left out"),
+              "implausible": dict(fmt="D", color="#7a1fa2", ms=3.5, mfc="none", label="implausible, left out")}
+    # the scale follows the plausible points; an implausible one off that scale is drawn at the edge
+    scaled = [m for m in ms if labels.get(m.id, "ok") != "implausible"] or ms
+    vals = [m.elongation_percent + s * m.elongation_sigma_percent for m in scaled for s in (-1, 1)]
+    ymin = min(min(vals) - 0.15, -0.1)
+    ymax = max(max(vals) + 0.15, limits[-1] + 0.35)
+    for lab, st in styles.items():
+        sel = [m for m in ms if labels.get(m.id, "ok") == lab]
+        if not sel:
+            continue
+        y = np.array([m.elongation_percent for m in sel])
+        off = (y > ymax) | (y < ymin)
+        if off.any():
+            st = {**st, "label": st["label"] + f" ({int(off.sum())} off scale, at the edge)"}
+        ax.errorbar([_utc(m.date_utc) for m in sel], np.clip(y, ymin + 0.02 * (ymax - ymin), ymax - 0.02 * (ymax - ymin)),
+                    yerr=np.where(off, 0.0, [m.elongation_sigma_percent for m in sel]), elinewidth=0.7, capsize=1.5,
+                    lw=0, **st)
+    t0 = min(m.date_unix_s for m in ms)
+    t_end = max(m.date_unix_s for m in ms)
+    fit, nxt = tr.fit, tr.next_limit()
+    has_interval = nxt is not None and nxt.status == "forecast" and nxt.earliest_utc and nxt.latest_utc
+    if has_interval:
+        t_end = max(t_end, min(_utc(nxt.latest_utc).timestamp(), t_end + 6 * 365.25 * 86400))
+    if fit is not None:
+        used = [m for m in ms if labels.get(m.id, "ok") == "ok"]
+        tt = np.linspace(min(m.date_unix_s for m in used), t_end, 60)
+        ax.plot([_dt_of(v) for v in tt], fit.elongation_at(tt), color="tab:blue", lw=1.0,
+                label=f"trend {tr.slope_percent_per_year:+.2f} +- {tr.slope_sigma_percent_per_year:.2f} %/yr")
+    for lim, c, name in zip(limits, _LIMIT_COLORS, _LIMIT_NAMES):
+        ax.axhline(lim, color=c, lw=0.9, ls="--")
+    if has_interval:
+        lo, hi = _utc(nxt.earliest_utc), _utc(nxt.latest_utc)
+        ax.plot([lo, hi], [nxt.limit_percent] * 2, color="tab:blue", lw=4.0, alpha=0.45, solid_capstyle="butt",
+                label=f"{nxt.limit_percent:g} % reached {nxt.date_utc[:7]} (2-sigma {nxt.earliest_utc[:7]}.."
+                      f"{nxt.latest_utc[:7]})")
+        ax.plot([_utc(nxt.date_utc)], [nxt.limit_percent], "|", color="tab:blue", ms=9)
+    ax.set_ylim(ymin, ymax)
+    span = max(t_end - t0, 30 * 86400)
+    ax.set_xlim(_dt_of(t0 - 0.04 * span), _dt_of(t_end + 0.04 * span))
+    for lim, c, name in zip(limits, _LIMIT_COLORS, _LIMIT_NAMES):  # labelled outside, right of the panel
+        ax.text(1.01, lim, f"{lim:g} %\n{name}", color=c, fontsize=6.5, ha="left", va="center",
+                transform=ax.get_yaxis_transform())
+
+
+def unit_pages(doc, ctx):
     import matplotlib.dates as mdates
     import matplotlib.pyplot as plt
 
-    from ... import __version__
-
-    trends, shown, measurements, by_unit, limits, date = (ctx.trends, ctx.shown, ctx.measurements, ctx.by_unit,
-                                                          ctx.limits, ctx.date)
-    utc = _utc
-    n = len(shown)
-    ncol = 1 if n <= 1 else 2 if n <= 4 else 3 if n <= 9 else 4
-    nrow = max(1, math.ceil(n / ncol))
-    colors = ("#d4a017", "#e0661b", "#b2182b")
-    fig = plt.figure(figsize=_WIDE)
-    _page_title(fig, "Fleet: step-chain elongation against date",
-                f"{len(trends)} unit(s), {len(measurements)} measurement(s), most urgent first; limits "
-                f"{' / '.join(f'{v:g}' for v in limits)} % (dashed); database "
-                f"{os.path.basename(str(ctx.database))}; {date:%Y-%m-%d}, vibkit {__version__}")
-    fig.text(0.06, 0.035, "points: measurements with 1-sigma error bars; line: weighted least-squares trend; "
-             "bar: 2-sigma interval of the date the next limit is reached", fontsize=7.5, color="0.3")
-    gs = fig.add_gridspec(nrow, ncol, left=0.06, right=0.98, top=0.90, bottom=0.08, hspace=0.55, wspace=0.25)
-    for i, tr in enumerate(shown):
-        ax = fig.add_subplot(gs[i // ncol, i % ncol])
-        ms = sorted(by_unit.get(tr.unit, []), key=lambda m: m.date_unix_s)
-        x = [utc(m.date_utc) for m in ms]
-        ax.errorbar(x, [m.elongation_percent for m in ms], yerr=[m.elongation_sigma_percent for m in ms],
-                    fmt="o", ms=2.5, color="k", elinewidth=0.8, capsize=1.5)
-        t_end = ms[-1].date_unix_s
-        fit = getattr(tr, "fit", None)
-        if fit is not None and fit.slope_percent_per_year > 0:
-            nxt = [f for f in tr.forecasts if f.status == "forecast" and f.date_utc]
-            if nxt:
-                t_end = max(t_end, min(utc(nxt[0].latest_utc or nxt[0].date_utc).timestamp(),
-                                       t_end + 5 * 365.25 * 86400))
-        if fit is not None:
-            tt = np.linspace(ms[0].date_unix_s, t_end, 50)
-            ax.plot([_dt.datetime.fromtimestamp(v, tz=_dt.timezone.utc) for v in tt], fit.elongation_at(tt),
-                    color="tab:blue", lw=1.0)
-        for lim, c in zip(limits, colors):
-            ax.axhline(lim, color=c, lw=0.9, ls="--")
-        # the next limit's forecast interval, as a bar on its line
-        nxt = [f for f in tr.forecasts if f.status == "forecast" and f.earliest_utc and f.latest_utc]
-        if nxt and utc(nxt[0].latest_utc).timestamp() <= t_end + 1.0:
-            ax.plot([utc(nxt[0].earliest_utc), utc(nxt[0].latest_utc)], [nxt[0].limit_percent] * 2,
-                    color="tab:blue", lw=3.0, alpha=0.5, solid_capstyle="butt")
-        slope = ("no trend" if tr.slope_percent_per_year is None else
-                 f"{tr.slope_percent_per_year:+.3f} +- {tr.slope_sigma_percent_per_year:.3f} %/yr")
-        ax.set_title(f"#{tr.rank} {tr.unit}: {slope}", loc="left")
-        loc = mdates.AutoDateLocator(minticks=2, maxticks=6)
-        ax.xaxis.set_major_locator(loc)
-        ax.xaxis.set_major_formatter(mdates.ConciseDateFormatter(loc))
-        ax.set_ylim(min(-0.2, min(m.elongation_percent for m in ms) - 0.2),
-                    max(limits[-1] * 1.15, max(m.elongation_percent for m in ms) + 0.2))
-        if i % ncol == 0:
+    shown = ctx.shown
+    for p0 in range(0, len(shown), _PER_PAGE):
+        fig = plt.figure(figsize=_WIDE)
+        _title(fig, "Fleet: step-chain elongation against date", _subtitle(ctx))
+        gs = fig.add_gridspec(2, 2, left=0.06, right=0.95, top=0.87, bottom=0.07, hspace=0.42, wspace=0.22)
+        for i, tr in enumerate(shown[p0:p0 + _PER_PAGE]):
+            ax = fig.add_subplot(gs[i // 2, i % 2])
+            ms = sorted(ctx.by_unit.get(tr.unit, []), key=lambda m: (m.date_unix_s, m.id or 0))
+            _draw_unit(ax, tr, ms, ctx.limits, ctx)
+            over = tr.over_limit_percent is not None
+            head = f"#{tr.rank} {tr.unit}: {tr.latest_elongation_percent:+.2f} +- " \
+                   f"{tr.latest_elongation_sigma_percent:.2f} %, {tr.latest_verdict}"
+            if over:
+                head += f" - OVER {tr.over_limit_percent:g} %"
+            if tr.rate_verdict == "implausible":
+                head += " - rate implausible: re-measure"
+            ax.set_title(head, loc="left", fontsize=8, color="#b2182b" if over else "k",
+                         fontweight="bold" if over else "normal")
+            if over:
+                for sp in ax.spines.values():
+                    sp.set_color("#b2182b")
+                    sp.set_linewidth(1.4)
+            loc = mdates.AutoDateLocator(minticks=2, maxticks=6)
+            ax.xaxis.set_major_locator(loc)
+            ax.xaxis.set_major_formatter(mdates.ConciseDateFormatter(loc))
             ax.set_ylabel("elongation [%]")
-        ax.grid(True, lw=0.3, alpha=0.5)
-    if len(trends) > n:
-        fig.text(0.06, 0.015, f"{len(trends) - n} less urgent unit(s) not drawn; `vibkit fleet status` lists "
-                 "all of them", fontsize=8, color="0.3")
-    doc.emit(fig, "fleet")
+            ax.grid(True, lw=0.3, alpha=0.5)
+            ax.legend(loc="best", fontsize=6, framealpha=0.85)
+        if p0 + _PER_PAGE >= len(shown) and len(ctx.trends) > len(shown):
+            fig.text(0.06, 0.015, f"{len(ctx.trends) - len(shown)} less urgent unit(s) not drawn; the work list "
+                     "(page 1) and `vibkit fleet status` list all of them", fontsize=8, color="0.3")
+        doc.emit(fig, "fleet units")
+
+
+def fleet_page(doc, ctx) -> None:
+    """The work list page(s), then the unit pages."""
+    rows = work_list_rows(ctx.trends, flags_width=80)
+    parts = max(1, math.ceil(len(rows) / _ROWS_PER_TABLE))
+    for k in range(parts):
+        work_list_page(doc, ctx, rows[k * _ROWS_PER_TABLE:(k + 1) * _ROWS_PER_TABLE], k + 1, parts)
+    unit_pages(doc, ctx)
+
+
+def fleet_report_date() -> _dt.datetime:
+    """``SOURCE_DATE_EPOCH`` (for reproducible bytes) if set, else now (UTC, to the second)."""
+    raw = os.environ.get("SOURCE_DATE_EPOCH")
+    if raw:
+        try:
+            return _dt.datetime.fromtimestamp(int(raw), tz=_dt.timezone.utc)
+        except ValueError:
+            raise ValueError(f"SOURCE_DATE_EPOCH must be an integer number of seconds, got {raw!r}") from None
+    return _dt.datetime.now(_dt.timezone.utc).replace(microsecond=0)
 
 
 def write_fleet_report(trends, measurements, out_path, *, limits_percent=None, database="",
                        max_units=FLEET_PAGE_MAX_UNITS) -> Report:
-    """One PDF page of a fleet: elongation against date per unit, with the limits as lines.
+    """The fleet PDF: the work list (page 1), then elongation against date for the most urgent units.
 
     Parameters
     ----------
-    trends : list of vibkit.fleet.history.UnitTrend
-        Ranked (most urgent first), as :meth:`vibkit.fleet.history.FleetDB.status` returns them.
-    measurements : list of vibkit.fleet.history.Measurement
+    trends : list of vibkit.fleet.trends.UnitTrend
+        Ranked (most urgent first), as :meth:`vibkit.fleet.FleetDB.status` returns them.
+    measurements : list of vibkit.fleet.measurement.Measurement
         The stored measurements (error bars: their elongation sigma).
     out_path : str or os.PathLike
         PDF written atomically (the caller decides whether an existing file may be replaced).
     limits_percent : (float, float, float), optional
         Elongation limits [%] (default 1.5, 2, 3).
     database : str
-        Named in the page's subtitle.
+        Named in the subtitles.
     max_units : int
-        Panels drawn (the most urgent units); the page says how many were left out.
+        Units drawn (the most urgent); the work list lists all of them.
 
     Returns
     -------
     Report
-        ``summary`` holds ``units`` and ``units_drawn``.
+        ``summary`` holds ``units`` and ``units_drawn``.  The date printed and stored is now, or
+        ``SOURCE_DATE_EPOCH`` where set (reproducible bytes).
     """
     import matplotlib
 
@@ -150,12 +274,11 @@ def write_fleet_report(trends, measurements, out_path, *, limits_percent=None, d
     by_unit = {}
     for m in measurements:
         by_unit.setdefault(m.unit, []).append(m)
-    date = report_date()
+    date = fleet_report_date()
     ctx = FleetContext(trends=trends, shown=shown, measurements=measurements, by_unit=by_unit, limits=limits,
                        database=database, date=date)
-
     meta = {"Title": "vibkit fleet report", "Author": f"vibkit {__version__}",
-            "Subject": "escalator step-chain elongation trends", "Creator": f"vibkit {__version__}",
+            "Subject": "escalator step-chain elongation: work list and trends", "Creator": f"vibkit {__version__}",
             "CreationDate": date, "ModDate": date}
     with matplotlib.rc_context({"pdf.compression": 6, "font.size": 7, "axes.titlesize": 8,
                                 "svg.hashsalt": "vibkit", "path.simplify": True}):

@@ -1,0 +1,145 @@
+"""The fleet history on a PostgreSQL server, for many technicians adding at once (psycopg 3).
+
+The same ``measurement`` table as the SQLite file (:mod:`vibkit.fleet.schema`; ``DOUBLE PRECISION``
+for the reals, an identity column for ``id``) next to a small ``vibkit_fleet_meta`` table that says
+whose it is and its schema version.  Every measurement is one transaction in which the writer holds
+a transaction-scoped advisory lock on its unit (``pg_advisory_xact_lock``), so the duplicate check,
+the unit's nominal pitch and the ``INSERT`` see no other writer of that unit; the ``UNIQUE``
+constraint on ``sha256`` refuses the same file stored under two units at once.  Readers never wait.
+
+The URL is libpq's (``postgresql://user@host:5432/dbname``, ``?host=/socket/dir``, ``sslmode=...``);
+a password is best left to ``PGPASSWORD`` or ``~/.pgpass`` rather than the URL.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import re
+
+from .errors import FleetError
+from .schema import APPLICATION_ID, COLUMNS, SCHEMA_VERSION, measurement_ddl
+from .store import Store
+
+__all__ = ["PostgresStore", "redact_url"]
+
+_META = "vibkit_fleet_meta"
+_APPLICATION = "vibkit-fleet"
+
+
+def redact_url(url) -> str:
+    """The URL with its password replaced by ``***`` (for messages)."""
+    s = re.sub(r"(://[^/@:]*:)[^@/]*@", r"\1***@", str(url))
+    return re.sub(r"(password=)[^&\s]*", r"\1***", s)
+
+
+def _one_line(exc):
+    return " ".join(str(exc).split()) or type(exc).__name__
+
+
+class PostgresStore(Store):
+    """A fleet history on a PostgreSQL server.  ``create=False``: no tables are created."""
+
+    dialect = "postgresql"
+    placeholder = "%s"
+    local_files = ()
+
+    def __init__(self, url, *, create=True, db_env="VIBKIT_FLEET_DB"):
+        self.location = self.path = redact_url(url)
+        try:
+            import psycopg
+        except ImportError:
+            raise FleetError(f"{self.location}: a PostgreSQL fleet database needs the psycopg package "
+                             "(pip install 'vibkit[postgres]')") from None
+        self._psycopg = psycopg
+        try:
+            self._con = psycopg.connect(str(url), autocommit=True, connect_timeout=30,
+                                        application_name="vibkit fleet")
+        except psycopg.Error as exc:
+            raise FleetError(f"{self.location}: cannot connect to the PostgreSQL server: {_one_line(exc)} (check the "
+                             f"URL given by --db or {db_env}, that the server runs, and PGPASSWORD or ~/.pgpass)") \
+                from None
+        try:
+            self._prepare(create, db_env)
+        except psycopg.Error as exc:
+            self._con.close()
+            raise FleetError(f"{self.location}: not a usable fleet database: {_one_line(exc)}") from None
+        except BaseException:
+            self._con.close()
+            raise
+
+    def _tables(self):
+        """Whether ``measurement`` and the meta table exist in the current schema (an MVCC query of the
+        catalogue: it sees what another creator committed a moment ago)."""
+        r = self._con.execute("SELECT count(*) FILTER (WHERE c.relname = 'measurement'), "
+                              "count(*) FILTER (WHERE c.relname = %s) FROM pg_class c JOIN pg_namespace n "
+                              "ON n.oid = c.relnamespace WHERE n.nspname = current_schema() "
+                              "AND c.relname IN ('measurement', %s)", (_META, _META)).fetchone()
+        return bool(r[0]), bool(r[1])
+
+    def _prepare(self, create, db_env):
+        con = self._con
+        have_m, have_meta = self._tables()
+        if not have_meta:
+            if have_m:
+                raise FleetError(f"{self.location}: has a table 'measurement' that is not a vibkit fleet's (no "
+                                 f"{_META} table); refusing to write into it (use another database or schema)")
+            if not create:
+                raise FleetError(f"{self.location}: no fleet database here (vibkit fleet add, scan or migrate creates "
+                                 f"one; --db or {db_env} names another)")
+            with con.transaction():
+                con.execute("SELECT pg_advisory_xact_lock(%s)", (APPLICATION_ID,))  # one creator at a time
+                have_m, have_meta = self._tables()
+                if not have_meta:
+                    for stmt in measurement_ddl("postgresql"):
+                        con.execute(stmt)
+                    con.execute(f"CREATE TABLE {_META} (key TEXT PRIMARY KEY, value TEXT NOT NULL)")
+                    con.execute(f"INSERT INTO {_META} VALUES ('application', %s), ('schema_version', %s)",
+                                (_APPLICATION, str(SCHEMA_VERSION)))
+        meta = dict(con.execute(f"SELECT key, value FROM {_META}").fetchall())
+        if meta.get("application") != _APPLICATION:
+            raise FleetError(f"{self.location}: table {_META} names application {meta.get('application')!r}, "
+                             f"not {_APPLICATION!r}; refusing to write into it")
+        ver = int(meta.get("schema_version", "0"))
+        if ver > SCHEMA_VERSION:
+            raise FleetError(f"{self.location}: written by a newer vibkit (schema {ver}, this one reads "
+                             f"{SCHEMA_VERSION})")
+        if ver < SCHEMA_VERSION:  # pragma: no cover - no older PostgreSQL schema exists yet
+            raise FleetError(f"{self.location}: schema {ver} is older than this vibkit's ({SCHEMA_VERSION})")
+
+    @contextlib.contextmanager
+    def write_transaction(self, unit):
+        units = [unit] if isinstance(unit, str) else sorted(unit)
+        with self._con.transaction():
+            for u in units:  # sorted: two writers of several units never wait on each other in a circle
+                self._con.execute("SELECT pg_advisory_xact_lock(%s, hashtext(%s))", (APPLICATION_ID, str(u)))
+            yield
+
+    def execute(self, sql, args=()):
+        try:
+            return self._con.execute(sql, args)
+        except self._psycopg.Error as exc:
+            raise FleetError(f"{self.location}: query failed on the PostgreSQL server: {_one_line(exc)}") from None
+
+    def _insert_row(self, values):
+        r = self._con.execute(f"INSERT INTO measurement ({', '.join(COLUMNS)}) VALUES "
+                              f"({', '.join(['%s'] * len(COLUMNS))}) RETURNING id", values).fetchone()
+        return int(r[0])
+
+    def _is_unique_violation(self, exc):
+        return isinstance(exc, self._psycopg.errors.UniqueViolation)
+
+    def _as_fleet_error(self, exc):
+        if isinstance(exc, self._psycopg.Error):
+            return FleetError(f"{self.location}: the PostgreSQL server refused the measurement or the connection was "
+                              f"lost: {_one_line(exc)} (nothing of it was stored)")
+        return None
+
+    def integrity_check(self) -> str:
+        """``"ok"`` when the table's indexes (the ``sha256`` uniqueness among them) are valid."""
+        bad = self._con.execute("SELECT i.indexrelid::regclass::text FROM pg_index i WHERE "
+                                "i.indrelid = 'measurement'::regclass AND NOT (i.indisvalid AND i.indisready)"
+                                ).fetchall()
+        return "ok" if not bad else "invalid index(es): " + ", ".join(r[0] for r in bad)
+
+    def close(self):
+        self._con.close()
