@@ -82,7 +82,8 @@ def test_pitch_no_time_column_needs_sample_rate(capsys):
     f = "data/field/layouts/no-time-column.txt"  # 1 s at 2050 Hz: three periods need a band above 3 Hz
     # its one second holds no detectable link-pass family (harmonic least squares finds every harmonic
     # below its own detection limit, SNR -5 dB): the honest answer is "no link-pass found", exit 1
-    assert main(["pitch", f, "--speed", "0.52", "--sample-rate", "2050", "--band", "3.5:6", "--json"]) == 1
+    assert main(["pitch", f, "--speed", "0.52", "--sample-rate", "2050", "--band", "3.5:6", "--channel", "acc_x",
+                 "--json"]) == 1
     d = _json(capsys)
     assert d["status"] == "no link-pass found" and "fundamental_hz" not in d
     assert d["detection"]["segment_s"] == pytest.approx(2050 / 2050, rel=1e-2)  # the given sample rate was used
@@ -105,7 +106,7 @@ def test_report_json(leon_nc, tmp_path, capsys):
     assert d["schema"] == "vibkit.report/1" and "verdict" in d["pages"] and out.exists()
 
 
-@pytest.mark.parametrize("argv", [["pitch", LEON], ["nonsense"], ["pitch", LEON, "--speed", "-1"],
+@pytest.mark.parametrize("argv", [["pitch", LEON, "--speed", "49"], ["nonsense"], ["pitch", LEON, "--speed", "-1"],
                                   ["pitch", LEON, "--speed", "0.5", "--band", "6:2"], [],
                                   ["pitch", LEON, "--speed", "0.5", "--speed-uncertainty", "abc"]])
 def test_usage_errors_exit_2(argv, capsys):

@@ -283,7 +283,7 @@ def test_add_date_from_start_time_or_refused(tmp_path, capsys):
     assert "--nominal-pitch" in capsys.readouterr().err
     # another nominal pitch for a known unit is refused
     assert main(["fleet", "add", str(plain), "--unit", "U1", "--speed", "0.5", "--date", "2025-01-01",
-                 "--nominal-pitch", "0.1016", "--db", str(db)]) == 1
+                 "--nominal-pitch", "0.1335", "--db", str(db)]) == 1  # plausible (+0.4 %), but not U1's
     assert "one unit has one nominal pitch" in capsys.readouterr().err
     with FleetDB(db) as fdb:
         assert len(fdb.measurements()) == 1

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import sys
 
-from .options import (add_command, add_json, add_limits, add_recording, cli_message, positive, reader_options,
-                      speed_sigma, workers)
+from .options import (add_command, add_json, add_limits, add_recording, chain_speed, cli_message, pitch_length,
+                      reader_options, speed_sigma, workers)
 from .output import CLIError, check_output, msg, print_json, table
 
 EPILOG = ("examples:\n  vibkit fleet add E07-2026-11-23.csv --unit E07 --speed 0.5 --nominal-pitch 0.13333\n"
@@ -34,10 +34,10 @@ def add_parser(subparsers):
     f = fleet_sub("add", "analyse one recording and store its pitch and elongation")
     add_recording(f)
     f.add_argument("--unit", required=True, help="escalator identifier")
-    f.add_argument("--speed", type=positive, required=True, help="chain speed measured on the steps [m/s]")
+    f.add_argument("--speed", type=chain_speed, required=True, help="chain speed measured on the steps [m/s]")
     f.add_argument("--speed-uncertainty", help="speed standard deviation, in m/s or in %% (e.g. 0.1%%)")
     f.add_argument("--date", help="measurement date, ISO 8601 (default: the recording's start time)")
-    f.add_argument("--nominal-pitch", type=positive, help="nominal link pitch [m] (required for a new unit)")
+    f.add_argument("--nominal-pitch", type=pitch_length, help="nominal link pitch [m] (required for a new unit)")
     f.add_argument("--replaced", action="store_true", help="the unit's chain was replaced since its previous "
                    "measurement: a new trend segment starts here")
     f.set_defaults(func=run_add)

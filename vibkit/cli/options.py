@@ -48,6 +48,68 @@ def positive(text):
     return v
 
 
+_LENGTH_UNITS = {"m": 1.0, "cm": 1e-2, "mm": 1e-3, "in": 0.0254, "\"": 0.0254}
+_SPEED_UNITS = {"m/s": 1.0, "cm/s": 1e-2, "mm/s": 1e-3, "m/min": 1 / 60, "ft/min": 0.3048 / 60, "fpm": 0.3048 / 60}
+#: a chain pitch given as a bare number must lie here [m]; a speed here [m/s] (escalators and moving walks)
+PITCH_RANGE_M = (0.02, 0.5)
+SPEED_RANGE_M_S = (0.05, 3.0)
+
+
+def _quantity(text, units, what, example):
+    t = str(text).strip().replace(" ", "")
+    for u in sorted(units, key=len, reverse=True):
+        if t.lower().endswith(u):
+            num, factor, unit = t[: -len(u)], units[u], u
+            break
+    else:
+        num, factor, unit = t, None, None
+    try:
+        v = float(num)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected {what} like {example}, got {text!r}") from None
+    if not (math.isfinite(v) and v > 0):
+        raise argparse.ArgumentTypeError(f"expected a positive {what}, got {text!r}")
+    return v, factor, unit
+
+
+def pitch_length(text):
+    """--nominal-pitch: metres, or with a unit (``133.33mm``, ``13.333cm``, ``0.13333m``, ``5.25in``).
+
+    A bare number outside 0.02-0.5 m is a usage error that says what was probably meant
+    (``133.33`` -> ``133.33mm``)."""
+    v, factor, unit = _quantity(text, _LENGTH_UNITS, "a link pitch", "0.13333 (m) or 133.33mm")
+    m = v * (factor or 1.0)
+    lo, hi = PITCH_RANGE_M
+    if not lo <= m <= hi:
+        hint = ""
+        if factor is None and lo <= v * 1e-3 <= hi:
+            hint = f"; did you mean {text.strip()}mm ({v * 1e-3:.6g} m)?"
+        elif factor is None and lo <= v * 1e-2 <= hi:
+            hint = f"; did you mean {text.strip()}cm ({v * 1e-2:.6g} m)?"
+        raise argparse.ArgumentTypeError(f"{text!r} is {m:g} m, not a step-chain pitch ({lo:g}-{hi:g} m){hint} "
+                                         "(a bare number is in metres; write the unit: 133.33mm)")
+    return m
+
+
+def chain_speed(text):
+    """--speed: m/s, or with a unit (``0.49m/s``, ``49cm/s``, ``29.4m/min``, ``96.5ft/min``).
+
+    A bare number outside 0.05-3 m/s is a usage error that says what was probably meant
+    (``49`` -> ``49cm/s``)."""
+    v, factor, unit = _quantity(text, _SPEED_UNITS, "a chain speed", "0.49 (m/s) or 49cm/s")
+    ms = v * (factor or 1.0)
+    lo, hi = SPEED_RANGE_M_S
+    if not lo <= ms <= hi:
+        hint = ""
+        for u in ("cm/s", "m/min", "ft/min", "mm/s"):
+            if factor is None and lo <= v * _SPEED_UNITS[u] <= 1.0:
+                hint = f"; did you mean {text.strip()}{u} ({v * _SPEED_UNITS[u]:.4g} m/s)?"
+                break
+        raise argparse.ArgumentTypeError(f"{text!r} is {ms:g} m/s, not an escalator or moving-walk speed "
+                                         f"({lo:g}-{hi:g} m/s){hint} (a bare number is in m/s; write the unit: 49cm/s)")
+    return ms
+
+
 def teeth(text):
     try:
         v = int(text)

@@ -4,12 +4,14 @@ from __future__ import annotations
 
 import math
 
-from .options import (add_command, add_json, add_limits, add_recording, band, positive, read_recording,
-                      speed_sigma, speed_uncertainty, teeth)
-from .output import msg, print_json, table
+from .options import (add_command, add_json, add_limits, add_recording, band, chain_speed, pitch_length,
+                      read_recording, speed_sigma, speed_uncertainty, teeth)
+from .output import CLIError, msg, print_json, table
 
-EPILOG = ("examples:\n  vibkit pitch data/field/leon-tensioner.csv --speed 0.49 --speed-uncertainty 0.1% "
-          "--nominal-pitch 0.13333\n  vibkit pitch logger.txt --sample-rate 2050 --speed 0.52 --json")
+EPILOG = ("examples:\n  vibkit pitch data/field/leon-tensioner.csv --speed-uncertainty 0.1% --nominal-pitch 133.33mm\n"
+          "  vibkit pitch logger.txt --sample-rate 2050 --speed 52cm/s --json\n"
+          "exit status: 0 verdict (or pitch), 1 no link-pass found / implausible / bad input, 2 usage error, "
+          "3 inconclusive (frequency and sigma given, no verdict)")
 
 
 def add_parser(subparsers):
@@ -17,10 +19,9 @@ def add_parser(subparsers):
                     EPILOG)
     add_recording(s)
     add_json(s)
-    s.add_argument("--speed", type=positive, required=True, help="chain speed measured on the steps [m/s]")
+    add_speed_options(s)
     s.add_argument("--speed-uncertainty", type=speed_uncertainty,
                    help="speed standard deviation, in m/s or in %% (e.g. 0.1%%)")
-    s.add_argument("--nominal-pitch", type=positive, help="nominal link pitch [m]: gives elongation and verdict")
     add_limits(s)
     s.add_argument("--band", type=band, help="search band LOW:HIGH [Hz] (default speed / 80-200 mm)")
     s.add_argument("--teeth", type=teeth, default=28, help="sprocket teeth, for the shaft hypothesis (default 28)")
@@ -28,21 +29,45 @@ def add_parser(subparsers):
     return s
 
 
+def add_speed_options(s, speed_help="chain speed measured on the steps: m/s, or 0.49m/s, 49cm/s "
+                                    "(default: the speed the file states, e.g. chain_speed_m_s)"):
+    s.add_argument("--speed", type=chain_speed, help=speed_help)
+    s.add_argument("--nominal-pitch", type=pitch_length,
+                   help="nominal link pitch: m, or 133.33mm: gives elongation and verdict")
+
+
+def resolve_speed(a, rec, *, required=True):
+    """``(speed, source)``: --speed, else the file's, else a CLIError (or ``(None, None)``)."""
+    from vibkit.diagnose.channels import speed_from_recording
+
+    if a.speed is not None:
+        return a.speed, "--speed"
+    v, src = speed_from_recording(rec)
+    if v is not None or not required:
+        return v, src
+    raise CLIError(f"{a.recording}: the file states no chain speed; give --speed (e.g. --speed 0.5 or --speed 50cm/s)")
+
+
 def run(a):
-    from vibkit.diagnose.pitch import estimate_pitch
+    from vibkit.diagnose.channels import estimate_channels
 
     rec = read_recording(a)
-    sigma = speed_sigma(a.speed_uncertainty, a.speed) if a.speed_uncertainty else 0.0
-    est = estimate_pitch(rec, speed=a.speed, speed_sigma=sigma, channel=a.channel, band=a.band,
-                         nominal_pitch=a.nominal_pitch, limits_percent=a.limits, teeth=a.teeth)
-    if not est.detected:
-        return not_found("pitch", a, est, {"file": a.recording})
+    speed, source = resolve_speed(a, rec)
+    sigma = speed_sigma(a.speed_uncertainty, speed) if a.speed_uncertainty else 0.0
+    res = estimate_channels(rec, channel=a.channel, speed=speed, speed_sigma=sigma, band=a.band,
+                            nominal_pitch=a.nominal_pitch, limits_percent=a.limits, teeth=a.teeth,
+                            speed_source=source)
+    if res.best is None:
+        return refused("pitch", a, res, {"file": a.recording})
+    est = res.best
     if a.json:
         d = est.as_dict()
-        d["file"] = a.recording
+        d.update(file=a.recording, status=res.status, reason=res.reason, exit_code=res.exit_code,
+                 channels=res.per_channel())
         print_json("pitch", d)
-        return 0
-    print(f"{a.recording}: channel {est.channel}, speed {est.speed_m_s:g} +- {est.speed_sigma_m_s:.2g} m/s")
+        return res.exit_code
+    print(f"{a.recording}: channel {est.channel}, speed {est.speed_m_s:g} +- {est.speed_sigma_m_s:.2g} m/s "
+          f"({est.speed_source})")
     print(f"link-pass frequency  {est.fundamental_hz:.5f} +- {est.fundamental_sigma_hz:.2g} Hz "
           f"({len(est.per_burst)} burst(s))")
     print(f"method               {est.method}")
@@ -52,6 +77,7 @@ def run(a):
               f"of {1000 * est.nominal_pitch_m:.2f} mm -> {est.verdict} "
               f"(limits {' / '.join(f'{v:g}' for v in est.limits_percent)} %)")
     print()
+    print_channels(res)
     print(table([[h.name, f"{h.frequency_hz:.4f}", "n/a" if math.isnan(h.snr_db) else f"{h.snr_db:.0f}",
                   f"{1000 * h.implied_pitch_m:.2f}", f"{1000 * h.nearest_catalogue_m:.2f} ({h.deviation_percent:+.1f} %)",
                   "<-" if h.chosen else "", h.reason] for h in est.hypotheses],
@@ -64,19 +90,36 @@ def run(a):
     for n in est.notes:
         msg(f"note: {n}")
     msg(f"note: method {est.method}: {est.method_reason}")
-    return 0
+    if res.status != "ok":
+        msg(f"vibkit pitch: {res.status}: {res.reason}")
+    return res.exit_code
 
 
-def not_found(cmd, a, est, extra):
-    """No link-pass family in the band: say so (JSON with the status, no number), exit 1."""
+def print_channels(res):
+    """The per-channel table (only when more than one channel was analysed)."""
+    rows = res.per_channel()
+    if len(rows) < 2:
+        return
+    print(table([[r["channel"], r["status"],
+                  f"{r['fundamental_hz']:.5f} +- {r['fundamental_sigma_hz']:.2g}" if "fundamental_hz" in r else "-",
+                  f"{1000 * r['pitch_m']:.2f}" if "pitch_m" in r else "-", r.get("verdict") or "-"] for r in rows],
+                ("channel", "status", "link pass [Hz]", "pitch [mm]", "verdict")))
+    print()
+
+
+def refused(cmd, a, res, extra):
+    """No usable link pass on any channel: say so (JSON with the status and reason, no number), exit 1."""
+    ests = res.estimates
     if a.json:
-        d = est.as_dict()
+        d = ests[0].as_dict() if len(ests) == 1 and not res.errors else {
+            "speed_m_s": ests[0].speed_m_s, "speed_source": ests[0].speed_source, "band_hz": list(ests[0].band_hz)}
         d.update(extra)
+        d.update(status=res.status, reason=res.reason, exit_code=res.exit_code, channels=res.per_channel())
         print_json(cmd, d)
     else:
-        print(f"{a.recording}: channel {est.channel}: no link-pass found")
-    band = est.band_hz
-    msg(f"vibkit {cmd}: no link-pass found in {band[0]:.4g}-{band[1]:.4g} Hz: {est.detection.get('reason', '')}")
-    for w in est.warnings[1:]:
-        msg(f"warning: {w}")
-    return 1
+        names = ", ".join(e.channel for e in ests)
+        print(f"{a.recording}: channel{'s' if len(ests) > 1 else ''} {names}: {res.status}")
+        print_channels(res)
+    band = ests[0].band_hz
+    msg(f"vibkit {cmd}: {res.status} in {band[0]:.4g}-{band[1]:.4g} Hz: {res.reason}")
+    return res.exit_code

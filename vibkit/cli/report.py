@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-from .options import (add_command, add_force_overwrite, add_json, add_limits, add_recording, band, positive,
-                      reader_options, speed_sigma, speed_uncertainty)
+from .options import (add_command, add_force_overwrite, add_json, add_limits, add_recording, band, chain_speed,
+                      pitch_length, positive, reader_options, speed_sigma, speed_uncertainty)
 from .output import check_output, print_json, table
 
 EPILOG = "example:\n  vibkit report data/field/leon-tensioner.csv --scene sim/leon.toml -o reports/leon.pdf"
@@ -16,9 +16,9 @@ def add_parser(subparsers):
     s.add_argument("--scene", help="scene describing the escalator and sensor (simulated and compared)")
     s.add_argument("-o", "--output", required=True, help="PDF to write; a new path unless --force")
     add_force_overwrite(s, "PDF")
-    s.add_argument("--speed", type=positive, help="chain speed [m/s] (default: recording's or scene's)")
+    s.add_argument("--speed", type=chain_speed, help="chain speed [m/s] (default: recording's or scene's)")
     s.add_argument("--speed-uncertainty", type=speed_uncertainty, help="speed standard deviation, in m/s or in %%")
-    s.add_argument("--nominal-pitch", type=positive, help="nominal link pitch [m] (default: the scene's)")
+    s.add_argument("--nominal-pitch", type=pitch_length, help="nominal link pitch [m] (default: the scene's)")
     add_limits(s, "elongation limits [%%]")
     s.add_argument("--band", type=band, help="link-pass search band LOW:HIGH [Hz]")
     s.add_argument("--duration", type=positive, help="simulated time [s] (default: the scene's)")

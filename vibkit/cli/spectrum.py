@@ -2,49 +2,62 @@
 
 from __future__ import annotations
 
-from .options import add_command, add_json, add_recording, band, read_recording
+from .options import add_command, add_json, add_limits, add_recording, band, read_recording
 from .output import msg, print_json, table
-from .pitch import not_found
+from .pitch import add_speed_options, print_channels, refused, resolve_speed
 
-EPILOG = "example:\n  vibkit spectrum data/field/leon-tensioner.csv --band 2.5:6 --json"
+EPILOG = ("example:\n  vibkit spectrum data/field/leon-tensioner.csv --band 2.5:6 --json\n"
+          "with a speed (given or stated by the file) the same decision as `vibkit pitch` (exit 0, 1 or 3); "
+          "without one the frequency only (search band 2.5-6 Hz)")
 
 
 def add_parser(subparsers):
     s = add_command(subparsers, "spectrum", "link-pass fundamental and harmonic peak table of a recording", EPILOG)
     add_recording(s)
     add_json(s)
-    s.add_argument("--band", type=band, help="search band of the link-pass LOW:HIGH [Hz] (default 2.5:6)")
+    s.add_argument("--band", type=band, help="search band of the link-pass LOW:HIGH [Hz] (default speed / "
+                   "80-200 mm, or 2.5:6 without a speed)")
     s.add_argument("--harmonics", type=int, default=5, help="harmonics listed (default 5)")
+    add_speed_options(s, "chain speed (optional): m/s, or 49cm/s; default the file's; checks the pitch is plausible")
+    add_limits(s)
     s.set_defaults(func=run)
     return s
 
 
 def run(a):
-    from vibkit.diagnose.pitch import estimate_pitch, pick_channel
+    from vibkit.diagnose.channels import estimate_channels
 
     rec = read_recording(a)
-    ch = pick_channel(rec, a.channel)
-    search = a.band or (2.5, 6.0)
-    est = estimate_pitch(rec, speed=1.0, channel=ch, band=search, n_harmonics=a.harmonics)
-    units = str(rec[ch].attrs.get("units", "1"))
-    if not est.detected:
-        return not_found("spectrum", a, est, {"file": a.recording, "channel": ch, "units": units,
-                                              "band_hz": list(search)})
+    speed, source = resolve_speed(a, rec, required=False)
+    search = a.band or (None if speed else (2.5, 6.0))
+    res = estimate_channels(rec, channel=a.channel, speed=speed or 1.0, band=search, n_harmonics=a.harmonics,
+                            nominal_pitch=a.nominal_pitch if speed else None, limits_percent=a.limits,
+                            speed_source=source or "none", frequency_only=speed is None)
+    if res.best is None:
+        e0 = res.estimates[0]
+        return refused("spectrum", a, res, {"file": a.recording, "units": e0.extra.get("units", "1"),
+                                            "band_hz": list(e0.band_hz)})
+    est = res.best
+    ch, units = est.channel, est.extra.get("units", "1")
     peaks = [{"order": h["order"], "frequency_hz": h["frequency_hz"], "amplitude": h["amplitude"],
               "units": units, "detected": h["detected"]} for h in est.harmonics]
-    payload = {"status": est.status, "file": a.recording, "channel": ch, "units": units, "band_hz": list(search),
-               "method": est.method, "method_reason": est.method_reason, "detection": est.detection,
-               "invalid_samples": est.invalid_samples,
+    payload = {"status": res.status, "reason": res.reason, "exit_code": res.exit_code, "file": a.recording,
+               "channel": ch, "units": units, "band_hz": list(est.band_hz), "speed_m_s": speed,
+               "speed_source": source, "method": est.method, "method_reason": est.method_reason,
+               "detection": est.detection, "invalid_samples": est.invalid_samples,
                "fundamental_hz": est.fundamental_hz, "fundamental_sigma_hz": est.fundamental_sigma_hz,
-               "snr_db": est.snr_db, "peaks": peaks, "warnings": est.warnings}
+               "snr_db": est.snr_db, "peaks": peaks, "channels": res.per_channel(), "warnings": est.warnings}
     if a.json:
         print_json("spectrum", payload)
     else:
         print(f"{a.recording}: channel {ch} [{units}]")
         print(f"link-pass fundamental {est.fundamental_hz:.5f} +- {est.fundamental_sigma_hz:.2g} Hz "
-              f"(search band {search[0]:g}-{search[1]:g} Hz)")
+              f"(search band {est.band_hz[0]:.4g}-{est.band_hz[1]:.4g} Hz)")
+        print_channels(res)
         print(table([[p["order"], f"{p['frequency_hz']:.4f}", f"{p['amplitude']:.4g}", "yes" if p["detected"] else "no"]
                      for p in peaks], ("order", "frequency [Hz]", f"amplitude [{units}]", "detected")))
         for w in est.warnings:
             msg(f"warning: {w}")
-    return 0
+        if res.status != "ok":
+            msg(f"vibkit spectrum: {res.status}: {res.reason}")
+    return res.exit_code

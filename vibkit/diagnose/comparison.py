@@ -272,6 +272,13 @@ def compare(recording, result, *, channel=None, variable=None, n_harmonics=5, ba
         lo = min(v_sim, v_meas) / DEFAULT_PITCH_RANGE_M[1]
         hi = max(v_sim, v_meas) / DEFAULT_PITCH_RANGE_M[0]
         band = (lo, hi)
+    # the shared decision first: no comparison of a link pass that the recording does not carry
+    from .pitch import estimate_pitch
+
+    dec = estimate_pitch(recording, speed=v_meas if v_meas > 0 else 1.0, channel=channel, band=band,
+                         n_harmonics=n_harmonics, frequency_only=not v_meas > 0)
+    if not dec.has_link_pass:
+        raise ValueError(f"channel {channel!r}: {dec.status}: {dec.reason}; nothing to compare")
     sim = uniform_bursts(result, variable)
     if len(sim) != 1:
         raise ValueError(f"the simulation's {variable!r} must be continuous (one segment)")

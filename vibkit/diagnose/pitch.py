@@ -23,6 +23,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..signal.detect import FILL_THRESHOLD, flag_invalid
+from .decision import (CATALOGUE_PITCHES_M, DEFAULT_LIMITS_PERCENT, STATUS_IMPLAUSIBLE, STATUS_INCONCLUSIVE,
+                       STATUS_NOT_FOUND, STATUS_OK, Decision, check_limits, decide, elongation_verdict,
+                       nearest_catalogue)
 
 __all__ = [
     "CATALOGUE_PITCHES_M",
@@ -31,16 +34,16 @@ __all__ = [
     "Burst",
     "Hypothesis",
     "PitchEstimate",
+    "STATUS_IMPLAUSIBLE",
+    "STATUS_INCONCLUSIVE",
+    "STATUS_NOT_FOUND",
+    "STATUS_OK",
     "elongation_verdict",
     "estimate_pitch",
     "pick_channel",
     "uniform_bursts",
 ]
 
-#: catalogue escalator step-chain pitches [m]: 4 in, 0.4 m step / 3, 135.46 mm (ISO 1275-style)
-CATALOGUE_PITCHES_M = (0.1016, 0.4 / 3.0, 0.13546)
-#: elongation limits [%]: watch, plan replacement, replace
-DEFAULT_LIMITS_PERCENT = (1.5, 2.0, 3.0)
 #: plausible link pitches [m]; the link-pass search band is speed / this range
 DEFAULT_PITCH_RANGE_M = (0.08, 0.2)
 #: step length of the reference escalator (3 links) [m]
@@ -51,9 +54,6 @@ JITTER_RESAMPLE = 0.01
 MAX_GAP_S = 0.1
 #: false-alarm probability of the link-pass detection test
 DEFAULT_P_FA = 1e-3
-#: status strings
-STATUS_OK = "ok"
-STATUS_NOT_FOUND = "no link-pass found"
 
 
 @dataclass(frozen=True)
@@ -258,6 +258,18 @@ class PitchEstimate:
     method: str = "spectral"
     method_reason: str = ""
     invalid_samples: dict = field(default_factory=dict)
+    decision: Decision | None = None
+    speed_source: str = "given"
+
+    @property
+    def has_link_pass(self) -> bool:
+        """Whether a frequency and a pitch may be reported (status ``ok`` or ``inconclusive``)."""
+        return self.status in (STATUS_OK, STATUS_INCONCLUSIVE)
+
+    @property
+    def reason(self) -> str:
+        """Why the status is what it is (the decision's reason)."""
+        return self.decision.reason if self.decision is not None else self.detection.get("reason", "")
 
     def as_dict(self) -> dict:
         """Plain JSON-ready dict (keys carry units).
@@ -265,17 +277,21 @@ class PitchEstimate:
         Without a detected link-pass family (``status == "no link-pass found"``) the dict has no
         frequency, pitch or elongation keys at all: there is no number to report.
         """
-        head = {"status": self.status, "detected": self.detected, "detection": dict(self.detection),
-                "invalid_samples": dict(self.invalid_samples)}
-        if not self.detected:
-            return {"channel": self.channel, **head, "speed_m_s": self.speed_m_s, "band_hz": list(self.band_hz),
-                    "warnings": list(self.warnings), "notes": list(self.notes)}
+        head = {"status": self.status, "reason": self.reason, "detected": self.detected,
+                "detection": dict(self.detection), "invalid_samples": dict(self.invalid_samples)}
+        if not self.has_link_pass:
+            d = {"channel": self.channel, **head, "speed_m_s": self.speed_m_s, "speed_source": self.speed_source,
+                 "band_hz": list(self.band_hz), "warnings": list(self.warnings), "notes": list(self.notes)}
+            if self.decision is not None and self.decision.implied_pitch_m is not None:
+                d["implied_pitch_m"] = self.decision.implied_pitch_m  # what the refused family would mean
+            return d
         d = {
             **head,
             "method": self.method,
             "method_reason": self.method_reason,
             "channel": self.channel,
             "speed_m_s": self.speed_m_s,
+            "speed_source": self.speed_source,
             "speed_sigma_m_s": self.speed_sigma_m_s,
             "band_hz": list(self.band_hz),
             "fundamental_hz": self.fundamental_hz,
@@ -297,39 +313,11 @@ class PitchEstimate:
         return d
 
 
-def elongation_verdict(elongation_percent, limits_percent=DEFAULT_LIMITS_PERCENT) -> str:
-    """Verdict for a chain elongation [%] against three increasing limits [%].
-
-    Returns one of ``"ok"`` (below the first), ``"watch"``, ``"plan replacement"``, ``"replace"``
-    (at or above the third).  A shortened chain (negative elongation beyond the first limit) is
-    ``"check speed"``: chains do not shrink, so the speed or the nominal pitch is wrong.
-    """
-    lim = _check_limits(limits_percent)
-    e = float(elongation_percent)
-    if e <= -lim[0]:
-        return "check speed"
-    if e < lim[0]:
-        return "ok"
-    if e < lim[1]:
-        return "watch"
-    if e < lim[2]:
-        return "plan replacement"
-    return "replace"
-
-
-def _check_limits(limits):
-    try:
-        lim = tuple(float(v) for v in limits)
-    except (TypeError, ValueError):
-        raise ValueError(f"limits must be three numbers [%], got {limits!r}") from None
-    if len(lim) != 3 or not 0 < lim[0] < lim[1] < lim[2]:
-        raise ValueError(f"limits must be three increasing positive percentages, got {limits!r}")
-    return lim
+_check_limits = check_limits
 
 
 def _nearest(p):
-    c = min(CATALOGUE_PITCHES_M, key=lambda q: abs(p / q - 1))
-    return c, 100.0 * (p / c - 1.0)
+    return nearest_catalogue(p)
 
 
 def _snr_at(bursts, f):
@@ -450,7 +438,7 @@ def _choose_method(e, mp):
 
 def estimate_pitch(recording, *, speed, speed_sigma=0.0, channel=None, band=None, nominal_pitch=None,
                    limits_percent=DEFAULT_LIMITS_PERCENT, pitch_range=DEFAULT_PITCH_RANGE_M, n_harmonics=5,
-                   teeth=28, p_fa=DEFAULT_P_FA):
+                   teeth=28, p_fa=DEFAULT_P_FA, speed_source="given", frequency_only=False):
     """Link pitch from a recording's link-pass frequency and an independently measured speed.
 
     Parameters
@@ -476,6 +464,10 @@ def estimate_pitch(recording, *, speed, speed_sigma=0.0, channel=None, band=None
         Harmonics fitted.
     teeth : int
         Sprocket teeth (>= 3), for the shaft-frequency hypothesis.
+    speed_source : str
+        Where ``speed`` came from (``"given"``, ``"file: chain_speed_m_s"`` ...), named in the result.
+    frequency_only : bool
+        ``speed`` is a placeholder (``vibkit spectrum`` without a known speed): no plausibility check.
     p_fa : float
         False-alarm probability of the detection test run first
         (:func:`vibkit.signal.detect.detect_link_pass`): without a harmonic family in the band the
@@ -484,6 +476,9 @@ def estimate_pitch(recording, *, speed, speed_sigma=0.0, channel=None, band=None
     Returns
     -------
     PitchEstimate
+        ``status`` and ``decision`` from :func:`vibkit.diagnose.decision.decide`: a refusal (``"no
+        link-pass found"``, ``"implausible"``) has NaN frequency and pitch and no verdict; ``"inconclusive"``
+        keeps its numbers with the verdict ``"inconclusive"``.
 
     Raises
     ------
@@ -553,7 +548,8 @@ def estimate_pitch(recording, *, speed, speed_sigma=0.0, channel=None, band=None
     bursts, scale = _prepared(raw_bursts, band)
     units = str(recording[name].attrs.get("units", "1"))
     common = dict(channel=name, speed_m_s=speed, speed_sigma_m_s=speed_sigma, band_hz=band, limits_percent=limits,
-                  extra={"units": units}, invalid_samples=invalid)
+                  extra={"units": units, "frequency_only": bool(frequency_only)}, invalid_samples=invalid,
+                  speed_source=speed_source)
     # 1. is there a link-pass family at all?
     fs_det = float(np.median([b.fs for b in bursts]))
     det = detect_link_pass([b.x for b in bursts if abs(b.fs / fs_det - 1) < 0.01], fs_det, band=band,
@@ -564,7 +560,8 @@ def estimate_pitch(recording, *, speed, speed_sigma=0.0, channel=None, band=None
         return PitchEstimate(fundamental_hz=nan, fundamental_sigma_hz=nan, pitch_m=nan, pitch_sigma_m=nan,
                              harmonics=[], per_burst=[], hypotheses=[], warnings=warnings, notes=notes,
                              detected=False, status=STATUS_NOT_FOUND, detection=det.as_dict(), method="none",
-                             method_reason="no link-pass family detected", **common)
+                             method_reason="no link-pass family detected",
+                             decision=decide(detected=False, detection_reason=det.reason), **common)
     # 2. estimate, burst by burst
     ests, skipped = [], []
     for b in bursts:
@@ -595,9 +592,6 @@ def estimate_pitch(recording, *, speed, speed_sigma=0.0, channel=None, band=None
                                                                  zip(ests, reasons))
     f = np.array(f_sel)
     s = np.array(s_sel)
-    if abs(float(np.median(f)) / det.frequency_hz - 1) > 2 * det.segment_s ** -1 / det.frequency_hz + 0.02:
-        warnings.append(f"the detection test found its family at {det.frequency_hz:.4g} Hz, the estimate is "
-                        f"{float(np.median(f)):.4g} Hz: check the band")
     if np.all(s > 0):
         w = 1.0 / s**2
         f0 = float(np.sum(w * f) / np.sum(w))
@@ -655,12 +649,29 @@ def estimate_pitch(recording, *, speed, speed_sigma=0.0, channel=None, band=None
                per_burst=per, hypotheses=_hypotheses([b for b, _, _ in ests], f0, speed, int(teeth), (lo_p, hi_p)),
                warnings=warnings, notes=notes, snr_db=snr, chi2_per_dof=chi2, detection=det.as_dict(),
                method=method, method_reason=method_reason, **common)
-    if nominal_pitch is not None:
+    # 3. the decision: this family, in the band, steady, plausible, resolved (vibkit.diagnose.decision)
+    worst = max(((abs(e.fundamental_hz - mp.frequency_hz), e.fundamental_hz, mp.frequency_hz)
+                 for _, e, mp in ests if mp is not None), default=None)
+    dec = decide(detected=True, detection_reason=det.reason, detection_hz=det.frequency_hz,
+                 resolution_hz=1.0 / det.segment_s, fundamental_hz=f0, fundamental_sigma_hz=sf, band_hz=band,
+                 speed_m_s=None if frequency_only else speed, speed_sigma_m_s=speed_sigma,
+                 nominal_pitch_m=None if frequency_only else nominal_pitch, limits_percent=limits,
+                 spectral_hz=worst[1] if worst else None, mean_phase_hz=worst[2] if worst else None,
+                 speed_source=speed_source, significant_orders=det.significant_orders)
+    if not dec.has_link_pass:
+        # refused: no frequency, pitch or verdict leaves this function (the reason says what the family implies)
+        warnings.insert(0, dec.reason)
+        nan = float("nan")
+        return PitchEstimate(fundamental_hz=nan, fundamental_sigma_hz=nan, pitch_m=nan, pitch_sigma_m=nan,
+                             harmonics=[], per_burst=[], hypotheses=[], warnings=warnings, notes=notes, detected=True,
+                             status=dec.status, detection=det.as_dict(), method=method, method_reason=method_reason,
+                             decision=dec, **common)
+    if dec.status == STATUS_INCONCLUSIVE:
+        warnings.insert(0, f"inconclusive: {dec.reason}")
+    res.update(decision=dec, status=dec.status)
+    if nominal_pitch is not None and not frequency_only:
         nom = float(nominal_pitch)
         el = 100.0 * (pitch / nom - 1.0)
         res.update(nominal_pitch_m=nom, elongation_percent=el, elongation_sigma_percent=100.0 * psig / nom,
-                   verdict=elongation_verdict(el, limits))
-        if 100.0 * psig / nom > limits[0] / 2:
-            warnings.append(f"elongation uncertainty {100.0 * psig / nom:.2g} % is large against the first limit "
-                            f"{limits[0]:g} %: the verdict is not reliable")
+                   verdict=dec.verdict)
     return PitchEstimate(**res)

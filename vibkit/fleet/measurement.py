@@ -128,12 +128,8 @@ def analyse_recording(path, *, unit, speed, speed_sigma=0.0, nominal_pitch, date
         est = estimate_pitch(rec, speed=speed, speed_sigma=speed_sigma, channel=channel, nominal_pitch=nominal_pitch)
     except ValueError as exc:
         raise FleetError(f"{spath}: {' '.join(str(exc).split())}") from None
-    detected = getattr(est, "detected", None)
-    if detected is None:  # before PitchEstimate carried a verdict: no harmonic above its 3-sigma level
-        detected = any(h.get("detected", False) for h in est.harmonics)
-    if not detected:
-        status = getattr(est, "status", "no link-pass found")
-        raise FleetError(f"{spath}: {status} (SNR {est.snr_db:.1f} dB); nothing stored")
+    if not est.has_link_pass:  # the shared decision (vibkit.diagnose.decision): no link pass, or implausible
+        raise FleetError(f"{spath}: {est.status}: {est.reason}; nothing stored")
     snr = float(est.snr_db) if math.isfinite(est.snr_db) else None
     quality, why = measurement_quality(est.elongation_percent, est.elongation_sigma_percent,
                                        decision=getattr(est, "decision", None))

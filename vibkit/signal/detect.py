@@ -293,6 +293,13 @@ def _search(r, f, df, fmin, fmax, f_top):
     return float(cands[i]), float(sc[i])
 
 
+def _normalised(pw, half):
+    """Average of periodograms ``pw`` (K, bins) over its own running-median floor (mean 1 under the null)."""
+    p = pw.mean(axis=0)
+    floor = scipy.ndimage.median_filter(p, size=2 * half + 1, mode="reflect") / _gamma_median(pw.shape[0])
+    return p / np.maximum(floor, 1e-12 * float(np.max(p)) + np.finfo(float).tiny)
+
+
 def _harmonic_bins(f0, df, n_harm, nbins):
     k = np.rint(f0 * np.arange(1, n_harm + 1) / df).astype(int)
     return k[(k >= 1) & (k < nbins - 1)]
@@ -404,8 +411,11 @@ def detect_link_pass(x, fs, *, band, n_harmonics=5, p_fa=1e-3, f_top=None):
             thr = harmonic_sum_threshold(p_fa / m_tests, h_top, k_all, s_rel)
             tests.append((pv, t, thr, float(tuples[i, 0] * df), h_top))
     for search_idx, test_idx in ((ia, ib), (ib, ia)) if split else ():
-        r_s = pw[search_idx].mean(axis=0) / floor
-        r_t = pw[test_idx].mean(axis=0) / floor
+        # each half normalised by its own floor: a transient (a step, an impulse) that lies in one half
+        # only raises that half's whole spectrum, which a floor shared with the other half would read
+        # as excess power at every harmonic
+        r_s = _normalised(pw[search_idx], half)
+        r_t = _normalised(pw[test_idx], half)
         fc, _ = _search(r_s, f, df, fmin, fmax, f_top)
         kb = _harmonic_bins(fc, df, n_h, f.size)
         hh = kb.size
@@ -413,8 +423,9 @@ def detect_link_pass(x, fs, *, band, n_harmonics=5, p_fa=1e-3, f_top=None):
             continue
         t = float(r_t[kb].sum())
         kt = test_idx.size
-        pv = float(harmonic_sum_pvalue(t, hh, kt, s_rel))
-        thr = harmonic_sum_threshold(p_fa / 2.0, hh, kt, s_rel)
+        s_t = _floor_rel_sd(kt, 2 * half + 1)
+        pv = float(harmonic_sum_pvalue(t, hh, kt, s_t))
+        thr = harmonic_sum_threshold(p_fa / 2.0, hh, kt, s_t)
         tests.append((pv, t, thr, fc, hh))
     if not tests:
         return none("no harmonic of the band lies below the analysed frequency range")
@@ -454,6 +465,26 @@ def detect_link_pass(x, fs, *, band, n_harmonics=5, p_fa=1e-3, f_top=None):
         f_best = fg
         sig = tuple(o // g for o in sig)
         base["significant_orders"] = sig
+    # a family with a line at a fractional order j/m (m = 2, 3: f/2, 3f/2, f/3 ...) at least as strong as
+    # its line at f has its fundamental at f/m, below the band (a gait at 1.6-2.2 Hz seen from its
+    # 2nd or 3rd harmonic; a modulated tone whose lines fall on a comb of f/2)
+    k1 = int(round(f_best / df))
+    p_one = float(np.max(r_all[max(k1 - 1, 0):k1 + 2]))
+    for m in (2, 3):
+        if f_best / m >= fmin or f_best / m < 2 * df:
+            continue
+        ks = [int(round(j * f_best / m / df)) for j in range(1, 3 * m) if j % m and j * f_best / m < f_top]
+        p_sub = [float(np.max(r_all[k - 1:k + 2])) if 1 <= k < f.size - 1 else 0.0 for k in ks]
+        # a significant fractional line as strong as the line at f; for thirds the line at f/3 itself must be
+        # there too (a structural mode near 4f/3 of a chain is not a subharmonic family; a carrier at exactly
+        # 3f/2 between two sidebands at f and 2f is)
+        if p_sub and max(p_sub) > lim and max(p_sub) >= p_one and (m == 2 or p_sub[0] > lim):
+            base["extra"]["subharmonic"] = m
+            return LinkPassDetection(False, "no link-pass found",
+                                     f"a periodic signal is present, but its line at {f_best / m:.4g} Hz (f/{m}) is as "
+                                     f"strong as the one at {f_best:.4g} Hz: its fundamental is {f_best / m:.4g} Hz, "
+                                     f"below the band {fmin:.4g}-{fmax:.4g} Hz (a gait, a sway, not a link pass)",
+                                     float(f_best / m), **base)
     return LinkPassDetection(True, "ok", f"harmonic family at {f_best:.4g} Hz: harmonic sum {t:.3g} over the "
                              f"threshold {thr:.3g} (p = {p_value:.2g}, false-alarm probability {p_fa:g})",
                              float(f_best), **base)

@@ -155,9 +155,11 @@ def analyse(recording, *, scene=None, speed=None, speed_sigma=0.0, channel=None,
         sc = scene if isinstance(scene, Scene) else load_scene(scene)
     notes = []
     if speed is None:
-        if float(rec.attrs.get("chain_speed_m_s", 0) or 0) > 0:
-            speed = float(rec.attrs["chain_speed_m_s"])
-            notes.append(f"speed {speed:g} m/s from the recording's metadata")
+        from ..channels import speed_from_recording
+
+        speed, source = speed_from_recording(rec)
+        if speed is not None:
+            notes.append(f"speed {speed:g} m/s from the recording's metadata ({source})")
         elif _scene_speed(sc):
             speed = _scene_speed(sc)
             notes.append(f"speed {speed:g} m/s from the scene (the recording states none): the pitch then "
@@ -174,13 +176,13 @@ def analyse(recording, *, scene=None, speed=None, speed_sigma=0.0, channel=None,
         f0 = pitch.fundamental_hz
     else:
         # frequency only: the same burst-combined estimator, with a unit "speed"
-        fonly = estimate_pitch(rec, speed=1.0, channel=ch, band=band or (2.5, 6.0))
+        fonly = estimate_pitch(rec, speed=1.0, channel=ch, band=band or (2.5, 6.0), frequency_only=True)
         f0 = fonly.fundamental_hz
         notes.append("no speed known: link-pass frequency only, no pitch (give --speed)")
-    found = pitch.detected if pitch is not None else fonly.detected
+    decided = pitch if pitch is not None else fonly  # the shared decision (vibkit.diagnose.decision)
+    found = decided.has_link_pass
     if not found:
-        why = (pitch if pitch is not None else fonly).detection.get("reason", "")
-        notes.insert(0, f"NO LINK-PASS FOUND: {why}; no frequency, pitch or elongation can be given")
+        notes.insert(0, f"{decided.status.upper()}: {decided.reason}; no frequency, pitch or elongation can be given")
         # the pages below mark harmonics of f0: show the search band's centre, unmarked
         band_used = (pitch if pitch is not None else fonly).band_hz
         f0 = float(np.sqrt(band_used[0] * band_used[1]))
@@ -192,7 +194,8 @@ def analyse(recording, *, scene=None, speed=None, speed_sigma=0.0, channel=None,
         from ...analyses.simulation import simulate
 
         result = simulate(sc, duration=duration, progress=progress)
-        comp = compare(rec, result, channel=ch)
+        if found:  # no comparison of a link pass the recording does not carry
+            comp = compare(rec, result, channel=ch)
     # statistics
     x_all = np.concatenate([b.x for b in bursts])
     rms = float(np.sqrt(np.mean((x_all - x_all.mean()) ** 2)))
@@ -221,7 +224,8 @@ def analyse(recording, *, scene=None, speed=None, speed_sigma=0.0, channel=None,
         "channel": ch,
         "units": units,
         "link_pass_hz": f0 if found else None,
-        "status": "ok" if found else "no link-pass found",
+        "status": decided.status,
+        "reason": decided.reason,
         "rms": rms,
         "peak_to_peak": p2p,
         "spikes": len(events),

@@ -47,7 +47,7 @@ def verdict_page(doc, ctx) -> None:
     _page_title(fig, "Verdict", f"{ctx.summary['file']}, channel {ctx.channel}")
     ax = fig.add_axes((0.06, 0.30, 0.88, 0.62))
     rows = [["link-pass frequency", (f"{f0:.5g} Hz" + (f" +- {pitch.fundamental_sigma_hz:.2g} Hz" if pitch else ""))
-             if found else "NO LINK-PASS FOUND (no pitch, no verdict)"]]
+             if found else f"{ctx.summary['status'].upper()} (no pitch, no verdict)"]]
     if pitch is not None:
         rows += [["speed", f"{pitch.speed_m_s:.4g} +- {pitch.speed_sigma_m_s:.2g} m/s"],
                  ["link pitch", f"{1000 * pitch.pitch_m:.2f} +- {1000 * pitch.pitch_sigma_m:.2f} mm"]]

@@ -1,0 +1,153 @@
+"""Every vibration channel of a recording, one decision for the recording.
+
+:func:`estimate_channels` runs :func:`vibkit.diagnose.pitch.estimate_pitch` on every vibration channel
+(or the one asked for) and combines them: the result comes from the channels where the link pass is
+found (status ``ok`` or ``inconclusive``); when several are, their fundamentals must agree within
+:data:`CONSISTENCY_SIGMAS` combined sigmas (else the recording is refused as ``implausible``: two
+periodicities, not one chain), and the channel with the smallest sigma gives the numbers.
+
+:func:`speed_from_recording` finds a chain speed the file states (Leon's ``chain_speed_m_s``, a
+Spanish sheet's ``Velocidad (m/s)``).
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass, field
+
+from .decision import STATUS_IMPLAUSIBLE, STATUS_NOT_FOUND, EXIT_CODES
+
+__all__ = ["CONSISTENCY_SIGMAS", "ChannelsResult", "estimate_channels", "speed_from_recording",
+           "vibration_channels"]
+
+#: channels whose fundamentals differ by more than this many combined sigmas are not one chain
+CONSISTENCY_SIGMAS = 5.0
+_SPEED_KEY = re.compile(r"(speed|velocidad|velocity|geschwindigkeit|vitesse|velocita)", re.IGNORECASE)
+_TIME_NAME = re.compile(r"(^|_)(time|timestamp|elapsed|seconds|epoch|date)(_|$)", re.IGNORECASE)
+
+
+def speed_from_recording(recording):
+    """``(speed [m/s], source)`` that the recording states in its metadata, or ``(None, None)``.
+
+    Keys ending in ``_m_s`` that name a speed (``chain_speed_m_s``, ``velocidad_m_s``, ``speed_m_s``)
+    count; the source names the key, e.g. ``"file: chain_speed_m_s"``.
+    """
+    for key in sorted(recording.attrs, key=lambda k: (k != "chain_speed_m_s", k)):
+        if not (str(key).endswith("_m_s") and _SPEED_KEY.search(str(key))):
+            continue
+        try:
+            v = float(recording.attrs[key])
+        except (TypeError, ValueError):
+            continue
+        if math.isfinite(v) and v > 0:
+            return v, f"file: {key}"
+    return None, None
+
+
+def vibration_channels(recording) -> list:
+    """Channels that may carry a vibration: along time, not the burst number, not a sample counter, not
+    a clock or a speed."""
+    from ..io.channels import COUNTER_ATTR
+
+    out = []
+    for v in recording.data_vars:
+        da = recording[v]
+        if v == "segment" or da.dims != ("time",) or da.attrs.get(COUNTER_ATTR):
+            continue
+        units = str(da.attrs.get("units", ""))
+        if units in ("s", "ms", "us", "ns") or _TIME_NAME.search(str(v)) or (units == "m/s" and _SPEED_KEY.search(str(v))):
+            continue
+        out.append(str(v))
+    return out
+
+
+@dataclass(frozen=True)
+class ChannelsResult:
+    """Per-channel estimates and the recording's decision.
+
+    Attributes
+    ----------
+    status, reason : str
+        The recording's status (as :mod:`vibkit.diagnose.decision`) and why.
+    best : PitchEstimate or None
+        The channel that gives the numbers (None when refused).
+    estimates : list of PitchEstimate
+    errors : dict
+        Channel -> message, for channels that could not be analysed (too short ...).
+    """
+
+    status: str
+    reason: str
+    best: object = None
+    estimates: list = field(default_factory=list)
+    errors: dict = field(default_factory=dict)
+
+    @property
+    def exit_code(self) -> int:
+        return EXIT_CODES[self.status]
+
+    def per_channel(self) -> list:
+        """One short JSON-ready row per channel."""
+        rows = []
+        for e in self.estimates:
+            r = {"channel": e.channel, "status": e.status, "reason": e.reason}
+            if e.has_link_pass:
+                r.update(fundamental_hz=e.fundamental_hz, fundamental_sigma_hz=e.fundamental_sigma_hz)
+                if not e.extra.get("frequency_only"):
+                    r.update(pitch_m=e.pitch_m, pitch_sigma_m=e.pitch_sigma_m)
+                if e.verdict is not None:
+                    r.update(elongation_percent=e.elongation_percent,
+                             elongation_sigma_percent=e.elongation_sigma_percent, verdict=e.verdict)
+            elif e.decision is not None and e.decision.implied_pitch_m is not None:
+                r["implied_pitch_m"] = e.decision.implied_pitch_m
+            rows.append(r)
+        rows += [{"channel": c, "status": "error", "reason": m} for c, m in self.errors.items()]
+        return rows
+
+
+def estimate_channels(recording, *, channel=None, **kwargs) -> ChannelsResult:
+    """:func:`estimate_pitch` on ``channel``, or on every :func:`vibration_channels` one, combined.
+
+    Raises
+    ------
+    ValueError
+        ``channel`` is given and cannot be analysed, or no channel can be analysed at all.
+    """
+    from .pitch import estimate_pitch, pick_channel
+
+    names = [pick_channel(recording, channel)] if channel is not None else vibration_channels(recording)
+    if not names:
+        names = [pick_channel(recording, None)]
+    ests, errors = [], {}
+    for name in names:
+        try:
+            ests.append(estimate_pitch(recording, channel=name, **kwargs))
+        except ValueError as exc:
+            if channel is not None or len(names) == 1:
+                raise
+            errors[name] = " ".join(str(exc).split())
+    if not ests:
+        raise ValueError("no channel could be analysed: " + "; ".join(f"{c}: {m}" for c, m in errors.items()))
+    found = [e for e in ests if e.has_link_pass]
+    if not found:
+        status = STATUS_IMPLAUSIBLE if any(e.status == STATUS_IMPLAUSIBLE for e in ests) else STATUS_NOT_FOUND
+        if len(ests) == 1:
+            reason = ests[0].reason
+        else:
+            reason = "no channel carries the link pass: " + "; ".join(f"{e.channel}: {e.reason}" for e in ests)
+        return ChannelsResult(status, reason, None, ests, errors)
+    best = min(found, key=lambda e: e.fundamental_sigma_hz)
+    bad = [e for e in found if e is not best and abs(e.fundamental_hz - best.fundamental_hz) >
+           CONSISTENCY_SIGMAS * math.hypot(e.fundamental_sigma_hz, best.fundamental_sigma_hz)]
+    if bad:
+        listing = ", ".join(f"{e.channel} {e.fundamental_hz:.5g} +- {e.fundamental_sigma_hz:.2g} Hz"
+                            for e in [best] + bad)
+        return ChannelsResult(STATUS_IMPLAUSIBLE, (
+            f"the channels disagree ({listing}; more than {CONSISTENCY_SIGMAS:g} sigma apart): two periodicities, "
+            "not one chain; choose the channel on the chain with --channel"), None, ests, errors)
+    reason = best.reason
+    if len(found) > 1:
+        reason += (f"; channels {', '.join(e.channel for e in found)} see the same link pass "
+                   f"(within {CONSISTENCY_SIGMAS:g} sigma), numbers from {best.channel} (smallest sigma)")
+    return ChannelsResult(best.status, reason, best, ests, errors)

@@ -1,0 +1,299 @@
+"""The decision: is an estimate the link pass of *this* chain, and does it support a verdict?
+
+One function, :func:`decide`, shared by every consumer of a link-pass estimate (``vibkit spectrum``,
+``pitch``, ``report``, ``compare``, the fleet).  It returns a :class:`Decision` whose ``status`` is
+
+``"ok"``
+    a link-pass family was detected, the estimate belongs to it, lies in the search band, and the
+    pitch it implies is physically plausible; with a nominal pitch the elongation is resolved well
+    enough for a verdict (exit 0);
+``"no link-pass found"``
+    no family, or the estimate is not the detected family's fundamental (a different frequency than
+    the detection's within its resolution), lies outside the search band, or wanders more than a
+    chain's speed can (exit 1, no pitch);
+``"implausible"``
+    a family was found, but the pitch it implies is not this chain's: an elongation outside
+    :data:`ELONGATION_WINDOW_PERCENT` of the nominal pitch, or (without a nominal pitch) of every
+    standard step-chain pitch in :data:`CATALOGUE_PITCHES_M` (exit 1, no pitch; the reason says
+    what the family implies and what to check);
+``"inconclusive"``
+    the family is there and plausible, but either its elongation is not resolved to a third of the
+    first limit, or it is one spectral line without a significant harmonic (a tone that a structural
+    mode, a motor or a fan gives as well): frequency, pitch and elongation with their sigmas, verdict
+    ``"inconclusive"`` (exit 3).
+
+Why -1 % to +6 %: a roller chain only lengthens with wear (pins and bushes wear, the pitch grows); a
+new chain is made to its nominal length within a few tenths of a per cent (ISO 606 allows 0 to
++0.15 % on a measured length), so -1 % leaves room for the speed's and the estimate's errors and
+nothing else.  A worn step chain is replaced at 3 % (vibkit's default limits 1.5 / 2 / 3 %); +6 % is
+twice the replacement limit, a chain no maintained escalator runs on, while still covering a chain
+that was missed for years.  A reading outside the window is another periodicity, a wrong speed or a
+wrong nominal pitch, never a verdict.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+__all__ = [
+    "CATALOGUE_PITCHES_M",
+    "CATALOGUE_SOURCES",
+    "DEFAULT_LIMITS_PERCENT",
+    "ELONGATION_WINDOW_PERCENT",
+    "EXIT_CODES",
+    "MAX_WANDER",
+    "STATUS_IMPLAUSIBLE",
+    "STATUS_INCONCLUSIVE",
+    "STATUS_NOT_FOUND",
+    "STATUS_OK",
+    "Decision",
+    "decide",
+    "elongation_verdict",
+    "nearest_catalogue",
+]
+
+STATUS_OK = "ok"
+STATUS_NOT_FOUND = "no link-pass found"
+STATUS_IMPLAUSIBLE = "implausible"
+STATUS_INCONCLUSIVE = "inconclusive"
+#: exit status of the CLI for each status (2 stays the usage error)
+EXIT_CODES = {STATUS_OK: 0, STATUS_NOT_FOUND: 1, STATUS_IMPLAUSIBLE: 1, STATUS_INCONCLUSIVE: 3}
+#: elongation limits [%]: watch, plan replacement, replace
+DEFAULT_LIMITS_PERCENT = (1.5, 2.0, 3.0)
+#: physically possible elongation of a running chain against its nominal pitch [%] (module notes)
+ELONGATION_WINDOW_PERCENT = (-1.0, 6.0)
+#: standard escalator step-chain pitches [m]: steps every ~406 mm carried on every 6th, 5th or 4th
+#: link (Tsubaki, The Complete Guide to Chain, 2.2.1 "Step (Escalator) Chain", table 2.5: 67.7,
+#: 81.3, 101.6 mm), 400 mm / 3 (the reference escalator of the study, /work/shared/spec), and the
+#: Otis T135.4 step chain (135.46 mm, supplier data sheets)
+CATALOGUE_PITCHES_M = (0.0677, 0.0813, 0.1016, 0.4 / 3.0, 0.13546)
+CATALOGUE_SOURCES = ("Tsubaki, The Complete Guide to Chain, 2.2.1 Step (Escalator) Chain, table 2.5 "
+                     "(67.7, 81.3, 101.6 mm)", "400 mm step / 3 links (133.33 mm), the study's reference escalator",
+                     "Otis T135.4 step chain, 135.46 mm (supplier data sheets)")
+#: largest relative difference between the spectral and the mean-phase estimate of one record: an
+#: escalator's speed wanders by a few per cent with load, a chirp, a gait or a ride by more
+MAX_WANDER = 0.025
+#: the elongation must be resolved to this fraction of the first limit for a verdict
+EVIDENCE_FRACTION = 1.0 / 3.0
+
+
+@dataclass(frozen=True)
+class Decision:
+    """What vibkit may say about one estimate (see the module notes).
+
+    Attributes
+    ----------
+    status : str
+        ``"ok"``, ``"no link-pass found"``, ``"implausible"`` or ``"inconclusive"``.
+    reason : str
+        One or two sentences: why (and, for a refusal, what to check).
+    verdict : str or None
+        ``"ok"``, ``"watch"``, ``"plan replacement"``, ``"replace"`` or ``"inconclusive"``; None
+        without a nominal pitch or when refused.
+    implied_pitch_m : float or None
+        The pitch the detected family implies at the given speed (also for an implausible one). [m]
+    checks : dict
+        Each check run: name -> passed (bool).
+    """
+
+    status: str
+    reason: str
+    verdict: str | None = None
+    implied_pitch_m: float | None = None
+    checks: dict = field(default_factory=dict)
+
+    @property
+    def exit_code(self) -> int:
+        """CLI exit status: 0 ok, 1 no link-pass found or implausible, 3 inconclusive."""
+        return EXIT_CODES[self.status]
+
+    @property
+    def has_link_pass(self) -> bool:
+        """True when a frequency (and pitch) may be reported: ``ok`` or ``inconclusive``."""
+        return self.status in (STATUS_OK, STATUS_INCONCLUSIVE)
+
+    @property
+    def flagged(self) -> bool:
+        """True when a fleet must not use the measurement in a trend (anything but ``ok``)."""
+        return self.status != STATUS_OK
+
+    def as_dict(self) -> dict:
+        return {"status": self.status, "reason": self.reason, "verdict": self.verdict,
+                "implied_pitch_m": self.implied_pitch_m, "exit_code": self.exit_code, "checks": dict(self.checks)}
+
+
+def elongation_verdict(elongation_percent, limits_percent=DEFAULT_LIMITS_PERCENT) -> str:
+    """Verdict for a chain elongation [%] against three increasing limits [%].
+
+    Returns one of ``"ok"`` (below the first), ``"watch"``, ``"plan replacement"``, ``"replace"``
+    (at or above the third).  A shortened chain (negative elongation beyond the first limit) is
+    ``"check speed"``: chains do not shrink, so the speed or the nominal pitch is wrong.
+    """
+    lim = check_limits(limits_percent)
+    e = float(elongation_percent)
+    if e <= -lim[0]:
+        return "check speed"
+    if e < lim[0]:
+        return "ok"
+    if e < lim[1]:
+        return "watch"
+    if e < lim[2]:
+        return "plan replacement"
+    return "replace"
+
+
+def check_limits(limits):
+    """Three increasing positive percentages, or ValueError."""
+    try:
+        lim = tuple(float(v) for v in limits)
+    except (TypeError, ValueError):
+        raise ValueError(f"limits must be three numbers [%], got {limits!r}") from None
+    if len(lim) != 3 or not 0 < lim[0] < lim[1] < lim[2]:
+        raise ValueError(f"limits must be three increasing positive percentages, got {limits!r}")
+    return lim
+
+
+def nearest_catalogue(pitch_m, catalogue=CATALOGUE_PITCHES_M):
+    """``(catalogue pitch, deviation [%])`` of the catalogue pitch nearest (relatively) to ``pitch_m``."""
+    c = min(catalogue, key=lambda q: abs(pitch_m / q - 1))
+    return c, 100.0 * (pitch_m / c - 1.0)
+
+
+def _mm(p):
+    return f"{1000 * p:.1f} mm"
+
+
+def decide(*, detected, detection_reason="", detection_hz=float("nan"), resolution_hz=float("nan"),
+           fundamental_hz=float("nan"), fundamental_sigma_hz=float("nan"), band_hz=None, speed_m_s=None,
+           speed_sigma_m_s=0.0, nominal_pitch_m=None, limits_percent=DEFAULT_LIMITS_PERCENT,
+           spectral_hz=None, mean_phase_hz=None, window_percent=ELONGATION_WINDOW_PERCENT,
+           catalogue=CATALOGUE_PITCHES_M, speed_source="given", significant_orders=None) -> Decision:
+    """The decision on one link-pass estimate (module notes).
+
+    Parameters
+    ----------
+    detected : bool
+        The detection test (:func:`vibkit.signal.detect.detect_link_pass`) found a family.
+    detection_reason : str
+        Its one-line reason (quoted when nothing was found).
+    detection_hz, resolution_hz : float
+        The family's fundamental as the test found it, and the test's bin width. [Hz]
+    fundamental_hz, fundamental_sigma_hz : float
+        The estimate and its standard deviation. [Hz]
+    band_hz : (float, float)
+        Search band. [Hz]
+    speed_m_s, speed_sigma_m_s : float, optional
+        Chain speed and its sigma; None: frequency only (no pitch, no plausibility). [m/s]
+    nominal_pitch_m : float, optional
+        Nominal pitch: plausibility against it, elongation verdict. [m]
+    limits_percent : (float, float, float)
+    spectral_hz, mean_phase_hz : float, optional
+        The two estimates of a record when both exist (steadiness check). [Hz]
+    window_percent : (float, float)
+        Physically possible elongation. [%]
+    catalogue : tuple of float
+        Standard pitches used without a nominal pitch. [m]
+    speed_source : str
+        Where the speed came from (named in the reasons).
+    significant_orders : sequence of int, optional
+        Harmonic orders individually significant in the detection; fewer than two (a lone spectral line,
+        which a structural mode, a motor or a fan gives as well) make the result ``inconclusive``.
+
+    Returns
+    -------
+    Decision
+    """
+    checks = {}
+    if not detected:
+        checks["detected"] = False
+        return Decision(STATUS_NOT_FOUND, detection_reason or "no harmonic family in the band", checks=checks)
+    checks["detected"] = True
+    f, sf = float(fundamental_hz), float(fundamental_sigma_hz)
+    if not (math.isfinite(f) and f > 0):
+        checks["estimated"] = False
+        return Decision(STATUS_NOT_FOUND, "a family was detected but no fundamental could be estimated", checks=checks)
+    sf = sf if math.isfinite(sf) else 0.0
+    fd, res = float(detection_hz), float(resolution_hz)
+    if math.isfinite(fd) and math.isfinite(res):
+        same = abs(f - fd) <= res + 3.0 * sf
+        checks["same family"] = bool(same)
+        if not same:
+            return Decision(STATUS_NOT_FOUND, (
+                f"the estimate {f:.4g} Hz is not the fundamental of the detected family ({fd:.4g} Hz, resolution "
+                f"{res:.2g} Hz): the record does not hold one steady family (too short, a transient, a sweep)"),
+                checks=checks)
+    if band_hz is not None:
+        lo, hi = (float(v) for v in band_hz)
+        inside = lo <= f <= hi
+        checks["in band"] = bool(inside)
+        if not inside:
+            return Decision(STATUS_NOT_FOUND, (
+                f"the estimate {f:.4g} Hz lies outside the search band {lo:.4g}-{hi:.4g} Hz: not a link pass "
+                "of this chain at this speed"), checks=checks)
+    if spectral_hz is not None and mean_phase_hz is not None:
+        rel = abs(float(spectral_hz) - float(mean_phase_hz)) / f
+        steady = rel <= MAX_WANDER
+        checks["steady"] = bool(steady)
+        if not steady:
+            return Decision(STATUS_NOT_FOUND, (
+                f"the spectral ({float(spectral_hz):.4g} Hz) and mean-phase ({float(mean_phase_hz):.4g} Hz) estimates "
+                f"differ by {100 * rel:.2g} %: a chain's speed wanders by a few per cent at most "
+                f"({100 * MAX_WANDER:g} % allowed); this periodicity drifts like a gait, a ride or a sweep"),
+                checks=checks)
+    if speed_m_s is None:
+        return Decision(STATUS_OK, f"link-pass family at {f:.4g} Hz (no speed: no pitch, plausibility not checked)",
+                        checks=checks)
+    v = float(speed_m_s)
+    p = v / f
+    wlo, whi = (float(x) for x in window_percent)
+    if nominal_pitch_m is not None:
+        nom = float(nominal_pitch_m)
+        el = 100.0 * (p / nom - 1.0)
+        ok = wlo <= el <= whi
+        checks["plausible"] = bool(ok)
+        if not ok:
+            v_nom = f * nom
+            return Decision(STATUS_IMPLAUSIBLE, (
+                f"the family at {f:.4g} Hz implies a pitch of {_mm(p)} at {v:g} m/s ({speed_source}), an elongation "
+                f"of {el:+.1f} % of the nominal {_mm(nom)}, outside the physical window {wlo:+g} to {whi:+g} %: "
+                f"not a verdict. Check the speed (the nominal pitch needs {v_nom:.3g} m/s), the channel (--channel), "
+                "the nominal pitch, or whether the sensor was on this machine's step chain"),
+                implied_pitch_m=p, checks=checks)
+    else:
+        c, dev = nearest_catalogue(p, catalogue)
+        ok = wlo <= dev <= whi
+        checks["plausible"] = bool(ok)
+        if not ok:
+            return Decision(STATUS_IMPLAUSIBLE, (
+                f"the family at {f:.4g} Hz implies a pitch of {_mm(p)} at {v:g} m/s ({speed_source}), {dev:+.1f} % "
+                f"from the nearest standard step-chain pitch {_mm(c)} (standard: "
+                f"{', '.join(f'{1000 * q:.2f}' for q in catalogue)} mm; window {wlo:+g} to {whi:+g} %): not a step "
+                "chain's link pass. Check the speed, the channel (--channel), give --nominal-pitch, or check "
+                "that the recording is of an escalator"), implied_pitch_m=p, checks=checks)
+    if significant_orders is not None:
+        harmonics = len(set(significant_orders) - {1}) >= 1
+        checks["harmonics"] = bool(harmonics)
+        if not harmonics:
+            return Decision(STATUS_INCONCLUSIVE, (
+                f"one spectral line at {f:.4g} Hz (pitch {_mm(p)}) without a significant harmonic: a tone (a structural "
+                "mode, a motor, a fan) cannot be told from a link pass, whose roller impacts give harmonics; no "
+                "verdict"), verdict="inconclusive" if nominal_pitch_m is not None else None, implied_pitch_m=p,
+                checks=checks)
+    if nominal_pitch_m is None:
+        return Decision(STATUS_OK, f"link-pass family at {f:.4g} Hz, pitch {_mm(p)} (no nominal pitch: no verdict)",
+                        implied_pitch_m=p, checks=checks)
+    lim = check_limits(limits_percent)
+    rel = math.hypot(sf / f, float(speed_sigma_m_s or 0.0) / v)
+    el_sigma = 100.0 * p * rel / nom
+    need = EVIDENCE_FRACTION * lim[0]
+    resolved = el_sigma <= need
+    checks["resolved"] = bool(resolved)
+    if not resolved:
+        return Decision(STATUS_INCONCLUSIVE, (
+            f"elongation {el:+.2f} +- {el_sigma:.2g} %: its sigma is more than a third of the first limit "
+            f"({need:.2g} %); record longer, or measure the speed better, for a verdict"),
+            verdict="inconclusive", implied_pitch_m=p, checks=checks)
+    verdict = elongation_verdict(el, lim)
+    return Decision(STATUS_OK, f"elongation {el:+.2f} +- {el_sigma:.2g} % of {_mm(nom)}: {verdict}", verdict=verdict,
+                    implied_pitch_m=p, checks=checks)
