@@ -21,14 +21,16 @@ from __future__ import annotations
 
 import math
 
+from ..diagnose.decision import ELONGATION_WINDOW_PERCENT
 from ..diagnose.pitch import DEFAULT_LIMITS_PERCENT
 
 __all__ = ["PHYSICAL_WINDOW_PERCENT", "QUALITIES", "measurement_quality"]
 
 #: stored quality flags; only "ok" measurements enter a trend
 QUALITIES = ("ok", "inconclusive", "implausible")
-#: elongations a real chain can have [%]: shorter than nominal by 1 % at most, 6 % at most (replaced at 3 %)
-PHYSICAL_WINDOW_PERCENT = (-1.0, 6.0)
+#: elongations a real chain can have [%]: the pitch decision's window (shorter than nominal by 1 % at most,
+#: 6 % at most; a chain is replaced at 3 %), one definition for both
+PHYSICAL_WINDOW_PERCENT = ELONGATION_WINDOW_PERCENT
 
 
 def _decision_word(decision):
