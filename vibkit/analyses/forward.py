@@ -91,7 +91,49 @@ def forward_dynamics(model, *, duration=None, progress=True, method=None, rtol=N
                              max_step=solver.get("max_step", math.inf), first_step=solver.get("first_step"),
                              max_wall_time=solver.get("max_wall_time", math.inf), progress=progress,
                              events=events, t_events=t_events, event_gap=event_gap(rtol))
-    return _post_process(fm, t_out, y_out, outputs, stats)
+    fm.info[0] = d0  # the closure's first guess at the outputs: the initial delta, whatever the run's length
+    # the outputs are taken on the side the motion goes at a breakpoint, whether or not the steps end there
+    y_obs = _observed_states(y_out, events if events is not None else _events(model, fm)[0])
+    return _post_process(fm, t_out, y_out, outputs, stats, y_obs)
+
+
+ON_BREAKPOINT = 1e-11  # [m] as the integrator: a stage this close to a breakpoint is on its side
+
+
+def _observed_states(y, events):
+    """The states at which the outputs are evaluated: ``y``, with s0_1 moved ``ON_BREAKPOINT`` to the
+    side the motion goes where it sits on a breakpoint of the guide (issue 20).
+
+    On a breakpoint (the start s0 = 0 is one) the right-hand side jumps, and its value there depended
+    on where the closure's Newton iteration came from; the integrator takes it on the side the motion
+    goes, and so do the outputs. The direction is that of s0dot_1, or where it is zero (a start from
+    rest) that of the next output's s0_1.
+    """
+    if events is None or y.shape[0] == 0:
+        return y
+    cross, p0 = events
+    cross = np.asarray(cross, dtype=float)
+    if cross.size == 0:
+        return y
+    s = y[:, 0]
+    r = s - np.floor(s / p0) * p0
+    ext = np.concatenate([cross - p0, cross, cross + p0])
+    k = np.clip(np.searchsorted(ext, r), 1, ext.size - 1)
+    near = np.minimum(np.abs(ext[k] - r), np.abs(ext[k - 1] - r))
+    hit = np.flatnonzero(near <= ON_BREAKPOINT)
+    if hit.size == 0:
+        return y
+    y = y.copy()
+    for j in hit:
+        v = y[j, 1]
+        if v == 0.0:
+            nxt = y[j + 1, 0] - y[j, 0] if j + 1 < y.shape[0] else 0.0
+            prv = y[j, 0] - y[j - 1, 0] if j > 0 else 0.0
+            v = nxt if nxt != 0.0 else prv
+        direction = 1.0 if v >= 0.0 else -1.0
+        i = k[j] if abs(ext[k[j]] - r[j]) <= abs(ext[k[j] - 1] - r[j]) else k[j] - 1
+        y[j, 0] = s[j] + (ext[i] - r[j]) + direction * ON_BREAKPOINT
+    return y
 
 def _events(model, fm):
     """Where the right-hand side is not smooth: values of s0_1 (one loop) and times.
@@ -242,8 +284,10 @@ def _observe(t, y, prm, ws, inertia, light, need_tension, need_teeth, need_accel
     return 0, 0
 
 
-def _post_process(fm, t, y, outputs, stats):
-    """Outputs asked for, evaluated at the output states (only those asked for are computed)."""
+def _post_process(fm, t, y, outputs, stats, y_obs=None):
+    """Outputs asked for, evaluated at the output states (only those asked for are computed);
+    ``y_obs``: the states at which to evaluate them (:func:`_observed_states`), default ``y``."""
+    y_obs = y if y_obs is None else y_obs
     model = fm.model
     scene = model.scene
     n = model.n
@@ -270,7 +314,7 @@ def _post_process(fm, t, y, outputs, stats):
     if need_teeth and fm.effects["contact"].get("damping", 0.0) != 0.0:
         light = False  # damped contact forces need the rollers' velocities
     scal[:] = np.nan
-    status, bad = _observe(t, y, fm.prm, ws, model.sprocket.inertia, light, need_tension, need_teeth, need_accel, mid,
+    status, bad = _observe(t, y_obs, fm.prm, ws, model.sprocket.inertia, light, need_tension, need_teeth, need_accel, mid,
                            ridx, scal, tension, ind, cf, rk)
     if status != 0:
         what = "non-finite state in the output" if status == 2 else "the chain could not be closed"
