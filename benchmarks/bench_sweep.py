@@ -37,7 +37,7 @@ SCENE = ROOT / "sim" / "thesis-forward.toml"
 def _scene_text(duration):
     import tomllib
 
-    from vibkit.sweep.run import to_toml
+    from vibkit.sweep.plan import to_toml
 
     data = tomllib.loads(SCENE.read_text())
     data["run"]["duration"] = duration
@@ -54,7 +54,7 @@ def main(argv=None):
     from distributed import Client, LocalCluster
 
     from vibkit.model.scene import parse_scene
-    from vibkit.sweep.run import plan_sweep, varied_text
+    from vibkit.sweep.plan import plan_sweep, varied_text
 
     n_runs, duration = (8, 1.0) if args.quick else (24, 4.0)
     tmp = Path(tempfile.mkdtemp(prefix="bench_sweep_"))

@@ -11,9 +11,10 @@ import xarray as xr
 import vibkit
 from vibkit.cli import main
 from vibkit.model.scene import parse_scene
-from vibkit.sweep.run import SweepError, plan_sweep
+from vibkit.sweep import SweepError, plan_sweep
 
 SW = sys.modules["vibkit.sweep.run"]  # the module (vibkit.sweep is the function)
+SP = sys.modules["vibkit.sweep.plan"]  # the plan and the varied scene texts
 
 # the no-load forward scene from rest with a stiff P controller (at speed within 0.5 s), 2 s: short; from rest
 # the teeth take load at once
@@ -291,11 +292,11 @@ def test_varied_scene_text_reads_back_equal(path):
 
     text = path.read_text()
     data = tomllib.loads(text)
-    assert tomllib.loads(SW.to_toml(data)) == data
-    a, b = parse_scene(text), parse_scene(SW.varied_text(text, {}))
+    assert tomllib.loads(SP.to_toml(data)) == data
+    a, b = parse_scene(text), parse_scene(SP.varied_text(text, {}))
     assert (a.guide, a.chain, a.sprocket, a.effects, a.outputs, a.sections) == \
         (b.guide, b.chain, b.sprocket, b.effects, b.outputs, b.sections)
-    c = parse_scene(SW.varied_text(text, {"chain.link_pitch": 0.1335}))
+    c = parse_scene(SP.varied_text(text, {"chain.link_pitch": 0.1335}))
     assert c.chain.link_pitch == 0.1335
     if data["guide"].get("head_radius") == "sprocket":  # the head follows the sprocket's pitch radius
         assert c.guide.head_radius == c.sprocket.pitch_radius(0.1335) != a.guide.head_radius

@@ -1,0 +1,291 @@
+"""A sweep's Zarr store, and the assembling of the runs' records into one Dataset.
+
+Storage (``output=...``, a Zarr directory, format 2): the root group's attrs hold the sweep's
+definition; each finished run is written by the driver to its own group ``runs/rNNNNNN`` (kept
+series first, then the summaries and ``done = true`` in the group's attrs, one atomic file
+replace), so a run counts as done only when both are on disk. Re-running the same sweep on the same
+store resumes: finished runs are read back, only the others are computed. When every run is done
+the results are consolidated into the root group (``xr.open_zarr(path)`` reads them), the per-run
+groups are removed and the metadata consolidated. A store that holds a different sweep is refused
+unless ``force=True``. The workers never touch the store, so a remote Dask cluster works without a
+shared file system.
+
+Imports only the standard library at load time (zarr, numpy and xarray inside the functions).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+from pathlib import Path
+
+from .plan import SweepError, _jsonval
+from .records import PENDING, STATUS, SUMMARIES, _failed_record
+
+# units of the scene keys a sweep can vary (the coordinates' ``units``)
+KEY_UNITS = {
+    "guide.tensioner_length": "m", "guide.lower_landing": "m", "guide.upper_landing": "m",
+    "guide.transition_radius": "m", "guide.incline_angle_deg": "deg", "guide.incline_length": "m",
+    "guide.head_radius": "m",
+    "chain.link_pitch": "m", "chain.roller_radius": "m", "chain.roller_mass": "kg", "chain.n_rollers": "1",
+    "chain.worn_link": "1", "chain.worn_link_pitch": "m",
+    "sprocket.teeth": "1", "sprocket.base_width": "m", "sprocket.tip_width": "m", "sprocket.tooth_height": "m",
+    "sprocket.mass": "kg", "sprocket.inertia": "kg m^2",
+    "kinematics.start": "m", "kinematics.stop": "m", "kinematics.step": "m",
+    "motion.speed": "m/s", "motion.duration": "s", "motion.step": "s", "motion.start": "m",
+    "run.duration": "s", "run.output_step": "s", "run.start": "m", "run.initial_speed": "m/s", "run.seed": "1",
+    "solver.method": "", "solver.rtol": "1", "solver.atol": "1", "solver.max_step": "s", "solver.first_step": "s",
+    "solver.max_wall_time": "s",
+    "effects.gravity.g": "m/s^2", "effects.gravity.enabled": "",
+    "effects.contact.stiffness": "N/m^exponent", "effects.contact.exponent": "1", "effects.contact.damping": "s/m",
+    "effects.motor.kp": "N m s", "effects.motor.ki": "N m", "effects.motor.speed": "m/s",
+    "effects.motor.torque_limit": "N m",
+    "effects.tensioner.stiffness": "N/m", "effects.tensioner.preload": "N", "effects.tensioner.mass": "kg",
+    "effects.rolling_resistance.coefficient": "1",
+}
+
+
+# ------------------------------------------------------------------------------------------------ the store
+
+
+def _zkw():
+    import zarr
+
+    return {"zarr_format": 2} if int(zarr.__version__.split(".")[0]) >= 3 else {}
+
+
+def _run_group(i):
+    return f"runs/r{i:06d}"
+
+
+class _Store:
+    """A sweep's Zarr directory: definition in the root attrs, one group per finished run."""
+
+    def __init__(self, path, plan, *, force):
+        import zarr
+
+        self.path = Path(path)
+        self.plan = plan
+        definition = plan.definition()
+        self.complete = False
+        if self.path.exists():
+            existing = self._definition()
+            if existing is None:
+                raise SweepError(f"{self.path}: exists and is not a vibkit sweep store; choose another output "
+                                 f"(nothing was changed)")
+            if existing != definition:
+                if not force:
+                    raise SweepError(f"{self.path}: holds a different sweep ({_differences(existing, definition)}); "
+                                     f"give a new output, or force=True (--force) to discard it")
+                shutil.rmtree(self.path)
+        if not self.path.exists():
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            tmp = self.path.with_name(self.path.name + f".{os.getpid()}.partial")
+            if tmp.exists():
+                shutil.rmtree(tmp)
+            root = zarr.open_group(str(tmp), mode="w", **_zkw())
+            root.attrs.update({"vibkit_sweep": json.dumps(definition), "vibkit_sweep_state": "running"})
+            os.replace(tmp, self.path)  # the store appears whole, with its definition
+        self.complete = self._state() == "complete"
+
+    def _attrs(self):
+        import zarr
+
+        try:
+            return dict(zarr.open_group(str(self.path), mode="r", **_zkw()).attrs)
+        except Exception:  # noqa: BLE001 - anything unreadable is "not a sweep store"
+            return None
+
+    def _definition(self):
+        attrs = self._attrs()
+        if not attrs or "vibkit_sweep" not in attrs:
+            return None
+        try:
+            return json.loads(attrs["vibkit_sweep"])
+        except (TypeError, ValueError):
+            return None
+
+    def _state(self):
+        return (self._attrs() or {}).get("vibkit_sweep_state")
+
+    def done_runs(self) -> dict:
+        """Run index -> record, for every run whose done flag is on disk."""
+        import numpy as np
+        import zarr
+
+        out = {}
+        runs = self.path / "runs"
+        if not runs.is_dir():
+            return out
+        for d in sorted(runs.iterdir()):
+            if not (d.is_dir() and d.name.startswith("r") and d.name[1:].isdigit()):
+                continue
+            try:
+                g = zarr.open_group(str(self.path), path=f"runs/{d.name}", mode="r", **_zkw())
+                attrs = dict(g.attrs)
+            except Exception:  # noqa: BLE001 - a half-written run is redone
+                continue
+            if attrs.get("done") is not True:
+                continue
+            rec = _failed_record(int(d.name[1:]), int(attrs["status"]), attrs.get("error", ""),
+                                 _num(attrs.get("wall_time")))
+            rec["summary"] = {k: _num(v) for k, v in attrs.get("summary", {}).items()}
+            rec["pid"] = attrs.get("pid", 0)
+            for var in attrs.get("kept", []):
+                arr = g[var]
+                dims = json.loads(attrs["kept_dims"])[var]
+                coords = {c: np.asarray(g[f"coord_{c}"][...]) for c in dims if f"coord_{c}" in g}
+                rec["kept"][var] = {"dims": dims, "values": np.asarray(arr[...]), "coords": coords,
+                                    "coord_attrs": json.loads(attrs["kept_coord_attrs"]).get(var, {}),
+                                    "attrs": json.loads(attrs["kept_attrs"])[var]}
+            out[rec["index"]] = rec
+        return out
+
+    def write_run(self, rec):
+        """Kept series, then the summaries and the done flag in one atomic attrs write."""
+        import numpy as np
+        import zarr
+
+        path = self.path / _run_group(rec["index"])
+        if path.exists():
+            shutil.rmtree(path)
+        g = zarr.open_group(str(self.path), path=_run_group(rec["index"]), mode="w", **_zkw())
+        coords_written = set()
+        for var, k in rec["kept"].items():
+            g.create_array(var, data=np.asarray(k["values"])) if hasattr(g, "create_array") else \
+                g.create_dataset(var, data=np.asarray(k["values"]))
+            for c, vals in k["coords"].items():
+                if c not in coords_written:
+                    coords_written.add(c)
+                    g.create_array(f"coord_{c}", data=np.asarray(vals)) if hasattr(g, "create_array") else \
+                        g.create_dataset(f"coord_{c}", data=np.asarray(vals))
+        g.attrs.update({
+            "index": rec["index"], "status": rec["status"], "error": rec["error"],
+            "summary": {k: _jsonval(v) for k, v in rec["summary"].items()},
+            "wall_time": _jsonval(rec["wall_time"]), "pid": rec.get("pid", 0),
+            "kept": list(rec["kept"]),
+            "kept_dims": json.dumps({v: k["dims"] for v, k in rec["kept"].items()}),
+            "kept_attrs": json.dumps({v: k["attrs"] for v, k in rec["kept"].items()}),
+            "kept_coord_attrs": json.dumps({v: k["coord_attrs"] for v, k in rec["kept"].items()}),
+            "done": True,
+        })
+
+    def finish(self, ds):
+        """Consolidate: the whole result in the root group, then the state, then drop the run groups."""
+        import zarr
+
+        ds = ds.copy()
+        ds.attrs["vibkit_sweep"] = json.dumps(self.plan.definition())
+        ds.attrs["vibkit_sweep_state"] = "consolidating"
+        ds.to_zarr(str(self.path), mode="a", consolidated=False, **_zkw())
+        zarr.open_group(str(self.path), mode="r+", **_zkw()).attrs.update({"vibkit_sweep_state": "complete"})
+        self.complete = True
+        self.tidy()
+
+    def tidy(self):
+        import zarr
+
+        if (self.path / "runs").exists():
+            shutil.rmtree(self.path / "runs")
+        zarr.consolidate_metadata(str(self.path))
+
+    def open(self):
+        import xarray as xr
+
+        return xr.open_zarr(str(self.path), chunks=None)
+
+
+def _num(v):
+    return float("nan") if v is None else float(v)
+
+
+def _differences(a, b):
+    keys = [k for k in sorted(set(a) | set(b)) if a.get(k) != b.get(k)]
+    return "differs in: " + ", ".join(keys) if keys else "differs"
+
+
+# ------------------------------------------------------------------------------------------------ the result
+
+
+def _assemble(plan, records, *, complete):
+    """One Dataset: dims are the varied keys (or ``sample``); summaries, status, error, kept series."""
+    import numpy as np
+    import xarray as xr
+
+    from .. import __version__
+
+    n = len(plan.points)
+    dims = plan.dims
+    shape = plan.shape
+    coords = {}
+    if plan.samples is None:
+        for a in plan.axes:
+            coords[a.key] = xr.Variable((a.key,), np.asarray(a.values),
+                                        attrs={"units": KEY_UNITS.get(a.key, ""), "long_name": f"scene key {a.key}"})
+    else:
+        coords["sample"] = xr.Variable(("sample",), np.arange(n), attrs={"units": "1", "long_name": "draw number"})
+        for a in plan.axes:
+            coords[a.key] = xr.Variable(("sample",), np.asarray([p[a.key] for p in plan.points]),
+                                        attrs={"units": KEY_UNITS.get(a.key, ""),
+                                               "long_name": f"scene key {a.key} (drawn)"})
+    status = np.full(n, PENDING, dtype=np.int8)
+    error = np.full(n, "", dtype=object)
+    summ = {k: np.full(n, np.nan) for k in SUMMARIES}
+    for i, rec in records.items():
+        status[i] = rec["status"]
+        error[i] = rec["error"]
+        for k in SUMMARIES:
+            v = rec["wall_time"] if k == "wall_time" else rec["summary"].get(k, np.nan)
+            summ[k][i] = np.nan if v is None else v
+    data = {}
+    for k, (units, long_name) in SUMMARIES.items():
+        data[k] = xr.Variable(dims, summ[k].reshape(shape), attrs={"units": units, "long_name": long_name})
+    meanings = {v: k for k, v in STATUS.items()}
+    if not complete:
+        meanings[PENDING] = "pending"
+    flags = sorted(meanings)
+    data["status"] = xr.Variable(dims, status.reshape(shape), attrs={
+        "long_name": "run status", "flag_values": np.array(flags, dtype=np.int8),
+        "flag_meanings": " ".join(meanings[f] for f in flags)})
+    data["error"] = xr.Variable(dims, error.reshape(shape).astype(str).astype(object),
+                                attrs={"long_name": "why the run failed (empty when it did not)"})
+    ds = xr.Dataset(data, coords=coords)
+    # kept time series: outer join over the runs' own coordinates, NaN where a run has none
+    names = list(dict.fromkeys(v for rec in records.values() for v in rec["kept"]))
+    for var in names:
+        per = [(i, rec["kept"][var]) for i, rec in sorted(records.items()) if var in rec["kept"]]
+        das = [xr.DataArray(np.asarray(k["values"], dtype=float), dims=k["dims"],
+                            coords={c: v for c, v in k["coords"].items()}) for _, k in per]
+        joined = xr.align(*das, join="outer", fill_value=np.nan) if len(das) > 1 else das
+        first = joined[0]
+        full = np.full((n,) + first.shape, np.nan)
+        for (i, _), da in zip(per, joined):
+            full[i] = da.values
+        k0 = per[0][1]
+        ds[var] = xr.Variable(dims + tuple(first.dims), full.reshape(shape + first.shape), attrs=k0["attrs"])
+        for c in first.dims:
+            if c in first.coords and c not in ds.coords:
+                ds = ds.assign_coords({c: xr.Variable((c,), first[c].values, attrs=k0["coord_attrs"].get(c, {}))})
+    counts = {name: int(np.count_nonzero(status == code)) for name, code in STATUS.items()}
+    ds.attrs.update({
+        "vibkit_version": __version__,
+        "scene": plan.text,
+        "scene_source": plan.source,
+        "analysis": plan.analysis,
+        "sweep": "monte-carlo" if plan.samples is not None else "grid",
+        "varied_keys": ", ".join(a.key for a in plan.axes),
+        "vary": "; ".join(f"{a.key}={a.spec}" for a in plan.axes),
+        "runs": n,
+        "runs_ok": counts["ok"], "runs_failed": counts["failed"], "runs_invalid": counts["invalid"],
+        "runs_pending": int(np.count_nonzero(status == PENDING)),
+        "start_up_excluded": ("a quarter of each forward run" if plan.settle is None
+                              else f"the first {plan.settle:g} s of each run"),
+        "history": f"swept by vibkit {__version__}",
+    })
+    if plan.samples is not None:
+        ds.attrs["seed"] = int(plan.seed)
+        ds.attrs["samples"] = int(plan.samples)
+    if plan.duration is not None:
+        ds.attrs["duration_override"] = float(plan.duration)
+    return ds
