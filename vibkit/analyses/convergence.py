@@ -163,12 +163,12 @@ def checked_forward(model, *, duration=None, progress=True, min_rtol=None):
     The search's budget: runs tighter by :data:`CHECK_FACTOR` each, down to ``min_rtol`` (default
     the scene's ``[solver] check_min_rtol``, else 1e-12), each under the scene's wall-time budget.
     """
-    from .forward import DEFAULT_RTOL, forward_dynamics
+    from .forward import default_rtol, forward_dynamics
 
     scene = model.scene
     solver = scene.section("solver")
     outputs = tuple(scene.outputs["variables"])
-    rtol = solver.get("rtol", DEFAULT_RTOL)
+    rtol = solver.get("rtol") or default_rtol(scene.effects)
     atol = solver.get("atol", rtol * 1e-2)
     min_rtol = min_rtol or solver.get("check_min_rtol", DEFAULT_MIN_RTOL)
     want = tuple(dict.fromkeys(outputs + NEEDED))
@@ -192,7 +192,21 @@ def checked_forward(model, *, duration=None, progress=True, min_rtol=None):
             break  # converged at the scene's tolerance
         if len(runs) > 2 and not compare(runs[-2][1], runs[-1][1], runs[-2][0], dt, duration):
             break  # found the tolerance from which the runs agree
-    v = verdict(runs, dt, duration, min_rtol)
+    if len(runs) == 2 and compare(runs[0][1], runs[1][1], rtol, dt, duration):
+        # the budget allowed one tighter run only, and it differs: a looser run tells a history that
+        # needs a tighter tolerance from one that no tolerance fixes (three runs, none agreeing)
+        loose, cpu = run(rtol * CHECK_FACTOR, compared)
+        runs.insert(0, (rtol * CHECK_FACTOR, summary(loose), cpu))
+        v = verdict(runs, dt, duration, min_rtol)
+        v["rtol"] = rtol
+        v["differences"] = compare(runs[1][1], runs[2][1], rtol, dt, duration)
+        v["converged"] = False
+        if v["agrees_at_rtol"] is not None:  # the looser pair agreeing says nothing about rtol
+            v["agrees_at_rtol"] = None
+            v["message"] = (f"not converged at rtol {rtol:g} (differs in {', '.join(v['differences'])}); the budget "
+                            f"(rtol down to {min_rtol:g}) ran out before two runs agreed")
+    else:
+        v = verdict(runs, dt, duration, min_rtol)
     drop = [name for name in ("drive_flank_force", "back_flank_force", "sprocket_speed", "delta")
             if name in ds and name not in outputs and not (name.endswith("flank_force") and "flank_force" in outputs)]
     ds = ds.drop_vars(drop)
