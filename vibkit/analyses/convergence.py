@@ -118,9 +118,19 @@ def _close(name, a, b, rtol, dt, duration):
 
 
 def compare(s1, s2, rtol, dt, duration, names=HISTORY):
-    """Quantities of ``names`` on which two summaries differ: {name: [first, second]}."""
+    """Quantities of ``names`` on which two summaries differ: {name: [first, second]}.
+
+    The dominant frequency of a ripple below what the runs resolve (a sprocket turning steadily, to
+    ten times the tolerance) is the frequency of rounding: it is not compared.
+    """
+    skip = set()
+    ripple = [s.get("sprocket_ripple_percent") or 0.0 for s in (s1, s2)]
+    if max(ripple) <= 100.0 * 10.0 * rtol:
+        skip.add("sprocket_speed_frequency_hz")
+    if max(s.get("delta_ripple_m") or 0.0 for s in (s1, s2)) <= 1e-8:
+        skip.add("delta_frequency_hz")
     return {k: [s1.get(k), s2.get(k)] for k in names
-            if (k in s1 or k in s2) and not _close(k, s1.get(k), s2.get(k), rtol, dt, duration)}
+            if (k in s1 or k in s2) and k not in skip and not _close(k, s1.get(k), s2.get(k), rtol, dt, duration)}
 
 
 def verdict(runs, dt, duration, min_rtol):
@@ -185,7 +195,7 @@ def checked_forward(model, *, duration=None, progress=True, min_rtol=None):
     compared = tuple(k for k in want if k in NEEDED or k == "link_tension")
     r = rtol
     while r / CHECK_FACTOR >= min_rtol * (1 - 1e-9):
-        r = r / CHECK_FACTOR
+        r = float(f"{r / CHECK_FACTOR:.12g}")
         tight, cpu = run(r, compared)
         runs.append((r, summary(tight), cpu))
         if len(runs) == 2 and not compare(runs[0][1], runs[1][1], rtol, dt, duration):
@@ -195,8 +205,9 @@ def checked_forward(model, *, duration=None, progress=True, min_rtol=None):
     if len(runs) == 2 and compare(runs[0][1], runs[1][1], rtol, dt, duration):
         # the budget allowed one tighter run only, and it differs: a looser run tells a history that
         # needs a tighter tolerance from one that no tolerance fixes (three runs, none agreeing)
-        loose, cpu = run(rtol * CHECK_FACTOR, compared)
-        runs.insert(0, (rtol * CHECK_FACTOR, summary(loose), cpu))
+        r = float(f"{rtol * CHECK_FACTOR:.12g}")
+        loose, cpu = run(r, compared)
+        runs.insert(0, (r, summary(loose), cpu))
         v = verdict(runs, dt, duration, min_rtol)
         v["rtol"] = rtol
         v["differences"] = compare(runs[1][1], runs[2][1], rtol, dt, duration)

@@ -197,7 +197,7 @@ NSCAL = 12  # delta, deltadot, motor, residual, speed, KE, PE, contact E, spring
 
 @nb.njit(cache=True, error_model="numpy")
 def _observe(t, y, prm, ws, inertia, light, need_tension, need_teeth, need_accel, mid, ridx, scal, tension, ind, cf,
-             rk):
+             rk, light_contact):
     """Every output quantity at the output states, in one compiled loop (see _post_process).
 
     Returns (status, index): status 0 ok, 1 closure failure, 2 non-finite state at ``index``.
@@ -239,7 +239,9 @@ def _observe(t, y, prm, ws, inertia, light, need_tension, need_teeth, need_accel
                 scal[j, 2] = motor_torque(fp[9] - y[j, 3], y[j, 4], fp[7], fp[8], fp[10])[0]
             else:
                 scal[j, 2] = 0.0
-            if need_teeth:
+            scal[j, 10] = 0.0
+            scal[j, 11] = 0.0
+            if light_contact:
                 # undamped contact forces need the positions only (the caller checked the damping)
                 ncand = 0
                 reach = fp[22] + 1e-9
@@ -256,11 +258,14 @@ def _observe(t, y, prm, ws, inertia, light, need_tension, need_teeth, need_accel
                 for q in range(ind_t.size):
                     ind_t[q] = 0.0
                     frc_t[q] = 0.0
-                contact_kernel(xs, zs, eta, sd, cand, ncand, y[j, 2], y[j, 3], fp[17], fp[18], prm[1], fp[19],
-                               fp[20], prm[3][1], fp[16], fp[4], fp[5], 0.0, fx, fz, ind_t, frc_t, True)
-                for q in range(ind_t.size):
-                    ind[j, q] = ind_t[q]
-                    cf[j, q] = frc_t[q]
+                res = contact_kernel(xs, zs, eta, sd, cand, ncand, y[j, 2], y[j, 3], fp[17], fp[18], prm[1], fp[19],
+                                     fp[20], prm[3][1], fp[16], fp[4], fp[5], 0.0, fx, fz, ind_t, frc_t, need_teeth)
+                scal[j, 10] = res[4]
+                scal[j, 11] = res[5]
+                if need_teeth:
+                    for q in range(ind_t.size):
+                        ind[j, q] = ind_t[q]
+                        cf[j, q] = frc_t[q]
             continue
         if evaluate(t[j], y[j], dy, prm, ws, need_teeth) != 0:
             return 1, j
@@ -340,12 +345,13 @@ def _post_process(fm, t, y, outputs, stats, y_obs=None):
     rk = np.empty((nt, ridx.size, 6))
     # outputs that need only positions and the state skip the forces altogether
     light = want <= {"delta", "closure_residual", "sprocket_angle", "sprocket_speed", "motor_torque", "s0",
-                     "tensioner_displacement", "indentation", "contact_force"}
-    if need_teeth and fm.effects["contact"].get("damping", 0.0) != 0.0:
+                     "tensioner_displacement", "indentation", "contact_force", "flank_force"}
+    light_contact = bool({"indentation", "contact_force", "flank_force"} & want) and "contact" in fm.effects
+    if light_contact and fm.effects["contact"].get("damping", 0.0) != 0.0:
         light = False  # damped contact forces need the rollers' velocities
     scal[:] = np.nan
     status, bad = _observe(t, y_obs, fm.prm, ws, model.sprocket.inertia, light, need_tension, need_teeth, need_accel, mid,
-                           ridx, scal, tension, ind, cf, rk)
+                           ridx, scal, tension, ind, cf, rk, light_contact)
     if status != 0:
         what = "non-finite state in the output" if status == 2 else "the chain could not be closed"
         raise IntegrationError(what, float(t[bad]), y[bad])
