@@ -177,7 +177,7 @@ def default_rtol(effects):
     k = effects.get("contact", {}).get("stiffness", 0.0) if "contact" in effects else 0.0
     if not k > REFERENCE_STIFFNESS:
         return DEFAULT_RTOL
-    return max(1e-11, DEFAULT_RTOL * (REFERENCE_STIFFNESS / k) ** 3)
+    return max(1e-11, float(f"{DEFAULT_RTOL * (REFERENCE_STIFFNESS / k) ** 3:.3g}"))
 
 
 def event_gap(rtol):
