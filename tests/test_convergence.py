@@ -109,3 +109,15 @@ def test_verdict_logic():
 def test_check_on_a_kinematic_scene_is_an_error():
     with pytest.raises(ValueError, match="forward scenes"):
         vibkit.simulate(SIM / "thesis-kinematics.toml", check=True, progress=False)
+
+
+def test_parallel_check_gives_the_same_verdict_as_sequential():
+    """The run and its first tighter run at once (two threads) or one after the other: the same numbers."""
+    from vibkit.analyses.convergence import checked_forward
+    from vibkit.model.escalator import EscalatorModel
+
+    sc = scene("thesis-forward", outputs=["delta", "contact_force"])
+    both = [checked_forward(EscalatorModel(sc), duration=2.0, progress=False, parallel=p) for p in (True, False)]
+    runs = [[{k: v for k, v in r.items() if k != "cpu_s"} for r in convergence(ds)["runs"]] for ds in both]
+    assert runs[0] == runs[1]
+    assert both[0].contact_force.equals(both[1].contact_force)

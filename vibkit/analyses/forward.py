@@ -195,7 +195,7 @@ def event_gap(rtol):
 NSCAL = 12  # delta, deltadot, motor, residual, speed, KE, PE, contact E, spring E, accel, drive/back flank
 
 
-@nb.njit(cache=True, error_model="numpy")
+@nb.njit(cache=True, error_model="numpy", nogil=True)
 def _observe(t, y, prm, ws, inertia, light, need_tension, need_teeth, need_accel, mid, ridx, scal, tension, ind, cf,
              rk, light_contact):
     """Every output quantity at the output states, in one compiled loop (see _post_process).
