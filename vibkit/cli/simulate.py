@@ -62,8 +62,7 @@ def run(a):
         print(f"closure   max residual {resid:.3g} m")
         print(f"wall time {wall:.2f} s")
         if "convergence" in summary:
-            print(f"converged {'yes' if summary['convergence']['converged'] else 'no'}: "
-                  f"{summary['convergence']['message']}")
+            print(f"check     {summary['convergence']['message']}")
         print(table([[k, ",".join(v["dims"]), v["units"]] for k, v in summary["variables"].items()],
                     ("variable", "dims", "units")))
     return 0
