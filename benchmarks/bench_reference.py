@@ -92,8 +92,8 @@ def run(duration: float) -> dict:
         "duration": duration,
         "ours": {"wall": wall_ours, "solver_wall": float(ours.attrs["solver_wall_time_s"]),
                  "evaluations": int(ours.attrs["solver_evaluations"]), "steps": int(ours.attrs["solver_steps"]),
-                 "method": f"{solver.get('method', 'dopri5')} (compiled), rtol {_rtol(solver):g}, "
-                           f"atol {solver.get('atol', _rtol(solver) * 1e-2):g}, steps ended on the guide's breakpoints",
+                 "method": f"{solver.get('method', 'dopri5')} (compiled), rtol {_rtol(solver, scene):g}, "
+                           f"atol {solver.get('atol', _rtol(solver, scene) * 1e-2):g}, steps ended on the guide's breakpoints",
                  "closure": float(ours.closure_residual.max())},
         "study": {"wall": wall_study, "solver_wall": float(study.attrs["solver_wall_time_s"]),
                   "evaluations": int(study.attrs["solver_evaluations"]),
@@ -171,10 +171,10 @@ def write(res: dict, note: str, stem: str) -> None:
     _atomic_write(RESULTS / f"{stem}.md", "\n".join(md))
 
 
-def _rtol(solver):
-    from vibkit.analyses.forward import DEFAULT_RTOL
+def _rtol(solver, scene):
+    from vibkit.analyses.forward import default_rtol
 
-    return solver.get("rtol", DEFAULT_RTOL)
+    return solver.get("rtol") or default_rtol(scene.effects)
 
 
 def main(argv=None) -> int:

@@ -156,3 +156,17 @@ def test_python_m_vibkit():
     r = subprocess.run([sys.executable, "-m", "vibkit", "--version"], capture_output=True, text=True,
                        env={**os.environ, "NO_COLOR": "1"})
     assert r.returncode == 0 and r.stdout.startswith("vibkit ")
+
+
+def test_simulate_check_json_carries_the_convergence_verdict(tmp_path, capsys):
+    out = tmp_path / "fwd.nc"
+    assert main(["simulate", "sim/thesis-forward.toml", "-o", str(out), "--duration", "2", "--check", "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    conv = d["convergence"]
+    assert conv["converged"] is True and conv["rtol"] == 1e-7
+    assert [r["rtol"] for r in conv["runs"]] == pytest.approx([1e-7, 1e-9])
+    assert "converged" in conv["message"]
+    import xarray as xr
+
+    with xr.open_dataset(out) as ds:
+        assert ds.attrs["converged"] == 1 and json.loads(ds.attrs["convergence"]) == conv

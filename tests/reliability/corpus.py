@@ -314,7 +314,7 @@ CASES = [
          files={"s.toml": scene_text("thesis-forward", replace={"stiffness = 1.0e6": "stiffness = 1.0e20"})},
          expect_in=("{w}/s.toml", "effects.contact.stiffness")),
     Case("solver.rtol = 10", "scene", ["simulate", "{w}/s.toml", "-o", "{w}/x.nc"],
-         files={"s.toml": scene_text("thesis-forward", replace={"rtol = 1e-6": "rtol = 10"})},
+         files={"s.toml": scene_text("thesis-forward", replace={'method = "dopri5"': 'method = "dopri5"\nrtol = 10'})},
          expect_in=("{w}/s.toml", "solver.rtol")),
     Case("motor kp = 1e20", "scene", ["simulate", "{w}/s.toml", "-o", "{w}/x.nc"],
          files={"s.toml": scene_text("thesis-forward", replace={"kp = 600.0": "kp = 1e20"})},

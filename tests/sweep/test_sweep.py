@@ -300,3 +300,22 @@ def test_varied_scene_text_reads_back_equal(path):
     assert c.chain.link_pitch == 0.1335
     if data["guide"].get("head_radius") == "sprocket":  # the head follows the sprocket's pitch radius
         assert c.guide.head_radius == c.sprocket.pitch_radius(0.1335) != a.guide.head_radius
+
+
+def test_cli_check_gives_a_converged_flag_per_run(scene_file, tmp_path, capsys):
+    """`vibkit sweep --check`: every run's convergence verdict, the same as the single run's."""
+    out = tmp_path / "checked.zarr"
+    argv = ["sweep", str(scene_file), "--vary", "effects.contact.stiffness=1e6,1e7", "--duration", "1", "-o",
+            str(out), "--workers", "2", "--json", "--quiet", "--check"]
+    assert main(argv) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["ok"] == 2
+    for r in d["run_results"]:
+        single = vibkit.simulate(parse_scene(_variant(0.13333333333333333, r["values"]["effects.contact.stiffness"])
+                                             .replace('rtol = 1e-5', 'rtol = 1e-5\ncheck = true'), "x.toml"),
+                                 duration=1.0, progress=False)
+        assert r["converged"] is bool(single.attrs["converged"])
+    assert set(xr.open_zarr(out)["converged"].values.ravel()) <= {0.0, 1.0}
+    with pytest.raises(SweepError, match="forward scenes"):
+        vibkit.sweep(Path(__file__).resolve().parents[1] / "sim" / "thesis-kinematics.toml",
+                     {"kinematics.step": "0.001,0.002"}, check=True, progress=False)

@@ -138,7 +138,7 @@ def _start_past(t, y, yt, k1, s_b, direction, tiny, prm, ws, ctl, counters):
     return evaluate(t, yt, k1, prm, ws, False)
 
 
-@nb.njit(cache=True, error_model="numpy")
+@nb.njit(cache=True, error_model="numpy", nogil=True)  # nogil: the convergence check runs two at once
 def _dopri5_chunk(t, y, h, k1, t_stop, t_out, idx, y_out, prm, ws, rtol, atol, max_step, counters, ctl, cross,
                   p0, gap, pause):
     """Advance from t towards t_stop, writing the dense output at t_out[idx:] <= t_stop.

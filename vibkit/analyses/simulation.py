@@ -11,7 +11,7 @@ __all__ = ["simulate"]
 
 
 def simulate(scene, *, duration: float | None = None, progress: bool = True, max_result_bytes=None,
-             max_wall_time=None):
+             max_wall_time=None, check: bool | None = None):
     """Run a scene.
 
     Parameters
@@ -31,6 +31,11 @@ def simulate(scene, *, duration: float | None = None, progress: bool = True, max
     max_wall_time : float, optional
         Wall-time budget of a forward integration [s]; default the scene's
         ``[solver] max_wall_time``, else ``$VIBKIT_MAX_WALL_TIME``, else 600 s.
+    check : bool, optional
+        Forward runs: say whether the result has converged (:mod:`vibkit.analyses.convergence`):
+        run again at tighter tolerances and compare the contact history, ripples, peak tension and
+        dominant frequencies. The verdict is in ``attrs["convergence"]`` (JSON) and
+        ``attrs["converged"]`` (1 or 0). Default the scene's ``[solver] check``, else False.
 
     Returns
     -------
@@ -58,6 +63,9 @@ def simulate(scene, *, duration: float | None = None, progress: bool = True, max
             sections = dict(scene.sections)
             sections["solver"] = {**scene.section("solver"), "max_wall_time": wall}
             scene = dataclasses.replace(scene, sections=sections)
+    if check and scene.analysis != "forward":
+        raise ValueError(f"{scene.source}: the convergence check applies to forward scenes; this one is "
+                         f"'{scene.analysis}' (drop check / --check)")
     model = EscalatorModel(scene)
     outputs = scene.outputs["variables"]
     rollers = scene.outputs["rollers"]
@@ -78,7 +86,13 @@ def simulate(scene, *, duration: float | None = None, progress: bool = True, max
     from .forward import forward_dynamics
     from .integrate import IntegrationError
 
+    if check is None:
+        check = bool(scene.section("solver").get("check", False))
     try:
+        if check:
+            from .convergence import checked_forward
+
+            return checked_forward(model, duration=duration, progress=progress)
         return forward_dynamics(model, duration=duration, progress=progress)
     except IntegrationError as exc:
         if "wall-time budget" not in str(exc):

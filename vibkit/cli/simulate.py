@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import os
 import time
 
@@ -23,6 +24,10 @@ def add_parser(subparsers):
     s.add_argument("--max-wall-time", type=seconds_or_none, metavar="SECONDS",
                    help="stop a forward integration after this long (default: the scene's [solver] max_wall_time, "
                         "$VIBKIT_MAX_WALL_TIME or 600 s; 0: no limit)")
+    s.add_argument("--check", action="store_true", default=None,
+                   help="forward scenes: say whether the result has converged: run again at tighter tolerances "
+                        "and compare the contact history, ripples, peak tension and frequencies (the scene's "
+                        "[solver] check = true does the same); the verdict is in the result's attrs")
     add_json(s)
     s.set_defaults(func=run)
     return s
@@ -36,7 +41,7 @@ def run(a):
     scene = vibkit.load_scene(a.scene)
     t0 = time.perf_counter()
     ds = vibkit.simulate(scene, duration=a.duration, progress=True, max_result_bytes=a.max_result_bytes,
-                         max_wall_time=a.max_wall_time)
+                         max_wall_time=a.max_wall_time, check=a.check)
     wall = time.perf_counter() - t0
     path = write_result(ds, a.output, overwrite=a.force, inputs=[a.scene])
     resid = float(ds["closure_residual"].max()) if "closure_residual" in ds else \
@@ -46,6 +51,8 @@ def run(a):
                "variables": {str(k): {"dims": list(v.dims), "units": v.attrs.get("units", "")}
                              for k, v in ds.data_vars.items()},
                "closure_residual_max_m": resid, "wall_time_s": wall}
+    if "convergence" in ds.attrs:
+        summary["convergence"] = json.loads(ds.attrs["convergence"])
     if a.json:
         print_json("simulate", summary)
     else:
@@ -54,6 +61,8 @@ def run(a):
         print(f"dims      {', '.join(f'{k}={v}' for k, v in summary['dims'].items())}")
         print(f"closure   max residual {resid:.3g} m")
         print(f"wall time {wall:.2f} s")
+        if "convergence" in summary:
+            print(f"check     {summary['convergence']['message']}")
         print(table([[k, ",".join(v["dims"]), v["units"]] for k, v in summary["variables"].items()],
                     ("variable", "dims", "units")))
     return 0

@@ -45,6 +45,8 @@ def add_parser(subparsers):
     s.add_argument("--workers", type=int, help="worker processes of the local cluster (default: one per core)")
     s.add_argument("--max-runs", type=int, help="compute at most this many runs now (resume later)")
     s.add_argument("--force", action="store_true", help="discard a store at -o that holds a different sweep")
+    s.add_argument("--check", action="store_true",
+                   help="forward scenes: check each run's convergence (a converged flag per run; see simulate --check)")
     s.add_argument("--quiet", action="store_true", help="no progress on stderr")
     add_json(s)
     s.set_defaults(func=run)
@@ -68,7 +70,7 @@ def run(a):
     t0 = time.perf_counter()
     ds = vibkit.sweep(a.scene, varied, output=a.output, samples=a.samples, seed=a.seed, keep=a.keep or (),
                       settle=a.settle, duration=a.duration, scheduler=a.scheduler, n_workers=a.workers,
-                      force=a.force, progress=not a.quiet, max_runs=a.max_runs)
+                      force=a.force, progress=not a.quiet, max_runs=a.max_runs, check=a.check)
     wall = time.perf_counter() - t0
     st = ds["status"]
     keys = [k.strip() for k in ds.attrs["varied_keys"].split(",")]
@@ -83,6 +85,9 @@ def run(a):
                "error": str(cols["error"][idx])}
         for name in ("link_pass_frequency", "delta_mean", "delta_ripple", "peak_link_tension", "wall_time"):
             row[name] = float(cols[name][idx])
+        if a.check:
+            c = float(ds["converged"].values[idx])
+            row["converged"] = None if c != c else bool(c)
         runs.append(row)
     complete = ds.attrs.get("runs_pending", 0) == 0 and ds.attrs.get("vibkit_sweep_state", "") != "running"
     summary = {"scene": a.scene, "output": os.fspath(a.output), "sweep": ds.attrs["sweep"],
@@ -105,11 +110,14 @@ def run(a):
               + f" ({summary['computed']} computed now, {summary['reused']} from the store)")
         print(f"wall time {wall:.1f} s")
         shown = runs[:40]
+        conv = {True: "yes", False: "no", None: "-"}
         print(table([[*(f"{v:.6g}" if isinstance(v, float) else v for v in r["values"].values()), r["status"],
+                      *([conv[r["converged"]]] if a.check else []),
                       f"{r['link_pass_frequency']:.5f}", f"{1e3 * r['delta_mean']:.4f}",
                       f"{1e3 * r['delta_ripple']:.4f}",
                       f"{r['peak_link_tension']:.1f}", f"{r['wall_time']:.2f}"] for r in shown],
-                    (*keys, "status", "link pass [Hz]", "delta [mm]", "ripple [mm]", "peak tension [N]", "wall [s]")))
+                    (*keys, "status", *(["converged"] if a.check else []), "link pass [Hz]", "delta [mm]",
+                     "ripple [mm]", "peak tension [N]", "wall [s]")))
         if len(runs) > len(shown):
             print(f"... {len(runs) - len(shown)} more runs in {summary['output']}")
         for r in runs:

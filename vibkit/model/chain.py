@@ -216,6 +216,33 @@ def solve_closure(tab, p0, lt, s0_1, delta0, pitches, n, s0, kk, lam, xs, zs, pa
     return d, 100, 2
 
 
+CHORD_WALKS = 3  # walks along chord steps before a full Newton solve takes over
+
+
+@nb.njit(cache=True, error_model="numpy")
+def close_with_slope(tab, p0, lt, s0_1, guess, slope, pitches, n, s0, kk, lam, xs, zs, part, alpha, beta, tol):
+    """Close the chain from a predicted delta with a known dh/ddelta ``slope`` (a chord-Newton step,
+    no partial derivatives), as many evaluations along a trajectory can; falls back to
+    :func:`solve_closure` when that does not meet the tolerance (or ``slope`` is not positive).
+
+    Returns (delta, walks, status). The test for convergence is the same, |h| <= tol, so the result
+    is as accurate as solve_closure's.
+    """
+    walks = 0
+    if slope > 0.0:
+        # chord steps converge linearly, at the rate of the slope's relative change since it was taken
+        for _ in range(CHORD_WALKS):
+            h = walk(tab, p0, s0_1, guess, pitches, n, s0, kk, lam, xs, zs)
+            walks += 1
+            if math.isnan(h):
+                break
+            if abs(h) <= tol:
+                return guess, walks, 0
+            guess = guess - h / slope
+    d, it, st = solve_closure(tab, p0, lt, s0_1, guess, pitches, n, s0, kk, lam, xs, zs, part, alpha, beta, tol)
+    return d, walks + it + 1, st
+
+
 @nb.njit(cache=True, error_model="numpy")
 def closure_residual(xs, zs, n, pitches):
     """max over the n links (the last one closing on roller 1) of | |r_{i+1} - r_i| - L_i |. [m]"""

@@ -29,7 +29,7 @@ import math
 import numba as nb
 import numpy as np
 
-from .chain import acceleration_terms, fill_partials, sensitivity, solve_closure, velocity_coefficients
+from .chain import acceleration_terms, close_with_slope, fill_partials, sensitivity, velocity_coefficients
 from .dynamics import reduced_equation
 from .sprocket import contact_kernel
 
@@ -52,7 +52,7 @@ class Work:
             np.empty(n + 1), np.empty(n + 1, dtype=np.int64), np.empty(n + 1), np.empty(n + 1), np.empty(n + 1),
             np.empty((n + 1, 12)), np.empty(n + 1), np.empty(n + 1), np.empty((n, 2)), np.empty(n),
             np.empty((n, 2)), np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n, dtype=np.int64),
-            np.zeros(nteeth), np.zeros(nteeth), np.zeros(10),
+            np.zeros(nteeth), np.zeros(nteeth), np.zeros(15),
         )
 
 
@@ -114,6 +114,13 @@ def pack_parameters(model, effects: dict, *, start: float = 0.0):
     return (model.guide.table, model.corners_local, fp, ip, model.mass.copy(), pm, ps, pb, pa, model.chain.pitches)
 
 
+def reset_closure(info, delta):
+    """Start the next evaluation's closure from ``delta`` alone (no prediction, no stored slope)."""
+    info[0] = delta
+    info[10:13] = 0.0
+    info[14] = 0.0
+
+
 @nb.njit(cache=True, error_model="numpy")
 def motor_torque(err, integral, kp, ki, limit):
     """Speed controller: M = kp err + ki integral, limited to +-limit [N m], and the rate of the
@@ -141,7 +148,9 @@ def evaluate(t, y, dy, prm, ws, want_teeth):
     State y = [s0_1, s0dot_1, theta, thetadot, integral of the speed error]. On return the work
     arrays ``ws`` hold the closed configuration, velocities and forces at (t, y), and ``ws[18]``
     holds [delta, deltadot, deltaddot, motor torque, contact torque, contact energy, max indentation,
-    active contacts, driving-flank force, back-flank force]. Status 0 is success; 1 means the chain could not be closed (the state left
+    active contacts, driving-flank force, back-flank force, s0_1, ddelta/ds0_1, dh/ddelta, walks so
+    far, d2delta/ds0_1^2]; the next evaluation predicts delta from slots 0, 10, 11 and 14 and closes the chain with the
+    slope in slot 12 (zero it to close from delta alone: see ``reset_closure``). Status 0 is success; 1 means the chain could not be closed (the state left
     the tensioner's travel).
     """
     tab, loc, fp, ip, mass, pm, ps, pb, pa, pitches = prm
@@ -149,12 +158,18 @@ def evaluate(t, y, dy, prm, ws, want_teeth):
     n = ip[0]
     p0, lt = fp[0], fp[1]
     sdot = y[1]
-    delta, it, st = solve_closure(tab, p0, lt, y[0], info[0], pitches, n, s0, kk, lam, xs, zs, part, alpha, beta,
-                                  fp[21])
+    # the closure from delta predicted along ddelta/ds0_1 of the last evaluation, with its exact
+    # dh/ddelta (info[10:13]); the same tolerance as a full Newton solve
+    ds = y[0] - info[10]
+    guess = info[0] + ds * (info[11] + 0.5 * info[14] * ds)
+    delta, walks, st = close_with_slope(tab, p0, lt, y[0], guess, info[12], pitches, n, s0, kk, lam, xs, zs, part,
+                                        alpha, beta, fp[21])
     if st != 0:
         return 1
-    fill_partials(tab, p0, s0, kk, lam, delta, n, part)
-    sensitivity(part, xs, zs, n, alpha, beta)
+    info[13] += walks
+    # partials and sensitivities over the n rollers and the ghost: beta[n] is dh/ddelta here
+    fill_partials(tab, p0, s0, kk, lam, delta, n + 1, part)
+    sensitivity(part, xs, zs, n + 1, alpha, beta)
     c = velocity_coefficients(part, xs, zs, n, alpha, beta, jac, gam)
     e = acceleration_terms(part, xs, zs, n, alpha, beta, gam, c, sdot, hacc, eta, sd)
     g = fp[3]
@@ -224,6 +239,11 @@ def evaluate(t, y, dy, prm, ws, want_teeth):
     dy[3] = (motor + torque_c) / fp[15]
     dy[4] = derr
     info[0] = delta
+    info[10] = y[0]
+    info[11] = c
+    info[12] = beta[n]
+    # d2delta/ds0_1^2 (deltaddot = c sddot + e with e = c' sdot^2), for a second-order prediction
+    info[14] = e / (sdot * sdot) if sdot * sdot > 1e-12 else 0.0
     info[1] = c * sdot
     info[2] = c * sddot + e
     info[3] = motor

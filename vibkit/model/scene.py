@@ -16,7 +16,7 @@ Layout (see ``sim/*.toml`` for complete examples)::
     [motion]       speed, duration, step, start           (analysis = "inverse")
     [run]          duration, output_step, start, initial_speed, seed   (analysis = "forward")
     [effects.*]    gravity, contact, motor, passengers, tensioner, rolling_resistance
-    [solver]       method, rtol, atol, max_step
+    [solver]       method, rtol, atol, max_step, check (convergence verdict), check_min_rtol
     [outputs]      variables, rollers, step_accelerometer
 """
 
@@ -55,6 +55,7 @@ RANGES = {
     "effects.tensioner.mass": (0.0, 1e6, "kg"),
     "solver.rtol": (1e-14, 0.1, ""),
     "solver.atol": (0.0, 1.0, ""),
+    "solver.check_min_rtol": (1e-14, 0.1, "(the tightest tolerance the convergence check tries)"),
     "motion.speed": (-10.0, 10.0, "m/s"),
     "run.initial_speed": (-10.0, 10.0, "m/s"),
 }
@@ -92,7 +93,8 @@ SECTIONS = {
     "motion": {"speed": float, "duration": float, "step": float, "start": float},
     "run": {"duration": float, "output_step": float, "start": float, "initial_speed": float, "seed": int},
     "solver": {"method": str, "rtol": float, "atol": float, "max_step": float, "first_step": float,
-               "max_wall_time": float, "max_result_bytes": (float, str), "events": bool},
+               "max_wall_time": float, "max_result_bytes": (float, str), "events": bool,
+               "check": bool, "check_min_rtol": float},
     "outputs": {"variables": list, "rollers": list, "step_accelerometer": int},
 }
 

@@ -24,6 +24,8 @@ SUMMARIES = {
     "last_back_flank_time": ("s", "last time a back flank carries load (needs the flank_force output)"),
     "closure_residual_max": ("m", "largest closure residual of the run"),
     "solver_steps": ("1", "integrator steps (forward dynamics)"),
+    "converged": ("1", "1: the run's convergence check found it converged at the scene's tolerance, 0: not "
+                       "(sweep --check; NaN unchecked)"),
     "wall_time": ("s", "wall time of the run in its worker (the first run of a worker includes loading the "
                        "compiled kernels)"),
 }

@@ -126,6 +126,8 @@ def summarize(ds, scene, *, settle: float | None = None) -> dict:
         out["closure_residual_max"] = float(ds.attrs["closure_residual_max"])
     if "solver_steps" in ds.attrs:
         out["solver_steps"] = float(ds.attrs["solver_steps"])
+    if "converged" in ds.attrs:
+        out["converged"] = float(ds.attrs["converged"])
     return out
 
 
@@ -233,7 +235,7 @@ class _Report:
 def sweep(scene, vary: dict, *, output=None, samples: int | None = None, seed: int | None = None, keep=(),
           settle: float | None = None, duration: float | None = None, scheduler: str | None = None,
           n_workers: int | None = None, client=None, force: bool = False, progress: bool = True,
-          max_runs: int | None = None):
+          max_runs: int | None = None, check: bool = False):
     """Run a scene over a grid (or Monte Carlo draws) of its keys on Dask.
 
     Parameters
@@ -267,6 +269,9 @@ def sweep(scene, vary: dict, *, output=None, samples: int | None = None, seed: i
         A bar on a terminal, a line every 5 s otherwise (on stderr); nothing when False.
     max_runs : int, optional
         Compute at most this many runs in this call and stop (the store stays resumable).
+    check : bool
+        Forward scenes: check every run's convergence (``[solver] check = true`` set in the base
+        scene, so a store of a checked sweep is another sweep); the summary ``converged`` is 1 or 0.
 
     Returns
     -------
@@ -297,6 +302,8 @@ def sweep(scene, vary: dict, *, output=None, samples: int | None = None, seed: i
     ...                   duration=10.0, keep=["delta"], output="sweep.zarr")
     >>> ds.delta_ripple.plot(x="chain.link_pitch", hue="effects.contact.stiffness")  # doctest: +SKIP
     """
+    if check:
+        scene = _checked(scene)
     plan = plan_sweep(scene, vary, samples=samples, seed=seed, keep=keep, settle=settle, duration=duration)
     if max_runs is not None and (isinstance(max_runs, bool) or int(max_runs) != max_runs or max_runs < 0):
         raise SweepError(f"max_runs must be a whole number >= 0, got {max_runs!r}")
@@ -359,6 +366,18 @@ def sweep(scene, vary: dict, *, output=None, samples: int | None = None, seed: i
         ds = store.open()
     ds.attrs.update(runs_computed=computed, runs_reused=reused)
     return ds
+
+
+def _checked(scene):
+    """The base scene with ``[solver] check = true`` (forward scenes only)."""
+    from ..model.scene import Scene, load_scene, parse_scene
+    from .plan import varied_text
+
+    base = scene if isinstance(scene, Scene) else load_scene(scene)
+    if base.analysis != "forward":
+        raise SweepError(f"{base.source}: check applies to forward scenes; this one is '{base.analysis}' "
+                         "(drop --check)")
+    return parse_scene(varied_text(base.text, {"solver.check": True}), base.source)
 
 
 def _submit(client, tasks, records, store, report):

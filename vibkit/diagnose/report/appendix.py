@@ -51,6 +51,17 @@ def parameters_page(doc, ctx) -> None:
             ["Hampel half window", f"{ctx.hampel_half_window_s:g} s"],
             ["Hampel false-alarm rate", f"{ctx.hampel_false_alarm_rate:g} per sample"],
             ["simulated duration", _fmt(duration, "s") if duration else "scene's"]]
+    res = getattr(ctx, "result", None)
+    if res is not None and "solver_method" in res.attrs:
+        # the simulation's numerics: its solver, and the convergence verdict ([solver] check = true)
+        rows.append(["solver", f"{res.attrs['solver_method']}, {res.attrs.get('solver_steps', '?')} steps"])
+        if "convergence" in res.attrs:
+            import json
+
+            conv = json.loads(res.attrs["convergence"])
+            rows.append(["converged", textwrap.shorten(conv["message"], 70)])
+        else:
+            rows.append(["converged", "not checked (set [solver] check = true)"])
     ax = fig.add_axes((0.06, 0.62, 0.88, 0.3))
     _table(ax, rows, (0.4, 0.6), 9)
     if sc is not None:
