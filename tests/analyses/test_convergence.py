@@ -12,7 +12,7 @@ import vibkit
 from vibkit.analyses.convergence import compare, verdict
 from vibkit.model.scene import load_scene
 
-SIM = Path(__file__).resolve().parents[1] / "sim"
+SIM = Path(__file__).resolve().parents[2] / "sim"
 
 
 def scene(name, *, stiffness=None, solver=None, run=None, effects=None, outputs=None):
