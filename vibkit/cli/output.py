@@ -1,0 +1,72 @@
+"""What the command line tells the user: data on stdout (a table, or JSON with a schema version),
+messages on stderr, and :class:`CLIError` for a problem with the command's inputs (exit 1)."""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import sys
+
+SCHEMA_VERSION = 1
+
+
+class CLIError(ValueError):
+    """A problem with the command's inputs, reported in one line (exit 1)."""
+
+
+def schema(cmd):
+    return f"vibkit.{cmd}/{SCHEMA_VERSION}"
+
+
+def color():
+    return sys.stderr.isatty() and "NO_COLOR" not in os.environ and os.environ.get("TERM", "") != "dumb"
+
+
+def msg(text):
+    print(text, file=sys.stderr)
+
+
+def jsonable(o):
+    import numpy as np
+
+    if isinstance(o, dict):
+        return {str(k): jsonable(v) for k, v in o.items()}
+    if isinstance(o, (list, tuple)):
+        return [jsonable(v) for v in o]
+    if isinstance(o, np.ndarray):
+        return jsonable(o.tolist())
+    if isinstance(o, (np.floating, float)):
+        v = float(o)
+        return v if math.isfinite(v) else None
+    if isinstance(o, (np.integer,)):
+        return int(o)
+    if isinstance(o, (np.bool_,)):
+        return bool(o)
+    return o
+
+
+def print_json(cmd, payload):
+    d = {"schema": schema(cmd)}
+    d.update(jsonable(payload))
+    print(json.dumps(d, indent=2, sort_keys=False, allow_nan=False))
+
+
+def table(rows, header=None):
+    rows = [[str(c) for c in r] for r in rows]
+    if header:
+        rows = [list(header)] + rows
+    if not rows:
+        return ""
+    w = [max(len(r[i]) for r in rows) for i in range(len(rows[0]))]
+    lines = ["  ".join(c.ljust(w[i]) for i, c in enumerate(r)).rstrip() for r in rows]
+    if header:
+        lines.insert(1, "  ".join("-" * x for x in w))
+    return "\n".join(lines)
+
+
+def check_output(out, inputs, force=False):
+    """Refuse an unsafe -o before any work (see :mod:`vibkit.runtime.safe_output`)."""
+    from vibkit.runtime.safe_output import check_output_path
+
+    check_output_path(out, overwrite=force, inputs=[p for p in inputs if p])

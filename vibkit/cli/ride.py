@@ -1,0 +1,98 @@
+"""``vibkit ride``: ride quality of a step-riding accelerometer (ISO 2631-1), recorded or simulated."""
+
+from __future__ import annotations
+
+import os
+import sys
+
+from .options import add_command, add_json, add_sample_rate, positive
+from .output import CLIError, msg, print_json, table
+
+EPILOG = ("examples:\n  vibkit ride data/field/layouts/phyphox.csv --segment 0.5:3 --json\n"
+          "  vibkit ride sim/las-palmas.toml --duration 15\n"
+          "  vibkit ride step.csv --scene sim/las-palmas.toml --segment 3:25 --weighting x=Wd,y=Wd,z=Wk")
+
+
+def add_parser(subparsers):
+    s = add_command(subparsers, "ride",
+                    "ride quality of a step-riding accelerometer: ISO 2631-1 weighted max pk-pk, A95, r.m.s.",
+                    EPILOG)
+    s.add_argument("input", metavar="RECORDING_OR_SCENE", help="recording file, or a scene .toml (simulated)")
+    s.add_argument("--channels", help="recording channels for x,y,z (travel, lateral, vertical; - skips one), "
+                   "or AXIS=NAME pairs (default: names ending in x, y, z); write --channels=-,-,az when x is skipped")
+    s.add_argument("--segment", help="ride segment START:END [s] from the first sample (default: detected)")
+    s.add_argument("--weighting", help="Wk, Wd ... for every axis, or x=Wd,y=Wd,z=Wk (the default)")
+    s.add_argument("--scene", help="also simulate this scene's step and report it next to the recording")
+    s.add_argument("--duration", type=positive, help="simulated time [s] (default: the scene's)")
+    add_sample_rate(s)
+    add_json(s)
+    s.set_defaults(func=run)
+    return s
+
+
+def _weightings(text):
+    """``Wk`` (every axis) or ``x=Wd,y=Wd,z=Wk`` -> {axis: name} (None: the defaults)."""
+    if not text:
+        return None
+    from vibkit.signal.weighting import get_weighting
+
+    out = {}
+    for item in text.split(","):
+        if "=" in item:
+            k, v = (p.strip() for p in item.split("=", 1))
+            if k.lower() not in ("x", "y", "z", "tangential"):
+                raise CLIError(f"--weighting: axis {k!r} must be x, y, z or tangential (in {text!r})")
+            out[k.lower()] = get_weighting(v).name
+        else:
+            name = get_weighting(item).name
+            out.update({k: name for k in ("x", "y", "z", "tangential")})
+    return out
+
+
+def _ride_rows(rq):
+    return [[a.axis, a.channel, a.weighting, f"{a.weighted.max:.4g}", f"{a.weighted.a95:.4g}", f"{a.weighted.rms:.4g}",
+             f"{a.lowpass.max:.4g}", f"{a.lowpass.a95:.4g}"] for a in rq.axes]
+
+
+def run(a):
+    from vibkit.diagnose.ride import parse_channels, parse_segment, ride_quality_from_recording, simulate_ride
+
+    segment = parse_segment(a.segment) if a.segment else None
+    weightings = _weightings(a.weighting)
+    if not os.path.exists(a.input):
+        raise CLIError(f"{a.input}: file not found (expected a recording or a scene .toml)")
+    is_scene = a.input.lower().endswith(".toml")
+    if is_scene and a.channels:
+        raise CLIError("--channels applies to a recording, not to a scene")
+    if is_scene and a.scene:
+        raise CLIError("--scene compares a recording with a scene; the input is already a scene")
+    if is_scene:
+        rq = simulate_ride(a.input, duration=a.duration, segment=segment, weightings=weightings,
+                           progress=sys.stderr.isatty())
+    else:
+        rq = ride_quality_from_recording(a.input, channels=parse_channels(a.channels) if a.channels else None,
+                                         segment=segment, weightings=weightings, sample_rate=a.sample_rate)
+    sim = None
+    if a.scene:
+        sim = simulate_ride(a.scene, duration=a.duration, weightings=weightings, progress=sys.stderr.isatty())
+    if a.json:
+        d = rq.as_dict()
+        if sim is not None:
+            d["simulation"] = sim.as_dict()
+        print_json("ride", d)
+    else:
+        head = ("axis", "channel", "weighting", "max pk-pk", "A95", "r.m.s.", "10 Hz max pk-pk", "10 Hz A95")
+        for r in (rq, sim):
+            if r is None:
+                continue
+            seg = r.segment
+            print(f"{r.source} ({r.kind}, {r.fs:.6g} Hz): ride {seg.start_s:.2f}-{seg.end_s:.2f} s "
+                  f"({seg.duration_s:.2f} s, {seg.method})" +
+                  (f", speed {r.speed_m_s:.3g} m/s" if r.speed_m_s else ""))
+            print("step vibration [m/s^2]: weighted (ISO 2631-1) and 0.4-10 Hz unweighted")
+            print(table(_ride_rows(r), head))
+            print()
+        for r in (rq, sim):
+            for n in ([] if r is None else r.notes + ([r.segment.note] if r.segment.note else [])):
+                msg(f"note: {n}")
+    return 0

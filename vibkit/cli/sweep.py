@@ -1,0 +1,118 @@
+"""``vibkit sweep``: run a scene over a grid (or random draws) of its keys on Dask; results to Zarr."""
+
+from __future__ import annotations
+
+import argparse
+import os
+import time
+
+from .options import add_command, add_json, positive
+from .output import CLIError, msg, print_json, table
+
+EPILOG = ("examples:\n  vibkit sweep sim/thesis-forward.toml --vary chain.link_pitch=0.1333:0.1373:9 "
+          "--vary effects.contact.stiffness=1e5,1e6,1e7 --duration 10 -o sweep.zarr\n"
+          "  vibkit sweep sim/leon.toml --vary motion.speed=0.45:0.55 --samples 50 --seed 1 --keep delta -o mc.zarr\n"
+          "re-running the same command resumes an interrupted sweep; xarray.open_zarr('sweep.zarr') reads it")
+
+
+def vary(text):
+    """argparse type of --vary KEY=SPEC (see :func:`vibkit.sweep.plan.parse_vary`)."""
+    from vibkit.sweep.plan import parse_vary
+
+    try:
+        return parse_vary(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def add_parser(subparsers):
+    s = add_command(subparsers, "sweep",
+                    "run a scene over a grid (or random draws) of its keys on Dask; results to Zarr", EPILOG)
+    s.add_argument("scene", help="scene file (.toml)")
+    s.add_argument("--vary", action="append", type=vary, required=True, metavar="KEY=SPEC",
+                   help="a dotted scene key and its values: A:B:N (linspace), a,b,c (list), A:B (a range, "
+                        "with --samples); repeat for more keys")
+    s.add_argument("-o", "--output", required=True, help="Zarr directory to write (re-run to resume)")
+    s.add_argument("--samples", type=int, help="Monte Carlo: draw this many scenes (uniformly in each A:B)")
+    s.add_argument("--seed", type=int, help="seed of the Monte Carlo draws (default 0)")
+    s.add_argument("--keep", action="append", metavar="OUTPUT",
+                   help="keep this output's full series (e.g. delta); repeat for more")
+    s.add_argument("--settle", type=float, help="start-up left out of the summaries [s] (default: a quarter "
+                                                "of a forward run)")
+    s.add_argument("--duration", type=positive, help="override every run's duration [s] (kinematics: [m])")
+    s.add_argument("--scheduler", help="address of a running Dask scheduler (default: Dask's configuration, "
+                                       "else a local cluster)")
+    s.add_argument("--workers", type=int, help="worker processes of the local cluster (default: one per core)")
+    s.add_argument("--max-runs", type=int, help="compute at most this many runs now (resume later)")
+    s.add_argument("--force", action="store_true", help="discard a store at -o that holds a different sweep")
+    s.add_argument("--quiet", action="store_true", help="no progress on stderr")
+    add_json(s)
+    s.set_defaults(func=run)
+    return s
+
+
+def run(a):
+    import numpy as np
+
+    import vibkit
+
+    # a Zarr store is a folder, re-used to resume: only refuse one that is the scene itself (the
+    # library refuses a folder that is not this sweep's store unless --force)
+    if os.path.exists(a.output) and os.path.exists(a.scene) and os.path.samefile(a.output, a.scene):
+        raise CLIError(f"output {a.output!r} is the scene file; refusing to overwrite it")
+    varied = {}
+    for key, spec in a.vary:
+        if key in varied:
+            raise CLIError(f"--vary {key} given twice")
+        varied[key] = spec
+    t0 = time.perf_counter()
+    ds = vibkit.sweep(a.scene, varied, output=a.output, samples=a.samples, seed=a.seed, keep=a.keep or (),
+                      settle=a.settle, duration=a.duration, scheduler=a.scheduler, n_workers=a.workers,
+                      force=a.force, progress=not a.quiet, max_runs=a.max_runs)
+    wall = time.perf_counter() - t0
+    st = ds["status"]
+    keys = [k.strip() for k in ds.attrs["varied_keys"].split(",")]
+    meaning = dict(zip((int(v) for v in st.attrs["flag_values"]), st.attrs["flag_meanings"].split()))
+    cols = {name: ds[name].values for name in ("status", "error", "link_pass_frequency", "delta_mean", "delta_ripple",
+                                               "peak_link_tension", "wall_time")}
+    runs = []
+    for idx in np.ndindex(*st.shape):
+        at = dict(zip(st.dims, idx))
+        row = {"values": {k: ds[k].isel({d: at[d] for d in ds[k].dims}).item() for k in keys},
+               "status": meaning.get(int(cols["status"][idx]), str(int(cols["status"][idx]))),
+               "error": str(cols["error"][idx])}
+        for name in ("link_pass_frequency", "delta_mean", "delta_ripple", "peak_link_tension", "wall_time"):
+            row[name] = float(cols[name][idx])
+        runs.append(row)
+    complete = ds.attrs.get("runs_pending", 0) == 0 and ds.attrs.get("vibkit_sweep_state", "") != "running"
+    summary = {"scene": a.scene, "output": os.fspath(a.output), "sweep": ds.attrs["sweep"],
+               "dims": {k: int(v) for k, v in ds["status"].sizes.items()}, "runs": int(ds.attrs["runs"]),
+               "ok": int(ds.attrs["runs_ok"]), "failed": int(ds.attrs["runs_failed"]),
+               "invalid": int(ds.attrs["runs_invalid"]), "pending": int(ds.attrs.get("runs_pending", 0)),
+               "computed": int(ds.attrs["runs_computed"]), "reused": int(ds.attrs["runs_reused"]),
+               "complete": bool(complete), "seed": ds.attrs.get("seed"), "wall_time_s": wall,
+               "units": {"link_pass_frequency": "Hz", "delta_mean": "m", "delta_ripple": "m",
+                         "peak_link_tension": "N", "wall_time": "s"},
+               "run_results": runs}
+    if a.json:
+        print_json("sweep", summary)
+    else:
+        print(f"scene     {a.scene} ({ds.attrs['sweep']}: {', '.join(f'{k}={v}' for k, v in summary['dims'].items())})")
+        print(f"output    {summary['output']}" + ("" if complete else " (incomplete: run the same command to resume)"))
+        print(f"runs      {summary['runs']}: {summary['ok']} ok, {summary['failed']} failed, "
+              f"{summary['invalid']} invalid"
+              + (f", {summary['pending']} pending" if summary["pending"] else "")
+              + f" ({summary['computed']} computed now, {summary['reused']} from the store)")
+        print(f"wall time {wall:.1f} s")
+        shown = runs[:40]
+        print(table([[*(f"{v:.6g}" if isinstance(v, float) else v for v in r["values"].values()), r["status"],
+                      f"{r['link_pass_frequency']:.5f}", f"{1e3 * r['delta_mean']:.4f}",
+                      f"{1e3 * r['delta_ripple']:.4f}",
+                      f"{r['peak_link_tension']:.1f}", f"{r['wall_time']:.2f}"] for r in shown],
+                    (*keys, "status", "link pass [Hz]", "delta [mm]", "ripple [mm]", "peak tension [N]", "wall [s]")))
+        if len(runs) > len(shown):
+            print(f"... {len(runs) - len(shown)} more runs in {summary['output']}")
+        for r in runs:
+            if r["error"]:
+                msg(f"run {', '.join(f'{k}={v}' for k, v in r['values'].items())}: {r['status']}: {r['error']}")
+    return 0
