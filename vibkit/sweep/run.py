@@ -354,8 +354,6 @@ def sweep(scene, vary: dict, *, output=None, samples: int | None = None, seed: i
             note = (f"{done} of {n} runs are stored in {store.path}" + (
                 "" if store.complete else ": run the same sweep again to resume"))
             exc.vibkit_note = note  # what the CLI says instead of "nothing was written"
-            if progress:
-                print(f"sweep: interrupted; {note}", file=sys.stderr, flush=True)
         raise
     ds.attrs.update(runs_computed=computed, runs_reused=reused)
     return ds

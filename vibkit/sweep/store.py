@@ -94,6 +94,7 @@ class _Store:
                 root.attrs.update({"vibkit_sweep": json.dumps(definition), "vibkit_sweep_state": "running",
                                    "comment": _RUNNING})
                 zarr.open_group(str(tmp), path="runs", mode="w", **_zkw())
+                zarr.consolidate_metadata(str(tmp))  # xarray.open_zarr reads the (empty) root without a warning
                 os.rename(tmp, self.path)  # the store appears whole, with its definition
             except OSError as exc:
                 if not self.path.is_dir():
@@ -239,6 +240,9 @@ class _Store:
                             comment=_RUNNING)
             self._clear_root()
             ds.to_zarr(str(self.path), mode="a", consolidated=False, **_zkw())
+            import zarr
+
+            zarr.consolidate_metadata(str(self.path))
 
     def _clear_root(self):
         """Remove the root group's arrays (an earlier snapshot), keeping its attrs and the runs."""
@@ -263,7 +267,7 @@ class _Store:
             ds = ds.copy()
             ds.attrs["vibkit_sweep"] = json.dumps(self.plan.definition())
             ds.attrs["vibkit_sweep_state"] = "consolidating"
-            ds.attrs["comment"] = ""
+            ds.attrs["comment"] = "a complete vibkit sweep (xarray.open_zarr reads it)"
             self._clear_root()
             ds.to_zarr(str(self.path), mode="a", consolidated=False, **_zkw())
             zarr.open_group(str(self.path), mode="r+", **_zkw()).attrs.update({"vibkit_sweep_state": "complete"})
