@@ -11,11 +11,13 @@ the scan machinery in :mod:`vibkit.fleet.scan`.
 
 from __future__ import annotations
 
+import functools
 import json
 import math
 import os
 import re
 import sqlite3
+import urllib.parse
 from dataclasses import asdict
 
 from ..diagnose.pitch import DEFAULT_LIMITS_PERCENT
@@ -92,6 +94,41 @@ def resolve_db_path(db=None) -> str:
     return path.split("?", 1)[0]
 
 
+def _sqlite_error(path, exc) -> FleetError:
+    """One line naming the database, what went wrong and what to do, for a ``sqlite3.Error``."""
+    text = " ".join(str(exc).split())
+    low = text.lower()
+    if "malformed" in low or "not a database" in low or "corrupt" in low:
+        why = (f"the database file is damaged ({text}); restore it from a backup, or recover what is readable "
+               f"with: sqlite3 {path} .recover | sqlite3 recovered.sqlite")
+    elif "readonly" in low or "read-only" in low:
+        why = (f"cannot write: the file or its folder is read-only ({text}); make both writable, or give a "
+               f"writable --db")
+    elif "locked" in low or "busy" in low:
+        why = f"locked by another process ({text}); try again when it has finished"
+    elif "unable to open" in low or "disk i/o" in low or "cannot open" in low:
+        why = (f"cannot open the database ({text}); check that the file and its folder exist and can be read "
+               f"(and written, to add)")
+    elif "full" in low:
+        why = f"the disk is full ({text}); nothing was stored"
+    else:
+        why = f"SQLite error: {text}"
+    return FleetError(f"{path}: {why}")
+
+
+def _translated(method):
+    """SQLite's exceptions of a :class:`FleetDB` method as one-line :class:`FleetError`\\ s naming the file."""
+
+    @functools.wraps(method)
+    def wrapper(self, *args, **kwargs):
+        try:
+            return method(self, *args, **kwargs)
+        except sqlite3.Error as exc:
+            raise _sqlite_error(self.path, exc) from None
+
+    return wrapper
+
+
 class FleetDB:
     """The measurement history of a fleet, in one SQLite file.
 
@@ -101,12 +138,16 @@ class FleetDB:
         Database file or ``sqlite:///path`` URL (see :func:`resolve_db_path`).
     create : bool
         Create the database if it does not exist (``False``: a missing database is an error).
+    readonly : bool
+        Open it read-only (SQLite's ``mode=ro``): for status and reports; never writes, not even
+        vibkit's schema into a SQLite file that lacks it (that is an error).
 
     Raises
     ------
     FleetError
         Missing database with ``create=False``, a file that is not a SQLite database, a SQLite
-        database of another application or of a newer vibkit.
+        database of another application or of a newer vibkit; and every SQLite error (a damaged,
+        read-only or locked file) in one line naming the database and what to do.
 
     Examples
     --------
@@ -116,34 +157,59 @@ class FleetDB:
     ...         print(trend.unit, trend.slope_percent_per_year)
     """
 
-    def __init__(self, path=None, *, create=True):
+    #: seconds a write waits for another process's transaction before it is an error
+    TIMEOUT_S = 60.0
+
+    def __init__(self, path=None, *, create=True, readonly=False):
         self.path = resolve_db_path(path)
+        self.readonly = bool(readonly)
         p = self.path
         if os.path.isdir(p):
             raise FleetError(f"{p}: is a folder; expected the fleet database file")
         exists = os.path.exists(p) and os.path.getsize(p) > 0
-        if not exists and not create:
+        if not exists and (not create or readonly):
             raise FleetError(f"{p}: no fleet database here (vibkit fleet add or scan creates one; --db or "
                              f"{DB_ENV} names another)")
         if exists:
-            with open(p, "rb") as fh:
-                if fh.read(16) != _SQLITE_MAGIC:
-                    raise FleetError(f"{p}: not a SQLite database; expected a vibkit fleet database")
+            try:
+                with open(p, "rb") as fh:
+                    head = fh.read(16)
+            except OSError as exc:
+                raise FleetError(f"{p}: cannot read the database: {exc.strerror or exc}; check its permissions") \
+                    from None
+            if head != _SQLITE_MAGIC:
+                raise FleetError(f"{p}: not a SQLite database; expected a vibkit fleet database")
         parent = os.path.dirname(os.path.abspath(p))
         if not os.path.isdir(parent):
             raise FleetError(f"{p}: folder {parent} does not exist")
         try:
-            self._con = sqlite3.connect(p, timeout=60.0, isolation_level=None)
+            self._con = self._connect(p)
         except sqlite3.Error as exc:
-            raise FleetError(f"{p}: cannot open the database: {exc}") from None
+            raise _sqlite_error(p, exc) from None
         try:
             self._prepare(exists)
-        except sqlite3.DatabaseError as exc:
+        except sqlite3.Error as exc:
             self._con.close()
-            raise FleetError(f"{p}: not a usable fleet database: {exc}") from None
+            raise _sqlite_error(p, exc) from None
         except FleetError:
             self._con.close()
             raise
+
+    def _connect(self, p):
+        if not self.readonly:
+            return sqlite3.connect(p, timeout=self.TIMEOUT_S, isolation_level=None)
+        # read-only use (status, report) never writes, not even a journal: SQLite's read-only mode; a WAL
+        # database in a read-only folder (no -shm file can be made) is read as immutable
+        uri = "file:" + urllib.parse.quote(os.path.abspath(p)) + "?mode=ro"
+        con = sqlite3.connect(uri, uri=True, timeout=self.TIMEOUT_S, isolation_level=None)
+        try:
+            con.execute("SELECT count(*) FROM sqlite_master").fetchone()
+        except sqlite3.OperationalError:
+            con.close()
+            if os.access(os.path.dirname(os.path.abspath(p)), os.W_OK):
+                raise
+            con = sqlite3.connect(uri + "&immutable=1", uri=True, timeout=60.0, isolation_level=None)
+        return con
 
     def _prepare(self, exists):
         con = self._con
@@ -155,6 +221,11 @@ class FleetDB:
                              f"{', '.join(tables) or 'none'}); refusing to write into it")
         if ver > SCHEMA_VERSION:
             raise FleetError(f"{self.path}: written by a newer vibkit (schema {ver}, this one reads {SCHEMA_VERSION})")
+        if self.readonly:
+            if "measurement" not in tables:
+                raise FleetError(f"{self.path}: a SQLite database without vibkit's measurement table, not a fleet "
+                                 f"history (vibkit fleet add or scan makes one; --db names another); left as it is")
+            return
         mode = con.execute("PRAGMA journal_mode=WAL").fetchone()[0]
         if str(mode).lower() != "wal":  # pragma: no cover - file systems without shared memory
             raise FleetError(f"{self.path}: SQLite cannot use its WAL journal here (mode {mode!r})")
@@ -194,27 +265,32 @@ class FleetDB:
             out.append(Measurement(**d))
         return out
 
+    @_translated
     def measurements(self, unit=None):
         """Stored measurements, by unit then date (of one unit if given)."""
         if unit is None:
             return self._rows("ORDER BY unit, date_unix_s, id")
         return self._rows("WHERE unit = ? ORDER BY date_unix_s, id", (str(unit),))
 
+    @_translated
     def find(self, sha256):
         """The stored measurement of a file with this SHA-256, or None."""
         r = self._rows("WHERE sha256 = ?", (str(sha256),))
         return r[0] if r else None
 
+    @_translated
     def units(self):
         """Unit identifiers, sorted."""
         return [r[0] for r in self._con.execute("SELECT DISTINCT unit FROM measurement ORDER BY unit")]
 
+    @_translated
     def nominal_pitch(self, unit):
         """The nominal pitch stored for a unit [m], or None for a new unit."""
         r = self._con.execute("SELECT nominal_pitch_m FROM measurement WHERE unit = ? ORDER BY id DESC LIMIT 1",
                               (str(unit),)).fetchone()
         return None if r is None else float(r[0])
 
+    @_translated
     def integrity_check(self) -> str:
         """SQLite's ``PRAGMA integrity_check`` (``"ok"`` when the file is sound)."""
         return str(self._con.execute("PRAGMA integrity_check").fetchone()[0])
@@ -224,6 +300,7 @@ class FleetDB:
         return (f"{what}: already stored (same sha256) as measurement #{m.id} of unit {m.unit!r} dated "
                 f"{m.date_utc[:10]}, from {m.path}")
 
+    @_translated
     def insert(self, m: Measurement) -> Measurement:
         """Store one analysed measurement in its own transaction; the stored row (with its id).
 
@@ -256,6 +333,7 @@ class FleetDB:
         d["id"] = rid
         return Measurement(**d)
 
+    @_translated
     def add(self, recording, *, unit, speed, speed_sigma=0.0, date=None, nominal_pitch=None, channel=None):
         """Analyse a recording and store its measurement.
 
@@ -285,6 +363,9 @@ class FleetDB:
             No date, no link-pass, no nominal pitch for a new unit, another nominal pitch than the
             unit's.
         """
+        from .inputs import check_inputs, check_pitch
+
+        check_inputs(unit=unit, speed=speed, speed_sigma=speed_sigma, nominal_pitch=nominal_pitch, date=date)
         spath = os.fspath(recording)
         if not os.path.exists(spath):
             raise FleetError(f"{spath}: file not found; expected a recording")
@@ -295,10 +376,12 @@ class FleetDB:
         nom = nominal_pitch if nominal_pitch is not None else self.nominal_pitch(unit)
         if nom is None:
             raise FleetError(f"unit {str(unit)!r} is new: give its nominal link pitch (--nominal-pitch, in m)")
+        check_pitch(nom, f"the nominal pitch stored for unit {str(unit)!r} in {self.path}")
         m = analyse_recording(spath, unit=unit, speed=speed, speed_sigma=speed_sigma, nominal_pitch=nom, date=date,
                               channel=channel)
         return self.insert(m)
 
+    @_translated
     def scan(self, directory, catalogue, *, scheduler=None, n_workers=None, client=None, parallel=True,
              on_failure=None, progress=False):
         """Add every recording of a folder that a catalogue describes; analyses run on Dask workers.
@@ -338,6 +421,7 @@ class FleetDB:
                            parallel=parallel, on_failure=on_failure, progress=progress)
 
     # ----------------------------------------------------------------------------------- status
+    @_translated
     def status(self, *, limits_percent=DEFAULT_LIMITS_PERCENT, coverage_sigma=2.0, units=None):
         """Per unit: latest elongation, trend and forecasts, ranked by urgency (most urgent first).
 
