@@ -6,7 +6,7 @@ import math
 
 from .options import (add_command, add_json, add_limits, add_recording, band, positive, read_recording,
                       speed_sigma, speed_uncertainty, teeth)
-from .output import msg, print_json, table
+from .output import in_file, msg, print_json, table
 
 EPILOG = ("examples:\n  vibkit pitch data/field/leon-tensioner.csv --speed 0.49 --speed-uncertainty 0.1% "
           "--nominal-pitch 0.13333\n  vibkit pitch logger.txt --sample-rate 2050 --speed 0.52 --json")
@@ -33,8 +33,11 @@ def run(a):
 
     rec = read_recording(a)
     sigma = speed_sigma(a.speed_uncertainty, a.speed) if a.speed_uncertainty else 0.0
-    est = estimate_pitch(rec, speed=a.speed, speed_sigma=sigma, channel=a.channel, band=a.band,
-                         nominal_pitch=a.nominal_pitch, limits_percent=a.limits, teeth=a.teeth)
+    try:
+        est = estimate_pitch(rec, speed=a.speed, speed_sigma=sigma, channel=a.channel, band=a.band,
+                             nominal_pitch=a.nominal_pitch, limits_percent=a.limits, teeth=a.teeth)
+    except ValueError as exc:  # the analysis's words about the signal, with the file named
+        raise in_file(a.recording, exc) from None
     if not est.detected:
         return not_found("pitch", a, est, {"file": a.recording})
     if a.json:

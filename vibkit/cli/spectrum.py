@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from .options import add_command, add_json, add_recording, band, read_recording
-from .output import msg, print_json, table
+from .output import in_file, msg, print_json, table
 from .pitch import not_found
 
 EPILOG = "example:\n  vibkit spectrum data/field/leon-tensioner.csv --band 2.5:6 --json"
@@ -25,7 +25,10 @@ def run(a):
     rec = read_recording(a)
     ch = pick_channel(rec, a.channel)
     search = a.band or (2.5, 6.0)
-    est = estimate_pitch(rec, speed=1.0, channel=ch, band=search, n_harmonics=a.harmonics)
+    try:
+        est = estimate_pitch(rec, speed=1.0, channel=ch, band=search, n_harmonics=a.harmonics)
+    except ValueError as exc:  # the analysis's words about the signal, with the file named
+        raise in_file(a.recording, exc) from None
     units = str(rec[ch].attrs.get("units", "1"))
     if not est.detected:
         return not_found("spectrum", a, est, {"file": a.recording, "channel": ch, "units": units,
