@@ -9,8 +9,10 @@ the outputs asked for with ``keep``. With ``samples=N`` the keys are drawn at ra
 
 Keys are the scene TOML's dotted keys (``chain.link_pitch``, ``effects.contact.stiffness``,
 ``solver.rtol`` ...). A key the scene loader does not know, or an effect the scene does not switch
-on, is an error naming the key before any run starts; every varied scene is validated when the
-sweep is planned, and a varied value the loader refuses is recorded as that run's failure
+on, or a key the scene's analysis does not read (it would give identical runs), is an error naming
+the key before any run starts, as is a sweep whose result would exceed the result budget
+(:mod:`vibkit.sweep.limits`). Each varied scene is validated just before it is submitted (a bounded
+number are in flight), and a varied value the loader refuses is recorded as that run's failure
 (status ``invalid``), as is a run whose integration fails (status ``failed``): neither stops the sweep.
 
 Storage (``output=...``, a Zarr directory): each finished run is written by the driver as it
