@@ -19,8 +19,8 @@ SIZE = ("runs", "of results", "--max-result-bytes")
 
 # the child prints READY once the first run is stored, then keeps computing slowly
 SLOW_SWEEP = """
-import time
-import vibkit.sweep.store as _st
+import importlib, time
+_st = importlib.import_module("vibkit.sweep.store")  # vibkit.sweep is the function
 _orig = _st._Store.write_run
 def _slow(self, rec):
     _orig(self, rec)
