@@ -115,7 +115,8 @@ def test_cli_ride_options_and_table(ride_csv, capsys):
 
 
 @pytest.mark.parametrize("args,msg", [
-    (["--weighting", "Wq"], "weighting='Wq'"),
+    (["--weighting", "Wq"], "unknown weighting 'Wq'"),
+    (["--weighting", "Wb,Wc"], "2 weightings for the three axes"),
     (["--channels", "nope,-,-"], "channel 'nope'"),
     (["--segment", "9:3"], "segment"),
     (["--segment", "900:1000"], "after the end"),

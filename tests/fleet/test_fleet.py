@@ -178,8 +178,9 @@ def test_parse_date():
     assert parse_date("2026-03-01T10:00:00+01:00").isoformat() == "2026-03-01T09:00:00+00:00"
     assert parse_date("01/03/2026 10:00:00").isoformat() == "2026-03-01T10:00:00+00:00"
     assert parse_date("2019-03-12, 10:25:14,500").isoformat() == "2019-03-12T10:25:14.500000+00:00"  # GCDC
-    for bad, match in (("12:00:00", "no calendar date"), ("yesterday", "ISO 8601"), ("2999-01-01", "future"),
-                       ("1850-01-01", "before 1900"), ("", "empty")):
+    for bad, match in (("12:00:00", "no calendar date"), ("yesterday", "ISO 8601"), ("2999-01-01", "1970-2100"),
+                       ("2099-01-01", "future"), ("1850-01-01", "1970-2100"), ("", "empty"),
+                       ("9999-12-31T23:59:59-23:59", "1970-2100")):
         with pytest.raises(FleetError, match=match):
             parse_date(bad)
 

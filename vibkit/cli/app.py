@@ -54,10 +54,11 @@ def main(argv=None) -> int:
         with handle_termination():  # SIGTERM runs the same clean-up as Ctrl-C
             return int(args.func(args))
     except Interrupted as exc:
-        msg(f"vibkit {args.command}: interrupted (signal {exc.signum}); nothing was written")
+        written = getattr(exc, "vibkit_note", "nothing was written")  # e.g. a sweep's runs stored so far
+        msg(f"vibkit {args.command}: interrupted (signal {exc.signum}); {written}")
         return 128 + exc.signum
-    except KeyboardInterrupt:
-        msg(f"vibkit {args.command}: interrupted; nothing was written")
+    except KeyboardInterrupt as exc:
+        msg(f"vibkit {args.command}: interrupted; {getattr(exc, 'vibkit_note', 'nothing was written')}")
         return 130
     except Exception as exc:
         if not _is_user_error(exc):

@@ -78,7 +78,7 @@ SCAN_SOME_FAILED = 3
 def _fleet_db(a, *, create=True):
     from vibkit.fleet.history import FleetDB
 
-    return FleetDB(a.db, create=create)
+    return FleetDB(a.db, create=create, readonly=not create)  # status, report: read-only
 
 
 def _fmt_measurement(m):
@@ -89,7 +89,11 @@ def _fmt_measurement(m):
 
 
 def run_add(a):
+    from vibkit.fleet.inputs import check_inputs
+
     sigma = speed_sigma(a.speed_uncertainty, a.speed) if a.speed_uncertainty else 0.0
+    # the stated ranges before the database is opened (or made) and before the recording is read
+    check_inputs(unit=a.unit, speed=a.speed, speed_sigma=sigma, nominal_pitch=a.nominal_pitch, date=a.date)
     with _fleet_db(a) as db:
         m = db.add(a.recording, unit=a.unit, speed=a.speed, speed_sigma=sigma, date=a.date,
                    nominal_pitch=a.nominal_pitch, channel=a.channel, replaced=a.replaced,
@@ -112,6 +116,9 @@ def run_scan(a):
         why = cli_message(why)
         msg(f"vibkit fleet scan: failed: {why if why.startswith(name) else f'{name}: {why}'}")
 
+    from vibkit.fleet.catalogue import read_catalogue
+
+    read_catalogue(a.catalogue)  # a bad catalogue is refused before the database is opened (or made)
     with _fleet_db(a) as db:
         res = db.scan(a.directory, a.catalogue, scheduler=a.scheduler, n_workers=a.workers or None,
                       parallel=a.workers != 0, on_failure=failed, progress=sys.stderr.isatty(),

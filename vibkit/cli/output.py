@@ -23,6 +23,12 @@ def color():
     return sys.stderr.isatty() and "NO_COLOR" not in os.environ and os.environ.get("TERM", "") != "dumb"
 
 
+def in_file(path, exc) -> Exception:
+    """``exc`` if its message names ``path``, else a ValueError whose one line starts with it."""
+    text = " ".join(str(exc).split()) or type(exc).__name__
+    return exc if os.fspath(path) in text else ValueError(f"{os.fspath(path)}: {text}")
+
+
 def msg(text):
     print(text, file=sys.stderr)
 

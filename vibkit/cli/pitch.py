@@ -6,7 +6,7 @@ import math
 
 from .options import (add_command, add_json, add_limits, add_recording, band, chain_speed, pitch_length,
                       read_recording, speed_sigma, speed_uncertainty, teeth)
-from .output import CLIError, msg, print_json, table
+from .output import CLIError, in_file, msg, print_json, table
 
 EPILOG = ("examples:\n  vibkit pitch data/field/leon-tensioner.csv --speed-uncertainty 0.1% --nominal-pitch 133.33mm\n"
           "  vibkit pitch logger.txt --sample-rate 2050 --speed 52cm/s --json\n"
@@ -54,9 +54,12 @@ def run(a):
     rec = read_recording(a)
     speed, source = resolve_speed(a, rec)
     sigma = speed_sigma(a.speed_uncertainty, speed) if a.speed_uncertainty else 0.0
-    res = estimate_channels(rec, channel=a.channel, speed=speed, speed_sigma=sigma, band=a.band,
-                            nominal_pitch=a.nominal_pitch, limits_percent=a.limits, teeth=a.teeth,
-                            speed_source=source)
+    try:
+        res = estimate_channels(rec, channel=a.channel, speed=speed, speed_sigma=sigma, band=a.band,
+                                nominal_pitch=a.nominal_pitch, limits_percent=a.limits, teeth=a.teeth,
+                                speed_source=source)
+    except ValueError as exc:  # the analysis's words about the signal, with the file named
+        raise in_file(a.recording, exc) from None
     if res.best is None:
         return refused("pitch", a, res, {"file": a.recording})
     est = res.best

@@ -21,7 +21,7 @@ def add_parser(subparsers):
     s.add_argument("--channels", help="recording channels for x,y,z (travel, lateral, vertical; - skips one), "
                    "or AXIS=NAME pairs (default: names ending in x, y, z); write --channels=-,-,az when x is skipped")
     s.add_argument("--segment", help="ride segment START:END [s] from the first sample (default: detected)")
-    s.add_argument("--weighting", help="Wk, Wd ... for every axis, or x=Wd,y=Wd,z=Wk (the default)")
+    s.add_argument("--weighting", help="Wk, Wd ... for every axis, three for x,y,z (Wd,Wd,Wk), or x=Wd,y=Wd,z=Wk (the default)")
     s.add_argument("--scene", help="also simulate this scene's step and report it next to the recording")
     s.add_argument("--duration", type=positive, help="simulated time [s] (default: the scene's)")
     add_recording(s, positional=False, channel=False)
@@ -31,22 +31,10 @@ def add_parser(subparsers):
 
 
 def _weightings(text):
-    """``Wk`` (every axis) or ``x=Wd,y=Wd,z=Wk`` -> {axis: name} (None: the defaults)."""
-    if not text:
-        return None
-    from vibkit.signal.weighting import get_weighting
+    """``Wk`` (every axis), ``Wd,Wd,Wk`` (x, y, z) or ``x=Wd,y=Wd,z=Wk`` -> {axis: name} (None: the defaults)."""
+    from vibkit.diagnose.ride import parse_weightings
 
-    out = {}
-    for item in text.split(","):
-        if "=" in item:
-            k, v = (p.strip() for p in item.split("=", 1))
-            if k.lower() not in ("x", "y", "z", "tangential"):
-                raise CLIError(f"--weighting: axis {k!r} must be x, y, z or tangential (in {text!r})")
-            out[k.lower()] = get_weighting(v).name
-        else:
-            name = get_weighting(item).name
-            out.update({k: name for k in ("x", "y", "z", "tangential")})
-    return out
+    return parse_weightings(text)
 
 
 def _ride_rows(rq):

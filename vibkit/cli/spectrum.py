@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from .options import add_command, add_json, add_limits, add_recording, band, read_recording
-from .output import msg, print_json, table
+from .output import in_file, msg, print_json, table
 from .pitch import add_speed_options, print_channels, refused, resolve_speed
 
 EPILOG = ("example:\n  vibkit spectrum data/field/leon-tensioner.csv --band 2.5:6 --json\n"
@@ -30,9 +30,12 @@ def run(a):
     rec = read_recording(a)
     speed, source = resolve_speed(a, rec, required=False)
     search = a.band or (None if speed else (2.5, 6.0))
-    res = estimate_channels(rec, channel=a.channel, speed=speed or 1.0, band=search, n_harmonics=a.harmonics,
-                            nominal_pitch=a.nominal_pitch if speed else None, limits_percent=a.limits,
-                            speed_source=source or "none", frequency_only=speed is None)
+    try:
+        res = estimate_channels(rec, channel=a.channel, speed=speed or 1.0, band=search, n_harmonics=a.harmonics,
+                                nominal_pitch=a.nominal_pitch if speed else None, limits_percent=a.limits,
+                                speed_source=source or "none", frequency_only=speed is None)
+    except ValueError as exc:  # the analysis's words about the signal, with the file named
+        raise in_file(a.recording, exc) from None
     if res.best is None:
         e0 = res.estimates[0]
         return refused("spectrum", a, res, {"file": a.recording, "units": e0.extra.get("units", "1"),

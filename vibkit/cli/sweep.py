@@ -6,13 +6,14 @@ import argparse
 import os
 import time
 
-from .options import add_command, add_json, positive
+from .options import add_command, add_json, byte_size, positive
 from .output import CLIError, msg, print_json, table
 
 EPILOG = ("examples:\n  vibkit sweep sim/thesis-forward.toml --vary chain.link_pitch=0.1333:0.1373:9 "
           "--vary effects.contact.stiffness=1e5,1e6,1e7 --duration 10 -o sweep.zarr\n"
           "  vibkit sweep sim/leon.toml --vary motion.speed=0.45:0.55 --samples 50 --seed 1 --keep delta -o mc.zarr\n"
-          "re-running the same command resumes an interrupted sweep; xarray.open_zarr('sweep.zarr') reads it")
+          "re-running the same command resumes an interrupted sweep; xarray.open_zarr('sweep.zarr') reads it\n"
+          "(vibkit.sweep.open_sweep('sweep.zarr') also reads the runs of an interrupted one)")
 
 
 def vary(text):
@@ -25,6 +26,23 @@ def vary(text):
         raise argparse.ArgumentTypeError(str(exc)) from None
 
 
+def _whole(text):
+    """A whole number >= 0 written plainly (``1_000`` and ``1e3`` are refused)."""
+    if not text.strip().isdigit() or not text.strip().isascii():
+        raise argparse.ArgumentTypeError(f"expected a whole number such as 50, got {text!r}")
+    return int(text)
+
+
+def _settle(text):
+    """Seconds >= 0, a plain decimal number (``0_5`` is refused)."""
+    from vibkit.sweep.plan import _number
+
+    try:
+        return _number(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a time in seconds such as 2.5, got {text!r}") from None
+
+
 def add_parser(subparsers):
     s = add_command(subparsers, "sweep",
                     "run a scene over a grid (or random draws) of its keys on Dask; results to Zarr", EPILOG)
@@ -33,17 +51,21 @@ def add_parser(subparsers):
                    help="a dotted scene key and its values: A:B:N (linspace), a,b,c (list), A:B (a range, "
                         "with --samples); repeat for more keys")
     s.add_argument("-o", "--output", required=True, help="Zarr directory to write (re-run to resume)")
-    s.add_argument("--samples", type=int, help="Monte Carlo: draw this many scenes (uniformly in each A:B)")
-    s.add_argument("--seed", type=int, help="seed of the Monte Carlo draws (default 0)")
+    s.add_argument("--samples", type=_whole, help="Monte Carlo: draw this many scenes (uniformly in each A:B)")
+    s.add_argument("--seed", type=_whole, help="seed of the Monte Carlo draws (default 0)")
     s.add_argument("--keep", action="append", metavar="OUTPUT",
                    help="keep this output's full series (e.g. delta); repeat for more")
-    s.add_argument("--settle", type=float, help="start-up left out of the summaries [s] (default: a quarter "
+    s.add_argument("--settle", type=_settle, help="start-up left out of the summaries [s] (default: a quarter "
                                                 "of a forward run)")
     s.add_argument("--duration", type=positive, help="override every run's duration [s] (kinematics: [m])")
     s.add_argument("--scheduler", help="address of a running Dask scheduler (default: Dask's configuration, "
                                        "else a local cluster)")
-    s.add_argument("--workers", type=int, help="worker processes of the local cluster (default: one per core)")
-    s.add_argument("--max-runs", type=int, help="compute at most this many runs now (resume later)")
+    s.add_argument("--workers", type=_whole, help="worker processes of the local cluster (default: one per core)")
+    s.add_argument("--max-runs", type=_whole, help="compute at most this many runs now (resume later)")
+    s.add_argument("--max-result-bytes", type=byte_size, metavar="SIZE",
+                   help="refuse sweeps whose result (runs x summaries and kept series) would be larger, e.g. 4GiB "
+                        "(default: the scene's [solver] max_result_bytes, $VIBKIT_MAX_RESULT_BYTES or 2GiB; 0: no "
+                        "limit)")
     s.add_argument("--force", action="store_true", help="discard a store at -o that holds a different sweep")
     s.add_argument("--check", action="store_true",
                    help="forward scenes: check each run's convergence (a converged flag per run; see simulate --check)")
@@ -70,7 +92,8 @@ def run(a):
     t0 = time.perf_counter()
     ds = vibkit.sweep(a.scene, varied, output=a.output, samples=a.samples, seed=a.seed, keep=a.keep or (),
                       settle=a.settle, duration=a.duration, scheduler=a.scheduler, n_workers=a.workers,
-                      force=a.force, progress=not a.quiet, max_runs=a.max_runs, check=a.check)
+                      force=a.force, progress=not a.quiet, max_runs=a.max_runs, check=a.check,
+                      max_result_bytes=a.max_result_bytes)
     wall = time.perf_counter() - t0
     st = ds["status"]
     keys = [k.strip() for k in ds.attrs["varied_keys"].split(",")]

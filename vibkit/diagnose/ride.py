@@ -19,6 +19,7 @@ low-passed (unweighted) signal.  Definitions: :mod:`vibkit.signal.ride`,
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import os
 import re
@@ -30,6 +31,7 @@ from ..signal.ride import LOWPASS_HZ, PeakToPeak, RideSegment, detect_ride_segme
 from ..signal.weighting import frequency_weighting, get_weighting
 
 __all__ = ["AxisRide", "RideQuality", "DEFAULT_WEIGHTINGS", "ride_quality", "ride_quality_from_recording",
+           "parse_weightings",
            "ride_quality_from_simulation", "simulate_ride", "parse_channels", "parse_segment"]
 
 #: ISO 2631-1 / ISO 18738: horizontal axes Wd, vertical Wk (an axis along the guide tangent: Wd)
@@ -155,6 +157,94 @@ def parse_channels(text) -> dict:
     return out
 
 
+def parse_weightings(text) -> dict | None:
+    """``--weighting`` text -> {axis: weighting name}, one to one, or None for the defaults.
+
+    One name weights every axis (``Wk``); three names weight x, y, z in that order (``Wd,Wd,Wk``);
+    ``AXIS=NAME`` pairs name their axes (``x=Wd,z=Wk``; x, y, z or tangential, each at most once).
+    Any other count, a repeated axis, a mix of the forms or an unknown name is a ValueError naming
+    the text.
+    """
+    from ..signal.weighting import WEIGHTINGS, get_weighting
+
+    if text is None or not str(text).strip():
+        return None
+    items = [s.strip() for s in str(text).split(",")]
+    if not all(items):
+        raise ValueError(f"--weighting {text!r}: an empty entry (expected Wk, Wd,Wd,Wk or x=Wd,y=Wd,z=Wk)")
+
+    def name(v):
+        try:
+            return get_weighting(v).name
+        except ValueError:
+            raise ValueError(f"--weighting {text!r}: unknown weighting {v!r} (ISO 2631-1: {', '.join(WEIGHTINGS)})") \
+                from None
+
+    pairs = ["=" in s for s in items]
+    if any(pairs) and not all(pairs):
+        raise ValueError(f"--weighting {text!r}: mix of AXIS=NAME and plain names; use one form")
+    if all(pairs):
+        out = {}
+        for s in items:
+            k, v = (p.strip() for p in s.split("=", 1))
+            k = k.lower()
+            if k not in DEFAULT_WEIGHTINGS:
+                raise ValueError(f"--weighting {text!r}: axis {k!r} must be x, y, z or tangential")
+            if k in out:
+                raise ValueError(f"--weighting {text!r}: axis {k} is given twice")
+            out[k] = name(v)
+        return out
+    if len(items) == 1:
+        return {k: name(items[0]) for k in DEFAULT_WEIGHTINGS}
+    if len(items) != 3:
+        raise ValueError(f"--weighting {text!r}: {len(items)} weightings for the three axes x, y, z; give one for "
+                         f"every axis, three in the order x,y,z, or AXIS=NAME pairs")
+    return dict(zip(("x", "y", "z"), (name(v) for v in items)))
+
+
+def _in_vibkit_words(exc, source) -> str:
+    """An analysis error as one line that names ``source`` (once), scipy's filter wording replaced."""
+    text = " ".join(str(exc).split()) or type(exc).__name__
+    if "Wn" in text or "critical frequenc" in text:
+        text = ("the sample rate is too low for the ISO 2631-1 weighting filters (they reach 100 Hz; record at "
+                "250 Hz or more)")
+    if text.startswith("Parameter "):
+        text = text[len("Parameter "):]
+    if source and str(source) not in text:
+        text = f"{source}: {text}"
+    return text
+
+
+def _naming(source_of):
+    """Decorator: ValueErrors (and scipy's) of a ride function re-raised in one line naming the file."""
+
+    def wrap(func):
+        @functools.wraps(func)
+        def inner(*args, **kwargs):
+            try:
+                return func(*args, **kwargs)
+            except ValueError as exc:
+                src = source_of(*args, **kwargs)
+                text = _in_vibkit_words(exc, src)
+                if text == str(exc):
+                    raise
+                raise ValueError(text) from None
+
+        return inner
+
+    return wrap
+
+
+def _recording_source(recording, *args, **kwargs):
+    if isinstance(recording, (str, os.PathLike)):
+        return os.fspath(recording)
+    return getattr(recording, "attrs", {}).get("source_file", "")
+
+
+def _scene_source(scene, *args, **kwargs):
+    return os.fspath(scene) if isinstance(scene, (str, os.PathLike)) else getattr(scene, "source", "")
+
+
 def _metrics(x, fs, i0, i1, notes, label):
     """Peak-to-peak summary over the segment; NaN (with a note) for a signal without two half-cycles."""
     try:
@@ -269,6 +359,7 @@ def _auto_channels(rec, names):
                      f"(e.g. --channels {names[0]},-,- or --channels z={names[0]})")
 
 
+@_naming(_recording_source)
 def ride_quality_from_recording(recording, *, channels=None, segment=None, weightings=None, sample_rate=None,
                                 speed_channel=None, read_options=None) -> RideQuality:
     """Ride quality of a recording of a step-riding accelerometer.
@@ -444,6 +535,7 @@ def ride_quality_from_simulation(ds, *, segment=None, weightings=None, source=No
                         channel_names=names, speed=speed, detect=detect, notes=notes)
 
 
+@_naming(_scene_source)
 def simulate_ride(scene, *, duration=None, segment=None, weightings=None, progress=False) -> RideQuality:
     """Simulate a scene with its step accelerometer's roller motion as outputs, then assess the ride.
 

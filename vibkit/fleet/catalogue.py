@@ -33,6 +33,7 @@ from dataclasses import dataclass
 
 from .dates import _iso, parse_date
 from .errors import FleetError
+from .inputs import check_pitch, check_speed, check_speed_sigma
 
 __all__ = ["CATALOGUE_COLUMNS", "CatalogueRow", "read_catalogue"]
 
@@ -124,6 +125,11 @@ def read_catalogue(path):
         speed = _number(v["speed_m_s"], spath, n, "speed_m_s", lo=0.0, hi=10.0, unit="m/s")
         ssig = _number(v["speed_sigma_m_s"], spath, n, "speed_sigma_m_s", lo=0.0, hi=speed, unit="m/s") \
             if v.get("speed_sigma_m_s") else 0.0
+        try:  # the stated ranges (vibkit.fleet.inputs), as for fleet add
+            check_speed(speed, "column speed_m_s")
+            check_speed_sigma(ssig, speed, "column speed_sigma_m_s")
+        except FleetError as exc:
+            raise FleetError(f"{spath}, line {n}: {exc}") from None
         date = None
         if v["date"]:
             try:
@@ -134,6 +140,10 @@ def read_catalogue(path):
         if v["nominal_pitch_m"]:
             nom = _number(v["nominal_pitch_m"], spath, n, "nominal_pitch_m", lo=0.0, hi=1.0, unit="m",
                           hint=" (metres: 0.13333, not 133.33)")
+            try:
+                check_pitch(nom, "column nominal_pitch_m")
+            except FleetError as exc:
+                raise FleetError(f"{spath}, line {n}: {exc}") from None
             prev = nominal.get(v["unit"])
             if prev is not None and not math.isclose(prev[0], nom, rel_tol=1e-9):
                 raise FleetError(f"{spath}, line {n}: unit {v['unit']!r} has nominal_pitch_m {nom:g} here but "

@@ -10,6 +10,7 @@ import math
 import re
 
 from .errors import FleetError
+from .inputs import check_date
 
 __all__ = ["parse_date"]
 
@@ -20,8 +21,8 @@ _DMY = re.compile(r"([0-9]{1,2})[/.-]([0-9]{1,2})[/.-]([0-9]{4})(?:[ T](.*))?")
 def parse_date(text, *, what="date") -> _dt.datetime:
     """A timezone-aware UTC datetime from ISO 8601 text (or day/month/year as loggers write it).
 
-    A date without time is midnight; a time without zone is UTC.  Dates before 1900 or more than a
-    day in the future are refused (a measurement cannot be in the future).
+    A date without time is midnight; a time without zone is UTC.  Dates outside 1970-2100 or more
+    than a day in the future are refused (:func:`vibkit.fleet.inputs.check_date`).
 
     Raises
     ------
@@ -44,11 +45,11 @@ def parse_date(text, *, what="date") -> _dt.datetime:
                          "2026-11-23T10:15:00+01:00)") from None
     if d.tzinfo is None:
         d = d.replace(tzinfo=_dt.timezone.utc)
-    d = d.astimezone(_dt.timezone.utc)
-    if d.year < 1900:
-        raise FleetError(f"{what} {s!r} is before 1900; expected the date of the measurement")
-    if d > _dt.datetime.now(_dt.timezone.utc) + _dt.timedelta(days=1):
-        raise FleetError(f"{what} {s!r} lies in the future; expected the date of the measurement")
+    try:
+        d = d.astimezone(_dt.timezone.utc)
+    except (OverflowError, ValueError):  # 9999-12-31T23:59:59-23:59 is past the calendar in UTC
+        raise FleetError(f"{what} {s!r} is outside 1970-2100; expected the date of the measurement") from None
+    check_date(d, what, s)
     return d
 
 

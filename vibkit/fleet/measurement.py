@@ -102,17 +102,17 @@ def analyse_recording(path, *, unit, speed, speed_sigma=0.0, nominal_pitch, date
     from vibkit.io import read_recording
     from vibkit.diagnose.pitch import estimate_pitch
 
+    from .inputs import check_inputs
+
+    # every input checked before the recording is read
+    given = check_inputs(unit=unit, speed=speed, speed_sigma=speed_sigma, nominal_pitch=nominal_pitch, date=date)
     unit = str(unit).strip()
-    if not unit:
-        raise FleetError("unit must be a non-empty identifier")
-    if nominal_pitch is None or not (math.isfinite(float(nominal_pitch)) and float(nominal_pitch) > 0):
-        raise FleetError(f"nominal_pitch must be a positive length [m], got {nominal_pitch!r}")
+    if nominal_pitch is None:
+        raise FleetError(f"nominal_pitch must be a length in 0.05-0.3 m, got {nominal_pitch!r}")
     spath = os.fspath(path)
     rec = read_recording(spath, **{**(read_options or {}), "channel": channel})
-    if isinstance(date, _dt.datetime):
-        d, source = (date if date.tzinfo else date.replace(tzinfo=_dt.timezone.utc)), str(date_source)
-    elif date is not None and str(date).strip():
-        d, source = parse_date(date), str(date_source)
+    if given is not None:
+        d, source = given, str(date_source)
     else:
         start = rec.attrs.get("start_time")
         if start is None:

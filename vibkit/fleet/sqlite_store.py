@@ -11,50 +11,100 @@ from __future__ import annotations
 import contextlib
 import os
 import sqlite3
+import urllib.parse
 
 from .errors import FleetError
 from .quality import measurement_quality
 from .schema import APPLICATION_ID, COLUMNS, SCHEMA_VERSION, V2_COLUMNS, column_def, measurement_ddl
 from .store import Store
 
-__all__ = ["SQLiteStore"]
+__all__ = ["SQLiteStore", "sqlite_error"]
 
 _SQLITE_MAGIC = b"SQLite format 3\x00"
 
 
+def sqlite_error(path, exc) -> FleetError:
+    """One line naming the database, what went wrong and what to do, for a ``sqlite3.Error``."""
+    text = " ".join(str(exc).split())
+    low = text.lower()
+    if "malformed" in low or "not a database" in low or "corrupt" in low:
+        why = (f"the database file is damaged ({text}); restore it from a backup, or recover what is readable "
+               f"with: sqlite3 {path} .recover | sqlite3 recovered.sqlite")
+    elif "readonly" in low or "read-only" in low:
+        why = (f"cannot write: the file or its folder is read-only ({text}); make both writable, or give a "
+               f"writable --db")
+    elif "locked" in low or "busy" in low:
+        why = f"locked by another process ({text}); try again when it has finished"
+    elif "unable to open" in low or "disk i/o" in low or "cannot open" in low:
+        why = (f"cannot open the database ({text}); check that the file and its folder exist and can be read "
+               f"(and written, to add)")
+    elif "full" in low:
+        why = f"the disk is full ({text}); nothing was stored"
+    else:
+        why = f"SQLite error: {text}"
+    return FleetError(f"{path}: {why}")
+
+
 class SQLiteStore(Store):
-    """A fleet database file.  ``create=False``: a missing file is an error (nothing is created)."""
+    """A fleet database file.  ``create=False``: a missing file is an error (nothing is created);
+    ``readonly=True``: opened with SQLite's ``mode=ro`` and never written, not even the schema."""
 
     dialect = "sqlite"
     placeholder = "?"
 
-    def __init__(self, path, *, create=True, db_env="VIBKIT_FLEET_DB"):
+    def __init__(self, path, *, create=True, readonly=False, db_env="VIBKIT_FLEET_DB"):
         p = self.location = self.path = os.fspath(path)
+        self.readonly = bool(readonly)
         if os.path.isdir(p):
             raise FleetError(f"{p}: is a folder; expected the fleet database file")
         exists = os.path.exists(p) and os.path.getsize(p) > 0
-        if not exists and not create:
+        if not exists and (not create or self.readonly):
             raise FleetError(f"{p}: no fleet database here (vibkit fleet add or scan creates one; --db or "
                              f"{db_env} names another)")
         if exists:
-            with open(p, "rb") as fh:
-                if fh.read(16) != _SQLITE_MAGIC:
-                    raise FleetError(f"{p}: not a SQLite database; expected a vibkit fleet database")
+            try:
+                with open(p, "rb") as fh:
+                    head = fh.read(16)
+            except OSError as exc:
+                raise FleetError(f"{p}: cannot read the database: {exc.strerror or exc}; check its permissions") \
+                    from None
+            if head != _SQLITE_MAGIC:
+                raise FleetError(f"{p}: not a SQLite database; expected a vibkit fleet database")
         parent = os.path.dirname(os.path.abspath(p))
         if not os.path.isdir(parent):
             raise FleetError(f"{p}: folder {parent} does not exist")
         try:
-            self._con = sqlite3.connect(p, timeout=60.0, isolation_level=None)
+            self._con = self._connect(p)
         except sqlite3.Error as exc:
-            raise FleetError(f"{p}: cannot open the database: {exc}") from None
+            raise sqlite_error(p, exc) from None
         try:
             self._prepare()
-        except sqlite3.DatabaseError as exc:
+        except sqlite3.Error as exc:
             self._con.close()
-            raise FleetError(f"{p}: not a usable fleet database: {exc}") from None
+            raise sqlite_error(p, exc) from None
         except FleetError:
             self._con.close()
             raise
+
+    def _connect(self, p):
+        if not self.readonly:
+            return sqlite3.connect(p, timeout=60.0, isolation_level=None)
+        # read-only use (status, report) never writes, not even a journal: SQLite's read-only mode; a WAL
+        # database in a read-only folder (no -shm file can be made) is read as immutable
+        uri = "file:" + urllib.parse.quote(os.path.abspath(p)) + "?mode=ro"
+        con = sqlite3.connect(uri, uri=True, timeout=60.0, isolation_level=None)
+        try:
+            con.execute("SELECT count(*) FROM sqlite_master").fetchone()
+        except sqlite3.OperationalError:
+            con.close()
+            if os.access(os.path.dirname(os.path.abspath(p)), os.W_OK):
+                raise
+            con = sqlite3.connect(uri + "&immutable=1", uri=True, timeout=60.0, isolation_level=None)
+        return con
+
+    def set_timeout(self, seconds):
+        """How long a write waits for another process's transaction before it is an error. [s]"""
+        self._con.execute(f"PRAGMA busy_timeout = {int(float(seconds) * 1000)}")
 
     @property
     def local_files(self):
@@ -72,6 +122,15 @@ class SQLiteStore(Store):
                              f"{', '.join(tables) or 'none'}); refusing to write into it")
         if ver > SCHEMA_VERSION:
             raise FleetError(f"{self.path}: written by a newer vibkit (schema {ver}, this one reads {SCHEMA_VERSION})")
+        if self.readonly:
+            if "measurement" not in tables:
+                raise FleetError(f"{self.path}: a SQLite database without vibkit's measurement table, not a fleet "
+                                 f"history (vibkit fleet add or scan makes one; --db names another); left as it is")
+            if ver < SCHEMA_VERSION:
+                raise FleetError(f"{self.path}: written by an older vibkit (schema {ver}); this one upgrades it to "
+                                 f"schema {SCHEMA_VERSION} in place, which a read-only command does not do: run "
+                                 "vibkit fleet add or scan once where it may write")
+            return
         mode = con.execute("PRAGMA journal_mode=WAL").fetchone()[0]
         if str(mode).lower() != "wal":  # pragma: no cover - file systems without shared memory
             raise FleetError(f"{self.path}: SQLite cannot use its WAL journal here (mode {mode!r})")

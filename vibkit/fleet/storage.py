@@ -13,8 +13,10 @@ trend maths lives in :mod:`vibkit.fleet.trends`, the scan machinery in :mod:`vib
 
 from __future__ import annotations
 
+import functools
 import os
 import re
+import sqlite3
 
 from ..diagnose.pitch import DEFAULT_LIMITS_PERCENT
 from .errors import DuplicateRecordingError, FleetError
@@ -68,14 +70,29 @@ def resolve_db_path(db=None) -> str:
     return path.split("?", 1)[0]
 
 
-def _open_store(spec, create):
+def _open_store(spec, create, readonly):
     if is_server_url(spec):
         from .postgres_store import PostgresStore
 
-        return PostgresStore(spec, create=create, db_env=DB_ENV)
+        return PostgresStore(spec, create=create and not readonly, db_env=DB_ENV)
     from .sqlite_store import SQLiteStore
 
-    return SQLiteStore(spec, create=create, db_env=DB_ENV)
+    return SQLiteStore(spec, create=create, readonly=readonly, db_env=DB_ENV)
+
+
+def _translated(method):
+    """SQLite's exceptions of a :class:`FleetDB` method as one-line :class:`FleetError`\\ s naming the file."""
+
+    @functools.wraps(method)
+    def wrapper(self, *args, **kwargs):
+        try:
+            return method(self, *args, **kwargs)
+        except sqlite3.Error as exc:
+            from .sqlite_store import sqlite_error
+
+            raise sqlite_error(self.path, exc) from None
+
+    return wrapper
 
 
 class FleetDB:
@@ -88,6 +105,9 @@ class FleetDB:
     create : bool
         Create the database (the file, or the tables on the server) if it does not exist
         (``False``: a missing database is an error).
+    readonly : bool
+        Open it read-only (SQLite's ``mode=ro``): for status and reports; never writes, not even
+        vibkit's schema into a SQLite file that lacks it (that is an error).
 
     Attributes
     ----------
@@ -100,7 +120,8 @@ class FleetDB:
     ------
     FleetError
         Missing database with ``create=False``, a file that is not a SQLite database, a database of
-        another application or of a newer vibkit, a server that cannot be reached.
+        another application or of a newer vibkit, a server that cannot be reached; and every SQLite
+        error (a damaged, read-only or locked file) in one line naming the database and what to do.
 
     Examples
     --------
@@ -110,8 +131,14 @@ class FleetDB:
     ...         print(trend.unit, trend.slope_percent_per_year)
     """
 
-    def __init__(self, path=None, *, create=True):
-        self._store = _open_store(resolve_db_path(path), create)
+    #: seconds a SQLite write waits for another process's transaction before it is an error
+    TIMEOUT_S = 60.0
+
+    def __init__(self, path=None, *, create=True, readonly=False):
+        self.readonly = bool(readonly)
+        self._store = _open_store(resolve_db_path(path), create, self.readonly)
+        if self._store.dialect == "sqlite":
+            self._store.set_timeout(self.TIMEOUT_S)
         self.path = self._store.location
         self.kind = self._store.dialect
 
@@ -132,29 +159,35 @@ class FleetDB:
         return False
 
     # ---------------------------------------------------------------------------------- queries
+    @_translated
     def measurements(self, unit=None):
         """Stored measurements, by unit then date (of one unit if given)."""
         if unit is None:
             return self._store.rows("ORDER BY unit, date_unix_s, id")
         return self._store.rows("WHERE unit = ? ORDER BY date_unix_s, id", (str(unit),))
 
+    @_translated
     def find(self, sha256):
         """The stored measurement of a file with this SHA-256, or None."""
         return self._store.find(sha256)
 
+    @_translated
     def units(self):
         """Unit identifiers, sorted."""
         return self._store.units()
 
+    @_translated
     def nominal_pitch(self, unit):
         """The nominal pitch stored for a unit [m], or None for a new unit."""
         return self._store.nominal_pitch(unit)
 
+    @_translated
     def integrity_check(self) -> str:
         """``"ok"`` when the store is sound (SQLite's ``PRAGMA integrity_check``; PostgreSQL: valid indexes)."""
         return self._store.integrity_check()
 
     # ---------------------------------------------------------------------------------- writing
+    @_translated
     def insert(self, m: Measurement) -> Measurement:
         """Store one analysed measurement in its own transaction; the stored row (with its id).
 
@@ -169,10 +202,12 @@ class FleetDB:
         """
         return self._store.insert(m)
 
+    @_translated
     def insert_many(self, measurements):
         """Store measurements in one transaction, leaving out those already stored; ``(added, skipped)``."""
         return self._store.insert_many(measurements)
 
+    @_translated
     def add(self, recording, *, unit, speed, speed_sigma=0.0, date=None, nominal_pitch=None, channel=None,
             replaced=False, read_options=None):
         """Analyse a recording and store its measurement.
@@ -208,6 +243,9 @@ class FleetDB:
             No date, no link-pass, no nominal pitch for a new unit, another nominal pitch than the
             unit's.
         """
+        from .inputs import check_inputs, check_pitch
+
+        check_inputs(unit=unit, speed=speed, speed_sigma=speed_sigma, nominal_pitch=nominal_pitch, date=date)
         spath = os.fspath(recording)
         if not os.path.exists(spath):
             raise FleetError(f"{spath}: file not found; expected a recording")
@@ -218,10 +256,12 @@ class FleetDB:
         nom = nominal_pitch if nominal_pitch is not None else self.nominal_pitch(unit)
         if nom is None:
             raise FleetError(f"unit {str(unit)!r} is new: give its nominal link pitch (--nominal-pitch, in m)")
+        check_pitch(nom, f"the nominal pitch stored for unit {str(unit)!r} in {self.path}")
         m = analyse_recording(spath, unit=unit, speed=speed, speed_sigma=speed_sigma, nominal_pitch=nom, date=date,
                               channel=channel, replaced=replaced, read_options=read_options)
         return self.insert(m)
 
+    @_translated
     def scan(self, directory, catalogue, *, scheduler=None, n_workers=None, client=None, parallel=True,
              on_failure=None, progress=False, read_options=None):
         """Add every recording of a folder that a catalogue describes; analyses run on Dask workers.
@@ -267,6 +307,7 @@ class FleetDB:
                            read_options=read_options)
 
     # ----------------------------------------------------------------------------------- status
+    @_translated
     def status(self, *, limits_percent=DEFAULT_LIMITS_PERCENT, coverage_sigma=2.0, units=None):
         """Per unit: latest elongation, trend and forecasts, ranked by urgency (most urgent first).
 

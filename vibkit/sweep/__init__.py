@@ -10,5 +10,6 @@ standard library at load.
 from .plan import SweepError, SweepPlan, parse_vary, plan_sweep, to_toml, varied_text  # noqa: F401
 from .records import STATUS, SUMMARIES  # noqa: F401
 from .run import summarize, sweep  # noqa: F401
+from .store import open_sweep  # noqa: F401
 
-__all__ = ["sweep", "parse_vary", "plan_sweep", "SweepPlan", "SweepError", "summarize", "SUMMARIES", "STATUS"]
+__all__ = ["sweep", "parse_vary", "plan_sweep", "SweepPlan", "SweepError", "summarize", "SUMMARIES", "STATUS", "open_sweep"]

@@ -12,6 +12,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
+import re
 
 __all__ = ["parse_vary", "plan_sweep", "SweepPlan", "SweepError", "to_toml", "varied_text"]
 
@@ -24,6 +25,107 @@ _PRODUCES = {"flank_force": ("drive_flank_force", "back_flank_force"),
 
 class SweepError(ValueError):
     """A sweep that cannot be planned or stored; the message names the key, value or path."""
+
+
+# numbers as a person writes them: no digit separators (float("0_5") is 5.0), no hex, no "nan"/"inf"
+_NUMBER = re.compile(r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
+_WHOLE = re.compile(r"\+?[0-9]+")
+
+
+def _number(text: str) -> float:
+    """``float(text)`` for plain decimal numbers only; ValueError otherwise (``0_5``, ``0x10``, ``nan``)."""
+    s = text.strip()
+    if not _NUMBER.fullmatch(s):
+        raise ValueError(text)
+    return float(s)
+
+
+class _Linspace:
+    """The N values of ``A:B:N`` without storing them: value i is ``A + i (B - A) / (N - 1)`` (B exactly last),
+    the same floats as :func:`numpy.linspace`."""
+
+    __slots__ = ("a", "b", "n", "whole")
+
+    def __init__(self, a: float, b: float, n: int, whole: bool = False):
+        self.a, self.b, self.n, self.whole = a, b, n, whole
+
+    def __len__(self):
+        return self.n
+
+    def __getitem__(self, i):
+        if isinstance(i, slice):
+            return [self[j] for j in range(*i.indices(self.n))]
+        if i < 0:
+            i += self.n
+        if not 0 <= i < self.n:
+            raise IndexError(i)
+        if self.n > 1 and i == self.n - 1:
+            v = self.b
+        else:
+            v = i * ((self.b - self.a) / (self.n - 1)) + self.a if self.n > 1 else self.a
+        return int(round(v)) if self.whole else float(v)
+
+    def __iter__(self):
+        return (self[i] for i in range(self.n))
+
+    def __array__(self, dtype=None, copy=None):
+        import numpy as np
+
+        vals = np.linspace(self.a, self.b, self.n) if self.n > 1 else np.array([self.a])
+        vals = np.round(vals).astype(np.int64) if self.whole else vals
+        return vals if dtype is None else vals.astype(dtype)
+
+    def __eq__(self, other):
+        if isinstance(other, _Linspace):
+            return (self.a, self.b, self.n, self.whole) == (other.a, other.b, other.n, other.whole)
+        return NotImplemented
+
+    def __hash__(self):
+        return hash((self.a, self.b, self.n, self.whole))
+
+    def __repr__(self):
+        return f"linspace({self.a!r}, {self.b!r}, {self.n})"
+
+
+class _Points:
+    """Run index -> {key: value}, computed on demand (grid runs in C order over the axes; Monte Carlo draws
+    from their columns): a plan of a billion runs holds no billion dicts."""
+
+    def __init__(self, axes, shape, columns=None):
+        self.axes, self.shape, self.columns = tuple(axes), tuple(shape), columns
+        n = 1
+        for s in self.shape:
+            n *= s
+        self.n = n
+
+    def __len__(self):
+        return self.n
+
+    def __getitem__(self, i):
+        if isinstance(i, slice):
+            return [self[j] for j in range(*i.indices(self.n))]
+        if i < 0:
+            i += self.n
+        if not 0 <= i < self.n:
+            raise IndexError(i)
+        if self.columns is not None:
+            return {a.key: col[i] for a, col in zip(self.axes, self.columns)}
+        idx = []
+        for s in reversed(self.shape):
+            i, r = divmod(i, s)
+            idx.append(r)
+        return {a.key: a.values[j] for a, j in zip(self.axes, reversed(idx))}
+
+    def __iter__(self):
+        return (self[i] for i in range(self.n))
+
+    def __eq__(self, other):
+        try:
+            return len(self) == len(other) and all(p == q for p, q in zip(self, other))
+        except TypeError:
+            return NotImplemented
+
+    __hash__ = None
 
 
 # ------------------------------------------------------------------------------------------------ the plan
@@ -70,7 +172,7 @@ def _split_spec(key, spec):
         if len(parts) not in (2, 3) or not all(parts):
             raise ValueError(f"{key}={spec}: expected A:B:N (linspace) or A:B (a Monte Carlo range)")
         try:
-            a, b = float(parts[0]), float(parts[1])
+            a, b = _number(parts[0]), _number(parts[1])
         except ValueError:
             raise ValueError(f"{key}={spec}: A and B of A:B:N must be numbers") from None
         if not (math.isfinite(a) and math.isfinite(b)):
@@ -78,6 +180,8 @@ def _split_spec(key, spec):
         n = None
         if len(parts) == 3:
             try:
+                if not _WHOLE.fullmatch(parts[2]):
+                    raise ValueError(parts[2])
                 n = int(parts[2])
             except ValueError:
                 raise ValueError(f"{key}={spec}: N of A:B:N must be a whole number of values") from None
@@ -139,11 +243,11 @@ def _convert(key, text_or_value, types):
                 return s.lower() == "true"
             raise SweepError(f"{key}: expected true or false, got {v!r}")
         try:
-            num = float(s)
+            num = _number(s)
         except ValueError:
             if str in types:
                 return s
-            raise SweepError(f"{key}: expected a number, got {v!r}") from None
+            raise SweepError(f"{key}: expected a number such as 0.5 or 1e6 (no '_' separators), got {v!r}") from None
         v = int(num) if (int in types and float not in types and num.is_integer()) else num
         if int in types and float not in types and isinstance(v, float):
             raise SweepError(f"{key}: expected a whole number, got {s!r}")
@@ -183,16 +287,13 @@ def _axis(key, spec, types, samples):
                                      f"(give samples / --samples)")
                 if not (int in types or float in types) or bool in types:
                     raise SweepError(f"{key}={spec}: A:B:N needs a numeric key")
-                import numpy as np
-
-                vals = np.linspace(a, b, n) if n > 1 else np.array([a])
-                if int in types and float not in types:
-                    ints = np.round(vals)
-                    if not np.allclose(vals, ints, rtol=0, atol=1e-9):
+                whole = int in types and float not in types
+                if whole:
+                    step = (b - a) / (n - 1) if n > 1 else 0.0
+                    if any(abs(v - round(v)) > 1e-9 for v in (a, b, step)):
                         raise SweepError(f"{key}={spec}: '{key}' takes whole numbers and A:B:N gives fractions "
                                          f"(use a list a,b,c)")
-                    vals = ints
-                values = tuple(_convert(key, float(v), types) for v in vals)
+                values = _Linspace(a, b, n, whole)
                 return Axis(key=key, spec=spec, values=values)
             if n is not None:
                 raise SweepError(f"{key}={spec}: with samples, give a range A:B (the number of draws is samples)")
@@ -227,8 +328,8 @@ class SweepPlan:
     axes : tuple of Axis
     samples, seed : int or None
         Monte Carlo draws and the seed of the generator (``None`` for a grid).
-    points : tuple of dict
-        Run index -> {key: value}, grid runs in C order over ``axes``.
+    points : sequence of dict
+        Run index -> {key: value}, grid runs in C order over ``axes`` (computed on demand).
     shape : tuple of int
         Grid shape (``(samples,)`` for Monte Carlo).
     keep : tuple of str
@@ -340,11 +441,19 @@ def _source_of(source, values):
 
 
 def plan_sweep(scene, vary: dict, *, samples: int | None = None, seed: int | None = None, keep=(),
-               settle: float | None = None, duration: float | None = None) -> SweepPlan:
-    """Check and expand a sweep's definition (no run is started); see :func:`sweep`."""
+               settle: float | None = None, duration: float | None = None, max_result_bytes=None) -> SweepPlan:
+    """Check and expand a sweep's definition (no run is started); see :func:`sweep`.
+
+    Every check is made on numbers before anything the size of the sweep is allocated: the keys
+    (known, switched on, read by the scene's analysis: :func:`vibkit.sweep.limits.check_key_used`),
+    the values, ``settle`` and the size of the result (:func:`vibkit.sweep.limits.check_size`,
+    raising :class:`vibkit.runtime.budget.BudgetError`).  Grid axes and points are computed on
+    demand, so planning costs the same for ten runs or a billion.
+    """
     import tomllib
 
     from ..model.scene import OUTPUTS, Scene, load_scene
+    from .limits import check_key_used, check_settle, check_size
 
     base = scene if isinstance(scene, Scene) else load_scene(scene)
     text, source = base.text, base.source
@@ -366,12 +475,15 @@ def plan_sweep(scene, vary: dict, *, samples: int | None = None, seed: int | Non
         raise SweepError(f"settle must be a time >= 0 [s], got {settle!r}")
     if duration is not None and not (math.isfinite(duration) and duration > 0):
         raise SweepError(f"duration must be positive, got {duration!r}")
+    check_settle(base, settle, duration, source)
     data = tomllib.loads(text)
-    axes = []
+    axes, key_types = [], []
     for key, spec in vary.items():
         key = str(key).strip()
         types = _key_type(key, data, source)
+        check_key_used(key, base.analysis, source, duration=duration)
         axes.append(_axis(key, spec, types, samples))
+        key_types.append(types)
     if len({a.key for a in axes}) != len(axes):
         raise SweepError("a key is varied twice")
     # outputs to keep: dataset variables of outputs the scene asks for
@@ -384,17 +496,20 @@ def plan_sweep(scene, vary: dict, *, samples: int | None = None, seed: int | Non
                              f"(available: {', '.join(sorted(OUTPUTS[base.analysis]))})")
         if parent not in asked:
             raise SweepError(f"keep: the scene does not output {parent!r}; add it to its [outputs] variables")
-    # every run's values
-    import numpy as np
-
+    shape = tuple(len(a.values) for a in axes) if samples is None else (samples,)
+    runs = 1
+    for s in shape:
+        runs *= s
+    check_size(base, runs, keep=keep, duration=duration, limit_bytes=max_result_bytes, source=source)
+    # every run's values: a grid's on demand, Monte Carlo draws now (within the budget just checked)
     if samples is None:
-        shape = tuple(len(a.values) for a in axes)
-        points = tuple({a.key: a.values[i] for a, i in zip(axes, idx)} for idx in np.ndindex(*shape))
+        points = _Points(axes, shape)
     else:
-        shape = (samples,)
+        import numpy as np
+
         rng = np.random.default_rng(seed)
         cols = []
-        for a, types in zip(axes, (_key_type(a.key, data, source) for a in axes)):
+        for a, types in zip(axes, key_types):
             if a.values is not None:
                 pick = rng.integers(0, len(a.values), samples)
                 cols.append([a.values[i] for i in pick])
@@ -405,7 +520,7 @@ def plan_sweep(scene, vary: dict, *, samples: int | None = None, seed: int | Non
                 cols.append([int(v) for v in rng.integers(lo, hi + 1, samples)])
             else:
                 cols.append([float(v) for v in rng.uniform(a.low, a.high, samples)])
-        points = tuple({a.key: cols[j][i] for j, a in enumerate(axes)} for i in range(samples))
+        points = _Points(axes, shape, columns=cols)
     plan = SweepPlan(text=text, source=source, analysis=base.analysis, axes=tuple(axes), samples=samples, seed=seed,
                      points=points, shape=shape, keep=keep, settle=settle, duration=duration)
     return plan

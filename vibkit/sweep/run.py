@@ -9,8 +9,10 @@ the outputs asked for with ``keep``. With ``samples=N`` the keys are drawn at ra
 
 Keys are the scene TOML's dotted keys (``chain.link_pitch``, ``effects.contact.stiffness``,
 ``solver.rtol`` ...). A key the scene loader does not know, or an effect the scene does not switch
-on, is an error naming the key before any run starts; every varied scene is validated when the
-sweep is planned, and a varied value the loader refuses is recorded as that run's failure
+on, or a key the scene's analysis does not read (it would give identical runs), is an error naming
+the key before any run starts, as is a sweep whose result would exceed the result budget
+(:mod:`vibkit.sweep.limits`). Each varied scene is validated just before it is submitted (a bounded
+number are in flight), and a varied value the loader refuses is recorded as that run's failure
 (status ``invalid``), as is a run whose integration fails (status ``failed``): neither stops the sweep.
 
 Storage (``output=...``, a Zarr directory): each finished run is written by the driver as it
@@ -31,6 +33,7 @@ works as usual).
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import math
 import os
 import sys
@@ -91,6 +94,9 @@ def summarize(ds, scene, *, settle: float | None = None) -> dict:
     ts = _settle_time(scene, t) if settle is None else float(settle)
     steady = t >= (t[0] + ts) if axis == "time" else np.ones(t.size, bool)
     if steady.sum() < 2:
+        if settle is not None:
+            raise ValueError(f"settle {ts:g} s leaves {int(steady.sum())} sample(s) of the run ({t[0]:g} to "
+                             f"{t[-1]:g} s); the summaries need at least two")
         steady = np.ones(t.size, bool)
     if scene.analysis == "forward" and "s0" in ds and "delta" in ds:
         from ..model.guide import Guide
@@ -235,7 +241,7 @@ class _Report:
 def sweep(scene, vary: dict, *, output=None, samples: int | None = None, seed: int | None = None, keep=(),
           settle: float | None = None, duration: float | None = None, scheduler: str | None = None,
           n_workers: int | None = None, client=None, force: bool = False, progress: bool = True,
-          max_runs: int | None = None, check: bool = False):
+          max_runs: int | None = None, check: bool = False, max_result_bytes=None):
     """Run a scene over a grid (or Monte Carlo draws) of its keys on Dask.
 
     Parameters
@@ -272,6 +278,10 @@ def sweep(scene, vary: dict, *, output=None, samples: int | None = None, seed: i
     check : bool
         Forward scenes: check every run's convergence (``[solver] check = true`` set in the base
         scene, so a store of a checked sweep is another sweep); the summary ``converged`` is 1 or 0.
+    max_result_bytes : float or str, optional
+        Limit of the sweep's result (runs x values x 8 bytes + bookkeeping; default the scene's
+        ``[solver] max_result_bytes``, ``VIBKIT_MAX_RESULT_BYTES``, else 2 GiB), checked from the plan
+        before anything is allocated.
 
     Returns
     -------
@@ -284,8 +294,11 @@ def sweep(scene, vary: dict, *, output=None, samples: int | None = None, seed: i
     Raises
     ------
     SweepError
-        A key the scene loader does not know, a malformed value list, an output to keep that the
-        scene does not give, or a store that holds another sweep (without ``force``).
+        A key the scene loader does not know or the scene's analysis does not read, a malformed value
+        list, a ``settle`` that leaves fewer than two samples, an output to keep that the scene does
+        not give, or a store that holds another sweep (without ``force``).
+    vibkit.runtime.budget.BudgetError
+        The result would exceed ``max_result_bytes``.
 
     Notes
     -----
@@ -304,26 +317,73 @@ def sweep(scene, vary: dict, *, output=None, samples: int | None = None, seed: i
     """
     if check:
         scene = _checked(scene)
-    plan = plan_sweep(scene, vary, samples=samples, seed=seed, keep=keep, settle=settle, duration=duration)
+    plan = plan_sweep(scene, vary, samples=samples, seed=seed, keep=keep, settle=settle, duration=duration,
+                      max_result_bytes=max_result_bytes)
     if max_runs is not None and (isinstance(max_runs, bool) or int(max_runs) != max_runs or max_runs < 0):
         raise SweepError(f"max_runs must be a whole number >= 0, got {max_runs!r}")
     if n_workers is not None and (isinstance(n_workers, bool) or int(n_workers) != n_workers or n_workers < 1):
         raise SweepError(f"n_workers must be a whole number >= 1, got {n_workers!r}")
     store = _Store(output, plan, force=force) if output is not None else None
-    if store is not None and store.complete:
-        if (store.path / "runs").exists() or not (store.path / ".zmetadata").exists():
-            store.tidy()  # a consolidation interrupted after its data were written
-        ds = store.open()
-        ds.attrs.update(runs_computed=0, runs_reused=int(ds.attrs.get("runs", len(plan.points))))
-        return ds
-    records = store.done_runs() if store is not None else {}
-    reused = len(records)
-    todo = [i for i in range(len(plan.points)) if i not in records]
-    # validate every varied scene now: a value the loader refuses is that run's result
+    n = len(plan.points)
+    try:
+        if store is not None and store.complete:
+            return _reopen(store, n)
+        records = store.done_runs() if store is not None else {}
+        reused = len(records)
+        report = _Report(n, len(records), enabled=progress)
+        report.failed = sum(r["status"] != STATUS["ok"] for r in records.values())
+        if reused:
+            report.line(f"sweep: resuming {output}: {reused} of {n} runs already done")
+        tasks = _tasks(plan, records, store, report)
+        if max_runs is not None:
+            tasks = itertools.islice(tasks, int(max_runs))
+        first = next(tasks, None)  # validates varied scenes until one can run: no cluster for none
+        computed = 0
+        if first is not None:
+            import contextlib
+
+            from ..runtime.cluster import dask_client
+
+            ctx = contextlib.nullcontext(client) if client is not None else dask_client(scheduler, n_workers=n_workers)
+            with ctx as cl:
+                computed = _submit(cl, itertools.chain([first], tasks), records, store, report)
+        report.close()
+        complete = len(records) == n
+        ds = _assemble(plan, records, complete=complete)
+        if store is not None:
+            if complete:
+                if not store.finish(ds):  # another process consolidated the same sweep first
+                    return _reopen(store, n, computed=computed, reused=reused)
+                ds = store.open()
+            else:
+                store.snapshot(ds)  # xarray.open_zarr reads what the store holds so far
+    except KeyboardInterrupt as exc:
+        if store is not None:
+            done = store.count_done()
+            note = (f"{done} of {n} runs are stored in {store.path}" + (
+                "" if store.complete else ": run the same sweep again to resume"))
+            exc.vibkit_note = note  # what the CLI says instead of "nothing was written"
+        raise
+    ds.attrs.update(runs_computed=computed, runs_reused=reused)
+    return ds
+
+
+def _reopen(store, n, *, computed=0, reused=None):
+    if (store.path / "runs").exists() or not (store.path / ".zmetadata").exists():
+        store.tidy()  # a consolidation interrupted after its data were written
+    ds = store.open()
+    ds.attrs.update(runs_computed=computed, runs_reused=int(ds.attrs.get("runs", n)) if reused is None else reused)
+    return ds
+
+
+def _tasks(plan, records, store, report):
+    """The runs still to do, one at a time: each varied scene is written and validated as it is needed (a
+    value the loader refuses is that run's result, recorded at once)."""
     from ..model.scene import SceneError, parse_scene
 
-    tasks = []
-    for i in todo:
+    for i in range(len(plan.points)):
+        if i in records:
+            continue
         p = plan.points[i]
         text, src = varied_text(plan.text, p), _source_of(plan.source, p)
         try:
@@ -333,39 +393,10 @@ def sweep(scene, vary: dict, *, output=None, samples: int | None = None, seed: i
             records[i] = rec
             if store is not None:
                 store.write_run(rec)
+            report.update(rec)
             continue
-        tasks.append({"index": i, "text": text, "source": src, "duration": plan.duration, "settle": plan.settle,
-                      "keep": plan.keep})
-    if max_runs is not None:
-        tasks = tasks[:int(max_runs)]
-    report = _Report(len(plan.points), len(records), enabled=progress)
-    report.failed = sum(r["status"] != STATUS["ok"] for r in records.values())
-    if reused:
-        report.line(f"sweep: resuming {output}: {reused} of {len(plan.points)} runs already done")
-    computed = 0
-    if tasks:
-        import contextlib
-
-        from ..runtime.cluster import dask_client
-
-        ctx = contextlib.nullcontext(client) if client is not None else dask_client(scheduler, n_workers=n_workers)
-        try:
-            with ctx as cl:
-                computed = _submit(cl, tasks, records, store, report)
-        except KeyboardInterrupt:
-            report.close()
-            if store is not None:
-                report.line(f"sweep: interrupted; {len(records)} of {len(plan.points)} runs are stored in "
-                            f"{store.path}: run the same sweep again to resume")
-            raise
-    report.close()
-    complete = len(records) == len(plan.points)
-    ds = _assemble(plan, records, complete=complete)
-    if store is not None and complete:
-        store.finish(ds)
-        ds = store.open()
-    ds.attrs.update(runs_computed=computed, runs_reused=reused)
-    return ds
+        yield {"index": i, "text": text, "source": src, "duration": plan.duration, "settle": plan.settle,
+               "keep": plan.keep}
 
 
 def _checked(scene):
@@ -381,18 +412,36 @@ def _checked(scene):
 
 
 def _submit(client, tasks, records, store, report):
-    """Submit the runs, write each as it finishes; returns how many were computed."""
+    """Submit the runs (a bounded number in flight, so that a long sweep holds few scene texts at a time), write
+    each as it finishes; returns how many were computed."""
     from distributed import as_completed
 
     token = f"vibkit-sweep-{os.getpid()}-{time.time_ns()}"
+    try:
+        threads = sum(client.nthreads().values())
+    except Exception:  # noqa: BLE001 - a scheduler that cannot say: a fixed window
+        threads = 0
+    window = max(16, 4 * threads)
     futures = {}
-    for t in tasks:
+
+    def submit_next(pool):
+        t = next(tasks, None)
+        if t is None:
+            return False
         fut = client.submit(_run_one, t, key=f"{token}-{t['index']}", pure=False)
         futures[fut] = t["index"]
+        if pool is not None:
+            pool.add(fut)
+        return True
+
+    for _ in range(window):
+        if not submit_next(None):
+            break
     computed = 0
     try:
-        for fut in as_completed(list(futures)):
-            i = futures[fut]
+        pool = as_completed(list(futures))
+        for fut in pool:
+            i = futures.pop(fut)
             try:
                 rec = fut.result()
             except Exception as exc:  # noqa: BLE001 - e.g. KilledWorker: the run is recorded as failed
@@ -403,6 +452,7 @@ def _submit(client, tasks, records, store, report):
                 store.write_run(rec)
             computed += 1
             report.update(rec)
+            submit_next(pool)
     finally:
         for fut in futures:
             if not fut.done():

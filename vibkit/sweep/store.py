@@ -15,6 +15,7 @@ Imports only the standard library at load time (zarr, numpy and xarray inside th
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import shutil
@@ -49,6 +50,10 @@ KEY_UNITS = {
 # ------------------------------------------------------------------------------------------------ the store
 
 
+_RUNNING = ("a vibkit sweep in progress or interrupted: its finished runs are under runs/; "
+            "vibkit.sweep.open_sweep(path) reads them, the same sweep again resumes it")
+
+
 def _zkw():
     import zarr
 
@@ -81,13 +86,50 @@ class _Store:
                 shutil.rmtree(self.path)
         if not self.path.exists():
             self.path.parent.mkdir(parents=True, exist_ok=True)
-            tmp = self.path.with_name(self.path.name + f".{os.getpid()}.partial")
+            tmp = self.path.with_name(f".{self.path.name}.{os.getpid()}.partial")
             if tmp.exists():
                 shutil.rmtree(tmp)
-            root = zarr.open_group(str(tmp), mode="w", **_zkw())
-            root.attrs.update({"vibkit_sweep": json.dumps(definition), "vibkit_sweep_state": "running"})
-            os.replace(tmp, self.path)  # the store appears whole, with its definition
+            try:
+                root = zarr.open_group(str(tmp), mode="w", **_zkw())
+                root.attrs.update({"vibkit_sweep": json.dumps(definition), "vibkit_sweep_state": "running",
+                                   "comment": _RUNNING})
+                zarr.open_group(str(tmp), path="runs", mode="w", **_zkw())
+                zarr.consolidate_metadata(str(tmp))  # xarray.open_zarr reads the (empty) root without a warning
+                os.rename(tmp, self.path)  # the store appears whole, with its definition
+            except OSError as exc:
+                if not self.path.is_dir():
+                    raise
+                # another process made the store at the same moment: use it if it holds this sweep
+                if self._definition() != definition:
+                    raise SweepError(f"{self.path}: another process made a different sweep store here at the same "
+                                     f"time; give another output") from exc
+            finally:
+                if tmp.exists():
+                    shutil.rmtree(tmp, ignore_errors=True)
         self.complete = self._state() == "complete"
+
+    @contextlib.contextmanager
+    def lock(self, exclusive):
+        """An advisory lock on the store's folder: shared while a run is written, exclusive while the result
+        is consolidated (several processes may run the same sweep at once)."""
+        try:
+            import fcntl
+        except ImportError:  # pragma: no cover - not POSIX: no lock
+            yield
+            return
+        fd = os.open(self.path, os.O_RDONLY)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX if exclusive else fcntl.LOCK_SH)
+            yield
+        finally:
+            os.close(fd)  # releases the lock
+
+    def count_done(self) -> int:
+        """Runs stored (every run once the store is complete)."""
+        if self._state() == "complete":
+            self.complete = True
+            return len(self.plan.points)
+        return len(self.done_runs(read_data=False))
 
     def _attrs(self):
         import zarr
@@ -109,8 +151,9 @@ class _Store:
     def _state(self):
         return (self._attrs() or {}).get("vibkit_sweep_state")
 
-    def done_runs(self) -> dict:
-        """Run index -> record, for every run whose done flag is on disk."""
+    def done_runs(self, *, read_data=True) -> dict:
+        """Run index -> record, for every run whose done flag is on disk (without the kept series if not
+        ``read_data``)."""
         import numpy as np
         import zarr
 
@@ -132,7 +175,7 @@ class _Store:
                                  _num(attrs.get("wall_time")))
             rec["summary"] = {k: _num(v) for k, v in attrs.get("summary", {}).items()}
             rec["pid"] = attrs.get("pid", 0)
-            for var in attrs.get("kept", []):
+            for var in (attrs.get("kept", []) if read_data else ()):
                 arr = g[var]
                 dims = json.loads(attrs["kept_dims"])[var]
                 coords = {c: np.asarray(g[f"coord_{c}"][...]) for c in dims if f"coord_{c}" in g}
@@ -143,47 +186,100 @@ class _Store:
         return out
 
     def write_run(self, rec):
-        """Kept series, then the summaries and the done flag in one atomic attrs write."""
+        """Kept series and attrs (summaries, done flag) into a temporary group, renamed into place in one step: a
+        run's group is whole or absent.  A run another process stored first is left as it is (same sweep, same
+        numbers)."""
         import numpy as np
         import zarr
 
-        path = self.path / _run_group(rec["index"])
-        if path.exists():
-            shutil.rmtree(path)
-        g = zarr.open_group(str(self.path), path=_run_group(rec["index"]), mode="w", **_zkw())
-        coords_written = set()
-        for var, k in rec["kept"].items():
-            g.create_array(var, data=np.asarray(k["values"])) if hasattr(g, "create_array") else \
-                g.create_dataset(var, data=np.asarray(k["values"]))
-            for c, vals in k["coords"].items():
-                if c not in coords_written:
-                    coords_written.add(c)
-                    g.create_array(f"coord_{c}", data=np.asarray(vals)) if hasattr(g, "create_array") else \
-                        g.create_dataset(f"coord_{c}", data=np.asarray(vals))
-        g.attrs.update({
-            "index": rec["index"], "status": rec["status"], "error": rec["error"],
-            "summary": {k: _jsonval(v) for k, v in rec["summary"].items()},
-            "wall_time": _jsonval(rec["wall_time"]), "pid": rec.get("pid", 0),
-            "kept": list(rec["kept"]),
-            "kept_dims": json.dumps({v: k["dims"] for v, k in rec["kept"].items()}),
-            "kept_attrs": json.dumps({v: k["attrs"] for v, k in rec["kept"].items()}),
-            "kept_coord_attrs": json.dumps({v: k["coord_attrs"] for v, k in rec["kept"].items()}),
-            "done": True,
-        })
+        final = self.path / _run_group(rec["index"])
+        tmp = self.path / "runs" / f".r{rec['index']:06d}.{os.getpid()}.tmp"
+        with self.lock(exclusive=False):
+            if self._state() == "complete":
+                return  # consolidated meanwhile by another process
+            if tmp.exists():
+                shutil.rmtree(tmp)
+            try:
+                g = zarr.open_group(str(tmp), mode="w", **_zkw())
+                coords_written = set()
+                for var, k in rec["kept"].items():
+                    _array(g, var, np.asarray(k["values"]))
+                    for c, vals in k["coords"].items():
+                        if c not in coords_written:
+                            coords_written.add(c)
+                            _array(g, f"coord_{c}", np.asarray(vals))
+                g.attrs.update({
+                    "index": rec["index"], "status": rec["status"], "error": rec["error"],
+                    "summary": {k: _jsonval(v) for k, v in rec["summary"].items()},
+                    "wall_time": _jsonval(rec["wall_time"]), "pid": rec.get("pid", 0),
+                    "kept": list(rec["kept"]),
+                    "kept_dims": json.dumps({v: k["dims"] for v, k in rec["kept"].items()}),
+                    "kept_attrs": json.dumps({v: k["attrs"] for v, k in rec["kept"].items()}),
+                    "kept_coord_attrs": json.dumps({v: k["coord_attrs"] for v, k in rec["kept"].items()}),
+                    "done": True,
+                })
+                if final.exists() and not _done(final):
+                    shutil.rmtree(final, ignore_errors=True)  # half a run from an older vibkit: redone
+                try:
+                    os.rename(tmp, final)
+                except OSError:
+                    if not final.is_dir():
+                        raise
+            finally:
+                if tmp.exists():
+                    shutil.rmtree(tmp, ignore_errors=True)
 
-    def finish(self, ds):
-        """Consolidate: the whole result in the root group, then the state, then drop the run groups."""
+    def snapshot(self, ds):
+        """Write an incomplete result into the root group (``xarray.open_zarr`` then reads what is stored, with
+        status -1 for the pending runs); the store stays resumable."""
+        with self.lock(exclusive=True):
+            if self._state() == "complete":
+                return
+            ds = ds.copy()
+            ds.attrs.update(vibkit_sweep=json.dumps(self.plan.definition()), vibkit_sweep_state="running",
+                            comment=_RUNNING)
+            self._clear_root()
+            ds.to_zarr(str(self.path), mode="a", consolidated=False, **_zkw())
+            import zarr
+
+            zarr.consolidate_metadata(str(self.path))
+
+    def _clear_root(self):
+        """Remove the root group's arrays (an earlier snapshot), keeping its attrs and the runs."""
+        for child in self.path.iterdir():
+            if child.is_dir() and child.name != "runs" and (child / ".zarray").exists():
+                shutil.rmtree(child)
+        zm = self.path / ".zmetadata"
+        if zm.exists():
+            zm.unlink()
+
+    def finish(self, ds) -> bool:
+        """Consolidate: the whole result in the root group, then the state, then drop the run groups.
+
+        Returns False (and writes nothing) when another process consolidated the same sweep first.
+        """
         import zarr
 
-        ds = ds.copy()
-        ds.attrs["vibkit_sweep"] = json.dumps(self.plan.definition())
-        ds.attrs["vibkit_sweep_state"] = "consolidating"
-        ds.to_zarr(str(self.path), mode="a", consolidated=False, **_zkw())
-        zarr.open_group(str(self.path), mode="r+", **_zkw()).attrs.update({"vibkit_sweep_state": "complete"})
-        self.complete = True
-        self.tidy()
+        with self.lock(exclusive=True):
+            if self._state() == "complete":
+                self.complete = True
+                return False
+            ds = ds.copy()
+            ds.attrs["vibkit_sweep"] = json.dumps(self.plan.definition())
+            ds.attrs["vibkit_sweep_state"] = "consolidating"
+            ds.attrs["comment"] = "a complete vibkit sweep (xarray.open_zarr reads it)"
+            self._clear_root()
+            ds.to_zarr(str(self.path), mode="a", consolidated=False, **_zkw())
+            zarr.open_group(str(self.path), mode="r+", **_zkw()).attrs.update({"vibkit_sweep_state": "complete"})
+            self.complete = True
+            self._tidy()
+        return True
 
     def tidy(self):
+        with self.lock(exclusive=True):
+            self._tidy()
+
+    def _tidy(self):
         import zarr
 
         if (self.path / "runs").exists():
@@ -194,6 +290,58 @@ class _Store:
         import xarray as xr
 
         return xr.open_zarr(str(self.path), chunks=None)
+
+
+def open_sweep(path):
+    """Open a sweep store as what it holds: the consolidated result of a complete sweep, else the runs stored so
+    far (status -1 for the pending ones; ``runs_pending`` in the attrs says how many).
+
+    Raises
+    ------
+    SweepError
+        The path is not a vibkit sweep store (the message says what it is).
+    """
+    import math
+
+    from ..model.scene import parse_scene
+    from .plan import plan_sweep
+
+    path = Path(path)
+    if not path.is_dir():
+        raise SweepError(f"{path}: {'no such folder' if not path.exists() else 'not a folder'}; expected a vibkit "
+                         f"sweep store (a Zarr folder written by vibkit sweep)")
+    probe = _Store.__new__(_Store)
+    probe.path = path
+    definition = probe._definition()
+    if definition is None:
+        raise SweepError(f"{path}: not a vibkit sweep store (no sweep definition in its root attributes)")
+    if probe._state() == "complete":
+        import xarray as xr
+
+        return xr.open_zarr(str(path), chunks=None)
+    try:
+        plan = plan_sweep(parse_scene(definition["scene"], f"{path} (its scene)"),
+                          {a["key"]: a["spec"] for a in definition["axes"]}, samples=definition["samples"],
+                          seed=definition["seed"], keep=definition["keep"], settle=definition["settle"],
+                          duration=definition["duration"], max_result_bytes=math.inf)
+    except (ValueError, KeyError, TypeError) as exc:
+        raise SweepError(f"{path}: its sweep definition cannot be read back ({exc})") from None
+    probe.plan = plan
+    records = probe.done_runs()
+    ds = _assemble(plan, records, complete=len(records) == len(plan.points))
+    ds.attrs.update(vibkit_sweep_state="running", comment=_RUNNING)
+    return ds
+
+
+def _array(g, name, data):
+    return g.create_array(name, data=data) if hasattr(g, "create_array") else g.create_dataset(name, data=data)
+
+
+def _done(group_dir):
+    try:
+        return json.loads((group_dir / ".zattrs").read_text()).get("done") is True
+    except (OSError, ValueError):
+        return False
 
 
 def _num(v):
