@@ -8,8 +8,8 @@ from .options import (add_command, add_json, add_limits, add_recording, band, po
                       speed_sigma, speed_uncertainty, teeth)
 from .output import msg, print_json, table
 
-EPILOG = ("examples:\n  vibkit pitch data/field/leon-tensioner.csv --speed 0.49 --speed-uncertainty 0.1% "
-          "--nominal-pitch 0.13333\n  vibkit pitch logger.txt --sample-rate 2050 --speed 0.52 --json")
+EPILOG = ("examples:\n  vibkit pitch data/field/leon-tensioner.csv --speed 0.49 --speed-uncertainty 0.1% \\\n"
+          "      --nominal-pitch 0.13333\n  vibkit pitch logger.txt --sample-rate 2050 --speed 0.52 --json")
 
 
 def add_parser(subparsers):
