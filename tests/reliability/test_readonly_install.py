@@ -86,10 +86,10 @@ def _make_read_only(path: Path):
     os.chmod(path, stat.S_IMODE(os.stat(path).st_mode) & ~0o222)
 
 
-def _probe_import(path):
-    """Can uid 65534 import numpy from ``path``?"""
+def _probe_import(py, path):
+    """Can uid 65534 import numpy from ``path`` with the interpreter ``py``?"""
     try:
-        proc = subprocess.run([os.path.realpath(sys.executable), "-I", "-c",
+        proc = subprocess.run([py, "-I", "-c",
                                f"import sys; sys.path.insert(0, {path!r}); import numpy; "
                                f"assert numpy.__file__.startswith({path!r})"],
                               preexec_fn=_demote, capture_output=True, text=True, cwd="/")
@@ -98,11 +98,11 @@ def _probe_import(path):
     return proc.returncode == 0
 
 
-def _reachable_deps(top: Path) -> str:
+def _reachable_deps(top: Path, py: str) -> str:
     """The test environment's site-packages, or a hard-linked copy of it in ``top`` when uid 65534
     cannot reach it (the clone and its .venv in a private folder); skips the module if neither works."""
     deps = sysconfig.get_paths()["purelib"]
-    if _probe_import(deps):
+    if _probe_import(py, deps):
         return deps
     linked = top / "deps"
     try:
@@ -115,7 +115,7 @@ def _reachable_deps(top: Path) -> str:
         for name in dirnames:
             os.chmod(os.path.join(dirpath, name), 0o755)
     os.chmod(linked, 0o755)
-    if not _probe_import(str(linked)):
+    if not _probe_import(py, str(linked)):
         pytest.skip(f"uid {NOBODY} cannot import numpy from {deps} nor from its hard-linked copy")
     return str(linked)
 
@@ -132,14 +132,13 @@ def readonly():
     (work / "tmp").mkdir(parents=True)
     for d in (work, work / "tmp"):
         os.chmod(d, 0o1777)
-    deps = _reachable_deps(top)
     env = {"PATH": "/usr/bin:/bin", "HOME": "/nonexistent", "LANG": "C.UTF-8", "TMPDIR": str(work / "tmp"),
-           "PYTHONPATH": os.pathsep.join([str(site), deps]), "MPLBACKEND": "Agg",
-           "VIBKIT_PROGRESS_INTERVAL": "1e9"}
+           "MPLBACKEND": "Agg", "VIBKIT_PROGRESS_INTERVAL": "1e9"}
     py = _interpreter(env)
     if py is None:
         pytest.skip(f"no python{sys.version_info[0]}.{sys.version_info[1]} executable by uid {NOBODY} "
                     f"({sys.executable} is not)")
+    env["PYTHONPATH"] = os.pathsep.join([str(site), _reachable_deps(top, py)])
     yield {"top": top, "site": site, "work": work, "env": env, "py": py, "how": how}
     shutil.rmtree(top, ignore_errors=True)  # root may remove read-only files
 

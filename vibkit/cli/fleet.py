@@ -7,12 +7,14 @@ import sys
 from .options import add_channel, add_command, add_json, add_limits, positive, speed_sigma, workers
 from .output import CLIError, check_output, msg, print_json, table
 
-EPILOG = ("examples:\n  vibkit fleet add E07-2026-11-23.csv --unit E07 --speed 0.5 --nominal-pitch 0.13333\n"
-          "  vibkit fleet scan visits/ --catalogue visits/units.csv --workers 2\n"
-          "  vibkit fleet status --json\n  vibkit fleet report -o fleet.pdf\n"
+EPILOG = ("examples (on the shipped example fleet, data/fleet-example/):\n"
+          "  vibkit fleet add data/fleet-example/E07/2026-11-23.csv --unit E07 --speed 0.5 \\\n"
+          "      --nominal-pitch 0.13333\n"
+          "  vibkit fleet scan data/fleet-example --catalogue data/fleet-example/units.csv --workers 0\n"
+          "  vibkit fleet status --json\n  vibkit fleet report -o out/fleet.pdf\n"
           "database: --db PATH (or sqlite:///PATH), else $VIBKIT_FLEET_DB, else ./vibkit-fleet.sqlite\n"
-          "catalogue columns: file (name or glob), unit, speed_m_s, date (ISO 8601; empty: the recording's "
-          "start time),\n  nominal_pitch_m (empty: the unit's), optional speed_sigma_m_s, channel")
+          "catalogue columns: file (name or glob), unit, speed_m_s, date (ISO 8601; empty: the recording's\n"
+          "  start time), nominal_pitch_m (empty: the unit's), optional speed_sigma_m_s, channel")
 
 
 def add_parser(subparsers):

@@ -13,7 +13,8 @@ EPILOG = ("examples:\n  vibkit sweep sim/thesis-forward.toml --vary chain.link_p
           "      --vary effects.contact.stiffness=1e5,1e6,1e7 --duration 10 -o out/sweep.zarr\n"
           "  vibkit sweep sim/leon.toml --vary motion.speed=0.45:0.55 --samples 50 --seed 1 --keep delta \\\n"
           "      -o out/mc.zarr\n"
-          "re-running the same command resumes an interrupted sweep; xarray.open_zarr('out/sweep.zarr') reads it")
+          "re-running the same command resumes an interrupted sweep;\n"
+          "xarray.open_zarr('out/sweep.zarr') reads it")
 
 
 def vary(text):
