@@ -69,10 +69,10 @@ def main(argv=None):
     ap.add_argument("--workers", default="1,2", help="worker counts of the Dask cases (default 1,2)")
     ap.add_argument("--repeat", type=int, help="runs per case (best kept; default 3, quick 1)")
     a = ap.parse_args(argv)
-    n = 12 if a.quick else 96
+    n = 4 if a.quick else 96
     duration = 30.0
     repeat = a.repeat or (1 if a.quick else 3)
-    workers = [int(w) for w in a.workers.split(",") if w.strip()]
+    workers = [int(w) for w in a.workers.split(",") if w.strip()][:1 if a.quick else None]
 
     import vibkit
     from vibkit.runtime.cluster import dask_client

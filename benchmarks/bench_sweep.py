@@ -56,7 +56,7 @@ def main(argv=None):
     from vibkit.model.scene import parse_scene
     from vibkit.sweep.plan import plan_sweep, varied_text
 
-    n_runs, duration = (8, 1.0) if args.quick else (24, 4.0)
+    n_runs, duration = (2, 0.5) if args.quick else (24, 4.0)
     tmp = Path(tempfile.mkdtemp(prefix="bench_sweep_"))
     scene_path = tmp / "scene.toml"
     scene_path.write_text(_scene_text(duration))
