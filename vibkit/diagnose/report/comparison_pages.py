@@ -1,0 +1,120 @@
+"""The report's comparison pages, drawn only when a scene was given: the simulation against the recording
+(:func:`plot_comparison`) and the table of harmonics with their intervals."""
+
+from __future__ import annotations
+
+import textwrap
+
+import numpy as np
+
+from .common import _PAGE, _WIDE, _page_title
+
+__all__ = ["plot_comparison", "simulation_page", "harmonics_page"]
+
+
+def plot_comparison(comp, fig=None):
+    """Draw a :class:`vibkit.diagnose.comparison.Comparison` on one figure: order spectra overlaid, amplitude
+    spectra side by side with harmonic markers, spectrograms side by side.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    import matplotlib.pyplot as plt
+
+    from ...signal import amplitude_spectrum, spectrogram
+
+    if fig is None:
+        fig = plt.figure(figsize=_WIDE)
+    gs = fig.add_gridspec(3, 2, height_ratios=(1.0, 1.0, 1.1), hspace=0.55, wspace=0.25,
+                          left=0.07, right=0.97, top=0.88, bottom=0.07)
+    u = comp.units
+    ax = fig.add_subplot(gs[0, :])
+    ax.semilogy(comp.orders, np.maximum(comp.order_amplitude_sim, 1e-30), label=f"simulation ({comp.variable})")
+    ax.semilogy(comp.orders, np.maximum(comp.order_amplitude_meas, 1e-30), label=f"recording ({comp.channel})",
+                alpha=0.8)
+    top = max(comp.order_amplitude_sim.max(), comp.order_amplitude_meas.max())
+    ax.set_ylim(top * 1e-4, top * 3)
+    ax.set_xlabel("order of the link-pass frequency [-]")
+    ax.set_ylabel(f"amplitude [{u}]")
+    ax.set_title(f"Order spectra (each referred to its own link-pass); score {comp.score:.3f}, "
+                 f"log-spectral distance {comp.log_spectral_distance_db:.1f} dB", fontsize=10)
+    ax.legend(fontsize=8, loc="upper right")
+    ax.grid(alpha=0.3)
+    fs_s, x_s = comp.signals["sim"]
+    meas = comp.signals["meas"]
+    longest = max(meas, key=lambda m: m[2].size)
+    nh = len(comp.harmonics)
+    fmax = min((nh + 1.5) * max(comp.fundamental_sim_hz, comp.fundamental_meas_hz), fs_s / 2, longest[1] / 2)
+    specs = (("simulation", fs_s, x_s, comp.fundamental_sim_hz, "C0"),
+             ("recording", longest[1], longest[2], comp.fundamental_meas_hz, "C1"))
+    for j, (name, fs, x, f0, col) in enumerate(specs):
+        a1 = fig.add_subplot(gs[1, j])
+        f, a = amplitude_spectrum(x, fs)
+        sel = f <= fmax
+        a1.semilogy(f[sel], np.maximum(a[sel], 1e-30), color=col, lw=0.9)
+        for h in range(1, nh + 1):
+            a1.axvline(h * f0, color="0.5", ls=":", lw=0.8)
+        a1.set_xlim(0, fmax)
+        a1.set_xlabel("frequency [Hz]")
+        a1.set_ylabel(f"amplitude [{u}]")
+        a1.set_title(f"{name}: link-pass {f0:.4g} Hz (dotted: harmonics)", fontsize=9)
+        a1.grid(alpha=0.3)
+        a2 = fig.add_subplot(gs[2, j])
+        frame = min(2.0, x.size / fs / 2)
+        nper = max(16, int(round(frame * fs)))
+        fr, tt, s = spectrogram(x, fs, nperseg=nper, noverlap=nper * 3 // 4)
+        sel = fr <= fmax
+        db = 20 * np.log10(np.maximum(s[sel], 1e-30))
+        im = a2.pcolormesh(tt, fr[sel], db, shading="nearest", vmin=db.max() - 60, vmax=db.max(), cmap="viridis",
+                           rasterized=True)
+        a2.set_xlabel("time from burst start [s]" if name == "recording" and len(meas) > 1 else "time [s]")
+        a2.set_ylabel("frequency [Hz]")
+        a2.set_title(f"{name} spectrogram ({frame:.2g} s frames)", fontsize=9)
+        cb = fig.colorbar(im, ax=a2, pad=0.01)
+        cb.set_label(f"dB re 1 {u}", fontsize=8)
+    return fig
+
+
+def simulation_page(doc, ctx) -> None:
+    """Simulation against recording (:func:`plot_comparison`); nothing without a scene."""
+    import matplotlib.pyplot as plt
+
+    comp, sc = ctx.comparison, ctx.scene
+    if comp is None:
+        return
+    fig = plt.figure(figsize=_WIDE)
+    _page_title(fig, "Simulation against recording",
+                f"scene {sc.name}: {comp.variable} vs {comp.channel}; pitch "
+                f"{'consistent' if comp.pitch_consistent else 'NOT consistent'} "
+                f"({1000 * comp.pitch_meas_m:.2f} mm recorded vs {1000 * comp.pitch_sim_m:.2f} mm simulated)")
+    plot_comparison(comp, fig)
+    doc.emit(fig, "simulation against recording")
+
+
+def harmonics_page(doc, ctx) -> None:
+    """Harmonics of the recording against the simulation, with intervals; nothing without a scene."""
+    import matplotlib.pyplot as plt
+
+    comp = ctx.comparison
+    if comp is None:
+        return
+    fig = plt.figure(figsize=_PAGE)
+    _page_title(fig, "Harmonics: recording / simulation", f"{100 * comp.confidence:.0f} % intervals")
+    ax = fig.add_axes((0.04, 0.45, 0.92, 0.45))
+    ax.axis("off")
+    head = ["order", "f sim [Hz]", "f rec [Hz]", "ratio", "amp. diff [dB]", "detected"]
+    cells = [[str(h["order"]), f"{h['frequency_sim_hz']:.4f}", f"{h['frequency_meas_hz']:.4f}",
+              f"{h['frequency_ratio']:.4f} +- {h['frequency_ratio_sigma']:.1e}",
+              f"{h['amplitude_diff_db']:+.1f} [{h['amplitude_diff_db_ci'][0]:+.1f}, "
+              f"{h['amplitude_diff_db_ci'][1]:+.1f}]",
+              ("sim " if h["detected_sim"] else "") + ("rec" if h["detected_meas"] else "")]
+             for h in comp.harmonics]
+    tab = ax.table(cellText=cells, colLabels=head, loc="upper center", cellLoc="center",
+                   colWidths=[0.08, 0.14, 0.14, 0.24, 0.26, 0.14])
+    tab.auto_set_font_size(False)
+    tab.set_fontsize(8.5)
+    tab.scale(1, 1.4)
+    fig.text(0.06, 0.1, "\n".join(textwrap.fill(m, 105) for m in
+                                  [f"score rule: {comp.rule}"] + comp.notes), fontsize=7.5, va="bottom")
+    doc.emit(fig, "harmonics")

@@ -1,0 +1,231 @@
+"""Everything the report's pages draw, computed once before the first page: :class:`ReportContext`.
+
+:func:`analyse` reads the recording, resolves speed and nominal pitch, estimates the link-pass frequency
+and the pitch (:mod:`vibkit.diagnose.pitch`), simulates and compares a scene when one is given
+(:mod:`vibkit.diagnose.comparison`), finds spikes (Hampel events on the residual after the link-pass
+family) and suspected clipping, and builds the JSON summary.  The page functions only draw.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import os
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .common import report_date
+
+__all__ = ["ReportContext", "analyse"]
+
+
+@dataclass
+class ReportContext:
+    """What :func:`analyse` found, and the options the pages print.
+
+    Attributes
+    ----------
+    recording : str
+        The recording's path as given.
+    rec : xarray.Dataset
+        The recording as :func:`vibkit.read_recording` read it.
+    channel, units : str
+    scene : Scene or None
+    speed, speed_sigma : float or None, float
+        Resolved chain speed (the option, else the recording's, else the scene's) [m/s].
+    nominal_pitch : float or None
+        Resolved nominal pitch (the option, else the scene's) [m].
+    limits : tuple of float
+        Elongation limits [%].
+    band : (float, float) or None
+        Link-pass search band as given [Hz].
+    duration : float or None
+        Simulated time as given [s].
+    hampel_half_window_s, hampel_false_alarm_rate : float
+    bursts : list
+        Uniform bursts of the channel (:func:`vibkit.diagnose.pitch.uniform_bursts`).
+    pitch : PitchEstimate or None
+        None without a speed or without a detected link-pass.
+    f0 : float
+        Link-pass frequency [Hz]; without a detection the search band's geometric centre (unmarked).
+    found : bool
+        A link-pass was detected.
+    notes : list of str
+        Decisions shown on the verdict page.
+    result : simulation result or None
+    comparison : Comparison or None
+    events : list of (time_s, value, HampelEvent)
+    rms, p2p : float
+    clip_n : int
+    clipped : bool
+    date : datetime.datetime
+    summary : dict
+        The verdict table as a JSON-ready dict.
+    """
+
+    recording: str
+    rec: object
+    channel: str
+    units: str
+    scene: object
+    speed: float | None
+    speed_sigma: float
+    nominal_pitch: float | None
+    limits: tuple
+    band: tuple | None
+    duration: float | None
+    hampel_half_window_s: float
+    hampel_false_alarm_rate: float
+    bursts: list
+    pitch: object
+    f0: float
+    found: bool
+    notes: list
+    result: object
+    comparison: object
+    events: list
+    rms: float
+    p2p: float
+    clip_n: int
+    clipped: bool
+    date: _dt.datetime
+    summary: dict = field(default_factory=dict)
+
+    @property
+    def harmonic_count(self) -> int:
+        """Harmonics marked on the spectrum and order-spectrum pages."""
+        return len(self.pitch.harmonics) if self.pitch else (5 if self.found else 0)
+
+    @property
+    def fmax_hz(self) -> float:
+        """Upper frequency of the spectrum and spectrogram pages [Hz]."""
+        return min((max(self.harmonic_count, 5) + 2) * self.f0, min(b.fs for b in self.bursts) / 2)
+
+
+def _scene_speed(scene):
+    if scene is None:
+        return None
+    if scene.analysis == "inverse":
+        return float(scene.section("motion")["speed"])
+    if scene.analysis == "forward":
+        return float(scene.effects.get("motor", {}).get("speed", scene.section("run").get("initial_speed", 0.0))) or None
+    return None
+
+
+def _family_fit(x, fs, band):
+    """The fitted link-pass harmonic family (with offset) at every sample of ``x`` [x]."""
+    from ...signal import link_pass_estimate
+
+    try:
+        e = link_pass_estimate(x, fs, band=band)
+    except ValueError:
+        return np.full(x.size, np.median(x))
+    t = np.arange(x.size) / fs
+    fit = np.full(x.size, float(getattr(e.estimate, "offset", 0.0) or 0.0))
+    for h in e.harmonics:
+        fit += h.amplitude * np.cos(2 * np.pi * h.frequency_hz * t + h.phase_rad)
+    return fit
+
+
+def analyse(recording, *, scene=None, speed=None, speed_sigma=0.0, channel=None, nominal_pitch=None,
+            limits_percent=None, sample_rate=None, duration=None, band=None, hampel_half_window_s=0.1,
+            hampel_false_alarm_rate=1e-4, progress=False) -> ReportContext:
+    """Everything :func:`vibkit.diagnose.report.write_report` draws (same parameters, no output)."""
+    from ...io import read_recording
+    from ..pitch import DEFAULT_LIMITS_PERCENT, estimate_pitch, pick_channel, uniform_bursts
+    from ...model.scene import Scene, load_scene
+    from ...signal import hampel_events
+
+    limits = tuple(limits_percent) if limits_percent is not None else DEFAULT_LIMITS_PERCENT
+    rec = read_recording(recording, sample_rate=sample_rate)
+    ch = pick_channel(rec, channel)
+    units = str(rec[ch].attrs.get("units", "1"))
+    sc = None
+    if scene is not None:
+        sc = scene if isinstance(scene, Scene) else load_scene(scene)
+    notes = []
+    if speed is None:
+        if float(rec.attrs.get("chain_speed_m_s", 0) or 0) > 0:
+            speed = float(rec.attrs["chain_speed_m_s"])
+            notes.append(f"speed {speed:g} m/s from the recording's metadata")
+        elif _scene_speed(sc):
+            speed = _scene_speed(sc)
+            notes.append(f"speed {speed:g} m/s from the scene (the recording states none): the pitch then "
+                         "assumes the scene's speed")
+    if nominal_pitch is None and sc is not None:
+        nominal_pitch = sc.chain.link_pitch
+    bursts = uniform_bursts(rec, ch)
+    pitch = None
+    f0 = None
+    if speed is not None:
+        pitch = estimate_pitch(rec, speed=speed, speed_sigma=speed_sigma, channel=ch, band=band,
+                               nominal_pitch=nominal_pitch, limits_percent=limits,
+                               teeth=sc.sprocket.teeth if sc else 28)
+        f0 = pitch.fundamental_hz
+    else:
+        # frequency only: the same burst-combined estimator, with a unit "speed"
+        fonly = estimate_pitch(rec, speed=1.0, channel=ch, band=band or (2.5, 6.0))
+        f0 = fonly.fundamental_hz
+        notes.append("no speed known: link-pass frequency only, no pitch (give --speed)")
+    found = pitch.detected if pitch is not None else fonly.detected
+    if not found:
+        why = (pitch if pitch is not None else fonly).detection.get("reason", "")
+        notes.insert(0, f"NO LINK-PASS FOUND: {why}; no frequency, pitch or elongation can be given")
+        # the pages below mark harmonics of f0: show the search band's centre, unmarked
+        band_used = (pitch if pitch is not None else fonly).band_hz
+        f0 = float(np.sqrt(band_used[0] * band_used[1]))
+        pitch = None
+    comp = None
+    result = None
+    if sc is not None:
+        from ..comparison import compare
+        from ...analyses.simulation import simulate
+
+        result = simulate(sc, duration=duration, progress=progress)
+        comp = compare(rec, result, channel=ch)
+    # statistics
+    x_all = np.concatenate([b.x for b in bursts])
+    rms = float(np.sqrt(np.mean((x_all - x_all.mean()) ** 2)))
+    p2p = float(np.ptp(x_all))
+    # spikes: Hampel events on the residual after the fitted link-pass family is removed (a strong
+    # periodic signal would otherwise inflate the local scatter and hide them)
+    events = []
+    search = pitch.band_hz if pitch is not None else (band or (0.9 * f0, 1.1 * f0))
+    for b in bursts:
+        hw = max(3, int(round(hampel_half_window_s * b.fs)))
+        if b.x.size <= 2 * hw + 1:
+            continue
+        resid = b.x - _family_fit(b.x, b.fs, search)
+        for e in hampel_events(resid, b.fs, half_window=hw, false_alarm_rate=hampel_false_alarm_rate, t0=b.t0,
+                               max_gap=hw // 4):
+            events.append((e.time_s, float(b.x[e.index]), e))
+    # clipping: samples sitting at the extreme values in runs
+    lo, hi = float(np.min(x_all)), float(np.max(x_all))
+    clip_n = int(np.sum(np.isclose(x_all, hi, rtol=0, atol=1e-9 * max(abs(hi), 1e-30))) +
+                 np.sum(np.isclose(x_all, lo, rtol=0, atol=1e-9 * max(abs(lo), 1e-30))))
+    clipped = clip_n > 4
+    date = report_date()
+    summary = {
+        "file": os.path.basename(os.fspath(recording)),
+        "sha256": rec.attrs.get("sha256", ""),
+        "channel": ch,
+        "units": units,
+        "link_pass_hz": f0 if found else None,
+        "status": "ok" if found else "no link-pass found",
+        "rms": rms,
+        "peak_to_peak": p2p,
+        "spikes": len(events),
+        "clipped": clipped,
+    }
+    if pitch is not None:
+        summary.update({k: v for k, v in pitch.as_dict().items()
+                        if k in ("fundamental_sigma_hz", "pitch_m", "pitch_sigma_m", "elongation_percent",
+                                 "elongation_sigma_percent", "verdict", "speed_m_s", "speed_sigma_m_s")})
+    if comp is not None:
+        summary.update(score=comp.score, pitch_consistent=comp.pitch_consistent)
+    return ReportContext(
+        recording=recording, rec=rec, channel=ch, units=units, scene=sc, speed=speed, speed_sigma=speed_sigma,
+        nominal_pitch=nominal_pitch, limits=limits, band=band, duration=duration,
+        hampel_half_window_s=hampel_half_window_s, hampel_false_alarm_rate=hampel_false_alarm_rate,
+        bursts=bursts, pitch=pitch, f0=f0, found=found, notes=notes, result=result, comparison=comp,
+        events=events, rms=rms, p2p=p2p, clip_n=clip_n, clipped=clipped, date=date, summary=summary)

@@ -1,0 +1,91 @@
+"""The report's ride-quality pages: ISO 2631-1 weighted step vibration of the recording (when it has x, y, z
+acceleration channels) and of the simulation (when it has the step's motion); :func:`plot_ride` draws one."""
+
+from __future__ import annotations
+
+import os
+import textwrap
+
+from .common import _PAGE, _page_title
+
+__all__ = ["plot_ride", "ride_quality_pages"]
+
+
+def plot_ride(rq, fig=None):
+    """Draw a :class:`vibkit.diagnose.ride.RideQuality` on one figure: the per-axis table (weighted and 10 Hz
+    max pk-pk, A95, r.m.s.) and each axis's weighted acceleration with the ride segment shaded and
+    its largest peak-to-peak pair marked.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    import matplotlib.pyplot as plt
+
+    if fig is None:
+        fig = plt.figure(figsize=_PAGE)
+    seg = rq.segment
+    n = len(rq.axes)
+    tab_ax = fig.add_axes((0.06, 0.76, 0.88, 0.14))
+    tab_ax.axis("off")
+    head = ["axis", "channel", "weighting", "max pk-pk", "A95", "r.m.s.", "10 Hz max pk-pk", "10 Hz A95"]
+    cells = [[a.axis, a.channel[:28], a.weighting, f"{a.weighted.max:.4g}", f"{a.weighted.a95:.4g}",
+              f"{a.weighted.rms:.4g}", f"{a.lowpass.max:.4g}", f"{a.lowpass.a95:.4g}"] for a in rq.axes]
+    tab = tab_ax.table(cellText=cells, colLabels=head, loc="upper center", cellLoc="center",
+                       colWidths=[0.06, 0.27, 0.09, 0.1, 0.1, 0.1, 0.14, 0.12])
+    tab.auto_set_font_size(False)
+    tab.set_fontsize(8)
+    tab.scale(1, 1.3)
+    fig.text(0.06, 0.745, f"values in m/s^2 over the ride {seg.start_s:.2f}-{seg.end_s:.2f} s ({seg.method}); "
+             "pk-pk: adjacent half-cycle peaks; A95: not exceeded by 95 % of them", fontsize=7.5, color="0.3")
+    top, bottom = 0.7, 0.07
+    h = (top - bottom) / max(n, 1)
+    for j, a in enumerate(rq.axes):
+        ax = fig.add_axes((0.1, top - (j + 1) * h + 0.04, 0.85, h - 0.06))
+        y = rq.weighted[a.axis]
+        ax.plot(rq.time, y, lw=0.5, color="C0")
+        ax.axvspan(seg.start_s, seg.end_s, color="C2", alpha=0.12, lw=0)
+        tm = seg.start_s + a.weighted.time_of_max_s
+        ax.axvline(tm, color="C3", ls=":", lw=1)
+        ax.set_ylabel(f"{a.axis}, {a.weighting} [m/s^2]")
+        ax.set_title(f"{a.axis}: weighted ({a.weighting}); max pk-pk {a.weighted.max:.3g} m/s^2 (dotted), "
+                     f"A95 {a.weighted.a95:.3g} m/s^2", fontsize=8.5)
+        ax.grid(alpha=0.3)
+        if j == n - 1:
+            ax.set_xlabel("time [s] (shaded: ride segment)")
+    return fig
+
+
+def ride_quality_pages(doc, ctx) -> list:
+    """Ride-quality pages of the recording (when it has x, y, z acceleration channels) and of the
+    simulation (when it has the step's motion); none when neither can be assessed.
+
+    Returns
+    -------
+    list of RideQuality
+        One per page drawn.
+    """
+    import matplotlib.pyplot as plt
+
+    from ..ride import ride_quality_from_recording, ride_quality_from_simulation
+
+    rec, result = ctx.rec, ctx.result if ctx.scene is not None else None
+    done = []
+    for what, make in (("recording", lambda: ride_quality_from_recording(rec)),
+                       ("simulation", lambda: ride_quality_from_simulation(result) if result is not None else None)):
+        try:
+            rq = make()
+        except ValueError:
+            rq = None
+        if rq is None:
+            continue
+        fig = plt.figure(figsize=_PAGE)
+        _page_title(fig, f"Ride quality ({what})", f"{os.path.basename(rq.source)}: step vibration, ISO 2631-1 "
+                    "weighted (x, y: Wd; z: Wk) and 0.4-10 Hz unweighted")
+        plot_ride(rq, fig)
+        notes = rq.notes + ([rq.segment.note] if rq.segment.note else [])
+        fig.text(0.06, 0.015, "\n".join(textwrap.fill("- " + m, 115) for m in notes[:4]), fontsize=6.5,
+                 va="bottom", color="0.3")
+        doc.emit(fig, f"ride quality ({what})")
+        done.append(rq)
+    return done
