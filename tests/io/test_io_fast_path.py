@@ -16,6 +16,7 @@ from hypothesis import strategies as st
 
 from vibkit.io import RecordingError, read_recording
 from vibkit.io import csv as vcsv
+from vibkit.io.fastpath import _HEAD_BYTES
 
 LAYOUTS = Path(__file__).resolve().parents[2] / "data" / "field" / "layouts"
 FIELD = LAYOUTS.parent
@@ -77,7 +78,7 @@ def big_file(tmp_path, rows=60_000, mutate=None, name="big.csv"):
         mutate(lines)
     p = tmp_path / name
     p.write_text("# Site: test\ntime (s),x (m),y (mm)\n" + "\n".join(lines) + "\n")
-    assert p.stat().st_size > vcsv._HEAD_BYTES
+    assert p.stat().st_size > _HEAD_BYTES
     return p
 
 

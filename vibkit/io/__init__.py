@@ -226,7 +226,7 @@ def read_recording(path, *, channel=None, sample_rate=None, time_column=None, ti
 
         return read_netcdf(spath, data, channel=channel, repair_time=repair_time)
     head = data[:65536]
-    from .csv import utf16_without_bom
+    from .layout import utf16_without_bom
 
     text_bom = (data.startswith(_BOMS) or utf16_without_bom(head) is not None) and suffix not in SEISMIC_SUFFIXES
     looks_binary = b"\x00" in head and not text_bom and encoding is None

@@ -1,0 +1,104 @@
+"""Metadata lines of a text recording: ``key: value`` pairs, free comment text, sample rate and scale.
+
+The sample rate (``Sampling rate = 200 Hz``) and the counts scale (``2048 counts
+per g``) found here are what :mod:`vibkit.io.csv` uses when the file's columns
+do not say them.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+
+from .cells import _NUM
+from .units import parse_unit
+
+__all__ = []
+
+_RATE_KEY = re.compile(r"sampl\w*[\s_-]*(?:rate|freq)|samplerate|^fs\b|frecuencia\s*de\s*muestreo"
+                       r"|sampling|muestreo|abtastrate", re.IGNORECASE)
+_SCALE = re.compile(r"([0-9]+(?:[.,][0-9]*)?(?:[eE][+-]?[0-9]+)?)\s*,?\s*(?:counts?|lsb|cts|digits)\s*"
+                    r"(?:/|per)\s*([^\s,;]+)", re.IGNORECASE)
+
+
+def _meta_pair(line: str, delim: str, dec: str):
+    """('key', value) from a metadata line, or (None, text) for free text."""
+    s = line.strip()
+    s = s.lstrip("#;%/! \t").strip()
+    if not s:
+        return None, ""
+    seps = [":", "=", "\t"] + ([delim] if delim not in (" ", "\t") else [])
+    pos = [(s.find(c), c) for c in seps if s.find(c) > 0]
+    if not pos:
+        return None, (s.rstrip(delim + " ") if delim != " " else s)
+    p, _ = min(pos)
+    key = s[:p].strip().strip('"').strip()
+    value = s[p + 1:].strip()
+    if delim not in (" ",):
+        value = value.strip(delim + " ")
+    value = value.strip('"').strip()
+    if (not key or len(key) > 48 or len(key.split()) > 5 or not re.search(r"[A-Za-z]", key)
+            or not value):
+        return None, (s.rstrip(delim + " ") if delim != " " else s)
+    for dm in (dec, "."):
+        if _NUM[dm].fullmatch(value):
+            v = value.replace(",", ".")
+            return key, (int(v) if re.fullmatch(r"[+-]?[0-9]+", v) and abs(int(v)) < 2**53 else float(v))
+    return key, value
+
+
+def _rate_from_meta(pairs):
+    """(rate [Hz], line, key) from a sample-rate metadata pair, or None."""
+    for lineno, key, value in pairs:
+        if not _RATE_KEY.search(key):
+            continue
+        text = f"{value}"
+        m = re.search(r"([0-9]+(?:[.,][0-9]*)?(?:[eE][+-]?[0-9]+)?)\s*,?\s*([A-Za-z/]*)", text)
+        if not m:
+            continue
+        rate = float(m.group(1).replace(",", "."))
+        unit = (m.group(2) or "").lower()
+        if "khz" in unit or "khz" in key.lower():
+            rate *= 1e3
+        elif unit and not (unit.startswith(("hz", "sps", "samples", "s/s", "muestras"))):
+            continue
+        if math.isfinite(rate) and rate > 0:
+            return rate, lineno, key
+    return None
+
+
+def _scale_from_meta(pairs):
+    """(factor counts->SI, si unit, line, text) from a 'N counts per <unit>' metadata pair, or None."""
+    for lineno, key, value in pairs:
+        m = _SCALE.search(f"{value}")
+        if not m:
+            continue
+        per = float(m.group(1).replace(",", "."))
+        unit = parse_unit(m.group(2))
+        if unit is None or unit.factor is None or not per > 0:
+            continue
+        return unit.factor / per, unit, lineno, f"{key}: {value}"
+    return None
+
+
+def _metadata(lines, indices, delim: str, dec: str):
+    """(pairs, free): ``(line, key, value)`` of the metadata lines among ``lines[indices]``, and their free text."""
+    pairs, free = [], []
+    for i in indices:
+        key, value = _meta_pair(lines[i], delim, dec)
+        if key is None:
+            if value:
+                free.append(value)
+        else:
+            pairs.append((i + 1, key, value))
+    return pairs, free
+
+
+def _header_from_meta(pairs, n: int):
+    """(column names, line, key) from a ``Headers`` metadata line naming ``n`` columns (GCDC loggers), or None."""
+    for lineno, key, value in pairs:
+        if key.lower() in ("headers", "header", "columns") and isinstance(value, str):
+            cells = [c.strip() for c in re.split(r"[,;\t]", value)]
+            if len(cells) == n:
+                return cells, lineno, key
+    return None

@@ -1,0 +1,158 @@
+"""The time column of a text recording: which column it is, and its values in seconds.
+
+Numbers carry their unit in the header (``time (ms)``), from ``time_unit=``, from
+the steps matching the header's sample rate (ms), or from their size (Unix
+epoch times in s, ms, us or ns); time stamps (ISO 8601, day/month/year,
+time of day) become seconds since the first.
+"""
+
+from __future__ import annotations
+
+import math
+from datetime import datetime, timezone
+
+import numpy as np
+import pandas as pd
+
+from .cells import _NUM, _STAMP_DMY, _STAMP_ISO, _STAMP_TOD, _parse_numbers
+from .columns import _ColumnNames
+from .errors import RecordingError
+from .fastpath import _Fallback
+from .units import is_time_name, parse_time_unit, parse_unit
+
+__all__ = []
+
+#: plausible Unix epoch times [s]: 1979-07 to 2103-02; each unit's range is 1000x the next, so they never overlap
+_EPOCH_RANGE_S = (3e8, 4.2e9)
+_EPOCH_UNITS = (("s", 1.0), ("ms", 1e-3), ("us", 1e-6), ("ns", 1e-9))
+
+
+def _choose_time_column(path, time_column, colnames: _ColumnNames, n, header_line, history):
+    """The index of the time column, or None: as given (``time_column=``), else the first named like time."""
+    tcol = None
+    if time_column is False:
+        history.append("no time column (time_column=False given)")
+    elif time_column is not None:
+        if isinstance(time_column, (int, np.integer)) and not isinstance(time_column, bool):
+            if not 0 <= int(time_column) < n:
+                raise RecordingError(path, header_line, f"time_column={time_column} is out of range: the file has "
+                                     f"{n} column(s), numbered from 0")
+            tcol = int(time_column)
+        else:
+            tcol = colnames.match(time_column)
+            if tcol is None:
+                raise RecordingError(path, header_line, f"no time column {time_column!r}; columns: "
+                                     + ", ".join(repr(h) for h in colnames.shown))
+    else:
+        for j, (nm, ut, _) in enumerate(colnames.split):
+            if is_time_name(nm) and (ut is None or parse_unit(ut) is None):
+                tcol = j
+                break
+    return tcol
+
+
+def _read_time(path, tcells, tname, unit_text, dec, rownums, header_line, time_unit, rate_meta, history,
+               extra_attrs):
+    """Seconds from the cells ``tcells`` of time column ``tname``; start time and offset go to ``extra_attrs``."""
+    numeric = isinstance(tcells, np.ndarray) and tcells.dtype.kind in "fiu"
+    if numeric and tcells.dtype.kind == "f" and np.isnan(tcells).any():
+        raise _Fallback("a missing time")  # the line-by-line reader quotes the cell
+    stamps = None if numeric or _NUM[dec].fullmatch(tcells[0]) else _parse_stamps(tcells)
+    if stamps is not None:
+        t, start, kind, ok = stamps
+        if not ok.all():
+            i = int(np.flatnonzero(~ok)[0])
+            raise RecordingError(path, int(rownums[i]), f"expected a time stamp like '{start}' "
+                                 f"in column '{tname}', found '{tcells[i]}'")
+        history.append(f"time column '{tname}' holds {kind}; time = seconds since {start}")
+        extra_attrs["start_time"] = start
+    else:
+        vals, missing, bad, inf = _parse_numbers(tcells, dec)
+        badall = np.union1d(np.union1d(bad, inf), np.flatnonzero(missing))
+        if badall.size:
+            i = int(badall[0])
+            raise RecordingError(path, int(rownums[i]), f"expected a time in column '{tname}', "
+                                 f"found '{tcells[i]}'")
+        if time_unit is not None:
+            f = parse_time_unit(time_unit)
+            if f is None:
+                raise ValueError(f"time_unit={time_unit!r} is not a time unit (expected s, ms, us, ns, min, h) "
+                                 f"for {path}")
+            history.append(f"time column '{tname}' in {time_unit} (given)" + ("" if f == 1 else f" -> s (x {f:g})"))
+        elif unit_text is not None and parse_time_unit(unit_text) is not None:
+            f = parse_time_unit(unit_text)
+            history.append(f"time column '{tname}' in {unit_text}" + ("" if f == 1 else f" -> s (x {f:g})"))
+        elif unit_text is not None:
+            raise RecordingError(path, header_line, f"time column '{tname}' has unit '{unit_text}'; "
+                                 "expected s, ms, us or time stamps (pass time_unit=)")
+        else:
+            f = 1.0
+            step = float(np.median(np.diff(vals))) if vals.size > 1 else 0.0
+            if rate_meta and step > 0 and abs(step * rate_meta[0] / 1e3 - 1) < 0.05:
+                f = 1e-3
+                history.append(f"time column '{tname}' has no unit; read as ms because its steps match "
+                               f"the header's sample rate {rate_meta[0]:g} Hz")
+            else:
+                epoch = _epoch_unit(path, vals, tname, int(rownums[0]))
+                if epoch is None:
+                    history.append(f"time column '{tname}' has no unit; read as s")
+                else:
+                    f, eunit = epoch
+                    start = datetime.fromtimestamp(float(vals[0]) * f, tz=timezone.utc)
+                    history.append(f"time column '{tname}' has no unit; its values ({vals[0]:.17g} ...) are "
+                                   f"Unix epoch times in {eunit} by their size and steps; read as {eunit} "
+                                   f"(start {start.isoformat()}; pass time_unit= to override)")
+                    extra_attrs.setdefault("start_time", start.isoformat())
+        if vals.size and abs(vals[0]) * f > 1e6:
+            extra_attrs["time_offset_s"] = float(vals[0] * f)
+            history.append(f"time shifted by {vals[0] * f:.6f} s so that it starts at 0 (epoch-like values)")
+            t = (vals - vals[0]) * f
+        else:
+            t = vals * f
+    return t
+
+
+def _parse_stamps(cells):
+    """Seconds since the first stamp, the first stamp as text, the format name; None if not stamps."""
+    s = pd.Series(cells, dtype=object)
+    first = s.iloc[0]
+    if _STAMP_ISO.fullmatch(first):
+        t = pd.to_datetime(s.str.replace(",", ".", regex=False), format="ISO8601", utc=True, errors="coerce")
+        kind = "ISO 8601 timestamps"
+        ok = t.notna().to_numpy()
+    elif _STAMP_DMY.fullmatch(first):
+        norm = s.str.replace(r"^([0-9]{1,2})[/.-]([0-9]{1,2})[/.-]([0-9]{4})[ T]", r"\3-\2-\1 ", regex=True)
+        norm = norm.str.replace(",", ".", regex=False)
+        t = pd.to_datetime(norm, format="ISO8601", errors="coerce")
+        kind = "day/month/year timestamps"
+        ok = t.notna().to_numpy()
+    elif _STAMP_TOD.fullmatch(first):
+        norm = s.str.replace(r"^([0-9]{1,2}:[0-9]{2}:[0-9]{2})[.,:]([0-9]+)$", r"\1.\2", regex=True)
+        t = pd.to_timedelta(norm.where(norm.str.fullmatch(r"[0-9]{1,2}:[0-9]{2}:[0-9]{2}(\.[0-9]+)?"), None),
+                            errors="coerce")
+        kind = "time-of-day stamps"
+        ok = t.notna().to_numpy()
+    else:
+        return None
+    if not ok[0]:
+        return None
+    secs = (t - t.iloc[0]).dt.total_seconds().to_numpy(dtype=float, na_value=np.nan)
+    return secs, str(first), kind, ok
+
+
+def _epoch_unit(path, vals, tname, line):
+    """(factor to s, unit) when a unitless time column holds Unix epoch times, else None."""
+    v0 = float(vals[0])
+    for unit, f in _EPOCH_UNITS:
+        if _EPOCH_RANGE_S[0] <= abs(v0) * f <= _EPOCH_RANGE_S[1]:
+            break
+    else:
+        return None
+    k = min(vals.size, 100_001)
+    steps = np.diff(vals[:k])
+    step = float(np.median(steps)) * f if steps.size else math.nan
+    if step > 0 and not 1e-7 <= step <= 1e4:  # 10 MHz to one sample every 3 hours (repeats: check_order)
+        raise RecordingError(path, line, f"time column '{tname}' has no unit and holds {v0:.17g}, a Unix epoch "
+                             f"time in {unit} by its size, but its steps ({step / f:.6g} {unit}) do not give a "
+                             "sample rate between 1e-4 Hz and 10 MHz; pass time_unit= (s, ms, us, ns)")
+    return f, unit
