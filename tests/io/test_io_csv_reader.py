@@ -210,7 +210,7 @@ def test_sample_rate_option_without_time_column(tmp_path):
 
 
 def test_time_column_option(tmp_path):
-    p = write(tmp_path, "clock,x (m)\n" + "".join(f"{k * 0.5},{k}\n" for k in range(6)))
+    p = write(tmp_path, "clock,x (m)\n" + "".join(f"{k * 0.5},{2 * k}\n" for k in range(6)))  # (a +1 ramp counts)
     ds = read_recording(p, time_column="clock")
     np.testing.assert_allclose(ds["time"].values, np.arange(6) * 0.5)
     ds = read_recording(p, time_column=False, sample_rate=10)

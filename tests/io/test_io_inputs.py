@@ -36,7 +36,7 @@ def one_line_error(path, fn, *words, line=None):
 
 
 def test_channel_named_as_the_file_writes_it(tmp_path):
-    p = write(tmp_path, "time,vz_ms,Acceleration x (m/s^2)\n" + "".join(f"{a},{k},{2 * k}\n" for k, a in enumerate(T)))
+    p = write(tmp_path, "time,vz_ms,Acceleration x (m/s^2)\n" + "".join(f"{a},{-k},{2 * k}\n" for k, a in enumerate(T)))
     ds = read_recording(p)
     assert list(ds.data_vars) == ["vz", "acceleration_x"]
     assert ds["vz"].attrs["source_name"] == "vz_ms"
@@ -63,7 +63,8 @@ def test_sample_counter_is_never_the_default_channel(tmp_path, counter):
     p = write(tmp_path, f"{counter},time (s),displacement (mm)\n"
               + "".join(f"{k + 1},{a:.4f},{v:.6f}\n" for k, (a, v) in enumerate(zip(T, x))))
     ds = read_recording(p)
-    var = [v for v in ds.data_vars if v != "displacement"][0]
+    assert list(ds.data_vars) == ["displacement"]  # a counter is no channel (a coordinate along time)
+    var = [v for v in ds.coords if v != "time"][0]
     assert ds[var].attrs["sample_counter"] == 1
     assert pick_channel(ds) == "displacement"
     assert pick_channel(ds, counter) == var  # still there when asked for by name

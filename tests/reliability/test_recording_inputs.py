@@ -201,7 +201,7 @@ def test_time_column_and_unit_options(run, tmp_path):
         pytest.approx(F0, abs=1e-3)
     d = spectrum_json(run, p, "--time-column", "none", "--sample-rate", "200", "--channel", "x")
     assert d["fundamental_hz"] == pytest.approx(F0, abs=1e-3)
-    one_line_error(run("spectrum", p, "--time-column", "7"), p, "time_column=7 is out of range")
+    one_line_error(run("spectrum", p, "--time-column", "7"), p, "--time-column 7 is out of range")
     one_line_error(run("spectrum", p, "--time-column", "tick"), p, "no time column 'tick'")
 
 

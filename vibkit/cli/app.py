@@ -67,6 +67,9 @@ def main(argv=None) -> int:
             where = f"{exc.filename}: " if getattr(exc, "filename", None) else ""
             text = f"{where}{exc.strerror}" + (" (the disk is full; nothing was written)"
                                               if exc.errno == errno.ENOSPC else "")
+        from .options import cli_message
+
+        text = cli_message(text)  # the reader's Python arguments named as their flags
         prefix = "\033[31merror\033[0m" if color() else "error"
         msg(f"vibkit {args.command}: {prefix}: {text}")
         return 1

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import sys
 
-from .options import add_channel, add_command, add_json, add_limits, positive, speed_sigma, workers
+from .options import (add_command, add_json, add_limits, add_recording, cli_message, positive, reader_options,
+                      speed_sigma, workers)
 from .output import CLIError, check_output, msg, print_json, table
 
 EPILOG = ("examples (on the shipped example fleet, data/fleet-example/):\n"
@@ -30,13 +31,12 @@ def add_parser(subparsers):
         return sp
 
     f = fleet_sub("add", "analyse one recording and store its pitch and elongation")
-    f.add_argument("recording", help="recording file (CSV/text, miniSEED ..., netCDF)")
+    add_recording(f)
     f.add_argument("--unit", required=True, help="escalator identifier")
     f.add_argument("--speed", type=positive, required=True, help="chain speed measured on the steps [m/s]")
     f.add_argument("--speed-uncertainty", help="speed standard deviation, in m/s or in %% (e.g. 0.1%%)")
     f.add_argument("--date", help="measurement date, ISO 8601 (default: the recording's start time)")
     f.add_argument("--nominal-pitch", type=positive, help="nominal link pitch [m] (required for a new unit)")
-    add_channel(f, "channel to analyse (default: the first)")
     f.set_defaults(func=run_add)
 
     f = fleet_sub("scan", "add every recording of a folder that a catalogue describes, in parallel (Dask)")
@@ -45,6 +45,7 @@ def add_parser(subparsers):
     f.add_argument("--scheduler", help="address of a running Dask scheduler (default: a local cluster)")
     f.add_argument("--workers", type=workers, help="worker processes of the local cluster (default: one per "
                    "core; 0: analyse in this process)")
+    add_recording(f, positional=False, channel=False)  # for every file; the catalogue's channel column per file
     f.set_defaults(func=run_scan)
 
     f = fleet_sub("status", "per unit: latest elongation, trend [%/year] and limit forecasts, most urgent first")
@@ -77,7 +78,8 @@ def run_add(a):
     sigma = speed_sigma(a.speed_uncertainty, a.speed) if a.speed_uncertainty else 0.0
     with _fleet_db(a) as db:
         m = db.add(a.recording, unit=a.unit, speed=a.speed, speed_sigma=sigma, date=a.date,
-                   nominal_pitch=a.nominal_pitch, channel=a.channel)
+                   nominal_pitch=a.nominal_pitch, channel=a.channel,
+                   read_options=reader_options(a))
         path = db.path
     if a.json:
         print_json("fleet.add", {"database": path, "measurement": m.as_dict()})
@@ -91,11 +93,13 @@ def run_add(a):
 
 def run_scan(a):
     def failed(name, why):
+        why = cli_message(why)
         msg(f"vibkit fleet scan: failed: {why if why.startswith(name) else f'{name}: {why}'}")
 
     with _fleet_db(a) as db:
         res = db.scan(a.directory, a.catalogue, scheduler=a.scheduler, n_workers=a.workers or None,
-                      parallel=a.workers != 0, on_failure=failed, progress=sys.stderr.isatty())
+                      parallel=a.workers != 0, on_failure=failed, progress=sys.stderr.isatty(),
+                      read_options=reader_options(a))
         path = db.path
     for n in res.notes:
         msg(f"note: {n}")

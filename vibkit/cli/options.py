@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import re
 
 from .output import CLIError
 
@@ -136,35 +137,137 @@ def add_channel(sp, help_="channel to analyse, named as the file writes it or as
     sp.add_argument("--channel", help=help_)
 
 
-def add_recording(sp, *, time_options=True):
-    """The RECORDING argument and the recording reader's options (applied by :func:`read_recording`).
+#: the reader's options: Python argument of :func:`vibkit.read_recording` -> command-line flag
+READER_FLAGS = {"channel": "--channel", "sample_rate": "--sample-rate", "time_column": "--time-column",
+                "time_unit": "--time-unit", "units": "--units", "repair_time": "--repair-time",
+                "delimiter": "--delimiter", "decimal": "--decimal", "encoding": "--encoding"}
+_DELIMS = {"comma": ",", ",": ",", "semicolon": ";", ";": ";", "tab": "\t", "\\t": "\t", "pipe": "|", "|": "|",
+           "space": " ", "whitespace": " "}
 
-    ``time_options=False``: no --time-column, --time-unit, --repair-time (``report`` reads the file
-    itself, in :mod:`vibkit.diagnose.report`).
+
+def units_option(text):
+    """--units: one unit for every channel (``g``, ``counts``, ``g/2048``) or NAME=UNIT pairs (``az=g,ax=m/s^2``)."""
+    t = text.strip()
+    if not t:
+        raise argparse.ArgumentTypeError("expected a unit (e.g. g, m/s^2, g/2048) or NAME=UNIT,NAME=UNIT")
+    if "=" not in t:
+        return t
+    out = {}
+    for item in t.split(","):
+        k, sep, v = item.partition("=")
+        if not sep or not k.strip() or not v.strip():
+            raise argparse.ArgumentTypeError(f"expected NAME=UNIT pairs separated by commas, got {text!r}")
+        out[k.strip()] = v.strip()
+    return out
+
+
+def delimiter_option(text):
+    d = _DELIMS.get(text.strip().lower() if text.strip() else text)
+    if d is None:
+        raise argparse.ArgumentTypeError(f"expected comma, semicolon, tab, pipe or whitespace, got {text!r}")
+    return d
+
+
+def add_recording(sp, *, positional=True, channel=True):
+    """The RECORDING argument and the recording reader's options, the same for every command that reads one.
+
+    ``positional=False``: the command names its input itself (``ride``'s RECORDING_OR_SCENE);
+    ``channel=False``: the command picks channels its own way (``ride --channels``).
+    :func:`reader_options` turns the parsed options into :func:`vibkit.read_recording` arguments.
     """
-    sp.add_argument("recording", help="recording file (CSV/text, miniSEED ..., netCDF)")
-    add_channel(sp)
-    add_sample_rate(sp)
-    if time_options:
-        sp.add_argument("--time-column", metavar="NAME|INDEX|none",
-                        help="time column by name or 0-based index; 'none': the file has no time column")
-        sp.add_argument("--time-unit", choices=("s", "ms", "us", "ns", "min", "h"),
-                        help="unit of a numeric time column (overrides the header and the epoch guess)")
-        sp.add_argument("--repair-time", action="store_true",
-                        help="undo a clock set back at midnight or by a DST change, sort other backward "
-                             "rows and drop repeated stamps instead of refusing the file (in the history)")
+    if positional:
+        sp.add_argument("recording", help="recording file (CSV/text, miniSEED ..., netCDF)")
+    g = sp.add_argument_group("reading the recording (all optional: the file says it)")
+    if channel:
+        add_channel(g)
+    add_sample_rate(g)
+    g.add_argument("--time-column", metavar="NAME|INDEX|none",
+                   help="time column by name or 0-based index; 'none': the file has no time column")
+    g.add_argument("--time-unit", choices=("s", "ms", "us", "ns", "min", "h"),
+                   help="unit of a numeric time column (overrides the header and the epoch guess)")
+    g.add_argument("--units", type=units_option, metavar="UNIT|NAME=UNIT,...",
+                   help="unit of every channel (m/s^2, g, mm, counts, or scaled counts like g/2048: one count "
+                        "is 1/2048 g), or per channel az=g,ax=g/2048; overrides the file's header")
+    g.add_argument("--repair-time", action="store_true",
+                   help="undo a clock set back at midnight or by a DST change, sort other backward "
+                        "rows and drop repeated stamps instead of refusing the file (in the history)")
+    g.add_argument("--delimiter", type=delimiter_option, metavar="comma|semicolon|tab|pipe|whitespace",
+                   help="text files: the delimiter (default: detected)")
+    g.add_argument("--decimal", choices=(".", ","), help="text files: the decimal mark (default: detected)")
+    g.add_argument("--encoding", help="text files: the encoding, e.g. cp1252 (default: UTF-8, else cp1252)")
 
 
-def read_recording(a):
-    """Read ``a.recording`` with the reader options that :func:`add_recording` gave the command."""
-    import vibkit
+def reader_options(a, *, channel=False):
+    """The :func:`vibkit.read_recording` keyword arguments that :func:`add_recording`'s options give.
 
+    ``channel=True`` adds ``--channel`` (the reader then keeps that channel only).
+    """
     tc = getattr(a, "time_column", None)
     if tc is not None:  # a 0-based index, 'none' (the file has no time column) or a name as the file writes it
         tc = int(tc) if tc.strip().isdigit() else False if tc.strip().lower() == "none" else tc
-    return vibkit.read_recording(a.recording, sample_rate=getattr(a, "sample_rate", None), time_column=tc,
-                                 time_unit=getattr(a, "time_unit", None),
-                                 repair_time=bool(getattr(a, "repair_time", False)))
+    opts = dict(sample_rate=getattr(a, "sample_rate", None), time_column=tc, time_unit=getattr(a, "time_unit", None),
+                units=getattr(a, "units", None), repair_time=bool(getattr(a, "repair_time", False)),
+                delimiter=getattr(a, "delimiter", None), decimal=getattr(a, "decimal", None),
+                encoding=getattr(a, "encoding", None))
+    if channel and getattr(a, "channel", None):
+        opts["channel"] = a.channel
+    return opts
+
+
+def read_recording(a):
+    """Read ``a.recording`` with the reader options that :func:`add_recording` gave the command.
+
+    Every channel is read (the command picks ``--channel`` among them); a file that cannot be read whole
+    (a waveform file whose traces start at different times) is read again with ``--channel`` only.
+    """
+    import vibkit
+    from vibkit.io import RecordingError
+
+    try:
+        rec = vibkit.read_recording(a.recording, **reader_options(a))
+    except RecordingError:
+        if not getattr(a, "channel", None):
+            raise
+        rec = vibkit.read_recording(a.recording, **reader_options(a, channel=True))
+    _note_held_samples(rec)
+    return rec
+
+
+def _note_held_samples(rec):
+    """Say on stderr which channels hold their values between updates, and the Nyquist frequency that follows."""
+    from .output import msg
+
+    held = {str(v): float(rec[v].attrs["update_rate_hz"]) for v in rec.data_vars if "update_rate_hz" in rec[v].attrs}
+    if held:
+        lo = min(held.values())
+        msg(f"note: {', '.join(held)}: values held between updates (rows at {rec.attrs['sample_rate_hz']:.4g} Hz, "
+            f"updates at {lo:.3g} Hz): nothing above {lo / 2:.3g} Hz (their Nyquist frequency) is in the data")
+
+
+_PY_ARG = re.compile(r"\b(" + "|".join(READER_FLAGS) + r")=(\{[^}]*\}|True\b|False\b)?( ?)")
+
+
+def cli_message(text: str) -> str:
+    """A library message for the command line: the reader's Python arguments become their flags.
+
+    ``pass time_unit= (s, ms ...)`` -> ``pass --time-unit (s, ms ...)``; ``repair_time=True`` ->
+    ``--repair-time``; ``time_column=False`` -> ``--time-column none``; ``units={'ax': 'g'}`` ->
+    ``--units ax=g``; ``max_bytes=`` -> the environment variable.
+    """
+    def sub(m):
+        flag, value, space = READER_FLAGS[m.group(1)], m.group(2), m.group(3)
+        if value == "True":
+            return flag + space
+        if value == "False":
+            return f"{flag} none" + space
+        if value:
+            pairs = re.findall(r"['\"]([^'\"]*)['\"]\s*:\s*['\"]?([^,'\"}]*)['\"]?", value)
+            return flag + " " + ",".join(f"{k}={v.strip()}" for k, v in pairs) + space
+        return flag + " "
+    text = text.replace("max_bytes= or ", "")
+    text = _PY_ARG.sub(sub, text)
+    text = re.sub(r"(--[a-z-]+) +(?=[),.;]|$)", r"\1", text)
+    return re.sub(r"(--[a-z-]+)( [^,;)]*)?, \1 on the command line,", r"\1\2", text)
 
 
 def add_force_overwrite(sp, what):

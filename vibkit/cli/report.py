@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from .options import (add_command, add_force_overwrite, add_json, add_limits, add_recording, band, positive,
-                      speed_sigma, speed_uncertainty)
+                      reader_options, speed_sigma, speed_uncertainty)
 from .output import check_output, print_json, table
 
 EPILOG = ("example:\n  vibkit report data/field/leon-tensioner.csv --scene sim/leon.toml --date 2020-02-14 \\\n"
@@ -12,7 +12,7 @@ EPILOG = ("example:\n  vibkit report data/field/leon-tensioner.csv --scene sim/l
 
 def add_parser(subparsers):
     s = add_command(subparsers, "report", "write the multi-page PDF diagnostic report of a recording", EPILOG)
-    add_recording(s, time_options=False)  # report reads the file itself (vibkit.diagnose.report)
+    add_recording(s)
     add_json(s)
     s.add_argument("--scene", help="scene describing the escalator and sensor (simulated and compared)")
     s.add_argument("-o", "--output", required=True, help="PDF to write; a new path unless --force")
@@ -34,8 +34,8 @@ def run(a):
     check_output(a.output, [a.recording, a.scene], a.force)
     sigma = speed_sigma(a.speed_uncertainty, a.speed) if (a.speed_uncertainty and a.speed) else 0.0
     rep = write_report(a.recording, a.output, scene=a.scene, speed=a.speed, speed_sigma=sigma, channel=a.channel,
-                       nominal_pitch=a.nominal_pitch, limits_percent=a.limits, sample_rate=a.sample_rate,
-                       duration=a.duration, band=a.band, progress=True, overwrite=a.force,
+                       nominal_pitch=a.nominal_pitch, limits_percent=a.limits, duration=a.duration,
+                       band=a.band, progress=True, overwrite=a.force, read_options=reader_options(a),
                        date=a.date)
     if a.json:
         print_json("report", {"output": rep.path, "pages": [t for t, _ in rep.pages], "summary": rep.summary})

@@ -5,7 +5,7 @@ from __future__ import annotations
 import os
 import sys
 
-from .options import add_command, add_json, add_sample_rate, positive
+from .options import add_command, add_json, add_recording, positive, reader_options
 from .output import CLIError, msg, print_json, table
 
 EPILOG = ("examples:\n  vibkit ride data/field/layouts/phyphox.csv --segment 0.5:3 --json\n"
@@ -24,7 +24,7 @@ def add_parser(subparsers):
     s.add_argument("--weighting", help="Wk, Wd ... for every axis, or x=Wd,y=Wd,z=Wk (the default)")
     s.add_argument("--scene", help="also simulate this scene's step and report it next to the recording")
     s.add_argument("--duration", type=positive, help="simulated time [s] (default: the scene's)")
-    add_sample_rate(s)
+    add_recording(s, positional=False, channel=False)
     add_json(s)
     s.set_defaults(func=run)
     return s
@@ -71,7 +71,8 @@ def run(a):
                            progress=sys.stderr.isatty())
     else:
         rq = ride_quality_from_recording(a.input, channels=parse_channels(a.channels) if a.channels else None,
-                                         segment=segment, weightings=weightings, sample_rate=a.sample_rate)
+                                         segment=segment, weightings=weightings,
+                                         read_options=reader_options(a))
     sim = None
     if a.scene:
         sim = simulate_ride(a.scene, duration=a.duration, weightings=weightings, progress=sys.stderr.isatty())

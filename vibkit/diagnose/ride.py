@@ -270,7 +270,7 @@ def _auto_channels(rec, names):
 
 
 def ride_quality_from_recording(recording, *, channels=None, segment=None, weightings=None, sample_rate=None,
-                                speed_channel=None) -> RideQuality:
+                                speed_channel=None, read_options=None) -> RideQuality:
     """Ride quality of a recording of a step-riding accelerometer.
 
     Parameters
@@ -290,6 +290,8 @@ def ride_quality_from_recording(recording, *, channels=None, segment=None, weigh
         For files without a time column. [Hz]
     speed_channel : str, optional
         A speed channel [m/s] (default: a channel in m/s named like ``speed``).
+    read_options : dict, optional
+        More :func:`vibkit.read_recording` arguments (``time_unit``, ``units``, ``repair_time`` ...).
 
     Returns
     -------
@@ -304,8 +306,10 @@ def ride_quality_from_recording(recording, *, channels=None, segment=None, weigh
     from ..io import read_recording
     from .pitch import uniform_bursts
 
-    rec = recording if not isinstance(recording, (str, os.PathLike)) else read_recording(recording,
-                                                                                        sample_rate=sample_rate)
+    opts = dict(read_options or {})
+    if sample_rate is not None:
+        opts["sample_rate"] = sample_rate
+    rec = recording if not isinstance(recording, (str, os.PathLike)) else read_recording(recording, **opts)
     src = os.fspath(recording) if isinstance(recording, (str, os.PathLike)) else rec.attrs.get("source_file", "")
     if (channels is None and rec.attrs.get("analysis") in ("forward", "inverse")
             and ("roller_acceleration" in rec or "accel_step" in rec)):

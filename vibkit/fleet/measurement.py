@@ -56,7 +56,7 @@ def _file_sha256(path):
     return h.hexdigest()
 
 
-def analyse_recording(path, *, unit, speed, speed_sigma=0.0, nominal_pitch, date=None, channel=None):
+def analyse_recording(path, *, unit, speed, speed_sigma=0.0, nominal_pitch, date=None, channel=None, read_options=None):
     """Read and analyse one recording; the :class:`Measurement` it gives (not stored, ``id`` None).
 
     Parameters
@@ -72,6 +72,8 @@ def analyse_recording(path, *, unit, speed, speed_sigma=0.0, nominal_pitch, date
     date : str or datetime, optional
         Measurement date (ISO 8601); default the recording's start time.
     channel : str, optional
+    read_options : dict, optional
+        More :func:`vibkit.read_recording` arguments (``time_unit``, ``units``, ``repair_time`` ...).
 
     Raises
     ------
@@ -90,7 +92,7 @@ def analyse_recording(path, *, unit, speed, speed_sigma=0.0, nominal_pitch, date
     if nominal_pitch is None or not (math.isfinite(float(nominal_pitch)) and float(nominal_pitch) > 0):
         raise FleetError(f"nominal_pitch must be a positive length [m], got {nominal_pitch!r}")
     spath = os.fspath(path)
-    rec = read_recording(spath, channel=channel)
+    rec = read_recording(spath, **{**(read_options or {}), "channel": channel})
     if isinstance(date, _dt.datetime):
         d, source = (date if date.tzinfo else date.replace(tzinfo=_dt.timezone.utc)), "given"
     elif date is not None and str(date).strip():

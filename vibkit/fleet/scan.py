@@ -31,13 +31,15 @@ class _Job:
     date: str | None
     channel: str | None
     sha256: str
+    read_options: dict | None = None
 
 
 def _analyse_job(job):
     """Worker side of a scan: analyse one recording; never raises (a failure is a message)."""
     try:
         m = analyse_recording(job.path, unit=job.unit, speed=job.speed_m_s, speed_sigma=job.speed_sigma_m_s,
-                              nominal_pitch=job.nominal_pitch_m, date=job.date, channel=job.channel)
+                              nominal_pitch=job.nominal_pitch_m, date=job.date, channel=job.channel,
+                              read_options=job.read_options)
         return {"ok": True, "measurement": m}
     except (ValueError, OSError) as exc:  # RecordingError and FleetError are ValueErrors
         msg = " ".join(str(exc).split()) or type(exc).__name__
@@ -100,7 +102,7 @@ def _match(rel, rows):
 
 
 def scan_folder(db, directory, catalogue, *, scheduler=None, n_workers=None, client=None, parallel=True,
-                on_failure=None, progress=False):
+                on_failure=None, progress=False, read_options=None):
     """Add every recording of a folder that a catalogue describes to ``db``; see :meth:`FleetDB.scan`.
 
     ``db`` stores the measurements: its ``find``, ``nominal_pitch`` and ``insert`` are called from
@@ -159,7 +161,7 @@ def scan_folder(db, directory, catalogue, *, scheduler=None, n_workers=None, cli
                        "on one line of the unit)")
             continue
         jobs.append(_Job(os.path.abspath(full), r.unit, r.speed_m_s, r.speed_sigma_m_s, nom, r.date, r.channel,
-                         sha))
+                         sha, read_options))
     for r in rows:
         if r.line not in used:
             if r.is_glob:

@@ -256,7 +256,8 @@ class FleetDB:
         d["id"] = rid
         return Measurement(**d)
 
-    def add(self, recording, *, unit, speed, speed_sigma=0.0, date=None, nominal_pitch=None, channel=None):
+    def add(self, recording, *, unit, speed, speed_sigma=0.0, date=None, nominal_pitch=None, channel=None,
+            read_options=None):
         """Analyse a recording and store its measurement.
 
         Parameters
@@ -271,6 +272,8 @@ class FleetDB:
         nominal_pitch : float, optional
             Nominal link pitch [m]; default the unit's stored value (required for a new unit).
         channel : str, optional
+        read_options : dict, optional
+            More :func:`vibkit.read_recording` arguments (``time_unit``, ``units``, ``repair_time`` ...).
 
         Returns
         -------
@@ -296,11 +299,11 @@ class FleetDB:
         if nom is None:
             raise FleetError(f"unit {str(unit)!r} is new: give its nominal link pitch (--nominal-pitch, in m)")
         m = analyse_recording(spath, unit=unit, speed=speed, speed_sigma=speed_sigma, nominal_pitch=nom, date=date,
-                              channel=channel)
+                              channel=channel, read_options=read_options)
         return self.insert(m)
 
     def scan(self, directory, catalogue, *, scheduler=None, n_workers=None, client=None, parallel=True,
-             on_failure=None, progress=False):
+             on_failure=None, progress=False, read_options=None):
         """Add every recording of a folder that a catalogue describes; analyses run on Dask workers.
 
         Parameters
@@ -322,6 +325,9 @@ class FleetDB:
             Called as ``on_failure(file, reason)`` for each failed file as it happens.
         progress : bool
             Draw a progress bar on a terminal.
+        read_options : dict, optional
+            :func:`vibkit.read_recording` arguments for every file (``time_unit``, ``units`` ...); the
+            catalogue's ``channel`` column names each file's channel.
 
         Returns
         -------
@@ -335,7 +341,8 @@ class FleetDB:
         ``if __name__ == "__main__":`` guard (or ``parallel=False``).
         """
         return scan_folder(self, directory, catalogue, scheduler=scheduler, n_workers=n_workers, client=client,
-                           parallel=parallel, on_failure=on_failure, progress=progress)
+                           parallel=parallel, on_failure=on_failure, progress=progress,
+                           read_options=read_options)
 
     # ----------------------------------------------------------------------------------- status
     def status(self, *, limits_percent=DEFAULT_LIMITS_PERCENT, coverage_sigma=2.0, units=None):

@@ -230,7 +230,8 @@ def read_recording(path, *, channel=None, sample_rate=None, time_column=None, ti
 
     text_bom = (data.startswith(_BOMS) or utf16_without_bom(head) is not None) and suffix not in SEISMIC_SUFFIXES
     looks_binary = b"\x00" in head and not text_bom and encoding is None
-    if suffix in SEISMIC_SUFFIXES or looks_binary:
+    if suffix in SEISMIC_SUFFIXES or looks_binary or head.lstrip(b"\xef\xbb\xbf \r\n").startswith(b"TIMESERIES "):
+        # obspy's ASCII layouts (TSPAIR, SLIST) start with a 'TIMESERIES NET_STA_LOC_CHA, N samples, R sps' line
         from .seismic import read_seismic
 
         return read_seismic(spath, data, units=units, **common)

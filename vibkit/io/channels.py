@@ -7,8 +7,9 @@ channel as the file writes it, so :func:`resolve_channel` accepts the variable
 name, the header as found and the name without its unit, case-insensitively.
 
 Columns that count samples (``index``, ``sample number``, ``#``, ``n``, or a
-strict +1 integer ramp) carry ``sample_counter = 1`` and are never chosen by
-default.
+strict +1 integer ramp) carry ``sample_counter = 1`` and are no channels: the
+readers keep them as coordinates along ``time`` (a channel only when asked for by
+name), never chosen by default.
 """
 
 from __future__ import annotations
@@ -53,6 +54,12 @@ def _channels(recording):
     return [str(v) for v in recording.data_vars if v != "segment" and recording[v].dims == ("time",)]
 
 
+def _counters(recording):
+    """Columns that count samples: coordinates along time (or, in older results, data variables) marked so."""
+    return [str(v) for v in recording.variables if v not in ("time", "segment") and recording[v].dims == ("time",)
+            and int(recording[v].attrs.get(COUNTER_ATTR, 0))]
+
+
 def _where(recording) -> str:
     src = recording.attrs.get("source_file", "")
     return f"{src}: " if src else ""
@@ -82,18 +89,19 @@ def resolve_channel(recording, channel=None) -> str:
         No such channel (the message names the file and lists the channels with
         the names the file wrote), no channel at all, or only sample counters.
     """
-    names = _channels(recording)
+    counters = _counters(recording)
+    names = _channels(recording) + [c for c in counters if c not in recording.data_vars]
     where = _where(recording)
     if not names:
         raise ValueError(f"{where}recording has no 1-D channel along 'time'")
     if channel is None:
         for n in names:
-            if not int(recording[n].attrs.get(COUNTER_ATTR, 0)):
+            if n not in counters:
                 return n
         raise ValueError(f"{where}the only channel(s) {', '.join(repr(n) for n in names)} count samples "
                          "(index, sample number); name one with channel= to analyse it anyway")
     want = _norm(channel)
-    for keys in (("__name__",), ("source_name", "column"), ("long_name",)):  # most specific first
+    for keys in (("__name__",), ("source_name", "column", "trace_id"), ("channel_code",), ("long_name",)):
         for n in names:
             attrs = recording[n].attrs
             cands = [n if k == "__name__" else attrs.get(k) for k in keys]

@@ -58,10 +58,10 @@ def _match_column(want, headers, names, vars_):
     return None
 
 
-def _select_channels(path, channel, tcol, colnames: _ColumnNames, n, header_line):
-    """(indices of the channel columns, whether the caller named them)."""
+def _select_channels(path, channel, tcol, colnames: _ColumnNames, n, header_line, clocks=()):
+    """(indices of the channel columns, whether the caller named them); clock columns only when named."""
     header_disp = colnames.shown
-    chan_idx = [j for j in range(n) if j != tcol]
+    chan_idx = [j for j in range(n) if j != tcol and j not in clocks]
     explicit = channel is not None
     if explicit:
         wanted = [channel] if isinstance(channel, str) else list(channel)
@@ -70,7 +70,7 @@ def _select_channels(path, channel, tcol, colnames: _ColumnNames, n, header_line
             j = colnames.match(w)
             if j is None or j == tcol:
                 raise RecordingError(path, header_line, f"no channel {w!r}; channels: "
-                                     + ", ".join(repr(header_disp[k]) for k in chan_idx))
+                                     + ", ".join(repr(header_disp[k]) for k in range(n) if k != tcol))
             picked.append(j)
         chan_idx = list(dict.fromkeys(picked))
     if not chan_idx:
@@ -131,7 +131,9 @@ def _build_channels(path, cols, rownums, dec, chan_idx, explicit, override, coln
         if named or is_counter_ramp(vals):
             attrs[COUNTER_ATTR] = 1
             why = "its name" if named else "a +1 integer ramp"
-            history.append(f"column '{head}' counts samples ({why}); never the default channel")
+            history.append(f"column '{head}' counts samples ({why}); kept as a coordinate, not a channel")
+            if explicit:
+                attrs["requested"] = 1
         if j in override:
             u_text = override[j]
             unit = parse_unit(u_text) if isinstance(u_text, str) else None

@@ -37,7 +37,8 @@ from .fastpath import _HEAD_BYTES, _Fallback, _fast_rows
 from .layout import _decode, _decode_head, _read_layout
 from .metadata import _meta_pair, _rate_from_meta, _scale_from_meta
 from .recording import build_recording, metadata_attrs
-from .timebase import check_order, diagnose, resample_linear
+from .timebase import check_order, diagnose, held_update_rate, resample_linear
+from .loggers import app_units
 from .timecolumn import _choose_time_column, _read_time
 
 __all__ = ["read_csv", "DELIMITERS"]
@@ -114,8 +115,10 @@ def _read_csv(path, data: bytes, *, fast, channel=None, sample_rate=None, time_c
     colnames = _column_names(lay.header, n, lay.unit_row, header_line, lay.unit_line, history)
     rate_meta = _rate_from_meta(lay.pairs)
     scale_meta = _scale_from_meta(lay.pairs)
-    tcol = _choose_time_column(path, time_column, colnames, n, header_line, history)
-    chan_idx, explicit = _select_channels(path, channel, tcol, colnames, n, header_line)
+    for j, u in app_units(path, colnames.names, [s[1] for s in colnames.split], lay.free, history).items():
+        colnames.split[j] = (colnames.split[j][0], u, None)
+    tcol, clocks = _choose_time_column(path, time_column, colnames, n, header_line, history, cols, dec)
+    chan_idx, explicit = _select_channels(path, channel, tcol, colnames, n, header_line, clocks)
     override = _unit_overrides(path, units, chan_idx, colnames)
 
     t = None
@@ -231,7 +234,7 @@ def _time_base(path, t, tname, channels, nrows, rownums, header_line, sample_rat
     else:
         keep, notes, t = check_order(t, rownums, path=path, column=tname, repair=repair_time)
         history += notes
-        if repair_time and (keep.size != t.size or np.any(keep != np.arange(t.size))):  # unrepaired: all kept
+        if keep.size != t.size or np.any(keep != np.arange(t.size)):  # repaired, or phyphox's repeated first stamp
             t = t[keep]
             for ch in channels:
                 ch.values = ch.values[keep]
@@ -261,6 +264,7 @@ def _time_base(path, t, tname, channels, nrows, rownums, header_line, sample_rat
                            f"(gaps {diag.gaps_s.min():.6g} to {diag.gaps_s.max():.6g} s); kept as segments, "
                            "not bridged")
             segment = diag.segment
+        _held_samples(t, channels, measured, history, extra_attrs)
         policy = "resampled below" if resample == "linear" else "kept as is"
         history.append(f"jitter rms {_pct(diag.jitter_rms)} % of the period "
                        f"(max {_pct(diag.jitter_max)} %), {policy}")
@@ -275,3 +279,25 @@ def _time_base(path, t, tname, channels, nrows, rownums, header_line, sample_rat
         extra_attrs["time_jitter_rms_percent"] = float(100 * jitter)
         extra_attrs["segment_count"] = int(diag.n_segments)
     return t, fs, segment
+
+
+def _held_samples(t, channels, row_rate, history, extra_attrs):
+    """Mark channels whose values are held between updates (multi-sensor phone exports) with their true rate."""
+    rates = {}
+    for ch in channels:
+        r = held_update_rate(t, ch.values)
+        if r is not None:
+            ch.attrs["update_rate_hz"] = r
+            ch.attrs["nyquist_hz"] = r / 2
+            rates[ch.name] = r
+    if rates:
+        lo = min(rates.values())
+        every = len(rates) == len(channels)
+        history.append(f"held samples: rows come at {row_rate:.4g} Hz but the values of "
+                       + ", ".join(f"{k} change {v:.3g}" for k, v in rates.items())
+                       + f" times a second (repeated between updates); true update rate {lo:.3g} Hz, so nothing "
+                       f"above its Nyquist frequency {lo / 2:.3g} Hz is in "
+                       + ("the data" if every else "those channels (attrs update_rate_hz, nyquist_hz)"))
+        if every:
+            extra_attrs["update_rate_hz"] = float(lo)
+            extra_attrs["nyquist_hz"] = float(lo / 2)

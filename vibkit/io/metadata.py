@@ -16,6 +16,7 @@ from .units import parse_unit
 __all__ = []
 
 _RATE_KEY = re.compile(r"sampl\w*[\s_-]*(?:rate|freq)|samplerate|^fs\b|frecuencia\s*de\s*muestreo"
+                       r"|^data[\s_-]*rate$|^odr$"
                        r"|sampling|muestreo|abtastrate", re.IGNORECASE)
 _SCALE = re.compile(r"([0-9]+(?:[.,][0-9]*)?(?:[eE][+-]?[0-9]+)?)\s*,?\s*(?:counts?|lsb|cts|digits)\s*"
                     r"(?:/|per)\s*([^\s,;]+)", re.IGNORECASE)
@@ -47,9 +48,23 @@ def _meta_pair(line: str, delim: str, dec: str):
     return key, value
 
 
-def _rate_from_meta(pairs):
-    """(rate [Hz], line, key) from a sample-rate metadata pair, or None."""
+def _nested(pairs):
+    """The pairs, each followed by the ``key = value`` pairs inside its value.
+
+    ``# Config: data_rate = 2000.0 Hz, filter = 488 Hz`` (PicoQuake) holds ``data_rate``.
+    """
     for lineno, key, value in pairs:
+        yield lineno, key, value
+        if isinstance(value, str) and "=" in value:
+            for part in value.split(","):
+                k, sep, v = part.partition("=")
+                if sep and k.strip() and v.strip():
+                    yield lineno, k.strip(), v.strip()
+
+
+def _rate_from_meta(pairs):
+    """(rate [Hz], line, key) from a sample-rate metadata pair (or one inside a pair's value), or None."""
+    for lineno, key, value in _nested(pairs):
         if not _RATE_KEY.search(key):
             continue
         text = f"{value}"

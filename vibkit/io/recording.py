@@ -138,13 +138,15 @@ def build_recording(*, time, channels, segment, path, data_bytes, reader, sample
     xarray.Dataset
     """
     time = np.asarray(time, dtype=np.float64)
-    data_vars = {}
+    data_vars, counters = {}, {}
     for ch in channels:
         if ch.quantity not in QUANTITIES:
             raise ValueError(f"quantity of channel {ch.name!r} must be one of {QUANTITIES}, got {ch.quantity!r}")
         attrs = {"units": ch.units, "long_name": ch.long_name, "quantity": ch.quantity}
         attrs.update(ch.attrs)
-        data_vars[ch.name] = ("time", np.asarray(ch.values, dtype=np.float64), attrs)
+        # a column that counts samples is no channel: a coordinate along time (unless asked for by name)
+        (counters if attrs.get("sample_counter") and not attrs.get("requested") else data_vars)[ch.name] = (
+            "time", np.asarray(ch.values, dtype=np.float64), {k: v for k, v in attrs.items() if k != "requested"})
     if segment is not None and np.asarray(segment).size and int(np.max(segment)) > 0:
         data_vars["segment"] = ("time", np.asarray(segment, dtype=np.int32),
                                 {"units": "1", "long_name": "burst number (0, 1, 2 ...)"})
@@ -158,4 +160,4 @@ def build_recording(*, time, channels, segment, path, data_bytes, reader, sample
         "sample_rate_hz": float(sample_rate_hz),
         "history": "\n".join(history),
     })
-    return xr.Dataset(data_vars, coords={"time": ("time", time, tattrs)}, attrs=attrs)
+    return xr.Dataset(data_vars, coords={"time": ("time", time, tattrs), **counters}, attrs=attrs)

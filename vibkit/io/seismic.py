@@ -2,9 +2,12 @@
 
 One data variable per trace id (``NET.STA.LOC.CHA`` -> ``NET_STA_LOC_CHA``).
 Several traces with the same id (a file with gaps) become segments of one
-channel.  A waveform file carries no physical units: values stay in counts
-unless the caller gives a unit (``units="m/s^2"``, ``units={"HNZ": "g/2048"}``);
-the decision is recorded.
+channel.  Where the format states a calibration to physical units, it is applied
+and said in the history: K-NET ASCII (``Scale Factor 2000(gal)/8388608``: counts
+-> gal -> m/s^2), Kinemetrics EVT (full scale and sensitivity: counts -> m/s^2),
+SAC with ``idep`` volts, nm, nm/s or nm/s^2.  Other waveform files carry no physical
+units: values stay in counts unless the caller gives a unit (``units="m/s^2"``,
+``units={"HNZ": "g/2048"}``, applied to the raw counts); the decision is recorded.
 """
 
 from __future__ import annotations
@@ -36,6 +39,30 @@ def _load(path):
             raise RecordingError(path, None, "binary content that is neither text, netCDF/HDF5 nor a waveform "
                                  f"format obspy reads{detail}") from None
     return st, [f"obspy warning: {w.message}" for w in caught]
+
+
+#: SAC ``idep`` codes with a physical unit: code -> (unit as SAC says it, factor to SI, SI unit, quantity)
+_SAC_IDEP = {6: ("nm", 1e-9, "m", "displacement"), 7: ("nm/s", 1e-9, "m/s", "velocity"),
+             8: ("nm/s^2", 1e-9, "m/s^2", "acceleration"), 50: ("V", 1.0, "V", "other")}
+
+
+def _calibration(tr):
+    """(factor counts -> SI, SI unit, quantity, what) when the format states a physical calibration, else None."""
+    s = tr.stats
+    fmt = str(s.get("_format", "")).upper()
+    calib = float(s.get("calib", 1.0) or 1.0)
+    if fmt == "KNET" and calib != 1.0:
+        return calib, "m/s^2", "acceleration", ("K-NET header 'Scale Factor' (counts -> gal), gal -> m/s^2: "
+                                                f"x {calib:.9g}")
+    if fmt == "KINEMETRICS_EVT" and calib != 1.0:
+        return calib, "m/s^2", "acceleration", ("Kinemetrics EVT header full scale and sensitivity "
+                                                f"(counts -> m/s^2, as obspy reads them): x {calib:.9g}")
+    if fmt == "SAC":
+        idep = int(s.get("sac", {}).get("idep", 5) or 5)
+        if idep in _SAC_IDEP:
+            unit, f, si, q = _SAC_IDEP[idep]
+            return f * calib, si, q, f"SAC header idep={idep} ({unit})" + ("" if f == 1 else f" -> {si}: x {f:g}")
+    return None
 
 
 def read_seismic(path, data: bytes, *, channel=None, units=None, sample_rate=None, resample=None,
@@ -73,7 +100,7 @@ def read_seismic(path, data: bytes, *, channel=None, units=None, sample_rate=Non
     if len(set(rates.values())) > 1:
         raise RecordingError(path, None, "traces have different sampling rates ("
                              + ", ".join(f"{i}: {r:g} Hz" for i, r in rates.items())
-                             + "); choose one with channel=")
+                             + "); read one with channel=")
     if isinstance(units, dict):
         unknown = [k for k in units if not any(k in (i, names[i], i.split(".")[-1]) for i in ids)]
         if unknown:
@@ -86,15 +113,25 @@ def read_seismic(path, data: bytes, *, channel=None, units=None, sample_rate=Non
             times = t
         elif t.shape != times.shape or not np.allclose(t, times, rtol=0, atol=0.01 / rates[i]):
             raise RecordingError(path, None, f"trace {i} does not share the time stamps of {ids[0]}; "
-                                 "choose traces with channel=")
+                                 f"read one trace at a time with channel= (e.g. channel={i.split('.')[-1]})")
         u_text = units if isinstance(units, str) else None
         if isinstance(units, dict):
             for k, u in units.items():
                 if k in (i, names[i], i.split(".")[-1]):
                     u_text = u
-        attrs = {"trace_id": i, "original_units": "counts"}
-        if u_text is None:
-            history.append(f"trace {i}: a waveform file has no physical units; values kept in counts")
+        attrs = {"trace_id": i, "channel_code": i.split(".")[-1], "original_units": "counts"}
+        cal = _calibration(g[0])
+        if u_text is None and cal is not None:
+            f, si, q, what = cal
+            history.append(f"trace {i} calibrated by the format: {what}; pass units= to read the raw counts "
+                           "with a scale of your own")
+            attrs["calibration"] = what
+            ch = Channel(names[i], v * f, si, f"trace {i}", q, attrs)
+        elif u_text is None:
+            calib = float(g[0].stats.get("calib", 1.0) or 1.0)
+            extra = "" if calib == 1.0 else f" (the header's calib {calib:.9g} has no stated unit; not applied)"
+            history.append(f"trace {i}: a waveform file has no physical units; values kept in counts{extra}; "
+                           "pass units= to scale them (e.g. 'g/2048')")
             ch = Channel(names[i], v, "counts", f"trace {i}", "other", attrs)
         else:
             unit = parse_unit(u_text)

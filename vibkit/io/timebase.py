@@ -18,7 +18,7 @@ import numpy as np
 
 from .errors import RecordingError
 
-__all__ = ["TimeDiagnosis", "check_order", "diagnose", "resample_linear"]
+__all__ = ["TimeDiagnosis", "check_order", "diagnose", "resample_linear", "held_update_rate"]
 
 
 @dataclass(frozen=True)
@@ -98,6 +98,11 @@ def check_order(t, lines, *, path, column, repair):
     dt = np.diff(t)
     back = np.flatnonzero(dt < 0)
     dup = np.flatnonzero(dt == 0)
+    if not back.size and dup.size == 1 and dup[0] == 0 and n > 2:
+        # one repeated stamp on the first two rows: phyphox writes its first sample twice at t = 0
+        return np.arange(1, n), [f"the first two rows share the time stamp {t[0]:.9g} s in column '{column}' "
+                                 "(a known phyphox artefact at the start); the first row"
+                                 + ("" if lines is None else f" (line {line_of(0)})") + " dropped"], t
     if not repair:
         if back.size and (not dup.size or back[0] < dup[0]):
             i = back[0] + 1
@@ -186,6 +191,39 @@ def diagnose(t, *, gap_factor=5.0) -> TimeDiagnosis:
     jitter_max = float(max(abs(dev.max()), abs(dev.min())))
     jitter_rms = float(np.sqrt(np.dot(dev, dev) / dev.size))
     return TimeDiagnosis(period, jitter_rms, jitter_max, segment, dt[gap].astype(float))
+
+
+def held_update_rate(t, values, *, held_fraction=0.3):
+    """The true update rate of a channel whose values are held (repeated) between updates. [Hz]
+
+    Multi-sensor phone exports (Physics Toolbox) write a row whenever any sensor
+    updates and repeat the other sensors' last values: a channel then changes less
+    often than the rows come.  An update is a row whose value differs from the
+    row before; a channel is *held* when more than ``held_fraction`` of its steps
+    repeat the previous value.
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        Strictly increasing times. [s]
+    values : numpy.ndarray
+        The channel's values at ``t``.
+    held_fraction : float
+        Fraction of repeated steps above which the channel counts as held.
+
+    Returns
+    -------
+    float or None
+        Number of updates over the time from the first to the last update [Hz];
+        None when the channel is not held, or constant.
+    """
+    v = np.asarray(values, dtype=float)
+    if v.size < 3:
+        return None
+    change = np.flatnonzero(np.diff(v) != 0) + 1  # rows that bring a new value (NaN != NaN: counted)
+    if change.size < 2 or 1 - change.size / (v.size - 1) <= held_fraction:
+        return None
+    return float((change.size - 1) / (t[change[-1]] - t[change[0]]))
 
 
 def resample_linear(t, columns, segment, fs):

@@ -9,6 +9,7 @@ time of day) become seconds since the first.
 from __future__ import annotations
 
 import math
+import re
 from datetime import datetime, timezone
 
 import numpy as np
@@ -27,9 +28,44 @@ _EPOCH_RANGE_S = (3e8, 4.2e9)
 _EPOCH_UNITS = (("s", 1.0), ("ms", 1e-3), ("us", 1e-6), ("ns", 1e-9))
 
 
-def _choose_time_column(path, time_column, colnames: _ColumnNames, n, header_line, history):
-    """The index of the time column, or None: as given (``time_column=``), else the first named like time."""
+#: names of clock columns besides ``time``: elapsed seconds, epoch, microcontroller clocks
+_CLOCK_NAME = re.compile(r"^(?:epoch?|unix[ _-]?time|(?:seconds|secs|time)?[ _-]?elapsed(?:[ _-]?(?:time|s|ms))?"
+                         r"|micros|millis|timestamp|time ?stamp)$", re.IGNORECASE)
+
+
+def _is_clock_name(nm, ut):
+    """Whether a column named ``nm`` with unit ``ut`` (or None) is a clock."""
+    if ut is not None and parse_unit(ut) is not None and parse_time_unit(ut) is None:
+        return False  # a physical unit: 'time (m)' is no clock
+    return bool(is_time_name(nm) or _CLOCK_NAME.match(nm.strip()))
+
+
+def _first_cell(cells):
+    return cells[0] if len(cells) else ""
+
+
+def _choose_time_column(path, time_column, colnames: _ColumnNames, n, header_line, history, cols=None, dec="."):
+    """(index of the time column or None, indices of other clock columns).
+
+    As given (``time_column=``), else the first column named like time or a clock (``time``,
+    ``elapsed (s)``, ``epoc (ms)``, ``seconds_elapsed``) that holds numbers, else the first
+    that holds time stamps.  The other clock columns are no channels.
+    """
     tcol = None
+    clocks = []
+    if cols is not None and time_column is None:
+        cand = [j for j, (nm, ut, _) in enumerate(colnames.split) if _is_clock_name(nm, ut)]
+        numeric = [j for j in cand if isinstance(cols[j], np.ndarray) and cols[j].dtype.kind in "fiu"
+                   or _NUM[dec].fullmatch(str(_first_cell(cols[j])).strip())]
+        if cand:
+            tcol = numeric[0] if numeric else cand[0]
+            if numeric and numeric[0] != cand[0]:
+                history.append(f"time column '{colnames.shown[tcol]}' (numbers) chosen over "
+                               f"'{colnames.shown[cand[0]]}' (text time stamps)")
+            clocks = [j for j in cand if j != tcol]
+            for j in clocks:
+                history.append(f"column '{colnames.shown[j]}' is another clock, not a channel")
+        return tcol, clocks
     if time_column is False:
         history.append("no time column (time_column=False given)")
     elif time_column is not None:
@@ -48,7 +84,7 @@ def _choose_time_column(path, time_column, colnames: _ColumnNames, n, header_lin
             if is_time_name(nm) and (ut is None or parse_unit(ut) is None):
                 tcol = j
                 break
-    return tcol
+    return tcol, clocks
 
 
 def _read_time(path, tcells, tname, unit_text, dec, rownums, header_line, time_unit, rate_meta, history,
@@ -94,7 +130,9 @@ def _read_time(path, tcells, tname, unit_text, dec, rownums, header_line, time_u
                                f"the header's sample rate {rate_meta[0]:g} Hz")
             else:
                 epoch = _epoch_unit(path, vals, tname, int(rownums[0]))
-                if epoch is None:
+                if epoch is None and step > 1 and np.all(vals[:100_000] == np.round(vals[:100_000])):
+                    f = _counter_clock_unit(path, vals, step, tname, header_line, history)
+                elif epoch is None:
                     history.append(f"time column '{tname}' has no unit; read as s")
                 else:
                     f, eunit = epoch
@@ -103,6 +141,9 @@ def _read_time(path, tcells, tname, unit_text, dec, rownums, header_line, time_u
                                    f"Unix epoch times in {eunit} by their size and steps; read as {eunit} "
                                    f"(start {start.isoformat()}; pass time_unit= to override)")
                     extra_attrs.setdefault("start_time", start.isoformat())
+        if vals.size and "start_time" not in extra_attrs and _EPOCH_RANGE_S[0] <= vals[0] * f <= _EPOCH_RANGE_S[1]:
+            # a Unix epoch column with its unit in the header (MetaWear 'epoc (ms)')
+            extra_attrs["start_time"] = datetime.fromtimestamp(float(vals[0]) * f, tz=timezone.utc).isoformat()
         if vals.size and abs(vals[0]) * f > 1e6:
             extra_attrs["time_offset_s"] = float(vals[0] * f)
             history.append(f"time shifted by {vals[0] * f:.6f} s so that it starts at 0 (epoch-like values)")
@@ -110,6 +151,31 @@ def _read_time(path, tcells, tname, unit_text, dec, rownums, header_line, time_u
         else:
             t = vals * f
     return t
+
+
+#: sample rates plausible for a vibration record from a microcontroller clock [Hz]
+_CLOCK_RATES_HZ = (1.0, 20e3)
+
+
+def _counter_clock_unit(path, vals, step, tname, header_line, history):
+    """Factor to s of a unitless integer time column whose steps, in seconds, give under 1 Hz.
+
+    Such a column is a microcontroller clock: Arduino ``millis()`` (ms) or ``micros()`` (us).  The unit
+    that gives a rate between 1 Hz and 20 kHz is chosen when only one does; otherwise the file is refused
+    naming ``time_unit=``.
+    """
+    named = {"micros": [("us", 1e-6)], "millis": [("ms", 1e-3)]}.get(tname.strip().lower())
+    fits = named or [(u, f) for u, f in (("ms", 1e-3), ("us", 1e-6))
+                     if _CLOCK_RATES_HZ[0] <= 1 / (step * f) <= _CLOCK_RATES_HZ[1]]
+    if len(fits) != 1:
+        rates = ", ".join(f"{1 / (step * f):.4g} Hz in {u}" for u, f in (("s", 1.0), ("ms", 1e-3), ("us", 1e-6)))
+        raise RecordingError(path, header_line, f"time column '{tname}' has no unit and whole-number steps of "
+                             f"{step:.6g} ({rates}): cannot tell its unit; pass time_unit= (s, ms, us)")
+    u, f = fits[0]
+    history.append(f"time column '{tname}' has no unit and whole-number steps of {step:.6g}: a microcontroller "
+                   f"clock (Arduino millis()/micros()); read as {u}, giving {1 / (step * f):.6g} Hz (in seconds it "
+                   f"would be {1 / step:.3g} Hz); pass time_unit= to override")
+    return f
 
 
 def _parse_stamps(cells):

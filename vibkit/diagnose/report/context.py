@@ -175,7 +175,7 @@ def measurement_date(rec, date=None):
 
 def analyse(recording, *, scene=None, speed=None, speed_sigma=0.0, channel=None, nominal_pitch=None,
             limits_percent=None, sample_rate=None, duration=None, band=None, hampel_half_window_s=0.1,
-            hampel_false_alarm_rate=1e-4, progress=False, date=None) -> ReportContext:
+            hampel_false_alarm_rate=1e-4, progress=False, read_options=None, date=None) -> ReportContext:
     """Everything :func:`vibkit.diagnose.report.write_report` draws (same parameters, no output)."""
     from ...io import read_recording
     from ..pitch import DEFAULT_LIMITS_PERCENT, estimate_pitch, pick_channel, uniform_bursts
@@ -183,7 +183,17 @@ def analyse(recording, *, scene=None, speed=None, speed_sigma=0.0, channel=None,
     from ...signal import hampel_events
 
     limits = tuple(limits_percent) if limits_percent is not None else DEFAULT_LIMITS_PERCENT
-    rec = read_recording(recording, sample_rate=sample_rate)
+    from ...io import RecordingError
+
+    opts = dict(read_options or {})
+    if sample_rate is not None:
+        opts["sample_rate"] = sample_rate
+    try:  # every channel: the report's ride-quality page wants the three axes
+        rec = read_recording(recording, **opts)
+    except RecordingError:
+        if channel is None:
+            raise
+        rec = read_recording(recording, channel=channel, **opts)  # e.g. traces on different time bases
     measured, measured_source = measurement_date(rec, date)
     ch = pick_channel(rec, channel)
     units = str(rec[ch].attrs.get("units", "1"))

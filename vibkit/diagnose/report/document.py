@@ -32,7 +32,7 @@ PAGES = (verdict_page, recording_page, time_signal_page, spectrum_page, spectrog
 def write_report(recording, out_path, *, scene=None, speed=None, speed_sigma=0.0, channel=None,
                  nominal_pitch=None, limits_percent=None, sample_rate=None, duration=None, band=None,
                  hampel_half_window_s=0.1, hampel_false_alarm_rate=1e-4, progress=False, overwrite=True,
-                 date=None) -> Report:
+                 read_options=None, date=None) -> Report:
     """Write the PDF diagnostic report of a recording.
 
     Parameters
@@ -64,6 +64,8 @@ def write_report(recording, out_path, *, scene=None, speed=None, speed_sigma=0.0
         Per-sample false-alarm probability of the spike detector on Gaussian noise.
     overwrite : bool
         Replace an existing regular file ``out_path`` (default True; the CLI passes ``--force``).
+    read_options : dict, optional
+        More :func:`vibkit.read_recording` arguments (``time_unit``, ``units``, ``repair_time`` ...).
     date : str or datetime.datetime, optional
         When the recording was made (ISO 8601); default the file's start time, if it states one.
 
@@ -97,7 +99,8 @@ def write_report(recording, out_path, *, scene=None, speed=None, speed_sigma=0.0
     ctx = analyse(recording, scene=scene, speed=speed, speed_sigma=speed_sigma, channel=channel,
                   nominal_pitch=nominal_pitch, limits_percent=limits_percent, sample_rate=sample_rate,
                   duration=duration, band=band, hampel_half_window_s=hampel_half_window_s,
-                  hampel_false_alarm_rate=hampel_false_alarm_rate, progress=progress, date=date)
+                  hampel_false_alarm_rate=hampel_false_alarm_rate, progress=progress,
+                  read_options=read_options, date=date)
     date, summary = ctx.date, ctx.summary
     meta = {"Title": f"vibkit report: {summary['file']}", "Author": f"vibkit {__version__}",
             "Subject": "escalator drive-chain vibration diagnostic", "Creator": f"vibkit {__version__}",
