@@ -39,9 +39,9 @@ def _headline(ctx):
         return f"PITCH {pitch_text}", _GREY, "no nominal pitch given: no elongation verdict (--nominal-pitch)"
     el = fmt_pm(pitch.elongation_percent, pitch.elongation_sigma_percent, "%")
     colour = VERDICT_COLOURS.get(str(pitch.verdict).lower(), _GREY)
+    # the pitch and the nominal pitch are in the evidence below: each figure once
     under = (f"elongation {el} against the limits {' / '.join(f'{v:g}' for v in ctx.limits)} % "
-             f"(watch / plan / replace); pitch {pitch_text} against the nominal "
-             f"{fmt_length(pitch.nominal_pitch_m)}" + (f"; {reason}" if reason else ""))
+             "(watch / plan / replace)" + (f"; {reason}" if reason else ""))
     return str(pitch.verdict).upper(), colour, under
 
 
@@ -107,7 +107,9 @@ def evidence_rows(ctx):
         rows.append(("link pitch = speed / frequency", fmt_length(pitch.pitch_m, pitch.pitch_sigma_m)))
         if pitch.nominal_pitch_m is not None:
             rows.append(("nominal pitch", fmt_length(pitch.nominal_pitch_m)))
-            rows.append(("elongation", fmt_pm(pitch.elongation_percent, pitch.elongation_sigma_percent, "%")))
+            if pitch.verdict is None or str(getattr(pitch, "status", "ok") or "ok").lower() != "ok":
+                rows.append(("elongation", fmt_pm(pitch.elongation_percent, pitch.elongation_sigma_percent,
+                                                  "%")))  # else it is under the verdict
         snr = getattr(pitch, "snr_db", None)
         if snr is not None and math.isfinite(snr):
             rows.append(("signal to noise", f"{snr:.0f} dB at the link-pass harmonics"))
