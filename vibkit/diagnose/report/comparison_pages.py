@@ -38,7 +38,7 @@ def plot_comparison(comp, fig=None, *, top=0.88):
     ax.set_xlabel("order of the link-pass frequency [-]")
     ax.set_ylabel(f"amplitude [{u}]")
     ax.set_title(f"Order spectra (each referred to its own link-pass); agreement score {comp.score:.2f} "
-                 "(0 none, 1 all harmonics match), "
+                 "(1: all harmonics match, 0: none), "
                  f"log-spectral distance {comp.log_spectral_distance_db:.1f} dB", fontsize=10)
     ax.legend(fontsize=8, loc="upper right")
     ax.grid(alpha=0.3)

@@ -123,8 +123,8 @@ def evidence_rows(ctx):
         rows.append(("pitch against the scene", ("consistent" if comp.pitch_consistent else "NOT consistent") +
                      f" (ratio {comp.pitch_ratio:.4f}: recorded over simulated)"))
         rows.append(("spectra against the simulation",
-                     f"agreement score {comp.score:.2f} (0: the harmonic amplitudes do not match, 1: they "
-                     "all do; page 'harmonics')"))
+                     f"agreement score {comp.score:.2f} (1: every harmonic matches in frequency and "
+                     "amplitude, 0: none does; rule on page 'harmonics')"))
     return rows
 
 
