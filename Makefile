@@ -7,7 +7,8 @@ BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
 .PHONY: demo test bench install clean
-# `make bench` regenerates benchmarks/results/ (about 30 min on 2 cores; `vibkit bench --quick` for a smoke run)
+# `make bench` regenerates benchmarks/results/ (about 30 min on 2 cores); `vibkit bench --quick` is a smoke
+# run that writes into a temporary folder (or -o DIR), never into benchmarks/results/
 
 $(BIN)/python:
 	@command -v $(PYTHON) >/dev/null 2>&1 || { echo "error: $(PYTHON) not found; set PYTHON=/path/to/python3.11" >&2; exit 1; }
@@ -31,7 +32,7 @@ $(VENV)/.bench: $(STAMP)
 	@touch $(VENV)/.bench
 
 bench: $(VENV)/.bench
-	$(BIN)/vibkit bench
+	$(BIN)/vibkit bench -o benchmarks/results
 
 clean:
 	rm -rf $(VENV) build *.egg-info

@@ -9,7 +9,9 @@ import tempfile
 import time
 from pathlib import Path
 
-RESULTS = Path(__file__).resolve().parent / "results"
+# where the scripts write: benchmarks/results/ (what the README quotes; `make bench`), or the folder
+# `vibkit bench -o DIR` gives them in VIBKIT_BENCH_RESULTS (default there: a new temporary folder)
+RESULTS = Path(os.environ.get("VIBKIT_BENCH_RESULTS") or Path(__file__).resolve().parent / "results")
 
 
 def machine() -> str:

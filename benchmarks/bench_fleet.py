@@ -72,10 +72,10 @@ def main(argv=None):
     ap.add_argument("--stores", default="sqlite,postgresql", help="stores scanned into (default sqlite,postgresql; "
                     "postgresql needs pgserver and psycopg)")
     a = ap.parse_args(argv)
-    n = 12 if a.quick else 96
+    n = 4 if a.quick else 96
     duration = 30.0
     repeat = a.repeat or (1 if a.quick else 3)
-    workers = [int(w) for w in a.workers.split(",") if w.strip()]
+    workers = [int(w) for w in a.workers.split(",") if w.strip()][:1 if a.quick else None]
     stores = [x.strip() for x in a.stores.split(",") if x.strip()]
 
     import vibkit

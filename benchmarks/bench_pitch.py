@@ -33,7 +33,7 @@ BAND = (2.45, 6.125)
 
 
 def false_alarms(quick):
-    n_rec = 1000 if quick else 10000
+    n_rec = 100 if quick else 10000
     rng = np.random.default_rng(11)
     pv = np.array([detect_link_pass(rng.standard_normal(3000), 100.0, band=BAND).p_value for _ in range(n_rec)])
     rows = []
@@ -52,7 +52,7 @@ def _family(n, fs, f, rng, snr_db, amps=(1.0, 0.5, 0.3)):
 
 
 def detection_probability(quick):
-    trials = 100 if quick else 500
+    trials = 10 if quick else 500
     rng = np.random.default_rng(12)
     rows = []
     for snr in (-21, -18, -15, -12, -9, -6):
@@ -85,7 +85,7 @@ def _wandering(duration, fs, period, amp, snr_db, kind, rng, pitch=0.13333, v0=0
 
 
 def wander(quick):
-    trials = 3 if quick else 10
+    trials = 1 if quick else 10
     rng = np.random.default_rng(13)
     rows = []
     for duration in (30.0, 120.0, 600.0):
@@ -236,7 +236,7 @@ def wander_power(quick):
 
 
 def long_record(quick):
-    n = 2_000_000 if quick else 20_000_000
+    n = 200_000 if quick else 20_000_000
     fs = 2000.0
     rng = np.random.default_rng(14)
     t = np.arange(n) / fs

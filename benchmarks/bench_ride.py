@@ -47,8 +47,8 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="1-minute records, fewer repeats; writes ride_quick.*")
     a = ap.parse_args(argv)
-    minutes = 1.0 if a.quick else 10.0
-    repeat = 2 if a.quick else 5
+    minutes = 0.2 if a.quick else 10.0
+    repeat = 1 if a.quick else 5
     load = os.getloadavg()[0]
     rows = []
     for fs in (200.0, 500.0, 2000.0, 5000.0):

@@ -21,7 +21,9 @@ from pathlib import Path
 __all__ = ["main"]
 
 
-def _plot(ds, path, variables, xdim):
+def _plot(ds, path, variables, xdim, zoom=None):
+    """One panel per variable over the whole run; with ``zoom`` (a span of ``xdim``) a second column
+    shows the same variables over that span, where a fast oscillation over a long run is visible."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -29,13 +31,20 @@ def _plot(ds, path, variables, xdim):
 
     from .diagnose.report import atomic_path
 
-    fig, axes = plt.subplots(len(variables), 1, figsize=(9, 3 * len(variables)), sharex=True, squeeze=False)
-    for ax, (name, sel) in zip(axes[:, 0], variables):
-        da = ds[name] if sel is None else ds[name].sel(sel)
-        ax.plot(ds[xdim].values, da.values, lw=0.8)
-        ax.set_ylabel(f"{da.attrs.get('long_name', name)}\n[{da.attrs.get('units', '')}]", fontsize=8)
-        ax.grid(alpha=0.3)
-    axes[-1, 0].set_xlabel(f"{ds[xdim].attrs.get('long_name', xdim)} [{ds[xdim].attrs.get('units', '')}]")
+    ncol = 2 if zoom else 1
+    fig, axes = plt.subplots(len(variables), ncol, figsize=(9 if ncol == 1 else 13, 3 * len(variables)),
+                             sharex="col", squeeze=False)
+    x = ds[xdim].values
+    for j in range(ncol):
+        sel_x = slice(None) if j == 0 else (x >= zoom[0]) & (x <= zoom[1])
+        for ax, (name, sel) in zip(axes[:, j], variables):
+            da = ds[name] if sel is None else ds[name].sel(sel)
+            ax.plot(x[sel_x], da.values[sel_x], lw=0.8)
+            ax.set_ylabel(f"{da.attrs.get('long_name', name)}\n[{da.attrs.get('units', '')}]", fontsize=8)
+            ax.grid(alpha=0.3)
+        unit = ds[xdim].attrs.get("units", "")
+        label = f"{ds[xdim].attrs.get('long_name', xdim)} [{unit}]"
+        axes[-1, j].set_xlabel(label if j == 0 else f"{label}: the first {zoom[1] - zoom[0]:g} {unit}")
     fig.suptitle(f"{ds.attrs.get('scene_name', '')}: {ds.attrs.get('analysis', '')}")
     fig.tight_layout()
     with atomic_path(path, ".png") as tmp:
@@ -73,7 +82,7 @@ def main(argv=None) -> int:
         ds = simulate(root / "sim/thesis-inverse.toml", duration=a.inverse_duration, progress=progress)
         written.append(write_result(ds, out / "thesis-inverse.nc"))
         _plot(ds, out / "thesis-inverse.png", [("delta", None), ("drive_force", None),
-                                                ("link_tension", {"link": 1})], "time")
+                                                ("link_tension", {"link": 1})], "time", zoom=(0.0, 2.0))
         written.append(out / "thesis-inverse.png")
         print(f"thesis-inverse: {float(ds.time[-1]):g} s of imposed motion, {ds.sizes['time']} steps, "
               f"in {time.perf_counter() - t0:.1f} s")

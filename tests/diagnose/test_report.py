@@ -23,15 +23,15 @@ def leon_report(tmp_path_factory):
 def test_pages_and_text(leon_report):
     rep = leon_report
     titles = [t for t, _ in rep.pages]
-    assert titles == ["cover", "verdict", "time signal", "spectrum", "spectrogram", "order spectrum",
+    assert titles == ["verdict", "recording", "time signal", "spectrum", "spectrogram", "order spectrum",
                       "simulation against recording", "harmonics", "data quality", "parameters"]
     assert _page_count(rep.path) == len(titles)
     text = {t: "\n".join(x) for t, x in rep.pages}
-    assert "leon-tensioner.csv" in text["cover"] and rep.summary["sha256"][:32] in text["cover"]
-    assert "Leon shopping centre" in text["cover"]
+    assert "leon-tensioner.csv" in text["recording"] and rep.summary["sha256"] in text["recording"]
+    assert "Leon shopping centre" in text["recording"] and "Leon shopping centre" in text["verdict"]
     # verdict: the published link-pass and pitch, elongation against the catalogue pitch
-    assert re.search(r"3\.53\d+ Hz", text["verdict"])
-    assert re.search(r"138\.4\d \+- [0-9.]+ mm", text["verdict"])
+    assert re.search(r"3\.53\d+ \+- 0\.0000\d\d Hz", text["verdict"])  # rounded to its sigma
+    assert re.search(r"138\.4\d+ \+- 0\.00\d\d mm", text["verdict"])
     assert "REPLACE" in text["verdict"] and "NOT consistent" in text["verdict"]
     assert "frequency [Hz]" in text["spectrum"] and "amplitude [m]" in text["spectrum"]
     assert "time [s]" in text["time signal"] and "6 spike(s)" in text["time signal"]  # the six spikes
@@ -49,6 +49,15 @@ def test_reproducible_bytes(tmp_path, monkeypatch):
     assert a.read_bytes() == b.read_bytes()
     assert "2023-11-14" in "\n".join(ra.pages[0][1])
     assert report_date().year == 2023
+
+
+def test_report_date_is_today_without_source_date_epoch(monkeypatch):
+    import datetime as dt
+
+    monkeypatch.delenv("SOURCE_DATE_EPOCH", raising=False)
+    before = dt.datetime.now(dt.timezone.utc).replace(microsecond=0)
+    d = report_date()
+    assert before <= d <= dt.datetime.now(dt.timezone.utc)
 
 
 def test_refuses_to_overwrite_input(tmp_path):

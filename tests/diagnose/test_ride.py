@@ -73,7 +73,7 @@ def test_simulation_dataset_goes_through_the_same_path():
     # accel_step alone: one tangential axis over the whole record
     ds2 = xr.Dataset({"accel_step": ("time", ax)}, coords={"time": t})
     one = ride_quality_from_simulation(ds2)
-    assert [a.axis for a in one.axes] == ["tangential"] and one.segment.method == "given"
+    assert [a.axis for a in one.axes] == ["tangential"] and one.segment.method == "whole simulated time"  # nobody gave it
     with pytest.raises(ValueError, match="neither"):
         ride_quality_from_simulation(xr.Dataset({"delta": ("time", ax)}, coords={"time": t}))
 

@@ -7,6 +7,11 @@ cannot build here), makes it read-only (``chmod -R a-w``) and runs every command
 ``HOME=/nonexistent``, the dependencies coming from the test environment.  CI runs as root, so the
 child drops to uid 65534 in ``preexec_fn``; the test is skipped (with the reason) when not root or
 when no Python 3.x interpreter can be executed by that user.
+
+The test must not depend on where the clone lives: in a private (0700) temporary folder, as CI
+makes them, uid 65534 cannot reach the virtual environment's site-packages.  The dependencies are
+then given to it as a tree of hard links (no data copied) in the test's own temporary folder; where
+that is impossible (another file system) the test is skipped with the reason.
 """
 
 from __future__ import annotations
@@ -81,6 +86,40 @@ def _make_read_only(path: Path):
     os.chmod(path, stat.S_IMODE(os.stat(path).st_mode) & ~0o222)
 
 
+def _probe_import(py, path):
+    """Can uid 65534 import numpy from ``path`` with the interpreter ``py``?"""
+    try:
+        proc = subprocess.run([py, "-I", "-c",
+                               f"import sys; sys.path.insert(0, {path!r}); import numpy; "
+                               f"assert numpy.__file__.startswith({path!r})"],
+                              preexec_fn=_demote, capture_output=True, text=True, cwd="/")
+    except OSError:
+        return False
+    return proc.returncode == 0
+
+
+def _reachable_deps(top: Path, py: str) -> str:
+    """The test environment's site-packages, or a hard-linked copy of it in ``top`` when uid 65534
+    cannot reach it (the clone and its .venv in a private folder); skips the module if neither works."""
+    deps = sysconfig.get_paths()["purelib"]
+    if _probe_import(py, deps):
+        return deps
+    linked = top / "deps"
+    try:
+        shutil.copytree(deps, linked, copy_function=os.link, symlinks=True,
+                        ignore=shutil.ignore_patterns("__editable__*", "*.pth", "vibkit", "vibkit-*"))
+    except (OSError, shutil.Error) as exc:
+        pytest.skip(f"uid {NOBODY} cannot reach {deps} (a private parent folder) and it cannot be hard-linked "
+                    f"into {top}: {exc}")
+    for dirpath, dirnames, _ in os.walk(linked):  # the folders are new: let that user in
+        for name in dirnames:
+            os.chmod(os.path.join(dirpath, name), 0o755)
+    os.chmod(linked, 0o755)
+    if not _probe_import(py, str(linked)):
+        pytest.skip(f"uid {NOBODY} cannot import numpy from {deps} nor from its hard-linked copy")
+    return str(linked)
+
+
 @pytest.fixture(scope="module")
 def readonly():
     # not pytest's tmp_path: its parents are private to root, and the user must reach this folder
@@ -93,14 +132,13 @@ def readonly():
     (work / "tmp").mkdir(parents=True)
     for d in (work, work / "tmp"):
         os.chmod(d, 0o1777)
-    deps = sysconfig.get_paths()["purelib"]
     env = {"PATH": "/usr/bin:/bin", "HOME": "/nonexistent", "LANG": "C.UTF-8", "TMPDIR": str(work / "tmp"),
-           "PYTHONPATH": os.pathsep.join([str(site), deps]), "MPLBACKEND": "Agg",
-           "VIBKIT_PROGRESS_INTERVAL": "1e9"}
+           "MPLBACKEND": "Agg", "VIBKIT_PROGRESS_INTERVAL": "1e9"}
     py = _interpreter(env)
     if py is None:
         pytest.skip(f"no python{sys.version_info[0]}.{sys.version_info[1]} executable by uid {NOBODY} "
                     f"({sys.executable} is not)")
+    env["PYTHONPATH"] = os.pathsep.join([str(site), _reachable_deps(top, py)])
     yield {"top": top, "site": site, "work": work, "env": env, "py": py, "how": how}
     shutil.rmtree(top, ignore_errors=True)  # root may remove read-only files
 
@@ -163,14 +201,16 @@ def test_every_command_runs_without_a_home(readonly):
     bench = work / "benchroot" / "benchmarks"
     bench.mkdir(parents=True)
     (bench / "bench_noop.py").write_text("print('noop benchmark ok')\n")
-    for p in (scene, rec, work / "benchroot", bench, bench / "bench_noop.py"):
+    leon = work / "leon.toml"  # the clone itself may be out of that user's reach
+    shutil.copy(ROOT / "sim" / "leon.toml", leon)
+    for p in (scene, rec, leon, work / "benchroot", bench, bench / "bench_noop.py"):
         os.chmod(p, 0o755 if p.is_dir() else 0o644)
 
     commands = [
         ("simulate", str(scene), "-o", str(work / "tiny.nc")),
         ("spectrum", str(rec)),
         ("pitch", str(rec), "--speed", "0.49", "--speed-uncertainty", "0.1%"),
-        ("compare", str(rec), str(ROOT / "sim" / "leon.toml"), "--duration", "2"),
+        ("compare", str(rec), str(leon), "--duration", "2"),
         ("report", str(rec), "-o", str(work / "leon.pdf")),
         ("bench", "--root", str(work / "benchroot")),
     ]

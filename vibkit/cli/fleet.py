@@ -8,15 +8,18 @@ from .options import (add_command, add_json, add_limits, add_recording, chain_sp
                       reader_options, speed_sigma, workers)
 from .output import CLIError, check_output, msg, print_json, table
 
-EPILOG = ("examples:\n  vibkit fleet add E07-2026-11-23.csv --unit E07 --speed 0.5 --nominal-pitch 0.13333\n"
-          "  vibkit fleet scan visits/ --catalogue visits/units.csv --workers 2\n"
-          "  vibkit fleet status --json\n  vibkit fleet report -o fleet.pdf\n"
-          "  vibkit fleet migrate --from vibkit-fleet.sqlite --to postgresql://tech@fleet-server/fleet\n"
-          "database: --db PATH (or sqlite:///PATH) or postgresql://user@host/dbname, else $VIBKIT_FLEET_DB, "
-          "else ./vibkit-fleet.sqlite\n"
+EPILOG = ("examples (on the shipped example fleet, data/fleet-example/):\n"
+          "  vibkit fleet add data/fleet-example/E07/2026-11-23.csv --unit E07 --speed 0.5 \\\n"
+          "      --nominal-pitch 0.13333\n"
+          "  vibkit fleet scan data/fleet-example --catalogue data/fleet-example/units.csv --workers 0\n"
+          "  vibkit fleet status --json\n  vibkit fleet report -o out/fleet.pdf\n"
+          "  vibkit fleet migrate --from out/fleet.sqlite --to postgresql://tech@fleet-server/fleet\n"
+          "database: --db PATH (or sqlite:///PATH) or postgresql://user@host/dbname,\n"
+          "  else $VIBKIT_FLEET_DB, else ./vibkit-fleet.sqlite\n"
           "exit codes: 0 done; 1 error; 3 scan: some files failed (others were stored)\n"
-          "catalogue columns: file (name or glob), unit, speed_m_s, date (ISO 8601; empty: an ISO date in the "
-          "file name,\n  else the recording's start time), nominal_pitch_m (empty: the unit's), optional speed_sigma_m_s, channel")
+          "catalogue columns: file (name or glob), unit, speed_m_s, date (ISO 8601; empty: an ISO date\n"
+          "  in the file name, else the recording's start time), nominal_pitch_m (empty: the unit's),\n"
+          "  optional speed_sigma_m_s, channel")
 
 
 def add_parser(subparsers):

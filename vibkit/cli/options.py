@@ -177,8 +177,12 @@ def workers(text):
 
 
 def add_command(subparsers, name, help_, epilog):
-    """Register one command (or fleet subcommand): its one-line help is also its description."""
-    return subparsers.add_parser(name, help=help_, description=help_, epilog=epilog,
+    """Register one command (or fleet subcommand): its one-line help is also its description.
+
+    ``help_`` is plain text: argparse %-formats a subcommand's help in its parent's listing, so a
+    ``%`` in it is escaped here (the description and the epilog are not %-formatted).
+    """
+    return subparsers.add_parser(name, help=help_.replace("%", "%%"), description=help_, epilog=epilog,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
 
 

@@ -3,15 +3,17 @@
 from __future__ import annotations
 
 import math
+import textwrap
 
 from .options import (add_command, add_json, add_limits, add_recording, band, chain_speed, pitch_length,
                       read_recording, speed_sigma, speed_uncertainty, teeth)
 from .output import CLIError, in_file, msg, print_json, table
 
-EPILOG = ("examples:\n  vibkit pitch data/field/leon-tensioner.csv --speed-uncertainty 0.1% --nominal-pitch 133.33mm\n"
+EPILOG = ("examples:\n  vibkit pitch data/field/leon-tensioner.csv --speed-uncertainty 0.1% \\\n"
+          "      --nominal-pitch 133.33mm\n"
           "  vibkit pitch logger.txt --sample-rate 2050 --speed 52cm/s --json\n"
-          "exit status: 0 verdict (or pitch), 1 no link-pass found / implausible / bad input, 2 usage error, "
-          "3 inconclusive (frequency and sigma given, no verdict)")
+          "exit status: 0 verdict (or pitch), 1 no link-pass found / implausible / bad input,\n"
+          "  2 usage error, 3 inconclusive (frequency and sigma given, no verdict)")
 
 
 def add_parser(subparsers):
@@ -77,24 +79,25 @@ def run(a):
     print(f"link pitch           {1000 * est.pitch_m:.3f} +- {1000 * est.pitch_sigma_m:.3f} mm")
     if est.nominal_pitch_m is not None:
         print(f"elongation           {est.elongation_percent:+.2f} +- {est.elongation_sigma_percent:.2f} % "
-              f"of {1000 * est.nominal_pitch_m:.2f} mm -> {est.verdict} "
-              f"(limits {' / '.join(f'{v:g}' for v in est.limits_percent)} %)")
+              f"of {1000 * est.nominal_pitch_m:.2f} mm -> {est.verdict}\n"
+              f"                     (limits {' / '.join(f'{v:g}' for v in est.limits_percent)} %)")
     print()
     print_channels(res)
     print(table([[h.name, f"{h.frequency_hz:.4f}", "n/a" if math.isnan(h.snr_db) else f"{h.snr_db:.0f}",
                   f"{1000 * h.implied_pitch_m:.2f}", f"{1000 * h.nearest_catalogue_m:.2f} ({h.deviation_percent:+.1f} %)",
-                  "<-" if h.chosen else "", h.reason] for h in est.hypotheses],
-                ("hypothesis", "link pass [Hz]", "SNR [dB]", "pitch [mm]", "catalogue [mm]", "", "why")))
+                  "<-" if h.chosen else ""] for h in est.hypotheses],
+                ("hypothesis", "link pass [Hz]", "SNR [dB]", "pitch [mm]", "catalogue [mm]", "")))
+    for h in est.hypotheses:  # the reasons under the table: it stays within 100 columns
+        print(textwrap.fill(f"{h.name}: {h.reason}", 100, subsequent_indent="    "))
     print()
     print(table([[h["order"], f"{h['frequency_hz']:.4f}", f"{h['amplitude']:.4g}", "yes" if h["detected"] else "no"]
                  for h in est.harmonics], ("order", "frequency [Hz]", f"amplitude [{est.extra['units']}]", "detected")))
     for w in est.warnings:
-        msg(f"warning: {w}")
-    for n in est.notes:
-        msg(f"note: {n}")
-    msg(f"note: method {est.method}: {est.method_reason}")
+        msg(textwrap.fill(f"warning: {w}", 100, subsequent_indent="  "))
+    for n in est.notes + [f"method {est.method}: {est.method_reason}"]:
+        msg(textwrap.fill(f"note: {n}", 100, subsequent_indent="  "))
     if res.status != "ok":
-        msg(f"vibkit pitch: {res.status}: {res.reason}")
+        msg(textwrap.fill(f"vibkit pitch: {res.status}: {res.reason}", 100, subsequent_indent="  "))
     return res.exit_code
 
 

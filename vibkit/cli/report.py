@@ -6,7 +6,8 @@ from .options import (add_command, add_force_overwrite, add_json, add_limits, ad
                       pitch_length, positive, reader_options, speed_sigma, speed_uncertainty)
 from .output import check_output, print_json, table
 
-EPILOG = "example:\n  vibkit report data/field/leon-tensioner.csv --scene sim/leon.toml -o reports/leon.pdf"
+EPILOG = ("example:\n  vibkit report data/field/leon-tensioner.csv --scene sim/leon.toml --date 2020-02-14 \\\n"
+          "      -o out/leon.pdf")
 
 
 def add_parser(subparsers):
@@ -22,6 +23,7 @@ def add_parser(subparsers):
     add_limits(s, "elongation limits [%%]")
     s.add_argument("--band", type=band, help="link-pass search band LOW:HIGH [Hz]")
     s.add_argument("--duration", type=positive, help="simulated time [s] (default: the scene's)")
+    s.add_argument("--date", help="when the recording was made, ISO 8601 (default: the file's start time)")
     s.set_defaults(func=run)
     return s
 
@@ -33,7 +35,8 @@ def run(a):
     sigma = speed_sigma(a.speed_uncertainty, a.speed) if (a.speed_uncertainty and a.speed) else 0.0
     rep = write_report(a.recording, a.output, scene=a.scene, speed=a.speed, speed_sigma=sigma, channel=a.channel,
                        nominal_pitch=a.nominal_pitch, limits_percent=a.limits, duration=a.duration,
-                       band=a.band, progress=True, overwrite=a.force, read_options=reader_options(a))
+                       band=a.band, progress=True, overwrite=a.force, read_options=reader_options(a),
+                       date=a.date)
     if a.json:
         print_json("report", {"output": rep.path, "pages": [t for t, _ in rep.pages], "summary": rep.summary})
     else:

@@ -9,11 +9,13 @@ import time
 from .options import add_command, add_json, byte_size, positive
 from .output import CLIError, msg, print_json, table
 
-EPILOG = ("examples:\n  vibkit sweep sim/thesis-forward.toml --vary chain.link_pitch=0.1333:0.1373:9 "
-          "--vary effects.contact.stiffness=1e5,1e6,1e7 --duration 10 -o sweep.zarr\n"
-          "  vibkit sweep sim/leon.toml --vary motion.speed=0.45:0.55 --samples 50 --seed 1 --keep delta -o mc.zarr\n"
-          "re-running the same command resumes an interrupted sweep; xarray.open_zarr('sweep.zarr') reads it\n"
-          "(vibkit.sweep.open_sweep('sweep.zarr') also reads the runs of an interrupted one)")
+EPILOG = ("examples:\n  vibkit sweep sim/thesis-forward.toml --vary chain.link_pitch=0.1333:0.1373:9 \\\n"
+          "      --vary effects.contact.stiffness=1e5,1e6,1e7 --duration 10 -o out/sweep.zarr\n"
+          "  vibkit sweep sim/leon.toml --vary motion.speed=0.45:0.55 --samples 50 --seed 1 --keep delta \\\n"
+          "      -o out/mc.zarr\n"
+          "re-running the same command resumes an interrupted sweep;\n"
+          "xarray.open_zarr('out/sweep.zarr') reads it; vibkit.sweep.open_sweep('out/sweep.zarr')\n"
+          "also reads the runs of an interrupted one")
 
 
 def vary(text):

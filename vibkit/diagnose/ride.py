@@ -526,8 +526,9 @@ def ride_quality_from_simulation(ds, *, segment=None, weightings=None, source=No
         names = {"tangential": "accel_step"}
         notes.append("only accel_step (along the guide tangent, no gravity): one axis; add roller outputs for x and z")
         if segment is None:
-            segment = (0.0, float(t[-1] - t[0]))
-            notes.append("no incline detection without the step's vertical motion: the whole simulated time is assessed")
+            def detect(fs_):  # not "given": nobody gave it
+                return RideSegment(start_s=0.0, end_s=float(t[-1] - t[0]), method="whole simulated time",
+                                   note="no incline detection without the step's vertical motion")
     else:
         raise ValueError("the simulation has neither 'roller_acceleration' nor 'accel_step' among its outputs "
                          "(use vibkit.diagnose.ride.simulate_ride, which adds them)")
@@ -564,12 +565,21 @@ def simulate_ride(scene, *, duration=None, segment=None, weightings=None, progre
     sc = scene if isinstance(scene, Scene) else load_scene(scene)
     if sc.analysis not in ("inverse", "forward"):
         raise ValueError(f"{sc.source}: ride quality needs an inverse or forward scene, not {sc.analysis}")
-    step = sc.outputs.get("step_accelerometer")
-    if step is None:
+    if sc.outputs.get("step_accelerometer") is None:
         raise ValueError(f"{sc.source}: the scene names no step ('outputs.step_accelerometer'); add one")
+    ds = simulate(with_ride_outputs(sc), duration=duration, progress=progress)
+    return ride_quality_from_simulation(ds, segment=segment, weightings=weightings, source=sc.source)
+
+
+def with_ride_outputs(sc):
+    """The scene with its step's roller (``outputs.step_accelerometer``) acceleration and velocity added
+    to its outputs: what the ride figure of a simulation is computed from, by ``vibkit ride SCENE``
+    and by the report alike (the scene unchanged when it names no step or is a kinematics scene)."""
+    step = sc.outputs.get("step_accelerometer")
+    if step is None or sc.analysis not in ("inverse", "forward"):
+        return sc
     roller = 3 * int(step) - 1
     out = dict(sc.outputs)
     out["variables"] = tuple(dict.fromkeys(tuple(out["variables"]) + ("roller_acceleration", "roller_velocity")))
     out["rollers"] = tuple(dict.fromkeys(tuple(out["rollers"]) + (roller,)))
-    ds = simulate(dataclasses.replace(sc, outputs=out), duration=duration, progress=progress)
-    return ride_quality_from_simulation(ds, segment=segment, weightings=weightings, source=sc.source)
+    return dataclasses.replace(sc, outputs=out)

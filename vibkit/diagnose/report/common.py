@@ -9,12 +9,13 @@ from __future__ import annotations
 import datetime as _dt
 import math
 import os
+import textwrap
 from dataclasses import dataclass, field
 
-__all__ = ["Report", "report_date", "atomic_path", "PageSink"]
+__all__ = ["Report", "report_date", "atomic_path", "PageSink", "TextColumn", "fmt_pm", "fmt_length"]
 
-#: date used in the PDF when SOURCE_DATE_EPOCH is not set (the PDF stays reproducible)
-FIXED_EPOCH = 946684800  # 2000-01-01T00:00:00Z
+#: an example SOURCE_DATE_EPOCH (2000-01-01T00:00:00Z), kept for callers that pinned it
+FIXED_EPOCH = 946684800
 _PAGE = (8.27, 11.69)  # A4 portrait [in]
 _WIDE = (11.69, 8.27)  # A4 landscape [in]
 
@@ -42,7 +43,7 @@ class Report:
 
 
 def report_date() -> _dt.datetime:
-    """UTC date of the report: ``SOURCE_DATE_EPOCH`` if set, else a fixed epoch (2000-01-01).
+    """UTC date of the report: now, or ``SOURCE_DATE_EPOCH`` when it is set (reproducible bytes).
 
     Raises
     ------
@@ -51,7 +52,7 @@ def report_date() -> _dt.datetime:
     """
     raw = os.environ.get("SOURCE_DATE_EPOCH")
     if raw is None or raw == "":
-        sec = FIXED_EPOCH
+        return _dt.datetime.now(_dt.timezone.utc).replace(microsecond=0)
     else:
         try:
             sec = int(raw)
@@ -114,6 +115,65 @@ def _texts(fig):
     return out
 
 
+def fmt_pm(value, sigma, unit="", digits=4):
+    """``value +- sigma unit`` with sigma to two significant digits and the value to the same decimal
+    place; without a positive finite sigma the value to ``digits`` significant digits (never ``+- 0``)."""
+    if value is None or not math.isfinite(float(value)):
+        return "n/a"
+    v = float(value)
+    u = f" {unit}" if unit else ""
+    if sigma is None or not math.isfinite(float(sigma)) or float(sigma) <= 0:
+        return f"{v:.{digits}g}{u}"
+    s = float(sigma)
+    dec = 1 - int(math.floor(math.log10(s)))  # two significant digits of sigma
+    if dec <= 0:
+        q = 10.0 ** (-dec)
+        return f"{round(v / q) * q:.0f} +- {round(s / q) * q:.0f}{u}"
+    return f"{v:.{dec}f} +- {s:.{dec}f}{u}"
+
+
+def fmt_length(value_m, sigma_m=None, digits=5):
+    """A length given in m, shown in mm (rounded to its sigma when one is given)."""
+    if value_m is None:
+        return "n/a"
+    return fmt_pm(1000.0 * value_m, None if sigma_m is None else 1000.0 * sigma_m, "mm", digits)
+
+
+class TextColumn:
+    """Lines of text put down a page from the top, wrapped to a width, never overlapping: each call
+    moves the cursor ``y`` (figure fraction) down by the height of what it drew."""
+
+    def __init__(self, fig, *, x, y, width):
+        self.fig, self.x, self.y, self.width = fig, x, y, width
+        w_in, self.h_in = fig.get_size_inches()
+        self.w_in = w_in
+
+    def _chars(self, width, size, weight):
+        # average glyph width of DejaVu Sans is about 0.55 em (bold 0.62); keep a margin
+        return max(10, int(width * self.w_in * 72 / (size * (0.66 if weight == "bold" else 0.58))))
+
+    def _step(self, n_lines, size):
+        return n_lines * size * 1.32 / 72 / self.h_in
+
+    def gap(self, dy):
+        self.y -= dy
+
+    def text(self, text, size, *, weight="normal", color="black", family=None):
+        lines = textwrap.wrap(str(text), self._chars(self.width, size, weight)) or [""]
+        self.fig.text(self.x, self.y, "\n".join(lines), fontsize=size, fontweight=weight, color=color, va="top",
+                      family=family, linespacing=1.2)
+        self.y -= self._step(len(lines), size)
+
+    def pairs(self, rows, size, *, key_width=0.25):
+        """Two columns: what (grey) and value, the value wrapped to the rest of the width."""
+        for key, value in rows:
+            kl = textwrap.wrap(str(key), self._chars(key_width - 0.01, size, "normal")) or [""]
+            vl = textwrap.wrap(str(value), self._chars(self.width - key_width, size, "normal")) or [""]
+            self.fig.text(self.x, self.y, "\n".join(kl), fontsize=size, color="0.35", va="top", linespacing=1.2)
+            self.fig.text(self.x + key_width, self.y, "\n".join(vl), fontsize=size, va="top", linespacing=1.2)
+            self.y -= self._step(max(len(kl), len(vl)), size) + 0.002
+
+
 def _fmt(v, unit="", digits=4):
     if v is None or (isinstance(v, float) and not math.isfinite(v)):
         return "n/a"
@@ -130,9 +190,15 @@ def _table(ax, rows, col_widths=(0.42, 0.58), fontsize=9):
 
 
 def _page_title(fig, title, subtitle=""):
-    fig.suptitle(title, fontsize=14, fontweight="bold", x=0.06, ha="left", y=0.975)
+    """Title and subtitle at the top left, placed in inches from the top (the same on portrait and
+    landscape pages), the subtitle under the title and wrapped to the page's width."""
+    w_in, h_in = fig.get_size_inches()
+    y = 1 - 0.3 / h_in
+    fig.text(0.06, y, title, fontsize=14, fontweight="bold", va="top")
     if subtitle:
-        fig.text(0.06, 0.945, subtitle, fontsize=8.5, color="0.3")
+        chars = int(0.88 * w_in * 72 / (8.5 * 0.58))
+        fig.text(0.06, y - 14 * 1.45 / 72 / h_in, "\n".join(textwrap.wrap(subtitle, chars)), fontsize=8.5,
+                 color="0.3", va="top")
 
 
 class PageSink:

@@ -12,7 +12,7 @@ from .common import _PAGE, _WIDE, _page_title
 __all__ = ["plot_comparison", "simulation_page", "harmonics_page"]
 
 
-def plot_comparison(comp, fig=None):
+def plot_comparison(comp, fig=None, *, top=0.88):
     """Draw a :class:`vibkit.diagnose.comparison.Comparison` on one figure: order spectra overlaid, amplitude
     spectra side by side with harmonic markers, spectrograms side by side.
 
@@ -27,7 +27,7 @@ def plot_comparison(comp, fig=None):
     if fig is None:
         fig = plt.figure(figsize=_WIDE)
     gs = fig.add_gridspec(3, 2, height_ratios=(1.0, 1.0, 1.1), hspace=0.55, wspace=0.25,
-                          left=0.07, right=0.97, top=0.88, bottom=0.07)
+                          left=0.07, right=0.97, top=top, bottom=0.07)
     u = comp.units
     ax = fig.add_subplot(gs[0, :])
     ax.semilogy(comp.orders, np.maximum(comp.order_amplitude_sim, 1e-30), label=f"simulation ({comp.variable})")
@@ -37,7 +37,8 @@ def plot_comparison(comp, fig=None):
     ax.set_ylim(top * 1e-4, top * 3)
     ax.set_xlabel("order of the link-pass frequency [-]")
     ax.set_ylabel(f"amplitude [{u}]")
-    ax.set_title(f"Order spectra (each referred to its own link-pass); score {comp.score:.3f}, "
+    ax.set_title(f"Order spectra (each referred to its own link-pass); agreement score {comp.score:.2f} "
+                 "(1: all harmonics match, 0: none), "
                  f"log-spectral distance {comp.log_spectral_distance_db:.1f} dB", fontsize=10)
     ax.legend(fontsize=8, loc="upper right")
     ax.grid(alpha=0.3)
@@ -84,11 +85,15 @@ def simulation_page(doc, ctx) -> None:
     if comp is None:
         return
     fig = plt.figure(figsize=_WIDE)
+    verdict = (f"; page 1's {1000 * ctx.pitch.pitch_m:.2f} mm is the harmonic least-squares estimate over "
+               "every burst" if ctx.pitch is not None else "")
     _page_title(fig, "Simulation against recording",
                 f"scene {sc.name}: {comp.variable} vs {comp.channel}; pitch "
                 f"{'consistent' if comp.pitch_consistent else 'NOT consistent'} "
-                f"({1000 * comp.pitch_meas_m:.2f} mm recorded vs {1000 * comp.pitch_sim_m:.2f} mm simulated)")
-    plot_comparison(comp, fig)
+                f"({1000 * comp.pitch_meas_m:.2f} mm recorded vs {1000 * comp.pitch_sim_m:.2f} mm simulated: "
+                f"each from its own link-pass peak, {comp.fundamental_meas_hz:.4g} and "
+                f"{comp.fundamental_sim_hz:.4g} Hz, as the comparison finds them{verdict})")
+    plot_comparison(comp, fig, top=0.82)  # under a two-line subtitle
     doc.emit(fig, "simulation against recording")
 
 

@@ -59,7 +59,12 @@ class ReportContext:
     clip_n : int
     clipped : bool
     date : datetime.datetime
+        The report's date (now, or ``SOURCE_DATE_EPOCH``).
     summary : dict
+    measurement_date : datetime.datetime or None
+        When the recording was made: the ``date`` option, else the file's start time, else None.
+    measurement_date_source : str
+        Where it came from.
         The verdict table as a JSON-ready dict.
     """
 
@@ -90,6 +95,23 @@ class ReportContext:
     clipped: bool
     date: _dt.datetime
     summary: dict = field(default_factory=dict)
+    measurement_date: _dt.datetime | None = None
+    measurement_date_source: str = ""
+    ride: list = field(default_factory=list)  # ("recording" | "simulation", RideQuality), one page each
+
+    @property
+    def date_fixed(self) -> bool:
+        """The report's date comes from ``SOURCE_DATE_EPOCH``."""
+        return bool(os.environ.get("SOURCE_DATE_EPOCH"))
+
+    @property
+    def measurement_date_text(self) -> str:
+        if self.measurement_date is None:
+            return "not stated in the file (give --date)"
+        d = self.measurement_date
+        text = d.strftime("%Y-%m-%d") if (d.hour, d.minute, d.second) == (0, 0, 0) else \
+            d.strftime("%Y-%m-%d %H:%M UTC")
+        return f"{text} ({self.measurement_date_source})"
 
     @property
     def harmonic_count(self) -> int:
@@ -127,9 +149,33 @@ def _family_fit(x, fs, band):
     return fit
 
 
+def measurement_date(rec, date=None):
+    """(datetime or None, source) of a recording: ``date`` (ISO 8601 text or a datetime), else the
+    file's ``start_time`` / ``start_utc`` metadata, else (None, "")."""
+    if date is not None:
+        d, source = date, "given"
+    else:
+        d = rec.attrs.get("start_time") or rec.attrs.get("start_utc")
+        source = "the file's start time"
+        if not d:
+            return None, ""
+    if not isinstance(d, _dt.datetime):
+        text = str(d).strip().replace("Z", "+00:00")
+        try:
+            d = _dt.datetime.fromisoformat(text)
+        except ValueError:
+            if source == "given":
+                raise ValueError(f"measurement date {date!r} is not an ISO 8601 date (e.g. 2026-11-23 or "
+                                 "2026-11-23T10:15:00Z); --date") from None
+            return None, ""
+    if d.tzinfo is None:
+        d = d.replace(tzinfo=_dt.timezone.utc)
+    return d.astimezone(_dt.timezone.utc), source
+
+
 def analyse(recording, *, scene=None, speed=None, speed_sigma=0.0, channel=None, nominal_pitch=None,
             limits_percent=None, sample_rate=None, duration=None, band=None, hampel_half_window_s=0.1,
-            hampel_false_alarm_rate=1e-4, progress=False, read_options=None) -> ReportContext:
+            hampel_false_alarm_rate=1e-4, progress=False, read_options=None, date=None) -> ReportContext:
     """Everything :func:`vibkit.diagnose.report.write_report` draws (same parameters, no output)."""
     from ...io import read_recording
     from ..pitch import DEFAULT_LIMITS_PERCENT, estimate_pitch, pick_channel, uniform_bursts
@@ -148,6 +194,7 @@ def analyse(recording, *, scene=None, speed=None, speed_sigma=0.0, channel=None,
         if channel is None:
             raise
         rec = read_recording(recording, channel=channel, **opts)  # e.g. traces on different time bases
+    measured, measured_source = measurement_date(rec, date)
     ch = pick_channel(rec, channel)
     units = str(rec[ch].attrs.get("units", "1"))
     sc = None
@@ -193,9 +240,13 @@ def analyse(recording, *, scene=None, speed=None, speed_sigma=0.0, channel=None,
         from ..comparison import compare
         from ...analyses.simulation import simulate
 
-        result = simulate(sc, duration=duration, progress=progress)
+        from ..ride import with_ride_outputs
+
+        # with the step's roller motion: the ride figure is then the one `vibkit ride SCENE` gives
+        result = simulate(with_ride_outputs(sc), duration=duration, progress=progress)
         if found:  # no comparison of a link pass the recording does not carry
             comp = compare(rec, result, channel=ch)
+    ride = _ride(rec, result, sc, notes)
     # statistics
     x_all = np.concatenate([b.x for b in bursts])
     rms = float(np.sqrt(np.mean((x_all - x_all.mean()) ** 2)))
@@ -226,6 +277,8 @@ def analyse(recording, *, scene=None, speed=None, speed_sigma=0.0, channel=None,
         "link_pass_hz": f0 if found else None,
         "status": decided.status,
         "reason": decided.reason,
+        "measurement_date": measured.isoformat() if measured else None,
+        "report_date": date.isoformat(),
         "rms": rms,
         "peak_to_peak": p2p,
         "spikes": len(events),
@@ -242,4 +295,27 @@ def analyse(recording, *, scene=None, speed=None, speed_sigma=0.0, channel=None,
         nominal_pitch=nominal_pitch, limits=limits, band=band, duration=duration,
         hampel_half_window_s=hampel_half_window_s, hampel_false_alarm_rate=hampel_false_alarm_rate,
         bursts=bursts, pitch=pitch, f0=f0, found=found, notes=notes, result=result, comparison=comp,
-        events=events, rms=rms, p2p=p2p, clip_n=clip_n, clipped=clipped, date=date, summary=summary)
+        events=events, rms=rms, p2p=p2p, clip_n=clip_n, clipped=clipped, date=date, summary=summary,
+        measurement_date=measured, measurement_date_source=measured_source, ride=ride)
+
+
+def _ride(rec, result, sc, notes):
+    """Ride qualities of the recording and the simulation; a one-line note where one that could be
+    expected (a recording with x, y, z channels, a scene that names its step) cannot be assessed."""
+    from ..ride import _AXIS_RE, ride_quality_from_recording, ride_quality_from_simulation
+
+    out = []
+    axes = {m.group(1) for nm in rec.data_vars if (m := _AXIS_RE.search(str(nm).lower()))}
+    try:
+        out.append(("recording", ride_quality_from_recording(rec)))
+    except ValueError as exc:
+        if len(axes) >= 2:
+            notes.append(f"no ride-quality page for the recording ({', '.join(sorted(axes))} axes): "
+                         f"{' '.join(str(exc).split())} (vibkit ride FILE --segment START:END)")
+    if result is not None:
+        try:
+            out.append(("simulation", ride_quality_from_simulation(result)))
+        except ValueError as exc:
+            if sc.outputs.get("step_accelerometer") is not None:
+                notes.append(f"no ride-quality page for the simulation: {' '.join(str(exc).split())}")
+    return out

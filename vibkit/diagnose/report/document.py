@@ -2,10 +2,10 @@
 (:func:`~vibkit.diagnose.report.context.analyse`) and calls one page function per page kind, in the
 order of :data:`PAGES`.
 
-The pages: cover, verdict table, time signal with events, spectrum with harmonic markers, spectrogram,
+The pages: the verdict (page 1), the recording and escalator, time signal with events, spectrum with harmonic markers, spectrogram,
 order spectrum, ride quality (when it can be assessed), simulation against recording and harmonics (given a
-scene), data quality, parameters.  The same inputs give the same bytes: the PDF dates come from
-``SOURCE_DATE_EPOCH`` (or a fixed epoch), and nothing random is drawn.
+scene), data quality, parameters.  The report is dated now; with ``SOURCE_DATE_EPOCH`` set the same
+inputs give the same bytes (nothing random is drawn).
 """
 
 from __future__ import annotations
@@ -18,21 +18,21 @@ from .comparison_pages import harmonics_page, simulation_page
 from .context import analyse
 from .ride_pages import ride_quality_pages
 from .signal_pages import order_spectrum_page, spectrogram_page, spectrum_page, time_signal_page
-from .verdict import cover_page, verdict_page
+from .verdict import recording_page, verdict_page
 
 __all__ = ["PAGES", "write_report"]
 
 #: the page functions, in page order; each is ``page(doc, ctx)`` with ``doc`` a
 #: :class:`~vibkit.diagnose.report.common.PageSink` and ``ctx`` a
 #: :class:`~vibkit.diagnose.report.context.ReportContext`, and emits zero or more pages
-PAGES = (cover_page, verdict_page, time_signal_page, spectrum_page, spectrogram_page, order_spectrum_page,
+PAGES = (verdict_page, recording_page, time_signal_page, spectrum_page, spectrogram_page, order_spectrum_page,
          ride_quality_pages, simulation_page, harmonics_page, data_quality_page, parameters_page)
 
 
 def write_report(recording, out_path, *, scene=None, speed=None, speed_sigma=0.0, channel=None,
                  nominal_pitch=None, limits_percent=None, sample_rate=None, duration=None, band=None,
                  hampel_half_window_s=0.1, hampel_false_alarm_rate=1e-4, progress=False, overwrite=True,
-                 read_options=None) -> Report:
+                 read_options=None, date=None) -> Report:
     """Write the PDF diagnostic report of a recording.
 
     Parameters
@@ -66,6 +66,8 @@ def write_report(recording, out_path, *, scene=None, speed=None, speed_sigma=0.0
         Replace an existing regular file ``out_path`` (default True; the CLI passes ``--force``).
     read_options : dict, optional
         More :func:`vibkit.read_recording` arguments (``time_unit``, ``units``, ``repair_time`` ...).
+    date : str or datetime.datetime, optional
+        When the recording was made (ISO 8601); default the file's start time, if it states one.
 
     Returns
     -------
@@ -98,7 +100,7 @@ def write_report(recording, out_path, *, scene=None, speed=None, speed_sigma=0.0
                   nominal_pitch=nominal_pitch, limits_percent=limits_percent, sample_rate=sample_rate,
                   duration=duration, band=band, hampel_half_window_s=hampel_half_window_s,
                   hampel_false_alarm_rate=hampel_false_alarm_rate, progress=progress,
-                  read_options=read_options)
+                  read_options=read_options, date=date)
     date, summary = ctx.date, ctx.summary
     meta = {"Title": f"vibkit report: {summary['file']}", "Author": f"vibkit {__version__}",
             "Subject": "escalator drive-chain vibration diagnostic", "Creator": f"vibkit {__version__}",

@@ -29,7 +29,7 @@ def plot_ride(rq, fig=None):
     tab_ax = fig.add_axes((0.06, 0.76, 0.88, 0.14))
     tab_ax.axis("off")
     head = ["axis", "channel", "weighting", "max pk-pk", "A95", "r.m.s.", "10 Hz max pk-pk", "10 Hz A95"]
-    cells = [[a.axis, a.channel[:28], a.weighting, f"{a.weighted.max:.4g}", f"{a.weighted.a95:.4g}",
+    cells = [[a.axis, a.channel[:32], a.weighting, f"{a.weighted.max:.4g}", f"{a.weighted.a95:.4g}",
               f"{a.weighted.rms:.4g}", f"{a.lowpass.max:.4g}", f"{a.lowpass.a95:.4g}"] for a in rq.axes]
     tab = tab_ax.table(cellText=cells, colLabels=head, loc="upper center", cellLoc="center",
                        colWidths=[0.06, 0.27, 0.09, 0.1, 0.1, 0.1, 0.14, 0.12])
@@ -67,21 +67,13 @@ def ride_quality_pages(doc, ctx) -> list:
     """
     import matplotlib.pyplot as plt
 
-    from ..ride import ride_quality_from_recording, ride_quality_from_simulation
-
-    rec, result = ctx.rec, ctx.result if ctx.scene is not None else None
     done = []
-    for what, make in (("recording", lambda: ride_quality_from_recording(rec)),
-                       ("simulation", lambda: ride_quality_from_simulation(result) if result is not None else None)):
-        try:
-            rq = make()
-        except ValueError:
-            rq = None
-        if rq is None:
-            continue
+    for what, rq in ctx.ride:
         fig = plt.figure(figsize=_PAGE)
+        same = (f"; the same figure as `vibkit ride {os.path.basename(str(ctx.scene.source))}"
+                + (f" --duration {ctx.duration:g}`" if ctx.duration else "`")) if what == "simulation" else ""
         _page_title(fig, f"Ride quality ({what})", f"{os.path.basename(rq.source)}: step vibration, ISO 2631-1 "
-                    "weighted (x, y: Wd; z: Wk) and 0.4-10 Hz unweighted")
+                    f"weighted (x, y: Wd; z: Wk) and 0.4-10 Hz unweighted{same}")
         plot_ride(rq, fig)
         notes = rq.notes + ([rq.segment.note] if rq.segment.note else [])
         fig.text(0.06, 0.015, "\n".join(textwrap.fill("- " + m, 115) for m in notes[:4]), fontsize=6.5,

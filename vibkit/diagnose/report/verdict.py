@@ -1,70 +1,156 @@
-"""The report's opening pages: the cover (what was measured, by what, when) and the verdict table
-(link-pass frequency, pitch, elongation against the limits, signal statistics, agreement with a scene)."""
+"""The report's opening pages: page 1, the verdict (the unit, the measurement date, the recording, the
+verdict in large type and colour with its uncertainty, at the same size whatever makes it unreliable,
+then the evidence), and page 2, the recording and the escalator (checksum, reader, scene, provenance).
+
+Page 1 draws whatever verdict fields the estimate carries (``status``, ``verdict``, ``reason``,
+``warnings``), so that a new status of :mod:`vibkit.diagnose.pitch` shows without a change here.
+"""
 
 from __future__ import annotations
 
+import math
 import textwrap
 
-from .common import _PAGE, _page_title, _table
+from .common import _PAGE, TextColumn, fmt_pm, fmt_length, _page_title
 
-__all__ = ["cover_page", "verdict_page"]
+__all__ = ["verdict_page", "recording_page", "VERDICT_COLOURS"]
+
+#: colour of each verdict (anything else: dark grey)
+VERDICT_COLOURS = {"ok": "#1a7f37", "watch": "#9a6700", "plan replacement": "#d1570b", "replace": "#c62828"}
+_GREY = "#555555"
+_BIG = 26  # the verdict's type size, and the warnings' header's [pt]
 
 
-def cover_page(doc, ctx) -> None:
-    """Page 1: recording, checksum, reader, date, vibkit version, escalator, scene, sensor, provenance."""
+def _headline(ctx):
+    """(big text, colour, line under it) of the verdict."""
+    pitch = ctx.pitch
+    if not ctx.found:  # the shared decision refused: no link pass, or implausible
+        status = str(ctx.summary.get("status") or "no link-pass found")
+        why = str(ctx.summary.get("reason") or "")
+        return status.upper(), _GREY, why or "no frequency, pitch or elongation can be given"
+    status = str(getattr(pitch, "status", "ok") or "ok") if pitch is not None else "ok"
+    reason = str(getattr(pitch, "reason", "") or "") if pitch is not None else ""
+    if pitch is None:
+        return (f"LINK PASS {fmt_pm(ctx.f0, None, 'Hz')}", _GREY,
+                "no chain speed known: no pitch and no verdict (give --speed)")
+    if status.lower() not in ("ok", ""):
+        return status.upper(), _GREY, reason or "no verdict"
+    pitch_text = fmt_length(pitch.pitch_m, pitch.pitch_sigma_m)
+    if pitch.verdict is None:
+        return f"PITCH {pitch_text}", _GREY, "no nominal pitch given: no elongation verdict (--nominal-pitch)"
+    el = fmt_pm(pitch.elongation_percent, pitch.elongation_sigma_percent, "%")
+    colour = VERDICT_COLOURS.get(str(pitch.verdict).lower(), _GREY)
+    # the pitch and the nominal pitch are in the evidence below: each figure once
+    under = (f"elongation {el} against the limits {' / '.join(f'{v:g}' for v in ctx.limits)} % "
+             "(watch / plan / replace)" + (f"; {reason}" if reason else ""))
+    return str(pitch.verdict).upper(), colour, under
+
+
+def verdict_page(doc, ctx) -> None:
+    """Page 1: who, when, what; the verdict; what makes it unreliable; the evidence."""
+    import matplotlib.pyplot as plt
+
+    pitch, comp, summary = ctx.pitch, ctx.comparison, ctx.summary
+    fig = plt.figure(figsize=_PAGE)
+    col = TextColumn(fig, x=0.07, y=0.965, width=0.86)
+    col.text("Escalator drive-chain diagnostic", 16, weight="bold")
+    sc = ctx.scene
+    unit = (sc.description or sc.name) if sc is not None else "not given (no scene: --scene)"
+    col.pairs([("escalator", unit),
+               ("measured", ctx.measurement_date_text),
+               ("recording", f"{summary['file']}, channel {ctx.channel} [{ctx.units}]"),
+               ("report", f"{ctx.date.strftime('%Y-%m-%d %H:%M')} UTC"
+                          + (" (SOURCE_DATE_EPOCH)" if ctx.date_fixed else ""))], 9.5, key_width=0.16)
+    col.gap(0.012)
+    big, colour, under = _headline(ctx)
+    col.text(big, _BIG, weight="bold", color=colour)
+    col.text(under, 11, color=colour)
+    warnings = list(getattr(pitch, "warnings", []) or []) if pitch is not None else []
+    if not ctx.found:
+        warnings = []  # the headline says it, with the reason
+    elif pitch is not None and not (pitch.speed_sigma_m_s and pitch.speed_sigma_m_s > 0):
+        warnings.append("the speed's uncertainty was not given: the +- of the pitch and the elongation covers "
+                        "the frequency only (give --speed-uncertainty)")
+    col.gap(0.008)
+    if warnings:
+        col.text(f"{len(warnings)} WARNING{'S' if len(warnings) > 1 else ''}", _BIG, weight="bold", color="#b35900")
+        col.text("the verdict may be unreliable: check these before acting", 11, color="#b35900")
+        for w in warnings[:6]:
+            col.text("- " + w, 10, weight="bold", color="#b35900")
+        if len(warnings) > 6:
+            col.text(f"... and {len(warnings) - 6} more (JSON: vibkit pitch --json)", 10, color="#b35900")
+    elif ctx.found:
+        col.text("no warning from the estimator", 11, color=_GREY)
+    col.gap(0.012)
+    col.text("Evidence", 12, weight="bold")
+    col.pairs(evidence_rows(ctx), 9, key_width=0.3)
+    notes = list(getattr(pitch, "notes", []) or []) if pitch is not None else []
+    notes += [n for n in ctx.notes if not n.startswith("NO LINK-PASS")]
+    if notes:
+        col.gap(0.006)
+        for n in notes[:5]:
+            col.text("note: " + n, 8, color="0.3")
+    doc.emit(fig, "verdict")
+
+
+def evidence_rows(ctx):
+    """(what, value) rows of the evidence under the verdict: each figure once, rounded to its sigma."""
+    pitch, comp, units = ctx.pitch, ctx.comparison, ctx.units
+    rows = []
+    if ctx.found:
+        sig = pitch.fundamental_sigma_hz if pitch is not None else None
+        method = f" ({pitch.method})" if pitch is not None and getattr(pitch, "method", "") else ""
+        rows.append(("link-pass frequency", fmt_pm(ctx.f0, sig, "Hz") + method))
+    if pitch is not None:
+        sv = pitch.speed_sigma_m_s
+        rows.append(("chain speed", fmt_pm(pitch.speed_m_s, sv, "m/s") +
+                     ("" if sv and sv > 0 else " (no uncertainty given: --speed-uncertainty)")))
+        rows.append(("link pitch = speed / frequency", fmt_length(pitch.pitch_m, pitch.pitch_sigma_m)))
+        if pitch.nominal_pitch_m is not None:
+            rows.append(("nominal pitch", fmt_length(pitch.nominal_pitch_m)))
+            if pitch.verdict is None or str(getattr(pitch, "status", "ok") or "ok").lower() != "ok":
+                rows.append(("elongation", fmt_pm(pitch.elongation_percent, pitch.elongation_sigma_percent,
+                                                  "%")))  # else it is under the verdict
+        snr = getattr(pitch, "snr_db", None)
+        if snr is not None and math.isfinite(snr):
+            rows.append(("signal to noise", f"{snr:.0f} dB at the link-pass harmonics"))
+    scale, shown = (1000.0, "mm") if units == "m" else (1.0, units)
+    rows.append(("RMS / peak to peak", f"{ctx.rms * scale:.3g} / {ctx.p2p * scale:.3g} {shown}"))
+    rows.append(("spikes", f"{len(ctx.events)} (Hampel events; page 'time signal')"))
+    rows.append(("clipping", f"{ctx.clip_n} sample(s) at the extreme values: " +
+                 ("suspected (more than 4)" if ctx.clipped else "not suspected (a clipped sensor holds its "
+                                                                "extreme for more than 4 samples)")))
+    if comp is not None:
+        rows.append(("pitch against the scene", ("consistent" if comp.pitch_consistent else "NOT consistent") +
+                     f" (ratio {comp.pitch_ratio:.4f}: recorded over simulated)"))
+        rows.append(("spectra against the simulation",
+                     f"agreement score {comp.score:.2f} (1: every harmonic matches in frequency and "
+                     "amplitude, 0: none does; rule on page 'harmonics')"))
+    return rows
+
+
+def recording_page(doc, ctx) -> None:
+    """Page 2: recording, checksum, reader, vibkit version, escalator, scene, sensor, provenance."""
     import matplotlib.pyplot as plt
 
     from ... import __version__
 
     rec, sc, ch, summary = ctx.rec, ctx.scene, ctx.channel, ctx.summary
     fig = plt.figure(figsize=_PAGE)
-    fig.text(0.08, 0.88, "Escalator drive-chain vibration", fontsize=20, fontweight="bold")
-    fig.text(0.08, 0.845, "Diagnostic report", fontsize=15, color="0.25")
-    ax = fig.add_axes((0.08, 0.35, 0.84, 0.45))
+    _page_title(fig, "Recording and escalator", "what was measured, by what, and what describes the escalator")
+    col = TextColumn(fig, x=0.07, y=0.9, width=0.86)
     sha = str(rec.attrs.get("sha256", ""))
-    rows = [["recording", summary["file"]], ["sha256", sha[:32]], ["", sha[32:]],
-            ["reader", str(rec.attrs.get("reader", ""))],
-            ["report date (UTC)", ctx.date.strftime("%Y-%m-%d")], ["vibkit version", __version__],
-            ["escalator", (sc.description if sc else "not given (no scene)")[:70]],
-            ["scene", (f"{sc.name} ({sc.analysis}; pitch {1000 * sc.chain.link_pitch:.2f} mm, "
-                       f"Z = {sc.sprocket.teeth})") if sc else "none"],
-            ["sensor channel", f"{ch} [{ctx.units}], {rec[ch].attrs.get('quantity', 'other')}"],
-            ["provenance", str(rec.attrs.get("provenance", "not stated"))[:70]]]
-    _table(ax, rows, (0.25, 0.75), 9)
-    fig.text(0.08, 0.08, textwrap.fill(
-        "Generated by vibkit. Frequencies from harmonic least squares with Cramer-Rao standard "
-        "deviations; pitch = speed / link-pass frequency. Reproducible: the same inputs give the same "
-        "file (dates from SOURCE_DATE_EPOCH).", 95), fontsize=8, color="0.35")
-    doc.emit(fig, "cover")
-
-
-def verdict_page(doc, ctx) -> None:
-    """Page 2: the verdict table and the estimator's warnings and notes."""
-    import matplotlib.pyplot as plt
-
-    pitch, f0, found, units, comp = ctx.pitch, ctx.f0, ctx.found, ctx.units, ctx.comparison
-    fig = plt.figure(figsize=_PAGE)
-    _page_title(fig, "Verdict", f"{ctx.summary['file']}, channel {ctx.channel}")
-    ax = fig.add_axes((0.06, 0.30, 0.88, 0.62))
-    rows = [["link-pass frequency", (f"{f0:.5g} Hz" + (f" +- {pitch.fundamental_sigma_hz:.2g} Hz" if pitch else ""))
-             if found else f"{ctx.summary['status'].upper()} (no pitch, no verdict)"]]
-    if pitch is not None:
-        rows += [["speed", f"{pitch.speed_m_s:.4g} +- {pitch.speed_sigma_m_s:.2g} m/s"],
-                 ["link pitch", f"{1000 * pitch.pitch_m:.2f} +- {1000 * pitch.pitch_sigma_m:.2f} mm"]]
-        if pitch.nominal_pitch_m is not None:
-            rows += [["nominal pitch", f"{1000 * pitch.nominal_pitch_m:.2f} mm"],
-                     ["elongation", f"{pitch.elongation_percent:.2f} +- {pitch.elongation_sigma_percent:.2f} %"],
-                     ["limits (watch / plan / replace)", " / ".join(f"{v:g} %" for v in ctx.limits)],
-                     ["elongation verdict", pitch.verdict.upper()]]
-    rows += [["RMS", f"{ctx.rms:.4g} {units}"], ["peak to peak", f"{ctx.p2p:.4g} {units}"],
-             ["spikes (Hampel events)", f"{len(ctx.events)}"],
-             ["clipping", "suspected" if ctx.clipped else "none seen"]]
-    if comp is not None:
-        rows += [["agreement with simulation", f"score {comp.score:.3f} (0 none, 1 perfect)"],
-                 ["pitch vs scene", ("consistent" if comp.pitch_consistent else "NOT consistent") +
-                  f" (ratio {comp.pitch_ratio:.4f})"]]
-    _table(ax, rows, (0.4, 0.6), 9.5)
-    msgs = (pitch.warnings + pitch.notes if pitch else []) + ctx.notes
-    fig.text(0.06, 0.05, "\n".join(textwrap.fill("- " + m, 110) for m in msgs[:7]), fontsize=7.5,
-             va="bottom", color="0.2")
-    doc.emit(fig, "verdict")
+    col.pairs([("recording", summary["file"]), ("sha256", sha), ("reader", str(rec.attrs.get("reader", ""))),
+               ("measured", ctx.measurement_date_text),
+               ("report date (UTC)", ctx.date.strftime("%Y-%m-%d %H:%M")), ("vibkit version", __version__),
+               ("escalator", sc.description if sc else "not given (no scene)"),
+               ("scene", (f"{sc.name} ({sc.analysis}; pitch {fmt_length(sc.chain.link_pitch)}, "
+                          f"Z = {sc.sprocket.teeth})") if sc else "none"),
+               ("sensor channel", f"{ch} [{ctx.units}], {rec[ch].attrs.get('quantity', 'other')}"),
+               ("provenance", str(rec.attrs.get("provenance", "not stated")))], 9.5, key_width=0.22)
+    col.gap(0.02)
+    col.text(textwrap.fill(
+        "Generated by vibkit. Frequencies from harmonic least squares with Cramer-Rao standard deviations; "
+        "pitch = speed / link-pass frequency; every number is rounded to its uncertainty. The same inputs "
+        "give the same file when SOURCE_DATE_EPOCH fixes the report date.", 100), 8, color="0.35")
+    doc.emit(fig, "recording")

@@ -1,0 +1,138 @@
+"""Every page of the diagnostic report is drawn and its text checked: no two text artists overlap,
+none leaves the page, a text placed in an axes stays in it, a table cell's text stays in its cell.
+Page 1 is the verdict: unit, dates, recording, the verdict with its uncertainty, the warnings."""
+
+import re
+
+import pytest
+
+from vibkit.diagnose.report import write_report
+from vibkit.diagnose.report.common import PageSink, fmt_pm
+
+LEON = "data/field/leon-tensioner.csv"
+PHYPHOX = "data/field/layouts/phyphox.csv"
+TOL = 1.0  # px at 72 dpi: touching is not overlapping
+
+
+def _bbox(artist, renderer):
+    bb = artist.get_window_extent(renderer)
+    return (bb.x0, bb.y0, bb.x1, bb.y1)
+
+
+def _overlap(a, b):
+    return min(a[2], b[2]) - max(a[0], b[0]) > TOL and min(a[3], b[3]) - max(a[1], b[1]) > TOL
+
+
+def _inside(inner, outer):
+    return (inner[0] >= outer[0] - TOL and inner[1] >= outer[1] - TOL and inner[2] <= outer[2] + TOL
+            and inner[3] <= outer[3] + TOL)
+
+
+def layout_problems(fig):
+    """Overlapping, clipped or escaped texts of a figure, as readable lines."""
+    import matplotlib.text
+
+    fig.set_dpi(72)
+    fig.canvas.draw()
+    r = fig.canvas.get_renderer()
+    page = (0, 0, fig.bbox.width, fig.bbox.height)
+    problems = []
+    cells = set()
+    for ax in fig.axes:
+        for tab in ax.tables:
+            for cell in tab.get_celld().values():
+                t = cell.get_text()
+                if not t.get_text():
+                    continue
+                cells.add(id(t))
+                if not _inside(_bbox(t, r), _bbox(cell, r)):
+                    problems.append(f"table cell text clipped: {t.get_text()!r}")
+    # tick labels: only those drawn (the ticks inside the view); the others exist but are not drawn
+    ticks, drawn = set(), set()
+    for ax in fig.axes:
+        for axis in (ax.xaxis, ax.yaxis):
+            for tick in axis.get_major_ticks() + axis.get_minor_ticks():
+                ticks.update((id(tick.label1), id(tick.label2)))
+            if not (ax.axison and axis.get_visible()):
+                continue
+            for tick in axis._update_ticks():  # the ticks matplotlib draws (inside the view)
+                drawn.update((id(tick.label1), id(tick.label2)))
+    texts = []
+    for t in fig.findobj(matplotlib.text.Text):
+        if not t.get_visible() or not t.get_text().strip() or id(t) in cells:
+            continue
+        if id(t) in ticks and id(t) not in drawn:
+            continue
+        bb = _bbox(t, r)
+        if bb[2] - bb[0] < 0.5:  # empty
+            continue
+        texts.append((t, bb))
+        if not _inside(bb, page):
+            problems.append(f"off the page: {t.get_text()[:60]!r}")
+    for ax in fig.axes:
+        abb = _bbox(ax, r)
+        for t in ax.texts:
+            if t.get_visible() and t.get_text().strip() and not _inside(_bbox(t, r), abb):
+                problems.append(f"leaves its axes: {t.get_text()[:60]!r}")
+    for i, (a, ba) in enumerate(texts):
+        for b, bb in texts[i + 1:]:
+            if _overlap(ba, bb):
+                # a legend or table draws its texts inside its own box; matplotlib's tick labels of one
+                # axis never overlap each other at these sizes, so any overlap is a real collision
+                problems.append(f"overlap: {a.get_text()[:50]!r} / {b.get_text()[:50]!r}")
+    return problems
+
+
+@pytest.fixture(scope="module")
+def checked_reports(tmp_path_factory):
+    """The Leon report (with its scene) and the phyphox report (x, y, z), every page checked as drawn."""
+    problems = {}
+    orig = PageSink.emit
+
+    def emit(self, fig, title):
+        problems[(len(self.pages) + 1, title)] = layout_problems(fig)
+        return orig(self, fig, title)
+
+    mp = pytest.MonkeyPatch()
+    mp.setattr(PageSink, "emit", emit)
+    d = tmp_path_factory.mktemp("layout")
+    try:
+        leon = write_report(LEON, d / "leon.pdf", scene="sim/leon.toml", duration=4.0, date="2020-02-14")
+        phy = write_report(PHYPHOX, d / "phyphox.pdf", speed=0.5)
+    finally:
+        mp.undo()
+    return leon, phy, problems
+
+
+def test_no_text_overlaps_or_leaves_its_place(checked_reports):
+    _, _, problems = checked_reports
+    bad = {f"page {n} ({t})": p for (n, t), p in problems.items() if p}
+    assert bad == {}
+
+
+def test_page_one_is_the_verdict(checked_reports):
+    leon, _, _ = checked_reports
+    title, texts = leon.pages[0]
+    text = "\n".join(texts)
+    assert title == "verdict"
+    assert "REPLACE" in text
+    assert "138.4" in text and " mm" in text
+    assert "2020-02-14 (given)" in text  # the measurement date
+    assert re.search(r"report\n?.*\d{4}-\d{2}-\d{2} \d{2}:\d{2} UTC", text)  # the report date
+    assert "Leon shopping centre" in text and "leon-tensioner.csv" in text
+    assert "WARNING" in text  # what makes the verdict unreliable, at the verdict's size
+    assert not re.search(r"\+- 0(\.0*)?(?![0-9.])", text)  # never +- 0.00
+    # lengths in mm: the peak to peak of a displacement in m is shown in mm
+    assert re.search(r"RMS / peak to peak\n?.*mm", text)
+
+
+def test_date_without_metadata_says_so(checked_reports):
+    _, phy, _ = checked_reports
+    assert "not stated in the file (give --date)" in "\n".join(phy.pages[0][1])
+
+
+@pytest.mark.parametrize("v, s, text", [(138.4163, 0.0213, "138.416 +- 0.021"), (0.49, 0.0, "0.49"),
+                                        (3.8207, 0.31, "3.82 +- 0.31"), (1234.5, 56.0, "1234 +- 56"),
+                                        (0.49, None, "0.49"), (3.5401234, 0.00123, "3.5401 +- 0.0012")])
+def test_numbers_rounded_to_their_uncertainty(v, s, text):
+    assert fmt_pm(v, s) == text
