@@ -12,7 +12,7 @@ import pytest
 import xarray as xr
 
 from vibkit.runtime.budget import BudgetError
-from vibkit.sweep import SweepError, open_sweep, plan_sweep
+from vibkit.sweep import SUMMARIES, SweepError, open_sweep, plan_sweep
 
 ROOT = Path(__file__).resolve().parents[2]
 LEON = ROOT / "sim" / "leon.toml"
@@ -49,9 +49,10 @@ def test_the_size_is_runs_times_values_and_the_limit_is_the_budgets(monkeypatch)
     est = LIMITS.estimate_sweep(scene, 1000, keep=("delta",), duration=1.0)
     samples = 1.0 / scene.section("motion")["step"] + 1
     assert est["samples"] == pytest.approx(samples)
-    assert est["bytes"] == pytest.approx(1000 * ((13 + samples) * 8 + LIMITS.BYTES_PER_RUN))
+    values = len(SUMMARIES) + 2  # the summaries, the status and the wall time of each run
+    assert est["bytes"] == pytest.approx(1000 * ((values + samples) * 8 + LIMITS.BYTES_PER_RUN))
     # just under and just over a limit given in bytes, through the environment as the CLI would
-    n = int(2e6 // (13 * 8 + LIMITS.BYTES_PER_RUN))
+    n = int(2e6 // (values * 8 + LIMITS.BYTES_PER_RUN))
     monkeypatch.setenv("VIBKIT_MAX_RESULT_BYTES", "2e6")
     assert len(plan_sweep(LEON, {"motion.speed": f"0.4:0.5:{n}"}).points) == n
     with pytest.raises(BudgetError):

@@ -317,5 +317,5 @@ def test_cli_check_gives_a_converged_flag_per_run(scene_file, tmp_path, capsys):
         assert r["converged"] is bool(single.attrs["converged"])
     assert set(xr.open_zarr(out)["converged"].values.ravel()) <= {0.0, 1.0}
     with pytest.raises(SweepError, match="forward scenes"):
-        vibkit.sweep(Path(__file__).resolve().parents[1] / "sim" / "thesis-kinematics.toml",
+        vibkit.sweep(Path(__file__).resolve().parents[2] / "sim" / "thesis-kinematics.toml",
                      {"kinematics.step": "0.001,0.002"}, check=True, progress=False)

@@ -182,8 +182,10 @@ def add_command(subparsers, name, help_, epilog):
     ``help_`` is plain text: argparse %-formats a subcommand's help in its parent's listing, so a
     ``%`` in it is escaped here (the description and the epilog are not %-formatted).
     """
-    return subparsers.add_parser(name, help=help_.replace("%", "%%"), description=help_, epilog=epilog,
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    import textwrap
+
+    return subparsers.add_parser(name, help=help_.replace("%", "%%"), description=textwrap.fill(help_, 99),
+                                 epilog=epilog, formatter_class=argparse.RawDescriptionHelpFormatter)
 
 
 def add_json(sp, help_=JSON_HELP):

@@ -7,7 +7,7 @@ from .output import in_file, msg, print_json, table
 from .pitch import add_speed_options, print_channels, refused, resolve_speed
 
 EPILOG = ("example:\n  vibkit spectrum data/field/leon-tensioner.csv --band 2.5:6 --json\n"
-          "with a speed (given or stated by the file) the same decision as `vibkit pitch` (exit 0, 1 or 3); "
+          "with a speed (given or stated by the file) the same decision as `vibkit pitch` (exit 0, 1 or 3);\n"
           "without one the frequency only (search band 2.5-6 Hz)")
 
 
