@@ -139,6 +139,15 @@ CELLS = st.sampled_from(["0", "1", "-2.5", "1e3", "3,5", "nan", "NaN", "", " ", 
                          "0.1", "12:00:01", "2021-01-01T00:00:00", "#", "7 ", " 8", "+.5", "1.", "N/A"])
 
 
+def test_a_comment_line_in_a_text_first_column_reads_as_line_by_line(tmp_path):
+    """Found by hypothesis: '#,0,0' under 'abc,0,0' parses whole in pandas, but is a comment line by line."""
+    p = tmp_path / "any.csv"
+    p.write_bytes(b"abc,0,0\n#,0,0\n")
+    same(outcome(lambda: read_recording(p)), outcome(lambda: slow(p)))
+    p.write_bytes(b"abc,0,0\nabd,1,1\n  % note,2,2\nabe,3,3\n")
+    same(outcome(lambda: read_recording(p)), outcome(lambda: slow(p)))
+
+
 @SETTINGS
 @given(rows=st.lists(st.lists(CELLS, min_size=1, max_size=4), min_size=1, max_size=12),
        sep=st.sampled_from([",", ";", "\t", " "]),

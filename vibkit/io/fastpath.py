@@ -14,7 +14,7 @@ import re
 import numpy as np
 import pandas as pd
 
-from .cells import _MISSING, _is_comment, _kind
+from .cells import _COMMENT, _MISSING, _is_comment, _kind
 from .errors import RecordingError
 
 __all__ = []
@@ -78,6 +78,11 @@ def _fast_rows(path, data, first, n, d, dec, trailing, first_cells, split, encod
         nlines = len(df)
     elif len(df) != nlines:
         raise _Fallback("quoted line ends")
+    if 0 in objcols and len(df):
+        # a comment line whose other cells parse ('#,0,0') leaves no missing value to flag it below
+        lead = df[0].astype(str).str.lstrip()
+        if (lead.str.startswith(_COMMENT) | (lead.str.startswith(";") if d != ";" else False)).any():
+            raise _Fallback("comment lines among the data")  # the line-by-line reader records them
     cols = [df[j].to_numpy(dtype=object if j in objcols else np.int64 if j in intcols else np.float64, copy=False)
             for j in range(n)]
     if trailing:
