@@ -186,7 +186,7 @@ def false_verdicts(quick, n_records=None):
     """Chain-free records analysed as ``vibkit pitch --speed 0.5 --nominal-pitch 0.13333`` would."""
     import scipy.stats
 
-    n_rec = n_records or (1200 if quick else 12000)
+    n_rec = n_records or (120 if quick else 12000)
     rng = np.random.default_rng(18)
     per = {k: [0, 0, 0, 0] for k in KINDS}  # records, verdicts, pitches (ok or inconclusive), too short
     for i in range(n_rec):
@@ -214,7 +214,7 @@ def false_verdicts(quick, n_records=None):
 
 def wander_power(quick):
     """Chain signals with +-2 % speed wander: how often vibkit gives a verdict (status ok) vs SNR."""
-    trials = 20 if quick else 100
+    trials = 4 if quick else 100
     rng = np.random.default_rng(19)
     rows = []
     for snr in (-15, -12, -9, -6, -3, 0, 10):
