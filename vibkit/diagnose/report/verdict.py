@@ -42,7 +42,7 @@ def _headline(ctx):
     colour = VERDICT_COLOURS.get(str(pitch.verdict).lower(), _GREY)
     # the pitch and the nominal pitch are in the evidence below: each figure once
     under = (f"elongation {el} against the limits {' / '.join(f'{v:g}' for v in ctx.limits)} % "
-             "(watch / plan / replace)" + (f"; {reason}" if reason else ""))
+             "(watch / plan / replace)")  # an accepted decision's reason repeats this line: not shown
     return str(pitch.verdict).upper(), colour, under
 
 
