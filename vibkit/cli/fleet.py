@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import textwrap
+
 import sys
 
 from .options import (add_command, add_json, add_limits, add_recording, chain_speed, cli_message, pitch_length,
@@ -160,9 +162,18 @@ def run_status(a):
         return 0
     from vibkit.diagnose.report.fleet import WORK_LIST_HEADER, work_list_rows
 
-    print(table(work_list_rows(trends), WORK_LIST_HEADER))
-    msg("note: most urgent first; latest usable elongation and the rate with 1 sigma; the next limit's date with its "
-        "2-sigma interval (year-month); flagged measurements and outliers are left out of the trends")
+    rows = work_list_rows(trends)
+    # the flags column takes what is left of 100 columns (the whole list is in --json)
+    used = sum(max(len(str(r[j])) for r in rows + [WORK_LIST_HEADER]) + 2 for j in range(len(WORK_LIST_HEADER) - 1))
+    width = max(12, 100 - used)
+    print(table(work_list_rows(trends, flags_width=width), WORK_LIST_HEADER))
+    for tr in trends:  # flags too long for the table, in full under it
+        flags = "; ".join(tr.flags)
+        if len(flags) > width:
+            print(textwrap.fill(f"{tr.unit} flags: {flags}", 100, subsequent_indent="    "))
+    msg(textwrap.fill("note: most urgent first; latest usable elongation and the rate with 1 sigma; the next "
+                      "limit and the year-month it is reached, with its 2-sigma interval; flagged measurements and "
+                      "outliers are left out of the trends (all of it: --json)", 100))
     return 0
 
 

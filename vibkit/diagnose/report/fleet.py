@@ -24,7 +24,7 @@ _LIMIT_NAMES = ("watch", "plan", "replace")
 _LIMIT_COLORS = ("#d4a017", "#e0661b", "#b2182b")
 
 #: the work list's columns (``vibkit fleet status`` and page 1 of the fleet report)
-WORK_LIST_HEADER = ["rank", "unit", "elongation [%]", "measured", "rate [%/year]", "verdict", "next limit",
+WORK_LIST_HEADER = ["rank", "unit", "elongation [%]", "measured", "rate [%/year]", "verdict", "next",
                     "reached on (2-sigma)", "flags"]
 
 
@@ -38,6 +38,10 @@ def fmt_forecast(f):
         if f.date_utc is None:
             return "after 9999"
         lo, hi = (f.earliest_utc or "?")[:7], (f.latest_utc or "after 9999")[:7]
+        if lo[:4] == hi[:4] == f.date_utc[:4]:  # one year: the months alone, '2027-09 (07..10)'
+            lo, hi = lo[5:], hi[5:]
+        elif lo[:4] != hi[:4] and hi[:2] != "af":  # years apart: the years alone, '2050-05 (2043..2063)'
+            lo, hi = lo[:4], hi[:4]
         return f"{f.date_utc[:7]} ({lo}..{hi})"
     if f.status == "not before":
         return f"not before {f.earliest_utc[:7]}" if f.earliest_utc else "-"
