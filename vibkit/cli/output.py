@@ -30,6 +30,11 @@ def in_file(path, exc) -> Exception:
 
 
 def msg(text):
+    """A message on stderr: one line when piped (for grep and logs), folded at 100 columns on a terminal."""
+    if len(text) > 100 and "\n" not in text and sys.stderr.isatty():
+        import textwrap
+
+        text = textwrap.fill(text, 100, subsequent_indent="    ", break_on_hyphens=False)
     print(text, file=sys.stderr)
 
 
