@@ -10,6 +10,8 @@ last word when two processes store the same file under different units at once.
 
 from __future__ import annotations
 
+import abc
+
 import math
 from dataclasses import replace
 
@@ -20,7 +22,7 @@ from .schema import COLUMNS, measurement_values, row_to_measurement
 __all__ = ["Store"]
 
 
-class Store:
+class Store(abc.ABC):
     """Base of the fleet stores (see the module docstring); not used directly."""
 
     dialect = ""
@@ -29,28 +31,33 @@ class Store:
     location = ""
 
     # ----------------------------------------------------------------- to be supplied by a store
-    def execute(self, sql, args=()):  # pragma: no cover - abstract
-        raise NotImplementedError
+    @abc.abstractmethod
+    def execute(self, sql, args=()):
+        ...
 
-    def write_transaction(self, unit):  # pragma: no cover - abstract
+    @abc.abstractmethod
+    def write_transaction(self, unit):
         """Context manager: one transaction in which no other writer stores a measurement of ``unit``."""
-        raise NotImplementedError
+        ...
 
-    def _insert_row(self, values) -> int:  # pragma: no cover - abstract
-        raise NotImplementedError
+    @abc.abstractmethod
+    def _insert_row(self, values) -> int:
+        ...
 
-    def _is_unique_violation(self, exc) -> bool:  # pragma: no cover - abstract
+    def _is_unique_violation(self, exc) -> bool:  # a store that has no unique index to violate
         return False
 
     def _as_fleet_error(self, exc):
         """A :class:`FleetError` for a database error of this store (None: not one of them)."""
         return None
 
-    def integrity_check(self) -> str:  # pragma: no cover - abstract
-        raise NotImplementedError
+    @abc.abstractmethod
+    def integrity_check(self) -> str:
+        ...
 
-    def close(self):  # pragma: no cover - abstract
-        raise NotImplementedError
+    @abc.abstractmethod
+    def close(self):
+        ...
 
     # ------------------------------------------------------------------------------------ queries
     def q(self, sql):
