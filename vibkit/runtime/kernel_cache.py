@@ -150,16 +150,22 @@ def remove_orphans(pkg_dir: str) -> list[str]:
     ``vibkit/model/chain.py``) an upgrade in place leaves the old files behind: never loaded again,
     but dead weight that would mislead whoever inspects the cache. Returns the paths removed.
     """
+    # runs at every `import vibkit`: list the package's and its subpackages' __pycache__ folders only
+    # (kernels live one level down at most), not the whole tree
+    try:
+        subs = [e.path for e in os.scandir(pkg_dir) if e.is_dir() and e.name != "__pycache__"]
+    except OSError:
+        return []
     removed = []
-    for root, dirs, files in os.walk(pkg_dir):
-        if os.path.basename(root) != "__pycache__":
+    for src_dir in (pkg_dir, *subs):
+        root = os.path.join(src_dir, "__pycache__")
+        try:
+            files = [n for n in os.listdir(root) if n.endswith((".nbi", ".nbc"))]
+            modules = {n[:-3] for n in os.listdir(src_dir) if n.endswith(".py")} if files else set()
+        except OSError:
             continue
-        src_dir = os.path.dirname(root)
         for name in files:
-            if not name.endswith((".nbi", ".nbc")):
-                continue
-            module = name.split(".", 1)[0]
-            if os.path.exists(os.path.join(src_dir, module + ".py")):
+            if name.split(".", 1)[0] in modules:
                 continue
             try:
                 os.remove(os.path.join(root, name))

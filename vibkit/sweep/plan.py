@@ -40,14 +40,10 @@ def _number(text: str) -> float:
     return float(s)
 
 
-class _Linspace:
-    """The N values of ``A:B:N`` without storing them: value i is ``A + i (B - A) / (N - 1)`` (B exactly last),
-    the same floats as :func:`numpy.linspace`."""
+class _Lazy:
+    """A read-only sequence of ``n`` items computed on demand by ``_item(i)`` (0 <= i < n)."""
 
-    __slots__ = ("a", "b", "n", "whole")
-
-    def __init__(self, a: float, b: float, n: int, whole: bool = False):
-        self.a, self.b, self.n, self.whole = a, b, n, whole
+    __slots__ = ()
 
     def __len__(self):
         return self.n
@@ -59,14 +55,27 @@ class _Linspace:
             i += self.n
         if not 0 <= i < self.n:
             raise IndexError(i)
+        return self._item(i)
+
+    def __iter__(self):
+        return (self._item(i) for i in range(self.n))
+
+
+class _Linspace(_Lazy):
+    """The N values of ``A:B:N`` without storing them: value i is ``A + i (B - A) / (N - 1)`` (B exactly last),
+    the same floats as :func:`numpy.linspace`."""
+
+    __slots__ = ("a", "b", "n", "whole")
+
+    def __init__(self, a: float, b: float, n: int, whole: bool = False):
+        self.a, self.b, self.n, self.whole = a, b, n, whole
+
+    def _item(self, i):
         if self.n > 1 and i == self.n - 1:
             v = self.b
         else:
             v = i * ((self.b - self.a) / (self.n - 1)) + self.a if self.n > 1 else self.a
         return int(round(v)) if self.whole else float(v)
-
-    def __iter__(self):
-        return (self[i] for i in range(self.n))
 
     def __array__(self, dtype=None, copy=None):
         import numpy as np
@@ -87,7 +96,7 @@ class _Linspace:
         return f"linspace({self.a!r}, {self.b!r}, {self.n})"
 
 
-class _Points:
+class _Points(_Lazy):
     """Run index -> {key: value}, computed on demand (grid runs in C order over the axes; Monte Carlo draws
     from their columns): a plan of a billion runs holds no billion dicts."""
 
@@ -98,16 +107,7 @@ class _Points:
             n *= s
         self.n = n
 
-    def __len__(self):
-        return self.n
-
-    def __getitem__(self, i):
-        if isinstance(i, slice):
-            return [self[j] for j in range(*i.indices(self.n))]
-        if i < 0:
-            i += self.n
-        if not 0 <= i < self.n:
-            raise IndexError(i)
+    def _item(self, i):
         if self.columns is not None:
             return {a.key: col[i] for a, col in zip(self.axes, self.columns)}
         idx = []
@@ -115,9 +115,6 @@ class _Points:
             i, r = divmod(i, s)
             idx.append(r)
         return {a.key: a.values[j] for a, j in zip(self.axes, reversed(idx))}
-
-    def __iter__(self):
-        return (self[i] for i in range(self.n))
 
     def __eq__(self, other):
         try:

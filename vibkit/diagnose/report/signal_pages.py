@@ -47,12 +47,12 @@ def spectrum_page(doc, ctx) -> None:
     nh = ctx.harmonic_count
     fmax = ctx.fmax_hz
     nfft = 1 << int(np.ceil(np.log2(max(b.x.size for b in bursts))))
+    fgrid = np.linspace(0, fmax, 2000)
     acc = None
     for b in bursts:
         f, a = amplitude_spectrum(b.x, b.fs, nfft=max(nfft, b.x.size))
-        a = np.interp(np.linspace(0, fmax, 2000), f, a)
+        a = np.interp(fgrid, f, a)
         acc = a if acc is None else acc + a
-    fgrid = np.linspace(0, fmax, 2000)
     ax.semilogy(fgrid, np.maximum(acc / len(bursts), 1e-30), lw=0.9)
     for h in range(1, nh + 1):
         ax.axvline(h * f0, color="C3", ls=":", lw=1)
