@@ -16,6 +16,7 @@ import numpy as np
 from ..model.chain import close_with_slope, closure_residual
 from ..model.dynamics import link_multipliers
 from ..model.effects import Work, evaluate, motor_torque, pack_parameters, reset_closure
+from ..model.pitch_table import build_table, empty_table, table_applies, table_evaluate, table_spacing
 from .integrate import IntegrationError, integrate
 from .results import make_dataset
 from ..model.sprocket import contact_kernel
@@ -83,18 +84,29 @@ def forward_dynamics(model, *, duration=None, progress=True, method=None, rtol=N
     if events is None:
         events = solver.get("events", True)
     t_events = None
-    if events:
-        events, t_events = _events(model, fm)
-    else:
-        events = None
+    crossings, t_events = _events(model, fm)
+    events, t_events = (crossings, t_events) if events else (None, None)
+    table, closure = forward_table(model, fm, crossings[0], rtol, solver.get("closure", "table"))
     y_out, stats = integrate(fm.prm, fm.work.arrays, y0, t_out, method=method, rtol=rtol, atol=atol,
                              max_step=solver.get("max_step", math.inf), first_step=solver.get("first_step"),
                              max_wall_time=solver.get("max_wall_time", math.inf), progress=progress,
-                             events=events, t_events=t_events, event_gap=event_gap(rtol))
+                             events=events, t_events=t_events, event_gap=event_gap(rtol), table=table)
+    stats["closure"] = closure
     reset_closure(fm.info, d0)  # the closure's first guess at the outputs: the initial delta, whatever the run's length
     # the outputs are taken on the side the motion goes at a breakpoint, whether or not the steps end there
-    y_obs = _observed_states(y_out, events if events is not None else _events(model, fm)[0])
-    return _post_process(fm, t_out, y_out, outputs, stats, y_obs)
+    y_obs = _observed_states(y_out, crossings)
+    return _post_process(fm, t_out, y_out, outputs, stats, y_obs, table)
+
+
+def forward_table(model, fm, crossings, rtol, closure="table"):
+    """The pitch table for the run and how the closure is taken: ("table" or "exact", and where the
+    table cannot stand for the closure, why)."""
+    if closure == "exact":
+        return None, "exact"
+    why = table_applies(model)
+    if why is not None:
+        return None, f"exact ({why})"
+    return build_table(model, fm.prm, crossings, table_spacing(rtol)), "table"
 
 
 ON_BREAKPOINT = 1e-11  # [m] as the integrator: a stage this close to a breakpoint is on its side
@@ -197,7 +209,7 @@ NSCAL = 12  # delta, deltadot, motor, residual, speed, KE, PE, contact E, spring
 
 @nb.njit(cache=True, error_model="numpy", nogil=True)
 def _observe(t, y, prm, ws, inertia, light, need_tension, need_teeth, need_accel, mid, ridx, scal, tension, ind, cf,
-             rk, light_contact):
+             rk, light_contact, tb):
     """Every output quantity at the output states, in one compiled loop (see _post_process).
 
     Returns (status, index): status 0 ok, 1 closure failure, 2 non-finite state at ``index``.
@@ -218,6 +230,18 @@ def _observe(t, y, prm, ws, inertia, light, need_tension, need_teeth, need_accel
         for i in range(5):
             if not math.isfinite(y[j, i]):
                 return 2, j
+        if light and tb[1].size > 0:
+            # from the pitch table, as the integrator saw them (no closure residual asked)
+            table_evaluate(t[j], y[j], dy, prm, ws, need_teeth, tb)
+            scal[j, 0] = info[0]
+            scal[j, 2] = info[3]
+            scal[j, 10] = info[8]
+            scal[j, 11] = info[9]
+            if need_teeth:
+                for q in range(ind_t.size):
+                    ind[j, q] = ind_t[q]
+                    cf[j, q] = frc_t[q]
+            continue
         if light:
             # positions only (delta, closure residual; torque from the state): no forces needed
             # delta extrapolated from the last three outputs, closed by chord steps on the last
@@ -319,7 +343,7 @@ def _observe(t, y, prm, ws, inertia, light, need_tension, need_teeth, need_accel
     return 0, 0
 
 
-def _post_process(fm, t, y, outputs, stats, y_obs=None):
+def _post_process(fm, t, y, outputs, stats, y_obs=None, table=None):
     """Outputs asked for, evaluated at the output states (only those asked for are computed);
     ``y_obs``: the states at which to evaluate them (:func:`_observed_states`), default ``y``."""
     y_obs = y if y_obs is None else y_obs
@@ -350,8 +374,10 @@ def _post_process(fm, t, y, outputs, stats, y_obs=None):
     if light_contact and fm.effects["contact"].get("damping", 0.0) != 0.0:
         light = False  # damped contact forces need the rollers' velocities
     scal[:] = np.nan
+    # light outputs come from the table where the run used one, unless the closure residual is asked
+    tb = table if table is not None and light and "closure_residual" not in want else empty_table()
     status, bad = _observe(t, y_obs, fm.prm, ws, model.sprocket.inertia, light, need_tension, need_teeth, need_accel, mid,
-                           ridx, scal, tension, ind, cf, rk, light_contact)
+                           ridx, scal, tension, ind, cf, rk, light_contact, tb)
     if status != 0:
         what = "non-finite state in the output" if status == 2 else "the chain could not be closed"
         raise IntegrationError(what, float(t[bad]), y[bad])
@@ -401,6 +427,7 @@ def _post_process(fm, t, y, outputs, stats, y_obs=None):
         "solver_steps": stats["steps"],
         "solver_rejected": stats["rejected"],
         "solver_evaluations": stats["evaluations"],
+        "solver_closure": stats.get("closure", "exact"),
         "solver_wall_time_s": float(stats["wall_time_s"]),
         "effects": ", ".join(sorted(fm.effects)),
     }

@@ -32,7 +32,7 @@ import time
 import numba as nb
 import numpy as np
 
-from ..model.effects import evaluate
+from ..model.pitch_table import empty_table, rhs
 from ..runtime.progress import Progress
 
 __all__ = ["integrate", "IntegrationError", "METHODS"]
@@ -125,7 +125,7 @@ def _side(pos, has_lo, lo, has_hi, hi, direction, tiny):
 
 
 @nb.njit(cache=True, error_model="numpy")
-def _start_past(t, y, yt, k1, s_b, direction, tiny, prm, ws, ctl, counters):
+def _start_past(t, y, yt, k1, s_b, direction, tiny, prm, ws, ctl, counters, tb):
     """The next step starts on breakpoint s_b: remember it (``ctl[3:6]``) and take k1, the
     right-hand side at (t, y), on its far side. Returns evaluate's status."""
     ctl[3] = 1.0
@@ -135,12 +135,12 @@ def _start_past(t, y, yt, k1, s_b, direction, tiny, prm, ws, ctl, counters):
         yt[i] = y[i]
     yt[0] = _side(yt[0], True, s_b, False, 0.0, direction, tiny)
     counters[2] += 1
-    return evaluate(t, yt, k1, prm, ws, False)
+    return rhs(t, yt, k1, prm, ws, False, tb)
 
 
 @nb.njit(cache=True, error_model="numpy", nogil=True)  # nogil: the convergence check runs two at once
 def _dopri5_chunk(t, y, h, k1, t_stop, t_out, idx, y_out, prm, ws, rtol, atol, max_step, counters, ctl, cross,
-                  p0, gap, pause):
+                  p0, gap, pause, tb):
     """Advance from t towards t_stop, writing the dense output at t_out[idx:] <= t_stop.
 
     Returns (status, t, h, idx): status 0 ok, 1 closure failure, 2 step size collapse,
@@ -149,7 +149,8 @@ def _dopri5_chunk(t, y, h, k1, t_stop, t_out, idx, y_out, prm, ws, rtol, atol, m
     ``ctl`` carries the controller's memory between calls: [previous error, last step rejected,
     step size before a breakpoint cut it, the step starts on a breakpoint, that breakpoint, its
     direction]. The step-size controller is Hairer's PI (Lund) stabilisation of DOPRI5
-    (beta = 0.04). ``counters`` accumulates [steps, rejected, evaluations, breakpoint steps].
+    (beta = 0.04). ``counters`` accumulates [steps, rejected, evaluations, breakpoint steps, steps taken again
+    because they passed a breakpoint].
 
     Breakpoints: ``cross`` holds the values of y[0] (one period ``p0``, sorted) at which the
     right-hand side is not smooth (a roller on a curvature jump of the guide, a passenger's step at
@@ -189,7 +190,7 @@ def _dopri5_chunk(t, y, h, k1, t_stop, t_out, idx, y_out, prm, ws, rtol, atol, m
                 # right-hand side on the far side
                 s_on = _next_crossing(y[0] - 2.0 * gap * direction, direction, cross, p0, 0.0)
                 if abs(y[0] - s_on) <= gap:
-                    if _start_past(t, y, yt, k1, s_on, direction, tiny, prm, ws, ctl, counters) != 0:
+                    if _start_past(t, y, yt, k1, s_on, direction, tiny, prm, ws, ctl, counters, tb) != 0:
                         return 1, t, h, idx
             sc = _next_crossing(y[0], direction, cross, p0, gap)
             hc = _time_to(sc - y[0], v, k1[1])
@@ -209,33 +210,33 @@ def _dopri5_chunk(t, y, h, k1, t_stop, t_out, idx, y_out, prm, ws, rtol, atol, m
         for i in range(m):
             yt[i] = y[i] + h * A21 * k1[i]
         yt[0] = _side(yt[0], has_lo, lo, has_hi, sc, direction, tiny)
-        if evaluate(t + h / 5, yt, k2, prm, ws, False) != 0:
+        if rhs(t + h / 5, yt, k2, prm, ws, False, tb) != 0:
             return 1, t, h, idx
         for i in range(m):
             yt[i] = y[i] + h * (A31 * k1[i] + A32 * k2[i])
         yt[0] = _side(yt[0], has_lo, lo, has_hi, sc, direction, tiny)
-        if evaluate(t + 0.3 * h, yt, k3, prm, ws, False) != 0:
+        if rhs(t + 0.3 * h, yt, k3, prm, ws, False, tb) != 0:
             return 1, t, h, idx
         for i in range(m):
             yt[i] = y[i] + h * (A41 * k1[i] + A42 * k2[i] + A43 * k3[i])
         yt[0] = _side(yt[0], has_lo, lo, has_hi, sc, direction, tiny)
-        if evaluate(t + 0.8 * h, yt, k4, prm, ws, False) != 0:
+        if rhs(t + 0.8 * h, yt, k4, prm, ws, False, tb) != 0:
             return 1, t, h, idx
         for i in range(m):
             yt[i] = y[i] + h * (A51 * k1[i] + A52 * k2[i] + A53 * k3[i] + A54 * k4[i])
         yt[0] = _side(yt[0], has_lo, lo, has_hi, sc, direction, tiny)
-        if evaluate(t + h * 8 / 9, yt, k5, prm, ws, False) != 0:
+        if rhs(t + h * 8 / 9, yt, k5, prm, ws, False, tb) != 0:
             return 1, t, h, idx
         for i in range(m):
             yt[i] = y[i] + h * (A61 * k1[i] + A62 * k2[i] + A63 * k3[i] + A64 * k4[i] + A65 * k5[i])
         yt[0] = _side(yt[0], has_lo, lo, has_hi, sc, direction, tiny)
-        if evaluate(t + h, yt, k6, prm, ws, False) != 0:
+        if rhs(t + h, yt, k6, prm, ws, False, tb) != 0:
             return 1, t, h, idx
         for i in range(m):
             y1[i] = y[i] + h * (B1 * k1[i] + B3 * k3[i] + B4 * k4[i] + B5 * k5[i] + B6 * k6[i])
             yt[i] = y1[i]
         yt[0] = _side(yt[0], has_lo, lo, has_hi, sc, direction, tiny)
-        if evaluate(t + h, yt, k7, prm, ws, False) != 0:
+        if rhs(t + h, yt, k7, prm, ws, False, tb) != 0:
             return 1, t, h, idx
         counters[2] += 6
         err = 0.0
@@ -278,6 +279,7 @@ def _dopri5_chunk(t, y, h, k1, t_stop, t_out, idx, y_out, prm, ws, rtol, atol, m
                     if (hi_t - lo_t) * h <= 1e-15 * max(1.0, abs(t)):
                         break
                 counters[1] += 1
+                counters[4] += 1
                 ctl[2] = hnat
                 h = max(lo_t * h, hmin)
                 continue
@@ -303,7 +305,7 @@ def _dopri5_chunk(t, y, h, k1, t_stop, t_out, idx, y_out, prm, ws, rtol, atol, m
             if has_hi and abs(y[0] - sc) <= gap:
                 # on the breakpoint: the next step starts from the right-hand side on its far side
                 counters[3] += 1
-                if _start_past(t, y, yt, k1, sc, direction, tiny, prm, ws, ctl, counters) != 0:
+                if _start_past(t, y, yt, k1, sc, direction, tiny, prm, ws, ctl, counters, tb) != 0:
                     return 1, t, h, idx
             if not last:
                 e = max(err, 1e-10)
@@ -342,7 +344,7 @@ def _closure_message(status):
 
 def integrate(prm, ws, y0, t_out, *, method="dopri5", rtol=1e-6, atol=1e-9, max_step=math.inf, first_step=None,
               max_wall_time=math.inf, progress=True, label="forward dynamics", events=None, event_gap=1e-6,
-              t_events=None):
+              t_events=None, table=None):
     """State at the output times ``t_out`` (increasing, starting at 0) of the forward dynamics.
 
     Parameters
@@ -354,6 +356,9 @@ def integrate(prm, ws, y0, t_out, *, method="dopri5", rtol=1e-6, atol=1e-9, max_
         How far from such a value a step may end and count as ending on it. [m]
     t_events : array_like, optional
         dopri5 only: times at which the right-hand side jumps; steps end on them. [s]
+    table : tuple, optional
+        The chain's configuration over one pitch (:func:`vibkit.model.pitch_table.build_table`):
+        the right-hand side reads the closure from it instead of solving it.
 
     Returns
     -------
@@ -362,6 +367,7 @@ def integrate(prm, ws, y0, t_out, *, method="dopri5", rtol=1e-6, atol=1e-9, max_
         ``steps``, ``rejected``, ``evaluations``, ``wall_time_s``, ``method``, and for dopri5
         ``event_steps`` (steps that ended on a breakpoint).
     """
+    tb = empty_table() if table is None else table
     method = method.lower()
     if method not in METHODS:
         raise ValueError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
@@ -371,7 +377,7 @@ def integrate(prm, ws, y0, t_out, *, method="dopri5", rtol=1e-6, atol=1e-9, max_
     t0 = time.perf_counter()
     bar = Progress(t_out[-1], label, enabled=progress)
     if method == "dopri5":
-        counters = np.zeros(4, dtype=np.int64)
+        counters = np.zeros(5, dtype=np.int64)
         ctl = np.array([1e-4, 0.0, 0.0, 0.0, 0.0, 1.0])
         cross = np.ascontiguousarray(events[0], dtype=float) if events is not None else np.zeros(0)
         period = float(events[1]) if events is not None else 1.0
@@ -381,7 +387,7 @@ def integrate(prm, ws, y0, t_out, *, method="dopri5", rtol=1e-6, atol=1e-9, max_
         stops = stops[(stops > 0.0) & (stops < t_out[-1])]
         stops = np.append(stops, t_out[-1])
         k1 = np.empty_like(y)
-        if evaluate(0.0, y, k1, prm, ws, False) != 0:
+        if rhs(0.0, y, k1, prm, ws, False, tb) != 0:
             raise IntegrationError(_closure_message(1), 0.0, y)
         y_out[0] = y
         idx = 1
@@ -395,10 +401,10 @@ def integrate(prm, ws, y0, t_out, *, method="dopri5", rtol=1e-6, atol=1e-9, max_
                 # pauses every 256 steps for the wall-time budget and the progress bar; the steps
                 # themselves never depend on where the pauses fall, nor on the output times
                 status, t, h, idx = _dopri5_chunk(t, y, h, k1, stops[js], t_out, idx, y_out, prm, ws, rtol, atol,
-                                                 max_step, counters, ctl, cross, period, event_gap, 256)
+                                                 max_step, counters, ctl, cross, period, event_gap, 256, tb)
                 if status == 0 and t < t_out[-1]:
                     # a time event: the right-hand side changes here; start again from its new value
-                    if evaluate(t, y, k1, prm, ws, False) != 0:
+                    if rhs(t, y, k1, prm, ws, False, tb) != 0:
                         raise IntegrationError(_closure_message(1), t, y)
                     counters[2] += 1
             except (ZeroDivisionError, FloatingPointError, ValueError) as exc:  # a degenerate state
@@ -413,7 +419,7 @@ def integrate(prm, ws, y0, t_out, *, method="dopri5", rtol=1e-6, atol=1e-9, max_
                 raise IntegrationError(f"dopri5: wall-time budget of {max_wall_time:g} s exceeded", t, y)
         bar.close()
         stats = {"steps": int(counters[0]), "rejected": int(counters[1]), "evaluations": int(counters[2] + 1),
-                 "event_steps": int(counters[3])}
+                 "event_steps": int(counters[3]), "event_retries": int(counters[4])}
     elif method.startswith("cvode"):
         try:
             from sksundae.cvode import CVODE
@@ -423,7 +429,7 @@ def integrate(prm, ws, y0, t_out, *, method="dopri5", rtol=1e-6, atol=1e-9, max_
         nev = [0]
         failure = []
 
-        def rhs(t, yy, yp):
+        def cvode_rhs(t, yy, yp):
             nev[0] += 1
             if nev[0] % 2000 == 0:
                 bar.update(t)
@@ -432,7 +438,7 @@ def integrate(prm, ws, y0, t_out, *, method="dopri5", rtol=1e-6, atol=1e-9, max_
                                                     t, yy))
                     yp[:] = np.nan
                     return
-            if evaluate(t, np.ascontiguousarray(yy), dy, prm, ws, False) != 0:
+            if rhs(t, np.ascontiguousarray(yy), dy, prm, ws, False, tb) != 0:
                 failure.append(IntegrationError(f"{method}: {_closure_message(1)}", t, yy))
                 yp[:] = np.nan
                 return
@@ -444,7 +450,7 @@ def integrate(prm, ws, y0, t_out, *, method="dopri5", rtol=1e-6, atol=1e-9, max_
             opts["max_step"] = max_step
         if first_step:
             opts["first_step"] = first_step
-        sol = CVODE(rhs, **opts).solve(t_out, y)
+        sol = CVODE(cvode_rhs, **opts).solve(t_out, y)
         bar.close()
         if failure:
             raise failure[0]
@@ -465,7 +471,7 @@ def integrate(prm, ws, y0, t_out, *, method="dopri5", rtol=1e-6, atol=1e-9, max_
                 bar.update(t)
                 if time.perf_counter() - t0 > max_wall_time:
                     raise IntegrationError(f"{method}: wall-time budget of {max_wall_time:g} s exceeded", t, yy)
-            if evaluate(t, np.ascontiguousarray(yy), dy, prm, ws, False) != 0:
+            if rhs(t, np.ascontiguousarray(yy), dy, prm, ws, False, tb) != 0:
                 raise IntegrationError(f"{method}: {_closure_message(1)}", t, yy)
             return dy.copy()
 

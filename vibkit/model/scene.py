@@ -16,7 +16,8 @@ Layout (see ``sim/*.toml`` for complete examples)::
     [motion]       speed, duration, step, start           (analysis = "inverse")
     [run]          duration, output_step, start, initial_speed, seed   (analysis = "forward")
     [effects.*]    gravity, contact, motor, passengers, tensioner, rolling_resistance
-    [solver]       method, rtol, atol, max_step, check (convergence verdict), check_min_rtol
+    [solver]       method, rtol, atol, max_step, check (convergence verdict), check_min_rtol,
+                   closure ("table", the default, or "exact")
     [outputs]      variables, rollers, step_accelerometer
 """
 
@@ -94,10 +95,14 @@ SECTIONS = {
     "run": {"duration": float, "output_step": float, "start": float, "initial_speed": float, "seed": int},
     "solver": {"method": str, "rtol": float, "atol": float, "max_step": float, "first_step": float,
                "max_wall_time": float, "max_result_bytes": (float, str), "events": bool,
-               "check": bool, "check_min_rtol": float},
+               "check": bool, "check_min_rtol": float, "closure": str},
     "outputs": {"variables": list, "rollers": list, "step_accelerometer": int},
 }
 
+
+# how the forward dynamics gets the chain's configuration: read from the table over one pitch, or
+# solved at every evaluation (vibkit.model.pitch_table)
+CLOSURES = ("table", "exact")
 
 # places of the guide where passengers board and alight (vibkit.model.escalator.EscalatorModel.place)
 PLACES = ("lower_landing", "upper_landing")
@@ -442,6 +447,9 @@ def _analysis_sections(src, sec, analysis):
     for key in ("rtol", "atol", "max_step", "first_step", "max_wall_time"):
         if key in sec["solver"]:
             _positive(src, f"solver.{key}", sec["solver"][key])
+    closure = sec["solver"].get("closure")
+    if closure is not None and closure not in CLOSURES:
+        raise SceneError(f"{src}: 'solver.closure' must be one of {', '.join(CLOSURES)}, got {closure!r}")
     method = sec["solver"].get("method")
     if method is not None and method.lower() not in SOLVER_METHODS:
         raise SceneError(f"{src}: 'solver.method' must be one of {', '.join(SOLVER_METHODS)}, got {method!r}")

@@ -101,6 +101,36 @@ def contact_kernel(xs, zs, vx, vz, candidates, ncand, theta, omega, cx, cz, loc,
     active = 0
     f_drive = 0.0
     f_back = 0.0
+    if ncand == 0:
+        return torque, energy, worst, active, f_drive, f_back
+    # each tooth's rotation, theta + psi j, by recurrence from two sines and cosines (not eight per roller)
+    cos_t = np.empty(nteeth)
+    sin_t = np.empty(nteeth)
+    cp, sp = math.cos(psi), math.sin(psi)
+    cos_t[0], sin_t[0] = math.cos(theta), math.sin(theta)
+    for j in range(1, nteeth):
+        cos_t[j] = cos_t[j - 1] * cp - sin_t[j - 1] * sp
+        sin_t[j] = sin_t[j - 1] * cp + cos_t[j - 1] * sp
+    # the flanks in the tooth's frame: start, direction and 1/length^2 (AB: corners 0-1, DC: 3-2)
+    fl = np.empty((2, 5))
+    for flank in range(2):
+        i0 = 0 if flank == 0 else 3
+        i1 = 1 if flank == 0 else 2
+        fl[flank, 0] = loc[i0, 0]
+        fl[flank, 1] = loc[i0, 1] + root_r
+        fl[flank, 2] = loc[i1, 0] - loc[i0, 0]
+        fl[flank, 3] = loc[i1, 1] - loc[i0, 1]
+        fl[flank, 4] = 1.0 / (fl[flank, 2] ** 2 + fl[flank, 3] ** 2)
+    # a circle round each tooth (on its axis) that a roller touching it must reach: teeth farther
+    # off are not looked at
+    zlo = min(min(loc[0, 1], loc[1, 1]), min(loc[2, 1], loc[3, 1]))
+    zhi = max(max(loc[0, 1], loc[1, 1]), max(loc[2, 1], loc[3, 1]))
+    zmid = root_r + 0.5 * (zlo + zhi)
+    bound = 0.0
+    for q in range(4):
+        bound = max(bound, math.hypot(loc[q, 0], loc[q, 1] + root_r - zmid))
+    bound += r_d
+    bound2 = bound * bound
     for jj in range(ncand):
         i = candidates[jj]
         px, pz = xs[i], zs[i]
@@ -109,25 +139,31 @@ def contact_kernel(xs, zs, vx, vz, candidates, ncand, theta, omega, cx, cz, loc,
         rel = phi - theta
         j0 = math.floor(rel / psi)
         for tj in (j0 - 1, j0, j0 + 1, j0 + 2):
-            th = theta + psi * tj
-            c, s = math.cos(th), math.sin(th)
             tooth = tj % nteeth
+            c, s = cos_t[tooth], sin_t[tooth]
+            # the roller's centre in the tooth's frame (x tangential, z radial)
+            lx = c * dx + s * dz
+            lz = c * dz - s * dx
+            if lx * lx + (lz - zmid) * (lz - zmid) >= bound2:
+                continue
             for flank in range(2):
-                # AB (flank 0: corners 0,1) and DC (flank 1: corners 3,2)
-                i0 = 0 if flank == 0 else 3
-                i1 = 1 if flank == 0 else 2
-                l0x, l0z = loc[i0, 0], loc[i0, 1] + root_r
-                l1x, l1z = loc[i1, 0], loc[i1, 1] + root_r
-                ax = cx + c * l0x - s * l0z
-                az = cz + s * l0x + c * l0z
-                bx = cx + c * l1x - s * l1z
-                bz = cz + s * l1x + c * l1z
-                qx, qz = _segment_closest(px, pz, ax, az, bx, bz)
-                nx, nz = px - qx, pz - qz
-                dist = math.sqrt(nx * nx + nz * nz)
+                ax, az, ex, ez = fl[flank, 0], fl[flank, 1], fl[flank, 2], fl[flank, 3]
+                u = ((lx - ax) * ex + (lz - az) * ez) * fl[flank, 4]
+                if u < 0.0:
+                    u = 0.0
+                elif u > 1.0:
+                    u = 1.0
+                nlx = lx - (ax + u * ex)
+                nlz = lz - (az + u * ez)
+                dist = math.sqrt(nlx * nlx + nlz * nlz)
                 pen = r_d - dist
                 if pen <= 0.0 or dist == 0.0:
                     continue
+                # back to the world: the normal, and the closest point q on the flank
+                nx = c * nlx - s * nlz
+                nz = s * nlx + c * nlz
+                qx = px - nx
+                qz = pz - nz
                 nx /= dist
                 nz /= dist
                 f = k * pen ** expo
