@@ -31,7 +31,10 @@ NO_LOAD_OUT = ["delta", "sprocket_speed", "contact_force"]
 SOLVER = {"contact, no load, stepping over breakpoints": {"events": False},
           "contact, no load, rtol 1e-6": {"rtol": 1e-6},
           "contact, no load, rtol 1e-9": {"rtol": 1e-9},
-          "contact, no load, with check": {"check": True}}
+          "contact, no load, with check": {"check": True},
+          "contact, no load, exact closure": {"closure": "exact"},
+          "contact, no load, exact closure, rtol 1e-9": {"closure": "exact", "rtol": 1e-9},
+          "contact, no load, default outputs, exact closure": {"closure": "exact"}}
 
 CASES = {
     # name: (effects, outputs, description)
@@ -48,7 +51,11 @@ CASES = {
     "contact, no load, rtol 1e-9": (NO_LOAD, NO_LOAD_OUT, "the same at rtol 1e-9"),
     "contact, no load, with check": (NO_LOAD, NO_LOAD_OUT, "the same with the convergence check (a second run "
                                                            "100 times tighter, compared; issue 20)"),
+    "contact, no load, exact closure": (NO_LOAD, NO_LOAD_OUT, "the same, the closure solved at every evaluation "
+                                                               "instead of read from the pitch table (before issue 20)"),
+    "contact, no load, exact closure, rtol 1e-9": (NO_LOAD, NO_LOAD_OUT, "the same at rtol 1e-9"),
     "contact, no load, default outputs": (None, None, "sim/thesis-forward.toml as shipped (link tensions etc.)"),
+    "contact, no load, default outputs, exact closure": (None, None, "the same, exact closure"),
     "contact + passengers": ({"gravity": {"g": 9.81}, "contact": {"stiffness": 1e6, "exponent": 1.5, "damping": 0.0},
                               "motor": {"kp": 6000.0, "speed": 0.5, "ki": 0.0},
                               "passengers": {"mass": [70.0, 90.0], "step": [3, 53],
@@ -79,6 +86,7 @@ for _ in range(3):
     wall, cpu = min(wall, time.perf_counter() - t0), min(cpu, time.process_time() - c0)
 from vibkit.analyses.forward import default_rtol
 print(json.dumps({"wall": wall, "cpu": cpu, "rtol": solver.get("rtol") or default_rtol(scene.effects), "integration": ds.attrs["solver_wall_time_s"], "steps": ds.attrs["solver_steps"],
+                  "closure_mode": ds.attrs["solver_closure"],
                   "evaluations": ds.attrs["solver_evaluations"],
                   "maxrss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
                   "closure": float(ds.closure_residual.max()) if "closure_residual" in ds else float("nan"),
@@ -99,7 +107,8 @@ def main(argv=None):
         out = subprocess.run([sys.executable, "-c", CHILD, json.dumps([effects, outputs, duration, SOLVER.get(name, {})]), scene],
                              capture_output=True, text=True, check=True)
         res = json.loads(out.stdout.strip().splitlines()[-1])
-        rows.append({"case": name, "rtol": res["rtol"], "simulated_s": duration, "cpu_s": res["cpu"],
+        rows.append({"case": name, "rtol": res["rtol"], "closure": res["closure_mode"], "simulated_s": duration,
+                     "cpu_s": res["cpu"],
                      "realtime_factor_cpu": duration / res["cpu"], "wall_s": res["wall"],
                      "realtime_factor_wall": duration / res["wall"], "integration_s": res["integration"], "steps": res["steps"], "evaluations": res["evaluations"],
                      "peak_memory_MB": res["maxrss_mb"], "result_MB": res["nbytes_mb"], "what": what})

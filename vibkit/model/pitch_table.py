@@ -33,7 +33,7 @@ import math
 import numba as nb
 import numpy as np
 
-from .chain import acceleration_terms, fill_partials, sensitivity, solve_closure, velocity_coefficients
+from .chain import acceleration_terms, close_with_slope, fill_partials, sensitivity, velocity_coefficients
 from .effects import evaluate, motor_torque
 from .sprocket import contact_kernel
 
@@ -72,11 +72,13 @@ def table_spacing(rtol: float) -> float:
 # building
 
 @nb.njit(cache=True, error_model="numpy")
-def _node(tab, p0, lt, u, guess, pitches, n, tol, s0, kk, lam, xs, zs, part, alpha, beta, jac, gam, hacc, eta, sd,
-          out):
-    """Exact closure at roller-1 coordinate u; fills out (n + 1, 3, 3): for each roller (and, in
-    row n, delta) its [x, z, s0] with first and second derivatives along u. Returns (delta, status)."""
-    d, _, st = solve_closure(tab, p0, lt, u, guess, pitches, n, s0, kk, lam, xs, zs, part, alpha, beta, tol)
+def _node(tab, p0, lt, u, guess, slope, pitches, n, tol, s0, kk, lam, xs, zs, part, alpha, beta, jac, gam, hacc, eta,
+          sd, out):
+    """Exact closure at roller-1 coordinate u, from a predicted delta and the last dh/ddelta
+    ``slope`` (0: none); fills out (n + 1, 3, 3): for each roller (and, in row n, delta) its
+    [x, z, s0] with first and second derivatives along u. Returns (delta, status); beta[n] is then
+    dh/ddelta here."""
+    d, _, st = close_with_slope(tab, p0, lt, u, guess, slope, pitches, n, s0, kk, lam, xs, zs, part, alpha, beta, tol)
     if st != 0:
         return d, st
     fill_partials(tab, p0, s0, kk, lam, d, n + 1, part)
@@ -132,6 +134,7 @@ def _nodes(tab, p0, lt, pts, inward, guess, pitches, n, tol, mroll, m_c, data, m
     sd = np.empty(n)
     tmp = np.empty((n + 1, 3, 3))
     d = guess
+    slope = 0.0
     u_at, c_at, e_at = pts[0], 0.0, 0.0  # where the last node was, its d delta/du and d2 delta/du2
     for q in range(pts.size):
         side = inward[q]
@@ -139,19 +142,19 @@ def _nodes(tab, p0, lt, pts, inward, guess, pitches, n, tol, mroll, m_c, data, m
         out = data[q]
         u = pts[q] + eps
         du = u - u_at
-        d, st = _node(tab, p0, lt, u, d + du * (c_at + 0.5 * e_at * du), pitches, n, tol, s0, kk, lam, xs, zs, part,
-                      alpha, beta, jac, gam, hacc, eta, sd, out)
+        d, st = _node(tab, p0, lt, u, d + du * (c_at + 0.5 * e_at * du), slope, pitches, n, tol, s0, kk, lam, xs, zs,
+                      part, alpha, beta, jac, gam, hacc, eta, sd, out)
         if st != 0:
             return q
-        u_at, c_at, e_at = u, out[n, 0, 1], out[n, 0, 2]
+        u_at, c_at, e_at, slope = u, out[n, 0, 1], out[n, 0, 2], beta[n]
         m0 = _mass_slope(out, mroll, m_c)
         # d2M/du2: a central difference, or on a breakpoint a one-sided one into the piece
         h1, h2 = (side * FD, 2.0 * side * FD) if side != 0.0 else (FD, -FD)
-        _, st = _node(tab, p0, lt, u + h1, d + h1 * (c_at + 0.5 * e_at * h1), pitches, n, tol, s0, kk, lam, xs, zs,
-                      part, alpha, beta, jac, gam, hacc, eta, sd, tmp)
+        _, st = _node(tab, p0, lt, u + h1, d + h1 * (c_at + 0.5 * e_at * h1), slope, pitches, n, tol, s0, kk, lam, xs,
+                      zs, part, alpha, beta, jac, gam, hacc, eta, sd, tmp)
         m1 = _mass_slope(tmp, mroll, m_c)
-        _, st2 = _node(tab, p0, lt, u + h2, d + h2 * (c_at + 0.5 * e_at * h2), pitches, n, tol, s0, kk, lam, xs, zs,
-                       part, alpha, beta, jac, gam, hacc, eta, sd, tmp)
+        _, st2 = _node(tab, p0, lt, u + h2, d + h2 * (c_at + 0.5 * e_at * h2), slope, pitches, n, tol, s0, kk, lam,
+                       xs, zs, part, alpha, beta, jac, gam, hacc, eta, sd, tmp)
         m2 = _mass_slope(tmp, mroll, m_c)
         if st != 0 or st2 != 0:
             return q
@@ -264,14 +267,16 @@ def build_table(model, prm, cross, spacing):
     reach = float(fp[22]) + 2.0 * spacing + 1e-6
     dist = np.hypot(x[..., 0] - fp[17], z[..., 0] - fp[18])  # (npc, 2, n)
     cand = np.flatnonzero((dist < reach).any(axis=(0, 1))).astype(np.int64)
+    # the candidates' x and z polynomials side by side, piece by piece: one evaluation reads one block
+    cc = np.ascontiguousarray(np.concatenate([xc[cand], zc[cand]], axis=-1).transpose(1, 0, 2))
     head = np.array([a, p0, float(npc), float(n)])
-    return (head, np.ascontiguousarray(sb), np.ascontiguousarray(uc), up, mc, vc, dc, xc, zc, sc, cand)
+    return (head, np.ascontiguousarray(sb), np.ascontiguousarray(uc), up, mc, vc, dc, xc, zc, sc, cand, cc)
 
 
 def empty_table():
     """The table's shape with nothing in it (the exact closure is used)."""
     z1, z2, z3 = np.zeros(0), np.zeros((0, 6)), np.zeros((0, 0, 6))
-    return (np.zeros(4), z1, z2, z1, z2, z2, z2, z3, z3, z3, np.zeros(0, dtype=np.int64))
+    return (np.zeros(4), z1, z2, z1, z2, z2, z2, z3, z3, z3, np.zeros(0, dtype=np.int64), np.zeros((0, 0, 12)))
 
 
 # --------------------------------------------------------------------------------------------
@@ -289,9 +294,9 @@ def _p5(c, r, x):
 
 
 @nb.njit(cache=True, error_model="numpy", inline="always")
-def _p5d(c, i, r, x):
-    """Value and d/dx at x of the quintic with coefficients c[i, r]."""
-    c0, c1, c2, c3, c4, c5 = c[i, r, 0], c[i, r, 1], c[i, r, 2], c[i, r, 3], c[i, r, 4], c[i, r, 5]
+def _p5d(c, i, r, x, o=0):
+    """Value and d/dx at x of the quintic with coefficients c[i, r, o:o + 6]."""
+    c0, c1, c2, c3, c4, c5 = c[i, r, o], c[i, r, o + 1], c[i, r, o + 2], c[i, r, o + 3], c[i, r, o + 4], c[i, r, o + 5]
     v = c0 + x * (c1 + x * (c2 + x * (c3 + x * (c4 + x * c5))))
     d = c1 + x * (2.0 * c2 + x * (3.0 * c3 + x * (4.0 * c4 + x * 5.0 * c5)))
     return v, d
@@ -331,7 +336,7 @@ def table_evaluate(t, y, dy, prm, ws, want_teeth, tb):
     candidates' positions land in ``ws``. Returns 0."""
     _, loc, fp, ip, mass, pm, ps, pb, pa, _ = prm
     (_, _, _, xs, zs, _, _, _, jac, _, _, vxs, vzs, fx, fz, cand, ind_t, frc_t, info) = ws
-    head, up, mc, vc, dc, xc, zc, sc, cand0 = tb[0], tb[3], tb[4], tb[5], tb[6], tb[7], tb[8], tb[9], tb[10]
+    head, up, mc, vc, dc, xc, zc, sc, cand0, cc = tb[0], tb[3], tb[4], tb[5], tb[6], tb[7], tb[8], tb[9], tb[10], tb[11]
     p0 = head[1]
     n = int(head[3])
     s, sdot = y[0], y[1]
@@ -385,13 +390,11 @@ def table_evaluate(t, y, dy, prm, ws, want_teeth, tb):
         reach2 = reach * reach
         for jj in range(cand0.size):
             i = cand0[jj]
-            x = xc[i, p, 0] + eta * (xc[i, p, 1] + eta * (xc[i, p, 2] + eta * (xc[i, p, 3] + eta * (xc[i, p, 4] + eta * xc[i, p, 5]))))
-            z = zc[i, p, 0] + eta * (zc[i, p, 1] + eta * (zc[i, p, 2] + eta * (zc[i, p, 3] + eta * (zc[i, p, 4] + eta * zc[i, p, 5]))))
+            x, jx = _p5d(cc, p, jj, eta)
+            z, jz = _p5d(cc, p, jj, eta, 6)
             dxc = x - fp[17]
             dzc = z - fp[18]
             if dxc * dxc + dzc * dzc < reach2:
-                jx = xc[i, p, 1] + eta * (2.0 * xc[i, p, 2] + eta * (3.0 * xc[i, p, 3] + eta * (4.0 * xc[i, p, 4] + eta * 5.0 * xc[i, p, 5])))
-                jz = zc[i, p, 1] + eta * (2.0 * zc[i, p, 2] + eta * (3.0 * zc[i, p, 3] + eta * (4.0 * zc[i, p, 4] + eta * 5.0 * zc[i, p, 5])))
                 xs[i] = x
                 zs[i] = z
                 jac[i, 0] = jx / hu

@@ -55,6 +55,10 @@ def parameters_page(doc, ctx) -> None:
     if res is not None and "solver_method" in res.attrs:
         # the simulation's numerics: its solver, and the convergence verdict ([solver] check = true)
         rows.append(["solver", f"{res.attrs['solver_method']}, {res.attrs.get('solver_steps', '?')} steps"])
+        if "solver_closure" in res.attrs:
+            rows.append(["chain closure", textwrap.shorten("read from the table over one pitch"
+                                                           if res.attrs["solver_closure"] == "table"
+                                                           else f"solved at every step: {res.attrs['solver_closure']}", 70)])
         if "convergence" in res.attrs:
             import json
 
