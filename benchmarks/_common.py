@@ -52,9 +52,16 @@ def write_text(path: Path, text: str) -> None:
 
 
 def write_csv(path: Path, rows: list[dict]) -> None:
+    """Rows as CSV (fields with commas or quotes quoted, as the csv module reads them)."""
+    import csv
+    import io
+
     cols = list(rows[0])
-    lines = [",".join(cols)] + [",".join(_fmt(r[c]) for c in cols) for r in rows]
-    write_text(path, "\n".join(lines) + "\n")
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(cols)
+    w.writerows([[_fmt(r[c]) for c in cols] for r in rows])
+    write_text(path, buf.getvalue())
 
 
 def markdown_table(rows: list[dict]) -> str:

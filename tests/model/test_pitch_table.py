@@ -68,13 +68,19 @@ def _errors(model, fm, tb, rng, count=400):
     return worst, scale
 
 
+BY_TIME = dict(ALL_EFFECTS, passengers={"mass": [70.0], "step": [3], "board": [0.0], "alight": [5.0]})
+
+
 @pytest.mark.parametrize("name, effects", [("thesis-forward.toml", None), ("las-palmas.toml", None),
-                                           ("thesis-passengers.toml", None), ("thesis-forward.toml", ALL_EFFECTS)],
-                         ids=["no-load", "las-palmas", "passengers", "every-effect"])
+                                           ("thesis-passengers.toml", None), ("thesis-forward.toml", ALL_EFFECTS),
+                                           ("thesis-forward.toml", BY_TIME)],
+                         ids=["no-load", "las-palmas", "passengers", "every-effect", "passengers-by-time"])
 def test_table_right_hand_side_is_the_exact_one(name, effects):
     model, fm, cross = _model(name, effects)
     assert table_applies(model) is None
     tb = build_table(model, fm.prm, cross, table_spacing(1e-7))
+    # the tabulated chain keeps its links' length as the exact walk does (1e-13 m)
+    assert tb[0][4] <= 5e-13
     worst, scale = _errors(model, fm, tb, np.random.default_rng(7))
     # measured at the default spacing (2 mm): 5.5e-7 m/s^2 on roller 1's acceleration (which reaches
     # 80-120 m/s^2 in these hard contacts), 6e-8 rad/s^2 on the sprocket's, 6e-14 m on delta and

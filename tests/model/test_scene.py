@@ -57,3 +57,13 @@ def test_unknown_effect_is_named(tmp_path):
 def test_missing_file():
     with pytest.raises(SceneError, match="no such scene file"):
         load_scene("does/not/exist.toml")
+
+
+def test_closure_choice_is_checked(tmp_path):
+    text = (SIM / "thesis-forward.toml").read_text().replace('method = "dopri5"', 'method = "dopri5"\nclosure = "tabel"')
+    p = tmp_path / "closure.toml"
+    p.write_text(text)
+    with pytest.raises(SceneError, match=r"'solver.closure' must be one of table, exact, got 'tabel'"):
+        load_scene(p)
+    p.write_text(text.replace('"tabel"', '"exact"'))
+    assert load_scene(p).section("solver")["closure"] == "exact"

@@ -269,14 +269,26 @@ def build_table(model, prm, cross, spacing):
     cand = np.flatnonzero((dist < reach).any(axis=(0, 1))).astype(np.int64)
     # the candidates' x and z polynomials side by side, piece by piece: one evaluation reads one block
     cc = np.ascontiguousarray(np.concatenate([xc[cand], zc[cand]], axis=-1).transpose(1, 0, 2))
-    head = np.array([a, p0, float(npc), float(n)])
+    head = np.array([a, p0, float(npc), float(n), _link_error(xc, zc, chain.pitches)])
     return (head, np.ascontiguousarray(sb), np.ascontiguousarray(uc), up, mc, vc, dc, xc, zc, sc, cand, cc)
+
+
+def _link_error(xc, zc, pitches):
+    """Largest | |r_{i+1} - r_i| - L_i | of the tabulated chain at the quarter points of every
+    piece: the table's own closure residual. [m]"""
+    worst = 0.0
+    for x in (0.25, 0.5, 0.75):
+        powers = x ** np.arange(6)
+        px, pz = xc @ powers, zc @ powers  # (n, npc)
+        length = np.hypot(np.roll(px, -1, axis=0) - px, np.roll(pz, -1, axis=0) - pz)
+        worst = max(worst, float(np.max(np.abs(length - pitches[:, None]))))
+    return worst
 
 
 def empty_table():
     """The table's shape with nothing in it (the exact closure is used)."""
     z1, z2, z3 = np.zeros(0), np.zeros((0, 6)), np.zeros((0, 0, 6))
-    return (np.zeros(4), z1, z2, z1, z2, z2, z2, z3, z3, z3, np.zeros(0, dtype=np.int64), np.zeros((0, 0, 12)))
+    return (np.zeros(5), z1, z2, z1, z2, z2, z2, z3, z3, z3, np.zeros(0, dtype=np.int64), np.zeros((0, 0, 12)))
 
 
 # --------------------------------------------------------------------------------------------
