@@ -16,7 +16,7 @@ import numpy as np
 from ..model.chain import close_with_slope, closure_residual
 from ..model.dynamics import link_multipliers
 from ..model.effects import Work, evaluate, motor_torque, pack_parameters, reset_closure
-from ..model.pitch_table import build_table, empty_table, table_applies, table_evaluate, table_spacing
+from ..model.pitch_table import build_table, empty_table, table_applies, table_delta, table_evaluate, table_spacing
 from .integrate import IntegrationError, integrate
 from .results import make_dataset
 from ..model.sprocket import contact_kernel
@@ -209,7 +209,7 @@ NSCAL = 12  # delta, deltadot, motor, residual, speed, KE, PE, contact E, spring
 
 @nb.njit(cache=True, error_model="numpy", nogil=True)
 def _observe(t, y, prm, ws, inertia, light, need_tension, need_teeth, need_accel, mid, ridx, scal, tension, ind, cf,
-             rk, light_contact, tb):
+             rk, light_contact, tb, light_table):
     """Every output quantity at the output states, in one compiled loop (see _post_process).
 
     Returns (status, index): status 0 ok, 1 closure failure, 2 non-finite state at ``index``.
@@ -230,7 +230,7 @@ def _observe(t, y, prm, ws, inertia, light, need_tension, need_teeth, need_accel
         for i in range(5):
             if not math.isfinite(y[j, i]):
                 return 2, j
-        if light and tb[1].size > 0:
+        if light_table:
             # from the pitch table, as the integrator saw them (no closure residual asked)
             table_evaluate(t[j], y[j], dy, prm, ws, need_teeth, tb)
             scal[j, 0] = info[0]
@@ -291,6 +291,12 @@ def _observe(t, y, prm, ws, inertia, light, need_tension, need_teeth, need_accel
                         ind[j, q] = ind_t[q]
                         cf[j, q] = frc_t[q]
             continue
+        if tb[1].size > 0:
+            # the closure from the table's delta (exact to 1e-13 m): one or two walks
+            info[0] = table_delta(tb, y[j, 0])
+            info[10] = y[j, 0]
+            info[11] = 0.0
+            info[14] = 0.0
         if evaluate(t[j], y[j], dy, prm, ws, need_teeth) != 0:
             return 1, j
         sdot, sddot = y[j, 1], dy[1]
@@ -375,9 +381,10 @@ def _post_process(fm, t, y, outputs, stats, y_obs=None, table=None):
         light = False  # damped contact forces need the rollers' velocities
     scal[:] = np.nan
     # light outputs come from the table where the run used one, unless the closure residual is asked
-    tb = table if table is not None and light and "closure_residual" not in want else empty_table()
+    tb = table if table is not None else empty_table()
+    light_table = table is not None and light and "closure_residual" not in want
     status, bad = _observe(t, y_obs, fm.prm, ws, model.sprocket.inertia, light, need_tension, need_teeth, need_accel, mid,
-                           ridx, scal, tension, ind, cf, rk, light_contact, tb)
+                           ridx, scal, tension, ind, cf, rk, light_contact, tb, light_table)
     if status != 0:
         what = "non-finite state in the output" if status == 2 else "the chain could not be closed"
         raise IntegrationError(what, float(t[bad]), y[bad])
@@ -423,7 +430,7 @@ def _post_process(fm, t, y, outputs, stats, y_obs=None, table=None):
         "chain_speed_m_s": float(nominal),
         "link_pass_frequency_hz": model.link_pass_frequency(nominal) if nominal else 0.0,
         # from the table: the tabulated chain's own link-length error (the outputs were read from it)
-        "closure_residual_max": float(tb[0][4]) if tb[1].size else float(resid.max()),
+        "closure_residual_max": float(tb[0][4]) if light_table else float(resid.max()),
         "solver_method": stats["method"],
         "solver_steps": stats["steps"],
         "solver_rejected": stats["rejected"],

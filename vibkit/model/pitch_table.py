@@ -37,7 +37,7 @@ from .chain import acceleration_terms, close_with_slope, fill_partials, sensitiv
 from .effects import evaluate, motor_torque
 from .sprocket import contact_kernel
 
-__all__ = ["build_table", "empty_table", "table_evaluate", "rhs", "table_spacing", "table_applies"]
+__all__ = ["build_table", "empty_table", "table_evaluate", "table_delta", "rhs", "table_spacing", "table_applies"]
 
 SIDE = 1e-9  # [m] a breakpoint node is evaluated this far inside its piece, then moved onto it by Taylor
 FD = 1e-6  # [m] step of the differences that give d2M/du2 from the exact dM/du
@@ -338,6 +338,13 @@ def locate(tb, s):
     elif eta > 1.0:
         eta = 1.0
     return p, k, w, eta, d / hs, dd / (hs * hs)
+
+
+@nb.njit(cache=True, error_model="numpy")
+def table_delta(tb, s):
+    """delta [m] with roller 1 at s, from the table."""
+    p, _, _, eta, _, _ = locate(tb, s)
+    return _p5(tb[6], p, eta)[0]
 
 
 @nb.njit(cache=True, error_model="numpy")
