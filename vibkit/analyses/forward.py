@@ -15,7 +15,7 @@ import numpy as np
 
 from ..model.chain import close_with_slope, closure_residual
 from ..model.dynamics import link_multipliers
-from ..model.effects import Work, evaluate, motor_torque, pack_parameters, reset_closure
+from ..model.effects import Work, clear_teeth, evaluate, motor_torque, pack_parameters, reset_closure
 from ..model.pitch_table import build_table, empty_table, table_applies, table_delta, table_evaluate, table_spacing
 from .integrate import IntegrationError, integrate
 from .results import make_dataset
@@ -207,6 +207,13 @@ def event_gap(rtol):
 NSCAL = 12  # delta, deltadot, motor, residual, speed, KE, PE, contact E, spring E, accel, drive/back flank
 
 
+@nb.njit(cache=True, error_model="numpy")
+def _teeth_row(ind, cf, j, ind_t, frc_t):
+    for q in range(ind_t.size):
+        ind[j, q] = ind_t[q]
+        cf[j, q] = frc_t[q]
+
+
 @nb.njit(cache=True, error_model="numpy", nogil=True)
 def _observe(t, y, prm, ws, inertia, light, need_tension, need_teeth, need_accel, mid, ridx, scal, tension, ind, cf,
              rk, light_contact, tb, light_table):
@@ -238,9 +245,7 @@ def _observe(t, y, prm, ws, inertia, light, need_tension, need_teeth, need_accel
             scal[j, 10] = info[8]
             scal[j, 11] = info[9]
             if need_teeth:
-                for q in range(ind_t.size):
-                    ind[j, q] = ind_t[q]
-                    cf[j, q] = frc_t[q]
+                _teeth_row(ind, cf, j, ind_t, frc_t)
             continue
         if light:
             # positions only (delta, closure residual; torque from the state): no forces needed
@@ -279,17 +284,13 @@ def _observe(t, y, prm, ws, inertia, light, need_tension, need_teeth, need_accel
                         eta[i] = 0.0
                         sd[i] = 0.0
                         ncand += 1
-                for q in range(ind_t.size):
-                    ind_t[q] = 0.0
-                    frc_t[q] = 0.0
+                clear_teeth(ind_t, frc_t)
                 res = contact_kernel(xs, zs, eta, sd, cand, ncand, y[j, 2], y[j, 3], fp[17], fp[18], prm[1], fp[19],
                                      fp[20], prm[3][1], fp[16], fp[4], fp[5], 0.0, fx, fz, ind_t, frc_t, need_teeth)
                 scal[j, 10] = res[4]
                 scal[j, 11] = res[5]
                 if need_teeth:
-                    for q in range(ind_t.size):
-                        ind[j, q] = ind_t[q]
-                        cf[j, q] = frc_t[q]
+                    _teeth_row(ind, cf, j, ind_t, frc_t)
             continue
         if tb[1].size > 0:
             # the closure from the table's delta (exact to 1e-13 m): one or two walks
@@ -318,9 +319,7 @@ def _observe(t, y, prm, ws, inertia, light, need_tension, need_teeth, need_accel
         scal[j, 10] = info[8]
         scal[j, 11] = info[9]
         if need_teeth:
-            for q in range(ind_t.size):
-                ind[j, q] = ind_t[q]
-                cf[j, q] = frc_t[q]
+            _teeth_row(ind, cf, j, ind_t, frc_t)
         if need_accel:
             ax = jac[mid, 0] * sddot + hacc[mid, 0]
             az = jac[mid, 1] * sddot + hacc[mid, 1]

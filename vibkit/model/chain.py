@@ -315,6 +315,14 @@ def acceleration_terms(part, xs, zs, n, alpha, beta, gam, c, sdot1, hacc, eta, s
 
 
 @nb.njit(cache=True, error_model="numpy")
+def walk_arrays(n):
+    """Scratch arrays of a walk of n links and its sensitivities: s0, segment, local coordinate,
+    x, z (n + 1 each), partials (n + 1, 12), alpha, beta (n + 1 each)."""
+    return (np.empty(n + 1), np.empty(n + 1, dtype=np.int64), np.empty(n + 1), np.empty(n + 1), np.empty(n + 1),
+            np.empty((n + 1, 12)), np.empty(n + 1), np.empty(n + 1))
+
+
+@nb.njit(cache=True, error_model="numpy")
 def sweep_kernel(tab, p0, lt, s0_values, delta0, pitches, n, tol, deltas, resid, status):
     """Kinematic sweep: closure at every s0_1 in ``s0_values``.
 
@@ -324,14 +332,7 @@ def sweep_kernel(tab, p0, lt, s0_values, delta0, pitches, n, tol, deltas, resid,
     tolerance (a curvature joint, a coarse step) the full safeguarded Newton takes over and
     refreshes the derivative.
     """
-    s0 = np.empty(n + 1)
-    kk = np.empty(n + 1, dtype=np.int64)
-    lam = np.empty(n + 1)
-    xs = np.empty(n + 1)
-    zs = np.empty(n + 1)
-    part = np.empty((n + 1, 12))
-    alpha = np.empty(n + 1)
-    beta = np.empty(n + 1)
+    s0, kk, lam, xs, zs, part, alpha, beta = walk_arrays(n)
     d = delta0
     d_prev = delta0
     slope = 0.0  # dh/ddelta from the last full Newton solve; 0 = unknown

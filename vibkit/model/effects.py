@@ -142,6 +142,45 @@ def motor_torque(err, integral, kp, ki, limit):
 
 
 @nb.njit(cache=True, error_model="numpy")
+def rolling_force(vx, vz, f):
+    """Rolling resistance of magnitude ``f`` [N] against a roller's velocity (vx, vz) [m/s],
+    regularised below 1 mm/s so that it is smooth."""
+    sp = math.sqrt(vx * vx + vz * vz + 1e-6)
+    return -f * vx / sp, -f * vz / sp
+
+
+@nb.njit(cache=True, error_model="numpy")
+def clear_teeth(ind_t, frc_t):
+    """Zero the per-tooth indentation and force of the next contact evaluation."""
+    for j in range(ind_t.size):
+        ind_t[j] = 0.0
+        frc_t[j] = 0.0
+
+
+@nb.njit(cache=True, error_model="numpy")
+def finish(y, dy, info, fp, ip, sddot, torque_c, energy_c, worst, active, f_drive, f_back):
+    """The state's rates from roller 1's acceleration ``sddot`` and the contact kernel's results
+    (torque, energy, max indentation, active contacts, drive- and back-flank forces): fills ``dy``
+    and the info slots 3-9 (motor torque and the contact's results)."""
+    motor = 0.0
+    derr = 0.0
+    if ip[4] == 1:
+        motor, derr = motor_torque(fp[9] - y[3], y[4], fp[7], fp[8], fp[10])
+    dy[0] = y[1]
+    dy[1] = sddot
+    dy[2] = y[3]
+    dy[3] = (motor + torque_c) / fp[15]
+    dy[4] = derr
+    info[3] = motor
+    info[4] = torque_c
+    info[5] = energy_c
+    info[6] = worst
+    info[7] = active
+    info[8] = f_drive
+    info[9] = f_back
+
+
+@nb.njit(cache=True, error_model="numpy")
 def evaluate(t, y, dy, prm, ws, want_teeth):
     """Right-hand side of the forward dynamics; fills ``dy`` and returns a status code.
 
@@ -187,21 +226,12 @@ def evaluate(t, y, dy, prm, ws, want_teeth):
     if ip[7] == 1:
         mu = fp[14]
         for i in range(n):
-            vx = jac[i, 0] * sdot
-            vz = jac[i, 1] * sdot
-            sp = math.sqrt(vx * vx + vz * vz + 1e-6)
-            fx[i] -= mu * mass[i] * g * vx / sp
-            fz[i] -= mu * mass[i] * g * vz / sp
-    torque_c = 0.0
-    energy_c = 0.0
-    worst = 0.0
-    active = 0
-    f_drive = 0.0
-    f_back = 0.0
+            rx, rz = rolling_force(jac[i, 0] * sdot, jac[i, 1] * sdot, mu * mass[i] * g)
+            fx[i] += rx
+            fz[i] += rz
+    torque_c, energy_c, worst, active, f_drive, f_back = 0.0, 0.0, 0.0, 0, 0.0, 0.0
     if want_teeth:
-        for j in range(ind_t.size):
-            ind_t[j] = 0.0
-            frc_t[j] = 0.0
+        clear_teeth(ind_t, frc_t)
     if ip[3] == 1:
         # candidates: rollers whose circle can reach a tooth (centre closer than the farthest
         # corner's radius + r_d)
@@ -229,15 +259,7 @@ def evaluate(t, y, dy, prm, ws, want_teeth):
         m_c = fp[13]
     m_eff, q = reduced_equation(jac, hacc, fx, fz, mass, c, e, m_c, f_c)
     sddot = q / m_eff
-    motor = 0.0
-    derr = 0.0
-    if ip[4] == 1:
-        motor, derr = motor_torque(fp[9] - y[3], y[4], fp[7], fp[8], fp[10])
-    dy[0] = sdot
-    dy[1] = sddot
-    dy[2] = y[3]
-    dy[3] = (motor + torque_c) / fp[15]
-    dy[4] = derr
+    finish(y, dy, info, fp, ip, sddot, torque_c, energy_c, worst, active, f_drive, f_back)
     info[0] = delta
     info[10] = y[0]
     info[11] = c
@@ -246,11 +268,4 @@ def evaluate(t, y, dy, prm, ws, want_teeth):
     info[14] = e / (sdot * sdot) if sdot * sdot > 1e-12 else 0.0
     info[1] = c * sdot
     info[2] = c * sddot + e
-    info[3] = motor
-    info[4] = torque_c
-    info[5] = energy_c
-    info[6] = worst
-    info[7] = active
-    info[8] = f_drive
-    info[9] = f_back
     return 0

@@ -33,8 +33,8 @@ import math
 import numba as nb
 import numpy as np
 
-from .chain import acceleration_terms, close_with_slope, fill_partials, sensitivity, velocity_coefficients
-from .effects import evaluate, motor_torque
+from .chain import acceleration_terms, close_with_slope, fill_partials, sensitivity, velocity_coefficients, walk_arrays
+from .effects import clear_teeth, evaluate, finish, rolling_force
 from .sprocket import contact_kernel
 
 __all__ = ["build_table", "empty_table", "table_evaluate", "table_delta", "rhs", "table_spacing", "table_applies"]
@@ -119,14 +119,7 @@ def _nodes(tab, p0, lt, pts, inward, guess, pitches, n, tol, mroll, m_c, data, m
     points to: taken SIDE inside and moved onto the point by Taylor, the second derivative of M
     by a one-sided difference. Returns the index of a point where the chain does not close, or -1.
     """
-    s0 = np.empty(n + 1)
-    kk = np.empty(n + 1, dtype=np.int64)
-    lam = np.empty(n + 1)
-    xs = np.empty(n + 1)
-    zs = np.empty(n + 1)
-    part = np.empty((n + 1, 12))
-    alpha = np.empty(n + 1)
-    beta = np.empty(n + 1)
+    s0, kk, lam, xs, zs, part, alpha, beta = walk_arrays(n)
     jac = np.empty((n, 2))
     gam = np.empty(n)
     hacc = np.empty((n, 2))
@@ -389,20 +382,11 @@ def table_evaluate(t, y, dy, prm, ws, want_teeth, tb):
         for i in range(n):
             jx = _p5d(xc, i, p, eta)[1] / hu
             jz = _p5d(zc, i, p, eta)[1] / hu
-            vx = jx * udot
-            vz = jz * udot
-            sp = math.sqrt(vx * vx + vz * vz + 1e-6)
-            q -= mu * mass[i] * g * (jx * vx + jz * vz) / sp
-    torque_c = 0.0
-    energy_c = 0.0
-    worst = 0.0
-    active = 0
-    f_drive = 0.0
-    f_back = 0.0
+            rx, rz = rolling_force(jx * udot, jz * udot, mu * mass[i] * g)
+            q += jx * rx + jz * rz
+    torque_c, energy_c, worst, active, f_drive, f_back = 0.0, 0.0, 0.0, 0, 0.0, 0.0
     if want_teeth:
-        for j in range(ind_t.size):
-            ind_t[j] = 0.0
-            frc_t[j] = 0.0
+        clear_teeth(ind_t, frc_t)
     if ip[3] == 1:
         ncand = 0
         reach = fp[22] + 1e-9
@@ -432,26 +416,11 @@ def table_evaluate(t, y, dy, prm, ws, want_teeth, tb):
             q += jac[i, 0] * fx[i] + jac[i, 1] * fz[i]
     uddot = (q - 0.5 * mp_u * udot * udot) / m_u
     sddot = (uddot - uss * sdot * sdot) / us
-    motor = 0.0
-    derr = 0.0
-    if ip[4] == 1:
-        motor, derr = motor_torque(fp[9] - y[3], y[4], fp[7], fp[8], fp[10])
-    dy[0] = sdot
-    dy[1] = sddot
-    dy[2] = y[3]
-    dy[3] = (motor + torque_c) / fp[15]
-    dy[4] = derr
+    finish(y, dy, info, fp, ip, sddot, torque_c, energy_c, worst, active, f_drive, f_back)
     c_s = d_u * us
     info[0] = delta
     info[1] = c_s * sdot
     info[2] = d_u * uddot + d_uu * udot * udot
-    info[3] = motor
-    info[4] = torque_c
-    info[5] = energy_c
-    info[6] = worst
-    info[7] = active
-    info[8] = f_drive
-    info[9] = f_back
     info[10] = s
     info[11] = c_s
     info[14] = d_uu * us * us + d_u * uss
