@@ -11,10 +11,11 @@ Interpolation. Between consecutive breakpoints (where some roller crosses a curv
 guide: the only places where the configuration is not smooth) each piece gets quintic Hermite
 polynomials in u from the exact positions, first and second derivatives at its ends (the chain's
 velocity and acceleration recursions give them, :mod:`vibkit.model.chain`), one-sided at a
-breakpoint; the generalised mass M(u) = sum m_i |dr_i/du|^2 + m_c (d delta/du)^2 gets a cubic Hermite
-from M and dM/du. The reduced equation is then that of a one-degree-of-freedom Lagrangian system
-with this M and the interpolated potentials, M u'' + M'(u) u'^2 / 2 = Q(u), so an undamped chain
-still conserves its (interpolated) energy exactly.
+breakpoint; the generalised mass M(u) = sum m_i |dr_i/du|^2 + m_c (d delta/du)^2 gets one from M,
+the exact dM/du and d2M/du2 by differences of the exact dM/du 1 um apart (third derivatives of the
+positions are not computed). The reduced equation is then that of a one-degree-of-freedom
+Lagrangian system with this M and the interpolated potentials, M u'' + M'(u) u'^2 / 2 = Q(u), so an
+undamped chain conserves the tabulated chain's energy exactly.
 
 Roller 1's coordinate s (the state) maps to the table through the pieces of the whole loop: for the
 piece where table roller k crosses s, u(s) is the inverse of u -> s0_k(u), a quintic from
@@ -22,8 +23,11 @@ ds0_k/du and d2 s0_k/du^2 at its ends. Its pieces end exactly on the crossing va
 stops at, so a stage on the far side of a breakpoint reads the far-side polynomial.
 
 Error: the node spacing h is chosen from the tolerance (:func:`table_spacing`); the quintics err
-as h^6 and the cubic of M as h^4. ``tests/model/test_pitch_table.py`` measures the right-hand side
-against the exact closure.
+as h^6 in the values and h^4 in the second derivatives (the accelerations), which is what the
+right-hand side's error follows (10-16 times less per halving of h, measured): the chain's
+accelerations change sharply near some breakpoints (speed ratios curving at 280 /m^2 within a few
+mm), so the nodes are closer than smooth functions would need. ``tests/model/test_pitch_table.py``
+measures the right-hand side against the exact closure.
 """
 
 from __future__ import annotations
@@ -56,10 +60,11 @@ def table_applies(model) -> str | None:
 def table_spacing(rtol: float) -> float:
     """Largest node spacing of the table at tolerance ``rtol``. [m]
 
-    Measured on the no-load scene against the exact closure (benchmarks/results/pitch_table.md):
-    at 4 mm the chain, coasting after its last contact, drifts 0.25 mm ahead of the exact run by
-    44 s at rtol 1e-7, where the exact run's own error is 6 um; at 2 mm the drift is that of the
-    exact run. The tighter tolerances of the convergence check get finer tables.
+    Measured on the no-load scene against the exact closure at rtol 1e-11
+    (``benchmarks/pitch_table_spacing.py``): at 4 mm the chain, coasting after its last contact,
+    drifts 0.25 mm ahead by 44 s at rtol 1e-7, where the exact closure's own drift is 6 um; at 2 mm
+    and finer the drift is the exact closure's (3-12 um at rtol 1e-7 and 1e-9). The tighter
+    tolerances of the convergence check get finer tables all the same.
     """
     if rtol >= 1e-8:
         return 2e-3
