@@ -227,7 +227,9 @@ def plot(rows, path, duration):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(1, 4, figsize=(17, 4.2))
+    from matplotlib.ticker import LogLocator, NullFormatter
+
+    fig, axes = plt.subplots(1, 4, figsize=(17, 5.0))
     labels = {}
     for r in rows:
         if not isinstance(r["wall_time_s"], float) or not math.isfinite(r["wall_time_s"]) or r["err_delta_m"] == "":
@@ -243,11 +245,22 @@ def plot(rows, path, duration):
             ax.loglog(x, y, "o-", label=name)
         ax.set_xlabel("wall time [s]")
         ax.set_ylabel(unit)
+        # decades only on the time axis: minor labels (2x10^-1, 3x10^-1, ...) overlap
+        ax.xaxis.set_major_locator(LogLocator(base=10.0))
+        ax.xaxis.set_minor_formatter(NullFormatter())
         ax.grid(True, which="both", alpha=0.3)
-    axes[0].legend(fontsize=7)
+    handles, names = axes[0].get_legend_handles_labels()
+    fig.legend(handles, names, loc="lower center", ncol=5, fontsize=8, frameon=False)
     fig.suptitle(f"Work-precision, no-load forward scene, {duration:g} s simulated ({today()})")
-    fig.tight_layout()
+    fig.tight_layout(rect=(0, 0.1, 1, 1))
     fig.savefig(path, dpi=110)
+
+
+def _number(text):
+    try:
+        return float(text)
+    except ValueError:
+        return text
 
 
 def main(argv=None):
@@ -255,8 +268,16 @@ def main(argv=None):
     ap.add_argument("--quick", action="store_true", help="4 s scene and shorter ladders (CI)")
     ap.add_argument("--skip-study", action="store_true",
                     help="leave out the study's formulation (about 150 s; benchmarks/bench_reference.py times it)")
+    ap.add_argument("--plot-only", action="store_true", help="redraw the figure from the CSV of the last run")
     args = ap.parse_args(argv)
     suffix = "_quick" if args.quick else ""
+    if args.plot_only:
+        import csv
+
+        with open(RESULTS / f"work_precision{suffix}.csv", newline="") as fh:
+            rows = [{k: _number(v) for k, v in r.items()} for r in csv.DictReader(fh)]
+        plot(rows, RESULTS / f"work_precision{suffix}.png", 4.0 if args.quick else 44.0)
+        return 0
     krows = kinematics(args.quick)
     write_csv(RESULTS / f"kinematic_precision{suffix}.csv", krows)
     rows, duration, t_ref = forward(args.quick, args.skip_study)
