@@ -33,7 +33,9 @@ def test_pages_and_text(leon_report):
     assert re.search(r"3\.53\d+ \+- 0\.0000\d\d Hz", text["verdict"])  # rounded to its sigma
     assert re.search(r"138\.4\d+ \+- 0\.00\d\d mm", text["verdict"])
     assert "REPLACE" in text["verdict"] and "NOT consistent" in text["verdict"]
-    assert "frequency [Hz]" in text["spectrum"] and "amplitude [m]" in text["spectrum"]
+    # lengths plotted in um, as the tables give them (the tensioner's ripple is tens of um)
+    assert "frequency [Hz]" in text["spectrum"] and "amplitude [\u00b5m]" in text["spectrum"]
+    assert "tensioner_displacement [\u00b5m]" in text["time signal"]
     assert "time [s]" in text["time signal"] and "6 spike(s)" in text["time signal"]  # the six spikes
     assert "order [cycles per link]" in text["order spectrum"]
     assert "simulation (delta)" in text["simulation against recording"]
@@ -72,3 +74,13 @@ def test_bad_source_date_epoch(monkeypatch):
     monkeypatch.setenv("SOURCE_DATE_EPOCH", "yesterday")
     with pytest.raises(ValueError, match="SOURCE_DATE_EPOCH"):
         report_date()
+
+
+def test_length_scale_reads_as_the_tables():
+    from vibkit.diagnose.report.common import length_scale
+
+    assert length_scale("m", 2.7e-5) == (1e6, "\u00b5m")
+    assert length_scale("m", 0.033) == (1e3, "mm")
+    assert length_scale("m", 2.5) == (1.0, "m")
+    assert length_scale("m/s^2", 0.4) == (1.0, "m/s^2")
+    assert length_scale("m", float("nan")) == (1.0, "m")

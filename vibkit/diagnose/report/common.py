@@ -12,7 +12,7 @@ import os
 import textwrap
 from dataclasses import dataclass, field
 
-__all__ = ["Report", "report_date", "atomic_path", "PageSink", "TextColumn", "fmt_pm", "fmt_length"]
+__all__ = ["Report", "report_date", "atomic_path", "PageSink", "TextColumn", "fmt_pm", "fmt_length", "length_scale"]
 
 #: an example SOURCE_DATE_EPOCH (2000-01-01T00:00:00Z), kept for callers that pinned it
 FIXED_EPOCH = 946684800
@@ -215,3 +215,21 @@ class PageSink:
         self.pages.append((title, _texts(fig)))
         self.pdf.savefig(fig)
         plt.close(fig)
+
+
+def length_scale(units, peak):
+    """A readable unit for a plot of ``units`` whose values reach ``peak``: (factor, unit).
+
+    Lengths in metres are plotted in micrometres below 1 mm and in millimetres below 1 m, as the
+    report's tables give them (a tensioner's 27 um ripple reads as 27 um, not 2.7e-5 m); every other
+    unit is left as it is.
+    """
+    peak = float(peak) if peak is not None else float("nan")
+    if units != "m" or not math.isfinite(peak) or peak <= 0.0:
+        return 1.0, units
+    if peak < 1e-3:
+        return 1e6, "\u00b5m"
+    if peak < 1.0:
+        return 1e3, "mm"
+    return 1.0, "m"
+

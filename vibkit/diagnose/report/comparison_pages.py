@@ -7,7 +7,7 @@ import textwrap
 
 import numpy as np
 
-from .common import _PAGE, _WIDE, _page_title
+from .common import _PAGE, _WIDE, _page_title, length_scale
 
 __all__ = ["plot_comparison", "simulation_page", "harmonics_page"]
 
@@ -28,12 +28,15 @@ def plot_comparison(comp, fig=None, *, top=0.88):
         fig = plt.figure(figsize=_WIDE)
     gs = fig.add_gridspec(3, 2, height_ratios=(1.0, 1.0, 1.1), hspace=0.55, wspace=0.25,
                           left=0.07, right=0.97, top=top, bottom=0.07)
-    u = comp.units
+    meas = comp.signals["meas"]
+    # lengths in um or mm as the tables give them, from the recording's largest value
+    k, u = length_scale(comp.units, max((float(np.nanmax(np.abs(m[2]))) for m in meas if m[2].size),
+                                        default=float("nan")))
     ax = fig.add_subplot(gs[0, :])
-    ax.semilogy(comp.orders, np.maximum(comp.order_amplitude_sim, 1e-30), label=f"simulation ({comp.variable})")
-    ax.semilogy(comp.orders, np.maximum(comp.order_amplitude_meas, 1e-30), label=f"recording ({comp.channel})",
+    ax.semilogy(comp.orders, np.maximum(k * comp.order_amplitude_sim, 1e-30), label=f"simulation ({comp.variable})")
+    ax.semilogy(comp.orders, np.maximum(k * comp.order_amplitude_meas, 1e-30), label=f"recording ({comp.channel})",
                 alpha=0.8)
-    top = max(comp.order_amplitude_sim.max(), comp.order_amplitude_meas.max())
+    top = k * max(comp.order_amplitude_sim.max(), comp.order_amplitude_meas.max())
     ax.set_ylim(top * 1e-4, top * 3)
     ax.set_xlabel("order of the link-pass frequency [-]")
     ax.set_ylabel(f"amplitude [{u}]")
@@ -43,7 +46,6 @@ def plot_comparison(comp, fig=None, *, top=0.88):
     ax.legend(fontsize=8, loc="upper right")
     ax.grid(alpha=0.3)
     fs_s, x_s = comp.signals["sim"]
-    meas = comp.signals["meas"]
     longest = max(meas, key=lambda m: m[2].size)
     nh = len(comp.harmonics)
     fmax = min((nh + 1.5) * max(comp.fundamental_sim_hz, comp.fundamental_meas_hz), fs_s / 2, longest[1] / 2)
@@ -53,7 +55,7 @@ def plot_comparison(comp, fig=None, *, top=0.88):
         a1 = fig.add_subplot(gs[1, j])
         f, a = amplitude_spectrum(x, fs)
         sel = f <= fmax
-        a1.semilogy(f[sel], np.maximum(a[sel], 1e-30), color=col, lw=0.9)
+        a1.semilogy(f[sel], np.maximum(k * a[sel], 1e-30), color=col, lw=0.9)
         for h in range(1, nh + 1):
             a1.axvline(h * f0, color="0.5", ls=":", lw=0.8)
         a1.set_xlim(0, fmax)
@@ -66,7 +68,7 @@ def plot_comparison(comp, fig=None, *, top=0.88):
         nper = max(16, int(round(frame * fs)))
         fr, tt, s = spectrogram(x, fs, nperseg=nper, noverlap=nper * 3 // 4)
         sel = fr <= fmax
-        db = 20 * np.log10(np.maximum(s[sel], 1e-30))
+        db = 20 * np.log10(np.maximum(k * s[sel], 1e-30))
         im = a2.pcolormesh(tt, fr[sel], db, shading="nearest", vmin=db.max() - 60, vmax=db.max(), cmap="viridis",
                            rasterized=True)
         a2.set_xlabel("time from burst start [s]" if name == "recording" and len(meas) > 1 else "time [s]")
