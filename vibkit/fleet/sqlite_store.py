@@ -155,8 +155,9 @@ class SQLiteStore(Store):
 
     def _read_older_schema(self, ver):
         """Read-only: the rows of an older schema as the upgrade would store them, through a ``temp`` view that
-        shadows the file's table on this connection only.  Nothing is written to the file; the rows are read from
-        it one query at a time, so memory does not grow with the file."""
+        shadows the file's table on this connection only.  Nothing is written to the file, nothing copied: the
+        view is evaluated row by row as a query reads it (the quality flag computed then), so opening costs no memory
+        and no time that grow with the file."""
         con = self._con
         have = [r[1] for r in con.execute("PRAGMA main.table_info(measurement)")]
         try:
