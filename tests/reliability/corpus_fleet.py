@@ -1,6 +1,7 @@
 """Reliability cases of ``vibkit fleet`` (issue 23): inputs outside their stated ranges refused before any
 analysis, damaged / foreign databases in one line, read-only uses that never write."""
 
+import datetime as dt
 import sqlite3
 import sys
 from pathlib import Path
@@ -41,6 +42,54 @@ def foreign_empty(name):
         con = sqlite3.connect(w / name)
         con.execute("CREATE TABLE t (x)")
         con.execute("DROP TABLE t")
+        con.commit()
+        con.close()
+
+    return setup
+
+
+#: the ``measurement`` table as vibkit wrote it before schema 2 (no quality flag, no ``replaced``)
+SCHEMA_1_DDL = """
+CREATE TABLE measurement (
+    id INTEGER PRIMARY KEY, unit TEXT NOT NULL CHECK (length(unit) > 0), date_utc TEXT NOT NULL,
+    date_unix_s REAL NOT NULL, date_source TEXT NOT NULL, speed_m_s REAL NOT NULL CHECK (speed_m_s > 0),
+    speed_sigma_m_s REAL NOT NULL CHECK (speed_sigma_m_s >= 0), nominal_pitch_m REAL NOT NULL CHECK (nominal_pitch_m > 0),
+    channel TEXT NOT NULL, fundamental_hz REAL NOT NULL, fundamental_sigma_hz REAL NOT NULL, pitch_m REAL NOT NULL,
+    pitch_sigma_m REAL NOT NULL, elongation_percent REAL NOT NULL, elongation_sigma_percent REAL NOT NULL, snr_db REAL,
+    warnings TEXT NOT NULL, sha256 TEXT NOT NULL UNIQUE CHECK (length(sha256) = 64), path TEXT NOT NULL,
+    size_bytes INTEGER NOT NULL, vibkit_version TEXT NOT NULL, analysed_utc TEXT NOT NULL);
+CREATE INDEX measurement_unit_date ON measurement (unit, date_unix_s);
+PRAGMA application_id = 1447185222;
+PRAGMA user_version = 1;
+"""
+
+#: rows of a schema-1 history: (unit, years after 2023-01-15, elongation [%], its sigma [%]); E22's last two are
+#: outside the physical window, E23's second is too wide (sigma 0.9 %), E24 grows by exactly 0.4 %/year
+SCHEMA_1_ROWS = [("E22", 0.0, 3.8, 0.1), ("E22", 0.5, -5.8, 0.3), ("E22", 1.0, 52.0, 0.4),
+                 ("E23", 0.0, 0.5, 0.05), ("E23", 1.0, 0.9, 0.9), ("E23", 2.0, 1.2, 0.05),
+                 ("E24", 0.0, 0.3, 0.05), ("E24", 0.5, 0.5, 0.05), ("E24", 1.0, 0.7, 0.05), ("E24", 1.5, 0.9, 0.05)]
+
+
+def schema1_db(name="main.sqlite", rows=SCHEMA_1_ROWS, *, journal="wal"):
+    """A fleet history as an older vibkit (schema 1) left it: WAL journal, closed cleanly (no -wal file)."""
+
+    def setup(w: Path):
+        nominal, t0 = 0.13333, 1673740800.0  # 2023-01-15T00:00:00Z
+        con = sqlite3.connect(w / name)
+        con.execute(f"PRAGMA journal_mode={journal}")
+        con.executescript(SCHEMA_1_DDL)
+        for i, (unit, years, e, s) in enumerate(rows):
+            t = t0 + years * 365.25 * 86400
+            date = dt.datetime.fromtimestamp(t, dt.timezone.utc)
+            con.execute(
+                "INSERT INTO measurement (unit, date_utc, date_unix_s, date_source, speed_m_s, speed_sigma_m_s, "
+                "nominal_pitch_m, channel, fundamental_hz, fundamental_sigma_hz, pitch_m, pitch_sigma_m, "
+                "elongation_percent, elongation_sigma_percent, snr_db, warnings, sha256, path, size_bytes, "
+                "vibkit_version, analysed_utc) VALUES (?, ?, ?, 'given', 0.5, 0.001, ?, 'accel', 3.75, 1e-3, ?, ?, "
+                "?, ?, ?, ?, ?, ?, ?, '0.0.9', '2025-11-01T10:00:00Z')",
+                (unit, date.isoformat(timespec="seconds").replace("+00:00", "Z"), t, nominal,
+                 nominal * (1 + e / 100), nominal * s / 100, e, s, None if i % 4 == 0 else 20.0 + i,
+                 '["clipped"]' if i % 3 == 0 else "[]", f"{i + 1:064x}", f"/visits/r{i}.csv", 1000 + i))
         con.commit()
         con.close()
 
@@ -100,4 +149,7 @@ CASES = [
          expect_in=("not a fleet history",), protect=("{w}/other.sqlite",), absent=("{w}/f.pdf",)),
     Case("fleet status, sound database", "fleet", ["fleet", "status", "--db", "{w}/main.sqlite"], setup=make_db(),
          expect="ok", protect=("{w}/main.sqlite",), note="read-only open: the file is left byte for byte"),
+    Case("fleet status --json of a schema-1 history", "fleet", ["fleet", "status", "--json", "--db", "{w}/main.sqlite"],
+         setup=schema1_db(), expect="ok", protect=("{w}/main.sqlite",),
+         note="an older vibkit's history is read without upgrading it; the file is left byte for byte"),
 ]

@@ -16,6 +16,7 @@ that is impossible (another file system) the test is skipped with the reason.
 
 from __future__ import annotations
 
+import json
 import os
 import shutil
 import stat
@@ -255,3 +256,23 @@ def test_home_cache_preferred_and_no_cache_last_resort(readonly):
     assert float(proc.stdout.split()[-1]) == 0.0  # the spike is replaced by the window's median
     notes = [line for line in proc.stderr.splitlines() if "not cached" in line]
     assert len(notes) == 1 and "no writable folder" in notes[0]
+
+
+def test_fleet_status_of_an_archived_schema_1_history(readonly):
+    """A schema-1 history (an older vibkit's) that the user may only read, in a folder it may only read: status
+    reads it without upgrading it (SQLite's immutable read: no -wal/-shm can be made), the file left as it was."""
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from corpus_fleet import schema1_db
+
+    archive = readonly["top"] / "archive"
+    archive.mkdir()
+    schema1_db("fleet.sqlite")(archive)
+    db = archive / "fleet.sqlite"
+    os.chmod(db, 0o444)
+    os.chmod(archive, 0o555)
+    before = (db.read_bytes(), db.stat().st_mtime_ns, sorted(os.listdir(archive)))
+    proc = _cli(readonly, "fleet", "status", "--json", "--db", str(db))
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert sorted(u["unit"] for u in json.loads(proc.stdout)["units"]) == ["E22", "E23", "E24"]
+    assert "read a schema-1 history without upgrading it" in proc.stderr and "Traceback" not in proc.stderr
+    assert (db.read_bytes(), db.stat().st_mtime_ns, sorted(os.listdir(archive))) == before

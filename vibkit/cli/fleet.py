@@ -83,7 +83,10 @@ SCAN_SOME_FAILED = 3
 def _fleet_db(a, *, create=True):
     from vibkit.fleet.history import FleetDB
 
-    return FleetDB(a.db, create=create, readonly=not create)  # status, report: read-only
+    db = FleetDB(a.db, create=create, readonly=not create)  # status, report: read-only
+    for n in db.notes:  # e.g. an older schema read without upgrading it
+        msg(f"note: {n}")
+    return db
 
 
 def _fmt_measurement(m):

@@ -3,7 +3,9 @@
 One table, ``measurement``: one row per analysed recording (the fields of
 :class:`~vibkit.fleet.measurement.Measurement`), ``sha256`` unique.  Schema version 2 added the quality
 flag (``quality``, ``quality_reason``) and ``replaced`` (a chain replacement starts a new trend
-segment); a version-1 SQLite file is upgraded in place, its rows flagged by the same rules.
+segment); a version-1 SQLite file is upgraded in place, its rows flagged by the same rules, when it is
+opened for writing.  Read-only use reads a version-1 file as it is, through :func:`upgraded_view_sql`:
+a view that gives every row as the upgrade would have stored it, the file left untouched.
 """
 
 from __future__ import annotations
@@ -13,7 +15,8 @@ import json
 from .measurement import Measurement
 
 __all__ = ["APPLICATION_ID", "COLUMNS", "SCHEMA_VERSION", "measurement_ddl", "row_to_measurement",
-           "measurement_values"]
+           "measurement_values",
+           "upgraded_view_sql", "QUALITY_FLAG_SQL", "QUALITY_REASON_SQL"]
 
 SCHEMA_VERSION = 2
 #: SQLite ``PRAGMA application_id`` of a vibkit fleet database ("VBKF"); PostgreSQL: its advisory lock key
@@ -50,6 +53,33 @@ _TYPES = {  # column: (SQLite type, PostgreSQL type, constraint)
 assert set(_TYPES) == set(COLUMNS)
 #: columns added by schema version 2 (a version-1 SQLite file gets them by ALTER TABLE)
 V2_COLUMNS = ("quality", "quality_reason", "replaced")
+
+
+#: SQL functions the SQLite store registers for :func:`upgraded_view_sql`: the quality flag and its reason of
+#: (elongation_percent, elongation_sigma_percent), by :func:`vibkit.fleet.quality.measurement_quality`
+QUALITY_FLAG_SQL, QUALITY_REASON_SQL = "vibkit_quality_flag", "vibkit_quality_reason"
+#: what the upgrade to version 2 stores in a column a version-1 row lacks (before the quality flag is set)
+_V2_DEFAULTS = {"quality": "'ok'", "quality_reason": "''", "replaced": "0"}
+
+
+def upgraded_view_sql(have_columns, name="temp.measurement", source="main.measurement"):
+    """``CREATE VIEW`` of an older ``measurement`` table with the columns it has (``have_columns``), giving
+    every row exactly as the upgrade to :data:`SCHEMA_VERSION` would store it (the same defaults, the quality
+    flag by today's rules on the rows still ``'ok'``), without writing into the table.  A ``temp`` view needs no
+    write access to the file: read-only use of an old file reads its rows through it, one at a time (no copy)."""
+    have = set(have_columns)
+    missing = [c for c in ("id",) + COLUMNS if c not in have and c not in _V2_DEFAULTS]
+    if missing:
+        raise ValueError(f"the measurement table lacks {', '.join(missing)}; not a vibkit schema this one reads")
+    base = {c: (c if c in have else _V2_DEFAULTS[c]) for c in V2_COLUMNS}
+    ok = f"({base['quality']}) = 'ok'"
+    e = "elongation_percent, elongation_sigma_percent"
+    expr = dict(base)
+    expr["quality"] = f"CASE WHEN {ok} THEN {QUALITY_FLAG_SQL}({e}) ELSE {base['quality']} END"
+    expr["quality_reason"] = (f"CASE WHEN {ok} AND {QUALITY_FLAG_SQL}({e}) != 'ok' THEN {QUALITY_REASON_SQL}({e}) "
+                              f"ELSE {base['quality_reason']} END")
+    cols = ", ".join(["id"] + [f"{expr[c]} AS {c}" if c in expr else c for c in COLUMNS])
+    return f"CREATE VIEW {name} AS SELECT {cols} FROM {source}"
 
 
 def column_def(col, dialect):

@@ -15,7 +15,8 @@ import urllib.parse
 
 from .errors import FleetError
 from .quality import measurement_quality
-from .schema import APPLICATION_ID, COLUMNS, SCHEMA_VERSION, V2_COLUMNS, column_def, measurement_ddl
+from .schema import (APPLICATION_ID, COLUMNS, QUALITY_FLAG_SQL, QUALITY_REASON_SQL, SCHEMA_VERSION, V2_COLUMNS,
+                     column_def, measurement_ddl, upgraded_view_sql)
 from .store import Store
 
 __all__ = ["SQLiteStore", "sqlite_error"]
@@ -47,7 +48,8 @@ def sqlite_error(path, exc) -> FleetError:
 
 class SQLiteStore(Store):
     """A fleet database file.  ``create=False``: a missing file is an error (nothing is created);
-    ``readonly=True``: opened with SQLite's ``mode=ro`` and never written, not even the schema."""
+    ``readonly=True``: opened with SQLite's ``mode=ro`` and never written, not even the schema: a file of an
+    older schema is read as it is, through a connection-private view (:attr:`notes` says so)."""
 
     dialect = "sqlite"
     placeholder = "?"
@@ -55,6 +57,10 @@ class SQLiteStore(Store):
     def __init__(self, path, *, create=True, readonly=False, db_env="VIBKIT_FLEET_DB"):
         p = self.location = self.path = os.fspath(path)
         self.readonly = bool(readonly)
+        #: what opening the file did that a user should know (one line each, for stderr)
+        self.notes = []
+        #: the schema version of the file as it was found
+        self.file_schema_version = None
         if os.path.isdir(p):
             raise FleetError(f"{p}: is a folder; expected the fleet database file")
         exists = os.path.exists(p) and os.path.getsize(p) > 0
@@ -115,7 +121,7 @@ class SQLiteStore(Store):
     def _prepare(self):
         con = self._con
         app = con.execute("PRAGMA application_id").fetchone()[0]
-        ver = con.execute("PRAGMA user_version").fetchone()[0]
+        ver = self.file_schema_version = con.execute("PRAGMA user_version").fetchone()[0]
         tables = [r[0] for r in con.execute("SELECT name FROM sqlite_master WHERE type = 'table'")]
         if app not in (0, APPLICATION_ID) or (app == 0 and tables and "measurement" not in tables):
             raise FleetError(f"{self.path}: a SQLite database of another application (tables: "
@@ -127,9 +133,7 @@ class SQLiteStore(Store):
                 raise FleetError(f"{self.path}: a SQLite database without vibkit's measurement table, not a fleet "
                                  f"history (vibkit fleet add or scan makes one; --db names another); left as it is")
             if ver < SCHEMA_VERSION:
-                raise FleetError(f"{self.path}: written by an older vibkit (schema {ver}); this one upgrades it to "
-                                 f"schema {SCHEMA_VERSION} in place, which a read-only command does not do: run "
-                                 "vibkit fleet add or scan once where it may write")
+                self._read_older_schema(ver)
             return
         mode = con.execute("PRAGMA journal_mode=WAL").fetchone()[0]
         if str(mode).lower() != "wal":  # pragma: no cover - file systems without shared memory
@@ -145,7 +149,34 @@ class SQLiteStore(Store):
                     raise
                 raise FleetError(f"{self.path}: written by an older vibkit (schema {ver}); this one upgrades it to "
                                  f"schema {SCHEMA_VERSION} in place, which needs write access to the file and its "
-                                 "folder (run any fleet command once where it may write)") from None
+                                 "folder (vibkit fleet status and report read it without upgrading it)") from None
+            if "measurement" in tables:
+                self.notes.append(f"{self.path}: upgraded in place from schema {ver} to schema {SCHEMA_VERSION}")
+
+    def _read_older_schema(self, ver):
+        """Read-only: the rows of an older schema as the upgrade would store them, through a ``temp`` view that
+        shadows the file's table on this connection only.  Nothing is written to the file, nothing copied: the
+        view is evaluated row by row as a query reads it (the quality flag computed then), so opening costs no memory
+        and no time that grow with the file."""
+        con = self._con
+        have = [r[1] for r in con.execute("PRAGMA main.table_info(measurement)")]
+        try:
+            sql = upgraded_view_sql(have)
+        except ValueError as exc:
+            raise FleetError(f"{self.path}: schema {ver}: {exc}") from None
+
+        def flag(e, s):
+            return measurement_quality(e, s)[0]
+
+        def reason(e, s):
+            return measurement_quality(e, s)[1]
+
+        con.create_function(QUALITY_FLAG_SQL, 2, flag, deterministic=True)
+        con.create_function(QUALITY_REASON_SQL, 2, reason, deterministic=True)
+        con.execute("PRAGMA temp_store=MEMORY")
+        con.execute(sql)
+        self.notes.append(f"{self.path}: read a schema-{ver} history without upgrading it (left as it is); run "
+                          f"vibkit fleet add or scan on it with write access to upgrade it to schema {SCHEMA_VERSION}")
 
     def _create_or_upgrade(self):
         """Inside the write lock: create the table, or bring a version-1 file to the current schema."""
@@ -170,6 +201,8 @@ class SQLiteStore(Store):
 
     @contextlib.contextmanager
     def write_transaction(self, unit):
+        if self.readonly:  # before any statement: an older file's rows are a view here, not the file's table
+            raise sqlite_error(self.path, "opened read-only (mode=ro): attempt to write a readonly database")
         con = self._con
         con.execute("BEGIN IMMEDIATE")
         try:

@@ -107,7 +107,9 @@ class FleetDB:
         (``False``: a missing database is an error).
     readonly : bool
         Open it read-only (SQLite's ``mode=ro``): for status and reports; never writes, not even
-        vibkit's schema into a SQLite file that lacks it (that is an error).
+        vibkit's schema into a SQLite file that lacks it (that is an error).  A file of an older
+        schema is read as the upgrade would leave it, without upgrading it (see :attr:`notes`); opened
+        for writing, it is upgraded in place, in one transaction.
 
     Attributes
     ----------
@@ -115,6 +117,8 @@ class FleetDB:
         The file, or the server URL without its password.
     kind : str
         ``"sqlite"`` or ``"postgresql"``.
+    notes : list of str
+        What opening it did that a user should know (an older schema read without upgrading it).
 
     Raises
     ------
@@ -141,6 +145,7 @@ class FleetDB:
             self._store.set_timeout(self.TIMEOUT_S)
         self.path = self._store.location
         self.kind = self._store.dialect
+        self.notes = list(getattr(self._store, "notes", ()))
 
     @property
     def local_files(self):
@@ -341,7 +346,8 @@ def migrate(source, target):
     Parameters
     ----------
     source : str or os.PathLike
-        The existing database (path or URL); opened without creating anything.
+        The existing database (path or URL); opened read-only: nothing is created, written or upgraded in it
+        (a file of an older schema is read as the upgrade would leave it).
     target : str or os.PathLike
         The database that receives the rows (created if missing).
 
@@ -367,7 +373,7 @@ def migrate(source, target):
     if not is_server_url(src_spec) and not is_server_url(dst_spec) and os.path.exists(dst_spec) \
             and os.path.exists(src_spec) and os.path.samefile(src_spec, dst_spec):
         raise FleetError(f"{src_spec}: source and target of the migration are the same database")
-    with FleetDB(src_spec, create=False) as src:
+    with FleetDB(src_spec, create=False, readonly=True) as src:  # the source is read, never upgraded
         rows = sorted(src.measurements(), key=lambda m: m.id)
         with FleetDB(dst_spec) as dst:
             if src.path == dst.path and src.kind == dst.kind:
