@@ -74,17 +74,6 @@ def mesh_phase(positions: np.ndarray, centre, sp: SprocketParams, link_pitch: fl
 
 
 @nb.njit(cache=True, error_model="numpy")
-def _segment_closest(px, pz, ax, az, bx, bz):
-    ex, ez = bx - ax, bz - az
-    t = ((px - ax) * ex + (pz - az) * ez) / (ex * ex + ez * ez)
-    if t < 0.0:
-        t = 0.0
-    elif t > 1.0:
-        t = 1.0
-    return ax + t * ex, az + t * ez
-
-
-@nb.njit(cache=True, error_model="numpy")
 def contact_kernel(xs, zs, vx, vz, candidates, ncand, theta, omega, cx, cz, loc, root_r, psi, nteeth,
                    r_d, k, expo, damp, fx, fz, ind_tooth, force_tooth, want_teeth):
     """Roller-tooth contact forces for the candidate rollers.
