@@ -55,6 +55,8 @@ JITTER_RESAMPLE = 0.01
 MAX_GAP_S = 0.1
 #: false-alarm probability of the link-pass detection test
 DEFAULT_P_FA = 1e-3
+#: samples (from the start) whose levels give the recorder's quantisation step
+QUANTUM_SAMPLES = 1 << 20
 
 
 @dataclass(frozen=True)
@@ -554,7 +556,7 @@ def estimate_pitch(recording, *, speed, speed_sigma=0.0, channel=None, band=None
     # 1. is there a link-pass family at all?
     fs_det = float(np.median([b.fs for b in bursts]))
     # the recorder's step (its valid levels, before scaling and decimation) bounds the noise floors
-    x_rec = np.asarray(recording[name].values, dtype=float).ravel()
+    x_rec = np.asarray(recording[name].values[:QUANTUM_SAMPLES], dtype=float).ravel()
     quantum = quantisation_step(x_rec[~flag_invalid(x_rec).mask]) / scale
     decimation = max(1.0, float(np.median([b.fs for b in raw_bursts])) / fs_det)
     det = detect_link_pass([b.x for b in bursts if abs(b.fs / fs_det - 1) < 0.01], fs_det, band=band,

@@ -66,9 +66,17 @@ def quantisation_step(x, *, max_samples=1 << 20, min_span=MIN_SPAN_STEPS) -> flo
     0.0
     """
     x = np.asarray(x, dtype=float).ravel()[:int(max_samples)]
-    u = np.unique(x[np.isfinite(x)])
-    if u.size < 2:
-        return 0.0
+    x = x[np.isfinite(x)]
+    head = np.unique(x[:4096])
+    if head.size >= 2 and _grid(head) == 0.0:
+        return 0.0  # continuous data, decided on the first samples without sorting the record
+    u = np.unique(x)
+    q = _grid(u) if u.size >= 2 else 0.0
+    return q if q > 0 and (u[-1] - u[0]) / q >= min_span - 0.5 else 0.0
+
+
+def _grid(u):
+    """Step of the sorted distinct levels ``u`` (at least two), or 0.0."""
     d = np.diff(u)
     d0 = float(d.min())
     # the differences carry the rounding of the levels themselves
@@ -80,7 +88,7 @@ def quantisation_step(x, *, max_samples=1 << 20, min_span=MIN_SPAN_STEPS) -> flo
         if tol > 0.05:
             break
         if np.all(np.abs(head / q - np.rint(head / q)) <= tol) and np.all(np.abs(d / q - np.rint(d / q)) <= tol):
-            return q if (u[-1] - u[0]) / q >= min_span - 0.5 else 0.0
+            return q
     return 0.0
 
 
