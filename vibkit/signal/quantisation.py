@@ -23,7 +23,8 @@ import math
 
 import numpy as np
 
-__all__ = ["MIN_SPAN_STEPS", "correlated_error_variance", "quantisation_step", "quantisation_floor"]
+__all__ = ["MIN_SPAN_STEPS", "correlated_error_variance", "quantisation_floor", "quantisation_step",
+           "signal_following_variance"]
 
 #: the levels' differences must be whole multiples of the step to this fraction of it
 STEP_TOLERANCE = 1e-3
@@ -139,12 +140,35 @@ def quantisation_floor(step, window, broadband, *, decimation=1.0) -> float:
         ``s**2 + q**2 / 12 - C(s) = m * broadband / sum w**2`` per recorded sample.
     """
     q = float(step)
-    v = q * q / 12.0
-    if not v > 0:
+    if not q > 0:
         return 0.0
     m = max(float(decimation), 1.0)
     s1, s2 = float(np.sum(window)), float(np.sum(np.square(window)))
-    seen = m * float(broadband) / s2
+    c = signal_following_variance(q, m * float(broadband) / s2)
+    return max(q * q / 12.0 / m * s2, c * s1 * s1 / 2.0)
+
+
+def signal_following_variance(step, seen_variance):
+    """:func:`correlated_error_variance` at the noise that a measured variance implies.
+
+    Parameters
+    ----------
+    step : float
+        Quantisation step. [x]
+    seen_variance : float
+        Variance per recorded sample of what is not signal (broadband floor, fit residual):
+        ``s**2 + q**2 / 12 - C(s)``, solved for the analogue noise ``s``. [x**2]
+
+    Returns
+    -------
+    float
+        ``C(s)``; ``q**2 / 12`` when nothing is seen (a clean record). [x**2]
+    """
+    q = float(step)
+    if not q > 0:
+        return 0.0
+    v = q * q / 12.0
+    seen = float(seen_variance)
     lo, hi = 0.0, math.sqrt(max(seen, 0.0))
     if hi > 0:
         for _ in range(60):
@@ -153,4 +177,4 @@ def quantisation_floor(step, window, broadband, *, decimation=1.0) -> float:
                 hi = mid
             else:
                 lo = mid
-    return max(v / m * s2, correlated_error_variance(q, lo) * s1 * s1 / 2.0)
+    return correlated_error_variance(q, lo)
