@@ -29,11 +29,11 @@ sees what is left between the lines: the window's leakage and, for a quantised r
 at all (the rounding error of a clean tone is a fixed function of its phase: lines, the tone's
 harmonics aliased over the whole band).  Those lines then stand 40 dB over the "floor" and make
 harmonic families of their own (a 2048-count tone at 3.5 Hz was found as a family at 3.14 Hz).  The
-floor is therefore never below what the record can resolve: the Hann leakage envelope of every line
-(``|W(v)/W(0)| <= 1 / (pi v (v**2 - 1))`` three or more bins away), the white quantisation noise
-``q**2 / 12`` per sample of the recorder's step ``q`` (inferred from the levels, or given), and the
-peak of one line that carries all of the quantisation error that follows the signal, given the noise
-that the broadband floor shows (:func:`vibkit.signal.quantisation.quantisation_floor`).  A record
+floor is therefore never below what the record can resolve: the white quantisation noise ``q**2 / 12``
+per sample of the recorder's step ``q`` (inferred from the levels, or given), and the peak of one line
+that carries all of the quantisation error that follows the signal, given the noise that the
+broadband floor shows (:func:`vibkit.signal.quantisation.quantisation_floor`); and, as before, not
+below 1e-12 of the strongest bin (floating-point rounding).  A record
 whose noise exceeds half a step keeps its floor; raising a floor only lowers the statistic, so the
 false-alarm probability stays at most ``p_fa``.
 
@@ -333,23 +333,6 @@ def _harmonic_bins(f0, df, n_harm, nbins):
     return k[(k >= 1) & (k < nbins - 1)]
 
 
-#: Hann window's leakage envelope (power, relative to the line) at 3 or more bins from a line:
-#: |W(v) / W(0)| <= 1 / (pi v (v^2 - 1)), taken half a bin nearer (a line between two bins)
-_LEAK_MIN_BINS = 3
-
-
-def _leakage(p):
-    """Hann leakage of every bin of ``p`` into the bins 3 or more away (its envelope, summed over lines)."""
-    n = p.size
-    d = np.arange(n, dtype=float)
-    v = np.maximum(d - 0.5, 1.5)
-    env = (1.0 / (np.pi * v * (v * v - 1.0))) ** 2
-    env[:_LEAK_MIN_BINS] = 0.0
-    if n < 2 * _LEAK_MIN_BINS:
-        return np.zeros_like(p)
-    return np.maximum(scipy.signal.fftconvolve(p, np.concatenate([env[:0:-1], env]), mode="same"), 0.0)
-
-
 def _floor(p, k, half, quant, w):
     """Noise floor of ``p`` (the average of ``k`` Hann periodograms with window ``w``): the running median,
     but never below what the record can resolve (module notes, "Floors of clean records").
@@ -357,7 +340,7 @@ def _floor(p, k, half, quant, w):
     med = scipy.ndimage.median_filter(p, size=2 * half + 1, mode="reflect") / _gamma_median(k)
     bound = max(quantisation_floor(quant[0], w, float(np.median(med)), decimation=quant[1]),
                 1e-12 * float(np.max(p)) + np.finfo(float).tiny)
-    return np.maximum(np.maximum(med, _leakage(p)), bound)
+    return np.maximum(med, bound)
 
 
 def detect_link_pass(x, fs, *, band, n_harmonics=5, p_fa=1e-3, f_top=None, quantum=None, decimation=1):
