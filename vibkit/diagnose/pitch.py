@@ -23,6 +23,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..signal.detect import FILL_THRESHOLD, flag_invalid
+from ..signal.quantisation import quantisation_step
 from .decision import (CATALOGUE_PITCHES_M, DEFAULT_LIMITS_PERCENT, STATUS_IMPLAUSIBLE, STATUS_INCONCLUSIVE,
                        STATUS_NOT_FOUND, STATUS_OK, Decision, check_limits, decide, elongation_verdict,
                        nearest_catalogue)
@@ -54,6 +55,8 @@ JITTER_RESAMPLE = 0.01
 MAX_GAP_S = 0.1
 #: false-alarm probability of the link-pass detection test
 DEFAULT_P_FA = 1e-3
+#: samples (from the start) whose levels give the recorder's quantisation step
+QUANTUM_SAMPLES = 1 << 20
 
 
 @dataclass(frozen=True)
@@ -552,8 +555,12 @@ def estimate_pitch(recording, *, speed, speed_sigma=0.0, channel=None, band=None
                   speed_source=speed_source)
     # 1. is there a link-pass family at all?
     fs_det = float(np.median([b.fs for b in bursts]))
+    # the recorder's step (its valid levels, before scaling and decimation) bounds the noise floors
+    x_rec = np.asarray(recording[name].values[:QUANTUM_SAMPLES], dtype=float).ravel()
+    quantum = quantisation_step(x_rec[~flag_invalid(x_rec).mask]) / scale
+    decimation = max(1.0, float(np.median([b.fs for b in raw_bursts])) / fs_det)
     det = detect_link_pass([b.x for b in bursts if abs(b.fs / fs_det - 1) < 0.01], fs_det, band=band,
-                           n_harmonics=n_harmonics, p_fa=p_fa)
+                           n_harmonics=n_harmonics, p_fa=p_fa, quantum=quantum, decimation=decimation)
     if not det.detected:
         warnings.insert(0, det.reason)
         nan = float("nan")
@@ -564,9 +571,10 @@ def estimate_pitch(recording, *, speed, speed_sigma=0.0, channel=None, band=None
                              decision=decide(detected=False, detection_reason=det.reason), **common)
     # 2. estimate, burst by burst
     ests, skipped = [], []
-    for b in bursts:
+    for b, b_raw in zip(bursts, raw_bursts):
         try:
-            e = link_pass_estimate(b.x, b.fs, band=band, n_harmonics=n_harmonics)
+            e = link_pass_estimate(b.x, b.fs, band=band, n_harmonics=n_harmonics, quantum=quantum,
+                                   decimation=b_raw.fs / b.fs)
         except ValueError as exc:
             skipped.append(f"burst {b.segment}: {exc}")
             continue

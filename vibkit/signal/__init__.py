@@ -31,6 +31,7 @@ from .orders import (
     vold_kalman,
 )
 from .peaks import Fundamental, Harmonic, LinkPassEstimate, find_fundamental, link_pass_estimate
+from .quantisation import quantisation_step
 from .ride import PeakToPeak, RideSegment, a95, detect_ride_segment, half_cycle_peaks, lowpass_10hz, peak_to_peak, peak_to_peak_values
 from .spectral import WelchResult, amplitude_spectrum, spectrogram, study_power_spectrum, welch_psd
 from .weighting import WEIGHTINGS, Weighting, frequency_weighting, frequency_weighting_response, frequency_weighting_sos
@@ -65,6 +66,7 @@ __all__ = [
     "detect_link_pass",
     "flag_invalid",
     "mean_link_pass_frequency",
+    "quantisation_step",
     "AngleSignal",
     "CombinedEstimate",
     "FrequencyEstimate",

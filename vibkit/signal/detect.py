@@ -22,6 +22,26 @@ probability is at most ``p_fa`` (union bound; the overlap is of order ``p_fa**2`
 estimation error (relative standard deviation ``s``, from the asymptotic variance of a sample
 median) is integrated out: ``P(T > t) = E_d[Q(t / (1 + d))]``, ``d ~ N(0, s**2 / H)``.
 
+Floors of clean records
+-----------------------
+The running median is an estimate of the noise; a record without noise has none, and the median then
+sees what is left between the lines: the window's leakage and, for a quantised record, almost nothing
+at all (the rounding error of a clean tone is a fixed function of its phase: lines, the tone's
+harmonics aliased over the whole band).  Those lines then stand 40 dB over the "floor" and make
+harmonic families of their own (a 2048-count tone at 3.5 Hz was found as a family at 3.14 Hz).  The
+floor is therefore never below what the record can resolve: the white quantisation noise ``q**2 / 12``
+per sample of the recorder's step ``q`` (inferred from the levels, or given), and the peak of one line
+that carries all of the quantisation error that follows the signal, given the noise that the
+broadband floor shows (:func:`vibkit.signal.quantisation.quantisation_floor`); and, as before, not
+below 1e-12 of the strongest bin (floating-point rounding).  A record
+whose noise exceeds half a step keeps its floor; raising a floor only lowers the statistic, so the
+false-alarm probability stays at most ``p_fa``.
+
+The harmonic-sum search scores each candidate on a spectrum max-filtered over +-1 bin, which gives
+every candidate within a bin of a line the line's full credit; the candidate is then placed where its
+harmonics with evidence are strongest in the spectrum itself (within +-1 bin), so that a lone clean
+tone is reported at its own bin, not at the lowest candidate of the plateau (up to 1.4 bins low).
+
 A family whose significant harmonics all share a common order ``g > 1`` (for instance a square wave
 at 8 Hz seen from 8/3 Hz: orders 3, 9, 15) is a family at ``g f``; when ``g f`` lies outside the
 band, no link-pass is found in the band.
@@ -47,6 +67,7 @@ import scipy.stats
 
 from ._checks import check_fs
 from .peaks import climb_from_subharmonic
+from .quantisation import quantisation_floor, quantisation_step
 
 __all__ = [
     "FILL_THRESHOLD",
@@ -290,14 +311,21 @@ def _search(r, f, df, fmin, fmax, f_top):
     ev[hf > f_top] = 0.0
     sc = ev.sum(axis=1)
     i = climb_from_subharmonic(cands, sc, df)
+    # the max filter gives every candidate within a bin of a line the line's full credit: place the family
+    # where its harmonics with evidence are strongest in the spectrum itself
+    near = np.flatnonzero(np.abs(cands - cands[i]) <= df)
+    use = ev[i] > 0
+    if near.size > 1 and use.any():
+        lines = np.interp(hf[near][:, use].ravel(), f, r).reshape(near.size, -1).sum(axis=1)
+        j = int(near[np.argmax(lines)])
+        return float(cands[j]), float(sc[i])
     return float(cands[i]), float(sc[i])
 
 
-def _normalised(pw, half):
-    """Average of periodograms ``pw`` (K, bins) over its own running-median floor (mean 1 under the null)."""
+def _normalised(pw, half, quant, w):
+    """Average of periodograms ``pw`` (K, bins) over its own floor (mean 1 under the null)."""
     p = pw.mean(axis=0)
-    floor = scipy.ndimage.median_filter(p, size=2 * half + 1, mode="reflect") / _gamma_median(pw.shape[0])
-    return p / np.maximum(floor, 1e-12 * float(np.max(p)) + np.finfo(float).tiny)
+    return p / _floor(p, pw.shape[0], half, quant, w)
 
 
 def _harmonic_bins(f0, df, n_harm, nbins):
@@ -305,7 +333,17 @@ def _harmonic_bins(f0, df, n_harm, nbins):
     return k[(k >= 1) & (k < nbins - 1)]
 
 
-def detect_link_pass(x, fs, *, band, n_harmonics=5, p_fa=1e-3, f_top=None):
+def _floor(p, k, half, quant, w):
+    """Noise floor of ``p`` (the average of ``k`` Hann periodograms with window ``w``): the running median,
+    but never below what the record can resolve (module notes, "Floors of clean records").
+    ``quant = (q, m)``: quantisation step of the analysed samples, decimated ``m`` times since recorded."""
+    med = scipy.ndimage.median_filter(p, size=2 * half + 1, mode="reflect") / _gamma_median(k)
+    bound = max(quantisation_floor(quant[0], w, float(np.median(med)), decimation=quant[1]),
+                1e-12 * float(np.max(p)) + np.finfo(float).tiny)
+    return np.maximum(med, bound)
+
+
+def detect_link_pass(x, fs, *, band, n_harmonics=5, p_fa=1e-3, f_top=None, quantum=None, decimation=1):
     """Decide whether a harmonic family with its fundamental in ``band`` is present.
 
     Parameters
@@ -322,6 +360,12 @@ def detect_link_pass(x, fs, *, band, n_harmonics=5, p_fa=1e-3, f_top=None):
         False-alarm probability of the test (Gaussian noise with a smooth spectrum).
     f_top : float, optional
         Highest frequency whose harmonics count in the search; default ``min(10 band[1], 0.45 fs)``. [Hz]
+    quantum : float, optional
+        Quantisation step of the recorder in the units of ``x``; the floor is never below what it can
+        resolve (module notes).  Default: the step of ``x``'s own levels
+        (:func:`vibkit.signal.quantisation.quantisation_step`; 0 for continuous data). [x]
+    decimation : float, optional
+        ``x`` was low-pass filtered and decimated this many times since it was recorded.
 
     Returns
     -------
@@ -378,7 +422,10 @@ def detect_link_pass(x, fs, *, band, n_harmonics=5, p_fa=1e-3, f_top=None):
         # what is left after the straight lines is rounding: nothing was measured
         return none("the record is constant (or a straight line) within each segment, to rounding: no vibration")
     segs /= scale
+    if quantum is None:
+        quantum = quantisation_step(np.concatenate(pieces))
     w = scipy.signal.windows.hann(nseg, sym=False)
+    quant = (float(quantum) / (level * scale), float(decimation))
     pw = np.abs(np.fft.rfft(segs * w, axis=1)) ** 2
     f = np.fft.rfftfreq(nseg, 1.0 / fs)
     df = fs / nseg
@@ -386,9 +433,7 @@ def detect_link_pass(x, fs, *, band, n_harmonics=5, p_fa=1e-3, f_top=None):
     if not float(np.max(p_all[1:])) > 0:
         return none("the record has no variation")
     half = max(_HALF_MIN, int(round(_HALF_PERIODS * fmin / df)))
-    law_med = _gamma_median(k_all)
-    floor = scipy.ndimage.median_filter(p_all, size=2 * half + 1, mode="reflect") / law_med
-    floor = np.maximum(floor, 1e-12 * float(np.max(p_all)) + np.finfo(float).tiny)
+    floor = _floor(p_all, k_all, half, quant, w)
     ia, ib = np.arange(0, k_all, 2), np.arange(1, k_all, 2)
     s_rel = _floor_rel_sd(k_all, 2 * half + 1)
     n_h = max(1, min(int(n_harmonics), int(f_top // fmax)))
@@ -414,8 +459,8 @@ def detect_link_pass(x, fs, *, band, n_harmonics=5, p_fa=1e-3, f_top=None):
         # each half normalised by its own floor: a transient (a step, an impulse) that lies in one half
         # only raises that half's whole spectrum, which a floor shared with the other half would read
         # as excess power at every harmonic
-        r_s = _normalised(pw[search_idx], half)
-        r_t = _normalised(pw[test_idx], half)
+        r_s = _normalised(pw[search_idx], half, quant, w)
+        r_t = _normalised(pw[test_idx], half, quant, w)
         fc, _ = _search(r_s, f, df, fmin, fmax, f_top)
         kb = _harmonic_bins(fc, df, n_h, f.size)
         hh = kb.size

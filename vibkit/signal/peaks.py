@@ -20,6 +20,7 @@ import scipy.ndimage
 
 from ._checks import as_signal, check_band, check_fs, check_positive_int, decimate_for_band, fill_nan
 from .estimate import FrequencyEstimate, harmonic_ls, interpolated_dft
+from .quantisation import quantisation_floor, quantisation_step
 
 __all__ = ["find_fundamental", "Fundamental", "link_pass_estimate", "LinkPassEstimate", "Harmonic"]
 
@@ -51,7 +52,7 @@ _TIE = 1.0
 _DYNAMIC_RANGE_DB = 80.0
 
 
-def _score_table(x, fs, band, f_top, threshold_db):
+def _score_table(x, fs, band, f_top, threshold_db, quantum=0.0, decimation=1.0):
     n = x.size
     # Long records: Welch-average segments of max(20 periods of band[0], 8 s); the search needs
     # no more resolution than that and the averaged noise floor is steadier.
@@ -72,7 +73,11 @@ def _score_table(x, fs, band, f_top, threshold_db):
     # _DYNAMIC_RANGE_DB under the strongest peak, so that noise-free (simulated) signals do not
     # turn window leakage and rounding into "detected" harmonics.
     floor = float(np.max(p[sel])) * 10.0 ** (-_DYNAMIC_RANGE_DB / 10.0)
-    noise = max(np.median(p[sel]) / np.log(2.0), floor, np.finfo(float).tiny)
+    # ... nor below what the recorder's step can resolve (vibkit.signal.quantisation): the lines of a clean
+    # quantised tone's rounding error are not harmonics
+    broadband = float(np.median(p[sel])) / np.log(2.0)
+    noise = max(broadband, floor, quantisation_floor(quantum, w, broadband, decimation=decimation),
+                np.finfo(float).tiny)
     half = max(1, int(round(df / (f[1] - f[0]))))
     pmax = scipy.ndimage.maximum_filter1d(p, size=2 * half + 1, mode="nearest") / noise
     # Threshold relative to the median of the max-filtered noise (the max over +-1 bin lifts the
@@ -112,7 +117,7 @@ def climb_from_subharmonic(cands, sc, df):
                     break
     return i
 
-def find_fundamental(x, fs, *, band, f_top=None, threshold_db=6.0, nan_policy="raise"):
+def find_fundamental(x, fs, *, band, f_top=None, threshold_db=6.0, nan_policy="raise", quantum=None, decimation=1):
     """Fundamental of a harmonic family within a plausible band, without octave errors.
 
     Parameters
@@ -128,6 +133,12 @@ def find_fundamental(x, fs, *, band, f_top=None, threshold_db=6.0, nan_policy="r
     threshold_db : float, optional
         Detection threshold of a harmonic over the noise floor. [dB]
     nan_policy : {"raise", "interpolate"}, optional
+    quantum : float, optional
+        Quantisation step of the recorder in the units of ``x``: the noise floor is never taken below
+        what it resolves (:func:`vibkit.signal.quantisation.quantisation_floor`).  Default: the step of
+        ``x``'s own levels (:func:`vibkit.signal.quantisation.quantisation_step`; 0 for continuous data). [x]
+    decimation : float, optional
+        ``x`` was low-pass filtered and decimated this many times since it was recorded.
 
     Returns
     -------
@@ -162,7 +173,8 @@ def find_fundamental(x, fs, *, band, f_top=None, threshold_db=6.0, nan_policy="r
     f_top = float(f_top)
     if not fmax <= f_top <= fs / 2.0:
         raise ValueError(f"Parameter f_top={f_top!r} must lie in [band[1], fs/2] = [{fmax:g}, {fs / 2:g}] Hz.")
-    f, pmax, praw, df, thr = _score_table(x, fs, (fmin, fmax), f_top, threshold_db)
+    quantum = quantisation_step(x) if quantum is None else float(quantum)
+    f, pmax, praw, df, thr = _score_table(x, fs, (fmin, fmax), f_top, threshold_db, quantum, decimation)
     h_max = max(1, int(f_top // fmin))
     step = df / (2.0 * h_max)
     cands = np.arange(fmin, fmax + step / 2, step)
@@ -237,7 +249,8 @@ class LinkPassEstimate:
     estimate: FrequencyEstimate | None = None
 
 
-def link_pass_estimate(x, fs, *, band=(2.0, 6.0), n_harmonics=5, method="harmonic-ls", nan_policy="raise"):
+def link_pass_estimate(x, fs, *, band=(2.0, 6.0), n_harmonics=5, method="harmonic-ls", nan_policy="raise",
+                       quantum=None, decimation=1):
     """Find the link-pass fundamental in a band (octave-safe), estimate it with sigma, list harmonics.
 
     Parameters
@@ -254,6 +267,9 @@ def link_pass_estimate(x, fs, *, band=(2.0, 6.0), n_harmonics=5, method="harmoni
         Precise harmonic least squares, or the fast single-tone estimator applied to the strongest
         harmonic (frequency and sigma divided by its order).
     nan_policy : {"raise", "interpolate"}, optional
+    quantum, decimation : float, optional
+        The recorder's quantisation step in the units of ``x`` (default: inferred from ``x``'s levels)
+        and the decimation since recording, for the search's noise floor (:func:`find_fundamental`).
 
     Returns
     -------
@@ -273,7 +289,7 @@ def link_pass_estimate(x, fs, *, band=(2.0, 6.0), n_harmonics=5, method="harmoni
     x = as_signal(x, min_samples=8)
     x = fill_nan(x, nan_policy=nan_policy)
     kmax = check_positive_int(n_harmonics, "n_harmonics")
-    fund = find_fundamental(x, fs, band=band)
+    fund = find_fundamental(x, fs, band=band, quantum=quantum, decimation=decimation)
     warnings = []
     # Only the harmonics matter: decimate long, fast-sampled records (the CRB is unchanged).
     x, fs, _q = decimate_for_band(x, fs, (kmax + 0.5) * fund.frequency_hz)
