@@ -268,19 +268,12 @@ def test_killed_scan_on_postgres_leaves_complete_rows(tmp_path, pg_server):
         assert len(db.measurements()) == n
 
 
-_V1_SCHEMA = """
-CREATE TABLE measurement (
-    id INTEGER PRIMARY KEY, unit TEXT NOT NULL CHECK (length(unit) > 0), date_utc TEXT NOT NULL,
-    date_unix_s REAL NOT NULL, date_source TEXT NOT NULL, speed_m_s REAL NOT NULL CHECK (speed_m_s > 0),
-    speed_sigma_m_s REAL NOT NULL CHECK (speed_sigma_m_s >= 0), nominal_pitch_m REAL NOT NULL CHECK (nominal_pitch_m > 0),
-    channel TEXT NOT NULL, fundamental_hz REAL NOT NULL, fundamental_sigma_hz REAL NOT NULL, pitch_m REAL NOT NULL,
-    pitch_sigma_m REAL NOT NULL, elongation_percent REAL NOT NULL, elongation_sigma_percent REAL NOT NULL, snr_db REAL,
-    warnings TEXT NOT NULL, sha256 TEXT NOT NULL UNIQUE CHECK (length(sha256) = 64), path TEXT NOT NULL,
-    size_bytes INTEGER NOT NULL, vibkit_version TEXT NOT NULL, analysed_utc TEXT NOT NULL);
-CREATE INDEX measurement_unit_date ON measurement (unit, date_unix_s);
-PRAGMA application_id = 1447185222;
-PRAGMA user_version = 1;
-"""
+def _v1_schema():
+    """The schema-1 DDL, written once in tests/reliability/corpus_fleet.py."""
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "reliability"))
+    from corpus_fleet import SCHEMA_1_DDL
+
+    return SCHEMA_1_DDL
 
 
 def test_version_1_sqlite_file_is_upgraded_and_flagged(tmp_path):
@@ -288,7 +281,7 @@ def test_version_1_sqlite_file_is_upgraded_and_flagged(tmp_path):
 
     p = tmp_path / "v1.sqlite"
     con = sqlite3.connect(p)
-    con.executescript(_V1_SCHEMA)
+    con.executescript(_v1_schema())
     cols = [f for f in Measurement.__dataclass_fields__ if f not in ("id", "quality", "quality_reason", "replaced")]
     for m in (fake(1, "E22", 0.0, 3.8, s=0.1), fake(2, "E22", 0.5, -5.8, s=0.3), fake(3, "E22", 1.0, 52.0, s=0.4)):
         vals = [("[]" if c == "warnings" else getattr(m, c)) for c in cols]
