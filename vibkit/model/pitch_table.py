@@ -189,7 +189,8 @@ def build_table(model, prm, cross, spacing):
     p0 = float(fp[0])
     cross = np.sort(np.mod(np.asarray(cross, dtype=float), p0))
     a = float(cross[0]) if cross.size else 0.0
-    b = float(chain.configure(a).s0[1])
+    start = chain.configure(a)  # roller 1 on the first breakpoint: where roller 2 sits ends the pitch
+    b = float(start.s0[1])
     bps = cross[(cross > a) & (cross < b - 1e-10)]
     edges = np.concatenate([[a], bps, [b]])
     # the pieces: each interval between breakpoints cut in equal parts no longer than spacing
@@ -217,7 +218,7 @@ def build_table(model, prm, cross, spacing):
     m_c = float(fp[13]) if ip[6] == 1 else 0.0
     data = np.zeros((len(pts), n + 1, 3, 3))
     mdd_pt = np.empty(len(pts))
-    bad = _nodes(tab, p0, fp[1], np.asarray(pts), np.asarray(inward), chain.configure(a).delta, chain.pitches, n,
+    bad = _nodes(tab, p0, fp[1], np.asarray(pts), np.asarray(inward), start.delta, chain.pitches, n,
                  fp[21], mroll, m_c, data, mdd_pt)
     if bad >= 0:
         raise ValueError(f"the chain could not be closed at s0_1 = {pts[bad]:.9g} m")
