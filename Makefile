@@ -6,7 +6,7 @@ VENV   ?= .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test bench install clean
+.PHONY: demo test lint format bench install clean
 # `make bench` regenerates benchmarks/results/ (about 30 min on 2 cores); `vibkit bench --quick` is a smoke
 # run that writes into a temporary folder (or -o DIR), never into benchmarks/results/
 
@@ -23,6 +23,15 @@ install: $(STAMP)
 
 test: $(STAMP)
 	$(BIN)/python -m pytest -q
+
+# ruff's lint and format check (the configuration is in pyproject.toml); `make format` rewrites
+lint: $(STAMP)
+	$(BIN)/ruff check vibkit tests benchmarks
+	$(BIN)/ruff format --check vibkit tests benchmarks
+
+format: $(STAMP)
+	$(BIN)/ruff format vibkit tests benchmarks
+	$(BIN)/ruff check --fix vibkit tests benchmarks
 
 demo: $(STAMP)
 	$(BIN)/python -m vibkit.demo

@@ -32,8 +32,22 @@ def scaled_chain(p: int) -> Chain:
     """The reference guide scaled in every length so that p whole links fit (the study's proportions)."""
     base = reference_guide()
     f = (p + 0.56) * L / base.perimeter
-    guide = Guide(dataclasses.replace(base, **{k: getattr(base, k) * f for k in (
-        "tensioner_length", "lower_landing", "upper_landing", "transition_radius", "incline_length", "head_radius")}))
+    guide = Guide(
+        dataclasses.replace(
+            base,
+            **{
+                k: getattr(base, k) * f
+                for k in (
+                    "tensioner_length",
+                    "lower_landing",
+                    "upper_landing",
+                    "transition_radius",
+                    "incline_length",
+                    "head_radius",
+                )
+            },
+        )
+    )
     n = int(guide.p0 // L)
     return Chain(guide, ChainParams(link_pitch=L, roller_radius=0.035, roller_mass=8.0, n_rollers=n))
 
@@ -122,9 +136,17 @@ def run(quick: bool):
         # agreement on delta at the last subset configuration
         xs = study.newton(float(subset[-1]), x_prev)
         d_walk = ch.configure(float(subset[-1])).delta
-        rows.append({"p": ch.n, "walk_us": t_walk * 1e6, "study_newton_us": t_newton * 1e6,
-                     "study_hybr_us": t_hybr * 1e6, "ratio_newton_over_walk": t_newton / t_walk,
-                     "ratio_hybr_over_walk": t_hybr / t_walk, "delta_difference_m": abs(xs[-1] - d_walk)})
+        rows.append(
+            {
+                "p": ch.n,
+                "walk_us": t_walk * 1e6,
+                "study_newton_us": t_newton * 1e6,
+                "study_hybr_us": t_hybr * 1e6,
+                "ratio_newton_over_walk": t_newton / t_walk,
+                "ratio_hybr_over_walk": t_hybr / t_walk,
+                "delta_difference_m": abs(xs[-1] - d_walk),
+            }
+        )
         print(rows[-1], flush=True)
     # the study's full-loop sweep at 0.1 mm with the reference escalator
     ch = Chain(Guide(reference_guide()), reference_chain())
@@ -132,8 +154,14 @@ def run(quick: bool):
     t0 = time.perf_counter()
     d, resid = ch.sweep(s0)
     full = time.perf_counter() - t0
-    sweep = {"configurations": s0.size, "step_m": s0[1] - s0[0], "wall_s": full, "us_per_configuration": full / s0.size * 1e6,
-             "closure_residual_max_m": float(resid.max()), "delta_mean_mm": float(d.mean() * 1e3)}
+    sweep = {
+        "configurations": s0.size,
+        "step_m": s0[1] - s0[0],
+        "wall_s": full,
+        "us_per_configuration": full / s0.size * 1e6,
+        "closure_residual_max_m": float(resid.max()),
+        "delta_mean_mm": float(d.mean() * 1e3),
+    }
     print(sweep, flush=True)
     return rows, sweep
 
@@ -145,13 +173,17 @@ def main(argv=None):
     rows, sweep = run(args.quick)
     name = "closure_quick" if args.quick else "closure"  # a quick run never overwrites the full results
     write_csv(RESULTS / f"{name}.csv", rows)
-    md = [f"# Closure benchmark\n\n{machine()}; {today()}; {'quick' if args.quick else 'full'} run.\n",
-          "Time per configuration [us]: vibkit's link-by-link walk (Newton on delta alone, compiled) and the "
-          "study's all-coordinates solve (dense Newton with the analytic Jacobian; scipy.optimize.root 'hybr', "
-          "fsolve's MINPACK code), side by side in one process.\n", markdown_table(rows), "",
-          f"Full-loop kinematic sweep of the reference escalator (p = 159): {sweep['configurations']} configurations "
-          f"at {sweep['step_m'] * 1e3:.1f} mm in {sweep['wall_s']:.2f} s ({sweep['us_per_configuration']:.1f} us each), "
-          f"closure residual at most {sweep['closure_residual_max_m']:.2g} m, mean delta {sweep['delta_mean_mm']:.3f} mm.\n"]
+    md = [
+        f"# Closure benchmark\n\n{machine()}; {today()}; {'quick' if args.quick else 'full'} run.\n",
+        "Time per configuration [us]: vibkit's link-by-link walk (Newton on delta alone, compiled) and the "
+        "study's all-coordinates solve (dense Newton with the analytic Jacobian; scipy.optimize.root 'hybr', "
+        "fsolve's MINPACK code), side by side in one process.\n",
+        markdown_table(rows),
+        "",
+        f"Full-loop kinematic sweep of the reference escalator (p = 159): {sweep['configurations']} configurations "
+        f"at {sweep['step_m'] * 1e3:.1f} mm in {sweep['wall_s']:.2f} s ({sweep['us_per_configuration']:.1f} us each), "
+        f"closure residual at most {sweep['closure_residual_max_m']:.2g} m, mean delta {sweep['delta_mean_mm']:.3f} mm.\n",
+    ]
     write_text(RESULTS / f"{name}.md", "\n".join(md))
     try:
         import matplotlib

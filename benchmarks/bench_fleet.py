@@ -69,20 +69,23 @@ def main(argv=None):
     ap.add_argument("--quick", action="store_true", help="a smoke run: few recordings, one repeat")
     ap.add_argument("--workers", default="1,2", help="worker counts of the Dask cases (default 1,2)")
     ap.add_argument("--repeat", type=int, help="runs per case (best kept; default 3, quick 1)")
-    ap.add_argument("--stores", default="sqlite,postgresql", help="stores scanned into (default sqlite,postgresql; "
-                    "postgresql needs pgserver and psycopg)")
+    ap.add_argument(
+        "--stores",
+        default="sqlite,postgresql",
+        help="stores scanned into (default sqlite,postgresql; postgresql needs pgserver and psycopg)",
+    )
     a = ap.parse_args(argv)
     n = 4 if a.quick else 96
     duration = 30.0
     repeat = a.repeat or (1 if a.quick else 3)
-    workers = [int(w) for w in a.workers.split(",") if w.strip()][:1 if a.quick else None]
+    workers = [int(w) for w in a.workers.split(",") if w.strip()][: 1 if a.quick else None]
     stores = [x.strip() for x in a.stores.split(",") if x.strip()]
 
     import vibkit
-    from vibkit.runtime.cluster import dask_client
     from vibkit.fleet import FleetDB
     from vibkit.fleet.measurement import _file_sha256
     from vibkit.fleet.scan import _analyse_job, _Job
+    from vibkit.runtime.cluster import dask_client
 
     load0 = os.getloadavg()
     rows = []
@@ -150,9 +153,17 @@ def main(argv=None):
                     print(f"round {k + 1}: {name:>24}: {times[name][-1]:7.2f} s", file=sys.stderr)
         for name, w, _ in cases:
             best = min(times[name])
-            rows.append({"case": name, "workers": w, "recordings": n, "wall_s": best, "recordings_per_s": n / best,
-                         "cluster_start_s": starts.get(w) if name.startswith("dask") else None,
-                         "load_avg_1min_mean": round(float(np.mean(loads[name])), 2)})
+            rows.append(
+                {
+                    "case": name,
+                    "workers": w,
+                    "recordings": n,
+                    "wall_s": best,
+                    "recordings_per_s": n / best,
+                    "cluster_start_s": starts.get(w) if name.startswith("dask") else None,
+                    "load_avg_1min_mean": round(float(np.mean(loads[name])), 2),
+                }
+            )
     load1 = os.getloadavg()
     base = next(r["wall_s"] for r in rows if r["case"].startswith("plain loop"))
     for r in rows:
@@ -177,11 +188,20 @@ def main(argv=None):
         f"on {os.cpu_count()} cores (a shared machine: other jobs ran at the same time).",
         "",
     ]
-    table = markdown_table([{"case": r["case"], "workers": r["workers"], "wall [s]": r["wall_s"],
-                             "recordings/s": r["recordings_per_s"], "ratio vs plain loop": r["ratio_vs_plain_loop"],
-                             "cluster start [s]": "-" if r["cluster_start_s"] is None else r["cluster_start_s"],
-                             "load avg (1 min)": r["load_avg_1min_mean"]}
-                            for r in rows])
+    table = markdown_table(
+        [
+            {
+                "case": r["case"],
+                "workers": r["workers"],
+                "wall [s]": r["wall_s"],
+                "recordings/s": r["recordings_per_s"],
+                "ratio vs plain loop": r["ratio_vs_plain_loop"],
+                "cluster start [s]": "-" if r["cluster_start_s"] is None else r["cluster_start_s"],
+                "load avg (1 min)": r["load_avg_1min_mean"],
+            }
+            for r in rows
+        ]
+    )
     write_text(RESULTS / f"fleet{suffix}.md", "\n".join(head) + "\n" + table + "\n")
     print(table)
     return 0

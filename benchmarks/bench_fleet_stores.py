@@ -25,8 +25,6 @@ import time
 import warnings
 from pathlib import Path
 
-import numpy as np
-
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import RESULTS, machine, markdown_table, write_csv, write_text  # noqa: E402
 from bench_fleet import NOMINAL, SPEED, synth  # noqa: E402
@@ -38,8 +36,13 @@ def _adder(db, files, start, q):
     with FleetDB(db) as fdb:
         start.wait()
         for i, f in files:
-            fdb.add(f, unit=f"U{i % 10:02d}", speed=SPEED, nominal_pitch=NOMINAL,
-                    date=(dt.date(2022, 1, 1) + dt.timedelta(days=7 * i)).isoformat())
+            fdb.add(
+                f,
+                unit=f"U{i % 10:02d}",
+                speed=SPEED,
+                nominal_pitch=NOMINAL,
+                date=(dt.date(2022, 1, 1) + dt.timedelta(days=7 * i)).isoformat(),
+            )
     q.put(len(files))
 
 
@@ -112,13 +115,31 @@ def main(argv=None):
                     for m in ms:
                         fdb.insert(m)
                     wall = time.perf_counter() - t0
-                rows.append({"store": kind, "case": "cost per insert (1 process)", "writers": 1, "items": n_ins,
-                             "wall_s": wall, "per_item_ms": 1e3 * wall / n_ins, "items_per_s": n_ins / wall})
+                rows.append(
+                    {
+                        "store": kind,
+                        "case": "cost per insert (1 process)",
+                        "writers": 1,
+                        "items": n_ins,
+                        "wall_s": wall,
+                        "per_item_ms": 1e3 * wall / n_ins,
+                        "items_per_s": n_ins / wall,
+                    }
+                )
                 print(rows[-1], file=sys.stderr)
                 for w in writers:
                     wall = _writers(fresh(kind), files, w)
-                    rows.append({"store": kind, "case": "fleet add of recordings", "writers": w, "items": n_rec,
-                                 "wall_s": wall, "per_item_ms": 1e3 * wall / n_rec, "items_per_s": n_rec / wall})
+                    rows.append(
+                        {
+                            "store": kind,
+                            "case": "fleet add of recordings",
+                            "writers": w,
+                            "items": n_rec,
+                            "wall_s": wall,
+                            "per_item_ms": 1e3 * wall / n_rec,
+                            "items_per_s": n_rec / wall,
+                        }
+                    )
                     print(rows[-1], file=sys.stderr)
         finally:
             with warnings.catch_warnings():
@@ -127,17 +148,32 @@ def main(argv=None):
     load1 = os.getloadavg()
     suffix = "_quick" if a.quick else ""
     write_csv(RESULTS / f"fleet_stores{suffix}.csv", rows)
-    head = ["# Fleet stores: SQLite file against PostgreSQL (pgserver, Unix socket, same machine)", "",
-            f"cost per insert: {n_ins} analysed measurements stored one transaction each by one process; fleet add: "
-            f"{n_rec} synthetic recordings (10 s at 200 Hz, CSV) added by N processes at once (read, hash, analyse, "
-            "store). PostgreSQL runs on the same machine and competes for its cores.", "",
-            f"Machine: {machine()}; vibkit {vibkit.__version__}; PostgreSQL {pgver} (pgserver).",
-            f"Date: {dt.datetime.now(dt.timezone.utc).isoformat(timespec='seconds')}. Load average (1/5/15 min) at "
-            f"start {load0[0]:.2f}/{load0[1]:.2f}/{load0[2]:.2f}, at end {load1[0]:.2f}/{load1[1]:.2f}/{load1[2]:.2f} "
-            f"on {os.cpu_count()} cores (a shared machine).", ""]
-    table = markdown_table([{"store": r["store"], "case": r["case"], "writers": r["writers"],
-                             "wall [s]": r["wall_s"], "ms per item": r["per_item_ms"],
-                             "items/s": r["items_per_s"]} for r in rows])
+    head = [
+        "# Fleet stores: SQLite file against PostgreSQL (pgserver, Unix socket, same machine)",
+        "",
+        f"cost per insert: {n_ins} analysed measurements stored one transaction each by one process; fleet add: "
+        f"{n_rec} synthetic recordings (10 s at 200 Hz, CSV) added by N processes at once (read, hash, analyse, "
+        "store). PostgreSQL runs on the same machine and competes for its cores.",
+        "",
+        f"Machine: {machine()}; vibkit {vibkit.__version__}; PostgreSQL {pgver} (pgserver).",
+        f"Date: {dt.datetime.now(dt.timezone.utc).isoformat(timespec='seconds')}. Load average (1/5/15 min) at "
+        f"start {load0[0]:.2f}/{load0[1]:.2f}/{load0[2]:.2f}, at end {load1[0]:.2f}/{load1[1]:.2f}/{load1[2]:.2f} "
+        f"on {os.cpu_count()} cores (a shared machine).",
+        "",
+    ]
+    table = markdown_table(
+        [
+            {
+                "store": r["store"],
+                "case": r["case"],
+                "writers": r["writers"],
+                "wall [s]": r["wall_s"],
+                "ms per item": r["per_item_ms"],
+                "items/s": r["items_per_s"],
+            }
+            for r in rows
+        ]
+    )
     write_text(RESULTS / f"fleet_stores{suffix}.md", "\n".join(head) + "\n" + table + "\n")
     print(table)
     return 0

@@ -23,45 +23,80 @@ from _common import RESULTS, machine, markdown_table, today, write_csv, write_te
 
 ROOT = Path(__file__).resolve().parents[1]
 
-NO_LOAD = {"gravity": {"g": 9.81}, "contact": {"stiffness": 1e6, "exponent": 1.5, "damping": 0.0},
-           "motor": {"kp": 600.0, "speed": 0.5, "ki": 0.0}}
+NO_LOAD = {
+    "gravity": {"g": 9.81},
+    "contact": {"stiffness": 1e6, "exponent": 1.5, "damping": 0.0},
+    "motor": {"kp": 600.0, "speed": 0.5, "ki": 0.0},
+}
 NO_LOAD_OUT = ["delta", "sprocket_speed", "contact_force"]
 
 # name: solver settings over the scene's (the default tolerance follows the contact stiffness: 1e-7 here)
-SOLVER = {"contact, no load, stepping over breakpoints": {"events": False},
-          "contact, no load, rtol 1e-6": {"rtol": 1e-6},
-          "contact, no load, rtol 1e-9": {"rtol": 1e-9},
-          "contact, no load, with check": {"check": True},
-          "contact, no load, exact closure": {"closure": "exact"},
-          "contact, no load, exact closure, rtol 1e-9": {"closure": "exact", "rtol": 1e-9},
-          "contact, no load, default outputs, exact closure": {"closure": "exact"}}
+SOLVER = {
+    "contact, no load, stepping over breakpoints": {"events": False},
+    "contact, no load, rtol 1e-6": {"rtol": 1e-6},
+    "contact, no load, rtol 1e-9": {"rtol": 1e-9},
+    "contact, no load, with check": {"check": True},
+    "contact, no load, exact closure": {"closure": "exact"},
+    "contact, no load, exact closure, rtol 1e-9": {"closure": "exact", "rtol": 1e-9},
+    "contact, no load, default outputs, exact closure": {"closure": "exact"},
+}
 
 CASES = {
     # name: (effects, outputs, description)
     "kinematics only": ({}, ["delta"], "no force at all: the chain coasts (closure walk + reduced dynamics)"),
     "gravity": ({"gravity": {"g": 9.81}}, ["delta"], "gravity on every roller"),
-    "contact, no load": ({"gravity": {"g": 9.81}, "contact": {"stiffness": 1e6, "exponent": 1.5, "damping": 0.0},
-                          "motor": {"kp": 600.0, "speed": 0.5, "ki": 0.0}}, ["delta", "sprocket_speed", "contact_force"],
-                         "the study's no-load scene: delta, sprocket speed, contact forces (issue 10)"),
+    "contact, no load": (
+        {
+            "gravity": {"g": 9.81},
+            "contact": {"stiffness": 1e6, "exponent": 1.5, "damping": 0.0},
+            "motor": {"kp": 600.0, "speed": 0.5, "ki": 0.0},
+        },
+        ["delta", "sprocket_speed", "contact_force"],
+        "the study's no-load scene: delta, sprocket speed, contact forces (issue 10)",
+    ),
     "contact, no load, stepping over breakpoints": (
-        {"gravity": {"g": 9.81}, "contact": {"stiffness": 1e6, "exponent": 1.5, "damping": 0.0},
-         "motor": {"kp": 600.0, "speed": 0.5, "ki": 0.0}}, ["delta", "sprocket_speed", "contact_force"],
-        "the same, steps not ended on the guide's breakpoints (wrong contact history: README)"),
-    "contact, no load, rtol 1e-6": (NO_LOAD, NO_LOAD_OUT, "the same at rtol 1e-6 (the tolerance shipped before issue 20)"),
+        {
+            "gravity": {"g": 9.81},
+            "contact": {"stiffness": 1e6, "exponent": 1.5, "damping": 0.0},
+            "motor": {"kp": 600.0, "speed": 0.5, "ki": 0.0},
+        },
+        ["delta", "sprocket_speed", "contact_force"],
+        "the same, steps not ended on the guide's breakpoints (wrong contact history: README)",
+    ),
+    "contact, no load, rtol 1e-6": (
+        NO_LOAD,
+        NO_LOAD_OUT,
+        "the same at rtol 1e-6 (the tolerance shipped before issue 20)",
+    ),
     "contact, no load, rtol 1e-9": (NO_LOAD, NO_LOAD_OUT, "the same at rtol 1e-9"),
-    "contact, no load, with check": (NO_LOAD, NO_LOAD_OUT, "the same with the convergence check (a second run "
-                                                           "100 times tighter, compared; issue 20)"),
-    "contact, no load, exact closure": (NO_LOAD, NO_LOAD_OUT, "the same, the closure solved at every evaluation "
-                                                               "instead of read from the pitch table (before issue 20)"),
+    "contact, no load, with check": (
+        NO_LOAD,
+        NO_LOAD_OUT,
+        "the same with the convergence check (a second run 100 times tighter, compared; issue 20)",
+    ),
+    "contact, no load, exact closure": (
+        NO_LOAD,
+        NO_LOAD_OUT,
+        "the same, the closure solved at every evaluation instead of read from the pitch table (before issue 20)",
+    ),
     "contact, no load, exact closure, rtol 1e-9": (NO_LOAD, NO_LOAD_OUT, "the same at rtol 1e-9"),
     "contact, no load, default outputs": (None, None, "sim/thesis-forward.toml as shipped (link tensions etc.)"),
     "contact, no load, default outputs, exact closure": (None, None, "the same, exact closure"),
-    "contact + passengers": ({"gravity": {"g": 9.81}, "contact": {"stiffness": 1e6, "exponent": 1.5, "damping": 0.0},
-                              "motor": {"kp": 6000.0, "speed": 0.5, "ki": 0.0},
-                              "passengers": {"mass": [70.0, 90.0], "step": [3, 53],
-                                             "board": ["lower_landing"] * 2, "alight": ["upper_landing"] * 2}},
-                             ["delta", "sprocket_speed"],
-                             "two passengers (the study's chapter 7.4)"),
+    "contact + passengers": (
+        {
+            "gravity": {"g": 9.81},
+            "contact": {"stiffness": 1e6, "exponent": 1.5, "damping": 0.0},
+            "motor": {"kp": 6000.0, "speed": 0.5, "ki": 0.0},
+            "passengers": {
+                "mass": [70.0, 90.0],
+                "step": [3, 53],
+                "board": ["lower_landing"] * 2,
+                "alight": ["upper_landing"] * 2,
+            },
+        },
+        ["delta", "sprocket_speed"],
+        "two passengers (the study's chapter 7.4)",
+    ),
 }
 
 CHILD = r"""
@@ -102,23 +137,43 @@ def main(argv=None):
     scene = str(ROOT / "sim" / "thesis-forward.toml")
     rows = []
     load0 = os.getloadavg()[0]
-    for name, (effects, outputs, what) in list(CASES.items())[:2 if args.quick else None]:
+    for name, (effects, outputs, what) in list(CASES.items())[: 2 if args.quick else None]:
         print(f"{name} ...", file=sys.stderr, flush=True)
-        out = subprocess.run([sys.executable, "-c", CHILD, json.dumps([effects, outputs, duration, SOLVER.get(name, {})]), scene],
-                             capture_output=True, text=True, check=True)
+        out = subprocess.run(
+            [sys.executable, "-c", CHILD, json.dumps([effects, outputs, duration, SOLVER.get(name, {})]), scene],
+            capture_output=True,
+            text=True,
+            check=True,
+        )
         res = json.loads(out.stdout.strip().splitlines()[-1])
-        rows.append({"case": name, "rtol": res["rtol"], "closure": res["closure_mode"], "simulated_s": duration,
-                     "cpu_s": res["cpu"],
-                     "realtime_factor_cpu": duration / res["cpu"], "wall_s": res["wall"],
-                     "realtime_factor_wall": duration / res["wall"], "integration_s": res["integration"], "steps": res["steps"], "evaluations": res["evaluations"],
-                     "peak_memory_MB": res["maxrss_mb"], "result_MB": res["nbytes_mb"], "what": what})
+        rows.append(
+            {
+                "case": name,
+                "rtol": res["rtol"],
+                "closure": res["closure_mode"],
+                "simulated_s": duration,
+                "cpu_s": res["cpu"],
+                "realtime_factor_cpu": duration / res["cpu"],
+                "wall_s": res["wall"],
+                "realtime_factor_wall": duration / res["wall"],
+                "integration_s": res["integration"],
+                "steps": res["steps"],
+                "evaluations": res["evaluations"],
+                "peak_memory_MB": res["maxrss_mb"],
+                "result_MB": res["nbytes_mb"],
+                "what": what,
+            }
+        )
         print(rows[-1], file=sys.stderr, flush=True)
     write_csv(RESULTS / ("forward_quick.csv" if args.quick else "forward.csv"), rows)
-    md = (f"# Forward dynamics speed\n\n{machine()}; {today()}; {duration:g} s simulated, dopri5 at the "
-          f"default tolerance (from the contact stiffness: 1e-7 at k = 1e6) unless the case says, one core, each "
-          f"case in a fresh process after a warm-up, best of three calls; CPU time is the process's "
-          f"(time.process_time); load average {load0:.1f} at the start, {os.getloadavg()[0]:.1f} at the end.\n\n"
-          + markdown_table(rows) + "\n")
+    md = (
+        f"# Forward dynamics speed\n\n{machine()}; {today()}; {duration:g} s simulated, dopri5 at the "
+        f"default tolerance (from the contact stiffness: 1e-7 at k = 1e6) unless the case says, one core, each "
+        f"case in a fresh process after a warm-up, best of three calls; CPU time is the process's "
+        f"(time.process_time); load average {load0:.1f} at the start, {os.getloadavg()[0]:.1f} at the end.\n\n"
+        + markdown_table(rows)
+        + "\n"
+    )
     write_text(RESULTS / ("forward_quick.md" if args.quick else "forward.md"), md)
     print(md)
     return 0

@@ -39,8 +39,15 @@ def false_alarms(quick):
     rows = []
     for p in (0.05, 0.01, 1e-3):
         k = int(np.sum(pv < p))
-        rows.append({"stated P_fa": p, "records": n_rec, "false alarms": k, "measured rate": k / n_rec,
-                     "binomial sd": float(np.sqrt(p * (1 - p) / n_rec))})
+        rows.append(
+            {
+                "stated P_fa": p,
+                "records": n_rec,
+                "false alarms": k,
+                "measured rate": k / n_rec,
+                "binomial sd": float(np.sqrt(p * (1 - p) / n_rec)),
+            }
+        )
     return rows
 
 
@@ -60,8 +67,15 @@ def detection_probability(quick):
         for _ in range(trials):
             det = detect_link_pass(_family(3000, 100.0, 3.75, rng, snr), 100.0, band=BAND)
             hits += det.detected and abs(det.frequency_hz - 3.75) < 0.2
-        rows.append({"SNR per sample [dB]": snr, "record [s]": 30, "trials": trials, "P_fa": 1e-3,
-                     "detection probability": hits / trials})
+        rows.append(
+            {
+                "SNR per sample [dB]": snr,
+                "record [s]": 30,
+                "trials": trials,
+                "P_fa": 1e-3,
+                "detection probability": hits / trials,
+            }
+        )
     return rows
 
 
@@ -102,10 +116,18 @@ def wander(quick):
                     est = estimate_pitch(xr.Dataset({"x": ("time", x)}, coords={"time": t}), speed=v)
                     ep.append(abs(est.pitch_m / pitch - 1))
                     chosen.append(est.method == "mean-phase")
-            rows.append({"record [s]": duration, "wander period [s]": period, "records": len(es),
-                         "spectral max err [%]": 100 * max(es), "spectral median err [%]": 100 * float(np.median(es)),
-                         "vibkit pitch max err [%]": 100 * max(ep), "vibkit pitch median err [%]": 100 * float(np.median(ep)),
-                         "mean-phase chosen": f"{sum(chosen)}/{len(chosen)}"})
+            rows.append(
+                {
+                    "record [s]": duration,
+                    "wander period [s]": period,
+                    "records": len(es),
+                    "spectral max err [%]": 100 * max(es),
+                    "spectral median err [%]": 100 * float(np.median(es)),
+                    "vibkit pitch max err [%]": 100 * max(ep),
+                    "vibkit pitch median err [%]": 100 * float(np.median(ep)),
+                    "mean-phase chosen": f"{sum(chosen)}/{len(chosen)}",
+                }
+            )
     return rows
 
 
@@ -145,7 +167,7 @@ def chain_free(kind, rng):
         return x, fs
     if kind == "chirp":
         f1, f2 = rng.uniform(0.3, 5.0), rng.uniform(5.0, 45.0)
-        return np.cos(2 * np.pi * (f1 * t + (f2 - f1) * t ** 2 / (2 * t[-1]))) + lvl * noise, fs
+        return np.cos(2 * np.pi * (f1 * t + (f2 - f1) * t**2 / (2 * t[-1]))) + lvl * noise, fs
     if kind == "pure tone":
         f = np.exp(rng.uniform(np.log(0.3), np.log(45.0)))
         return np.cos(2 * np.pi * f * t + rng.uniform(0, 6.3)) + lvl * noise, fs
@@ -178,8 +200,20 @@ def chain_free(kind, rng):
     raise ValueError(kind)
 
 
-KINDS = ("white noise", "pink noise", "brown noise", "step", "impulses", "chirp", "pure tone", "AM tone",
-         "quantised noise", "clipped noise", "gait", "elevator hum")
+KINDS = (
+    "white noise",
+    "pink noise",
+    "brown noise",
+    "step",
+    "impulses",
+    "chirp",
+    "pure tone",
+    "AM tone",
+    "quantised noise",
+    "clipped noise",
+    "gait",
+    "elevator hum",
+)
 
 
 def false_verdicts(quick, n_records=None):
@@ -206,9 +240,17 @@ def false_verdicts(quick, n_records=None):
     rows = []
     tot = np.sum([v for v in per.values()], axis=0)
     for k, (n, v, p, e) in list(per.items()) + [("all", tuple(int(u) for u in tot))]:
-        rows.append({"kind": k, "records": n, "false verdicts": v, "rate": v / n,
-                     "95 % upper bound": float(scipy.stats.beta.ppf(0.95, v + 1, n - v)) if n else float("nan"),
-                     "pitch given (ok or inconclusive)": p, "refused as too short": e})
+        rows.append(
+            {
+                "kind": k,
+                "records": n,
+                "false verdicts": v,
+                "rate": v / n,
+                "95 % upper bound": float(scipy.stats.beta.ppf(0.95, v + 1, n - v)) if n else float("nan"),
+                "pitch given (ok or inconclusive)": p,
+                "refused as too short": e,
+            }
+        )
     return rows
 
 
@@ -221,17 +263,32 @@ def wander_power(quick):
         found = verdict = 0
         errs = []
         for i in range(trials):
-            x, v, pitch = _wandering(30.0, 100.0, float(rng.choice([10.0, 60.0])), 0.02, snr,
-                                     "sine" if i % 2 else "walk", rng, pitch=NOMINAL * (1 + rng.uniform(0, 0.03)))
+            x, v, pitch = _wandering(
+                30.0,
+                100.0,
+                float(rng.choice([10.0, 60.0])),
+                0.02,
+                snr,
+                "sine" if i % 2 else "walk",
+                rng,
+                pitch=NOMINAL * (1 + rng.uniform(0, 0.03)),
+            )
             rec = xr.Dataset({"x": ("time", x)}, coords={"time": np.arange(x.size) / 100.0})
             est = estimate_pitch(rec, speed=v, nominal_pitch=NOMINAL)
             found += est.has_link_pass
             verdict += est.status == "ok"
             if est.has_link_pass:
                 errs.append(abs(est.pitch_m / pitch - 1))
-        rows.append({"SNR per sample [dB]": snr, "record [s]": 30, "records": trials,
-                     "link pass found": found / trials, "verdict given (ok)": verdict / trials,
-                     "max pitch err when found [%]": 100 * max(errs) if errs else float("nan")})
+        rows.append(
+            {
+                "SNR per sample [dB]": snr,
+                "record [s]": 30,
+                "records": trials,
+                "link pass found": found / trials,
+                "verdict given (ok)": verdict / trials,
+                "max pitch err when found [%]": 100 * max(errs) if errs else float("nan"),
+            }
+        )
     return rows
 
 
@@ -254,41 +311,66 @@ def long_record(quick):
     est = estimate_pitch(rec, speed=0.5)
     wall = time.perf_counter() - t0
     rss1 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-    rows.append({"analysis": "vibkit pitch (detect, decimate, spectral + mean-phase)", "samples": n,
-                 "wall [s]": wall, "peak RSS growth [MB]": rss1 - rss0,
-                 "rel. error of mean f": est.fundamental_hz / truth - 1, "method": est.method})
+    rows.append(
+        {
+            "analysis": "vibkit pitch (detect, decimate, spectral + mean-phase)",
+            "samples": n,
+            "wall [s]": wall,
+            "peak RSS growth [MB]": rss1 - rss0,
+            "rel. error of mean f": est.fundamental_hz / truth - 1,
+            "method": est.method,
+        }
+    )
     t0 = time.perf_counter()
     spec = link_pass_estimate(x, fs, band=(2.5, 6.25))
     wall_b = time.perf_counter() - t0
     rss2 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-    rows.append({"analysis": "baseline: link_pass_estimate at 2 kHz (spectral only)", "samples": n,
-                 "wall [s]": wall_b, "peak RSS growth [MB]": rss2 - rss1,
-                 "rel. error of mean f": spec.fundamental_hz / truth - 1, "method": "spectral"})
+    rows.append(
+        {
+            "analysis": "baseline: link_pass_estimate at 2 kHz (spectral only)",
+            "samples": n,
+            "wall [s]": wall_b,
+            "peak RSS growth [MB]": rss2 - rss1,
+            "rel. error of mean f": spec.fundamental_hz / truth - 1,
+            "method": "spectral",
+        }
+    )
     return rows
 
 
 def main():
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--quick", action="store_true", help="fewer records, a 2 M-sample long record")
-    p.add_argument("--only", action="append", choices=("false alarms", "detection", "wander", "false verdicts",
-                                                       "wander power", "long record"), help="run only this part (repeatable)")
+    p.add_argument(
+        "--only",
+        action="append",
+        choices=("false alarms", "detection", "wander", "false verdicts", "wander power", "long record"),
+        help="run only this part (repeatable)",
+    )
     p.add_argument("--records", type=int, help="chain-free records for the false-verdict part (default 12000)")
     args = p.parse_args()
     suffix = "_quick" if args.quick else ""
     load = os.getloadavg()[0]
     t0 = time.perf_counter()
     parts = {}
-    fns = (("false alarms", false_alarms), ("detection", detection_probability), ("wander", wander),
-           ("false verdicts", lambda q: false_verdicts(q, args.records)), ("wander power", wander_power),
-           ("long record", long_record))
+    fns = (
+        ("false alarms", false_alarms),
+        ("detection", detection_probability),
+        ("wander", wander),
+        ("false verdicts", lambda q: false_verdicts(q, args.records)),
+        ("wander power", wander_power),
+        ("long record", long_record),
+    )
     if args.only:
         fns = [(n, f) for n, f in fns if n in args.only]
         suffix += "_" + "_".join(n.replace(" ", "_") for n, _ in fns)
     for name, fn in fns:
         print(f"{name} ...", file=sys.stderr, flush=True)
         parts[name] = fn(args.quick)
-    head = (f"# bench_pitch{suffix}\n\n{machine()}; {today()}; load average (1 min) at start {load:.2f}, at end "
-            f"{os.getloadavg()[0]:.2f} (other jobs share the machine); total {time.perf_counter() - t0:.0f} s\n")
+    head = (
+        f"# bench_pitch{suffix}\n\n{machine()}; {today()}; load average (1 min) at start {load:.2f}, at end "
+        f"{os.getloadavg()[0]:.2f} (other jobs share the machine); total {time.perf_counter() - t0:.0f} s\n"
+    )
     text = head
     for name, rows in parts.items():
         text += f"\n## {name}\n\n" + markdown_table(rows) + "\n"

@@ -91,8 +91,10 @@ def worker(kind: str, path: str) -> None:
             raise SystemExit(rc)
     else:
         raise SystemExit(f"unknown worker {kind!r}")
-    print(json.dumps({"kind": kind, "rows": n, "wall_s": wall, "peak_rss_mb": rss_mb(),
-                      "rss_after_import_mb": base}), file=sys.stderr if kind == "pitch" else sys.stdout)
+    print(
+        json.dumps({"kind": kind, "rows": n, "wall_s": wall, "peak_rss_mb": rss_mb(), "rss_after_import_mb": base}),
+        file=sys.stderr if kind == "pitch" else sys.stdout,
+    )
 
 
 def make_file(path: Path, rows: int, seed: int = 7) -> int:
@@ -106,8 +108,12 @@ def make_file(path: Path, rows: int, seed: int = 7) -> int:
         for start in range(0, rows, chunk):
             k = np.arange(start, min(rows, start + chunk))
             t = k / FS
-            x = (0.3 * np.sin(2 * np.pi * F0 * t) + 0.1 * np.sin(2 * np.pi * 2 * F0 * t + 0.4)
-                 + 0.05 * np.sin(2 * np.pi * 3 * F0 * t + 1.1) + 0.05 * rng.standard_normal(k.size))
+            x = (
+                0.3 * np.sin(2 * np.pi * F0 * t)
+                + 0.1 * np.sin(2 * np.pi * 2 * F0 * t + 0.4)
+                + 0.05 * np.sin(2 * np.pi * 3 * F0 * t + 1.1)
+                + 0.05 * rng.standard_normal(k.size)
+            )
             # time to 0.1 us with fixed decimals, values to 6 significant digits: what loggers write
             tt = np.char.mod("%.7f", t)
             xx = np.char.mod("%.6e", x)
@@ -120,13 +126,18 @@ def run_worker(kind: str, path: Path, timeout: float = 1800) -> dict:
     env = dict(os.environ)
     env["PYTHONPATH"] = str(HERE.parent) + os.pathsep + env.get("PYTHONPATH", "")
     t0 = time.perf_counter()
-    proc = subprocess.run([sys.executable, str(Path(__file__).resolve()), "--worker", kind, str(path)],
-                          capture_output=True, text=True, env=env, timeout=timeout)
+    proc = subprocess.run(
+        [sys.executable, str(Path(__file__).resolve()), "--worker", kind, str(path)],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=timeout,
+    )
     outer = time.perf_counter() - t0
     if proc.returncode != 0:
         raise RuntimeError(f"worker {kind} failed ({proc.returncode}): {proc.stderr.strip()[-2000:]}")
     stream = proc.stderr if kind == "pitch" else proc.stdout
-    line = [ln for ln in stream.splitlines() if ln.startswith("{\"kind\"")][-1]
+    line = [ln for ln in stream.splitlines() if ln.startswith('{"kind"')][-1]
     d = json.loads(line)
     d["process_wall_s"] = outer
     if kind == "pitch":
@@ -154,39 +165,56 @@ def main(argv=None) -> int:
             pd_ = run_worker("pandas", path)
             vk = run_worker("vibkit", path)
             row = {
-                "rows": n, "file_MB": round(size / 1e6, 1),
-                "pandas_s": pd_["wall_s"], "vibkit_s": vk["wall_s"], "time_ratio": vk["wall_s"] / pd_["wall_s"],
-                "pandas_peak_MB": pd_["peak_rss_mb"], "vibkit_peak_MB": vk["peak_rss_mb"],
+                "rows": n,
+                "file_MB": round(size / 1e6, 1),
+                "pandas_s": pd_["wall_s"],
+                "vibkit_s": vk["wall_s"],
+                "time_ratio": vk["wall_s"] / pd_["wall_s"],
+                "pandas_peak_MB": pd_["peak_rss_mb"],
+                "vibkit_peak_MB": vk["peak_rss_mb"],
                 "peak_ratio": vk["peak_rss_mb"] / pd_["peak_rss_mb"],
                 "pandas_read_MB": pd_["peak_rss_mb"] - pd_["rss_after_import_mb"],
                 "vibkit_read_MB": vk["peak_rss_mb"] - vk["rss_after_import_mb"],
             }
             row["read_mem_ratio"] = row["vibkit_read_MB"] / row["pandas_read_MB"]
             rows.append(row)
-            print(f"    pandas {pd_['wall_s']:.2f} s {pd_['peak_rss_mb']:.0f} MB | vibkit {vk['wall_s']:.2f} s "
-                  f"{vk['peak_rss_mb']:.0f} MB | ratios time {row['time_ratio']:.2f} peak {row['peak_ratio']:.2f} "
-                  f"read-memory {row['read_mem_ratio']:.2f}", flush=True)
+            print(
+                f"    pandas {pd_['wall_s']:.2f} s {pd_['peak_rss_mb']:.0f} MB | vibkit {vk['wall_s']:.2f} s "
+                f"{vk['peak_rss_mb']:.0f} MB | ratios time {row['time_ratio']:.2f} peak {row['peak_ratio']:.2f} "
+                f"read-memory {row['read_mem_ratio']:.2f}",
+                flush=True,
+            )
             if n == sizes[-1]:
                 pitch = run_worker("pitch", path)
                 out = pitch["output"]
-                print(f"    vibkit pitch end to end: {pitch['process_wall_s']:.1f} s, "
-                      f"peak {pitch['peak_rss_mb']:.0f} MB,"
-                      f" link pass {out.get('fundamental_hz')} Hz", flush=True)
+                print(
+                    f"    vibkit pitch end to end: {pitch['process_wall_s']:.1f} s, "
+                    f"peak {pitch['peak_rss_mb']:.0f} MB,"
+                    f" link pass {out.get('fundamental_hz')} Hz",
+                    flush=True,
+                )
             path.unlink()
     load1 = os.getloadavg()[0]
     suffix = "_quick" if a.quick else ""
     write_csv(RESULTS / f"read{suffix}.csv", rows)
-    md = [f"# Reading long recordings: vibkit.read_recording vs pandas.read_csv ({today()})", "",
-          f"Machine: {machine()}; load average (1 min) {load0:.2f} at start, {load1:.2f} at end "
-          "(the machine is shared with other jobs). Each read in a fresh process; peak = peak resident memory "
-          "of that process (ru_maxrss), read = peak minus the memory held after the imports.", "",
-          "File: `time (s),acceleration (m/s^2)` at 2 kHz (time to 0.1 us, values to 6 digits), written to a "
-          "temporary folder.", "",
-          markdown_table(rows), "",
-          f"`vibkit pitch` on the {sizes[-1]:,}-row file ({sizes[-1] / FS / 3600:.2f} h at 2 kHz), end to end in a "
-          f"subprocess (imports, reading, analysis): **{pitch['process_wall_s']:.1f} s** wall, "
-          f"peak {pitch['peak_rss_mb']:.0f} MB; link-pass {out.get('fundamental_hz')} Hz "
-          f"(signal built at {F0} Hz).", ""]
+    md = [
+        f"# Reading long recordings: vibkit.read_recording vs pandas.read_csv ({today()})",
+        "",
+        f"Machine: {machine()}; load average (1 min) {load0:.2f} at start, {load1:.2f} at end "
+        "(the machine is shared with other jobs). Each read in a fresh process; peak = peak resident memory "
+        "of that process (ru_maxrss), read = peak minus the memory held after the imports.",
+        "",
+        "File: `time (s),acceleration (m/s^2)` at 2 kHz (time to 0.1 us, values to 6 digits), written to a "
+        "temporary folder.",
+        "",
+        markdown_table(rows),
+        "",
+        f"`vibkit pitch` on the {sizes[-1]:,}-row file ({sizes[-1] / FS / 3600:.2f} h at 2 kHz), end to end in a "
+        f"subprocess (imports, reading, analysis): **{pitch['process_wall_s']:.1f} s** wall, "
+        f"peak {pitch['peak_rss_mb']:.0f} MB; link-pass {out.get('fundamental_hz')} Hz "
+        f"(signal built at {F0} Hz).",
+        "",
+    ]
     write_text(RESULTS / f"read{suffix}.md", "\n".join(md))
     print(f"wrote {RESULTS / f'read{suffix}.md'}")
     return 0

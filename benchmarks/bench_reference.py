@@ -44,8 +44,8 @@ sys.path.insert(0, str(ROOT))
 
 from vibkit import __version__  # noqa: E402
 from vibkit.analyses.forward import forward_dynamics  # noqa: E402
-from vibkit.model.escalator import EscalatorModel  # noqa: E402
 from vibkit.analyses.reference import BAUMGARTE_ALPHA, BAUMGARTE_BETA, STUDY_SETTINGS, run_study  # noqa: E402
+from vibkit.model.escalator import EscalatorModel  # noqa: E402
 from vibkit.model.scene import load_scene  # noqa: E402
 
 SCENE = ROOT / "sim" / "thesis-forward.toml"
@@ -69,8 +69,10 @@ def machine() -> str:
                 break
     except OSError:
         pass
-    return (f"{platform.system()} {platform.machine()}, {os.cpu_count()} cores ({cpu}); Python "
-            f"{platform.python_version()}, numpy {np.__version__}, scipy {scipy.__version__}, vibkit {__version__}")
+    return (
+        f"{platform.system()} {platform.machine()}, {os.cpu_count()} cores ({cpu}); Python "
+        f"{platform.python_version()}, numpy {np.__version__}, scipy {scipy.__version__}, vibkit {__version__}"
+    )
 
 
 def run(duration: float) -> dict:
@@ -87,26 +89,38 @@ def run(duration: float) -> dict:
     study = run_study(scene, duration=duration, **STUDY_SETTINGS)
     wall_study = time.perf_counter() - t0
 
-    diff = {name: float(np.abs(study[name].values - ours[name].values).max())
-            for name in ("delta", "chain_speed", "sprocket_speed", "link_tension")}
+    diff = {
+        name: float(np.abs(study[name].values - ours[name].values).max())
+        for name in ("delta", "chain_speed", "sprocket_speed", "link_tension")
+    }
     return {
         "duration": duration,
-        "ours": {"wall": wall_ours, "solver_wall": float(ours.attrs["solver_wall_time_s"]),
-                 "evaluations": int(ours.attrs["solver_evaluations"]), "steps": int(ours.attrs["solver_steps"]),
-                 "method": f"{solver.get('method', 'dopri5')} (compiled), rtol {_rtol(solver, scene):g}, "
-                           f"atol {solver.get('atol', _rtol(solver, scene) * 1e-2):g}, steps ended on the guide's breakpoints, "
-                           f"closure: {ours.attrs['solver_closure']}",
-                 "closure": float(ours.closure_residual.max())},
-        "study": {"wall": wall_study, "solver_wall": float(study.attrs["solver_wall_time_s"]),
-                  "evaluations": int(study.attrs["solver_evaluations"]),
-                  "jacobians": int(study.attrs["solver_jacobians"]),
-                  "method": f"scipy BDF, rtol {STUDY_SETTINGS['rtol']:g}, atol {STUDY_SETTINGS['atol']:g}, "
-                            f"max_step {STUDY_SETTINGS['max_step']:g} s, Baumgarte alpha = {BAUMGARTE_ALPHA:g}, "
-                            f"beta = {BAUMGARTE_BETA:g} 1/s",
-                  "closure": float(study.closure_residual.max())},
+        "ours": {
+            "wall": wall_ours,
+            "solver_wall": float(ours.attrs["solver_wall_time_s"]),
+            "evaluations": int(ours.attrs["solver_evaluations"]),
+            "steps": int(ours.attrs["solver_steps"]),
+            "method": f"{solver.get('method', 'dopri5')} (compiled), rtol {_rtol(solver, scene):g}, "
+            f"atol {solver.get('atol', _rtol(solver, scene) * 1e-2):g}, steps ended on the guide's breakpoints, "
+            f"closure: {ours.attrs['solver_closure']}",
+            "closure": float(ours.closure_residual.max()),
+        },
+        "study": {
+            "wall": wall_study,
+            "solver_wall": float(study.attrs["solver_wall_time_s"]),
+            "evaluations": int(study.attrs["solver_evaluations"]),
+            "jacobians": int(study.attrs["solver_jacobians"]),
+            "method": f"scipy BDF, rtol {STUDY_SETTINGS['rtol']:g}, atol {STUDY_SETTINGS['atol']:g}, "
+            f"max_step {STUDY_SETTINGS['max_step']:g} s, Baumgarte alpha = {BAUMGARTE_ALPHA:g}, "
+            f"beta = {BAUMGARTE_BETA:g} 1/s",
+            "closure": float(study.closure_residual.max()),
+        },
         "diff": diff,
-        "ranges": {"delta": float(np.ptp(ours.delta.values)), "chain_speed": float(ours.chain_speed.values[-1]),
-                   "link_tension": float(np.abs(ours.link_tension.values).max())},
+        "ranges": {
+            "delta": float(np.ptp(ours.delta.values)),
+            "chain_speed": float(ours.chain_speed.values[-1]),
+            "link_tension": float(np.abs(ours.link_tension.values).max()),
+        },
     }
 
 
@@ -187,8 +201,11 @@ def main(argv=None) -> int:
     duration = args.duration or (0.5 if args.quick else 44.0)
     if not duration > 0:
         parser.error(f"--duration must be positive, got {duration}")
-    note = "The study's full 44 s." if duration == 44.0 else \
-        f"A shorter common duration than the study's 44 s ({duration:g} s)."
+    note = (
+        "The study's full 44 s."
+        if duration == 44.0
+        else f"A shorter common duration than the study's 44 s ({duration:g} s)."
+    )
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     res = run(duration)
     res["load"] = load

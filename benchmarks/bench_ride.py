@@ -57,9 +57,15 @@ def main(argv=None):
         frequency_weighting(x[: int(fs)], fs, "Wk")  # warm-up
         tw = best_of(lambda: frequency_weighting(x, fs, "Wk"), repeat=repeat)
         tb = best_of(lambda: scipy.signal.sosfilt(sos, x), repeat=repeat)
-        rows.append({"case": f"Wk weighting, {minutes:g} min at {fs:g} Hz (internal x{oversampling_factor(fs)})",
-                     "samples": x.size, "vibkit [ms]": 1e3 * tw, "sosfilt same order [ms]": 1e3 * tb,
-                     "ratio": tw / tb})
+        rows.append(
+            {
+                "case": f"Wk weighting, {minutes:g} min at {fs:g} Hz (internal x{oversampling_factor(fs)})",
+                "samples": x.size,
+                "vibkit [ms]": 1e3 * tw,
+                "sosfilt same order [ms]": 1e3 * tb,
+                "ratio": tw / tb,
+            }
+        )
     fs = 2000.0
     x3 = record(fs, 60.0 * minutes, seed=1)
     sig = {"x": x3[0], "y": x3[1], "z": x3[2]}
@@ -67,17 +73,33 @@ def main(argv=None):
     tr = best_of(lambda: ride_quality(sig, fs, segment=seg), repeat=repeat)
     sos_k = frequency_weighting_sos("Wk", fs)
     tb = best_of(lambda: scipy.signal.sosfilt(sos_k, x3, axis=-1), repeat=repeat)
-    rows.append({"case": f"ride_quality, 3 axes, {minutes:g} min at 2 kHz (weightings, 10 Hz channel, pk-pk, A95)",
-                 "samples": x3.size, "vibkit [ms]": 1e3 * tr, "sosfilt same order [ms]": 1e3 * tb, "ratio": tr / tb})
+    rows.append(
+        {
+            "case": f"ride_quality, 3 axes, {minutes:g} min at 2 kHz (weightings, 10 Hz channel, pk-pk, A95)",
+            "samples": x3.size,
+            "vibkit [ms]": 1e3 * tr,
+            "sosfilt same order [ms]": 1e3 * tb,
+            "ratio": tr / tb,
+        }
+    )
     y = frequency_weighting(x3[2] - 9.80665, fs, "Wk")
     tp = best_of(lambda: peak_to_peak(y, fs), repeat=repeat)
-    rows.append({"case": f"peak_to_peak alone, one axis, {minutes:g} min at 2 kHz", "samples": y.size,
-                 "vibkit [ms]": 1e3 * tp, "sosfilt same order [ms]": float("nan"), "ratio": float("nan")})
+    rows.append(
+        {
+            "case": f"peak_to_peak alone, one axis, {minutes:g} min at 2 kHz",
+            "samples": y.size,
+            "vibkit [ms]": 1e3 * tp,
+            "sosfilt same order [ms]": float("nan"),
+            "ratio": float("nan"),
+        }
+    )
     suffix = "_quick" if a.quick else ""
-    head = (f"# Ride-quality benchmark\n\n{machine()}; {today()}; numpy {np.__version__}, scipy {scipy.__version__}; "
-            f"1-minute load average {load:.2f} at the start (the machine is shared).\n"
-            "Best of several repeats; 'sosfilt same order' is scipy.signal.sosfilt of the same four sections "
-            "at the record's rate (for the ride_quality row: of one weighting on all three axes).\n\n")
+    head = (
+        f"# Ride-quality benchmark\n\n{machine()}; {today()}; numpy {np.__version__}, scipy {scipy.__version__}; "
+        f"1-minute load average {load:.2f} at the start (the machine is shared).\n"
+        "Best of several repeats; 'sosfilt same order' is scipy.signal.sosfilt of the same four sections "
+        "at the record's rate (for the ride_quality row: of one weighting on all three axes).\n\n"
+    )
     write_text(RESULTS / f"ride{suffix}.md", head + markdown_table(rows) + "\n")
     write_csv(RESULTS / f"ride{suffix}.csv", [dict(r, load_avg_1min=load) for r in rows])
     print(markdown_table(rows))

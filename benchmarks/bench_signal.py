@@ -257,7 +257,10 @@ def write_accuracy(acc, suffix=""):
     import matplotlib.pyplot as plt
 
     fig, axs = plt.subplots(1, 2, figsize=(10, 4))
-    for ax, sweep, key, label in ((axs[0], "length", "seconds", "record length [s]"), (axs[1], "snr", "snr_db", "SNR [dB]")):
+    for ax, sweep, key, label in (
+        (axs[0], "length", "seconds", "record length [s]"),
+        (axs[1], "snr", "snr_db", "SNR [dB]"),
+    ):
         rows = [r for r in acc if r["sweep"] == sweep]
         xv = [r[key] for r in rows]
         ax.semilogy(xv, [r["rms_harmonic_ls_hz"] for r in rows], "o-", label="harmonic LS (RMS)")
@@ -304,8 +307,12 @@ def main(argv=None):
     md = ["# vibkit.signal benchmark", "", ", ".join(f"{k}: {v}" for k, v in info.items()), ""]
     md += ["| benchmark | samples | implementation | time [s] | ratio |", "|---|---:|---|---:|---:|"]
     md += [f"| {r[0]} | {r[1]:,} | {r[2]} | {r[3]:.4g} | {r[4]:.3g} |" for r in rows]
-    md += ["", "Ratio: time of the row over the first row of its group (vibkit's implementation), "
-           "so > 1 means vibkit is faster; pipeline stages: share of the total.", ""]
+    md += [
+        "",
+        "Ratio: time of the row over the first row of its group (vibkit's implementation), "
+        "so > 1 means vibkit is faster; pipeline stages: share of the total.",
+        "",
+    ]
     atomic_write(RESULTS / f"signal_benchmark{suffix}.md", "\n".join(md).encode())
     print("\n".join(md))
     acc = accuracy(args.quick)

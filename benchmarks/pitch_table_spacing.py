@@ -71,11 +71,15 @@ def main():
     for rtol in (1e-7, 1e-9):
         for spacing in (None,) + SPACINGS:
             ds, cpu = run(rtol, "exact" if spacing is None else "table", spacing)
-            row = {"rtol": rtol, "closure": "exact" if spacing is None else f"table {spacing * 1e3:g} mm",
-                   "s0_drift_max_m": float(np.abs(ds.s0.values - ref.s0.values).max()),
-                   "sprocket_speed_diff_max_rad_s": float(np.abs(ds.sprocket_speed.values
-                                                                 - ref.sprocket_speed.values).max()),
-                   "cpu_s": cpu}
+            row = {
+                "rtol": rtol,
+                "closure": "exact" if spacing is None else f"table {spacing * 1e3:g} mm",
+                "s0_drift_max_m": float(np.abs(ds.s0.values - ref.s0.values).max()),
+                "sprocket_speed_diff_max_rad_s": float(
+                    np.abs(ds.sprocket_speed.values - ref.sprocket_speed.values).max()
+                ),
+                "cpu_s": cpu,
+            }
             if spacing is not None:
                 row["build_s"], row["pieces"], row["link_length_error_m"] = build_cost(spacing)
             else:
@@ -83,10 +87,12 @@ def main():
             rows.append(row)
             print(row, file=sys.stderr, flush=True)
     write_csv(RESULTS / "pitch_table_spacing.csv", rows)
-    md = (f"# Pitch table: node spacing against accuracy\n\n{machine()}; {today()}; the no-load scene, 44 s, "
-          f"dopri5 with steps ended on the breakpoints, each run against the exact closure at rtol 1e-11; "
-          f"CPU time of one whole call; load average {load0:.1f} at the start, {os.getloadavg()[0]:.1f} at the "
-          f"end.\n\n" + markdown_table(rows) + "\n")
+    md = (
+        f"# Pitch table: node spacing against accuracy\n\n{machine()}; {today()}; the no-load scene, 44 s, "
+        f"dopri5 with steps ended on the breakpoints, each run against the exact closure at rtol 1e-11; "
+        f"CPU time of one whole call; load average {load0:.1f} at the start, {os.getloadavg()[0]:.1f} at the "
+        f"end.\n\n" + markdown_table(rows) + "\n"
+    )
     write_text(RESULTS / "pitch_table_spacing.md", md)
     print(md)
     return 0

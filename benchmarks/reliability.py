@@ -31,7 +31,9 @@ RESULTS = ROOT / "benchmarks" / "results"
 
 
 def _corpus():
-    spec = importlib.util.spec_from_file_location("vibkit_reliability_corpus", ROOT / "tests" / "reliability" / "corpus.py")
+    spec = importlib.util.spec_from_file_location(
+        "vibkit_reliability_corpus", ROOT / "tests" / "reliability" / "corpus.py"
+    )
     mod = importlib.util.module_from_spec(spec)
     sys.modules[spec.name] = mod
     spec.loader.exec_module(mod)
@@ -44,16 +46,22 @@ def _machine() -> str:
     except OSError:
         load = "n/a"
     try:
-        commit = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"], capture_output=True,
-                                text=True).stdout.strip() or "n/a"
+        commit = (
+            subprocess.run(
+                ["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"], capture_output=True, text=True
+            ).stdout.strip()
+            or "n/a"
+        )
     except OSError:
         commit = "n/a"
     sys.path.insert(0, str(ROOT))
     import vibkit
 
-    return (f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}, "
-            f"vibkit {vibkit.__version__} (commit {commit}), user uid {os.getuid() if hasattr(os, 'getuid') else 'n/a'}, "
-            f"load average {load} (the machine is shared)")
+    return (
+        f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}, "
+        f"vibkit {vibkit.__version__} (commit {commit}), user uid {os.getuid() if hasattr(os, 'getuid') else 'n/a'}, "
+        f"load average {load} (the machine is shared)"
+    )
 
 
 def _md_cell(text: str, n: int = 110) -> str:
@@ -66,11 +74,14 @@ def main(argv=None) -> int:
     ap.add_argument("--quick", action="store_true", help="leave out the heavy cases; write *_quick.* files")
     ap.add_argument("--only", help="run only cases whose name contains this (no files written)")
     ap.add_argument("--timeout", type=float, default=300.0, help="seconds before a case counts as a hang")
-    ap.add_argument("--code", help="run the vibkit package found in this folder instead (e.g. an older version "
-                                   "unpacked with `git archive COMMIT vibkit | tar -x -C DIR`); writes "
-                                   "reliability_<label>.{md,csv}; cases that write near system paths "
-                                   "(/dev/null ...) or inject faults into new modules are not run, and "
-                                   "--force/--overwrite are dropped (older code had no such flag)")
+    ap.add_argument(
+        "--code",
+        help="run the vibkit package found in this folder instead (e.g. an older version "
+        "unpacked with `git archive COMMIT vibkit | tar -x -C DIR`); writes "
+        "reliability_<label>.{md,csv}; cases that write near system paths "
+        "(/dev/null ...) or inject faults into new modules are not run, and "
+        "--force/--overwrite are dropped (older code had no such flag)",
+    )
     ap.add_argument("--label", default="before", help="label of a --code run (default: before)")
     a = ap.parse_args(argv)
 
@@ -89,15 +100,23 @@ def main(argv=None) -> int:
     with tempfile.TemporaryDirectory(prefix="vibkit-reliability-") as top:
         for i, case in enumerate(cases, 1):
             t0 = time.perf_counter()
-            res = corpus.run_case(case, Path(top) / f"case{i:03d}", inprocess=False, timeout=a.timeout,
-                                  code_root=os.path.abspath(a.code) if a.code else None)
+            res = corpus.run_case(
+                case,
+                Path(top) / f"case{i:03d}",
+                inprocess=False,
+                timeout=a.timeout,
+                code_root=os.path.abspath(a.code) if a.code else None,
+            )
             res["wall_s"] = time.perf_counter() - t0
             res["expect"] = case.expect
             res["note"] = case.note
             res["message"] = res["message"].replace(str(Path(top) / f"case{i:03d}"), "WORK")
             rows.append(res)
-            print(f"[{i}/{len(cases)}] {case.name}: {res['outcome']}{'' if res['passed'] else ' FAILED ' + str(res['problems'])}"
-                  f" ({res['wall_s']:.1f} s)", file=sys.stderr)
+            print(
+                f"[{i}/{len(cases)}] {case.name}: {res['outcome']}{'' if res['passed'] else ' FAILED ' + str(res['problems'])}"
+                f" ({res['wall_s']:.1f} s)",
+                file=sys.stderr,
+            )
     wall = time.perf_counter() - t_all
 
     outcomes = Counter(r["outcome"] for r in rows)
@@ -121,40 +140,73 @@ def main(argv=None) -> int:
     suffix = ("_quick" if a.quick else "") + (f"_{a.label}" if a.code else "")
     RESULTS.mkdir(parents=True, exist_ok=True)
     date = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
-    cmdline = "python benchmarks/reliability.py" + (" --quick" if a.quick else "") + \
-        (f" --code {a.code} --label {a.label}" if a.code else "")
-    lines = [f"# Reliability: bad inputs through `vibkit.cli.main`{' (quick)' if a.quick else ''}"
-             f"{f' ({a.label})' if a.code else ''}", "",
-             f"Written by `{cmdline}` on {date}; "
-             f"{_machine()}; {wall:.0f} s in all. Each case runs in a fresh process in its own folder; the corpus is "
-             "`tests/reliability/corpus.py` (+ `corpus_*.py`)."
-             + (f" Code run: `{a.code}` ({a.label}); not run against it (system paths or fault injection into "
-                f"new modules): {', '.join(left_out) or 'none'}." if a.code else ""), "",
-             "| | count |", "|---|---:|"]
+    cmdline = (
+        "python benchmarks/reliability.py"
+        + (" --quick" if a.quick else "")
+        + (f" --code {a.code} --label {a.label}" if a.code else "")
+    )
+    lines = [
+        f"# Reliability: bad inputs through `vibkit.cli.main`{' (quick)' if a.quick else ''}"
+        f"{f' ({a.label})' if a.code else ''}",
+        "",
+        f"Written by `{cmdline}` on {date}; "
+        f"{_machine()}; {wall:.0f} s in all. Each case runs in a fresh process in its own folder; the corpus is "
+        "`tests/reliability/corpus.py` (+ `corpus_*.py`)."
+        + (
+            f" Code run: `{a.code}` ({a.label}); not run against it (system paths or fault injection into "
+            f"new modules): {', '.join(left_out) or 'none'}."
+            if a.code
+            else ""
+        ),
+        "",
+        "| | count |",
+        "|---|---:|",
+    ]
     lines += [f"| {k} | {v} |" for k, v in summary]
     items = sorted({r["item"] for r in rows})
-    lines += ["", "| item | tried | clean errors | results | interrupted | tracebacks | files lost | not as expected |",
-              "|---|---:|---:|---:|---:|---:|---:|---:|"]
+    lines += [
+        "",
+        "| item | tried | clean errors | results | interrupted | tracebacks | files lost | not as expected |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|",
+    ]
     for it in items:
         rs = [r for r in rows if r["item"] == it]
         c = Counter(r["outcome"] for r in rs)
-        lines.append(f"| {it} | {len(rs)} | {c['clean']} | {c['ok']} | {c['interrupted']} | "
-                     f"{c['traceback'] + c['hang']} | {sum(1 for r in rs if r['lost'])} | "
-                     f"{sum(1 for r in rs if not r['passed'])} |")
-    lines += ["", "| item | input tried | expected | outcome | exit | message (or note) |",
-              "|---|---|---|---|---:|---|"]
+        lines.append(
+            f"| {it} | {len(rs)} | {c['clean']} | {c['ok']} | {c['interrupted']} | "
+            f"{c['traceback'] + c['hang']} | {sum(1 for r in rs if r['lost'])} | "
+            f"{sum(1 for r in rs if not r['passed'])} |"
+        )
+    lines += [
+        "",
+        "| item | input tried | expected | outcome | exit | message (or note) |",
+        "|---|---|---|---|---:|---|",
+    ]
     for r in rows:
         msg = r["message"] or r["note"]
         mark = "" if r["passed"] else " **(not as expected: " + "; ".join(r["problems"]) + ")**"
-        lines.append(f"| {r['item']} | {_md_cell(r['case'], 50)} | {r['expect']} | {r['outcome']}{mark} | "
-                     f"{r['returncode']} | {_md_cell(msg)} |")
+        lines.append(
+            f"| {r['item']} | {_md_cell(r['case'], 50)} | {r['expect']} | {r['outcome']}{mark} | "
+            f"{r['returncode']} | {_md_cell(msg)} |"
+        )
     (RESULTS / f"reliability{suffix}.md").write_text("\n".join(lines) + "\n", encoding="utf-8")
     with open(RESULTS / f"reliability{suffix}.csv", "w", newline="", encoding="utf-8") as f:
         w = csv.writer(f)
         w.writerow(["item", "case", "expect", "outcome", "returncode", "passed", "files_lost", "wall_s", "message"])
         for r in rows:
-            w.writerow([r["item"], r["case"], r["expect"], r["outcome"], r["returncode"], r["passed"],
-                        ";".join(r["lost"]), f"{r['wall_s']:.2f}", r["message"]])
+            w.writerow(
+                [
+                    r["item"],
+                    r["case"],
+                    r["expect"],
+                    r["outcome"],
+                    r["returncode"],
+                    r["passed"],
+                    ";".join(r["lost"]),
+                    f"{r['wall_s']:.2f}",
+                    r["message"],
+                ]
+            )
     print(f"wrote {RESULTS / f'reliability{suffix}.md'}: " + ", ".join(f"{k} {v}" for k, v in summary))
     return 1 if failed else 0
 

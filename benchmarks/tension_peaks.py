@@ -39,8 +39,11 @@ ROOT = Path(__file__).resolve().parents[1]
 def scene_with(k, *, dt=0.002):
     scene = load_scene(ROOT / "sim" / "thesis-forward.toml")
     effects = dict(scene.effects, contact={"stiffness": k, "exponent": 1.5, "damping": 0.0})
-    sections = dict(scene.sections, run=dict(scene.sections["run"], output_step=dt),
-                    solver={"method": "dopri5", "rtol": 1e-8, "atol": 1e-10})
+    sections = dict(
+        scene.sections,
+        run=dict(scene.sections["run"], output_step=dt),
+        solver={"method": "dopri5", "rtol": 1e-8, "atol": 1e-10},
+    )
     out = dict(scene.outputs, variables=("link_tension", "sprocket_speed", "s0", "delta", "closure_residual"))
     return replace(scene, effects=effects, sections=sections, outputs=out)
 
@@ -84,8 +87,16 @@ def main(argv=None):
         tt, T, f, spec, flink, peaks = window_peaks(ds, window, 500.0)
         curves.append((f"vibkit, k = {k:.0e}", f / flink, spec))
         for fr, order, amp in peaks:
-            rows.append({"formulation": "vibkit (exact closure)", "k_N_m^1.5": k, "window_s": f"{tt[0]:.2f}-{tt[-1]:.2f}",
-                         "peak_hz": fr, "order": order, "amplitude_N": amp})
+            rows.append(
+                {
+                    "formulation": "vibkit (exact closure)",
+                    "k_N_m^1.5": k,
+                    "window_s": f"{tt[0]:.2f}-{tt[-1]:.2f}",
+                    "peak_hz": fr,
+                    "order": order,
+                    "amplitude_N": amp,
+                }
+            )
     if not args.quick:
         from vibkit.analyses.reference import run_study
 
@@ -95,11 +106,21 @@ def main(argv=None):
             tt, T, f, spec, flink, peaks = window_peaks(ds, window, 500.0)
             curves.append((label, f / flink, spec))
             for fr, order, amp in peaks:
-                rows.append({"formulation": label, "k_N_m^1.5": 1e6, "window_s": f"{tt[0]:.2f}-{tt[-1]:.2f}",
-                             "peak_hz": fr, "order": order, "amplitude_N": amp})
-    md = (f"# Secondary peaks in the link tension (study's figure 76)\n\n{machine()}; {today()}.\n"
-          "Link 1's tension, detrended (quadratic), while roller 1 runs along the upper landing; peaks above 3 % "
-          "of the largest, frequency also in orders of the link-pass frequency.\n\n" + markdown_table(rows) + "\n")
+                rows.append(
+                    {
+                        "formulation": label,
+                        "k_N_m^1.5": 1e6,
+                        "window_s": f"{tt[0]:.2f}-{tt[-1]:.2f}",
+                        "peak_hz": fr,
+                        "order": order,
+                        "amplitude_N": amp,
+                    }
+                )
+    md = (
+        f"# Secondary peaks in the link tension (study's figure 76)\n\n{machine()}; {today()}.\n"
+        "Link 1's tension, detrended (quadratic), while roller 1 runs along the upper landing; peaks above 3 % "
+        "of the largest, frequency also in orders of the link-pass frequency.\n\n" + markdown_table(rows) + "\n"
+    )
     write_text(RESULTS / "tension_peaks.md", md)
     import matplotlib
 

@@ -34,9 +34,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import RESULTS, machine, markdown_table, today, write_csv, write_text  # noqa: E402
 
 import vibkit  # noqa: E402
+from vibkit.analyses.integrate import IntegrationError  # noqa: E402
 from vibkit.model.chain import Chain  # noqa: E402
 from vibkit.model.guide import Guide  # noqa: E402
-from vibkit.analyses.integrate import IntegrationError  # noqa: E402
 from vibkit.model.params import reference_chain, reference_guide  # noqa: E402
 from vibkit.model.scene import load_scene  # noqa: E402
 
@@ -56,14 +56,19 @@ def scene_for(duration):
 def conservative_for(scene):
     sections = dict(scene.sections)
     sections["run"] = dict(sections["run"], initial_speed=0.5)
-    return replace(scene, effects=CONSERVATIVE, sections=sections,
-                   outputs=dict(scene.outputs, variables=("energy",)))
+    return replace(scene, effects=CONSERVATIVE, sections=sections, outputs=dict(scene.outputs, variables=("energy",)))
 
 
 def run_ours(scene, method, rtol, budget, events=True, closure="table"):
     sections = dict(scene.sections)
-    sections["solver"] = {"method": method, "rtol": rtol, "atol": rtol * 1e-2, "max_wall_time": budget,
-                          "events": events, "closure": closure}
+    sections["solver"] = {
+        "method": method,
+        "rtol": rtol,
+        "atol": rtol * 1e-2,
+        "max_wall_time": budget,
+        "events": events,
+        "closure": closure,
+    }
     t0 = time.perf_counter()
     ds = vibkit.simulate(replace(scene, sections=sections), progress=False)
     return ds, time.perf_counter() - t0
@@ -125,16 +130,18 @@ def forward(quick, skip_study=False):
     ref, t_ref = run_ours(scene, "dopri5", 1e-11, math.inf, closure="exact")
     # (method, steps end on breakpoints, tolerances); the closure is read from the pitch table
     # (the default) except in the "exact closure" ladder
-    ladders = [("dopri5", True, [1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9] if not quick else [1e-6]),
-               ("dopri5 exact", True, [1e-6, 1e-7, 1e-9] if not quick else [1e-6]),
-               ("dopri5", False, [1e-5, 1e-7, 1e-9] if not quick else [1e-6]),
-               ("dop853", False, [1e-4, 1e-6, 1e-8] if not quick else [1e-6]),
-               ("rk45", False, [1e-4, 1e-6] if not quick else [1e-4]),
-               ("bdf", False, [1e-4, 1e-6] if not quick else [1e-4]),
-               ("radau", False, [1e-4, 1e-6] if not quick else [1e-4]),
-               ("lsoda", False, [1e-4, 1e-6] if not quick else [1e-4]),
-               ("cvode-bdf", False, [1e-4, 1e-6, 1e-8] if not quick else [1e-4]),
-               ("cvode-adams", False, [1e-4, 1e-6, 1e-8] if not quick else [1e-4])]
+    ladders = [
+        ("dopri5", True, [1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9] if not quick else [1e-6]),
+        ("dopri5 exact", True, [1e-6, 1e-7, 1e-9] if not quick else [1e-6]),
+        ("dopri5", False, [1e-5, 1e-7, 1e-9] if not quick else [1e-6]),
+        ("dop853", False, [1e-4, 1e-6, 1e-8] if not quick else [1e-6]),
+        ("rk45", False, [1e-4, 1e-6] if not quick else [1e-4]),
+        ("bdf", False, [1e-4, 1e-6] if not quick else [1e-4]),
+        ("radau", False, [1e-4, 1e-6] if not quick else [1e-4]),
+        ("lsoda", False, [1e-4, 1e-6] if not quick else [1e-4]),
+        ("cvode-bdf", False, [1e-4, 1e-6, 1e-8] if not quick else [1e-4]),
+        ("cvode-adams", False, [1e-4, 1e-6, 1e-8] if not quick else [1e-4]),
+    ]
     if quick:  # a smoke run: the default and one scipy method
         ladders = [lad for lad in ladders if lad[0] in ("dopri5", "rk45")]
     budget = 300.0 if not quick else 60.0
@@ -142,26 +149,47 @@ def forward(quick, skip_study=False):
     for method, events, tols in ladders:
         closure = "exact" if method.endswith(" exact") else "table"
         method = method.split()[0]
-        label = method + ("" if events or method != "dopri5" else " (steps over breakpoints)") + \
-            (", exact closure" if closure == "exact" else "")
+        label = (
+            method
+            + ("" if events or method != "dopri5" else " (steps over breakpoints)")
+            + (", exact closure" if closure == "exact" else "")
+        )
         for rtol in tols:
             print(f"{label} rtol {rtol:g} ...", file=sys.stderr, flush=True)
             try:
                 ds, wall = run_ours(scene, method, rtol, budget, events, closure)
             except (IntegrationError, ValueError) as exc:  # ValueError: an optional solver not installed
-                rows.append({"formulation": "vibkit", "method": label, "tolerance": rtol, "wall_time_s": float("nan"),
-                             "realtime_factor": float("nan"), "note": str(exc).split(" at t")[0]})
+                rows.append(
+                    {
+                        "formulation": "vibkit",
+                        "method": label,
+                        "tolerance": rtol,
+                        "wall_time_s": float("nan"),
+                        "realtime_factor": float("nan"),
+                        "note": str(exc).split(" at t")[0],
+                    }
+                )
                 continue
-            row = {"formulation": "vibkit", "method": label, "tolerance": rtol, "wall_time_s": wall,
-                   "realtime_factor": duration / wall}
+            row = {
+                "formulation": "vibkit",
+                "method": label,
+                "tolerance": rtol,
+                "wall_time_s": wall,
+                "realtime_factor": duration / wall,
+            }
             row.update(errors(ds, ref, 0.5 if quick else 10.0))
             row.update(physics(ds))
             row["energy_error_J"] = energy_error(scene, method, rtol, budget, events, closure)
             row["evaluations"] = int(ds.attrs["solver_evaluations"])
             rows.append(row)
-    ref_row = {"formulation": "vibkit (reference)", "method": "dopri5, exact closure", "tolerance": 1e-11,
-               "wall_time_s": t_ref,
-               "realtime_factor": duration / t_ref, "evaluations": int(ref.attrs["solver_evaluations"])}
+    ref_row = {
+        "formulation": "vibkit (reference)",
+        "method": "dopri5, exact closure",
+        "tolerance": 1e-11,
+        "wall_time_s": t_ref,
+        "realtime_factor": duration / t_ref,
+        "evaluations": int(ref.attrs["solver_evaluations"]),
+    }
     ref_row.update(physics(ref))
     ref_row["energy_error_J"] = energy_error(scene, "dopri5", 1e-11, math.inf, closure="exact")
     rows.append(ref_row)
@@ -174,22 +202,56 @@ def forward(quick, skip_study=False):
         print(f"study formulation BDF rtol {rtol:g} over {study_duration:g} s ...", file=sys.stderr, flush=True)
         t0 = time.perf_counter()
         try:
-            ds = run_study(scene, duration=study_duration, rtol=rtol, atol=rtol, max_step=1e-3, output_step=0.01,
-                           max_wall_time=900.0)
+            ds = run_study(
+                scene,
+                duration=study_duration,
+                rtol=rtol,
+                atol=rtol,
+                max_step=1e-3,
+                output_step=0.01,
+                max_wall_time=900.0,
+            )
             wall = time.perf_counter() - t0
-            row = {"formulation": "study (Baumgarte)", "method": "BDF", "tolerance": rtol, "wall_time_s": wall,
-                   "realtime_factor": study_duration / wall}
+            row = {
+                "formulation": "study (Baumgarte)",
+                "method": "BDF",
+                "tolerance": rtol,
+                "wall_time_s": wall,
+                "realtime_factor": study_duration / wall,
+            }
             row.update(errors(ds, ref, 0.5 if quick else 10.0))
             if "contact_force" in ds:
                 row.update(physics(ds))
             row["evaluations"] = int(ds.attrs.get("solver_evaluations", -1))
             rows.append(row)
         except IntegrationError as exc:
-            rows.append({"formulation": "study (Baumgarte)", "method": "BDF", "tolerance": rtol,
-                         "wall_time_s": float("nan"), "note": str(exc)})
-    keys = ["formulation", "method", "tolerance", "wall_time_s", "realtime_factor", "err_delta_m",
-            "err_chain_speed_m_s", "err_link_tension_N", "err_link_pass_rel", "closure_residual_m",
-            "contact_episodes", "last_contact_s", "ripple_percent", "energy_error_J", "evaluations", "note"]
+            rows.append(
+                {
+                    "formulation": "study (Baumgarte)",
+                    "method": "BDF",
+                    "tolerance": rtol,
+                    "wall_time_s": float("nan"),
+                    "note": str(exc),
+                }
+            )
+    keys = [
+        "formulation",
+        "method",
+        "tolerance",
+        "wall_time_s",
+        "realtime_factor",
+        "err_delta_m",
+        "err_chain_speed_m_s",
+        "err_link_tension_N",
+        "err_link_pass_rel",
+        "closure_residual_m",
+        "contact_episodes",
+        "last_contact_s",
+        "ripple_percent",
+        "energy_error_J",
+        "evaluations",
+        "note",
+    ]
     rows = [{k: r.get(k, "") for k in keys} for r in rows]
     return rows, duration, t_ref
 
@@ -206,8 +268,14 @@ def kinematics(quick):
         t0 = time.perf_counter()
         d, _ = ch.sweep(s)
         wall = time.perf_counter() - t0
-        rows.append({"study": "closure tolerance", "value": tol, "err_delta_m": float(np.abs(d - exact).max()),
-                     "us_per_configuration": wall / s.size * 1e6})
+        rows.append(
+            {
+                "study": "closure tolerance",
+                "value": tol,
+                "err_delta_m": float(np.abs(d - exact).max()),
+                "us_per_configuration": wall / s.size * 1e6,
+            }
+        )
     ch.tol = 1e-13
     fine_mean, fine_ptp = exact.mean(), np.ptp(exact)
     for step in (1e-2, 1e-3, 1e-4, 1e-5):
@@ -215,8 +283,15 @@ def kinematics(quick):
         d, _ = ch.sweep(grid)
         # delta between the samples, by linear interpolation, against the 0.01 mm sweep
         interp = np.interp(s, grid, d, period=None)
-        rows.append({"study": "sweep step [m]", "value": step, "err_delta_m": float(np.abs(interp - exact).max()),
-                     "err_mean_m": abs(d.mean() - fine_mean), "err_peak_to_peak_m": abs(np.ptp(d) - fine_ptp)})
+        rows.append(
+            {
+                "study": "sweep step [m]",
+                "value": step,
+                "err_delta_m": float(np.abs(interp - exact).max()),
+                "err_mean_m": abs(d.mean() - fine_mean),
+                "err_peak_to_peak_m": abs(np.ptp(d) - fine_ptp),
+            }
+        )
     keys = ["study", "value", "err_delta_m", "us_per_configuration", "err_mean_m", "err_peak_to_peak_m"]
     return [{k: r.get(k, "") for k in keys} for r in rows]
 
@@ -226,7 +301,6 @@ def plot(rows, path, duration):
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-
     from matplotlib.ticker import LogLocator, NullFormatter
 
     fig, axes = plt.subplots(1, 4, figsize=(17, 5.0))
@@ -235,9 +309,16 @@ def plot(rows, path, duration):
         if not isinstance(r["wall_time_s"], float) or not math.isfinite(r["wall_time_s"]) or r["err_delta_m"] == "":
             continue
         labels.setdefault(f"{r['formulation']} {r['method']}", []).append(r)
-    for ax, key, unit in zip(axes, ("err_delta_m", "err_link_tension_N", "err_link_pass_rel", "energy_error_J"),
-                             ("delta error [m]", "link tension error [N]", "link-pass frequency error [-]",
-                              "energy error, conservative scene [J]")):
+    for ax, key, unit in zip(
+        axes,
+        ("err_delta_m", "err_link_tension_N", "err_link_pass_rel", "energy_error_J"),
+        (
+            "delta error [m]",
+            "link tension error [N]",
+            "link-pass frequency error [-]",
+            "energy error, conservative scene [J]",
+        ),
+    ):
         for name, rs in labels.items():
             rs = [r for r in rs if isinstance(r.get(key), float) and math.isfinite(r[key])]
             x = [r["wall_time_s"] for r in rs]
@@ -266,8 +347,11 @@ def _number(text):
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--quick", action="store_true", help="4 s scene and shorter ladders (CI)")
-    ap.add_argument("--skip-study", action="store_true",
-                    help="leave out the study's formulation (about 150 s; benchmarks/bench_reference.py times it)")
+    ap.add_argument(
+        "--skip-study",
+        action="store_true",
+        help="leave out the study's formulation (about 150 s; benchmarks/bench_reference.py times it)",
+    )
     ap.add_argument("--plot-only", action="store_true", help="redraw the figure from the CSV of the last run")
     args = ap.parse_args(argv)
     suffix = "_quick" if args.quick else ""
@@ -282,10 +366,15 @@ def main(argv=None):
     write_csv(RESULTS / f"kinematic_precision{suffix}.csv", krows)
     rows, duration, t_ref = forward(args.quick, args.skip_study)
     write_csv(RESULTS / f"work_precision{suffix}.csv", rows)
-    md = [f"# Work-precision\n\n{machine()}; {today()}; no-load forward scene, {duration:g} s simulated; "
-          f"reference dopri5 rtol 1e-11 ({t_ref:.1f} s).\n", markdown_table(rows), "",
-          "## Kinematic sweep: delta against closure tolerance and sweep step (one pitch on the incline)\n",
-          markdown_table(krows), ""]
+    md = [
+        f"# Work-precision\n\n{machine()}; {today()}; no-load forward scene, {duration:g} s simulated; "
+        f"reference dopri5 rtol 1e-11 ({t_ref:.1f} s).\n",
+        markdown_table(rows),
+        "",
+        "## Kinematic sweep: delta against closure tolerance and sweep step (one pitch on the incline)\n",
+        markdown_table(krows),
+        "",
+    ]
     write_text(RESULTS / f"work_precision{suffix}.md", "\n".join(md))
     plot(rows, RESULTS / f"work_precision{suffix}.png", duration)
     print("\n".join(md))

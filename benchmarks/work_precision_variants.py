@@ -45,8 +45,7 @@ def variant(name, k, rtol=None, check=False, closure="table"):
     solver = dict(sc.sections["solver"], check=check, closure=closure)
     if rtol is not None:
         solver.update(rtol=rtol, atol=rtol * 1e-2)
-    return replace(sc, effects=eff, sections=dict(sc.sections, solver=solver),
-                   outputs=dict(sc.outputs, variables=outs))
+    return replace(sc, effects=eff, sections=dict(sc.sections, solver=solver), outputs=dict(sc.outputs, variables=outs))
 
 
 def timed(scene, duration):
@@ -84,29 +83,54 @@ def main(argv=None):
             print(f"{name} k={k:g} ...", file=sys.stderr, flush=True)
             for (r, closure), (s, wall, cpu) in runs.items():
                 diff = compare(s, ref, r, dt, duration)
-                rows.append({"scene": name, "stiffness": k, "rtol": r, "closure": closure,
-                             "default": "yes" if r == dflt else "",
-                             "episodes": s["contact_episodes"], "back_flank": s["back_flank_episodes"],
-                             "last_contact_s": s["last_contact_s"], "ripple_percent": s["sprocket_ripple_percent"],
-                             "right": "reference" if (r, closure) == (top, "exact") else
-                             ("yes" if not diff else "no: " + ", ".join(diff)),
-                             "wall_s": wall, "cpu_s": cpu, "x_real_time_cpu": duration / cpu})
+                rows.append(
+                    {
+                        "scene": name,
+                        "stiffness": k,
+                        "rtol": r,
+                        "closure": closure,
+                        "default": "yes" if r == dflt else "",
+                        "episodes": s["contact_episodes"],
+                        "back_flank": s["back_flank_episodes"],
+                        "last_contact_s": s["last_contact_s"],
+                        "ripple_percent": s["sprocket_ripple_percent"],
+                        "right": "reference"
+                        if (r, closure) == (top, "exact")
+                        else ("yes" if not diff else "no: " + ", ".join(diff)),
+                        "wall_s": wall,
+                        "cpu_s": cpu,
+                        "x_real_time_cpu": duration / cpu,
+                    }
+                )
             ds, wall, cpu = timed(variant(name, k, check=True), duration)
             v = json.loads(ds.attrs["convergence"])
-            rows.append({"scene": name, "stiffness": k, "rtol": dflt, "closure": "table", "default": "yes, with check",
-                         "episodes": v["runs"][0]["contact_episodes"], "back_flank": v["runs"][0]["back_flank_episodes"],
-                         "last_contact_s": v["runs"][0]["last_contact_s"],
-                         "ripple_percent": v["runs"][0]["sprocket_ripple_percent"],
-                         "right": ("converged" if v["converged"] else "sensitive" if v["sensitive"] else "not converged")
-                                  + f" ({len(v['runs'])} runs; check cost {cpu / runs[(dflt, 'table')][2]:.2f}x)",
-                         "wall_s": wall, "cpu_s": cpu, "x_real_time_cpu": duration / cpu})
+            rows.append(
+                {
+                    "scene": name,
+                    "stiffness": k,
+                    "rtol": dflt,
+                    "closure": "table",
+                    "default": "yes, with check",
+                    "episodes": v["runs"][0]["contact_episodes"],
+                    "back_flank": v["runs"][0]["back_flank_episodes"],
+                    "last_contact_s": v["runs"][0]["last_contact_s"],
+                    "ripple_percent": v["runs"][0]["sprocket_ripple_percent"],
+                    "right": ("converged" if v["converged"] else "sensitive" if v["sensitive"] else "not converged")
+                    + f" ({len(v['runs'])} runs; check cost {cpu / runs[(dflt, 'table')][2]:.2f}x)",
+                    "wall_s": wall,
+                    "cpu_s": cpu,
+                    "x_real_time_cpu": duration / cpu,
+                }
+            )
     stem = "work_precision_variants" + ("_quick" if args.quick else "")
     write_csv(RESULTS / f"{stem}.csv", rows)
-    md = (f"# Work-precision: shipped scenes and their stiffness variants\n\n{machine()}; {today()}; dopri5, steps "
-          f"ended on the breakpoints; every run compared with the exact closure's rtol 1e-12 run by the "
-          f"convergence check's criteria; closure: the chain's configuration read from the table over one "
-          f"pitch (the default) or solved at every evaluation (exact); CPU time of the process; load average {load0:.1f} at the start, {os.getloadavg()[0]:.1f} at "
-          f"the end.\n\n" + markdown_table(rows) + "\n")
+    md = (
+        f"# Work-precision: shipped scenes and their stiffness variants\n\n{machine()}; {today()}; dopri5, steps "
+        f"ended on the breakpoints; every run compared with the exact closure's rtol 1e-12 run by the "
+        f"convergence check's criteria; closure: the chain's configuration read from the table over one "
+        f"pitch (the default) or solved at every evaluation (exact); CPU time of the process; load average {load0:.1f} at the start, {os.getloadavg()[0]:.1f} at "
+        f"the end.\n\n" + markdown_table(rows) + "\n"
+    )
     write_text(RESULTS / f"{stem}.md", md)
     print(md)
     return 0

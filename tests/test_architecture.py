@@ -16,8 +16,7 @@ import pytest
 PKG = Path(__file__).resolve().parents[1] / "vibkit"
 
 #: layer of each subpackage: an import may go to the same or a lower number only
-LAYER = {"runtime": 0, "signal": 1, "io": 1, "model": 2, "analyses": 3, "diagnose": 4, "fleet": 5,
-         "sweep": 5, "cli": 6}
+LAYER = {"runtime": 0, "signal": 1, "io": 1, "model": 2, "analyses": 3, "diagnose": 4, "fleet": 5, "sweep": 5, "cli": 6}
 #: imports the layer numbers alone would allow but the architecture forbids
 FORBIDDEN = {("signal", "io"), ("io", "signal")}
 MAX_LINES = 700
@@ -111,8 +110,9 @@ def test_signal_and_io_never_import_the_model():
     for name in MODULES:
         if _layer(name) in ("signal", "io"):
             for target, line, _ in _imports(name):
-                assert _layer(target) not in ("model", "analyses", "diagnose", "fleet", "sweep", "cli"), \
+                assert _layer(target) not in ("model", "analyses", "diagnose", "fleet", "sweep", "cli"), (
                     f"{name}:{line} imports {target}"
+                )
 
 
 def test_no_import_cycles_at_load_time():
@@ -137,7 +137,7 @@ def test_no_import_cycles_at_load_time():
         stack.append(n)
         for m in sorted(graph[n]):
             if state.get(m) == 1:
-                cycles.append(stack[stack.index(m):] + [m])
+                cycles.append(stack[stack.index(m) :] + [m])
             elif m not in state:
                 visit(m)
         stack.pop()

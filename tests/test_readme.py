@@ -87,8 +87,9 @@ def test_outputs_are_ignored_by_git():
             written.update(re.findall(r'write_report\([^,]+, "([^"]+)"', ex))
     if shutil.which("git") is None or not (ROOT / ".git").exists():
         pytest.skip("not a git checkout")
-    proc = subprocess.run(["git", "check-ignore", "--no-index", *sorted(written)], cwd=ROOT,
-                          capture_output=True, text=True)
+    proc = subprocess.run(
+        ["git", "check-ignore", "--no-index", *sorted(written)], cwd=ROOT, capture_output=True, text=True
+    )
     ignored = set(proc.stdout.split())
     assert ignored == written, f"not ignored by git: {sorted(written - ignored)}"
 
@@ -129,13 +130,15 @@ def _run_shell(argv, cwd, env, capsys):
     if argv[0] in ("mkdir", "rm"):
         return subprocess.run(argv, cwd=cwd, env=env, capture_output=True, text=True), " ".join(argv)
     if argv[0] == "python":
-        return subprocess.run([sys.executable] + argv[1:], cwd=cwd, env=env, capture_output=True, text=True,
-                              timeout=900), " ".join(argv)
+        return subprocess.run(
+            [sys.executable] + argv[1:], cwd=cwd, env=env, capture_output=True, text=True, timeout=900
+        ), " ".join(argv)
     if argv[0] != "vibkit":
         raise AssertionError(f"the README shows a command this test does not know how to run: {argv}")
     if FULL:  # exactly as written, each in its own process
-        return subprocess.run([sys.executable, "-m", "vibkit"] + argv[1:], cwd=cwd, env=env, capture_output=True,
-                              text=True, timeout=900), " ".join(argv)
+        return subprocess.run(
+            [sys.executable, "-m", "vibkit"] + argv[1:], cwd=cwd, env=env, capture_output=True, text=True, timeout=900
+        ), " ".join(argv)
     key = next((k for k in CHEAP if " ".join(argv).startswith(k)), None)
     args = argv[1:]
     if key is not None:
@@ -156,8 +159,9 @@ def test_every_example_runs_in_order(tmp_path, monkeypatch, capsys):
     for kind, ex in examples():
         if kind == "py":
             if FULL:
-                proc = subprocess.run([sys.executable, "-c", ex], cwd=box, env=env, capture_output=True, text=True,
-                                      timeout=900)
+                proc = subprocess.run(
+                    [sys.executable, "-c", ex], cwd=box, env=env, capture_output=True, text=True, timeout=900
+                )
                 assert proc.returncode == 0, f"the README's Python block failed:\n{proc.stderr[-3000:]}"
             else:
                 compile(ex, "README.md", "exec")

@@ -19,10 +19,9 @@ __all__ = ["__version__", "load_scene", "simulate", "read_recording", "compare",
 
 # eager (the module imports only the standard library): a lazy name would be replaced by the module
 # object the first time someone runs `import vibkit.sweep`; this way `vibkit.sweep` is the function
-from .sweep.run import sweep  # noqa: E402
-
 # a read-only install (root installs, a service account runs) must still find a writable kernel cache
 from .runtime.kernel_cache import configure as _configure_kernel_cache  # noqa: E402
+from .sweep.run import sweep  # noqa: E402
 
 _configure_kernel_cache()
 

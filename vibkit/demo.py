@@ -32,8 +32,9 @@ def _plot(ds, path, variables, xdim, zoom=None):
     from .diagnose.report import atomic_path
 
     ncol = 2 if zoom else 1
-    fig, axes = plt.subplots(len(variables), ncol, figsize=(9 if ncol == 1 else 13, 3 * len(variables)),
-                             sharex="col", squeeze=False)
+    fig, axes = plt.subplots(
+        len(variables), ncol, figsize=(9 if ncol == 1 else 13, 3 * len(variables)), sharex="col", squeeze=False
+    )
     x = ds[xdim].values
     for j in range(ncol):
         sel_x = slice(None) if j == 0 else (x >= zoom[0]) & (x <= zoom[1])
@@ -55,16 +56,24 @@ def _plot(ds, path, variables, xdim, zoom=None):
 def main(argv=None) -> int:
     """Run the demo; returns 0, or 1 with a one-line message on failure."""
     from . import simulate
-    from .io import write_result
     from .diagnose.report import write_report
+    from .io import write_result
 
     p = argparse.ArgumentParser(prog="python -m vibkit.demo", description=__doc__.splitlines()[0])
     p.add_argument("--root", default=str(Path(__file__).resolve().parent.parent), help="repository root")
     p.add_argument("--out", default=None, help="output folder (default ROOT/reports)")
-    p.add_argument("--inverse-duration", type=float, default=None,
-                   help="inverse-dynamics time [s] (default: the scene's 42 s, as the study)")
-    p.add_argument("--field-duration", type=float, default=None,
-                   help="simulated time of the field scenes [s] (default: the scenes')")
+    p.add_argument(
+        "--inverse-duration",
+        type=float,
+        default=None,
+        help="inverse-dynamics time [s] (default: the scene's 42 s, as the study)",
+    )
+    p.add_argument(
+        "--field-duration",
+        type=float,
+        default=None,
+        help="simulated time of the field scenes [s] (default: the scenes')",
+    )
     a = p.parse_args(argv)
     root = Path(a.root)
     out = Path(a.out) if a.out else root / "reports"
@@ -81,23 +90,38 @@ def main(argv=None) -> int:
         t0 = time.perf_counter()
         ds = simulate(root / "sim/thesis-inverse.toml", duration=a.inverse_duration, progress=progress)
         written.append(write_result(ds, out / "thesis-inverse.nc"))
-        _plot(ds, out / "thesis-inverse.png", [("delta", None), ("drive_force", None),
-                                                ("link_tension", {"link": 1})], "time", zoom=(0.0, 2.0))
+        _plot(
+            ds,
+            out / "thesis-inverse.png",
+            [("delta", None), ("drive_force", None), ("link_tension", {"link": 1})],
+            "time",
+            zoom=(0.0, 2.0),
+        )
         written.append(out / "thesis-inverse.png")
-        print(f"thesis-inverse: {float(ds.time[-1]):g} s of imposed motion, {ds.sizes['time']} steps, "
-              f"in {time.perf_counter() - t0:.1f} s")
+        print(
+            f"thesis-inverse: {float(ds.time[-1]):g} s of imposed motion, {ds.sizes['time']} steps, "
+            f"in {time.perf_counter() - t0:.1f} s"
+        )
         for name, rec in (("las-palmas", "las-palmas-accelerometer.csv"), ("leon", "leon-tensioner.csv")):
             t0 = time.perf_counter()
-            rep = write_report(root / "data/field" / rec, out / f"{name}.pdf", scene=root / "sim" / f"{name}.toml",
-                               duration=a.field_duration, progress=progress)
+            rep = write_report(
+                root / "data/field" / rec,
+                out / f"{name}.pdf",
+                scene=root / "sim" / f"{name}.toml",
+                duration=a.field_duration,
+                progress=progress,
+            )
             written.append(rep.path)
             s = rep.summary
             extra = ""
             if "pitch_m" in s:
-                extra = f", pitch {1000 * s['pitch_m']:.2f} mm, pitch vs scene " + \
-                        ("consistent" if s.get("pitch_consistent") else "NOT consistent")
-            print(f"{name}: link-pass {s['link_pass_hz']:.4f} Hz{extra}; {len(rep.pages)} pages "
-                  f"in {time.perf_counter() - t0:.1f} s")
+                extra = f", pitch {1000 * s['pitch_m']:.2f} mm, pitch vs scene " + (
+                    "consistent" if s.get("pitch_consistent") else "NOT consistent"
+                )
+            print(
+                f"{name}: link-pass {s['link_pass_hz']:.4f} Hz{extra}; {len(rep.pages)} pages "
+                f"in {time.perf_counter() - t0:.1f} s"
+            )
     except (ValueError, OSError, RuntimeError) as exc:
         print(f"vibkit demo: error: {' '.join(str(exc).split())}", file=sys.stderr)
         return 1

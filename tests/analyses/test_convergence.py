@@ -52,8 +52,9 @@ def test_shipped_scenes_converged_at_their_defaults(name):
 def test_stiff_contact_not_converged_at_1e_6_and_found_at_1e_10():
     """Contact ten times stiffer: at rtol 1e-6 the contact history is wrong (the issue: converged
     needs 1e-10); the check says so and finds the tolerance from which the runs agree."""
-    ds = vibkit.simulate(scene("thesis-forward", stiffness=1e7, solver={"rtol": 1e-6}), duration=12.0,
-                         progress=False, check=True)
+    ds = vibkit.simulate(
+        scene("thesis-forward", stiffness=1e7, solver={"rtol": 1e-6}), duration=12.0, progress=False, check=True
+    )
     v = convergence(ds)
     assert v["converged"] is False and v["sensitive"] is False
     assert "contact_episodes" in v["differences"]
@@ -67,8 +68,13 @@ def test_conservative_stiff_chain_is_reported_sensitive():
     """No motor, no damping, k = 1e7, 25 s from 0.5 m/s: the chain rattles chaotically in its
     backlash, no two tolerances from 1e-6 to 1e-12 give the same contact history; what is still
     robust is the kinematic part (mean delta and its tooth-mesh frequency, 28 x 0.1336 Hz)."""
-    sc = scene("thesis-forward", run={"initial_speed": 0.5}, outputs=["energy"], solver={"rtol": 1e-6},
-               effects={"gravity": {"g": 9.81}, "contact": {"stiffness": 1e7, "exponent": 1.5, "damping": 0.0}})
+    sc = scene(
+        "thesis-forward",
+        run={"initial_speed": 0.5},
+        outputs=["energy"],
+        solver={"rtol": 1e-6},
+        effects={"gravity": {"g": 9.81}, "contact": {"stiffness": 1e7, "exponent": 1.5, "damping": 0.0}},
+    )
     v = convergence(vibkit.simulate(sc, duration=25.0, progress=False, check=True))
     assert v["converged"] is False and v["sensitive"] is True and v["agrees_at_rtol"] is None
     assert [r["rtol"] for r in v["runs"]] == pytest.approx([1e-6, 1e-8, 1e-10, 1e-12])
@@ -92,9 +98,17 @@ def test_stiffness_variants_right_at_the_default_tolerance():
 
 
 def test_verdict_logic():
-    base = {"contact_episodes": 3, "back_flank_episodes": 0, "last_contact_s": 2.0, "sprocket_ripple_percent": 1.0,
-            "delta_ripple_m": 1e-5, "sprocket_speed_frequency_hz": 3.0, "delta_frequency_hz": 3.0,
-            "mean_sprocket_speed_rad_s": -0.84, "mean_delta_m": 0.033}
+    base = {
+        "contact_episodes": 3,
+        "back_flank_episodes": 0,
+        "last_contact_s": 2.0,
+        "sprocket_ripple_percent": 1.0,
+        "delta_ripple_m": 1e-5,
+        "sprocket_speed_frequency_hz": 3.0,
+        "delta_frequency_hz": 3.0,
+        "mean_sprocket_speed_rad_s": -0.84,
+        "mean_delta_m": 0.033,
+    }
     other = dict(base, contact_episodes=5)
     assert compare(base, dict(base, last_contact_s=2.004), 1e-6, 0.005, 10.0) == {}
     assert set(compare(base, dict(base, last_contact_s=2.02), 1e-6, 0.005, 10.0)) == {"last_contact_s"}

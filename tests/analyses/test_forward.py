@@ -39,8 +39,11 @@ def peak_frequency(x, fs):
 
 @pytest.fixture(scope="module")
 def startup():
-    return vibkit.simulate(variant(outputs=["motor_torque", "sprocket_speed", "chain_speed", "closure_residual",
-                                            "delta"]), duration=6.0, progress=False)
+    return vibkit.simulate(
+        variant(outputs=["motor_torque", "sprocket_speed", "chain_speed", "closure_residual", "delta"]),
+        duration=6.0,
+        progress=False,
+    )
 
 
 def test_startup_torque_and_time_to_speed(startup):
@@ -74,8 +77,9 @@ def test_delta_follows_tooth_mesh_frequency():
     backlash (about 6.5 mm), so the two frequencies may differ by 0.0065 / (v T): 0.06 % over 20 s.
     The spectral peak of a 10 s record scatters by about as much, because the undamped chain
     surges within the backlash (frequency modulation), hence the average-phase measure."""
-    ds = vibkit.simulate(variant(run={"initial_speed": 0.5}, outputs=["delta", "sprocket_speed"]), duration=24.0,
-                         progress=False)
+    ds = vibkit.simulate(
+        variant(run={"initial_speed": 0.5}, outputs=["delta", "sprocket_speed"]), duration=24.0, progress=False
+    )
     steady = ds.time.values >= 2.0
     mesh = 28 * abs(ds.sprocket_speed.values[steady].mean()) / (2 * np.pi)
     f = mean_frequency(ds.delta.values[steady], 1 / 0.005, mesh)
@@ -121,16 +125,18 @@ def test_result_does_not_depend_on_run_length_or_output_step(no_load):
     run up to its last step, and so is a run with a coarser output step. The state is the same bit
     for bit; delta and the contact forces, closed again at each output time from the previous
     output's delta, agree to the closure's rounding."""
-    short = vibkit.simulate(variant(outputs=["delta", "sprocket_speed", "contact_force"]), duration=30.0,
-                            progress=False)
+    short = vibkit.simulate(
+        variant(outputs=["delta", "sprocket_speed", "contact_force"]), duration=30.0, progress=False
+    )
     common = short.time.values <= 29.9  # the last step of the short run is cut to end at 30 s
     long_ = no_load.isel(time=slice(0, common.size)).isel(time=common)
     np.testing.assert_array_equal(short.sprocket_speed.values[common], long_.sprocket_speed.values)
     np.testing.assert_allclose(short.delta.values[common], long_.delta.values, rtol=0, atol=1e-12)
     np.testing.assert_allclose(short.contact_force.values[common], long_.contact_force.values, rtol=1e-9, atol=1e-6)
     assert contact_episodes(short) == contact_episodes(no_load)
-    coarse = vibkit.simulate(variant(run={"output_step": 0.02}, outputs=["delta", "sprocket_speed"]),
-                             duration=30.0, progress=False)
+    coarse = vibkit.simulate(
+        variant(run={"output_step": 0.02}, outputs=["delta", "sprocket_speed"]), duration=30.0, progress=False
+    )
     keep = coarse.time.values <= 29.9
     fine = no_load.sel(time=coarse.time.values[keep])
     np.testing.assert_array_equal(coarse.sprocket_speed.values[keep], fine.sprocket_speed.values)
@@ -141,9 +147,14 @@ def test_conservative_scene_loses_less_than_10_mJ_over_44_s():
     """No motor, no damping, started at 0.5 m/s, at the shipped solver settings: kinetic +
     gravitational + contact energy stays within 0.01 J over 44 s (about 160 J of kinetic energy;
     the whole converged drift inside the backlash is worth about 0.05 J)."""
-    ds = vibkit.simulate(variant(effects={"gravity": {"g": 9.81}, "contact": {"stiffness": 1e6, "exponent": 1.5,
-                                                                              "damping": 0.0}},
-                                 run={"initial_speed": 0.5}, outputs=["energy"]), progress=False)
+    ds = vibkit.simulate(
+        variant(
+            effects={"gravity": {"g": 9.81}, "contact": {"stiffness": 1e6, "exponent": 1.5, "damping": 0.0}},
+            run={"initial_speed": 0.5},
+            outputs=["energy"],
+        ),
+        progress=False,
+    )
     e = (ds.kinetic_energy + ds.potential_energy + ds.contact_energy).values
     assert np.abs(e - e[0]).max() < 0.01
 
@@ -153,10 +164,16 @@ def test_energy_conserved_without_motor_and_damping():
     conserved over 44 s to the integrator tolerance, and the error shrinks with the tolerance."""
     drift = {}
     for rtol, duration in ((1e-6, 44.0), (1e-8, 44.0)):
-        ds = vibkit.simulate(variant(effects={"gravity": {"g": 9.81}, "contact": {"stiffness": 1e6, "exponent": 1.5,
-                                                                                  "damping": 0.0}},
-                                     run={"initial_speed": 0.5}, solver={"rtol": rtol, "atol": rtol * 1e-2},
-                                     outputs=["energy", "closure_residual"]), duration=duration, progress=False)
+        ds = vibkit.simulate(
+            variant(
+                effects={"gravity": {"g": 9.81}, "contact": {"stiffness": 1e6, "exponent": 1.5, "damping": 0.0}},
+                run={"initial_speed": 0.5},
+                solver={"rtol": rtol, "atol": rtol * 1e-2},
+                outputs=["energy", "closure_residual"],
+            ),
+            duration=duration,
+            progress=False,
+        )
         e = (ds.kinetic_energy + ds.potential_energy + ds.contact_energy).values
         # relative to the kinetic energy: the potential energy's large constant would flatter the ratio
         drift[rtol] = np.abs(e - e[0]).max() / float(ds.kinetic_energy[0])
@@ -168,12 +185,16 @@ def test_energy_conserved_without_motor_and_damping():
 
 
 def _passenger_run(motor, *, alight=100.0, duration=4.0, outputs=("sprocket_speed", "motor_torque")):
-    effects = {"gravity": {"g": 9.81}, "contact": {"stiffness": 1e6, "exponent": 1.5, "damping": 0.0},
-               "motor": motor,
-               # 160 kg on step 7 (rollers 19-21, on the incline from t = 0 for 10 s)
-               "passengers": {"mass": [160.0], "step": [7], "board": [0.0], "alight": [alight]}}
-    return vibkit.simulate(variant(effects=effects, run={"initial_speed": 0.5}, outputs=list(outputs)),
-                           duration=duration, progress=False)
+    effects = {
+        "gravity": {"g": 9.81},
+        "contact": {"stiffness": 1e6, "exponent": 1.5, "damping": 0.0},
+        "motor": motor,
+        # 160 kg on step 7 (rollers 19-21, on the incline from t = 0 for 10 s)
+        "passengers": {"mass": [160.0], "step": [7], "board": [0.0], "alight": [alight]},
+    }
+    return vibkit.simulate(
+        variant(effects=effects, run={"initial_speed": 0.5}, outputs=list(outputs)), duration=duration, progress=False
+    )
 
 
 def test_p_controller_droop_equals_load_torque_over_kp():
@@ -194,8 +215,9 @@ def test_pi_controller_removes_droop():
 def test_back_flanks_take_load_when_passenger_steps_off():
     """The study's chapter 7.4: with no friction the chain overruns the sprocket after the load
     leaves, and the rollers strike the back flanks (AB)."""
-    ds = _passenger_run({"kp": 6000.0, "speed": 0.5}, alight=2.0, duration=8.0,
-                        outputs=("flank_force", "sprocket_speed"))
+    ds = _passenger_run(
+        {"kp": 6000.0, "speed": 0.5}, alight=2.0, duration=8.0, outputs=("flank_force", "sprocket_speed")
+    )
     t = ds.time.values
     loaded = (t > 0.5) & (t < 2.0)
     assert float(ds.back_flank_force.values[loaded].max()) == 0.0
@@ -227,7 +249,7 @@ def test_passengers_board_and_alight_at_the_landings():
     assert by_place
     lower, upper = model.place("lower_landing"), model.place("upper_landing")
     # both places are on the horizontal landings' top runs (curvature 0, at the landing heights)
-    for place, z in ((lower, 0.0), (upper, None)):
+    for place, _z in ((lower, 0.0), (upper, None)):
         s = model.guide.s0_to_s(place, 0.0)
         assert float(model.guide.curvature(s, 0.0)) == 0.0
     conf = model.chain.configure(0.0)
@@ -240,8 +262,12 @@ def test_passengers_board_and_alight_at_the_landings():
     assert conf.s0[mid53] < board[1]
     assert np.mod(board[1], p0) == pytest.approx(lower) and np.mod(alight[1], p0) == pytest.approx(upper)
     # the weight is on the step's three rollers exactly while its middle roller is between the places
-    for s0_mid, aboard in ((board[0] - 1e-6, False), (board[0] + 1e-6, True), (alight[0] - 1e-6, True),
-                           (alight[0] + 1e-6, False)):
+    for s0_mid, aboard in (
+        (board[0] - 1e-6, False),
+        (board[0] + 1e-6, True),
+        (alight[0] - 1e-6, True),
+        (alight[0] + 1e-6, False),
+    ):
         s0 = conf.s0.copy()
         s0[mid3] = s0_mid
         fz = np.zeros(model.n)
@@ -287,7 +313,10 @@ def test_t0_sample_does_not_depend_on_run_length():
     for name in ("accel_step", "link_tension", "delta"):
         np.testing.assert_array_equal(runs[0][name].values[0], runs[1][name].values[0])
     # and it is the one-sided value: the same as a sample a nanometre of travel further on
-    assert abs(float(runs[0].accel_step[0]) - float(runs[0].accel_step[1])) < 0.05 * abs(float(runs[0].accel_step[1])) + 0.01
+    assert (
+        abs(float(runs[0].accel_step[0]) - float(runs[0].accel_step[1]))
+        < 0.05 * abs(float(runs[0].accel_step[1])) + 0.01
+    )
     rest = variant(outputs=["accel_step", "link_tension"])
     a, b = (vibkit.simulate(rest, duration=d, progress=False) for d in (0.3, 0.9))
     np.testing.assert_array_equal(a.link_tension.values[0], b.link_tension.values[0])

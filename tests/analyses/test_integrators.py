@@ -15,10 +15,17 @@ SIM = Path(__file__).resolve().parents[2] / "sim"
 
 def scene(method, rtol, *, effects=None, speed=0.5, **solver):
     s = load_scene(SIM / "thesis-forward.toml")
-    sections = dict(s.sections, run=dict(s.sections["run"], initial_speed=speed),
-                    solver={"method": method, "rtol": rtol, "atol": rtol * 1e-2, **solver})
-    return replace(s, sections=sections, effects=effects if effects is not None else s.effects,
-                   outputs=dict(s.outputs, variables=("delta", "sprocket_speed", "s0", "closure_residual")))
+    sections = dict(
+        s.sections,
+        run=dict(s.sections["run"], initial_speed=speed),
+        solver={"method": method, "rtol": rtol, "atol": rtol * 1e-2, **solver},
+    )
+    return replace(
+        s,
+        sections=sections,
+        effects=effects if effects is not None else s.effects,
+        outputs=dict(s.outputs, variables=("delta", "sprocket_speed", "s0", "closure_residual")),
+    )
 
 
 @pytest.fixture(scope="module")
@@ -29,8 +36,16 @@ def reference():
 # per-method: tolerance asked, and the error on delta accepted over 1.5 s of contact, motor and gravity
 # (about twice what each method gives; delta's ripple is 2.7e-5 m). dopri5 ends its steps on the guide's
 # breakpoints and is 100 times closer than the methods that step over them (1e-10 m against 1e-8 m).
-CASES = {"dopri5": (1e-7, 3e-10), "rk45": (1e-7, 8e-8), "dop853": (1e-7, 4e-8), "bdf": (1e-7, 1e-8),
-         "radau": (1e-7, 2e-9), "lsoda": (1e-7, 2e-9), "cvode-bdf": (1e-7, 3e-8), "cvode-adams": (1e-7, 4e-8)}
+CASES = {
+    "dopri5": (1e-7, 3e-10),
+    "rk45": (1e-7, 8e-8),
+    "dop853": (1e-7, 4e-8),
+    "bdf": (1e-7, 1e-8),
+    "radau": (1e-7, 2e-9),
+    "lsoda": (1e-7, 2e-9),
+    "cvode-bdf": (1e-7, 3e-8),
+    "cvode-adams": (1e-7, 4e-8),
+}
 
 
 @pytest.mark.parametrize("method", METHODS)
@@ -53,11 +68,16 @@ def test_dopri5_is_fifth_order():
     exact = w_ref * (1.0 - np.exp(-kp * 0.2 / inertia))
     errors = []
     for h in (0.2 / 4, 0.2 / 8, 0.2 / 16, 0.2 / 32):
-        sc = replace(s, effects={"motor": {"kp": kp, "speed": 0.5, "ki": 0.0}},
-                     sections=dict(s.sections, run=dict(s.sections["run"], initial_speed=0.0, output_step=0.2),
-                                   solver={"method": "dopri5", "rtol": 1.0, "atol": 1.0, "max_step": h,
-                                           "first_step": h}),
-                     outputs=dict(s.outputs, variables=("sprocket_speed", "delta")))
+        sc = replace(
+            s,
+            effects={"motor": {"kp": kp, "speed": 0.5, "ki": 0.0}},
+            sections=dict(
+                s.sections,
+                run=dict(s.sections["run"], initial_speed=0.0, output_step=0.2),
+                solver={"method": "dopri5", "rtol": 1.0, "atol": 1.0, "max_step": h, "first_step": h},
+            ),
+            outputs=dict(s.outputs, variables=("sprocket_speed", "delta")),
+        )
         ds = vibkit.simulate(sc, duration=0.2, progress=False)
         errors.append(abs(float(ds.sprocket_speed[-1]) - exact))
     orders = np.log2(np.array(errors[:-1]) / np.array(errors[1:]))

@@ -21,8 +21,8 @@ import numpy as np
 import pytest
 
 from vibkit.analyses.forward import ForwardModel, forward_dynamics, initial_state
-from vibkit.model.escalator import EscalatorModel
 from vibkit.analyses.reference import STUDY_SETTINGS, StudyFormulation, run_study
+from vibkit.model.escalator import EscalatorModel
 from vibkit.model.scene import load_scene
 
 SIM = Path(__file__).resolve().parents[2] / "sim"
@@ -60,6 +60,7 @@ def study_faithful(scene):
 
 
 # -- 1. one instant ------------------------------------------------------------------------------
+
 
 @pytest.mark.parametrize("coordinate_map", ["study", "vibkit"])
 @pytest.mark.parametrize("start, speed, dtheta", [(1.234, 0.5, 0.0), (0.05, 0.3, 0.01), (8.9, 0.5, -0.02)])
@@ -111,6 +112,7 @@ def test_same_link_tensions_at_an_instant(scene, fmodel, coordinate_map):
 
 # -- 2. converged runs, same coordinate ---------------------------------------------------------
 
+
 def test_converged_runs_agree(ours, study_converged):
     """Both converged, so they agree to the study run's integration accuracy (rtol 1e-6, atol 1e-8
     on 323 states, with Baumgarte); the differences measured are about 10x below each tolerance:
@@ -134,6 +136,7 @@ def test_the_run_is_not_trivial(ours):
 
 
 # -- 3. the faithful port ----------------------------------------------------------------------
+
 
 def test_faithful_port_agrees_within_stated_tolerances(fmodel, ours, study_faithful):
     """The study's settings (RelTol = AbsTol = MaxStep = 1e-3) and its linear coordinate map.
@@ -176,7 +179,7 @@ def test_speed_jump_of_the_study_coordinate(fmodel, ours, study_faithful):
     assert 0.3 * jump < diff[j] < jump
     assert np.abs(diff[j:]).max() < jump
     # vibkit's roller-1 speed is continuous there: no step larger than the neighbouring ones
-    steps = np.abs(np.diff(ours.chain_speed.values[j - 5:j + 5]))
+    steps = np.abs(np.diff(ours.chain_speed.values[j - 5 : j + 5]))
     assert steps.max() < 3.0 * np.median(steps) + 1e-4
 
 
@@ -203,6 +206,7 @@ def test_result_layout(study_faithful, ours):
 
 
 # -- bad input -----------------------------------------------------------------------------------
+
 
 def test_rejects_bad_input(scene, fmodel):
     with pytest.raises(ValueError, match="duration"):

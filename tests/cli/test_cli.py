@@ -3,7 +3,6 @@
 import json
 import os
 import sys
-
 from pathlib import Path
 
 import pytest
@@ -57,12 +56,22 @@ def test_spectrum_table_and_json(capsys):
 
 
 def test_pitch_json_keys(capsys):
-    assert main(["pitch", LEON, "--speed", "0.49", "--speed-uncertainty", "0.1%", "--nominal-pitch", "0.133333",
-                 "--json"]) == 0
+    assert (
+        main(["pitch", LEON, "--speed", "0.49", "--speed-uncertainty", "0.1%", "--nominal-pitch", "0.133333", "--json"])
+        == 0
+    )
     d = _json(capsys)
     assert d["schema"] == "vibkit.pitch/1"
-    for key in ("fundamental_hz", "fundamental_sigma_hz", "pitch_m", "pitch_sigma_m", "elongation_percent",
-                "harmonics", "warnings", "hypotheses"):
+    for key in (
+        "fundamental_hz",
+        "fundamental_sigma_hz",
+        "pitch_m",
+        "pitch_sigma_m",
+        "elongation_percent",
+        "harmonics",
+        "warnings",
+        "hypotheses",
+    ):
         assert key in d
     assert d["pitch_m"] == pytest.approx(0.1384, abs=2e-4)
     assert d["speed_sigma_m_s"] == pytest.approx(0.00049)
@@ -82,8 +91,12 @@ def test_pitch_no_time_column_needs_sample_rate(capsys):
     f = "data/field/layouts/no-time-column.txt"  # 1 s at 2050 Hz: three periods need a band above 3 Hz
     # its one second holds no detectable link-pass family (harmonic least squares finds every harmonic
     # below its own detection limit, SNR -5 dB): the honest answer is "no link-pass found", exit 1
-    assert main(["pitch", f, "--speed", "0.52", "--sample-rate", "2050", "--band", "3.5:6", "--channel", "acc_x",
-                 "--json"]) == 1
+    assert (
+        main(
+            ["pitch", f, "--speed", "0.52", "--sample-rate", "2050", "--band", "3.5:6", "--channel", "acc_x", "--json"]
+        )
+        == 1
+    )
     d = _json(capsys)
     assert d["status"] == "no link-pass found" and "fundamental_hz" not in d
     assert d["detection"]["segment_s"] == pytest.approx(2050 / 2050, rel=1e-2)  # the given sample rate was used
@@ -106,22 +119,33 @@ def test_report_json(leon_nc, tmp_path, capsys):
     assert d["schema"] == "vibkit.report/1" and "verdict" in d["pages"] and out.exists()
 
 
-@pytest.mark.parametrize("argv", [["pitch", LEON, "--speed", "49"], ["nonsense"], ["pitch", LEON, "--speed", "-1"],
-                                  ["pitch", LEON, "--speed", "0.5", "--band", "6:2"], [],
-                                  ["pitch", LEON, "--speed", "0.5", "--speed-uncertainty", "abc"]])
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["pitch", LEON, "--speed", "49"],
+        ["nonsense"],
+        ["pitch", LEON, "--speed", "-1"],
+        ["pitch", LEON, "--speed", "0.5", "--band", "6:2"],
+        [],
+        ["pitch", LEON, "--speed", "0.5", "--speed-uncertainty", "abc"],
+    ],
+)
 def test_usage_errors_exit_2(argv, capsys):
     with pytest.raises(SystemExit) as exc:
         main(argv)
     assert exc.value.code == 2
 
 
-@pytest.mark.parametrize("argv, text", [
-    (["pitch", "missing.csv", "--speed", "0.5"], "file not found"),
-    (["pitch", LEON, "--speed", "0.5", "--channel", "nope"], "channel 'nope'"),
-    (["simulate", "missing.toml", "-o", "x.nc"], "missing.toml"),
-    (["compare", LEON, "missing.toml"], "file not found"),
-    (["report", LEON, "-o", "out.txt"], ".pdf"),
-])
+@pytest.mark.parametrize(
+    "argv, text",
+    [
+        (["pitch", "missing.csv", "--speed", "0.5"], "file not found"),
+        (["pitch", LEON, "--speed", "0.5", "--channel", "nope"], "channel 'nope'"),
+        (["simulate", "missing.toml", "-o", "x.nc"], "missing.toml"),
+        (["compare", LEON, "missing.toml"], "file not found"),
+        (["report", LEON, "-o", "out.txt"], ".pdf"),
+    ],
+)
 def test_data_errors_exit_1_one_line(argv, text, capsys, tmp_path, monkeypatch):
     assert main(argv) == 1
     err = capsys.readouterr().err
@@ -153,8 +177,12 @@ def test_help_shows_example(capsys):
 def test_python_m_vibkit():
     import subprocess
 
-    r = subprocess.run([sys.executable, "-m", "vibkit", "--version"], capture_output=True, text=True,
-                       env={**os.environ, "NO_COLOR": "1"})
+    r = subprocess.run(
+        [sys.executable, "-m", "vibkit", "--version"],
+        capture_output=True,
+        text=True,
+        env={**os.environ, "NO_COLOR": "1"},
+    )
     assert r.returncode == 0 and r.stdout.startswith("vibkit ")
 
 

@@ -49,8 +49,11 @@ def _synthetic(t, f, amps, seg=None, rng=None):
     x = sum(a * np.cos(2 * np.pi * (k + 1) * f * t + 0.3 * k) for k, a in enumerate(amps))
     if rng is not None:
         x = x + 1e-3 * rng.standard_normal(t.size)
-    ds = xr.Dataset({"delta": ("time", x, {"units": "m", "long_name": "d"})},
-                    coords={"time": ("time", t, {"units": "s"})}, attrs={"chain_speed_m_s": 0.5})
+    ds = xr.Dataset(
+        {"delta": ("time", x, {"units": "m", "long_name": "d"})},
+        coords={"time": ("time", t, {"units": "s"})},
+        attrs={"chain_speed_m_s": 0.5},
+    )
     if seg is not None:
         ds["segment"] = ("time", seg.astype(np.int32))
     return ds

@@ -15,8 +15,14 @@ import vibkit
 from vibkit.cli import main
 from vibkit.cli.options import chain_speed, pitch_length
 from vibkit.diagnose.channels import estimate_channels, speed_from_recording, vibration_channels
-from vibkit.diagnose.decision import (EXIT_CODES, STATUS_IMPLAUSIBLE, STATUS_INCONCLUSIVE, STATUS_NOT_FOUND,
-                                      STATUS_OK, decide)
+from vibkit.diagnose.decision import (
+    EXIT_CODES,
+    STATUS_IMPLAUSIBLE,
+    STATUS_INCONCLUSIVE,
+    STATUS_NOT_FOUND,
+    STATUS_OK,
+    decide,
+)
 from vibkit.diagnose.pitch import estimate_pitch
 
 LEON = "data/field/leon-tensioner.csv"
@@ -29,8 +35,11 @@ NOMINAL = 0.13333
 def _rec(channels, fs=FS, attrs=None):
     n = len(next(iter(channels.values())))
     t = np.arange(n) / fs
-    return xr.Dataset({k: ("time", np.asarray(v, dtype=float), {"units": "m/s^2"}) for k, v in channels.items()},
-                      coords={"time": ("time", t, {"units": "s"})}, attrs=attrs or {})
+    return xr.Dataset(
+        {k: ("time", np.asarray(v, dtype=float), {"units": "m/s^2"}) for k, v in channels.items()},
+        coords={"time": ("time", t, {"units": "s"})},
+        attrs=attrs or {},
+    )
 
 
 def _chain(f, seconds=30.0, fs=FS, noise=0.1, seed=1):
@@ -51,9 +60,13 @@ def _issue_cases():
     imp3[[n // 4, n // 2, 3 * n // 4]] = 1.0
     imp3c = np.zeros(n)
     imp3c[[n // 2, n // 2 + 40, n // 2 + 80]] = 1.0  # 0.2 s apart: a 5 Hz comb in one segment
-    return {"lone step": np.where(t >= 30, 1.0, 0.0) + noise, "single impulse": imp1 + noise,
-            "three impulses": imp3 + noise, "three impulses 0.2 s apart": imp3c + noise,
-            "chirp 1-20 Hz": scipy.signal.chirp(t, 1.0, 60.0, 20.0) + noise}
+    return {
+        "lone step": np.where(t >= 30, 1.0, 0.0) + noise,
+        "single impulse": imp1 + noise,
+        "three impulses": imp3 + noise,
+        "three impulses 0.2 s apart": imp3c + noise,
+        "chirp 1-20 Hz": scipy.signal.chirp(t, 1.0, 60.0, 20.0) + noise,
+    }
 
 
 @pytest.mark.parametrize("name", list(_issue_cases()))
@@ -129,8 +142,9 @@ def test_elongation_outside_the_window_is_a_refusal():
     assert est.status == STATUS_OK and est.verdict == "ok"
 
 
-@pytest.mark.parametrize("pitch, status", [(0.1384, STATUS_OK), (0.1016, STATUS_OK), (0.17, STATUS_IMPLAUSIBLE),
-                                           (0.118, STATUS_IMPLAUSIBLE)])
+@pytest.mark.parametrize(
+    "pitch, status", [(0.1384, STATUS_OK), (0.1016, STATUS_OK), (0.17, STATUS_IMPLAUSIBLE), (0.118, STATUS_IMPLAUSIBLE)]
+)
 def test_without_nominal_pitch_the_catalogue_decides(pitch, status):
     est = estimate_pitch(_rec({"x": _chain(0.5 / pitch)}), speed=0.5)
     assert est.status == status, est.reason
@@ -149,17 +163,26 @@ def test_unresolved_elongation_is_inconclusive(capsys, tmp_path):
     assert est.elongation_sigma_percent > 0.5
     assert est.decision.exit_code == EXIT_CODES[STATUS_INCONCLUSIVE] == 3
     p = tmp_path / "c.csv"
-    np.savetxt(p, np.column_stack([rec.time.values, rec.x.values]), delimiter=",", header="time_s,x_m/s^2",
-               comments="")
-    assert main(["pitch", str(p), "--speed", "0.5", "--speed-uncertainty", "1%", "--nominal-pitch", "133.33mm",
-                 "--json"]) == 3
+    np.savetxt(p, np.column_stack([rec.time.values, rec.x.values]), delimiter=",", header="time_s,x_m/s^2", comments="")
+    assert (
+        main(["pitch", str(p), "--speed", "0.5", "--speed-uncertainty", "1%", "--nominal-pitch", "133.33mm", "--json"])
+        == 3
+    )
     d = json.loads(capsys.readouterr().out)
     assert d["verdict"] == "inconclusive" and d["fundamental_hz"] == pytest.approx(3.75, abs=1e-3)
 
 
 def test_decide_rules():
-    base = dict(detected=True, detection_hz=3.75, resolution_hz=0.125, fundamental_hz=3.76, fundamental_sigma_hz=1e-3,
-                band_hz=(2.5, 6.25), speed_m_s=0.5, nominal_pitch_m=0.5 / 3.76)
+    base = dict(
+        detected=True,
+        detection_hz=3.75,
+        resolution_hz=0.125,
+        fundamental_hz=3.76,
+        fundamental_sigma_hz=1e-3,
+        band_hz=(2.5, 6.25),
+        speed_m_s=0.5,
+        nominal_pitch_m=0.5 / 3.76,
+    )
     assert decide(**base).status == STATUS_OK
     assert decide(**{**base, "fundamental_hz": 3.5}).status == STATUS_NOT_FOUND  # not the detected family
     assert decide(**{**base, "detection_hz": 2.4, "fundamental_hz": 2.4}).status == STATUS_NOT_FOUND  # below the band
@@ -215,30 +238,43 @@ def test_spectrum_and_pitch_agree(capsys):
 # ------------------------------------------------------------------------------------ units
 
 
-@pytest.mark.parametrize("text, metres", [("0.13333", 0.13333), ("133.33mm", 0.13333), ("13.333cm", 0.13333),
-                                          ("0.13333m", 0.13333), ("4in", 0.1016)])
+@pytest.mark.parametrize(
+    "text, metres",
+    [("0.13333", 0.13333), ("133.33mm", 0.13333), ("13.333cm", 0.13333), ("0.13333m", 0.13333), ("4in", 0.1016)],
+)
 def test_pitch_units(text, metres):
     assert pitch_length(text) == pytest.approx(metres, rel=1e-9)
 
 
-@pytest.mark.parametrize("text, ms", [("0.49", 0.49), ("0.49m/s", 0.49), ("49cm/s", 0.49), ("29.4m/min", 0.49),
-                                      ("100ft/min", 0.508)])
+@pytest.mark.parametrize(
+    "text, ms", [("0.49", 0.49), ("0.49m/s", 0.49), ("49cm/s", 0.49), ("29.4m/min", 0.49), ("100ft/min", 0.508)]
+)
 def test_speed_units(text, ms):
     assert chain_speed(text) == pytest.approx(ms, rel=1e-9)
 
 
-@pytest.mark.parametrize("fn, text, hint", [(pitch_length, "133.33", "133.33mm"), (chain_speed, "49", "49cm/s"),
-                                            (chain_speed, "49m/s", "not an escalator"), (pitch_length, "-1", "positive"),
-                                            (chain_speed, "fast", "0.49")])
+@pytest.mark.parametrize(
+    "fn, text, hint",
+    [
+        (pitch_length, "133.33", "133.33mm"),
+        (chain_speed, "49", "49cm/s"),
+        (chain_speed, "49m/s", "not an escalator"),
+        (pitch_length, "-1", "positive"),
+        (chain_speed, "fast", "0.49"),
+    ],
+)
 def test_units_caught(fn, text, hint):
     with pytest.raises(argparse.ArgumentTypeError, match=hint):
         fn(text)
 
 
 def test_units_are_usage_errors_in_every_command(capsys):
-    for argv in (["pitch", LEON, "--nominal-pitch", "133.33"], ["spectrum", LEON, "--speed", "49"],
-                 ["report", LEON, "-o", "x.pdf", "--speed", "49"],
-                 ["fleet", "add", LEON, "--unit", "E1", "--speed", "49", "--nominal-pitch", "0.13333"]):
+    for argv in (
+        ["pitch", LEON, "--nominal-pitch", "133.33"],
+        ["spectrum", LEON, "--speed", "49"],
+        ["report", LEON, "-o", "x.pdf", "--speed", "49"],
+        ["fleet", "add", LEON, "--unit", "E1", "--speed", "49", "--nominal-pitch", "0.13333"],
+    ):
         with pytest.raises(SystemExit) as exc:
             main(argv)
         assert exc.value.code == 2
@@ -249,8 +285,13 @@ def test_compare_refuses_a_recording_without_the_link_pass(tmp_path, capsys):
     """compare uses the same decision: noise against a result file is refused, exit 1, nothing compared."""
     p = tmp_path / "noise.csv"
     t = np.arange(int(30 * FS)) / FS
-    np.savetxt(p, np.column_stack([t, np.random.default_rng(7).standard_normal(t.size)]), delimiter=",",
-               header="time_s,tensioner_displacement_m", comments="")
+    np.savetxt(
+        p,
+        np.column_stack([t, np.random.default_rng(7).standard_normal(t.size)]),
+        delimiter=",",
+        header="time_s,tensioner_displacement_m",
+        comments="",
+    )
     rec = vibkit.read_recording(str(p))
     with pytest.raises(ValueError, match="no link-pass found"):
         vibkit.compare(rec, vibkit.read_recording(LEON))

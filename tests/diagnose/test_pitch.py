@@ -8,8 +8,10 @@ from vibkit.diagnose.pitch import elongation_verdict, estimate_pitch
 
 
 def _rec(t, x, seg=None, units="m/s^2"):
-    ds = xr.Dataset({"acc": ("time", x, {"units": units, "long_name": "acc", "quantity": "acceleration"})},
-                    coords={"time": ("time", t, {"units": "s"})})
+    ds = xr.Dataset(
+        {"acc": ("time", x, {"units": units, "long_name": "acc", "quantity": "acceleration"})},
+        coords={"time": ("time", t, {"units": "s"})},
+    )
     if seg is not None:
         ds["segment"] = ("time", seg.astype(np.int32))
     return ds
@@ -53,9 +55,12 @@ def test_mains_hum_and_resonance_nearby_do_not_capture():
     rng = np.random.default_rng(4)
     fs = 1000.0
     t = np.arange(int(20 * fs)) / fs
-    x = (_family(t, 3.9, [0.3, 0.16, 0.09, 0.05]) + 2.0 * np.cos(2 * np.pi * 50 * t)   # hum, much stronger
-         + 0.4 * np.cos(2 * np.pi * 5.3 * t) * (1 + 0.1 * np.cos(2 * np.pi * 0.2 * t))  # structural mode in band
-         + 0.05 * rng.standard_normal(t.size))
+    x = (
+        _family(t, 3.9, [0.3, 0.16, 0.09, 0.05])
+        + 2.0 * np.cos(2 * np.pi * 50 * t)  # hum, much stronger
+        + 0.4 * np.cos(2 * np.pi * 5.3 * t) * (1 + 0.1 * np.cos(2 * np.pi * 0.2 * t))  # structural mode in band
+        + 0.05 * rng.standard_normal(t.size)
+    )
     est = estimate_pitch(_rec(t, x), speed=0.52)
     assert est.fundamental_hz == pytest.approx(3.9, abs=2e-3)
     assert est.pitch_m == pytest.approx(0.52 / 3.9, rel=1e-3)
@@ -100,10 +105,9 @@ def test_irregular_sampling_resampled():
 def test_field_cases():
     import vibkit
 
-    leon = estimate_pitch(vibkit.read_recording("data/field/leon-tensioner.csv"), speed=0.49,
-                          nominal_pitch=0.4 / 3)
-    assert leon.fundamental_hz == pytest.approx(3.54, abs=0.005)   # published
-    assert leon.pitch_m == pytest.approx(0.1384, abs=2e-4)          # published 0.49 / 3.54
+    leon = estimate_pitch(vibkit.read_recording("data/field/leon-tensioner.csv"), speed=0.49, nominal_pitch=0.4 / 3)
+    assert leon.fundamental_hz == pytest.approx(3.54, abs=0.005)  # published
+    assert leon.pitch_m == pytest.approx(0.1384, abs=2e-4)  # published 0.49 / 3.54
     assert leon.elongation_percent == pytest.approx(100 * (0.49 / 3.54 / (0.4 / 3) - 1), abs=0.2)
     assert leon.verdict == "replace"
     lp = estimate_pitch(vibkit.read_recording("data/field/las-palmas-accelerometer.csv"), speed=0.52)
@@ -111,16 +115,23 @@ def test_field_cases():
     assert lp.fundamental_hz == pytest.approx(3.9, abs=0.005)
 
 
-@pytest.mark.parametrize("e, verdict", [(0.5, "ok"), (1.6, "watch"), (2.5, "plan replacement"), (3.0, "replace"),
-                                        (-2.0, "check speed")])
+@pytest.mark.parametrize(
+    "e, verdict", [(0.5, "ok"), (1.6, "watch"), (2.5, "plan replacement"), (3.0, "replace"), (-2.0, "check speed")]
+)
 def test_verdicts(e, verdict):
     assert elongation_verdict(e) == verdict
 
 
-@pytest.mark.parametrize("kw, msg", [({"speed": 0.0}, "speed"), ({"speed": 0.5, "speed_sigma": -1}, "speed_sigma"),
-                                     ({"speed": 0.5, "channel": "nope"}, "channel"),
-                                     ({"speed": 0.5, "limits_percent": (3, 2, 1)}, "limits"),
-                                     ({"speed": 0.5, "band": (6.0, 2.0)}, "band")])
+@pytest.mark.parametrize(
+    "kw, msg",
+    [
+        ({"speed": 0.0}, "speed"),
+        ({"speed": 0.5, "speed_sigma": -1}, "speed_sigma"),
+        ({"speed": 0.5, "channel": "nope"}, "channel"),
+        ({"speed": 0.5, "limits_percent": (3, 2, 1)}, "limits"),
+        ({"speed": 0.5, "band": (6.0, 2.0)}, "band"),
+    ],
+)
 def test_bad_input(kw, msg):
     t = np.arange(2000) / 200.0
     with pytest.raises(ValueError, match=msg):

@@ -25,10 +25,17 @@ def test_cli_integer_tone_as_the_float_tone(tmp_path, capsys):
     t = np.arange(0, 120, 1 / fs)
     x = 2048 * np.sin(2 * np.pi * 3.5 * t)
     p_int, p_float = tmp_path / "tone_int.csv", tmp_path / "tone_float.csv"
-    np.savetxt(p_int, np.column_stack([t, np.round(x).astype(int)]), delimiter=",", header="time_s,accel_counts",
-               comments="", fmt=["%.4f", "%d"])
-    np.savetxt(p_float, np.column_stack([t, x]), delimiter=",", header="time_s,accel", comments="",
-               fmt=["%.4f", "%.6f"])
+    np.savetxt(
+        p_int,
+        np.column_stack([t, np.round(x).astype(int)]),
+        delimiter=",",
+        header="time_s,accel_counts",
+        comments="",
+        fmt=["%.4f", "%d"],
+    )
+    np.savetxt(
+        p_float, np.column_stack([t, x]), delimiter=",", header="time_s,accel", comments="", fmt=["%.4f", "%.6f"]
+    )
     out = {}
     for name, p in (("int", p_int), ("float", p_float)):
         # one spectral line without a harmonic: a pitch, no verdict (exit 3)
@@ -49,7 +56,9 @@ def test_quantised_tones_give_the_tone_pitch(fs, amplitude):
     t = np.arange(0, 60, 1 / fs)
     for f0 in (2.7, 5.5):
         for noise in (0.0, 0.2):
-            x = np.round(amplitude * np.sin(2 * np.pi * f0 * t + rng.uniform(0, 6.3)) + noise * rng.standard_normal(t.size))
+            x = np.round(
+                amplitude * np.sin(2 * np.pi * f0 * t + rng.uniform(0, 6.3)) + noise * rng.standard_normal(t.size)
+            )
             est = estimate_pitch(_rec(x, fs), speed=SPEED, nominal_pitch=SPEED / f0)
             assert est.status == STATUS_INCONCLUSIVE, (f0, noise, est.decision.reason)
             assert est.pitch_m == pytest.approx(SPEED / f0, rel=1e-5), (f0, noise)

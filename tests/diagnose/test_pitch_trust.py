@@ -20,8 +20,9 @@ SPEED = 0.49  # default band: 0.49 / (0.2 .. 0.08 m) = 2.45 .. 6.125 Hz
 
 def _rec(x, fs=FS, t=None):
     t = np.arange(len(x)) / fs if t is None else t
-    return xr.Dataset({"x": ("time", np.asarray(x, dtype=float), {"units": "m"})},
-                      coords={"time": ("time", t, {"units": "s"})})
+    return xr.Dataset(
+        {"x": ("time", np.asarray(x, dtype=float), {"units": "m"})}, coords={"time": ("time", t, {"units": "s"})}
+    )
 
 
 def _t(seconds=40.0, fs=FS):
@@ -74,8 +75,13 @@ def test_square_wave_is_not_read_as_a_third_of_its_frequency():
 def test_cli_pitch_and_spectrum_no_link_pass(tmp_path, capsys):
     p = tmp_path / "noise.csv"
     t = _t()
-    np.savetxt(p, np.column_stack([t, np.random.default_rng(3).standard_normal(t.size)]), delimiter=",",
-               header="time_s,x_m", comments="")
+    np.savetxt(
+        p,
+        np.column_stack([t, np.random.default_rng(3).standard_normal(t.size)]),
+        delimiter=",",
+        header="time_s,x_m",
+        comments="",
+    )
     assert main(["pitch", str(p), "--speed", "0.49", "--json"]) == 1
     cap = capsys.readouterr()
     d = json.loads(cap.out)
@@ -198,8 +204,14 @@ def _wandering(duration, fs, period, amp, snr_db, kind, seed, pitch=0.13333, v0=
     return x, v_mean, pitch
 
 
-_GRID = [(dur, per, kind, snr) for dur in (30.0, 120.0, 600.0) for per in (10.0, 60.0, 300.0)
-         for kind in ("sine", "walk") for snr in (0.0, 20.0) if not (dur == 600.0 and snr == 20.0)]
+_GRID = [
+    (dur, per, kind, snr)
+    for dur in (30.0, 120.0, 600.0)
+    for per in (10.0, 60.0, 300.0)
+    for kind in ("sine", "walk")
+    for snr in (0.0, 20.0)
+    if not (dur == 600.0 and snr == 20.0)
+]
 
 
 @pytest.mark.parametrize("duration, period, kind, snr_db", _GRID)
@@ -247,8 +259,9 @@ def test_false_alarm_rate_on_1000_noise_records():
     """Measured rates at 0.05, 0.01 and 1e-3 within their binomial 99.9 % intervals (1,000 records)."""
     rng = np.random.default_rng(2026)
     n_rec = 1000
-    pv = np.array([detect_link_pass(rng.standard_normal(3000), 100.0, band=(2.45, 6.125)).p_value
-                   for _ in range(n_rec)])
+    pv = np.array(
+        [detect_link_pass(rng.standard_normal(3000), 100.0, band=(2.45, 6.125)).p_value for _ in range(n_rec)]
+    )
     for p in (0.05, 0.01, 1e-3):
         lo, hi = scipy.stats.binom.interval(0.999, n_rec, p)
         assert lo <= np.sum(pv < p) <= hi, (p, np.sum(pv < p))
@@ -258,7 +271,11 @@ def test_detects_a_weak_family():
     # -10 dB per sample, 30 s: integrated SNR about 25 dB; must be found, at the right place
     rng = np.random.default_rng(6)
     t = _t(30.0, 100.0)
-    x = np.cos(2 * np.pi * 3.75 * t) + 0.5 * np.cos(2 * np.pi * 7.5 * t) + np.sqrt(10 * 0.625) * rng.standard_normal(t.size)
+    x = (
+        np.cos(2 * np.pi * 3.75 * t)
+        + 0.5 * np.cos(2 * np.pi * 7.5 * t)
+        + np.sqrt(10 * 0.625) * rng.standard_normal(t.size)
+    )
     det = detect_link_pass(x, 100.0, band=(2.45, 6.125))
     assert det.detected and det.frequency_hz == pytest.approx(3.75, abs=0.15)
 

@@ -23,8 +23,18 @@ def leon_report(tmp_path_factory):
 def test_pages_and_text(leon_report):
     rep = leon_report
     titles = [t for t, _ in rep.pages]
-    assert titles == ["verdict", "recording", "time signal", "spectrum", "spectrogram", "order spectrum",
-                      "simulation against recording", "harmonics", "data quality", "parameters"]
+    assert titles == [
+        "verdict",
+        "recording",
+        "time signal",
+        "spectrum",
+        "spectrogram",
+        "order spectrum",
+        "simulation against recording",
+        "harmonics",
+        "data quality",
+        "parameters",
+    ]
     assert _page_count(rep.path) == len(titles)
     text = {t: "\n".join(x) for t, x in rep.pages}
     assert "leon-tensioner.csv" in text["recording"] and rep.summary["sha256"] in text["recording"]

@@ -24,8 +24,12 @@ def _overlap(a, b):
 
 
 def _inside(inner, outer):
-    return (inner[0] >= outer[0] - TOL and inner[1] >= outer[1] - TOL and inner[2] <= outer[2] + TOL
-            and inner[3] <= outer[3] + TOL)
+    return (
+        inner[0] >= outer[0] - TOL
+        and inner[1] >= outer[1] - TOL
+        and inner[2] <= outer[2] + TOL
+        and inner[3] <= outer[3] + TOL
+    )
 
 
 def layout_problems(fig):
@@ -75,7 +79,7 @@ def layout_problems(fig):
             if t.get_visible() and t.get_text().strip() and not _inside(_bbox(t, r), abb):
                 problems.append(f"leaves its axes: {t.get_text()[:60]!r}")
     for i, (a, ba) in enumerate(texts):
-        for b, bb in texts[i + 1:]:
+        for b, bb in texts[i + 1 :]:
             if _overlap(ba, bb):
                 # a legend or table draws its texts inside its own box; matplotlib's tick labels of one
                 # axis never overlap each other at these sizes, so any overlap is a real collision
@@ -131,8 +135,16 @@ def test_date_without_metadata_says_so(checked_reports):
     assert "not stated in the file (give --date)" in "\n".join(phy.pages[0][1])
 
 
-@pytest.mark.parametrize("v, s, text", [(138.4163, 0.0213, "138.416 +- 0.021"), (0.49, 0.0, "0.49"),
-                                        (3.8207, 0.31, "3.82 +- 0.31"), (1234.5, 56.0, "1234 +- 56"),
-                                        (0.49, None, "0.49"), (3.5401234, 0.00123, "3.5401 +- 0.0012")])
+@pytest.mark.parametrize(
+    "v, s, text",
+    [
+        (138.4163, 0.0213, "138.416 +- 0.021"),
+        (0.49, 0.0, "0.49"),
+        (3.8207, 0.31, "3.82 +- 0.31"),
+        (1234.5, 56.0, "1234 +- 56"),
+        (0.49, None, "0.49"),
+        (3.5401234, 0.00123, "3.5401 +- 0.0012"),
+    ],
+)
 def test_numbers_rounded_to_their_uncertainty(v, s, text):
     assert fmt_pm(v, s) == text

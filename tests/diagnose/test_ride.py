@@ -8,7 +8,12 @@ import pytest
 import xarray as xr
 
 from vibkit.cli import main
-from vibkit.diagnose.ride import parse_channels, parse_segment, ride_quality_from_recording, ride_quality_from_simulation
+from vibkit.diagnose.ride import (
+    parse_channels,
+    parse_segment,
+    ride_quality_from_recording,
+    ride_quality_from_simulation,
+)
 from vibkit.signal import frequency_weighting_response
 
 from ..signal.test_signal_ride import synthetic_ride
@@ -49,8 +54,9 @@ def test_recording_ride_quality_has_the_known_values(ride_csv):
     z, x = rq.axis("z"), rq.axis("x")
     assert z.weighted.a95 == pytest.approx(2 * AMP_Z * abs(frequency_weighting_response(F_Z, "Wk")), rel=0.02)
     assert x.weighted.a95 == pytest.approx(2 * AMP_X * abs(frequency_weighting_response(F_X, "Wd")), rel=0.03)
-    assert z.weighted.rms == pytest.approx(AMP_Z * abs(frequency_weighting_response(F_Z, "Wk")) / math.sqrt(2),
-                                           rel=0.03)
+    assert z.weighted.rms == pytest.approx(
+        AMP_Z * abs(frequency_weighting_response(F_Z, "Wk")) / math.sqrt(2), rel=0.03
+    )
     assert rq.speed_m_s == pytest.approx(0.5)
 
 
@@ -60,10 +66,14 @@ def test_simulation_dataset_goes_through_the_same_path():
     vz = np.cumsum(az - 9.80665 - 0.003) / FS  # synthetic_ride adds a 0.003 m/s^2 sensor offset
     acc = np.stack([ax, az - 9.80665], axis=-1)[:, None, :]  # kinematic acceleration (no gravity)
     vel = np.stack([np.full(t.size, 0.5), vz], axis=-1)[:, None, :]
-    ds = xr.Dataset({"roller_acceleration": (("time", "roller", "axis"), acc),
-                     "roller_velocity": (("time", "roller", "axis"), vel)},
-                    coords={"time": t, "roller": [8], "axis": ["x", "z"]},
-                    attrs={"step_accelerometer": 3, "scene_name": "synthetic"})
+    ds = xr.Dataset(
+        {
+            "roller_acceleration": (("time", "roller", "axis"), acc),
+            "roller_velocity": (("time", "roller", "axis"), vel),
+        },
+        coords={"time": t, "roller": [8], "axis": ["x", "z"]},
+        attrs={"step_accelerometer": 3, "scene_name": "synthetic"},
+    )
     sim = ride_quality_from_simulation(ds)
     rec = ride_quality_from_recording(_dataset_recording(t, ax, ay, az))
     assert sim.kind == "simulation" and sim.segment.method == "speed channel"
@@ -73,15 +83,20 @@ def test_simulation_dataset_goes_through_the_same_path():
     # accel_step alone: one tangential axis over the whole record
     ds2 = xr.Dataset({"accel_step": ("time", ax)}, coords={"time": t})
     one = ride_quality_from_simulation(ds2)
-    assert [a.axis for a in one.axes] == ["tangential"] and one.segment.method == "whole simulated time"  # nobody gave it
+    assert [a.axis for a in one.axes] == [
+        "tangential"
+    ] and one.segment.method == "whole simulated time"  # nobody gave it
     with pytest.raises(ValueError, match="neither"):
         ride_quality_from_simulation(xr.Dataset({"delta": ("time", ax)}, coords={"time": t}))
 
 
 def _dataset_recording(t, ax, ay, az):
     attrs = {"units": "m/s^2", "quantity": "acceleration"}
-    return xr.Dataset({"ax": ("time", ax, attrs), "ay": ("time", ay, attrs), "az": ("time", az, attrs)},
-                      coords={"time": t}, attrs={"source_file": "synthetic"})
+    return xr.Dataset(
+        {"ax": ("time", ax, attrs), "ay": ("time", ay, attrs), "az": ("time", az, attrs)},
+        coords={"time": t},
+        attrs={"source_file": "synthetic"},
+    )
 
 
 def test_parsers():
@@ -114,14 +129,17 @@ def test_cli_ride_options_and_table(ride_csv, capsys):
     assert "12.00-20.00 s" in out and "Wb" in out and "\nz     az" in out and "\nx " not in out
 
 
-@pytest.mark.parametrize("args,msg", [
-    (["--weighting", "Wq"], "unknown weighting 'Wq'"),
-    (["--weighting", "Wb,Wc"], "2 weightings for the three axes"),
-    (["--channels", "nope,-,-"], "channel 'nope'"),
-    (["--segment", "9:3"], "segment"),
-    (["--segment", "900:1000"], "after the end"),
-    (["--channels", "speed,-,-"], "not an acceleration"),
-])
+@pytest.mark.parametrize(
+    "args,msg",
+    [
+        (["--weighting", "Wq"], "unknown weighting 'Wq'"),
+        (["--weighting", "Wb,Wc"], "2 weightings for the three axes"),
+        (["--channels", "nope,-,-"], "channel 'nope'"),
+        (["--segment", "9:3"], "segment"),
+        (["--segment", "900:1000"], "after the end"),
+        (["--channels", "speed,-,-"], "not an acceleration"),
+    ],
+)
 def test_cli_ride_bad_input_is_one_line(ride_csv, capsys, args, msg):
     path, _, _ = ride_csv
     assert main(["ride", str(path)] + args) == 1
@@ -180,9 +198,13 @@ def test_a_constant_axis_gives_nan_and_a_note_not_an_error():
 
 def test_a_vibkit_result_file_takes_the_simulation_path(tmp_path, capsys):
     t = np.arange(0, 10, 1 / 400.0)
-    ds = xr.Dataset({"accel_step": ("time", 0.05 * np.sin(2 * np.pi * 3.9 * t), {"units": "m/s^2"})},
-                    coords={"time": ("time", t, {"units": "s"})}, attrs={"analysis": "forward", "scene_name": "x"})
+    ds = xr.Dataset(
+        {"accel_step": ("time", 0.05 * np.sin(2 * np.pi * 3.9 * t), {"units": "m/s^2"})},
+        coords={"time": ("time", t, {"units": "s"})},
+        attrs={"analysis": "forward", "scene_name": "x"},
+    )
     rq = ride_quality_from_recording(ds)
     assert rq.kind == "simulation" and rq.axes[0].axis == "tangential"
-    assert rq.axes[0].lowpass.a95 == pytest.approx(0.1 * abs(1 / math.sqrt(1 + (3.9 / 10) ** 8))
-                                                   / math.sqrt(1 + (0.4 / 3.9) ** 4), rel=0.01)
+    assert rq.axes[0].lowpass.a95 == pytest.approx(
+        0.1 * abs(1 / math.sqrt(1 + (3.9 / 10) ** 8)) / math.sqrt(1 + (0.4 / 3.9) ** 4), rel=0.01
+    )

@@ -16,8 +16,17 @@ import numpy as np
 import pytest
 
 from vibkit.cli import main
-from vibkit.fleet import (DuplicateRecordingError, FleetDB, FleetError, TrendFit, fit_trend, forecast_limits,
-                          parse_date, read_catalogue, resolve_db_path)
+from vibkit.fleet import (
+    DuplicateRecordingError,
+    FleetDB,
+    FleetError,
+    TrendFit,
+    fit_trend,
+    forecast_limits,
+    parse_date,
+    read_catalogue,
+    resolve_db_path,
+)
 from vibkit.fleet.trends import SECONDS_PER_YEAR
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -44,8 +53,10 @@ def synth(path, pitch_m, seed, *, start=None, amps=AMPS, duration=DURATION):
             fh.writelines(f"{ti:.3f},{xi:.6f}\n" for ti, xi in zip(t, x))
         else:
             fh.write("timestamp,accel_m_s2\n")
-            fh.writelines(f"{(start + dt.timedelta(seconds=float(ti))).strftime('%Y-%m-%dT%H:%M:%S.%f')[:-3]}Z,"
-                          f"{xi:.6f}\n" for ti, xi in zip(t, x))
+            fh.writelines(
+                f"{(start + dt.timedelta(seconds=float(ti))).strftime('%Y-%m-%dT%H:%M:%S.%f')[:-3]}Z,{xi:.6f}\n"
+                for ti, xi in zip(t, x)
+            )
     return path
 
 
@@ -56,8 +67,9 @@ def crb_elongation_sigma_percent(pitch_m):
     the elongation 100 (L / L0 - 1) with L = v / f has sigma 100 L / L0 * sigma_f / f.
     """
     n = int(DURATION * FS)
-    var_f = 12 * NOISE**2 * FS**2 / ((2 * np.pi) ** 2 * n * (n**2 - 1) * sum(k**2 * a**2 for k, a in
-                                                                             enumerate(AMPS, 1)))
+    var_f = (
+        12 * NOISE**2 * FS**2 / ((2 * np.pi) ** 2 * n * (n**2 - 1) * sum(k**2 * a**2 for k, a in enumerate(AMPS, 1)))
+    )
     f = SPEED / pitch_m
     return 100 * pitch_m / NOMINAL * math.sqrt(var_f) / f
 
@@ -133,13 +145,16 @@ def test_fit_trend_weights_and_birge_scaling():
     assert abs(fit.slope_percent_per_year - 0.5) < 3 * fit.slope_sigma_percent_per_year
 
 
-@pytest.mark.parametrize("t, e, s, match", [
-    ([0.0], [1.0], [0.1], "at least two"),
-    ([0.0, 0.0], [1.0, 1.1], [0.1, 0.1], "different times"),
-    ([0.0, 1e8], [1.0, 1.1], [0.1, 0.0], "sigma_percent must be > 0"),
-    ([0.0, 1e8], [1.0, np.nan], [0.1, 0.1], "finite"),
-    ([0.0, 1e8, 2e8], [1.0, 1.1], [0.1, 0.1], "same length"),
-])
+@pytest.mark.parametrize(
+    "t, e, s, match",
+    [
+        ([0.0], [1.0], [0.1], "at least two"),
+        ([0.0, 0.0], [1.0, 1.1], [0.1, 0.1], "different times"),
+        ([0.0, 1e8], [1.0, 1.1], [0.1, 0.0], "sigma_percent must be > 0"),
+        ([0.0, 1e8], [1.0, np.nan], [0.1, 0.1], "finite"),
+        ([0.0, 1e8, 2e8], [1.0, 1.1], [0.1, 0.1], "same length"),
+    ],
+)
 def test_fit_trend_rejects(t, e, s, match):
     with pytest.raises(ValueError, match=match):
         fit_trend(t, e, s)
@@ -169,8 +184,11 @@ def test_forecast_limits_analytic():
     assert _years_after(fc[1].earliest_utc) == pytest.approx((2.0 - 1.0 - 0.04) / 0.3, abs=1e-6)
     fc = forecast_limits(_fit(1.0, 0.02, -0.5, 0.1), (1.5, 2.0, 3.0))
     assert [f.status for f in fc] == ["none"] * 3
-    assert [f.status for f in forecast_limits(None, (1.5, 2.0, 3.0), latest_elongation_percent=2.5)] == \
-        ["reached", "reached", "none"]
+    assert [f.status for f in forecast_limits(None, (1.5, 2.0, 3.0), latest_elongation_percent=2.5)] == [
+        "reached",
+        "reached",
+        "none",
+    ]
 
 
 def test_parse_date():
@@ -178,9 +196,15 @@ def test_parse_date():
     assert parse_date("2026-03-01T10:00:00+01:00").isoformat() == "2026-03-01T09:00:00+00:00"
     assert parse_date("01/03/2026 10:00:00").isoformat() == "2026-03-01T10:00:00+00:00"
     assert parse_date("2019-03-12, 10:25:14,500").isoformat() == "2019-03-12T10:25:14.500000+00:00"  # GCDC
-    for bad, match in (("12:00:00", "no calendar date"), ("yesterday", "ISO 8601"), ("2999-01-01", "1970-2100"),
-                       ("2099-01-01", "future"), ("1850-01-01", "1970-2100"), ("", "empty"),
-                       ("9999-12-31T23:59:59-23:59", "1970-2100")):
+    for bad, match in (
+        ("12:00:00", "no calendar date"),
+        ("yesterday", "ISO 8601"),
+        ("2999-01-01", "1970-2100"),
+        ("2099-01-01", "future"),
+        ("1850-01-01", "1970-2100"),
+        ("", "empty"),
+        ("9999-12-31T23:59:59-23:59", "1970-2100"),
+    ):
         with pytest.raises(FleetError, match=match):
             parse_date(bad)
 
@@ -194,27 +218,28 @@ def test_rates_within_sigma_and_forecasts(fleet):
         trends = {t.unit: t for t in db.status()}
         ranked = [t.unit for t in db.status()]
     years = VISITS_YEARS - np.mean(VISITS_YEARS)
-    for unit, (e0, rate) in UNITS.items():
+    for unit, (_e0, rate) in UNITS.items():
         tr = trends[unit]
         assert tr.n_measurements == 6
         sig = tr.slope_sigma_percent_per_year
         assert abs(tr.slope_percent_per_year - rate) < 3 * sig, unit
         # sigma plausibly sized: the Cramer-Rao bound of each elongation propagated through the fit
         # (the estimator reaches about 1.2x the bound; the Birge factor can only widen it)
-        crb = np.mean([crb_elongation_sigma_percent(NOMINAL * (1 + true_elongation(unit, y) / 100))
-                       for y in VISITS_YEARS])
+        crb = np.mean(
+            [crb_elongation_sigma_percent(NOMINAL * (1 + true_elongation(unit, y) / 100)) for y in VISITS_YEARS]
+        )
         expected = crb / math.sqrt(np.sum(years**2))
         assert 0.8 * expected < sig < 3.0 * expected, (unit, sig, expected)
-        assert tr.latest_elongation_percent == pytest.approx(true_elongation(unit, VISITS_YEARS[-1]),
-                                                             abs=4 * tr.latest_elongation_sigma_percent)
+        assert tr.latest_elongation_percent == pytest.approx(
+            true_elongation(unit, VISITS_YEARS[-1]), abs=4 * tr.latest_elongation_sigma_percent
+        )
     # forecasts of the growing units: the true crossing lies in the interval, near the central date
     for unit in ("E-fast", "E-slow"):
         e0, rate = UNITS[unit]
         for f in trends[unit].forecasts:
             assert f.status == "forecast"
             truth = T0.timestamp() + (f.limit_percent - e0) / rate * SECONDS_PER_YEAR
-            lo, mid, hi = (dt.datetime.fromisoformat(v).timestamp() for v in (f.earliest_utc, f.date_utc,
-                                                                               f.latest_utc))
+            lo, mid, hi = (dt.datetime.fromisoformat(v).timestamp() for v in (f.earliest_utc, f.date_utc, f.latest_utc))
             assert lo <= truth <= hi, (unit, f)
             assert abs(mid - truth) < max(hi - mid, mid - lo)
     # a flat unit has no significant growth: no forecast date, at most a "not before"
@@ -256,8 +281,24 @@ def test_duplicate_refused(fleet, tmp_path, capsys):
             db.add(copy, unit="E-other", speed=SPEED, date="2026-01-01", nominal_pitch=NOMINAL)
         assert ei.value.existing.unit == "E-slow"
         n = len(db.measurements())
-    assert main(["fleet", "add", str(copy), "--unit", "E-slow", "--speed", "0.5", "--date", "2026-01-01",
-                 "--db", str(fleet["db"])]) == 1
+    assert (
+        main(
+            [
+                "fleet",
+                "add",
+                str(copy),
+                "--unit",
+                "E-slow",
+                "--speed",
+                "0.5",
+                "--date",
+                "2026-01-01",
+                "--db",
+                str(fleet["db"]),
+            ]
+        )
+        == 1
+    )
     err = capsys.readouterr().err
     assert "already stored (same sha256)" in err and "Traceback" not in err
     with FleetDB(fleet["db"]) as db:
@@ -269,8 +310,25 @@ def test_add_date_from_start_time_or_refused(tmp_path, capsys):
     start = dt.datetime(2025, 6, 1, 8, 30, tzinfo=dt.timezone.utc)
     stamped = synth(tmp_path / "stamped.csv", NOMINAL * 1.005, 1, start=start, duration=10.0)
     plain = synth(tmp_path / "plain.csv", NOMINAL * 1.005, 2, duration=10.0)
-    assert main(["fleet", "add", str(stamped), "--unit", "U1", "--speed", "0.5", "--nominal-pitch",
-                 str(NOMINAL), "--db", str(db), "--json"]) == 0
+    assert (
+        main(
+            [
+                "fleet",
+                "add",
+                str(stamped),
+                "--unit",
+                "U1",
+                "--speed",
+                "0.5",
+                "--nominal-pitch",
+                str(NOMINAL),
+                "--db",
+                str(db),
+                "--json",
+            ]
+        )
+        == 0
+    )
     d = json.loads(capsys.readouterr().out)
     assert d["schema"] == "vibkit.fleet.add/1"
     m = d["measurement"]
@@ -279,12 +337,32 @@ def test_add_date_from_start_time_or_refused(tmp_path, capsys):
     # no start time and no --date: refused, asking for --date; a new unit without a nominal pitch too
     assert main(["fleet", "add", str(plain), "--unit", "U1", "--speed", "0.5", "--db", str(db)]) == 1
     assert "--date" in capsys.readouterr().err
-    assert main(["fleet", "add", str(plain), "--unit", "U2", "--speed", "0.5", "--date", "2025-01-01",
-                 "--db", str(db)]) == 1
+    assert (
+        main(["fleet", "add", str(plain), "--unit", "U2", "--speed", "0.5", "--date", "2025-01-01", "--db", str(db)])
+        == 1
+    )
     assert "--nominal-pitch" in capsys.readouterr().err
     # another nominal pitch for a known unit is refused
-    assert main(["fleet", "add", str(plain), "--unit", "U1", "--speed", "0.5", "--date", "2025-01-01",
-                 "--nominal-pitch", "0.1335", "--db", str(db)]) == 1  # plausible (+0.4 %), but not U1's
+    assert (
+        main(
+            [
+                "fleet",
+                "add",
+                str(plain),
+                "--unit",
+                "U1",
+                "--speed",
+                "0.5",
+                "--date",
+                "2025-01-01",
+                "--nominal-pitch",
+                "0.1335",
+                "--db",
+                str(db),
+            ]
+        )
+        == 1
+    )  # plausible (+0.4 %), but not U1's
     assert "one unit has one nominal pitch" in capsys.readouterr().err
     with FleetDB(db) as fdb:
         assert len(fdb.measurements()) == 1
@@ -300,17 +378,18 @@ def test_bad_rows_reported_not_fatal(tmp_path, capsys):
     synth(d / "stray.csv", NOMINAL, 14, duration=10.0)  # no catalogue line: unknown unit
     synth(d / "E22-2026-01-01.csv", NOMINAL * 1.01, 15, duration=10.0)  # no date but in its name
     cat = tmp_path / "units.csv"
-    cat.write_text("file,unit,speed_m_s,date,nominal_pitch_m\n"
-                   "good*.csv,U1,0.5,,0.133333\n"  # glob; no date: ...
-                   "good1.csv,U1,0.5,2025-01-01,\n"  # ... except the exact line wins for good1
-                   "noise.csv,U2,0.5,2025-01-01,0.133333\n"
-                   "garbage.csv,U2,0.5,2025-01-01,\n"
-                   "missing.csv,U3,0.5,2025-01-01,0.1016\n"
-                   "E22-*.csv,E22,0.5,,0.133333\n")
+    cat.write_text(
+        "file,unit,speed_m_s,date,nominal_pitch_m\n"
+        "good*.csv,U1,0.5,,0.133333\n"  # glob; no date: ...
+        "good1.csv,U1,0.5,2025-01-01,\n"  # ... except the exact line wins for good1
+        "noise.csv,U2,0.5,2025-01-01,0.133333\n"
+        "garbage.csv,U2,0.5,2025-01-01,\n"
+        "missing.csv,U3,0.5,2025-01-01,0.1016\n"
+        "E22-*.csv,E22,0.5,,0.133333\n"
+    )
     db = tmp_path / "f.sqlite"
     # some files failed, others stored: the documented exit code 3, and a summary line
-    assert main(["fleet", "scan", str(d), "--catalogue", str(cat), "--db", str(db), "--workers", "0",
-                 "--json"]) == 3
+    assert main(["fleet", "scan", str(d), "--catalogue", str(cat), "--db", str(db), "--workers", "0", "--json"]) == 3
     out, err = capsys.readouterr()
     s = json.loads(out)
     assert s["schema"] == "vibkit.fleet.scan/1"
@@ -343,10 +422,12 @@ def test_scan_named_file_any_suffix_and_repeated_line(tmp_path):
     synth(d / "E9" / "visit.log.bak", NOMINAL * 1.01, 21, duration=10.0)  # not a recording suffix: named exactly
     synth(d / "E9" / "other.csv", NOMINAL * 1.01, 22, duration=10.0)
     cat = tmp_path / "units.csv"
-    cat.write_text("file,unit,speed_m_s,date,nominal_pitch_m\n"
-                   "./E9/visit.log.bak,E9,0.5,2025-01-01,0.133333\n"
-                   "E9/other.csv,E9,0.5,2025-02-01,\n"
-                   "other.csv,E9,0.5,2025-03-01,\n")  # the same file again (by its base name)
+    cat.write_text(
+        "file,unit,speed_m_s,date,nominal_pitch_m\n"
+        "./E9/visit.log.bak,E9,0.5,2025-01-01,0.133333\n"
+        "E9/other.csv,E9,0.5,2025-02-01,\n"
+        "other.csv,E9,0.5,2025-03-01,\n"
+    )  # the same file again (by its base name)
     with FleetDB(tmp_path / "f.sqlite") as db:
         res = db.scan(d, cat, parallel=False)
         assert len(res.added) == 2 and not res.failed and not res.skipped
@@ -354,18 +435,28 @@ def test_scan_named_file_any_suffix_and_repeated_line(tmp_path):
         assert [m.date_utc[:10] for m in db.measurements("E9")] == ["2025-01-01", "2025-02-01"]
 
 
-@pytest.mark.parametrize("text, match", [
-    ("file,unit,speed_m_s,date\nx.csv,U,0.5,\n", r"line 1: missing column\(s\) nominal_pitch_m"),
-    ("# comment\nfile,unit,speed_m_s,date,nominal_pitch_m,colour\n", r"line 2: unknown column\(s\) 'colour'"),
-    ("file,unit,speed_m_s,date,nominal_pitch_m\na.csv,U,0.5,,0.1333\nb.csv,U,0.5\n",
-     r"line 3: 3 cell\(s\), expected 5"),
-    ("file,unit,speed_m_s,date,nominal_pitch_m\na.csv,U,fast,,0.1333\n", "line 2: column speed_m_s: expected a number"),
-    ("file,unit,speed_m_s,date,nominal_pitch_m\na.csv,U,0.5,,133.33\n", "line 2: .*not 133.33"),
-    ("file,unit,speed_m_s,date,nominal_pitch_m\na.csv,U,0.5,tomorrow,\n", "line 2: date 'tomorrow'"),
-    ("file,unit,speed_m_s,date,nominal_pitch_m\na.csv,U,0.5,,0.1333\nb.csv,U,0.5,,0.1016\n",
-     "line 3: unit 'U' has nominal_pitch_m 0.1016 here but 0.1333 on line 2"),
-    ("file,unit,speed_m_s,date,nominal_pitch_m\n/etc/passwd,U,0.5,,0.1333\n", "relative to the scanned folder"),
-])
+@pytest.mark.parametrize(
+    "text, match",
+    [
+        ("file,unit,speed_m_s,date\nx.csv,U,0.5,\n", r"line 1: missing column\(s\) nominal_pitch_m"),
+        ("# comment\nfile,unit,speed_m_s,date,nominal_pitch_m,colour\n", r"line 2: unknown column\(s\) 'colour'"),
+        (
+            "file,unit,speed_m_s,date,nominal_pitch_m\na.csv,U,0.5,,0.1333\nb.csv,U,0.5\n",
+            r"line 3: 3 cell\(s\), expected 5",
+        ),
+        (
+            "file,unit,speed_m_s,date,nominal_pitch_m\na.csv,U,fast,,0.1333\n",
+            "line 2: column speed_m_s: expected a number",
+        ),
+        ("file,unit,speed_m_s,date,nominal_pitch_m\na.csv,U,0.5,,133.33\n", "line 2: .*not 133.33"),
+        ("file,unit,speed_m_s,date,nominal_pitch_m\na.csv,U,0.5,tomorrow,\n", "line 2: date 'tomorrow'"),
+        (
+            "file,unit,speed_m_s,date,nominal_pitch_m\na.csv,U,0.5,,0.1333\nb.csv,U,0.5,,0.1016\n",
+            "line 3: unit 'U' has nominal_pitch_m 0.1016 here but 0.1333 on line 2",
+        ),
+        ("file,unit,speed_m_s,date,nominal_pitch_m\n/etc/passwd,U,0.5,,0.1333\n", "relative to the scanned folder"),
+    ],
+)
 def test_catalogue_rejected_with_line(tmp_path, text, match):
     cat = tmp_path / "units.csv"
     cat.write_text(text)
@@ -375,11 +466,18 @@ def test_catalogue_rejected_with_line(tmp_path, text, match):
 
 def test_catalogue_optional_columns_and_semicolons(tmp_path):
     cat = tmp_path / "units.csv"
-    cat.write_text("File;Unit;Speed_m_s;Date;Nominal_pitch_m;speed_sigma_m_s;channel\n"
-                   "a.csv;U;0.5;2025-01-01;0.1333;0.0005;accel\n")
+    cat.write_text(
+        "File;Unit;Speed_m_s;Date;Nominal_pitch_m;speed_sigma_m_s;channel\na.csv;U;0.5;2025-01-01;0.1333;0.0005;accel\n"
+    )
     (r,) = read_catalogue(cat)
-    assert (r.file, r.unit, r.speed_m_s, r.speed_sigma_m_s, r.nominal_pitch_m, r.channel) == \
-        ("a.csv", "U", 0.5, 0.0005, 0.1333, "accel")
+    assert (r.file, r.unit, r.speed_m_s, r.speed_sigma_m_s, r.nominal_pitch_m, r.channel) == (
+        "a.csv",
+        "U",
+        0.5,
+        0.0005,
+        0.1333,
+        "accel",
+    )
     assert r.date == "2025-01-01T00:00:00Z"
 
 
@@ -392,8 +490,7 @@ def test_database_location_and_refusals(tmp_path, monkeypatch, capsys):
     assert resolve_db_path("sqlite:///rel/f.sqlite") == "rel/f.sqlite"
     assert resolve_db_path("sqlite:////abs/f.sqlite") == "/abs/f.sqlite"
     assert resolve_db_path("postgresql://tech@fleet.example/fleet") == "postgresql://tech@fleet.example/fleet"
-    for url, match in (("mysql://host/db", "scheme 'mysql' is not supported"),
-                       ("sqlite://", "sqlite:///path")):
+    for url, match in (("mysql://host/db", "scheme 'mysql' is not supported"), ("sqlite://", "sqlite:///path")):
         with pytest.raises(FleetError, match=match):
             resolve_db_path(url)
     # status without a database: an error, and nothing created
@@ -422,8 +519,14 @@ def test_cli_status_json_and_report(fleet, tmp_path, capsys):
     assert d["schema"] == "vibkit.fleet.status/1" and d["limits_percent"] == [1.5, 2.0, 3.0]
     assert [u["unit"] for u in d["units"]] == ["E-worn", "E-fast", "E-slow", "E-flat"]
     u = d["units"][1]
-    assert {"slope_percent_per_year", "slope_sigma_percent_per_year", "latest_elongation_percent",
-            "latest_elongation_sigma_percent", "forecasts", "rank"} <= set(u)
+    assert {
+        "slope_percent_per_year",
+        "slope_sigma_percent_per_year",
+        "latest_elongation_percent",
+        "latest_elongation_sigma_percent",
+        "forecasts",
+        "rank",
+    } <= set(u)
     assert u["forecasts"][0]["limit_percent"] == 1.5 and u["forecasts"][0]["status"] == "forecast"
     assert main(["fleet", "status", "--db", db]) == 0
     out = capsys.readouterr().out
@@ -475,13 +578,17 @@ def _overlaps(fig):
         for axis, (lo, hi) in ((ax.xaxis, ax.get_xlim()), (ax.yaxis, ax.get_ylim())):
             ticks += [t.label1 for t in axis.get_major_ticks() if min(lo, hi) <= t.get_loc() <= max(lo, hi)]
         items = [ax.title, ax._left_title, *ax.texts, *ticks, ax.yaxis.label]
-        boxes += [(f"ax{k}:{t.get_text()[:30]}", t.get_window_extent(r)) for t in items
-                  if t.get_text() and t.get_visible()]
+        boxes += [
+            (f"ax{k}:{t.get_text()[:30]}", t.get_window_extent(r)) for t in items if t.get_text() and t.get_visible()
+        ]
         if ax.get_legend() is not None:
             boxes.append((f"ax{k}:legend", ax.get_legend().get_window_extent(r)))
     fig_box = fig.bbox
-    out = [name for name, b in boxes if b.x0 < fig_box.x0 - 1 or b.x1 > fig_box.x1 + 1 or b.y0 < fig_box.y0 - 1
-           or b.y1 > fig_box.y1 + 1]
+    out = [
+        name
+        for name, b in boxes
+        if b.x0 < fig_box.x0 - 1 or b.x1 > fig_box.x1 + 1 or b.y0 < fig_box.y0 - 1 or b.y1 > fig_box.y1 + 1
+    ]
     for i in range(len(boxes)):
         for j in range(i + 1, len(boxes)):
             (na, a), (nb, b) = boxes[i], boxes[j]
@@ -510,8 +617,15 @@ def test_fleet_pages_have_no_overlapping_text(fleet):
             found.extend((title, o) for o in _overlaps(fig))
             plt.close(fig)
 
-    ctx = FleetContext(trends, trends, meas, by_unit, (1.5, 2.0, 3.0), "fleet.sqlite",
-                       dt.datetime(2026, 11, 23, tzinfo=dt.timezone.utc))
+    ctx = FleetContext(
+        trends,
+        trends,
+        meas,
+        by_unit,
+        (1.5, 2.0, 3.0),
+        "fleet.sqlite",
+        dt.datetime(2026, 11, 23, tzinfo=dt.timezone.utc),
+    )
     with matplotlib.rc_context({"font.size": 7, "axes.titlesize": 8}):
         fleet_page(Doc(), ctx)
     assert found == []
@@ -522,8 +636,21 @@ def test_cli_add_replaced_starts_a_segment(tmp_path, capsys):
     rates = [(0, 1.6), (1, 1.9), (2, 0.2)]  # (years, elongation %): the third after a replacement
     for k, (y, e) in enumerate(rates):
         rec = synth(tmp_path / f"v{k}.csv", NOMINAL * (1 + e / 100), 300 + k, duration=10.0)
-        args = ["fleet", "add", str(rec), "--unit", "R1", "--speed", "0.5", "--nominal-pitch", str(NOMINAL),
-                "--date", (T0 + dt.timedelta(days=365 * y)).date().isoformat(), "--db", db]
+        args = [
+            "fleet",
+            "add",
+            str(rec),
+            "--unit",
+            "R1",
+            "--speed",
+            "0.5",
+            "--nominal-pitch",
+            str(NOMINAL),
+            "--date",
+            (T0 + dt.timedelta(days=365 * y)).date().isoformat(),
+            "--db",
+            db,
+        ]
         assert main(args + (["--replaced"] if k == 2 else [])) == 0
     capsys.readouterr()
     assert main(["fleet", "status", "--db", db, "--json"]) == 0
@@ -545,11 +672,12 @@ def test_cli_add_replaced_starts_a_segment(tmp_path, capsys):
 @pytest.mark.filterwarnings("ignore::pytest.PytestUnraisableExceptionWarning")
 def test_scan_on_dask_gives_the_plain_loop_numbers(fleet, tmp_path, capsys):
     cat = tmp_path / "units.csv"
-    cat.write_text("file,unit,speed_m_s,date,nominal_pitch_m\n"
-                   f"E-fast_[0-2].csv,E-fast,{SPEED},2024-01-01,{NOMINAL}\n")
+    cat.write_text(f"file,unit,speed_m_s,date,nominal_pitch_m\nE-fast_[0-2].csv,E-fast,{SPEED},2024-01-01,{NOMINAL}\n")
     db = tmp_path / "dask.sqlite"
-    assert main(["fleet", "scan", str(fleet["dir"]), "--catalogue", str(cat), "--db", str(db), "--workers", "1",
-                 "--json"]) == 3  # the other units' files failed
+    assert (
+        main(["fleet", "scan", str(fleet["dir"]), "--catalogue", str(cat), "--db", str(db), "--workers", "1", "--json"])
+        == 3
+    )  # the other units' files failed
     out, err = capsys.readouterr()
     s = json.loads(out)
     assert (s["added"], s["skipped_duplicates"]) == (3, 0)
@@ -573,9 +701,26 @@ def test_killed_scan_leaves_complete_rows(tmp_path):
     cat.write_text("\n".join(rows) + "\n")
     db = tmp_path / "f.sqlite"
     env = dict(os.environ, PYTHONPATH=str(ROOT))
-    proc = subprocess.Popen([sys.executable, "-m", "vibkit", "fleet", "scan", str(d), "--catalogue", str(cat),
-                             "--db", str(db), "--workers", "1"], stdout=subprocess.DEVNULL,
-                            stderr=subprocess.DEVNULL, env=env, start_new_session=True)
+    proc = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "vibkit",
+            "fleet",
+            "scan",
+            str(d),
+            "--catalogue",
+            str(cat),
+            "--db",
+            str(db),
+            "--workers",
+            "1",
+        ],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+        env=env,
+        start_new_session=True,
+    )
     stored = 0
     try:
         deadline = time.monotonic() + 240
@@ -616,8 +761,15 @@ def test_history_name_keeps_the_public_names():
     import vibkit.fleet.history as history
 
     assert history.__all__ == fleet.__all__
-    for name in fleet.__all__ + ["SECONDS_PER_YEAR", "CATALOGUE_OPTIONAL", "RECORDING_SUFFIXES", "SCHEMA_VERSION",
-                                 "APPLICATION_ID", "unit_trend", "rank_units"]:
+    for name in fleet.__all__ + [
+        "SECONDS_PER_YEAR",
+        "CATALOGUE_OPTIONAL",
+        "RECORDING_SUFFIXES",
+        "SCHEMA_VERSION",
+        "APPLICATION_ID",
+        "unit_trend",
+        "rank_units",
+    ]:
         assert hasattr(history, name), name
     for name in fleet.__all__:
         assert getattr(history, name) is getattr(fleet, name)

@@ -80,7 +80,10 @@ def test_library_reads_schema_1_read_only_as_upgraded(archive):
     assert [t.as_dict() for t in st_ro] == [t.as_dict() for t in st_up]
     # the flags by today's rules: E22's two impossible points, E23's 0.9 % sigma; nothing 'replaced'
     assert [(m.unit, m.quality) for m in ms_ro if m.quality != "ok"] == [
-        ("E22", "implausible"), ("E22", "implausible"), ("E23", "inconclusive")]
+        ("E22", "implausible"),
+        ("E22", "implausible"),
+        ("E23", "inconclusive"),
+    ]
     assert all(m.quality_reason for m in ms_ro if m.quality != "ok")
     assert all(m.quality_reason == "" and not m.replaced for m in ms_ro if m.quality == "ok")
     assert ms_ro[0].warnings == ("clipped",) and ms_ro[0].snr_db is None
@@ -111,8 +114,10 @@ def test_cli_status_and_report_on_a_read_only_schema_1_file(archive, tmp_path, c
         report = json.loads(cap.out)
         assert (NOTE in cap.err) == (name == "ro")
         assert (out / f"{name}.pdf").read_bytes()[:5] == b"%PDF-"
-        answers[name] = ({k: v for k, v in status.items() if k != "database"},
-                         {k: v for k, v in report.items() if k not in ("database", "output")})
+        answers[name] = (
+            {k: v for k, v in status.items() if k != "database"},
+            {k: v for k, v in report.items() if k not in ("database", "output")},
+        )
     assert answers["ro"] == answers["up"]
     assert sorted(u["unit"] for u in answers["ro"][0]["units"]) == ["E22", "E23", "E24"]
     assert answers["ro"][1]["units"] == 3
@@ -126,8 +131,25 @@ def test_write_command_upgrades_schema_1_in_place(tmp_path, capsys):
     with FleetDB(db, create=False, readonly=True) as fdb:
         seen = fdb.measurements()
     rec = ROOT / "data" / "fleet-example" / "E07" / "2026-11-23.csv"
-    assert main(["fleet", "add", str(rec), "--db", str(db), "--unit", "E07", "--speed", "0.5",
-                 "--nominal-pitch", "0.13333", "--json"]) == 0
+    assert (
+        main(
+            [
+                "fleet",
+                "add",
+                str(rec),
+                "--db",
+                str(db),
+                "--unit",
+                "E07",
+                "--speed",
+                "0.5",
+                "--nominal-pitch",
+                "0.13333",
+                "--json",
+            ]
+        )
+        == 0
+    )
     cap = capsys.readouterr()
     assert json.loads(cap.out)["measurement"]["unit"] == "E07"
     assert "upgraded in place from schema 1 to schema 2" in cap.err

@@ -76,20 +76,47 @@ def store(request, tmp_path):
 
 def fake(i, unit, years, e, *, s=0.05, quality="ok", replaced=False, nominal=NOMINAL):
     t = T0.timestamp() + years * 365.25 * 86400
-    return Measurement(id=None, unit=unit, date_utc=dt.datetime.fromtimestamp(t, dt.timezone.utc)
-                       .isoformat(timespec="seconds").replace("+00:00", "Z"), date_unix_s=t, date_source="given",
-                       speed_m_s=0.5, speed_sigma_m_s=0.001, nominal_pitch_m=nominal, channel="accel",
-                       fundamental_hz=3.75, fundamental_sigma_hz=1e-3, pitch_m=nominal * (1 + e / 100),
-                       pitch_sigma_m=nominal * s / 100, elongation_percent=e, elongation_sigma_percent=s,
-                       snr_db=None if i % 5 == 0 else 20.0 + i, warnings=("w",) if i % 3 == 0 else (),
-                       sha256=f"{i:064x}", path=f"/visits/r{i}.csv", size_bytes=1000 + i, vibkit_version="t",
-                       analysed_utc="2026-11-23T10:00:00Z", quality=quality,
-                       quality_reason="" if quality == "ok" else "given", replaced=replaced)
+    return Measurement(
+        id=None,
+        unit=unit,
+        date_utc=dt.datetime.fromtimestamp(t, dt.timezone.utc).isoformat(timespec="seconds").replace("+00:00", "Z"),
+        date_unix_s=t,
+        date_source="given",
+        speed_m_s=0.5,
+        speed_sigma_m_s=0.001,
+        nominal_pitch_m=nominal,
+        channel="accel",
+        fundamental_hz=3.75,
+        fundamental_sigma_hz=1e-3,
+        pitch_m=nominal * (1 + e / 100),
+        pitch_sigma_m=nominal * s / 100,
+        elongation_percent=e,
+        elongation_sigma_percent=s,
+        snr_db=None if i % 5 == 0 else 20.0 + i,
+        warnings=("w",) if i % 3 == 0 else (),
+        sha256=f"{i:064x}",
+        path=f"/visits/r{i}.csv",
+        size_bytes=1000 + i,
+        vibkit_version="t",
+        analysed_utc="2026-11-23T10:00:00Z",
+        quality=quality,
+        quality_reason="" if quality == "ok" else "given",
+        replaced=replaced,
+    )
 
 
 def _fleet(n=24):
-    return [fake(i, f"U{i % 4}", 0.25 * (i // 4), 0.3 + 0.1 * (i // 4), quality="inconclusive" if i == 7 else "ok",
-                 replaced=(i == 21)) for i in range(n)]
+    return [
+        fake(
+            i,
+            f"U{i % 4}",
+            0.25 * (i // 4),
+            0.3 + 0.1 * (i // 4),
+            quality="inconclusive" if i == 7 else "ok",
+            replaced=(i == 21),
+        )
+        for i in range(n)
+    ]
 
 
 def _adder(db, order, start, queue):
@@ -194,7 +221,7 @@ def test_postgres_refusals(pg_server):
         con.execute("CREATE TABLE measurement (n INTEGER)")
     with pytest.raises(FleetError, match="not a vibkit fleet's"):
         FleetDB(url)
-    bad = url.replace("?host=", "?connect_timeout=2&host=") .replace(url.split("?host=")[1], "/nonexistent")
+    bad = url.replace("?host=", "?connect_timeout=2&host=").replace(url.split("?host=")[1], "/nonexistent")
     with pytest.raises(FleetError, match="cannot connect to the PostgreSQL server.*PGPASSWORD"):
         FleetDB(bad)
     assert main(["fleet", "status", "--db", bad]) == 1
@@ -202,8 +229,10 @@ def test_postgres_refusals(pg_server):
     url2 = _fresh_pg_url(pg_server)
     with FleetDB(url2) as db:
         with psycopg.connect(url2, autocommit=True) as con:
-            con.execute("SELECT pg_terminate_backend(pid) FROM pg_stat_activity WHERE application_name = "
-                        "'vibkit fleet' AND datname = current_database()")
+            con.execute(
+                "SELECT pg_terminate_backend(pid) FROM pg_stat_activity WHERE application_name = "
+                "'vibkit fleet' AND datname = current_database()"
+            )
         with pytest.raises(FleetError, match="connection was lost|query failed"):
             db.insert(fake(9, "E9", 0.0, 0.4))
     with FleetDB(url2) as db:
@@ -234,9 +263,26 @@ def test_killed_scan_on_postgres_leaves_complete_rows(tmp_path, pg_server):
     cat = tmp_path / "units.csv"
     cat.write_text("\n".join(rows) + "\n")
     env = dict(os.environ, PYTHONPATH=str(ROOT))
-    proc = subprocess.Popen([sys.executable, "-m", "vibkit", "fleet", "scan", str(d), "--catalogue", str(cat),
-                             "--db", url, "--workers", "0"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-                            env=env, start_new_session=True)
+    proc = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "vibkit",
+            "fleet",
+            "scan",
+            str(d),
+            "--catalogue",
+            str(cat),
+            "--db",
+            url,
+            "--workers",
+            "0",
+        ],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+        env=env,
+        start_new_session=True,
+    )
     stored = 0
     try:
         deadline = time.monotonic() + 240

@@ -19,13 +19,33 @@ SIGMA = 0.05  # % per measurement
 def meas(i, years, e, s=SIGMA, *, unit="U", quality=None, replaced=False):
     t = T0 + years * SECONDS_PER_YEAR
     q, why = measurement_quality(e, s) if quality is None else (quality, "given")
-    return Measurement(id=i, unit=unit, date_utc=dt.datetime.fromtimestamp(t, dt.timezone.utc).isoformat(),
-                       date_unix_s=t, date_source="given", speed_m_s=0.5, speed_sigma_m_s=0.0,
-                       nominal_pitch_m=0.13333, channel="a", fundamental_hz=3.75, fundamental_sigma_hz=1e-3,
-                       pitch_m=0.13333 * (1 + e / 100), pitch_sigma_m=1e-5, elongation_percent=e,
-                       elongation_sigma_percent=s, snr_db=20.0, warnings=(), sha256=f"{i:064x}", path=f"/r{i}.csv",
-                       size_bytes=1, vibkit_version="t", analysed_utc="2026-01-01T00:00:00Z", quality=q,
-                       quality_reason=why, replaced=replaced)
+    return Measurement(
+        id=i,
+        unit=unit,
+        date_utc=dt.datetime.fromtimestamp(t, dt.timezone.utc).isoformat(),
+        date_unix_s=t,
+        date_source="given",
+        speed_m_s=0.5,
+        speed_sigma_m_s=0.0,
+        nominal_pitch_m=0.13333,
+        channel="a",
+        fundamental_hz=3.75,
+        fundamental_sigma_hz=1e-3,
+        pitch_m=0.13333 * (1 + e / 100),
+        pitch_sigma_m=1e-5,
+        elongation_percent=e,
+        elongation_sigma_percent=s,
+        snr_db=20.0,
+        warnings=(),
+        sha256=f"{i:064x}",
+        path=f"/r{i}.csv",
+        size_bytes=1,
+        vibkit_version="t",
+        analysed_utc="2026-01-01T00:00:00Z",
+        quality=q,
+        quality_reason=why,
+        replaced=replaced,
+    )
 
 
 def line_unit(e0, rate, years, *, seed, start_id=1, unit="U", s=SIGMA):
@@ -130,11 +150,17 @@ def test_replaced_flag_starts_a_segment_without_a_drop():
     # a used chain fitted: no drop, but the technician said so (fleet add --replaced)
     old = line_unit(0.5, 0.6, np.linspace(0, 2.0, 5), seed=7)
     new = line_unit(1.8, 0.2, 2.3 + np.linspace(0, 2.0, 5), seed=8, start_id=50)
-    new = [meas(m.id, (m.date_unix_s - T0) / SECONDS_PER_YEAR, 1.8 + 0.2 * ((m.date_unix_s - T0) / SECONDS_PER_YEAR
-                                                                            - 2.3) + (m.elongation_percent - 1.8 - 0.2
-                                                                                      * (m.date_unix_s - T0)
-                                                                                      / SECONDS_PER_YEAR),
-                replaced=(k == 0)) for k, m in enumerate(new)]
+    new = [
+        meas(
+            m.id,
+            (m.date_unix_s - T0) / SECONDS_PER_YEAR,
+            1.8
+            + 0.2 * ((m.date_unix_s - T0) / SECONDS_PER_YEAR - 2.3)
+            + (m.elongation_percent - 1.8 - 0.2 * (m.date_unix_s - T0) / SECONDS_PER_YEAR),
+            replaced=(k == 0),
+        )
+        for k, m in enumerate(new)
+    ]
     tr = unit_trend("U", old + new)
     assert [r["id"] for r in tr.replacements] == [50] and "given" in tr.replacements[0]["reason"]
     assert tr.n_used == 5 and abs(tr.slope_percent_per_year - 0.2) < 3 * tr.slope_sigma_percent_per_year

@@ -29,6 +29,7 @@ def write(tmp_path):
         p = tmp_path / name
         p.write_bytes(content if isinstance(content, bytes) else content.encode())
         return p
+
     return _write
 
 

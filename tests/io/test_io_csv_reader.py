@@ -26,8 +26,9 @@ T = np.arange(50) / 100.0
 X = np.sin(2 * np.pi * 3.0 * T)
 
 
-@pytest.mark.parametrize("sep, dec", [(s, d) for s in (",", ";", "\t", "|", " ") for d in (".", ",")
-                                      if (s, d) != (",", ",")])
+@pytest.mark.parametrize(
+    "sep, dec", [(s, d) for s in (",", ";", "\t", "|", " ") for d in (".", ",") if (s, d) != (",", ",")]
+)
 def test_delimiter_and_decimal_detected(tmp_path, sep, dec):
     head = sep.join(["time (s)", "acc (m/s^2)"]) if sep != " " else "time_s acc_g"
     p = write(tmp_path, head + "\n" + table(T, [X], sep, dec))
@@ -40,7 +41,9 @@ def test_delimiter_and_decimal_detected(tmp_path, sep, dec):
 
 
 def test_single_column_decimal_comma_with_header(tmp_path):
-    p = write(tmp_path, "Sample rate: 100 Hz\nDesplazamiento (mm)\n" + "\n".join(f"{v:.4f}".replace(".", ",") for v in X))
+    p = write(
+        tmp_path, "Sample rate: 100 Hz\nDesplazamiento (mm)\n" + "\n".join(f"{v:.4f}".replace(".", ",") for v in X)
+    )
     ds = read_recording(p)
     np.testing.assert_allclose(ds["desplazamiento"].values, np.round(X, 4) * 1e-3, rtol=1e-12)
     assert ds.attrs["sample_rate_hz"] == 100.0
@@ -70,12 +73,15 @@ def test_unitless_time_read_as_ms_when_the_header_rate_says_so(tmp_path):
     assert "read as ms" in ds.attrs["history"]
 
 
-@pytest.mark.parametrize("stamps", [
-    ["2021-06-15T10:00:00.000", "2021-06-15T10:00:00.250", "2021-06-15T10:00:00.500", "2021-06-15T10:00:01.000"],
-    ["15/06/2021 10:00:00,000", "15/06/2021 10:00:00,250", "15/06/2021 10:00:00,500", "15/06/2021 10:00:01,000"],
-    ["10:00:00:000", "10:00:00:250", "10:00:00:500", "10:00:01:000"],
-    ["2021-06-15 10:00:00Z", "2021-06-15 10:00:00.25Z", "2021-06-15 10:00:00.5Z", "2021-06-15 10:00:01Z"],
-])
+@pytest.mark.parametrize(
+    "stamps",
+    [
+        ["2021-06-15T10:00:00.000", "2021-06-15T10:00:00.250", "2021-06-15T10:00:00.500", "2021-06-15T10:00:01.000"],
+        ["15/06/2021 10:00:00,000", "15/06/2021 10:00:00,250", "15/06/2021 10:00:00,500", "15/06/2021 10:00:01,000"],
+        ["10:00:00:000", "10:00:00:250", "10:00:00:500", "10:00:01:000"],
+        ["2021-06-15 10:00:00Z", "2021-06-15 10:00:00.25Z", "2021-06-15 10:00:00.5Z", "2021-06-15 10:00:01Z"],
+    ],
+)
 def test_timestamp_time_columns(tmp_path, stamps):
     sep = ";" if "," in stamps[0] else ","
     p = write(tmp_path, f"Timestamp{sep}v (m/s)\n" + "".join(f"{s}{sep}{i}\n" for i, s in enumerate(stamps)))
@@ -94,8 +100,10 @@ def test_epoch_seconds_shifted_and_recorded(tmp_path):
 
 
 def test_metadata_block_kept_as_attrs(tmp_path):
-    text = ("# Site: Leon\n# chain_speed_m_s = 0.49\n# free text about the test\nOperator;Ana\n"
-            "Steps;34\ntime (s);x (mm)\n" + table(T, [X], ";"))
+    text = (
+        "# Site: Leon\n# chain_speed_m_s = 0.49\n# free text about the test\nOperator;Ana\n"
+        "Steps;34\ntime (s);x (mm)\n" + table(T, [X], ";")
+    )
     ds = read_recording(write(tmp_path, text))
     assert ds.attrs["site"] == "Leon"
     assert ds.attrs["chain_speed_m_s"] == 0.49
@@ -176,8 +184,9 @@ def test_jitter_measured_exactly(tmp_path):
 
 def test_resample_linear_per_segment(tmp_path):
     rng = np.random.default_rng(1)
-    t = np.r_[np.cumsum(0.01 * (1 + 0.1 * rng.uniform(-1, 1, 100))),
-              5 + np.cumsum(0.01 * (1 + 0.1 * rng.uniform(-1, 1, 100)))]
+    t = np.r_[
+        np.cumsum(0.01 * (1 + 0.1 * rng.uniform(-1, 1, 100))), 5 + np.cumsum(0.01 * (1 + 0.1 * rng.uniform(-1, 1, 100)))
+    ]
     x = 3.0 * t + 1.0  # linear: interpolation is exact
     p = write(tmp_path, "time (s),x (m)\n" + "".join(f"{a:.9f},{b:.9f}\n" for a, b in zip(t, x)))
     ds = read_recording(p, resample="linear", sample_rate=100.0)
@@ -235,9 +244,13 @@ def test_crlf_bom_and_trailing_delimiters(tmp_path):
 
 
 def test_options_are_validated():
-    for kwargs, word in [({"sample_rate": -1}, "sample_rate"), ({"resample": "cubic"}, "resample"),
-                         ({"gap_factor": 0.5}, "gap_factor"), ({"delimiter": "x"}, "delimiter"),
-                         ({"decimal": ";"}, "decimal")]:
+    for kwargs, word in [
+        ({"sample_rate": -1}, "sample_rate"),
+        ({"resample": "cubic"}, "resample"),
+        ({"gap_factor": 0.5}, "gap_factor"),
+        ({"delimiter": "x"}, "delimiter"),
+        ({"decimal": ";"}, "decimal"),
+    ]:
         with pytest.raises(ValueError, match=word):
             read_recording("whatever.csv", **kwargs)
 

@@ -47,8 +47,17 @@ def same(fast, ref):
     xr.testing.assert_identical(a, b)
 
 
-@pytest.mark.parametrize("name", ["phyphox.csv", "physics-toolbox.csv", "endaq.csv", "gcdc-x16.csv",
-                                  "spanish-spreadsheet.csv", "no-time-column.txt"])
+@pytest.mark.parametrize(
+    "name",
+    [
+        "phyphox.csv",
+        "physics-toolbox.csv",
+        "endaq.csv",
+        "gcdc-x16.csv",
+        "spanish-spreadsheet.csv",
+        "no-time-column.txt",
+    ],
+)
 def test_layouts_read_the_same_both_ways(name):
     path = LAYOUTS / name
     same(read_recording(path), slow(path))
@@ -90,17 +99,21 @@ def test_file_larger_than_the_head_reads_the_same(tmp_path):
     same(ds, slow(p))
 
 
-@pytest.mark.parametrize("where, edit, line, words", [
-    (50_000, lambda s: "49.998" + s[6:], 50_003, "time goes backwards"),       # reversed time deep in the file
-    (40_000, lambda s: "39.999" + s[6:], 40_003, "repeats the previous row"),  # repeated stamp
-    (30_000, lambda s: s.split(",")[0] + ",1.0", 30_003, "expected 3 fields"),  # short ragged row
-    (30_000, lambda s: s + ",7", 30_003, "expected 3 fields"),                  # long ragged row
-    (20_000, lambda s: s.replace(",", ",abc,", 1).rsplit(",", 1)[0], 20_003, "expected a number in column 'x (m)'"),
-    (10_000, lambda s: s.split(",")[0] + ",1e999," + s.split(",")[2], 10_003, "expected a finite number"),
-])
+@pytest.mark.parametrize(
+    "where, edit, line, words",
+    [
+        (50_000, lambda s: "49.998" + s[6:], 50_003, "time goes backwards"),  # reversed time deep in the file
+        (40_000, lambda s: "39.999" + s[6:], 40_003, "repeats the previous row"),  # repeated stamp
+        (30_000, lambda s: s.split(",")[0] + ",1.0", 30_003, "expected 3 fields"),  # short ragged row
+        (30_000, lambda s: s + ",7", 30_003, "expected 3 fields"),  # long ragged row
+        (20_000, lambda s: s.replace(",", ",abc,", 1).rsplit(",", 1)[0], 20_003, "expected a number in column 'x (m)'"),
+        (10_000, lambda s: s.split(",")[0] + ",1e999," + s.split(",")[2], 10_003, "expected a finite number"),
+    ],
+)
 def test_errors_deep_in_a_big_file_name_the_line(tmp_path, where, edit, line, words):
     def mutate(lines):
         lines[where] = edit(lines[where])
+
     p = big_file(tmp_path, mutate=mutate)
     with pytest.raises(RecordingError) as info:
         read_recording(p)
@@ -113,6 +126,7 @@ def test_blank_and_padding_lines_keep_line_numbers_right(tmp_path):
         lines.insert(100, "")
         lines.insert(200, ",,")
         lines[30_000] = "29.990" + lines[30_000][6:]  # after 29.997: backwards, file line 30_003
+
     p = big_file(tmp_path, mutate=mutate)
     with pytest.raises(RecordingError, match=r"line 30003: time goes backwards"):
         read_recording(p)
@@ -125,6 +139,7 @@ def test_missing_values_in_a_big_file(tmp_path):
         for i in (5, 500, 50_000):
             a, b, c = lines[i].split(",")
             lines[i] = f"{a},,{c}" if i != 500 else f"{a},NaN,{c}"
+
     p = big_file(tmp_path, mutate=mutate)
     ds = read_recording(p)
     assert FAST_NOTE in ds.attrs["history"]
@@ -133,10 +148,35 @@ def test_missing_values_in_a_big_file(tmp_path):
     same(ds, slow(p))
 
 
-SETTINGS = settings(max_examples=120, deadline=None,
-                    suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
-CELLS = st.sampled_from(["0", "1", "-2.5", "1e3", "3,5", "nan", "NaN", "", " ", "abc", "inf", "1e999", "\"4\"",
-                         "0.1", "12:00:01", "2021-01-01T00:00:00", "#", "7 ", " 8", "+.5", "1.", "N/A"])
+SETTINGS = settings(
+    max_examples=120, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow]
+)
+CELLS = st.sampled_from(
+    [
+        "0",
+        "1",
+        "-2.5",
+        "1e3",
+        "3,5",
+        "nan",
+        "NaN",
+        "",
+        " ",
+        "abc",
+        "inf",
+        "1e999",
+        '"4"',
+        "0.1",
+        "12:00:01",
+        "2021-01-01T00:00:00",
+        "#",
+        "7 ",
+        " 8",
+        "+.5",
+        "1.",
+        "N/A",
+    ]
+)
 
 
 def test_a_comment_line_in_a_text_first_column_reads_as_line_by_line(tmp_path):
@@ -149,10 +189,12 @@ def test_a_comment_line_in_a_text_first_column_reads_as_line_by_line(tmp_path):
 
 
 @SETTINGS
-@given(rows=st.lists(st.lists(CELLS, min_size=1, max_size=4), min_size=1, max_size=12),
-       sep=st.sampled_from([",", ";", "\t", " "]),
-       header=st.sampled_from(["", "time (s),x (m)\n", "t;a;b\n", "# note\nindex\ttime\tv (mm/s)\n"]),
-       ending=st.sampled_from(["\n", "\r\n"]))
+@given(
+    rows=st.lists(st.lists(CELLS, min_size=1, max_size=4), min_size=1, max_size=12),
+    sep=st.sampled_from([",", ";", "\t", " "]),
+    header=st.sampled_from(["", "time (s),x (m)\n", "t;a;b\n", "# note\nindex\ttime\tv (mm/s)\n"]),
+    ending=st.sampled_from(["\n", "\r\n"]),
+)
 def test_fast_and_slow_agree_on_anything(tmp_path, rows, sep, header, ending):
     p = tmp_path / "any.csv"
     text = header + ending.join(sep.join(r) for r in rows) + ending
@@ -163,9 +205,15 @@ def test_fast_and_slow_agree_on_anything(tmp_path, rows, sep, header, ending):
 
 
 @SETTINGS
-@given(n=st.integers(2, 60), nchan=st.integers(1, 3), seed=st.integers(0, 2**16),
-       sep=st.sampled_from([",", ";", "\t", " "]), comma=st.booleans(), holes=st.booleans(),
-       quote=st.booleans())
+@given(
+    n=st.integers(2, 60),
+    nchan=st.integers(1, 3),
+    seed=st.integers(0, 2**16),
+    sep=st.sampled_from([",", ";", "\t", " "]),
+    comma=st.booleans(),
+    holes=st.booleans(),
+    quote=st.booleans(),
+)
 def test_fast_and_slow_agree_on_tables(tmp_path, n, nchan, seed, sep, comma, holes, quote):
     rng = np.random.default_rng(seed)
     dec = "," if comma and sep != "," else "."

@@ -6,8 +6,9 @@ from hypothesis import strategies as st
 
 from vibkit.io import RecordingError, read_recording
 
-SETTINGS = settings(max_examples=150, deadline=None,
-                    suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
+SETTINGS = settings(
+    max_examples=150, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow]
+)
 ALPHABET = st.sampled_from(list("0123456789.,;\t |\n\r-+eE#:=\"'abcxyzNaT()[]/sgm ") + ["nan", "1e999", "ó", "\x00"])
 
 

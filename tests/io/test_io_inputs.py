@@ -8,9 +8,15 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from vibkit.io import (DEFAULT_MAX_RECORDING_BYTES, RecordingError, max_recording_bytes, read_recording,
-                       resolve_channel, write_result)
 from vibkit.diagnose.pitch import pick_channel
+from vibkit.io import (
+    DEFAULT_MAX_RECORDING_BYTES,
+    RecordingError,
+    max_recording_bytes,
+    read_recording,
+    resolve_channel,
+    write_result,
+)
 
 FS = 200.0
 T = np.arange(400) / FS
@@ -47,8 +53,10 @@ def test_channel_named_as_the_file_writes_it(tmp_path):
         assert pick_channel(ds, name) == "acceleration_x"
     with pytest.raises(ValueError) as info:
         pick_channel(ds, "vy_ms")
-    assert str(info.value) == ("rec.csv: channel 'vy_ms' is not in the recording (channels: vz (file: 'vz_ms'), "
-                               "acceleration_x (file: 'Acceleration x (m/s^2)'))")
+    assert str(info.value) == (
+        "rec.csv: channel 'vy_ms' is not in the recording (channels: vz (file: 'vz_ms'), "
+        "acceleration_x (file: 'Acceleration x (m/s^2)'))"
+    )
 
 
 def test_source_name_survives_a_netcdf_round_trip(tmp_path):
@@ -60,8 +68,11 @@ def test_source_name_survives_a_netcdf_round_trip(tmp_path):
 @pytest.mark.parametrize("counter", ["index", "#", "n", "Sample number", "sample", "No.", "idx"])
 def test_sample_counter_is_never_the_default_channel(tmp_path, counter):
     x = np.sin(2 * np.pi * 3.5 * T)
-    p = write(tmp_path, f"{counter},time (s),displacement (mm)\n"
-              + "".join(f"{k + 1},{a:.4f},{v:.6f}\n" for k, (a, v) in enumerate(zip(T, x))))
+    p = write(
+        tmp_path,
+        f"{counter},time (s),displacement (mm)\n"
+        + "".join(f"{k + 1},{a:.4f},{v:.6f}\n" for k, (a, v) in enumerate(zip(T, x))),
+    )
     ds = read_recording(p)
     assert list(ds.data_vars) == ["displacement"]  # a counter is no channel (a coordinate along time)
     var = [v for v in ds.coords if v != "time"][0]
@@ -73,8 +84,11 @@ def test_sample_counter_is_never_the_default_channel(tmp_path, counter):
 
 def test_an_unnamed_plus_one_ramp_is_a_counter_but_a_signal_is_not(tmp_path):
     x = np.sin(2 * np.pi * 3.5 * T)
-    p = write(tmp_path, "a,time (s),b (mm),c (mm)\n"
-              + "".join(f"{k + 100},{a:.4f},{v:.6f},{2 * k}\n" for k, (a, v) in enumerate(zip(T, x))))
+    p = write(
+        tmp_path,
+        "a,time (s),b (mm),c (mm)\n"
+        + "".join(f"{k + 100},{a:.4f},{v:.6f},{2 * k}\n" for k, (a, v) in enumerate(zip(T, x))),
+    )
     ds = read_recording(p)
     assert ds["a"].attrs.get("sample_counter") == 1
     assert "sample_counter" not in ds["b"].attrs and "sample_counter" not in ds["c"].attrs  # step 2 is no counter
@@ -187,8 +201,14 @@ def test_size_limit_by_keyword_and_environment(tmp_path, monkeypatch):
     monkeypatch.delenv("VIBKIT_MAX_RECORDING_BYTES", raising=False)
     assert max_recording_bytes() == DEFAULT_MAX_RECORDING_BYTES == 4 * 1024**3
     assert read_recording(p, max_bytes=size).sizes["time"] == 400
-    one_line_error(p, lambda: read_recording(p, max_bytes=size - 1), f"is {size} bytes",
-                   f"larger than the {size - 1} bytes limit", "max_bytes=", "VIBKIT_MAX_RECORDING_BYTES")
+    one_line_error(
+        p,
+        lambda: read_recording(p, max_bytes=size - 1),
+        f"is {size} bytes",
+        f"larger than the {size - 1} bytes limit",
+        "max_bytes=",
+        "VIBKIT_MAX_RECORDING_BYTES",
+    )
     monkeypatch.setenv("VIBKIT_MAX_RECORDING_BYTES", str(size - 1))
     one_line_error(p, lambda: read_recording(p), "limit")
     assert read_recording(p, max_bytes=size).sizes["time"] == 400  # the keyword wins
@@ -208,20 +228,25 @@ def test_time_column_out_of_range_names_the_file(tmp_path):
 
 
 def nc(tmp_path, t, x, name="r.nc", encoding=None):
-    ds = xr.Dataset({"x": ("time", np.asarray(x, float), {"units": "m"})},
-                    coords={"time": ("time", np.asarray(t, float), {"units": "s"})})
+    ds = xr.Dataset(
+        {"x": ("time", np.asarray(x, float), {"units": "m"})},
+        coords={"time": ("time", np.asarray(t, float), {"units": "s"})},
+    )
     p = tmp_path / name
     ds.to_netcdf(p, engine="h5netcdf", encoding=encoding or {})
     return p
 
 
-@pytest.mark.parametrize("t, words", [
-    ([0.0, 0.1, 0.1, 0.3], ["repeats the previous row", "variable 'time'", "index 2", "repair_time=True"]),
-    ([0.0, 0.2, 0.1, 0.3], ["time goes backwards", "index 2"]),
-    ([0.0, 0.1, np.inf, 0.3], ["not a finite number at index 2"]),
-    ([0.0, 0.1, np.nan, 0.3], ["not a finite number at index 2"]),
-    ([0.0, 0.1, 9.969209968386869e36, 0.3], ["not a finite number at index 2"]),
-])
+@pytest.mark.parametrize(
+    "t, words",
+    [
+        ([0.0, 0.1, 0.1, 0.3], ["repeats the previous row", "variable 'time'", "index 2", "repair_time=True"]),
+        ([0.0, 0.2, 0.1, 0.3], ["time goes backwards", "index 2"]),
+        ([0.0, 0.1, np.inf, 0.3], ["not a finite number at index 2"]),
+        ([0.0, 0.1, np.nan, 0.3], ["not a finite number at index 2"]),
+        ([0.0, 0.1, 9.969209968386869e36, 0.3], ["not a finite number at index 2"]),
+    ],
+)
 def test_netcdf_time_checks_as_for_text(tmp_path, t, words):
     p = nc(tmp_path, t, [1, 2, 3, 4])
     one_line_error(p, lambda: read_recording(p), *words)
@@ -259,8 +284,9 @@ def hms(s):
 def test_midnight_crossing_refused_then_unwrapped(tmp_path):
     t = 86400 - 1.0 + np.arange(400) / FS  # 23:59:59.000 for 2 s
     p = write(tmp_path, "time,x (m)\n" + "".join(f"{hms(a)},{k}\n" for k, a in enumerate(t)))
-    one_line_error(p, lambda: read_recording(p), "time goes backwards", "crossing midnight", "repair_time=True",
-                   line=202)
+    one_line_error(
+        p, lambda: read_recording(p), "time goes backwards", "crossing midnight", "repair_time=True", line=202
+    )
     ds = read_recording(p, repair_time=True)
     np.testing.assert_allclose(ds["time"].values, np.arange(400) / FS, atol=1e-9)  # order kept, nothing sorted
     np.testing.assert_array_equal(ds["x"].values, np.arange(400))

@@ -117,9 +117,13 @@ def test_spanish_spreadsheet():
     assert ds.attrs["velocidad_m_s"] == 0.49
     assert ds.attrs["fecha"] == "12/03/2019"
     assert ds.attrs["sample_rate_hz"] == 500.0
-    for decision in ("encoding cp1252", "delimiter ';' detected", "decimal comma detected",
-                     "time column 'Tiempo (ms)' in ms -> s (x 0.001)",
-                     "column 'Aceleración (g)' in g -> m/s^2 (x 9.80665)"):
+    for decision in (
+        "encoding cp1252",
+        "delimiter ';' detected",
+        "decimal comma detected",
+        "time column 'Tiempo (ms)' in ms -> s (x 0.001)",
+        "column 'Aceleración (g)' in g -> m/s^2 (x 9.80665)",
+    ):
         assert decision in ds.attrs["history"]
 
 

@@ -14,12 +14,28 @@ def sim_like():
     link = np.arange(3)
     return xr.Dataset(
         {
-            "delta": ("time", 0.037 + 1e-5 * np.sin(2 * np.pi * 3.75 * t), {"units": "m", "long_name": "tensioner displacement"}),
-            "link_tension": (("time", "link"), np.outer(1 + t, 1000.0 + link), {"units": "N", "long_name": "link tension"}),
+            "delta": (
+                "time",
+                0.037 + 1e-5 * np.sin(2 * np.pi * 3.75 * t),
+                {"units": "m", "long_name": "tensioner displacement"},
+            ),
+            "link_tension": (
+                ("time", "link"),
+                np.outer(1 + t, 1000.0 + link),
+                {"units": "N", "long_name": "link tension"},
+            ),
         },
-        coords={"time": ("time", t, {"units": "s", "long_name": "time"}), "link": ("link", link, {"long_name": "link"})},
-        attrs={"link_pitch_m": 0.1333, "chain_speed_m_s": 0.5, "sprocket_teeth": 28,
-               "scene": "[chain]\npitch = 0.1333\n", "vibkit_version": "0.1.0"},
+        coords={
+            "time": ("time", t, {"units": "s", "long_name": "time"}),
+            "link": ("link", link, {"long_name": "link"}),
+        },
+        attrs={
+            "link_pitch_m": 0.1333,
+            "chain_speed_m_s": 0.5,
+            "sprocket_teeth": 28,
+            "scene": "[chain]\npitch = 0.1333\n",
+            "vibkit_version": "0.1.0",
+        },
     )
 
 

@@ -41,8 +41,9 @@ def test_miniseed_with_a_gap_gives_segments(tmp_path):
 
 
 def test_channel_selection_and_differing_rates(tmp_path):
-    st = obspy.Stream([trace("HNZ", np.arange(100, dtype=np.int32)),
-                       trace("HNX", np.arange(50, dtype=np.int32), fs=50.0)])
+    st = obspy.Stream(
+        [trace("HNZ", np.arange(100, dtype=np.int32)), trace("HNX", np.arange(50, dtype=np.int32), fs=50.0)]
+    )
     p = tmp_path / "two.mseed"
     st.write(str(p), format="MSEED")
     with pytest.raises(RecordingError, match="different sampling rates"):

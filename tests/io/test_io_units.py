@@ -56,8 +56,10 @@ def test_unknown_units_are_none(text):
     assert parse_unit(text) is None
 
 
-@pytest.mark.parametrize("text, factor", [("s", 1.0), ("sec", 1.0), ("ms", 1e-3), ("µs", 1e-6),
-                                          ("us", 1e-6), ("ns", 1e-9), ("min", 60.0), ("seg", 1.0)])
+@pytest.mark.parametrize(
+    "text, factor",
+    [("s", 1.0), ("sec", 1.0), ("ms", 1e-3), ("µs", 1e-6), ("us", 1e-6), ("ns", 1e-9), ("min", 60.0), ("seg", 1.0)],
+)
 def test_time_units(text, factor):
     assert parse_time_unit(text) == factor
 

@@ -30,6 +30,7 @@ def run(capsys):
         out, err = capsys.readouterr()
         assert "Traceback" not in out + err
         return rc, out, err
+
     return _run
 
 
@@ -74,8 +75,10 @@ def test_metawear_numeric_clock_preferred_over_the_text_stamp(tmp_path, header):
 def sensor_logger(path, n=1000, fs=100.0):
     t_ns = 1760565906248623000 + np.round(np.arange(n) * 1e9 / fs).astype(np.int64)
     el = (t_ns - t_ns[0]) / 1e9 + 0.1036
-    path.write_text("time,seconds_elapsed,z,y,x\n" + "".join(
-        f"{a},{float(e)!r},{float(sine(k / fs))!r},0.1,-0.2\n" for k, (a, e) in enumerate(zip(t_ns, el))))
+    path.write_text(
+        "time,seconds_elapsed,z,y,x\n"
+        + "".join(f"{a},{float(e)!r},{float(sine(k / fs))!r},0.1,-0.2\n" for k, (a, e) in enumerate(zip(t_ns, el)))
+    )
     return path
 
 
@@ -138,11 +141,13 @@ def test_arduino_clock_of_unclear_unit_is_refused_naming_time_unit(tmp_path, run
 def test_picoquake_rate_from_the_config_comment(tmp_path):
     n = 2000
     p = tmp_path / "car.csv"
-    p.write_text("# PLab PicoQuake Data\n# Time: 2024-04-21 15:54:46.333682, Device: D4E9 (E6632891E36F2029)\n"
-                 "# Num. samples: 2000, Duration: 1.0 s\n"
-                 "# Config: data_rate = 2000.0 Hz, filter = 488 Hz, acc_range = 4 g, gyro_range = 250.0 dps\n"
-                 "# Integrity: True, Skipped samples: 0\ncount,a_x,a_y,a_z,g_x,g_y,g_z\n"
-                 + "".join(f"{k},{0.1 * sine(k / 2000):.5f},0.0,1.0,0.5,-0.5,180.0\n" for k in range(n)))
+    p.write_text(
+        "# PLab PicoQuake Data\n# Time: 2024-04-21 15:54:46.333682, Device: D4E9 (E6632891E36F2029)\n"
+        "# Num. samples: 2000, Duration: 1.0 s\n"
+        "# Config: data_rate = 2000.0 Hz, filter = 488 Hz, acc_range = 4 g, gyro_range = 250.0 dps\n"
+        "# Integrity: True, Skipped samples: 0\ncount,a_x,a_y,a_z,g_x,g_y,g_z\n"
+        + "".join(f"{k},{0.1 * sine(k / 2000):.5f},0.0,1.0,0.5,-0.5,180.0\n" for k in range(n))
+    )
     ds = read_recording(p)
     assert ds.attrs["sample_rate_hz"] == 2000.0
     assert list(ds.data_vars) == ["a_x", "a_y", "a_z", "g_x", "g_y", "g_z"]  # 'count' is no channel
@@ -161,9 +166,11 @@ def test_no_rate_error_names_the_flags(tmp_path, run):
 
 
 def phyphox(path, t):
-    path.write_text('"Time (s)","Acceleration x (m/s^2)","Acceleration y (m/s^2)","Acceleration z (m/s^2)",'
-                    '"Absolute acceleration (m/s^2)"\n'
-                    + "".join(f"{a:.9E},{sine(a):.9E},0.000000000E0,9.806650000E0,9.8E0\n" for a in t))
+    path.write_text(
+        '"Time (s)","Acceleration x (m/s^2)","Acceleration y (m/s^2)","Acceleration z (m/s^2)",'
+        '"Absolute acceleration (m/s^2)"\n'
+        + "".join(f"{a:.9E},{sine(a):.9E},0.000000000E0,9.806650000E0,9.8E0\n" for a in t)
+    )
     return path
 
 
@@ -199,9 +206,13 @@ def test_physics_toolbox_held_samples_give_the_true_update_rate(tmp_path):
     idx = np.searchsorted(upd, rows_t, side="right") - 1
     g = np.round(0.3 * sine(upd[idx]) + 1e-4 * idx, 4)  # held between its updates
     p = tmp_path / "multi.csv"
-    p.write_text("\ntime,gFx,gFy,gFz,ax,ay,az,wx,wy,wz,\n" + "".join(
-        f"{a:.6f},{b:.4f},{b:.4f},{b:.4f},{r:.4f},0.0,0.0,{r:.4f},0.0,0.0,\n"
-        for a, b, r in zip(rows_t, g, rng.normal(size=rows_t.size))))
+    p.write_text(
+        "\ntime,gFx,gFy,gFz,ax,ay,az,wx,wy,wz,\n"
+        + "".join(
+            f"{a:.6f},{b:.4f},{b:.4f},{b:.4f},{r:.4f},0.0,0.0,{r:.4f},0.0,0.0,\n"
+            for a, b, r in zip(rows_t, g, rng.normal(size=rows_t.size))
+        )
+    )
     ds = read_recording(p)
     n_upd = np.unique(idx).size
     true_rate = (n_upd - 1) / (upd[idx[-1]] - upd[idx[0]])
@@ -219,10 +230,21 @@ def test_physics_toolbox_held_samples_give_the_true_update_rate(tmp_path):
 
 def mseed(path, traces):
     obspy = pytest.importorskip("obspy")
-    st = obspy.Stream([obspy.Trace(data=np.asarray(d, dtype=np.int32),
-                                   header={"network": "CH", "station": "BALST", "channel": ch, "sampling_rate": fs,
-                                           "starttime": obspy.UTCDateTime(2024, 1, 1) + t0})
-                       for ch, d, fs, t0 in traces])
+    st = obspy.Stream(
+        [
+            obspy.Trace(
+                data=np.asarray(d, dtype=np.int32),
+                header={
+                    "network": "CH",
+                    "station": "BALST",
+                    "channel": ch,
+                    "sampling_rate": fs,
+                    "starttime": obspy.UTCDateTime(2024, 1, 1) + t0,
+                },
+            )
+            for ch, d, fs, t0 in traces
+        ]
+    )
     st.write(str(path), format="MSEED")
     return path
 
@@ -241,8 +263,13 @@ def test_units_option_scales_raw_counts(tmp_path):
 def test_two_channel_miniseed_with_different_starts_read_with_channel(tmp_path, run):
     fs = 100.0
     t = np.arange(6000) / fs
-    p = mseed(tmp_path / "two.mseed", [("LHE", np.round(1000 * np.cos(t)), fs, 0.0),
-                                       ("LHZ", np.round(1000 * (sine(t) + 0.3 * sine(2 * t))), fs, 0.37)])
+    p = mseed(
+        tmp_path / "two.mseed",
+        [
+            ("LHE", np.round(1000 * np.cos(t)), fs, 0.0),
+            ("LHZ", np.round(1000 * (sine(t) + 0.3 * sine(2 * t))), fs, 0.37),
+        ],
+    )
     with pytest.raises(RecordingError, match="read one trace at a time with channel="):
         read_recording(p)
     rc, _, err = run("spectrum", p)
@@ -255,8 +282,16 @@ def test_two_channel_miniseed_with_different_starts_read_with_channel(tmp_path, 
 # ------------------------------------------------------------------------------------------ the CLI
 
 
-READER_FLAGS = {"--sample-rate", "--time-column", "--time-unit", "--units", "--repair-time", "--delimiter",
-                "--decimal", "--encoding"}
+READER_FLAGS = {
+    "--sample-rate",
+    "--time-column",
+    "--time-unit",
+    "--units",
+    "--repair-time",
+    "--delimiter",
+    "--decimal",
+    "--encoding",
+}
 
 
 def _options(argv):
@@ -270,8 +305,9 @@ def _options(argv):
     return {o for a in sp._actions for o in a.option_strings}
 
 
-@pytest.mark.parametrize("cmd", [["spectrum"], ["pitch"], ["compare"], ["report"], ["ride"], ["fleet", "add"],
-                                 ["fleet", "scan"]])
+@pytest.mark.parametrize(
+    "cmd", [["spectrum"], ["pitch"], ["compare"], ["report"], ["ride"], ["fleet", "add"], ["fleet", "scan"]]
+)
 def test_every_command_that_reads_a_recording_takes_the_reader_options(cmd):
     opts = _options(cmd)
     assert READER_FLAGS <= opts, READER_FLAGS - opts
@@ -298,8 +334,10 @@ def test_cli_message_names_flags_not_python_arguments():
 
     assert cli_message("pass time_unit= (s, ms, us)") == "pass --time-unit (s, ms, us)"
     assert cli_message("(time_column=) or (sample_rate=)") == "(--time-column) or (--sample-rate)"
-    assert cli_message("pass repair_time=True, --repair-time on the command line, to repair") == \
-        "pass --repair-time to repair"
+    assert (
+        cli_message("pass repair_time=True, --repair-time on the command line, to repair")
+        == "pass --repair-time to repair"
+    )
     assert cli_message("kept (pass units={'ax': 'g/<counts per g>'})") == "kept (pass --units ax=g/<counts per g>)"
     assert cli_message("no time column (time_column=False given)") == "no time column (--time-column none given)"
 
@@ -310,9 +348,21 @@ def test_fleet_scan_applies_the_reader_options_to_every_file(tmp_path, run):
         arduino(tmp_path / "visits" / name, 120_000 + 7 * k, 50, n=200)  # unit unclear without --time-unit
     (tmp_path / "cat.csv").write_text("file,unit,speed_m_s,date,nominal_pitch_m\n*.csv,E1,0.5,2026-01-01,0.13333\n")
     db = tmp_path / "f.sqlite"
-    rc, _, err = run("fleet", "scan", tmp_path / "visits", "--catalogue", tmp_path / "cat.csv", "--db", db,
-                     "--workers", "0")
+    rc, _, err = run(
+        "fleet", "scan", tmp_path / "visits", "--catalogue", tmp_path / "cat.csv", "--db", db, "--workers", "0"
+    )
     assert rc == 1 and err.count("pass --time-unit (s, ms, us)") == 2, err
-    rc, _, err = run("fleet", "scan", tmp_path / "visits", "--catalogue", tmp_path / "cat.csv", "--db", db,
-                     "--workers", "0", "--time-unit", "ms")
+    rc, _, err = run(
+        "fleet",
+        "scan",
+        tmp_path / "visits",
+        "--catalogue",
+        tmp_path / "cat.csv",
+        "--db",
+        db,
+        "--workers",
+        "0",
+        "--time-unit",
+        "ms",
+    )
     assert "--time-unit" not in err and "cannot tell its unit" not in err, err  # read; no link-pass is fine

@@ -21,9 +21,8 @@ EXPECTED = json.loads((ROOT / "expected.json").read_text(encoding="utf-8"))
 
 #: files that need an option, and the one line naming the flag that fixes them
 NEEDS_A_FLAG = {
-    "physicstoolbox_multi_gforce_linacc_gyro_xmoves.csv":
-        "rows come every 66 us to 12.9 ms and are split into bursts at gaps, so the rate inside bursts "
-        "(447 Hz) is not the rows' mean rate (441 Hz): --sample-rate 441.17 states it",
+    "physicstoolbox_multi_gforce_linacc_gyro_xmoves.csv": "rows come every 66 us to 12.9 ms and are split into bursts at gaps, so the rate inside bursts "
+    "(447 Hz) is not the rows' mean rate (441 Hz): --sample-rate 441.17 states it",
 }
 
 

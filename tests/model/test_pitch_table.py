@@ -23,8 +23,12 @@ ALL_EFFECTS = {
     "contact": {"stiffness": 1.0e6, "exponent": 1.5, "damping": 0.3},
     "motor": {"kp": 600.0, "speed": 0.5},
     "tensioner": {"stiffness": 2.0e4, "preload": 3000.0, "mass": 40.0},
-    "passengers": {"mass": [70.0, 90.0], "step": [3, 53], "board": ["lower_landing"] * 2,
-                   "alight": ["upper_landing"] * 2},
+    "passengers": {
+        "mass": [70.0, 90.0],
+        "step": [3, 53],
+        "board": ["lower_landing"] * 2,
+        "alight": ["upper_landing"] * 2,
+    },
     "rolling_resistance": {"coefficient": 0.01},
 }
 
@@ -54,16 +58,24 @@ def _errors(model, fm, tb, rng, count=400):
     worst = np.zeros(4)
     scale = np.zeros(2)
     for _ in range(count):
-        y = np.array([rng.uniform(0.0, 2.0 * p0), rng.uniform(-0.6, 0.6), rng.uniform(0.0, 2 * np.pi),
-                      rng.uniform(-1.0, 0.0), rng.uniform(-0.01, 0.01)])
+        y = np.array(
+            [
+                rng.uniform(0.0, 2.0 * p0),
+                rng.uniform(-0.6, 0.6),
+                rng.uniform(0.0, 2 * np.pi),
+                rng.uniform(-1.0, 0.0),
+                rng.uniform(-0.01, 0.01),
+            ]
+        )
         exact, fast = np.empty(5), np.empty(5)
         fm.info[:] = 0.0
         fm.info[0] = model.chain.configure(y[0]).delta
         assert evaluate(0.0, y, exact, fm.prm, fm.work.arrays, False) == 0
         d_exact, e_exact = fm.info[0], fm.info[5]
         assert table_evaluate(0.0, y, fast, fm.prm, fm.work.arrays, False, tb) == 0
-        worst = np.maximum(worst, np.abs([exact[1] - fast[1], exact[3] - fast[3], d_exact - fm.info[0],
-                                          e_exact - fm.info[5]]))
+        worst = np.maximum(
+            worst, np.abs([exact[1] - fast[1], exact[3] - fast[3], d_exact - fm.info[0], e_exact - fm.info[5]])
+        )
         scale = np.maximum(scale, np.abs([exact[1], exact[3]]))
     return worst, scale
 
@@ -71,10 +83,17 @@ def _errors(model, fm, tb, rng, count=400):
 BY_TIME = dict(ALL_EFFECTS, passengers={"mass": [70.0], "step": [3], "board": [0.0], "alight": [5.0]})
 
 
-@pytest.mark.parametrize("name, effects", [("thesis-forward.toml", None), ("las-palmas.toml", None),
-                                           ("thesis-passengers.toml", None), ("thesis-forward.toml", ALL_EFFECTS),
-                                           ("thesis-forward.toml", BY_TIME)],
-                         ids=["no-load", "las-palmas", "passengers", "every-effect", "passengers-by-time"])
+@pytest.mark.parametrize(
+    "name, effects",
+    [
+        ("thesis-forward.toml", None),
+        ("las-palmas.toml", None),
+        ("thesis-passengers.toml", None),
+        ("thesis-forward.toml", ALL_EFFECTS),
+        ("thesis-forward.toml", BY_TIME),
+    ],
+    ids=["no-load", "las-palmas", "passengers", "every-effect", "passengers-by-time"],
+)
 def test_table_right_hand_side_is_the_exact_one(name, effects):
     model, fm, cross = _model(name, effects)
     assert table_applies(model) is None
@@ -103,8 +122,11 @@ def test_finer_table_errs_less():
 
 
 def test_worn_link_falls_back_to_the_exact_closure(tmp_path):
-    text = (SIM / "thesis-forward.toml").read_text().replace("n_rollers = 159", "n_rollers = 159\nworn_link = 5\n"
-                                                            "worn_link_pitch = 0.1336")
+    text = (
+        (SIM / "thesis-forward.toml")
+        .read_text()
+        .replace("n_rollers = 159", "n_rollers = 159\nworn_link = 5\nworn_link_pitch = 0.1336")
+    )
     path = tmp_path / "worn.toml"
     path.write_text(text)
     worn = load_scene(path)

@@ -25,7 +25,10 @@ def test_shipped_scenes_load():
 @pytest.mark.parametrize(
     "edit, pattern",
     [
-        (lambda b: b.replace("roller_radius = 0.035", "roller_radius = 0.035\nroller_colour = 3"), r"unknown key 'chain.roller_colour'"),
+        (
+            lambda b: b.replace("roller_radius = 0.035", "roller_radius = 0.035\nroller_colour = 3"),
+            r"unknown key 'chain.roller_colour'",
+        ),
         (lambda b: b.replace("[kinematics]", "[kinematic]"), r"unknown section \[kinematic\]"),
         (lambda b: b.replace("step = 0.0001", ""), r"missing value 'kinematics.step'"),
         (lambda b: b.replace('analysis = "kinematics"', ""), r"missing value 'scene.analysis'"),
@@ -33,7 +36,10 @@ def test_shipped_scenes_load():
         (lambda b: b.replace("lower_landing = 0.8", "lower_landing = 0.0"), r"'guide.lower_landing' must be positive"),
         (lambda b: b.replace("n_rollers = 159", "n_rollers = 175"), r"cannot close"),
         (lambda b: b.replace("roller_mass = 8.0", 'roller_mass = "heavy"'), r"'chain.roller_mass' expected float"),
-        (lambda b: b.replace('variables = ["delta", "s1", "closure_residual"]', 'variables = ["deltaa"]'), r"unknown output 'deltaa'"),
+        (
+            lambda b: b.replace('variables = ["delta", "s1", "closure_residual"]', 'variables = ["deltaa"]'),
+            r"unknown output 'deltaa'",
+        ),
         (lambda b: b + "\n[effects]\ngravity = true\n", r"no meaning in a kinematics scene"),
         (lambda b: b.replace("[scene]", "[scene"), r"not valid TOML"),
     ],
@@ -60,7 +66,9 @@ def test_missing_file():
 
 
 def test_closure_choice_is_checked(tmp_path):
-    text = (SIM / "thesis-forward.toml").read_text().replace('method = "dopri5"', 'method = "dopri5"\nclosure = "tabel"')
+    text = (
+        (SIM / "thesis-forward.toml").read_text().replace('method = "dopri5"', 'method = "dopri5"\nclosure = "tabel"')
+    )
     p = tmp_path / "closure.toml"
     p.write_text(text)
     with pytest.raises(SceneError, match=r"'solver.closure' must be one of table, exact, got 'tabel'"):

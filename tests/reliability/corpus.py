@@ -129,6 +129,7 @@ SIMULATE = ["simulate", "{w}/tiny.toml", "-o"]
 def _mkfifo(name):
     def setup(w: Path):
         os.mkfifo(w / name)
+
     return setup
 
 
@@ -137,6 +138,7 @@ def _symlink(name, target, make_target=None):
         if make_target is not None:
             (w / target).write_bytes(make_target)
         os.symlink(target, w / name)
+
     return setup
 
 
@@ -144,12 +146,14 @@ def _chmod(name, mode, content=b"keep me\n"):
     def setup(w: Path):
         (w / name).write_bytes(content)
         os.chmod(w / name, mode)
+
     return setup
 
 
 def _mkdir(name):
     def setup(w: Path):
         (w / name).mkdir()
+
     return setup
 
 
@@ -162,6 +166,7 @@ def _dead_pid() -> int:
 def _stale_temp(name):
     def setup(w: Path):
         (w / f".{name}.vibkit-tmp-{_dead_pid()}").write_bytes(b"half a file from a killed run")
+
     return setup
 
 
@@ -196,137 +201,421 @@ _so.open = _open
 
 CASES = [
     # ------------------------------------------------------------------ -o: never clobber, never leak
-    Case("output is /dev/null", "output", SIMULATE + ["/dev/null"], files=TINY,
-         expect_in=("/dev/null", "character device"), protect=("/dev/null",)),
-    Case("output is a FIFO", "output", SIMULATE + ["{w}/out.fifo"], files=TINY, setup=_mkfifo("out.fifo"),
-         expect_in=("FIFO",), protect=("{w}/out.fifo",), subprocess_only=True),
-    Case("output is /dev/stdout", "output", SIMULATE + ["/dev/stdout"], files=TINY,
-         expect_in=("symbolic link",), protect=("/dev/stdout",)),
-    Case("output is an existing recording", "output", SIMULATE + ["{w}/victim.csv"], files={**TINY, **{"victim.csv": REC["rec.csv"]}},
-         expect_in=("already exists", "--force"), protect=("{w}/victim.csv",)),
-    Case("output exists, --force", "output", SIMULATE + ["{w}/old.nc", "--force"], files={**TINY, "old.nc": b"old"},
-         expect="ok", outputs=("{w}/old.nc",), note="replaced as asked"),
-    Case("output exists, --overwrite", "output", SIMULATE + ["{w}/old.nc", "--overwrite"], files={**TINY, "old.nc": b"old"},
-         expect="ok", outputs=("{w}/old.nc",)),
-    Case("output read-only (0444), --force", "output", SIMULATE + ["{w}/ro.nc", "--force"], files=TINY,
-         setup=_chmod("ro.nc", 0o444), expect_in=("read-only",), protect=("{w}/ro.nc",)),
-    Case("output is a symlink to a file", "output", SIMULATE + ["{w}/link.nc", "--force"], files=TINY,
-         setup=_symlink("link.nc", "target.nc", b"target data"), expect_in=("symbolic link",),
-         protect=("{w}/link.nc", "{w}/target.nc")),
-    Case("output is a dangling symlink", "output", SIMULATE + ["{w}/dangling.nc"], files=TINY,
-         setup=_symlink("dangling.nc", "nowhere.nc"), expect_in=("symbolic link",),
-         protect=("{w}/dangling.nc",), absent=("{w}/nowhere.nc",)),
-    Case("output is the scene itself", "output", SIMULATE + ["{w}/tiny.toml", "--force"], files=TINY,
-         expect_in=("input",), protect=("{w}/tiny.toml",)),
+    Case(
+        "output is /dev/null",
+        "output",
+        SIMULATE + ["/dev/null"],
+        files=TINY,
+        expect_in=("/dev/null", "character device"),
+        protect=("/dev/null",),
+    ),
+    Case(
+        "output is a FIFO",
+        "output",
+        SIMULATE + ["{w}/out.fifo"],
+        files=TINY,
+        setup=_mkfifo("out.fifo"),
+        expect_in=("FIFO",),
+        protect=("{w}/out.fifo",),
+        subprocess_only=True,
+    ),
+    Case(
+        "output is /dev/stdout",
+        "output",
+        SIMULATE + ["/dev/stdout"],
+        files=TINY,
+        expect_in=("symbolic link",),
+        protect=("/dev/stdout",),
+    ),
+    Case(
+        "output is an existing recording",
+        "output",
+        SIMULATE + ["{w}/victim.csv"],
+        files={**TINY, **{"victim.csv": REC["rec.csv"]}},
+        expect_in=("already exists", "--force"),
+        protect=("{w}/victim.csv",),
+    ),
+    Case(
+        "output exists, --force",
+        "output",
+        SIMULATE + ["{w}/old.nc", "--force"],
+        files={**TINY, "old.nc": b"old"},
+        expect="ok",
+        outputs=("{w}/old.nc",),
+        note="replaced as asked",
+    ),
+    Case(
+        "output exists, --overwrite",
+        "output",
+        SIMULATE + ["{w}/old.nc", "--overwrite"],
+        files={**TINY, "old.nc": b"old"},
+        expect="ok",
+        outputs=("{w}/old.nc",),
+    ),
+    Case(
+        "output read-only (0444), --force",
+        "output",
+        SIMULATE + ["{w}/ro.nc", "--force"],
+        files=TINY,
+        setup=_chmod("ro.nc", 0o444),
+        expect_in=("read-only",),
+        protect=("{w}/ro.nc",),
+    ),
+    Case(
+        "output is a symlink to a file",
+        "output",
+        SIMULATE + ["{w}/link.nc", "--force"],
+        files=TINY,
+        setup=_symlink("link.nc", "target.nc", b"target data"),
+        expect_in=("symbolic link",),
+        protect=("{w}/link.nc", "{w}/target.nc"),
+    ),
+    Case(
+        "output is a dangling symlink",
+        "output",
+        SIMULATE + ["{w}/dangling.nc"],
+        files=TINY,
+        setup=_symlink("dangling.nc", "nowhere.nc"),
+        expect_in=("symbolic link",),
+        protect=("{w}/dangling.nc",),
+        absent=("{w}/nowhere.nc",),
+    ),
+    Case(
+        "output is the scene itself",
+        "output",
+        SIMULATE + ["{w}/tiny.toml", "--force"],
+        files=TINY,
+        expect_in=("input",),
+        protect=("{w}/tiny.toml",),
+    ),
     Case("output path empty", "output", SIMULATE + [""], files=TINY, expect_in=("empty",)),
-    Case("output folder missing", "output", SIMULATE + ["{w}/no/such/folder/x.nc"], files=TINY,
-         expect_in=("does not exist",)),
-    Case("report -o an existing folder", "output", ["report", "{w}/rec.csv", "-o", "{w}/existing_dir.pdf"],
-         files=REC, setup=_mkdir("existing_dir.pdf"), expect_in=("folder",), protect=("{w}/existing_dir.pdf",)),
-    Case("report -o the recording", "output", ["report", "{w}/rec.csv", "-o", "{w}/rec.csv", "--force"], files=REC,
-         protect=("{w}/rec.csv",)),
-    Case("stale temp of a killed run", "output", SIMULATE + ["{w}/fresh.nc"], files=TINY,
-         setup=_stale_temp("fresh.nc"), expect="ok", outputs=("{w}/fresh.nc",),
-         note="the stale .fresh.nc.vibkit-tmp-PID is removed"),
+    Case(
+        "output folder missing",
+        "output",
+        SIMULATE + ["{w}/no/such/folder/x.nc"],
+        files=TINY,
+        expect_in=("does not exist",),
+    ),
+    Case(
+        "report -o an existing folder",
+        "output",
+        ["report", "{w}/rec.csv", "-o", "{w}/existing_dir.pdf"],
+        files=REC,
+        setup=_mkdir("existing_dir.pdf"),
+        expect_in=("folder",),
+        protect=("{w}/existing_dir.pdf",),
+    ),
+    Case(
+        "report -o the recording",
+        "output",
+        ["report", "{w}/rec.csv", "-o", "{w}/rec.csv", "--force"],
+        files=REC,
+        protect=("{w}/rec.csv",),
+    ),
+    Case(
+        "stale temp of a killed run",
+        "output",
+        SIMULATE + ["{w}/fresh.nc"],
+        files=TINY,
+        setup=_stale_temp("fresh.nc"),
+        expect="ok",
+        outputs=("{w}/fresh.nc",),
+        note="the stale .fresh.nc.vibkit-tmp-PID is removed",
+    ),
     Case("simulate, new output", "output", SIMULATE + ["{w}/new.nc"], files=TINY, expect="ok", outputs=("{w}/new.nc",)),
-    Case("report, new output", "output", ["report", "{w}/rec.csv", "-o", "{w}/new.pdf"], files=REC, expect="ok",
-         outputs=("{w}/new.pdf",), heavy=True, note="tested in test_readonly_install.py and test_report.py"),
-    Case("SIGTERM during the write", "output", SIMULATE + ["{w}/term.nc"], files=TINY, prelude=SLOW_COMMIT,
-         send_signal=signal.SIGTERM, expect="interrupted", absent=("{w}/term.nc",)),
-    Case("Ctrl-C during the write", "output", SIMULATE + ["{w}/int.nc"], files=TINY, prelude=SLOW_COMMIT,
-         send_signal=signal.SIGINT, expect="interrupted", absent=("{w}/int.nc",)),
-    Case("Ctrl-C replacing a file", "output", SIMULATE + ["{w}/keep.nc", "--force"], files={**TINY, "keep.nc": b"keep"},
-         prelude=SLOW_COMMIT, send_signal=signal.SIGINT, expect="interrupted", protect=("{w}/keep.nc",)),
-    Case("disk full (simulate)", "output", SIMULATE + ["{w}/full.nc"], files=TINY, prelude=DISK_FULL,
-         expect_in=("{w}/full.nc: No space left",), absent=("{w}/full.nc",)),
-    Case("disk full (report)", "output", ["report", "{w}/rec.csv", "-o", "{w}/full.pdf"], files=REC,
-         prelude=DISK_FULL, expect_in=("{w}/full.pdf: No space left",), absent=("{w}/full.pdf",), heavy=True,
-         note="the PDF is made in memory; write tested in test_safe_output.py"),
+    Case(
+        "report, new output",
+        "output",
+        ["report", "{w}/rec.csv", "-o", "{w}/new.pdf"],
+        files=REC,
+        expect="ok",
+        outputs=("{w}/new.pdf",),
+        heavy=True,
+        note="tested in test_readonly_install.py and test_report.py",
+    ),
+    Case(
+        "SIGTERM during the write",
+        "output",
+        SIMULATE + ["{w}/term.nc"],
+        files=TINY,
+        prelude=SLOW_COMMIT,
+        send_signal=signal.SIGTERM,
+        expect="interrupted",
+        absent=("{w}/term.nc",),
+    ),
+    Case(
+        "Ctrl-C during the write",
+        "output",
+        SIMULATE + ["{w}/int.nc"],
+        files=TINY,
+        prelude=SLOW_COMMIT,
+        send_signal=signal.SIGINT,
+        expect="interrupted",
+        absent=("{w}/int.nc",),
+    ),
+    Case(
+        "Ctrl-C replacing a file",
+        "output",
+        SIMULATE + ["{w}/keep.nc", "--force"],
+        files={**TINY, "keep.nc": b"keep"},
+        prelude=SLOW_COMMIT,
+        send_signal=signal.SIGINT,
+        expect="interrupted",
+        protect=("{w}/keep.nc",),
+    ),
+    Case(
+        "disk full (simulate)",
+        "output",
+        SIMULATE + ["{w}/full.nc"],
+        files=TINY,
+        prelude=DISK_FULL,
+        expect_in=("{w}/full.nc: No space left",),
+        absent=("{w}/full.nc",),
+    ),
+    Case(
+        "disk full (report)",
+        "output",
+        ["report", "{w}/rec.csv", "-o", "{w}/full.pdf"],
+        files=REC,
+        prelude=DISK_FULL,
+        expect_in=("{w}/full.pdf: No space left",),
+        absent=("{w}/full.pdf",),
+        heavy=True,
+        note="the PDF is made in memory; write tested in test_safe_output.py",
+    ),
     # ------------------------------------------------------------------ limits: checked before work
-    Case("--duration 1e9", "limits", ["simulate", str(SIM / "leon.toml"), "-o", "{w}/x.nc", "--duration", "1e9"],
-         expect_in=("limit", "--duration")),
-    Case("output_step = 1e-9", "limits", ["simulate", "{w}/s.toml", "-o", "{w}/x.nc"],
-         files={"s.toml": scene_text("thesis-forward", replace={"output_step = 0.005": "output_step = 1e-9"})},
-         expect_in=("run.output_step", "limit")),
-    Case("kinematics step = 1e-12", "limits", ["simulate", "{w}/s.toml", "-o", "{w}/x.nc"],
-         files={"s.toml": scene_text("thesis-kinematics", replace={"step = 0.0001": "step = 1e-12"})},
-         expect_in=("kinematics.step",)),
-    Case("max_step = 1e-12", "limits", ["simulate", "{w}/s.toml", "-o", "{w}/x.nc"],
-         files={"s.toml": scene_text("thesis-forward", replace={"method = \"dopri5\"": "method = \"dopri5\"\nmax_step = 1e-12"})},
-         expect_in=("solver.max_step",)),
-    Case("gravity g = 1e10", "limits", ["simulate", "{w}/s.toml", "-o", "{w}/x.nc"],
-         files={"s.toml": scene_text("thesis-forward", replace={"gravity = true": "gravity = { g = 1e10 }"})},
-         expect_in=("effects.gravity.g",)),
-    Case("wall-time budget exceeded", "limits", ["simulate", "{w}/s.toml", "-o", "{w}/x.nc", "--max-wall-time", "0.5"],
-         files={"s.toml": scene_text("thesis-forward", replace={"method = \"dopri5\"": "method = \"dopri5\"\nmax_step = 1e-5"})},
-         expect_in=("wall-time budget", "max_wall_time"), absent=("{w}/x.nc",)),
-    Case("VIBKIT_MAX_RESULT_BYTES=100", "limits", SIMULATE + ["{w}/x.nc"], files=TINY,
-         env={"VIBKIT_MAX_RESULT_BYTES": "100"}, expect_in=("limit",)),
-    Case("--max-result-bytes 200B", "limits", SIMULATE + ["{w}/x.nc", "--max-result-bytes", "200B"], files=TINY,
-         expect_in=("limit",)),
-    Case("[solver] max_result_bytes = 100", "limits", SIMULATE + ["{w}/x.nc"],
-         files={"tiny.toml": tiny(append='\n[solver]\nmax_result_bytes = 100\n')}, expect_in=("limit",)),
-    Case("--max-result-bytes lots", "limits", SIMULATE + ["{w}/x.nc", "--max-result-bytes", "lots"], files=TINY,
-         expect="usage"),
-    Case("scene is a FIFO", "limits", ["simulate", "{w}/scene.toml", "-o", "{w}/x.nc"], setup=_mkfifo("scene.toml"),
-         expect_in=("not a regular file",), subprocess_only=True),
-    Case("scene is /dev/zero", "limits", ["simulate", "/dev/zero", "-o", "{w}/x.nc"],
-         expect_in=("not a regular file",), subprocess_only=True),
+    Case(
+        "--duration 1e9",
+        "limits",
+        ["simulate", str(SIM / "leon.toml"), "-o", "{w}/x.nc", "--duration", "1e9"],
+        expect_in=("limit", "--duration"),
+    ),
+    Case(
+        "output_step = 1e-9",
+        "limits",
+        ["simulate", "{w}/s.toml", "-o", "{w}/x.nc"],
+        files={"s.toml": scene_text("thesis-forward", replace={"output_step = 0.005": "output_step = 1e-9"})},
+        expect_in=("run.output_step", "limit"),
+    ),
+    Case(
+        "kinematics step = 1e-12",
+        "limits",
+        ["simulate", "{w}/s.toml", "-o", "{w}/x.nc"],
+        files={"s.toml": scene_text("thesis-kinematics", replace={"step = 0.0001": "step = 1e-12"})},
+        expect_in=("kinematics.step",),
+    ),
+    Case(
+        "max_step = 1e-12",
+        "limits",
+        ["simulate", "{w}/s.toml", "-o", "{w}/x.nc"],
+        files={
+            "s.toml": scene_text("thesis-forward", replace={'method = "dopri5"': 'method = "dopri5"\nmax_step = 1e-12'})
+        },
+        expect_in=("solver.max_step",),
+    ),
+    Case(
+        "gravity g = 1e10",
+        "limits",
+        ["simulate", "{w}/s.toml", "-o", "{w}/x.nc"],
+        files={"s.toml": scene_text("thesis-forward", replace={"gravity = true": "gravity = { g = 1e10 }"})},
+        expect_in=("effects.gravity.g",),
+    ),
+    Case(
+        "wall-time budget exceeded",
+        "limits",
+        ["simulate", "{w}/s.toml", "-o", "{w}/x.nc", "--max-wall-time", "0.5"],
+        files={
+            "s.toml": scene_text("thesis-forward", replace={'method = "dopri5"': 'method = "dopri5"\nmax_step = 1e-5'})
+        },
+        expect_in=("wall-time budget", "max_wall_time"),
+        absent=("{w}/x.nc",),
+    ),
+    Case(
+        "VIBKIT_MAX_RESULT_BYTES=100",
+        "limits",
+        SIMULATE + ["{w}/x.nc"],
+        files=TINY,
+        env={"VIBKIT_MAX_RESULT_BYTES": "100"},
+        expect_in=("limit",),
+    ),
+    Case(
+        "--max-result-bytes 200B",
+        "limits",
+        SIMULATE + ["{w}/x.nc", "--max-result-bytes", "200B"],
+        files=TINY,
+        expect_in=("limit",),
+    ),
+    Case(
+        "[solver] max_result_bytes = 100",
+        "limits",
+        SIMULATE + ["{w}/x.nc"],
+        files={"tiny.toml": tiny(append="\n[solver]\nmax_result_bytes = 100\n")},
+        expect_in=("limit",),
+    ),
+    Case(
+        "--max-result-bytes lots",
+        "limits",
+        SIMULATE + ["{w}/x.nc", "--max-result-bytes", "lots"],
+        files=TINY,
+        expect="usage",
+    ),
+    Case(
+        "scene is a FIFO",
+        "limits",
+        ["simulate", "{w}/scene.toml", "-o", "{w}/x.nc"],
+        setup=_mkfifo("scene.toml"),
+        expect_in=("not a regular file",),
+        subprocess_only=True,
+    ),
+    Case(
+        "scene is /dev/zero",
+        "limits",
+        ["simulate", "/dev/zero", "-o", "{w}/x.nc"],
+        expect_in=("not a regular file",),
+        subprocess_only=True,
+    ),
     Case("scene is a folder", "limits", ["simulate", "{w}", "-o", "{w}/x.nc"], expect_in=("folder",)),
     # ------------------------------------------------------------------ messages
-    Case("--speed-uncertainty abc", "messages", ["pitch", "{w}/rec.csv", "--speed", "0.49", "--speed-uncertainty", "abc"],
-         files=REC, expect="usage", expect_in=("--speed-uncertainty",)),
-    Case("--speed-uncertainty -5%", "messages", ["pitch", "{w}/rec.csv", "--speed", "0.49", "--speed-uncertainty=-5%"],
-         files=REC, expect="usage", expect_in=("--speed-uncertainty",)),
-    Case("report --speed-uncertainty x%", "messages",
-         ["report", "{w}/rec.csv", "-o", "{w}/r.pdf", "--speed", "0.49", "--speed-uncertainty", "x%"], files=REC,
-         expect="usage", absent=("{w}/r.pdf",)),
+    Case(
+        "--speed-uncertainty abc",
+        "messages",
+        ["pitch", "{w}/rec.csv", "--speed", "0.49", "--speed-uncertainty", "abc"],
+        files=REC,
+        expect="usage",
+        expect_in=("--speed-uncertainty",),
+    ),
+    Case(
+        "--speed-uncertainty -5%",
+        "messages",
+        ["pitch", "{w}/rec.csv", "--speed", "0.49", "--speed-uncertainty=-5%"],
+        files=REC,
+        expect="usage",
+        expect_in=("--speed-uncertainty",),
+    ),
+    Case(
+        "report --speed-uncertainty x%",
+        "messages",
+        ["report", "{w}/rec.csv", "-o", "{w}/r.pdf", "--speed", "0.49", "--speed-uncertainty", "x%"],
+        files=REC,
+        expect="usage",
+        absent=("{w}/r.pdf",),
+    ),
     # ------------------------------------------------------------------ scene validation at load
-    Case("passengers.mass = [inf]", "scene", ["simulate", "{w}/s.toml", "-o", "{w}/x.nc"],
-         files={"s.toml": scene_text("thesis-passengers", replace={"mass = [70.0, 90.0]": "mass = [70.0, inf]"})},
-         expect_in=("{w}/s.toml", "effects.passengers.mass[1]")),
-    Case("passengers.step = [100000]", "scene", ["simulate", "{w}/s.toml", "-o", "{w}/x.nc"],
-         files={"s.toml": scene_text("thesis-passengers", replace={"step = [3, 53]": "step = [3, 100000]"})},
-         expect_in=("{w}/s.toml", "effects.passengers.step[1]", "1..53")),
-    Case("passengers.step = [true]", "scene", ["simulate", "{w}/s.toml", "-o", "{w}/x.nc"],
-         files={"s.toml": scene_text("thesis-passengers", replace={"step = [3, 53]": "step = [3, true]"})},
-         expect_in=("effects.passengers.step[1]",)),
-    Case("outputs.rollers = [true]", "scene", SIMULATE + ["{w}/x.nc"],
-         files={"tiny.toml": tiny(append='rollers = [true]\n')}, expect_in=("outputs.rollers",)),
-    Case("solver.method = rk99", "scene", ["simulate", "{w}/s.toml", "-o", "{w}/x.nc"],
-         files={"s.toml": scene_text("thesis-forward", replace={'method = "dopri5"': 'method = "rk99"'})},
-         expect_in=("{w}/s.toml", "solver.method", "dopri5")),
-    Case("scene with a UTF-8 BOM", "scene", SIMULATE + ["{w}/bom.nc"], files={"tiny.toml": tiny(bom=True)},
-         expect="ok", outputs=("{w}/bom.nc",)),
-    Case("tooth_height = 10", "scene", SIMULATE + ["{w}/x.nc"],
-         files={"tiny.toml": tiny(replace={"tooth_height = 0.070": "tooth_height = 10"})},
-         expect_in=("sprocket.tooth_height",)),
-    Case("tip wider than base", "scene", SIMULATE + ["{w}/x.nc"],
-         files={"tiny.toml": tiny(replace={"tip_width = 0.040": "tip_width = 0.080"})},
-         expect_in=("sprocket.tip_width",)),
-    Case("motion.start = 1e9", "scene", ["simulate", "{w}/s.toml", "-o", "{w}/start.nc", "--duration", "0.5"],
-         files={"s.toml": scene_text("leon", replace={"start = 0.0": "start = 1e9"})}, expect="ok",
-         outputs=("{w}/start.nc",), note="reduced modulo the guide's perimeter: full closure accuracy"),
-    Case("kinematics.start = 1e9", "scene", SIMULATE + ["{w}/x.nc"],
-         files={"tiny.toml": tiny(replace={"start = 3.0": "start = 1e9", "stop = 3.01": "stop = 1000000000.01"})},
-         expect_in=("kinematics.start",)),
-    Case("contact stiffness 1e20", "scene", ["simulate", "{w}/s.toml", "-o", "{w}/x.nc"],
-         files={"s.toml": scene_text("thesis-forward", replace={"stiffness = 1.0e6": "stiffness = 1.0e20"})},
-         expect_in=("{w}/s.toml", "effects.contact.stiffness")),
-    Case("solver.rtol = 10", "scene", ["simulate", "{w}/s.toml", "-o", "{w}/x.nc"],
-         files={"s.toml": scene_text("thesis-forward", replace={'method = "dopri5"': 'method = "dopri5"\nrtol = 10'})},
-         expect_in=("{w}/s.toml", "solver.rtol")),
-    Case("motor kp = 1e20", "scene", ["simulate", "{w}/s.toml", "-o", "{w}/x.nc"],
-         files={"s.toml": scene_text("thesis-forward", replace={"kp = 600.0": "kp = 1e20"})},
-         expect_in=("{w}/s.toml", "effects.motor.kp")),
-    Case("scene not TOML", "scene", ["simulate", "{w}/s.toml", "-o", "{w}/x.nc"], files={"s.toml": "[scene\nname="},
-         expect_in=("not valid TOML",)),
-    Case("scene is binary", "scene", ["simulate", "{w}/s.toml", "-o", "{w}/x.nc"],
-         files={"s.toml": bytes(range(256)) * 4}),
+    Case(
+        "passengers.mass = [inf]",
+        "scene",
+        ["simulate", "{w}/s.toml", "-o", "{w}/x.nc"],
+        files={"s.toml": scene_text("thesis-passengers", replace={"mass = [70.0, 90.0]": "mass = [70.0, inf]"})},
+        expect_in=("{w}/s.toml", "effects.passengers.mass[1]"),
+    ),
+    Case(
+        "passengers.step = [100000]",
+        "scene",
+        ["simulate", "{w}/s.toml", "-o", "{w}/x.nc"],
+        files={"s.toml": scene_text("thesis-passengers", replace={"step = [3, 53]": "step = [3, 100000]"})},
+        expect_in=("{w}/s.toml", "effects.passengers.step[1]", "1..53"),
+    ),
+    Case(
+        "passengers.step = [true]",
+        "scene",
+        ["simulate", "{w}/s.toml", "-o", "{w}/x.nc"],
+        files={"s.toml": scene_text("thesis-passengers", replace={"step = [3, 53]": "step = [3, true]"})},
+        expect_in=("effects.passengers.step[1]",),
+    ),
+    Case(
+        "outputs.rollers = [true]",
+        "scene",
+        SIMULATE + ["{w}/x.nc"],
+        files={"tiny.toml": tiny(append="rollers = [true]\n")},
+        expect_in=("outputs.rollers",),
+    ),
+    Case(
+        "solver.method = rk99",
+        "scene",
+        ["simulate", "{w}/s.toml", "-o", "{w}/x.nc"],
+        files={"s.toml": scene_text("thesis-forward", replace={'method = "dopri5"': 'method = "rk99"'})},
+        expect_in=("{w}/s.toml", "solver.method", "dopri5"),
+    ),
+    Case(
+        "scene with a UTF-8 BOM",
+        "scene",
+        SIMULATE + ["{w}/bom.nc"],
+        files={"tiny.toml": tiny(bom=True)},
+        expect="ok",
+        outputs=("{w}/bom.nc",),
+    ),
+    Case(
+        "tooth_height = 10",
+        "scene",
+        SIMULATE + ["{w}/x.nc"],
+        files={"tiny.toml": tiny(replace={"tooth_height = 0.070": "tooth_height = 10"})},
+        expect_in=("sprocket.tooth_height",),
+    ),
+    Case(
+        "tip wider than base",
+        "scene",
+        SIMULATE + ["{w}/x.nc"],
+        files={"tiny.toml": tiny(replace={"tip_width = 0.040": "tip_width = 0.080"})},
+        expect_in=("sprocket.tip_width",),
+    ),
+    Case(
+        "motion.start = 1e9",
+        "scene",
+        ["simulate", "{w}/s.toml", "-o", "{w}/start.nc", "--duration", "0.5"],
+        files={"s.toml": scene_text("leon", replace={"start = 0.0": "start = 1e9"})},
+        expect="ok",
+        outputs=("{w}/start.nc",),
+        note="reduced modulo the guide's perimeter: full closure accuracy",
+    ),
+    Case(
+        "kinematics.start = 1e9",
+        "scene",
+        SIMULATE + ["{w}/x.nc"],
+        files={"tiny.toml": tiny(replace={"start = 3.0": "start = 1e9", "stop = 3.01": "stop = 1000000000.01"})},
+        expect_in=("kinematics.start",),
+    ),
+    Case(
+        "contact stiffness 1e20",
+        "scene",
+        ["simulate", "{w}/s.toml", "-o", "{w}/x.nc"],
+        files={"s.toml": scene_text("thesis-forward", replace={"stiffness = 1.0e6": "stiffness = 1.0e20"})},
+        expect_in=("{w}/s.toml", "effects.contact.stiffness"),
+    ),
+    Case(
+        "solver.rtol = 10",
+        "scene",
+        ["simulate", "{w}/s.toml", "-o", "{w}/x.nc"],
+        files={"s.toml": scene_text("thesis-forward", replace={'method = "dopri5"': 'method = "dopri5"\nrtol = 10'})},
+        expect_in=("{w}/s.toml", "solver.rtol"),
+    ),
+    Case(
+        "motor kp = 1e20",
+        "scene",
+        ["simulate", "{w}/s.toml", "-o", "{w}/x.nc"],
+        files={"s.toml": scene_text("thesis-forward", replace={"kp = 600.0": "kp = 1e20"})},
+        expect_in=("{w}/s.toml", "effects.motor.kp"),
+    ),
+    Case(
+        "scene not TOML",
+        "scene",
+        ["simulate", "{w}/s.toml", "-o", "{w}/x.nc"],
+        files={"s.toml": "[scene\nname="},
+        expect_in=("not valid TOML",),
+    ),
+    Case(
+        "scene is binary",
+        "scene",
+        ["simulate", "{w}/s.toml", "-o", "{w}/x.nc"],
+        files={"s.toml": bytes(range(256)) * 4},
+    ),
     # ------------------------------------------------------------------ recordings (more: corpus_*.py)
     Case("recording empty", "recording", ["spectrum", "{w}/empty.csv"], files={"empty.csv": b""}),
-    Case("recording binary garbage", "recording", ["spectrum", "{w}/junk.csv"],
-         files={"junk.csv": bytes(range(256)) * 16}),
+    Case(
+        "recording binary garbage",
+        "recording",
+        ["spectrum", "{w}/junk.csv"],
+        files={"junk.csv": bytes(range(256)) * 16},
+    ),
     Case("recording header only", "recording", ["spectrum", "{w}/head.csv"], files={"head.csv": "time,accel_x\n"}),
     Case("recording missing", "recording", ["pitch", "{w}/missing.csv", "--speed", "0.5"]),
 ]
@@ -416,8 +705,15 @@ def run_subprocess(case: Case, work: Path, *, timeout: float = 300.0, python: st
         return p.returncode, p.stdout, p.stderr
     # a person's Ctrl-C: the child gets SIGINT's default disposition even where this process was
     # started in the background (there SIGINT is ignored, and a child would inherit that)
-    proc = subprocess.Popen(cmd, env=env, cwd=work, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    proc = subprocess.Popen(
+        cmd,
+        env=env,
+        cwd=work,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+    )
     t0 = time.monotonic()
     line = ""
     while time.monotonic() - t0 < timeout:
@@ -472,8 +768,12 @@ def _error_lines(stderr: str) -> list[str]:
 def judge(case: Case, work: Path, before: dict, rc, stdout: str, stderr: str) -> dict:
     """Classify a run (see the module docstring); ``passed`` says whether it met the case's expectation."""
     res = {"case": case.name, "item": case.item, "returncode": rc, "problems": []}
-    tb = rc is None or (isinstance(rc, int) and rc < 0) or "Traceback (most recent call last)" in stderr \
+    tb = (
+        rc is None
+        or (isinstance(rc, int) and rc < 0)
+        or "Traceback (most recent call last)" in stderr
         or "Fatal Python error" in stderr
+    )
     errs = _error_lines(stderr)
     if tb:
         res["outcome"] = "traceback" if rc is not None else "hang"
@@ -521,8 +821,9 @@ def judge(case: Case, work: Path, before: dict, rc, stdout: str, stderr: str) ->
 def touches_system(case: Case) -> bool:
     """True when the case writes near a path outside its work folder (``/dev/null``, ``/dev/stdout`` ...):
     safe with this code, which refuses them, but never to be run against older code that might not."""
-    return any(a.startswith("/") and not a.startswith(str(ROOT)) for a in case.argv) or \
-        any(p.startswith("/") for p in case.protect)
+    return any(a.startswith("/") and not a.startswith(str(ROOT)) for a in case.argv) or any(
+        p.startswith("/") for p in case.protect
+    )
 
 
 def run_case(case: Case, work: Path, *, inprocess: bool = False, timeout: float = 300.0, code_root=None) -> dict:

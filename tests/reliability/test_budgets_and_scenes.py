@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 import vibkit
-from vibkit.runtime import budget
 from vibkit.model.scene import SceneError, load_scene, parse_scene
+from vibkit.runtime import budget
 
 SIM = Path(__file__).resolve().parents[2] / "sim"
 
@@ -43,8 +43,10 @@ def test_result_limit_refuses_before_work_and_names_what_to_change(monkeypatch):
     assert budget.max_result_bytes(scene) == 1000.0
     with pytest.raises(budget.BudgetError, match="VIBKIT_MAX_RESULT_BYTES"):
         vibkit.simulate(scene, duration=0.1)
-    keyed = parse_scene(_text("thesis-forward", **{"method = \"dopri5\"": "method = \"dopri5\"\nmax_result_bytes = \"3GiB\""}))
-    assert budget.max_result_bytes(keyed) == 3 * 1024 ** 3
+    keyed = parse_scene(
+        _text("thesis-forward", **{'method = "dopri5"': 'method = "dopri5"\nmax_result_bytes = "3GiB"'})
+    )
+    assert budget.max_result_bytes(keyed) == 3 * 1024**3
     assert budget.max_result_bytes(keyed, "0") == math.inf
     monkeypatch.setenv("VIBKIT_MAX_RESULT_BYTES", "lots")
     with pytest.raises(budget.BudgetError, match="VIBKIT_MAX_RESULT_BYTES"):
@@ -54,7 +56,7 @@ def test_result_limit_refuses_before_work_and_names_what_to_change(monkeypatch):
 def test_parse_bytes():
     assert budget.parse_bytes("2e9") == 2e9
     assert budget.parse_bytes("500MB") == 5e8
-    assert budget.parse_bytes("2GiB") == 2 * 1024 ** 3
+    assert budget.parse_bytes("2GiB") == 2 * 1024**3
     assert budget.parse_bytes("0") == math.inf
     for bad in ("-1", "lots", "5 parsecs", "nan"):
         with pytest.raises(ValueError):
@@ -67,13 +69,15 @@ def test_wall_time_default_and_precedence(monkeypatch):
     assert budget.max_wall_time(scene) == budget.DEFAULT_MAX_WALL_TIME == 600.0
     monkeypatch.setenv("VIBKIT_MAX_WALL_TIME", "30")
     assert budget.max_wall_time(scene) == 30.0
-    keyed = parse_scene(_text("thesis-forward", **{"method = \"dopri5\"": "method = \"dopri5\"\nmax_wall_time = 7.0"}))
+    keyed = parse_scene(_text("thesis-forward", **{'method = "dopri5"': 'method = "dopri5"\nmax_wall_time = 7.0'}))
     assert budget.max_wall_time(keyed) == 7.0
     assert budget.max_wall_time(keyed, 0) == math.inf
 
 
 def test_wall_time_budget_stops_with_a_clear_error():
-    scene = parse_scene(_text("thesis-forward", **{"method = \"dopri5\"": "method = \"dopri5\"\nmax_step = 1e-5"}), "slow.toml")
+    scene = parse_scene(
+        _text("thesis-forward", **{'method = "dopri5"': 'method = "dopri5"\nmax_step = 1e-5'}), "slow.toml"
+    )
     from vibkit.analyses.integrate import IntegrationError
 
     with pytest.raises(IntegrationError, match=r"slow.toml: dopri5: wall-time budget of 0.2 s exceeded.*max_wall_time"):
@@ -81,28 +85,47 @@ def test_wall_time_budget_stops_with_a_clear_error():
 
 
 def test_tiny_max_step_refused_before_work():
-    scene = parse_scene(_text("thesis-forward", **{"method = \"dopri5\"": "method = \"dopri5\"\nmax_step = 1e-12"}), "s.toml")
+    scene = parse_scene(
+        _text("thesis-forward", **{'method = "dopri5"': 'method = "dopri5"\nmax_step = 1e-12'}), "s.toml"
+    )
     with pytest.raises(budget.BudgetError, match=r"s.toml: 'solver.max_step' = 1e-12 s forces at least 4.4e\+13"):
         vibkit.simulate(scene)
 
 
-@pytest.mark.parametrize("name, replace, match", [
-    ("thesis-passengers", {"mass = [70.0, 90.0]": "mass = [70.0, inf]"}, r"'effects.passengers.mass\[1\]'.*finite"),
-    ("thesis-passengers", {"mass = [70.0, 90.0]": "mass = [70.0, true]"}, r"'effects.passengers.mass\[1\]'"),
-    ("thesis-passengers", {"step = [3, 53]": "step = [3, 54]"}, r"'effects.passengers.step\[1\]'.*1..53"),
-    ("thesis-kinematics", {'variables = ["delta", "s1", "closure_residual"]':
-                           'variables = ["delta"]\nrollers = [true]'}, r"'outputs.rollers'"),
-    ("thesis-forward", {'method = "dopri5"': 'method = "rk99"'}, r"'solver.method' must be one of dopri5"),
-    ("thesis-forward", {"tooth_height = 0.070": "tooth_height = 10"}, r"'sprocket.tooth_height' = 10 m is not plausible"),
-    ("thesis-forward", {"base_width = 0.060": "base_width = 0.2"}, r"'sprocket.base_width'"),
-    ("thesis-forward", {"stiffness = 1.0e6": "stiffness = 1e20"}, r"'effects.contact.stiffness' = 1e\+20 is outside"),
-    # the shipped scene sets no rtol since issue 20 (the default follows the contact stiffness)
-    ("thesis-forward", {'method = "dopri5"': 'method = "dopri5"\nrtol = 10'}, r"'solver.rtol' = 10"),
-    ("thesis-forward", {"kp = 600.0": "kp = 1e20"}, r"'effects.motor.kp'"),
-    ("thesis-forward", {"gravity = true": "gravity = { g = 1e10 }"}, r"'effects.gravity.g'"),
-    ("thesis-kinematics", {"start = 3.0": "start = 1e9", "stop = 3.5333333": "stop = 1000000000.5"},
-     r"'kinematics.start' = 1e\+09 m is more than 100 loops"),
-])
+@pytest.mark.parametrize(
+    "name, replace, match",
+    [
+        ("thesis-passengers", {"mass = [70.0, 90.0]": "mass = [70.0, inf]"}, r"'effects.passengers.mass\[1\]'.*finite"),
+        ("thesis-passengers", {"mass = [70.0, 90.0]": "mass = [70.0, true]"}, r"'effects.passengers.mass\[1\]'"),
+        ("thesis-passengers", {"step = [3, 53]": "step = [3, 54]"}, r"'effects.passengers.step\[1\]'.*1..53"),
+        (
+            "thesis-kinematics",
+            {'variables = ["delta", "s1", "closure_residual"]': 'variables = ["delta"]\nrollers = [true]'},
+            r"'outputs.rollers'",
+        ),
+        ("thesis-forward", {'method = "dopri5"': 'method = "rk99"'}, r"'solver.method' must be one of dopri5"),
+        (
+            "thesis-forward",
+            {"tooth_height = 0.070": "tooth_height = 10"},
+            r"'sprocket.tooth_height' = 10 m is not plausible",
+        ),
+        ("thesis-forward", {"base_width = 0.060": "base_width = 0.2"}, r"'sprocket.base_width'"),
+        (
+            "thesis-forward",
+            {"stiffness = 1.0e6": "stiffness = 1e20"},
+            r"'effects.contact.stiffness' = 1e\+20 is outside",
+        ),
+        # the shipped scene sets no rtol since issue 20 (the default follows the contact stiffness)
+        ("thesis-forward", {'method = "dopri5"': 'method = "dopri5"\nrtol = 10'}, r"'solver.rtol' = 10"),
+        ("thesis-forward", {"kp = 600.0": "kp = 1e20"}, r"'effects.motor.kp'"),
+        ("thesis-forward", {"gravity = true": "gravity = { g = 1e10 }"}, r"'effects.gravity.g'"),
+        (
+            "thesis-kinematics",
+            {"start = 3.0": "start = 1e9", "stop = 3.5333333": "stop = 1000000000.5"},
+            r"'kinematics.start' = 1e\+09 m is more than 100 loops",
+        ),
+    ],
+)
 def test_scene_gaps_are_load_time_errors_naming_file_and_key(name, replace, match):
     with pytest.raises(SceneError, match=match) as exc:
         parse_scene(_text(name, **replace), f"{name}-bad.toml")

@@ -39,9 +39,13 @@ def test_ranges_are_checked_in_si_at_their_edges():
 
 def test_every_input_is_checked_before_the_recording_is_read(tmp_path):
     missing = tmp_path / "not-there.csv"  # reading it would fail: the inputs must fail first
-    for kw, match in (({"date": "9999-12-31T23:59:59-23:59"}, "1970-2100"), ({"speed": 1e-9}, "0.1-2 m/s"),
-                      ({"nominal_pitch": 133.33}, "0.05-0.3 m"), ({"speed_sigma": 5.0}, "0-20 %"),
-                      ({"unit": " "}, "unit")):
+    for kw, match in (
+        ({"date": "9999-12-31T23:59:59-23:59"}, "1970-2100"),
+        ({"speed": 1e-9}, "0.1-2 m/s"),
+        ({"nominal_pitch": 133.33}, "0.05-0.3 m"),
+        ({"speed_sigma": 5.0}, "0-20 %"),
+        ({"unit": " "}, "unit"),
+    ):
         args = {"unit": "E01", "speed": 0.5, "speed_sigma": 0.0, "nominal_pitch": 0.13333, "date": "2026-01-01"}
         args.update(kw)
         with pytest.raises(FleetError, match=match):

@@ -32,8 +32,10 @@ import pytest
 ROOT = Path(__file__).resolve().parents[2]
 NOBODY = 65534
 
-pytestmark = pytest.mark.skipif(not hasattr(os, "getuid") or os.getuid() != 0,
-                                reason="needs root to run the commands as uid 65534 (os.setuid in preexec_fn)")
+pytestmark = pytest.mark.skipif(
+    not hasattr(os, "getuid") or os.getuid() != 0,
+    reason="needs root to run the commands as uid 65534 (os.setuid in preexec_fn)",
+)
 
 
 def _demote():
@@ -45,13 +47,23 @@ def _demote():
 def _interpreter(env):
     """An interpreter of this Python version that uid 65534 can execute (the venv's may live in /root)."""
     ver = f"{sys.version_info[0]}.{sys.version_info[1]}"
-    for cand in (sys.executable, os.path.realpath(sys.executable), shutil.which(f"python{ver}", path="/usr/bin:/bin"),
-                 shutil.which(f"python{ver}", path="/usr/local/bin")):
+    for cand in (
+        sys.executable,
+        os.path.realpath(sys.executable),
+        shutil.which(f"python{ver}", path="/usr/bin:/bin"),
+        shutil.which(f"python{ver}", path="/usr/local/bin"),
+    ):
         if not cand:
             continue
         try:
-            probe = subprocess.run([cand, "-c", "import sys; print(f'{sys.version_info[0]}.{sys.version_info[1]}')"],
-                                   env=env, preexec_fn=_demote, capture_output=True, text=True, cwd="/")
+            probe = subprocess.run(
+                [cand, "-c", "import sys; print(f'{sys.version_info[0]}.{sys.version_info[1]}')"],
+                env=env,
+                preexec_fn=_demote,
+                capture_output=True,
+                text=True,
+                cwd="/",
+            )
         except OSError:  # not executable by that user
             continue
         if probe.returncode == 0 and probe.stdout.strip() == ver:
@@ -90,10 +102,18 @@ def _make_read_only(path: Path):
 def _probe_import(py, path):
     """Can uid 65534 import numpy from ``path`` with the interpreter ``py``?"""
     try:
-        proc = subprocess.run([py, "-I", "-c",
-                               f"import sys; sys.path.insert(0, {path!r}); import numpy; "
-                               f"assert numpy.__file__.startswith({path!r})"],
-                              preexec_fn=_demote, capture_output=True, text=True, cwd="/")
+        proc = subprocess.run(
+            [
+                py,
+                "-I",
+                "-c",
+                f"import sys; sys.path.insert(0, {path!r}); import numpy; assert numpy.__file__.startswith({path!r})",
+            ],
+            preexec_fn=_demote,
+            capture_output=True,
+            text=True,
+            cwd="/",
+        )
     except OSError:
         return False
     return proc.returncode == 0
@@ -107,11 +127,17 @@ def _reachable_deps(top: Path, py: str) -> str:
         return deps
     linked = top / "deps"
     try:
-        shutil.copytree(deps, linked, copy_function=os.link, symlinks=True,
-                        ignore=shutil.ignore_patterns("__editable__*", "*.pth", "vibkit", "vibkit-*"))
+        shutil.copytree(
+            deps,
+            linked,
+            copy_function=os.link,
+            symlinks=True,
+            ignore=shutil.ignore_patterns("__editable__*", "*.pth", "vibkit", "vibkit-*"),
+        )
     except (OSError, shutil.Error) as exc:
-        pytest.skip(f"uid {NOBODY} cannot reach {deps} (a private parent folder) and it cannot be hard-linked "
-                    f"into {top}: {exc}")
+        pytest.skip(
+            f"uid {NOBODY} cannot reach {deps} (a private parent folder) and it cannot be hard-linked into {top}: {exc}"
+        )
     for dirpath, dirnames, _ in os.walk(linked):  # the folders are new: let that user in
         for name in dirnames:
             os.chmod(os.path.join(dirpath, name), 0o755)
@@ -133,12 +159,19 @@ def readonly():
     (work / "tmp").mkdir(parents=True)
     for d in (work, work / "tmp"):
         os.chmod(d, 0o1777)
-    env = {"PATH": "/usr/bin:/bin", "HOME": "/nonexistent", "LANG": "C.UTF-8", "TMPDIR": str(work / "tmp"),
-           "MPLBACKEND": "Agg", "VIBKIT_PROGRESS_INTERVAL": "1e9"}
+    env = {
+        "PATH": "/usr/bin:/bin",
+        "HOME": "/nonexistent",
+        "LANG": "C.UTF-8",
+        "TMPDIR": str(work / "tmp"),
+        "MPLBACKEND": "Agg",
+        "VIBKIT_PROGRESS_INTERVAL": "1e9",
+    }
     py = _interpreter(env)
     if py is None:
-        pytest.skip(f"no python{sys.version_info[0]}.{sys.version_info[1]} executable by uid {NOBODY} "
-                    f"({sys.executable} is not)")
+        pytest.skip(
+            f"no python{sys.version_info[0]}.{sys.version_info[1]} executable by uid {NOBODY} ({sys.executable} is not)"
+        )
     env["PYTHONPATH"] = os.pathsep.join([str(site), _reachable_deps(top, py)])
     yield {"top": top, "site": site, "work": work, "env": env, "py": py, "how": how}
     shutil.rmtree(top, ignore_errors=True)  # root may remove read-only files
@@ -146,8 +179,15 @@ def readonly():
 
 def _run(ro, code, timeout=600):
     """Run ``code`` (Python) as uid 65534 without a home; returns the CompletedProcess."""
-    return subprocess.run([ro["py"], "-c", textwrap.dedent(code)], env=ro["env"], preexec_fn=_demote,
-                          capture_output=True, text=True, cwd=ro["work"], timeout=timeout)
+    return subprocess.run(
+        [ro["py"], "-c", textwrap.dedent(code)],
+        env=ro["env"],
+        preexec_fn=_demote,
+        capture_output=True,
+        text=True,
+        cwd=ro["work"],
+        timeout=timeout,
+    )
 
 
 def _cli(ro, *argv, timeout=600):
@@ -164,11 +204,14 @@ def _cli(ro, *argv, timeout=600):
 
 
 def test_installed_read_only_and_imported_from_there(readonly):
-    proc = _run(readonly, """
+    proc = _run(
+        readonly,
+        """
         import os, vibkit
         print(vibkit.__file__)
         print(os.access(os.path.dirname(vibkit.__file__), os.W_OK))
-    """)
+    """,
+    )
     assert proc.returncode == 0, proc.stderr
     path, writable = proc.stdout.split()
     assert path == str(readonly["site"] / "vibkit" / "__init__.py")
@@ -178,7 +221,9 @@ def test_installed_read_only_and_imported_from_there(readonly):
 def test_version_and_help_compile_nothing(readonly):
     """--version and --help work and do not even import numba (so they cannot compile)."""
     for flag in ("--version", "--help", "simulate --help"):
-        proc = _run(readonly, f"""
+        proc = _run(
+            readonly,
+            f"""
             import sys
             from vibkit.cli import main
             try:
@@ -186,7 +231,8 @@ def test_version_and_help_compile_nothing(readonly):
             except SystemExit as exc:
                 assert exc.code == 0, exc.code
             assert "numba" not in sys.modules, "numba was imported"
-        """)
+        """,
+        )
         assert proc.returncode == 0, proc.stderr
         assert "Traceback" not in proc.stderr
     assert "vibkit 0.1" in _cli(readonly, "--version").stdout
@@ -195,8 +241,12 @@ def test_version_and_help_compile_nothing(readonly):
 def test_every_command_runs_without_a_home(readonly):
     work = readonly["work"]
     scene = work / "tiny.toml"
-    scene.write_text((ROOT / "sim" / "thesis-kinematics.toml").read_text()
-                     .replace("stop = 3.5333333", "stop = 3.01").replace("step = 0.0001", "step = 0.001"))
+    scene.write_text(
+        (ROOT / "sim" / "thesis-kinematics.toml")
+        .read_text()
+        .replace("stop = 3.5333333", "stop = 3.01")
+        .replace("step = 0.0001", "step = 0.001")
+    )
     rec = work / "leon.csv"
     shutil.copy(ROOT / "data" / "field" / "leon-tensioner.csv", rec)
     bench = work / "benchroot" / "benchmarks"
@@ -234,16 +284,21 @@ def test_home_cache_preferred_and_no_cache_last_resort(readonly):
     xdg.mkdir()
     os.chmod(xdg, 0o1777)
     ro = dict(readonly, env=dict(readonly["env"], XDG_CACHE_HOME=str(xdg)))
-    proc = _run(ro, """
+    proc = _run(
+        ro,
+        """
         from vibkit.runtime.kernel_cache import cache_dir
         print(cache_dir())
-    """)
+    """,
+    )
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.strip() == str(xdg / "vibkit" / "numba")
 
     nowhere = readonly["top"] / "nowhere"
     nowhere.mkdir(mode=0o555)
-    proc = _run(readonly, f"""
+    proc = _run(
+        readonly,
+        f"""
         import tempfile
         tempfile.tempdir = {str(nowhere)!r}  # as if no temp folder were writable (gettempdir would fall back)
         import numpy as np
@@ -251,7 +306,8 @@ def test_home_cache_preferred_and_no_cache_last_resort(readonly):
         x = np.zeros(50); x[25] = 100.0
         y = hampel(x, 3)
         print(float(np.asarray(y[0] if isinstance(y, tuple) else y)[25]))
-    """)
+    """,
+    )
     assert proc.returncode == 0, proc.stderr
     assert float(proc.stdout.split()[-1]) == 0.0  # the spike is replaced by the window's median
     notes = [line for line in proc.stderr.splitlines() if "not cached" in line]

@@ -27,11 +27,13 @@ def signal(n=4000, fs=FS):
 @pytest.fixture
 def run(capsys):
     """Run the CLI; returns (exit code, stdout, stderr), never raising for bad data."""
+
     def _run(*argv):
         rc = main([str(a) for a in argv])
         out, err = capsys.readouterr()
         assert "Traceback" not in out + err
         return rc, out, err
+
     return _run
 
 
@@ -111,8 +113,9 @@ def test_binary_garbage(run, tmp_path):
 def test_utf16_export_is_read(run, tmp_path, codec):
     t, x = signal()
     p = tmp_path / "excel.csv"
-    p.write_bytes(("Tiempo (s)\tDesplazamiento (mm)\n" + "".join(f"{a:.4f}\t{v:.6f}\n" for a, v in zip(t, x)))
-                  .encode(codec))
+    p.write_bytes(
+        ("Tiempo (s)\tDesplazamiento (mm)\n" + "".join(f"{a:.4f}\t{v:.6f}\n" for a, v in zip(t, x))).encode(codec)
+    )
     d = spectrum_json(run, p)
     assert d["fundamental_hz"] == pytest.approx(F0, abs=1e-3)
     assert d["channel"] == "desplazamiento"
@@ -123,8 +126,9 @@ def test_epoch_stamps_without_unit(run, tmp_path, per_s):
     t, x = signal()
     p = tmp_path / "epoch.csv"
     start = 1_700_000_000 * per_s
-    p.write_text("timestamp,acc (m/s^2)\n"
-                 + "".join(f"{start + k * per_s // int(FS)},{v:.6f}\n" for k, v in enumerate(x)))
+    p.write_text(
+        "timestamp,acc (m/s^2)\n" + "".join(f"{start + k * per_s // int(FS)},{v:.6f}\n" for k, v in enumerate(x))
+    )
     d = spectrum_json(run, p)
     assert d["fundamental_hz"] == pytest.approx(F0, abs=1e-3)
 
@@ -132,8 +136,9 @@ def test_epoch_stamps_without_unit(run, tmp_path, per_s):
 def test_sample_counter_column_is_not_analysed(run, tmp_path):
     t, x = signal()
     p = tmp_path / "logger.csv"
-    p.write_text("index,time (s),displacement (mm)\n"
-                 + "".join(f"{k},{a:.4f},{v:.6f}\n" for k, (a, v) in enumerate(zip(t, x))))
+    p.write_text(
+        "index,time (s),displacement (mm)\n" + "".join(f"{k},{a:.4f},{v:.6f}\n" for k, (a, v) in enumerate(zip(t, x)))
+    )
     d = spectrum_json(run, p)
     assert d["channel"] == "displacement" and d["fundamental_hz"] == pytest.approx(F0, abs=1e-3)
 
@@ -144,8 +149,12 @@ def test_channel_named_as_the_file_writes_it(run, tmp_path):
     p.write_text("time,vx_ms,vz_ms\n" + "".join(f"{a:.4f},0,{v:.6f}\n" for a, v in zip(t, x)))
     d = spectrum_json(run, p, "--channel", "vz_ms")
     assert d["channel"] == "vz" and d["fundamental_hz"] == pytest.approx(F0, abs=1e-3)
-    one_line_error(run("spectrum", p, "--channel", "vy_ms"), "v.csv", "channel 'vy_ms' is not in the recording",
-                   "vz (file: 'vz_ms')")
+    one_line_error(
+        run("spectrum", p, "--channel", "vy_ms"),
+        "v.csv",
+        "channel 'vy_ms' is not in the recording",
+        "vz (file: 'vz_ms')",
+    )
 
 
 # ----------------------------------------------------------------------------- clocks: midnight and DST
@@ -160,8 +169,10 @@ def test_recording_across_midnight(run, tmp_path):
     t, x = signal()
     p = tmp_path / "night.csv"
     start = 86400 - 5.0  # 23:59:55, 20 s long
-    p.write_text("Hora;Aceleracion (g)\n" + "".join(f"{tod(start + a)};{v:.6f}\n".replace(".", ",", 1)
-                                                       .replace(".", ",") for a, v in zip(t, x)))
+    p.write_text(
+        "Hora;Aceleracion (g)\n"
+        + "".join(f"{tod(start + a)};{v:.6f}\n".replace(".", ",", 1).replace(".", ",") for a, v in zip(t, x))
+    )
     msg = one_line_error(run("spectrum", p), p, "time goes backwards", "crossing midnight", "--repair-time")
     assert ", line 1002:" in msg  # 23:59:59.995 on line 1001, then 00:00:00.000
     d = spectrum_json(run, p, "--repair-time")
@@ -195,10 +206,12 @@ def test_time_column_and_unit_options(run, tmp_path):
     p.write_text("clock,x (mm)\n" + "".join(f"{1000 * a:.1f},{v:.6f}\n" for a, v in zip(t, x)))
     # 'clock' is not a time name: without --time-column there is no time base
     one_line_error(run("spectrum", p), p, "no time column")
-    assert spectrum_json(run, p, "--time-column", "clock", "--time-unit", "ms")["fundamental_hz"] == \
-        pytest.approx(F0, abs=1e-3)
-    assert spectrum_json(run, p, "--time-column", "0", "--time-unit", "ms")["fundamental_hz"] == \
-        pytest.approx(F0, abs=1e-3)
+    assert spectrum_json(run, p, "--time-column", "clock", "--time-unit", "ms")["fundamental_hz"] == pytest.approx(
+        F0, abs=1e-3
+    )
+    assert spectrum_json(run, p, "--time-column", "0", "--time-unit", "ms")["fundamental_hz"] == pytest.approx(
+        F0, abs=1e-3
+    )
     d = spectrum_json(run, p, "--time-column", "none", "--sample-rate", "200", "--channel", "x")
     assert d["fundamental_hz"] == pytest.approx(F0, abs=1e-3)
     one_line_error(run("spectrum", p, "--time-column", "7"), p, "--time-column 7 is out of range")
@@ -222,7 +235,8 @@ def test_netcdf_with_fill_values_and_reversed_time(run, tmp_path):
     x[100:110] = 9.969209968386869e36  # netCDF's default fill: no data there
     p = tmp_path / "logger.nc"
     xr.Dataset({"x": ("time", x, {"units": "m"})}, coords={"time": ("time", t, {"units": "s"})}).to_netcdf(
-        p, engine="h5netcdf")
+        p, engine="h5netcdf"
+    )
     d = spectrum_json(run, p)
     assert d["fundamental_hz"] == pytest.approx(F0, abs=1e-2)
     bad = tmp_path / "reversed.nc"

@@ -135,6 +135,7 @@ def test_report_pdf_in_memory_then_disk_full(tmp_path, monkeypatch):
         class F(io.FileIO):
             def write(self, b):
                 raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
         return F(p, "w")
 
     monkeypatch.setattr(so, "open", full, raising=False)
@@ -150,8 +151,10 @@ def test_report_pdf_in_memory_then_disk_full(tmp_path, monkeypatch):
 def test_real_full_disk_on_a_tiny_tmpfs(tmp_path):
     mnt = tmp_path / "tiny"
     mnt.mkdir()
-    if subprocess.run(["mount", "-t", "tmpfs", "-o", "size=64k", "tmpfs", str(mnt)],
-                      capture_output=True).returncode != 0:
+    if (
+        subprocess.run(["mount", "-t", "tmpfs", "-o", "size=64k", "tmpfs", str(mnt)], capture_output=True).returncode
+        != 0
+    ):
         pytest.skip("cannot mount a tmpfs here (no CAP_SYS_ADMIN)")
     try:
         with pytest.raises(OSError) as exc:

@@ -28,10 +28,14 @@ from corpus import tiny  # noqa: E402
 
 def test_a_billion_runs_are_refused_from_the_shape_within_100_MB():
     plan_sweep(LEON, {"motion.speed": "0.4,0.5"})  # imports and the scene cache out of the measurement
-    for vary, samples in (({"motion.speed": "0.4:0.5:1000000000"}, None),
-                          ({"motion.speed": "0.4:0.5:1000", "motion.step": "0.001:0.002:1000",
-                            "chain.link_pitch": "0.133:0.134:1000"}, None),
-                          ({"motion.speed": "0.4:0.5"}, 1_000_000_000)):
+    for vary, samples in (
+        ({"motion.speed": "0.4:0.5:1000000000"}, None),
+        (
+            {"motion.speed": "0.4:0.5:1000", "motion.step": "0.001:0.002:1000", "chain.link_pitch": "0.133:0.134:1000"},
+            None,
+        ),
+        ({"motion.speed": "0.4:0.5"}, 1_000_000_000),
+    ):
         tracemalloc.start()
         try:
             with pytest.raises(BudgetError, match=r"1e\+09 runs .* more than the limit of 2 GiB.*--max-result-bytes"):
@@ -73,17 +77,20 @@ def test_lazy_grid_values_are_numpy_linspace_bit_for_bit():
         plan_sweep(ROOT / "sim" / "thesis-forward.toml", {"sprocket.teeth": "20:28:4"})
 
 
-@pytest.mark.parametrize("scene, vary, match", [
-    ("thesis-forward", {"motion.speed": "0.45,0.55"}, "forward analysis does not read \\[motion\\]"),
-    ("thesis-forward", {"run.seed": "1,2"}, "forward analysis does not use it"),
-    ("leon", {"run.duration": "1,2"}, "inverse analysis does not read \\[run\\]"),
-    ("leon", {"solver.rtol": "1e-6,1e-7"}, "inverse analysis does not read \\[solver\\]"),
-    ("leon", {"kinematics.step": "0.001,0.002"}, "inverse analysis does not read \\[kinematics\\]"),
-    ("thesis-kinematics", {"motion.speed": "0.45,0.55"}, "kinematics analysis does not read \\[motion\\]"),
-    ("thesis-kinematics", {"sprocket.mass": "100,200"}, "kinematics analysis does not use it"),
-    ("leon", {"motion.speed": "0_5"}, "got '0_5'"),
-    ("leon", {"motion.speed": "0x1"}, "got '0x1'"),
-])
+@pytest.mark.parametrize(
+    "scene, vary, match",
+    [
+        ("thesis-forward", {"motion.speed": "0.45,0.55"}, "forward analysis does not read \\[motion\\]"),
+        ("thesis-forward", {"run.seed": "1,2"}, "forward analysis does not use it"),
+        ("leon", {"run.duration": "1,2"}, "inverse analysis does not read \\[run\\]"),
+        ("leon", {"solver.rtol": "1e-6,1e-7"}, "inverse analysis does not read \\[solver\\]"),
+        ("leon", {"kinematics.step": "0.001,0.002"}, "inverse analysis does not read \\[kinematics\\]"),
+        ("thesis-kinematics", {"motion.speed": "0.45,0.55"}, "kinematics analysis does not read \\[motion\\]"),
+        ("thesis-kinematics", {"sprocket.mass": "100,200"}, "kinematics analysis does not use it"),
+        ("leon", {"motion.speed": "0_5"}, "got '0_5'"),
+        ("leon", {"motion.speed": "0x1"}, "got '0x1'"),
+    ],
+)
 def test_keys_that_change_nothing_and_loose_numbers_are_refused(scene, vary, match):
     with pytest.raises(SweepError, match=match):
         plan_sweep(ROOT / "sim" / f"{scene}.toml", vary)
@@ -97,8 +104,15 @@ def test_settle_must_leave_two_samples():
 
 
 def _record(i):
-    return {"index": i, "status": 0, "error": "", "summary": {"delta_mean": 0.033 + i}, "kept": {},
-            "wall_time": 0.1, "pid": 1}
+    return {
+        "index": i,
+        "status": 0,
+        "error": "",
+        "summary": {"delta_mean": 0.033 + i},
+        "kept": {},
+        "wall_time": 0.1,
+        "pid": 1,
+    }
 
 
 def test_two_processes_storing_and_consolidating_the_same_sweep(tmp_path):
@@ -110,8 +124,11 @@ def test_two_processes_storing_and_consolidating_the_same_sweep(tmp_path):
     for i in range(3):
         a.write_run(_record(i))
         b.write_run(_record(i))  # the same run stored twice: whole, once
-    assert sorted(p.name for p in (out / "runs").iterdir() if p.name.startswith("r")) == \
-        ["r000000", "r000001", "r000002"]
+    assert sorted(p.name for p in (out / "runs").iterdir() if p.name.startswith("r")) == [
+        "r000000",
+        "r000001",
+        "r000002",
+    ]
     records = b.done_runs()
     ds = STORE._assemble(plan, records, complete=True)
     assert a.finish(ds) is True

@@ -79,7 +79,11 @@ def test_link_pass_estimate_one_call():
     fs = 2050.0
     t = np.arange(int(10 * fs)) / fs
     f0 = 3.742
-    x = 0.2 * np.cos(2 * np.pi * f0 * t) + 1.0 * np.cos(2 * np.pi * 2 * f0 * t + 1) + 0.1 * np.cos(2 * np.pi * 3 * f0 * t)
+    x = (
+        0.2 * np.cos(2 * np.pi * f0 * t)
+        + 1.0 * np.cos(2 * np.pi * 2 * f0 * t + 1)
+        + 0.1 * np.cos(2 * np.pi * 3 * f0 * t)
+    )
     x += rng.standard_normal(t.size)
     r = link_pass_estimate(x, fs, band=(2.0, 6.0), n_harmonics=4)
     assert abs(r.fundamental_hz - f0) < 4 * r.fundamental_sigma_hz
@@ -95,7 +99,10 @@ def test_link_pass_estimate_one_call():
     ("call", "match"),
     [
         (lambda: find_fundamental(np.ones(1000), 100.0, band=(2.0, 60.0)), "Nyquist"),
-        (lambda: find_fundamental(np.random.default_rng(0).standard_normal(100), 100.0, band=(2.0, 6.0)), "three periods"),
+        (
+            lambda: find_fundamental(np.random.default_rng(0).standard_normal(100), 100.0, band=(2.0, 6.0)),
+            "three periods",
+        ),
         (lambda: harmonic_ls(np.ones(1000), 100.0, f_guess=20.0, n_harmonics=3), "Nyquist"),
         (lambda: harmonic_ls(np.ones(100), 100.0, f_guess=0.5), "two periods"),
         (lambda: interpolated_dft(np.ones(100), -1.0), "fs"),

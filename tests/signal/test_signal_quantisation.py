@@ -26,7 +26,9 @@ def test_step_of_integer_and_scaled_levels():
     assert quantisation_step(tone) == 1.0
 
 
-@pytest.mark.parametrize("x", [np.random.default_rng(2).standard_normal(3000), np.full(100, 4.0), np.sqrt([2.0, 3.0, 5.0, 7.0, 11.0, 13.0])])
+@pytest.mark.parametrize(
+    "x", [np.random.default_rng(2).standard_normal(3000), np.full(100, 4.0), np.sqrt([2.0, 3.0, 5.0, 7.0, 11.0, 13.0])]
+)
 def test_no_step_for_continuous_or_constant_data(x):
     assert quantisation_step(x) == 0.0
 
@@ -35,7 +37,7 @@ def test_correlated_error_variance_against_its_limits_and_monte_carlo():
     # without noise the whole error q^2/12 follows the signal (sum 1/(2 pi^2 k^2) = 1/12)
     assert correlated_error_variance(2.0, 0.0) == pytest.approx(4.0 / 12.0, rel=1e-3)
     # at half a step of noise only the first term is left: q^2/(2 pi^2) exp(-pi^2)
-    assert correlated_error_variance(1.0, 0.5) == pytest.approx(np.exp(-np.pi**2) / (2 * np.pi**2), rel=1e-3)
+    assert correlated_error_variance(1.0, 0.5) == pytest.approx(np.exp(-(np.pi**2)) / (2 * np.pi**2), rel=1e-3)
     # Monte Carlo: the variance over the input of the noise-averaged rounding error
     rng = np.random.default_rng(3)
     x = np.linspace(0.0, 1.0, 200, endpoint=False)[:, None]  # one step, evenly: the average over the input
@@ -84,6 +86,7 @@ def test_quantised_noise_keeps_its_false_alarm_rate():
     hits = 0
     for i in range(n_rec):
         sd = (0.2, 0.5, 1.0, 3.0)[i % 4]
-        hits += detect_link_pass(np.round(sd * rng.standard_normal(3000)), 100.0, band=(2.45, 6.125),
-                                 p_fa=p_fa).detected
+        hits += detect_link_pass(
+            np.round(sd * rng.standard_normal(3000)), 100.0, band=(2.45, 6.125), p_fa=p_fa
+        ).detected
     assert hits <= scipy.stats.binom.ppf(0.999, n_rec, p_fa)

@@ -74,15 +74,16 @@ def test_metrics_independent_of_sample_rate():
         x = (amps[:, None] * np.sin(2 * np.pi * freqs[:, None] * t + ph[:, None])).sum(0)
         out[fs] = ride_quality({"z": x, "x": x}, fs, segment=(4.0, 28.0)).axis("z")
     ref = out[4096.0]
-    for fs, r in out.items():
+    for _fs, r in out.items():
         for a, b in ((r.weighted, ref.weighted), (r.lowpass, ref.lowpass)):
             assert a.rms == pytest.approx(b.rms, rel=0.01)
             assert a.max == pytest.approx(b.max, rel=0.01)
             assert a.a95 == pytest.approx(b.a95, rel=0.01)
 
 
-def synthetic_ride(fs=500.0, v=0.5, radius=1.5, incline_deg=30.0, incline_len=6.0, landing_s=5.0, noise=0.02,
-                   offset=0.003, seed=3):
+def synthetic_ride(
+    fs=500.0, v=0.5, radius=1.5, incline_deg=30.0, incline_len=6.0, landing_s=5.0, noise=0.02, offset=0.003, seed=3
+):
     """A step's acceleration (x along travel, z up, gravity and a sensor offset included) on a ride:
     landing, concave transition arc, incline, convex arc, landing; with the exact segment times."""
     th = math.radians(incline_deg)
@@ -90,8 +91,11 @@ def synthetic_ride(fs=500.0, v=0.5, radius=1.5, incline_deg=30.0, incline_len=6.
     t_inc = incline_len / v
     edges = np.cumsum([landing_s, t_arc, t_inc, t_arc, landing_s])
     t = np.arange(0, edges[-1], 1 / fs)
-    phi = np.select([t < edges[0], t < edges[1], t < edges[2], t < edges[3]],
-                    [0.0 * t, (t - edges[0]) / t_arc * th, th + 0 * t, th - (t - edges[2]) / t_arc * th], 0.0 * t)
+    phi = np.select(
+        [t < edges[0], t < edges[1], t < edges[2], t < edges[3]],
+        [0.0 * t, (t - edges[0]) / t_arc * th, th + 0 * t, th - (t - edges[2]) / t_arc * th],
+        0.0 * t,
+    )
     # centripetal acceleration v^2/R on the arcs, normal to the path (towards the centre)
     on1 = (t >= edges[0]) & (t < edges[1])
     on2 = (t >= edges[2]) & (t < edges[3])
@@ -170,7 +174,7 @@ def _peaks_by_groupby(x):
     runs, i = [], 0
     for _, g in itertools.groupby(sign):
         n = len(list(g))
-        seg = np.abs(x[i:i + n])
+        seg = np.abs(x[i : i + n])
         runs.append(i + int(np.argmax(seg)))
         i += n
     first = [r for r in runs[1:-1]]

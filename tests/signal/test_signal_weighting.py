@@ -21,8 +21,14 @@ REFERENCE_15915 = {"Wb": 0.8126, "Wc": 0.5145, "Wd": 0.1261, "We": 0.06287, "Wj"
 # Evaluated at the nominal centre frequencies (the table's own); agreement to one unit in the last
 # printed digit.
 TABLE3 = {  # n: (nominal Hz, Wk, Wd)
-    -3: (0.5, 0.418, 0.853), 0: (1.0, 0.482, 1.011), 3: (2.0, 0.531, 0.890), 6: (4.0, 0.967, 0.512),
-    7: (5.0, 1.039, 0.409), 9: (8.0, 1.036, 0.253), 10: (10.0, 0.988, 0.201), 12: (16.0, 0.768, 0.125),
+    -3: (0.5, 0.418, 0.853),
+    0: (1.0, 0.482, 1.011),
+    3: (2.0, 0.531, 0.890),
+    6: (4.0, 0.967, 0.512),
+    7: (5.0, 1.039, 0.409),
+    9: (8.0, 1.036, 0.253),
+    10: (10.0, 0.988, 0.201),
+    12: (16.0, 0.768, 0.125),
     15: (31.5, 0.405, None),  # Wd there: 0.0632 computed; the transcription's 0.062 looks truncated
 }
 
@@ -80,7 +86,9 @@ def test_filter_magnitude_within_0p1_db_from_0p5_to_80_hz(fs):
             sel[np.flatnonzero(sel)[~keep]] = False
             ha = ha[keep]
         err = 20 * np.log10(np.abs(h[sel]) / np.abs(ha))
-        assert np.max(np.abs(err)) < 0.1, f"{name} at fs={fs}: {np.max(np.abs(err)):.3f} dB at {f[sel][np.argmax(np.abs(err))]:.2f} Hz"
+        assert np.max(np.abs(err)) < 0.1, (
+            f"{name} at fs={fs}: {np.max(np.abs(err)):.3f} dB at {f[sel][np.argmax(np.abs(err))]:.2f} Hz"
+        )
 
 
 @pytest.mark.parametrize("fs", [2000.0, 4096.0])
@@ -107,7 +115,7 @@ def test_sine_through_weighting_has_its_gain(name, f0, fs):
     t = np.arange(0, 16.0, 1 / fs)
     y = frequency_weighting(2.0 * np.sin(2 * np.pi * f0 * t), fs, name)
     tail = y[t >= 8.0]  # after the 0.4 Hz high-pass has settled
-    amp = np.sqrt(2) * np.sqrt(np.mean(tail ** 2))
+    amp = np.sqrt(2) * np.sqrt(np.mean(tail**2))
     assert amp == pytest.approx(2.0 * abs(frequency_weighting_response(f0, name)), rel=2e-3)
 
 

@@ -20,8 +20,13 @@ def recording(seconds=20.0, *, bursts=1, seed=0, f0=3.75):
     x = np.cos(2 * np.pi * f0 * t) + 0.5 * np.cos(4 * np.pi * f0 * t) + 0.3 * rng.standard_normal(n)
     seg = np.repeat(np.arange(bursts), n // bursts)[:n]
     t = t + seg * 100.0  # gaps between bursts
-    da = xr.DataArray(x, dims="time", coords={"time": ("time", t, {"units": "s"})}, name="acc",
-                      attrs={"units": "m/s^2", "long_name": "step acceleration", "quantity": "acceleration"})
+    da = xr.DataArray(
+        x,
+        dims="time",
+        coords={"time": ("time", t, {"units": "s"})},
+        name="acc",
+        attrs={"units": "m/s^2", "long_name": "step acceleration", "quantity": "acceleration"},
+    )
     return da.assign_coords(segment=("time", seg.astype(np.int32)))
 
 

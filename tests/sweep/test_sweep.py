@@ -53,8 +53,9 @@ VARY = {"chain.link_pitch": "0.1333:0.1337:3", "effects.contact.stiffness": "1e5
 
 
 def _variant(pitch, k):
-    return (SCENE.replace("link_pitch = 0.13333333333333333", f"link_pitch = {pitch!r}")
-            .replace("stiffness = 1.0e6", f"stiffness = {k!r}"))
+    return SCENE.replace("link_pitch = 0.13333333333333333", f"link_pitch = {pitch!r}").replace(
+        "stiffness = 1.0e6", f"stiffness = {k!r}"
+    )
 
 
 @pytest.fixture(scope="module")
@@ -130,8 +131,9 @@ def test_interrupted_sweep_resumes_without_recomputing(scene_file, tmp_path, gri
 
     monkeypatch.setattr(SW, "_simulate", counting)
     out = tmp_path / "resume.zarr"
-    part = vibkit.sweep(scene_file, VARY, output=out, keep=["delta"], client=threaded_client, progress=False,
-                        max_runs=4)
+    part = vibkit.sweep(
+        scene_file, VARY, output=out, keep=["delta"], client=threaded_client, progress=False, max_runs=4
+    )
     assert len(calls) == 4 and part.attrs["runs_pending"] == 5
     assert (part["status"].values == -1).sum() == 5
     # a run whose data reached the disk but whose done flag did not (killed mid-write) is redone
@@ -168,8 +170,12 @@ def test_not_a_sweep_store_is_never_touched(scene_file, tmp_path):
 
 def test_failures_are_recorded_and_the_others_complete(scene_file, threaded_client):
     # a negative stiffness is refused by the scene loader; a 1 ns wall-time budget stops the integrator
-    ds = vibkit.sweep(scene_file, {"effects.contact.stiffness": "-1e6,1e6", "solver.max_wall_time": [1e-9, 100.0]},
-                      client=threaded_client, progress=False)
+    ds = vibkit.sweep(
+        scene_file,
+        {"effects.contact.stiffness": "-1e6,1e6", "solver.max_wall_time": [1e-9, 100.0]},
+        client=threaded_client,
+        progress=False,
+    )
     st = ds["status"].values
     meanings = dict(zip(ds["status"].attrs["flag_values"], ds["status"].attrs["flag_meanings"].split()))
     assert meanings[st[0, 0]] == meanings[st[0, 1]] == "invalid"
@@ -192,20 +198,24 @@ def test_monte_carlo_is_reproducible(scene_file, threaded_client):
     ds = vibkit.sweep(scene_file, vary, samples=3, seed=7, duration=0.5, client=threaded_client, progress=False)
     assert ds["status"].dims == ("sample",)
     assert ds["chain.link_pitch"].dims == ("sample",)
-    assert list(ds["chain.link_pitch"].values) == [p["chain.link_pitch"] for p in
-                                                   plan_sweep(scene_file, vary, samples=3, seed=7).points]
+    assert list(ds["chain.link_pitch"].values) == [
+        p["chain.link_pitch"] for p in plan_sweep(scene_file, vary, samples=3, seed=7).points
+    ]
     assert ds.attrs["seed"] == 7 and (ds["status"].values == 0).all()
 
 
-@pytest.mark.parametrize("vary, match", [
-    ({"chain.pitch": "1,2"}, "'chain.pitch'"),
-    ({"effects.contact.stifness": "1,2"}, "'effects.contact.stifness'"),
-    ({"gear.teeth": "20,28"}, "'gear.teeth'"),
-    ({"effects.passengers.mass": "1,2"}, "effects.passengers"),  # the scene has no passengers
-    ({"sprocket.teeth": "27.5,28"}, "whole number"),
-    ({"chain.link_pitch": "0.13:0.14"}, "A:B:N"),
-    ({"chain.link_pitch": "0.1333,0.1333"}, "values repeat"),
-])
+@pytest.mark.parametrize(
+    "vary, match",
+    [
+        ({"chain.pitch": "1,2"}, "'chain.pitch'"),
+        ({"effects.contact.stifness": "1,2"}, "'effects.contact.stifness'"),
+        ({"gear.teeth": "20,28"}, "'gear.teeth'"),
+        ({"effects.passengers.mass": "1,2"}, "effects.passengers"),  # the scene has no passengers
+        ({"sprocket.teeth": "27.5,28"}, "whole number"),
+        ({"chain.link_pitch": "0.13:0.14"}, "A:B:N"),
+        ({"chain.link_pitch": "0.1333,0.1333"}, "values repeat"),
+    ],
+)
 def test_bad_keys_and_values_are_named_before_any_run(scene_file, vary, match):
     with pytest.raises(SweepError, match=match):
         plan_sweep(scene_file, vary)
@@ -213,9 +223,22 @@ def test_bad_keys_and_values_are_named_before_any_run(scene_file, vary, match):
 
 def test_cli_json(scene_file, tmp_path, capsys):
     out = tmp_path / "cli.zarr"
-    argv = ["sweep", str(scene_file), "--vary", "chain.link_pitch=0.1333:0.1337:2", "--vary",
-            "effects.contact.stiffness=-1,1e6", "--duration", "1", "-o", str(out), "--workers", "2", "--json",
-            "--quiet"]
+    argv = [
+        "sweep",
+        str(scene_file),
+        "--vary",
+        "chain.link_pitch=0.1333:0.1337:2",
+        "--vary",
+        "effects.contact.stiffness=-1,1e6",
+        "--duration",
+        "1",
+        "-o",
+        str(out),
+        "--workers",
+        "2",
+        "--json",
+        "--quiet",
+    ]
     assert main(argv) == 0
     captured = capsys.readouterr()
     d = json.loads(captured.out)
@@ -234,8 +257,12 @@ def test_cli_json(scene_file, tmp_path, capsys):
 
 
 def test_cli_bad_vary_syntax_is_a_usage_error(scene_file, tmp_path, capsys):
-    for bad in ("chain.link_pitch", "chain.link_pitch=0.13:x:3", "chain.link_pitch=0.13:0.14:0",
-                "chain.link_pitch=1,,2"):
+    for bad in (
+        "chain.link_pitch",
+        "chain.link_pitch=0.13:x:3",
+        "chain.link_pitch=0.13:0.14:0",
+        "chain.link_pitch=1,,2",
+    ):
         with pytest.raises(SystemExit) as exc:
             main(["sweep", str(scene_file), "--vary", bad, "-o", str(tmp_path / "x.zarr")])
         assert exc.value.code == 2
@@ -285,7 +312,9 @@ def test_progress_lines_when_piped_a_bar_on_a_terminal_nothing_when_quiet(monkey
     assert quiet.text == ""
 
 
-@pytest.mark.parametrize("path", sorted((Path(__file__).resolve().parents[2] / "sim").glob("*.toml")), ids=lambda p: p.stem)
+@pytest.mark.parametrize(
+    "path", sorted((Path(__file__).resolve().parents[2] / "sim").glob("*.toml")), ids=lambda p: p.stem
+)
 def test_varied_scene_text_reads_back_equal(path):
     """The varied scenes are written back as TOML: every shipped scene survives the round trip."""
     import tomllib
@@ -294,8 +323,14 @@ def test_varied_scene_text_reads_back_equal(path):
     data = tomllib.loads(text)
     assert tomllib.loads(SP.to_toml(data)) == data
     a, b = parse_scene(text), parse_scene(SP.varied_text(text, {}))
-    assert (a.guide, a.chain, a.sprocket, a.effects, a.outputs, a.sections) == \
-        (b.guide, b.chain, b.sprocket, b.effects, b.outputs, b.sections)
+    assert (a.guide, a.chain, a.sprocket, a.effects, a.outputs, a.sections) == (
+        b.guide,
+        b.chain,
+        b.sprocket,
+        b.effects,
+        b.outputs,
+        b.sections,
+    )
     c = parse_scene(SP.varied_text(text, {"chain.link_pitch": 0.1335}))
     assert c.chain.link_pitch == 0.1335
     if data["guide"].get("head_radius") == "sprocket":  # the head follows the sprocket's pitch radius
@@ -305,17 +340,41 @@ def test_varied_scene_text_reads_back_equal(path):
 def test_cli_check_gives_a_converged_flag_per_run(scene_file, tmp_path, capsys):
     """`vibkit sweep --check`: every run's convergence verdict, the same as the single run's."""
     out = tmp_path / "checked.zarr"
-    argv = ["sweep", str(scene_file), "--vary", "effects.contact.stiffness=1e6,1e7", "--duration", "1", "-o",
-            str(out), "--workers", "2", "--json", "--quiet", "--check"]
+    argv = [
+        "sweep",
+        str(scene_file),
+        "--vary",
+        "effects.contact.stiffness=1e6,1e7",
+        "--duration",
+        "1",
+        "-o",
+        str(out),
+        "--workers",
+        "2",
+        "--json",
+        "--quiet",
+        "--check",
+    ]
     assert main(argv) == 0
     d = json.loads(capsys.readouterr().out)
     assert d["ok"] == 2
     for r in d["run_results"]:
-        single = vibkit.simulate(parse_scene(_variant(0.13333333333333333, r["values"]["effects.contact.stiffness"])
-                                             .replace('rtol = 1e-5', 'rtol = 1e-5\ncheck = true'), "x.toml"),
-                                 duration=1.0, progress=False)
+        single = vibkit.simulate(
+            parse_scene(
+                _variant(0.13333333333333333, r["values"]["effects.contact.stiffness"]).replace(
+                    "rtol = 1e-5", "rtol = 1e-5\ncheck = true"
+                ),
+                "x.toml",
+            ),
+            duration=1.0,
+            progress=False,
+        )
         assert r["converged"] is bool(single.attrs["converged"])
     assert set(xr.open_zarr(out)["converged"].values.ravel()) <= {0.0, 1.0}
     with pytest.raises(SweepError, match="forward scenes"):
-        vibkit.sweep(Path(__file__).resolve().parents[2] / "sim" / "thesis-kinematics.toml",
-                     {"kinematics.step": "0.001,0.002"}, check=True, progress=False)
+        vibkit.sweep(
+            Path(__file__).resolve().parents[2] / "sim" / "thesis-kinematics.toml",
+            {"kinematics.step": "0.001,0.002"},
+            check=True,
+            progress=False,
+        )

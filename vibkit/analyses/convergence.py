@@ -90,8 +90,16 @@ def summary(ds):
 
 # what is compared, and how close counts as the same (the looser run's rtol enters the floors:
 # a ripple below ten times the tolerance is below what the run resolves)
-HISTORY = ("contact_episodes", "back_flank_episodes", "last_contact_s", "sprocket_ripple_percent", "delta_ripple_m",
-           "peak_tension_n", "sprocket_speed_frequency_hz", "delta_frequency_hz")
+HISTORY = (
+    "contact_episodes",
+    "back_flank_episodes",
+    "last_contact_s",
+    "sprocket_ripple_percent",
+    "delta_ripple_m",
+    "peak_tension_n",
+    "sprocket_speed_frequency_hz",
+    "delta_frequency_hz",
+)
 ROBUST = ("mean_sprocket_speed_rad_s", "mean_delta_m", "sprocket_speed_frequency_hz", "delta_frequency_hz")
 
 
@@ -130,19 +138,26 @@ def compare(s1, s2, rtol, dt, duration, names=HISTORY):
         skip.add("sprocket_speed_frequency_hz")
     if max(s.get("delta_ripple_m") or 0.0 for s in (s1, s2)) <= 1e-8:
         skip.add("delta_frequency_hz")
-    return {k: [s1.get(k), s2.get(k)] for k in names
-            if (k in s1 or k in s2) and k not in skip and not _close(k, s1.get(k), s2.get(k), rtol, dt, duration)}
+    return {
+        k: [s1.get(k), s2.get(k)]
+        for k in names
+        if (k in s1 or k in s2) and k not in skip and not _close(k, s1.get(k), s2.get(k), rtol, dt, duration)
+    }
 
 
 def verdict(runs, dt, duration, min_rtol):
     """The verdict from runs [(rtol, summary, cpu_s)], loosest first (see the module's doc)."""
     rt0 = runs[0][0]
-    out = {"rtol": rt0, "min_rtol": min_rtol, "factor": CHECK_FACTOR,
-           "runs": [{"rtol": r, "cpu_s": round(c, 3), **s} for r, s, c in runs]}
+    out = {
+        "rtol": rt0,
+        "min_rtol": min_rtol,
+        "factor": CHECK_FACTOR,
+        "runs": [{"rtol": r, "cpu_s": round(c, 3), **s} for r, s, c in runs],
+    }
     first = compare(runs[0][1], runs[1][1], rt0, dt, duration) if len(runs) > 1 else {}
     out["differences"] = first
     agree_at = None
-    for (ra, sa, _), (rb, sb, _) in zip(runs, runs[1:]):
+    for (ra, sa, _), (_rb, sb, _) in zip(runs, runs[1:]):
         if not compare(sa, sb, ra, dt, duration):
             agree_at = ra
             break
@@ -150,21 +165,32 @@ def verdict(runs, dt, duration, min_rtol):
     out["agrees_at_rtol"] = agree_at
     out["sensitive"] = bool(agree_at is None and len(runs) > 2)
     if out["converged"]:
-        out["message"] = (f"converged: the run at rtol {rt0:g} and one at {rt0 / CHECK_FACTOR:g} agree on the contact "
-                          "history, ripples, peak tension and dominant frequencies")
+        out["message"] = (
+            f"converged: the run at rtol {rt0:g} and one at {rt0 / CHECK_FACTOR:g} agree on the contact "
+            "history, ripples, peak tension and dominant frequencies"
+        )
     elif agree_at is not None:
-        out["message"] = (f"not converged at rtol {rt0:g} (differs in {', '.join(first)}); the runs agree from rtol "
-                          f"{agree_at:g}: set [solver] rtol = {agree_at:g}")
+        out["message"] = (
+            f"not converged at rtol {rt0:g} (differs in {', '.join(first)}); the runs agree from rtol "
+            f"{agree_at:g}: set [solver] rtol = {agree_at:g}"
+        )
     elif out["sensitive"]:
-        robust = [k for k in ROBUST
-                  if all(not compare(sa, sb, ra, dt, duration, (k,)) for (ra, sa, _), (_, sb, _) in zip(runs, runs[1:]))]
+        robust = [
+            k
+            for k in ROBUST
+            if all(not compare(sa, sb, ra, dt, duration, (k,)) for (ra, sa, _), (_, sb, _) in zip(runs, runs[1:]))
+        ]
         out["robust"] = robust
-        out["message"] = (f"sensitive: no two runs from rtol {rt0:g} to {runs[-1][0]:g} agree on the contact history "
-                          "(a chaotic regime: the history depends on rounding, no converged one exists); still robust: "
-                          + (", ".join(robust) if robust else "nothing compared"))
+        out["message"] = (
+            f"sensitive: no two runs from rtol {rt0:g} to {runs[-1][0]:g} agree on the contact history "
+            "(a chaotic regime: the history depends on rounding, no converged one exists); still robust: "
+            + (", ".join(robust) if robust else "nothing compared")
+        )
     else:
-        out["message"] = (f"not converged at rtol {rt0:g} (differs in {', '.join(first)}); the budget (rtol down to "
-                          f"{min_rtol:g}) ran out before two runs agreed")
+        out["message"] = (
+            f"not converged at rtol {rt0:g} (differs in {', '.join(first)}); the budget (rtol down to "
+            f"{min_rtol:g}) ran out before two runs agreed"
+        )
     return out
 
 
@@ -238,12 +264,17 @@ def checked_forward(model, *, duration=None, progress=True, min_rtol=None, paral
         v["converged"] = False
         if v["agrees_at_rtol"] is not None:  # the looser pair agreeing says nothing about rtol
             v["agrees_at_rtol"] = None
-            v["message"] = (f"not converged at rtol {rtol:g} (differs in {', '.join(v['differences'])}); the budget "
-                            f"(rtol down to {min_rtol:g}) ran out before two runs agreed")
+            v["message"] = (
+                f"not converged at rtol {rtol:g} (differs in {', '.join(v['differences'])}); the budget "
+                f"(rtol down to {min_rtol:g}) ran out before two runs agreed"
+            )
     else:
         v = verdict(runs, dt, duration, min_rtol)
-    drop = [name for name in ("drive_flank_force", "back_flank_force", "sprocket_speed", "delta")
-            if name in ds and name not in outputs and not (name.endswith("flank_force") and "flank_force" in outputs)]
+    drop = [
+        name
+        for name in ("drive_flank_force", "back_flank_force", "sprocket_speed", "delta")
+        if name in ds and name not in outputs and not (name.endswith("flank_force") and "flank_force" in outputs)
+    ]
     ds = ds.drop_vars(drop)
     ds.attrs["convergence"] = json.dumps(v, default=float)
     ds.attrs["converged"] = int(v["converged"])

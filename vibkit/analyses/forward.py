@@ -17,9 +17,9 @@ from ..model.chain import close_with_slope, closure_residual
 from ..model.dynamics import link_multipliers
 from ..model.effects import Work, clear_teeth, evaluate, motor_torque, pack_parameters, reset_closure
 from ..model.pitch_table import build_table, empty_table, table_applies, table_delta, table_evaluate, table_spacing
+from ..model.sprocket import contact_kernel
 from .integrate import IntegrationError, integrate
 from .results import make_dataset
-from ..model.sprocket import contact_kernel
 
 __all__ = ["forward_dynamics", "initial_state", "ForwardModel", "default_rtol"]
 
@@ -59,8 +59,19 @@ def initial_state(model, *, start=0.0, speed=0.0, theta=None):
     return np.array([start, s0dot, th, -speed / model.pitch_radius, 0.0]), conf.delta
 
 
-def forward_dynamics(model, *, duration=None, progress=True, method=None, rtol=None, atol=None, outputs=None,
-                     effects=None, t_out=None, events=None):
+def forward_dynamics(
+    model,
+    *,
+    duration=None,
+    progress=True,
+    method=None,
+    rtol=None,
+    atol=None,
+    outputs=None,
+    effects=None,
+    t_out=None,
+    events=None,
+):
     """Run the forward dynamics of ``model.scene``; see :func:`vibkit.simulate`.
 
     Keyword arguments override the scene's solver settings, outputs and effects (for benchmarks).
@@ -87,10 +98,23 @@ def forward_dynamics(model, *, duration=None, progress=True, method=None, rtol=N
     crossings, t_events = _events(model, fm)
     events, t_events = (crossings, t_events) if events else (None, None)
     table, closure = forward_table(model, fm, crossings[0], rtol, solver.get("closure", "table"))
-    y_out, stats = integrate(fm.prm, fm.work.arrays, y0, t_out, method=method, rtol=rtol, atol=atol,
-                             max_step=solver.get("max_step", math.inf), first_step=solver.get("first_step"),
-                             max_wall_time=solver.get("max_wall_time", math.inf), progress=progress,
-                             events=events, t_events=t_events, event_gap=event_gap(rtol), table=table)
+    y_out, stats = integrate(
+        fm.prm,
+        fm.work.arrays,
+        y0,
+        t_out,
+        method=method,
+        rtol=rtol,
+        atol=atol,
+        max_step=solver.get("max_step", math.inf),
+        first_step=solver.get("first_step"),
+        max_wall_time=solver.get("max_wall_time", math.inf),
+        progress=progress,
+        events=events,
+        t_events=t_events,
+        event_gap=event_gap(rtol),
+        table=table,
+    )
     stats["closure"] = closure
     reset_closure(fm.info, d0)  # the closure's first guess at the outputs: the initial delta, whatever the run's length
     # the outputs are taken on the side the motion goes at a breakpoint, whether or not the steps end there
@@ -146,6 +170,7 @@ def _observed_states(y, events):
         i = k[j] if abs(ext[k[j]] - r[j]) <= abs(ext[k[j] - 1] - r[j]) else k[j] - 1
         y[j, 0] = s[j] + (ext[i] - r[j]) + direction * ON_BREAKPOINT
     return y
+
 
 def _events(model, fm):
     """Where the right-hand side is not smooth: values of s0_1 (one loop) and times.
@@ -204,6 +229,7 @@ def event_gap(rtol):
     """
     return min(1e-6, max(1e-11, rtol))
 
+
 NSCAL = 12  # delta, deltadot, motor, residual, speed, KE, PE, contact E, spring E, accel, drive/back flank
 
 
@@ -215,8 +241,27 @@ def _teeth_row(ind, cf, j, ind_t, frc_t):
 
 
 @nb.njit(cache=True, error_model="numpy", nogil=True)
-def _observe(t, y, prm, ws, inertia, light, need_tension, need_teeth, need_accel, mid, ridx, scal, tension, ind, cf,
-             rk, light_contact, tb, light_table):
+def _observe(
+    t,
+    y,
+    prm,
+    ws,
+    inertia,
+    light,
+    need_tension,
+    need_teeth,
+    need_accel,
+    mid,
+    ridx,
+    scal,
+    tension,
+    ind,
+    cf,
+    rk,
+    light_contact,
+    tb,
+    light_table,
+):
     """Every output quantity at the output states, in one compiled loop (see _post_process).
 
     Returns (status, index): status 0 ok, 1 closure failure, 2 non-finite state at ``index``.
@@ -252,8 +297,9 @@ def _observe(t, y, prm, ws, inertia, light, need_tension, need_teeth, need_accel
             # delta extrapolated from the last three outputs, closed by chord steps on the last
             # Newton slope; a full Newton solve where they do not close
             guess = 3.0 * (d1 - d2) + d3 if j >= 3 else info[0]
-            d, walks, st = close_with_slope(prm[0], fp[0], fp[1], y[j, 0], guess, slope, pitches, n, s0a, kk, lam, xs,
-                                            zs, part, alpha, beta, fp[21])
+            d, walks, st = close_with_slope(
+                prm[0], fp[0], fp[1], y[j, 0], guess, slope, pitches, n, s0a, kk, lam, xs, zs, part, alpha, beta, fp[21]
+            )
             if st != 0:
                 return 1, j
             if walks > 2 and beta[n] > 0.0:
@@ -285,8 +331,31 @@ def _observe(t, y, prm, ws, inertia, light, need_tension, need_teeth, need_accel
                         sd[i] = 0.0
                         ncand += 1
                 clear_teeth(ind_t, frc_t)
-                res = contact_kernel(xs, zs, eta, sd, cand, ncand, y[j, 2], y[j, 3], fp[17], fp[18], prm[1], fp[19],
-                                     fp[20], prm[3][1], fp[16], fp[4], fp[5], 0.0, fx, fz, ind_t, frc_t, need_teeth)
+                res = contact_kernel(
+                    xs,
+                    zs,
+                    eta,
+                    sd,
+                    cand,
+                    ncand,
+                    y[j, 2],
+                    y[j, 3],
+                    fp[17],
+                    fp[18],
+                    prm[1],
+                    fp[19],
+                    fp[20],
+                    prm[3][1],
+                    fp[16],
+                    fp[4],
+                    fp[5],
+                    0.0,
+                    fx,
+                    fz,
+                    ind_t,
+                    frc_t,
+                    need_teeth,
+                )
                 scal[j, 10] = res[4]
                 scal[j, 11] = res[5]
                 if need_teeth:
@@ -373,8 +442,18 @@ def _post_process(fm, t, y, outputs, stats, y_obs=None, table=None):
     ridx = rollers.astype(np.int64) if need_roller else np.zeros(0, dtype=np.int64)
     rk = np.empty((nt, ridx.size, 6))
     # outputs that need only positions and the state skip the forces altogether
-    light = want <= {"delta", "closure_residual", "sprocket_angle", "sprocket_speed", "motor_torque", "s0",
-                     "tensioner_displacement", "indentation", "contact_force", "flank_force"}
+    light = want <= {
+        "delta",
+        "closure_residual",
+        "sprocket_angle",
+        "sprocket_speed",
+        "motor_torque",
+        "s0",
+        "tensioner_displacement",
+        "indentation",
+        "contact_force",
+        "flank_force",
+    }
     light_contact = bool({"indentation", "contact_force", "flank_force"} & want) and "contact" in fm.effects
     if light_contact and fm.effects["contact"].get("damping", 0.0) != 0.0:
         light = False  # damped contact forces need the rollers' velocities
@@ -382,8 +461,27 @@ def _post_process(fm, t, y, outputs, stats, y_obs=None, table=None):
     # light outputs come from the table where the run used one, unless the closure residual is asked
     tb = table if table is not None else empty_table()
     light_table = table is not None and light and "closure_residual" not in want
-    status, bad = _observe(t, y_obs, fm.prm, ws, model.sprocket.inertia, light, need_tension, need_teeth, need_accel, mid,
-                           ridx, scal, tension, ind, cf, rk, light_contact, tb, light_table)
+    status, bad = _observe(
+        t,
+        y_obs,
+        fm.prm,
+        ws,
+        model.sprocket.inertia,
+        light,
+        need_tension,
+        need_teeth,
+        need_accel,
+        mid,
+        ridx,
+        scal,
+        tension,
+        ind,
+        cf,
+        rk,
+        light_contact,
+        tb,
+        light_table,
+    )
     if status != 0:
         what = "non-finite state in the output" if status == 2 else "the chain could not be closed"
         raise IntegrationError(what, float(t[bad]), y[bad])
@@ -391,8 +489,16 @@ def _post_process(fm, t, y, outputs, stats, y_obs=None, table=None):
     flank = scal[:, 10:12]
     rp, rv, ra = rk[:, :, 0:2], rk[:, :, 2:4], rk[:, :, 4:6]
     data = {}
-    simple = {"delta": delta, "delta_dot": ddot, "sprocket_angle": y[:, 2], "sprocket_speed": y[:, 3],
-              "motor_torque": motor, "chain_speed": speed, "closure_residual": resid, "s0": y[:, 0]}
+    simple = {
+        "delta": delta,
+        "delta_dot": ddot,
+        "sprocket_angle": y[:, 2],
+        "sprocket_speed": y[:, 3],
+        "motor_torque": motor,
+        "chain_speed": speed,
+        "closure_residual": resid,
+        "s0": y[:, 0],
+    }
     for name, arr in simple.items():
         if name in want:
             data[name] = (("time",), arr)

@@ -48,8 +48,10 @@ class IntegrationError(RuntimeError):
         if t is not None:
             detail = f" at t = {t:.6g} s"
         if y is not None:
-            detail += f" (state s0_1 = {y[0]:.9g} m, s0dot = {y[1]:.6g} m/s, theta = {y[2]:.6g} rad, " \
-                      f"thetadot = {y[3]:.6g} rad/s)"
+            detail += (
+                f" (state s0_1 = {y[0]:.9g} m, s0dot = {y[1]:.6g} m/s, theta = {y[2]:.6g} rad, "
+                f"thetadot = {y[3]:.6g} rad/s)"
+            )
         super().__init__(message + detail)
         self.t = t
         self.y = None if y is None else np.array(y)
@@ -63,8 +65,14 @@ A51, A52, A53, A54 = 19372 / 6561, -25360 / 2187, 64448 / 6561, -212 / 729
 A61, A62, A63, A64, A65 = 9017 / 3168, -355 / 33, 46732 / 5247, 49 / 176, -5103 / 18656
 B1, B3, B4, B5, B6 = 35 / 384, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84
 E1, E3, E4, E5, E6, E7 = 71 / 57600, -71 / 16695, 71 / 1920, -17253 / 339200, 22 / 525, -1 / 40
-D1, D3, D4, D5, D6, D7 = (-12715105075 / 11282082432, 87487479700 / 32700410799, -10690763975 / 1880347072,
-                          701980252875 / 199316789632, -1453857185 / 822651844, 69997945 / 29380423)
+D1, D3, D4, D5, D6, D7 = (
+    -12715105075 / 11282082432,
+    87487479700 / 32700410799,
+    -10690763975 / 1880347072,
+    701980252875 / 199316789632,
+    -1453857185 / 822651844,
+    69997945 / 29380423,
+)
 
 
 @nb.njit(cache=True, error_model="numpy")
@@ -139,8 +147,9 @@ def _start_past(t, y, yt, k1, s_b, direction, tiny, prm, ws, ctl, counters, tb):
 
 
 @nb.njit(cache=True, error_model="numpy", nogil=True)  # nogil: the convergence check runs two at once
-def _dopri5_chunk(t, y, h, k1, t_stop, t_out, idx, y_out, prm, ws, rtol, atol, max_step, counters, ctl, cross,
-                  p0, gap, pause, tb):
+def _dopri5_chunk(
+    t, y, h, k1, t_stop, t_out, idx, y_out, prm, ws, rtol, atol, max_step, counters, ctl, cross, p0, gap, pause, tb
+):
     """Advance from t towards t_stop, writing the dense output at t_out[idx:] <= t_stop.
 
     Returns (status, t, h, idx): status 0 ok, 1 closure failure, 2 step size collapse,
@@ -338,13 +347,33 @@ def _dopri5_chunk(t, y, h, k1, t_stop, t_out, idx, y_out, prm, ws, rtol, atol, m
 
 
 def _closure_message(status):
-    return {1: "the chain could not be closed (delta left the tensioner's travel)",
-            2: "step size collapsed", 3: "the state became non-finite", 4: "too many steps"}[status]
+    return {
+        1: "the chain could not be closed (delta left the tensioner's travel)",
+        2: "step size collapsed",
+        3: "the state became non-finite",
+        4: "too many steps",
+    }[status]
 
 
-def integrate(prm, ws, y0, t_out, *, method="dopri5", rtol=1e-6, atol=1e-9, max_step=math.inf, first_step=None,
-              max_wall_time=math.inf, progress=True, label="forward dynamics", events=None, event_gap=1e-6,
-              t_events=None, table=None):
+def integrate(
+    prm,
+    ws,
+    y0,
+    t_out,
+    *,
+    method="dopri5",
+    rtol=1e-6,
+    atol=1e-9,
+    max_step=math.inf,
+    first_step=None,
+    max_wall_time=math.inf,
+    progress=True,
+    label="forward dynamics",
+    events=None,
+    event_gap=1e-6,
+    t_events=None,
+    table=None,
+):
     """State at the output times ``t_out`` (increasing, starting at 0) of the forward dynamics.
 
     Parameters
@@ -400,8 +429,28 @@ def integrate(prm, ws, y0, t_out, *, method="dopri5", rtol=1e-6, atol=1e-9, max_
             try:
                 # pauses every 256 steps for the wall-time budget and the progress bar; the steps
                 # themselves never depend on where the pauses fall, nor on the output times
-                status, t, h, idx = _dopri5_chunk(t, y, h, k1, stops[js], t_out, idx, y_out, prm, ws, rtol, atol,
-                                                 max_step, counters, ctl, cross, period, event_gap, 256, tb)
+                status, t, h, idx = _dopri5_chunk(
+                    t,
+                    y,
+                    h,
+                    k1,
+                    stops[js],
+                    t_out,
+                    idx,
+                    y_out,
+                    prm,
+                    ws,
+                    rtol,
+                    atol,
+                    max_step,
+                    counters,
+                    ctl,
+                    cross,
+                    period,
+                    event_gap,
+                    256,
+                    tb,
+                )
                 if status == 0 and t < t_out[-1]:
                     # a time event: the right-hand side changes here; start again from its new value
                     if rhs(t, y, k1, prm, ws, False, tb) != 0:
@@ -418,8 +467,13 @@ def integrate(prm, ws, y0, t_out, *, method="dopri5", rtol=1e-6, atol=1e-9, max_
                 bar.close()
                 raise IntegrationError(f"dopri5: wall-time budget of {max_wall_time:g} s exceeded", t, y)
         bar.close()
-        stats = {"steps": int(counters[0]), "rejected": int(counters[1]), "evaluations": int(counters[2] + 1),
-                 "event_steps": int(counters[3]), "event_retries": int(counters[4])}
+        stats = {
+            "steps": int(counters[0]),
+            "rejected": int(counters[1]),
+            "evaluations": int(counters[2] + 1),
+            "event_steps": int(counters[3]),
+            "event_retries": int(counters[4]),
+        }
     elif method.startswith("cvode"):
         try:
             from sksundae.cvode import CVODE
@@ -434,8 +488,9 @@ def integrate(prm, ws, y0, t_out, *, method="dopri5", rtol=1e-6, atol=1e-9, max_
             if nev[0] % 2000 == 0:
                 bar.update(t)
                 if time.perf_counter() - t0 > max_wall_time:
-                    failure.append(IntegrationError(f"{method}: wall-time budget of {max_wall_time:g} s exceeded",
-                                                    t, yy))
+                    failure.append(
+                        IntegrationError(f"{method}: wall-time budget of {max_wall_time:g} s exceeded", t, yy)
+                    )
                     yp[:] = np.nan
                     return
             if rhs(t, np.ascontiguousarray(yy), dy, prm, ws, False, tb) != 0:
@@ -444,8 +499,12 @@ def integrate(prm, ws, y0, t_out, *, method="dopri5", rtol=1e-6, atol=1e-9, max_
                 return
             yp[:] = dy
 
-        opts = {"method": "BDF" if method == "cvode-bdf" else "Adams", "rtol": rtol, "atol": atol,
-                "max_num_steps": 1_000_000}
+        opts = {
+            "method": "BDF" if method == "cvode-bdf" else "Adams",
+            "rtol": rtol,
+            "atol": atol,
+            "max_num_steps": 1_000_000,
+        }
         if math.isfinite(max_step):
             opts["max_step"] = max_step
         if first_step:
@@ -478,9 +537,14 @@ def integrate(prm, ws, y0, t_out, *, method="dopri5", rtol=1e-6, atol=1e-9, max_
         kw = {"rtol": rtol, "atol": atol, "max_step": max_step}
         if first_step:
             kw["first_step"] = first_step
-        sol = solve_ivp(fun, (0.0, t_out[-1]), y, method={"rk45": "RK45", "dop853": "DOP853", "bdf": "BDF",
-                                                           "radau": "Radau", "lsoda": "LSODA"}[method],
-                        t_eval=t_out, **kw)
+        sol = solve_ivp(
+            fun,
+            (0.0, t_out[-1]),
+            y,
+            method={"rk45": "RK45", "dop853": "DOP853", "bdf": "BDF", "radau": "Radau", "lsoda": "LSODA"}[method],
+            t_eval=t_out,
+            **kw,
+        )
         bar.close()
         if not sol.success:
             ylast = sol.y[:, -1] if sol.y.size else y

@@ -38,8 +38,7 @@ def _solve_s0(model, s_target, s0_guess):
     raise RuntimeError(f"inverse dynamics: could not place roller 1 at s = {s_target:.9g} m")
 
 
-def inverse_dynamics(model, *, speed, duration, step, start=0.0, effects=None, outputs=(), rollers=(),
-                     progress=True):
+def inverse_dynamics(model, *, speed, duration, step, start=0.0, effects=None, outputs=(), rollers=(), progress=True):
     """Run the inverse dynamics; see module docstring.
 
     Parameters
@@ -72,9 +71,21 @@ def inverse_dynamics(model, *, speed, duration, step, start=0.0, effects=None, o
     need_forces = bool(want & {"link_tension", "drive_force", "energy"})
     ridx = np.asarray(rollers, dtype=int) - 1
     nt = t.size
-    out = {name: np.full(nt, np.nan) for name in ("delta", "delta_dot", "delta_ddot", "drive_force", "closure_residual",
-                                             "chain_speed", "kinetic_energy", "potential_energy", "power_balance",
-                                             "spring_energy")}
+    out = {
+        name: np.full(nt, np.nan)
+        for name in (
+            "delta",
+            "delta_dot",
+            "delta_ddot",
+            "drive_force",
+            "closure_residual",
+            "chain_speed",
+            "kinetic_energy",
+            "potential_energy",
+            "power_balance",
+            "spring_energy",
+        )
+    }
     tension = np.empty((nt, n))
     rpos = np.empty((nt, ridx.size, 2))
     rvel = np.empty((nt, ridx.size, 2))
@@ -103,7 +114,7 @@ def inverse_dynamics(model, *, speed, duration, step, start=0.0, effects=None, o
         mo = model.chain.motion(conf, s0dot, 0.0)
         e = mo["e"]
         ddot = c * s0dot
-        s0ddot = -(sd * e + lss * s0dot ** 2 + 2.0 * lsd * s0dot * ddot) / dsd
+        s0ddot = -(sd * e + lss * s0dot**2 + 2.0 * lsd * s0dot * ddot) / dsd
         mo = model.chain.motion(conf, s0dot, s0ddot)
         vel, acc = mo["velocity"], mo["acceleration"]
         dd = mo["delta_ddot"]
@@ -130,13 +141,19 @@ def inverse_dynamics(model, *, speed, duration, step, start=0.0, effects=None, o
         mu, _ = link_multipliers(part, xs, zs, n, rs_res, rd_res, 0.0, sig, sd, lam, True)
         tension[j] = 2.0 * lam * model.chain.pitches
         out["drive_force"][j] = -mu
-        out["kinetic_energy"][j] = 0.5 * float(np.sum(model.mass * (vel ** 2).sum(axis=1))) \
-            + 0.5 * m_c * mo["delta_dot"] ** 2 + 0.5 * model.sprocket.inertia * omega ** 2
+        out["kinetic_energy"][j] = (
+            0.5 * float(np.sum(model.mass * (vel**2).sum(axis=1)))
+            + 0.5 * m_c * mo["delta_dot"] ** 2
+            + 0.5 * model.sprocket.inertia * omega**2
+        )
         out["potential_energy"][j] = g * float(np.sum(model.mass * conf.position[:, 1]))
-        out["spring_energy"][j] = pre * conf.delta + 0.5 * k_s * conf.delta ** 2
+        out["spring_energy"][j] = pre * conf.delta + 0.5 * k_s * conf.delta**2
         # exact rate of change of energy, for the power balance: sum m v.a + m g v_z + carriage terms
-        dEdt = float(np.sum(model.mass * (vel * acc).sum(axis=1))) + g * float(np.sum(model.mass * vel[:, 1])) \
+        dEdt = (
+            float(np.sum(model.mass * (vel * acc).sum(axis=1)))
+            + g * float(np.sum(model.mass * vel[:, 1]))
             + (m_c * dd + pre + k_s * conf.delta) * mo["delta_dot"]
+        )
         out["power_balance"][j] = -mu * speed - dEdt
         bar.update(j + 1)
     bar.close()

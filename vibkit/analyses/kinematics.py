@@ -14,8 +14,7 @@ __all__ = ["kinematic_sweep"]
 PROGRESS_CHUNK = 1_000_000
 
 
-def kinematic_sweep(model, start: float, stop: float, step: float, *, rollers=(), outputs=("delta",),
-                    progress=False):
+def kinematic_sweep(model, start: float, stop: float, step: float, *, rollers=(), outputs=("delta",), progress=False):
     """delta (and optionally roller positions) as roller 1 advances from ``start`` to ``stop``.
 
     Parameters
@@ -82,6 +81,9 @@ def kinematic_sweep(model, start: float, stop: float, step: float, *, rollers=()
         data["roller_position"] = (("advance", "roller", "axis"), pos)
         coords["roller"] = np.asarray(rollers)
         coords["axis"] = ["x", "z"]
-    attrs = {"closure_residual_max": float(resid.max()), "closure_residual_max_units": "m",
-             "advance_step_m": float(step)}
+    attrs = {
+        "closure_residual_max": float(resid.max()),
+        "closure_residual_max_units": "m",
+        "advance_step_m": float(step),
+    }
     return make_dataset(coords, data, attrs, model.scene)

@@ -47,10 +47,14 @@ def make_dataset(coords: dict, data: dict, attrs: dict, scene) -> xr.Dataset:
     for name, (dims, arr) in data.items():
         units, long_name = VARIABLES.get(name, ("1", name))
         ds[name] = xr.DataArray(np.asarray(arr), dims=dims, attrs={"units": units, "long_name": long_name})
-    for name, (units, long_name) in {"time": ("s", "time"), "advance": ("m", "roller 1 coordinate s0 on the undeformed guide"),
-                                     "link": ("1", "link number (link j joins roller j and j+1)"),
-                                     "roller": ("1", "roller number"), "tooth": ("1", "tooth number"),
-                                     "axis": ("1", "component")}.items():
+    for name, (units, long_name) in {
+        "time": ("s", "time"),
+        "advance": ("m", "roller 1 coordinate s0 on the undeformed guide"),
+        "link": ("1", "link number (link j joins roller j and j+1)"),
+        "roller": ("1", "roller number"),
+        "tooth": ("1", "tooth number"),
+        "axis": ("1", "component"),
+    }.items():
         if name in ds.coords:
             ds[name].attrs.update({"units": units, "long_name": long_name})
     base = {

@@ -10,8 +10,15 @@ from ..model.scene import Scene, load_scene
 __all__ = ["simulate"]
 
 
-def simulate(scene, *, duration: float | None = None, progress: bool = True, max_result_bytes=None,
-             max_wall_time=None, check: bool | None = None):
+def simulate(
+    scene,
+    *,
+    duration: float | None = None,
+    progress: bool = True,
+    max_result_bytes=None,
+    max_wall_time=None,
+    check: bool | None = None,
+):
     """Run a scene.
 
     Parameters
@@ -64,8 +71,10 @@ def simulate(scene, *, duration: float | None = None, progress: bool = True, max
             sections["solver"] = {**scene.section("solver"), "max_wall_time": wall}
             scene = dataclasses.replace(scene, sections=sections)
     if check and scene.analysis != "forward":
-        raise ValueError(f"{scene.source}: the convergence check applies to forward scenes; this one is "
-                         f"'{scene.analysis}' (drop check / --check)")
+        raise ValueError(
+            f"{scene.source}: the convergence check applies to forward scenes; this one is "
+            f"'{scene.analysis}' (drop check / --check)"
+        )
     model = EscalatorModel(scene)
     outputs = scene.outputs["variables"]
     rollers = scene.outputs["rollers"]
@@ -74,15 +83,22 @@ def simulate(scene, *, duration: float | None = None, progress: bool = True, max
 
         k = scene.section("kinematics")
         stop = k["stop"] if duration is None else k["start"] + duration
-        return kinematic_sweep(model, k["start"], stop, k["step"], rollers=rollers, outputs=outputs,
-                               progress=progress)
+        return kinematic_sweep(model, k["start"], stop, k["step"], rollers=rollers, outputs=outputs, progress=progress)
     if scene.analysis == "inverse":
         from .inverse import inverse_dynamics
 
         m = scene.section("motion")
-        return inverse_dynamics(model, speed=m["speed"], duration=duration or m["duration"], step=m["step"],
-                                start=m.get("start", 0.0), effects=scene.effects, outputs=outputs,
-                                rollers=rollers, progress=progress)
+        return inverse_dynamics(
+            model,
+            speed=m["speed"],
+            duration=duration or m["duration"],
+            step=m["step"],
+            start=m.get("start", 0.0),
+            effects=scene.effects,
+            outputs=outputs,
+            rollers=rollers,
+            progress=progress,
+        )
     from .forward import forward_dynamics
     from .integrate import IntegrationError
 
@@ -97,8 +113,10 @@ def simulate(scene, *, duration: float | None = None, progress: bool = True, max
     except IntegrationError as exc:
         if "wall-time budget" not in str(exc):
             raise
-        hint = IntegrationError(f"{scene.source}: {exc}; raise the budget with [solver] max_wall_time, "
-                                "VIBKIT_MAX_WALL_TIME or --max-wall-time (0: none), or check the scene "
-                                "(a stiff contact or a tiny max_step makes the steps small)")
+        hint = IntegrationError(
+            f"{scene.source}: {exc}; raise the budget with [solver] max_wall_time, "
+            "VIBKIT_MAX_WALL_TIME or --max-wall-time (0: none), or check the scene "
+            "(a stiff contact or a tiny max_step makes the steps small)"
+        )
         hint.t, hint.y = exc.t, exc.y
         raise hint from None

@@ -28,9 +28,12 @@ COMMANDS = (simulate, spectrum, pitch, compare, report, sweep, ride, fleet, benc
 def _parser():
     import vibkit
 
-    p = argparse.ArgumentParser(prog="vibkit", description="Escalator drive-chain vibration: simulate, analyse, "
-                                "compare, report.", formatter_class=argparse.RawDescriptionHelpFormatter,
-                                epilog="run 'vibkit COMMAND --help' for each command's options and an example")
+    p = argparse.ArgumentParser(
+        prog="vibkit",
+        description="Escalator drive-chain vibration: simulate, analyse, compare, report.",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        epilog="run 'vibkit COMMAND --help' for each command's options and an example",
+    )
     p.add_argument("--version", action="version", version=f"vibkit {vibkit.__version__}")
     sub = p.add_subparsers(dest="command", metavar="COMMAND", required=True)
     for command in COMMANDS:
@@ -66,8 +69,9 @@ def main(argv=None) -> int:
         text = " ".join(str(exc).split()) or type(exc).__name__
         if isinstance(exc, OSError) and getattr(exc, "strerror", None):
             where = f"{exc.filename}: " if getattr(exc, "filename", None) else ""
-            text = f"{where}{exc.strerror}" + (" (the disk is full; nothing was written)"
-                                              if exc.errno == errno.ENOSPC else "")
+            text = f"{where}{exc.strerror}" + (
+                " (the disk is full; nothing was written)" if exc.errno == errno.ENOSPC else ""
+            )
         from .options import cli_message
 
         text = cli_message(text)  # the reader's Python arguments named as their flags

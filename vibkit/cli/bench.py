@@ -17,18 +17,27 @@ from pathlib import Path
 from .options import add_command, add_json
 from .output import CLIError, msg, print_json, table
 
-EPILOG = ("examples:\n  vibkit bench --quick                   # a smoke run of every script, into a temporary folder\n"
-          "  vibkit bench --only signal -o out/bench\n"
-          "  vibkit bench -o benchmarks/results     # what `make bench` runs: the tables the README quotes")
+EPILOG = (
+    "examples:\n  vibkit bench --quick                   # a smoke run of every script, into a temporary folder\n"
+    "  vibkit bench --only signal -o out/bench\n"
+    "  vibkit bench -o benchmarks/results     # what `make bench` runs: the tables the README quotes"
+)
 
 
 def add_parser(subparsers):
     s = add_command(subparsers, "bench", "run the repository's benchmark scripts (benchmarks/bench_*.py)", EPILOG)
-    s.add_argument("--quick", action="store_true", help="pass --quick to every script (a smoke run: the scripts "
-                   "run side by side, one per core)")
+    s.add_argument(
+        "--quick",
+        action="store_true",
+        help="pass --quick to every script (a smoke run: the scripts run side by side, one per core)",
+    )
     s.add_argument("--only", help="run only scripts whose name contains this")
-    s.add_argument("-o", "--output", metavar="DIR", help="folder the scripts write their tables into "
-                   "(default: a new temporary folder, printed)")
+    s.add_argument(
+        "-o",
+        "--output",
+        metavar="DIR",
+        help="folder the scripts write their tables into (default: a new temporary folder, printed)",
+    )
     s.add_argument("--root", help="repository root holding benchmarks/ (default: next to the vibkit package)")
     add_json(s, "JSON on stdout")
     s.set_defaults(func=run)
@@ -65,9 +74,20 @@ def run(a):
     if a.json:
         print_json("bench", {"root": str(root), "output": str(out), "quick": bool(a.quick), "results": rows})
     else:
-        print(table([[r["script"], "ok" if r["returncode"] == 0 else f"failed ({r['returncode']})",
-                      f"{r['wall_time_s']:.1f}", r["last_line"]] for r in rows],
-                    ("script", "status", "wall [s]", "last line")))
+        print(
+            table(
+                [
+                    [
+                        r["script"],
+                        "ok" if r["returncode"] == 0 else f"failed ({r['returncode']})",
+                        f"{r['wall_time_s']:.1f}",
+                        r["last_line"],
+                    ]
+                    for r in rows
+                ],
+                ("script", "status", "wall [s]", "last line"),
+            )
+        )
         print(f"results in {out}")
     if failed:
         raise CLIError(f"{failed} of {len(rows)} benchmark script(s) failed")

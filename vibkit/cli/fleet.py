@@ -2,37 +2,52 @@
 
 from __future__ import annotations
 
+import sys
 import textwrap
 
-import sys
-
-from .options import (add_command, add_json, add_limits, add_recording, chain_speed, cli_message, pitch_length,
-                      reader_options, speed_sigma, workers)
+from .options import (
+    add_command,
+    add_json,
+    add_limits,
+    add_recording,
+    chain_speed,
+    cli_message,
+    pitch_length,
+    reader_options,
+    speed_sigma,
+    workers,
+)
 from .output import CLIError, check_output, msg, print_json, table
 
-EPILOG = ("examples (on the shipped example fleet, data/fleet-example/):\n"
-          "  vibkit fleet add data/fleet-example/E07/2026-11-23.csv --unit E07 --speed 0.5 \\\n"
-          "      --nominal-pitch 0.13333\n"
-          "  vibkit fleet scan data/fleet-example --catalogue data/fleet-example/units.csv --workers 0\n"
-          "  vibkit fleet status --json\n  vibkit fleet report -o out/fleet.pdf\n"
-          "  vibkit fleet migrate --from out/fleet.sqlite --to postgresql://tech@fleet-server/fleet\n"
-          "database: --db PATH (or sqlite:///PATH) or postgresql://user@host/dbname,\n"
-          "  else $VIBKIT_FLEET_DB, else ./vibkit-fleet.sqlite\n"
-          "exit codes: 0 done; 1 error; 3 scan: some files failed (others were stored)\n"
-          "catalogue columns: file (name or glob), unit, speed_m_s, date (ISO 8601; empty: an ISO date\n"
-          "  in the file name, else the recording's start time), nominal_pitch_m (empty: the unit's),\n"
-          "  optional speed_sigma_m_s, channel")
+EPILOG = (
+    "examples (on the shipped example fleet, data/fleet-example/):\n"
+    "  vibkit fleet add data/fleet-example/E07/2026-11-23.csv --unit E07 --speed 0.5 \\\n"
+    "      --nominal-pitch 0.13333\n"
+    "  vibkit fleet scan data/fleet-example --catalogue data/fleet-example/units.csv --workers 0\n"
+    "  vibkit fleet status --json\n  vibkit fleet report -o out/fleet.pdf\n"
+    "  vibkit fleet migrate --from out/fleet.sqlite --to postgresql://tech@fleet-server/fleet\n"
+    "database: --db PATH (or sqlite:///PATH) or postgresql://user@host/dbname,\n"
+    "  else $VIBKIT_FLEET_DB, else ./vibkit-fleet.sqlite\n"
+    "exit codes: 0 done; 1 error; 3 scan: some files failed (others were stored)\n"
+    "catalogue columns: file (name or glob), unit, speed_m_s, date (ISO 8601; empty: an ISO date\n"
+    "  in the file name, else the recording's start time), nominal_pitch_m (empty: the unit's),\n"
+    "  optional speed_sigma_m_s, channel"
+)
 
 
 def add_parser(subparsers):
-    s = add_command(subparsers, "fleet", "measurement history of a fleet of escalators: add, scan, status, report, migrate",
-                    EPILOG)
+    s = add_command(
+        subparsers, "fleet", "measurement history of a fleet of escalators: add, scan, status, report, migrate", EPILOG
+    )
     fsub = s.add_subparsers(dest="fleet_command", metavar="SUBCOMMAND", required=True)
 
     def fleet_sub(name, help_):
         sp = add_command(fsub, name, help_, EPILOG)
-        sp.add_argument("--db", help="fleet database: a path, sqlite:///PATH or postgresql://user@host/dbname "
-                        "(default $VIBKIT_FLEET_DB, else ./vibkit-fleet.sqlite)")
+        sp.add_argument(
+            "--db",
+            help="fleet database: a path, sqlite:///PATH or postgresql://user@host/dbname "
+            "(default $VIBKIT_FLEET_DB, else ./vibkit-fleet.sqlite)",
+        )
         add_json(sp)
         return sp
 
@@ -43,20 +58,29 @@ def add_parser(subparsers):
     f.add_argument("--speed-uncertainty", help="speed standard deviation, in m/s or in %% (e.g. 0.1%%)")
     f.add_argument("--date", help="measurement date, ISO 8601 (default: the recording's start time)")
     f.add_argument("--nominal-pitch", type=pitch_length, help="nominal link pitch [m] (required for a new unit)")
-    f.add_argument("--replaced", action="store_true", help="the unit's chain was replaced since its previous "
-                   "measurement: a new trend segment starts here")
+    f.add_argument(
+        "--replaced",
+        action="store_true",
+        help="the unit's chain was replaced since its previous measurement: a new trend segment starts here",
+    )
     f.set_defaults(func=run_add)
 
     f = fleet_sub("scan", "add every recording of a folder that a catalogue describes, in parallel (Dask)")
     f.add_argument("directory", metavar="DIR", help="folder of recordings (searched recursively)")
     f.add_argument("--catalogue", required=True, help="CSV: file, unit, speed_m_s, date, nominal_pitch_m")
     f.add_argument("--scheduler", help="address of a running Dask scheduler (default: a local cluster)")
-    f.add_argument("--workers", type=workers, help="worker processes of the local cluster (default: one per "
-                   "core; 0: analyse in this process)")
+    f.add_argument(
+        "--workers",
+        type=workers,
+        help="worker processes of the local cluster (default: one per core; 0: analyse in this process)",
+    )
     add_recording(f, positional=False, channel=False)  # for every file; the catalogue's channel column per file
     f.set_defaults(func=run_scan)
 
-    f = fleet_sub("status", "the work list: per unit the latest elongation, the rate per year, the next limit and its date, flags; most urgent first")
+    f = fleet_sub(
+        "status",
+        "the work list: per unit the latest elongation, the rate per year, the next limit and its date, flags; most urgent first",
+    )
     f.add_argument("--unit", action="append", help="only this unit (repeatable)")
     add_limits(f)
     f.set_defaults(func=run_status)
@@ -67,8 +91,13 @@ def add_parser(subparsers):
     add_limits(f, "elongation limits [%%]")
     f.set_defaults(func=run_report)
 
-    f = add_command(fsub, "migrate", "copy every measurement of one fleet database into another (e.g. a SQLite "
-                    "file to PostgreSQL), in one transaction; again: copies only what is missing", EPILOG)
+    f = add_command(
+        fsub,
+        "migrate",
+        "copy every measurement of one fleet database into another (e.g. a SQLite "
+        "file to PostgreSQL), in one transaction; again: copies only what is missing",
+        EPILOG,
+    )
     f.add_argument("--from", dest="source", required=True, help="the existing database (path or URL)")
     f.add_argument("--to", dest="target", required=True, help="the receiving database (created if missing)")
     add_json(f)
@@ -90,10 +119,12 @@ def _fleet_db(a, *, create=True):
 
 
 def _fmt_measurement(m):
-    return (f"#{m.id} unit {m.unit} {m.date_utc[:10]}: "
-            f"pitch {1000 * m.pitch_m:.3f} +- {1000 * m.pitch_sigma_m:.3f} mm, "
-            f"elongation {m.elongation_percent:+.3f} +- {m.elongation_sigma_percent:.3f} % "
-            f"(SNR {'n/a' if m.snr_db is None else f'{m.snr_db:.0f} dB'})")
+    return (
+        f"#{m.id} unit {m.unit} {m.date_utc[:10]}: "
+        f"pitch {1000 * m.pitch_m:.3f} +- {1000 * m.pitch_sigma_m:.3f} mm, "
+        f"elongation {m.elongation_percent:+.3f} +- {m.elongation_sigma_percent:.3f} % "
+        f"(SNR {'n/a' if m.snr_db is None else f'{m.snr_db:.0f} dB'})"
+    )
 
 
 def run_add(a):
@@ -103,9 +134,17 @@ def run_add(a):
     # the stated ranges before the database is opened (or made) and before the recording is read
     check_inputs(unit=a.unit, speed=a.speed, speed_sigma=sigma, nominal_pitch=a.nominal_pitch, date=a.date)
     with _fleet_db(a) as db:
-        m = db.add(a.recording, unit=a.unit, speed=a.speed, speed_sigma=sigma, date=a.date,
-                   nominal_pitch=a.nominal_pitch, channel=a.channel, replaced=a.replaced,
-                   read_options=reader_options(a))
+        m = db.add(
+            a.recording,
+            unit=a.unit,
+            speed=a.speed,
+            speed_sigma=sigma,
+            date=a.date,
+            nominal_pitch=a.nominal_pitch,
+            channel=a.channel,
+            replaced=a.replaced,
+            read_options=reader_options(a),
+        )
         path = db.path
     if a.json:
         print_json("fleet.add", {"database": path, "measurement": m.as_dict()})
@@ -128,25 +167,39 @@ def run_scan(a):
 
     read_catalogue(a.catalogue)  # a bad catalogue is refused before the database is opened (or made)
     with _fleet_db(a) as db:
-        res = db.scan(a.directory, a.catalogue, scheduler=a.scheduler, n_workers=a.workers or None,
-                      parallel=a.workers != 0, on_failure=failed, progress=sys.stderr.isatty(),
-                      read_options=reader_options(a))
+        res = db.scan(
+            a.directory,
+            a.catalogue,
+            scheduler=a.scheduler,
+            n_workers=a.workers or None,
+            parallel=a.workers != 0,
+            on_failure=failed,
+            progress=sys.stderr.isatty(),
+            read_options=reader_options(a),
+        )
         path = db.path
     for n in res.notes:
         msg(f"note: {n}")
     if a.json:
         print_json("fleet.scan", {"database": path, **res.as_dict()})
     else:
-        print(f"added {len(res.added)}, skipped {len(res.skipped)} (already stored), failed {len(res.failed)}"
-              f"  [database {path}]")
+        print(
+            f"added {len(res.added)}, skipped {len(res.skipped)} (already stored), failed {len(res.failed)}"
+            f"  [database {path}]"
+        )
         for m in res.added:
             print(f"  added {_fmt_measurement(m)}")
     flagged = sum(1 for m in res.added if m.quality != "ok")
-    msg(f"vibkit fleet scan: {len(res.added)} added ({flagged} flagged), {len(res.skipped)} already stored, "
-        f"{len(res.failed)} failed")
+    msg(
+        f"vibkit fleet scan: {len(res.added)} added ({flagged} flagged), {len(res.skipped)} already stored, "
+        f"{len(res.failed)} failed"
+    )
     if not res.added and not res.skipped:
-        raise CLIError(f"nothing added from {a.directory}: {len(res.failed)} file(s) failed"
-                       if res.failed else f"{a.directory}: no recording found (suffixes .csv, .txt, .nc, .mseed ...)")
+        raise CLIError(
+            f"nothing added from {a.directory}: {len(res.failed)} file(s) failed"
+            if res.failed
+            else f"{a.directory}: no recording found (suffixes .csv, .txt, .nc, .mseed ...)"
+        )
     return SCAN_SOME_FAILED if res.failed else 0
 
 
@@ -157,8 +210,9 @@ def run_status(a):
     if a.unit and not trends:
         raise CLIError(f"{path}: no measurement of unit(s) {', '.join(a.unit)}")
     if a.json:
-        print_json("fleet.status", {"database": path, "limits_percent": list(a.limits),
-                                    "units": [t.as_dict() for t in trends]})
+        print_json(
+            "fleet.status", {"database": path, "limits_percent": list(a.limits), "units": [t.as_dict() for t in trends]}
+        )
         return 0
     if not trends:
         print(f"{path}: no measurement stored yet")
@@ -174,9 +228,14 @@ def run_status(a):
         flags = "; ".join(tr.flags)
         if len(flags) > width:
             print(textwrap.fill(f"{tr.unit} flags: {flags}", 100, subsequent_indent="    "))
-    msg(textwrap.fill("note: most urgent first; latest usable elongation and the rate with 1 sigma; the next "
-                      "limit and the year-month it is reached, with its 2-sigma interval; flagged measurements and "
-                      "outliers are left out of the trends (all of it: --json)", 100))
+    msg(
+        textwrap.fill(
+            "note: most urgent first; latest usable elongation and the rate with 1 sigma; the next "
+            "limit and the year-month it is reached, with its 2-sigma interval; flagged measurements and "
+            "outliers are left out of the trends (all of it: --json)",
+            100,
+        )
+    )
     return 0
 
 
@@ -193,11 +252,21 @@ def run_report(a):
         raise CLIError(f"{path}: no measurement stored yet; nothing to report")
     rep = write_fleet_report(trends, meas, a.output, limits_percent=a.limits, database=path)
     if a.json:
-        print_json("fleet.report", {"output": rep.path, "database": path, "pages": [t for t, _ in rep.pages],
-                                    "units": len(trends), "units_drawn": rep.summary["units_drawn"]})
+        print_json(
+            "fleet.report",
+            {
+                "output": rep.path,
+                "database": path,
+                "pages": [t for t, _ in rep.pages],
+                "units": len(trends),
+                "units_drawn": rep.summary["units_drawn"],
+            },
+        )
     else:
-        print(f"wrote {rep.path} ({len(rep.pages)} page(s): the work list, then {rep.summary['units_drawn']} of "
-              f"{len(trends)} units drawn)")
+        print(
+            f"wrote {rep.path} ({len(rep.pages)} page(s): the work list, then {rep.summary['units_drawn']} of "
+            f"{len(trends)} units drawn)"
+        )
     return 0
 
 
@@ -208,8 +277,10 @@ def run_migrate(a):
     if a.json:
         print_json("fleet.migrate", r)
     else:
-        print(f"copied {r['copied']}, skipped {r['skipped']} (already there); {r['target']} holds "
-              f"{r['target_total']} measurement(s)")
+        print(
+            f"copied {r['copied']}, skipped {r['skipped']} (already there); {r['target']} holds "
+            f"{r['target_total']} measurement(s)"
+        )
     return 0
 
 

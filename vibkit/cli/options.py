@@ -48,7 +48,7 @@ def positive(text):
     return v
 
 
-_LENGTH_UNITS = {"m": 1.0, "cm": 1e-2, "mm": 1e-3, "in": 0.0254, "\"": 0.0254}
+_LENGTH_UNITS = {"m": 1.0, "cm": 1e-2, "mm": 1e-3, "in": 0.0254, '"': 0.0254}
 _SPEED_UNITS = {"m/s": 1.0, "cm/s": 1e-2, "mm/s": 1e-3, "m/min": 1 / 60, "ft/min": 0.3048 / 60, "fpm": 0.3048 / 60}
 #: a chain pitch given as a bare number must lie here [m]; a speed here [m/s] (escalators and moving walks)
 PITCH_RANGE_M = (0.02, 0.5)
@@ -86,8 +86,10 @@ def pitch_length(text):
             hint = f"; did you mean {text.strip()}mm ({v * 1e-3:.6g} m)?"
         elif factor is None and lo <= v * 1e-2 <= hi:
             hint = f"; did you mean {text.strip()}cm ({v * 1e-2:.6g} m)?"
-        raise argparse.ArgumentTypeError(f"{text!r} is {m:g} m, not a step-chain pitch ({lo:g}-{hi:g} m){hint} "
-                                         "(a bare number is in metres; write the unit: 133.33mm)")
+        raise argparse.ArgumentTypeError(
+            f"{text!r} is {m:g} m, not a step-chain pitch ({lo:g}-{hi:g} m){hint} "
+            "(a bare number is in metres; write the unit: 133.33mm)"
+        )
     return m
 
 
@@ -105,8 +107,10 @@ def chain_speed(text):
             if factor is None and lo <= v * _SPEED_UNITS[u] <= 1.0:
                 hint = f"; did you mean {text.strip()}{u} ({v * _SPEED_UNITS[u]:.4g} m/s)?"
                 break
-        raise argparse.ArgumentTypeError(f"{text!r} is {ms:g} m/s, not an escalator or moving-walk speed "
-                                         f"({lo:g}-{hi:g} m/s){hint} (a bare number is in m/s; write the unit: 49cm/s)")
+        raise argparse.ArgumentTypeError(
+            f"{text!r} is {ms:g} m/s, not an escalator or moving-walk speed "
+            f"({lo:g}-{hi:g} m/s){hint} (a bare number is in m/s; write the unit: 49cm/s)"
+        )
     return ms
 
 
@@ -184,8 +188,13 @@ def add_command(subparsers, name, help_, epilog):
     """
     import textwrap
 
-    return subparsers.add_parser(name, help=help_.replace("%", "%%"), description=textwrap.fill(help_, 99),
-                                 epilog=epilog, formatter_class=argparse.RawDescriptionHelpFormatter)
+    return subparsers.add_parser(
+        name,
+        help=help_.replace("%", "%%"),
+        description=textwrap.fill(help_, 99),
+        epilog=epilog,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
 
 
 def add_json(sp, help_=JSON_HELP):
@@ -196,17 +205,38 @@ def add_sample_rate(sp):
     sp.add_argument("--sample-rate", type=positive, help="sample rate for files without time [Hz]")
 
 
-def add_channel(sp, help_="channel to analyse, named as the file writes it or as vibkit does "
-                          "(default: the first that is not a sample counter)"):
+def add_channel(
+    sp,
+    help_="channel to analyse, named as the file writes it or as vibkit does "
+    "(default: the first that is not a sample counter)",
+):
     sp.add_argument("--channel", help=help_)
 
 
 #: the reader's options: Python argument of :func:`vibkit.read_recording` -> command-line flag
-READER_FLAGS = {"channel": "--channel", "sample_rate": "--sample-rate", "time_column": "--time-column",
-                "time_unit": "--time-unit", "units": "--units", "repair_time": "--repair-time",
-                "delimiter": "--delimiter", "decimal": "--decimal", "encoding": "--encoding"}
-_DELIMS = {"comma": ",", ",": ",", "semicolon": ";", ";": ";", "tab": "\t", "\\t": "\t", "pipe": "|", "|": "|",
-           "space": " ", "whitespace": " "}
+READER_FLAGS = {
+    "channel": "--channel",
+    "sample_rate": "--sample-rate",
+    "time_column": "--time-column",
+    "time_unit": "--time-unit",
+    "units": "--units",
+    "repair_time": "--repair-time",
+    "delimiter": "--delimiter",
+    "decimal": "--decimal",
+    "encoding": "--encoding",
+}
+_DELIMS = {
+    "comma": ",",
+    ",": ",",
+    "semicolon": ";",
+    ";": ";",
+    "tab": "\t",
+    "\\t": "\t",
+    "pipe": "|",
+    "|": "|",
+    "space": " ",
+    "whitespace": " ",
+}
 
 
 def units_option(text):
@@ -245,18 +275,35 @@ def add_recording(sp, *, positional=True, channel=True):
     if channel:
         add_channel(g)
     add_sample_rate(g)
-    g.add_argument("--time-column", metavar="NAME|INDEX|none",
-                   help="time column by name or 0-based index; 'none': the file has no time column")
-    g.add_argument("--time-unit", choices=("s", "ms", "us", "ns", "min", "h"),
-                   help="unit of a numeric time column (overrides the header and the epoch guess)")
-    g.add_argument("--units", type=units_option, metavar="UNIT|NAME=UNIT,...",
-                   help="unit of every channel (m/s^2, g, mm, counts, or scaled counts like g/2048: one count "
-                        "is 1/2048 g), or per channel az=g,ax=g/2048; overrides the file's header")
-    g.add_argument("--repair-time", action="store_true",
-                   help="undo a clock set back at midnight or by a DST change, sort other backward "
-                        "rows and drop repeated stamps instead of refusing the file (in the history)")
-    g.add_argument("--delimiter", type=delimiter_option, metavar="comma|semicolon|tab|pipe|whitespace",
-                   help="text files: the delimiter (default: detected)")
+    g.add_argument(
+        "--time-column",
+        metavar="NAME|INDEX|none",
+        help="time column by name or 0-based index; 'none': the file has no time column",
+    )
+    g.add_argument(
+        "--time-unit",
+        choices=("s", "ms", "us", "ns", "min", "h"),
+        help="unit of a numeric time column (overrides the header and the epoch guess)",
+    )
+    g.add_argument(
+        "--units",
+        type=units_option,
+        metavar="UNIT|NAME=UNIT,...",
+        help="unit of every channel (m/s^2, g, mm, counts, or scaled counts like g/2048: one count "
+        "is 1/2048 g), or per channel az=g,ax=g/2048; overrides the file's header",
+    )
+    g.add_argument(
+        "--repair-time",
+        action="store_true",
+        help="undo a clock set back at midnight or by a DST change, sort other backward "
+        "rows and drop repeated stamps instead of refusing the file (in the history)",
+    )
+    g.add_argument(
+        "--delimiter",
+        type=delimiter_option,
+        metavar="comma|semicolon|tab|pipe|whitespace",
+        help="text files: the delimiter (default: detected)",
+    )
     g.add_argument("--decimal", choices=(".", ","), help="text files: the decimal mark (default: detected)")
     g.add_argument("--encoding", help="text files: the encoding, e.g. cp1252 (default: UTF-8, else cp1252)")
 
@@ -269,10 +316,16 @@ def reader_options(a, *, channel=False):
     tc = getattr(a, "time_column", None)
     if tc is not None:  # a 0-based index, 'none' (the file has no time column) or a name as the file writes it
         tc = int(tc) if tc.strip().isdigit() else False if tc.strip().lower() == "none" else tc
-    opts = dict(sample_rate=getattr(a, "sample_rate", None), time_column=tc, time_unit=getattr(a, "time_unit", None),
-                units=getattr(a, "units", None), repair_time=bool(getattr(a, "repair_time", False)),
-                delimiter=getattr(a, "delimiter", None), decimal=getattr(a, "decimal", None),
-                encoding=getattr(a, "encoding", None))
+    opts = dict(
+        sample_rate=getattr(a, "sample_rate", None),
+        time_column=tc,
+        time_unit=getattr(a, "time_unit", None),
+        units=getattr(a, "units", None),
+        repair_time=bool(getattr(a, "repair_time", False)),
+        delimiter=getattr(a, "delimiter", None),
+        decimal=getattr(a, "decimal", None),
+        encoding=getattr(a, "encoding", None),
+    )
     if channel and getattr(a, "channel", None):
         opts["channel"] = a.channel
     return opts
@@ -304,8 +357,10 @@ def _note_held_samples(rec):
     held = {str(v): float(rec[v].attrs["update_rate_hz"]) for v in rec.data_vars if "update_rate_hz" in rec[v].attrs}
     if held:
         lo = min(held.values())
-        msg(f"note: {', '.join(held)}: values held between updates (rows at {rec.attrs['sample_rate_hz']:.4g} Hz, "
-            f"updates at {lo:.3g} Hz): nothing above {lo / 2:.3g} Hz (their Nyquist frequency) is in the data")
+        msg(
+            f"note: {', '.join(held)}: values held between updates (rows at {rec.attrs['sample_rate_hz']:.4g} Hz, "
+            f"updates at {lo:.3g} Hz): nothing above {lo / 2:.3g} Hz (their Nyquist frequency) is in the data"
+        )
 
 
 _PY_ARG = re.compile(r"\b(" + "|".join(READER_FLAGS) + r")=(\{[^}]*\}|True\b|False\b)?( ?)")
@@ -318,6 +373,7 @@ def cli_message(text: str) -> str:
     ``--repair-time``; ``time_column=False`` -> ``--time-column none``; ``units={'ax': 'g'}`` ->
     ``--units ax=g``; ``max_bytes=`` -> the environment variable.
     """
+
     def sub(m):
         flag, value, space = READER_FLAGS[m.group(1)], m.group(2), m.group(3)
         if value == "True":
@@ -328,6 +384,7 @@ def cli_message(text: str) -> str:
             pairs = re.findall(r"['\"]([^'\"]*)['\"]\s*:\s*['\"]?([^,'\"}]*)['\"]?", value)
             return flag + " " + ",".join(f"{k}={v.strip()}" for k, v in pairs) + space
         return flag + " "
+
     text = text.replace("max_bytes= or ", "")
     text = _PY_ARG.sub(sub, text)
     text = re.sub(r"(--[a-z-]+) +(?=[),.;]|$)", r"\1", text)
@@ -336,8 +393,13 @@ def cli_message(text: str) -> str:
 
 def add_force_overwrite(sp, what):
     """--force/--overwrite of a command that refuses to replace an existing output."""
-    sp.add_argument("--force", "--overwrite", dest="force", action="store_true",
-                    help=f"replace an existing {what} (never an input, a link, a device or a read-only file)")
+    sp.add_argument(
+        "--force",
+        "--overwrite",
+        dest="force",
+        action="store_true",
+        help=f"replace an existing {what} (never an input, a link, a device or a read-only file)",
+    )
 
 
 def add_limits(sp, help_="elongation limits watch,plan,replace [%%] (default 1.5,2,3)"):

@@ -5,25 +5,40 @@ from __future__ import annotations
 import math
 import textwrap
 
-from .options import (add_command, add_json, add_limits, add_recording, band, chain_speed, pitch_length,
-                      read_recording, speed_sigma, speed_uncertainty, teeth)
+from .options import (
+    add_command,
+    add_json,
+    add_limits,
+    add_recording,
+    band,
+    chain_speed,
+    pitch_length,
+    read_recording,
+    speed_sigma,
+    speed_uncertainty,
+    teeth,
+)
 from .output import CLIError, in_file, msg, print_json, table
 
-EPILOG = ("examples:\n  vibkit pitch data/field/leon-tensioner.csv --speed-uncertainty 0.1% \\\n"
-          "      --nominal-pitch 133.33mm\n"
-          "  vibkit pitch logger.txt --sample-rate 2050 --speed 52cm/s --json\n"
-          "exit status: 0 verdict (or pitch), 1 no link-pass found / implausible / bad input,\n"
-          "  2 usage error, 3 inconclusive (frequency and sigma given, no verdict)")
+EPILOG = (
+    "examples:\n  vibkit pitch data/field/leon-tensioner.csv --speed-uncertainty 0.1% \\\n"
+    "      --nominal-pitch 133.33mm\n"
+    "  vibkit pitch logger.txt --sample-rate 2050 --speed 52cm/s --json\n"
+    "exit status: 0 verdict (or pitch), 1 no link-pass found / implausible / bad input,\n"
+    "  2 usage error, 3 inconclusive (frequency and sigma given, no verdict)"
+)
 
 
 def add_parser(subparsers):
-    s = add_command(subparsers, "pitch", "link pitch from a recording's link-pass frequency and the chain speed",
-                    EPILOG)
+    s = add_command(
+        subparsers, "pitch", "link pitch from a recording's link-pass frequency and the chain speed", EPILOG
+    )
     add_recording(s)
     add_json(s)
     add_speed_options(s)
-    s.add_argument("--speed-uncertainty", type=speed_uncertainty,
-                   help="speed standard deviation, in m/s or in %% (e.g. 0.1%%)")
+    s.add_argument(
+        "--speed-uncertainty", type=speed_uncertainty, help="speed standard deviation, in m/s or in %% (e.g. 0.1%%)"
+    )
     add_limits(s)
     s.add_argument("--band", type=band, help="search band LOW:HIGH [Hz] (default speed / 80-200 mm)")
     s.add_argument("--teeth", type=teeth, default=28, help="sprocket teeth, for the shaft hypothesis (default 28)")
@@ -31,11 +46,15 @@ def add_parser(subparsers):
     return s
 
 
-def add_speed_options(s, speed_help="chain speed measured on the steps: m/s, or 0.49m/s, 49cm/s "
-                                    "(default: the speed the file states, e.g. chain_speed_m_s)"):
+def add_speed_options(
+    s,
+    speed_help="chain speed measured on the steps: m/s, or 0.49m/s, 49cm/s "
+    "(default: the speed the file states, e.g. chain_speed_m_s)",
+):
     s.add_argument("--speed", type=chain_speed, help=speed_help)
-    s.add_argument("--nominal-pitch", type=pitch_length,
-                   help="nominal link pitch: m, or 133.33mm: gives elongation and verdict")
+    s.add_argument(
+        "--nominal-pitch", type=pitch_length, help="nominal link pitch: m, or 133.33mm: gives elongation and verdict"
+    )
 
 
 def resolve_speed(a, rec, *, required=True):
@@ -57,9 +76,17 @@ def run(a):
     speed, source = resolve_speed(a, rec)
     sigma = speed_sigma(a.speed_uncertainty, speed) if a.speed_uncertainty else 0.0
     try:
-        res = estimate_channels(rec, channel=a.channel, speed=speed, speed_sigma=sigma, band=a.band,
-                                nominal_pitch=a.nominal_pitch, limits_percent=a.limits, teeth=a.teeth,
-                                speed_source=source)
+        res = estimate_channels(
+            rec,
+            channel=a.channel,
+            speed=speed,
+            speed_sigma=sigma,
+            band=a.band,
+            nominal_pitch=a.nominal_pitch,
+            limits_percent=a.limits,
+            teeth=a.teeth,
+            speed_source=source,
+        )
     except ValueError as exc:  # the analysis's words about the signal, with the file named
         raise in_file(a.recording, exc) from None
     if res.best is None:
@@ -67,31 +94,57 @@ def run(a):
     est = res.best
     if a.json:
         d = est.as_dict()
-        d.update(file=a.recording, status=res.status, reason=res.reason, exit_code=res.exit_code,
-                 channels=res.per_channel())
+        d.update(
+            file=a.recording, status=res.status, reason=res.reason, exit_code=res.exit_code, channels=res.per_channel()
+        )
         print_json("pitch", d)
         return res.exit_code
-    print(f"{a.recording}: channel {est.channel}, speed {est.speed_m_s:g} +- {est.speed_sigma_m_s:.2g} m/s "
-          f"({est.speed_source})")
-    print(f"link-pass frequency  {est.fundamental_hz:.5f} +- {est.fundamental_sigma_hz:.2g} Hz "
-          f"({len(est.per_burst)} burst(s))")
+    print(
+        f"{a.recording}: channel {est.channel}, speed {est.speed_m_s:g} +- {est.speed_sigma_m_s:.2g} m/s "
+        f"({est.speed_source})"
+    )
+    print(
+        f"link-pass frequency  {est.fundamental_hz:.5f} +- {est.fundamental_sigma_hz:.2g} Hz "
+        f"({len(est.per_burst)} burst(s))"
+    )
     print(f"method               {est.method}")
     print(f"link pitch           {1000 * est.pitch_m:.3f} +- {1000 * est.pitch_sigma_m:.3f} mm")
     if est.nominal_pitch_m is not None:
-        print(f"elongation           {est.elongation_percent:+.2f} +- {est.elongation_sigma_percent:.2f} % "
-              f"of {1000 * est.nominal_pitch_m:.2f} mm -> {est.verdict}\n"
-              f"                     (limits {' / '.join(f'{v:g}' for v in est.limits_percent)} %)")
+        print(
+            f"elongation           {est.elongation_percent:+.2f} +- {est.elongation_sigma_percent:.2f} % "
+            f"of {1000 * est.nominal_pitch_m:.2f} mm -> {est.verdict}\n"
+            f"                     (limits {' / '.join(f'{v:g}' for v in est.limits_percent)} %)"
+        )
     print()
     print_channels(res)
-    print(table([[h.name, f"{h.frequency_hz:.4f}", "n/a" if math.isnan(h.snr_db) else f"{h.snr_db:.0f}",
-                  f"{1000 * h.implied_pitch_m:.2f}", f"{1000 * h.nearest_catalogue_m:.2f} ({h.deviation_percent:+.1f} %)",
-                  "<-" if h.chosen else ""] for h in est.hypotheses],
-                ("hypothesis", "link pass [Hz]", "SNR [dB]", "pitch [mm]", "catalogue [mm]", "")))
+    print(
+        table(
+            [
+                [
+                    h.name,
+                    f"{h.frequency_hz:.4f}",
+                    "n/a" if math.isnan(h.snr_db) else f"{h.snr_db:.0f}",
+                    f"{1000 * h.implied_pitch_m:.2f}",
+                    f"{1000 * h.nearest_catalogue_m:.2f} ({h.deviation_percent:+.1f} %)",
+                    "<-" if h.chosen else "",
+                ]
+                for h in est.hypotheses
+            ],
+            ("hypothesis", "link pass [Hz]", "SNR [dB]", "pitch [mm]", "catalogue [mm]", ""),
+        )
+    )
     for h in est.hypotheses:  # the reasons under the table: it stays within 100 columns
         print(textwrap.fill(f"{h.name}: {h.reason}", 100, subsequent_indent="    "))
     print()
-    print(table([[h["order"], f"{h['frequency_hz']:.4f}", f"{h['amplitude']:.4g}", "yes" if h["detected"] else "no"]
-                 for h in est.harmonics], ("order", "frequency [Hz]", f"amplitude [{est.extra['units']}]", "detected")))
+    print(
+        table(
+            [
+                [h["order"], f"{h['frequency_hz']:.4f}", f"{h['amplitude']:.4g}", "yes" if h["detected"] else "no"]
+                for h in est.harmonics
+            ],
+            ("order", "frequency [Hz]", f"amplitude [{est.extra['units']}]", "detected"),
+        )
+    )
     for w in est.warnings:
         msg(textwrap.fill(f"warning: {w}", 100, subsequent_indent="  "))
     for n in est.notes + [f"method {est.method}: {est.method_reason}"]:
@@ -106,10 +159,21 @@ def print_channels(res):
     rows = res.per_channel()
     if len(rows) < 2:
         return
-    print(table([[r["channel"], r["status"],
-                  f"{r['fundamental_hz']:.5f} +- {r['fundamental_sigma_hz']:.2g}" if "fundamental_hz" in r else "-",
-                  f"{1000 * r['pitch_m']:.2f}" if "pitch_m" in r else "-", r.get("verdict") or "-"] for r in rows],
-                ("channel", "status", "link pass [Hz]", "pitch [mm]", "verdict")))
+    print(
+        table(
+            [
+                [
+                    r["channel"],
+                    r["status"],
+                    f"{r['fundamental_hz']:.5f} +- {r['fundamental_sigma_hz']:.2g}" if "fundamental_hz" in r else "-",
+                    f"{1000 * r['pitch_m']:.2f}" if "pitch_m" in r else "-",
+                    r.get("verdict") or "-",
+                ]
+                for r in rows
+            ],
+            ("channel", "status", "link pass [Hz]", "pitch [mm]", "verdict"),
+        )
+    )
     print()
 
 
@@ -117,8 +181,15 @@ def refused(cmd, a, res, extra):
     """No usable link pass on any channel: say so (JSON with the status and reason, no number), exit 1."""
     ests = res.estimates
     if a.json:
-        d = ests[0].as_dict() if len(ests) == 1 and not res.errors else {
-            "speed_m_s": ests[0].speed_m_s, "speed_source": ests[0].speed_source, "band_hz": list(ests[0].band_hz)}
+        d = (
+            ests[0].as_dict()
+            if len(ests) == 1 and not res.errors
+            else {
+                "speed_m_s": ests[0].speed_m_s,
+                "speed_source": ests[0].speed_source,
+                "band_hz": list(ests[0].band_hz),
+            }
+        )
         d.update(extra)
         d.update(status=res.status, reason=res.reason, exit_code=res.exit_code, channels=res.per_channel())
         print_json(cmd, d)

@@ -2,12 +2,26 @@
 
 from __future__ import annotations
 
-from .options import (add_command, add_force_overwrite, add_json, add_limits, add_recording, band, chain_speed,
-                      pitch_length, positive, reader_options, speed_sigma, speed_uncertainty)
+from .options import (
+    add_command,
+    add_force_overwrite,
+    add_json,
+    add_limits,
+    add_recording,
+    band,
+    chain_speed,
+    pitch_length,
+    positive,
+    reader_options,
+    speed_sigma,
+    speed_uncertainty,
+)
 from .output import check_output, print_json, table
 
-EPILOG = ("example:\n  vibkit report data/field/leon-tensioner.csv --scene sim/leon.toml --date 2020-02-14 \\\n"
-          "      -o out/leon.pdf")
+EPILOG = (
+    "example:\n  vibkit report data/field/leon-tensioner.csv --scene sim/leon.toml --date 2020-02-14 \\\n"
+    "      -o out/leon.pdf"
+)
 
 
 def add_parser(subparsers):
@@ -33,10 +47,22 @@ def run(a):
 
     check_output(a.output, [a.recording, a.scene], a.force)
     sigma = speed_sigma(a.speed_uncertainty, a.speed) if (a.speed_uncertainty and a.speed) else 0.0
-    rep = write_report(a.recording, a.output, scene=a.scene, speed=a.speed, speed_sigma=sigma, channel=a.channel,
-                       nominal_pitch=a.nominal_pitch, limits_percent=a.limits, duration=a.duration,
-                       band=a.band, progress=True, overwrite=a.force, read_options=reader_options(a),
-                       date=a.date)
+    rep = write_report(
+        a.recording,
+        a.output,
+        scene=a.scene,
+        speed=a.speed,
+        speed_sigma=sigma,
+        channel=a.channel,
+        nominal_pitch=a.nominal_pitch,
+        limits_percent=a.limits,
+        duration=a.duration,
+        band=a.band,
+        progress=True,
+        overwrite=a.force,
+        read_options=reader_options(a),
+        date=a.date,
+    )
     if a.json:
         print_json("report", {"output": rep.path, "pages": [t for t, _ in rep.pages], "summary": rep.summary})
     else:

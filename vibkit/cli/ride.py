@@ -8,20 +8,30 @@ import sys
 from .options import add_command, add_json, add_recording, positive, reader_options
 from .output import CLIError, msg, print_json, table
 
-EPILOG = ("examples:\n  vibkit ride data/field/layouts/phyphox.csv --segment 0.5:3 --json\n"
-          "  vibkit ride sim/las-palmas.toml --duration 15\n"
-          "  vibkit ride step.csv --scene sim/las-palmas.toml --segment 3:25 --weighting x=Wd,y=Wd,z=Wk")
+EPILOG = (
+    "examples:\n  vibkit ride data/field/layouts/phyphox.csv --segment 0.5:3 --json\n"
+    "  vibkit ride sim/las-palmas.toml --duration 15\n"
+    "  vibkit ride step.csv --scene sim/las-palmas.toml --segment 3:25 --weighting x=Wd,y=Wd,z=Wk"
+)
 
 
 def add_parser(subparsers):
-    s = add_command(subparsers, "ride",
-                    "ride quality of a step-riding accelerometer: ISO 2631-1 weighted max pk-pk, A95, r.m.s.",
-                    EPILOG)
+    s = add_command(
+        subparsers,
+        "ride",
+        "ride quality of a step-riding accelerometer: ISO 2631-1 weighted max pk-pk, A95, r.m.s.",
+        EPILOG,
+    )
     s.add_argument("input", metavar="RECORDING_OR_SCENE", help="recording file, or a scene .toml (simulated)")
-    s.add_argument("--channels", help="recording channels for x,y,z (travel, lateral, vertical; - skips one), "
-                   "or AXIS=NAME pairs (default: names ending in x, y, z); write --channels=-,-,az when x is skipped")
+    s.add_argument(
+        "--channels",
+        help="recording channels for x,y,z (travel, lateral, vertical; - skips one), "
+        "or AXIS=NAME pairs (default: names ending in x, y, z); write --channels=-,-,az when x is skipped",
+    )
     s.add_argument("--segment", help="ride segment START:END [s] from the first sample (default: detected)")
-    s.add_argument("--weighting", help="Wk, Wd ... for every axis, three for x,y,z (Wd,Wd,Wk), or x=Wd,y=Wd,z=Wk (the default)")
+    s.add_argument(
+        "--weighting", help="Wk, Wd ... for every axis, three for x,y,z (Wd,Wd,Wk), or x=Wd,y=Wd,z=Wk (the default)"
+    )
     s.add_argument("--scene", help="also simulate this scene's step and report it next to the recording")
     s.add_argument("--duration", type=positive, help="simulated time [s] (default: the scene's)")
     add_recording(s, positional=False, channel=False)
@@ -38,8 +48,19 @@ def _weightings(text):
 
 
 def _ride_rows(rq):
-    return [[a.axis, a.channel, a.weighting, f"{a.weighted.max:.4g}", f"{a.weighted.a95:.4g}", f"{a.weighted.rms:.4g}",
-             f"{a.lowpass.max:.4g}", f"{a.lowpass.a95:.4g}"] for a in rq.axes]
+    return [
+        [
+            a.axis,
+            a.channel,
+            a.weighting,
+            f"{a.weighted.max:.4g}",
+            f"{a.weighted.a95:.4g}",
+            f"{a.weighted.rms:.4g}",
+            f"{a.lowpass.max:.4g}",
+            f"{a.lowpass.a95:.4g}",
+        ]
+        for a in rq.axes
+    ]
 
 
 def run(a):
@@ -55,12 +76,17 @@ def run(a):
     if is_scene and a.scene:
         raise CLIError("--scene compares a recording with a scene; the input is already a scene")
     if is_scene:
-        rq = simulate_ride(a.input, duration=a.duration, segment=segment, weightings=weightings,
-                           progress=sys.stderr.isatty())
+        rq = simulate_ride(
+            a.input, duration=a.duration, segment=segment, weightings=weightings, progress=sys.stderr.isatty()
+        )
     else:
-        rq = ride_quality_from_recording(a.input, channels=parse_channels(a.channels) if a.channels else None,
-                                         segment=segment, weightings=weightings,
-                                         read_options=reader_options(a))
+        rq = ride_quality_from_recording(
+            a.input,
+            channels=parse_channels(a.channels) if a.channels else None,
+            segment=segment,
+            weightings=weightings,
+            read_options=reader_options(a),
+        )
     sim = None
     if a.scene:
         sim = simulate_ride(a.scene, duration=a.duration, weightings=weightings, progress=sys.stderr.isatty())
@@ -75,13 +101,14 @@ def run(a):
             if r is None:
                 continue
             seg = r.segment
-            print(f"{r.source} ({r.kind}, {r.fs:.6g} Hz): ride {seg.start_s:.2f}-{seg.end_s:.2f} s "
-                  f"({seg.duration_s:.2f} s, {seg.method})" +
-                  (f", speed {r.speed_m_s:.3g} m/s" if r.speed_m_s else ""))
+            print(
+                f"{r.source} ({r.kind}, {r.fs:.6g} Hz): ride {seg.start_s:.2f}-{seg.end_s:.2f} s "
+                f"({seg.duration_s:.2f} s, {seg.method})" + (f", speed {r.speed_m_s:.3g} m/s" if r.speed_m_s else "")
+            )
             print("step vibration [m/s^2]: weighted (ISO 2631-1) and 0.4-10 Hz unweighted")
             print(table(_ride_rows(r), head))
             print()
         for r in (rq, sim):
-            for n in ([] if r is None else r.notes + ([r.segment.note] if r.segment.note else [])):
+            for n in [] if r is None else r.notes + ([r.segment.note] if r.segment.note else []):
                 msg(f"note: {n}")
     return 0

@@ -18,16 +18,28 @@ def add_parser(subparsers):
     s.add_argument("-o", "--output", required=True, help="result file to write (.nc); a new path unless --force")
     add_force_overwrite(s, "result file")
     s.add_argument("--duration", type=positive, help="override the scene's duration [s] (kinematics: [m])")
-    s.add_argument("--max-result-bytes", type=byte_size, metavar="SIZE",
-                   help="refuse runs whose result would be larger, e.g. 500MB (default: the scene's "
-                        "[solver] max_result_bytes, $VIBKIT_MAX_RESULT_BYTES or 2GiB; 0: no limit)")
-    s.add_argument("--max-wall-time", type=seconds_or_none, metavar="SECONDS",
-                   help="stop a forward integration after this long (default: the scene's [solver] max_wall_time, "
-                        "$VIBKIT_MAX_WALL_TIME or 600 s; 0: no limit)")
-    s.add_argument("--check", action="store_true", default=None,
-                   help="forward scenes: say whether the result has converged: run again at tighter tolerances "
-                        "and compare the contact history, ripples, peak tension and frequencies (the scene's "
-                        "[solver] check = true does the same); the verdict is in the result's attrs")
+    s.add_argument(
+        "--max-result-bytes",
+        type=byte_size,
+        metavar="SIZE",
+        help="refuse runs whose result would be larger, e.g. 500MB (default: the scene's "
+        "[solver] max_result_bytes, $VIBKIT_MAX_RESULT_BYTES or 2GiB; 0: no limit)",
+    )
+    s.add_argument(
+        "--max-wall-time",
+        type=seconds_or_none,
+        metavar="SECONDS",
+        help="stop a forward integration after this long (default: the scene's [solver] max_wall_time, "
+        "$VIBKIT_MAX_WALL_TIME or 600 s; 0: no limit)",
+    )
+    s.add_argument(
+        "--check",
+        action="store_true",
+        default=None,
+        help="forward scenes: say whether the result has converged: run again at tighter tolerances "
+        "and compare the contact history, ripples, peak tension and frequencies (the scene's "
+        "[solver] check = true does the same); the verdict is in the result's attrs",
+    )
     add_json(s)
     s.set_defaults(func=run)
     return s
@@ -40,17 +52,32 @@ def run(a):
     check_output(a.output, [a.scene], a.force)
     scene = vibkit.load_scene(a.scene)
     t0 = time.perf_counter()
-    ds = vibkit.simulate(scene, duration=a.duration, progress=True, max_result_bytes=a.max_result_bytes,
-                         max_wall_time=a.max_wall_time, check=a.check)
+    ds = vibkit.simulate(
+        scene,
+        duration=a.duration,
+        progress=True,
+        max_result_bytes=a.max_result_bytes,
+        max_wall_time=a.max_wall_time,
+        check=a.check,
+    )
     wall = time.perf_counter() - t0
     path = write_result(ds, a.output, overwrite=a.force, inputs=[a.scene])
-    resid = float(ds["closure_residual"].max()) if "closure_residual" in ds else \
-        float(ds.attrs.get("closure_residual_max", float("nan")))
-    summary = {"scene": scene.name, "analysis": scene.analysis, "output": os.fspath(path),
-               "dims": {k: int(v) for k, v in ds.sizes.items()},
-               "variables": {str(k): {"dims": list(v.dims), "units": v.attrs.get("units", "")}
-                             for k, v in ds.data_vars.items()},
-               "closure_residual_max_m": resid, "wall_time_s": wall}
+    resid = (
+        float(ds["closure_residual"].max())
+        if "closure_residual" in ds
+        else float(ds.attrs.get("closure_residual_max", float("nan")))
+    )
+    summary = {
+        "scene": scene.name,
+        "analysis": scene.analysis,
+        "output": os.fspath(path),
+        "dims": {k: int(v) for k, v in ds.sizes.items()},
+        "variables": {
+            str(k): {"dims": list(v.dims), "units": v.attrs.get("units", "")} for k, v in ds.data_vars.items()
+        },
+        "closure_residual_max_m": resid,
+        "wall_time_s": wall,
+    }
     if "convergence" in ds.attrs:
         summary["convergence"] = json.loads(ds.attrs["convergence"])
     if a.json:
@@ -63,6 +90,10 @@ def run(a):
         print(f"wall time {wall:.2f} s")
         if "convergence" in summary:
             print(f"check     {summary['convergence']['message']}")
-        print(table([[k, ",".join(v["dims"]), v["units"]] for k, v in summary["variables"].items()],
-                    ("variable", "dims", "units")))
+        print(
+            table(
+                [[k, ",".join(v["dims"]), v["units"]] for k, v in summary["variables"].items()],
+                ("variable", "dims", "units"),
+            )
+        )
     return 0

@@ -6,17 +6,22 @@ from .options import add_command, add_json, add_limits, add_recording, band, rea
 from .output import in_file, msg, print_json, table
 from .pitch import add_speed_options, print_channels, refused, resolve_speed
 
-EPILOG = ("example:\n  vibkit spectrum data/field/leon-tensioner.csv --band 2.5:6 --json\n"
-          "with a speed (given or stated by the file) the same decision as `vibkit pitch` (exit 0, 1 or 3);\n"
-          "without one the frequency only (search band 2.5-6 Hz)")
+EPILOG = (
+    "example:\n  vibkit spectrum data/field/leon-tensioner.csv --band 2.5:6 --json\n"
+    "with a speed (given or stated by the file) the same decision as `vibkit pitch` (exit 0, 1 or 3);\n"
+    "without one the frequency only (search band 2.5-6 Hz)"
+)
 
 
 def add_parser(subparsers):
     s = add_command(subparsers, "spectrum", "link-pass fundamental and harmonic peak table of a recording", EPILOG)
     add_recording(s)
     add_json(s)
-    s.add_argument("--band", type=band, help="search band of the link-pass LOW:HIGH [Hz] (default speed / "
-                   "80-200 mm, or 2.5:6 without a speed)")
+    s.add_argument(
+        "--band",
+        type=band,
+        help="search band of the link-pass LOW:HIGH [Hz] (default speed / 80-200 mm, or 2.5:6 without a speed)",
+    )
     s.add_argument("--harmonics", type=int, default=5, help="harmonics listed (default 5)")
     add_speed_options(s, "chain speed (optional): m/s, or 49cm/s; default the file's; checks the pitch is plausible")
     add_limits(s)
@@ -31,34 +36,75 @@ def run(a):
     speed, source = resolve_speed(a, rec, required=False)
     search = a.band or (None if speed else (2.5, 6.0))
     try:
-        res = estimate_channels(rec, channel=a.channel, speed=speed or 1.0, band=search, n_harmonics=a.harmonics,
-                                nominal_pitch=a.nominal_pitch if speed else None, limits_percent=a.limits,
-                                speed_source=source or "none", frequency_only=speed is None)
+        res = estimate_channels(
+            rec,
+            channel=a.channel,
+            speed=speed or 1.0,
+            band=search,
+            n_harmonics=a.harmonics,
+            nominal_pitch=a.nominal_pitch if speed else None,
+            limits_percent=a.limits,
+            speed_source=source or "none",
+            frequency_only=speed is None,
+        )
     except ValueError as exc:  # the analysis's words about the signal, with the file named
         raise in_file(a.recording, exc) from None
     if res.best is None:
         e0 = res.estimates[0]
-        return refused("spectrum", a, res, {"file": a.recording, "units": e0.extra.get("units", "1"),
-                                            "band_hz": list(e0.band_hz)})
+        return refused(
+            "spectrum", a, res, {"file": a.recording, "units": e0.extra.get("units", "1"), "band_hz": list(e0.band_hz)}
+        )
     est = res.best
     ch, units = est.channel, est.extra.get("units", "1")
-    peaks = [{"order": h["order"], "frequency_hz": h["frequency_hz"], "amplitude": h["amplitude"],
-              "units": units, "detected": h["detected"]} for h in est.harmonics]
-    payload = {"status": res.status, "reason": res.reason, "exit_code": res.exit_code, "file": a.recording,
-               "channel": ch, "units": units, "band_hz": list(est.band_hz), "speed_m_s": speed,
-               "speed_source": source, "method": est.method, "method_reason": est.method_reason,
-               "detection": est.detection, "invalid_samples": est.invalid_samples,
-               "fundamental_hz": est.fundamental_hz, "fundamental_sigma_hz": est.fundamental_sigma_hz,
-               "snr_db": est.snr_db, "peaks": peaks, "channels": res.per_channel(), "warnings": est.warnings}
+    peaks = [
+        {
+            "order": h["order"],
+            "frequency_hz": h["frequency_hz"],
+            "amplitude": h["amplitude"],
+            "units": units,
+            "detected": h["detected"],
+        }
+        for h in est.harmonics
+    ]
+    payload = {
+        "status": res.status,
+        "reason": res.reason,
+        "exit_code": res.exit_code,
+        "file": a.recording,
+        "channel": ch,
+        "units": units,
+        "band_hz": list(est.band_hz),
+        "speed_m_s": speed,
+        "speed_source": source,
+        "method": est.method,
+        "method_reason": est.method_reason,
+        "detection": est.detection,
+        "invalid_samples": est.invalid_samples,
+        "fundamental_hz": est.fundamental_hz,
+        "fundamental_sigma_hz": est.fundamental_sigma_hz,
+        "snr_db": est.snr_db,
+        "peaks": peaks,
+        "channels": res.per_channel(),
+        "warnings": est.warnings,
+    }
     if a.json:
         print_json("spectrum", payload)
     else:
         print(f"{a.recording}: channel {ch} [{units}]")
-        print(f"link-pass fundamental {est.fundamental_hz:.5f} +- {est.fundamental_sigma_hz:.2g} Hz "
-              f"(search band {est.band_hz[0]:.4g}-{est.band_hz[1]:.4g} Hz)")
+        print(
+            f"link-pass fundamental {est.fundamental_hz:.5f} +- {est.fundamental_sigma_hz:.2g} Hz "
+            f"(search band {est.band_hz[0]:.4g}-{est.band_hz[1]:.4g} Hz)"
+        )
         print_channels(res)
-        print(table([[p["order"], f"{p['frequency_hz']:.4f}", f"{p['amplitude']:.4g}", "yes" if p["detected"] else "no"]
-                     for p in peaks], ("order", "frequency [Hz]", f"amplitude [{units}]", "detected")))
+        print(
+            table(
+                [
+                    [p["order"], f"{p['frequency_hz']:.4f}", f"{p['amplitude']:.4g}", "yes" if p["detected"] else "no"]
+                    for p in peaks
+                ],
+                ("order", "frequency [Hz]", f"amplitude [{units}]", "detected"),
+            )
+        )
         for w in est.warnings:
             msg(f"warning: {w}")
         if res.status != "ok":

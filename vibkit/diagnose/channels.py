@@ -16,10 +16,9 @@ import math
 import re
 from dataclasses import dataclass, field
 
-from .decision import STATUS_IMPLAUSIBLE, STATUS_NOT_FOUND, EXIT_CODES
+from .decision import EXIT_CODES, STATUS_IMPLAUSIBLE, STATUS_NOT_FOUND
 
-__all__ = ["CONSISTENCY_SIGMAS", "ChannelsResult", "estimate_channels", "speed_from_recording",
-           "vibration_channels"]
+__all__ = ["CONSISTENCY_SIGMAS", "ChannelsResult", "estimate_channels", "speed_from_recording", "vibration_channels"]
 
 #: channels whose fundamentals differ by more than this many combined sigmas are not one chain
 CONSISTENCY_SIGMAS = 5.0
@@ -56,7 +55,11 @@ def vibration_channels(recording) -> list:
         if v == "segment" or da.dims != ("time",) or da.attrs.get(COUNTER_ATTR):
             continue
         units = str(da.attrs.get("units", ""))
-        if units in ("s", "ms", "us", "ns") or _TIME_NAME.search(str(v)) or (units == "m/s" and _SPEED_KEY.search(str(v))):
+        if (
+            units in ("s", "ms", "us", "ns")
+            or _TIME_NAME.search(str(v))
+            or (units == "m/s" and _SPEED_KEY.search(str(v)))
+        ):
             continue
         out.append(str(v))
     return out
@@ -97,8 +100,11 @@ class ChannelsResult:
                 if not e.extra.get("frequency_only"):
                     r.update(pitch_m=e.pitch_m, pitch_sigma_m=e.pitch_sigma_m)
                 if e.verdict is not None:
-                    r.update(elongation_percent=e.elongation_percent,
-                             elongation_sigma_percent=e.elongation_sigma_percent, verdict=e.verdict)
+                    r.update(
+                        elongation_percent=e.elongation_percent,
+                        elongation_sigma_percent=e.elongation_sigma_percent,
+                        verdict=e.verdict,
+                    )
             elif e.decision is not None and e.decision.implied_pitch_m is not None:
                 r["implied_pitch_m"] = e.decision.implied_pitch_m
             rows.append(r)
@@ -138,16 +144,31 @@ def estimate_channels(recording, *, channel=None, **kwargs) -> ChannelsResult:
             reason = "no channel carries the link pass: " + "; ".join(f"{e.channel}: {e.reason}" for e in ests)
         return ChannelsResult(status, reason, None, ests, errors)
     best = min(found, key=lambda e: e.fundamental_sigma_hz)
-    bad = [e for e in found if e is not best and abs(e.fundamental_hz - best.fundamental_hz) >
-           CONSISTENCY_SIGMAS * math.hypot(e.fundamental_sigma_hz, best.fundamental_sigma_hz)]
+    bad = [
+        e
+        for e in found
+        if e is not best
+        and abs(e.fundamental_hz - best.fundamental_hz)
+        > CONSISTENCY_SIGMAS * math.hypot(e.fundamental_sigma_hz, best.fundamental_sigma_hz)
+    ]
     if bad:
-        listing = ", ".join(f"{e.channel} {e.fundamental_hz:.5g} +- {e.fundamental_sigma_hz:.2g} Hz"
-                            for e in [best] + bad)
-        return ChannelsResult(STATUS_IMPLAUSIBLE, (
-            f"the channels disagree ({listing}; more than {CONSISTENCY_SIGMAS:g} sigma apart): two periodicities, "
-            "not one chain; choose the channel on the chain with --channel"), None, ests, errors)
+        listing = ", ".join(
+            f"{e.channel} {e.fundamental_hz:.5g} +- {e.fundamental_sigma_hz:.2g} Hz" for e in [best] + bad
+        )
+        return ChannelsResult(
+            STATUS_IMPLAUSIBLE,
+            (
+                f"the channels disagree ({listing}; more than {CONSISTENCY_SIGMAS:g} sigma apart): two periodicities, "
+                "not one chain; choose the channel on the chain with --channel"
+            ),
+            None,
+            ests,
+            errors,
+        )
     reason = best.reason
     if len(found) > 1:
-        reason += (f"; channels {', '.join(e.channel for e in found)} see the same link pass "
-                   f"(within {CONSISTENCY_SIGMAS:g} sigma), numbers from {best.channel} (smallest sigma)")
+        reason += (
+            f"; channels {', '.join(e.channel for e in found)} see the same link pass "
+            f"(within {CONSISTENCY_SIGMAS:g} sigma), numbers from {best.channel} (smallest sigma)"
+        )
     return ChannelsResult(best.status, reason, best, ests, errors)

@@ -51,8 +51,9 @@ def as_result(result, *, duration=None, progress=False):
         from ..io import read_recording
 
         return read_recording(result)
-    raise ValueError(f"result must be a Dataset, a Scene or a path (.toml scene or result file), "
-                     f"got {type(result).__name__}")
+    raise ValueError(
+        f"result must be a Dataset, a Scene or a path (.toml scene or result file), got {type(result).__name__}"
+    )
 
 
 def matching_variable(result, recording, channel) -> str:
@@ -74,10 +75,12 @@ def matching_variable(result, recording, channel) -> str:
     for name in _BY_UNITS.get(units, ()):
         if name in one_d:
             return name
-    raise ValueError(f"the simulation has no variable to compare with channel {channel!r} [{units}] "
-                     f"(its time variables: {', '.join(one_d) or 'none'}); add one of "
-                     f"{', '.join(_BY_UNITS.get(units, ('a variable in the same units',)))} to the scene's "
-                     "outputs.variables")
+    raise ValueError(
+        f"the simulation has no variable to compare with channel {channel!r} [{units}] "
+        f"(its time variables: {', '.join(one_d) or 'none'}); add one of "
+        f"{', '.join(_BY_UNITS.get(units, ('a variable in the same units',)))} to the scene's "
+        "outputs.variables"
+    )
 
 
 @dataclass(frozen=True)
@@ -195,8 +198,21 @@ def _max_in_bins(o, a, grid, step):
     return out
 
 
-def compare(recording, result, *, channel=None, variable=None, n_harmonics=5, band=None, confidence=0.95,
-            freq_tol=0.01, amp_tol_db=3.0, pitch_tolerance=0.005, duration=None, progress=False):
+def compare(
+    recording,
+    result,
+    *,
+    channel=None,
+    variable=None,
+    n_harmonics=5,
+    band=None,
+    confidence=0.95,
+    freq_tol=0.01,
+    amp_tol_db=3.0,
+    pitch_tolerance=0.005,
+    duration=None,
+    progress=False,
+):
     """Compare a recording with a simulation in the order domain.
 
     Parameters
@@ -238,8 +254,8 @@ def compare(recording, result, *, channel=None, variable=None, n_harmonics=5, ba
     1.0
     """
     from ..io import read_recording
-    from .pitch import DEFAULT_PITCH_RANGE_M, pick_channel, uniform_bursts
     from ..signal import compare_spectra
+    from .pitch import DEFAULT_PITCH_RANGE_M, pick_channel, uniform_bursts
 
     if not 0 < float(confidence) < 1:
         raise ValueError(f"confidence must lie in (0, 1), got {confidence!r}")
@@ -258,7 +274,7 @@ def compare(recording, result, *, channel=None, variable=None, n_harmonics=5, ba
     v_sim = v_nom
     if "chain_speed" in result.data_vars and result["chain_speed"].dims == ("time",):
         # a controlled drive droops below its set speed: the simulated chain's own mean speed
-        v_sim = float(np.abs(result["chain_speed"].values[result.sizes["time"] // 4:]).mean())
+        v_sim = float(np.abs(result["chain_speed"].values[result.sizes["time"] // 4 :]).mean())
         notes.append(f"simulated chain speed {v_sim:.5g} m/s (mean after the first quarter; set {v_nom:g} m/s)")
     v_meas = float(recording.attrs.get("chain_speed_m_s", 0.0) or 0.0)
     if not v_sim > 0:
@@ -275,8 +291,14 @@ def compare(recording, result, *, channel=None, variable=None, n_harmonics=5, ba
     # the shared decision first: no comparison of a link pass that the recording does not carry
     from .pitch import estimate_pitch
 
-    dec = estimate_pitch(recording, speed=v_meas if v_meas > 0 else 1.0, channel=channel, band=band,
-                         n_harmonics=n_harmonics, frequency_only=not v_meas > 0)
+    dec = estimate_pitch(
+        recording,
+        speed=v_meas if v_meas > 0 else 1.0,
+        channel=channel,
+        band=band,
+        n_harmonics=n_harmonics,
+        frequency_only=not v_meas > 0,
+    )
     if not dec.has_link_pass:
         raise ValueError(f"channel {channel!r}: {dec.status}: {dec.reason}; nothing to compare")
     sim = uniform_bursts(result, variable)
@@ -287,15 +309,30 @@ def compare(recording, result, *, channel=None, variable=None, n_harmonics=5, ba
     runs = []
     for b in meas:
         try:
-            runs.append((b, compare_spectra(sim.x, sim.fs, b.x, b.fs, band=band, n_harmonics=n_harmonics,
-                                            confidence=confidence, freq_tol=freq_tol, amp_tol_db=amp_tol_db)))
+            runs.append(
+                (
+                    b,
+                    compare_spectra(
+                        sim.x,
+                        sim.fs,
+                        b.x,
+                        b.fs,
+                        band=band,
+                        n_harmonics=n_harmonics,
+                        confidence=confidence,
+                        freq_tol=freq_tol,
+                        amp_tol_db=amp_tol_db,
+                    ),
+                )
+            )
         except ValueError as exc:
             notes.append(f"burst {b.segment} skipped: {exc}")
     if not runs:
         raise ValueError(f"no burst of channel {channel!r} could be compared ({'; '.join(notes)})")
     if len(runs) > 1:
-        notes.append(f"{len(runs)} bursts compared one by one with the simulation and combined "
-                     "(inverse-variance weights)")
+        notes.append(
+            f"{len(runs)} bursts compared one by one with the simulation and combined (inverse-variance weights)"
+        )
     k = min(len(c.harmonics) for _, c in runs)
     z = float(scipy.stats.norm.ppf(1.0 - (1.0 - float(confidence)) / (2.0 * k)))
     rows, scores = [], []
@@ -311,14 +348,29 @@ def compare(recording, result, *, channel=None, variable=None, n_harmonics=5, ba
         det_m = bool(sum(h.detected_meas for h in hs) * 2 >= len(hs))
         ci = (ratio - z * rs, ratio + z * rs)
         mismatch = bool(det_s and det_m and not ci[0] <= 1.0 <= ci[1])
-        rows.append({"order": i + 1, "frequency_sim_hz": hs[0].frequency_sim_hz, "frequency_meas_hz": f_meas,
-                     "frequency_ratio": ratio, "frequency_ratio_sigma": rs, "frequency_ratio_ci": list(ci),
-                     "amplitude_sim": hs[0].amplitude_sim, "amplitude_meas": a_meas,
-                     "amplitude_diff_db": diff, "amplitude_diff_db_ci": [diff - z * ds, diff + z * ds],
-                     "detected_sim": det_s, "detected_meas": det_m, "frequency_mismatch": mismatch})
+        rows.append(
+            {
+                "order": i + 1,
+                "frequency_sim_hz": hs[0].frequency_sim_hz,
+                "frequency_meas_hz": f_meas,
+                "frequency_ratio": ratio,
+                "frequency_ratio_sigma": rs,
+                "frequency_ratio_ci": list(ci),
+                "amplitude_sim": hs[0].amplitude_sim,
+                "amplitude_meas": a_meas,
+                "amplitude_diff_db": diff,
+                "amplitude_diff_db_ci": [diff - z * ds, diff + z * ds],
+                "detected_sim": det_s,
+                "detected_meas": det_m,
+                "frequency_mismatch": mismatch,
+            }
+        )
         if det_s or det_m:
-            scores.append(math.exp(-0.5 * ((ratio - 1) / freq_tol) ** 2 - 0.5 * (diff / amp_tol_db) ** 2)
-                          if det_s and det_m else 0.0)
+            scores.append(
+                math.exp(-0.5 * ((ratio - 1) / freq_tol) ** 2 - 0.5 * (diff / amp_tol_db) ** 2)
+                if det_s and det_m
+                else 0.0
+            )
     score = float(np.mean(scores)) if scores else 0.0
     c0 = runs[0][1]
     # order spectra on a common axis; each fine spectrum is reduced by its maximum within every
@@ -345,14 +397,32 @@ def compare(recording, result, *, channel=None, variable=None, n_harmonics=5, ba
     consistent = bool(v_sim > 0 and abs(p_ratio - 1) <= float(pitch_tolerance) + z1 * p_sig)
     if v_sim > 0:
         verdict = "consistent" if consistent else "NOT consistent"
-        notes.append(f"pitch implied by the recording {1000 * p_meas:.2f} mm vs the simulation {1000 * p_sim:.2f} mm "
-                     f"(ratio {p_ratio:.4f}): {verdict} within {100 * pitch_tolerance:g} % + {z1:.2f} sigma")
-    return Comparison(channel=channel, variable=variable, units=str(recording[channel].attrs.get("units", "1")),
-                      harmonics=rows, fundamental_sim_hz=f_sim, fundamental_meas_hz=float(f_meas),
-                      log_spectral_distance_db=lsd, score=score, rule=c0.rule, speed_sim_m_s=v_sim,
-                      speed_meas_m_s=v_meas, pitch_sim_m=p_sim, pitch_meas_m=p_meas, pitch_ratio=float(p_ratio),
-                      pitch_ratio_sigma=float(p_sig), pitch_consistent=consistent,
-                      pitch_tolerance=float(pitch_tolerance), confidence=float(confidence), orders=orders,
-                      order_amplitude_sim=a_sim, order_amplitude_meas=a_meas,
-                      signals={"sim": (sim.fs, sim.x), "meas": [(b.t0, b.fs, b.x) for b, _ in runs]},
-                      notes=notes)
+        notes.append(
+            f"pitch implied by the recording {1000 * p_meas:.2f} mm vs the simulation {1000 * p_sim:.2f} mm "
+            f"(ratio {p_ratio:.4f}): {verdict} within {100 * pitch_tolerance:g} % + {z1:.2f} sigma"
+        )
+    return Comparison(
+        channel=channel,
+        variable=variable,
+        units=str(recording[channel].attrs.get("units", "1")),
+        harmonics=rows,
+        fundamental_sim_hz=f_sim,
+        fundamental_meas_hz=float(f_meas),
+        log_spectral_distance_db=lsd,
+        score=score,
+        rule=c0.rule,
+        speed_sim_m_s=v_sim,
+        speed_meas_m_s=v_meas,
+        pitch_sim_m=p_sim,
+        pitch_meas_m=p_meas,
+        pitch_ratio=float(p_ratio),
+        pitch_ratio_sigma=float(p_sig),
+        pitch_consistent=consistent,
+        pitch_tolerance=float(pitch_tolerance),
+        confidence=float(confidence),
+        orders=orders,
+        order_amplitude_sim=a_sim,
+        order_amplitude_meas=a_meas,
+        signals={"sim": (sim.fs, sim.x), "meas": [(b.t0, b.fs, b.x) for b, _ in runs]},
+        notes=notes,
+    )

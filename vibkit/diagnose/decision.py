@@ -68,9 +68,11 @@ ELONGATION_WINDOW_PERCENT = (-1.0, 6.0)
 #: 81.3, 101.6 mm), 400 mm / 3 (the reference escalator of the study, /work/shared/spec), and the
 #: Otis T135.4 step chain (135.46 mm, supplier data sheets)
 CATALOGUE_PITCHES_M = (0.0677, 0.0813, 0.1016, 0.4 / 3.0, 0.13546)
-CATALOGUE_SOURCES = ("Tsubaki, The Complete Guide to Chain, 2.2.1 Step (Escalator) Chain, table 2.5 "
-                     "(67.7, 81.3, 101.6 mm)", "400 mm step / 3 links (133.33 mm), the study's reference escalator",
-                     "Otis T135.4 step chain, 135.46 mm (supplier data sheets)")
+CATALOGUE_SOURCES = (
+    "Tsubaki, The Complete Guide to Chain, 2.2.1 Step (Escalator) Chain, table 2.5 (67.7, 81.3, 101.6 mm)",
+    "400 mm step / 3 links (133.33 mm), the study's reference escalator",
+    "Otis T135.4 step chain, 135.46 mm (supplier data sheets)",
+)
 #: largest relative difference between the spectral and the mean-phase estimate of one record: an
 #: escalator's speed wanders by a few per cent with load, a chirp, a gait or a ride by more
 MAX_WANDER = 0.025
@@ -119,8 +121,14 @@ class Decision:
         return self.status != STATUS_OK
 
     def as_dict(self) -> dict:
-        return {"status": self.status, "reason": self.reason, "verdict": self.verdict,
-                "implied_pitch_m": self.implied_pitch_m, "exit_code": self.exit_code, "checks": dict(self.checks)}
+        return {
+            "status": self.status,
+            "reason": self.reason,
+            "verdict": self.verdict,
+            "implied_pitch_m": self.implied_pitch_m,
+            "exit_code": self.exit_code,
+            "checks": dict(self.checks),
+        }
 
 
 def elongation_verdict(elongation_percent, limits_percent=DEFAULT_LIMITS_PERCENT) -> str:
@@ -164,11 +172,26 @@ def _mm(p):
     return f"{1000 * p:.1f} mm"
 
 
-def decide(*, detected, detection_reason="", detection_hz=float("nan"), resolution_hz=float("nan"),
-           fundamental_hz=float("nan"), fundamental_sigma_hz=float("nan"), band_hz=None, speed_m_s=None,
-           speed_sigma_m_s=0.0, nominal_pitch_m=None, limits_percent=DEFAULT_LIMITS_PERCENT,
-           spectral_hz=None, mean_phase_hz=None, window_percent=ELONGATION_WINDOW_PERCENT,
-           catalogue=CATALOGUE_PITCHES_M, speed_source="given", significant_orders=None) -> Decision:
+def decide(
+    *,
+    detected,
+    detection_reason="",
+    detection_hz=float("nan"),
+    resolution_hz=float("nan"),
+    fundamental_hz=float("nan"),
+    fundamental_sigma_hz=float("nan"),
+    band_hz=None,
+    speed_m_s=None,
+    speed_sigma_m_s=0.0,
+    nominal_pitch_m=None,
+    limits_percent=DEFAULT_LIMITS_PERCENT,
+    spectral_hz=None,
+    mean_phase_hz=None,
+    window_percent=ELONGATION_WINDOW_PERCENT,
+    catalogue=CATALOGUE_PITCHES_M,
+    speed_source="given",
+    significant_orders=None,
+) -> Decision:
     """The decision on one link-pass estimate (module notes).
 
     Parameters
@@ -219,31 +242,45 @@ def decide(*, detected, detection_reason="", detection_hz=float("nan"), resoluti
         same = abs(f - fd) <= res + 3.0 * sf
         checks["same family"] = bool(same)
         if not same:
-            return Decision(STATUS_NOT_FOUND, (
-                f"the estimate {f:.4g} Hz is not the fundamental of the detected family ({fd:.4g} Hz, resolution "
-                f"{res:.2g} Hz): the record does not hold one steady family (too short, a transient, a sweep)"),
-                checks=checks)
+            return Decision(
+                STATUS_NOT_FOUND,
+                (
+                    f"the estimate {f:.4g} Hz is not the fundamental of the detected family ({fd:.4g} Hz, resolution "
+                    f"{res:.2g} Hz): the record does not hold one steady family (too short, a transient, a sweep)"
+                ),
+                checks=checks,
+            )
     if band_hz is not None:
         lo, hi = (float(v) for v in band_hz)
         inside = lo <= f <= hi
         checks["in band"] = bool(inside)
         if not inside:
-            return Decision(STATUS_NOT_FOUND, (
-                f"the estimate {f:.4g} Hz lies outside the search band {lo:.4g}-{hi:.4g} Hz: not a link pass "
-                "of this chain at this speed"), checks=checks)
+            return Decision(
+                STATUS_NOT_FOUND,
+                (
+                    f"the estimate {f:.4g} Hz lies outside the search band {lo:.4g}-{hi:.4g} Hz: not a link pass "
+                    "of this chain at this speed"
+                ),
+                checks=checks,
+            )
     if spectral_hz is not None and mean_phase_hz is not None:
         rel = abs(float(spectral_hz) - float(mean_phase_hz)) / f
         steady = rel <= MAX_WANDER
         checks["steady"] = bool(steady)
         if not steady:
-            return Decision(STATUS_NOT_FOUND, (
-                f"the spectral ({float(spectral_hz):.4g} Hz) and mean-phase ({float(mean_phase_hz):.4g} Hz) estimates "
-                f"differ by {100 * rel:.2g} %: a chain's speed wanders by a few per cent at most "
-                f"({100 * MAX_WANDER:g} % allowed); this periodicity drifts like a gait, a ride or a sweep"),
-                checks=checks)
+            return Decision(
+                STATUS_NOT_FOUND,
+                (
+                    f"the spectral ({float(spectral_hz):.4g} Hz) and mean-phase ({float(mean_phase_hz):.4g} Hz) estimates "
+                    f"differ by {100 * rel:.2g} %: a chain's speed wanders by a few per cent at most "
+                    f"({100 * MAX_WANDER:g} % allowed); this periodicity drifts like a gait, a ride or a sweep"
+                ),
+                checks=checks,
+            )
     if speed_m_s is None:
-        return Decision(STATUS_OK, f"link-pass family at {f:.4g} Hz (no speed: no pitch, plausibility not checked)",
-                        checks=checks)
+        return Decision(
+            STATUS_OK, f"link-pass family at {f:.4g} Hz (no speed: no pitch, plausibility not checked)", checks=checks
+        )
     v = float(speed_m_s)
     p = v / f
     wlo, whi = (float(x) for x in window_percent)
@@ -254,35 +291,56 @@ def decide(*, detected, detection_reason="", detection_hz=float("nan"), resoluti
         checks["plausible"] = bool(ok)
         if not ok:
             v_nom = f * nom
-            return Decision(STATUS_IMPLAUSIBLE, (
-                f"the family at {f:.4g} Hz implies a pitch of {_mm(p)} at {v:g} m/s ({speed_source}), an elongation "
-                f"of {el:+.1f} % of the nominal {_mm(nom)}, outside the physical window {wlo:+g} to {whi:+g} %: "
-                f"not a verdict. Check the speed (the nominal pitch needs {v_nom:.3g} m/s), the channel (--channel), "
-                "the nominal pitch, or whether the sensor was on this machine's step chain"),
-                implied_pitch_m=p, checks=checks)
+            return Decision(
+                STATUS_IMPLAUSIBLE,
+                (
+                    f"the family at {f:.4g} Hz implies a pitch of {_mm(p)} at {v:g} m/s ({speed_source}), an elongation "
+                    f"of {el:+.1f} % of the nominal {_mm(nom)}, outside the physical window {wlo:+g} to {whi:+g} %: "
+                    f"not a verdict. Check the speed (the nominal pitch needs {v_nom:.3g} m/s), the channel (--channel), "
+                    "the nominal pitch, or whether the sensor was on this machine's step chain"
+                ),
+                implied_pitch_m=p,
+                checks=checks,
+            )
     else:
         c, dev = nearest_catalogue(p, catalogue)
         ok = wlo <= dev <= whi
         checks["plausible"] = bool(ok)
         if not ok:
-            return Decision(STATUS_IMPLAUSIBLE, (
-                f"the family at {f:.4g} Hz implies a pitch of {_mm(p)} at {v:g} m/s ({speed_source}), {dev:+.1f} % "
-                f"from the nearest standard step-chain pitch {_mm(c)} (standard: "
-                f"{', '.join(f'{1000 * q:.2f}' for q in catalogue)} mm; window {wlo:+g} to {whi:+g} %): not a step "
-                "chain's link pass. Check the speed, the channel (--channel), give --nominal-pitch, or check "
-                "that the recording is of an escalator"), implied_pitch_m=p, checks=checks)
+            return Decision(
+                STATUS_IMPLAUSIBLE,
+                (
+                    f"the family at {f:.4g} Hz implies a pitch of {_mm(p)} at {v:g} m/s ({speed_source}), {dev:+.1f} % "
+                    f"from the nearest standard step-chain pitch {_mm(c)} (standard: "
+                    f"{', '.join(f'{1000 * q:.2f}' for q in catalogue)} mm; window {wlo:+g} to {whi:+g} %): not a step "
+                    "chain's link pass. Check the speed, the channel (--channel), give --nominal-pitch, or check "
+                    "that the recording is of an escalator"
+                ),
+                implied_pitch_m=p,
+                checks=checks,
+            )
     if significant_orders is not None:
         harmonics = len(set(significant_orders) - {1}) >= 1
         checks["harmonics"] = bool(harmonics)
         if not harmonics:
-            return Decision(STATUS_INCONCLUSIVE, (
-                f"one spectral line at {f:.4g} Hz (pitch {_mm(p)}) without a significant harmonic: a tone (a structural "
-                "mode, a motor, a fan) cannot be told from a link pass, whose roller impacts give harmonics; no "
-                "verdict"), verdict="inconclusive" if nominal_pitch_m is not None else None, implied_pitch_m=p,
-                checks=checks)
+            return Decision(
+                STATUS_INCONCLUSIVE,
+                (
+                    f"one spectral line at {f:.4g} Hz (pitch {_mm(p)}) without a significant harmonic: a tone (a structural "
+                    "mode, a motor, a fan) cannot be told from a link pass, whose roller impacts give harmonics; no "
+                    "verdict"
+                ),
+                verdict="inconclusive" if nominal_pitch_m is not None else None,
+                implied_pitch_m=p,
+                checks=checks,
+            )
     if nominal_pitch_m is None:
-        return Decision(STATUS_OK, f"link-pass family at {f:.4g} Hz, pitch {_mm(p)} (no nominal pitch: no verdict)",
-                        implied_pitch_m=p, checks=checks)
+        return Decision(
+            STATUS_OK,
+            f"link-pass family at {f:.4g} Hz, pitch {_mm(p)} (no nominal pitch: no verdict)",
+            implied_pitch_m=p,
+            checks=checks,
+        )
     lim = check_limits(limits_percent)
     rel = math.hypot(sf / f, float(speed_sigma_m_s or 0.0) / v)
     el_sigma = 100.0 * p * rel / nom
@@ -290,10 +348,21 @@ def decide(*, detected, detection_reason="", detection_hz=float("nan"), resoluti
     resolved = el_sigma <= need
     checks["resolved"] = bool(resolved)
     if not resolved:
-        return Decision(STATUS_INCONCLUSIVE, (
-            f"elongation {el:+.2f} +- {el_sigma:.2g} %: its sigma is more than a third of the first limit "
-            f"({need:.2g} %); record longer, or measure the speed better, for a verdict"),
-            verdict="inconclusive", implied_pitch_m=p, checks=checks)
+        return Decision(
+            STATUS_INCONCLUSIVE,
+            (
+                f"elongation {el:+.2f} +- {el_sigma:.2g} %: its sigma is more than a third of the first limit "
+                f"({need:.2g} %); record longer, or measure the speed better, for a verdict"
+            ),
+            verdict="inconclusive",
+            implied_pitch_m=p,
+            checks=checks,
+        )
     verdict = elongation_verdict(el, lim)
-    return Decision(STATUS_OK, f"elongation {el:+.2f} +- {el_sigma:.2g} % of {_mm(nom)}: {verdict}", verdict=verdict,
-                    implied_pitch_m=p, checks=checks)
+    return Decision(
+        STATUS_OK,
+        f"elongation {el:+.2f} +- {el_sigma:.2g} % of {_mm(nom)}: {verdict}",
+        verdict=verdict,
+        implied_pitch_m=p,
+        checks=checks,
+    )

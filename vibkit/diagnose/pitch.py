@@ -585,7 +585,7 @@ def estimate_pitch(recording, *, speed, speed_sigma=0.0, channel=None, band=None
     if skipped:
         warnings.append(f"{len(skipped)} burst(s) too short, skipped")
     f_sel, s_sel, methods, reasons = [], [], [], []
-    for b, e, mp in ests:
+    for _b, e, mp in ests:
         m, why = _choose_method(e, mp)
         methods.append(m)
         reasons.append(why)

@@ -30,9 +30,18 @@ import numpy as np
 from ..signal.ride import LOWPASS_HZ, PeakToPeak, RideSegment, detect_ride_segment, lowpass_10hz, peak_to_peak
 from ..signal.weighting import frequency_weighting, get_weighting
 
-__all__ = ["AxisRide", "RideQuality", "DEFAULT_WEIGHTINGS", "ride_quality", "ride_quality_from_recording",
-           "parse_weightings",
-           "ride_quality_from_simulation", "simulate_ride", "parse_channels", "parse_segment"]
+__all__ = [
+    "AxisRide",
+    "RideQuality",
+    "DEFAULT_WEIGHTINGS",
+    "ride_quality",
+    "ride_quality_from_recording",
+    "parse_weightings",
+    "ride_quality_from_simulation",
+    "simulate_ride",
+    "parse_channels",
+    "parse_segment",
+]
 
 #: ISO 2631-1 / ISO 18738: horizontal axes Wd, vertical Wk (an axis along the guide tangent: Wd)
 DEFAULT_WEIGHTINGS = {"x": "Wd", "y": "Wd", "z": "Wk", "tangential": "Wd"}
@@ -66,8 +75,14 @@ class AxisRide:
     lowpass: PeakToPeak
 
     def as_dict(self) -> dict:
-        return {"axis": self.axis, "channel": self.channel, "weighting": self.weighting, "units": "m/s^2",
-                "weighted": self.weighted.as_dict(), "lowpass_10hz": self.lowpass.as_dict()}
+        return {
+            "axis": self.axis,
+            "channel": self.channel,
+            "weighting": self.weighting,
+            "units": "m/s^2",
+            "weighted": self.weighted.as_dict(),
+            "lowpass_10hz": self.lowpass.as_dict(),
+        }
 
 
 @dataclass(frozen=True)
@@ -111,16 +126,27 @@ class RideQuality:
         raise KeyError(f"no axis {name!r} (axes: {', '.join(a.axis for a in self.axes)})")
 
     def as_dict(self) -> dict:
-        return {"source": self.source, "kind": self.kind, "sample_rate_hz": self.fs,
-                "segment": {"start_s": self.segment.start_s, "end_s": self.segment.end_s,
-                            "duration_s": self.segment.duration_s, "method": self.segment.method,
-                            "note": self.segment.note},
-                "speed_m_s": self.speed_m_s, "axes": [a.as_dict() for a in self.axes],
-                "definitions": {"pk_pk": "sum of the magnitudes of adjacent half-cycle peaks (one per zero crossing)",
-                                "a95": "smallest pk-pk value that 95 % of the pk-pk values do not exceed",
-                                "weighted": "ISO 2631-1 weighting (x, y: Wd; z: Wk)",
-                                "lowpass_10hz": f"unweighted, 0.4 Hz high-pass and {LOWPASS_HZ:g} Hz low-pass"},
-                "notes": list(self.notes)}
+        return {
+            "source": self.source,
+            "kind": self.kind,
+            "sample_rate_hz": self.fs,
+            "segment": {
+                "start_s": self.segment.start_s,
+                "end_s": self.segment.end_s,
+                "duration_s": self.segment.duration_s,
+                "method": self.segment.method,
+                "note": self.segment.note,
+            },
+            "speed_m_s": self.speed_m_s,
+            "axes": [a.as_dict() for a in self.axes],
+            "definitions": {
+                "pk_pk": "sum of the magnitudes of adjacent half-cycle peaks (one per zero crossing)",
+                "a95": "smallest pk-pk value that 95 % of the pk-pk values do not exceed",
+                "weighted": "ISO 2631-1 weighting (x, y: Wd; z: Wk)",
+                "lowpass_10hz": f"unweighted, 0.4 Hz high-pass and {LOWPASS_HZ:g} Hz low-pass",
+            },
+            "notes": list(self.notes),
+        }
 
 
 def parse_segment(text) -> tuple[float, float]:
@@ -177,8 +203,9 @@ def parse_weightings(text) -> dict | None:
         try:
             return get_weighting(v).name
         except ValueError:
-            raise ValueError(f"--weighting {text!r}: unknown weighting {v!r} (ISO 2631-1: {', '.join(WEIGHTINGS)})") \
-                from None
+            raise ValueError(
+                f"--weighting {text!r}: unknown weighting {v!r} (ISO 2631-1: {', '.join(WEIGHTINGS)})"
+            ) from None
 
     pairs = ["=" in s for s in items]
     if any(pairs) and not all(pairs):
@@ -197,8 +224,10 @@ def parse_weightings(text) -> dict | None:
     if len(items) == 1:
         return {k: name(items[0]) for k in DEFAULT_WEIGHTINGS}
     if len(items) != 3:
-        raise ValueError(f"--weighting {text!r}: {len(items)} weightings for the three axes x, y, z; give one for "
-                         f"every axis, three in the order x,y,z, or AXIS=NAME pairs")
+        raise ValueError(
+            f"--weighting {text!r}: {len(items)} weightings for the three axes x, y, z; give one for "
+            f"every axis, three in the order x,y,z, or AXIS=NAME pairs"
+        )
     return dict(zip(("x", "y", "z"), (name(v) for v in items)))
 
 
@@ -206,10 +235,12 @@ def _in_vibkit_words(exc, source) -> str:
     """An analysis error as one line that names ``source`` (once), scipy's filter wording replaced."""
     text = " ".join(str(exc).split()) or type(exc).__name__
     if "Wn" in text or "critical frequenc" in text:
-        text = ("the sample rate is too low for the ISO 2631-1 weighting filters (they reach 100 Hz; record at "
-                "250 Hz or more)")
+        text = (
+            "the sample rate is too low for the ISO 2631-1 weighting filters (they reach 100 Hz; record at "
+            "250 Hz or more)"
+        )
     if text.startswith("Parameter "):
-        text = text[len("Parameter "):]
+        text = text[len("Parameter ") :]
     if source and str(source) not in text:
         text = f"{source}: {text}"
     return text
@@ -252,12 +283,24 @@ def _metrics(x, fs, i0, i1, notes, label):
     except ValueError:
         notes.append(f"{label}: fewer than two complete half-cycles in the segment (a constant channel?): no values")
         nan = float("nan")
-        return PeakToPeak(max=nan, a95=nan, rms=float(np.sqrt(np.mean(x[i0:i1] ** 2))), peak=nan, n_values=0,
-                          time_of_max_s=nan)
+        return PeakToPeak(
+            max=nan, a95=nan, rms=float(np.sqrt(np.mean(x[i0:i1] ** 2))), peak=nan, n_values=0, time_of_max_s=nan
+        )
 
 
-def ride_quality(signals: dict, fs, *, segment=None, weightings=None, source="", kind="recording",
-                 channel_names=None, speed=None, detect=None, notes=None) -> RideQuality:
+def ride_quality(
+    signals: dict,
+    fs,
+    *,
+    segment=None,
+    weightings=None,
+    source="",
+    kind="recording",
+    channel_names=None,
+    speed=None,
+    detect=None,
+    notes=None,
+) -> RideQuality:
     """Ride quality from acceleration arrays.
 
     Parameters
@@ -319,8 +362,10 @@ def ride_quality(signals: dict, fs, *, segment=None, weightings=None, source="",
         seg = RideSegment(start_s=float(a), end_s=float(b), method="given")
     i0, i1 = int(round(seg.start_s * fs)), int(round(seg.end_s * fs))
     if seg.start_s < SETTLE_S:
-        notes.append(f"the segment starts {seg.start_s:.3g} s into the record: the weighting's 0.4 Hz high-pass "
-                     f"is still settling there (record at least {SETTLE_S:g} s before the ride)")
+        notes.append(
+            f"the segment starts {seg.start_s:.3g} s into the record: the weighting's 0.4 Hz high-pass "
+            f"is still settling there (record at least {SETTLE_S:g} s before the ride)"
+        )
     if i1 - i0 < max(8, int(fs / 2)):
         raise ValueError(f"ride segment {seg.start_s:.4g}-{seg.end_s:.4g} s is too short (need at least 0.5 s)")
     axes = []
@@ -332,15 +377,30 @@ def ride_quality(signals: dict, fs, *, segment=None, weightings=None, source="",
         y = frequency_weighting(x0, fs, wt)
         lp = lowpass_10hz(x0, fs)
         weighted[ax] = y
-        axes.append(AxisRide(axis=ax, channel=(channel_names or {}).get(ax, ax), weighting=wt,
-                             weighted=_metrics(y, fs, i0, i1, notes, f"axis {ax} weighted"),
-                             lowpass=_metrics(lp, fs, i0, i1, notes, f"axis {ax} 10 Hz")))
+        axes.append(
+            AxisRide(
+                axis=ax,
+                channel=(channel_names or {}).get(ax, ax),
+                weighting=wt,
+                weighted=_metrics(y, fs, i0, i1, notes, f"axis {ax} weighted"),
+                lowpass=_metrics(lp, fs, i0, i1, notes, f"axis {ax} 10 Hz"),
+            )
+        )
     sp = None
     if speed is not None:
         s = np.asarray(speed, dtype=float)
         sp = float(s) if s.ndim == 0 else float(np.nanmean(np.abs(s[i0:i1])))
-    return RideQuality(source=str(source), kind=kind, fs=float(fs), segment=seg, axes=tuple(axes), speed_m_s=sp,
-                       time=np.arange(n) / fs, weighted=weighted, notes=notes)
+    return RideQuality(
+        source=str(source),
+        kind=kind,
+        fs=float(fs),
+        segment=seg,
+        axes=tuple(axes),
+        speed_m_s=sp,
+        time=np.arange(n) / fs,
+        weighted=weighted,
+        notes=notes,
+    )
 
 
 _AXIS_RE = re.compile(r"([xyz])$")
@@ -354,14 +414,17 @@ def _auto_channels(rec, names):
             found.setdefault(m.group(1), []).append(nm)
     if found and all(len(v) == 1 for v in found.values()):
         return {k: v[0] for k, v in sorted(found.items())}
-    raise ValueError(f"cannot tell the x, y, z channels of {rec.attrs.get('source_file', 'the recording')!r} from "
-                     f"their names ({', '.join(names)}); say which with --channels x,y,z "
-                     f"(e.g. --channels {names[0]},-,- or --channels z={names[0]})")
+    raise ValueError(
+        f"cannot tell the x, y, z channels of {rec.attrs.get('source_file', 'the recording')!r} from "
+        f"their names ({', '.join(names)}); say which with --channels x,y,z "
+        f"(e.g. --channels {names[0]},-,- or --channels z={names[0]})"
+    )
 
 
 @_naming(_recording_source)
-def ride_quality_from_recording(recording, *, channels=None, segment=None, weightings=None, sample_rate=None,
-                                speed_channel=None, read_options=None) -> RideQuality:
+def ride_quality_from_recording(
+    recording, *, channels=None, segment=None, weightings=None, sample_rate=None, speed_channel=None, read_options=None
+) -> RideQuality:
     """Ride quality of a recording of a step-riding accelerometer.
 
     Parameters
@@ -402,8 +465,11 @@ def ride_quality_from_recording(recording, *, channels=None, segment=None, weigh
         opts["sample_rate"] = sample_rate
     rec = recording if not isinstance(recording, (str, os.PathLike)) else read_recording(recording, **opts)
     src = os.fspath(recording) if isinstance(recording, (str, os.PathLike)) else rec.attrs.get("source_file", "")
-    if (channels is None and rec.attrs.get("analysis") in ("forward", "inverse")
-            and ("roller_acceleration" in rec or "accel_step" in rec)):
+    if (
+        channels is None
+        and rec.attrs.get("analysis") in ("forward", "inverse")
+        and ("roller_acceleration" in rec or "accel_step" in rec)
+    ):
         # a vibkit result file: the simulation path (its step roller, or accel_step)
         return ride_quality_from_simulation(rec, segment=segment, weightings=weightings, source=src)
     names = [str(v) for v in rec.data_vars if v != "segment" and rec[v].dims == ("time",)]
@@ -415,12 +481,16 @@ def ride_quality_from_recording(recording, *, channels=None, segment=None, weigh
     lower = {n.lower(): n for n in names}
     for ax, ch in list(chans.items()):
         if ch.lower() not in lower:
-            raise ValueError(f"{src}: channel {ch!r} (axis {ax}) is not in the recording (channels: {', '.join(names)})")
+            raise ValueError(
+                f"{src}: channel {ch!r} (axis {ax}) is not in the recording (channels: {', '.join(names)})"
+            )
         ch = chans[ax] = lower[ch.lower()]
         units = str(rec[ch].attrs.get("units", ""))
         if units not in ("m/s^2", "m s-2", "m/s2"):
-            raise ValueError(f"{src}: channel {ch!r} is in {units or 'unknown units'!r}, not an acceleration in m/s^2 "
-                             "(the reader converts g; give units to the reader for raw counts)")
+            raise ValueError(
+                f"{src}: channel {ch!r} is in {units or 'unknown units'!r}, not an acceleration in m/s^2 "
+                "(the reader converts g; give units to the reader for raw counts)"
+            )
     notes = []
     bursts = {ax: uniform_bursts(rec, ch) for ax, ch in chans.items()}
     first = next(iter(bursts.values()))
@@ -428,15 +498,20 @@ def ride_quality_from_recording(recording, *, channels=None, segment=None, weigh
         raise ValueError(f"{src}: no burst of uniformly sampled data long enough to assess")
     k = int(np.argmax([b.x.size for b in first]))
     if len(first) > 1:
-        notes.append(f"the recording has {len(first)} bursts; the longest ({first[k].x.size / first[k].fs:.3g} s "
-                     f"from t = {first[k].t0:.4g} s) is assessed, times from its start")
+        notes.append(
+            f"the recording has {len(first)} bursts; the longest ({first[k].x.size / first[k].fs:.3g} s "
+            f"from t = {first[k].t0:.4g} s) is assessed, times from its start"
+        )
     fs = first[k].fs
     sig = {ax: b[k].x for ax, b in bursts.items()}
     if any(b[k].resampled for b in bursts.values()):
         notes.append("irregular time stamps: resampled linearly to a uniform grid (weighting above ~fs/4 is softened)")
     speed = None
-    sp_names = [speed_channel] if speed_channel else [n for n in names if "speed" in n.lower()
-                                                      and str(rec[n].attrs.get("units", "")) == "m/s"]
+    sp_names = (
+        [speed_channel]
+        if speed_channel
+        else [n for n in names if "speed" in n.lower() and str(rec[n].attrs.get("units", "")) == "m/s"]
+    )
     if sp_names and sp_names[0]:
         if sp_names[0].lower() not in lower:
             raise ValueError(f"{src}: speed channel {speed_channel!r} is not in the recording")
@@ -444,8 +519,17 @@ def ride_quality_from_recording(recording, *, channels=None, segment=None, weigh
         speed = sb[k].x if len(sb) > k and sb[k].x.size == sig[next(iter(sig))].size else None
     if speed is None and float(rec.attrs.get("chain_speed_m_s", 0) or 0) > 0:
         speed = float(rec.attrs["chain_speed_m_s"])
-    return ride_quality(sig, fs, segment=segment, weightings=weightings, source=src, kind="recording",
-                        channel_names=chans, speed=speed, notes=notes)
+    return ride_quality(
+        sig,
+        fs,
+        segment=segment,
+        weightings=weightings,
+        source=src,
+        kind="recording",
+        channel_names=chans,
+        speed=speed,
+        notes=notes,
+    )
 
 
 def _step_roller(ds):
@@ -499,8 +583,10 @@ def ride_quality_from_simulation(ds, *, segment=None, weightings=None, source=No
         acc = ds["roller_acceleration"].sel(roller=roller)
         sig = {"x": acc.sel(axis="x").values, "z": acc.sel(axis="z").values + G}
         names = {"x": f"roller_acceleration[{roller}, x]", "z": f"roller_acceleration[{roller}, z] + g"}
-        notes.append(f"simulated step: roller {roller} (middle roller of step {ds.attrs.get('step_accelerometer', '?')}); "
-                     "no lateral axis in a planar model")
+        notes.append(
+            f"simulated step: roller {roller} (middle roller of step {ds.attrs.get('step_accelerometer', '?')}); "
+            "no lateral axis in a planar model"
+        )
         if "roller_velocity" in ds and segment is None:
             vz = ds["roller_velocity"].sel(roller=roller, axis="z").values
             vel = ds["roller_velocity"].sel(roller=roller).values
@@ -510,8 +596,10 @@ def ride_quality_from_simulation(ds, *, segment=None, weightings=None, source=No
                 k = int(np.argmax(np.abs(vz)))
                 peak = float(vz[k])
                 if abs(peak) < 0.05:
-                    raise ValueError(f"the simulated step does not ride an incline in {t[-1] - t[0]:.3g} s (vertical "
-                                     f"speed at most {abs(peak):.2g} m/s): simulate longer (--duration)")
+                    raise ValueError(
+                        f"the simulated step does not ride an incline in {t[-1] - t[0]:.3g} s (vertical "
+                        f"speed at most {abs(peak):.2g} m/s): simulate longer (--duration)"
+                    )
                 run = np.sign(peak) * vz > 0.5 * abs(peak)
                 d = np.diff(np.concatenate([[0], run.astype(np.int8), [0]]))
                 s0, s1 = np.flatnonzero(d == 1), np.flatnonzero(d == -1)
@@ -519,21 +607,39 @@ def ride_quality_from_simulation(ds, *, segment=None, weightings=None, source=No
                 note = f"vertical speed {peak:+.3g} m/s of the simulated roller"
                 if s0[j] == 0 or s1[j] == vz.size:
                     note += "; the incline reaches an end of the simulated time (simulate longer: --duration)"
-                return RideSegment(start_s=s0[j] / fs_, end_s=s1[j] / fs_, method="speed channel", plateau=peak,
-                                   note=note)
+                return RideSegment(
+                    start_s=s0[j] / fs_, end_s=s1[j] / fs_, method="speed channel", plateau=peak, note=note
+                )
     elif "accel_step" in ds:
         sig = {"tangential": ds["accel_step"].values}
         names = {"tangential": "accel_step"}
         notes.append("only accel_step (along the guide tangent, no gravity): one axis; add roller outputs for x and z")
         if segment is None:
+
             def detect(fs_):  # not "given": nobody gave it
-                return RideSegment(start_s=0.0, end_s=float(t[-1] - t[0]), method="whole simulated time",
-                                   note="no incline detection without the step's vertical motion")
+                return RideSegment(
+                    start_s=0.0,
+                    end_s=float(t[-1] - t[0]),
+                    method="whole simulated time",
+                    note="no incline detection without the step's vertical motion",
+                )
     else:
-        raise ValueError("the simulation has neither 'roller_acceleration' nor 'accel_step' among its outputs "
-                         "(use vibkit.diagnose.ride.simulate_ride, which adds them)")
-    return ride_quality(sig, fs, segment=segment, weightings=weightings, source=src, kind="simulation",
-                        channel_names=names, speed=speed, detect=detect, notes=notes)
+        raise ValueError(
+            "the simulation has neither 'roller_acceleration' nor 'accel_step' among its outputs "
+            "(use vibkit.diagnose.ride.simulate_ride, which adds them)"
+        )
+    return ride_quality(
+        sig,
+        fs,
+        segment=segment,
+        weightings=weightings,
+        source=src,
+        kind="simulation",
+        channel_names=names,
+        speed=speed,
+        detect=detect,
+        notes=notes,
+    )
 
 
 @_naming(_scene_source)
@@ -559,8 +665,8 @@ def simulate_ride(scene, *, duration=None, segment=None, weightings=None, progre
     SceneError, ValueError
         A kinematics scene, or no ``outputs.step_accelerometer``.
     """
-    from ..model.scene import Scene, load_scene
     from ..analyses.simulation import simulate
+    from ..model.scene import Scene, load_scene
 
     sc = scene if isinstance(scene, Scene) else load_scene(scene)
     if sc.analysis not in ("inverse", "forward"):

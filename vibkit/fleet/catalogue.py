@@ -94,28 +94,35 @@ def read_catalogue(path):
         text = raw.decode("cp1252", errors="replace")
     lines = [(i, ln) for i, ln in enumerate(text.splitlines(), 1) if ln.strip() and not ln.lstrip().startswith("#")]
     if not lines:
-        raise FleetError(f"{spath}: catalogue is empty; expected a header line with columns "
-                         f"{', '.join(CATALOGUE_COLUMNS)}")
+        raise FleetError(
+            f"{spath}: catalogue is empty; expected a header line with columns {', '.join(CATALOGUE_COLUMNS)}"
+        )
     head_line, head = lines[0]
     delim = ";" if head.count(";") > head.count(",") else ","
     cells = lambda s: next(csv.reader(io.StringIO(s), delimiter=delim, skipinitialspace=True))  # noqa: E731
     header = [c.strip().lower() for c in cells(head)]
     missing = [c for c in CATALOGUE_COLUMNS if c not in header]
     if missing:
-        raise FleetError(f"{spath}, line {head_line}: missing column(s) {', '.join(missing)}; a catalogue has the "
-                         f"columns {', '.join(CATALOGUE_COLUMNS)} (optional: {', '.join(CATALOGUE_OPTIONAL)})")
+        raise FleetError(
+            f"{spath}, line {head_line}: missing column(s) {', '.join(missing)}; a catalogue has the "
+            f"columns {', '.join(CATALOGUE_COLUMNS)} (optional: {', '.join(CATALOGUE_OPTIONAL)})"
+        )
     unknown = [c for c in header if c not in CATALOGUE_COLUMNS + CATALOGUE_OPTIONAL]
     if unknown:
-        raise FleetError(f"{spath}, line {head_line}: unknown column(s) {', '.join(map(repr, unknown))}; known: "
-                         f"{', '.join(CATALOGUE_COLUMNS + CATALOGUE_OPTIONAL)}")
+        raise FleetError(
+            f"{spath}, line {head_line}: unknown column(s) {', '.join(map(repr, unknown))}; known: "
+            f"{', '.join(CATALOGUE_COLUMNS + CATALOGUE_OPTIONAL)}"
+        )
     if len(set(header)) != len(header):
         raise FleetError(f"{spath}, line {head_line}: a column appears twice")
     rows, nominal = [], {}
     for n, ln in lines[1:]:
         c = [v.strip() for v in cells(ln)]
         if len(c) != len(header):
-            raise FleetError(f"{spath}, line {n}: {len(c)} cell(s), expected {len(header)} "
-                             f"({', '.join(header)}); a missing value is an empty cell between commas")
+            raise FleetError(
+                f"{spath}, line {n}: {len(c)} cell(s), expected {len(header)} "
+                f"({', '.join(header)}); a missing value is an empty cell between commas"
+            )
         v = dict(zip(header, c))
         for col in ("file", "unit", "speed_m_s"):
             if not v[col]:
@@ -123,8 +130,11 @@ def read_catalogue(path):
         if os.path.isabs(v["file"]) or ".." in v["file"].replace("\\", "/").split("/"):
             raise FleetError(f"{spath}, line {n}: file {v['file']!r} must be relative to the scanned folder")
         speed = _number(v["speed_m_s"], spath, n, "speed_m_s", lo=0.0, hi=10.0, unit="m/s")
-        ssig = _number(v["speed_sigma_m_s"], spath, n, "speed_sigma_m_s", lo=0.0, hi=speed, unit="m/s") \
-            if v.get("speed_sigma_m_s") else 0.0
+        ssig = (
+            _number(v["speed_sigma_m_s"], spath, n, "speed_sigma_m_s", lo=0.0, hi=speed, unit="m/s")
+            if v.get("speed_sigma_m_s")
+            else 0.0
+        )
         try:  # the stated ranges (vibkit.fleet.inputs), as for fleet add
             check_speed(speed, "column speed_m_s")
             check_speed_sigma(ssig, speed, "column speed_sigma_m_s")
@@ -138,19 +148,39 @@ def read_catalogue(path):
                 raise FleetError(f"{spath}, line {n}: {exc}") from None
         nom = None
         if v["nominal_pitch_m"]:
-            nom = _number(v["nominal_pitch_m"], spath, n, "nominal_pitch_m", lo=0.0, hi=1.0, unit="m",
-                          hint=" (metres: 0.13333, not 133.33)")
+            nom = _number(
+                v["nominal_pitch_m"],
+                spath,
+                n,
+                "nominal_pitch_m",
+                lo=0.0,
+                hi=1.0,
+                unit="m",
+                hint=" (metres: 0.13333, not 133.33)",
+            )
             try:
                 check_pitch(nom, "column nominal_pitch_m")
             except FleetError as exc:
                 raise FleetError(f"{spath}, line {n}: {exc}") from None
             prev = nominal.get(v["unit"])
             if prev is not None and not math.isclose(prev[0], nom, rel_tol=1e-9):
-                raise FleetError(f"{spath}, line {n}: unit {v['unit']!r} has nominal_pitch_m {nom:g} here but "
-                                 f"{prev[0]:g} on line {prev[1]}")
+                raise FleetError(
+                    f"{spath}, line {n}: unit {v['unit']!r} has nominal_pitch_m {nom:g} here but "
+                    f"{prev[0]:g} on line {prev[1]}"
+                )
             nominal.setdefault(v["unit"], (nom, n))
-        rows.append(CatalogueRow(n, posixpath.normpath(v["file"].replace("\\", "/")), v["unit"], speed, ssig, date, nom,
-                                 v.get("channel") or None))
+        rows.append(
+            CatalogueRow(
+                n,
+                posixpath.normpath(v["file"].replace("\\", "/")),
+                v["unit"],
+                speed,
+                ssig,
+                date,
+                nom,
+                v.get("channel") or None,
+            )
+        )
     if not rows:
         raise FleetError(f"{spath}: catalogue has a header but no line")
     return rows

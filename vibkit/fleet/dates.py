@@ -41,8 +41,9 @@ def parse_date(text, *, what="date") -> _dt.datetime:
     try:
         d = _dt.datetime.fromisoformat(t)
     except ValueError:
-        raise FleetError(f"{what} {s!r} is not an ISO 8601 date (expected e.g. 2026-11-23 or "
-                         "2026-11-23T10:15:00+01:00)") from None
+        raise FleetError(
+            f"{what} {s!r} is not an ISO 8601 date (expected e.g. 2026-11-23 or 2026-11-23T10:15:00+01:00)"
+        ) from None
     if d.tzinfo is None:
         d = d.replace(tzinfo=_dt.timezone.utc)
     try:

@@ -67,8 +67,10 @@ def check_speed_sigma(value, speed, what="speed uncertainty") -> float:
     lo, hi, _ = RANGES["speed_sigma_fraction"]
     v = _finite(value, what, "m/s")
     if not lo <= v <= hi * speed:
-        raise FleetError(f"{what} {v:g} m/s is {100 * v / speed:.3g} % of the speed {speed:g} m/s; expected 0-"
-                         f"{100 * hi:g} % (a standard deviation, in m/s or as a percentage such as 0.5%)")
+        raise FleetError(
+            f"{what} {v:g} m/s is {100 * v / speed:.3g} % of the speed {speed:g} m/s; expected 0-"
+            f"{100 * hi:g} % (a standard deviation, in m/s or as a percentage such as 0.5%)"
+        )
     return v
 
 

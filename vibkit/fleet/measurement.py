@@ -64,8 +64,19 @@ def _file_sha256(path):
     return h.hexdigest()
 
 
-def analyse_recording(path, *, unit, speed, speed_sigma=0.0, nominal_pitch, date=None, channel=None, replaced=False,
-                      date_source="given", read_options=None):
+def analyse_recording(
+    path,
+    *,
+    unit,
+    speed,
+    speed_sigma=0.0,
+    nominal_pitch,
+    date=None,
+    channel=None,
+    replaced=False,
+    date_source="given",
+    read_options=None,
+):
     """Read and analyse one recording; the :class:`Measurement` it gives (not stored, ``id`` None).
 
     Parameters
@@ -99,8 +110,8 @@ def analyse_recording(path, *, unit, speed, speed_sigma=0.0, nominal_pitch, date
         The file cannot be read, or an option is invalid.
     """
     import vibkit
-    from vibkit.io import read_recording
     from vibkit.diagnose.pitch import estimate_pitch
+    from vibkit.io import read_recording
 
     from .inputs import check_inputs
 
@@ -116,13 +127,16 @@ def analyse_recording(path, *, unit, speed, speed_sigma=0.0, nominal_pitch, date
     else:
         start = rec.attrs.get("start_time")
         if start is None:
-            raise FleetError(f"{spath}: the recording has no start time; give the measurement date "
-                             "(--date, or the catalogue's date column) as ISO 8601, e.g. 2026-11-23")
+            raise FleetError(
+                f"{spath}: the recording has no start time; give the measurement date "
+                "(--date, or the catalogue's date column) as ISO 8601, e.g. 2026-11-23"
+            )
         try:
             d = parse_date(start, what="the recording's start time")
         except FleetError as exc:
-            raise FleetError(f"{spath}: {exc}; give the measurement date (--date, or the catalogue's date column)") \
-                from None
+            raise FleetError(
+                f"{spath}: {exc}; give the measurement date (--date, or the catalogue's date column)"
+            ) from None
         source = "recording start time"
     try:
         est = estimate_pitch(rec, speed=speed, speed_sigma=speed_sigma, channel=channel, nominal_pitch=nominal_pitch)
@@ -131,16 +145,33 @@ def analyse_recording(path, *, unit, speed, speed_sigma=0.0, nominal_pitch, date
     if not est.has_link_pass:  # the shared decision (vibkit.diagnose.decision): no link pass, or implausible
         raise FleetError(f"{spath}: {est.status}: {est.reason}; nothing stored")
     snr = float(est.snr_db) if math.isfinite(est.snr_db) else None
-    quality, why = measurement_quality(est.elongation_percent, est.elongation_sigma_percent,
-                                       decision=getattr(est, "decision", None))
+    quality, why = measurement_quality(
+        est.elongation_percent, est.elongation_sigma_percent, decision=getattr(est, "decision", None)
+    )
     return Measurement(
-        id=None, unit=unit, date_utc=_iso(d), date_unix_s=d.timestamp(), date_source=source,
-        speed_m_s=float(est.speed_m_s), speed_sigma_m_s=float(est.speed_sigma_m_s),
-        nominal_pitch_m=float(est.nominal_pitch_m), channel=str(est.channel), fundamental_hz=float(est.fundamental_hz),
-        fundamental_sigma_hz=float(est.fundamental_sigma_hz), pitch_m=float(est.pitch_m),
-        pitch_sigma_m=float(est.pitch_sigma_m), elongation_percent=float(est.elongation_percent),
-        elongation_sigma_percent=float(est.elongation_sigma_percent), snr_db=snr, warnings=tuple(est.warnings),
-        sha256=str(rec.attrs["sha256"]), path=os.path.abspath(spath), size_bytes=os.path.getsize(spath),
+        id=None,
+        unit=unit,
+        date_utc=_iso(d),
+        date_unix_s=d.timestamp(),
+        date_source=source,
+        speed_m_s=float(est.speed_m_s),
+        speed_sigma_m_s=float(est.speed_sigma_m_s),
+        nominal_pitch_m=float(est.nominal_pitch_m),
+        channel=str(est.channel),
+        fundamental_hz=float(est.fundamental_hz),
+        fundamental_sigma_hz=float(est.fundamental_sigma_hz),
+        pitch_m=float(est.pitch_m),
+        pitch_sigma_m=float(est.pitch_sigma_m),
+        elongation_percent=float(est.elongation_percent),
+        elongation_sigma_percent=float(est.elongation_sigma_percent),
+        snr_db=snr,
+        warnings=tuple(est.warnings),
+        sha256=str(rec.attrs["sha256"]),
+        path=os.path.abspath(spath),
+        size_bytes=os.path.getsize(spath),
         vibkit_version=vibkit.__version__,
-        analysed_utc=_iso(_dt.datetime.now(_dt.timezone.utc)), quality=quality, quality_reason=why,
-        replaced=bool(replaced))
+        analysed_utc=_iso(_dt.datetime.now(_dt.timezone.utc)),
+        quality=quality,
+        quality_reason=why,
+        replaced=bool(replaced),
+    )

@@ -48,16 +48,18 @@ class PostgresStore(Store):
         try:
             import psycopg
         except ImportError:
-            raise FleetError(f"{self.location}: a PostgreSQL fleet database needs the psycopg package "
-                             "(pip install 'vibkit[postgres]')") from None
+            raise FleetError(
+                f"{self.location}: a PostgreSQL fleet database needs the psycopg package "
+                "(pip install 'vibkit[postgres]')"
+            ) from None
         self._psycopg = psycopg
         try:
-            self._con = psycopg.connect(str(url), autocommit=True, connect_timeout=30,
-                                        application_name="vibkit fleet")
+            self._con = psycopg.connect(str(url), autocommit=True, connect_timeout=30, application_name="vibkit fleet")
         except psycopg.Error as exc:
-            raise FleetError(f"{self.location}: cannot connect to the PostgreSQL server: {_one_line(exc)} (check the "
-                             f"URL given by --db or {db_env}, that the server runs, and PGPASSWORD or ~/.pgpass)") \
-                from None
+            raise FleetError(
+                f"{self.location}: cannot connect to the PostgreSQL server: {_one_line(exc)} (check the "
+                f"URL given by --db or {db_env}, that the server runs, and PGPASSWORD or ~/.pgpass)"
+            ) from None
         try:
             self._prepare(create, db_env)
         except psycopg.Error as exc:
@@ -70,10 +72,13 @@ class PostgresStore(Store):
     def _tables(self):
         """Whether ``measurement`` and the meta table exist in the current schema (an MVCC query of the
         catalogue: it sees what another creator committed a moment ago)."""
-        r = self._con.execute("SELECT count(*) FILTER (WHERE c.relname = 'measurement'), "
-                              "count(*) FILTER (WHERE c.relname = %s) FROM pg_class c JOIN pg_namespace n "
-                              "ON n.oid = c.relnamespace WHERE n.nspname = current_schema() "
-                              "AND c.relname IN ('measurement', %s)", (_META, _META)).fetchone()
+        r = self._con.execute(
+            "SELECT count(*) FILTER (WHERE c.relname = 'measurement'), "
+            "count(*) FILTER (WHERE c.relname = %s) FROM pg_class c JOIN pg_namespace n "
+            "ON n.oid = c.relnamespace WHERE n.nspname = current_schema() "
+            "AND c.relname IN ('measurement', %s)",
+            (_META, _META),
+        ).fetchone()
         return bool(r[0]), bool(r[1])
 
     def _prepare(self, create, db_env):
@@ -81,11 +86,15 @@ class PostgresStore(Store):
         have_m, have_meta = self._tables()
         if not have_meta:
             if have_m:
-                raise FleetError(f"{self.location}: has a table 'measurement' that is not a vibkit fleet's (no "
-                                 f"{_META} table); refusing to write into it (use another database or schema)")
+                raise FleetError(
+                    f"{self.location}: has a table 'measurement' that is not a vibkit fleet's (no "
+                    f"{_META} table); refusing to write into it (use another database or schema)"
+                )
             if not create:
-                raise FleetError(f"{self.location}: no fleet database here (vibkit fleet add, scan or migrate creates "
-                                 f"one; --db or {db_env} names another)")
+                raise FleetError(
+                    f"{self.location}: no fleet database here (vibkit fleet add, scan or migrate creates "
+                    f"one; --db or {db_env} names another)"
+                )
             with con.transaction():
                 con.execute("SELECT pg_advisory_xact_lock(%s)", (APPLICATION_ID,))  # one creator at a time
                 have_m, have_meta = self._tables()
@@ -93,16 +102,21 @@ class PostgresStore(Store):
                     for stmt in measurement_ddl("postgresql"):
                         con.execute(stmt)
                     con.execute(f"CREATE TABLE {_META} (key TEXT PRIMARY KEY, value TEXT NOT NULL)")
-                    con.execute(f"INSERT INTO {_META} VALUES ('application', %s), ('schema_version', %s)",
-                                (_APPLICATION, str(SCHEMA_VERSION)))
+                    con.execute(
+                        f"INSERT INTO {_META} VALUES ('application', %s), ('schema_version', %s)",
+                        (_APPLICATION, str(SCHEMA_VERSION)),
+                    )
         meta = dict(con.execute(f"SELECT key, value FROM {_META}").fetchall())
         if meta.get("application") != _APPLICATION:
-            raise FleetError(f"{self.location}: table {_META} names application {meta.get('application')!r}, "
-                             f"not {_APPLICATION!r}; refusing to write into it")
+            raise FleetError(
+                f"{self.location}: table {_META} names application {meta.get('application')!r}, "
+                f"not {_APPLICATION!r}; refusing to write into it"
+            )
         ver = int(meta.get("schema_version", "0"))
         if ver > SCHEMA_VERSION:
-            raise FleetError(f"{self.location}: written by a newer vibkit (schema {ver}, this one reads "
-                             f"{SCHEMA_VERSION})")
+            raise FleetError(
+                f"{self.location}: written by a newer vibkit (schema {ver}, this one reads {SCHEMA_VERSION})"
+            )
         if ver < SCHEMA_VERSION:  # pragma: no cover - no older PostgreSQL schema exists yet
             raise FleetError(f"{self.location}: schema {ver} is older than this vibkit's ({SCHEMA_VERSION})")
 
@@ -121,8 +135,10 @@ class PostgresStore(Store):
             raise FleetError(f"{self.location}: query failed on the PostgreSQL server: {_one_line(exc)}") from None
 
     def _insert_row(self, values):
-        r = self._con.execute(f"INSERT INTO measurement ({', '.join(COLUMNS)}) VALUES "
-                              f"({', '.join(['%s'] * len(COLUMNS))}) RETURNING id", values).fetchone()
+        r = self._con.execute(
+            f"INSERT INTO measurement ({', '.join(COLUMNS)}) VALUES ({', '.join(['%s'] * len(COLUMNS))}) RETURNING id",
+            values,
+        ).fetchone()
         return int(r[0])
 
     def _is_unique_violation(self, exc):
@@ -130,15 +146,18 @@ class PostgresStore(Store):
 
     def _as_fleet_error(self, exc):
         if isinstance(exc, self._psycopg.Error):
-            return FleetError(f"{self.location}: the PostgreSQL server refused the measurement or the connection was "
-                              f"lost: {_one_line(exc)} (nothing of it was stored)")
+            return FleetError(
+                f"{self.location}: the PostgreSQL server refused the measurement or the connection was "
+                f"lost: {_one_line(exc)} (nothing of it was stored)"
+            )
         return None
 
     def integrity_check(self) -> str:
         """``"ok"`` when the table's indexes (the ``sha256`` uniqueness among them) are valid."""
-        bad = self._con.execute("SELECT i.indexrelid::regclass::text FROM pg_index i WHERE "
-                                "i.indrelid = 'measurement'::regclass AND NOT (i.indisvalid AND i.indisready)"
-                                ).fetchall()
+        bad = self._con.execute(
+            "SELECT i.indexrelid::regclass::text FROM pg_index i WHERE "
+            "i.indrelid = 'measurement'::regclass AND NOT (i.indisvalid AND i.indisready)"
+        ).fetchall()
         return "ok" if not bad else "invalid index(es): " + ", ".join(r[0] for r in bad)
 
     def close(self):

@@ -49,8 +49,7 @@ def _decision_word(decision):
     return None
 
 
-def measurement_quality(elongation_percent, sigma_percent, *, limits_percent=DEFAULT_LIMITS_PERCENT,
-                        decision=None):
+def measurement_quality(elongation_percent, sigma_percent, *, limits_percent=DEFAULT_LIMITS_PERCENT, decision=None):
     """The quality flag of one measurement and its reason: ``(flag, reason)``, flag in :data:`QUALITIES`.
 
     Parameters
@@ -76,16 +75,20 @@ def measurement_quality(elongation_percent, sigma_percent, *, limits_percent=DEF
     if not (math.isfinite(e) and math.isfinite(s)):
         return "implausible", "elongation or its sigma is not a finite number"
     if not lo <= e <= hi:
-        return "implausible", (f"elongation {e:+.2f} % is outside the physical window {lo:+g} to {hi:+g} % (a chain "
-                               "is replaced at 3 %, never shorter than nominal): check the speed, the channel, "
-                               "the nominal pitch")
+        return "implausible", (
+            f"elongation {e:+.2f} % is outside the physical window {lo:+g} to {hi:+g} % (a chain "
+            "is replaced at 3 %, never shorter than nominal): check the speed, the channel, "
+            "the nominal pitch"
+        )
     word = _decision_word(decision)
     if word == "implausible":
         return "implausible", f"the pitch analysis calls it implausible ({decision})"
     need = min(float(x) for x in limits_percent) / 3.0
     if not s <= need:
-        return "inconclusive", (f"elongation sigma {s:.2f} % is wider than a third of the first limit "
-                                f"({need:.2f} %): record longer or closer to the chain")
+        return "inconclusive", (
+            f"elongation sigma {s:.2f} % is wider than a third of the first limit "
+            f"({need:.2f} %): record longer or closer to the chain"
+        )
     if word == "inconclusive":
         return "inconclusive", f"the pitch analysis calls it inconclusive ({decision})"
     return "ok", ""

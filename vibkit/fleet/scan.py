@@ -22,8 +22,22 @@ from .measurement import _file_sha256, analyse_recording
 __all__ = ["RECORDING_SUFFIXES", "ScanResult", "scan_folder"]
 
 #: file suffixes a scan treats as recordings
-RECORDING_SUFFIXES = (".csv", ".txt", ".tsv", ".dat", ".log", ".nc", ".nc4", ".h5", ".hdf5", ".mseed", ".miniseed",
-                      ".msd", ".seed", ".sac")
+RECORDING_SUFFIXES = (
+    ".csv",
+    ".txt",
+    ".tsv",
+    ".dat",
+    ".log",
+    ".nc",
+    ".nc4",
+    ".h5",
+    ".hdf5",
+    ".mseed",
+    ".miniseed",
+    ".msd",
+    ".seed",
+    ".sac",
+)
 
 
 @dataclass(frozen=True)
@@ -43,9 +57,17 @@ class _Job:
 def _analyse_job(job):
     """Worker side of a scan: analyse one recording; never raises (a failure is a message)."""
     try:
-        m = analyse_recording(job.path, unit=job.unit, speed=job.speed_m_s, speed_sigma=job.speed_sigma_m_s,
-                              nominal_pitch=job.nominal_pitch_m, date=job.date, channel=job.channel,
-                              read_options=job.read_options, date_source=job.date_source)
+        m = analyse_recording(
+            job.path,
+            unit=job.unit,
+            speed=job.speed_m_s,
+            speed_sigma=job.speed_sigma_m_s,
+            nominal_pitch=job.nominal_pitch_m,
+            date=job.date,
+            channel=job.channel,
+            read_options=job.read_options,
+            date_source=job.date_source,
+        )
         return {"ok": True, "measurement": m}
     except (ValueError, OSError) as exc:  # RecordingError and FleetError are ValueErrors
         msg = " ".join(str(exc).split()) or type(exc).__name__
@@ -76,10 +98,15 @@ class ScanResult:
     notes: list = field(default_factory=list)
 
     def as_dict(self) -> dict:
-        return {"added": len(self.added), "skipped_duplicates": len(self.skipped), "failed": len(self.failed),
-                "added_files": [m.path for m in self.added],
-                "skipped_files": [{"file": p, "reason": r} for p, r in self.skipped],
-                "failed_files": [{"file": p, "reason": r} for p, r in self.failed], "notes": list(self.notes)}
+        return {
+            "added": len(self.added),
+            "skipped_duplicates": len(self.skipped),
+            "failed": len(self.failed),
+            "added_files": [m.path for m in self.added],
+            "skipped_files": [{"file": p, "reason": r} for p, r in self.skipped],
+            "failed_files": [{"file": p, "reason": r} for p, r in self.failed],
+            "notes": list(self.notes),
+        }
 
 
 _NAME_DATE = re.compile(r"(?<![0-9])([0-9]{4}-[0-9]{2}-[0-9]{2})(?![0-9])")
@@ -120,8 +147,19 @@ def _match(rel, rows):
     return None
 
 
-def scan_folder(db, directory, catalogue, *, scheduler=None, n_workers=None, client=None, parallel=True,
-                on_failure=None, progress=False, read_options=None):
+def scan_folder(
+    db,
+    directory,
+    catalogue,
+    *,
+    scheduler=None,
+    n_workers=None,
+    client=None,
+    parallel=True,
+    on_failure=None,
+    progress=False,
+    read_options=None,
+):
     """Add every recording of a folder that a catalogue describes to ``db``; see :meth:`FleetDB.scan`.
 
     ``db`` stores the measurements: its ``find``, ``nominal_pitch`` and ``insert`` are called from
@@ -144,8 +182,13 @@ def scan_folder(db, directory, catalogue, *, scheduler=None, n_workers=None, cli
     exclude = {os.path.abspath(os.fspath(catalogue)), *getattr(db, "local_files", ())}
     files = _candidate_files(d, exclude)
     # a file the catalogue names exactly is a recording whatever its suffix
-    named = [r.file for r in rows if not r.is_glob and os.path.isfile(os.path.join(d, r.file))
-             and os.path.abspath(os.path.join(d, r.file)) not in exclude]
+    named = [
+        r.file
+        for r in rows
+        if not r.is_glob
+        and os.path.isfile(os.path.join(d, r.file))
+        and os.path.abspath(os.path.join(d, r.file)) not in exclude
+    ]
     files = sorted(set(files) | {os.path.normpath(f).replace(os.sep, "/") for f in named})
     unit_nominal = {}
     for r in rows:
@@ -175,22 +218,38 @@ def scan_folder(db, directory, catalogue, *, scheduler=None, n_workers=None, cli
         seen[sha] = full
         nom = r.nominal_pitch_m or unit_nominal.get(r.unit) or db.nominal_pitch(r.unit)
         if nom is None:
-            fail(full, f"unit {r.unit!r} has no nominal pitch (catalogue line {r.line}: fill nominal_pitch_m "
-                       "on one line of the unit)")
+            fail(
+                full,
+                f"unit {r.unit!r} has no nominal pitch (catalogue line {r.line}: fill nominal_pitch_m "
+                "on one line of the unit)",
+            )
             continue
         date, source = r.date, "given"
         if date is None and date_from_name(rel) is not None:
             date, source = date_from_name(rel), "file name"
-        jobs.append(_Job(os.path.abspath(full), r.unit, r.speed_m_s, r.speed_sigma_m_s, nom, date, r.channel,
-                         sha, read_options, source))
+        jobs.append(
+            _Job(
+                os.path.abspath(full),
+                r.unit,
+                r.speed_m_s,
+                r.speed_sigma_m_s,
+                nom,
+                date,
+                r.channel,
+                sha,
+                read_options,
+                source,
+            )
+        )
     for r in rows:
         if r.line not in used:
             if r.is_glob:
                 res.notes.append(f"catalogue line {r.line}: {r.file!r} matches no recording")
             elif any(r.file in (f, f.rsplit("/", 1)[-1]) for f in files):
                 f = next(f for f in files if r.file in (f, f.rsplit("/", 1)[-1]))
-                res.notes.append(f"catalogue line {r.line}: {r.file!r} is also on line "
-                                 f"{_match(f, rows).line}, which is used")
+                res.notes.append(
+                    f"catalogue line {r.line}: {r.file!r} is also on line {_match(f, rows).line}, which is used"
+                )
             else:
                 fail(os.path.join(d, r.file), f"file not found (catalogue line {r.line})")
     bar = Progress(len(jobs), "fleet scan", enabled=progress)
@@ -232,8 +291,10 @@ def _scan_dask(jobs, take, bar, *, client, scheduler, n_workers):
         cl = ctx.__enter__()
     except (OSError, RuntimeError, TimeoutError, ValueError) as exc:
         where = f"the Dask scheduler at {scheduler}" if scheduler else "a local Dask cluster"
-        raise FleetError(f"cannot start or reach {where}: {' '.join(str(exc).split()) or type(exc).__name__} "
-                         "(--workers 0 analyses in this process, without Dask)") from None
+        raise FleetError(
+            f"cannot start or reach {where}: {' '.join(str(exc).split()) or type(exc).__name__} "
+            "(--workers 0 analyses in this process, without Dask)"
+        ) from None
     with contextlib.ExitStack() as stack:
         stack.push(ctx)
         futs = {}
@@ -245,9 +306,10 @@ def _scan_dask(jobs, take, bar, *, client, scheduler, n_workers):
             try:
                 outcome = f.result()
             except Exception as exc:  # noqa: BLE001 - a lost worker fails one row, not the scan
-                outcome = {"ok": False, "error": f"{job.path}: analysis lost ({type(exc).__name__}: "
-                                                 f"{' '.join(str(exc).split())})"}
+                outcome = {
+                    "ok": False,
+                    "error": f"{job.path}: analysis lost ({type(exc).__name__}: {' '.join(str(exc).split())})",
+                }
             f.release()
             take(job, outcome)
             bar.update(n)
-

@@ -63,8 +63,9 @@ def _key(m):
 
 def _drop(a, b, k):
     """How many combined sigmas ``b`` lies below ``a`` (positive: a drop), and whether it exceeds ``k``."""
-    z = (a.elongation_percent - b.elongation_percent) / math.hypot(a.elongation_sigma_percent,
-                                                                    b.elongation_sigma_percent)
+    z = (a.elongation_percent - b.elongation_percent) / math.hypot(
+        a.elongation_sigma_percent, b.elongation_sigma_percent
+    )
     return z, z > k
 
 
@@ -72,14 +73,17 @@ def _leave_one_out(points, outlier_sigma):
     """Index and distance [sigmas] of the point furthest from the line through the others, if beyond."""
     worst, worst_z = None, 0.0
     for i, m in enumerate(points):
-        rest = points[:i] + points[i + 1:]
+        rest = points[:i] + points[i + 1 :]
         try:
-            fit = fit_trend([r.date_unix_s for r in rest], [r.elongation_percent for r in rest],
-                            [r.elongation_sigma_percent for r in rest])
+            fit = fit_trend(
+                [r.date_unix_s for r in rest],
+                [r.elongation_percent for r in rest],
+                [r.elongation_sigma_percent for r in rest],
+            )
         except ValueError:
             continue
         tau = (m.date_unix_s - fit.t_ref_unix_s) / SECONDS_PER_YEAR
-        pred_var = fit.elongation_ref_sigma_percent ** 2 + (fit.slope_sigma_percent_per_year * tau) ** 2
+        pred_var = fit.elongation_ref_sigma_percent**2 + (fit.slope_sigma_percent_per_year * tau) ** 2
         sig = math.sqrt((fit.sigma_scale * m.elongation_sigma_percent) ** 2 + pred_var)
         z = abs(m.elongation_percent - float(fit.elongation_at(m.date_unix_s))) / sig
         if z > worst_z:
@@ -107,8 +111,12 @@ def screen_unit(measurements, *, drop_sigma=DROP_SIGMA, outlier_sigma=OUTLIER_SI
             z, dropped = _drop(prev, m, drop_sigma)
             if dropped:
                 nxt = good[i + 1] if i + 1 < len(good) else None
-                if nxt is not None and not nxt.replaced and not _drop(prev, nxt, drop_sigma)[1] \
-                        and _drop(nxt, m, drop_sigma)[1]:
+                if (
+                    nxt is not None
+                    and not nxt.replaced
+                    and not _drop(prev, nxt, drop_sigma)[1]
+                    and _drop(nxt, m, drop_sigma)[1]
+                ):
                     out.outliers.append((m, float("nan")))  # the next point is back at the old level
                     out.labels[_key(m)] = "outlier"
                     continue
@@ -121,8 +129,13 @@ def screen_unit(measurements, *, drop_sigma=DROP_SIGMA, outlier_sigma=OUTLIER_SI
                     out.labels[_key(prev)] = "outlier"
                     dropped = False
             if dropped:
-                out.segment_starts.append((m, f"elongation fell from {prev.elongation_percent:+.2f} to "
-                                              f"{m.elongation_percent:+.2f} % ({z:.1f} sigma): chain replaced?"))
+                out.segment_starts.append(
+                    (
+                        m,
+                        f"elongation fell from {prev.elongation_percent:+.2f} to "
+                        f"{m.elongation_percent:+.2f} % ({z:.1f} sigma): chain replaced?",
+                    )
+                )
                 segments.append([])
         segments[-1].append(m)
         prev = m

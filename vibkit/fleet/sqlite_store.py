@@ -15,8 +15,17 @@ import urllib.parse
 
 from .errors import FleetError
 from .quality import measurement_quality
-from .schema import (APPLICATION_ID, COLUMNS, QUALITY_FLAG_SQL, QUALITY_REASON_SQL, SCHEMA_VERSION, V2_COLUMNS,
-                     column_def, measurement_ddl, upgraded_view_sql)
+from .schema import (
+    APPLICATION_ID,
+    COLUMNS,
+    QUALITY_FLAG_SQL,
+    QUALITY_REASON_SQL,
+    SCHEMA_VERSION,
+    V2_COLUMNS,
+    column_def,
+    measurement_ddl,
+    upgraded_view_sql,
+)
 from .store import Store
 
 __all__ = ["SQLiteStore", "sqlite_error"]
@@ -29,16 +38,19 @@ def sqlite_error(path, exc) -> FleetError:
     text = " ".join(str(exc).split())
     low = text.lower()
     if "malformed" in low or "not a database" in low or "corrupt" in low:
-        why = (f"the database file is damaged ({text}); restore it from a backup, or recover what is readable "
-               f"with: sqlite3 {path} .recover | sqlite3 recovered.sqlite")
+        why = (
+            f"the database file is damaged ({text}); restore it from a backup, or recover what is readable "
+            f"with: sqlite3 {path} .recover | sqlite3 recovered.sqlite"
+        )
     elif "readonly" in low or "read-only" in low:
-        why = (f"cannot write: the file or its folder is read-only ({text}); make both writable, or give a "
-               f"writable --db")
+        why = f"cannot write: the file or its folder is read-only ({text}); make both writable, or give a writable --db"
     elif "locked" in low or "busy" in low:
         why = f"locked by another process ({text}); try again when it has finished"
     elif "unable to open" in low or "disk i/o" in low or "cannot open" in low:
-        why = (f"cannot open the database ({text}); check that the file and its folder exist and can be read "
-               f"(and written, to add)")
+        why = (
+            f"cannot open the database ({text}); check that the file and its folder exist and can be read "
+            f"(and written, to add)"
+        )
     elif "full" in low:
         why = f"the disk is full ({text}); nothing was stored"
     else:
@@ -65,15 +77,17 @@ class SQLiteStore(Store):
             raise FleetError(f"{p}: is a folder; expected the fleet database file")
         exists = os.path.exists(p) and os.path.getsize(p) > 0
         if not exists and (not create or self.readonly):
-            raise FleetError(f"{p}: no fleet database here (vibkit fleet add or scan creates one; --db or "
-                             f"{db_env} names another)")
+            raise FleetError(
+                f"{p}: no fleet database here (vibkit fleet add or scan creates one; --db or {db_env} names another)"
+            )
         if exists:
             try:
                 with open(p, "rb") as fh:
                     head = fh.read(16)
             except OSError as exc:
-                raise FleetError(f"{p}: cannot read the database: {exc.strerror or exc}; check its permissions") \
-                    from None
+                raise FleetError(
+                    f"{p}: cannot read the database: {exc.strerror or exc}; check its permissions"
+                ) from None
             if head != _SQLITE_MAGIC:
                 raise FleetError(f"{p}: not a SQLite database; expected a vibkit fleet database")
         parent = os.path.dirname(os.path.abspath(p))
@@ -124,14 +138,18 @@ class SQLiteStore(Store):
         ver = self.file_schema_version = con.execute("PRAGMA user_version").fetchone()[0]
         tables = [r[0] for r in con.execute("SELECT name FROM sqlite_master WHERE type = 'table'")]
         if app not in (0, APPLICATION_ID) or (app == 0 and tables and "measurement" not in tables):
-            raise FleetError(f"{self.path}: a SQLite database of another application (tables: "
-                             f"{', '.join(tables) or 'none'}); refusing to write into it")
+            raise FleetError(
+                f"{self.path}: a SQLite database of another application (tables: "
+                f"{', '.join(tables) or 'none'}); refusing to write into it"
+            )
         if ver > SCHEMA_VERSION:
             raise FleetError(f"{self.path}: written by a newer vibkit (schema {ver}, this one reads {SCHEMA_VERSION})")
         if self.readonly:
             if "measurement" not in tables:
-                raise FleetError(f"{self.path}: a SQLite database without vibkit's measurement table, not a fleet "
-                                 f"history (vibkit fleet add or scan makes one; --db names another); left as it is")
+                raise FleetError(
+                    f"{self.path}: a SQLite database without vibkit's measurement table, not a fleet "
+                    f"history (vibkit fleet add or scan makes one; --db names another); left as it is"
+                )
             if ver < SCHEMA_VERSION:
                 self._read_older_schema(ver)
             return
@@ -147,9 +165,11 @@ class SQLiteStore(Store):
             except sqlite3.OperationalError as exc:
                 if "readonly" not in str(exc).replace(" ", "").lower():
                     raise
-                raise FleetError(f"{self.path}: written by an older vibkit (schema {ver}); this one upgrades it to "
-                                 f"schema {SCHEMA_VERSION} in place, which needs write access to the file and its "
-                                 "folder (vibkit fleet status and report read it without upgrading it)") from None
+                raise FleetError(
+                    f"{self.path}: written by an older vibkit (schema {ver}); this one upgrades it to "
+                    f"schema {SCHEMA_VERSION} in place, which needs write access to the file and its "
+                    "folder (vibkit fleet status and report read it without upgrading it)"
+                ) from None
             if "measurement" in tables:
                 self.notes.append(f"{self.path}: upgraded in place from schema {ver} to schema {SCHEMA_VERSION}")
 
@@ -175,8 +195,10 @@ class SQLiteStore(Store):
         con.create_function(QUALITY_REASON_SQL, 2, reason, deterministic=True)
         con.execute("PRAGMA temp_store=MEMORY")
         con.execute(sql)
-        self.notes.append(f"{self.path}: read a schema-{ver} history without upgrading it (left as it is); run "
-                          f"vibkit fleet add or scan on it with write access to upgrade it to schema {SCHEMA_VERSION}")
+        self.notes.append(
+            f"{self.path}: read a schema-{ver} history without upgrading it (left as it is); run "
+            f"vibkit fleet add or scan on it with write access to upgrade it to schema {SCHEMA_VERSION}"
+        )
 
     def _create_or_upgrade(self):
         """Inside the write lock: create the table, or bring a version-1 file to the current schema."""
@@ -191,8 +213,9 @@ class SQLiteStore(Store):
                 if col not in have:
                     con.execute(f"ALTER TABLE measurement ADD COLUMN {column_def(col, 'sqlite')}")
             # the rows of a version-1 file get the quality flag by today's rules
-            for rid, e, s in con.execute("SELECT id, elongation_percent, elongation_sigma_percent FROM measurement "
-                                         "WHERE quality = 'ok'").fetchall():
+            for rid, e, s in con.execute(
+                "SELECT id, elongation_percent, elongation_sigma_percent FROM measurement WHERE quality = 'ok'"
+            ).fetchall():
                 flag, why = measurement_quality(e, s)
                 if flag != "ok":
                     con.execute("UPDATE measurement SET quality = ?, quality_reason = ? WHERE id = ?", (flag, why, rid))
@@ -216,8 +239,9 @@ class SQLiteStore(Store):
         return self._con.execute(sql, args)
 
     def _insert_row(self, values):
-        cur = self._con.execute(f"INSERT INTO measurement ({', '.join(COLUMNS)}) VALUES "
-                                f"({', '.join('?' * len(COLUMNS))})", values)
+        cur = self._con.execute(
+            f"INSERT INTO measurement ({', '.join(COLUMNS)}) VALUES ({', '.join('?' * len(COLUMNS))})", values
+        )
         return int(cur.lastrowid)
 
     def _is_unique_violation(self, exc):

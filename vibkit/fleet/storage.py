@@ -60,13 +60,16 @@ def resolve_db_path(db=None) -> str:
     if scheme in _SERVER_SCHEMES:
         return spec
     if scheme != "sqlite":
-        raise FleetError(f"database URL {spec!r}: scheme {scheme!r} is not supported; vibkit's fleet database "
-                         "is a SQLite file (a path, or sqlite:///relative/path, sqlite:////absolute/path) or a "
-                         "PostgreSQL server (postgresql://user@host/dbname)")
+        raise FleetError(
+            f"database URL {spec!r}: scheme {scheme!r} is not supported; vibkit's fleet database "
+            "is a SQLite file (a path, or sqlite:///relative/path, sqlite:////absolute/path) or a "
+            "PostgreSQL server (postgresql://user@host/dbname)"
+        )
     if not spec.startswith("sqlite:///") or len(spec) == len("sqlite:///"):
-        raise FleetError(f"database URL {spec!r}: expected sqlite:///path (an in-memory database would lose "
-                         "every measurement)")
-    path = spec[len("sqlite:///"):]
+        raise FleetError(
+            f"database URL {spec!r}: expected sqlite:///path (an in-memory database would lose every measurement)"
+        )
+    path = spec[len("sqlite:///") :]
     return path.split("?", 1)[0]
 
 
@@ -213,8 +216,19 @@ class FleetDB:
         return self._store.insert_many(measurements)
 
     @_translated
-    def add(self, recording, *, unit, speed, speed_sigma=0.0, date=None, nominal_pitch=None, channel=None,
-            replaced=False, read_options=None):
+    def add(
+        self,
+        recording,
+        *,
+        unit,
+        speed,
+        speed_sigma=0.0,
+        date=None,
+        nominal_pitch=None,
+        channel=None,
+        replaced=False,
+        read_options=None,
+    ):
         """Analyse a recording and store its measurement.
 
         Parameters
@@ -262,13 +276,33 @@ class FleetDB:
         if nom is None:
             raise FleetError(f"unit {str(unit)!r} is new: give its nominal link pitch (--nominal-pitch, in m)")
         check_pitch(nom, f"the nominal pitch stored for unit {str(unit)!r} in {self.path}")
-        m = analyse_recording(spath, unit=unit, speed=speed, speed_sigma=speed_sigma, nominal_pitch=nom, date=date,
-                              channel=channel, replaced=replaced, read_options=read_options)
+        m = analyse_recording(
+            spath,
+            unit=unit,
+            speed=speed,
+            speed_sigma=speed_sigma,
+            nominal_pitch=nom,
+            date=date,
+            channel=channel,
+            replaced=replaced,
+            read_options=read_options,
+        )
         return self.insert(m)
 
     @_translated
-    def scan(self, directory, catalogue, *, scheduler=None, n_workers=None, client=None, parallel=True,
-             on_failure=None, progress=False, read_options=None):
+    def scan(
+        self,
+        directory,
+        catalogue,
+        *,
+        scheduler=None,
+        n_workers=None,
+        client=None,
+        parallel=True,
+        on_failure=None,
+        progress=False,
+        read_options=None,
+    ):
         """Add every recording of a folder that a catalogue describes; analyses run on Dask workers.
 
         Parameters
@@ -307,9 +341,18 @@ class FleetDB:
         A local cluster spawns its worker processes: a script that calls ``scan`` needs the
         ``if __name__ == "__main__":`` guard (or ``parallel=False``).
         """
-        return scan_folder(self, directory, catalogue, scheduler=scheduler, n_workers=n_workers, client=client,
-                           parallel=parallel, on_failure=on_failure, progress=progress,
-                           read_options=read_options)
+        return scan_folder(
+            self,
+            directory,
+            catalogue,
+            scheduler=scheduler,
+            n_workers=n_workers,
+            client=client,
+            parallel=parallel,
+            on_failure=on_failure,
+            progress=progress,
+            read_options=read_options,
+        )
 
     # ----------------------------------------------------------------------------------- status
     @_translated
@@ -370,8 +413,13 @@ def migrate(source, target):
         between them (nothing copied).
     """
     src_spec, dst_spec = resolve_db_path(source), resolve_db_path(target)
-    if not is_server_url(src_spec) and not is_server_url(dst_spec) and os.path.exists(dst_spec) \
-            and os.path.exists(src_spec) and os.path.samefile(src_spec, dst_spec):
+    if (
+        not is_server_url(src_spec)
+        and not is_server_url(dst_spec)
+        and os.path.exists(dst_spec)
+        and os.path.exists(src_spec)
+        and os.path.samefile(src_spec, dst_spec)
+    ):
         raise FleetError(f"{src_spec}: source and target of the migration are the same database")
     with FleetDB(src_spec, create=False, readonly=True) as src:  # the source is read, never upgraded
         rows = sorted(src.measurements(), key=lambda m: m.id)
@@ -379,5 +427,10 @@ def migrate(source, target):
             if src.path == dst.path and src.kind == dst.kind:
                 raise FleetError(f"{src.path}: source and target of the migration are the same database")
             added, skipped = dst.insert_many(rows)
-            return {"source": src.path, "target": dst.path, "copied": added, "skipped": skipped,
-                    "target_total": len(dst.measurements())}
+            return {
+                "source": src.path,
+                "target": dst.path,
+                "copied": added,
+                "skipped": skipped,
+                "target_total": len(dst.measurements()),
+            }

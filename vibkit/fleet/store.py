@@ -11,7 +11,6 @@ last word when two processes store the same file under different units at once.
 from __future__ import annotations
 
 import abc
-
 import math
 from dataclasses import replace
 
@@ -32,8 +31,7 @@ class Store(abc.ABC):
 
     # ----------------------------------------------------------------- to be supplied by a store
     @abc.abstractmethod
-    def execute(self, sql, args=()):
-        ...
+    def execute(self, sql, args=()): ...
 
     @abc.abstractmethod
     def write_transaction(self, unit):
@@ -41,8 +39,7 @@ class Store(abc.ABC):
         ...
 
     @abc.abstractmethod
-    def _insert_row(self, values) -> int:
-        ...
+    def _insert_row(self, values) -> int: ...
 
     def _is_unique_violation(self, exc) -> bool:  # a store that has no unique index to violate
         return False
@@ -52,12 +49,10 @@ class Store(abc.ABC):
         return None
 
     @abc.abstractmethod
-    def integrity_check(self) -> str:
-        ...
+    def integrity_check(self) -> str: ...
 
     @abc.abstractmethod
-    def close(self):
-        ...
+    def close(self): ...
 
     # ------------------------------------------------------------------------------------ queries
     def q(self, sql):
@@ -76,8 +71,9 @@ class Store(abc.ABC):
         return [r[0] for r in self.execute("SELECT DISTINCT unit FROM measurement ORDER BY unit").fetchall()]
 
     def nominal_pitch(self, unit):
-        r = self.execute(self.q("SELECT nominal_pitch_m FROM measurement WHERE unit = ? ORDER BY id DESC LIMIT 1"),
-                         (str(unit),)).fetchone()
+        r = self.execute(
+            self.q("SELECT nominal_pitch_m FROM measurement WHERE unit = ? ORDER BY id DESC LIMIT 1"), (str(unit),)
+        ).fetchone()
         return None if r is None else float(r[0])
 
     def count(self) -> int:
@@ -86,8 +82,10 @@ class Store(abc.ABC):
     # ------------------------------------------------------------------------------------ writing
     @staticmethod
     def duplicate_message(what, m):
-        return (f"{what}: already stored (same sha256) as measurement #{m.id} of unit {m.unit!r} dated "
-                f"{m.date_utc[:10]}, from {m.path}")
+        return (
+            f"{what}: already stored (same sha256) as measurement #{m.id} of unit {m.unit!r} dated "
+            f"{m.date_utc[:10]}, from {m.path}"
+        )
 
     def _check_and_insert(self, m):
         old = self.find(m.sha256)
@@ -95,8 +93,10 @@ class Store(abc.ABC):
             raise DuplicateRecordingError(self.duplicate_message(m.path, old), old)
         nom = self.nominal_pitch(m.unit)
         if nom is not None and not math.isclose(nom, m.nominal_pitch_m, rel_tol=1e-9):
-            raise FleetError(f"unit {m.unit!r} is stored with nominal pitch {nom:g} m, not "
-                             f"{m.nominal_pitch_m:g} m; one unit has one nominal pitch")
+            raise FleetError(
+                f"unit {m.unit!r} is stored with nominal pitch {nom:g} m, not "
+                f"{m.nominal_pitch_m:g} m; one unit has one nominal pitch"
+            )
         return self._insert_row(measurement_values(m))
 
     def insert(self, m: Measurement) -> Measurement:
@@ -122,8 +122,10 @@ class Store(abc.ABC):
                 raise err from None
             old = self.find(m.sha256)  # stored by another process between our check and our insert
             if old is None:  # pragma: no cover - the row that collided was rolled back since
-                raise FleetError(f"{m.path}: another process stored the same file at the same moment and "
-                                 "then rolled back; run the command again") from None
+                raise FleetError(
+                    f"{m.path}: another process stored the same file at the same moment and "
+                    "then rolled back; run the command again"
+                ) from None
             raise DuplicateRecordingError(self.duplicate_message(m.path, old), old) from None
         return replace(m, id=rid)
 

@@ -21,8 +21,16 @@ import numpy as np
 from ..diagnose.pitch import DEFAULT_LIMITS_PERCENT, elongation_verdict
 from .dates import _unix_to_iso
 
-__all__ = ["LimitForecast", "SECONDS_PER_YEAR", "TrendFit", "UnitTrend", "fit_trend", "forecast_limits", "rank_units",
-           "unit_trend"]
+__all__ = [
+    "LimitForecast",
+    "SECONDS_PER_YEAR",
+    "TrendFit",
+    "UnitTrend",
+    "fit_trend",
+    "forecast_limits",
+    "rank_units",
+    "unit_trend",
+]
 
 SECONDS_PER_YEAR = 365.25 * 86400.0
 #: a rate below zero by more than this many of its sigmas is implausible (a chain does not shorten)
@@ -62,7 +70,8 @@ class TrendFit:
     def elongation_at(self, t_unix_s):
         """Fitted elongation at times [s since 1970]. [%]"""
         return self.elongation_ref_percent + self.slope_percent_per_year * (
-            (np.asarray(t_unix_s, dtype=float) - self.t_ref_unix_s) / SECONDS_PER_YEAR)
+            (np.asarray(t_unix_s, dtype=float) - self.t_ref_unix_s) / SECONDS_PER_YEAR
+        )
 
 
 def fit_trend(t_unix_s, elongation_percent, sigma_percent) -> TrendFit:
@@ -103,8 +112,10 @@ def fit_trend(t_unix_s, elongation_percent, sigma_percent) -> TrendFit:
     e = np.asarray(elongation_percent, dtype=float).ravel()
     s = np.asarray(sigma_percent, dtype=float).ravel()
     if not t.size == e.size == s.size:
-        raise ValueError(f"t_unix_s, elongation_percent and sigma_percent must have the same length, got "
-                         f"{t.size}, {e.size}, {s.size}")
+        raise ValueError(
+            f"t_unix_s, elongation_percent and sigma_percent must have the same length, got "
+            f"{t.size}, {e.size}, {s.size}"
+        )
     if t.size < 2:
         raise ValueError(f"a trend needs at least two measurements, got {t.size}")
     if not (np.all(np.isfinite(t)) and np.all(np.isfinite(e)) and np.all(np.isfinite(s))):
@@ -123,8 +134,9 @@ def fit_trend(t_unix_s, elongation_percent, sigma_percent) -> TrendFit:
     dof = t.size - 2
     chi2_dof = chi2 / dof if dof > 0 else float("nan")
     scale = max(1.0, math.sqrt(chi2_dof)) if dof > 0 else 1.0
-    return TrendFit(int(t.size), t_ref, e_ref, scale / math.sqrt(float(np.sum(w))), slope, scale / math.sqrt(stt),
-                    chi2_dof, scale)
+    return TrendFit(
+        int(t.size), t_ref, e_ref, scale / math.sqrt(float(np.sum(w))), slope, scale / math.sqrt(stt), chi2_dof, scale
+    )
 
 
 @dataclass(frozen=True)
@@ -159,8 +171,7 @@ class LimitForecast:
         return _dt.datetime.fromisoformat(d).timestamp() if d else math.inf
 
 
-def forecast_limits(fit, limits_percent=DEFAULT_LIMITS_PERCENT, *, latest_elongation_percent=None,
-                    coverage_sigma=2.0):
+def forecast_limits(fit, limits_percent=DEFAULT_LIMITS_PERCENT, *, latest_elongation_percent=None, coverage_sigma=2.0):
     """Dates at which the fitted trend reaches each elongation limit, with an interval.
 
     Parameters
@@ -207,8 +218,11 @@ def forecast_limits(fit, limits_percent=DEFAULT_LIMITS_PERCENT, *, latest_elonga
 
         if b > k * sb:
             corners = [cross(a_, b_) for a_ in (a - k * sa, a + k * sa) for b_ in (b - k * sb, b + k * sb)]
-            out.append(LimitForecast(lim, "forecast", _unix_to_iso(cross(a, b)), _unix_to_iso(min(corners)),
-                                     _unix_to_iso(max(corners))))
+            out.append(
+                LimitForecast(
+                    lim, "forecast", _unix_to_iso(cross(a, b)), _unix_to_iso(min(corners)), _unix_to_iso(max(corners))
+                )
+            )
         elif b + k * sb > 0:
             out.append(LimitForecast(lim, "not before", None, _unix_to_iso(cross(a + k * sa, b + k * sb)), None))
         else:
@@ -322,8 +336,11 @@ def unit_trend(unit, measurements, *, limits_percent=DEFAULT_LIMITS_PERCENT, cov
     fit = None
     if len(used) >= 2:
         try:
-            fit = fit_trend([m.date_unix_s for m in used], [m.elongation_percent for m in used],
-                            [m.elongation_sigma_percent for m in used])
+            fit = fit_trend(
+                [m.date_unix_s for m in used],
+                [m.elongation_percent for m in used],
+                [m.elongation_sigma_percent for m in used],
+            )
         except ValueError:  # one date only
             fit = None
     last = used[-1] if used else ms[-1]
@@ -338,16 +355,29 @@ def unit_trend(unit, measurements, *, limits_percent=DEFAULT_LIMITS_PERCENT, cov
     else:
         rate = "flat"
     reached = [lim for lim in limits_percent if last.elongation_percent >= lim]
-    fc = forecast_limits(None if rate == "implausible" else fit, limits_percent,
-                         latest_elongation_percent=last.elongation_percent if used else None,
-                         coverage_sigma=coverage_sigma)
+    fc = forecast_limits(
+        None if rate == "implausible" else fit,
+        limits_percent,
+        latest_elongation_percent=last.elongation_percent if used else None,
+        coverage_sigma=coverage_sigma,
+    )
     if rate == "implausible":
         fc = tuple(f if f.status == "reached" else LimitForecast(f.limit_percent, "implausible") for f in fc)
-    outliers = tuple({"id": m.id, "date_utc": m.date_utc, "elongation_percent": m.elongation_percent,
-                      "sigma_percent": m.elongation_sigma_percent, "deviation_sigma": _finite_or_none(z)}
-                     for m, z in scr.outliers)
-    flagged = tuple({"id": m.id, "date_utc": m.date_utc, "quality": m.quality, "reason": m.quality_reason}
-                    for m in ms if m.quality != "ok")
+    outliers = tuple(
+        {
+            "id": m.id,
+            "date_utc": m.date_utc,
+            "elongation_percent": m.elongation_percent,
+            "sigma_percent": m.elongation_sigma_percent,
+            "deviation_sigma": _finite_or_none(z),
+        }
+        for m, z in scr.outliers
+    )
+    flagged = tuple(
+        {"id": m.id, "date_utc": m.date_utc, "quality": m.quality, "reason": m.quality_reason}
+        for m in ms
+        if m.quality != "ok"
+    )
     repl = tuple({"id": m.id, "date_utc": m.date_utc, "reason": why} for m, why in scr.segment_starts)
     if outliers:
         flags.append(f"{len(outliers)} outlier(s) left out: " + ", ".join(o["date_utc"][:10] for o in outliers))
@@ -363,18 +393,29 @@ def unit_trend(unit, measurements, *, limits_percent=DEFAULT_LIMITS_PERCENT, cov
         flags.append(f"latest measurement ({ms[-1].date_utc[:10]}) not used")
     seg_start = repl[-1]["date_utc"] if repl else None
     return UnitTrend(
-        unit=str(unit), n_measurements=len(ms), first_date_utc=ms[0].date_utc, latest_date_utc=last.date_utc,
-        nominal_pitch_m=last.nominal_pitch_m, latest_elongation_percent=last.elongation_percent,
+        unit=str(unit),
+        n_measurements=len(ms),
+        first_date_utc=ms[0].date_utc,
+        latest_date_utc=last.date_utc,
+        nominal_pitch_m=last.nominal_pitch_m,
+        latest_elongation_percent=last.elongation_percent,
         latest_elongation_sigma_percent=last.elongation_sigma_percent,
         latest_verdict=elongation_verdict(last.elongation_percent, limits_percent) if used else "inconclusive",
         slope_percent_per_year=None if fit is None else fit.slope_percent_per_year,
         slope_sigma_percent_per_year=None if fit is None else fit.slope_sigma_percent_per_year,
         chi2_per_dof=None if fit is None or math.isnan(fit.chi2_per_dof) else fit.chi2_per_dof,
-        over_limit_percent=max(reached) if reached and used else None, forecasts=fc, fit=fit,
-        rate_verdict=rate, n_used=len(used), segment_start_utc=seg_start, outliers=outliers, flagged=flagged,
-        replacements=repl, point_labels=tuple((m.id, scr.labels.get(m.id if m.id is not None else id(m), "ok"))
-                                              for m in ms),
-        flags=tuple(flags))
+        over_limit_percent=max(reached) if reached and used else None,
+        forecasts=fc,
+        fit=fit,
+        rate_verdict=rate,
+        n_used=len(used),
+        segment_start_utc=seg_start,
+        outliers=outliers,
+        flagged=flagged,
+        replacements=repl,
+        point_labels=tuple((m.id, scr.labels.get(m.id if m.id is not None else id(m), "ok")) for m in ms),
+        flags=tuple(flags),
+    )
 
 
 def rank_units(trends):
@@ -383,6 +424,7 @@ def rank_units(trends):
     measurements need a visit (an implausible rate, or no usable measurement; largest elongation
     first), then by the earliest "not before" date, then the rest (largest elongation first);
     ``rank`` set from 1."""
+
     def key(u):
         if u.over_limit_percent is not None:
             return (0, -u.over_limit_percent, -u.latest_elongation_percent, u.unit)
@@ -397,5 +439,6 @@ def rank_units(trends):
         return (4, -u.latest_elongation_percent, 0.0, u.unit)
 
     out = sorted(trends, key=key)
-    return [UnitTrend(**{**{k: getattr(u, k) for k in u.__dataclass_fields__}, "rank": i})
-            for i, u in enumerate(out, 1)]
+    return [
+        UnitTrend(**{**{k: getattr(u, k) for k in u.__dataclass_fields__}, "rank": i}) for i, u in enumerate(out, 1)
+    ]

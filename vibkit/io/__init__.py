@@ -26,16 +26,39 @@ from .channels import resolve_channel
 from .errors import RecordingError
 from .netcdf import write_result
 
-__all__ = ["read_recording", "write_result", "resolve_channel", "RecordingError", "SEISMIC_SUFFIXES",
-           "NETCDF_SUFFIXES", "DEFAULT_MAX_RECORDING_BYTES", "max_recording_bytes"]
+__all__ = [
+    "read_recording",
+    "write_result",
+    "resolve_channel",
+    "RecordingError",
+    "SEISMIC_SUFFIXES",
+    "NETCDF_SUFFIXES",
+    "DEFAULT_MAX_RECORDING_BYTES",
+    "max_recording_bytes",
+]
 
 #: largest recording read unless ``max_bytes=`` or ``VIBKIT_MAX_RECORDING_BYTES`` says otherwise [bytes] (4 GiB)
 DEFAULT_MAX_RECORDING_BYTES = 4 * 1024**3
 _MAX_ENV = "VIBKIT_MAX_RECORDING_BYTES"
 
 #: suffixes sent to obspy whatever their content
-SEISMIC_SUFFIXES = (".mseed", ".miniseed", ".msd", ".seed", ".sac", ".gse", ".gse2", ".segy", ".sgy",
-                    ".su", ".ah", ".css", ".knet", ".sh", ".q")
+SEISMIC_SUFFIXES = (
+    ".mseed",
+    ".miniseed",
+    ".msd",
+    ".seed",
+    ".sac",
+    ".gse",
+    ".gse2",
+    ".segy",
+    ".sgy",
+    ".su",
+    ".ah",
+    ".css",
+    ".knet",
+    ".sh",
+    ".q",
+)
 #: suffixes sent to xarray whatever their content
 NETCDF_SUFFIXES = (".nc", ".nc4", ".netcdf", ".h5", ".hdf5", ".he5", ".cdf")
 _HDF5 = b"\x89HDF\r\n\x1a\n"
@@ -69,8 +92,12 @@ def max_recording_bytes(max_bytes=None) -> int:
         if value <= 0:
             raise ValueError(f"environment variable {_MAX_ENV}={env!r}: expected a positive number of bytes")
         return value
-    if isinstance(max_bytes, bool) or not isinstance(max_bytes, (int, float)) or not max_bytes > 0 \
-            or not math.isfinite(max_bytes):
+    if (
+        isinstance(max_bytes, bool)
+        or not isinstance(max_bytes, (int, float))
+        or not max_bytes > 0
+        or not math.isfinite(max_bytes)
+    ):
         raise ValueError(f"max_bytes must be a positive number of bytes, got {max_bytes!r}")
     return int(max_bytes)
 
@@ -87,13 +114,25 @@ def _open_checked(spath: str, limit: int):
     if stat.S_ISDIR(mode):
         raise RecordingError(spath, None, "is a folder, expected a file")
     if not stat.S_ISREG(mode):
-        kind = ("a named pipe (FIFO)" if stat.S_ISFIFO(mode) else "a character device" if stat.S_ISCHR(mode)
-                else "a block device" if stat.S_ISBLK(mode) else "a socket" if stat.S_ISSOCK(mode)
-                else "not a regular file")
+        kind = (
+            "a named pipe (FIFO)"
+            if stat.S_ISFIFO(mode)
+            else "a character device"
+            if stat.S_ISCHR(mode)
+            else "a block device"
+            if stat.S_ISBLK(mode)
+            else "a socket"
+            if stat.S_ISSOCK(mode)
+            else "not a regular file"
+        )
         raise RecordingError(spath, None, f"is {kind}, not a regular file; expected a recording file on disk")
     if st.st_size > limit:
-        raise RecordingError(spath, None, f"is {_gib(st.st_size)}, larger than the {_gib(limit)} limit for a "
-                             f"recording (raise it with max_bytes= or the environment variable {_MAX_ENV})")
+        raise RecordingError(
+            spath,
+            None,
+            f"is {_gib(st.st_size)}, larger than the {_gib(limit)} limit for a "
+            f"recording (raise it with max_bytes= or the environment variable {_MAX_ENV})",
+        )
     try:
         fd = os.open(spath, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_NOCTTY", 0))
     except OSError as exc:
@@ -109,8 +148,12 @@ def _open_checked(spath: str, limit: int):
     finally:
         os.close(fd)
     if len(data) > limit:
-        raise RecordingError(spath, None, f"holds more than the {_gib(limit)} limit for a recording "
-                             f"(raise it with max_bytes= or the environment variable {_MAX_ENV})")
+        raise RecordingError(
+            spath,
+            None,
+            f"holds more than the {_gib(limit)} limit for a recording "
+            f"(raise it with max_bytes= or the environment variable {_MAX_ENV})",
+        )
     return data
 
 
@@ -136,9 +179,22 @@ def _check_options(sample_rate, resample, gap_factor, delimiter, decimal):
         raise ValueError(f"decimal must be '.' or ',', got {decimal!r}")
 
 
-def read_recording(path, *, channel=None, sample_rate=None, time_column=None, time_unit=None, units=None,
-                   resample=None, gap_factor=5.0, repair_time=False, delimiter=None, decimal=None,
-                   encoding=None, max_bytes=None):
+def read_recording(
+    path,
+    *,
+    channel=None,
+    sample_rate=None,
+    time_column=None,
+    time_unit=None,
+    units=None,
+    resample=None,
+    gap_factor=5.0,
+    repair_time=False,
+    delimiter=None,
+    decimal=None,
+    encoding=None,
+    max_bytes=None,
+):
     """Read a field recording (or a vibkit result) into an xarray Dataset.
 
     Parameters
@@ -219,8 +275,9 @@ def read_recording(path, *, channel=None, sample_rate=None, time_column=None, ti
     if not data:
         raise RecordingError(spath, None, "file is empty (0 bytes); expected a recording")
     suffix = os.path.splitext(spath)[1].lower()
-    common = dict(channel=channel, sample_rate=sample_rate, resample=resample, gap_factor=gap_factor,
-                  repair_time=repair_time)
+    common = dict(
+        channel=channel, sample_rate=sample_rate, resample=resample, gap_factor=gap_factor, repair_time=repair_time
+    )
     if data.startswith(_HDF5) or data[:4] in (b"CDF\x01", b"CDF\x02") or suffix in NETCDF_SUFFIXES:
         from .netcdf import read_netcdf
 
@@ -237,5 +294,14 @@ def read_recording(path, *, channel=None, sample_rate=None, time_column=None, ti
         return read_seismic(spath, data, units=units, **common)
     from .csv import read_csv
 
-    return read_csv(spath, data, time_column=time_column, time_unit=time_unit, units=units,
-                    delimiter=delimiter, decimal=decimal, encoding=encoding, **common)
+    return read_csv(
+        spath,
+        data,
+        time_column=time_column,
+        time_unit=time_unit,
+        units=units,
+        delimiter=delimiter,
+        decimal=decimal,
+        encoding=encoding,
+        **common,
+    )

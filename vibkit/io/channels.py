@@ -26,7 +26,8 @@ _COUNTER_NAME = re.compile(
     r"^(?:#|n|nr|no\.?|num|number|idx|index|row|record|count|counter"
     r"|(?:sample|muestra|punto|data ?point)s?(?:[ _-]?(?:#|n|nr|no\.?|num|number|index|idx|count|counter))?"
     r"|(?:#|n|nr|no\.?|num|number|index|idx)[ _-]?(?:de[ _-])?(?:sample|muestra|point|row)s?)$",
-    re.IGNORECASE)
+    re.IGNORECASE,
+)
 
 
 def _norm(text) -> str:
@@ -56,8 +57,13 @@ def _channels(recording):
 
 def _counters(recording):
     """Columns that count samples: coordinates along time (or, in older results, data variables) marked so."""
-    return [str(v) for v in recording.variables if v not in ("time", "segment") and recording[v].dims == ("time",)
-            and int(recording[v].attrs.get(COUNTER_ATTR, 0))]
+    return [
+        str(v)
+        for v in recording.variables
+        if v not in ("time", "segment")
+        and recording[v].dims == ("time",)
+        and int(recording[v].attrs.get(COUNTER_ATTR, 0))
+    ]
 
 
 def _where(recording) -> str:
@@ -98,8 +104,10 @@ def resolve_channel(recording, channel=None) -> str:
         for n in names:
             if n not in counters:
                 return n
-        raise ValueError(f"{where}the only channel(s) {', '.join(repr(n) for n in names)} count samples "
-                         "(index, sample number); name one with channel= to analyse it anyway")
+        raise ValueError(
+            f"{where}the only channel(s) {', '.join(repr(n) for n in names)} count samples "
+            "(index, sample number); name one with channel= to analyse it anyway"
+        )
     want = _norm(channel)
     for keys in (("__name__",), ("source_name", "column", "trace_id"), ("channel_code",), ("long_name",)):
         for n in names:

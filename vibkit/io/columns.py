@@ -69,8 +69,11 @@ def _select_channels(path, channel, tcol, colnames: _ColumnNames, n, header_line
         for w in wanted:
             j = colnames.match(w)
             if j is None or j == tcol:
-                raise RecordingError(path, header_line, f"no channel {w!r}; channels: "
-                                     + ", ".join(repr(header_disp[k]) for k in range(n) if k != tcol))
+                raise RecordingError(
+                    path,
+                    header_line,
+                    f"no channel {w!r}; channels: " + ", ".join(repr(header_disp[k]) for k in range(n) if k != tcol),
+                )
             picked.append(j)
         chan_idx = list(dict.fromkeys(picked))
     if not chan_idx:
@@ -88,16 +91,18 @@ def _unit_overrides(path, units, chan_idx, colnames: _ColumnNames):
         for key, u in units.items():
             j = colnames.match(key)
             if j is None:
-                raise ValueError(f"units: no column {key!r} in {path}; columns: "
-                                 + ", ".join(repr(h) for h in header_disp))
+                raise ValueError(
+                    f"units: no column {key!r} in {path}; columns: " + ", ".join(repr(h) for h in header_disp)
+                )
             override[j] = u
     elif isinstance(units, str):
         override = {j: units for j in chan_idx}
     return override
 
 
-def _build_channels(path, cols, rownums, dec, chan_idx, explicit, override, colnames: _ColumnNames, scale_meta,
-                    header_line, history):
+def _build_channels(
+    path, cols, rownums, dec, chan_idx, explicit, override, colnames: _ColumnNames, scale_meta, header_line, history
+):
     """The channels of columns ``chan_idx``, in SI units where the unit is known."""
     header_disp, split_names, vars_ = colnames.shown, colnames.split, colnames.vars
     channels = []
@@ -114,12 +119,15 @@ def _build_channels(path, cols, rownums, dec, chan_idx, explicit, override, coln
             raise RecordingError(path, int(rownums[i]), f"expected a number in column '{head}', found '{cells[i]}'")
         if inf.size:
             i = int(inf[0])
-            raise RecordingError(path, int(rownums[i]), f"expected a finite number in column '{head}', "
-                                 f"found '{cells[i]}'")
+            raise RecordingError(
+                path, int(rownums[i]), f"expected a finite number in column '{head}', found '{cells[i]}'"
+            )
         nmiss = int(np.count_nonzero(np.isnan(vals)))
         if nmiss == vals.size:
-            msg = (f"all values in column '{head}' are missing (NaN or empty), lines "
-                   f"{rownums[0]}-{rownums[-1]}; expected numbers")
+            msg = (
+                f"all values in column '{head}' are missing (NaN or empty), lines "
+                f"{rownums[0]}-{rownums[-1]}; expected numbers"
+            )
             if explicit or len(chan_idx) == 1:
                 raise RecordingError(path, None, msg)
             history.append(msg.replace("; expected numbers", "; column skipped"))
@@ -138,8 +146,10 @@ def _build_channels(path, cols, rownums, dec, chan_idx, explicit, override, coln
             u_text = override[j]
             unit = parse_unit(u_text) if isinstance(u_text, str) else None
             if unit is None:
-                raise ValueError(f"units[{head!r}]={u_text!r} (for {path}) is not a unit vibkit knows; expected e.g. "
-                                 "'m/s^2', 'g', 'mm', 'm', 'mm/s', 'counts' or a scaled one like 'g/2048'")
+                raise ValueError(
+                    f"units[{head!r}]={u_text!r} (for {path}) is not a unit vibkit knows; expected e.g. "
+                    "'m/s^2', 'g', 'mm', 'm', 'mm/s', 'counts' or a scaled one like 'g/2048'"
+                )
             source = f"{u_text} (given)"
         elif unit_text is not None:
             unit = parse_unit(unit_text)
@@ -150,23 +160,28 @@ def _build_channels(path, cols, rownums, dec, chan_idx, explicit, override, coln
             unit, source = None, None
         if (unit is None and unit_text is None or unit is not None and unit.factor is None) and scale_meta:
             factor, su, lineno, stext = scale_meta
-            history.append(f"column '{head}' in counts, scale from header line {lineno} ('{stext}') "
-                           f"-> {su.si} (x {factor:.9g})")
+            history.append(
+                f"column '{head}' in counts, scale from header line {lineno} ('{stext}') -> {su.si} (x {factor:.9g})"
+            )
             vals = vals * factor
             attrs["original_units"] = "counts"
             ch_units, quantity = su.si, su.quantity
         elif unit is None:
             if unit_text is None:
-                history.append(f"column '{head}' has no unit; values kept as found (units 'unknown'; "
-                               f"pass units={{'{vars_[j]}': ...}})")
+                history.append(
+                    f"column '{head}' has no unit; values kept as found (units 'unknown'; "
+                    f"pass units={{'{vars_[j]}': ...}})"
+                )
                 ch_units = "unknown"
             else:
                 history.append(f"unit '{unit_text}' of column '{head}' not recognised; values kept as found")
                 ch_units = unit_text
             quantity = "other"
         elif unit.factor is None:
-            history.append(f"column '{head}' in counts with no scale; kept in counts "
-                           f"(pass units={{'{vars_[j]}': 'g/<counts per g>'}})")
+            history.append(
+                f"column '{head}' in counts with no scale; kept in counts "
+                f"(pass units={{'{vars_[j]}': 'g/<counts per g>'}})"
+            )
             ch_units, quantity = "counts", "other"
             attrs["original_units"] = source
         else:

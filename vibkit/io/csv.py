@@ -35,10 +35,10 @@ from .columns import _build_channels, _column_names, _select_channels, _unit_ove
 from .errors import RecordingError
 from .fastpath import _HEAD_BYTES, _Fallback, _fast_rows
 from .layout import _decode, _decode_head, _read_layout
+from .loggers import app_units
 from .metadata import _meta_pair, _rate_from_meta, _scale_from_meta
 from .recording import build_recording, metadata_attrs
 from .timebase import check_order, diagnose, held_update_rate, resample_linear
-from .loggers import app_units
 from .timecolumn import _choose_time_column, _read_time
 
 __all__ = ["read_csv", "DELIMITERS"]
@@ -49,9 +49,22 @@ def _pct(fraction: float) -> str:
     return "0" if abs(fraction) < 1e-8 else f"{100 * fraction:.2g}"
 
 
-def read_csv(path, data: bytes, *, channel=None, sample_rate=None, time_column=None, time_unit=None,
-             units=None, resample=None, gap_factor=5.0, repair_time=False, delimiter=None, decimal=None,
-             encoding=None):
+def read_csv(
+    path,
+    data: bytes,
+    *,
+    channel=None,
+    sample_rate=None,
+    time_column=None,
+    time_unit=None,
+    units=None,
+    resample=None,
+    gap_factor=5.0,
+    repair_time=False,
+    delimiter=None,
+    decimal=None,
+    encoding=None,
+):
     """Read a CSV or text export into a recording Dataset.
 
     Parameters are those of :func:`vibkit.io.read_recording`; ``data`` holds the
@@ -75,23 +88,51 @@ def read_csv(path, data: bytes, *, channel=None, sample_rate=None, time_column=N
     ragged long rows, infinities, lone CR line ends) sends the file through the
     line-by-line reader, which says where and what.
     """
-    kw = dict(channel=channel, sample_rate=sample_rate, time_column=time_column, time_unit=time_unit, units=units,
-              resample=resample, gap_factor=gap_factor, repair_time=repair_time, delimiter=delimiter,
-              decimal=decimal, encoding=encoding)
+    kw = dict(
+        channel=channel,
+        sample_rate=sample_rate,
+        time_column=time_column,
+        time_unit=time_unit,
+        units=units,
+        resample=resample,
+        gap_factor=gap_factor,
+        repair_time=repair_time,
+        delimiter=delimiter,
+        decimal=decimal,
+        encoding=encoding,
+    )
     try:
         return _read_csv(path, data, fast=True, **kw)
     except _Fallback as why:
         try:
             return _read_csv(path, data, fast=False, **kw)
         except MemoryError:
-            raise RecordingError(path, None, f"not enough memory: {len(data) / 1e6:.0f} MB of rows need the "
-                                 f"line-by-line reader ({why}); remove that from the file or read it in "
-                                 "parts") from None
+            raise RecordingError(
+                path,
+                None,
+                f"not enough memory: {len(data) / 1e6:.0f} MB of rows need the "
+                f"line-by-line reader ({why}); remove that from the file or read it in "
+                "parts",
+            ) from None
 
 
-def _read_csv(path, data: bytes, *, fast, channel=None, sample_rate=None, time_column=None, time_unit=None,
-              units=None, resample=None, gap_factor=5.0, repair_time=False, delimiter=None, decimal=None,
-              encoding=None):
+def _read_csv(
+    path,
+    data: bytes,
+    *,
+    fast,
+    channel=None,
+    sample_rate=None,
+    time_column=None,
+    time_unit=None,
+    units=None,
+    resample=None,
+    gap_factor=5.0,
+    repair_time=False,
+    delimiter=None,
+    decimal=None,
+    encoding=None,
+):
     """:func:`read_csv` through the fast path (``fast=True``, may raise :class:`_Fallback`) or line by line."""
     history = []
     pdata, complete, codec = data, True, None
@@ -127,29 +168,75 @@ def _read_csv(path, data: bytes, *, fast, channel=None, sample_rate=None, time_c
     tname = None
     if tcol is not None:
         tname = colnames.shown[tcol]
-        t = _read_time(path, cols[tcol], tname, colnames.split[tcol][1], dec, rownums, header_line, time_unit,
-                       rate_meta, history, extra_attrs)
+        t = _read_time(
+            path,
+            cols[tcol],
+            tname,
+            colnames.split[tcol][1],
+            dec,
+            rownums,
+            header_line,
+            time_unit,
+            rate_meta,
+            history,
+            extra_attrs,
+        )
         time_attrs["column"] = tname
-    channels = _build_channels(path, cols, rownums, dec, chan_idx, explicit, override, colnames, scale_meta,
-                               header_line, history)
-    t, fs, segment = _time_base(path, t, tname, channels, nrows, rownums, header_line, sample_rate, rate_meta,
-                                resample, gap_factor, repair_time, history, extra_attrs)
+    channels = _build_channels(
+        path, cols, rownums, dec, chan_idx, explicit, override, colnames, scale_meta, header_line, history
+    )
+    t, fs, segment = _time_base(
+        path,
+        t,
+        tname,
+        channels,
+        nrows,
+        rownums,
+        header_line,
+        sample_rate,
+        rate_meta,
+        resample,
+        gap_factor,
+        repair_time,
+        history,
+        extra_attrs,
+    )
 
     pairs, free = lay.pairs, lay.free
     if free:
         pairs.append((0, "comment", "\n".join(free)))
     metadata = metadata_attrs([(k, v) for _, k, v in pairs])
     metadata.update(extra_attrs)
-    return build_recording(time=t, channels=channels, segment=segment, path=path, data_bytes=data,
-                           reader="vibkit.io.csv", sample_rate_hz=fs, history=history,
-                           metadata=metadata, time_attrs=time_attrs)
+    return build_recording(
+        time=t,
+        channels=channels,
+        segment=segment,
+        path=path,
+        data_bytes=data,
+        reader="vibkit.io.csv",
+        sample_rate_hz=fs,
+        history=history,
+        metadata=metadata,
+        time_attrs=time_attrs,
+    )
 
 
 def _fast_rows_checked(path, lay, pdata, codec, history):
     """(columns, file line of each row, row count) parsed by pandas' C reader; :class:`_Fallback` for < 2 rows."""
     first, split = lay.first, lay.split
-    cols, rownums = _fast_rows(path, pdata, first, lay.n, lay.delim, lay.dec, lay.trailing, split(lay.lines[first]),
-                               split, codec, lay.header_line)
+    cols, rownums = _fast_rows(
+        path,
+        pdata,
+        first,
+        lay.n,
+        lay.delim,
+        lay.dec,
+        lay.trailing,
+        split(lay.lines[first]),
+        split,
+        codec,
+        lay.header_line,
+    )
     nrows = len(rownums)
     if nrows < 2:
         raise _Fallback("fewer than 2 rows")
@@ -196,8 +283,10 @@ def _read_rows_by_line(path, lay, history):
         rows.append(cells)
         rownums.append(i + 1)
     if after:
-        history.append(f"{len(after)} comment line(s) among or after the data skipped (line {after[0]}"
-                       + (f" ... {after[-1]})" if len(after) > 1 else ")"))
+        history.append(
+            f"{len(after)} comment line(s) among or after the data skipped (line {after[0]}"
+            + (f" ... {after[-1]})" if len(after) > 1 else ")")
+        )
     rownums = np.asarray(rownums)
     if len(rows) < 2:
         raise RecordingError(path, int(rownums[0]), "only one data row; expected at least 2 samples")
@@ -205,8 +294,22 @@ def _read_rows_by_line(path, lay, history):
     return cols, rownums, len(rows)
 
 
-def _time_base(path, t, tname, channels, nrows, rownums, header_line, sample_rate, rate_meta, resample, gap_factor,
-               repair_time, history, extra_attrs):
+def _time_base(
+    path,
+    t,
+    tname,
+    channels,
+    nrows,
+    rownums,
+    header_line,
+    sample_rate,
+    rate_meta,
+    resample,
+    gap_factor,
+    repair_time,
+    history,
+    extra_attrs,
+):
     """(time [s], sample rate [Hz], segment or None): from the time column, else from the sample rate.
 
     Checks order (repairing it with ``repair_time``), splits segments at gaps,
@@ -224,11 +327,16 @@ def _time_base(path, t, tname, channels, nrows, rownums, header_line, sample_rat
             history.append(f"no time column; time = sample index / {fs:g} Hz (sample_rate given)")
         elif rate_meta is not None:
             fs = rate_meta[0]
-            history.append(f"no time column; time = sample index / {fs:g} Hz "
-                           f"(header line {rate_meta[1]}, '{rate_meta[2]}')")
+            history.append(
+                f"no time column; time = sample index / {fs:g} Hz (header line {rate_meta[1]}, '{rate_meta[2]}')"
+            )
         else:
-            raise RecordingError(path, header_line, "no time column and no sample rate in the header; "
-                                 "expected a time column (time_column=) or a sample rate (sample_rate=)")
+            raise RecordingError(
+                path,
+                header_line,
+                "no time column and no sample rate in the header; "
+                "expected a time column (time_column=) or a sample rate (sample_rate=)",
+            )
         t = np.arange(nrows) / fs
         jitter = 0.0
     else:
@@ -239,8 +347,9 @@ def _time_base(path, t, tname, channels, nrows, rownums, header_line, sample_rat
             for ch in channels:
                 ch.values = ch.values[keep]
         if t.size < 2:
-            raise RecordingError(path, int(rownums[0]), "only one sample left after repairing time; "
-                                 "expected at least 2")
+            raise RecordingError(
+                path, int(rownums[0]), "only one sample left after repairing time; expected at least 2"
+            )
         diag = diagnose(t, gap_factor=gap_factor)
         measured = 1.0 / diag.period_s
         if fs_given is not None:
@@ -260,14 +369,15 @@ def _time_base(path, t, tname, channels, nrows, rownums, header_line, sample_rat
                 history.append(f"nominal and measured sample rates differ by {100 * (measured / fs - 1):+.2g} %")
         jitter = diag.jitter_rms
         if diag.n_segments > 1:
-            history.append(f"{diag.n_segments} segments split at gaps > {gap_factor:g} sample periods "
-                           f"(gaps {diag.gaps_s.min():.6g} to {diag.gaps_s.max():.6g} s); kept as segments, "
-                           "not bridged")
+            history.append(
+                f"{diag.n_segments} segments split at gaps > {gap_factor:g} sample periods "
+                f"(gaps {diag.gaps_s.min():.6g} to {diag.gaps_s.max():.6g} s); kept as segments, "
+                "not bridged"
+            )
             segment = diag.segment
         _held_samples(t, channels, measured, history, extra_attrs)
         policy = "resampled below" if resample == "linear" else "kept as is"
-        history.append(f"jitter rms {_pct(diag.jitter_rms)} % of the period "
-                       f"(max {_pct(diag.jitter_max)} %), {policy}")
+        history.append(f"jitter rms {_pct(diag.jitter_rms)} % of the period (max {_pct(diag.jitter_max)} %), {policy}")
         if resample == "linear":
             cols_in = {ch.name: ch.values for ch in channels}
             seg_in = diag.segment
@@ -293,11 +403,13 @@ def _held_samples(t, channels, row_rate, history, extra_attrs):
     if rates:
         lo = min(rates.values())
         every = len(rates) == len(channels)
-        history.append(f"held samples: rows come at {row_rate:.4g} Hz but the values of "
-                       + ", ".join(f"{k} change {v:.3g}" for k, v in rates.items())
-                       + f" times a second (repeated between updates); true update rate {lo:.3g} Hz, so nothing "
-                       f"above its Nyquist frequency {lo / 2:.3g} Hz is in "
-                       + ("the data" if every else "those channels (attrs update_rate_hz, nyquist_hz)"))
+        history.append(
+            f"held samples: rows come at {row_rate:.4g} Hz but the values of "
+            + ", ".join(f"{k} change {v:.3g}" for k, v in rates.items())
+            + f" times a second (repeated between updates); true update rate {lo:.3g} Hz, so nothing "
+            f"above its Nyquist frequency {lo / 2:.3g} Hz is in "
+            + ("the data" if every else "those channels (attrs update_rate_hz, nyquist_hz)")
+        )
         if every:
             extra_attrs["update_rate_hz"] = float(lo)
             extra_attrs["nyquist_hz"] = float(lo / 2)

@@ -66,10 +66,21 @@ def _fast_rows(path, data, first, n, d, dec, trailing, first_cells, split, encod
     buf = _io.BytesIO(data)
     buf.seek(offset)
     try:
-        df = pd.read_csv(buf, sep=r"\s+" if d == " " else d, decimal=dec, header=None, names=list(range(ncols)),
-                         index_col=False, dtype=dtype, keep_default_na=False,
-                         na_values={j: _NA_STRINGS for j in range(ncols) if j not in objcols + intcols},
-                         skip_blank_lines=False, engine="c", quotechar='"', encoding=encoding)
+        df = pd.read_csv(
+            buf,
+            sep=r"\s+" if d == " " else d,
+            decimal=dec,
+            header=None,
+            names=list(range(ncols)),
+            index_col=False,
+            dtype=dtype,
+            keep_default_na=False,
+            na_values={j: _NA_STRINGS for j in range(ncols) if j not in objcols + intcols},
+            skip_blank_lines=False,
+            engine="c",
+            quotechar='"',
+            encoding=encoding,
+        )
     except (ValueError, TypeError, UnicodeDecodeError, pd.errors.ParserError, OverflowError):
         raise _Fallback("a row pandas' reader cannot take") from None
     finally:
@@ -83,8 +94,10 @@ def _fast_rows(path, data, first, n, d, dec, trailing, first_cells, split, encod
         lead = df[0].astype(str).str.lstrip()
         if (lead.str.startswith(_COMMENT) | (lead.str.startswith(";") if d != ";" else False)).any():
             raise _Fallback("comment lines among the data")  # the line-by-line reader records them
-    cols = [df[j].to_numpy(dtype=object if j in objcols else np.int64 if j in intcols else np.float64, copy=False)
-            for j in range(n)]
+    cols = [
+        df[j].to_numpy(dtype=object if j in objcols else np.int64 if j in intcols else np.float64, copy=False)
+        for j in range(n)
+    ]
     if trailing:
         last = df[ncols - 1].to_numpy(dtype=np.float64)
         if not np.all(np.isnan(last)):
@@ -93,7 +106,7 @@ def _fast_rows(path, data, first, n, d, dec, trailing, first_cells, split, encod
     flagged = np.zeros(nlines, dtype=bool)
     for j, c in enumerate(cols):
         if j in objcols:
-            flagged |= (c == "")
+            flagged |= c == ""
         elif j in intcols:
             continue
         else:

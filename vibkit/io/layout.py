@@ -11,8 +11,17 @@ import re
 from collections import Counter
 from dataclasses import dataclass
 
-from .cells import (_COMMENT, _DELIM_NAMES, _MISSING, DELIMITERS, _data_like, _is_comment, _kind,
-                    _mostly_numbers, _Splitter)
+from .cells import (
+    _COMMENT,
+    _DELIM_NAMES,
+    _MISSING,
+    DELIMITERS,
+    _data_like,
+    _is_comment,
+    _kind,
+    _mostly_numbers,
+    _Splitter,
+)
 from .errors import RecordingError
 from .fastpath import _HEAD_BYTES, _Fallback
 from .metadata import _header_from_meta, _metadata
@@ -21,8 +30,12 @@ from .units import parse_time_unit, parse_unit
 __all__ = ["utf16_without_bom"]
 
 _CONTROL = re.compile("[\x00-\x08\x0b\x0e-\x1f\x7f-\x9f]")
-_BOMS = ((b"\xff\xfe\x00\x00", "utf-32"), (b"\x00\x00\xfe\xff", "utf-32"), (b"\xff\xfe", "utf-16"),
-         (b"\xfe\xff", "utf-16"))
+_BOMS = (
+    (b"\xff\xfe\x00\x00", "utf-32"),
+    (b"\x00\x00\xfe\xff", "utf-32"),
+    (b"\xff\xfe", "utf-16"),
+    (b"\xfe\xff", "utf-16"),
+)
 
 
 def _hash_header(line: str, delim: str, n: int, split) -> bool:
@@ -65,21 +78,33 @@ def _decode(path, data: bytes, encoding):
             try:
                 return data.decode(codec), [f"encoding {codec.upper()} (byte-order mark)"]
             except UnicodeDecodeError as exc:
-                raise RecordingError(path, None, f"starts with a {codec.upper()} byte-order mark but cannot be "
-                                     f"decoded as {codec.upper()} ({exc.reason} at byte {exc.start})") from None
+                raise RecordingError(
+                    path,
+                    None,
+                    f"starts with a {codec.upper()} byte-order mark but cannot be "
+                    f"decoded as {codec.upper()} ({exc.reason} at byte {exc.start})",
+                ) from None
     codec = utf16_without_bom(data)
     if codec is not None:
         try:
             return data.decode(codec), [f"encoding {codec.upper()} (no byte-order mark; every other byte is zero)"]
         except UnicodeDecodeError as exc:
-            raise RecordingError(path, None, f"looks like {codec.upper()} text without a byte-order mark but "
-                                 f"cannot be decoded as such ({exc.reason} at byte {exc.start}); "
-                                 "pass encoding=") from None
+            raise RecordingError(
+                path,
+                None,
+                f"looks like {codec.upper()} text without a byte-order mark but "
+                f"cannot be decoded as such ({exc.reason} at byte {exc.start}); "
+                "pass encoding=",
+            ) from None
     head = data[:65536]
     nul = head.find(b"\x00")
     if nul >= 0:
-        raise RecordingError(path, None, f"binary content (NUL byte at offset {nul}); "
-                                         "expected a text file, netCDF/HDF5 or a waveform format obspy reads")
+        raise RecordingError(
+            path,
+            None,
+            f"binary content (NUL byte at offset {nul}); "
+            "expected a text file, netCDF/HDF5 or a waveform format obspy reads",
+        )
     try:
         text, notes = data.decode("utf-8-sig"), []
     except UnicodeDecodeError:
@@ -90,8 +115,12 @@ def _decode(path, data: bytes, encoding):
     sample = text[:65536]
     ctrl = len(_CONTROL.findall(sample))
     if sample and ctrl > max(2, 0.01 * len(sample)):
-        raise RecordingError(path, None, f"binary content ({ctrl} control bytes in the first {len(sample)}); "
-                                         "expected a text file, netCDF/HDF5 or a waveform format obspy reads")
+        raise RecordingError(
+            path,
+            None,
+            f"binary content ({ctrl} control bytes in the first {len(sample)}); "
+            "expected a text file, netCDF/HDF5 or a waveform format obspy reads",
+        )
     return text, notes
 
 
@@ -105,7 +134,7 @@ def _decode_head(path, data, encoding):
         codec = "utf-8" if not notes else notes[0].split()[1]
         return text, notes, codec, data, True
     head = data[:_HEAD_BYTES]
-    head = head[:head.rfind(b"\n") + 1]
+    head = head[: head.rfind(b"\n") + 1]
     if not head:
         raise _Fallback("no complete line in the first MiB")
     text, notes = _decode(path, head, None)
@@ -217,8 +246,9 @@ def _read_layout(path, text: str, delimiter, decimal, complete: bool, history: l
     if first is None:
         allmiss = [i for i, c in nonblank if len(c) == n and all(_kind(x, dec) == "missing" for x in c)]
         if allmiss:
-            raise RecordingError(path, allmiss[0] + 1, "all values are missing (NaN or empty); "
-                                                       "expected at least one number per row")
+            raise RecordingError(
+                path, allmiss[0] + 1, "all values are missing (NaN or empty); expected at least one number per row"
+            )
         i_last = nonblank[-1][0] + 1 if nonblank else None
         raise RecordingError(path, i_last, "no data rows found (expected rows of numbers below the header)")
     if delimiter is None and d != ",":
@@ -226,8 +256,9 @@ def _read_layout(path, text: str, delimiter, decimal, complete: bool, history: l
     elif delimiter is not None:
         history.append(f"delimiter {_DELIM_NAMES[d]} (given)")
     if decimal is None:
-        if dec == "," and any("," in c for ln in lines[first:first + 200] for c in split(ln)
-                              if not _is_comment(ln, d)):
+        if dec == "," and any(
+            "," in c for ln in lines[first : first + 200] for c in split(ln) if not _is_comment(ln, d)
+        ):
             history.append("decimal comma detected")
         elif dec == ",":
             dec = "."
@@ -256,8 +287,7 @@ def _no_data(path, lines):
     for i in body:
         cells = [c.strip('"') for c in re.split(r"[,;\t| ]+", lines[i].strip())]
         if all(c.lower() in _MISSING for c in cells):
-            raise RecordingError(path, i + 1, "all values are missing (NaN or empty); "
-                                              "expected rows of numbers")
+            raise RecordingError(path, i + 1, "all values are missing (NaN or empty); expected rows of numbers")
     raise RecordingError(path, last, "no data rows found (expected rows of numbers below the header)")
 
 
@@ -280,9 +310,14 @@ def _header_rows(path, nonblank, n, dec):
     """(header cells, its 1-based line, units row cells, its line) from the lines above the data; Nones if absent."""
     header, header_line = None, None
     unit_row, unit_line = None, None
-    if (len(nonblank) > 1 and len(nonblank[-1][1]) == n and len(nonblank[-2][1]) == n
-            and any(nonblank[-1][1]) and all(_is_unit_cell(c) for c in nonblank[-1][1])
-            and all(_kind(c, dec) in ("text", "missing") for c in nonblank[-2][1])):
+    if (
+        len(nonblank) > 1
+        and len(nonblank[-1][1]) == n
+        and len(nonblank[-2][1]) == n
+        and any(nonblank[-1][1])
+        and all(_is_unit_cell(c) for c in nonblank[-1][1])
+        and all(_kind(c, dec) in ("text", "missing") for c in nonblank[-2][1])
+    ):
         unit_line, unit_row = nonblank[-1][0] + 1, nonblank[-1][1]  # a row of units below the names
         nonblank = nonblank[:-1]
     if nonblank:
@@ -290,9 +325,14 @@ def _header_rows(path, nonblank, n, dec):
         kinds = [_kind(c, dec) for c in hcells]
         if len(hcells) == n and "num" not in kinds and "stamp" not in kinds and "text" in kinds:
             header, header_line = hcells, hi + 1
-        elif (len(hcells) == n and "num" in kinds and "text" in kinds and len(nonblank) > 1
-              and len(nonblank[-2][1]) == n
-              and all(_kind(c, dec) in ("text", "missing") for c in nonblank[-2][1])):
+        elif (
+            len(hcells) == n
+            and "num" in kinds
+            and "text" in kinds
+            and len(nonblank) > 1
+            and len(nonblank[-2][1]) == n
+            and all(_kind(c, dec) in ("text", "missing") for c in nonblank[-2][1])
+        ):
             j = kinds.index("text")
             col = nonblank[-2][1][j]
             raise RecordingError(path, hi + 1, f"expected a number in column '{col}', found '{hcells[j]}'")

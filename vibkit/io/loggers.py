@@ -27,9 +27,12 @@ import re
 __all__ = ["app_units"]
 
 _SENSOR_LOGGER_FILES = (  # file name (lower case, no separators) -> (unit of x, y, z, what the app calls it)
-    ("totalacceleration", "m/s^2", "TotalAcceleration.csv"), ("accelerometer", "m/s^2", "Accelerometer.csv"),
-    ("acceleration", "m/s^2", "Accelerometer.csv"), ("gravity", "m/s^2", "Gravity.csv"),
-    ("gyroscope", "rad/s", "Gyroscope.csv"), ("gyro", "rad/s", "Gyroscope.csv"),
+    ("totalacceleration", "m/s^2", "TotalAcceleration.csv"),
+    ("accelerometer", "m/s^2", "Accelerometer.csv"),
+    ("acceleration", "m/s^2", "Accelerometer.csv"),
+    ("gravity", "m/s^2", "Gravity.csv"),
+    ("gyroscope", "rad/s", "Gyroscope.csv"),
+    ("gyro", "rad/s", "Gyroscope.csv"),
 )
 _PTB_UNITS = {"ax": "m/s^2", "ay": "m/s^2", "az": "m/s^2", "wx": "rad/s", "wy": "rad/s", "wz": "rad/s"}
 _PICOQUAKE = re.compile(r"^[ag]_[xyz]$")
@@ -58,22 +61,31 @@ def app_units(path, names, units, free_text, history):
         for key, unit, app_name in _SENSOR_LOGGER_FILES:
             if key in base:
                 out = {j: unit for j, n in enumerate(low) if n in ("x", "y", "z") and units[j] is None}
-                history.append(f"Sensor Logger export ('time,seconds_elapsed,...'): x, y, z in {unit}, as the app "
-                               f"documents for {app_name} (file name); pass units= to override")
+                history.append(
+                    f"Sensor Logger export ('time,seconds_elapsed,...'): x, y, z in {unit}, as the app "
+                    f"documents for {app_name} (file name); pass units= to override"
+                )
                 break
         else:
-            history.append("Sensor Logger export ('time,seconds_elapsed,...'): the file name does not say the "
-                           "sensor, so x, y, z keep no unit; pass units= (e.g. m/s^2 for the accelerometer)")
+            history.append(
+                "Sensor Logger export ('time,seconds_elapsed,...'): the file name does not say the "
+                "sensor, so x, y, z keep no unit; pass units= (e.g. m/s^2 for the accelerometer)"
+            )
     elif {"gfx", "gfy", "gfz"} <= set(low):
         out = {j: _PTB_UNITS[n] for j, n in enumerate(low) if n in _PTB_UNITS and units[j] is None}
         if out:
-            history.append("Physics Toolbox Sensor Suite export (gFx, gFy, gFz): "
-                           + ", ".join(f"{names[j]} in {u}" for j, u in out.items())
-                           + " as the app documents; pass units= to override")
+            history.append(
+                "Physics Toolbox Sensor Suite export (gFx, gFy, gFz): "
+                + ", ".join(f"{names[j]} in {u}" for j, u in out.items())
+                + " as the app documents; pass units= to override"
+            )
     elif any("picoquake" in t.lower() for t in free_text):
-        out = {j: ("g" if n[0] == "a" else "deg/s") for j, n in enumerate(low)
-               if _PICOQUAKE.match(n) and units[j] is None}
+        out = {
+            j: ("g" if n[0] == "a" else "deg/s") for j, n in enumerate(low) if _PICOQUAKE.match(n) and units[j] is None
+        }
         if out:
-            history.append("PicoQuake export ('# PLab PicoQuake Data'): a_x, a_y, a_z in g and g_x, g_y, g_z in "
-                           "deg/s, as PLab documents; pass units= to override")
+            history.append(
+                "PicoQuake export ('# PLab PicoQuake Data'): a_x, a_y, a_z in g and g_x, g_y, g_z in "
+                "deg/s, as PLab documents; pass units= to override"
+            )
     return out

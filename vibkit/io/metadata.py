@@ -15,11 +15,17 @@ from .units import parse_unit
 
 __all__ = []
 
-_RATE_KEY = re.compile(r"sampl\w*[\s_-]*(?:rate|freq)|samplerate|^fs\b|frecuencia\s*de\s*muestreo"
-                       r"|^data[\s_-]*rate$|^odr$"
-                       r"|sampling|muestreo|abtastrate", re.IGNORECASE)
-_SCALE = re.compile(r"([0-9]+(?:[.,][0-9]*)?(?:[eE][+-]?[0-9]+)?)\s*,?\s*(?:counts?|lsb|cts|digits)\s*"
-                    r"(?:/|per)\s*([^\s,;]+)", re.IGNORECASE)
+_RATE_KEY = re.compile(
+    r"sampl\w*[\s_-]*(?:rate|freq)|samplerate|^fs\b|frecuencia\s*de\s*muestreo"
+    r"|^data[\s_-]*rate$|^odr$"
+    r"|sampling|muestreo|abtastrate",
+    re.IGNORECASE,
+)
+_SCALE = re.compile(
+    r"([0-9]+(?:[.,][0-9]*)?(?:[eE][+-]?[0-9]+)?)\s*,?\s*(?:counts?|lsb|cts|digits)\s*"
+    r"(?:/|per)\s*([^\s,;]+)",
+    re.IGNORECASE,
+)
 
 
 def _meta_pair(line: str, delim: str, dec: str):
@@ -34,12 +40,11 @@ def _meta_pair(line: str, delim: str, dec: str):
         return None, (s.rstrip(delim + " ") if delim != " " else s)
     p, _ = min(pos)
     key = s[:p].strip().strip('"').strip()
-    value = s[p + 1:].strip()
+    value = s[p + 1 :].strip()
     if delim not in (" ",):
         value = value.strip(delim + " ")
     value = value.strip('"').strip()
-    if (not key or len(key) > 48 or len(key.split()) > 5 or not re.search(r"[A-Za-z]", key)
-            or not value):
+    if not key or len(key) > 48 or len(key.split()) > 5 or not re.search(r"[A-Za-z]", key) or not value:
         return None, (s.rstrip(delim + " ") if delim != " " else s)
     for dm in (dec, "."):
         if _NUM[dm].fullmatch(value):

@@ -29,16 +29,19 @@ NC_DEFAULT_FILL = 9.969209968386869e36
 def _check_attrs(where: str, attrs: dict) -> None:
     for key, value in attrs.items():
         if isinstance(value, (bool, np.bool_)) or value is None:
-            raise ValueError(f"attr {key!r} of {where} is {value!r}; netCDF attrs must be strings or numbers "
-                             "(write booleans as 0/1)")
+            raise ValueError(
+                f"attr {key!r} of {where} is {value!r}; netCDF attrs must be strings or numbers (write booleans as 0/1)"
+            )
         if isinstance(value, _ATTR_TYPES):
             continue
         if isinstance(value, (list, tuple, np.ndarray)):
             arr = np.asarray(value)
             if arr.ndim == 1 and (arr.dtype.kind in "iuf" or arr.dtype.kind == "U"):
                 continue
-        raise ValueError(f"attr {key!r} of {where} has type {type(value).__name__}; netCDF attrs must be "
-                         "strings, numbers or 1-D arrays of them")
+        raise ValueError(
+            f"attr {key!r} of {where} has type {type(value).__name__}; netCDF attrs must be "
+            "strings, numbers or 1-D arrays of them"
+        )
 
 
 def write_result(ds: xr.Dataset, path, *, overwrite: bool = True, inputs=()) -> str:
@@ -101,12 +104,16 @@ def _mask_fill_values(ds, history):
         if ndef:
             vals = np.where(default, np.nan, vals)
             ds[name] = var.copy(data=vals)
-            history.append(f"variable '{name}': {ndef} value(s) equal to netCDF's default fill value "
-                           f"{NC_DEFAULT_FILL:.6g} read as NaN (missing)")
+            history.append(
+                f"variable '{name}': {ndef} value(s) equal to netCDF's default fill value "
+                f"{NC_DEFAULT_FILL:.6g} read as NaN (missing)"
+            )
         if declared and nan_before:
             fills = ", ".join(f"{float(np.ravel(v)[0]):.6g}" for v in declared)
-            history.append(f"variable '{name}': {nan_before} fill value(s) (_FillValue/missing_value {fills}) "
-                           "read as NaN (missing)")
+            history.append(
+                f"variable '{name}': {nan_before} fill value(s) (_FillValue/missing_value {fills}) "
+                "read as NaN (missing)"
+            )
 
 
 def _check_time(path, ds, repair, history):
@@ -120,8 +127,12 @@ def _check_time(path, ds, repair, history):
     tv = np.where(np.isclose(np.abs(tv), NC_DEFAULT_FILL, rtol=1e-6, atol=0), np.nan, tv)
     bad = np.flatnonzero(~np.isfinite(tv))
     if bad.size:
-        raise RecordingError(path, None, f"time in variable 'time' is not a finite number at index {bad[0]} "
-                             f"({tv.size} samples; {bad.size} such); expected seconds")
+        raise RecordingError(
+            path,
+            None,
+            f"time in variable 'time' is not a finite number at index {bad[0]} "
+            f"({tv.size} samples; {bad.size} such); expected seconds",
+        )
     try:
         keep, notes, tv = check_order(tv, None, path=path, column="time", repair=repair)
     except RecordingError as err:
@@ -183,8 +194,9 @@ def read_netcdf(path, data: bytes, *, channel=None, repair_time=False) -> xr.Dat
         wanted = [channel] if isinstance(channel, str) else list(channel)
         missing = [w for w in wanted if w not in ds.data_vars]
         if missing:
-            raise RecordingError(path, None, f"no variable {missing[0]!r}; variables: "
-                                 + ", ".join(repr(str(v)) for v in ds.data_vars))
+            raise RecordingError(
+                path, None, f"no variable {missing[0]!r}; variables: " + ", ".join(repr(str(v)) for v in ds.data_vars)
+            )
         keep = list(dict.fromkeys(wanted + (["segment"] if "segment" in ds.data_vars else [])))
         ds = ds[keep]
         history.append("kept variable(s) " + ", ".join(repr(w) for w in wanted))

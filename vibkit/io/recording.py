@@ -107,8 +107,9 @@ def metadata_attrs(pairs):
     return out
 
 
-def build_recording(*, time, channels, segment, path, data_bytes, reader, sample_rate_hz,
-                    history, metadata=None, time_attrs=None) -> xr.Dataset:
+def build_recording(
+    *, time, channels, segment, path, data_bytes, reader, sample_rate_hz, history, metadata=None, time_attrs=None
+) -> xr.Dataset:
     """Build the recording Dataset with its provenance.
 
     Parameters
@@ -146,18 +147,26 @@ def build_recording(*, time, channels, segment, path, data_bytes, reader, sample
         attrs.update(ch.attrs)
         # a column that counts samples is no channel: a coordinate along time (unless asked for by name)
         (counters if attrs.get("sample_counter") and not attrs.get("requested") else data_vars)[ch.name] = (
-            "time", np.asarray(ch.values, dtype=np.float64), {k: v for k, v in attrs.items() if k != "requested"})
+            "time",
+            np.asarray(ch.values, dtype=np.float64),
+            {k: v for k, v in attrs.items() if k != "requested"},
+        )
     if segment is not None and np.asarray(segment).size and int(np.max(segment)) > 0:
-        data_vars["segment"] = ("time", np.asarray(segment, dtype=np.int32),
-                                {"units": "1", "long_name": "burst number (0, 1, 2 ...)"})
+        data_vars["segment"] = (
+            "time",
+            np.asarray(segment, dtype=np.int32),
+            {"units": "1", "long_name": "burst number (0, 1, 2 ...)"},
+        )
     tattrs = {"units": "s", "long_name": "time", "standard_name": "time"}
     tattrs.update(time_attrs or {})
     attrs = dict(metadata or {})
-    attrs.update({
-        "source_file": os.path.basename(os.fspath(path)),
-        "sha256": sha256_of(data_bytes),
-        "reader": reader,
-        "sample_rate_hz": float(sample_rate_hz),
-        "history": "\n".join(history),
-    })
+    attrs.update(
+        {
+            "source_file": os.path.basename(os.fspath(path)),
+            "sha256": sha256_of(data_bytes),
+            "reader": reader,
+            "sample_rate_hz": float(sample_rate_hz),
+            "history": "\n".join(history),
+        }
+    )
     return xr.Dataset(data_vars, coords={"time": ("time", time, tattrs), **counters}, attrs=attrs)

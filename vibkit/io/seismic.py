@@ -36,14 +36,21 @@ def _load(path):
             st = obspy.read(str(path))
         except Exception as exc:  # obspy raises TypeError/ValueError/... for what it cannot read
             detail = "" if "Unknown format" in str(exc) else f" ({type(exc).__name__}: {exc})"
-            raise RecordingError(path, None, "binary content that is neither text, netCDF/HDF5 nor a waveform "
-                                 f"format obspy reads{detail}") from None
+            raise RecordingError(
+                path,
+                None,
+                f"binary content that is neither text, netCDF/HDF5 nor a waveform format obspy reads{detail}",
+            ) from None
     return st, [f"obspy warning: {w.message}" for w in caught]
 
 
 #: SAC ``idep`` codes with a physical unit: code -> (unit as SAC says it, factor to SI, SI unit, quantity)
-_SAC_IDEP = {6: ("nm", 1e-9, "m", "displacement"), 7: ("nm/s", 1e-9, "m/s", "velocity"),
-             8: ("nm/s^2", 1e-9, "m/s^2", "acceleration"), 50: ("V", 1.0, "V", "other")}
+_SAC_IDEP = {
+    6: ("nm", 1e-9, "m", "displacement"),
+    7: ("nm/s", 1e-9, "m/s", "velocity"),
+    8: ("nm/s^2", 1e-9, "m/s^2", "acceleration"),
+    50: ("V", 1.0, "V", "other"),
+}
 
 
 def _calibration(tr):
@@ -52,11 +59,22 @@ def _calibration(tr):
     fmt = str(s.get("_format", "")).upper()
     calib = float(s.get("calib", 1.0) or 1.0)
     if fmt == "KNET" and calib != 1.0:
-        return calib, "m/s^2", "acceleration", ("K-NET header 'Scale Factor' (counts -> gal), gal -> m/s^2: "
-                                                f"x {calib:.9g}")
+        return (
+            calib,
+            "m/s^2",
+            "acceleration",
+            (f"K-NET header 'Scale Factor' (counts -> gal), gal -> m/s^2: x {calib:.9g}"),
+        )
     if fmt == "KINEMETRICS_EVT" and calib != 1.0:
-        return calib, "m/s^2", "acceleration", ("Kinemetrics EVT header full scale and sensitivity "
-                                                f"(counts -> m/s^2, as obspy reads them): x {calib:.9g}")
+        return (
+            calib,
+            "m/s^2",
+            "acceleration",
+            (
+                "Kinemetrics EVT header full scale and sensitivity "
+                f"(counts -> m/s^2, as obspy reads them): x {calib:.9g}"
+            ),
+        )
     if fmt == "SAC":
         idep = int(s.get("sac", {}).get("idep", 5) or 5)
         if idep in _SAC_IDEP:
@@ -65,8 +83,9 @@ def _calibration(tr):
     return None
 
 
-def read_seismic(path, data: bytes, *, channel=None, units=None, sample_rate=None, resample=None,
-                 gap_factor=5.0, repair_time=False):
+def read_seismic(
+    path, data: bytes, *, channel=None, units=None, sample_rate=None, resample=None, gap_factor=5.0, repair_time=False
+):
     """Read a waveform file with obspy into a recording Dataset.
 
     Parameters are those of :func:`vibkit.io.read_recording`.
@@ -98,9 +117,13 @@ def read_seismic(path, data: bytes, *, channel=None, units=None, sample_rate=Non
     t0 = min(g[0].stats.starttime for g in groups.values())
     rates = {i: float(g[0].stats.sampling_rate) for i, g in groups.items()}
     if len(set(rates.values())) > 1:
-        raise RecordingError(path, None, "traces have different sampling rates ("
-                             + ", ".join(f"{i}: {r:g} Hz" for i, r in rates.items())
-                             + "); read one with channel=")
+        raise RecordingError(
+            path,
+            None,
+            "traces have different sampling rates ("
+            + ", ".join(f"{i}: {r:g} Hz" for i, r in rates.items())
+            + "); read one with channel=",
+        )
     if isinstance(units, dict):
         unknown = [k for k in units if not any(k in (i, names[i], i.split(".")[-1]) for i in ids)]
         if unknown:
@@ -112,8 +135,12 @@ def read_seismic(path, data: bytes, *, channel=None, units=None, sample_rate=Non
         if times is None:
             times = t
         elif t.shape != times.shape or not np.allclose(t, times, rtol=0, atol=0.01 / rates[i]):
-            raise RecordingError(path, None, f"trace {i} does not share the time stamps of {ids[0]}; "
-                                 f"read one trace at a time with channel= (e.g. channel={i.split('.')[-1]})")
+            raise RecordingError(
+                path,
+                None,
+                f"trace {i} does not share the time stamps of {ids[0]}; "
+                f"read one trace at a time with channel= (e.g. channel={i.split('.')[-1]})",
+            )
         u_text = units if isinstance(units, str) else None
         if isinstance(units, dict):
             for k, u in units.items():
@@ -123,21 +150,27 @@ def read_seismic(path, data: bytes, *, channel=None, units=None, sample_rate=Non
         cal = _calibration(g[0])
         if u_text is None and cal is not None:
             f, si, q, what = cal
-            history.append(f"trace {i} calibrated by the format: {what}; pass units= to read the raw counts "
-                           "with a scale of your own")
+            history.append(
+                f"trace {i} calibrated by the format: {what}; pass units= to read the raw counts "
+                "with a scale of your own"
+            )
             attrs["calibration"] = what
             ch = Channel(names[i], v * f, si, f"trace {i}", q, attrs)
         elif u_text is None:
             calib = float(g[0].stats.get("calib", 1.0) or 1.0)
             extra = "" if calib == 1.0 else f" (the header's calib {calib:.9g} has no stated unit; not applied)"
-            history.append(f"trace {i}: a waveform file has no physical units; values kept in counts{extra}; "
-                           "pass units= to scale them (e.g. 'g/2048')")
+            history.append(
+                f"trace {i}: a waveform file has no physical units; values kept in counts{extra}; "
+                "pass units= to scale them (e.g. 'g/2048')"
+            )
             ch = Channel(names[i], v, "counts", f"trace {i}", "other", attrs)
         else:
             unit = parse_unit(u_text)
             if unit is None:
-                raise ValueError(f"units for trace {i} of {path}: {u_text!r} is not a unit vibkit knows; expected e.g. "
-                                 "'m/s^2', 'g', 'm', 'counts' or a scaled one like 'g/2048'")
+                raise ValueError(
+                    f"units for trace {i} of {path}: {u_text!r} is not a unit vibkit knows; expected e.g. "
+                    "'m/s^2', 'g', 'm', 'counts' or a scaled one like 'g/2048'"
+                )
             if unit.factor is None:
                 history.append(f"trace {i} in {u_text} (given), kept in counts")
                 ch = Channel(names[i], v, "counts", f"trace {i}", "other", attrs)
@@ -155,12 +188,12 @@ def read_seismic(path, data: bytes, *, channel=None, units=None, sample_rate=Non
         raise RecordingError(path, None, "holds only one sample; expected at least 2")
     diag = diagnose(times, gap_factor=gap_factor)
     fs = float(sample_rate) if sample_rate is not None else rates[ids[0]]
-    history.append(f"sample rate {fs:g} Hz " + ("(sample_rate given)" if sample_rate is not None
-                                                 else "(trace header)"))
+    history.append(f"sample rate {fs:g} Hz " + ("(sample_rate given)" if sample_rate is not None else "(trace header)"))
     segment = None
     if diag.n_segments > 1:
-        history.append(f"{diag.n_segments} segments split at gaps > {gap_factor:g} sample periods; "
-                       "kept as segments, not bridged")
+        history.append(
+            f"{diag.n_segments} segments split at gaps > {gap_factor:g} sample periods; kept as segments, not bridged"
+        )
         segment = diag.segment
     if resample == "linear":
         times, cols, seg = resample_linear(times, {c.name: c.values for c in channels}, diag.segment, fs)
@@ -169,10 +202,26 @@ def read_seismic(path, data: bytes, *, channel=None, units=None, sample_rate=Non
         segment = seg if diag.n_segments > 1 else None
         history.append(f"resampled linearly to {fs:g} Hz, each segment on its own")
     first = groups[ids[0]][0].stats
-    meta = metadata_attrs([
-        ("start_time", str(t0)), ("network", first.network), ("station", first.station),
-        ("location", first.location), ("channel", first.channel), ("format", str(first.get("_format", ""))),
-        ("segment_count", diag.n_segments), ("time_jitter_rms_percent", 100 * diag.jitter_rms),
-    ])
-    return build_recording(time=times, channels=channels, segment=segment, path=path, data_bytes=data,
-                           reader="vibkit.io.seismic", sample_rate_hz=fs, history=history, metadata=meta)
+    meta = metadata_attrs(
+        [
+            ("start_time", str(t0)),
+            ("network", first.network),
+            ("station", first.station),
+            ("location", first.location),
+            ("channel", first.channel),
+            ("format", str(first.get("_format", ""))),
+            ("segment_count", diag.n_segments),
+            ("time_jitter_rms_percent", 100 * diag.jitter_rms),
+        ]
+    )
+    return build_recording(
+        time=times,
+        channels=channels,
+        segment=segment,
+        path=path,
+        data_bytes=data,
+        reader="vibkit.io.seismic",
+        sample_rate_hz=fs,
+        history=history,
+        metadata=meta,
+    )

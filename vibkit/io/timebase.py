@@ -100,36 +100,49 @@ def check_order(t, lines, *, path, column, repair):
     dup = np.flatnonzero(dt == 0)
     if not back.size and dup.size == 1 and dup[0] == 0 and n > 2:
         # one repeated stamp on the first two rows: phyphox writes its first sample twice at t = 0
-        return np.arange(1, n), [f"the first two rows share the time stamp {t[0]:.9g} s in column '{column}' "
-                                 "(a known phyphox artefact at the start); the first row"
-                                 + ("" if lines is None else f" (line {line_of(0)})") + " dropped"], t
+        return (
+            np.arange(1, n),
+            [
+                f"the first two rows share the time stamp {t[0]:.9g} s in column '{column}' "
+                "(a known phyphox artefact at the start); the first row"
+                + ("" if lines is None else f" (line {line_of(0)})")
+                + " dropped"
+            ],
+            t,
+        )
     if not repair:
         if back.size and (not dup.size or back[0] < dup[0]):
             i = back[0] + 1
             jump = _clock_jump(dt, back[0])
             hint = "" if jump is None else f"; a clock {jump[1]}?"
             raise RecordingError(
-                path, line_of(i),
+                path,
+                line_of(i),
                 f"time goes backwards in column '{column}': {t[i]:.9g} s after {t[i - 1]:.9g} s "
                 f"(expected increasing time{hint}; pass repair_time=True, --repair-time on the command line, "
-                "to repair)")
+                "to repair)",
+            )
         if dup.size:
             i = dup[0] + 1
             raise RecordingError(
-                path, line_of(i),
+                path,
+                line_of(i),
                 f"time stamp {t[i]:.9g} s in column '{column}' repeats the previous row "
                 "(expected increasing time; pass repair_time=True, --repair-time on the command line, to drop "
-                "repeats)")
+                "repeats)",
+            )
         return np.arange(n), [], t
     notes = []
     if back.size:
         t = t.copy()
         for i in back:
-            jump = _clock_jump(np.diff(t[i:i + 2]), 0, reference=dt)
+            jump = _clock_jump(np.diff(t[i : i + 2]), 0, reference=dt)
             if jump is not None:
-                t[i + 1:] += jump[0]
-                notes.append(f"time repaired: the clock went back by {jump[0]:g} s at line {line_of(i + 1)} "
-                             f"({jump[1]}); {jump[0]:g} s added to the rest, order kept")
+                t[i + 1 :] += jump[0]
+                notes.append(
+                    f"time repaired: the clock went back by {jump[0]:g} s at line {line_of(i + 1)} "
+                    f"({jump[1]}); {jump[0]:g} s added to the rest, order kept"
+                )
         dt = np.diff(t)
         back = np.flatnonzero(dt < 0)
         if not back.size and not np.any(dt == 0):

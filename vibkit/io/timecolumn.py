@@ -29,8 +29,11 @@ _EPOCH_UNITS = (("s", 1.0), ("ms", 1e-3), ("us", 1e-6), ("ns", 1e-9))
 
 
 #: names of clock columns besides ``time``: elapsed seconds, epoch, microcontroller clocks
-_CLOCK_NAME = re.compile(r"^(?:epoch?|unix[ _-]?time|(?:seconds|secs|time)?[ _-]?elapsed(?:[ _-]?(?:time|s|ms))?"
-                         r"|micros|millis|timestamp|time ?stamp)$", re.IGNORECASE)
+_CLOCK_NAME = re.compile(
+    r"^(?:epoch?|unix[ _-]?time|(?:seconds|secs|time)?[ _-]?elapsed(?:[ _-]?(?:time|s|ms))?"
+    r"|micros|millis|timestamp|time ?stamp)$",
+    re.IGNORECASE,
+)
 
 
 def _is_clock_name(nm, ut):
@@ -55,13 +58,20 @@ def _choose_time_column(path, time_column, colnames: _ColumnNames, n, header_lin
     clocks = []
     if cols is not None and time_column is None:
         cand = [j for j, (nm, ut, _) in enumerate(colnames.split) if _is_clock_name(nm, ut)]
-        numeric = [j for j in cand if isinstance(cols[j], np.ndarray) and cols[j].dtype.kind in "fiu"
-                   or _NUM[dec].fullmatch(str(_first_cell(cols[j])).strip())]
+        numeric = [
+            j
+            for j in cand
+            if isinstance(cols[j], np.ndarray)
+            and cols[j].dtype.kind in "fiu"
+            or _NUM[dec].fullmatch(str(_first_cell(cols[j])).strip())
+        ]
         if cand:
             tcol = numeric[0] if numeric else cand[0]
             if numeric and numeric[0] != cand[0]:
-                history.append(f"time column '{colnames.shown[tcol]}' (numbers) chosen over "
-                               f"'{colnames.shown[cand[0]]}' (text time stamps)")
+                history.append(
+                    f"time column '{colnames.shown[tcol]}' (numbers) chosen over "
+                    f"'{colnames.shown[cand[0]]}' (text time stamps)"
+                )
             clocks = [j for j in cand if j != tcol]
             for j in clocks:
                 history.append(f"column '{colnames.shown[j]}' is another clock, not a channel")
@@ -71,14 +81,20 @@ def _choose_time_column(path, time_column, colnames: _ColumnNames, n, header_lin
     elif time_column is not None:
         if isinstance(time_column, (int, np.integer)) and not isinstance(time_column, bool):
             if not 0 <= int(time_column) < n:
-                raise RecordingError(path, header_line, f"time_column={time_column} is out of range: the file has "
-                                     f"{n} column(s), numbered from 0")
+                raise RecordingError(
+                    path,
+                    header_line,
+                    f"time_column={time_column} is out of range: the file has {n} column(s), numbered from 0",
+                )
             tcol = int(time_column)
         else:
             tcol = colnames.match(time_column)
             if tcol is None:
-                raise RecordingError(path, header_line, f"no time column {time_column!r}; columns: "
-                                     + ", ".join(repr(h) for h in colnames.shown))
+                raise RecordingError(
+                    path,
+                    header_line,
+                    f"no time column {time_column!r}; columns: " + ", ".join(repr(h) for h in colnames.shown),
+                )
     else:
         for j, (nm, ut, _) in enumerate(colnames.split):
             if is_time_name(nm) and (ut is None or parse_unit(ut) is None):
@@ -87,8 +103,7 @@ def _choose_time_column(path, time_column, colnames: _ColumnNames, n, header_lin
     return tcol, clocks
 
 
-def _read_time(path, tcells, tname, unit_text, dec, rownums, header_line, time_unit, rate_meta, history,
-               extra_attrs):
+def _read_time(path, tcells, tname, unit_text, dec, rownums, header_line, time_unit, rate_meta, history, extra_attrs):
     """Seconds from the cells ``tcells`` of time column ``tname``; start time and offset go to ``extra_attrs``."""
     numeric = isinstance(tcells, np.ndarray) and tcells.dtype.kind in "fiu"
     if numeric and tcells.dtype.kind == "f" and np.isnan(tcells).any():
@@ -98,8 +113,9 @@ def _read_time(path, tcells, tname, unit_text, dec, rownums, header_line, time_u
         t, start, kind, ok = stamps
         if not ok.all():
             i = int(np.flatnonzero(~ok)[0])
-            raise RecordingError(path, int(rownums[i]), f"expected a time stamp like '{start}' "
-                                 f"in column '{tname}', found '{tcells[i]}'")
+            raise RecordingError(
+                path, int(rownums[i]), f"expected a time stamp like '{start}' in column '{tname}', found '{tcells[i]}'"
+            )
         history.append(f"time column '{tname}' holds {kind}; time = seconds since {start}")
         extra_attrs["start_time"] = start
     else:
@@ -107,27 +123,32 @@ def _read_time(path, tcells, tname, unit_text, dec, rownums, header_line, time_u
         badall = np.union1d(np.union1d(bad, inf), np.flatnonzero(missing))
         if badall.size:
             i = int(badall[0])
-            raise RecordingError(path, int(rownums[i]), f"expected a time in column '{tname}', "
-                                 f"found '{tcells[i]}'")
+            raise RecordingError(path, int(rownums[i]), f"expected a time in column '{tname}', found '{tcells[i]}'")
         if time_unit is not None:
             f = parse_time_unit(time_unit)
             if f is None:
-                raise ValueError(f"time_unit={time_unit!r} is not a time unit (expected s, ms, us, ns, min, h) "
-                                 f"for {path}")
+                raise ValueError(
+                    f"time_unit={time_unit!r} is not a time unit (expected s, ms, us, ns, min, h) for {path}"
+                )
             history.append(f"time column '{tname}' in {time_unit} (given)" + ("" if f == 1 else f" -> s (x {f:g})"))
         elif unit_text is not None and parse_time_unit(unit_text) is not None:
             f = parse_time_unit(unit_text)
             history.append(f"time column '{tname}' in {unit_text}" + ("" if f == 1 else f" -> s (x {f:g})"))
         elif unit_text is not None:
-            raise RecordingError(path, header_line, f"time column '{tname}' has unit '{unit_text}'; "
-                                 "expected s, ms, us or time stamps (pass time_unit=)")
+            raise RecordingError(
+                path,
+                header_line,
+                f"time column '{tname}' has unit '{unit_text}'; expected s, ms, us or time stamps (pass time_unit=)",
+            )
         else:
             f = 1.0
             step = float(np.median(np.diff(vals))) if vals.size > 1 else 0.0
             if rate_meta and step > 0 and abs(step * rate_meta[0] / 1e3 - 1) < 0.05:
                 f = 1e-3
-                history.append(f"time column '{tname}' has no unit; read as ms because its steps match "
-                               f"the header's sample rate {rate_meta[0]:g} Hz")
+                history.append(
+                    f"time column '{tname}' has no unit; read as ms because its steps match "
+                    f"the header's sample rate {rate_meta[0]:g} Hz"
+                )
             else:
                 epoch = _epoch_unit(path, vals, tname, int(rownums[0]))
                 if epoch is None and step > 1 and np.all(vals[:100_000] == np.round(vals[:100_000])):
@@ -137,9 +158,11 @@ def _read_time(path, tcells, tname, unit_text, dec, rownums, header_line, time_u
                 else:
                     f, eunit = epoch
                     start = datetime.fromtimestamp(float(vals[0]) * f, tz=timezone.utc)
-                    history.append(f"time column '{tname}' has no unit; its values ({vals[0]:.17g} ...) are "
-                                   f"Unix epoch times in {eunit} by their size and steps; read as {eunit} "
-                                   f"(start {start.isoformat()}; pass time_unit= to override)")
+                    history.append(
+                        f"time column '{tname}' has no unit; its values ({vals[0]:.17g} ...) are "
+                        f"Unix epoch times in {eunit} by their size and steps; read as {eunit} "
+                        f"(start {start.isoformat()}; pass time_unit= to override)"
+                    )
                     extra_attrs.setdefault("start_time", start.isoformat())
         if vals.size and "start_time" not in extra_attrs and _EPOCH_RANGE_S[0] <= vals[0] * f <= _EPOCH_RANGE_S[1]:
             # a Unix epoch column with its unit in the header (MetaWear 'epoc (ms)')
@@ -165,16 +188,23 @@ def _counter_clock_unit(path, vals, step, tname, header_line, history):
     naming ``time_unit=``.
     """
     named = {"micros": [("us", 1e-6)], "millis": [("ms", 1e-3)]}.get(tname.strip().lower())
-    fits = named or [(u, f) for u, f in (("ms", 1e-3), ("us", 1e-6))
-                     if _CLOCK_RATES_HZ[0] <= 1 / (step * f) <= _CLOCK_RATES_HZ[1]]
+    fits = named or [
+        (u, f) for u, f in (("ms", 1e-3), ("us", 1e-6)) if _CLOCK_RATES_HZ[0] <= 1 / (step * f) <= _CLOCK_RATES_HZ[1]
+    ]
     if len(fits) != 1:
         rates = ", ".join(f"{1 / (step * f):.4g} Hz in {u}" for u, f in (("s", 1.0), ("ms", 1e-3), ("us", 1e-6)))
-        raise RecordingError(path, header_line, f"time column '{tname}' has no unit and whole-number steps of "
-                             f"{step:.6g} ({rates}): cannot tell its unit; pass time_unit= (s, ms, us)")
+        raise RecordingError(
+            path,
+            header_line,
+            f"time column '{tname}' has no unit and whole-number steps of "
+            f"{step:.6g} ({rates}): cannot tell its unit; pass time_unit= (s, ms, us)",
+        )
     u, f = fits[0]
-    history.append(f"time column '{tname}' has no unit and whole-number steps of {step:.6g}: a microcontroller "
-                   f"clock (Arduino millis()/micros()); read as {u}, giving {1 / (step * f):.6g} Hz (in seconds it "
-                   f"would be {1 / step:.3g} Hz); pass time_unit= to override")
+    history.append(
+        f"time column '{tname}' has no unit and whole-number steps of {step:.6g}: a microcontroller "
+        f"clock (Arduino millis()/micros()); read as {u}, giving {1 / (step * f):.6g} Hz (in seconds it "
+        f"would be {1 / step:.3g} Hz); pass time_unit= to override"
+    )
     return f
 
 
@@ -194,8 +224,9 @@ def _parse_stamps(cells):
         ok = t.notna().to_numpy()
     elif _STAMP_TOD.fullmatch(first):
         norm = s.str.replace(r"^([0-9]{1,2}:[0-9]{2}:[0-9]{2})[.,:]([0-9]+)$", r"\1.\2", regex=True)
-        t = pd.to_timedelta(norm.where(norm.str.fullmatch(r"[0-9]{1,2}:[0-9]{2}:[0-9]{2}(\.[0-9]+)?"), None),
-                            errors="coerce")
+        t = pd.to_timedelta(
+            norm.where(norm.str.fullmatch(r"[0-9]{1,2}:[0-9]{2}:[0-9]{2}(\.[0-9]+)?"), None), errors="coerce"
+        )
         kind = "time-of-day stamps"
         ok = t.notna().to_numpy()
     else:
@@ -209,7 +240,7 @@ def _parse_stamps(cells):
 def _epoch_unit(path, vals, tname, line):
     """(factor to s, unit) when a unitless time column holds Unix epoch times, else None."""
     v0 = float(vals[0])
-    for unit, f in _EPOCH_UNITS:
+    for unit, f in _EPOCH_UNITS:  # noqa: B007 (unit is used after the loop)
         if _EPOCH_RANGE_S[0] <= abs(v0) * f <= _EPOCH_RANGE_S[1]:
             break
     else:
@@ -218,7 +249,11 @@ def _epoch_unit(path, vals, tname, line):
     steps = np.diff(vals[:k])
     step = float(np.median(steps)) * f if steps.size else math.nan
     if step > 0 and not 1e-7 <= step <= 1e4:  # 10 MHz to one sample every 3 hours (repeats: check_order)
-        raise RecordingError(path, line, f"time column '{tname}' has no unit and holds {v0:.17g}, a Unix epoch "
-                             f"time in {unit} by its size, but its steps ({step / f:.6g} {unit}) do not give a "
-                             "sample rate between 1e-4 Hz and 10 MHz; pass time_unit= (s, ms, us, ns)")
+        raise RecordingError(
+            path,
+            line,
+            f"time column '{tname}' has no unit and holds {v0:.17g}, a Unix epoch "
+            f"time in {unit} by its size, but its steps ({step / f:.6g} {unit}) do not give a "
+            "sample rate between 1e-4 Hz and 10 MHz; pass time_unit= (s, ms, us, ns)",
+        )
     return f, unit

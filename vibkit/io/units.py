@@ -62,11 +62,28 @@ _OTHER = {
     "hz": (1.0, "Hz"),
 }
 _TIME = {
-    "s": 1.0, "sec": 1.0, "secs": 1.0, "second": 1.0, "seconds": 1.0, "seg": 1.0, "segundos": 1.0,
-    "ms": 1e-3, "msec": 1e-3, "millisecond": 1e-3, "milliseconds": 1e-3, "millis": 1e-3,
-    "us": 1e-6, "usec": 1e-6, "microsecond": 1e-6, "microseconds": 1e-6,
-    "ns": 1e-9, "nanoseconds": 1e-9,
-    "min": 60.0, "minutes": 60.0, "h": 3600.0, "hours": 3600.0,
+    "s": 1.0,
+    "sec": 1.0,
+    "secs": 1.0,
+    "second": 1.0,
+    "seconds": 1.0,
+    "seg": 1.0,
+    "segundos": 1.0,
+    "ms": 1e-3,
+    "msec": 1e-3,
+    "millisecond": 1e-3,
+    "milliseconds": 1e-3,
+    "millis": 1e-3,
+    "us": 1e-6,
+    "usec": 1e-6,
+    "microsecond": 1e-6,
+    "microseconds": 1e-6,
+    "ns": 1e-9,
+    "nanoseconds": 1e-9,
+    "min": 60.0,
+    "minutes": 60.0,
+    "h": 3600.0,
+    "hours": 3600.0,
 }
 _NUMBER = r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?"
 _LEN_ALT = "|".join(sorted(_LENGTH, key=len, reverse=True))
@@ -83,8 +100,17 @@ _TIME_NAME_RE = re.compile(
 
 def _normalise(text: str) -> str:
     t = text.strip().strip("\"'").strip()
-    for a, b in (("µ", "u"), ("μ", "u"), ("⁻²", "^-2"), ("⁻¹", "^-1"), ("²", "^2"), ("**", "^"),
-                 ("·", "*"), ("⋅", "*"), ("−", "-")):
+    for a, b in (
+        ("µ", "u"),
+        ("μ", "u"),
+        ("⁻²", "^-2"),
+        ("⁻¹", "^-1"),
+        ("²", "^2"),
+        ("**", "^"),
+        ("·", "*"),
+        ("⋅", "*"),
+        ("−", "-"),
+    ):
         t = t.replace(a, b)
     t = t.lower()
     t = re.sub(r"\s*([/*^])\s*", r"\1", t)

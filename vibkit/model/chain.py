@@ -25,8 +25,28 @@ from dataclasses import dataclass
 import numba as nb
 import numpy as np
 
-from .guide import (AX, AZ, BX, BZ, COS0, CUMD, KAPPA, LEN0, S0, SIGP, SIN0, TRAVEL, Guide, circle_hit, local_frame, local_inverse, local_map, locate,
-                    point_partials, seg_length)
+from .guide import (
+    AX,
+    AZ,
+    BX,
+    BZ,
+    COS0,
+    CUMD,
+    KAPPA,
+    LEN0,
+    S0,
+    SIGP,
+    SIN0,
+    TRAVEL,
+    Guide,
+    circle_hit,
+    local_frame,
+    local_inverse,
+    local_map,
+    locate,
+    point_partials,
+    seg_length,
+)
 from .params import ChainParams
 
 __all__ = ["Chain", "Configuration", "ClosureError"]
@@ -43,6 +63,7 @@ class ClosureError(ValueError):
 
 # --------------------------------------------------------------------------------------------
 # compiled kernels
+
 
 @nb.njit(cache=True, error_model="numpy")
 def walk(tab, p0, s0_1, delta, pitches, n, s0, kk, lam, xs, zs):
@@ -318,8 +339,16 @@ def acceleration_terms(part, xs, zs, n, alpha, beta, gam, c, sdot1, hacc, eta, s
 def walk_arrays(n):
     """Scratch arrays of a walk of n links and its sensitivities: s0, segment, local coordinate,
     x, z (n + 1 each), partials (n + 1, 12), alpha, beta (n + 1 each)."""
-    return (np.empty(n + 1), np.empty(n + 1, dtype=np.int64), np.empty(n + 1), np.empty(n + 1), np.empty(n + 1),
-            np.empty((n + 1, 12)), np.empty(n + 1), np.empty(n + 1))
+    return (
+        np.empty(n + 1),
+        np.empty(n + 1, dtype=np.int64),
+        np.empty(n + 1),
+        np.empty(n + 1),
+        np.empty(n + 1),
+        np.empty((n + 1, 12)),
+        np.empty(n + 1),
+        np.empty(n + 1),
+    )
 
 
 @nb.njit(cache=True, error_model="numpy")
@@ -350,8 +379,9 @@ def sweep_kernel(tab, p0, lt, s0_values, delta0, pitches, n, tol, deltas, resid,
                     h = walk(tab, p0, s0_values[j], dn, pitches, n, s0, kk, lam, xs, zs)
                     done = (not math.isnan(h)) and abs(h) <= tol
         if not done:
-            dn, _, st = solve_closure(tab, p0, lt, s0_values[j], guess, pitches, n, s0, kk, lam, xs, zs, part,
-                                      alpha, beta, tol)
+            dn, _, st = solve_closure(
+                tab, p0, lt, s0_values[j], guess, pitches, n, s0, kk, lam, xs, zs, part, alpha, beta, tol
+            )
             status[j] = st
             if st != 0:
                 deltas[j] = dn
@@ -367,6 +397,7 @@ def sweep_kernel(tab, p0, lt, s0_values, delta0, pitches, n, tol, deltas, resid,
 
 
 # --------------------------------------------------------------------------------------------
+
 
 @dataclass(frozen=True)
 class Configuration:
@@ -432,8 +463,24 @@ class Chain:
         """A starting delta for s0_1 found by scanning the tensioner's travel; raises ClosureError."""
         lt = self._lt * TRAVEL
         grid = np.linspace(-lt, lt, 81)[1:-1]
-        hs = np.array([walk(self.guide.table, self.guide.p0, s0_1, d, self.pitches, self.n, self._s0, self._kk,
-                            self._lam, self._xs, self._zs) for d in grid])
+        hs = np.array(
+            [
+                walk(
+                    self.guide.table,
+                    self.guide.p0,
+                    s0_1,
+                    d,
+                    self.pitches,
+                    self.n,
+                    self._s0,
+                    self._kk,
+                    self._lam,
+                    self._xs,
+                    self._zs,
+                )
+                for d in grid
+            ]
+        )
         ok = np.isfinite(hs)
         sign_change = np.nonzero(ok[:-1] & ok[1:] & (np.sign(hs[:-1]) != np.sign(hs[1:])))[0]
         if sign_change.size == 0:
@@ -441,7 +488,8 @@ class Chain:
             raise ClosureError(
                 f"a chain of {self.n} links of pitch {self.pitch:.6g} m ({length:.6g} m) cannot close on this guide: "
                 f"its perimeter is {self.guide.p0:.6g} m less 2*delta, with delta within the tensioner travel "
-                f"(-{lt:.6g}, {lt:.6g}) m; change chain.n_rollers or the guide")
+                f"(-{lt:.6g}, {lt:.6g}) m; change chain.n_rollers or the guide"
+            )
         i = sign_change[0]
         return float(0.5 * (grid[i] + grid[i + 1]))
 
@@ -451,14 +499,44 @@ class Chain:
         guess = delta_guess if delta_guess is not None else self._delta_guess
         if guess is None:
             guess = self.find_delta_bracket(s0_1)
-        d, _, st = solve_closure(g.table, g.p0, self._lt, float(s0_1), float(guess), self.pitches, self.n, self._s0,
-                                 self._kk, self._lam, self._xs, self._zs, self._part, self._alpha, self._beta,
-                                 self.tol)
+        d, _, st = solve_closure(
+            g.table,
+            g.p0,
+            self._lt,
+            float(s0_1),
+            float(guess),
+            self.pitches,
+            self.n,
+            self._s0,
+            self._kk,
+            self._lam,
+            self._xs,
+            self._zs,
+            self._part,
+            self._alpha,
+            self._beta,
+            self.tol,
+        )
         if st != 0:
             guess = self.find_delta_bracket(s0_1)
-            d, _, st = solve_closure(g.table, g.p0, self._lt, float(s0_1), guess, self.pitches, self.n, self._s0,
-                                     self._kk, self._lam, self._xs, self._zs, self._part, self._alpha,
-                                     self._beta, self.tol)
+            d, _, st = solve_closure(
+                g.table,
+                g.p0,
+                self._lt,
+                float(s0_1),
+                guess,
+                self.pitches,
+                self.n,
+                self._s0,
+                self._kk,
+                self._lam,
+                self._xs,
+                self._zs,
+                self._part,
+                self._alpha,
+                self._beta,
+                self.tol,
+            )
             if st != 0:
                 raise ClosureError(f"chain closure did not converge at s0_1 = {s0_1:.9g} m (status {st})")
         self._delta_guess = d
@@ -562,11 +640,13 @@ class Chain:
         resid = np.empty(s0_values.size)
         status = np.zeros(s0_values.size, dtype=np.int64)
         g = self.guide
-        done = sweep_kernel(g.table, g.p0, self._lt, s0_values, guess, self.pitches, self.n, self.tol, deltas, resid,
-                            status)
+        done = sweep_kernel(
+            g.table, g.p0, self._lt, s0_values, guess, self.pitches, self.n, self.tol, deltas, resid, status
+        )
         if done < s0_values.size:
             raise ClosureError(
-                f"chain closure failed at s0_1 = {s0_values[done]:.9g} m (status {status[done]}) during the sweep")
+                f"chain closure failed at s0_1 = {s0_values[done]:.9g} m (status {status[done]}) during the sweep"
+            )
         return deltas, resid
 
     def s_deformed(self, s0: float, delta: float):

@@ -36,12 +36,41 @@ from .sprocket import contact_kernel
 __all__ = ["pack_parameters", "evaluate", "motor_torque", "FP", "IP"]
 
 # float parameter slots
-FP = {name: i for i, name in enumerate((
-    "p0", "lt", "pitch", "g", "k", "expo", "damp", "kp", "ki", "wref", "tlim", "k_s", "preload", "m_c", "mu_rr",
-    "inertia", "r_d", "cx", "cz", "root_r", "psi", "tol", "reach"))}
+FP = {
+    name: i
+    for i, name in enumerate(
+        (
+            "p0",
+            "lt",
+            "pitch",
+            "g",
+            "k",
+            "expo",
+            "damp",
+            "kp",
+            "ki",
+            "wref",
+            "tlim",
+            "k_s",
+            "preload",
+            "m_c",
+            "mu_rr",
+            "inertia",
+            "r_d",
+            "cx",
+            "cz",
+            "root_r",
+            "psi",
+            "tol",
+            "reach",
+        )
+    )
+}
 # integer parameter slots
-IP = {name: i for i, name in enumerate(("n", "nteeth", "gravity", "contact", "motor", "passengers", "tensioner",
-                                        "rolling"))}
+IP = {
+    name: i
+    for i, name in enumerate(("n", "nteeth", "gravity", "contact", "motor", "passengers", "tensioner", "rolling"))
+}
 
 
 class Work:
@@ -49,10 +78,25 @@ class Work:
 
     def __init__(self, n, nteeth):
         self.arrays = (
-            np.empty(n + 1), np.empty(n + 1, dtype=np.int64), np.empty(n + 1), np.empty(n + 1), np.empty(n + 1),
-            np.empty((n + 1, 12)), np.empty(n + 1), np.empty(n + 1), np.empty((n, 2)), np.empty(n),
-            np.empty((n, 2)), np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n, dtype=np.int64),
-            np.zeros(nteeth), np.zeros(nteeth), np.zeros(15),
+            np.empty(n + 1),
+            np.empty(n + 1, dtype=np.int64),
+            np.empty(n + 1),
+            np.empty(n + 1),
+            np.empty(n + 1),
+            np.empty((n + 1, 12)),
+            np.empty(n + 1),
+            np.empty(n + 1),
+            np.empty((n, 2)),
+            np.empty(n),
+            np.empty((n, 2)),
+            np.empty(n),
+            np.empty(n),
+            np.empty(n),
+            np.empty(n),
+            np.empty(n, dtype=np.int64),
+            np.zeros(nteeth),
+            np.zeros(nteeth),
+            np.zeros(15),
         )
 
 
@@ -74,7 +118,9 @@ def pack_parameters(model, effects: dict, *, start: float = 0.0):
     # contact candidates: roller centres within reach of a tooth's farthest corner (the tip corners
     # B and C lie beyond R^F + h: sqrt((R^F + h)^2 + (tip width / 2)^2))
     loc = model.corners_local
-    fp[FP["reach"]] = float(np.max(np.hypot(loc[:, 0], geo["root_radius"] + loc[:, 1]))) + model.scene.chain.roller_radius
+    fp[FP["reach"]] = (
+        float(np.max(np.hypot(loc[:, 0], geo["root_radius"] + loc[:, 1]))) + model.scene.chain.roller_radius
+    )
     ip[IP["n"]] = n
     ip[IP["nteeth"]] = model.sprocket.teeth
     if "gravity" in effects:
@@ -201,8 +247,9 @@ def evaluate(t, y, dy, prm, ws, want_teeth):
     # dh/ddelta (info[10:13]); the same tolerance as a full Newton solve
     ds = y[0] - info[10]
     guess = info[0] + ds * (info[11] + 0.5 * info[14] * ds)
-    delta, walks, st = close_with_slope(tab, p0, lt, y[0], guess, info[12], pitches, n, s0, kk, lam, xs, zs, part,
-                                        alpha, beta, fp[21])
+    delta, walks, st = close_with_slope(
+        tab, p0, lt, y[0], guess, info[12], pitches, n, s0, kk, lam, xs, zs, part, alpha, beta, fp[21]
+    )
     if st != 0:
         return 1
     info[13] += walks
@@ -250,8 +297,30 @@ def evaluate(t, y, dy, prm, ws, want_teeth):
             eta[i] = jac[i, 0] * sdot
             sd[i] = jac[i, 1] * sdot
         torque_c, energy_c, worst, active, f_drive, f_back = contact_kernel(
-            xs, zs, eta, sd, cand, ncand, y[2], y[3], fp[17], fp[18], loc, fp[19], fp[20], ip[1], fp[16], fp[4],
-            fp[5], fp[6], fx, fz, ind_t, frc_t, want_teeth)
+            xs,
+            zs,
+            eta,
+            sd,
+            cand,
+            ncand,
+            y[2],
+            y[3],
+            fp[17],
+            fp[18],
+            loc,
+            fp[19],
+            fp[20],
+            ip[1],
+            fp[16],
+            fp[4],
+            fp[5],
+            fp[6],
+            fx,
+            fz,
+            ind_t,
+            frc_t,
+            want_teeth,
+        )
     f_c = 0.0
     m_c = 0.0
     if ip[6] == 1:

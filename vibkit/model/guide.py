@@ -62,8 +62,15 @@ NCOL = 12
 
 def build_table(p: GuideParams) -> np.ndarray:
     """Segment table (14 x 10 float64) of the guide; see module docstring for the columns."""
-    lt, l1, l2, rt, a, ll, rr = (p.tensioner_length, p.lower_landing, p.upper_landing, p.transition_radius,
-                                 p.incline_angle, p.incline_length, p.head_radius)
+    lt, l1, l2, rt, a, ll, rr = (
+        p.tensioner_length,
+        p.lower_landing,
+        p.upper_landing,
+        p.transition_radius,
+        p.incline_angle,
+        p.incline_length,
+        p.head_radius,
+    )
     # (kind length-or-radius, turn) as in model.md section 1
     segs = [
         ("line", lt, 0.0, True),
@@ -88,8 +95,20 @@ def build_table(p: GuideParams) -> np.ndarray:
             length, kappa = size, 0.0
         else:
             length, kappa = size * abs(turn), math.copysign(1.0 / size, turn)
-        tab[k] = (s0, length, kappa, phi, x, z, 0.0, 0.0, (-1.0 / lt) if tele else 0.0, cumd, math.cos(phi),
-                  math.sin(phi))
+        tab[k] = (
+            s0,
+            length,
+            kappa,
+            phi,
+            x,
+            z,
+            0.0,
+            0.0,
+            (-1.0 / lt) if tele else 0.0,
+            cumd,
+            math.cos(phi),
+            math.sin(phi),
+        )
         if k in (0, 13):  # the start of the top tensioner run and of the lower head move with delta
             tab[k, BX] = 1.0
         # advance the undeformed pose
@@ -106,12 +125,14 @@ def build_table(p: GuideParams) -> np.ndarray:
     if abs(x) > 1e-9 or abs(z - rr) > 1e-9 or abs(math.remainder(phi, 2 * math.pi)) > 1e-12:
         raise ValueError(
             f"guide does not close: it ends at ({x:.6g}, {z:.6g}) m heading {math.degrees(phi):.6g} deg "
-            f"instead of (0, {rr:.6g}) m heading 0 deg; check incline_length against the rise")
+            f"instead of (0, {rr:.6g}) m heading 0 deg; check incline_length against the rise"
+        )
     return tab
 
 
 # --------------------------------------------------------------------------------------------
 # compiled kernels (all take the segment table ``tab`` and the period ``p0``)
+
 
 @nb.njit(cache=True, error_model="numpy")
 def locate(tab, s0):
@@ -138,13 +159,19 @@ def tele_ramp(u):
     a = 1.0 / (1.0 - eps)
     if u < eps:
         x = math.pi * u / eps
-        return a * 0.5 * (u - eps / math.pi * math.sin(x)), a * 0.5 * (1.0 - math.cos(x)), \
-            a * 0.5 * math.pi / eps * math.sin(x)
+        return (
+            a * 0.5 * (u - eps / math.pi * math.sin(x)),
+            a * 0.5 * (1.0 - math.cos(x)),
+            a * 0.5 * math.pi / eps * math.sin(x),
+        )
     if u > 1.0 - eps:
         v = 1.0 - u
         x = math.pi * v / eps
-        return 1.0 - a * 0.5 * (v - eps / math.pi * math.sin(x)), a * 0.5 * (1.0 - math.cos(x)), \
-            -a * 0.5 * math.pi / eps * math.sin(x)
+        return (
+            1.0 - a * 0.5 * (v - eps / math.pi * math.sin(x)),
+            a * 0.5 * (1.0 - math.cos(x)),
+            -a * 0.5 * math.pi / eps * math.sin(x),
+        )
     return a * (0.5 * eps + (u - eps)), a, 0.0
 
 
@@ -203,8 +230,7 @@ def local_point(tab, k, lam, delta):
         c, s = math.cos(phi0), math.sin(phi0)
         return x0 + lam * c, z0 + lam * s, phi0
     phi = phi0 + kap * lam
-    return (x0 + (math.sin(phi) - math.sin(phi0)) / kap,
-            z0 + (math.cos(phi0) - math.cos(phi)) / kap, phi)
+    return (x0 + (math.sin(phi) - math.sin(phi0)) / kap, z0 + (math.cos(phi0) - math.cos(phi)) / kap, phi)
 
 
 @nb.njit(cache=True, error_model="numpy")
@@ -311,6 +337,7 @@ def circle_hit(tab, k, delta, qx, qz, radius, lam_lo):
 
 # --------------------------------------------------------------------------------------------
 
+
 class Guide:
     """The guide of one escalator, deformed by the tensioner displacement delta.
 
@@ -373,8 +400,11 @@ class Guide:
         out = np.empty(flat.size)
         for j, v in enumerate(flat):
             k = locate(self.table, v)
-            out[j] = self.table[k, S0] + self.table[k, CUMD] * delta + local_map(self.table, k, v - self.table[k, S0],
-                                                                                  delta)[0]
+            out[j] = (
+                self.table[k, S0]
+                + self.table[k, CUMD] * delta
+                + local_map(self.table, k, v - self.table[k, S0], delta)[0]
+            )
         return out.reshape(np.shape(s0))
 
     def s_to_s0(self, s, delta: float = 0.0):
@@ -384,8 +414,9 @@ class Guide:
         starts = self.table[:, S0] + self.table[:, CUMD] * delta
         flat = np.atleast_1d(s)
         k = np.searchsorted(starts, flat, side="right") - 1
-        out = np.array([self.table[kk, S0] + local_inverse(self.table, kk, v - starts[kk], delta)
-                        for kk, v in zip(k, flat)])
+        out = np.array(
+            [self.table[kk, S0] + local_inverse(self.table, kk, v - starts[kk], delta) for kk, v in zip(k, flat)]
+        )
         return out.reshape(np.shape(s))
 
     def _frame(self, s, delta):

@@ -60,23 +60,41 @@ class GuideParams:
     head_radius: float
 
     def __post_init__(self):
-        _positive(self, "tensioner_length", "lower_landing", "upper_landing", "transition_radius",
-                  "incline_length", "head_radius")
+        _positive(
+            self,
+            "tensioner_length",
+            "lower_landing",
+            "upper_landing",
+            "transition_radius",
+            "incline_length",
+            "head_radius",
+        )
         if not (0.0 < self.incline_angle < math.pi / 2):
             raise ValueError(f"GuideParams.incline_angle must be in (0, pi/2) rad, got {self.incline_angle!r}")
 
     @property
     def perimeter(self) -> float:
         """Undeformed perimeter P0 = 2(L + L1 + L2 + Lt + pi R + 2 alpha r_t). [m]"""
-        return 2.0 * (self.incline_length + self.lower_landing + self.upper_landing + self.tensioner_length
-                      + math.pi * self.head_radius + 2.0 * self.incline_angle * self.transition_radius)
+        return 2.0 * (
+            self.incline_length
+            + self.lower_landing
+            + self.upper_landing
+            + self.tensioner_length
+            + math.pi * self.head_radius
+            + 2.0 * self.incline_angle * self.transition_radius
+        )
 
     @property
     def sprocket_centre(self) -> tuple[float, float]:
         """Centre of the upper head (x, z). [m]"""
         a, rt = self.incline_angle, self.transition_radius
-        x = self.tensioner_length + self.lower_landing + 2 * rt * math.sin(a) + self.incline_length * math.cos(a) \
+        x = (
+            self.tensioner_length
+            + self.lower_landing
+            + 2 * rt * math.sin(a)
+            + self.incline_length * math.cos(a)
             + self.upper_landing
+        )
         z = 2 * rt * (1 - math.cos(a)) + self.incline_length * math.sin(a)
         return (x, z)
 
@@ -177,13 +195,19 @@ def reference_chain() -> ChainParams:
 def reference_sprocket() -> SprocketParams:
     """The study's sprocket: Z = 28 trapezoidal teeth, 250.62 kg, 43.78 kg m^2."""
     z = sprocket_teeth_for(0.4 / 3.0, 0.6)
-    return SprocketParams(teeth=z, base_width=0.060, tip_width=0.040, tooth_height=0.070,
-                          mass=250.62, inertia=43.78)
+    return SprocketParams(teeth=z, base_width=0.060, tip_width=0.040, tooth_height=0.070, mass=250.62, inertia=43.78)
 
 
 def reference_guide() -> GuideParams:
     """The study's guide (rise 3 m at 30 deg) with head radius equal to the sprocket pitch radius."""
     chain = reference_chain()
     radius = reference_sprocket().pitch_radius(chain.link_pitch)
-    return GuideParams(tensioner_length=0.4, lower_landing=0.8, upper_landing=0.8, transition_radius=1.5,
-                       incline_angle=math.radians(30.0), incline_length=5.19615, head_radius=radius)
+    return GuideParams(
+        tensioner_length=0.4,
+        lower_landing=0.8,
+        upper_landing=0.8,
+        transition_radius=1.5,
+        incline_angle=math.radians(30.0),
+        incline_length=5.19615,
+        head_radius=radius,
+    )

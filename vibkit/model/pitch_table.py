@@ -76,9 +76,11 @@ def table_spacing(rtol: float) -> float:
 # --------------------------------------------------------------------------------------------
 # building
 
+
 @nb.njit(cache=True, error_model="numpy")
-def _node(tab, p0, lt, u, guess, slope, pitches, n, tol, s0, kk, lam, xs, zs, part, alpha, beta, jac, gam, hacc, eta,
-          sd, out):
+def _node(
+    tab, p0, lt, u, guess, slope, pitches, n, tol, s0, kk, lam, xs, zs, part, alpha, beta, jac, gam, hacc, eta, sd, out
+):
     """Exact closure at roller-1 coordinate u, from a predicted delta and the last dh/ddelta
     ``slope`` (0: none); fills out (n + 1, 3, 3): for each roller (and, in row n, delta) its
     [x, z, s0] with first and second derivatives along u. Returns (delta, status); beta[n] is then
@@ -140,19 +142,88 @@ def _nodes(tab, p0, lt, pts, inward, guess, pitches, n, tol, mroll, m_c, data, m
         out = data[q]
         u = pts[q] + eps
         du = u - u_at
-        d, st = _node(tab, p0, lt, u, d + du * (c_at + 0.5 * e_at * du), slope, pitches, n, tol, s0, kk, lam, xs, zs,
-                      part, alpha, beta, jac, gam, hacc, eta, sd, out)
+        d, st = _node(
+            tab,
+            p0,
+            lt,
+            u,
+            d + du * (c_at + 0.5 * e_at * du),
+            slope,
+            pitches,
+            n,
+            tol,
+            s0,
+            kk,
+            lam,
+            xs,
+            zs,
+            part,
+            alpha,
+            beta,
+            jac,
+            gam,
+            hacc,
+            eta,
+            sd,
+            out,
+        )
         if st != 0:
             return q
         u_at, c_at, e_at, slope = u, out[n, 0, 1], out[n, 0, 2], beta[n]
         m0 = _mass_slope(out, mroll, m_c)
         # d2M/du2: a central difference, or on a breakpoint a one-sided one into the piece
         h1, h2 = (side * FD, 2.0 * side * FD) if side != 0.0 else (FD, -FD)
-        _, st = _node(tab, p0, lt, u + h1, d + h1 * (c_at + 0.5 * e_at * h1), slope, pitches, n, tol, s0, kk, lam, xs,
-                      zs, part, alpha, beta, jac, gam, hacc, eta, sd, tmp)
+        _, st = _node(
+            tab,
+            p0,
+            lt,
+            u + h1,
+            d + h1 * (c_at + 0.5 * e_at * h1),
+            slope,
+            pitches,
+            n,
+            tol,
+            s0,
+            kk,
+            lam,
+            xs,
+            zs,
+            part,
+            alpha,
+            beta,
+            jac,
+            gam,
+            hacc,
+            eta,
+            sd,
+            tmp,
+        )
         m1 = _mass_slope(tmp, mroll, m_c)
-        _, st2 = _node(tab, p0, lt, u + h2, d + h2 * (c_at + 0.5 * e_at * h2), slope, pitches, n, tol, s0, kk, lam,
-                       xs, zs, part, alpha, beta, jac, gam, hacc, eta, sd, tmp)
+        _, st2 = _node(
+            tab,
+            p0,
+            lt,
+            u + h2,
+            d + h2 * (c_at + 0.5 * e_at * h2),
+            slope,
+            pitches,
+            n,
+            tol,
+            s0,
+            kk,
+            lam,
+            xs,
+            zs,
+            part,
+            alpha,
+            beta,
+            jac,
+            gam,
+            hacc,
+            eta,
+            sd,
+            tmp,
+        )
         m2 = _mass_slope(tmp, mroll, m_c)
         if st != 0 or st2 != 0:
             return q
@@ -173,10 +244,17 @@ def _quintic(f0, d0, dd0, f1, d1, dd1, h):
     (along the original variable) at the ends of an interval of length h."""
     d0, d1, dd0, dd1 = d0 * h, d1 * h, dd0 * h * h, dd1 * h * h
     df = f1 - f0
-    return np.stack([f0, d0, 0.5 * dd0,
-                     10.0 * df - 6.0 * d0 - 4.0 * d1 - 1.5 * dd0 + 0.5 * dd1,
-                     -15.0 * df + 8.0 * d0 + 7.0 * d1 + 1.5 * dd0 - dd1,
-                     6.0 * df - 3.0 * d0 - 3.0 * d1 - 0.5 * dd0 + 0.5 * dd1], axis=-1)
+    return np.stack(
+        [
+            f0,
+            d0,
+            0.5 * dd0,
+            10.0 * df - 6.0 * d0 - 4.0 * d1 - 1.5 * dd0 + 0.5 * dd1,
+            -15.0 * df + 8.0 * d0 + 7.0 * d1 + 1.5 * dd0 - dd1,
+            6.0 * df - 3.0 * d0 - 3.0 * d1 - 0.5 * dd0 + 0.5 * dd1,
+        ],
+        axis=-1,
+    )
 
 
 def build_table(model, prm, cross, spacing):
@@ -218,8 +296,21 @@ def build_table(model, prm, cross, spacing):
     m_c = float(fp[13]) if ip[6] == 1 else 0.0
     data = np.zeros((len(pts), n + 1, 3, 3))
     mdd_pt = np.empty(len(pts))
-    bad = _nodes(tab, p0, fp[1], np.asarray(pts), np.asarray(inward), start.delta, chain.pitches, n,
-                 fp[21], mroll, m_c, data, mdd_pt)
+    bad = _nodes(
+        tab,
+        p0,
+        fp[1],
+        np.asarray(pts),
+        np.asarray(inward),
+        start.delta,
+        chain.pitches,
+        n,
+        fp[21],
+        mroll,
+        m_c,
+        data,
+        mdd_pt,
+    )
     if bad >= 0:
         raise ValueError(f"the chain could not be closed at s0_1 = {pts[bad]:.9g} m")
     ends = data[slot]  # (npc, 2, n + 1, 3, 3)
@@ -234,8 +325,9 @@ def build_table(model, prm, cross, spacing):
 
     def q5(f):  # f (npc, 2, ..., 3) -> (npc, ..., 6)
         h = hu.reshape((-1,) + (1,) * (f.ndim - 3))
-        return _quintic(f[:, 0, ..., 0], f[:, 0, ..., 1], f[:, 0, ..., 2], f[:, 1, ..., 0], f[:, 1, ..., 1],
-                        f[:, 1, ..., 2], h)
+        return _quintic(
+            f[:, 0, ..., 0], f[:, 0, ..., 1], f[:, 0, ..., 2], f[:, 1, ..., 0], f[:, 1, ..., 1], f[:, 1, ..., 2], h
+        )
 
     mc = _quintic(mm[:, 0], mp[:, 0], mdd[:, 0], mm[:, 1], mp[:, 1], mdd[:, 1], hu)
     vc = q5(vg)
@@ -256,12 +348,13 @@ def build_table(model, prm, cross, spacing):
     gk = s[:, :, :, 1]  # ds0_k/du (npc, 2, n)
     tk = s[:, :, :, 2]
     du = 1.0 / gk
-    ddu = -tk / gk ** 3
+    ddu = -tk / gk**3
     hs = np.diff(sb).reshape(n, npc)
     if np.any(hs <= 0.0) or np.any(np.abs(s_hi - s_lo - hs) > 1e-9):
         raise ValueError("the pitch table's pieces do not tile the loop")
-    uc = _quintic(np.zeros((n, npc)), du[:, 0].T, ddu[:, 0].T, np.broadcast_to(hu, (n, npc)), du[:, 1].T,
-                  ddu[:, 1].T, hs).reshape(n * npc, 6)
+    uc = _quintic(
+        np.zeros((n, npc)), du[:, 0].T, ddu[:, 0].T, np.broadcast_to(hu, (n, npc)), du[:, 1].T, ddu[:, 1].T, hs
+    ).reshape(n * npc, 6)
     # contact candidates: table rollers that come within reach of a tooth anywhere in the pitch
     reach = float(fp[22]) + 2.0 * spacing + 1e-6
     dist = np.hypot(x[..., 0] - fp[17], z[..., 0] - fp[18])  # (npc, 2, n)
@@ -292,6 +385,7 @@ def empty_table():
 
 # --------------------------------------------------------------------------------------------
 # evaluation
+
 
 @nb.njit(cache=True, error_model="numpy", inline="always")
 def _p5(c, r, x):
@@ -415,8 +509,30 @@ def table_evaluate(t, y, dy, prm, ws, want_teeth, tb):
                 cand[ncand] = i
                 ncand += 1
         torque_c, energy_c, worst, active, f_drive, f_back = contact_kernel(
-            xs, zs, vxs, vzs, cand, ncand, y[2], y[3], fp[17], fp[18], loc, fp[19], fp[20], ip[1], fp[16], fp[4],
-            fp[5], fp[6], fx, fz, ind_t, frc_t, want_teeth)
+            xs,
+            zs,
+            vxs,
+            vzs,
+            cand,
+            ncand,
+            y[2],
+            y[3],
+            fp[17],
+            fp[18],
+            loc,
+            fp[19],
+            fp[20],
+            ip[1],
+            fp[16],
+            fp[4],
+            fp[5],
+            fp[6],
+            fx,
+            fz,
+            ind_t,
+            frc_t,
+            want_teeth,
+        )
         for jj in range(ncand):
             i = cand[jj]
             q += jac[i, 0] * fx[i] + jac[i, 1] * fz[i]

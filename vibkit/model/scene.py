@@ -72,30 +72,86 @@ EFFECTS = {
 
 OUTPUTS = {
     "kinematics": {"delta", "s1", "roller_position", "closure_residual"},
-    "inverse": {"delta", "delta_dot", "delta_ddot", "link_tension", "drive_force", "closure_residual",
-                "chain_speed", "sprocket_angle", "sprocket_speed", "roller_position", "roller_velocity",
-                "roller_acceleration", "energy"},
-    "forward": {"delta", "delta_dot", "sprocket_angle", "sprocket_speed", "motor_torque", "chain_speed",
-                "link_tension", "indentation", "contact_force", "flank_force", "roller_position", "roller_velocity",
-                "roller_acceleration", "closure_residual", "tensioner_displacement", "accel_step", "energy",
-                "s0"},
+    "inverse": {
+        "delta",
+        "delta_dot",
+        "delta_ddot",
+        "link_tension",
+        "drive_force",
+        "closure_residual",
+        "chain_speed",
+        "sprocket_angle",
+        "sprocket_speed",
+        "roller_position",
+        "roller_velocity",
+        "roller_acceleration",
+        "energy",
+    },
+    "forward": {
+        "delta",
+        "delta_dot",
+        "sprocket_angle",
+        "sprocket_speed",
+        "motor_torque",
+        "chain_speed",
+        "link_tension",
+        "indentation",
+        "contact_force",
+        "flank_force",
+        "roller_position",
+        "roller_velocity",
+        "roller_acceleration",
+        "closure_residual",
+        "tensioner_displacement",
+        "accel_step",
+        "energy",
+        "s0",
+    },
 }
 
 SECTIONS = {
     "scene": {"name": str, "analysis": str, "description": str},
-    "guide": {"tensioner_length": float, "lower_landing": float, "upper_landing": float,
-              "transition_radius": float, "incline_angle_deg": float, "incline_length": float,
-              "head_radius": (float, str)},
-    "chain": {"link_pitch": float, "roller_radius": float, "roller_mass": float, "n_rollers": (int, str),
-              "worn_link": int, "worn_link_pitch": float},
-    "sprocket": {"teeth": int, "base_width": float, "tip_width": float, "tooth_height": float, "mass": float,
-                 "inertia": float},
+    "guide": {
+        "tensioner_length": float,
+        "lower_landing": float,
+        "upper_landing": float,
+        "transition_radius": float,
+        "incline_angle_deg": float,
+        "incline_length": float,
+        "head_radius": (float, str),
+    },
+    "chain": {
+        "link_pitch": float,
+        "roller_radius": float,
+        "roller_mass": float,
+        "n_rollers": (int, str),
+        "worn_link": int,
+        "worn_link_pitch": float,
+    },
+    "sprocket": {
+        "teeth": int,
+        "base_width": float,
+        "tip_width": float,
+        "tooth_height": float,
+        "mass": float,
+        "inertia": float,
+    },
     "kinematics": {"start": float, "stop": float, "step": float},
     "motion": {"speed": float, "duration": float, "step": float, "start": float},
     "run": {"duration": float, "output_step": float, "start": float, "initial_speed": float, "seed": int},
-    "solver": {"method": str, "rtol": float, "atol": float, "max_step": float, "first_step": float,
-               "max_wall_time": float, "max_result_bytes": (float, str), "events": bool,
-               "check": bool, "check_min_rtol": float, "closure": str},
+    "solver": {
+        "method": str,
+        "rtol": float,
+        "atol": float,
+        "max_step": float,
+        "first_step": float,
+        "max_wall_time": float,
+        "max_result_bytes": (float, str),
+        "events": bool,
+        "check": bool,
+        "check_min_rtol": float,
+        "closure": str,
+    },
     "outputs": {"variables": list, "rollers": list, "step_accelerometer": int},
 }
 
@@ -160,8 +216,9 @@ def _check_type(src, where, value, typ):
     if bool not in types and isinstance(value, bool):
         raise SceneError(f"{src}: {where} expected {'/'.join(t.__name__ for t in types)}, got a boolean")
     if not isinstance(value, types):
-        raise SceneError(f"{src}: {where} expected {'/'.join(t.__name__ for t in types)}, "
-                         f"got {type(value).__name__} {value!r}")
+        raise SceneError(
+            f"{src}: {where} expected {'/'.join(t.__name__ for t in types)}, got {type(value).__name__} {value!r}"
+        )
     if isinstance(value, float) and not math.isfinite(value):
         raise SceneError(f"{src}: {where} must be finite, got {value!r}")
     return value
@@ -216,10 +273,19 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
     _check_ranges(src, sec, effects)
     _check_sprocket_geometry(src, sec["sprocket"], sprocket, chain)
     _reduce_start(src, sec, analysis, guide)
-    return Scene(name=scene_sec.get("name", Path(source).stem), analysis=analysis,
-                 description=scene_sec.get("description", ""), guide=guide, chain=chain, sprocket=sprocket,
-                 sections={k: sec[k] for k in ("kinematics", "motion", "run", "solver")}, effects=effects,
-                 outputs=outputs, source=source, text=text)
+    return Scene(
+        name=scene_sec.get("name", Path(source).stem),
+        analysis=analysis,
+        description=scene_sec.get("description", ""),
+        guide=guide,
+        chain=chain,
+        sprocket=sprocket,
+        sections={k: sec[k] for k in ("kinematics", "motion", "run", "solver")},
+        effects=effects,
+        outputs=outputs,
+        source=source,
+        text=text,
+    )
 
 
 def _parameters(src, sec):
@@ -231,8 +297,12 @@ def _parameters(src, sec):
             _positive(src, f"sprocket.{key}", s[key])
     if "teeth" in s and s["teeth"] < 3:
         raise SceneError(f"{src}: 'sprocket.teeth' must be an integer >= 3, got {s['teeth']!r}")
-    sprocket = SprocketParams(**{k: s.get(k, getattr(ref_s, k)) for k in
-                                 ("teeth", "base_width", "tip_width", "tooth_height", "mass", "inertia")})
+    sprocket = SprocketParams(
+        **{
+            k: s.get(k, getattr(ref_s, k))
+            for k in ("teeth", "base_width", "tip_width", "tooth_height", "mass", "inertia")
+        }
+    )
     # chain
     c = sec["chain"]
     for key in ("link_pitch", "roller_radius", "roller_mass"):
@@ -261,7 +331,8 @@ def _parameters(src, sec):
         transition_radius=g.get("transition_radius", ref_g.transition_radius),
         incline_angle=math.radians(angle),
         incline_length=g.get("incline_length", ref_g.incline_length),
-        head_radius=head)
+        head_radius=head,
+    )
     n = c.get("n_rollers", "fill")
     if isinstance(n, str):
         if n != "fill":
@@ -277,8 +348,13 @@ def _parameters(src, sec):
             raise SceneError(f"{src}: 'chain.worn_link' must be a link number 1..{n}, got {c['worn_link']!r}")
         _positive(src, "chain.worn_link_pitch", c["worn_link_pitch"])
         worn = ((c["worn_link"], c["worn_link_pitch"]),)
-    chain = ChainParams(link_pitch=pitch, roller_radius=c.get("roller_radius", ref_c.roller_radius),
-                        roller_mass=c.get("roller_mass", ref_c.roller_mass), n_rollers=n, worn_links=worn)
+    chain = ChainParams(
+        link_pitch=pitch,
+        roller_radius=c.get("roller_radius", ref_c.roller_radius),
+        roller_mass=c.get("roller_mass", ref_c.roller_mass),
+        n_rollers=n,
+        worn_links=worn,
+    )
     # the chain must close within the tensioner travel: P0 - 2 delta ~ sum of pitches, |delta| < travel
     from .guide import TRAVEL
 
@@ -288,7 +364,8 @@ def _parameters(src, sec):
         raise SceneError(
             f"{src}: 'chain.n_rollers' = {n} links of {pitch:.6g} m cannot close on a guide of perimeter "
             f"{guide.perimeter:.6g} m: the tensioner would need delta = {slack:.4g} m, outside its travel "
-            f"(-{travel:.4g}, {travel:.4g}) m")
+            f"(-{travel:.4g}, {travel:.4g}) m"
+        )
     return guide, chain, sprocket
 
 
@@ -308,8 +385,7 @@ def _effects(src, raw, analysis):
         checked = {}
         for key, value in opts.items():
             if key not in EFFECTS[name]:
-                raise SceneError(f"{src}: unknown key 'effects.{name}.{key}' "
-                                 f"(known: {', '.join(EFFECTS[name])})")
+                raise SceneError(f"{src}: unknown key 'effects.{name}.{key}' (known: {', '.join(EFFECTS[name])})")
             checked[key] = _check_type(src, f"'effects.{name}.{key}'", value, EFFECTS[name][key])
         if checked.get("enabled", True) is False:
             continue
@@ -320,8 +396,10 @@ def _effects(src, raw, analysis):
     if allowed is not None:
         extra = set(effects) - allowed
         if extra:
-            raise SceneError(f"{src}: effect(s) {', '.join(sorted(extra))} not available in an {analysis} scene "
-                             f"(available: {', '.join(sorted(allowed))})")
+            raise SceneError(
+                f"{src}: effect(s) {', '.join(sorted(extra))} not available in an {analysis} scene "
+                f"(available: {', '.join(sorted(allowed))})"
+            )
     _validate_effects(src, effects)
     return effects
 
@@ -361,8 +439,9 @@ def _validate_effects(src, eff):
         if "coefficient" not in o:
             raise SceneError(f"{src}: missing value 'effects.rolling_resistance.coefficient'")
         if not 0 <= o["coefficient"] < 1:
-            raise SceneError(f"{src}: 'effects.rolling_resistance.coefficient' must be in [0, 1), "
-                             f"got {o['coefficient']!r}")
+            raise SceneError(
+                f"{src}: 'effects.rolling_resistance.coefficient' must be in [0, 1), got {o['coefficient']!r}"
+            )
     if "gravity" in eff:
         eff["gravity"].setdefault("g", 9.81)
         eff["gravity"].pop("enabled", None)
@@ -378,8 +457,9 @@ def _validate_effects(src, eff):
         o.setdefault("alight", ["upper_landing"] * n)
         for key in ("step", "board", "alight"):
             if len(o[key]) != n:
-                raise SceneError(f"{src}: 'effects.passengers.{key}' has {len(o[key])} entries, "
-                                 f"'effects.passengers.mass' has {n}")
+                raise SceneError(
+                    f"{src}: 'effects.passengers.{key}' has {len(o[key])} entries, 'effects.passengers.mass' has {n}"
+                )
         for i in range(n):
             m, st, b, a = o["mass"][i], o["step"][i], o["board"][i], o["alight"][i]
             if not isinstance(m, (int, float)) or m <= 0:
@@ -389,15 +469,20 @@ def _validate_effects(src, eff):
             for key, v in (("board", b), ("alight", a)):
                 if isinstance(v, str):
                     if v not in PLACES:
-                        raise SceneError(f"{src}: 'effects.passengers.{key}[{i}]' must be a place "
-                                         f"({', '.join(repr(p) for p in PLACES)}) or a time [s], got {v!r}")
+                        raise SceneError(
+                            f"{src}: 'effects.passengers.{key}[{i}]' must be a place "
+                            f"({', '.join(repr(p) for p in PLACES)}) or a time [s], got {v!r}"
+                        )
                 elif isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
-                    raise SceneError(f"{src}: 'effects.passengers.{key}[{i}]' must be a place "
-                                     f"({', '.join(repr(p) for p in PLACES)}) or a time [s], got {v!r}")
+                    raise SceneError(
+                        f"{src}: 'effects.passengers.{key}[{i}]' must be a place "
+                        f"({', '.join(repr(p) for p in PLACES)}) or a time [s], got {v!r}"
+                    )
         kinds = {isinstance(v, str) for v in list(o["board"]) + list(o["alight"])}
         if len(kinds) > 1:
-            raise SceneError(f"{src}: 'effects.passengers.board' and 'alight' must all be places or all be "
-                             f"times [s], not a mix")
+            raise SceneError(
+                f"{src}: 'effects.passengers.board' and 'alight' must all be places or all be times [s], not a mix"
+            )
         if kinds == {str}:
             for i, (b, a) in enumerate(zip(o["board"], o["alight"])):
                 if b == a:
@@ -413,8 +498,10 @@ def _outputs(src, o, analysis, chain):
     variables = o.get("variables", ["delta", "closure_residual"])
     for v in variables:
         if not isinstance(v, str) or v not in allowed:
-            raise SceneError(f"{src}: unknown output {v!r} in 'outputs.variables' for a {analysis} scene "
-                             f"(available: {', '.join(sorted(allowed))})")
+            raise SceneError(
+                f"{src}: unknown output {v!r} in 'outputs.variables' for a {analysis} scene "
+                f"(available: {', '.join(sorted(allowed))})"
+            )
     rollers = o.get("rollers", [])
     for r in rollers:
         if not isinstance(r, int) or isinstance(r, bool) or not 1 <= r <= chain.n_rollers:
@@ -430,9 +517,11 @@ def _outputs(src, o, analysis, chain):
 
 
 def _analysis_sections(src, sec, analysis):
-    need = {"kinematics": ("kinematics", ("start", "stop", "step")),
-            "inverse": ("motion", ("speed", "duration", "step")),
-            "forward": ("run", ("duration", "output_step"))}[analysis]
+    need = {
+        "kinematics": ("kinematics", ("start", "stop", "step")),
+        "inverse": ("motion", ("speed", "duration", "step")),
+        "forward": ("run", ("duration", "output_step")),
+    }[analysis]
     name, keys = need
     for key in keys:
         if key not in sec[name]:
@@ -490,7 +579,6 @@ def load_scene(path) -> Scene:
     return parse_scene(text, str(p))
 
 
-
 def _check_scene_file(p: Path) -> None:
     """A scene must be a regular file of reasonable size: a FIFO or a device would block or never end."""
     import stat
@@ -506,8 +594,7 @@ def _check_scene_file(p: Path) -> None:
     if not stat.S_ISREG(st.st_mode):
         raise SceneError(f"{p}: is not a regular file (a FIFO, device or socket); expected a scene file (.toml)")
     if st.st_size > MAX_SCENE_BYTES:
-        raise SceneError(f"{p}: is {st.st_size} bytes; a scene is a small TOML file (at most {MAX_SCENE_BYTES} "
-                         "bytes)")
+        raise SceneError(f"{p}: is {st.st_size} bytes; a scene is a small TOML file (at most {MAX_SCENE_BYTES} bytes)")
 
 
 def _validate_passenger_numbers(src, o, chain) -> None:
@@ -517,12 +604,13 @@ def _validate_passenger_numbers(src, o, chain) -> None:
     n_steps = chain.n_rollers // 3
     for i, m in enumerate(o.get("mass", [])):
         if isinstance(m, bool) or not isinstance(m, (int, float)) or not math.isfinite(m) or m <= 0:
-            raise SceneError(f"{src}: 'effects.passengers.mass[{i}]' must be a finite positive mass [kg], "
-                             f"got {m!r}")
+            raise SceneError(f"{src}: 'effects.passengers.mass[{i}]' must be a finite positive mass [kg], got {m!r}")
     for i, st in enumerate(o.get("step", [])):
         if isinstance(st, bool) or not isinstance(st, int) or not 1 <= st <= n_steps:
-            raise SceneError(f"{src}: 'effects.passengers.step[{i}]' must be a step number 1..{n_steps} "
-                             f"(the chain has {chain.n_rollers} rollers, 3 per step), got {st!r}")
+            raise SceneError(
+                f"{src}: 'effects.passengers.step[{i}]' must be a step number 1..{n_steps} "
+                f"(the chain has {chain.n_rollers} rollers, 3 per step), got {st!r}"
+            )
 
 
 def _check_ranges(src, sec, effects) -> None:
@@ -544,15 +632,21 @@ def _check_sprocket_geometry(src, given, sprocket, chain) -> None:
     pitch = chain.link_pitch
     r = sprocket.pitch_radius(pitch)
     if sprocket.tooth_height >= min(pitch, r):
-        raise SceneError(f"{src}: 'sprocket.tooth_height' = {sprocket.tooth_height:g} m is not plausible for a "
-                         f"sprocket of pitch radius {r:.4g} m driving links of {pitch:g} m (expected less than "
-                         f"{min(pitch, r):.4g} m)")
+        raise SceneError(
+            f"{src}: 'sprocket.tooth_height' = {sprocket.tooth_height:g} m is not plausible for a "
+            f"sprocket of pitch radius {r:.4g} m driving links of {pitch:g} m (expected less than "
+            f"{min(pitch, r):.4g} m)"
+        )
     if sprocket.base_width >= pitch:
-        raise SceneError(f"{src}: 'sprocket.base_width' = {sprocket.base_width:g} m must be less than the link "
-                         f"pitch {pitch:g} m (a tooth sits between two rollers)")
+        raise SceneError(
+            f"{src}: 'sprocket.base_width' = {sprocket.base_width:g} m must be less than the link "
+            f"pitch {pitch:g} m (a tooth sits between two rollers)"
+        )
     if sprocket.tip_width > sprocket.base_width:
-        raise SceneError(f"{src}: 'sprocket.tip_width' = {sprocket.tip_width:g} m must not exceed "
-                         f"'sprocket.base_width' = {sprocket.base_width:g} m (a trapezoidal tooth)")
+        raise SceneError(
+            f"{src}: 'sprocket.tip_width' = {sprocket.tip_width:g} m must not exceed "
+            f"'sprocket.base_width' = {sprocket.base_width:g} m (a trapezoidal tooth)"
+        )
 
 
 #: starting positions beyond this many guide perimeters are refused (kinematics) [-]
@@ -574,6 +668,8 @@ def _reduce_start(src, sec, analysis, guide) -> None:
         for key in ("start", "stop"):
             v = sec["kinematics"].get(key)
             if v is not None and abs(v) > bound:
-                raise SceneError(f"{src}: 'kinematics.{key}' = {v:g} m is more than {MAX_START_LOOPS} loops of "
-                                 f"the guide ({bound:.6g} m): positions that far lose accuracy; give the advance "
-                                 f"within one loop (perimeter {perimeter:.6g} m)")
+                raise SceneError(
+                    f"{src}: 'kinematics.{key}' = {v:g} m is more than {MAX_START_LOOPS} loops of "
+                    f"the guide ({bound:.6g} m): positions that far lose accuracy; give the advance "
+                    f"within one loop (perimeter {perimeter:.6g} m)"
+                )

@@ -28,8 +28,14 @@ def tooth_geometry(sp: SprocketParams, link_pitch: float, roller_radius: float) 
     rp = sp.pitch_radius(link_pitch)
     rf = rp - roller_radius
     beta = math.atan((sp.base_width / 2.0) / rf)
-    return {"pitch_radius": rp, "root_radius": rf, "tip_radius": rp + roller_radius, "beta": beta,
-            "a": rf * (1.0 - math.cos(beta)), "tooth_pitch": 2.0 * math.pi / sp.teeth}
+    return {
+        "pitch_radius": rp,
+        "root_radius": rf,
+        "tip_radius": rp + roller_radius,
+        "beta": beta,
+        "a": rf * (1.0 - math.cos(beta)),
+        "tooth_pitch": 2.0 * math.pi / sp.teeth,
+    }
 
 
 def local_corners(sp: SprocketParams, link_pitch: float, roller_radius: float) -> np.ndarray:
@@ -74,8 +80,31 @@ def mesh_phase(positions: np.ndarray, centre, sp: SprocketParams, link_pitch: fl
 
 
 @nb.njit(cache=True, error_model="numpy")
-def contact_kernel(xs, zs, vx, vz, candidates, ncand, theta, omega, cx, cz, loc, root_r, psi, nteeth,
-                   r_d, k, expo, damp, fx, fz, ind_tooth, force_tooth, want_teeth):
+def contact_kernel(
+    xs,
+    zs,
+    vx,
+    vz,
+    candidates,
+    ncand,
+    theta,
+    omega,
+    cx,
+    cz,
+    loc,
+    root_r,
+    psi,
+    nteeth,
+    r_d,
+    k,
+    expo,
+    damp,
+    fx,
+    fz,
+    ind_tooth,
+    force_tooth,
+    want_teeth,
+):
     """Roller-tooth contact forces for the candidate rollers.
 
     Adds the contact force on each candidate roller to ``fx, fz`` [N] and returns
@@ -155,7 +184,7 @@ def contact_kernel(xs, zs, vx, vz, candidates, ncand, theta, omega, cx, cz, loc,
                 qz = pz - nz
                 nx /= dist
                 nz /= dist
-                f = k * pen ** expo
+                f = k * pen**expo
                 energy += k * pen ** (expo + 1.0) / (expo + 1.0)
                 if damp > 0.0:
                     # tooth point velocity: omega x (q - C) = omega (-(qz - cz), qx - cx)

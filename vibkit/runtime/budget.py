@@ -30,18 +30,41 @@ import math
 import os
 import re
 
-__all__ = ["BudgetError", "DEFAULT_MAX_RESULT_BYTES", "DEFAULT_MAX_WALL_TIME", "MAX_INTEGRATOR_STEPS",
-           "estimate_result", "check_run", "max_result_bytes", "max_wall_time", "parse_bytes"]
+__all__ = [
+    "BudgetError",
+    "DEFAULT_MAX_RESULT_BYTES",
+    "DEFAULT_MAX_WALL_TIME",
+    "MAX_INTEGRATOR_STEPS",
+    "estimate_result",
+    "check_run",
+    "max_result_bytes",
+    "max_wall_time",
+    "parse_bytes",
+]
 
 #: default limit of the result arrays' size [bytes]
-DEFAULT_MAX_RESULT_BYTES = 2 * 1024 ** 3
+DEFAULT_MAX_RESULT_BYTES = 2 * 1024**3
 #: default wall-time budget of a forward-dynamics integration [s]
 DEFAULT_MAX_WALL_TIME = 600.0
 #: a forward run whose max_step implies more steps than this is refused (1e8 steps: hours)
 MAX_INTEGRATOR_STEPS = 1e8
 
-_SUFFIX = {"": 1, "b": 1, "k": 1e3, "kb": 1e3, "m": 1e6, "mb": 1e6, "g": 1e9, "gb": 1e9, "t": 1e12, "tb": 1e12,
-           "kib": 1024, "mib": 1024 ** 2, "gib": 1024 ** 3, "tib": 1024 ** 4}
+_SUFFIX = {
+    "": 1,
+    "b": 1,
+    "k": 1e3,
+    "kb": 1e3,
+    "m": 1e6,
+    "mb": 1e6,
+    "g": 1e9,
+    "gb": 1e9,
+    "t": 1e12,
+    "tb": 1e12,
+    "kib": 1024,
+    "mib": 1024**2,
+    "gib": 1024**3,
+    "tib": 1024**4,
+}
 
 
 class BudgetError(ValueError):
@@ -117,8 +140,11 @@ def _samples(scene, duration):
     if scene.analysis == "kinematics":
         k = scene.section("kinematics")
         span = duration if duration is not None else k["stop"] - k["start"]
-        return span / k["step"] + 1, "kinematics.step", "kinematics.stop - kinematics.start" \
-            if duration is None else "--duration"
+        return (
+            span / k["step"] + 1,
+            "kinematics.step",
+            "kinematics.stop - kinematics.start" if duration is None else "--duration",
+        )
     if scene.analysis == "inverse":
         m = scene.section("motion")
         span = duration or m["duration"]
@@ -152,17 +178,28 @@ def estimate_result(scene, duration=None) -> dict:
     elif scene.analysis == "inverse":
         cols = 1 + 10 + n + 6 * nr  # the inverse allocates every column whatever is asked
     else:
-        cols = 1 + 5 + 12 + 6 * nr + (n if "link_tension" in outputs else 0) \
+        cols = (
+            1
+            + 5
+            + 12
+            + 6 * nr
+            + (n if "link_tension" in outputs else 0)
             + (2 * teeth if outputs & {"indentation", "contact_force"} else 0)
+        )
     samples, step_key, span_key = _samples(scene, duration)
-    return {"samples": samples, "columns": cols, "bytes": samples * cols * 8.0, "step_key": step_key,
-            "span_key": span_key}
+    return {
+        "samples": samples,
+        "columns": cols,
+        "bytes": samples * cols * 8.0,
+        "step_key": step_key,
+        "span_key": span_key,
+    }
 
 
 def _fmt_bytes(b: float) -> str:
     if not math.isfinite(b):
         return "unlimited"
-    for unit, f in (("TiB", 1024 ** 4), ("GiB", 1024 ** 3), ("MiB", 1024 ** 2), ("KiB", 1024)):
+    for unit, f in (("TiB", 1024**4), ("GiB", 1024**3), ("MiB", 1024**2), ("KiB", 1024)):
         if b >= f:
             return f"{b / f:.3g} {unit}"
     return f"{b:.0f} B"
@@ -199,7 +236,8 @@ def check_run(scene, *, duration=None, limit_bytes=None) -> dict:
             f"{src}: the run asks for {est['samples']:.3g} samples ({est['span_key']} / '{est['step_key']}') x "
             f"{est['columns']} values = {_fmt_bytes(est['bytes'])} of results, more than the limit of "
             f"{_fmt_bytes(limit)}; shorten the run, take a larger '{est['step_key']}', or raise the limit "
-            "([solver] max_result_bytes, VIBKIT_MAX_RESULT_BYTES or --max-result-bytes)")
+            "([solver] max_result_bytes, VIBKIT_MAX_RESULT_BYTES or --max-result-bytes)"
+        )
     if scene.analysis == "forward":
         ms = scene.section("solver").get("max_step")
         span = duration or scene.section("run")["duration"]
@@ -207,5 +245,6 @@ def check_run(scene, *, duration=None, limit_bytes=None) -> dict:
             raise BudgetError(
                 f"{src}: 'solver.max_step' = {ms:g} s forces at least {span / ms:.3g} integrator steps over "
                 f"{span:g} s (more than {MAX_INTEGRATOR_STEPS:.0e}: hours of work); take max_step >= "
-                f"{span / MAX_INTEGRATOR_STEPS:.2g} s or leave it out (the step is adaptive)")
+                f"{span / MAX_INTEGRATOR_STEPS:.2g} s or leave it out (the step is adaptive)"
+            )
     return est

@@ -40,8 +40,7 @@ def dask_client(scheduler: str | None = None, *, n_workers: int | None = None):
         import dask
         from distributed import Client, LocalCluster
     except ImportError as exc:  # pragma: no cover - a declared dependency
-        raise ImportError("vibkit needs dask.distributed for sweeps and fleet scans: "
-                          "pip install distributed") from exc
+        raise ImportError("vibkit needs dask.distributed for sweeps and fleet scans: pip install distributed") from exc
     address = scheduler or dask.config.get("scheduler-address", None)
     if address:
         with Client(address) as client:
@@ -53,7 +52,15 @@ def dask_client(scheduler: str | None = None, *, n_workers: int | None = None):
     # dashboard on a free port: the default 8787 is often taken (another cluster, another user)
     # no dashboard: the scheduler's HTTP server would otherwise bind port 8787 (or warn and leak a
     # socket when another process holds it)
-    with LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0",
-                      scheduler_kwargs={"dashboard": False, "dashboard_address": ":0"},
-                      silence_logs=logging.ERROR) as cluster, Client(cluster) as client:
+    with (
+        LocalCluster(
+            n_workers=n,
+            threads_per_worker=1,
+            processes=True,
+            dashboard_address=":0",
+            scheduler_kwargs={"dashboard": False, "dashboard_address": ":0"},
+            silence_logs=logging.ERROR,
+        ) as cluster,
+        Client(cluster) as client,
+    ):
         yield client

@@ -91,8 +91,11 @@ def _disable_numba_cache(reason: str) -> None:
         self._cache = NullCache()
 
     dispatcher.Dispatcher.enable_caching = enable_caching
-    print(f"vibkit: note: {reason}; compiled kernels are not cached (each run compiles them again, "
-          "about a minute); set NUMBA_CACHE_DIR or XDG_CACHE_HOME to a writable folder", file=sys.stderr)
+    print(
+        f"vibkit: note: {reason}; compiled kernels are not cached (each run compiles them again, "
+        "about a minute); set NUMBA_CACHE_DIR or XDG_CACHE_HOME to a writable folder",
+        file=sys.stderr,
+    )
 
 
 def _set_numba_cache_dir(path: str) -> None:
@@ -134,11 +137,13 @@ def configure(pkg_dir: str | None = None) -> str | None:
         _STATE["dir"] = path
         _set_numba_cache_dir(path)
         if _STATE.get("created"):  # said once, when the folder is made
-            print(f"vibkit: note: the package folder and the home cache are not writable; compiled kernels "
-                  f"are cached in {path}", file=sys.stderr)
+            print(
+                f"vibkit: note: the package folder and the home cache are not writable; compiled kernels "
+                f"are cached in {path}",
+                file=sys.stderr,
+            )
         return path
-    _disable_numba_cache(f"no writable folder for the kernel cache (package {pkg_dir}, home, "
-                         f"{tempfile.gettempdir()})")
+    _disable_numba_cache(f"no writable folder for the kernel cache (package {pkg_dir}, home, {tempfile.gettempdir()})")
     return None
 
 

@@ -66,8 +66,9 @@ class Progress:
         frac = min(max(done / self.total, 0.0), 1.0)
         width = 30
         fill = int(round(frac * width))
-        self.stream.write(f"\r{self.label} [{'#' * fill}{'.' * (width - fill)}] {100 * frac:5.1f}% "
-                          f"{now - self._t0:6.1f} s")
+        self.stream.write(
+            f"\r{self.label} [{'#' * fill}{'.' * (width - fill)}] {100 * frac:5.1f}% {now - self._t0:6.1f} s"
+        )
         self.stream.flush()
 
     def close(self) -> None:

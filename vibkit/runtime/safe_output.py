@@ -29,8 +29,16 @@ import signal
 import stat
 import threading
 
-__all__ = ["OutputError", "Interrupted", "check_output_path", "atomic_output", "write_bytes",
-           "clean_stale_temporaries", "temporary_name", "handle_termination"]
+__all__ = [
+    "OutputError",
+    "Interrupted",
+    "check_output_path",
+    "atomic_output",
+    "write_bytes",
+    "clean_stale_temporaries",
+    "temporary_name",
+    "handle_termination",
+]
 
 TMP_MARK = ".vibkit-tmp-"
 
@@ -48,9 +56,14 @@ class Interrupted(KeyboardInterrupt):
 
 
 def _describe(mode: int) -> str:
-    for test, what in ((stat.S_ISDIR, "a folder"), (stat.S_ISCHR, "a character device"),
-                       (stat.S_ISBLK, "a block device"), (stat.S_ISFIFO, "a FIFO (named pipe)"),
-                       (stat.S_ISSOCK, "a socket"), (stat.S_ISLNK, "a symbolic link")):
+    for test, what in (
+        (stat.S_ISDIR, "a folder"),
+        (stat.S_ISCHR, "a character device"),
+        (stat.S_ISBLK, "a block device"),
+        (stat.S_ISFIFO, "a FIFO (named pipe)"),
+        (stat.S_ISSOCK, "a socket"),
+        (stat.S_ISLNK, "a symbolic link"),
+    ):
         if test(mode):
             return what
     return "not a regular file"
@@ -105,19 +118,24 @@ def check_output_path(path, *, overwrite: bool = False, inputs=()) -> str:
         raise OutputError(f"output {p}: cannot be checked ({exc.strerror or exc})") from None
     if st is not None:
         if stat.S_ISLNK(st.st_mode):
-            raise OutputError(f"output {p}: is a symbolic link (to {os.readlink(p)!r}); vibkit does not follow "
-                              "or replace links: give the real path")
+            raise OutputError(
+                f"output {p}: is a symbolic link (to {os.readlink(p)!r}); vibkit does not follow "
+                "or replace links: give the real path"
+            )
         if not stat.S_ISREG(st.st_mode):
             raise OutputError(f"output {p}: is {_describe(st.st_mode)}, not a regular file; refusing to write to it")
         for src in inputs:
             if src is not None and _same_file(p, src):
-                raise OutputError(f"output {p}: is an input of this command ({os.fspath(src)}); refusing to "
-                                  "overwrite it")
+                raise OutputError(
+                    f"output {p}: is an input of this command ({os.fspath(src)}); refusing to overwrite it"
+                )
         if not overwrite:
             raise OutputError(f"output {p}: already exists; give --force to replace it (or choose a new name)")
         if not st.st_mode & 0o222:
-            raise OutputError(f"output {p}: is read-only (mode {stat.S_IMODE(st.st_mode):04o}); refusing to "
-                              "replace it, even with --force")
+            raise OutputError(
+                f"output {p}: is read-only (mode {stat.S_IMODE(st.st_mode):04o}); refusing to "
+                "replace it, even with --force"
+            )
     folder = os.path.dirname(os.path.abspath(p))
     if not os.path.isdir(folder):
         raise OutputError(f"output {p}: folder {folder} does not exist")
@@ -285,7 +303,7 @@ def write_bytes(data, path, *, overwrite: bool = False, inputs=(), chunk: int = 
         with atomic_output(path, overwrite=overwrite, inputs=inputs) as tmp:
             with open(tmp, "wb") as f:
                 for i in range(0, len(view), chunk):
-                    f.write(view[i:i + chunk])
+                    f.write(view[i : i + chunk])
                 f.flush()
     except OSError as exc:
         if exc.errno is not None and not exc.filename:  # name the file the user asked for (disk full ...)

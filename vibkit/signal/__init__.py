@@ -6,9 +6,8 @@ Functions follow scipy.signal conventions (array, ``fs`` [Hz], keyword-only opti
 numpy, scipy, xarray and numba only -- never the simulator.
 """
 
-from .detect import InvalidSamples, LinkPassDetection, detect_link_pass, flag_invalid
-from .meanfreq import MeanFrequency, mean_link_pass_frequency
 from .compare import HarmonicComparison, SpectrumComparison, common_spectrograms, compare_spectra
+from .detect import InvalidSamples, LinkPassDetection, detect_link_pass, flag_invalid
 from .estimate import FrequencyEstimate, crb_harmonic, crb_single_tone, harmonic_ls, interpolated_dft
 from .hampel import (
     HampelResult,
@@ -18,6 +17,7 @@ from .hampel import (
     hampel_false_alarm_rate,
     hampel_n_sigma_for_rate,
 )
+from .meanfreq import MeanFrequency, mean_link_pass_frequency
 from .orders import (
     AngleSignal,
     PhaseTrack,
@@ -32,7 +32,16 @@ from .orders import (
 )
 from .peaks import Fundamental, Harmonic, LinkPassEstimate, find_fundamental, link_pass_estimate
 from .quantisation import quantisation_step
-from .ride import PeakToPeak, RideSegment, a95, detect_ride_segment, half_cycle_peaks, lowpass_10hz, peak_to_peak, peak_to_peak_values
+from .ride import (
+    PeakToPeak,
+    RideSegment,
+    a95,
+    detect_ride_segment,
+    half_cycle_peaks,
+    lowpass_10hz,
+    peak_to_peak,
+    peak_to_peak_values,
+)
 from .spectral import WelchResult, amplitude_spectrum, spectrogram, study_power_spectrum, welch_psd
 from .weighting import WEIGHTINGS, Weighting, frequency_weighting, frequency_weighting_response, frequency_weighting_sos
 from .xr import (

@@ -114,8 +114,12 @@ class InvalidSamples:
         return self.non_finite + self.fill_value + self.absurd
 
     def as_dict(self) -> dict:
-        return {"non_finite": self.non_finite, "fill_value": self.fill_value, "absurd": self.absurd,
-                "total": self.count}
+        return {
+            "non_finite": self.non_finite,
+            "fill_value": self.fill_value,
+            "absurd": self.absurd,
+            "total": self.count,
+        }
 
 
 def flag_invalid(x, *, fill_threshold=FILL_THRESHOLD, absurd_factor=ABSURD_FACTOR) -> InvalidSamples:
@@ -218,8 +222,11 @@ def _threshold(p_fa, n_harmonics, k, floor_rel_sd):
     hi = float(scipy.stats.gamma.isf(p_fa, n_harmonics * k, scale=1.0 / k)) * (1 + 10 * floor_rel_sd) + 1.0
     while harmonic_sum_pvalue(hi, n_harmonics, k, floor_rel_sd) > p_fa:
         hi *= 2.0
-    return float(scipy.optimize.brentq(lambda v: float(harmonic_sum_pvalue(v, n_harmonics, k, floor_rel_sd)) - p_fa,
-                                       lo, hi, xtol=1e-10))
+    return float(
+        scipy.optimize.brentq(
+            lambda v: float(harmonic_sum_pvalue(v, n_harmonics, k, floor_rel_sd)) - p_fa, lo, hi, xtol=1e-10
+        )
+    )
 
 
 @dataclass(frozen=True)
@@ -269,11 +276,21 @@ class LinkPassDetection:
     extra: dict = field(default_factory=dict)
 
     def as_dict(self) -> dict:
-        return {"detected": self.detected, "status": self.status, "reason": self.reason,
-                "frequency_hz": self.frequency_hz, "p_value": self.p_value, "p_fa": self.p_fa,
-                "statistic": self.statistic, "threshold": self.threshold, "n_segments": self.n_segments,
-                "segment_s": self.segment_s, "n_harmonics": self.n_harmonics,
-                "significant_orders": list(self.significant_orders), **self.extra}
+        return {
+            "detected": self.detected,
+            "status": self.status,
+            "reason": self.reason,
+            "frequency_hz": self.frequency_hz,
+            "p_value": self.p_value,
+            "p_fa": self.p_fa,
+            "statistic": self.statistic,
+            "threshold": self.threshold,
+            "n_segments": self.n_segments,
+            "segment_s": self.segment_s,
+            "n_harmonics": self.n_harmonics,
+            "significant_orders": list(self.significant_orders),
+            **self.extra,
+        }
 
 
 def _segments(pieces, fs, fmin):
@@ -294,7 +311,7 @@ def _segments(pieces, fs, fmin):
         nseg = lens[0]
         if nseg < shortest:
             return None, nseg, False
-    rows = [p[i * nseg:(i + 1) * nseg] for p in pieces for i in range(p.size // nseg)]
+    rows = [p[i * nseg : (i + 1) * nseg] for p in pieces for i in range(p.size // nseg)]
     return np.array(rows, dtype=float), nseg, split
 
 
@@ -338,8 +355,10 @@ def _floor(p, k, half, quant, w):
     but never below what the record can resolve (module notes, "Floors of clean records").
     ``quant = (q, m)``: quantisation step of the analysed samples, decimated ``m`` times since recorded."""
     med = scipy.ndimage.median_filter(p, size=2 * half + 1, mode="reflect") / _gamma_median(k)
-    bound = max(quantisation_floor(quant[0], w, float(np.median(med)), decimation=quant[1]),
-                1e-12 * float(np.max(p)) + np.finfo(float).tiny)
+    bound = max(
+        quantisation_floor(quant[0], w, float(np.median(med)), decimation=quant[1]),
+        1e-12 * float(np.max(p)) + np.finfo(float).tiny,
+    )
     return np.maximum(med, bound)
 
 
@@ -402,15 +421,18 @@ def detect_link_pass(x, fs, *, band, n_harmonics=5, p_fa=1e-3, f_top=None, quant
     segs, nseg, split = _segments(pieces, fs, fmin)
     if segs is None:
         longest = max(p.size for p in pieces) / fs
-        raise ValueError(f"the record is too short to test for a link-pass family down to {fmin:.4g} Hz: two "
-                         f"segments of {MIN_SEGMENT_PERIODS:g} periods ({2 * MIN_SEGMENT_PERIODS / fmin:.3g} s) are "
-                         f"needed, the longest piece has {longest:.3g} s")
+        raise ValueError(
+            f"the record is too short to test for a link-pass family down to {fmin:.4g} Hz: two "
+            f"segments of {MIN_SEGMENT_PERIODS:g} periods ({2 * MIN_SEGMENT_PERIODS / fmin:.3g} s) are "
+            f"needed, the longest piece has {longest:.3g} s"
+        )
     k_all = segs.shape[0]
     seg_s = nseg / fs
 
     def none(reason, f=float("nan"), extra=None):
-        return LinkPassDetection(False, "no link-pass found", reason, f, 1.0, p_fa, 0.0, float("nan"), k_all,
-                                 seg_s, 0, (), extra or {})
+        return LinkPassDetection(
+            False, "no link-pass found", reason, f, 1.0, p_fa, 0.0, float("nan"), k_all, seg_s, 0, (), extra or {}
+        )
 
     # scale first: huge or tiny values must not overflow or underflow in the squares
     level = float(np.max(np.abs(segs)))
@@ -489,24 +511,41 @@ def detect_link_pass(x, fs, *, band, n_harmonics=5, p_fa=1e-3, f_top=None, quant
     lim = float(scipy.special.gammainccinv(k_all, p_fa / max(kb.size, 1))) / k_all * (1 + 3 * s_rel)
     near = np.maximum(r_all[kb], np.maximum(r_all[np.maximum(kb - 1, 0)], r_all[np.minimum(kb + 1, f.size - 1)]))
     sig = tuple(int(o) for o in orders[near > lim])
-    base = dict(p_value=p_value, p_fa=p_fa, statistic=t, threshold=thr, n_segments=k_all, segment_s=seg_s,
-                n_harmonics=hh, significant_orders=sig,
-                extra={"test": "split-half" if split else "bonferroni (one segment per piece)"})
+    base = dict(
+        p_value=p_value,
+        p_fa=p_fa,
+        statistic=t,
+        threshold=thr,
+        n_segments=k_all,
+        segment_s=seg_s,
+        n_harmonics=hh,
+        significant_orders=sig,
+        extra={"test": "split-half" if split else "bonferroni (one segment per piece)"},
+    )
     if not detected:
-        return LinkPassDetection(False, "no link-pass found",
-                                 f"no harmonic family in {fmin:.4g}-{fmax:.4g} Hz: harmonic sum {t:.3g} under the "
-                                 f"threshold {thr:.3g} (p = {p_value:.2g}, false-alarm probability {p_fa:g})",
-                                 float("nan"), **base)
+        return LinkPassDetection(
+            False,
+            "no link-pass found",
+            f"no harmonic family in {fmin:.4g}-{fmax:.4g} Hz: harmonic sum {t:.3g} under the "
+            f"threshold {thr:.3g} (p = {p_value:.2g}, false-alarm probability {p_fa:g})",
+            float("nan"),
+            **base,
+        )
     g = 0
     for o in sig:
         g = math.gcd(g, o)
     if g > 1:
         fg = g * f_best
         if fg > fmax * (1 + 0.5 * df / fmax):
-            return LinkPassDetection(False, "no link-pass found",
-                                     f"a periodic signal is present, but its harmonics (orders {', '.join(map(str, sig[:6]))} "
-                                     f"of {f_best:.4g} Hz) make its fundamental {fg:.4g} Hz, outside the band "
-                                     f"{fmin:.4g}-{fmax:.4g} Hz", float(fg), **base)
+            return LinkPassDetection(
+                False,
+                "no link-pass found",
+                f"a periodic signal is present, but its harmonics (orders {', '.join(map(str, sig[:6]))} "
+                f"of {f_best:.4g} Hz) make its fundamental {fg:.4g} Hz, outside the band "
+                f"{fmin:.4g}-{fmax:.4g} Hz",
+                float(fg),
+                **base,
+            )
         f_best = fg
         sig = tuple(o // g for o in sig)
         base["significant_orders"] = sig
@@ -514,22 +553,31 @@ def detect_link_pass(x, fs, *, band, n_harmonics=5, p_fa=1e-3, f_top=None, quant
     # its line at f has its fundamental at f/m, below the band (a gait at 1.6-2.2 Hz seen from its
     # 2nd or 3rd harmonic; a modulated tone whose lines fall on a comb of f/2)
     k1 = int(round(f_best / df))
-    p_one = float(np.max(r_all[max(k1 - 1, 0):k1 + 2]))
+    p_one = float(np.max(r_all[max(k1 - 1, 0) : k1 + 2]))
     for m in (2, 3):
         if f_best / m >= fmin or f_best / m < 2 * df:
             continue
         ks = [int(round(j * f_best / m / df)) for j in range(1, 3 * m) if j % m and j * f_best / m < f_top]
-        p_sub = [float(np.max(r_all[k - 1:k + 2])) if 1 <= k < f.size - 1 else 0.0 for k in ks]
+        p_sub = [float(np.max(r_all[k - 1 : k + 2])) if 1 <= k < f.size - 1 else 0.0 for k in ks]
         # a significant fractional line as strong as the line at f; for thirds the line at f/3 itself must be
         # there too (a structural mode near 4f/3 of a chain is not a subharmonic family; a carrier at exactly
         # 3f/2 between two sidebands at f and 2f is)
         if p_sub and max(p_sub) > lim and max(p_sub) >= p_one and (m == 2 or p_sub[0] > lim):
             base["extra"]["subharmonic"] = m
-            return LinkPassDetection(False, "no link-pass found",
-                                     f"a periodic signal is present, but its line at {f_best / m:.4g} Hz (f/{m}) is as "
-                                     f"strong as the one at {f_best:.4g} Hz: its fundamental is {f_best / m:.4g} Hz, "
-                                     f"below the band {fmin:.4g}-{fmax:.4g} Hz (a gait, a sway, not a link pass)",
-                                     float(f_best / m), **base)
-    return LinkPassDetection(True, "ok", f"harmonic family at {f_best:.4g} Hz: harmonic sum {t:.3g} over the "
-                             f"threshold {thr:.3g} (p = {p_value:.2g}, false-alarm probability {p_fa:g})",
-                             float(f_best), **base)
+            return LinkPassDetection(
+                False,
+                "no link-pass found",
+                f"a periodic signal is present, but its line at {f_best / m:.4g} Hz (f/{m}) is as "
+                f"strong as the one at {f_best:.4g} Hz: its fundamental is {f_best / m:.4g} Hz, "
+                f"below the band {fmin:.4g}-{fmax:.4g} Hz (a gait, a sway, not a link pass)",
+                float(f_best / m),
+                **base,
+            )
+    return LinkPassDetection(
+        True,
+        "ok",
+        f"harmonic family at {f_best:.4g} Hz: harmonic sum {t:.3g} over the "
+        f"threshold {thr:.3g} (p = {p_value:.2g}, false-alarm probability {p_fa:g})",
+        float(f_best),
+        **base,
+    )

@@ -349,7 +349,7 @@ def harmonic_ls(x, fs, *, f_guess, n_harmonics=5, max_iter=20, nan_policy="raise
     omega = 2.0 * np.pi * f0
     coef, cost, full = fit_at(omega)
     iterations = 0
-    for iterations in range(1, max_iter + 1):
+    for iterations in range(1, max_iter + 1):  # noqa: B007 (the count is read after the loop)
         a = coef[1 : kmax + 1]
         b = coef[kmax + 1 :]
         m = full[:, :-1]
@@ -395,9 +395,7 @@ def harmonic_ls(x, fs, *, f_guess, n_harmonics=5, max_iter=20, nan_policy="raise
     else:
         crb, snr = 0.0, np.inf
     if abs(f - f0) > 1.0 / (2.0 * duration):
-        warn.append(
-            f"estimate {f:.6g} Hz moved more than half a bin from the guess {f0:.6g} Hz; check the guess"
-        )
+        warn.append(f"estimate {f:.6g} Hz moved more than half a bin from the guess {f0:.6g} Hz; check the guess")
     if iterations >= max_iter:
         warn.append(f"Gauss-Newton stopped after max_iter={max_iter} iterations")
     return FrequencyEstimate(

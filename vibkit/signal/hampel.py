@@ -13,7 +13,6 @@ it by its window median.  A window without finite samples gives NaN median and s
 from __future__ import annotations
 
 import math
-
 from dataclasses import dataclass
 from functools import lru_cache
 from typing import NamedTuple
@@ -355,9 +354,7 @@ def hampel_events(x, fs, *, half_window=3, n_sigma=None, false_alarm_rate=None, 
         s = float(res.sigma[i])
         size = abs(dev) / s if s > 0 else float("inf")
         start, stop = int(run[0]), int(run[-1]) + 1
-        events.append(
-            OutlierEvent(i, float(t0) + i / fs, float(x[i]), dev, size, start, stop, (stop - start) / fs)
-        )
+        events.append(OutlierEvent(i, float(t0) + i / fs, float(x[i]), dev, size, start, stop, (stop - start) / fs))
     return events
 
 

@@ -147,8 +147,7 @@ def _end_phase(x, phase, fs, k, ref, amp, *, start):
     return num / wsum, 1.0 / wsum
 
 
-def mean_link_pass_frequency(x, fs, *, f0, amplitudes=None, n_harmonics=3, max_deviation=0.05,
-                             bandwidth_hz=None):
+def mean_link_pass_frequency(x, fs, *, f0, amplitudes=None, n_harmonics=3, max_deviation=0.05, bandwidth_hz=None):
     """Mean link-pass frequency over a record from the total tracked phase.
 
     Parameters
@@ -200,9 +199,10 @@ def mean_link_pass_frequency(x, fs, *, f0, amplitudes=None, n_harmonics=3, max_d
     s2 = float(np.sum(h**2 * a**2))
     var_phi = 4.0 * noise_var * bw / (fs * s2) if s2 > 0 else math.inf
     edge = min(int(fs / bw), n // 4)
-    fi = tr.frequency_hz[edge:n - edge] if n - 2 * edge > 8 else tr.frequency_hz
+    fi = tr.frequency_hz[edge : n - edge] if n - 2 * edge > 8 else tr.frequency_hz
     spread = float(np.std(fi))
     # spread that phase noise alone gives: flat phase noise over +-B has var(dphi/dt / 2 pi) = var(phi) B^2 / 3
     noise_spread = math.sqrt(var_phi / 3.0) * bw
-    return MeanFrequency(float(f_mean), float(sigma), float(span), dphi / (2 * np.pi), spread, spread * span, bw,
-                         float(noise_spread))
+    return MeanFrequency(
+        float(f_mean), float(sigma), float(span), dphi / (2 * np.pi), spread, spread * span, bw, float(noise_spread)
+    )

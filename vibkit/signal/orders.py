@@ -166,7 +166,9 @@ def track_phase(x, fs, *, band, n_harmonics=3, frame_s=None, bandwidth_hz=None, 
     nper = int(round(float(frame_s) * fs))
     n = x.size
     if nper < 8 or nper > n:
-        raise ValueError(f"Parameter frame_s={frame_s!r} gives {nper} samples per frame; expected 8..{n} for this record.")
+        raise ValueError(
+            f"Parameter frame_s={frame_s!r} gives {nper} samples per frame; expected 8..{n} for this record."
+        )
     if bandwidth_hz is None:
         bandwidth_hz = f0 / 20.0
     bw = float(bandwidth_hz)
@@ -284,7 +286,9 @@ def resample_to_angle(x, fs, phase, *, samples_per_cycle=32, antialias=True, nan
     if x.ndim != 1 or ph.shape != x.shape:
         raise ValueError(f"Parameters x and phase must be 1-D of equal length, got {x.shape} and {ph.shape}.")
     if np.isnan(ph).any() or np.any(np.diff(ph) <= 0):
-        raise ValueError("Parameter phase must increase strictly at every sample (no NaN); reverse the sign of a decreasing angle.")
+        raise ValueError(
+            "Parameter phase must increase strictly at every sample (no NaN); reverse the sign of a decreasing angle."
+        )
     spc = check_positive_int(samples_per_cycle, "samples_per_cycle", minimum=4)
     t = np.arange(x.size) / fs
     t_full = t

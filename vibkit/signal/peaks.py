@@ -76,8 +76,9 @@ def _score_table(x, fs, band, f_top, threshold_db, quantum=0.0, decimation=1.0):
     # ... nor below what the recorder's step can resolve (vibkit.signal.quantisation): the lines of a clean
     # quantised tone's rounding error are not harmonics
     broadband = float(np.median(p[sel])) / np.log(2.0)
-    noise = max(broadband, floor, quantisation_floor(quantum, w, broadband, decimation=decimation),
-                np.finfo(float).tiny)
+    noise = max(
+        broadband, floor, quantisation_floor(quantum, w, broadband, decimation=decimation), np.finfo(float).tiny
+    )
     half = max(1, int(round(df / (f[1] - f[0]))))
     pmax = scipy.ndimage.maximum_filter1d(p, size=2 * half + 1, mode="nearest") / noise
     # Threshold relative to the median of the max-filtered noise (the max over +-1 bin lifts the
@@ -116,6 +117,7 @@ def climb_from_subharmonic(cands, sc, df):
                     i, moved = j, True
                     break
     return i
+
 
 def find_fundamental(x, fs, *, band, f_top=None, threshold_db=6.0, nan_policy="raise", quantum=None, decimation=1):
     """Fundamental of a harmonic family within a plausible band, without octave errors.
@@ -249,8 +251,9 @@ class LinkPassEstimate:
     estimate: FrequencyEstimate | None = None
 
 
-def link_pass_estimate(x, fs, *, band=(2.0, 6.0), n_harmonics=5, method="harmonic-ls", nan_policy="raise",
-                       quantum=None, decimation=1):
+def link_pass_estimate(
+    x, fs, *, band=(2.0, 6.0), n_harmonics=5, method="harmonic-ls", nan_policy="raise", quantum=None, decimation=1
+):
     """Find the link-pass fundamental in a band (octave-safe), estimate it with sigma, list harmonics.
 
     Parameters

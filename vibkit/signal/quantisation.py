@@ -23,8 +23,13 @@ import math
 
 import numpy as np
 
-__all__ = ["MIN_SPAN_STEPS", "correlated_error_variance", "quantisation_floor", "quantisation_step",
-           "signal_following_variance"]
+__all__ = [
+    "MIN_SPAN_STEPS",
+    "correlated_error_variance",
+    "quantisation_floor",
+    "quantisation_step",
+    "signal_following_variance",
+]
 
 #: the levels' differences must be whole multiples of the step to this fraction of it
 STEP_TOLERANCE = 1e-3
@@ -66,7 +71,7 @@ def quantisation_step(x, *, max_samples=1 << 20, min_span=MIN_SPAN_STEPS) -> flo
     >>> quantisation_step(np.sqrt([2.0, 3.0, 5.0, 7.0, 11.0, 13.0]))
     0.0
     """
-    x = np.asarray(x, dtype=float).ravel()[:int(max_samples)]
+    x = np.asarray(x, dtype=float).ravel()[: int(max_samples)]
     x = x[np.isfinite(x)]
     head = np.unique(x[:4096])
     if head.size >= 2 and _grid(head) == 0.0:

@@ -24,7 +24,6 @@ cycle between zero crossings; A95 is the value that 95 % of them do not exceed),
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numba as nb
@@ -159,8 +158,14 @@ class PeakToPeak:
     time_of_max_s: float
 
     def as_dict(self) -> dict:
-        return {"max_pk_pk": self.max, "a95": self.a95, "rms": self.rms, "peak": self.peak,
-                "n_values": self.n_values, "time_of_max_s": self.time_of_max_s}
+        return {
+            "max_pk_pk": self.max,
+            "a95": self.a95,
+            "rms": self.rms,
+            "peak": self.peak,
+            "n_values": self.n_values,
+            "time_of_max_s": self.time_of_max_s,
+        }
 
 
 def peak_to_peak(x, fs) -> PeakToPeak:
@@ -186,12 +191,20 @@ def peak_to_peak(x, fs) -> PeakToPeak:
     x = as_signal(x)
     p, i = half_cycle_peaks(x)
     if p.size < 2:
-        raise ValueError(f"Parameter x ({x.size} samples) has fewer than two complete half-cycles: no "
-                         "peak-to-peak value (a constant or one-signed signal; remove its mean).")
+        raise ValueError(
+            f"Parameter x ({x.size} samples) has fewer than two complete half-cycles: no "
+            "peak-to-peak value (a constant or one-signed signal; remove its mean)."
+        )
     v = np.abs(p[:-1]) + np.abs(p[1:])
     k = int(np.argmax(v))
-    return PeakToPeak(max=float(v[k]), a95=a95(v), rms=float(np.sqrt(np.mean(x * x))),
-                      peak=float(np.max(np.abs(x))), n_values=int(v.size), time_of_max_s=float(i[k + 1] / fs))
+    return PeakToPeak(
+        max=float(v[k]),
+        a95=a95(v),
+        rms=float(np.sqrt(np.mean(x * x))),
+        peak=float(np.max(np.abs(x))),
+        n_values=int(v.size),
+        time_of_max_s=float(i[k + 1] / fs),
+    )
 
 
 def lowpass_10hz(x, fs, *, axis=-1, highpass_hz=0.4):
@@ -221,7 +234,9 @@ def lowpass_10hz(x, fs, *, axis=-1, highpass_hz=0.4):
     """
     fs = check_fs(fs)
     if fs <= 2.0 * LOWPASS_HZ:
-        raise ValueError(f"Parameter fs={fs:g} Hz is too low for a {LOWPASS_HZ:g} Hz low-pass (need > {2 * LOWPASS_HZ:g} Hz).")
+        raise ValueError(
+            f"Parameter fs={fs:g} Hz is too low for a {LOWPASS_HZ:g} Hz low-pass (need > {2 * LOWPASS_HZ:g} Hz)."
+        )
     x = as_signal(x, axis=axis)
     lp = scipy.signal.butter(4, LOWPASS_HZ, btype="low", fs=fs, output="sos")
     hp = scipy.signal.butter(2, highpass_hz, btype="high", fs=fs, output="sos")
@@ -265,8 +280,9 @@ def _longest_run(mask):
     return int(starts[k]), int(stops[k])
 
 
-def detect_ride_segment(fs, *, vertical=None, along=None, lowpass_hz=0.3, edge_s=1.0,
-                        min_vertical_speed=0.05, min_tilt=0.5) -> RideSegment:
+def detect_ride_segment(
+    fs, *, vertical=None, along=None, lowpass_hz=0.3, edge_s=1.0, min_vertical_speed=0.05, min_tilt=0.5
+) -> RideSegment:
     """Find the incline (start and end) of a step-riding accelerometer record.
 
     Two methods, tried in this order:
@@ -329,8 +345,9 @@ def detect_ride_segment(fs, *, vertical=None, along=None, lowpass_hz=0.3, edge_s
     if along is not None:
         a = as_signal(along, "along")
         if a.size < 4 * n_edge:
-            raise ValueError(f"record of {a.size / fs:.3g} s is too short to find a ride segment "
-                             f"(need at least {4 * edge_s:g} s).")
+            raise ValueError(
+                f"record of {a.size / fs:.3g} s is too short to find a ride segment (need at least {4 * edge_s:g} s)."
+            )
         trend = scipy.signal.sosfiltfilt(sos, a)
         base = float(np.mean(trend[:n_edge]))
         dev = trend - base
@@ -339,16 +356,24 @@ def detect_ride_segment(fs, *, vertical=None, along=None, lowpass_hz=0.3, edge_s
         if abs(step) >= min_tilt:
             run = _longest_run(np.abs(dev) > 0.5 * abs(step))
             i0, i1 = run
-            return RideSegment(start_s=i0 / fs, end_s=i1 / fs, method="gravity component", plateau=step,
-                               note=f"along-travel gravity component moves by {step:+.3g} m/s^2 on the incline")
+            return RideSegment(
+                start_s=i0 / fs,
+                end_s=i1 / fs,
+                method="gravity component",
+                plateau=step,
+                note=f"along-travel gravity component moves by {step:+.3g} m/s^2 on the incline",
+            )
         notes.append(f"along-travel trend moves by at most {abs(step):.2g} m/s^2: no tilt")
     if vertical is None:
-        raise ValueError("no incline found: " + "; ".join(notes) + " (give the vertical channel, or the segment "
-                         "as --segment START:END)")
+        raise ValueError(
+            "no incline found: " + "; ".join(notes) + " (give the vertical channel, or the segment "
+            "as --segment START:END)"
+        )
     z = as_signal(vertical, "vertical")
     if z.size < 4 * n_edge:
-        raise ValueError(f"record of {z.size / fs:.3g} s is too short to find a ride segment "
-                         f"(need at least {4 * edge_s:g} s).")
+        raise ValueError(
+            f"record of {z.size / fs:.3g} s is too short to find a ride segment (need at least {4 * edge_s:g} s)."
+        )
     zt = scipy.signal.sosfiltfilt(sos, z)
     rest = 0.5 * (np.mean(zt[:n_edge]) + np.mean(zt[-n_edge:]))
     v = np.cumsum(zt - rest) / fs
@@ -359,11 +384,18 @@ def detect_ride_segment(fs, *, vertical=None, along=None, lowpass_hz=0.3, edge_s
     k = int(np.argmax(np.abs(v)))
     peak = float(v[k])
     if abs(peak) < min_vertical_speed:
-        raise ValueError(f"no incline found: the vertical speed integrated from the vertical channel stays within "
-                         f"{abs(peak):.3g} m/s (< {min_vertical_speed:g} m/s) -- is that channel vertical, and does "
-                         "the record start and end on the landings? Give the segment as --segment START:END.")
+        raise ValueError(
+            f"no incline found: the vertical speed integrated from the vertical channel stays within "
+            f"{abs(peak):.3g} m/s (< {min_vertical_speed:g} m/s) -- is that channel vertical, and does "
+            "the record start and end on the landings? Give the segment as --segment START:END."
+        )
     i0, i1 = _longest_run(np.sign(peak) * v > 0.5 * abs(peak))
     if i0 == 0 or i1 == z.size:
         notes.append("the incline reaches an end of the record: it may start or end on the incline")
-    return RideSegment(start_s=i0 / fs, end_s=i1 / fs, method="vertical speed", plateau=peak,
-                       note="; ".join(notes + [f"vertical speed {peak:+.3g} m/s on the incline"]))
+    return RideSegment(
+        start_s=i0 / fs,
+        end_s=i1 / fs,
+        method="vertical speed",
+        plateau=peak,
+        note="; ".join(notes + [f"vertical speed {peak:+.3g} m/s on the incline"]),
+    )

@@ -124,8 +124,10 @@ class Weighting:
         the frequency [Hz] at which each is pre-warped in the bilinear transform."""
         tp = 2.0 * math.pi
         w1, w2 = tp * self.f1, tp * self.f2
-        out = [([1.0, 0.0, 0.0], [1.0, w1 / self.q1, w1 * w1], self.f1),
-               ([w2 * w2], [1.0, w2 / self.q2, w2 * w2], self.f2)]
+        out = [
+            ([1.0, 0.0, 0.0], [1.0, w1 / self.q1, w1 * w1], self.f1),
+            ([w2 * w2], [1.0, w2 / self.q2, w2 * w2], self.f2),
+        ]
         if math.isfinite(self.f4):
             w4 = tp * self.f4
             b = [w4 * w4 / (tp * self.f3), w4 * w4] if math.isfinite(self.f3) else [w4 * w4]
@@ -139,20 +141,104 @@ class Weighting:
 _INF = math.inf
 #: ISO 8041 Table 3 (Larson Davis HVM200 manual, Table 3.1); Wb also ISO 2631-4:2001 Table A.1
 WEIGHTINGS = {
-    "Wb": Weighting(name="Wb", f1=0.4, f2=100.0, f3=16.0, f4=16.0, q4=0.55, f5=2.5, q5=0.9, f6=4.0, q6=0.95,
-                    k=1.024, use="vertical (z) comfort, rail vehicles (ISO 2631-4, BS 6841)"),
-    "Wc": Weighting(name="Wc", f1=0.4, f2=100.0, f3=8.0, f4=8.0, q4=0.63, f5=_INF, q5=1.0, f6=_INF, q6=1.0, k=1.0,
-                    use="seat-back x (ISO 2631-1)"),
-    "Wd": Weighting(name="Wd", f1=0.4, f2=100.0, f3=2.0, f4=2.0, q4=0.63, f5=_INF, q5=1.0, f6=_INF, q6=1.0, k=1.0,
-                    use="horizontal x, y, seated, standing, recumbent (ISO 2631-1)"),
-    "We": Weighting(name="We", f1=0.4, f2=100.0, f3=1.0, f4=1.0, q4=0.63, f5=_INF, q5=1.0, f6=_INF, q6=1.0, k=1.0,
-                    use="rotational vibration [rad/s^2] (ISO 2631-1)"),
-    "Wf": Weighting(name="Wf", f1=0.08, f2=0.63, f3=_INF, f4=0.25, q4=0.86, f5=0.0625, q5=0.80, f6=0.10, q6=0.80,
-                    k=1.0, use="vertical, motion sickness, 0.1-0.5 Hz (ISO 2631-1)"),
-    "Wj": Weighting(name="Wj", f1=0.4, f2=100.0, f3=_INF, f4=_INF, q4=1.0, f5=3.75, q5=0.91, f6=5.32, q6=0.91, k=1.0,
-                    use="vertical, recumbent, under the head (ISO 2631-1)"),
-    "Wk": Weighting(name="Wk", f1=0.4, f2=100.0, f3=12.5, f4=12.5, q4=0.63, f5=2.37, q5=0.91, f6=3.35, q6=0.91,
-                    k=1.0, use="vertical z, seated, standing, recumbent (ISO 2631-1); escalator/lift ride z"),
+    "Wb": Weighting(
+        name="Wb",
+        f1=0.4,
+        f2=100.0,
+        f3=16.0,
+        f4=16.0,
+        q4=0.55,
+        f5=2.5,
+        q5=0.9,
+        f6=4.0,
+        q6=0.95,
+        k=1.024,
+        use="vertical (z) comfort, rail vehicles (ISO 2631-4, BS 6841)",
+    ),
+    "Wc": Weighting(
+        name="Wc",
+        f1=0.4,
+        f2=100.0,
+        f3=8.0,
+        f4=8.0,
+        q4=0.63,
+        f5=_INF,
+        q5=1.0,
+        f6=_INF,
+        q6=1.0,
+        k=1.0,
+        use="seat-back x (ISO 2631-1)",
+    ),
+    "Wd": Weighting(
+        name="Wd",
+        f1=0.4,
+        f2=100.0,
+        f3=2.0,
+        f4=2.0,
+        q4=0.63,
+        f5=_INF,
+        q5=1.0,
+        f6=_INF,
+        q6=1.0,
+        k=1.0,
+        use="horizontal x, y, seated, standing, recumbent (ISO 2631-1)",
+    ),
+    "We": Weighting(
+        name="We",
+        f1=0.4,
+        f2=100.0,
+        f3=1.0,
+        f4=1.0,
+        q4=0.63,
+        f5=_INF,
+        q5=1.0,
+        f6=_INF,
+        q6=1.0,
+        k=1.0,
+        use="rotational vibration [rad/s^2] (ISO 2631-1)",
+    ),
+    "Wf": Weighting(
+        name="Wf",
+        f1=0.08,
+        f2=0.63,
+        f3=_INF,
+        f4=0.25,
+        q4=0.86,
+        f5=0.0625,
+        q5=0.80,
+        f6=0.10,
+        q6=0.80,
+        k=1.0,
+        use="vertical, motion sickness, 0.1-0.5 Hz (ISO 2631-1)",
+    ),
+    "Wj": Weighting(
+        name="Wj",
+        f1=0.4,
+        f2=100.0,
+        f3=_INF,
+        f4=_INF,
+        q4=1.0,
+        f5=3.75,
+        q5=0.91,
+        f6=5.32,
+        q6=0.91,
+        k=1.0,
+        use="vertical, recumbent, under the head (ISO 2631-1)",
+    ),
+    "Wk": Weighting(
+        name="Wk",
+        f1=0.4,
+        f2=100.0,
+        f3=12.5,
+        f4=12.5,
+        q4=0.63,
+        f5=2.37,
+        q5=0.91,
+        f6=3.35,
+        q6=0.91,
+        k=1.0,
+        use="vertical z, seated, standing, recumbent (ISO 2631-1); escalator/lift ride z",
+    ),
 }
 
 
@@ -164,8 +250,7 @@ def get_weighting(weighting) -> Weighting:
         for key, w in WEIGHTINGS.items():
             if key.lower() == weighting.strip().lower():
                 return w
-    raise ValueError(f"Parameter weighting={weighting!r} must be one of {', '.join(WEIGHTINGS)} "
-                     "(or a Weighting).")
+    raise ValueError(f"Parameter weighting={weighting!r} must be one of {', '.join(WEIGHTINGS)} (or a Weighting).")
 
 
 def frequency_weighting_response(f, weighting) -> np.ndarray:
@@ -250,7 +335,7 @@ def _sos(w: Weighting, fs: float) -> np.ndarray:
 def _biquad_bilinear(p, c):
     """Coefficients in 1/z of ``p2 s^2 + p1 s + p0`` (``p`` highest power first, up to degree 2)
     times ``(1 + 1/z)^2`` with ``s = c (1 - 1/z)/(1 + 1/z)``."""
-    p2, p1, p0 = ([0.0] * (3 - len(p)) + [float(v) for v in p])
+    p2, p1, p0 = [0.0] * (3 - len(p)) + [float(v) for v in p]
     c2 = c * c
     return np.array([p2 * c2 + p1 * c + p0, 2.0 * (p0 - p2 * c2), p2 * c2 - p1 * c + p0])
 

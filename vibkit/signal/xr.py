@@ -81,7 +81,9 @@ def split_segments(obj, segment=None):
         return [(0, obj)]
     seg = np.asarray(segment)
     if seg.shape != (obj.sizes["time"],):
-        raise ValueError(f"Parameter segment must have one value per time sample ({obj.sizes['time']}), got {seg.shape}.")
+        raise ValueError(
+            f"Parameter segment must have one value per time sample ({obj.sizes['time']}), got {seg.shape}."
+        )
     return [(int(s), obj.isel(time=np.flatnonzero(seg == s))) for s in np.unique(seg)]
 
 

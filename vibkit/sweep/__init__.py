@@ -12,4 +12,14 @@ from .records import STATUS, SUMMARIES  # noqa: F401
 from .run import summarize, sweep  # noqa: F401
 from .store import open_sweep  # noqa: F401
 
-__all__ = ["sweep", "parse_vary", "plan_sweep", "SweepPlan", "SweepError", "summarize", "SUMMARIES", "STATUS", "open_sweep"]
+__all__ = [
+    "sweep",
+    "parse_vary",
+    "plan_sweep",
+    "SweepPlan",
+    "SweepError",
+    "summarize",
+    "SUMMARIES",
+    "STATUS",
+    "open_sweep",
+]

@@ -26,23 +26,42 @@ BYTES_PER_RUN = 1024
 
 # the sections an analysis reads (keys of other sections change nothing); None: every key of the section
 _READS = {
-    "kinematics": {"guide": None, "chain": None,
-                   "sprocket": {"teeth", "base_width", "tip_width", "tooth_height"},
-                   "kinematics": None},
+    "kinematics": {
+        "guide": None,
+        "chain": None,
+        "sprocket": {"teeth", "base_width", "tip_width", "tooth_height"},
+        "kinematics": None,
+    },
     "inverse": {"guide": None, "chain": None, "sprocket": None, "motion": None},
-    "forward": {"guide": None, "chain": None, "sprocket": None,
-                "run": {"duration", "output_step", "start", "initial_speed"}, "solver": None},
+    "forward": {
+        "guide": None,
+        "chain": None,
+        "sprocket": None,
+        "run": {"duration", "output_step", "start", "initial_speed"},
+        "solver": None,
+    },
 }
 # the effects an analysis applies
-_EFFECTS = {"kinematics": set(), "inverse": {"gravity", "tensioner", "passengers"},
-            "forward": {"gravity", "contact", "motor", "passengers", "tensioner", "rolling_resistance"}}
+_EFFECTS = {
+    "kinematics": set(),
+    "inverse": {"gravity", "tensioner", "passengers"},
+    "forward": {"gravity", "contact", "motor", "passengers", "tensioner", "rolling_resistance"},
+}
 # keys that the duration override replaces
 _OVERRIDDEN = {"kinematics": "kinematics.stop", "inverse": "motion.duration", "forward": "run.duration"}
 
 # values per sample of a kept output (n: rollers of the chain, t: teeth, r: rollers asked for)
-_COLUMNS = {"link_tension": "n", "contact_force": "t", "indentation": "t", "flank_force": "2t",
-            "roller_position": "2r", "roller_velocity": "2r", "roller_acceleration": "2r", "energy": "4",
-            "accel_step": "3"}
+_COLUMNS = {
+    "link_tension": "n",
+    "contact_force": "t",
+    "indentation": "t",
+    "flank_force": "2t",
+    "roller_position": "2r",
+    "roller_velocity": "2r",
+    "roller_acceleration": "2r",
+    "energy": "4",
+    "accel_step": "3",
+}
 
 
 def check_key_used(key: str, analysis: str, source: str, *, duration=None):
@@ -53,21 +72,29 @@ def check_key_used(key: str, analysis: str, source: str, *, duration=None):
     hint = "vary a key the analysis reads"
     if parts[0] == "effects":
         if parts[1] not in _EFFECTS[analysis]:
-            raise SweepError(f"{source}: varying '{key}' would give identical runs: the {analysis} analysis does not "
-                             f"apply effects.{parts[1]} (it applies: {', '.join(sorted(_EFFECTS[analysis])) or 'none'})"
-                             f"; {hint}")
+            raise SweepError(
+                f"{source}: varying '{key}' would give identical runs: the {analysis} analysis does not "
+                f"apply effects.{parts[1]} (it applies: {', '.join(sorted(_EFFECTS[analysis])) or 'none'})"
+                f"; {hint}"
+            )
     else:
         reads = _READS[analysis]
         if parts[0] not in reads:
-            raise SweepError(f"{source}: varying '{key}' would give identical runs: the {analysis} analysis does not "
-                             f"read [{parts[0]}] (it reads [{'], ['.join(reads)}]); {hint}")
+            raise SweepError(
+                f"{source}: varying '{key}' would give identical runs: the {analysis} analysis does not "
+                f"read [{parts[0]}] (it reads [{'], ['.join(reads)}]); {hint}"
+            )
         keys = reads[parts[0]]
         if keys is not None and parts[1] not in keys:
-            raise SweepError(f"{source}: varying '{key}' would give identical runs: the {analysis} analysis does not "
-                             f"use it (of [{parts[0]}] it uses {', '.join(sorted(keys))}); {hint}")
+            raise SweepError(
+                f"{source}: varying '{key}' would give identical runs: the {analysis} analysis does not "
+                f"use it (of [{parts[0]}] it uses {', '.join(sorted(keys))}); {hint}"
+            )
     if duration is not None and key == _OVERRIDDEN[analysis]:
-        raise SweepError(f"{source}: varying '{key}' would give identical runs: --duration / duration= "
-                         f"({duration:g}) replaces it in every run; leave one of them out")
+        raise SweepError(
+            f"{source}: varying '{key}' would give identical runs: --duration / duration= "
+            f"({duration:g}) replaces it in every run; leave one of them out"
+        )
 
 
 def _span_and_step(scene, duration):
@@ -89,12 +116,16 @@ def check_settle(scene, settle, duration, source):
     if settle is None:
         return
     if scene.analysis == "kinematics":
-        raise SweepError(f"{source}: settle applies to runs along time (inverse, forward); a kinematic sweep has "
-                         f"no start-up; leave --settle out")
+        raise SweepError(
+            f"{source}: settle applies to runs along time (inverse, forward); a kinematic sweep has "
+            f"no start-up; leave --settle out"
+        )
     span, step, key = _span_and_step(scene, duration)
     if not settle <= span - step:
-        raise SweepError(f"{source}: --settle {settle:g} s leaves fewer than two samples of the {span:g} s runs "
-                         f"('{key}' = {step:g} s); take a settle below {max(span - step, 0.0):g} s or a longer run")
+        raise SweepError(
+            f"{source}: --settle {settle:g} s leaves fewer than two samples of the {span:g} s runs "
+            f"('{key}' = {step:g} s); take a settle below {max(span - step, 0.0):g} s or a longer run"
+        )
 
 
 def estimate_sweep(scene, runs: int, keep=(), duration=None) -> dict:
@@ -116,8 +147,12 @@ def estimate_sweep(scene, runs: int, keep=(), duration=None) -> dict:
         c = _COLUMNS.get(name, "1")
         kept += samples * (int(c[:-1] or 1) * cols[c[-1]] if c[-1] in cols else int(c))
     values = len(SUMMARIES) + 2 + kept
-    return {"runs": runs, "samples": samples, "values_per_run": values,
-            "bytes": float(runs) * (values * 8.0 + BYTES_PER_RUN)}
+    return {
+        "runs": runs,
+        "samples": samples,
+        "values_per_run": values,
+        "bytes": float(runs) * (values * 8.0 + BYTES_PER_RUN),
+    }
 
 
 def check_size(scene, runs: int, *, keep=(), duration=None, limit_bytes=None, source=""):
@@ -133,5 +168,6 @@ def check_size(scene, runs: int, *, keep=(), duration=None, limit_bytes=None, so
             f"{source}: the sweep asks for {runs:.4g} runs x {est['values_per_run']:.4g} values{kept} = "
             f"{_fmt_bytes(est['bytes'])} of results (with {BYTES_PER_RUN} B of bookkeeping a run), more than the "
             f"limit of {_fmt_bytes(limit)}; vary fewer values, keep fewer series, or raise the limit "
-            f"(--max-result-bytes, [solver] max_result_bytes or VIBKIT_MAX_RESULT_BYTES)")
+            f"(--max-result-bytes, [solver] max_result_bytes or VIBKIT_MAX_RESULT_BYTES)"
+        )
     return est

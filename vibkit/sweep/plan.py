@@ -19,8 +19,10 @@ __all__ = ["parse_vary", "plan_sweep", "SweepPlan", "SweepError", "to_toml", "va
 SCHEMA = 1
 
 # scene outputs that give more than one dataset variable
-_PRODUCES = {"flank_force": ("drive_flank_force", "back_flank_force"),
-             "energy": ("kinetic_energy", "potential_energy", "contact_energy", "spring_energy")}
+_PRODUCES = {
+    "flank_force": ("drive_flank_force", "back_flank_force"),
+    "energy": ("kinetic_energy", "potential_energy", "contact_energy", "spring_energy"),
+}
 
 
 class SweepError(ValueError):
@@ -133,9 +135,9 @@ class Axis:
     """One varied key: its values (a grid axis, or the choices of a Monte Carlo draw) or a range."""
 
     key: str
-    spec: str                      # as the user wrote it (for messages and the stored definition)
-    values: tuple | None = None    # explicit values (A:B:N expanded, or a,b,c)
-    low: float | None = None       # Monte Carlo range A:B
+    spec: str  # as the user wrote it (for messages and the stored definition)
+    values: tuple | None = None  # explicit values (A:B:N expanded, or a,b,c)
+    low: float | None = None  # Monte Carlo range A:B
     high: float | None = None
 
 
@@ -205,22 +207,28 @@ def _key_type(key: str, base_data: dict, source: str):
     parts = key.split(".")
     if parts[0] == "effects":
         if len(parts) != 3 or parts[1] not in EFFECTS or parts[2] not in EFFECTS[parts[1]]:
-            known = ", ".join(f"effects.{e}.{k}" for e, opts in EFFECTS.items() for k, t in opts.items()
-                              if t is not list)
+            known = ", ".join(
+                f"effects.{e}.{k}" for e, opts in EFFECTS.items() for k, t in opts.items() if t is not list
+            )
             raise SweepError(f"{source}: cannot vary unknown scene key '{key}' (effect keys: {known})")
         typ = EFFECTS[parts[1]][parts[2]]
         eff = base_data.get("effects", {}).get(parts[1])
         if eff is None or eff is False or (isinstance(eff, dict) and eff.get("enabled", True) is False):
-            raise SweepError(f"{source}: cannot vary '{key}': the scene does not switch on effects.{parts[1]} "
-                             f"(add it to the scene's [effects] first)")
+            raise SweepError(
+                f"{source}: cannot vary '{key}': the scene does not switch on effects.{parts[1]} "
+                f"(add it to the scene's [effects] first)"
+            )
     else:
         if len(parts) != 2 or parts[0] not in SECTIONS or parts[1] not in SECTIONS[parts[0]]:
             if len(parts) == 2 and parts[0] in SECTIONS:
                 known = ", ".join(f"{parts[0]}.{k}" for k in SECTIONS[parts[0]])
-                raise SweepError(f"{source}: cannot vary unknown scene key '{key}' "
-                                 f"(known keys of [{parts[0]}]: {known})")
-            raise SweepError(f"{source}: cannot vary unknown scene key '{key}' (keys are dotted like chain.link_pitch, "
-                             f"effects.contact.stiffness; sections: {', '.join(SECTIONS)}, effects)")
+                raise SweepError(
+                    f"{source}: cannot vary unknown scene key '{key}' (known keys of [{parts[0]}]: {known})"
+                )
+            raise SweepError(
+                f"{source}: cannot vary unknown scene key '{key}' (keys are dotted like chain.link_pitch, "
+                f"effects.contact.stiffness; sections: {', '.join(SECTIONS)}, effects)"
+            )
         typ = SECTIONS[parts[0]][parts[1]]
         if parts[0] in ("scene", "outputs"):
             raise SweepError(f"{source}: '{key}' cannot be varied (it says what the scene is, not a parameter)")
@@ -280,16 +288,19 @@ def _axis(key, spec, types, samples):
             a, b, n = parsed
             if samples is None:
                 if n is None:
-                    raise SweepError(f"{key}={spec}: a grid needs A:B:N (N values); A:B alone is a Monte Carlo range "
-                                     f"(give samples / --samples)")
+                    raise SweepError(
+                        f"{key}={spec}: a grid needs A:B:N (N values); A:B alone is a Monte Carlo range "
+                        f"(give samples / --samples)"
+                    )
                 if not (int in types or float in types) or bool in types:
                     raise SweepError(f"{key}={spec}: A:B:N needs a numeric key")
                 whole = int in types and float not in types
                 if whole:
                     step = (b - a) / (n - 1) if n > 1 else 0.0
                     if any(abs(v - round(v)) > 1e-9 for v in (a, b, step)):
-                        raise SweepError(f"{key}={spec}: '{key}' takes whole numbers and A:B:N gives fractions "
-                                         f"(use a list a,b,c)")
+                        raise SweepError(
+                            f"{key}={spec}: '{key}' takes whole numbers and A:B:N gives fractions (use a list a,b,c)"
+                        )
                 values = _Linspace(a, b, n, whole)
                 return Axis(key=key, spec=spec, values=values)
             if n is not None:
@@ -355,11 +366,17 @@ class SweepPlan:
 
     def definition(self) -> dict:
         """What identifies the sweep (compared on resume; stored in the root group's attrs)."""
-        return {"schema": f"vibkit.sweep/{SCHEMA}", "scene": self.text,
-                "axes": [{"key": a.key, "spec": a.spec} for a in self.axes],
-                "samples": self.samples, "seed": self.seed,
-                "points": [[_jsonval(p[a.key]) for a in self.axes] for p in self.points],
-                "keep": list(self.keep), "settle": self.settle, "duration": self.duration}
+        return {
+            "schema": f"vibkit.sweep/{SCHEMA}",
+            "scene": self.text,
+            "axes": [{"key": a.key, "spec": a.spec} for a in self.axes],
+            "samples": self.samples,
+            "seed": self.seed,
+            "points": [[_jsonval(p[a.key]) for a in self.axes] for p in self.points],
+            "keep": list(self.keep),
+            "settle": self.settle,
+            "duration": self.duration,
+        }
 
 
 def _jsonval(v):
@@ -376,7 +393,7 @@ def _set_key(data: dict, key: str, value):
         if not isinstance(nxt, dict):
             nxt = {} if nxt in (None, True) else nxt
             if not isinstance(nxt, dict):  # pragma: no cover - excluded by _key_type
-                raise SweepError(f"cannot set '{key}': '{'.'.join(parts[:i + 1])}' is not a table")
+                raise SweepError(f"cannot set '{key}': '{'.'.join(parts[: i + 1])}' is not a table")
             d[p] = nxt
         d = nxt
     d[parts[-1]] = value
@@ -437,8 +454,17 @@ def _source_of(source, values):
     return f"{source} [{', '.join(f'{k}={v!r}' for k, v in values.items())}]"
 
 
-def plan_sweep(scene, vary: dict, *, samples: int | None = None, seed: int | None = None, keep=(),
-               settle: float | None = None, duration: float | None = None, max_result_bytes=None) -> SweepPlan:
+def plan_sweep(
+    scene,
+    vary: dict,
+    *,
+    samples: int | None = None,
+    seed: int | None = None,
+    keep=(),
+    settle: float | None = None,
+    duration: float | None = None,
+    max_result_bytes=None,
+) -> SweepPlan:
     """Check and expand a sweep's definition (no run is started); see :func:`sweep`.
 
     Every check is made on numbers before anything the size of the sweep is allocated: the keys
@@ -489,8 +515,10 @@ def plan_sweep(scene, vary: dict, *, samples: int | None = None, seed: int | Non
     for name in keep:
         parent = next((o for o, kids in _PRODUCES.items() if name in kids), name)
         if parent not in OUTPUTS[base.analysis]:
-            raise SweepError(f"keep: unknown output {name!r} for a {base.analysis} scene "
-                             f"(available: {', '.join(sorted(OUTPUTS[base.analysis]))})")
+            raise SweepError(
+                f"keep: unknown output {name!r} for a {base.analysis} scene "
+                f"(available: {', '.join(sorted(OUTPUTS[base.analysis]))})"
+            )
         if parent not in asked:
             raise SweepError(f"keep: the scene does not output {parent!r}; add it to its [outputs] variables")
     shape = tuple(len(a.values) for a in axes) if samples is None else (samples,)
@@ -518,6 +546,17 @@ def plan_sweep(scene, vary: dict, *, samples: int | None = None, seed: int | Non
             else:
                 cols.append([float(v) for v in rng.uniform(a.low, a.high, samples)])
         points = _Points(axes, shape, columns=cols)
-    plan = SweepPlan(text=text, source=source, analysis=base.analysis, axes=tuple(axes), samples=samples, seed=seed,
-                     points=points, shape=shape, keep=keep, settle=settle, duration=duration)
+    plan = SweepPlan(
+        text=text,
+        source=source,
+        analysis=base.analysis,
+        axes=tuple(axes),
+        samples=samples,
+        seed=seed,
+        points=points,
+        shape=shape,
+        keep=keep,
+        settle=settle,
+        duration=duration,
+    )
     return plan

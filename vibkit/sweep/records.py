@@ -13,8 +13,11 @@ PENDING = -1
 
 #: per-run summaries: name -> (units, long_name)
 SUMMARIES = {
-    "link_pass_frequency": ("Hz", "link-pass frequency: forward, roller 1's advance along the guide after the "
-                                  "start-up / time / mean pitch; inverse, imposed speed / mean pitch"),
+    "link_pass_frequency": (
+        "Hz",
+        "link-pass frequency: forward, roller 1's advance along the guide after the "
+        "start-up / time / mean pitch; inverse, imposed speed / mean pitch",
+    ),
     "delta_mean": ("m", "mean tensioner displacement delta after the start-up"),
     "delta_ripple": ("m", "peak-to-peak of delta after the start-up"),
     "peak_link_tension": ("N", "largest link tension of the run (needs the link_tension output)"),
@@ -24,13 +27,17 @@ SUMMARIES = {
     "last_back_flank_time": ("s", "last time a back flank carries load (needs the flank_force output)"),
     "closure_residual_max": ("m", "largest closure residual of the run"),
     "solver_steps": ("1", "integrator steps (forward dynamics)"),
-    "converged": ("1", "1: the run's convergence check found it converged at the scene's tolerance, 0: not "
-                       "(sweep --check; NaN unchecked)"),
-    "wall_time": ("s", "wall time of the run in its worker (the first run of a worker includes loading the "
-                       "compiled kernels)"),
+    "converged": (
+        "1",
+        "1: the run's convergence check found it converged at the scene's tolerance, 0: not "
+        "(sweep --check; NaN unchecked)",
+    ),
+    "wall_time": (
+        "s",
+        "wall time of the run in its worker (the first run of a worker includes loading the compiled kernels)",
+    ),
 }
 
 
 def _failed_record(index, status, error, wall=float("nan")):
-    return {"index": index, "status": status, "error": error, "summary": {}, "kept": {}, "wall_time": wall,
-            "pid": 0}
+    return {"index": index, "status": status, "error": error, "summary": {}, "kept": {}, "wall_time": wall, "pid": 0}

@@ -95,8 +95,10 @@ def summarize(ds, scene, *, settle: float | None = None) -> dict:
     steady = t >= (t[0] + ts) if axis == "time" else np.ones(t.size, bool)
     if steady.sum() < 2:
         if settle is not None:
-            raise ValueError(f"settle {ts:g} s leaves {int(steady.sum())} sample(s) of the run ({t[0]:g} to "
-                             f"{t[-1]:g} s); the summaries need at least two")
+            raise ValueError(
+                f"settle {ts:g} s leaves {int(steady.sum())} sample(s) of the run ({t[0]:g} to "
+                f"{t[-1]:g} s); the summaries need at least two"
+            )
         steady = np.ones(t.size, bool)
     if scene.analysis == "forward" and "s0" in ds and "delta" in ds:
         from ..model.guide import Guide
@@ -117,7 +119,7 @@ def summarize(ds, scene, *, settle: float | None = None) -> dict:
     if "link_tension" in ds:
         out["peak_link_tension"] = float(np.nanmax(ds["link_tension"].values))
     if "contact_force" in ds:
-        on = np.asarray(ds["contact_force"].values) > 0.0            # (time, tooth)
+        on = np.asarray(ds["contact_force"].values) > 0.0  # (time, tooth)
         starts = on[0].sum() + np.count_nonzero(on[1:] & ~on[:-1])
         out["contact_episodes"] = float(starts)
         any_on = on.any(axis=1)
@@ -160,8 +162,9 @@ def _run_one(task: dict) -> dict:
         # roller 1's advance and delta are cheap (never change which outputs need the forces)
         extra = [v for v in ("delta", "s0") if v in OUTPUTS[scene.analysis] and v not in scene.outputs["variables"]]
         if extra:
-            scene = dataclasses.replace(scene, outputs={**scene.outputs,
-                                                        "variables": scene.outputs["variables"] + tuple(extra)})
+            scene = dataclasses.replace(
+                scene, outputs={**scene.outputs, "variables": scene.outputs["variables"] + tuple(extra)}
+            )
         try:
             ds = _simulate(scene, task["duration"])
         except (IntegrationError, ValueError, ArithmeticError) as exc:
@@ -172,15 +175,22 @@ def _run_one(task: dict) -> dict:
             for var in _PRODUCES.get(name, (name,)):
                 if var in ds:
                     da = ds[var]
-                    rec["kept"][var] = {"dims": list(da.dims), "values": da.values,
-                                        "coords": {d: ds[d].values for d in da.dims if d in ds.coords},
-                                        "coord_attrs": {d: dict(ds[d].attrs) for d in da.dims if d in ds.coords},
-                                        "attrs": dict(da.attrs)}
+                    rec["kept"][var] = {
+                        "dims": list(da.dims),
+                        "values": da.values,
+                        "coords": {d: ds[d].values for d in da.dims if d in ds.coords},
+                        "coord_attrs": {d: dict(ds[d].attrs) for d in da.dims if d in ds.coords},
+                        "attrs": dict(da.attrs),
+                    }
     except Exception as exc:  # noqa: BLE001 - a run's failure is data, not the sweep's end
         tb = traceback.extract_tb(exc.__traceback__)
         where = f" ({tb[-1].filename.rsplit(os.sep, 1)[-1]}:{tb[-1].lineno})" if tb else ""
-        rec.update(status=STATUS["failed"], error=f"{type(exc).__name__}: {' '.join(str(exc).split())}{where}",
-                   summary={}, kept={})
+        rec.update(
+            status=STATUS["failed"],
+            error=f"{type(exc).__name__}: {' '.join(str(exc).split())}{where}",
+            summary={},
+            kept={},
+        )
     finally:
         rec["wall_time"] = time.perf_counter() - t0
     return rec
@@ -226,8 +236,9 @@ class _Report:
             rate = new / max(now - self.t0, 1e-9)
             left = (self.total - self.done) / rate if rate > 0 else float("nan")
             eta = f", about {left:.0f} s left" if math.isfinite(left) and self.done < self.total else ""
-            self.stream.write(f"sweep: {self.done}/{self.total} runs done ({self.failed} failed), "
-                              f"{rate:.2f} runs/s{eta}\n")
+            self.stream.write(
+                f"sweep: {self.done}/{self.total} runs done ({self.failed} failed), {rate:.2f} runs/s{eta}\n"
+            )
             self.stream.flush()
 
     def close(self):
@@ -238,10 +249,25 @@ class _Report:
 # ------------------------------------------------------------------------------------------------ sweep()
 
 
-def sweep(scene, vary: dict, *, output=None, samples: int | None = None, seed: int | None = None, keep=(),
-          settle: float | None = None, duration: float | None = None, scheduler: str | None = None,
-          n_workers: int | None = None, client=None, force: bool = False, progress: bool = True,
-          max_runs: int | None = None, check: bool = False, max_result_bytes=None):
+def sweep(
+    scene,
+    vary: dict,
+    *,
+    output=None,
+    samples: int | None = None,
+    seed: int | None = None,
+    keep=(),
+    settle: float | None = None,
+    duration: float | None = None,
+    scheduler: str | None = None,
+    n_workers: int | None = None,
+    client=None,
+    force: bool = False,
+    progress: bool = True,
+    max_runs: int | None = None,
+    check: bool = False,
+    max_result_bytes=None,
+):
     """Run a scene over a grid (or Monte Carlo draws) of its keys on Dask.
 
     Parameters
@@ -317,8 +343,16 @@ def sweep(scene, vary: dict, *, output=None, samples: int | None = None, seed: i
     """
     if check:
         scene = _checked(scene)
-    plan = plan_sweep(scene, vary, samples=samples, seed=seed, keep=keep, settle=settle, duration=duration,
-                      max_result_bytes=max_result_bytes)
+    plan = plan_sweep(
+        scene,
+        vary,
+        samples=samples,
+        seed=seed,
+        keep=keep,
+        settle=settle,
+        duration=duration,
+        max_result_bytes=max_result_bytes,
+    )
     if max_runs is not None and (isinstance(max_runs, bool) or int(max_runs) != max_runs or max_runs < 0):
         raise SweepError(f"max_runs must be a whole number >= 0, got {max_runs!r}")
     if n_workers is not None and (isinstance(n_workers, bool) or int(n_workers) != n_workers or n_workers < 1):
@@ -360,8 +394,9 @@ def sweep(scene, vary: dict, *, output=None, samples: int | None = None, seed: i
     except KeyboardInterrupt as exc:
         if store is not None:
             done = store.count_done()
-            note = (f"{done} of {n} runs are stored in {store.path}" + (
-                "" if store.complete else ": run the same sweep again to resume"))
+            note = f"{done} of {n} runs are stored in {store.path}" + (
+                "" if store.complete else ": run the same sweep again to resume"
+            )
             exc.vibkit_note = note  # what the CLI says instead of "nothing was written"
         raise
     ds.attrs.update(runs_computed=computed, runs_reused=reused)
@@ -395,8 +430,14 @@ def _tasks(plan, records, store, report):
                 store.write_run(rec)
             report.update(rec)
             continue
-        yield {"index": i, "text": text, "source": src, "duration": plan.duration, "settle": plan.settle,
-               "keep": plan.keep}
+        yield {
+            "index": i,
+            "text": text,
+            "source": src,
+            "duration": plan.duration,
+            "settle": plan.settle,
+            "keep": plan.keep,
+        }
 
 
 def _checked(scene):
@@ -406,8 +447,9 @@ def _checked(scene):
 
     base = scene if isinstance(scene, Scene) else load_scene(scene)
     if base.analysis != "forward":
-        raise SweepError(f"{base.source}: check applies to forward scenes; this one is '{base.analysis}' "
-                         "(drop --check)")
+        raise SweepError(
+            f"{base.source}: check applies to forward scenes; this one is '{base.analysis}' (drop --check)"
+        )
     return parse_scene(varied_text(base.text, {"solver.check": True}), base.source)
 
 

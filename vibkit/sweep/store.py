@@ -26,23 +26,55 @@ from .records import PENDING, STATUS, SUMMARIES, _failed_record
 
 # units of the scene keys a sweep can vary (the coordinates' ``units``)
 KEY_UNITS = {
-    "guide.tensioner_length": "m", "guide.lower_landing": "m", "guide.upper_landing": "m",
-    "guide.transition_radius": "m", "guide.incline_angle_deg": "deg", "guide.incline_length": "m",
+    "guide.tensioner_length": "m",
+    "guide.lower_landing": "m",
+    "guide.upper_landing": "m",
+    "guide.transition_radius": "m",
+    "guide.incline_angle_deg": "deg",
+    "guide.incline_length": "m",
     "guide.head_radius": "m",
-    "chain.link_pitch": "m", "chain.roller_radius": "m", "chain.roller_mass": "kg", "chain.n_rollers": "1",
-    "chain.worn_link": "1", "chain.worn_link_pitch": "m",
-    "sprocket.teeth": "1", "sprocket.base_width": "m", "sprocket.tip_width": "m", "sprocket.tooth_height": "m",
-    "sprocket.mass": "kg", "sprocket.inertia": "kg m^2",
-    "kinematics.start": "m", "kinematics.stop": "m", "kinematics.step": "m",
-    "motion.speed": "m/s", "motion.duration": "s", "motion.step": "s", "motion.start": "m",
-    "run.duration": "s", "run.output_step": "s", "run.start": "m", "run.initial_speed": "m/s", "run.seed": "1",
-    "solver.method": "", "solver.rtol": "1", "solver.atol": "1", "solver.max_step": "s", "solver.first_step": "s",
+    "chain.link_pitch": "m",
+    "chain.roller_radius": "m",
+    "chain.roller_mass": "kg",
+    "chain.n_rollers": "1",
+    "chain.worn_link": "1",
+    "chain.worn_link_pitch": "m",
+    "sprocket.teeth": "1",
+    "sprocket.base_width": "m",
+    "sprocket.tip_width": "m",
+    "sprocket.tooth_height": "m",
+    "sprocket.mass": "kg",
+    "sprocket.inertia": "kg m^2",
+    "kinematics.start": "m",
+    "kinematics.stop": "m",
+    "kinematics.step": "m",
+    "motion.speed": "m/s",
+    "motion.duration": "s",
+    "motion.step": "s",
+    "motion.start": "m",
+    "run.duration": "s",
+    "run.output_step": "s",
+    "run.start": "m",
+    "run.initial_speed": "m/s",
+    "run.seed": "1",
+    "solver.method": "",
+    "solver.rtol": "1",
+    "solver.atol": "1",
+    "solver.max_step": "s",
+    "solver.first_step": "s",
     "solver.max_wall_time": "s",
-    "effects.gravity.g": "m/s^2", "effects.gravity.enabled": "",
-    "effects.contact.stiffness": "N/m^exponent", "effects.contact.exponent": "1", "effects.contact.damping": "s/m",
-    "effects.motor.kp": "N m s", "effects.motor.ki": "N m", "effects.motor.speed": "m/s",
+    "effects.gravity.g": "m/s^2",
+    "effects.gravity.enabled": "",
+    "effects.contact.stiffness": "N/m^exponent",
+    "effects.contact.exponent": "1",
+    "effects.contact.damping": "s/m",
+    "effects.motor.kp": "N m s",
+    "effects.motor.ki": "N m",
+    "effects.motor.speed": "m/s",
     "effects.motor.torque_limit": "N m",
-    "effects.tensioner.stiffness": "N/m", "effects.tensioner.preload": "N", "effects.tensioner.mass": "kg",
+    "effects.tensioner.stiffness": "N/m",
+    "effects.tensioner.preload": "N",
+    "effects.tensioner.mass": "kg",
     "effects.rolling_resistance.coefficient": "1",
 }
 
@@ -50,8 +82,10 @@ KEY_UNITS = {
 # ------------------------------------------------------------------------------------------------ the store
 
 
-_RUNNING = ("a vibkit sweep in progress or interrupted: its finished runs are under runs/; "
-            "vibkit.sweep.open_sweep(path) reads them, the same sweep again resumes it")
+_RUNNING = (
+    "a vibkit sweep in progress or interrupted: its finished runs are under runs/; "
+    "vibkit.sweep.open_sweep(path) reads them, the same sweep again resumes it"
+)
 
 
 def _zkw():
@@ -77,12 +111,15 @@ class _Store:
         if self.path.exists():
             existing = self._definition()
             if existing is None:
-                raise SweepError(f"{self.path}: exists and is not a vibkit sweep store; choose another output "
-                                 f"(nothing was changed)")
+                raise SweepError(
+                    f"{self.path}: exists and is not a vibkit sweep store; choose another output (nothing was changed)"
+                )
             if existing != definition:
                 if not force:
-                    raise SweepError(f"{self.path}: holds a different sweep ({_differences(existing, definition)}); "
-                                     f"give a new output, or force=True (--force) to discard it")
+                    raise SweepError(
+                        f"{self.path}: holds a different sweep ({_differences(existing, definition)}); "
+                        f"give a new output, or force=True (--force) to discard it"
+                    )
                 shutil.rmtree(self.path)
         if not self.path.exists():
             self.path.parent.mkdir(parents=True, exist_ok=True)
@@ -91,8 +128,9 @@ class _Store:
                 shutil.rmtree(tmp)
             try:
                 root = zarr.open_group(str(tmp), mode="w", **_zkw())
-                root.attrs.update({"vibkit_sweep": json.dumps(definition), "vibkit_sweep_state": "running",
-                                   "comment": _RUNNING})
+                root.attrs.update(
+                    {"vibkit_sweep": json.dumps(definition), "vibkit_sweep_state": "running", "comment": _RUNNING}
+                )
                 zarr.open_group(str(tmp), path="runs", mode="w", **_zkw())
                 zarr.consolidate_metadata(str(tmp))  # xarray.open_zarr reads the (empty) root without a warning
                 os.rename(tmp, self.path)  # the store appears whole, with its definition
@@ -101,8 +139,10 @@ class _Store:
                     raise
                 # another process made the store at the same moment: use it if it holds this sweep
                 if self._definition() != definition:
-                    raise SweepError(f"{self.path}: another process made a different sweep store here at the same "
-                                     f"time; give another output") from exc
+                    raise SweepError(
+                        f"{self.path}: another process made a different sweep store here at the same "
+                        f"time; give another output"
+                    ) from exc
             finally:
                 if tmp.exists():
                     shutil.rmtree(tmp, ignore_errors=True)
@@ -171,17 +211,22 @@ class _Store:
                 continue
             if attrs.get("done") is not True:
                 continue
-            rec = _failed_record(int(d.name[1:]), int(attrs["status"]), attrs.get("error", ""),
-                                 _num(attrs.get("wall_time")))
+            rec = _failed_record(
+                int(d.name[1:]), int(attrs["status"]), attrs.get("error", ""), _num(attrs.get("wall_time"))
+            )
             rec["summary"] = {k: _num(v) for k, v in attrs.get("summary", {}).items()}
             rec["pid"] = attrs.get("pid", 0)
-            for var in (attrs.get("kept", []) if read_data else ()):
+            for var in attrs.get("kept", []) if read_data else ():
                 arr = g[var]
                 dims = json.loads(attrs["kept_dims"])[var]
                 coords = {c: np.asarray(g[f"coord_{c}"][...]) for c in dims if f"coord_{c}" in g}
-                rec["kept"][var] = {"dims": dims, "values": np.asarray(arr[...]), "coords": coords,
-                                    "coord_attrs": json.loads(attrs["kept_coord_attrs"]).get(var, {}),
-                                    "attrs": json.loads(attrs["kept_attrs"])[var]}
+                rec["kept"][var] = {
+                    "dims": dims,
+                    "values": np.asarray(arr[...]),
+                    "coords": coords,
+                    "coord_attrs": json.loads(attrs["kept_coord_attrs"]).get(var, {}),
+                    "attrs": json.loads(attrs["kept_attrs"])[var],
+                }
             out[rec["index"]] = rec
         return out
 
@@ -208,16 +253,21 @@ class _Store:
                         if c not in coords_written:
                             coords_written.add(c)
                             _array(g, f"coord_{c}", np.asarray(vals))
-                g.attrs.update({
-                    "index": rec["index"], "status": rec["status"], "error": rec["error"],
-                    "summary": {k: _jsonval(v) for k, v in rec["summary"].items()},
-                    "wall_time": _jsonval(rec["wall_time"]), "pid": rec.get("pid", 0),
-                    "kept": list(rec["kept"]),
-                    "kept_dims": json.dumps({v: k["dims"] for v, k in rec["kept"].items()}),
-                    "kept_attrs": json.dumps({v: k["attrs"] for v, k in rec["kept"].items()}),
-                    "kept_coord_attrs": json.dumps({v: k["coord_attrs"] for v, k in rec["kept"].items()}),
-                    "done": True,
-                })
+                g.attrs.update(
+                    {
+                        "index": rec["index"],
+                        "status": rec["status"],
+                        "error": rec["error"],
+                        "summary": {k: _jsonval(v) for k, v in rec["summary"].items()},
+                        "wall_time": _jsonval(rec["wall_time"]),
+                        "pid": rec.get("pid", 0),
+                        "kept": list(rec["kept"]),
+                        "kept_dims": json.dumps({v: k["dims"] for v, k in rec["kept"].items()}),
+                        "kept_attrs": json.dumps({v: k["attrs"] for v, k in rec["kept"].items()}),
+                        "kept_coord_attrs": json.dumps({v: k["coord_attrs"] for v, k in rec["kept"].items()}),
+                        "done": True,
+                    }
+                )
                 if final.exists() and not _done(final):
                     shutil.rmtree(final, ignore_errors=True)  # half a run from an older vibkit: redone
                 try:
@@ -236,8 +286,9 @@ class _Store:
             if self._state() == "complete":
                 return
             ds = ds.copy()
-            ds.attrs.update(vibkit_sweep=json.dumps(self.plan.definition()), vibkit_sweep_state="running",
-                            comment=_RUNNING)
+            ds.attrs.update(
+                vibkit_sweep=json.dumps(self.plan.definition()), vibkit_sweep_state="running", comment=_RUNNING
+            )
             self._clear_root()
             ds.to_zarr(str(self.path), mode="a", consolidated=False, **_zkw())
             import zarr
@@ -308,8 +359,10 @@ def open_sweep(path):
 
     path = Path(path)
     if not path.is_dir():
-        raise SweepError(f"{path}: {'no such folder' if not path.exists() else 'not a folder'}; expected a vibkit "
-                         f"sweep store (a Zarr folder written by vibkit sweep)")
+        raise SweepError(
+            f"{path}: {'no such folder' if not path.exists() else 'not a folder'}; expected a vibkit "
+            f"sweep store (a Zarr folder written by vibkit sweep)"
+        )
     probe = _Store.__new__(_Store)
     probe.path = path
     definition = probe._definition()
@@ -320,10 +373,16 @@ def open_sweep(path):
 
         return xr.open_zarr(str(path), chunks=None)
     try:
-        plan = plan_sweep(parse_scene(definition["scene"], f"{path} (its scene)"),
-                          {a["key"]: a["spec"] for a in definition["axes"]}, samples=definition["samples"],
-                          seed=definition["seed"], keep=definition["keep"], settle=definition["settle"],
-                          duration=definition["duration"], max_result_bytes=math.inf)
+        plan = plan_sweep(
+            parse_scene(definition["scene"], f"{path} (its scene)"),
+            {a["key"]: a["spec"] for a in definition["axes"]},
+            samples=definition["samples"],
+            seed=definition["seed"],
+            keep=definition["keep"],
+            settle=definition["settle"],
+            duration=definition["duration"],
+            max_result_bytes=math.inf,
+        )
     except (ValueError, KeyError, TypeError) as exc:
         raise SweepError(f"{path}: its sweep definition cannot be read back ({exc})") from None
     probe.plan = plan
@@ -369,14 +428,19 @@ def _assemble(plan, records, *, complete):
     coords = {}
     if plan.samples is None:
         for a in plan.axes:
-            coords[a.key] = xr.Variable((a.key,), np.asarray(a.values),
-                                        attrs={"units": KEY_UNITS.get(a.key, ""), "long_name": f"scene key {a.key}"})
+            coords[a.key] = xr.Variable(
+                (a.key,),
+                np.asarray(a.values),
+                attrs={"units": KEY_UNITS.get(a.key, ""), "long_name": f"scene key {a.key}"},
+            )
     else:
         coords["sample"] = xr.Variable(("sample",), np.arange(n), attrs={"units": "1", "long_name": "draw number"})
         for a in plan.axes:
-            coords[a.key] = xr.Variable(("sample",), np.asarray([p[a.key] for p in plan.points]),
-                                        attrs={"units": KEY_UNITS.get(a.key, ""),
-                                               "long_name": f"scene key {a.key} (drawn)"})
+            coords[a.key] = xr.Variable(
+                ("sample",),
+                np.asarray([p[a.key] for p in plan.points]),
+                attrs={"units": KEY_UNITS.get(a.key, ""), "long_name": f"scene key {a.key} (drawn)"},
+            )
     status = np.full(n, PENDING, dtype=np.int8)
     error = np.full(n, "", dtype=object)
     summ = {k: np.full(n, np.nan) for k in SUMMARIES}
@@ -393,18 +457,31 @@ def _assemble(plan, records, *, complete):
     if not complete:
         meanings[PENDING] = "pending"
     flags = sorted(meanings)
-    data["status"] = xr.Variable(dims, status.reshape(shape), attrs={
-        "long_name": "run status", "flag_values": np.array(flags, dtype=np.int8),
-        "flag_meanings": " ".join(meanings[f] for f in flags)})
-    data["error"] = xr.Variable(dims, error.reshape(shape).astype(str).astype(object),
-                                attrs={"long_name": "why the run failed (empty when it did not)"})
+    data["status"] = xr.Variable(
+        dims,
+        status.reshape(shape),
+        attrs={
+            "long_name": "run status",
+            "flag_values": np.array(flags, dtype=np.int8),
+            "flag_meanings": " ".join(meanings[f] for f in flags),
+        },
+    )
+    data["error"] = xr.Variable(
+        dims,
+        error.reshape(shape).astype(str).astype(object),
+        attrs={"long_name": "why the run failed (empty when it did not)"},
+    )
     ds = xr.Dataset(data, coords=coords)
     # kept time series: outer join over the runs' own coordinates, NaN where a run has none
     names = list(dict.fromkeys(v for rec in records.values() for v in rec["kept"]))
     for var in names:
         per = [(i, rec["kept"][var]) for i, rec in sorted(records.items()) if var in rec["kept"]]
-        das = [xr.DataArray(np.asarray(k["values"], dtype=float), dims=k["dims"],
-                            coords={c: v for c, v in k["coords"].items()}) for _, k in per]
+        das = [
+            xr.DataArray(
+                np.asarray(k["values"], dtype=float), dims=k["dims"], coords={c: v for c, v in k["coords"].items()}
+            )
+            for _, k in per
+        ]
         joined = xr.align(*das, join="outer", fill_value=np.nan) if len(das) > 1 else das
         first = joined[0]
         full = np.full((n,) + first.shape, np.nan)
@@ -416,21 +493,26 @@ def _assemble(plan, records, *, complete):
             if c in first.coords and c not in ds.coords:
                 ds = ds.assign_coords({c: xr.Variable((c,), first[c].values, attrs=k0["coord_attrs"].get(c, {}))})
     counts = {name: int(np.count_nonzero(status == code)) for name, code in STATUS.items()}
-    ds.attrs.update({
-        "vibkit_version": __version__,
-        "scene": plan.text,
-        "scene_source": plan.source,
-        "analysis": plan.analysis,
-        "sweep": "monte-carlo" if plan.samples is not None else "grid",
-        "varied_keys": ", ".join(a.key for a in plan.axes),
-        "vary": "; ".join(f"{a.key}={a.spec}" for a in plan.axes),
-        "runs": n,
-        "runs_ok": counts["ok"], "runs_failed": counts["failed"], "runs_invalid": counts["invalid"],
-        "runs_pending": int(np.count_nonzero(status == PENDING)),
-        "start_up_excluded": ("a quarter of each forward run" if plan.settle is None
-                              else f"the first {plan.settle:g} s of each run"),
-        "history": f"swept by vibkit {__version__}",
-    })
+    ds.attrs.update(
+        {
+            "vibkit_version": __version__,
+            "scene": plan.text,
+            "scene_source": plan.source,
+            "analysis": plan.analysis,
+            "sweep": "monte-carlo" if plan.samples is not None else "grid",
+            "varied_keys": ", ".join(a.key for a in plan.axes),
+            "vary": "; ".join(f"{a.key}={a.spec}" for a in plan.axes),
+            "runs": n,
+            "runs_ok": counts["ok"],
+            "runs_failed": counts["failed"],
+            "runs_invalid": counts["invalid"],
+            "runs_pending": int(np.count_nonzero(status == PENDING)),
+            "start_up_excluded": (
+                "a quarter of each forward run" if plan.settle is None else f"the first {plan.settle:g} s of each run"
+            ),
+            "history": f"swept by vibkit {__version__}",
+        }
+    )
     if plan.samples is not None:
         ds.attrs["seed"] = int(plan.seed)
         ds.attrs["samples"] = int(plan.samples)

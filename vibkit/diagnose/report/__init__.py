@@ -15,11 +15,10 @@ The only part of vibkit that draws pages, one module per page kind:
 matplotlib is imported only when a page is drawn.
 """
 
-from .common import FIXED_EPOCH, Report, _pdf_in_memory, atomic_path, report_date
+from .common import FIXED_EPOCH, Report, _pdf_in_memory, atomic_path, report_date  # noqa: F401 (re-exported)
 from .comparison_pages import plot_comparison
 from .document import write_report
-from .fleet import FLEET_PAGE_MAX_UNITS, write_fleet_report
+from .fleet import FLEET_PAGE_MAX_UNITS, write_fleet_report  # noqa: F401 (re-exported)
 from .ride_pages import plot_ride
 
-__all__ = ["Report", "write_report", "plot_comparison", "plot_ride", "report_date", "atomic_path",
-           "write_fleet_report"]
+__all__ = ["Report", "write_report", "plot_comparison", "plot_ride", "report_date", "atomic_path", "write_fleet_report"]

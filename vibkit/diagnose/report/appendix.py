@@ -23,13 +23,16 @@ def data_quality_page(doc, ctx) -> None:
     _page_title(fig, "Data quality", "what the reader found and decided")
     ax = fig.add_axes((0.06, 0.55, 0.88, 0.36))
     gaps = [bursts[i + 1].t0 - (bursts[i].t0 + bursts[i].x.size / bursts[i].fs) for i in range(len(bursts) - 1)]
-    rows = [["samples", f"{rec.sizes['time']}"], ["nominal sample rate", f"{rec.attrs.get('sample_rate_hz', 0):.6g} Hz"],
-            ["bursts", f"{len(bursts)}"],
-            ["gaps", (f"{len(gaps)}, {min(gaps):.4g} to {max(gaps):.4g} s" if gaps else "none")],
-            ["time jitter (rms)", f"{float(rec.attrs.get('time_jitter_rms_percent', 0.0)):.3g} % of the period"],
-            ["resampled to a uniform grid", "yes" if any(b.resampled for b in bursts) else "no"],
-            ["clipping", f"{ctx.clip_n} samples at the extremes" + (" (suspected)" if ctx.clipped else "")],
-            ["non-finite samples", f"{int(np.sum(~np.isfinite(rec[ctx.channel].values)))}"]]
+    rows = [
+        ["samples", f"{rec.sizes['time']}"],
+        ["nominal sample rate", f"{rec.attrs.get('sample_rate_hz', 0):.6g} Hz"],
+        ["bursts", f"{len(bursts)}"],
+        ["gaps", (f"{len(gaps)}, {min(gaps):.4g} to {max(gaps):.4g} s" if gaps else "none")],
+        ["time jitter (rms)", f"{float(rec.attrs.get('time_jitter_rms_percent', 0.0)):.3g} % of the period"],
+        ["resampled to a uniform grid", "yes" if any(b.resampled for b in bursts) else "no"],
+        ["clipping", f"{ctx.clip_n} samples at the extremes" + (" (suspected)" if ctx.clipped else "")],
+        ["non-finite samples", f"{int(np.sum(~np.isfinite(rec[ctx.channel].values)))}"],
+    ]
     _table(ax, rows, (0.4, 0.6), 9)
     hist = str(rec.attrs.get("history", "")).split("\n")
     fig.text(0.06, 0.5, "Reader's decisions:", fontsize=10, fontweight="bold")
@@ -44,21 +47,33 @@ def parameters_page(doc, ctx) -> None:
     pitch, sc, duration = ctx.pitch, ctx.scene, ctx.duration
     fig = plt.figure(figsize=_PAGE)
     _page_title(fig, "Parameters", "everything needed to repeat this report")
-    rows = [["channel", ctx.channel], ["speed", _fmt(ctx.speed, "m/s")],
-            ["speed sigma", _fmt(float(ctx.speed_sigma), "m/s")],
-            ["nominal pitch", _fmt(ctx.nominal_pitch, "m")], ["limits", " / ".join(f"{v:g} %" for v in ctx.limits)],
-            ["search band", (f"{pitch.band_hz[0]:.4g} - {pitch.band_hz[1]:.4g} Hz" if pitch else str(ctx.band))],
-            ["Hampel half window", f"{ctx.hampel_half_window_s:g} s"],
-            ["Hampel false-alarm rate", f"{ctx.hampel_false_alarm_rate:g} per sample"],
-            ["simulated duration", _fmt(duration, "s") if duration else "scene's"]]
+    rows = [
+        ["channel", ctx.channel],
+        ["speed", _fmt(ctx.speed, "m/s")],
+        ["speed sigma", _fmt(float(ctx.speed_sigma), "m/s")],
+        ["nominal pitch", _fmt(ctx.nominal_pitch, "m")],
+        ["limits", " / ".join(f"{v:g} %" for v in ctx.limits)],
+        ["search band", (f"{pitch.band_hz[0]:.4g} - {pitch.band_hz[1]:.4g} Hz" if pitch else str(ctx.band))],
+        ["Hampel half window", f"{ctx.hampel_half_window_s:g} s"],
+        ["Hampel false-alarm rate", f"{ctx.hampel_false_alarm_rate:g} per sample"],
+        ["simulated duration", _fmt(duration, "s") if duration else "scene's"],
+    ]
     res = getattr(ctx, "result", None)
     if res is not None and "solver_method" in res.attrs:
         # the simulation's numerics: its solver, and the convergence verdict ([solver] check = true)
         rows.append(["solver", f"{res.attrs['solver_method']}, {res.attrs.get('solver_steps', '?')} steps"])
         if "solver_closure" in res.attrs:
-            rows.append(["chain closure", textwrap.shorten("read from the table over one pitch"
-                                                           if res.attrs["solver_closure"] == "table"
-                                                           else f"solved at every step: {res.attrs['solver_closure']}", 70)])
+            rows.append(
+                [
+                    "chain closure",
+                    textwrap.shorten(
+                        "read from the table over one pitch"
+                        if res.attrs["solver_closure"] == "table"
+                        else f"solved at every step: {res.attrs['solver_closure']}",
+                        70,
+                    ),
+                ]
+            )
         if "convergence" in res.attrs:
             import json
 
@@ -71,6 +86,5 @@ def parameters_page(doc, ctx) -> None:
     if sc is not None:
         lines = [ln for ln in sc.text.splitlines() if ln.strip() and not ln.lstrip().startswith("#")][:48]
         fig.text(0.06, 0.58, f"Scene {os.path.basename(sc.source)}:", fontsize=10, fontweight="bold")
-        fig.text(0.06, 0.565, "\n".join(ln[:100] for ln in lines), fontsize=6.5, family="monospace",
-                 va="top")
+        fig.text(0.06, 0.565, "\n".join(ln[:100] for ln in lines), fontsize=6.5, family="monospace", va="top")
     doc.emit(fig, "parameters")

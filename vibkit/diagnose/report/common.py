@@ -160,8 +160,17 @@ class TextColumn:
 
     def text(self, text, size, *, weight="normal", color="black", family=None):
         lines = textwrap.wrap(str(text), self._chars(self.width, size, weight)) or [""]
-        self.fig.text(self.x, self.y, "\n".join(lines), fontsize=size, fontweight=weight, color=color, va="top",
-                      family=family, linespacing=1.2)
+        self.fig.text(
+            self.x,
+            self.y,
+            "\n".join(lines),
+            fontsize=size,
+            fontweight=weight,
+            color=color,
+            va="top",
+            family=family,
+            linespacing=1.2,
+        )
         self.y -= self._step(len(lines), size)
 
     def pairs(self, rows, size, *, key_width=0.25):
@@ -197,8 +206,14 @@ def _page_title(fig, title, subtitle=""):
     fig.text(0.06, y, title, fontsize=14, fontweight="bold", va="top")
     if subtitle:
         chars = int(0.88 * w_in * 72 / (8.5 * 0.58))
-        fig.text(0.06, y - 14 * 1.45 / 72 / h_in, "\n".join(textwrap.wrap(subtitle, chars)), fontsize=8.5,
-                 color="0.3", va="top")
+        fig.text(
+            0.06,
+            y - 14 * 1.45 / 72 / h_in,
+            "\n".join(textwrap.wrap(subtitle, chars)),
+            fontsize=8.5,
+            color="0.3",
+            va="top",
+        )
 
 
 class PageSink:
@@ -232,4 +247,3 @@ def length_scale(units, peak):
     if peak < 1.0:
         return 1e3, "mm"
     return 1.0, "m"
-

@@ -26,31 +26,39 @@ def plot_comparison(comp, fig=None, *, top=0.88):
 
     if fig is None:
         fig = plt.figure(figsize=_WIDE)
-    gs = fig.add_gridspec(3, 2, height_ratios=(1.0, 1.0, 1.1), hspace=0.55, wspace=0.25,
-                          left=0.07, right=0.97, top=top, bottom=0.07)
+    gs = fig.add_gridspec(
+        3, 2, height_ratios=(1.0, 1.0, 1.1), hspace=0.55, wspace=0.25, left=0.07, right=0.97, top=top, bottom=0.07
+    )
     meas = comp.signals["meas"]
     # lengths in um or mm as the tables give them, from the recording's largest value
-    k, u = length_scale(comp.units, max((float(np.nanmax(np.abs(m[2]))) for m in meas if m[2].size),
-                                        default=float("nan")))
+    k, u = length_scale(
+        comp.units, max((float(np.nanmax(np.abs(m[2]))) for m in meas if m[2].size), default=float("nan"))
+    )
     ax = fig.add_subplot(gs[0, :])
     ax.semilogy(comp.orders, np.maximum(k * comp.order_amplitude_sim, 1e-30), label=f"simulation ({comp.variable})")
-    ax.semilogy(comp.orders, np.maximum(k * comp.order_amplitude_meas, 1e-30), label=f"recording ({comp.channel})",
-                alpha=0.8)
+    ax.semilogy(
+        comp.orders, np.maximum(k * comp.order_amplitude_meas, 1e-30), label=f"recording ({comp.channel})", alpha=0.8
+    )
     top = k * max(comp.order_amplitude_sim.max(), comp.order_amplitude_meas.max())
     ax.set_ylim(top * 1e-4, top * 3)
     ax.set_xlabel("order of the link-pass frequency [-]")
     ax.set_ylabel(f"amplitude [{u}]")
-    ax.set_title(f"Order spectra (each referred to its own link-pass); agreement score {comp.score:.2f} "
-                 "(1: all harmonics match, 0: none), "
-                 f"log-spectral distance {comp.log_spectral_distance_db:.1f} dB", fontsize=10)
+    ax.set_title(
+        f"Order spectra (each referred to its own link-pass); agreement score {comp.score:.2f} "
+        "(1: all harmonics match, 0: none), "
+        f"log-spectral distance {comp.log_spectral_distance_db:.1f} dB",
+        fontsize=10,
+    )
     ax.legend(fontsize=8, loc="upper right")
     ax.grid(alpha=0.3)
     fs_s, x_s = comp.signals["sim"]
     longest = max(meas, key=lambda m: m[2].size)
     nh = len(comp.harmonics)
     fmax = min((nh + 1.5) * max(comp.fundamental_sim_hz, comp.fundamental_meas_hz), fs_s / 2, longest[1] / 2)
-    specs = (("simulation", fs_s, x_s, comp.fundamental_sim_hz, "C0"),
-             ("recording", longest[1], longest[2], comp.fundamental_meas_hz, "C1"))
+    specs = (
+        ("simulation", fs_s, x_s, comp.fundamental_sim_hz, "C0"),
+        ("recording", longest[1], longest[2], comp.fundamental_meas_hz, "C1"),
+    )
     for j, (name, fs, x, f0, col) in enumerate(specs):
         a1 = fig.add_subplot(gs[1, j])
         f, a = amplitude_spectrum(x, fs)
@@ -69,8 +77,9 @@ def plot_comparison(comp, fig=None, *, top=0.88):
         fr, tt, s = spectrogram(x, fs, nperseg=nper, noverlap=nper * 3 // 4)
         sel = fr <= fmax
         db = 20 * np.log10(np.maximum(k * s[sel], 1e-30))
-        im = a2.pcolormesh(tt, fr[sel], db, shading="nearest", vmin=db.max() - 60, vmax=db.max(), cmap="viridis",
-                           rasterized=True)
+        im = a2.pcolormesh(
+            tt, fr[sel], db, shading="nearest", vmin=db.max() - 60, vmax=db.max(), cmap="viridis", rasterized=True
+        )
         a2.set_xlabel("time from burst start [s]" if name == "recording" and len(meas) > 1 else "time [s]")
         a2.set_ylabel("frequency [Hz]")
         a2.set_title(f"{name} spectrogram ({frame:.2g} s frames)", fontsize=9)
@@ -87,14 +96,20 @@ def simulation_page(doc, ctx) -> None:
     if comp is None:
         return
     fig = plt.figure(figsize=_WIDE)
-    verdict = (f"; page 1's {1000 * ctx.pitch.pitch_m:.2f} mm is the harmonic least-squares estimate over "
-               "every burst" if ctx.pitch is not None else "")
-    _page_title(fig, "Simulation against recording",
-                f"scene {sc.name}: {comp.variable} vs {comp.channel}; pitch "
-                f"{'consistent' if comp.pitch_consistent else 'NOT consistent'} "
-                f"({1000 * comp.pitch_meas_m:.2f} mm recorded vs {1000 * comp.pitch_sim_m:.2f} mm simulated: "
-                f"each from its own link-pass peak, {comp.fundamental_meas_hz:.4g} and "
-                f"{comp.fundamental_sim_hz:.4g} Hz, as the comparison finds them{verdict})")
+    verdict = (
+        f"; page 1's {1000 * ctx.pitch.pitch_m:.2f} mm is the harmonic least-squares estimate over every burst"
+        if ctx.pitch is not None
+        else ""
+    )
+    _page_title(
+        fig,
+        "Simulation against recording",
+        f"scene {sc.name}: {comp.variable} vs {comp.channel}; pitch "
+        f"{'consistent' if comp.pitch_consistent else 'NOT consistent'} "
+        f"({1000 * comp.pitch_meas_m:.2f} mm recorded vs {1000 * comp.pitch_sim_m:.2f} mm simulated: "
+        f"each from its own link-pass peak, {comp.fundamental_meas_hz:.4g} and "
+        f"{comp.fundamental_sim_hz:.4g} Hz, as the comparison finds them{verdict})",
+    )
     plot_comparison(comp, fig, top=0.82)  # under a two-line subtitle
     doc.emit(fig, "simulation against recording")
 
@@ -111,17 +126,32 @@ def harmonics_page(doc, ctx) -> None:
     ax = fig.add_axes((0.04, 0.45, 0.92, 0.45))
     ax.axis("off")
     head = ["order", "f sim [Hz]", "f rec [Hz]", "ratio", "amp. diff [dB]", "detected"]
-    cells = [[str(h["order"]), f"{h['frequency_sim_hz']:.4f}", f"{h['frequency_meas_hz']:.4f}",
-              f"{h['frequency_ratio']:.4f} +- {h['frequency_ratio_sigma']:.1e}",
-              f"{h['amplitude_diff_db']:+.1f} [{h['amplitude_diff_db_ci'][0]:+.1f}, "
-              f"{h['amplitude_diff_db_ci'][1]:+.1f}]",
-              ("sim " if h["detected_sim"] else "") + ("rec" if h["detected_meas"] else "")]
-             for h in comp.harmonics]
-    tab = ax.table(cellText=cells, colLabels=head, loc="upper center", cellLoc="center",
-                   colWidths=[0.08, 0.14, 0.14, 0.24, 0.26, 0.14])
+    cells = [
+        [
+            str(h["order"]),
+            f"{h['frequency_sim_hz']:.4f}",
+            f"{h['frequency_meas_hz']:.4f}",
+            f"{h['frequency_ratio']:.4f} +- {h['frequency_ratio_sigma']:.1e}",
+            f"{h['amplitude_diff_db']:+.1f} [{h['amplitude_diff_db_ci'][0]:+.1f}, {h['amplitude_diff_db_ci'][1]:+.1f}]",
+            ("sim " if h["detected_sim"] else "") + ("rec" if h["detected_meas"] else ""),
+        ]
+        for h in comp.harmonics
+    ]
+    tab = ax.table(
+        cellText=cells,
+        colLabels=head,
+        loc="upper center",
+        cellLoc="center",
+        colWidths=[0.08, 0.14, 0.14, 0.24, 0.26, 0.14],
+    )
     tab.auto_set_font_size(False)
     tab.set_fontsize(8.5)
     tab.scale(1, 1.4)
-    fig.text(0.06, 0.1, "\n".join(textwrap.fill(m, 105) for m in
-                                  [f"score rule: {comp.rule}"] + comp.notes), fontsize=7.5, va="bottom")
+    fig.text(
+        0.06,
+        0.1,
+        "\n".join(textwrap.fill(m, 105) for m in [f"score rule: {comp.rule}"] + comp.notes),
+        fontsize=7.5,
+        va="bottom",
+    )
     doc.emit(fig, "harmonics")

@@ -109,8 +109,7 @@ class ReportContext:
         if self.measurement_date is None:
             return "not stated in the file (give --date)"
         d = self.measurement_date
-        text = d.strftime("%Y-%m-%d") if (d.hour, d.minute, d.second) == (0, 0, 0) else \
-            d.strftime("%Y-%m-%d %H:%M UTC")
+        text = d.strftime("%Y-%m-%d") if (d.hour, d.minute, d.second) == (0, 0, 0) else d.strftime("%Y-%m-%d %H:%M UTC")
         return f"{text} ({self.measurement_date_source})"
 
     @property
@@ -130,7 +129,9 @@ def _scene_speed(scene):
     if scene.analysis == "inverse":
         return float(scene.section("motion")["speed"])
     if scene.analysis == "forward":
-        return float(scene.effects.get("motor", {}).get("speed", scene.section("run").get("initial_speed", 0.0))) or None
+        return (
+            float(scene.effects.get("motor", {}).get("speed", scene.section("run").get("initial_speed", 0.0))) or None
+        )
     return None
 
 
@@ -165,22 +166,39 @@ def measurement_date(rec, date=None):
             d = _dt.datetime.fromisoformat(text)
         except ValueError:
             if source == "given":
-                raise ValueError(f"measurement date {date!r} is not an ISO 8601 date (e.g. 2026-11-23 or "
-                                 "2026-11-23T10:15:00Z); --date") from None
+                raise ValueError(
+                    f"measurement date {date!r} is not an ISO 8601 date (e.g. 2026-11-23 or "
+                    "2026-11-23T10:15:00Z); --date"
+                ) from None
             return None, ""
     if d.tzinfo is None:
         d = d.replace(tzinfo=_dt.timezone.utc)
     return d.astimezone(_dt.timezone.utc), source
 
 
-def analyse(recording, *, scene=None, speed=None, speed_sigma=0.0, channel=None, nominal_pitch=None,
-            limits_percent=None, sample_rate=None, duration=None, band=None, hampel_half_window_s=0.1,
-            hampel_false_alarm_rate=1e-4, progress=False, read_options=None, date=None) -> ReportContext:
+def analyse(
+    recording,
+    *,
+    scene=None,
+    speed=None,
+    speed_sigma=0.0,
+    channel=None,
+    nominal_pitch=None,
+    limits_percent=None,
+    sample_rate=None,
+    duration=None,
+    band=None,
+    hampel_half_window_s=0.1,
+    hampel_false_alarm_rate=1e-4,
+    progress=False,
+    read_options=None,
+    date=None,
+) -> ReportContext:
     """Everything :func:`vibkit.diagnose.report.write_report` draws (same parameters, no output)."""
     from ...io import read_recording
-    from ..pitch import DEFAULT_LIMITS_PERCENT, estimate_pitch, pick_channel, uniform_bursts
     from ...model.scene import Scene, load_scene
     from ...signal import hampel_events
+    from ..pitch import DEFAULT_LIMITS_PERCENT, estimate_pitch, pick_channel, uniform_bursts
 
     limits = tuple(limits_percent) if limits_percent is not None else DEFAULT_LIMITS_PERCENT
     from ...io import RecordingError
@@ -209,17 +227,26 @@ def analyse(recording, *, scene=None, speed=None, speed_sigma=0.0, channel=None,
             notes.append(f"speed {speed:g} m/s from the recording's metadata ({source})")
         elif _scene_speed(sc):
             speed = _scene_speed(sc)
-            notes.append(f"speed {speed:g} m/s from the scene (the recording states none): the pitch then "
-                         "assumes the scene's speed")
+            notes.append(
+                f"speed {speed:g} m/s from the scene (the recording states none): the pitch then "
+                "assumes the scene's speed"
+            )
     if nominal_pitch is None and sc is not None:
         nominal_pitch = sc.chain.link_pitch
     bursts = uniform_bursts(rec, ch)
     pitch = None
     f0 = None
     if speed is not None:
-        pitch = estimate_pitch(rec, speed=speed, speed_sigma=speed_sigma, channel=ch, band=band,
-                               nominal_pitch=nominal_pitch, limits_percent=limits,
-                               teeth=sc.sprocket.teeth if sc else 28)
+        pitch = estimate_pitch(
+            rec,
+            speed=speed,
+            speed_sigma=speed_sigma,
+            channel=ch,
+            band=band,
+            nominal_pitch=nominal_pitch,
+            limits_percent=limits,
+            teeth=sc.sprocket.teeth if sc else 28,
+        )
         f0 = pitch.fundamental_hz
     else:
         # frequency only: the same burst-combined estimator, with a unit "speed"
@@ -237,9 +264,8 @@ def analyse(recording, *, scene=None, speed=None, speed_sigma=0.0, channel=None,
     comp = None
     result = None
     if sc is not None:
-        from ..comparison import compare
         from ...analyses.simulation import simulate
-
+        from ..comparison import compare
         from ..ride import with_ride_outputs
 
         # with the step's roller motion: the ride figure is then the one `vibkit ride SCENE` gives
@@ -260,13 +286,16 @@ def analyse(recording, *, scene=None, speed=None, speed_sigma=0.0, channel=None,
         if b.x.size <= 2 * hw + 1:
             continue
         resid = b.x - _family_fit(b.x, b.fs, search)
-        for e in hampel_events(resid, b.fs, half_window=hw, false_alarm_rate=hampel_false_alarm_rate, t0=b.t0,
-                               max_gap=hw // 4):
+        for e in hampel_events(
+            resid, b.fs, half_window=hw, false_alarm_rate=hampel_false_alarm_rate, t0=b.t0, max_gap=hw // 4
+        ):
             events.append((e.time_s, float(b.x[e.index]), e))
     # clipping: samples sitting at the extreme values in runs
     lo, hi = float(np.min(x_all)), float(np.max(x_all))
-    clip_n = int(np.sum(np.isclose(x_all, hi, rtol=0, atol=1e-9 * max(abs(hi), 1e-30))) +
-                 np.sum(np.isclose(x_all, lo, rtol=0, atol=1e-9 * max(abs(lo), 1e-30))))
+    clip_n = int(
+        np.sum(np.isclose(x_all, hi, rtol=0, atol=1e-9 * max(abs(hi), 1e-30)))
+        + np.sum(np.isclose(x_all, lo, rtol=0, atol=1e-9 * max(abs(lo), 1e-30)))
+    )
     clipped = clip_n > 4
     date = report_date()
     summary = {
@@ -285,18 +314,57 @@ def analyse(recording, *, scene=None, speed=None, speed_sigma=0.0, channel=None,
         "clipped": clipped,
     }
     if pitch is not None:
-        summary.update({k: v for k, v in pitch.as_dict().items()
-                        if k in ("fundamental_sigma_hz", "pitch_m", "pitch_sigma_m", "elongation_percent",
-                                 "elongation_sigma_percent", "verdict", "speed_m_s", "speed_sigma_m_s")})
+        summary.update(
+            {
+                k: v
+                for k, v in pitch.as_dict().items()
+                if k
+                in (
+                    "fundamental_sigma_hz",
+                    "pitch_m",
+                    "pitch_sigma_m",
+                    "elongation_percent",
+                    "elongation_sigma_percent",
+                    "verdict",
+                    "speed_m_s",
+                    "speed_sigma_m_s",
+                )
+            }
+        )
     if comp is not None:
         summary.update(score=comp.score, pitch_consistent=comp.pitch_consistent)
     return ReportContext(
-        recording=recording, rec=rec, channel=ch, units=units, scene=sc, speed=speed, speed_sigma=speed_sigma,
-        nominal_pitch=nominal_pitch, limits=limits, band=band, duration=duration,
-        hampel_half_window_s=hampel_half_window_s, hampel_false_alarm_rate=hampel_false_alarm_rate,
-        bursts=bursts, pitch=pitch, f0=f0, found=found, notes=notes, result=result, comparison=comp,
-        events=events, rms=rms, p2p=p2p, clip_n=clip_n, clipped=clipped, date=date, summary=summary,
-        measurement_date=measured, measurement_date_source=measured_source, ride=ride)
+        recording=recording,
+        rec=rec,
+        channel=ch,
+        units=units,
+        scene=sc,
+        speed=speed,
+        speed_sigma=speed_sigma,
+        nominal_pitch=nominal_pitch,
+        limits=limits,
+        band=band,
+        duration=duration,
+        hampel_half_window_s=hampel_half_window_s,
+        hampel_false_alarm_rate=hampel_false_alarm_rate,
+        bursts=bursts,
+        pitch=pitch,
+        f0=f0,
+        found=found,
+        notes=notes,
+        result=result,
+        comparison=comp,
+        events=events,
+        rms=rms,
+        p2p=p2p,
+        clip_n=clip_n,
+        clipped=clipped,
+        date=date,
+        summary=summary,
+        measurement_date=measured,
+        measurement_date_source=measured_source,
+        ride=ride,
+    )
 
 
 def _ride(rec, result, sc, notes):
@@ -310,8 +378,10 @@ def _ride(rec, result, sc, notes):
         out.append(("recording", ride_quality_from_recording(rec)))
     except ValueError as exc:
         if len(axes) >= 2:
-            notes.append(f"no ride-quality page for the recording ({', '.join(sorted(axes))} axes): "
-                         f"{' '.join(str(exc).split())} (vibkit ride FILE --segment START:END)")
+            notes.append(
+                f"no ride-quality page for the recording ({', '.join(sorted(axes))} axes): "
+                f"{' '.join(str(exc).split())} (vibkit ride FILE --segment START:END)"
+            )
     if result is not None:
         try:
             out.append(("simulation", ride_quality_from_simulation(result)))

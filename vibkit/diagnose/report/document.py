@@ -25,14 +25,41 @@ __all__ = ["PAGES", "write_report"]
 #: the page functions, in page order; each is ``page(doc, ctx)`` with ``doc`` a
 #: :class:`~vibkit.diagnose.report.common.PageSink` and ``ctx`` a
 #: :class:`~vibkit.diagnose.report.context.ReportContext`, and emits zero or more pages
-PAGES = (verdict_page, recording_page, time_signal_page, spectrum_page, spectrogram_page, order_spectrum_page,
-         ride_quality_pages, simulation_page, harmonics_page, data_quality_page, parameters_page)
+PAGES = (
+    verdict_page,
+    recording_page,
+    time_signal_page,
+    spectrum_page,
+    spectrogram_page,
+    order_spectrum_page,
+    ride_quality_pages,
+    simulation_page,
+    harmonics_page,
+    data_quality_page,
+    parameters_page,
+)
 
 
-def write_report(recording, out_path, *, scene=None, speed=None, speed_sigma=0.0, channel=None,
-                 nominal_pitch=None, limits_percent=None, sample_rate=None, duration=None, band=None,
-                 hampel_half_window_s=0.1, hampel_false_alarm_rate=1e-4, progress=False, overwrite=True,
-                 read_options=None, date=None) -> Report:
+def write_report(
+    recording,
+    out_path,
+    *,
+    scene=None,
+    speed=None,
+    speed_sigma=0.0,
+    channel=None,
+    nominal_pitch=None,
+    limits_percent=None,
+    sample_rate=None,
+    duration=None,
+    band=None,
+    hampel_half_window_s=0.1,
+    hampel_false_alarm_rate=1e-4,
+    progress=False,
+    overwrite=True,
+    read_options=None,
+    date=None,
+) -> Report:
     """Write the PDF diagnostic report of a recording.
 
     Parameters
@@ -96,17 +123,35 @@ def write_report(recording, out_path, *, scene=None, speed=None, speed_sigma=0.0
     from ...runtime.safe_output import check_output_path
 
     check_output_path(out, overwrite=overwrite, inputs=inputs)  # before any work
-    ctx = analyse(recording, scene=scene, speed=speed, speed_sigma=speed_sigma, channel=channel,
-                  nominal_pitch=nominal_pitch, limits_percent=limits_percent, sample_rate=sample_rate,
-                  duration=duration, band=band, hampel_half_window_s=hampel_half_window_s,
-                  hampel_false_alarm_rate=hampel_false_alarm_rate, progress=progress,
-                  read_options=read_options, date=date)
+    ctx = analyse(
+        recording,
+        scene=scene,
+        speed=speed,
+        speed_sigma=speed_sigma,
+        channel=channel,
+        nominal_pitch=nominal_pitch,
+        limits_percent=limits_percent,
+        sample_rate=sample_rate,
+        duration=duration,
+        band=band,
+        hampel_half_window_s=hampel_half_window_s,
+        hampel_false_alarm_rate=hampel_false_alarm_rate,
+        progress=progress,
+        read_options=read_options,
+        date=date,
+    )
     date, summary = ctx.date, ctx.summary
-    meta = {"Title": f"vibkit report: {summary['file']}", "Author": f"vibkit {__version__}",
-            "Subject": "escalator drive-chain vibration diagnostic", "Creator": f"vibkit {__version__}",
-            "CreationDate": date, "ModDate": date}
-    with matplotlib.rc_context({"pdf.compression": 6, "font.size": 9, "axes.titlesize": 10,
-                                "svg.hashsalt": "vibkit", "path.simplify": True}):
+    meta = {
+        "Title": f"vibkit report: {summary['file']}",
+        "Author": f"vibkit {__version__}",
+        "Subject": "escalator drive-chain vibration diagnostic",
+        "Creator": f"vibkit {__version__}",
+        "CreationDate": date,
+        "ModDate": date,
+    }
+    with matplotlib.rc_context(
+        {"pdf.compression": 6, "font.size": 9, "axes.titlesize": 10, "svg.hashsalt": "vibkit", "path.simplify": True}
+    ):
         with _pdf_in_memory(out, overwrite=overwrite, inputs=inputs) as buf, PdfPages(buf, metadata=meta) as pdf:
             doc = PageSink(pdf)
             for page in PAGES:

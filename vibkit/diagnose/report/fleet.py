@@ -13,8 +13,14 @@ import numpy as np
 
 from .common import _WIDE, PageSink, Report, atomic_path
 
-__all__ = ["FLEET_PAGE_MAX_UNITS", "FleetContext", "WORK_LIST_HEADER", "fleet_page", "work_list_rows",
-           "write_fleet_report"]
+__all__ = [
+    "FLEET_PAGE_MAX_UNITS",
+    "FleetContext",
+    "WORK_LIST_HEADER",
+    "fleet_page",
+    "work_list_rows",
+    "write_fleet_report",
+]
 
 #: units drawn (the most urgent ones; the work list on page 1 lists them all)
 FLEET_PAGE_MAX_UNITS = 24
@@ -24,8 +30,17 @@ _LIMIT_NAMES = ("watch", "plan", "replace")
 _LIMIT_COLORS = ("#d4a017", "#e0661b", "#b2182b")
 
 #: the work list's columns (``vibkit fleet status`` and page 1 of the fleet report)
-WORK_LIST_HEADER = ["rank", "unit", "elongation [%]", "measured", "rate [%/year]", "verdict", "next",
-                    "reached on (2-sigma)", "flags"]
+WORK_LIST_HEADER = [
+    "rank",
+    "unit",
+    "elongation [%]",
+    "measured",
+    "rate [%/year]",
+    "verdict",
+    "next",
+    "reached on (2-sigma)",
+    "flags",
+]
 
 
 def fmt_forecast(f):
@@ -54,17 +69,29 @@ def work_list_rows(trends, *, flags_width=None):
     """The work list's rows (:data:`WORK_LIST_HEADER`) of ranked :class:`vibkit.fleet.trends.UnitTrend`."""
     rows = []
     for t in trends:
-        slope = "-" if t.slope_percent_per_year is None else \
-            f"{t.slope_percent_per_year:+.2f} +- {t.slope_sigma_percent_per_year:.2f}"
+        slope = (
+            "-"
+            if t.slope_percent_per_year is None
+            else f"{t.slope_percent_per_year:+.2f} +- {t.slope_sigma_percent_per_year:.2f}"
+        )
         nxt = t.next_limit()
         verdict = t.latest_verdict if t.rate_verdict != "implausible" else f"{t.latest_verdict}; rate implausible"
         flags = "; ".join(t.flags) or "-"
         if flags_width and len(flags) > flags_width:
             flags = flags[: flags_width - 3] + "..."
-        rows.append([str(t.rank), t.unit,
-                     f"{t.latest_elongation_percent:+.2f} +- {t.latest_elongation_sigma_percent:.2f}",
-                     t.latest_date_utc[:10], slope, verdict, "-" if nxt is None else f"{nxt.limit_percent:g} %",
-                     fmt_forecast(nxt), flags])
+        rows.append(
+            [
+                str(t.rank),
+                t.unit,
+                f"{t.latest_elongation_percent:+.2f} +- {t.latest_elongation_sigma_percent:.2f}",
+                t.latest_date_utc[:10],
+                slope,
+                verdict,
+                "-" if nxt is None else f"{nxt.limit_percent:g} %",
+                fmt_forecast(nxt),
+                flags,
+            ]
+        )
     return rows
 
 
@@ -98,9 +125,11 @@ def _title(fig, title, subtitle):
 def _subtitle(ctx):
     from ... import __version__
 
-    return (f"{len(ctx.trends)} unit(s), {len(ctx.measurements)} measurement(s); limits "
-            f"{' / '.join(f'{v:g}' for v in ctx.limits)} % ({' / '.join(_LIMIT_NAMES)}); database "
-            f"{os.path.basename(str(ctx.database)) or ctx.database}; {ctx.date:%Y-%m-%d %H:%M} UTC, vibkit {__version__}")
+    return (
+        f"{len(ctx.trends)} unit(s), {len(ctx.measurements)} measurement(s); limits "
+        f"{' / '.join(f'{v:g}' for v in ctx.limits)} % ({' / '.join(_LIMIT_NAMES)}); database "
+        f"{os.path.basename(str(ctx.database)) or ctx.database}; {ctx.date:%Y-%m-%d %H:%M} UTC, vibkit {__version__}"
+    )
 
 
 def work_list_page(doc, ctx, rows, part, parts):
@@ -116,7 +145,7 @@ def work_list_page(doc, ctx, rows, part, parts):
     tab.set_fontsize(7)
     tab.scale(1.0, 1.3)
     by_unit = {t.unit: t for t in ctx.trends}
-    for (r, c), cell in tab.get_celld().items():
+    for (r, _c), cell in tab.get_celld().items():
         cell.set_linewidth(0.3)
         if r == 0:
             cell.set_text_props(fontweight="bold")
@@ -125,20 +154,28 @@ def work_list_page(doc, ctx, rows, part, parts):
             cell.set_facecolor("#f6d5d5")  # over a limit now
         elif by_unit[rows[r - 1][1]].flags:
             cell.set_facecolor("#fff3cd")  # something to look at
-    fig.text(0.04, 0.05, "elongation: the latest usable measurement +- 1 sigma; rate: weighted least squares over the "
-             "current chain (after the last replacement), +- 1 sigma; red: over a limit now; yellow: flags (outliers, "
-             "flagged measurements, replacements, an implausible rate) - left out of the trend.", fontsize=7,
-             color="0.3", wrap=True)
+    fig.text(
+        0.04,
+        0.05,
+        "elongation: the latest usable measurement +- 1 sigma; rate: weighted least squares over the "
+        "current chain (after the last replacement), +- 1 sigma; red: over a limit now; yellow: flags (outliers, "
+        "flagged measurements, replacements, an implausible rate) - left out of the trend.",
+        fontsize=7,
+        color="0.3",
+        wrap=True,
+    )
     doc.emit(fig, "work list")
 
 
 def _draw_unit(ax, tr, ms, limits, ctx):
     labels = dict(tr.point_labels)
-    styles = {"ok": dict(fmt="o", color="k", ms=3, label="measurement (1 sigma)"),
-              "earlier segment": dict(fmt="o", color="0.65", ms=3, label="before the chain was replaced"),
-              "outlier": dict(fmt="x", color="#c00000", ms=6, label="outlier (> 5 sigma), left out"),
-              "inconclusive": dict(fmt="s", color="#8a6d00", ms=3.5, mfc="none", label="inconclusive, left out"),
-              "implausible": dict(fmt="D", color="#7a1fa2", ms=3.5, mfc="none", label="implausible, left out")}
+    styles = {
+        "ok": dict(fmt="o", color="k", ms=3, label="measurement (1 sigma)"),
+        "earlier segment": dict(fmt="o", color="0.65", ms=3, label="before the chain was replaced"),
+        "outlier": dict(fmt="x", color="#c00000", ms=6, label="outlier (> 5 sigma), left out"),
+        "inconclusive": dict(fmt="s", color="#8a6d00", ms=3.5, mfc="none", label="inconclusive, left out"),
+        "implausible": dict(fmt="D", color="#7a1fa2", ms=3.5, mfc="none", label="implausible, left out"),
+    }
     # the scale follows the plausible points; an implausible one off that scale is drawn at the edge
     scaled = [m for m in ms if labels.get(m.id, "ok") != "implausible"] or ms
     vals = [m.elongation_percent + s * m.elongation_sigma_percent for m in scaled for s in (-1, 1)]
@@ -152,9 +189,15 @@ def _draw_unit(ax, tr, ms, limits, ctx):
         off = (y > ymax) | (y < ymin)
         if off.any():
             st = {**st, "label": st["label"] + f" ({int(off.sum())} off scale, at the edge)"}
-        ax.errorbar([_utc(m.date_utc) for m in sel], np.clip(y, ymin + 0.02 * (ymax - ymin), ymax - 0.02 * (ymax - ymin)),
-                    yerr=np.where(off, 0.0, [m.elongation_sigma_percent for m in sel]), elinewidth=0.7, capsize=1.5,
-                    lw=0, **st)
+        ax.errorbar(
+            [_utc(m.date_utc) for m in sel],
+            np.clip(y, ymin + 0.02 * (ymax - ymin), ymax - 0.02 * (ymax - ymin)),
+            yerr=np.where(off, 0.0, [m.elongation_sigma_percent for m in sel]),
+            elinewidth=0.7,
+            capsize=1.5,
+            lw=0,
+            **st,
+        )
     t0 = min(m.date_unix_s for m in ms)
     t_end = max(m.date_unix_s for m in ms)
     fit, nxt = tr.fit, tr.next_limit()
@@ -164,22 +207,42 @@ def _draw_unit(ax, tr, ms, limits, ctx):
     if fit is not None:
         used = [m for m in ms if labels.get(m.id, "ok") == "ok"]
         tt = np.linspace(min(m.date_unix_s for m in used), t_end, 60)
-        ax.plot([_dt_of(v) for v in tt], fit.elongation_at(tt), color="tab:blue", lw=1.0,
-                label=f"trend {tr.slope_percent_per_year:+.2f} +- {tr.slope_sigma_percent_per_year:.2f} %/yr")
-    for lim, c, name in zip(limits, _LIMIT_COLORS, _LIMIT_NAMES):
+        ax.plot(
+            [_dt_of(v) for v in tt],
+            fit.elongation_at(tt),
+            color="tab:blue",
+            lw=1.0,
+            label=f"trend {tr.slope_percent_per_year:+.2f} +- {tr.slope_sigma_percent_per_year:.2f} %/yr",
+        )
+    for lim, c, _name in zip(limits, _LIMIT_COLORS, _LIMIT_NAMES):
         ax.axhline(lim, color=c, lw=0.9, ls="--")
     if has_interval:
         lo, hi = _utc(nxt.earliest_utc), _utc(nxt.latest_utc)
-        ax.plot([lo, hi], [nxt.limit_percent] * 2, color="tab:blue", lw=4.0, alpha=0.45, solid_capstyle="butt",
-                label=f"{nxt.limit_percent:g} % reached {nxt.date_utc[:7]} (2-sigma {nxt.earliest_utc[:7]}.."
-                      f"{nxt.latest_utc[:7]})")
+        ax.plot(
+            [lo, hi],
+            [nxt.limit_percent] * 2,
+            color="tab:blue",
+            lw=4.0,
+            alpha=0.45,
+            solid_capstyle="butt",
+            label=f"{nxt.limit_percent:g} % reached {nxt.date_utc[:7]} (2-sigma {nxt.earliest_utc[:7]}.."
+            f"{nxt.latest_utc[:7]})",
+        )
         ax.plot([_utc(nxt.date_utc)], [nxt.limit_percent], "|", color="tab:blue", ms=9)
     ax.set_ylim(ymin, ymax)
     span = max(t_end - t0, 30 * 86400)
     ax.set_xlim(_dt_of(t0 - 0.04 * span), _dt_of(t_end + 0.04 * span))
     for lim, c, name in zip(limits, _LIMIT_COLORS, _LIMIT_NAMES):  # labelled outside, right of the panel
-        ax.text(1.01, lim, f"{lim:g} %\n{name}", color=c, fontsize=6.5, ha="left", va="center",
-                transform=ax.get_yaxis_transform())
+        ax.text(
+            1.01,
+            lim,
+            f"{lim:g} %\n{name}",
+            color=c,
+            fontsize=6.5,
+            ha="left",
+            va="center",
+            transform=ax.get_yaxis_transform(),
+        )
 
 
 def unit_pages(doc, ctx):
@@ -191,19 +254,22 @@ def unit_pages(doc, ctx):
         fig = plt.figure(figsize=_WIDE)
         _title(fig, "Fleet: step-chain elongation against date", _subtitle(ctx))
         gs = fig.add_gridspec(2, 2, left=0.06, right=0.95, top=0.87, bottom=0.07, hspace=0.42, wspace=0.22)
-        for i, tr in enumerate(shown[p0:p0 + _PER_PAGE]):
+        for i, tr in enumerate(shown[p0 : p0 + _PER_PAGE]):
             ax = fig.add_subplot(gs[i // 2, i % 2])
             ms = sorted(ctx.by_unit.get(tr.unit, []), key=lambda m: (m.date_unix_s, m.id or 0))
             _draw_unit(ax, tr, ms, ctx.limits, ctx)
             over = tr.over_limit_percent is not None
-            head = f"#{tr.rank} {tr.unit}: {tr.latest_elongation_percent:+.2f} +- " \
-                   f"{tr.latest_elongation_sigma_percent:.2f} %, {tr.latest_verdict}"
+            head = (
+                f"#{tr.rank} {tr.unit}: {tr.latest_elongation_percent:+.2f} +- "
+                f"{tr.latest_elongation_sigma_percent:.2f} %, {tr.latest_verdict}"
+            )
             if over:
                 head += f" - OVER {tr.over_limit_percent:g} %"
             if tr.rate_verdict == "implausible":
                 head += " - rate implausible: re-measure"
-            ax.set_title(head, loc="left", fontsize=8, color="#b2182b" if over else "k",
-                         fontweight="bold" if over else "normal")
+            ax.set_title(
+                head, loc="left", fontsize=8, color="#b2182b" if over else "k", fontweight="bold" if over else "normal"
+            )
             if over:
                 for sp in ax.spines.values():
                     sp.set_color("#b2182b")
@@ -215,8 +281,14 @@ def unit_pages(doc, ctx):
             ax.grid(True, lw=0.3, alpha=0.5)
             ax.legend(loc="best", fontsize=6, framealpha=0.85)
         if p0 + _PER_PAGE >= len(shown) and len(ctx.trends) > len(shown):
-            fig.text(0.06, 0.015, f"{len(ctx.trends) - len(shown)} less urgent unit(s) not drawn; the work list "
-                     "(page 1) and `vibkit fleet status` list all of them", fontsize=8, color="0.3")
+            fig.text(
+                0.06,
+                0.015,
+                f"{len(ctx.trends) - len(shown)} less urgent unit(s) not drawn; the work list "
+                "(page 1) and `vibkit fleet status` list all of them",
+                fontsize=8,
+                color="0.3",
+            )
         doc.emit(fig, "fleet units")
 
 
@@ -225,7 +297,7 @@ def fleet_page(doc, ctx) -> None:
     rows = work_list_rows(ctx.trends, flags_width=80)
     parts = max(1, math.ceil(len(rows) / _ROWS_PER_TABLE))
     for k in range(parts):
-        work_list_page(doc, ctx, rows[k * _ROWS_PER_TABLE:(k + 1) * _ROWS_PER_TABLE], k + 1, parts)
+        work_list_page(doc, ctx, rows[k * _ROWS_PER_TABLE : (k + 1) * _ROWS_PER_TABLE], k + 1, parts)
     unit_pages(doc, ctx)
 
 
@@ -240,8 +312,9 @@ def fleet_report_date() -> _dt.datetime:
     return _dt.datetime.now(_dt.timezone.utc).replace(microsecond=0)
 
 
-def write_fleet_report(trends, measurements, out_path, *, limits_percent=None, database="",
-                       max_units=FLEET_PAGE_MAX_UNITS) -> Report:
+def write_fleet_report(
+    trends, measurements, out_path, *, limits_percent=None, database="", max_units=FLEET_PAGE_MAX_UNITS
+) -> Report:
     """The fleet PDF: the work list (page 1), then elongation against date for the most urgent units.
 
     Parameters
@@ -279,13 +352,26 @@ def write_fleet_report(trends, measurements, out_path, *, limits_percent=None, d
     for m in measurements:
         by_unit.setdefault(m.unit, []).append(m)
     date = fleet_report_date()
-    ctx = FleetContext(trends=trends, shown=shown, measurements=measurements, by_unit=by_unit, limits=limits,
-                       database=database, date=date)
-    meta = {"Title": "vibkit fleet report", "Author": f"vibkit {__version__}",
-            "Subject": "escalator step-chain elongation: work list and trends", "Creator": f"vibkit {__version__}",
-            "CreationDate": date, "ModDate": date}
-    with matplotlib.rc_context({"pdf.compression": 6, "font.size": 7, "axes.titlesize": 8,
-                                "svg.hashsalt": "vibkit", "path.simplify": True}):
+    ctx = FleetContext(
+        trends=trends,
+        shown=shown,
+        measurements=measurements,
+        by_unit=by_unit,
+        limits=limits,
+        database=database,
+        date=date,
+    )
+    meta = {
+        "Title": "vibkit fleet report",
+        "Author": f"vibkit {__version__}",
+        "Subject": "escalator step-chain elongation: work list and trends",
+        "Creator": f"vibkit {__version__}",
+        "CreationDate": date,
+        "ModDate": date,
+    }
+    with matplotlib.rc_context(
+        {"pdf.compression": 6, "font.size": 7, "axes.titlesize": 8, "svg.hashsalt": "vibkit", "path.simplify": True}
+    ):
         with atomic_path(out, ".pdf") as tmp, PdfPages(tmp, metadata=meta) as pdf:
             doc = PageSink(pdf)
             fleet_page(doc, ctx)

@@ -29,15 +29,37 @@ def plot_ride(rq, fig=None):
     tab_ax = fig.add_axes((0.06, 0.76, 0.88, 0.14))
     tab_ax.axis("off")
     head = ["axis", "channel", "weighting", "max pk-pk", "A95", "r.m.s.", "10 Hz max pk-pk", "10 Hz A95"]
-    cells = [[a.axis, a.channel[:32], a.weighting, f"{a.weighted.max:.4g}", f"{a.weighted.a95:.4g}",
-              f"{a.weighted.rms:.4g}", f"{a.lowpass.max:.4g}", f"{a.lowpass.a95:.4g}"] for a in rq.axes]
-    tab = tab_ax.table(cellText=cells, colLabels=head, loc="upper center", cellLoc="center",
-                       colWidths=[0.06, 0.27, 0.09, 0.1, 0.1, 0.1, 0.14, 0.12])
+    cells = [
+        [
+            a.axis,
+            a.channel[:32],
+            a.weighting,
+            f"{a.weighted.max:.4g}",
+            f"{a.weighted.a95:.4g}",
+            f"{a.weighted.rms:.4g}",
+            f"{a.lowpass.max:.4g}",
+            f"{a.lowpass.a95:.4g}",
+        ]
+        for a in rq.axes
+    ]
+    tab = tab_ax.table(
+        cellText=cells,
+        colLabels=head,
+        loc="upper center",
+        cellLoc="center",
+        colWidths=[0.06, 0.27, 0.09, 0.1, 0.1, 0.1, 0.14, 0.12],
+    )
     tab.auto_set_font_size(False)
     tab.set_fontsize(8)
     tab.scale(1, 1.3)
-    fig.text(0.06, 0.745, f"values in m/s^2 over the ride {seg.start_s:.2f}-{seg.end_s:.2f} s ({seg.method}); "
-             "pk-pk: adjacent half-cycle peaks; A95: not exceeded by 95 % of them", fontsize=7.5, color="0.3")
+    fig.text(
+        0.06,
+        0.745,
+        f"values in m/s^2 over the ride {seg.start_s:.2f}-{seg.end_s:.2f} s ({seg.method}); "
+        "pk-pk: adjacent half-cycle peaks; A95: not exceeded by 95 % of them",
+        fontsize=7.5,
+        color="0.3",
+    )
     top, bottom = 0.7, 0.07
     h = (top - bottom) / max(n, 1)
     for j, a in enumerate(rq.axes):
@@ -48,8 +70,11 @@ def plot_ride(rq, fig=None):
         tm = seg.start_s + a.weighted.time_of_max_s
         ax.axvline(tm, color="C3", ls=":", lw=1)
         ax.set_ylabel(f"{a.axis}, {a.weighting} [m/s^2]")
-        ax.set_title(f"{a.axis}: weighted ({a.weighting}); max pk-pk {a.weighted.max:.3g} m/s^2 (dotted), "
-                     f"A95 {a.weighted.a95:.3g} m/s^2", fontsize=8.5)
+        ax.set_title(
+            f"{a.axis}: weighted ({a.weighting}); max pk-pk {a.weighted.max:.3g} m/s^2 (dotted), "
+            f"A95 {a.weighted.a95:.3g} m/s^2",
+            fontsize=8.5,
+        )
         ax.grid(alpha=0.3)
         if j == n - 1:
             ax.set_xlabel("time [s] (shaded: ride segment)")
@@ -70,14 +95,30 @@ def ride_quality_pages(doc, ctx) -> list:
     done = []
     for what, rq in ctx.ride:
         fig = plt.figure(figsize=_PAGE)
-        same = (f"; the same figure as `vibkit ride {os.path.basename(str(ctx.scene.source))}"
-                + (f" --duration {ctx.duration:g}`" if ctx.duration else "`")) if what == "simulation" else ""
-        _page_title(fig, f"Ride quality ({what})", f"{os.path.basename(rq.source)}: step vibration, ISO 2631-1 "
-                    f"weighted (x, y: Wd; z: Wk) and 0.4-10 Hz unweighted{same}")
+        same = (
+            (
+                f"; the same figure as `vibkit ride {os.path.basename(str(ctx.scene.source))}"
+                + (f" --duration {ctx.duration:g}`" if ctx.duration else "`")
+            )
+            if what == "simulation"
+            else ""
+        )
+        _page_title(
+            fig,
+            f"Ride quality ({what})",
+            f"{os.path.basename(rq.source)}: step vibration, ISO 2631-1 "
+            f"weighted (x, y: Wd; z: Wk) and 0.4-10 Hz unweighted{same}",
+        )
         plot_ride(rq, fig)
         notes = rq.notes + ([rq.segment.note] if rq.segment.note else [])
-        fig.text(0.06, 0.015, "\n".join(textwrap.fill("- " + m, 115) for m in notes[:4]), fontsize=6.5,
-                 va="bottom", color="0.3")
+        fig.text(
+            0.06,
+            0.015,
+            "\n".join(textwrap.fill("- " + m, 115) for m in notes[:4]),
+            fontsize=6.5,
+            va="bottom",
+            color="0.3",
+        )
         doc.emit(fig, f"ride quality ({what})")
         done.append(rq)
     return done

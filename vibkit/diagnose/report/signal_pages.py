@@ -23,16 +23,27 @@ def time_signal_page(doc, ctx) -> None:
     events, rec, ch = ctx.events, ctx.rec, ctx.channel
     fig, ax = plt.subplots(figsize=_WIDE)
     fig.subplots_adjust(left=0.08, right=0.97, top=0.88, bottom=0.1)
-    _page_title(fig, "Time signal", f"{len(ctx.bursts)} burst(s); red: spikes (Hampel events on the residual "
-                f"after the link-pass family, half window {ctx.hampel_half_window_s:g} s, false-alarm rate "
-                f"{ctx.hampel_false_alarm_rate:g})")
+    _page_title(
+        fig,
+        "Time signal",
+        f"{len(ctx.bursts)} burst(s); red: spikes (Hampel events on the residual "
+        f"after the link-pass family, half window {ctx.hampel_half_window_s:g} s, false-alarm rate "
+        f"{ctx.hampel_false_alarm_rate:g})",
+    )
     k, unit = _scale(ctx)
     for b in ctx.bursts:
         t = b.t0 + np.arange(b.x.size) / b.fs
         ax.plot(t, k * b.x, lw=0.5, color="C0")
     if events:
-        ax.plot([e[0] for e in events], [k * e[1] for e in events], "o", mfc="none", color="C3",
-                ms=8, label=f"{len(events)} spike(s)")
+        ax.plot(
+            [e[0] for e in events],
+            [k * e[1] for e in events],
+            "o",
+            mfc="none",
+            color="C3",
+            ms=8,
+            label=f"{len(events)} spike(s)",
+        )
         ax.legend(loc="upper right")
     ax.set_xlabel("time [s]")
     ax.set_ylabel(f"{rec[ch].attrs.get('long_name', ch)} [{unit}]")
@@ -49,8 +60,7 @@ def spectrum_page(doc, ctx) -> None:
     bursts, f0 = ctx.bursts, ctx.f0
     fig, ax = plt.subplots(figsize=_WIDE)
     fig.subplots_adjust(left=0.08, right=0.97, top=0.88, bottom=0.1)
-    _page_title(fig, "Spectrum", "Hann-windowed amplitude spectrum averaged over bursts; dotted: "
-                "link-pass harmonics")
+    _page_title(fig, "Spectrum", "Hann-windowed amplitude spectrum averaged over bursts; dotted: link-pass harmonics")
     nh = ctx.harmonic_count
     fmax = ctx.fmax_hz
     nfft = 1 << int(np.ceil(np.log2(max(b.x.size for b in bursts))))
@@ -94,8 +104,7 @@ def spectrogram_page(doc, ctx) -> None:
         vmax = db.max() if vmax is None else max(vmax, db.max())
         ims.append((b.t0 + tt, fr[sel], db))
     for tt, fr, db in ims:
-        im = ax.pcolormesh(tt, fr, db, shading="nearest", vmin=vmax - 60, vmax=vmax, cmap="viridis",
-                           rasterized=True)
+        im = ax.pcolormesh(tt, fr, db, shading="nearest", vmin=vmax - 60, vmax=vmax, cmap="viridis", rasterized=True)
     cb = fig.colorbar(im, ax=ax, pad=0.01)
     cb.set_label(f"amplitude [dB re 1 {unit}]")
     ax.set_xlabel("time [s]")
@@ -112,8 +121,11 @@ def order_spectrum_page(doc, ctx) -> None:
     bursts, f0, nh = ctx.bursts, ctx.f0, ctx.harmonic_count
     fig, ax = plt.subplots(figsize=_WIDE)
     fig.subplots_adjust(left=0.08, right=0.97, top=0.88, bottom=0.1)
-    _page_title(fig, "Order spectrum", f"resampled to constant link-pass phase ({f0:.5g} Hz); order 1 = "
-                "link pass, 1/3 = step pass")
+    _page_title(
+        fig,
+        "Order spectrum",
+        f"resampled to constant link-pass phase ({f0:.5g} Hz); order 1 = link pass, 1/3 = step pass",
+    )
     spc = 32
     k, unit = _scale(ctx)
     acc, o_ref = None, None

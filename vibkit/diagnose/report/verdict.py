@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 import textwrap
 
-from .common import _PAGE, TextColumn, fmt_pm, fmt_length, _page_title
+from .common import _PAGE, TextColumn, _page_title, fmt_length, fmt_pm
 
 __all__ = ["verdict_page", "recording_page", "VERDICT_COLOURS"]
 
@@ -31,8 +31,11 @@ def _headline(ctx):
     status = str(getattr(pitch, "status", "ok") or "ok") if pitch is not None else "ok"
     reason = str(getattr(pitch, "reason", "") or "") if pitch is not None else ""
     if pitch is None:
-        return (f"LINK PASS {fmt_pm(ctx.f0, None, 'Hz')}", _GREY,
-                "no chain speed known: no pitch and no verdict (give --speed)")
+        return (
+            f"LINK PASS {fmt_pm(ctx.f0, None, 'Hz')}",
+            _GREY,
+            "no chain speed known: no pitch and no verdict (give --speed)",
+        )
     if status.lower() not in ("ok", ""):
         return status.upper(), _GREY, reason or "no verdict"
     pitch_text = fmt_length(pitch.pitch_m, pitch.pitch_sigma_m)
@@ -41,8 +44,10 @@ def _headline(ctx):
     el = fmt_pm(pitch.elongation_percent, pitch.elongation_sigma_percent, "%")
     colour = VERDICT_COLOURS.get(str(pitch.verdict).lower(), _GREY)
     # the pitch and the nominal pitch are in the evidence below: each figure once
-    under = (f"elongation {el} against the limits {' / '.join(f'{v:g}' for v in ctx.limits)} % "
-             "(watch / plan / replace)")  # an accepted decision's reason repeats this line: not shown
+    under = (
+        f"elongation {el} against the limits {' / '.join(f'{v:g}' for v in ctx.limits)} % "
+        "(watch / plan / replace)"
+    )  # an accepted decision's reason repeats this line: not shown
     return str(pitch.verdict).upper(), colour, under
 
 
@@ -50,17 +55,25 @@ def verdict_page(doc, ctx) -> None:
     """Page 1: who, when, what; the verdict; what makes it unreliable; the evidence."""
     import matplotlib.pyplot as plt
 
-    pitch, comp, summary = ctx.pitch, ctx.comparison, ctx.summary
+    pitch, summary = ctx.pitch, ctx.summary
     fig = plt.figure(figsize=_PAGE)
     col = TextColumn(fig, x=0.07, y=0.965, width=0.86)
     col.text("Escalator drive-chain diagnostic", 16, weight="bold")
     sc = ctx.scene
     unit = (sc.description or sc.name) if sc is not None else "not given (no scene: --scene)"
-    col.pairs([("escalator", unit),
-               ("measured", ctx.measurement_date_text),
-               ("recording", f"{summary['file']}, channel {ctx.channel} [{ctx.units}]"),
-               ("report", f"{ctx.date.strftime('%Y-%m-%d %H:%M')} UTC"
-                          + (" (SOURCE_DATE_EPOCH)" if ctx.date_fixed else ""))], 9.5, key_width=0.16)
+    col.pairs(
+        [
+            ("escalator", unit),
+            ("measured", ctx.measurement_date_text),
+            ("recording", f"{summary['file']}, channel {ctx.channel} [{ctx.units}]"),
+            (
+                "report",
+                f"{ctx.date.strftime('%Y-%m-%d %H:%M')} UTC" + (" (SOURCE_DATE_EPOCH)" if ctx.date_fixed else ""),
+            ),
+        ],
+        9.5,
+        key_width=0.16,
+    )
     col.gap(0.012)
     big, colour, under = _headline(ctx)
     col.text(big, _BIG, weight="bold", color=colour)
@@ -69,8 +82,10 @@ def verdict_page(doc, ctx) -> None:
     if not ctx.found:
         warnings = []  # the headline says it, with the reason
     elif pitch is not None and not (pitch.speed_sigma_m_s and pitch.speed_sigma_m_s > 0):
-        warnings.append("the speed's uncertainty was not given: the +- of the pitch and the elongation covers "
-                        "the frequency only (give --speed-uncertainty)")
+        warnings.append(
+            "the speed's uncertainty was not given: the +- of the pitch and the elongation covers "
+            "the frequency only (give --speed-uncertainty)"
+        )
     col.gap(0.008)
     if warnings:
         col.text(f"{len(warnings)} WARNING{'S' if len(warnings) > 1 else ''}", _BIG, weight="bold", color="#b35900")
@@ -103,29 +118,52 @@ def evidence_rows(ctx):
         rows.append(("link-pass frequency", fmt_pm(ctx.f0, sig, "Hz") + method))
     if pitch is not None:
         sv = pitch.speed_sigma_m_s
-        rows.append(("chain speed", fmt_pm(pitch.speed_m_s, sv, "m/s") +
-                     ("" if sv and sv > 0 else " (no uncertainty given: --speed-uncertainty)")))
+        rows.append(
+            (
+                "chain speed",
+                fmt_pm(pitch.speed_m_s, sv, "m/s")
+                + ("" if sv and sv > 0 else " (no uncertainty given: --speed-uncertainty)"),
+            )
+        )
         rows.append(("link pitch = speed / frequency", fmt_length(pitch.pitch_m, pitch.pitch_sigma_m)))
         if pitch.nominal_pitch_m is not None:
             rows.append(("nominal pitch", fmt_length(pitch.nominal_pitch_m)))
             if pitch.verdict is None or str(getattr(pitch, "status", "ok") or "ok").lower() != "ok":
-                rows.append(("elongation", fmt_pm(pitch.elongation_percent, pitch.elongation_sigma_percent,
-                                                  "%")))  # else it is under the verdict
+                rows.append(
+                    ("elongation", fmt_pm(pitch.elongation_percent, pitch.elongation_sigma_percent, "%"))
+                )  # else it is under the verdict
         snr = getattr(pitch, "snr_db", None)
         if snr is not None and math.isfinite(snr):
             rows.append(("signal to noise", f"{snr:.0f} dB at the link-pass harmonics"))
     scale, shown = (1000.0, "mm") if units == "m" else (1.0, units)
     rows.append(("RMS / peak to peak", f"{ctx.rms * scale:.3g} / {ctx.p2p * scale:.3g} {shown}"))
     rows.append(("spikes", f"{len(ctx.events)} (Hampel events; page 'time signal')"))
-    rows.append(("clipping", f"{ctx.clip_n} sample(s) at the extreme values: " +
-                 ("suspected (more than 4)" if ctx.clipped else "not suspected (a clipped sensor holds its "
-                                                                "extreme for more than 4 samples)")))
+    rows.append(
+        (
+            "clipping",
+            f"{ctx.clip_n} sample(s) at the extreme values: "
+            + (
+                "suspected (more than 4)"
+                if ctx.clipped
+                else "not suspected (a clipped sensor holds its extreme for more than 4 samples)"
+            ),
+        )
+    )
     if comp is not None:
-        rows.append(("pitch against the scene", ("consistent" if comp.pitch_consistent else "NOT consistent") +
-                     f" (ratio {comp.pitch_ratio:.4f}: recorded over simulated)"))
-        rows.append(("spectra against the simulation",
-                     f"agreement score {comp.score:.2f} (1: every harmonic matches in frequency and "
-                     "amplitude, 0: none does; rule on page 'harmonics')"))
+        rows.append(
+            (
+                "pitch against the scene",
+                ("consistent" if comp.pitch_consistent else "NOT consistent")
+                + f" (ratio {comp.pitch_ratio:.4f}: recorded over simulated)",
+            )
+        )
+        rows.append(
+            (
+                "spectra against the simulation",
+                f"agreement score {comp.score:.2f} (1: every harmonic matches in frequency and "
+                "amplitude, 0: none does; rule on page 'harmonics')",
+            )
+        )
     return rows
 
 
@@ -140,17 +178,36 @@ def recording_page(doc, ctx) -> None:
     _page_title(fig, "Recording and escalator", "what was measured, by what, and what describes the escalator")
     col = TextColumn(fig, x=0.07, y=0.9, width=0.86)
     sha = str(rec.attrs.get("sha256", ""))
-    col.pairs([("recording", summary["file"]), ("sha256", sha), ("reader", str(rec.attrs.get("reader", ""))),
-               ("measured", ctx.measurement_date_text),
-               ("report date (UTC)", ctx.date.strftime("%Y-%m-%d %H:%M")), ("vibkit version", __version__),
-               ("escalator", sc.description if sc else "not given (no scene)"),
-               ("scene", (f"{sc.name} ({sc.analysis}; pitch {fmt_length(sc.chain.link_pitch)}, "
-                          f"Z = {sc.sprocket.teeth})") if sc else "none"),
-               ("sensor channel", f"{ch} [{ctx.units}], {rec[ch].attrs.get('quantity', 'other')}"),
-               ("provenance", str(rec.attrs.get("provenance", "not stated")))], 9.5, key_width=0.22)
+    col.pairs(
+        [
+            ("recording", summary["file"]),
+            ("sha256", sha),
+            ("reader", str(rec.attrs.get("reader", ""))),
+            ("measured", ctx.measurement_date_text),
+            ("report date (UTC)", ctx.date.strftime("%Y-%m-%d %H:%M")),
+            ("vibkit version", __version__),
+            ("escalator", sc.description if sc else "not given (no scene)"),
+            (
+                "scene",
+                (f"{sc.name} ({sc.analysis}; pitch {fmt_length(sc.chain.link_pitch)}, Z = {sc.sprocket.teeth})")
+                if sc
+                else "none",
+            ),
+            ("sensor channel", f"{ch} [{ctx.units}], {rec[ch].attrs.get('quantity', 'other')}"),
+            ("provenance", str(rec.attrs.get("provenance", "not stated"))),
+        ],
+        9.5,
+        key_width=0.22,
+    )
     col.gap(0.02)
-    col.text(textwrap.fill(
-        "Generated by vibkit. Frequencies from harmonic least squares with Cramer-Rao standard deviations; "
-        "pitch = speed / link-pass frequency; every number is rounded to its uncertainty. The same inputs "
-        "give the same file when SOURCE_DATE_EPOCH fixes the report date.", 100), 8, color="0.35")
+    col.text(
+        textwrap.fill(
+            "Generated by vibkit. Frequencies from harmonic least squares with Cramer-Rao standard deviations; "
+            "pitch = speed / link-pass frequency; every number is rounded to its uncertainty. The same inputs "
+            "give the same file when SOURCE_DATE_EPOCH fixes the report date.",
+            100,
+        ),
+        8,
+        color="0.35",
+    )
     doc.emit(fig, "recording")
