@@ -7,7 +7,7 @@ following vibkit's data contract), choosing the reader by content and suffix:
   (``CDF\\x01``) -> :mod:`vibkit.io.netcdf`;
 * waveform formats obspy reads (miniSEED, SAC, ...: by suffix, or binary content
   that is not HDF5) -> :mod:`vibkit.io.seismic`;
-* text (CSV, TSV, logger and spreadsheet exports) -> :mod:`vibkit.io.csv`.
+* text (CSV, TSV, logger and spreadsheet exports) -> :mod:`vibkit.io.text.csv`.
 
 Every dataset carries ``source_file``, ``sha256``, ``reader``,
 ``sample_rate_hz`` and ``history`` (each decision on its own line).
@@ -283,7 +283,7 @@ def read_recording(
 
         return read_netcdf(spath, data, channel=channel, repair_time=repair_time)
     head = data[:65536]
-    from .layout import utf16_without_bom
+    from .text.layout import utf16_without_bom
 
     text_bom = (data.startswith(_BOMS) or utf16_without_bom(head) is not None) and suffix not in SEISMIC_SUFFIXES
     looks_binary = b"\x00" in head and not text_bom and encoding is None
@@ -292,7 +292,7 @@ def read_recording(
         from .seismic import read_seismic
 
         return read_seismic(spath, data, units=units, **common)
-    from .csv import read_csv
+    from .text.csv import read_csv
 
     return read_csv(
         spath,

@@ -1,7 +1,7 @@
 """Metadata lines of a text recording: ``key: value`` pairs, free comment text, sample rate and scale.
 
 The sample rate (``Sampling rate = 200 Hz``) and the counts scale (``2048 counts
-per g``) found here are what :mod:`vibkit.io.csv` uses when the file's columns
+per g``) found here are what :mod:`vibkit.io.text.csv` uses when the file's columns
 do not say them.
 """
 

@@ -13,7 +13,7 @@ decision is recorded in the history:
   in rad/s.
 * **PicoQuake** (PLab; ``# PLab PicoQuake Data`` comment, ``count,a_x,...,g_z``):
   ``a_*`` in g, ``g_*`` in deg/s; the rate is ``data_rate`` in the ``# Config:``
-  comment (read by :mod:`vibkit.io.metadata`).
+  comment (read by :mod:`vibkit.io.text.metadata`).
 
 MetaWear (MbientLab MetaBase) and phyphox exports write their units in the
 header (``x-axis (g)``, ``Time (s)``); they need nothing here.

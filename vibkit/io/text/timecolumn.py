@@ -15,9 +15,9 @@ from datetime import datetime, timezone
 import numpy as np
 import pandas as pd
 
+from ..errors import RecordingError
 from .cells import _NUM, _STAMP_DMY, _STAMP_ISO, _STAMP_TOD, _parse_numbers
 from .columns import _ColumnNames
-from .errors import RecordingError
 from .fastpath import _Fallback
 from .units import is_time_name, parse_time_unit, parse_unit
 
