@@ -30,13 +30,14 @@ read), with
   ``import vibkit`` stays light; ``options`` holds every keyword of ``read_recording``, and the
   reader uses those it understands;
 * one test file ``tests/io/test_format_<name>.py`` reading a real file (or one written in the
-  documented layout) and asserting that ``detect_format`` names the entry.
+  documented layout) and asserting that :func:`detect_format` names the entry; a file shipped in
+  ``data/`` also gets its line in ``SHIPPED`` of ``tests/io/test_registry.py``.
 
 A new *text logger or app* (a CSV export whose columns do not say their units, a header line
 with the rate under its own key) is not a format: it is one :class:`~vibkit.io.text.loggers.LoggerProfile`
 in :data:`vibkit.io.text.loggers.PROFILES` and one test file; see that module.
-:func:`test_registry` in ``tests/io/test_registry.py`` checks that every shipped file in
-``data/`` is read by the entry it expects.
+``tests/io/test_registry.py`` checks that every file shipped in ``data/`` is read by the entry
+it lists for it, and that the order above decides between sniffers that both claim a file.
 """
 
 from __future__ import annotations
