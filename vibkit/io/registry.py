@@ -27,11 +27,16 @@ read), with
 * ``sniff(probe)``: a cheap check of :class:`Probe` (the suffix, the first 64 KiB, the options);
   it must not parse the whole file and must not raise;
 * ``read(path, data, options)``: the reader, importing its module inside the function so that
-  ``import vibkit`` stays light; ``options`` holds every keyword of ``read_recording``, and the
-  reader uses those it understands;
+  ``import vibkit`` stays light; ``options`` holds every reading option of ``read_recording``
+  (all its keywords but ``max_bytes`` and ``format``), and the reader passes on those it understands;
 * one test file ``tests/io/test_format_<name>.py`` reading a real file (or one written in the
   documented layout) and asserting that :func:`detect_format` names the entry; a file shipped in
   ``data/`` also gets its line in ``SHIPPED`` of ``tests/io/test_registry.py``.
+
+A container (``.gz``, ``.zip`` of one recording) is an entry like any other: its reader unpacks
+``data`` and hands the inner name and bytes to ``detect_format(inner, inner_data).read(...)``.
+A binary format vibkit does not read is an entry too: its sniffer knows the signature, and its
+reader raises :class:`~vibkit.io.errors.RecordingError` naming the format and what reads it.
 
 A new *text logger or app* (a CSV export whose columns do not say their units, a header line
 with the rate under its own key) is not a format: it is one :class:`~vibkit.io.text.loggers.LoggerProfile`
@@ -155,6 +160,7 @@ def _read_netcdf(path, data, options):
 
 
 _COMMON = ("channel", "sample_rate", "resample", "gap_factor", "repair_time")
+_TEXT_OPTIONS = (*_COMMON, "time_column", "time_unit", "units", "delimiter", "decimal", "encoding")
 
 
 def _read_seismic(path, data, options):
@@ -166,7 +172,7 @@ def _read_seismic(path, data, options):
 def _read_text(path, data, options):
     from .text.csv import read_csv
 
-    return read_csv(path, data, **options)  # the text reader takes every option of read_recording
+    return read_csv(path, data, **{k: options[k] for k in _TEXT_OPTIONS})
 
 
 #: the reader table, in priority order (see the module docstring)
