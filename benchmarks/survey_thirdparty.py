@@ -26,7 +26,7 @@ CORPUS = ROOT / "data" / "thirdparty"
 
 
 def _si(text):
-    from vibkit.io.units import parse_unit
+    from vibkit.io.text.units import parse_unit
 
     u = parse_unit(text.split(" (")[0])
     return text if u is None else u.si

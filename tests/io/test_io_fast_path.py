@@ -15,8 +15,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from vibkit.io import RecordingError, read_recording
-from vibkit.io import csv as vcsv
-from vibkit.io.fastpath import _HEAD_BYTES
+from vibkit.io.text import csv as vcsv
+from vibkit.io.text.fastpath import _HEAD_BYTES
 
 LAYOUTS = Path(__file__).resolve().parents[2] / "data" / "field" / "layouts"
 FIELD = LAYOUTS.parent

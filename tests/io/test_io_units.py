@@ -4,7 +4,7 @@ import math
 
 import pytest
 
-from vibkit.io.units import STANDARD_GRAVITY, is_time_name, parse_time_unit, parse_unit, split_name_unit
+from vibkit.io.text.units import STANDARD_GRAVITY, is_time_name, parse_time_unit, parse_unit, split_name_unit
 
 
 @pytest.mark.parametrize(

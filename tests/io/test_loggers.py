@@ -18,7 +18,7 @@ import pytest
 
 from vibkit.cli import main
 from vibkit.io import RecordingError, read_recording
-from vibkit.io.units import STANDARD_GRAVITY
+from vibkit.io.text.units import STANDARD_GRAVITY
 
 F0 = 3.5  # test signal [Hz]
 

@@ -2,7 +2,7 @@
 
 ``expected.json`` holds, per file, the sample rate, the time column and its unit, the channels and their
 units as the file or its documentation states them (see SOURCES.md).  vibkit converts units to SI, so a
-channel's unit is compared through :func:`vibkit.io.units.parse_unit` (``g`` -> ``m/s^2``).  Columns that
+channel's unit is compared through :func:`vibkit.io.text.units.parse_unit` (``g`` -> ``m/s^2``).  Columns that
 count samples (PicoQuake's ``count``) and other clocks (Sensor Logger's ``seconds_elapsed``) are no channels.
 """
 
@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 
 from vibkit.io import read_recording
-from vibkit.io.units import parse_unit
+from vibkit.io.text.units import parse_unit
 
 ROOT = Path(__file__).resolve().parents[2] / "data" / "thirdparty"
 EXPECTED = json.loads((ROOT / "expected.json").read_text(encoding="utf-8"))

@@ -1,13 +1,14 @@
 """Read field recordings and write vibkit results.
 
 :func:`read_recording` turns a file into a recording (an :class:`xarray.Dataset`
-following vibkit's data contract), choosing the reader by content and suffix:
+following vibkit's data contract), choosing the reader by content and suffix from
+the table in :mod:`vibkit.io.registry`, in this order:
 
 * netCDF4/HDF5 (vibkit's own results; signature ``\\x89HDF``) and netCDF3
   (``CDF\\x01``) -> :mod:`vibkit.io.netcdf`;
 * waveform formats obspy reads (miniSEED, SAC, ...: by suffix, or binary content
   that is not HDF5) -> :mod:`vibkit.io.seismic`;
-* text (CSV, TSV, logger and spreadsheet exports) -> :mod:`vibkit.io.csv`.
+* text (CSV, TSV, logger and spreadsheet exports) -> :mod:`vibkit.io.text.csv`.
 
 Every dataset carries ``source_file``, ``sha256``, ``reader``,
 ``sample_rate_hz`` and ``history`` (each decision on its own line).
@@ -25,6 +26,7 @@ import stat
 from .channels import resolve_channel
 from .errors import RecordingError
 from .netcdf import write_result
+from .registry import NETCDF_SUFFIXES, SEISMIC_SUFFIXES, detect_format, format_names, get_format
 
 __all__ = [
     "read_recording",
@@ -35,34 +37,12 @@ __all__ = [
     "NETCDF_SUFFIXES",
     "DEFAULT_MAX_RECORDING_BYTES",
     "max_recording_bytes",
+    "format_names",
 ]
 
 #: largest recording read unless ``max_bytes=`` or ``VIBKIT_MAX_RECORDING_BYTES`` says otherwise [bytes] (4 GiB)
 DEFAULT_MAX_RECORDING_BYTES = 4 * 1024**3
 _MAX_ENV = "VIBKIT_MAX_RECORDING_BYTES"
-
-#: suffixes sent to obspy whatever their content
-SEISMIC_SUFFIXES = (
-    ".mseed",
-    ".miniseed",
-    ".msd",
-    ".seed",
-    ".sac",
-    ".gse",
-    ".gse2",
-    ".segy",
-    ".sgy",
-    ".su",
-    ".ah",
-    ".css",
-    ".knet",
-    ".sh",
-    ".q",
-)
-#: suffixes sent to xarray whatever their content
-NETCDF_SUFFIXES = (".nc", ".nc4", ".netcdf", ".h5", ".hdf5", ".he5", ".cdf")
-_HDF5 = b"\x89HDF\r\n\x1a\n"
-_BOMS = (b"\xff\xfe\x00\x00", b"\x00\x00\xfe\xff", b"\xff\xfe", b"\xfe\xff")  # UTF-32/UTF-16 text
 
 
 def _gib(n: int) -> str:
@@ -194,6 +174,7 @@ def read_recording(
     decimal=None,
     encoding=None,
     max_bytes=None,
+    format=None,
 ):
     """Read a field recording (or a vibkit result) into an xarray Dataset.
 
@@ -240,6 +221,10 @@ def read_recording(
         variable ``VIBKIT_MAX_RECORDING_BYTES``, else 4 GiB.  Only regular
         files are read: a folder, FIFO, device or socket is refused before it
         is opened.
+    format : str, optional
+        Read the file with this entry of the reader table (one of
+        :func:`format_names`: ``"netcdf"``, ``"seismic"``, ``"text"``) instead of
+        the one its content and suffix choose (see :mod:`vibkit.io.registry`).
 
     Returns
     -------
@@ -268,40 +253,25 @@ def read_recording(
     'm'
     """
     _check_options(sample_rate, resample, gap_factor, delimiter, decimal)
+    fmt = None if format is None else get_format(format)
     if not isinstance(path, (str, os.PathLike)):
         raise ValueError(f"path must be a file path (str or os.PathLike), got {type(path).__name__}")
     spath = os.fspath(path)
     data = _open_checked(spath, max_recording_bytes(max_bytes))
     if not data:
         raise RecordingError(spath, None, "file is empty (0 bytes); expected a recording")
-    suffix = os.path.splitext(spath)[1].lower()
-    common = dict(
-        channel=channel, sample_rate=sample_rate, resample=resample, gap_factor=gap_factor, repair_time=repair_time
-    )
-    if data.startswith(_HDF5) or data[:4] in (b"CDF\x01", b"CDF\x02") or suffix in NETCDF_SUFFIXES:
-        from .netcdf import read_netcdf
-
-        return read_netcdf(spath, data, channel=channel, repair_time=repair_time)
-    head = data[:65536]
-    from .layout import utf16_without_bom
-
-    text_bom = (data.startswith(_BOMS) or utf16_without_bom(head) is not None) and suffix not in SEISMIC_SUFFIXES
-    looks_binary = b"\x00" in head and not text_bom and encoding is None
-    if suffix in SEISMIC_SUFFIXES or looks_binary or head.lstrip(b"\xef\xbb\xbf \r\n").startswith(b"TIMESERIES "):
-        # obspy's ASCII layouts (TSPAIR, SLIST) start with a 'TIMESERIES NET_STA_LOC_CHA, N samples, R sps' line
-        from .seismic import read_seismic
-
-        return read_seismic(spath, data, units=units, **common)
-    from .csv import read_csv
-
-    return read_csv(
-        spath,
-        data,
+    options = dict(
+        channel=channel,
+        sample_rate=sample_rate,
         time_column=time_column,
         time_unit=time_unit,
         units=units,
+        resample=resample,
+        gap_factor=gap_factor,
+        repair_time=repair_time,
         delimiter=delimiter,
         decimal=decimal,
         encoding=encoding,
-        **common,
     )
+    entry = detect_format(spath, data, encoding) if fmt is None else fmt
+    return entry.read(spath, data, options)

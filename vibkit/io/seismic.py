@@ -18,8 +18,8 @@ import numpy as np
 
 from .errors import RecordingError
 from .recording import Channel, build_recording, metadata_attrs, safe_name
+from .text.units import parse_unit
 from .timebase import check_order, diagnose, resample_linear
-from .units import parse_unit
 
 __all__ = ["read_seismic"]
 

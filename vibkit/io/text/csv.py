@@ -30,15 +30,15 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..errors import RecordingError
+from ..recording import build_recording, metadata_attrs
+from ..timebase import check_order, diagnose, held_update_rate, resample_linear
 from .cells import _MAYBE_COMMENT, DELIMITERS, _is_comment
 from .columns import _build_channels, _column_names, _select_channels, _unit_overrides
-from .errors import RecordingError
 from .fastpath import _HEAD_BYTES, _Fallback, _fast_rows
 from .layout import _decode, _decode_head, _read_layout
 from .loggers import app_units
 from .metadata import _meta_pair, _rate_from_meta, _scale_from_meta
-from .recording import build_recording, metadata_attrs
-from .timebase import check_order, diagnose, held_update_rate, resample_linear
 from .timecolumn import _choose_time_column, _read_time
 
 __all__ = ["read_csv", "DELIMITERS"]

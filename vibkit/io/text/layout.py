@@ -2,7 +2,7 @@
 
 :func:`_read_layout` works out where the data rows start and what sits above
 them; the rows themselves are read by :mod:`.fastpath` or line by line in
-:mod:`vibkit.io.csv`.
+:mod:`vibkit.io.text.csv`.
 """
 
 from __future__ import annotations
@@ -11,6 +11,7 @@ import re
 from collections import Counter
 from dataclasses import dataclass
 
+from ..errors import RecordingError
 from .cells import (
     _COMMENT,
     _DELIM_NAMES,
@@ -22,7 +23,6 @@ from .cells import (
     _mostly_numbers,
     _Splitter,
 )
-from .errors import RecordingError
 from .fastpath import _HEAD_BYTES, _Fallback
 from .metadata import _header_from_meta, _metadata
 from .units import parse_time_unit, parse_unit

@@ -1,8 +1,9 @@
 """Metadata lines of a text recording: ``key: value`` pairs, free comment text, sample rate and scale.
 
 The sample rate (``Sampling rate = 200 Hz``) and the counts scale (``2048 counts
-per g``) found here are what :mod:`vibkit.io.csv` uses when the file's columns
-do not say them.
+per g``) found here are what :mod:`vibkit.io.text.csv` uses when the file's columns
+do not say them.  The keys one logger alone uses (PicoQuake's ``data_rate``, GCDC's
+``Headers``) come from its profile in :mod:`vibkit.io.text.loggers`.
 """
 
 from __future__ import annotations
@@ -11,16 +12,23 @@ import math
 import re
 
 from .cells import _NUM
+from .loggers import header_keys, rate_key_patterns
 from .units import parse_unit
 
 __all__ = []
 
-_RATE_KEY = re.compile(
-    r"sampl\w*[\s_-]*(?:rate|freq)|samplerate|^fs\b|frecuencia\s*de\s*muestreo"
-    r"|^data[\s_-]*rate$|^odr$"
-    r"|sampling|muestreo|abtastrate",
-    re.IGNORECASE,
+#: metadata keys that hold the sample rate in any logger's file (a logger's own key is in its profile)
+_GENERIC_RATE_KEYS = (
+    r"sampl\w*[\s_-]*(?:rate|freq)",
+    r"samplerate",
+    r"^fs\b",
+    r"frecuencia\s*de\s*muestreo",
+    r"^odr$",
+    r"sampling",
+    r"muestreo",
+    r"abtastrate",
 )
+_RATE_KEY = re.compile("|".join(_GENERIC_RATE_KEYS + rate_key_patterns()), re.IGNORECASE)
 _SCALE = re.compile(
     r"([0-9]+(?:[.,][0-9]*)?(?:[eE][+-]?[0-9]+)?)\s*,?\s*(?:counts?|lsb|cts|digits)\s*"
     r"(?:/|per)\s*([^\s,;]+)",
@@ -115,9 +123,13 @@ def _metadata(lines, indices, delim: str, dec: str):
 
 
 def _header_from_meta(pairs, n: int):
-    """(column names, line, key) from a ``Headers`` metadata line naming ``n`` columns (GCDC loggers), or None."""
+    """(column names, line, key) from a metadata line naming ``n`` columns (GCDC's ``Headers``), or None.
+
+    The keys are the profiles' ``header_keys`` (:mod:`vibkit.io.text.loggers`).
+    """
+    keys = header_keys()
     for lineno, key, value in pairs:
-        if key.lower() in ("headers", "header", "columns") and isinstance(value, str):
+        if key.lower() in keys and isinstance(value, str):
             cells = [c.strip() for c in re.split(r"[,;\t]", value)]
             if len(cells) == n:
                 return cells, lineno, key

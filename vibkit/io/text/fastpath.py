@@ -1,7 +1,7 @@
 """The fast path of the CSV reader: data rows parsed by pandas' C reader.
 
 Anything that reader cannot take exactly as the line-by-line reader of
-:mod:`vibkit.io.csv` would raises :class:`_Fallback`, and the file is read again
+:mod:`vibkit.io.text.csv` would raises :class:`_Fallback`, and the file is read again
 line by line, so both give the same dataset.
 """
 
@@ -14,8 +14,8 @@ import re
 import numpy as np
 import pandas as pd
 
+from ..errors import RecordingError
 from .cells import _COMMENT, _MISSING, _is_comment, _kind
-from .errors import RecordingError
 
 __all__ = []
 

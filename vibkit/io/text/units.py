@@ -4,7 +4,9 @@ Field exports write units in many ways: ``"Acceleration x (m/s^2)"``,
 ``"acc [g]"``, ``"Aceleración (g)"``, ``"time_ms"``, ``"gFz"`` (g-force),
 ``"X (100g)"`` (an enDAQ channel: range 100 g, values in g).  This module turns
 such text into a :class:`Unit` (factor to SI, SI symbol, physical quantity) and
-says nothing it cannot justify: an unknown unit gives ``None``.
+says nothing it cannot justify: an unknown unit gives ``None``.  What one logger
+means by a header (the enDAQ range, Physics Toolbox's ``gFz``) is in its entry
+of :mod:`vibkit.io.text.loggers`.
 """
 
 from __future__ import annotations
@@ -12,6 +14,8 @@ from __future__ import annotations
 import math
 import re
 from dataclasses import dataclass
+
+from .loggers import header_unit
 
 __all__ = [
     "STANDARD_GRAVITY",
@@ -233,9 +237,9 @@ def split_name_unit(header: str) -> tuple[str, str | None, str | None]:
     if m and m.group("unit"):
         name = m.group("name") or h
         unit = m.group("unit")
-        r = re.match(r"^(\d+(?:\.\d+)?)\s*g$", unit, re.IGNORECASE)
-        if r:  # enDAQ "X (100g)": the sensor's range; the values are in g
-            return name, "g", f"'({unit})' read as a {r.group(1)} g sensor range, values in g"
+        quirk = header_unit(h, unit)
+        if quirk is not None:  # a logger's own meaning of the bracket (enDAQ "X (100g)": a range, values in g)
+            return name, quirk[0], quirk[1]
         return name, unit, None
     m = re.match(r"^(?P<name>.*\S)\s+in\s+(?P<unit>\S+)$", h)
     if m and (parse_unit(m.group("unit")) or parse_time_unit(m.group("unit"))):
@@ -243,6 +247,7 @@ def split_name_unit(header: str) -> tuple[str, str | None, str | None]:
     m = re.match(r"^(?P<name>.*?[A-Za-z0-9])[ _\-](?P<unit>[A-Za-zµμ/0-9^]+)$", h)
     if m and _normalise(m.group("unit")) in _SUFFIX_UNITS:
         return m.group("name"), m.group("unit"), None
-    if re.match(r"^t?gf[xyz]?$", h, re.IGNORECASE):  # Physics Toolbox g-force columns
-        return h, "g", f"'{h}' is a g-force column (Physics Toolbox), values in g"
+    quirk = header_unit(h)
+    if quirk is not None:  # a logger's header that is its own unit (Physics Toolbox "gFz": g-force, in g)
+        return h, quirk[0], quirk[1]
     return h, None, None

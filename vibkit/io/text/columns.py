@@ -6,10 +6,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..channels import COUNTER_ATTR, is_counter_name, is_counter_ramp
+from ..errors import RecordingError
+from ..recording import Channel, safe_name, unique_names
 from .cells import _parse_numbers
-from .channels import COUNTER_ATTR, is_counter_name, is_counter_ramp
-from .errors import RecordingError
-from .recording import Channel, safe_name, unique_names
 from .units import parse_unit, split_name_unit
 
 __all__ = []

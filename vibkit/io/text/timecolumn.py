@@ -15,10 +15,11 @@ from datetime import datetime, timezone
 import numpy as np
 import pandas as pd
 
+from ..errors import RecordingError
 from .cells import _NUM, _STAMP_DMY, _STAMP_ISO, _STAMP_TOD, _parse_numbers
 from .columns import _ColumnNames
-from .errors import RecordingError
 from .fastpath import _Fallback
+from .loggers import clock_units
 from .units import is_time_name, parse_time_unit, parse_unit
 
 __all__ = []
@@ -31,7 +32,7 @@ _EPOCH_UNITS = (("s", 1.0), ("ms", 1e-3), ("us", 1e-6), ("ns", 1e-9))
 #: names of clock columns besides ``time``: elapsed seconds, epoch, microcontroller clocks
 _CLOCK_NAME = re.compile(
     r"^(?:epoch?|unix[ _-]?time|(?:seconds|secs|time)?[ _-]?elapsed(?:[ _-]?(?:time|s|ms))?"
-    r"|micros|millis|timestamp|time ?stamp)$",
+    r"|timestamp|time ?stamp|" + "|".join(map(re.escape, clock_units())) + ")$",
     re.IGNORECASE,
 )
 
@@ -187,10 +188,16 @@ def _counter_clock_unit(path, vals, step, tname, header_line, history):
     that gives a rate between 1 Hz and 20 kHz is chosen when only one does; otherwise the file is refused
     naming ``time_unit=``.
     """
-    named = {"micros": [("us", 1e-6)], "millis": [("ms", 1e-3)]}.get(tname.strip().lower())
-    fits = named or [
-        (u, f) for u, f in (("ms", 1e-3), ("us", 1e-6)) if _CLOCK_RATES_HZ[0] <= 1 / (step * f) <= _CLOCK_RATES_HZ[1]
-    ]
+    named = clock_units().get(tname.strip().lower())  # a clock function's name (Arduino millis) says its unit
+    fits = (
+        [named]
+        if named is not None
+        else [
+            (u, f)
+            for u, f in (("ms", 1e-3), ("us", 1e-6))
+            if _CLOCK_RATES_HZ[0] <= 1 / (step * f) <= _CLOCK_RATES_HZ[1]
+        ]
+    )
     if len(fits) != 1:
         rates = ", ".join(f"{1 / (step * f):.4g} Hz in {u}" for u, f in (("s", 1.0), ("ms", 1e-3), ("us", 1e-6)))
         raise RecordingError(

@@ -2,7 +2,7 @@
 
 Shared by the layout reader (:mod:`.layout`), the fast path (:mod:`.fastpath`),
 the time column (:mod:`.timecolumn`) and the channels (:mod:`.columns`) of
-:mod:`vibkit.io.csv`.
+:mod:`vibkit.io.text.csv`.
 """
 
 from __future__ import annotations

@@ -1,0 +1,130 @@
+"""The reader table: every shipped file is read by the entry expected of it, in a fixed order, and by name.
+
+Each file under data/ that vibkit ships is listed here with the format entry that must read it and,
+for a logger's layout, the history line its profile writes; a file added to data/ without a line here
+fails :func:`test_every_shipped_file_is_listed`.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from vibkit.io import RecordingError, format_names, read_recording
+from vibkit.io.registry import FORMATS, detect_format, get_format
+from vibkit.io.text.loggers import PROFILES
+
+DATA = Path(__file__).resolve().parents[2] / "data"
+READER_ATTR = {"netcdf": "vibkit.io.netcdf", "seismic": "vibkit.io.seismic", "text": "vibkit.io.csv"}
+
+#: file -> (format entry, text the history must hold: the logger profile's decision, or None)
+SHIPPED = {
+    "field/las-palmas-accelerometer.csv": ("text", "sample rate 2050 Hz (header line 10, 'Sample rate')"),
+    "field/leon-tensioner.csv": ("text", "sample rate 200 Hz (header line 13, 'Sample rate')"),
+    "field/layouts/endaq.csv": ("text", "'(100g)' read as a 100 g sensor range, values in g"),
+    "field/layouts/gcdc-x16.csv": ("text", "column names from header line 9 ('Headers')"),
+    "field/layouts/no-time-column.txt": ("text", "time = sample index / 2050 Hz"),
+    "field/layouts/phyphox.csv": ("text", None),
+    "field/layouts/physics-toolbox.csv": ("text", "'gFz' is a g-force column (Physics Toolbox), values in g"),
+    "field/layouts/spanish-spreadsheet.csv": ("text", "'Frecuencia de muestreo'"),
+    "field/layouts/station.mseed": ("seismic", None),
+    **{
+        f"fleet-example/{e}/{d}.csv": ("text", None)
+        for e in ("E07", "E12", "E21")
+        for d in ("2024-11-20", "2025-11-19", "2026-11-23")
+    },
+    "thirdparty/obspy_BI008_MEMA-04823.evt": ("seismic", None),
+    "thirdparty/obspy_acc.gse": ("seismic", None),
+    "thirdparty/obspy_gaps.mseed": ("seismic", None),
+    "thirdparty/obspy_seism.sac": ("seismic", None),
+    "thirdparty/obspy_slist.ascii": ("seismic", None),
+    "thirdparty/obspy_test.knet": ("seismic", None),
+    "thirdparty/obspy_tspair.ascii": ("seismic", None),
+    "thirdparty/obspy_two_channels.mseed": ("seismic", None),
+    "thirdparty/phyphox_elevator_linear_acc.csv": ("text", None),
+    "thirdparty/phyphox_pendulum_acc_with_g.csv": ("text", None),
+    "thirdparty/phyphox_rollercoaster_acc_with_g.csv": ("text", None),
+    "thirdparty/phyphox_walking_linear_accelerometer.csv": ("text", None),
+    "thirdparty/physicstoolbox_multi_gforce_linacc_gyro_daily.csv": ("text", "Physics Toolbox Sensor Suite export"),
+    "thirdparty/physicstoolbox_multi_gforce_linacc_gyro_xmoves.csv": ("text", "Physics Toolbox Sensor Suite export"),
+    "thirdparty/picoquake_car_vibration.csv": ("text", "PicoQuake export ('# PLab PicoQuake Data')"),
+    "thirdparty/sensorlogger_driving_total_acceleration.csv": ("text", "for TotalAcceleration.csv (file name)"),
+    "thirdparty/sensorlogger_imu_accelerometer.csv": ("text", "for Accelerometer.csv (file name)"),
+    "thirdparty/sensorlogger_walking_pdr_accelerometer.csv": ("text", "for Accelerometer.csv (file name)"),
+}
+#: shipped files that are not recordings: the text entry claims them and refuses them in one line
+NOT_RECORDINGS = {"fleet-example/units.csv": "no data rows found"}
+#: files beside the data that no reader is meant for
+SKIP_SUFFIXES = (".py", ".md", ".json")
+
+
+def test_every_shipped_file_is_listed():
+    shipped = {
+        p.relative_to(DATA).as_posix()
+        for p in DATA.rglob("*")
+        if p.is_file() and not p.name.startswith(".") and p.suffix not in SKIP_SUFFIXES
+    }
+    assert shipped == set(SHIPPED) | set(NOT_RECORDINGS)
+
+
+@pytest.mark.parametrize("rel", sorted(SHIPPED))
+def test_shipped_file_read_by_its_entry(rel):
+    fmt, history = SHIPPED[rel]
+    path = DATA / rel
+    assert detect_format(path, path.read_bytes()).name == fmt
+    ds = read_recording(path)
+    assert ds.attrs["reader"] == READER_ATTR[fmt]
+    if history is not None:
+        assert history in ds.attrs["history"]
+
+
+@pytest.mark.parametrize("rel", sorted(NOT_RECORDINGS))
+def test_shipped_non_recording_refused_by_the_text_entry(rel):
+    path = DATA / rel
+    assert detect_format(path, path.read_bytes()).name == "text"
+    with pytest.raises(RecordingError, match=NOT_RECORDINGS[rel]):
+        read_recording(path)
+
+
+def test_order_is_fixed_and_the_last_entry_claims_everything():
+    assert format_names() == ("netcdf", "seismic", "text")
+    assert [f.name for f in FORMATS] == list(format_names())
+    hdf5 = b"\x89HDF\r\n\x1a\n" + b"\x00" * 64
+    cases = [  # (name, bytes, encoding, entry): each claimed by two sniffers goes to the first of them
+        ("x.mseed", hdf5, None, "netcdf"),  # HDF5 signature beats a seismic suffix
+        ("x.nc", b"time,a\n0,1\n", None, "netcdf"),  # a netCDF suffix whatever the content
+        ("x.csv", b"CDF\x01" + b"\x00" * 32, None, "netcdf"),
+        ("x.csv", b"\x00\x01\x02binary", None, "seismic"),  # NUL bytes, not UTF-16: binary
+        ("x.csv", b"\x00\x01\x02binary", "latin-1", "text"),  # ... unless an encoding says it is text
+        ("x.csv", "time,a\n0,1\n".encode("utf-16-le"), None, "text"),  # UTF-16 without a byte-order mark
+        ("x.csv", "\ufefftime,a\n0,1\n".encode("utf-16"), None, "text"),
+        ("x.mseed", b"time,a\n0,1\n", None, "seismic"),  # a seismic suffix whatever the content
+        ("x.txt", b"TIMESERIES XX_TEST__BHZ_R, 6 samples, 10 sps\n", None, "seismic"),
+        ("x.txt", b"time,a\n0,1\n", None, "text"),
+        ("noext", bytes(range(1, 256)), None, "text"),  # no NUL, no signature: the last entry
+    ]
+    for name, data, encoding, want in cases:
+        got = [detect_format(name, data, encoding).name for _ in range(3)]
+        assert got == [want] * 3, (name, data[:12], encoding)
+
+
+def test_format_by_name(tmp_path):
+    path = DATA / "field/layouts/phyphox.csv"
+    auto, named = read_recording(path), read_recording(path, format="TEXT")
+    assert auto.identical(named) and auto.attrs == named.attrs
+    assert get_format("seismic") is FORMATS[1]
+    with pytest.raises(ValueError, match=r"format must be one of 'netcdf', 'seismic', 'text', got 'xlsx'"):
+        read_recording(path, format="xlsx")
+    with pytest.raises(ValueError, match="format must be one of"):
+        read_recording(path, format=3)
+    with pytest.raises(RecordingError, match="phyphox.csv"):  # the named entry reads it, or says why not
+        read_recording(path, format="netcdf")
+
+
+def test_logger_profiles_are_one_entry_each():
+    names = [p.name for p in PROFILES]
+    assert len(names) == len(set(names))
+    for p in PROFILES:
+        assert p.source and p.facts, p.name
+        assert (p.recognise is None) == (p.column_units is None), p.name

@@ -1,0 +1,223 @@
+"""Which reader reads a file: one table of formats, each a sniffer and a reader, tried in a fixed order.
+
+:func:`vibkit.io.read_recording` checks the path and the options, reads the file's bytes once, and
+hands them to the first entry of :data:`FORMATS` whose sniffer claims them, or to the entry the user
+names with ``format=``.  The order of :data:`FORMATS` is the priority, and it is fixed:
+
+1. ``netcdf``: netCDF4/HDF5 (signature ``\\x89HDF``) or netCDF3 (``CDF\\x01``, ``CDF\\x02``) by
+   content, or a suffix of :data:`NETCDF_SUFFIXES` whatever the content (vibkit's own results,
+   read by :mod:`vibkit.io.netcdf`);
+2. ``seismic``: a suffix of :data:`SEISMIC_SUFFIXES` whatever the content, binary content (a NUL
+   byte in the first 64 KiB that is not UTF-16/32 text, unless ``encoding=`` is given), or obspy's
+   ASCII layouts that start with a ``TIMESERIES`` line (read by :mod:`vibkit.io.seismic`);
+3. ``text``: everything else: CSV, TSV, logger and spreadsheet exports (read by
+   :mod:`vibkit.io.text.csv`, which refuses what is not text).
+
+A content signature beats a suffix only where the entry with the signature comes first; the last
+entry claims every file, so every file has a reader and the choice never depends on anything but
+the file's name, its bytes and ``encoding=``.
+
+Adding a format or a logger
+---------------------------
+A new *file format* (a binary logger, a compressed container) is one :class:`Format` entry in
+:data:`FORMATS`, placed before the first entry that would otherwise claim its files (before
+``seismic`` for binary content, before ``text`` for a text layout that the text reader cannot
+read), with
+
+* ``sniff(probe)``: a cheap check of :class:`Probe` (the suffix, the first 64 KiB, the options);
+  it must not parse the whole file and must not raise;
+* ``read(path, data, options)``: the reader, importing its module inside the function so that
+  ``import vibkit`` stays light; ``options`` holds every reading option of ``read_recording``
+  (all its keywords but ``max_bytes`` and ``format``), and the reader passes on those it understands;
+* one test file ``tests/io/test_format_<name>.py`` reading a real file (or one written in the
+  documented layout) and asserting that :func:`detect_format` names the entry; a file shipped in
+  ``data/`` also gets its line in ``SHIPPED`` of ``tests/io/test_registry.py``.
+
+A container (``.gz``, ``.zip`` of one recording) is an entry like any other: its reader unpacks
+``data`` and hands the inner name and bytes to ``detect_format(inner, inner_data).read(...)``.
+A binary format vibkit does not read is an entry too: its sniffer knows the signature, and its
+reader raises :class:`~vibkit.io.errors.RecordingError` naming the format and what reads it.
+
+A new *text logger or app* (a CSV export whose columns do not say their units, a header line
+with the rate under its own key) is not a format: it is one :class:`~vibkit.io.text.loggers.LoggerProfile`
+in :data:`vibkit.io.text.loggers.PROFILES` and one test file; see that module.
+``tests/io/test_registry.py`` checks that every file shipped in ``data/`` is read by the entry
+it lists for it, and that the order above decides between sniffers that both claim a file.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from typing import Callable
+
+__all__ = [
+    "Format",
+    "Probe",
+    "FORMATS",
+    "SEISMIC_SUFFIXES",
+    "NETCDF_SUFFIXES",
+    "format_names",
+    "get_format",
+    "detect_format",
+]
+
+#: suffixes sent to obspy whatever their content
+SEISMIC_SUFFIXES = (
+    ".mseed",
+    ".miniseed",
+    ".msd",
+    ".seed",
+    ".sac",
+    ".gse",
+    ".gse2",
+    ".segy",
+    ".sgy",
+    ".su",
+    ".ah",
+    ".css",
+    ".knet",
+    ".sh",
+    ".q",
+)
+#: suffixes sent to xarray whatever their content
+NETCDF_SUFFIXES = (".nc", ".nc4", ".netcdf", ".h5", ".hdf5", ".he5", ".cdf")
+_HDF5 = b"\x89HDF\r\n\x1a\n"
+_NETCDF3 = (b"CDF\x01", b"CDF\x02")
+_BOMS = (b"\xff\xfe\x00\x00", b"\x00\x00\xfe\xff", b"\xff\xfe", b"\xfe\xff")  # UTF-32/UTF-16 text
+#: bytes a sniffer sees at most (the whole file stays in ``data`` for the reader)
+HEAD_BYTES = 65536
+
+
+@dataclass(frozen=True)
+class Probe:
+    """What a sniffer may look at.
+
+    Attributes
+    ----------
+    path : str
+        The file as given.
+    suffix : str
+        Its last suffix in lower case (``".csv"``; ``""`` for none).
+    head : bytes
+        The first :data:`HEAD_BYTES` bytes.
+    encoding : str or None
+        The ``encoding=`` the user forced (a forced encoding says the file is text).
+    """
+
+    path: str
+    suffix: str
+    head: bytes
+    encoding: str | None = None
+
+
+@dataclass(frozen=True)
+class Format:
+    """One entry of the reader table.
+
+    Attributes
+    ----------
+    name : str
+        What ``format=`` calls it.
+    description : str
+        One line: what files it reads.
+    sniff : callable
+        ``sniff(probe: Probe) -> bool``: whether the entry claims the file.
+    read : callable
+        ``read(path: str, data: bytes, options: dict) -> xarray.Dataset``.
+    """
+
+    name: str
+    description: str
+    sniff: Callable[[Probe], bool]
+    read: Callable[..., object]
+
+
+def _sniff_netcdf(p: Probe) -> bool:
+    return p.head.startswith(_HDF5) or p.head[:4] in _NETCDF3 or p.suffix in NETCDF_SUFFIXES
+
+
+def _text_with_nul(p: Probe) -> bool:
+    """Whether content with NUL bytes is UTF-16/32 text (a byte-order mark, or UTF-16 without one)."""
+    from .text.layout import utf16_without_bom
+
+    return p.head.startswith(_BOMS) or utf16_without_bom(p.head) is not None
+
+
+def _sniff_seismic(p: Probe) -> bool:
+    if p.suffix in SEISMIC_SUFFIXES:
+        return True
+    if b"\x00" in p.head and p.encoding is None and not _text_with_nul(p):
+        return True  # binary content that is not HDF5/netCDF: obspy reads it or says why not
+    # obspy's ASCII layouts (TSPAIR, SLIST) start with a 'TIMESERIES NET_STA_LOC_CHA, N samples, R sps' line
+    return p.head.lstrip(b"\xef\xbb\xbf \r\n").startswith(b"TIMESERIES ")
+
+
+def _read_netcdf(path, data, options):
+    from .netcdf import read_netcdf
+
+    return read_netcdf(path, data, channel=options["channel"], repair_time=options["repair_time"])
+
+
+_COMMON = ("channel", "sample_rate", "resample", "gap_factor", "repair_time")
+_TEXT_OPTIONS = (*_COMMON, "time_column", "time_unit", "units", "delimiter", "decimal", "encoding")
+
+
+def _read_seismic(path, data, options):
+    from .seismic import read_seismic
+
+    return read_seismic(path, data, units=options["units"], **{k: options[k] for k in _COMMON})
+
+
+def _read_text(path, data, options):
+    from .text.csv import read_csv
+
+    return read_csv(path, data, **{k: options[k] for k in _TEXT_OPTIONS})
+
+
+#: the reader table, in priority order (see the module docstring)
+FORMATS: tuple[Format, ...] = (
+    Format(
+        "netcdf", "netCDF4/HDF5 and netCDF3 (vibkit's results), by signature or suffix", _sniff_netcdf, _read_netcdf
+    ),
+    Format(
+        "seismic",
+        "waveform formats obspy reads (miniSEED, SAC, GSE2, ...): by suffix, binary content or a TIMESERIES line",
+        _sniff_seismic,
+        _read_seismic,
+    ),
+    Format(
+        "text",
+        "CSV, TSV, logger and spreadsheet exports (every file no entry above claims)",
+        lambda p: True,
+        _read_text,
+    ),
+)
+
+
+def format_names() -> tuple[str, ...]:
+    """The registered format names, in priority order."""
+    return tuple(f.name for f in FORMATS)
+
+
+def get_format(name) -> Format:
+    """The entry called ``name`` (``format=`` of :func:`vibkit.io.read_recording`).
+
+    Raises
+    ------
+    ValueError
+        No entry has that name; the message lists the registered names.
+    """
+    for f in FORMATS:
+        if isinstance(name, str) and f.name == name.strip().lower():
+            return f
+    raise ValueError(f"format must be one of {', '.join(repr(n) for n in format_names())}, got {name!r}")
+
+
+def detect_format(path, data: bytes, encoding=None) -> Format:
+    """The first entry of :data:`FORMATS` whose sniffer claims the file (the last claims every file)."""
+    probe = Probe(os.fspath(path), os.path.splitext(os.fspath(path))[1].lower(), data[:HEAD_BYTES], encoding)
+    for f in FORMATS:
+        if f.sniff(probe):
+            return f
+    raise AssertionError("the last entry of FORMATS claims every file")  # pragma: no cover
