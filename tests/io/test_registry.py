@@ -87,8 +87,17 @@ def test_shipped_non_recording_refused_by_the_text_entry(rel):
         read_recording(path)
 
 
+def _witmotion_packets(n):
+    """``n`` WitMotion packets: 0x55, type 0x51-0x54, 8 data bytes, checksum (low byte of the sum)."""
+    out = b""
+    for k in range(n):
+        p = bytes([0x55, 0x51 + k % 4]) + bytes(range(k, k + 8))
+        out += p + bytes([sum(p) & 0xFF])
+    return out
+
+
 def test_order_is_fixed_and_the_last_entry_claims_everything():
-    assert format_names() == ("netcdf", "seismic", "text")
+    assert format_names() == ("netcdf", "gzip", "zip", "witmotion", "seismic", "e4", "actigraph", "lvm", "text")
     assert [f.name for f in FORMATS] == list(format_names())
     hdf5 = b"\x89HDF\r\n\x1a\n" + b"\x00" * 64
     cases = [  # (name, bytes, encoding, entry): each claimed by two sniffers goes to the first of them
@@ -103,6 +112,14 @@ def test_order_is_fixed_and_the_last_entry_claims_everything():
         ("x.txt", b"TIMESERIES XX_TEST__BHZ_R, 6 samples, 10 sps\n", None, "seismic"),
         ("x.txt", b"time,a\n0,1\n", None, "text"),
         ("noext", bytes(range(1, 256)), None, "text"),  # no NUL, no signature: the last entry
+        ("x.mseed", b"\x1f\x8b\x08\x00" + b"\x00" * 16, None, "gzip"),  # a container signature beats a suffix
+        ("x.csv", b"PK\x03\x04" + b"\x00" * 26, None, "zip"),
+        ("x.TXT", _witmotion_packets(6), None, "witmotion"),  # binary with valid 0x55 packets: named
+        ("x.TXT", b"\x55\x51" + b"\x00" * 64, None, "seismic"),  # 0x55 without valid checksums: binary
+        ("x.csv", b"1680686620.000000\n32.000000\n-34\n", None, "e4"),
+        ("x.csv", b"------------ Data File Created By ActiGraph GT3X+ at 30 Hz -----------\n", None, "actigraph"),
+        ("x.txt", b"LabVIEW Measurement\t\nWriter_Version\t2\n", None, "lvm"),
+        ("x.csv", b"1680686620\n32\n", None, "text"),  # two rows only: not an E4 export
     ]
     for name, data, encoding, want in cases:
         got = [detect_format(name, data, encoding).name for _ in range(3)]
@@ -113,8 +130,8 @@ def test_format_by_name(tmp_path):
     path = DATA / "field/layouts/phyphox.csv"
     auto, named = read_recording(path), read_recording(path, format="TEXT")
     assert auto.identical(named) and auto.attrs == named.attrs
-    assert get_format("seismic") is FORMATS[1]
-    with pytest.raises(ValueError, match=r"format must be one of 'netcdf', 'seismic', 'text', got 'xlsx'"):
+    assert get_format("seismic") is FORMATS[4]
+    with pytest.raises(ValueError, match=r"format must be one of 'netcdf', 'gzip', .*'lvm', 'text', got 'xlsx'"):
         read_recording(path, format="xlsx")
     with pytest.raises(ValueError, match="format must be one of"):
         read_recording(path, format=3)
