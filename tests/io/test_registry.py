@@ -16,7 +16,15 @@ from vibkit.io.registry import FORMATS, detect_format, get_format
 from vibkit.io.text.loggers import PROFILES
 
 DATA = Path(__file__).resolve().parents[2] / "data"
-READER_ATTR = {"netcdf": "vibkit.io.netcdf", "seismic": "vibkit.io.seismic", "text": "vibkit.io.csv"}
+READER_ATTR = {
+    "netcdf": "vibkit.io.netcdf",
+    "seismic": "vibkit.io.seismic",
+    "text": "vibkit.io.csv",
+    "e4": "vibkit.io.devices.e4",
+    "actigraph": "vibkit.io.devices.actigraph",
+    "lvm": "vibkit.io.lvm",
+    "gzip": "vibkit.io.devices.actigraph",  # the one shipped .gz holds an ActiGraph export
+}
 
 #: file -> (format entry, text the history must hold: the logger profile's decision, or None)
 SHIPPED = {
@@ -52,9 +60,27 @@ SHIPPED = {
     "thirdparty/sensorlogger_driving_total_acceleration.csv": ("text", "for TotalAcceleration.csv (file name)"),
     "thirdparty/sensorlogger_imu_accelerometer.csv": ("text", "for Accelerometer.csv (file name)"),
     "thirdparty/sensorlogger_walking_pdr_accelerometer.csv": ("text", "for Accelerometer.csv (file name)"),
+    "devices/actigraph/exampleRAW.csv.gz": ("gzip", "gzip file unpacked: exampleRAW.csv"),
+    **{f"devices/empatica_e4/{n}.csv": ("e4", "Empatica E4 export") for n in ("ACC", "BVP", "EDA", "HR", "TEMP")},
+    **{
+        f"devices/labview/{n}.lvm": ("lvm", "LabVIEW Measurement file")
+        for n in (
+            "long_single_header_first2048",
+            "multi_time_column",
+            "no_decimal_separator",
+            "short",
+            "with_comments",
+            "with_empty_fields",
+        )
+    },
+    "devices/science_journal/Untitled Experiment Trial 1.csv": ("text", None),
+    "devices/sensor_logger/AccelerometerUncalibrated.csv": ("text", "g on iOS and m/s^2 on Android"),
 }
-#: shipped files that are not recordings: the text entry claims them and refuses them in one line
-NOT_RECORDINGS = {"fleet-example/units.csv": "no data rows found"}
+#: shipped files that are not recordings: the entry named refuses them in one line
+NOT_RECORDINGS = {
+    "fleet-example/units.csv": ("text", "no data rows found"),
+    "devices/empatica_e4/IBI.csv": ("e4", "not a sampled signal"),
+}
 #: files beside the data that no reader is meant for
 SKIP_SUFFIXES = (".py", ".md", ".json")
 
@@ -80,10 +106,10 @@ def test_shipped_file_read_by_its_entry(rel):
 
 
 @pytest.mark.parametrize("rel", sorted(NOT_RECORDINGS))
-def test_shipped_non_recording_refused_by_the_text_entry(rel):
+def test_shipped_non_recording_refused_by_its_entry(rel):
     path = DATA / rel
-    assert detect_format(path, path.read_bytes()).name == "text"
-    with pytest.raises(RecordingError, match=NOT_RECORDINGS[rel]):
+    assert detect_format(path, path.read_bytes()).name == NOT_RECORDINGS[rel][0]
+    with pytest.raises(RecordingError, match=NOT_RECORDINGS[rel][1]):
         read_recording(path)
 
 

@@ -46,13 +46,15 @@ def speed_from_recording(recording):
 
 def vibration_channels(recording) -> list:
     """Channels that may carry a vibration: along time, not the burst number, not a sample counter, not
-    a clock or a speed."""
-    from ..io.channels import COUNTER_ATTR
+    a clock or a speed, not a status column (an accuracy code, a column that never changes)."""
+    from ..io.channels import COUNTER_ATTR, STATUS_ATTR, is_status
 
     out = []
     for v in recording.data_vars:
         da = recording[v]
         if v == "segment" or da.dims != ("time",) or da.attrs.get(COUNTER_ATTR):
+            continue
+        if int(da.attrs.get(STATUS_ATTR, 0)) or is_status("", da.values):
             continue
         units = str(da.attrs.get("units", ""))
         if (

@@ -162,8 +162,8 @@ def _assemble(path, data, head, dec, xcols, multi, segments, history, options):
                 path, None, f"no channel {want!r} (channel=); channels: " + ", ".join(k[1] for k in keep)
             )
         keep = sel
-    fs = 1.0 / ref
-    history.append(f"sample rate {fs:.6g} Hz from Delta_X {ref:g} s")
+    fs = _rate(keep[0][3].get("Delta_X", ""), ref, history)
+    ref = 1.0 / fs
     # blocks: (rows, header stamp)
     blocks = []
     for start_line, seg_head, _names, rows, _first_row in segments:
@@ -249,6 +249,25 @@ def _assemble(path, data, head, dec, xcols, multi, segments, history, options):
         history=history,
         metadata=metadata,
     )
+
+
+def _rate(text, dx, history):
+    """The sample rate Delta_X states [Hz]: 1/Delta_X, or the whole number of Hz it was rounded from.
+
+    LabVIEW writes Delta_X with a fixed number of decimals (``0.000977`` for 1/1024 s); a whole
+    rate whose period, rounded to those decimals, gives the text is taken, and said so.
+    """
+    m = re.fullmatch(r"\s*[0-9]*[.,]([0-9]+)\s*", text)
+    fs = 1.0 / dx
+    whole = round(fs)
+    if m and whole > 0 and abs(whole / fs - 1) < 1e-3 and round(1.0 / whole, len(m.group(1))) == dx and whole != fs:
+        history.append(
+            f"Delta_X {text.strip()} s is 1/{whole} s written with {len(m.group(1))} decimals: sample rate "
+            f"{whole} Hz (1/Delta_X would give {fs:.6g} Hz)"
+        )
+        return float(whole)
+    history.append(f"sample rate {fs:.6g} Hz from Delta_X {dx:g} s")
+    return fs
 
 
 def _cell(path, row, c, dec, line):

@@ -440,10 +440,14 @@ def _sparse_channels(t, channels, history):
     ``own_samples`` and ``own_rate_hz``.
     """
     notes = []
+    filled = np.zeros(t.size, dtype=int)
+    for ch in channels:
+        filled += np.isfinite(ch.values)
     for ch in channels:
         ok = np.isfinite(ch.values)
         n = int(ok.sum())
-        if n >= 2 and n <= 0.8 * ok.size:
+        # at least a tenth of the rows empty, and those rows hold another sensor's value
+        if n >= 2 and n <= 0.9 * ok.size and np.all(filled[~ok] > 0):
             tt = t[ok]
             ch.attrs.update({"sparse": 1, "own_samples": n, "own_rate_hz": float((n - 1) / (tt[-1] - tt[0]))})
             notes.append(f"{ch.name} {n} samples ({ch.attrs['own_rate_hz']:.4g} Hz)")

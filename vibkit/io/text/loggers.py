@@ -94,8 +94,36 @@ def _is_sensor_logger(path, low, free_text):
     return low[:2] == ["time", "seconds_elapsed"] and {"x", "y", "z"} <= set(low)
 
 
+def _sensor_logger_platform(path):
+    """'ios' or 'android' from the Metadata.csv that Sensor Logger writes beside each sensor file, else None."""
+    meta = os.path.join(os.path.dirname(str(path)), "Metadata.csv")
+    try:
+        with open(meta, encoding="utf-8", errors="replace") as f:
+            head, row = f.readline().strip().split(","), f.readline().strip().split(",")
+    except OSError:
+        return None
+    if "platform" in head and len(row) == len(head):
+        p = row[head.index("platform")].strip().lower()
+        return p if p in ("ios", "android") else None
+    return None
+
+
 def _sensor_logger_units(path, names, low, units, history):
     base = re.sub(r"[^a-z]", "", os.path.basename(str(path)).lower())
+    if "uncalibrated" in base and "accelerometer" in base:
+        platform = _sensor_logger_platform(path)
+        unit = {"ios": "g", "android": "m/s^2"}.get(platform)
+        if unit is None:
+            history.append(
+                "Sensor Logger AccelerometerUncalibrated.csv: x, y, z are in g on iOS and m/s^2 on Android, and "
+                "no Metadata.csv beside the file says the platform; x, y, z keep no unit (pass units=)"
+            )
+            return {}
+        history.append(
+            f"Sensor Logger AccelerometerUncalibrated.csv on {platform} (Metadata.csv beside it): x, y, z in "
+            f"{unit}; pass units= to override"
+        )
+        return {j: unit for j, n in enumerate(low) if n in ("x", "y", "z") and units[j] is None}
     for key, unit, app_name in _SENSOR_LOGGER_FILES:
         if key in base:
             history.append(
@@ -198,9 +226,10 @@ PROFILES: tuple[LoggerProfile, ...] = (
         "Kelvin Choi, Sensor Logger for Android/iOS: export documentation, one CSV per sensor",
         recognise=_is_sensor_logger,
         column_units=_sensor_logger_units,
-        facts="header 'time,seconds_elapsed,z,y,x': time is Unix epoch in ns, seconds_elapsed a second clock; "
-        "the axes carry no unit, which the app documents per sensor file: Accelerometer.csv, "
-        "TotalAcceleration.csv, Gravity.csv in m/s^2, Gyroscope.csv in rad/s",
+        facts="header 'time,seconds_elapsed,z,y,x': time is Unix epoch in ns (UTC, not since boot), "
+        "seconds_elapsed a second clock; the axes carry no unit, which the app documents per sensor file: "
+        "Accelerometer.csv (gravity removed), TotalAcceleration.csv, Gravity.csv in m/s^2, Gyroscope.csv in "
+        "rad/s; AccelerometerUncalibrated.csv in g on iOS and m/s^2 on Android (Metadata.csv's platform)",
     ),
     LoggerProfile(
         "Physics Toolbox Sensor Suite",
