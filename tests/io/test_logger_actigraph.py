@@ -89,3 +89,17 @@ def test_export_without_a_column_row_at_30_hz(tmp_path, capsys):
 def test_day_first_date_format_in_the_banner(tmp_path):
     p = _export(tmp_path / "dmy.csv", [(0, 0, 1)] * 10, date="14/2/2019", fmt="dd/MM/yyyy", column_row=True)
     assert read_recording(p).attrs["start_time"] == "2019-02-14T10:54:00"
+
+
+def test_export_with_a_timestamp_column(tmp_path):
+    """'Timestamp,Accelerometer X,...' exports: the stamps are not a channel; the rate is the banner's."""
+    p = _export(tmp_path / "ts.csv", [(0.001 * k, 0, 1) for k in range(60)], column_row=True)
+    lines = p.read_text().splitlines()
+    head, body = lines[:10], lines[10:]
+    body[0] = "Timestamp," + body[0]
+    body[1:] = [f"6/27/2012 10:54:{k // 30:02d}.{round(1000 * (k % 30) / 30):03d},{r}" for k, r in enumerate(body[1:])]
+    p.write_text("\n".join(head + body) + "\n")
+    ds = read_recording(p)
+    assert list(ds.data_vars) == ["accelerometer_x", "accelerometer_y", "accelerometer_z"]
+    assert ds["accelerometer_x"].values[59] == pytest.approx(0.059 * STANDARD_GRAVITY, rel=1e-12)
+    assert ds.attrs["sample_rate_hz"] == 30.0 and "Timestamp column is not read" in ds.attrs["history"]

@@ -13,7 +13,7 @@ import pytest
 
 from vibkit.cli import main
 from vibkit.io import read_recording
-from vibkit.io.channels import channel_series
+from vibkit.io.channels import channel_series, own_samples
 
 SJ = Path(__file__).resolve().parents[2] / "data" / "devices" / "science_journal" / "Untitled Experiment Trial 1.csv"
 
@@ -63,3 +63,7 @@ def test_sparse_rows_become_per_sensor_series_on_their_own_times(tmp_path, capsy
     rc = main(["spectrum", str(p), "--channel", "AccX", "--json"])
     out = json.loads(capsys.readouterr().out)
     assert rc == 0 and out["fundamental_hz"] == pytest.approx(4.0, abs=0.02)
+    # analysed on its own 1000 samples at 50 Hz: nothing filled in at the light sensor's rows
+    assert out["invalid_samples"]["total"] == 0
+    assert own_samples(ds, "accx").sizes["time"] == acc_t.size
+    assert own_samples(ds, "accx")["time"].values[1] == pytest.approx(0.02, abs=1e-12)

@@ -1,7 +1,8 @@
 """Every vibration channel of a recording, one decision for the recording.
 
 :func:`estimate_channels` runs :func:`vibkit.diagnose.pitch.estimate_pitch` on every vibration channel
-(or the one asked for) and combines them: the result comes from the channels where the link pass is
+(or the one asked for; a sparse channel on its own samples, :func:`vibkit.io.channels.own_samples`) and
+combines them: the result comes from the channels where the link pass is
 found (status ``ok`` or ``inconclusive``); when several are, their fundamentals must agree within
 :data:`CONSISTENCY_SIGMAS` combined sigmas (else the recording is refused as ``implausible``: two
 periodicities, not one chain), and the channel with the smallest sigma gives the numbers.
@@ -122,6 +123,7 @@ def estimate_channels(recording, *, channel=None, **kwargs) -> ChannelsResult:
     ValueError
         ``channel`` is given and cannot be analysed, or no channel can be analysed at all.
     """
+    from ..io.channels import own_samples
     from .pitch import estimate_pitch, pick_channel
 
     names = [pick_channel(recording, channel)] if channel is not None else vibration_channels(recording)
@@ -130,7 +132,7 @@ def estimate_channels(recording, *, channel=None, **kwargs) -> ChannelsResult:
     ests, errors = [], {}
     for name in names:
         try:
-            ests.append(estimate_pitch(recording, channel=name, **kwargs))
+            ests.append(estimate_pitch(own_samples(recording, name), channel=name, **kwargs))
         except ValueError as exc:
             if channel is not None or len(names) == 1:
                 raise

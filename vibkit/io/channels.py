@@ -27,6 +27,7 @@ __all__ = [
     "is_status",
     "mark_status",
     "channel_series",
+    "own_samples",
 ]
 
 #: variable attr marking a column that counts samples
@@ -75,6 +76,17 @@ def channel_series(recording, name):
     t = np.asarray(recording["time"].values, dtype=float)
     ok = np.isfinite(v)
     return t[ok], v[ok]
+
+
+def own_samples(recording, name):
+    """The recording cut to the rows where channel ``name`` holds a value, when it is sparse (attr ``sparse``:
+    a sensor that wrote only some rows); else the recording itself.
+
+    Analyses of a sparse channel run on its own samples and times, never on values filled in between them.
+    """
+    if not int(recording[name].attrs.get("sparse", 0)):
+        return recording
+    return recording.isel(time=np.flatnonzero(np.isfinite(np.asarray(recording[name].values, dtype=float))))
 
 
 def _norm(text) -> str:

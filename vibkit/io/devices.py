@@ -150,6 +150,7 @@ def read_e4(path, data, options):
 
 # ----------------------------------------------------------------------------------------- ActiGraph
 _AG_BANNER = re.compile(r"^-+\s*Data File Created By ActiGraph", re.IGNORECASE)
+_AG_TIME = re.compile(r"(time ?stamp|date ?time|time|date)", re.IGNORECASE)
 
 
 def sniff_actigraph(probe) -> bool:
@@ -202,13 +203,14 @@ def read_actigraph(path, data, options):
         first += 1
     else:
         history.append(f"no column-name row: data from line {first + 1}, columns read as {', '.join(names)}")
+    value_cols = [k for k, nm in enumerate(names) if not _AG_TIME.fullmatch(nm)]
     rows, rownums = [], []
     for i in range(first, len(lines)):
         if not lines[i].strip():
             continue
         cells = _cells(lines[i])[: len(names)]
         try:
-            rows.append([float(c) for c in cells])
+            rows.append([float(cells[k]) for k in value_cols if k < len(cells)])
         except ValueError:
             raise RecordingError(
                 path, i + 1, f"expected {len(names)} numbers (ActiGraph RAW), found {lines[i]!r}"
@@ -230,11 +232,11 @@ def read_actigraph(path, data, options):
             f"start {metadata['start_time']} (local time) from 'Start Date' line {start_date[0]} read as "
             f"{date_fmt or 'M/d/yyyy'} and 'Start Time' line {start_time[0]}"
         )
-    channels = []
-    for k, name in enumerate(names):
-        if re.fullmatch(r"(time ?stamp|date ?time|time)", name, re.IGNORECASE):
-            continue
-        channels.append(_channel(name, values[:, k], "g", "acceleration", name, history))
+    if len(value_cols) < len(names):
+        history.append("the Timestamp column is not read: time = sample index / the banner's rate, from the start")
+    channels = [
+        _channel(names[k], values[:, j], "g", "acceleration", names[k], history) for j, k in enumerate(value_cols)
+    ]
     channels = _keep_channels(path, channels, options.get("channel"))
     return build_recording(
         time=np.arange(values.shape[0]) / fs,
@@ -270,12 +272,17 @@ def read_gzip(path, data, options):
     d = zlib.decompressobj(16 + zlib.MAX_WBITS)
     try:
         inner = d.decompress(data, limit + 1)
-        if len(inner) <= limit and not d.eof:  # concatenated members or an unfinished stream
-            inner = gzip.decompress(data) if len(data) < limit else inner
+        if len(inner) <= limit and (not d.eof or d.unused_data.strip(b"\0")):  # cut short, or several members
+            inner = gzip.decompress(data)
     except (zlib.error, EOFError, OSError) as exc:
         raise RecordingError(path, None, f"gzip file that cannot be unpacked ({exc}); expected a whole .gz") from None
     if len(inner) > limit:
-        raise RecordingError(path, None, "unpacks to more than the size limit for a recording (max_bytes=)")
+        raise RecordingError(
+            path,
+            None,
+            f"unpacks to more than the {limit} byte limit for a recording "
+            "(raise it with the environment variable VIBKIT_MAX_RECORDING_BYTES)",
+        )
     base = os.path.basename(str(path))
     member = base[:-3] if base.lower().endswith(".gz") else os.path.splitext(base)[0] or base
     if member.lower().endswith(".tar") or inner[257:262] == b"ustar":
@@ -306,7 +313,12 @@ def read_zip(path, data, options):
         )
     info = infos[0]
     if info.file_size > _limit():
-        raise RecordingError(path, None, f"{info.filename} unpacks to more than the size limit for a recording")
+        raise RecordingError(
+            path,
+            None,
+            f"{info.filename} unpacks to more than the {_limit()} byte limit for a recording "
+            "(raise it with the environment variable VIBKIT_MAX_RECORDING_BYTES)",
+        )
     try:
         inner = zf.read(info)
     except (zipfile.BadZipFile, RuntimeError, NotImplementedError, OSError, zlib.error) as exc:

@@ -196,6 +196,7 @@ def analyse(
 ) -> ReportContext:
     """Everything :func:`vibkit.diagnose.report.write_report` draws (same parameters, no output)."""
     from ...io import read_recording
+    from ...io.channels import own_samples
     from ...model.scene import Scene, load_scene
     from ...signal import hampel_events
     from ..channels import estimate_channels
@@ -253,7 +254,7 @@ def analyse(
     est = decided.best if found else next((e for e in decided.estimates if e.channel == ch), decided.estimates[0])
     ch = est.channel
     units = str(rec[ch].attrs.get("units", "1"))
-    bursts = uniform_bursts(rec, ch)
+    bursts = uniform_bursts(own_samples(rec, ch), ch)
     f0 = est.fundamental_hz
     pitch = est if speed is not None else None
     if found and len(decided.estimates) > 1:
