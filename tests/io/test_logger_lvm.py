@@ -121,3 +121,19 @@ def test_unknown_channel_and_missing_end_of_header_refused_in_one_line(tmp_path)
     with pytest.raises(RecordingError) as err:
         read_recording(p)
     assert str(err.value) == f"{p}: LabVIEW file header without '***End_of_Header***'; expected one"
+
+
+def test_blocks_under_one_header_without_headings_become_segments(tmp_path):
+    """Multi_Headings No: LabVIEW appends each block of Samples rows under the one header (upstream long.lvm
+    holds 16,384 rows under 'Samples 8192'): two segments, end to end, never bridged."""
+    text = (LVM / "long_single_header_first2048.lvm").read_text()
+    head, rows = text.split("***End_of_Header***\t\t\t\t\n")
+    rows = rows.splitlines()
+    names, data = rows[0], rows[1:]
+    head = head.replace("Samples\t8192\t8192\t8192", "Samples\t1024\t1024\t1024")
+    p = tmp_path / "blocks.lvm"
+    p.write_text(head + "***End_of_Header***\t\t\t\t\n" + "\n".join([names] + data) + "\n")
+    ds = read_recording(p)
+    assert ds.attrs["segment_count"] == 2 and np.bincount(ds["segment"].values).tolist() == [1024, 1024]
+    assert ds["time"].values[1024] == pytest.approx(1024 / 1024.0, abs=1e-12)  # right after the first block
+    assert "2 segments of 1024 rows, placed end to end" in ds.attrs["history"]
