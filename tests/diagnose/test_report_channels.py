@@ -54,3 +54,27 @@ def test_quantisation_is_not_clipping_but_a_clipped_quantised_signal_is():
     clipped = np.minimum(x, 0.4)  # the top two levels cut: the 0.4 level piles up
     assert not _quantisation_explains_extremes(clipped, 0.1)
     assert not _quantisation_explains_extremes(x, None)  # not quantised: the generic test decides
+
+
+def test_report_on_an_android_log_never_analyses_its_status_column(tmp_path, capfd):
+    """The constant 'accuracy' column once went to the report: numpy RuntimeWarnings and LAPACK DLASCL lines."""
+    import warnings
+
+    rng = np.random.default_rng(4)
+    t = np.arange(2000) / 100.0
+    stamps = 81_234_567_890_123 + np.round(t * 1e9).astype(np.int64)  # ns since boot
+    x = 0.2 * np.sin(2 * np.pi * 3.75 * t) + 0.05 * np.sin(4 * np.pi * 3.75 * t) + 0.05 * rng.standard_normal(t.size)
+    p = tmp_path / "android_accelerometer.csv"
+    p.write_text(
+        "timestamp,accuracy,x,y,z\n"  # the status first: once the default channel
+        + "".join(
+            f"{s},3,{a:.5f},{0.05 * b:.5f},{9.81 + 0.05 * c:.5f}\n"
+            for s, a, b, c in zip(stamps, x, *rng.standard_normal((2, t.size)))
+        )
+    )
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        ctx = analyse(str(p), speed=0.5)
+    captured = capfd.readouterr()
+    assert ctx.channel == "x" and ctx.summary["status"] == "ok"
+    assert "DLASCL" not in captured.out + captured.err

@@ -48,7 +48,10 @@ _STATUS_NAME = re.compile(r"^(?:accuracy|status|state|flags?|quality|valid(?:ity
 def is_status(name, values) -> bool:
     """Whether a column is a status and not a signal: named like one (``accuracy``, ``status``) and holding
     few distinct integers, or holding one value only."""
-    v = np.asarray(values, dtype=float)
+    try:
+        v = np.asarray(values, dtype=float).ravel()
+    except (TypeError, ValueError):  # text or stamps: not a signal vibkit analyses anyway
+        return False
     v = v[np.isfinite(v)]
     if v.size < 2:
         return False
