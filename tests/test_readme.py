@@ -35,8 +35,13 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 README = ROOT / "README.md"
-#: the documentation's pages, in a stable order (docs/_build is Sphinx's output)
-DOC_PAGES = sorted(p for p in (ROOT / "docs").rglob("*.md") if "_build" not in p.parts)
+#: the documentation's pages, in a stable order; not Sphinx's output (docs/_build) nor the benchmark
+#: pages it writes (docs/benchmarks/results, each including a file of benchmarks/results)
+DOC_PAGES = sorted(
+    p
+    for p in (ROOT / "docs").rglob("*.md")
+    if "_build" not in p.parts and not p.is_relative_to(ROOT / "docs" / "benchmarks" / "results")
+)
 FULL = os.environ.get("VIBKIT_README_FULL") == "1"
 
 # commands (by their first words) changed in the default, cheap run; None: --help only
