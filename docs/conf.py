@@ -87,9 +87,17 @@ write_benchmark_pages()
 
 
 def _changelog_guard(app, docname, source):
-    """Without a CHANGELOG.md at the repository root the changelog page says so instead of failing."""
-    if docname == "changelog" and not (ROOT / "CHANGELOG.md").exists():
+    """The changelog page includes ``CHANGELOG.md`` from the repository root, given a title if its first
+    heading is not one; without the file the page says so instead of failing the build."""
+    if docname != "changelog":
+        return
+    path = ROOT / "CHANGELOG.md"
+    if not path.exists():
         source[0] = "# Changelog\n\nThis checkout has no `CHANGELOG.md` at the repository root.\n"
+        return
+    first = next((line for line in path.read_text(encoding="utf-8").splitlines() if line.startswith("#")), "")
+    if not first.startswith("# "):
+        source[0] = "# Changelog\n\n```{include} ../CHANGELOG.md\n```\n"
 
 
 def _escape_bars(app, what, name, obj, options, lines):
