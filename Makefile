@@ -6,7 +6,7 @@ VENV   ?= .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test lint format bench install clean
+.PHONY: demo test lint format bench docs install clean
 # `make bench` regenerates benchmarks/results/ (about 30 min on 2 cores); `vibkit bench --quick` is a smoke
 # run that writes into a temporary folder (or -o DIR), never into benchmarks/results/
 
@@ -43,5 +43,13 @@ $(VENV)/.bench: $(STAMP)
 bench: $(VENV)/.bench
 	$(BIN)/vibkit bench -o benchmarks/results
 
+# the documentation: docs/ -> docs/_build/html (Sphinx; every warning is an error; under a minute)
+$(VENV)/.docs: $(STAMP)
+	$(BIN)/python -m pip install --quiet -e '.[test,docs]'
+	@touch $(VENV)/.docs
+
+docs: $(VENV)/.docs
+	$(BIN)/sphinx-build -W --keep-going -q -b html docs docs/_build/html
+
 clean:
-	rm -rf $(VENV) build *.egg-info
+	rm -rf $(VENV) build *.egg-info docs/_build docs/api/generated docs/benchmarks/results
