@@ -164,3 +164,79 @@ def test_the_checks_can_fail(tmp_path, monkeypatch):
         test_imports_run_one_way()
     with pytest.raises(AssertionError, match="vibkit.runtime.a -> vibkit.runtime.b -> vibkit.runtime.a"):
         test_no_import_cycles_at_load_time()
+
+
+#: the names the compiled kernels give their parameter and work arrays and tuples (vibkit.model.slots):
+#: a compiled kernel reads them by named slot, never by a bare number
+SLOT_ARRAYS = frozenset({"prm", "fp", "ip", "ws", "info", "tb", "head"})
+
+
+def _is_compiled(fn: ast.AST) -> bool:
+    """Whether a function is decorated with numba's njit or jit (bare, called, or as nb.njit)."""
+    for dec in fn.decorator_list:
+        target = dec.func if isinstance(dec, ast.Call) else dec
+        name = target.attr if isinstance(target, ast.Attribute) else getattr(target, "id", None)
+        if name in ("njit", "jit"):
+            return True
+    return False
+
+
+def _literal_int(node: ast.AST | None) -> bool:
+    if isinstance(node, ast.UnaryOp) and isinstance(node.op, (ast.USub, ast.UAdd)):
+        node = node.operand
+    return isinstance(node, ast.Constant) and isinstance(node.value, int)
+
+
+def _bare_slot(index: ast.AST) -> bool:
+    """A bare integer, a slice with a bare integer bound, or a tuple index holding either."""
+    if _literal_int(index):
+        return True
+    if isinstance(index, ast.Slice):
+        return _literal_int(index.lower) or _literal_int(index.upper)
+    if isinstance(index, ast.Tuple):
+        return any(_bare_slot(e) for e in index.elts)
+    return False
+
+
+def bare_slots(source: str, filename: str = "<string>") -> list[str]:
+    """``file:line: kernel reads array[...]`` for each bare-number subscript of a slot array
+    (:data:`SLOT_ARRAYS`, also ``prm[2][5]``) inside a compiled kernel of ``source``."""
+    found = []
+    for fn in ast.walk(ast.parse(source, filename=filename)):
+        if not (isinstance(fn, (ast.FunctionDef, ast.AsyncFunctionDef)) and _is_compiled(fn)):
+            continue
+        for node in ast.walk(fn):
+            if not isinstance(node, ast.Subscript) or not _bare_slot(node.slice):
+                continue
+            base = node.value
+            while isinstance(base, ast.Subscript):  # prm[PRM_IP][3]: the array is prm's slot
+                base = base.value
+            if isinstance(base, ast.Name) and base.id in SLOT_ARRAYS:
+                found.append(f"{filename}:{node.lineno}: {fn.name} reads {ast.unparse(node)}")
+    return found
+
+
+def test_compiled_kernels_read_slots_by_name():
+    found = []
+    for _, (path, _) in sorted(MODULES.items()):
+        found += bare_slots(path.read_text(), str(path.relative_to(PKG.parent)))
+    assert not found, "name the slot (vibkit.model.slots):\n" + "\n".join(found)
+
+
+def test_the_slot_check_can_fail():
+    source = (
+        "import numba as nb\n"
+        "from numba import njit\n"
+        "@nb.njit(cache=True)\n"
+        "def k(fp, ip, prm, info):\n"
+        "    a = fp[3] + fp[FP_G]\n"
+        "    info[10:13] = 0.0\n"
+        "    return prm[3][-1] + ip[IP_N]\n"
+        "@njit\n"
+        "def j(ws):\n"
+        "    return ws[18]\n"
+        "def python_side(fp):\n"
+        "    return fp[3]\n"
+    )
+    found = sorted(f.split(": ", 1)[1] for f in bare_slots(source))
+    assert found == ["j reads ws[18]", "k reads fp[3]", "k reads info[10:13]", "k reads prm[3]", "k reads prm[3][-1]"]

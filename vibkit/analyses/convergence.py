@@ -1,4 +1,4 @@
-"""Does a forward run's physics still change with the tolerance? A verdict, not a guess (issue 20).
+"""Does a forward run's physics still change with the tolerance? A verdict, not a guess.
 
 A result counts only when it no longer changes with the tolerance. :func:`checked_forward` runs the
 scene at its tolerance and again at a tolerance 100 times tighter, and compares what a user reads
