@@ -68,7 +68,7 @@ class _Section:
 
 @dataclasses.dataclass(frozen=True)
 class SceneSection(_Section):
-    name: str = key("", "the scene's name (default: the file's stem)", types=(str,))
+    name: str = key("", "the scene's name; not set: the file's stem", types=(str,), derived=True)
     analysis: str = key("", '"kinematics", "inverse" or "forward"', types=(str,), required=True)
     description: str = key("", "one line on what the scene is", "", types=(str,))
 
@@ -94,8 +94,10 @@ class ChainSection(_Section):
     n_rollers: int | str = key(
         "", 'number of rollers, or "fill": as many links as fit the guide', "fill", types=(int, str)
     )
-    worn_link: int = key("", "number (1..n) of one link of another pitch (with worn_link_pitch)", types=(int,))
-    worn_link_pitch: float = key("m", "pitch of the worn link (with worn_link)")
+    worn_link: int = key(
+        "", "number (1..n) of one link of another pitch (with worn_link_pitch); not set: no worn link", types=(int,)
+    )
+    worn_link_pitch: float = key("m", "pitch of the worn link (with worn_link); not set: no worn link")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -132,7 +134,7 @@ class RunSection(_Section):
     output_step: float = key("s", "output step (forward)", required=True)
     start: float = key("m", "position of roller 1 at t = 0 (reduced modulo the perimeter)", 0.0)
     initial_speed: float = key("m/s", "chain speed at t = 0", 0.0, range=_SPEED)
-    seed: int = key("", "a seed; read by no analysis", types=(int,))
+    seed: int = key("", "a seed, recorded; read by no analysis; not set: none", types=(int,))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -167,7 +169,9 @@ class SolverSection(_Section):
 class OutputsSection(_Section):
     variables: tuple = key("", "names of the outputs", ("delta", "closure_residual"), types=(list,))
     rollers: tuple = key("", "1-based numbers of the rollers whose motion is stored", (), types=(list,))
-    step_accelerometer: int = key("", "1-based step carrying the accelerometer of accel_step", types=(int,))
+    step_accelerometer: int = key(
+        "", "1-based step carrying the accelerometer of accel_step; not set: none", types=(int,)
+    )
 
 
 # effects -----------------------------------------------------------------------------------------
