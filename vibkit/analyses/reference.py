@@ -47,8 +47,8 @@ import scipy.sparse as sp
 from scipy.sparse.linalg import splu
 
 from ..model.effects import FP, IP, motor_torque, pack_parameters
-from ..model.schema import effect_options, nominal_speed
 from ..model.guide import BX, BZ, KAPPA, S0, SIGP, local_inverse, local_map, local_point, locate, point_partials
+from ..model.schema import effect_options, nominal_speed
 from .integrate import IntegrationError
 from .results import make_dataset
 from ..model.sprocket import contact_kernel

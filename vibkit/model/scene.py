@@ -5,20 +5,12 @@ missing value or a non-physical number is a :class:`SceneError` that names the f
 A scene asks only for the effects and outputs it needs; :func:`vibkit.simulate` assembles,
 evaluates and stores only those.
 
-Layout (see ``sim/*.toml`` for complete examples)::
-
-    [scene]        name, analysis = "kinematics" | "inverse" | "forward", description
-    [guide]        tensioner_length, lower_landing, upper_landing, transition_radius,
-                   incline_angle_deg, incline_length, head_radius (or "sprocket")
-    [chain]        link_pitch, roller_radius, roller_mass, n_rollers (or "fill")
-    [sprocket]     teeth, base_width, tip_width, tooth_height, mass, inertia
-    [kinematics]   start, stop, step                      (analysis = "kinematics")
-    [motion]       speed, duration, step, start           (analysis = "inverse")
-    [run]          duration, output_step, start, initial_speed, seed   (analysis = "forward")
-    [effects.*]    gravity, contact, motor, passengers, tensioner, rolling_resistance
-    [solver]       method, rtol, atol, max_step, check (convergence verdict), check_min_rtol,
-                   closure ("table", the default, or "exact")
-    [outputs]      variables, rollers, step_accelerometer
+The sections are ``[scene]``, ``[guide]``, ``[chain]``, ``[sprocket]``, the analysis's own
+(``[kinematics]``, ``[motion]`` or ``[run]``), ``[solver]`` (forward), ``[effects.*]`` and ``[outputs]``
+(see ``sim/*.toml`` for complete examples). Every key, with its unit, default, plausible range and
+meaning, is declared once in :mod:`vibkit.model.schema` (:func:`~vibkit.model.schema.schema_table`
+renders them as a table); this module reads the TOML, checks it against the schema and the rules
+between keys (the chain closes on the guide, a tooth fits a link, ...), and builds the typed scene.
 """
 
 from __future__ import annotations

@@ -20,6 +20,7 @@ import dataclasses
 import math
 from collections.abc import Mapping
 
+from ..runtime.budget import DEFAULT_MAX_RESULT_BYTES, DEFAULT_MAX_WALL_TIME
 from .params import GRAVITY, reference_chain, reference_guide, reference_sprocket
 
 __all__ = [
@@ -31,6 +32,7 @@ __all__ = [
     "SECTIONS",
     "effect_options",
     "gravity_of",
+    "key_units",
     "nominal_speed",
     "schema_fields",
     "schema_table",
@@ -75,12 +77,14 @@ class SceneSection(_Section):
 
 @dataclasses.dataclass(frozen=True)
 class GuideSection(_Section):
-    tensioner_length: float = key("m", "length of the tensioner's straight", _RG.tensioner_length)
-    lower_landing: float = key("m", "length of the lower landing", _RG.lower_landing)
-    upper_landing: float = key("m", "length of the upper landing", _RG.upper_landing)
-    transition_radius: float = key("m", "radius of the curves between landings and incline", _RG.transition_radius)
+    tensioner_length: float = key(
+        "m", "length Lt of each telescopic run of the tensioner, undeformed", _RG.tensioner_length
+    )
+    lower_landing: float = key("m", "length L1 of the horizontal lower landing", _RG.lower_landing)
+    upper_landing: float = key("m", "length L2 of the horizontal upper landing", _RG.upper_landing)
+    transition_radius: float = key("m", "radius r_t of the four transition arcs", _RG.transition_radius)
     incline_angle_deg: float = key("deg", "angle of the incline, in (0, 90)", math.degrees(_RG.incline_angle))
-    incline_length: float = key("m", "length of the incline", _RG.incline_length)
+    incline_length: float = key("m", "length L of the straight incline", _RG.incline_length)
     head_radius: float | str = key(
         "m", 'radius of the heads, or "sprocket": the sprocket\'s pitch radius', "sprocket", types=(float, str)
     )
@@ -88,9 +92,9 @@ class GuideSection(_Section):
 
 @dataclasses.dataclass(frozen=True)
 class ChainSection(_Section):
-    link_pitch: float = key("m", "link pitch (roller to roller)", _RC.link_pitch)
-    roller_radius: float = key("m", "roller radius", _RC.roller_radius)
-    roller_mass: float = key("kg", "mass per roller (roller, link and its share of the step)", _RC.roller_mass)
+    link_pitch: float = key("m", "distance between consecutive roller centres", _RC.link_pitch)
+    roller_radius: float = key("m", "roller radius r_d", _RC.roller_radius)
+    roller_mass: float = key("kg", "point mass per roller (a third of a step plus one pitch of chain)", _RC.roller_mass)
     n_rollers: int | str = key(
         "", 'number of rollers, or "fill": as many links as fit the guide', "fill", types=(int, str)
     )
@@ -141,13 +145,20 @@ class RunSection(_Section):
 class SolverSection(_Section):
     method: str = key("", "integrator (vibkit.analyses.integrate.METHODS)", "dopri5", types=(str,))
     rtol: float = key("", "relative tolerance; not set: chosen from the contact stiffness", range=(1e-14, 0.1, ""))
-    atol: float = key("m, rad", f"absolute tolerance; not set: rtol x {ATOL_PER_RTOL:g}", range=(0.0, 1.0, ""))
+    atol: float = key(
+        "",
+        f"absolute tolerance (m of delta, rad of the sprocket); not set: rtol x {ATOL_PER_RTOL:g}",
+        range=(0.0, 1.0, ""),
+    )
     max_step: float = key("s", "largest integrator step", math.inf)
     first_step: float = key("s", "first integrator step; not set: the integrator's choice")
-    max_wall_time: float = key("s", "wall-time budget; not set: $VIBKIT_MAX_WALL_TIME, else 600 s")
+    max_wall_time: float = key(
+        "s", f"wall-time budget; not set: $VIBKIT_MAX_WALL_TIME, else {DEFAULT_MAX_WALL_TIME:g} s"
+    )
     max_result_bytes: float | str = key(
         "bytes",
-        'result-size limit ("2GiB" or a number); not set: $VIBKIT_MAX_RESULT_BYTES, else 2 GiB',
+        'result-size limit ("2GiB" or a number); not set: $VIBKIT_MAX_RESULT_BYTES, else '
+        f"{DEFAULT_MAX_RESULT_BYTES / 1024**3:g} GiB",
         types=(float, str),
     )
     events: bool = key("", "end steps where a roller crosses a curvature jump of the guide", True, types=(bool,))
@@ -200,9 +211,11 @@ class ContactOptions(_Section):
 @dataclasses.dataclass(frozen=True)
 class MotorOptions(_Section):
     kp: float = key(
-        "N m s/rad", "proportional gain of the speed controller", required=True, range=(0.0, 1e8, "N m s/rad")
+        "N m s", "proportional gain (per rad/s of speed error)", required=True, range=(0.0, 1e8, "N m s/rad")
     )
-    ki: float = key("N m/rad", "integral gain of the speed controller", 0.0, range=(0.0, 1e9, "N m/rad"))
+    ki: float = key(
+        "N m", "integral gain of the speed controller (per rad of angle error)", 0.0, range=(0.0, 1e9, "N m/rad")
+    )
     speed: float = key("m/s", "nominal chain speed", required=True, range=(-10.0, 10.0, "m/s"))
     torque_limit: float = key("N m", "largest motor torque", math.inf, range=(0.0, 1e8, "N m"))
 
@@ -310,9 +323,24 @@ def nominal_speed(effects: Mapping, run: RunSection) -> float:
     return effects["motor"].speed if "motor" in effects else run.initial_speed
 
 
+def key_units() -> dict:
+    """Dotted key -> unit of every number key (``"1"`` for a pure number), as a coordinate's ``units``."""
+    out = {}
+    for sec, f in schema_fields():
+        types = f.metadata["types"]
+        if float in types or int in types:
+            out[f"{sec}.{f.name}"] = f.metadata["unit"] or "1"
+        elif bool in types or str in types:
+            out[f"{sec}.{f.name}"] = ""
+    return out
+
+
 def _fmt(v):
+    """A default as TOML writes it ("not set" for None)."""
     if v is None:
-        return ""
+        return "not set"
+    if isinstance(v, bool):
+        return "true" if v else "false"
     if isinstance(v, tuple):
         return "[" + ", ".join(repr(x) for x in v) + "]"
     if isinstance(v, str):
