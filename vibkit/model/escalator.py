@@ -62,8 +62,10 @@ class EscalatorModel:
         tab = self.guide.table
         return float(tab[seg, 0] + 0.5 * tab[seg, 1])
 
-    def passenger_schedule(self, opts: dict, start: float):
+    def passenger_schedule(self, opts, start: float):
         """Where or when each passenger is aboard: (by_place, board, alight) arrays.
+
+        ``opts`` are the passengers' options (:class:`vibkit.model.schema.PassengersOptions`).
 
         By place (the default): board and alight are the unwrapped undeformed coordinates that the
         middle roller of the passenger's step passes when it reaches the boarding and alighting
@@ -87,7 +89,7 @@ class EscalatorModel:
             a_abs.append(sa + j * p0)
         return True, np.asarray(b_abs), np.asarray(a_abs)
 
-    def passenger_forces(self, opts: dict, t: float, g: float, fz: np.ndarray, *, s0=None, schedule=None) -> None:
+    def passenger_forces(self, opts, t: float, g: float, fz: np.ndarray, *, s0=None, schedule=None) -> None:
         """Add each passenger's weight, shared by the three rollers of its step, while aboard.
 
         ``schedule`` is :meth:`passenger_schedule`'s result; by place, ``s0`` holds the rollers'
