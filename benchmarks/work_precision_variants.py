@@ -40,7 +40,7 @@ STIFFNESS = (1e5, 1e6, 1e7)
 def variant(name, k, rtol=None, check=False, closure="table"):
     sc = load_scene(ROOT / "sim" / f"{name}.toml")
     eff = dict(sc.effects)
-    eff["contact"] = dict(eff["contact"], stiffness=k)
+    eff["contact"] = replace(eff["contact"], stiffness=k)
     outs = tuple(dict.fromkeys(tuple(sc.outputs["variables"]) + ("flank_force", "sprocket_speed", "delta")))
     solver = dict(sc.sections["solver"], check=check, closure=closure)
     if rtol is not None:

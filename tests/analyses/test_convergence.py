@@ -19,7 +19,7 @@ def scene(name, *, stiffness=None, solver=None, run=None, effects=None, outputs=
     sc = load_scene(SIM / f"{name}.toml")
     eff = dict(sc.effects) if effects is None else effects
     if stiffness is not None:
-        eff["contact"] = dict(eff["contact"], stiffness=stiffness)
+        eff["contact"] = replace(eff["contact"], stiffness=stiffness)
     sections = dict(sc.sections)
     sections["solver"] = {**sections["solver"], **(solver or {})}
     sections["run"] = {**sections["run"], **(run or {})}

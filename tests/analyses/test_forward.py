@@ -254,7 +254,7 @@ def test_passengers_board_and_alight_at_the_landings():
         assert float(model.guide.curvature(s, 0.0)) == 0.0
     conf = model.chain.configure(0.0)
     p0 = model.guide.p0
-    mid3, mid53 = (int(model.step_rollers(st)[1]) for st in opts["step"])
+    mid3, mid53 = (int(model.step_rollers(st)[1]) for st in opts.step)
     # step 3 is already past the boarding place at t = 0: it carries its passenger from the start
     assert board[0] <= conf.s0[mid3] < alight[0]
     assert board[0] == pytest.approx(lower) and alight[0] == pytest.approx(upper)

@@ -126,7 +126,7 @@ def test_interrupted_sweep_resumes_without_recomputing(scene_file, tmp_path, gri
     real = SW._simulate
 
     def counting(scene, duration):
-        calls.append((scene.chain.link_pitch, scene.effects["contact"]["stiffness"]))
+        calls.append((scene.chain.link_pitch, scene.effects["contact"].stiffness))
         return real(scene, duration)
 
     monkeypatch.setattr(SW, "_simulate", counting)

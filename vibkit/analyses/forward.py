@@ -25,6 +25,7 @@ from ..model.effects import (
     reset_closure,
 )
 from ..model.pitch_table import build_table, empty_table, table_applies, table_delta, table_evaluate, table_spacing
+from ..model.schema import effect_options, nominal_speed
 from ..model.slots import (
     FP_CARRIAGE_MASS,
     FP_CLOSURE_TOL,
@@ -86,7 +87,7 @@ class ForwardModel:
 
     def __init__(self, model, effects, *, start=0.0):
         self.model = model
-        self.effects = effects
+        self.effects = effect_options(effects)
         self.prm = pack_parameters(model, effects, start=start)
         self.work = Work(model.n, model.sprocket.teeth)
 
@@ -134,27 +135,27 @@ def forward_dynamics(
     Keyword arguments override the scene's solver settings, outputs and effects (for benchmarks).
     """
     scene = model.scene
-    run = scene.section("run")
-    solver = scene.section("solver")
-    effects = scene.effects if effects is None else effects
+    run = scene.run
+    solver = scene.solver
+    effects = effect_options(scene.effects if effects is None else effects)
     outputs = scene.outputs["variables"] if outputs is None else outputs
-    duration = duration or run["duration"]
-    dt = run["output_step"]
+    duration = duration or run.duration
+    dt = run.output_step
     if t_out is None:
         t_out = np.arange(0.0, duration + 0.5 * dt, dt)
-    fm = ForwardModel(model, effects, start=run.get("start", 0.0))
-    y0, d0 = initial_state(model, start=run.get("start", 0.0), speed=run.get("initial_speed", 0.0))
+    fm = ForwardModel(model, effects, start=run.start)
+    y0, d0 = initial_state(model, start=run.start, speed=run.initial_speed)
     reset_closure(fm.info, d0)
-    method = method or solver.get("method", "dopri5")
-    rtol = rtol or solver.get("rtol") or default_rtol(effects)
-    atol = atol or solver.get("atol", rtol * 1e-2)
+    method = method or solver.method
+    rtol = rtol or solver.rtol or default_rtol(effects)
+    atol = atol or solver.atol_for(rtol)
     # dopri5 ends its steps where a roller crosses a curvature jump of the guide
     if events is None:
-        events = solver.get("events", True)
+        events = solver.events
     t_events = None
     crossings, t_events = _events(model, fm)
     events, t_events = (crossings, t_events) if events else (None, None)
-    table, closure = forward_table(model, fm, crossings[0], rtol, solver.get("closure", "table"))
+    table, closure = forward_table(model, fm, crossings[0], rtol, solver.closure)
     y_out, stats = integrate(
         fm.prm,
         fm.work.arrays,
@@ -163,9 +164,9 @@ def forward_dynamics(
         method=method,
         rtol=rtol,
         atol=atol,
-        max_step=solver.get("max_step", math.inf),
-        first_step=solver.get("first_step"),
-        max_wall_time=solver.get("max_wall_time", math.inf),
+        max_step=solver.max_step,
+        first_step=solver.first_step,
+        max_wall_time=math.inf if solver.max_wall_time is None else solver.max_wall_time,
         progress=progress,
         events=events,
         t_events=t_events,
@@ -268,7 +269,8 @@ def default_rtol(effects):
     tolerance gives a converged history (an undamped stiff chain rattling chaotically) no default
     can be right: ``check`` reports such a run as sensitive.
     """
-    k = effects.get("contact", {}).get("stiffness", 0.0) if "contact" in effects else 0.0
+    effects = effect_options(effects)
+    k = effects["contact"].stiffness if "contact" in effects else 0.0
     if not k > REFERENCE_STIFFNESS:
         return DEFAULT_RTOL
     return max(1e-11, float(f"{DEFAULT_RTOL * (REFERENCE_STIFFNESS / k) ** 3:.3g}"))
@@ -526,7 +528,7 @@ def _post_process(fm, t, y, outputs, stats, y_obs=None, table=None):
         "flank_force",
     }
     light_contact = bool({"indentation", "contact_force", "flank_force"} & want) and "contact" in fm.effects
-    if light_contact and fm.effects["contact"].get("damping", 0.0) != 0.0:
+    if light_contact and fm.effects["contact"].damping != 0.0:
         light = False  # damped contact forces need the rollers' velocities
     scal[:] = np.nan
     # light outputs come from the table where the run used one, unless the closure residual is asked
@@ -601,7 +603,7 @@ def _post_process(fm, t, y, outputs, stats, y_obs=None, table=None):
         for name, arr in (("roller_position", rp), ("roller_velocity", rv), ("roller_acceleration", ra)):
             if name in want:
                 data[name] = (("time", "roller", "axis"), arr)
-    nominal = fm.effects.get("motor", {}).get("speed", scene.section("run").get("initial_speed", 0.0))
+    nominal = nominal_speed(fm.effects, scene.run)
     attrs = {
         "chain_speed_m_s": float(nominal),
         "link_pass_frequency_hz": model.link_pass_frequency(nominal) if nominal else 0.0,

@@ -47,6 +47,7 @@ from scipy.sparse.linalg import splu
 
 from ..model.effects import pack_parameters
 from ..model.guide import S0, SIGP, local_inverse
+from ..model.schema import effect_options, nominal_speed
 from .integrate import IntegrationError
 from .results import make_dataset
 from .study_kernels import assemble, kkt_pattern, study_closure_residual, study_kinematics
@@ -126,12 +127,12 @@ class StudyFormulation:
             if isinstance(value, bool) or not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0):
                 raise ValueError(f"Baumgarte constant {name} must be a finite number >= 0 [1/s], got {value!r}")
         self.model = model
-        self.effects = effects
+        self.effects = effects = effect_options(effects)
         self.alpha = float(alpha)
         self.beta = float(beta)
         self.coordinate_map = coordinate_map
         self.linear = coordinate_map == "study"
-        if "passengers" in effects and isinstance(list(effects["passengers"]["board"])[0], str):
+        if "passengers" in effects and isinstance(list(effects["passengers"].board)[0], str):
             raise ValueError(
                 "the study's formulation takes passengers by time (effects.passengers.board and "
                 "alight in seconds), not by place"
@@ -406,13 +407,13 @@ def run_study(
             raise ValueError(f"{name} must be a positive number, got {value!r}")
     if method not in _SOLVE_IVP_METHODS:
         raise ValueError(f"method must be one of {', '.join(_SOLVE_IVP_METHODS)}, got {method!r}")
-    run = scene.section("run")
-    dt = output_step if output_step is not None else run["output_step"]
+    run = scene.run
+    dt = output_step if output_step is not None else run.output_step
     if not dt > 0:
         raise ValueError(f"output_step must be positive [s], got {dt!r}")
     model = EscalatorModel(scene)
     form = StudyFormulation(model, scene.effects, alpha=alpha, beta=beta, coordinate_map=coordinate_map)
-    y0 = form.initial_state(start=run.get("start", 0.0), speed=run.get("initial_speed", 0.0))
+    y0 = form.initial_state(start=run.start, speed=run.initial_speed)
     t_out = np.arange(0.0, duration + 0.5 * dt, dt)  # the grid of vibkit.analyses.forward.forward_dynamics
     from scipy.integrate import solve_ivp
 
@@ -456,7 +457,7 @@ def _dataset(form, sol, wall, method, rtol, atol, max_step):
         tension[j] = obs["link_tension"]
     data = {name: (("time",), out[name]) for name in scalars}
     data["link_tension"] = (("time", "link"), tension)
-    nominal = form.effects.get("motor", {}).get("speed", scene.section("run").get("initial_speed", 0.0))
+    nominal = nominal_speed(form.effects, scene.run)
     attrs = {
         "formulation": "study: p + 2 coordinates, Lagrange multipliers, Baumgarte stabilisation",
         "baumgarte_alpha_per_s": form.alpha,

@@ -31,6 +31,7 @@ import numpy as np
 
 from .chain import acceleration_terms, close_with_slope, fill_partials, sensitivity, velocity_coefficients
 from .dynamics import reduced_equation
+from .schema import effect_options, gravity_of
 from .slots import (
     FP,
     FP_CARRIAGE_MASS,
@@ -128,7 +129,9 @@ class Work:
 
 
 def pack_parameters(model, effects: dict, *, start: float = 0.0):
-    """Parameter arrays for the compiled kernels from a model and the scene's effects."""
+    """Parameter arrays for the compiled kernels from a model and the scene's effects (typed options or
+    plain tables: :func:`vibkit.model.schema.effect_options`)."""
+    effects = effect_options(effects)
     n = model.n
     fp = np.zeros(len(FP))
     ip = np.zeros(len(IP), dtype=np.int64)
@@ -152,17 +155,17 @@ def pack_parameters(model, effects: dict, *, start: float = 0.0):
     ip[IP["nteeth"]] = model.sprocket.teeth
     if "gravity" in effects:
         ip[IP["gravity"]] = 1
-        fp[FP["g"]] = effects["gravity"].get("g", 9.81)
+        fp[FP["g"]] = effects["gravity"].g
     if "contact" in effects:
         ip[IP["contact"]] = 1
         o = effects["contact"]
-        fp[FP["k"]], fp[FP["expo"]], fp[FP["damp"]] = o["stiffness"], o.get("exponent", 1.5), o.get("damping", 0.0)
+        fp[FP["k"]], fp[FP["expo"]], fp[FP["damp"]] = o.stiffness, o.exponent, o.damping
     if "motor" in effects:
         ip[IP["motor"]] = 1
         o = effects["motor"]
-        fp[FP["kp"]], fp[FP["ki"]] = o["kp"], o.get("ki", 0.0)
-        fp[FP["wref"]] = -o["speed"] / geo["pitch_radius"]
-        fp[FP["tlim"]] = o.get("torque_limit", math.inf)
+        fp[FP["kp"]], fp[FP["ki"]] = o.kp, o.ki
+        fp[FP["wref"]] = -o.speed / geo["pitch_radius"]
+        fp[FP["tlim"]] = o.torque_limit
     pm = np.zeros(0)
     ps = np.zeros(0, dtype=np.int64)
     pb = np.zeros(0)
@@ -171,19 +174,19 @@ def pack_parameters(model, effects: dict, *, start: float = 0.0):
         o = effects["passengers"]
         by_place, pb, pa = model.passenger_schedule(o, start)
         ip[IP["passengers"]] = 2 if by_place else 1
-        pm = np.asarray(o["mass"], dtype=float)
-        ps = np.asarray(o["step"], dtype=np.int64)
+        pm = np.asarray(o.mass, dtype=float)
+        ps = np.asarray(o.step, dtype=np.int64)
         if "gravity" not in effects:
-            fp[FP["g"]] = 9.81
+            fp[FP["g"]] = gravity_of(effects)
     if "tensioner" in effects:
         ip[IP["tensioner"]] = 1
         o = effects["tensioner"]
-        fp[FP["k_s"]], fp[FP["preload"]], fp[FP["m_c"]] = o["stiffness"], o["preload"], o["mass"]
+        fp[FP["k_s"]], fp[FP["preload"]], fp[FP["m_c"]] = o.stiffness, o.preload, o.mass
     if "rolling_resistance" in effects:
         ip[IP["rolling"]] = 1
-        fp[FP["mu_rr"]] = effects["rolling_resistance"]["coefficient"]
+        fp[FP["mu_rr"]] = effects["rolling_resistance"].coefficient
         if "gravity" not in effects:
-            fp[FP["g"]] = 9.81
+            fp[FP["g"]] = gravity_of(effects)
     return (model.guide.table, model.corners_local, fp, ip, model.mass.copy(), pm, ps, pb, pa, model.chain.pitches)
 
 

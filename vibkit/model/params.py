@@ -21,7 +21,9 @@ __all__ = [
 ]
 
 GRAVITY = 9.81
-"""Acceleration of gravity used by the study. [m/s^2]"""
+"""Acceleration of gravity used by the study and ``model.md`` (the default of ``effects.gravity.g``); not
+the standard gravity 9.80665 that defines the unit g (:data:`vibkit.runtime.constants.STANDARD_GRAVITY`).
+[m/s^2]"""
 
 
 def _positive(obj, *names):

@@ -127,11 +127,11 @@ def _scene_speed(scene):
     if scene is None:
         return None
     if scene.analysis == "inverse":
-        return float(scene.section("motion")["speed"])
+        return float(scene.motion.speed)
     if scene.analysis == "forward":
-        return (
-            float(scene.effects.get("motor", {}).get("speed", scene.section("run").get("initial_speed", 0.0))) or None
-        )
+        from ...model.schema import nominal_speed
+
+        return float(nominal_speed(scene.effects, scene.run)) or None
     return None
 
 
