@@ -271,31 +271,10 @@ def estimate_pitch(
     >>> round(estimate_pitch(rec, speed=0.5).pitch_m, 4)
     0.1333
     """
-    req = _request(
-        speed,
-        speed_sigma,
-        band,
-        nominal_pitch,
-        limits_percent,
-        pitch_range,
-        n_harmonics,
-        teeth,
-        p_fa,
-        speed_source,
-        frequency_only,
-    )
+    req = _request(speed, speed_sigma, band, nominal_pitch, limits_percent, pitch_range, teeth, p_fa, frequency_only)
     name = pick_channel(recording, channel)
     prep = steps.prepare_bursts(recording, name, req.band)
-    common = dict(
-        channel=name,
-        speed_m_s=req.speed,
-        speed_sigma_m_s=req.speed_sigma,
-        band_hz=req.band,
-        limits_percent=req.limits,
-        invalid_samples=prep.invalid,
-        speed_source=speed_source,
-        extra={"units": str(recording[name].attrs.get("units", "1")), "frequency_only": bool(frequency_only)},
-    )
+    common = _common(recording, name, req, prep, speed_source)
     det = steps.detect(prep, band=req.band, n_harmonics=n_harmonics, p_fa=p_fa)
     if not det.detected:
         dec = decide(LinkPassEvidence(detected=False, detection_reason=det.reason))
@@ -307,32 +286,15 @@ def estimate_pitch(
     for w in (w for be in ests for w in be.spectral.warnings):
         if w not in warnings:
             warnings.append(w)
-    pitch, psig, caveats, notes = steps.pitch_from(
-        comb, speed=req.speed, speed_sigma=req.speed_sigma, band=req.band, teeth=teeth
-    )
+    pitch, psig, caveats, notes = steps.pitch_from(comb, req)
     warnings += caveats
-    dec = decide(
-        steps.evidence(
-            det,
-            ests,
-            comb,
-            band=req.band,
-            speed=req.speed,
-            speed_sigma=req.speed_sigma,
-            nominal_pitch=nominal_pitch,
-            limits=req.limits,
-            speed_source=speed_source,
-            frequency_only=frequency_only,
-        )
-    )
+    dec = decide(steps.evidence(det, ests, comb, req, speed_source=speed_source))
     if not dec.has_link_pass:
         # refused: no frequency, pitch or verdict leaves this function (the reason says what the family implies)
         return _refusal(common, det, dec, [dec.reason, *warnings], notes, comb.method, comb.method_reason)
     if dec.status == STATUS_INCONCLUSIVE:
         warnings.insert(0, f"inconclusive: {dec.reason}")
     res = dict(
-        fundamental_hz=comb.f0,
-        fundamental_sigma_hz=comb.sigma,
         pitch_m=pitch,
         pitch_sigma_m=psig,
         harmonics=steps.harmonic_rows(ests, comb, prep.scale),
@@ -340,50 +302,15 @@ def estimate_pitch(
         hypotheses=steps.hypotheses([be.burst for be in ests], comb.f0, req.speed, int(teeth), req.pitch_range),
         warnings=warnings,
         notes=notes,
-        snr_db=float(np.mean([be.spectral.snr_db for be in ests])),
-        chi2_per_dof=comb.chi2,
         detection=det.as_dict(),
-        method=comb.method,
-        method_reason=comb.method_reason,
         decision=dec,
         status=dec.status,
         **common,
     )
-    if nominal_pitch is not None and not frequency_only:
-        nom = float(nominal_pitch)
-        res.update(
-            nominal_pitch_m=nom,
-            elongation_percent=100.0 * (pitch / nom - 1.0),
-            elongation_sigma_percent=100.0 * psig / nom,
-            verdict=dec.verdict,
-        )
-    return PitchEstimate(**res)
+    return PitchEstimate(**res, **_numbers(ests, comb, req, pitch, psig, dec))
 
 
-@dataclass(frozen=True)
-class _Request:
-    """The checked arguments of :func:`estimate_pitch` (SI)."""
-
-    speed: float
-    speed_sigma: float
-    band: tuple
-    pitch_range: tuple
-    limits: tuple
-
-
-def _request(
-    speed,
-    speed_sigma,
-    band,
-    nominal_pitch,
-    limits_percent,
-    pitch_range,
-    n_harmonics,
-    teeth,
-    p_fa,
-    speed_source,
-    frequency_only,
-):
+def _request(speed, speed_sigma, band, nominal_pitch, limits_percent, pitch_range, teeth, p_fa, frequency_only):
     """The arguments of :func:`estimate_pitch` checked (a one-line ValueError naming the first bad one), the
     band defaulting to ``speed / pitch_range``."""
     speed = float(speed)
@@ -407,7 +334,43 @@ def _request(
     band = tuple(float(v) for v in band)
     if len(band) != 2 or not 0 < band[0] < band[1]:
         raise ValueError(f"band must be (low, high) with 0 < low < high [Hz], got {band!r}")
-    return _Request(speed, speed_sigma, band, (lo_p, hi_p), limits)
+    return steps.Request(speed, speed_sigma, band, (lo_p, hi_p), limits, nominal_pitch, teeth, bool(frequency_only))
+
+
+def _common(recording, name, req, prep, speed_source):
+    """The fields every result has, refused or not."""
+    extra = {"units": str(recording[name].attrs.get("units", "1")), "frequency_only": req.frequency_only}
+    return dict(
+        channel=name,
+        speed_m_s=req.speed,
+        speed_sigma_m_s=req.speed_sigma,
+        band_hz=req.band,
+        limits_percent=req.limits,
+        extra=extra,
+        invalid_samples=prep.invalid,
+        speed_source=speed_source,
+    )
+
+
+def _numbers(ests, comb, req, pitch, psig, dec):
+    """The frequency, its method and fit, and (with a nominal pitch) the elongation and verdict."""
+    out = dict(
+        fundamental_hz=comb.f0,
+        fundamental_sigma_hz=comb.sigma,
+        snr_db=float(np.mean([be.spectral.snr_db for be in ests])),
+        chi2_per_dof=comb.chi2,
+        method=comb.method,
+        method_reason=comb.method_reason,
+    )
+    if req.nominal_pitch is not None and not req.frequency_only:
+        nom = float(req.nominal_pitch)
+        out.update(
+            nominal_pitch_m=nom,
+            elongation_percent=100.0 * (pitch / nom - 1.0),
+            elongation_sigma_percent=100.0 * psig / nom,
+            verdict=dec.verdict,
+        )
+    return out
 
 
 def _refusal(common, det, dec, warnings, notes, method, method_reason):

@@ -15,19 +15,17 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..signal.bursts import MAX_GAP_S, Burst, dropped_samples, uniform_bursts
-from ..signal.detect import FILL_THRESHOLD, flag_invalid
+from ..signal.detect import FILL_THRESHOLD, HARMONIC_SPAN, flag_invalid
 from ..signal.quantisation import quantisation_step
 from .decision import LinkPassEvidence, nearest_catalogue
 
 #: samples (from the start) whose levels give the recorder's quantisation step
 QUANTUM_SAMPLES = 1 << 20
-#: harmonics kept by the decimation before the estimate: up to this many times the band's top (the
-#: detection sums harmonics up to ten times the band, :func:`vibkit.signal.detect.detect_link_pass`)
-HARMONIC_SPAN = 10.0
-#: the decimated rate is at least this many times the highest frequency kept (anti-alias filter's room)
+#: the decimated rate is at least this many times the highest frequency kept: its Nyquist frequency 1.25
+#: times it, so that the decimation's low-pass (at 0.8 of Nyquist) passes it flat
 DECIMATION_OVERSAMPLE = 2.5
-#: bursts whose rate differs from the detection's by more than this fraction are left out of the detection
-#: test, which needs one sampling frequency (decimation may round a burst's rate)
+#: the detection test needs one sampling frequency: bursts whose rate differs from the median rate by more
+#: than this fraction are left out of it (they are still estimated)
 SAME_FS_TOLERANCE = 0.01
 #: spectral and mean-phase estimates further apart than this many combined sigmas: not stationary
 DISAGREE_SIGMAS = 5.0
@@ -40,21 +38,38 @@ TRACK_HARMONICS = 3
 WANDER_BINS = 0.5
 #: ... and over more than this many times the spread that noise alone gives
 WANDER_NOISE_FACTOR = 2.0
-#: burst estimates scattering more than this chi^2 per degree of freedom (two sigmas of scatter) disagree
-#: beyond their sigmas (speed drift between bursts): the combined sigma is widened by sqrt(chi^2)
+#: burst estimates scattering more than this chi^2 per degree of freedom (an rms scatter of two sigmas)
+#: disagree beyond their sigmas (speed drift between bursts): the combined sigma is widened by sqrt(chi^2)
 CHI2_WIDEN = 4.0
 #: a fundamental within 2 % of an edge of the search band may be cut off by it: warned
 BAND_EDGE_LOW = 1.02
 BAND_EDGE_HIGH = 0.98
 #: a predicted line this far over the floor is "seen" in the hypotheses (100 x the floor's power) [dB]
 SEEN_SNR_DB = 20.0
-#: the floor of the hypotheses' SNR: the median spectrum between these frequencies, above drift and below
-#: what an accelerometer's mounting passes [Hz]
+#: the floor of the hypotheses' SNR: the median spectrum between these frequencies, above the drift and the
+#: leakage of the mean, below 50 Hz where a link pass's first harmonics lie at any escalator speed (not the
+#: floor of a fast recorder's empty upper band) [Hz]
 SNR_FLOOR_BAND_HZ = (0.2, 50.0)
 #: zero padding of the hypotheses' spectrum (FFT length >= this many times the record)
 SNR_ZERO_PAD = 4
 #: power and floor are kept above this in the SNR's logarithm (an empty spectrum is not -inf dB)
 TINY_POWER = 1e-300
+
+
+@dataclass(frozen=True)
+class Request:
+    """The checked arguments of :func:`vibkit.diagnose.pitch.estimate_pitch` that the steps read (SI): speed
+    and its sigma [m/s], search band [Hz], plausible pitches [m], elongation limits [%], the nominal pitch
+    as given [m] (or None), sprocket teeth, and whether the speed is a placeholder (frequency only)."""
+
+    speed: float
+    speed_sigma: float
+    band: tuple
+    pitch_range: tuple
+    limits: tuple
+    nominal_pitch: object
+    teeth: int
+    frequency_only: bool
 
 
 @dataclass(frozen=True)
@@ -130,7 +145,7 @@ def prepare_bursts(recording, name, band):
 
 def _scaled(bursts, band):
     """Bursts scaled to unit size (no overflow or underflow in squares) and decimated to what the
-    harmonics need (``HARMONIC_SPAN band[1]`` kept); returns ``(bursts, scale)`` with ``x_original = scale x``."""
+    harmonics need (``HARMONIC_SPAN band[1]`` kept, the span the detection searches); returns ``(bursts, scale)`` with ``x_original = scale x``."""
     from ..signal._checks import decimate_for_band
 
     scale = max(float(np.max(np.abs(b.x - np.median(b.x)))) for b in bursts)
@@ -274,10 +289,11 @@ def combine(ests):
     return Combination(f0, sf, chi2, w, method, method_reason, warnings)
 
 
-def pitch_from(comb, *, speed, speed_sigma, band, teeth):
+def pitch_from(comb, req):
     """``(pitch, sigma, warnings, notes)``: ``L = v / f`` with ``sigma_L = L hypot(sigma_f / f, sigma_v / v)``,
     a warning when ``f`` sits at an edge of the band or the speed's uncertainty dominates."""
     f0, sf = comb.f0, comb.sigma
+    speed, speed_sigma, band, teeth = req.speed, req.speed_sigma, req.band, req.teeth
     warnings, notes = [], []
     if f0 < band[0] * BAND_EDGE_LOW or f0 > band[1] * BAND_EDGE_HIGH:
         warnings.append(
@@ -354,7 +370,7 @@ def burst_rows(ests):
     return per
 
 
-def evidence(det, ests, comb, *, band, speed, speed_sigma, nominal_pitch, limits, speed_source, frequency_only):
+def evidence(det, ests, comb, req, *, speed_source):
     """What :func:`vibkit.diagnose.decision.decide` weighs: the detection, the combined estimate, and the
     burst whose spectral and mean-phase estimates differ most (its steadiness check)."""
     worst = max(
@@ -376,11 +392,11 @@ def evidence(det, ests, comb, *, band, speed, speed_sigma, nominal_pitch, limits
         resolution_hz=1.0 / det.segment_s,
         fundamental_hz=comb.f0,
         fundamental_sigma_hz=comb.sigma,
-        band_hz=band,
-        speed_m_s=None if frequency_only else speed,
-        speed_sigma_m_s=speed_sigma,
-        nominal_pitch_m=None if frequency_only else nominal_pitch,
-        limits_percent=limits,
+        band_hz=req.band,
+        speed_m_s=None if req.frequency_only else req.speed,
+        speed_sigma_m_s=req.speed_sigma,
+        nominal_pitch_m=None if req.frequency_only else req.nominal_pitch,
+        limits_percent=req.limits,
         spectral_hz=worst[1] if worst else None,
         mean_phase_hz=worst[2] if worst else None,
         speed_source=speed_source,
