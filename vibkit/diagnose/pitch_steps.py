@@ -3,6 +3,7 @@
 bursts (:func:`prepare_bursts`) -> detection (:func:`detect`) -> per-burst estimates
 (:func:`estimate_bursts`) -> method (:func:`choose_methods`) -> combination (:func:`combine`) ->
 pitch (:func:`pitch_from`) -> decision (:func:`evidence` for :func:`vibkit.diagnose.decision.decide`).
+The rows of the result come from :func:`harmonic_rows`, :func:`burst_rows` and :func:`hypotheses`.
 Small frozen dataclasses carry what one step hands to the next; each step says why in its docstring,
 and every tuning number is a named constant here with its reason.
 """

@@ -9,22 +9,32 @@ recording into bursts:
 * :func:`split_segments` splits a Dataset or DataArray into its bursts (xarray objects, as they are);
 * :func:`uniform_bursts` splits one channel into :class:`Burst` arrays ready for a spectrum: invalid
   samples repaired or cut out, irregular time stamps resampled;
-* :func:`dropped_samples` counts the invalid samples that :func:`uniform_bursts` cut out.
+* :func:`dropped_samples` counts the invalid samples that :func:`uniform_bursts` cut out;
+* :func:`flag_invalid` says which samples are not measurements.
+
+Invalid samples (:func:`flag_invalid`)
+--------------------------------------
+Non-finite values, fill values (``|x| >= 1e30``, which covers netCDF's default 9.96921e36) and
+*absurd* values (further from the median than ``1e3`` times the median absolute deviation scaled to a
+Gaussian sigma, or ``1e6`` times when the MAD is zero) are not measurements.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from .detect import FILL_THRESHOLD, flag_invalid
-
 __all__ = [
+    "ABSURD_FACTOR",
+    "FILL_THRESHOLD",
     "JITTER_RESAMPLE",
     "MAX_GAP_S",
     "Burst",
+    "InvalidSamples",
     "dropped_samples",
+    "flag_invalid",
     "segment_numbers",
     "split_segments",
     "uniform_bursts",
@@ -35,6 +45,15 @@ __all__ = [
 JITTER_RESAMPLE = 0.01
 #: longest run of invalid samples interpolated; longer runs split the burst [s]
 MAX_GAP_S = 0.1
+#: values at or above this magnitude are fill values, never data (netCDF's default fill is 9.96921e36)
+FILL_THRESHOLD = 1e30
+#: a sample further from the median than this many robust sigmas is absurd (not a measurement)
+ABSURD_FACTOR = 1e3
+#: the median absolute deviation of Gaussian samples times this is their standard deviation (1 / Phi^-1(3/4))
+MAD_TO_SIGMA = 1.4826
+#: when more than half the samples equal the median (MAD 0: a quantised or clipped record), a sample is absurd
+#: beyond this many median non-zero deviations
+ABSURD_FACTOR_NO_MAD = 1e6
 
 
 @dataclass(frozen=True)
@@ -205,3 +224,72 @@ def dropped_samples(recording, channel, bursts):
     mask = flag_invalid(np.asarray(values, dtype=float)).mask
     interpolated = sum(b.invalid.get("total", 0) for b in bursts)
     return max(0, int(mask.sum()) - interpolated) if values.size else 0
+
+
+@dataclass(frozen=True)
+class InvalidSamples:
+    """Samples that are not measurements (see :func:`flag_invalid`).
+
+    Attributes
+    ----------
+    mask : ndarray of bool
+        True where a sample is invalid.
+    non_finite, fill_value, absurd : int
+        Counts by kind (disjoint).
+    """
+
+    mask: np.ndarray
+    non_finite: int
+    fill_value: int
+    absurd: int
+
+    @property
+    def count(self) -> int:
+        """Total number of invalid samples."""
+        return self.non_finite + self.fill_value + self.absurd
+
+    def as_dict(self) -> dict:
+        return {
+            "non_finite": self.non_finite,
+            "fill_value": self.fill_value,
+            "absurd": self.absurd,
+            "total": self.count,
+        }
+
+
+def flag_invalid(x, *, fill_threshold=FILL_THRESHOLD, absurd_factor=ABSURD_FACTOR) -> InvalidSamples:
+    """Flag non-finite, fill-value and absurd samples.
+
+    Parameters
+    ----------
+    x : array_like, 1-D
+        Samples. [x]
+    fill_threshold : float, optional
+        ``|x| >=`` this is a fill value. [x]
+    absurd_factor : float, optional
+        ``|x - median| > absurd_factor * 1.4826 MAD`` is absurd (with ``1e6`` instead of
+        ``absurd_factor`` and the median of the non-zero deviations when the MAD is 0).
+
+    Returns
+    -------
+    InvalidSamples
+    """
+    x = np.asarray(x, dtype=float)
+    with np.errstate(invalid="ignore", over="ignore"):
+        nonfin = ~np.isfinite(x)
+        fill = ~nonfin & (np.abs(x) >= float(fill_threshold))
+    bad = nonfin | fill
+    absurd = np.zeros_like(bad)
+    good = x[~bad]
+    if good.size >= 3:
+        med = float(np.median(good))
+        dev = np.abs(good - med)
+        mad = float(np.median(dev))
+        if mad > 0:
+            lim = float(absurd_factor) * MAD_TO_SIGMA * mad
+        else:
+            nz = dev[dev > 0]
+            lim = ABSURD_FACTOR_NO_MAD * float(np.median(nz)) if nz.size else math.inf
+        with np.errstate(invalid="ignore", over="ignore"):
+            absurd[~bad] = dev > lim
+    return InvalidSamples(bad | absurd, int(nonfin.sum()), int(fill.sum()), int(absurd.sum()))

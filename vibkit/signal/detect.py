@@ -46,11 +46,7 @@ A family whose significant harmonics all share a common order ``g > 1`` (for ins
 at 8 Hz seen from 8/3 Hz: orders 3, 9, 15) is a family at ``g f``; when ``g f`` lies outside the
 band, no link-pass is found in the band.
 
-Invalid samples (:func:`flag_invalid`)
---------------------------------------
-Non-finite values, fill values (``|x| >= 1e30``, which covers netCDF's default 9.96921e36) and
-*absurd* values (further from the median than ``1e3`` times the median absolute deviation scaled to a
-Gaussian sigma, or ``1e6`` times when the MAD is zero) are not measurements.
+Invalid samples are flagged by :func:`vibkit.signal.bursts.flag_invalid` (re-exported here).
 """
 
 from __future__ import annotations
@@ -66,6 +62,7 @@ import scipy.special
 import scipy.stats
 
 from ._checks import check_fs
+from .bursts import ABSURD_FACTOR, FILL_THRESHOLD, InvalidSamples, flag_invalid
 from .peaks import climb_from_subharmonic
 from .quantisation import quantisation_floor, quantisation_step
 
@@ -80,10 +77,6 @@ __all__ = [
     "harmonic_sum_threshold",
 ]
 
-#: values at or above this magnitude are fill values, never data (netCDF's default fill is 9.96921e36)
-FILL_THRESHOLD = 1e30
-#: a sample further from the median than this many robust sigmas is absurd (not a measurement)
-ABSURD_FACTOR = 1e3
 #: running-median floor: +- max(_HALF_MIN bins, _HALF_PERIODS x band[0]) around each bin
 _HALF_MIN = 10
 #: shortest test segment, in periods of band[0] (the record must hold two)
@@ -107,6 +100,9 @@ F_TOP_NYQUIST_FRACTION = 0.45
 SEARCH_EVIDENCE_FACTOR = 4.0
 #: a segment whose detrended range is below this fraction of its level holds nothing but rounding
 ROUNDING_LEVEL = 1e-9
+#: no floor is below this fraction of the strongest bin: double-precision rounding of the squares (module
+#: notes, "Floors of clean records")
+ROUNDING_FLOOR = 1e-12
 #: a single harmonic line is significant above its Gamma quantile raised by this many of the floor's
 #: relative sigmas (the floor is an estimate; its error must not make lines)
 LINE_FLOOR_SIGMAS = 3
@@ -115,75 +111,6 @@ LINE_FLOOR_SIGMAS = 3
 COMMON_ORDER_BINS = 0.5
 #: fractional orders j/m checked for a fundamental below the band (f/2 and f/3: a gait's 2nd and 3rd)
 SUBHARMONIC_DIVISORS = (2, 3)
-
-
-@dataclass(frozen=True)
-class InvalidSamples:
-    """Samples that are not measurements (see :func:`flag_invalid`).
-
-    Attributes
-    ----------
-    mask : ndarray of bool
-        True where a sample is invalid.
-    non_finite, fill_value, absurd : int
-        Counts by kind (disjoint).
-    """
-
-    mask: np.ndarray
-    non_finite: int
-    fill_value: int
-    absurd: int
-
-    @property
-    def count(self) -> int:
-        """Total number of invalid samples."""
-        return self.non_finite + self.fill_value + self.absurd
-
-    def as_dict(self) -> dict:
-        return {
-            "non_finite": self.non_finite,
-            "fill_value": self.fill_value,
-            "absurd": self.absurd,
-            "total": self.count,
-        }
-
-
-def flag_invalid(x, *, fill_threshold=FILL_THRESHOLD, absurd_factor=ABSURD_FACTOR) -> InvalidSamples:
-    """Flag non-finite, fill-value and absurd samples.
-
-    Parameters
-    ----------
-    x : array_like, 1-D
-        Samples. [x]
-    fill_threshold : float, optional
-        ``|x| >=`` this is a fill value. [x]
-    absurd_factor : float, optional
-        ``|x - median| > absurd_factor * 1.4826 MAD`` is absurd (with ``1e6`` instead of
-        ``absurd_factor`` and the median of the non-zero deviations when the MAD is 0).
-
-    Returns
-    -------
-    InvalidSamples
-    """
-    x = np.asarray(x, dtype=float)
-    with np.errstate(invalid="ignore", over="ignore"):
-        nonfin = ~np.isfinite(x)
-        fill = ~nonfin & (np.abs(x) >= float(fill_threshold))
-    bad = nonfin | fill
-    absurd = np.zeros_like(bad)
-    good = x[~bad]
-    if good.size >= 3:
-        med = float(np.median(good))
-        dev = np.abs(good - med)
-        mad = float(np.median(dev))
-        if mad > 0:
-            lim = float(absurd_factor) * 1.4826 * mad
-        else:
-            nz = dev[dev > 0]
-            lim = 1e6 * float(np.median(nz)) if nz.size else math.inf
-        with np.errstate(invalid="ignore", over="ignore"):
-            absurd[~bad] = dev > lim
-    return InvalidSamples(bad | absurd, int(nonfin.sum()), int(fill.sum()), int(absurd.sum()))
 
 
 # ------------------------------------------------------------------------------------------- the test
@@ -383,7 +310,7 @@ def _floor(p, k, half, quant, w):
     med = scipy.ndimage.median_filter(p, size=2 * half + 1, mode="reflect") / _gamma_median(k)
     bound = max(
         quantisation_floor(quant[0], w, float(np.median(med)), decimation=quant[1]),
-        1e-12 * float(np.max(p)) + np.finfo(float).tiny,
+        ROUNDING_FLOOR * float(np.max(p)) + np.finfo(float).tiny,
     )
     return np.maximum(med, bound)
 
