@@ -15,8 +15,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..signal.bursts import MAX_GAP_S, Burst, dropped_samples, uniform_bursts
-from ..signal.detect import FILL_THRESHOLD, HARMONIC_SPAN, flag_invalid
+from ..signal.bursts import FILL_THRESHOLD, MAX_GAP_S, Burst, dropped_samples, flag_invalid, uniform_bursts
+from ..signal.detect import HARMONIC_SPAN
 from ..signal.quantisation import quantisation_step
 from .decision import LinkPassEvidence, nearest_catalogue
 

@@ -134,7 +134,7 @@ def uniform_bursts(recording, channel, *, min_samples=16, max_gap_s=None):
     min_samples : int
         Bursts shorter than this are dropped.
     max_gap_s : float, optional
-        Invalid samples (:func:`vibkit.signal.detect.flag_invalid`: non-finite, fill values
+        Invalid samples (:func:`flag_invalid`: non-finite, fill values
         ``|x| >= 1e30``, absurd values) are replaced by linear interpolation when they run over at
         most this time; a longer run, or one at an end of a burst, is cut out and splits the burst
         (never bridged). [s]  Default :data:`MAX_GAP_S`.
