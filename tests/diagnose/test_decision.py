@@ -21,6 +21,7 @@ from vibkit.diagnose.decision import (
     STATUS_INCONCLUSIVE,
     STATUS_NOT_FOUND,
     STATUS_OK,
+    LinkPassEvidence,
     decide,
 )
 from vibkit.diagnose.pitch import estimate_pitch
@@ -183,16 +184,24 @@ def test_decide_rules():
         speed_m_s=0.5,
         nominal_pitch_m=0.5 / 3.76,
     )
-    assert decide(**base).status == STATUS_OK
-    assert decide(**{**base, "fundamental_hz": 3.5}).status == STATUS_NOT_FOUND  # not the detected family
-    assert decide(**{**base, "detection_hz": 2.4, "fundamental_hz": 2.4}).status == STATUS_NOT_FOUND  # below the band
-    assert decide(**base, spectral_hz=3.76, mean_phase_hz=3.9).status == STATUS_NOT_FOUND  # drifts 3.7 %
-    assert decide(**base, spectral_hz=3.76, mean_phase_hz=3.80).status == STATUS_OK  # 1 %: a chain's wander
+    assert decide(LinkPassEvidence(**base)).status == STATUS_OK
+    assert (
+        decide(LinkPassEvidence(**{**base, "fundamental_hz": 3.5})).status == STATUS_NOT_FOUND
+    )  # not the detected family
+    assert (
+        decide(LinkPassEvidence(**{**base, "detection_hz": 2.4, "fundamental_hz": 2.4})).status == STATUS_NOT_FOUND
+    )  # below the band
+    assert (
+        decide(LinkPassEvidence(**base, spectral_hz=3.76, mean_phase_hz=3.9)).status == STATUS_NOT_FOUND
+    )  # drifts 3.7 %
+    assert (
+        decide(LinkPassEvidence(**base, spectral_hz=3.76, mean_phase_hz=3.80)).status == STATUS_OK
+    )  # 1 %: a chain's wander
     # a third of the first limit: 0.5 % elongation sigma is the edge
     edge = 1.5 / 3 / 100 * 3.76
-    assert decide(**{**base, "fundamental_sigma_hz": 0.9 * edge}).status == STATUS_OK
-    assert decide(**{**base, "fundamental_sigma_hz": 1.1 * edge}).status == STATUS_INCONCLUSIVE
-    assert decide(detected=False, detection_reason="nothing").reason == "nothing"
+    assert decide(LinkPassEvidence(**{**base, "fundamental_sigma_hz": 0.9 * edge})).status == STATUS_OK
+    assert decide(LinkPassEvidence(**{**base, "fundamental_sigma_hz": 1.1 * edge})).status == STATUS_INCONCLUSIVE
+    assert decide(LinkPassEvidence(detected=False, detection_reason="nothing")).reason == "nothing"
 
 
 # ------------------------------------------------------------------------------------ channels and speed

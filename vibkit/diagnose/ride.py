@@ -461,7 +461,7 @@ def ride_quality_from_recording(
         whose longest burst is too short; the errors of :func:`ride_quality`.
     """
     from ..io import read_recording
-    from .pitch import uniform_bursts
+    from ..signal.bursts import uniform_bursts
 
     opts = dict(read_options or {})
     if sample_rate is not None:

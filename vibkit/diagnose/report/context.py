@@ -43,7 +43,7 @@ class ReportContext:
         Simulated time as given [s].
     hampel_half_window_s, hampel_false_alarm_rate : float
     bursts : list
-        Uniform bursts of the channel (:func:`vibkit.diagnose.pitch.uniform_bursts`).
+        Uniform bursts of the channel (:func:`vibkit.signal.bursts.uniform_bursts`).
     pitch : PitchEstimate or None
         None without a speed or without a detected link-pass.
     f0 : float
@@ -198,7 +198,8 @@ def analyse(
     from ...io import read_recording
     from ...model.scene import Scene, load_scene
     from ...signal import hampel_events
-    from ..pitch import DEFAULT_LIMITS_PERCENT, estimate_pitch, pick_channel, uniform_bursts
+    from ...signal.bursts import uniform_bursts
+    from ..pitch import DEFAULT_LIMITS_PERCENT, estimate_pitch, pick_channel
 
     limits = tuple(limits_percent) if limits_percent is not None else DEFAULT_LIMITS_PERCENT
     from ...io import RecordingError
