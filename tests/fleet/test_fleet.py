@@ -29,6 +29,8 @@ from vibkit.fleet import (
 )
 from vibkit.fleet.trends import SECONDS_PER_YEAR
 
+from support.chain import random_phase_family
+
 ROOT = Path(__file__).resolve().parents[2]
 SPEED = 0.5  # m/s
 NOMINAL = 0.4 / 3  # m
@@ -41,12 +43,8 @@ T0 = dt.datetime(2023, 1, 15, tzinfo=dt.timezone.utc)
 
 def synth(path, pitch_m, seed, *, start=None, amps=AMPS, duration=DURATION):
     """A recording of a chain of pitch ``pitch_m`` at SPEED: harmonics of v/L plus white noise, CSV."""
-    rng = np.random.default_rng(seed)
     t = np.arange(int(duration * FS)) / FS
-    f = SPEED / pitch_m
-    x = NOISE * rng.standard_normal(t.size)
-    for k, a in enumerate(amps, 1):
-        x += a * np.cos(2 * np.pi * k * f * t + rng.uniform(0, 2 * np.pi))
+    x = random_phase_family(t, SPEED / pitch_m, np.random.default_rng(seed), amps, noise=NOISE)
     with open(path, "w") as fh:
         if start is None:
             fh.write("time_s,accel_m_s2\n")

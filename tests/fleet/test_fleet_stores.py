@@ -316,7 +316,6 @@ def test_killed_scan_on_postgres_leaves_complete_rows(tmp_path, pg_server):
 
 def _v1_schema():
     """The schema-1 DDL, written once in tests/reliability/corpus_fleet.py."""
-    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "reliability"))
     from corpus_fleet import SCHEMA_1_DDL
 
     return SCHEMA_1_DDL

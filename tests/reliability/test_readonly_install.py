@@ -317,7 +317,6 @@ def test_home_cache_preferred_and_no_cache_last_resort(readonly):
 def test_fleet_status_of_an_archived_schema_1_history(readonly):
     """A schema-1 history (an older vibkit's) that the user may only read, in a folder it may only read: status
     reads it without upgrading it (SQLite's immutable read: no -wal/-shm can be made), the file left as it was."""
-    sys.path.insert(0, str(Path(__file__).resolve().parent))
     from corpus_fleet import schema1_db
 
     archive = readonly["top"] / "archive"
