@@ -113,6 +113,7 @@ def test_same_link_tensions_at_an_instant(scene, fmodel, coordinate_map):
 # -- 2. converged runs, same coordinate ---------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_converged_runs_agree(ours, study_converged):
     """Both converged, so they agree to the study run's integration accuracy (rtol 1e-6, atol 1e-8
     on 323 states, with Baumgarte); the differences measured are about 10x below each tolerance:
@@ -138,6 +139,7 @@ def test_the_run_is_not_trivial(ours):
 # -- 3. the faithful port ----------------------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_faithful_port_agrees_within_stated_tolerances(fmodel, ours, study_faithful):
     """The study's settings (RelTol = AbsTol = MaxStep = 1e-3) and its linear coordinate map.
 

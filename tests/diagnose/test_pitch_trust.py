@@ -230,6 +230,7 @@ def test_threshold_is_the_gamma_quantile():
     assert harmonic_sum_threshold(1e-3, 5, 3, 0.1) > t  # an uncertain floor raises it
 
 
+@pytest.mark.slow
 def test_false_alarm_rate_on_1000_noise_records():
     """Measured rates at 0.05, 0.01 and 1e-3 within their binomial 99.9 % intervals (1,000 records)."""
     rng = np.random.default_rng(2026)
@@ -255,6 +256,7 @@ def test_detects_a_weak_family():
     assert det.detected and det.frequency_hz == pytest.approx(3.75, abs=0.15)
 
 
+@pytest.mark.slow
 def test_false_alarm_rate_of_short_records_is_at_most_the_stated_one():
     """Records too short for two segments are tested once per piece, Bonferroni over the candidate
     bin tuples: conservative (rate at most the stated one, within binomial noise)."""

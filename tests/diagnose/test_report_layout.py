@@ -108,6 +108,7 @@ def checked_reports(tmp_path_factory):
     return leon, phy, problems
 
 
+@pytest.mark.slow
 def test_no_text_overlaps_or_leaves_its_place(checked_reports):
     _, _, problems = checked_reports
     bad = {f"page {n} ({t})": p for (n, t), p in problems.items() if p}

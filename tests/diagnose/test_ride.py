@@ -161,6 +161,7 @@ def test_cli_ride_of_a_scene_simulates_it(capsys):
     assert all(math.isfinite(a["weighted"]["a95"]) and a["weighted"]["a95"] > 0 for a in d["axes"])
 
 
+@pytest.mark.slow
 def test_report_has_a_ride_quality_page(ride_csv, tmp_path):
     from vibkit.diagnose.report import write_report
 

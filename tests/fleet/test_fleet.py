@@ -665,6 +665,7 @@ def test_cli_add_replaced_starts_a_segment(tmp_path, capsys):
 
 # vibkit.runtime.cluster's local scheduler binds its HTTP server to port 8787 by default (dashboard off): where
 # another cluster holds the port, distributed warns and leaks the socket of its first try
+@pytest.mark.slow
 @pytest.mark.filterwarnings("ignore:Port 8787 is already in use:UserWarning")
 @pytest.mark.filterwarnings("ignore::ResourceWarning")
 @pytest.mark.filterwarnings("ignore::pytest.PytestUnraisableExceptionWarning")
@@ -687,6 +688,7 @@ def test_scan_on_dask_gives_the_plain_loop_numbers(fleet, tmp_path, capsys):
     assert got and all(got[k] == ref[k] for k in got)  # bit for bit
 
 
+@pytest.mark.slow
 def test_killed_scan_leaves_complete_rows(tmp_path):
     d = tmp_path / "visits"
     d.mkdir()

@@ -32,10 +32,13 @@ import pytest
 ROOT = Path(__file__).resolve().parents[2]
 NOBODY = 65534
 
-pytestmark = pytest.mark.skipif(
-    not hasattr(os, "getuid") or os.getuid() != 0,
-    reason="needs root to run the commands as uid 65534 (os.setuid in preexec_fn)",
-)
+pytestmark = [
+    pytest.mark.skipif(
+        not hasattr(os, "getuid") or os.getuid() != 0,
+        reason="needs root to run the commands as uid 65534 (os.setuid in preexec_fn)",
+    ),
+    pytest.mark.slow,  # a pip install and every command in a fresh process
+]
 
 
 def _demote():
