@@ -1,4 +1,5 @@
-"""Shared helpers of the benchmark scripts: machine description, timing, atomic result files."""
+"""Shared helpers of the benchmark scripts: machine description, timing, atomic result files, and
+``support`` (tests/support: the synthetic chain signals the tests use)."""
 
 from __future__ import annotations
 
@@ -31,7 +32,12 @@ def _support():
     return mod
 
 
-support = _support()
+def __getattr__(name):
+    # `from _common import support` loads tests/support on first use: the scripts that need no
+    # synthetic signal run without tests/ beside them
+    if name == "support":
+        return _support()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def machine() -> str:
