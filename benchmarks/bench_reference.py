@@ -32,7 +32,6 @@ import csv  # noqa: E402
 import datetime as dt  # noqa: E402
 import io  # noqa: E402
 import platform  # noqa: E402
-import sys  # noqa: E402
 import time  # noqa: E402
 from pathlib import Path  # noqa: E402
 
@@ -40,7 +39,6 @@ import numpy as np  # noqa: E402
 import scipy  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
 
 from vibkit import __version__  # noqa: E402
 from vibkit.analyses.forward import forward_dynamics  # noqa: E402

@@ -30,15 +30,14 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import RESULTS, machine, markdown_table, today, write_csv, write_text  # noqa: E402
+import vibkit
+from vibkit.analyses.integrate import IntegrationError
+from vibkit.model.chain import Chain
+from vibkit.model.guide import Guide
+from vibkit.model.params import reference_chain, reference_guide
+from vibkit.model.scene import load_scene
 
-import vibkit  # noqa: E402
-from vibkit.analyses.integrate import IntegrationError  # noqa: E402
-from vibkit.model.chain import Chain  # noqa: E402
-from vibkit.model.guide import Guide  # noqa: E402
-from vibkit.model.params import reference_chain, reference_guide  # noqa: E402
-from vibkit.model.scene import load_scene  # noqa: E402
+from _common import RESULTS, machine, markdown_table, today, write_csv, write_text
 
 ROOT = Path(__file__).resolve().parents[1]
 OUTPUTS = ("delta", "chain_speed", "sprocket_speed", "link_tension", "closure_residual", "s0", "contact_force")

@@ -24,13 +24,12 @@ import time
 from dataclasses import replace
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import RESULTS, machine, markdown_table, today, write_csv, write_text  # noqa: E402
+import vibkit
+from vibkit.analyses.convergence import compare, summary
+from vibkit.analyses.forward import default_rtol
+from vibkit.model.scene import load_scene
 
-import vibkit  # noqa: E402
-from vibkit.analyses.convergence import compare, summary  # noqa: E402
-from vibkit.analyses.forward import default_rtol  # noqa: E402
-from vibkit.model.scene import load_scene  # noqa: E402
+from _common import RESULTS, machine, markdown_table, today, write_csv, write_text
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENES = ("thesis-forward", "las-palmas", "thesis-passengers")

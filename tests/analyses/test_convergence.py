@@ -33,7 +33,9 @@ def convergence(ds):
     return v
 
 
-@pytest.mark.parametrize("name", ["thesis-forward", "las-palmas", "thesis-passengers"])
+@pytest.mark.parametrize(
+    "name", [pytest.param("thesis-forward", marks=pytest.mark.slow), "las-palmas", "thesis-passengers"]
+)
 def test_shipped_scenes_converged_at_their_defaults(name):
     """12 s of each shipped scene (the no-load spin-up has its 23 contact episodes by 7.87 s), the
     check asked for by the scene key ``[solver] check = true``."""

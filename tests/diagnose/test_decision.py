@@ -9,7 +9,6 @@ import os
 import numpy as np
 import pytest
 import scipy.signal
-import xarray as xr
 
 import vibkit
 from vibkit.cli import main
@@ -26,6 +25,9 @@ from vibkit.diagnose.decision import (
 )
 from vibkit.diagnose.pitch import estimate_pitch
 
+from support.chain import chain as _chain
+from support.recording import recording
+
 LEON = "data/field/leon-tensioner.csv"
 LAS_PALMAS = "data/field/las-palmas-accelerometer.csv"
 SPANISH = "data/field/layouts/spanish-spreadsheet.csv"
@@ -34,19 +36,7 @@ NOMINAL = 0.13333
 
 
 def _rec(channels, fs=FS, attrs=None):
-    n = len(next(iter(channels.values())))
-    t = np.arange(n) / fs
-    return xr.Dataset(
-        {k: ("time", np.asarray(v, dtype=float), {"units": "m/s^2"}) for k, v in channels.items()},
-        coords={"time": ("time", t, {"units": "s"})},
-        attrs=attrs or {},
-    )
-
-
-def _chain(f, seconds=30.0, fs=FS, noise=0.1, seed=1):
-    t = np.arange(int(seconds * fs)) / fs
-    x = np.cos(2 * np.pi * f * t) + 0.5 * np.cos(2 * np.pi * 2 * f * t + 1) + 0.3 * np.cos(2 * np.pi * 3 * f * t + 2)
-    return x + noise * np.random.default_rng(seed).standard_normal(t.size)
+    return recording(channels, fs, attrs=attrs)
 
 
 def _issue_cases():

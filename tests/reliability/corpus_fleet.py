@@ -3,11 +3,9 @@ analysis, damaged / foreign databases in one line, read-only uses that never wri
 
 import datetime as dt
 import sqlite3
-import sys
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from corpus import REC, Case  # noqa: E402
+from corpus import REC, Case
 
 ADD = ["fleet", "add", "{w}/rec.csv", "--db", "{w}/main.sqlite", "--unit", "E01"]
 

@@ -5,11 +5,8 @@ All but the signal cases are refused before a Dask cluster starts (a second or t
 """
 
 import signal
-import sys
-from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from corpus import SIM, Case, tiny  # noqa: E402
+from corpus import SIM, Case, tiny
 
 LEON = str(SIM / "leon.toml")
 FORWARD = str(SIM / "thesis-forward.toml")

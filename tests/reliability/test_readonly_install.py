@@ -32,10 +32,13 @@ import pytest
 ROOT = Path(__file__).resolve().parents[2]
 NOBODY = 65534
 
-pytestmark = pytest.mark.skipif(
-    not hasattr(os, "getuid") or os.getuid() != 0,
-    reason="needs root to run the commands as uid 65534 (os.setuid in preexec_fn)",
-)
+pytestmark = [
+    pytest.mark.skipif(
+        not hasattr(os, "getuid") or os.getuid() != 0,
+        reason="needs root to run the commands as uid 65534 (os.setuid in preexec_fn)",
+    ),
+    pytest.mark.slow,  # a pip install and every command in a fresh process
+]
 
 
 def _demote():
@@ -317,7 +320,6 @@ def test_home_cache_preferred_and_no_cache_last_resort(readonly):
 def test_fleet_status_of_an_archived_schema_1_history(readonly):
     """A schema-1 history (an older vibkit's) that the user may only read, in a folder it may only read: status
     reads it without upgrading it (SQLite's immutable read: no -wal/-shm can be made), the file left as it was."""
-    sys.path.insert(0, str(Path(__file__).resolve().parent))
     from corpus_fleet import schema1_db
 
     archive = readonly["top"] / "archive"
