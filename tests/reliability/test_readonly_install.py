@@ -1,6 +1,6 @@
 """A read-only install run by a user without a home (service account, cron, container non-root).
 
-Issue 12: every command crashed at import with numba's ``RuntimeError: cannot cache function
+Once every command crashed at import with numba's ``RuntimeError: cannot cache function
 'locate': no locator available`` (even ``vibkit --version``).  This test installs the package
 non-editable into a temporary folder (``pip install --target``; a plain copy of the package if pip
 cannot build here), makes it read-only (``chmod -R a-w``) and runs every command as uid 65534 with
