@@ -29,6 +29,8 @@ from pathlib import Path
 
 import pytest
 
+import vibkit
+
 ROOT = Path(__file__).resolve().parents[2]
 NOBODY = 65534
 
@@ -238,7 +240,7 @@ def test_version_and_help_compile_nothing(readonly):
         )
         assert proc.returncode == 0, proc.stderr
         assert "Traceback" not in proc.stderr
-    assert "vibkit 0.1" in _cli(readonly, "--version").stdout
+    assert f"vibkit {vibkit.__version__}" in _cli(readonly, "--version").stdout
 
 
 def test_every_command_runs_without_a_home(readonly):
