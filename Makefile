@@ -1,12 +1,13 @@
 # vibkit: two commands do everything on a fresh clone with Python 3.11.
 #   make demo   creates .venv, installs, simulates the shipped scenes, analyses the field data, writes reports/
 #   make test   creates .venv, installs, runs the whole test suite
+#   make test-fast   the suite without the tests marked slow (the inner loop while editing)
 PYTHON ?= python3.11
 VENV   ?= .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test lint format bench install clean
+.PHONY: demo test test-fast lint format bench docs install clean
 # `make bench` regenerates benchmarks/results/ (about 30 min on 2 cores); `vibkit bench --quick` is a smoke
 # run that writes into a temporary folder (or -o DIR), never into benchmarks/results/
 
@@ -23,6 +24,11 @@ install: $(STAMP)
 
 test: $(STAMP)
 	$(BIN)/python -m pytest -q
+
+# every test but those marked @pytest.mark.slow (the longest physics runs, the install test, the corpus cases
+# that need a process of their own): the inner loop while editing; `make test` runs them all
+test-fast: $(STAMP)
+	$(BIN)/python -m pytest -q -m "not slow"
 
 # ruff's lint and format check (the configuration is in pyproject.toml); `make format` rewrites
 lint: $(STAMP)
@@ -43,5 +49,13 @@ $(VENV)/.bench: $(STAMP)
 bench: $(VENV)/.bench
 	$(BIN)/vibkit bench -o benchmarks/results
 
+# the documentation: docs/ -> docs/_build/html (Sphinx; every warning is an error; under a minute)
+$(VENV)/.docs: $(STAMP)
+	$(BIN)/python -m pip install --quiet -e '.[test,docs]'
+	@touch $(VENV)/.docs
+
+docs: $(VENV)/.docs
+	$(BIN)/sphinx-build -W --keep-going -q -b html docs docs/_build/html
+
 clean:
-	rm -rf $(VENV) build *.egg-info
+	rm -rf $(VENV) build *.egg-info docs/_build docs/api/generated docs/benchmarks/results

@@ -1,17 +1,43 @@
-"""Shared helpers of the benchmark scripts: machine description, timing, atomic result files."""
+"""Shared helpers of the benchmark scripts: machine description, timing, atomic result files, and
+``support`` (tests/support: the synthetic chain signals the tests use)."""
 
 from __future__ import annotations
 
 import datetime as dt
+import importlib.util
 import os
 import platform
+import sys
 import tempfile
 import time
 from pathlib import Path
 
-# where the scripts write: benchmarks/results/ (what the README quotes; `make bench`), or the folder
+# where the scripts write: benchmarks/results/ (what the docs quote; `make bench`), or the folder
 # `vibkit bench -o DIR` gives them in VIBKIT_BENCH_RESULTS (default there: a new temporary folder)
 RESULTS = Path(os.environ.get("VIBKIT_BENCH_RESULTS") or Path(__file__).resolve().parent / "results")
+
+
+def _support():
+    """tests/support, the helpers the tests use (synthetic chain signals), imported from its folder as
+    ``support``: the scripts build the signals the tests check, with no path set up beforehand."""
+    if "support" in sys.modules:
+        return sys.modules["support"]
+    folder = Path(__file__).resolve().parents[1] / "tests" / "support"
+    spec = importlib.util.spec_from_file_location(
+        "support", folder / "__init__.py", submodule_search_locations=[str(folder)]
+    )
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules["support"] = mod
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def __getattr__(name):
+    # `from _common import support` loads tests/support on first use: the scripts that need no
+    # synthetic signal run without tests/ beside them
+    if name == "support":
+        return _support()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def machine() -> str:

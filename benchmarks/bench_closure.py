@@ -14,16 +14,14 @@ import argparse
 import dataclasses
 import sys
 import time
-from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import RESULTS, best_of, machine, markdown_table, today, write_csv, write_text  # noqa: E402
+from vibkit.model.chain import Chain
+from vibkit.model.guide import Guide, local_map, locate, point_partials
+from vibkit.model.params import ChainParams, reference_chain, reference_guide
 
-from vibkit.model.chain import Chain  # noqa: E402
-from vibkit.model.guide import Guide, local_map, locate, point_partials  # noqa: E402
-from vibkit.model.params import ChainParams, reference_chain, reference_guide  # noqa: E402
+from _common import RESULTS, best_of, machine, markdown_table, today, write_csv, write_text
 
 L = 0.4 / 3
 

@@ -33,8 +33,7 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import RESULTS, machine, markdown_table, write_csv, write_text  # noqa: E402
+from _common import RESULTS, machine, markdown_table, support, write_csv, write_text
 
 SPEED = 0.5  # m/s
 NOMINAL = 0.4 / 3  # m
@@ -42,12 +41,8 @@ FS = 200.0  # Hz
 
 
 def synth(path, pitch_m, seed, duration):
-    rng = np.random.default_rng(seed)
     t = np.arange(int(duration * FS)) / FS
-    f = SPEED / pitch_m
-    x = rng.standard_normal(t.size)
-    for k, a in enumerate((1.0, 0.5, 0.3), 1):
-        x += a * np.cos(2 * np.pi * k * f * t + rng.uniform(0, 2 * np.pi))
+    x = support.chain.random_phase_family(t, SPEED / pitch_m, np.random.default_rng(seed))
     np.savetxt(path, np.column_stack([t, x]), delimiter=",", header="time_s,accel_m_s2", comments="", fmt="%.6f")
 
 

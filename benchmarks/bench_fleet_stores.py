@@ -25,9 +25,8 @@ import time
 import warnings
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import RESULTS, machine, markdown_table, write_csv, write_text  # noqa: E402
-from bench_fleet import NOMINAL, SPEED, synth  # noqa: E402
+from _common import RESULTS, machine, markdown_table, write_csv, write_text
+from bench_fleet import NOMINAL, SPEED, synth
 
 
 def _adder(db, files, start, q):

@@ -33,9 +33,9 @@ import tempfile
 import time
 from pathlib import Path
 
+from _common import RESULTS, machine, markdown_table, today, write_csv, write_text
+
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE))
-from _common import RESULTS, machine, markdown_table, today, write_csv, write_text  # noqa: E402
 
 FS = 2000.0  # [Hz]
 F0 = 3.75  # link-pass frequency [Hz]: 0.5 m/s over a 133.33 mm pitch

@@ -1,4 +1,4 @@
-"""vibkit's formulation against the study's, side by side in one process (issue 3).
+"""vibkit's formulation against the study's, side by side in one process.
 
     python benchmarks/bench_reference.py            # 44 s of sim/thesis-forward.toml (minutes)
     python benchmarks/bench_reference.py --quick    # 2 s
@@ -32,7 +32,6 @@ import csv  # noqa: E402
 import datetime as dt  # noqa: E402
 import io  # noqa: E402
 import platform  # noqa: E402
-import sys  # noqa: E402
 import time  # noqa: E402
 from pathlib import Path  # noqa: E402
 
@@ -40,7 +39,6 @@ import numpy as np  # noqa: E402
 import scipy  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
 
 from vibkit import __version__  # noqa: E402
 from vibkit.analyses.forward import forward_dynamics  # noqa: E402
@@ -152,7 +150,7 @@ def write(res: dict, note: str, stem: str) -> None:
         w.writerow([name, f"{value:.6g}", unit, text])
     _atomic_write(RESULTS / f"{stem}.csv", buf.getvalue())
     md = [
-        "# vibkit's formulation against the study's (issue 3)",
+        "# vibkit's formulation against the study's",
         "",
         f"`python benchmarks/bench_reference.py` -- {dt.datetime.now(dt.timezone.utc):%Y-%m-%d %H:%M} UTC",
         "",

@@ -21,17 +21,15 @@ from __future__ import annotations
 import argparse
 import os
 import sys
-from pathlib import Path
 
 import numpy as np
 import scipy.signal
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import RESULTS, best_of, machine, markdown_table, today, write_csv, write_text  # noqa: E402
+from vibkit.diagnose.ride import ride_quality
+from vibkit.signal import frequency_weighting, frequency_weighting_sos, peak_to_peak
+from vibkit.signal.weighting import oversampling_factor
 
-from vibkit.diagnose.ride import ride_quality  # noqa: E402
-from vibkit.signal import frequency_weighting, frequency_weighting_sos, peak_to_peak  # noqa: E402
-from vibkit.signal.weighting import oversampling_factor  # noqa: E402
+from _common import RESULTS, best_of, machine, markdown_table, today, write_csv, write_text
 
 
 def record(fs, seconds, seed=0):

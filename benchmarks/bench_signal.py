@@ -33,6 +33,8 @@ from numpy.lib.stride_tricks import sliding_window_view
 import vibkit.signal as vs
 from vibkit.signal.orders import _vk_banded, _vk_solve, _vk_sparse
 
+from _common import support
+
 RESULTS = Path(os.environ.get("VIBKIT_BENCH_RESULTS") or Path(__file__).resolve().parent / "results")  # see _common.py
 
 
@@ -154,7 +156,7 @@ def synthetic_recording(seconds, fs, seed=2):
     phi = 2 * np.pi * np.cumsum(f_inst) / fs
     axes = []
     for a in range(3):
-        s = (1.0 - 0.2 * a) * np.cos(phi) + 0.5 * np.cos(2 * phi + a) + 0.2 * np.cos(3 * phi)
+        s = support.chain.family_of_phase(phi, (1.0 - 0.2 * a, 0.5, 0.2), phases=(0, a, 0))
         x = s + rng.standard_normal(t.size) * np.std(s)
         x[rng.integers(0, t.size, 50)] += 20.0  # knocks
         axes.append(x)

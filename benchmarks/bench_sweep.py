@@ -27,8 +27,7 @@ import tempfile
 import time
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import RESULTS, machine, markdown_table, today, write_csv, write_text  # noqa: E402
+from _common import RESULTS, machine, markdown_table, today, write_csv, write_text
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENE = ROOT / "sim" / "thesis-forward.toml"

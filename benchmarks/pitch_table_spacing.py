@@ -1,4 +1,4 @@
-"""What the pitch table's node spacing costs and buys (issue 20).
+"""What the pitch table's node spacing costs and buys.
 
 The no-load scene (``sim/thesis-forward.toml``, 44 s) run with the closure read from tables of
 4, 2, 1 and 0.5 mm spacing and solved exactly, at rtol 1e-7 and 1e-9; each run against the exact
@@ -21,15 +21,14 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import RESULTS, machine, markdown_table, today, write_csv, write_text  # noqa: E402
+import vibkit
+import vibkit.analyses.forward as forward
+from vibkit.analyses.forward import ForwardModel, _events
+from vibkit.model.escalator import EscalatorModel
+from vibkit.model.pitch_table import build_table
+from vibkit.model.scene import load_scene
 
-import vibkit  # noqa: E402
-import vibkit.analyses.forward as forward  # noqa: E402
-from vibkit.analyses.forward import ForwardModel, _events  # noqa: E402
-from vibkit.model.escalator import EscalatorModel  # noqa: E402
-from vibkit.model.pitch_table import build_table  # noqa: E402
-from vibkit.model.scene import load_scene  # noqa: E402
+from _common import RESULTS, machine, markdown_table, today, write_csv, write_text
 
 ROOT = Path(__file__).resolve().parents[1]
 SPACINGS = (4e-3, 2e-3, 1e-3, 5e-4)

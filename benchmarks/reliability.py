@@ -54,7 +54,6 @@ def _machine() -> str:
         )
     except OSError:
         commit = "n/a"
-    sys.path.insert(0, str(ROOT))
     import vibkit
 
     return (

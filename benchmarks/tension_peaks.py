@@ -26,12 +26,11 @@ from pathlib import Path
 import numpy as np
 from scipy.signal import find_peaks
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import RESULTS, machine, markdown_table, today, write_text  # noqa: E402
+import vibkit
+from vibkit.model.escalator import EscalatorModel
+from vibkit.model.scene import load_scene
 
-import vibkit  # noqa: E402
-from vibkit.model.escalator import EscalatorModel  # noqa: E402
-from vibkit.model.scene import load_scene  # noqa: E402
+from _common import RESULTS, machine, markdown_table, today, write_text
 
 ROOT = Path(__file__).resolve().parents[1]
 

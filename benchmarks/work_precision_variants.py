@@ -1,5 +1,5 @@
 """Work-precision of the shipped forward scenes and their contact stiffness x0.1 and x10 variants,
-and what the convergence check costs (issue 20).
+and what the convergence check costs.
 
 Each scene (full length) with k = 1e5, 1e6, 1e7 runs by dopri5 (steps ended on the breakpoints) at
 rtol 1e-6 ... 1e-12 and at its default tolerance (``default_rtol``: from the contact stiffness),
@@ -24,13 +24,12 @@ import time
 from dataclasses import replace
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import RESULTS, machine, markdown_table, today, write_csv, write_text  # noqa: E402
+import vibkit
+from vibkit.analyses.convergence import compare, summary
+from vibkit.analyses.forward import default_rtol
+from vibkit.model.scene import load_scene
 
-import vibkit  # noqa: E402
-from vibkit.analyses.convergence import compare, summary  # noqa: E402
-from vibkit.analyses.forward import default_rtol  # noqa: E402
-from vibkit.model.scene import load_scene  # noqa: E402
+from _common import RESULTS, machine, markdown_table, today, write_csv, write_text
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENES = ("thesis-forward", "las-palmas", "thesis-passengers")
@@ -40,7 +39,7 @@ STIFFNESS = (1e5, 1e6, 1e7)
 def variant(name, k, rtol=None, check=False, closure="table"):
     sc = load_scene(ROOT / "sim" / f"{name}.toml")
     eff = dict(sc.effects)
-    eff["contact"] = dict(eff["contact"], stiffness=k)
+    eff["contact"] = replace(eff["contact"], stiffness=k)
     outs = tuple(dict.fromkeys(tuple(sc.outputs["variables"]) + ("flank_force", "sprocket_speed", "delta")))
     solver = dict(sc.sections["solver"], check=check, closure=closure)
     if rtol is not None:

@@ -3,6 +3,8 @@ from pathlib import Path
 
 import pytest
 
+from support.cli import run  # noqa: F401  (the fixture `run`: vibkit.cli.main in-process, for every test)
+
 ROOT = Path(__file__).resolve().parents[1]
 SIM = ROOT / "sim"
 

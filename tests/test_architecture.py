@@ -164,3 +164,179 @@ def test_the_checks_can_fail(tmp_path, monkeypatch):
         test_imports_run_one_way()
     with pytest.raises(AssertionError, match="vibkit.runtime.a -> vibkit.runtime.b -> vibkit.runtime.a"):
         test_no_import_cycles_at_load_time()
+
+
+#: the names the compiled kernels give their parameter and work arrays and tuples (vibkit.model.slots):
+#: a compiled kernel reads them by named slot, never by a bare number
+SLOT_ARRAYS = frozenset({"prm", "fp", "ip", "ws", "info", "tb", "head"})
+
+
+def _is_compiled(fn: ast.AST) -> bool:
+    """Whether a function is decorated with numba's njit or jit (bare, called, or as nb.njit)."""
+    for dec in fn.decorator_list:
+        target = dec.func if isinstance(dec, ast.Call) else dec
+        name = target.attr if isinstance(target, ast.Attribute) else getattr(target, "id", None)
+        if name in ("njit", "jit"):
+            return True
+    return False
+
+
+def _literal_int(node: ast.AST | None) -> bool:
+    if isinstance(node, ast.UnaryOp) and isinstance(node.op, (ast.USub, ast.UAdd)):
+        node = node.operand
+    return isinstance(node, ast.Constant) and isinstance(node.value, int)
+
+
+def _bare_slot(index: ast.AST) -> bool:
+    """A bare integer, a slice with a bare integer bound, or a tuple index holding either."""
+    if _literal_int(index):
+        return True
+    if isinstance(index, ast.Slice):
+        return _literal_int(index.lower) or _literal_int(index.upper)
+    if isinstance(index, ast.Tuple):
+        return any(_bare_slot(e) for e in index.elts)
+    return False
+
+
+def bare_slots(source: str, filename: str = "<string>") -> list[str]:
+    """``file:line: kernel reads array[...]`` for each bare-number subscript of a slot array
+    (:data:`SLOT_ARRAYS`, also ``prm[2][5]``) inside a compiled kernel of ``source``."""
+    found = []
+    for fn in ast.walk(ast.parse(source, filename=filename)):
+        if not (isinstance(fn, (ast.FunctionDef, ast.AsyncFunctionDef)) and _is_compiled(fn)):
+            continue
+        for node in ast.walk(fn):
+            if not isinstance(node, ast.Subscript) or not _bare_slot(node.slice):
+                continue
+            base = node.value
+            while isinstance(base, ast.Subscript):  # prm[PRM_IP][3]: the array is prm's slot
+                base = base.value
+            if isinstance(base, ast.Name) and base.id in SLOT_ARRAYS:
+                found.append(f"{filename}:{node.lineno}: {fn.name} reads {ast.unparse(node)}")
+    return found
+
+
+def test_compiled_kernels_read_slots_by_name():
+    found = []
+    for _, (path, _) in sorted(MODULES.items()):
+        found += bare_slots(path.read_text(), str(path.relative_to(PKG.parent)))
+    assert not found, "name the slot (vibkit.model.slots):\n" + "\n".join(found)
+
+
+def test_the_slot_check_can_fail():
+    source = (
+        "import numba as nb\n"
+        "from numba import njit\n"
+        "@nb.njit(cache=True)\n"
+        "def k(fp, ip, prm, info):\n"
+        "    a = fp[3] + fp[FP_G]\n"
+        "    info[10:13] = 0.0\n"
+        "    return prm[3][-1] + ip[IP_N]\n"
+        "@njit\n"
+        "def j(ws):\n"
+        "    return ws[18]\n"
+        "def python_side(fp):\n"
+        "    return fp[3]\n"
+    )
+    found = sorted(f.split(": ", 1)[1] for f in bare_slots(source))
+    assert found == ["j reads ws[18]", "k reads fp[3]", "k reads info[10:13]", "k reads prm[3]", "k reads prm[3][-1]"]
+
+
+# --- scene keys are read through the schema -------------------------------------------------------
+
+#: the modules that read the raw scene (its TOML tables) and fill in defaults
+SCHEMA_MODULES = {"vibkit.model.schema", "vibkit.model.scene"}
+#: modules that may parse scene TOML, and why
+RAW_TOML_ALLOWED = {
+    "vibkit.sweep.plan": "writes varied copies of a scene's TOML text; each copy is validated when it is loaded",
+}
+
+
+def _schema_names():
+    from vibkit.model.schema import EFFECTS
+
+    return set(EFFECTS), {k for opts in EFFECTS.values() for k in opts}
+
+
+def _literal_key(node):
+    """The string literal ``node`` reads by, for ``x["k"]`` and ``x.get("k", ...)`` / setdefault / pop."""
+    if isinstance(node, ast.Subscript) and isinstance(node.slice, ast.Constant) and isinstance(node.slice.value, str):
+        return node.value, node.slice.value
+    if (
+        isinstance(node, ast.Call)
+        and isinstance(node.func, ast.Attribute)
+        and node.func.attr in ("get", "setdefault", "pop")
+        and node.args
+        and isinstance(node.args[0], ast.Constant)
+        and isinstance(node.args[0].value, str)
+    ):
+        return node.func.value, node.args[0].value
+    return None, None
+
+
+def scene_key_reads(source: str, name: str) -> list[str]:
+    """Places in module ``name`` that read a scene key around the schema (empty for the schema modules).
+
+    Flagged: parsing TOML (``tomllib``) outside the schema modules and :data:`RAW_TOML_ALLOWED`; the
+    untyped tables of given keys (``scene.section(...)``, ``scene.sections``), whose missing keys would
+    need a default restated; and an effect's option read by a string (``effects["contact"]["damping"]``,
+    ``o = effects["motor"]; o.get("ki", 0.0)``): options are typed, their defaults in the schema.
+    """
+    if name in SCHEMA_MODULES:
+        return []
+    effect_names, option_keys = _schema_names()
+    tree = ast.parse(source)
+    bad = []
+
+    def effect_table(node):
+        recv, key = _literal_key(node)
+        return recv is not None and key in effect_names
+
+    # names bound to one effect's options: o = effects["contact"]
+    bound = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Assign) and effect_table(node.value):
+            bound |= {t.id for t in node.targets if isinstance(t, ast.Name)}
+    for node in ast.walk(tree):
+        line = getattr(node, "lineno", 0)
+        if isinstance(node, (ast.Import, ast.ImportFrom)) and name not in RAW_TOML_ALLOWED:
+            mods = [a.name for a in node.names] if isinstance(node, ast.Import) else [node.module or ""]
+            if "tomllib" in mods:
+                bad.append(f"{name}:{line} parses TOML (scenes are read by vibkit.model.scene)")
+        if isinstance(node, ast.Attribute) and node.attr == "sections":
+            bad.append(f"{name}:{line} reads Scene.sections (use the typed scene.run, scene.solver, ...)")
+        if isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr == "section":
+            bad.append(f"{name}:{line} reads scene.section(...) (use the typed scene.run, scene.solver, ...)")
+        recv, key = _literal_key(node)
+        if key in option_keys and (effect_table(recv) or (isinstance(recv, ast.Name) and recv.id in bound)):
+            bad.append(f"{name}:{line} reads effect option '{key}' by name (use the typed options' attribute)")
+    return bad
+
+
+def test_scene_keys_are_read_through_the_schema():
+    bad = []
+    for name, (path, _) in MODULES.items():
+        bad += scene_key_reads(path.read_text(), name)
+    assert not bad, "\n".join(bad)
+
+
+@pytest.mark.parametrize(
+    "snippet",
+    [
+        "import tomllib\n",
+        "x = scene.section('run').get('start', 0.0)\n",
+        "x = dict(scene.sections)\n",
+        "k = effects['contact'].get('damping', 0.0)\n",
+        "k = effects.get('motor', {}).get('ki', 0.0)\n",
+        "o = effects['tensioner']\nk = o['stiffness']\n",
+    ],
+)
+def test_the_scene_key_check_can_fail(snippet):
+    """Each way around the schema, planted in a fake module, is caught; typed reads are not."""
+    assert scene_key_reads(snippet, "vibkit.analyses.fake"), snippet
+    assert scene_key_reads(snippet, "vibkit.model.scene") == []
+
+
+def test_typed_scene_reads_pass_the_scene_key_check():
+    ok = "k = effects['contact'].damping\nr = scene.run.start\nf = FP['g']\nv = scene.outputs['variables']\n"
+    assert scene_key_reads(ok, "vibkit.analyses.fake") == []

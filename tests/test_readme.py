@@ -1,6 +1,7 @@
-"""The README's examples run as written, in order, on the files that ship with the repository.
+"""The examples of the README and the docs run as written, in order, on the files that ship with the repository.
 
-Every ```bash and ```python block of README.md is taken apart into commands (shell: one a line,
+Every ```bash and ```python block of README.md, and of every page under docs/ (each page in its own
+sandbox), is taken apart into commands (shell: one a line,
 ``\\`` continuations joined; Python: the whole block).  They run in a sandbox folder that holds
 links to the repository's ``sim/``, ``data/`` and ``benchmarks/`` and nothing else, so that what
 they write is seen: it must all be under ``out/``, which git ignores.
@@ -15,7 +16,11 @@ Two depths:
   asks of a release: ``make demo``, then every README command, exit 0, ``git status`` clean).
 
 ``make ...`` (the setup) and ``. .venv/bin/activate`` are not run: the full run calls ``vibkit`` as
-``sys.executable -m vibkit`` and ``python`` as ``sys.executable``.
+``sys.executable -m vibkit`` and ``python`` as ``sys.executable``. A block that must not run is written
+as ```text, ```console or ```toml.
+
+Every path of the repository that the README or a docs page names (``vibkit/...``, ``tests/...``,
+``data/...``, ``sim/...``, ``benchmarks/...``, ``docs/...``) must exist.
 """
 
 import os
@@ -29,6 +34,14 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
+README = ROOT / "README.md"
+#: the documentation's pages, in a stable order; not Sphinx's output (docs/_build) nor the benchmark
+#: pages it writes (docs/benchmarks/results, each including a file of benchmarks/results)
+DOC_PAGES = sorted(
+    p
+    for p in (ROOT / "docs").rglob("*.md")
+    if "_build" not in p.parts and not p.is_relative_to(ROOT / "docs" / "benchmarks" / "results")
+)
 FULL = os.environ.get("VIBKIT_README_FULL") == "1"
 
 # commands (by their first words) changed in the default, cheap run; None: --help only
@@ -58,10 +71,10 @@ def shell_commands(code):
     return out
 
 
-def examples():
-    """Every example of the README, in order: ("sh", argv) or ("py", code)."""
+def examples(page=README):
+    """Every example of a page (the README by default), in order: ("sh", argv) or ("py", code)."""
     ex = []
-    for lang, code in blocks((ROOT / "README.md").read_text(encoding="utf-8")):
+    for lang, code in blocks(page.read_text(encoding="utf-8")):
         if lang == "python":
             ex.append(("py", code))
         else:
@@ -80,7 +93,7 @@ def test_the_readme_has_its_examples():
 def test_outputs_are_ignored_by_git():
     """Every file an example writes (-o, write_report, the fleet database) is ignored by git."""
     written = {"out/x", "vibkit-fleet.sqlite", "reports/leon.pdf", "out/sweep.zarr/x"}
-    for kind, ex in examples():
+    for kind, ex in [e for page in (README, *DOC_PAGES) for e in examples(page)]:
         if kind == "sh" and "-o" in ex:
             written.add(ex[ex.index("-o") + 1])
         if kind == "py":
@@ -127,7 +140,7 @@ def _run_shell(argv, cwd, env, capsys):
         env[name] = value
         os.environ[name] = value  # the in-process commands read it too (monkeypatched by the test)
         return None, "export"
-    if argv[0] in ("mkdir", "rm"):
+    if argv[0] in ("mkdir", "rm", "cp"):
         return subprocess.run(argv, cwd=cwd, env=env, capture_output=True, text=True), " ".join(argv)
     if argv[0] == "python":
         return subprocess.run(
@@ -150,31 +163,99 @@ def _run_shell(argv, cwd, env, capsys):
     return _in_process(args, capsys), "vibkit " + " ".join(args)
 
 
-def test_every_example_runs_in_order(tmp_path, monkeypatch, capsys):
-    box = _sandbox(tmp_path)
+def _run_page(page, box, monkeypatch, capsys):
+    """Run every example of one page in the sandbox ``box``, in order; returns what was run."""
     monkeypatch.chdir(box)
     monkeypatch.delenv("VIBKIT_FLEET_DB", raising=False)
     env = dict(os.environ, MPLBACKEND="Agg", PYTHONPATH=str(ROOT), VIBKIT_PROGRESS_INTERVAL="1e9")
+    name = page.relative_to(ROOT).as_posix()
     ran = []
-    for kind, ex in examples():
+    for kind, ex in examples(page):
         if kind == "py":
             if FULL:
                 proc = subprocess.run(
                     [sys.executable, "-c", ex], cwd=box, env=env, capture_output=True, text=True, timeout=900
                 )
-                assert proc.returncode == 0, f"the README's Python block failed:\n{proc.stderr[-3000:]}"
+                assert proc.returncode == 0, f"a Python block of {name} failed:\n{proc.stderr[-3000:]}"
             else:
-                compile(ex, "README.md", "exec")
+                compile(ex, name, "exec")
             continue
         proc, what = _run_shell(ex, box, env, capsys)
         if proc is None:
             continue
         ran.append(what)
-        assert proc.returncode == 0, f"{what}: exit {proc.returncode}\n{proc.stderr[-3000:]}"
-        assert "Traceback" not in proc.stderr, f"{what}:\n{proc.stderr[-3000:]}"
+        assert proc.returncode == 0, f"{name}: {what}: exit {proc.returncode}\n{proc.stderr[-3000:]}"
+        assert "Traceback" not in proc.stderr, f"{name}: {what}:\n{proc.stderr[-3000:]}"
+    return ran
+
+
+def test_every_example_runs_in_order(tmp_path, monkeypatch, capsys):
+    box = _sandbox(tmp_path)
+    ran = _run_page(README, box, monkeypatch, capsys)
     assert len(ran) >= 14
     # nothing written outside out/ (the links are the sandbox's own)
     left = sorted(p.name for p in box.iterdir() if p.name not in ("sim", "data", "benchmarks", "out"))
     assert left == [], f"the examples wrote outside out/: {left}"
     assert (box / "out" / "fleet.sqlite").exists()
     assert (box / "out" / "fleet.pdf").read_bytes()[:5] == b"%PDF-"
+
+
+@pytest.mark.parametrize(
+    "page", [p for p in DOC_PAGES if examples(p)], ids=lambda p: p.relative_to(ROOT / "docs").as_posix()
+)
+def test_every_docs_example_runs_in_order(page, tmp_path, monkeypatch, capsys):
+    """Each docs page's examples, in order, in a fresh sandbox of their own; outputs under out/ only."""
+    box = _sandbox(tmp_path)
+    _run_page(page, box, monkeypatch, capsys)
+    left = sorted(p.name for p in box.iterdir() if p.name not in ("sim", "data", "benchmarks", "out"))
+    assert left == [], f"the examples of {page.name} wrote outside out/: {left}"
+
+
+#: a path of the repository as the README and the docs name it: one of these folders, then a path
+#: (braces {a,b} and globs * allowed), not part of a longer path or a URL
+REPO_PATH = re.compile(r"(?<![\w/.$~-])((?:vibkit|tests|data|sim|benchmarks|docs)/[\w./{},*-]*)")
+
+
+def _expand_braces(path):
+    m = re.search(r"\{([^{}]*)\}", path)
+    if not m:
+        return [path]
+    return [x for alt in m.group(1).split(",") for x in _expand_braces(path[: m.start()] + alt + path[m.end() :])]
+
+
+def named_paths(text):
+    """Every repository path a page names, braces expanded, trailing punctuation dropped.
+
+    Sphinx's own references (toctree entries, ``{doc}`` targets) name pages, not files, and are
+    checked by the docs build; a path with ``...`` in it is a pattern, not a path.
+    """
+    text = re.sub(r"^```\{toctree\}.*?^```", "", text, flags=re.M | re.S)
+    text = re.sub(r"\{doc\}`[^`]*`", "", text)
+    out = set()
+    for raw in REPO_PATH.findall(text):
+        if "..." in raw:
+            continue
+        for path in _expand_braces(raw.rstrip(".,")):
+            if path.startswith("docs/_build"):
+                continue  # Sphinx's output, not in a checkout
+            out.add(path.rstrip("/") or path)
+    return out
+
+
+def test_named_paths_parse():
+    text = (
+        "see `vibkit/model/guide.py`, benchmarks/results/closure.{md,png} and ~/.cache/vibkit/numba; "
+        "{doc}`benchmarks/index`, `tests/...`."
+    )
+    assert named_paths(text) == {
+        "vibkit/model/guide.py",
+        "benchmarks/results/closure.md",
+        "benchmarks/results/closure.png",
+    }
+
+
+@pytest.mark.parametrize("page", [README, *DOC_PAGES], ids=lambda p: p.relative_to(ROOT).as_posix())
+def test_every_path_named_exists(page):
+    """A path the page names (``vibkit/...``, ``tests/...``, ``data/...``, ``sim/...``, ``benchmarks/...``) exists."""
+    missing = sorted(p for p in named_paths(page.read_text(encoding="utf-8")) if not list(ROOT.glob(p)))
+    assert missing == [], f"{page.relative_to(ROOT)} names paths that do not exist: {missing}"

@@ -48,7 +48,9 @@ CASES = {
 }
 
 
-@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize(
+    "method", [pytest.param(m, marks=pytest.mark.slow) if m.startswith("cvode") else m for m in METHODS]
+)
 def test_every_method_agrees_with_the_reference(method, reference):
     rtol, accept = CASES[method]
     ds = vibkit.simulate(scene(method, rtol), duration=1.5, progress=False)

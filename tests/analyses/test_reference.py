@@ -113,6 +113,7 @@ def test_same_link_tensions_at_an_instant(scene, fmodel, coordinate_map):
 # -- 2. converged runs, same coordinate ---------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_converged_runs_agree(ours, study_converged):
     """Both converged, so they agree to the study run's integration accuracy (rtol 1e-6, atol 1e-8
     on 323 states, with Baumgarte); the differences measured are about 10x below each tolerance:
@@ -138,6 +139,7 @@ def test_the_run_is_not_trivial(ours):
 # -- 3. the faithful port ----------------------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_faithful_port_agrees_within_stated_tolerances(fmodel, ours, study_faithful):
     """The study's settings (RelTol = AbsTol = MaxStep = 1e-3) and its linear coordinate map.
 
@@ -160,6 +162,7 @@ def test_faithful_port_agrees_within_stated_tolerances(fmodel, ours, study_faith
     np.testing.assert_allclose(s.link_tension, ours.link_tension, rtol=0, atol=100.0)
 
 
+@pytest.mark.slow
 def test_speed_jump_of_the_study_coordinate(fmodel, ours, study_faithful):
     """Where roller 1 leaves the telescopic run (s0 = Lt) the study's map changes dr/ds0 from
     sigma = (Lt - delta)/Lt to 1 while s0dot stays continuous, so roller 1's speed jumps by
@@ -183,6 +186,7 @@ def test_speed_jump_of_the_study_coordinate(fmodel, ours, study_faithful):
     assert steps.max() < 3.0 * np.median(steps) + 1e-4
 
 
+@pytest.mark.slow
 def test_baumgarte_keeps_closure_small_but_not_exact(ours, study_faithful):
     """Baumgarte holds the study's links to a fraction of a millimetre (the study's own fsolve
     tolerance was 1e-4), never to rounding; vibkit's walked closure holds to ~1e-13 m."""
@@ -192,6 +196,7 @@ def test_baumgarte_keeps_closure_small_but_not_exact(ours, study_faithful):
     assert float(ours.closure_residual.max()) < 1e-11
 
 
+@pytest.mark.slow
 def test_result_layout(study_faithful, ours):
     ds = study_faithful
     for name in ds.data_vars:

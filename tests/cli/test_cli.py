@@ -112,6 +112,7 @@ def test_compare_result_file(leon_nc, capsys):
     assert "NOT consistent" in out
 
 
+@pytest.mark.slow
 def test_report_json(leon_nc, tmp_path, capsys):
     out = tmp_path / "r.pdf"
     assert main(["report", LEON, "-o", str(out), "--json"]) == 0

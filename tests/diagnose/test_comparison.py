@@ -7,6 +7,9 @@ import xarray as xr
 import vibkit
 from vibkit.diagnose.comparison import compare
 
+from support.chain import family
+from support.recording import recording
+
 
 @pytest.fixture(scope="module")
 def leon_short(tmp_path_factory):
@@ -46,17 +49,12 @@ def test_leon_pitch_not_consistent(leon_short):
 
 
 def _synthetic(t, f, amps, seg=None, rng=None):
-    x = sum(a * np.cos(2 * np.pi * (k + 1) * f * t + 0.3 * k) for k, a in enumerate(amps))
+    x = family(t, f, amps, phases=[0.3 * k for k in range(len(amps))])
     if rng is not None:
         x = x + 1e-3 * rng.standard_normal(t.size)
-    ds = xr.Dataset(
-        {"delta": ("time", x, {"units": "m", "long_name": "d"})},
-        coords={"time": ("time", t, {"units": "s"})},
-        attrs={"chain_speed_m_s": 0.5},
+    return recording(
+        {"delta": x}, t=t, units="m", var_attrs={"long_name": "d"}, segment=seg, attrs={"chain_speed_m_s": 0.5}
     )
-    if seg is not None:
-        ds["segment"] = ("time", seg.astype(np.int32))
-    return ds
 
 
 def test_bursts_and_known_amplitude_difference():

@@ -1,4 +1,4 @@
-"""A verdict only where the chain is (issue 18): one decision for spectrum, pitch, report, compare and the
+"""A verdict only where the chain is: one decision for spectrum, pitch, report, compare and the
 fleet; physical plausibility; inconclusive without evidence; every channel; speed from the file; units."""
 
 import argparse
@@ -9,7 +9,6 @@ import os
 import numpy as np
 import pytest
 import scipy.signal
-import xarray as xr
 
 import vibkit
 from vibkit.cli import main
@@ -21,9 +20,13 @@ from vibkit.diagnose.decision import (
     STATUS_INCONCLUSIVE,
     STATUS_NOT_FOUND,
     STATUS_OK,
+    LinkPassEvidence,
     decide,
 )
 from vibkit.diagnose.pitch import estimate_pitch
+
+from support.chain import chain as _chain
+from support.recording import recording
 
 LEON = "data/field/leon-tensioner.csv"
 LAS_PALMAS = "data/field/las-palmas-accelerometer.csv"
@@ -33,19 +36,7 @@ NOMINAL = 0.13333
 
 
 def _rec(channels, fs=FS, attrs=None):
-    n = len(next(iter(channels.values())))
-    t = np.arange(n) / fs
-    return xr.Dataset(
-        {k: ("time", np.asarray(v, dtype=float), {"units": "m/s^2"}) for k, v in channels.items()},
-        coords={"time": ("time", t, {"units": "s"})},
-        attrs=attrs or {},
-    )
-
-
-def _chain(f, seconds=30.0, fs=FS, noise=0.1, seed=1):
-    t = np.arange(int(seconds * fs)) / fs
-    x = np.cos(2 * np.pi * f * t) + 0.5 * np.cos(2 * np.pi * 2 * f * t + 1) + 0.3 * np.cos(2 * np.pi * 3 * f * t + 2)
-    return x + noise * np.random.default_rng(seed).standard_normal(t.size)
+    return recording(channels, fs, attrs=attrs)
 
 
 def _issue_cases():
@@ -102,11 +93,11 @@ def _thirdparty():
 @pytest.mark.parametrize("path", _thirdparty(), ids=os.path.basename)
 def test_thirdparty_corpus_gives_no_pitch(path):
     """Real recordings of everything but an escalator: every channel that reads gives no pitch, no verdict
-    (files the reader cannot read yet are issue 19's and listed in the report)."""
+    (files the reader cannot read yet are listed in the report)."""
     try:
         rec = vibkit.read_recording(path)
     except vibkit.io.RecordingError:
-        pytest.xfail("the reader does not read this file yet (issue 19)")
+        pytest.xfail("the reader does not read this file yet")
     for ch in vibration_channels(rec):
         try:
             est = estimate_pitch(rec, speed=0.5, channel=ch, nominal_pitch=NOMINAL)
@@ -183,16 +174,24 @@ def test_decide_rules():
         speed_m_s=0.5,
         nominal_pitch_m=0.5 / 3.76,
     )
-    assert decide(**base).status == STATUS_OK
-    assert decide(**{**base, "fundamental_hz": 3.5}).status == STATUS_NOT_FOUND  # not the detected family
-    assert decide(**{**base, "detection_hz": 2.4, "fundamental_hz": 2.4}).status == STATUS_NOT_FOUND  # below the band
-    assert decide(**base, spectral_hz=3.76, mean_phase_hz=3.9).status == STATUS_NOT_FOUND  # drifts 3.7 %
-    assert decide(**base, spectral_hz=3.76, mean_phase_hz=3.80).status == STATUS_OK  # 1 %: a chain's wander
+    assert decide(LinkPassEvidence(**base)).status == STATUS_OK
+    assert (
+        decide(LinkPassEvidence(**{**base, "fundamental_hz": 3.5})).status == STATUS_NOT_FOUND
+    )  # not the detected family
+    assert (
+        decide(LinkPassEvidence(**{**base, "detection_hz": 2.4, "fundamental_hz": 2.4})).status == STATUS_NOT_FOUND
+    )  # below the band
+    assert (
+        decide(LinkPassEvidence(**base, spectral_hz=3.76, mean_phase_hz=3.9)).status == STATUS_NOT_FOUND
+    )  # drifts 3.7 %
+    assert (
+        decide(LinkPassEvidence(**base, spectral_hz=3.76, mean_phase_hz=3.80)).status == STATUS_OK
+    )  # 1 %: a chain's wander
     # a third of the first limit: 0.5 % elongation sigma is the edge
     edge = 1.5 / 3 / 100 * 3.76
-    assert decide(**{**base, "fundamental_sigma_hz": 0.9 * edge}).status == STATUS_OK
-    assert decide(**{**base, "fundamental_sigma_hz": 1.1 * edge}).status == STATUS_INCONCLUSIVE
-    assert decide(detected=False, detection_reason="nothing").reason == "nothing"
+    assert decide(LinkPassEvidence(**{**base, "fundamental_sigma_hz": 0.9 * edge})).status == STATUS_OK
+    assert decide(LinkPassEvidence(**{**base, "fundamental_sigma_hz": 1.1 * edge})).status == STATUS_INCONCLUSIVE
+    assert decide(LinkPassEvidence(detected=False, detection_reason="nothing")).reason == "nothing"
 
 
 # ------------------------------------------------------------------------------------ channels and speed

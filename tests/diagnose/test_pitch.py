@@ -2,24 +2,17 @@
 
 import numpy as np
 import pytest
-import xarray as xr
 
 from vibkit.diagnose.pitch import elongation_verdict, estimate_pitch
 
+from support.chain import family as _family
+from support.recording import recording
+
 
 def _rec(t, x, seg=None, units="m/s^2"):
-    ds = xr.Dataset(
-        {"acc": ("time", x, {"units": units, "long_name": "acc", "quantity": "acceleration"})},
-        coords={"time": ("time", t, {"units": "s"})},
+    return recording(
+        {"acc": x}, t=t, units=units, var_attrs={"long_name": "acc", "quantity": "acceleration"}, segment=seg
     )
-    if seg is not None:
-        ds["segment"] = ("time", seg.astype(np.int32))
-    return ds
-
-
-def _family(t, f, amps, phases=None, rng=None):
-    phases = phases if phases is not None else np.zeros(len(amps))
-    return sum(a * np.cos(2 * np.pi * (k + 1) * f * t + phases[k]) for k, a in enumerate(amps))
 
 
 @pytest.mark.parametrize("pitch", [0.1016, 0.13333, 0.13546, 0.1384])

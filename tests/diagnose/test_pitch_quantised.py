@@ -6,17 +6,17 @@ import json
 
 import numpy as np
 import pytest
-import xarray as xr
 
 from vibkit.cli import main
 from vibkit.diagnose.pitch import STATUS_INCONCLUSIVE, STATUS_NOT_FOUND, STATUS_OK, estimate_pitch
+
+from support.recording import recording
 
 SPEED = 0.4667
 
 
 def _rec(x, fs):
-    t = np.arange(len(x)) / fs
-    return xr.Dataset({"x": ("time", np.asarray(x, dtype=float))}, coords={"time": t})
+    return recording({"x": x}, fs, units=None, time_units=None)
 
 
 def test_cli_integer_tone_as_the_float_tone(tmp_path, capsys):

@@ -1,4 +1,4 @@
-"""Pitch you can trust (issue 11): no link-pass, no number; invalid samples; wandering speed; the detector's
+"""Pitch you can trust: no link-pass, no number; invalid samples; wandering speed; the detector's
 false-alarm rate."""
 
 import json
@@ -7,11 +7,13 @@ import warnings
 import numpy as np
 import pytest
 import scipy.stats
-import xarray as xr
 
 from vibkit.cli import main
 from vibkit.diagnose.pitch import STATUS_NOT_FOUND, estimate_pitch
 from vibkit.signal.detect import detect_link_pass, flag_invalid, harmonic_sum_pvalue, harmonic_sum_threshold
+
+from support.chain import wandering as _wandering
+from support.recording import recording
 
 LEON = "data/field/leon-tensioner.csv"
 FS = 200.0
@@ -19,10 +21,7 @@ SPEED = 0.49  # default band: 0.49 / (0.2 .. 0.08 m) = 2.45 .. 6.125 Hz
 
 
 def _rec(x, fs=FS, t=None):
-    t = np.arange(len(x)) / fs if t is None else t
-    return xr.Dataset(
-        {"x": ("time", np.asarray(x, dtype=float), {"units": "m"})}, coords={"time": ("time", t, {"units": "s"})}
-    )
+    return recording({"x": x}, fs, t=t, units="m")
 
 
 def _t(seconds=40.0, fs=FS):
@@ -178,31 +177,7 @@ def test_bad_teeth_and_p_fa():
 
 
 # ------------------------------------------------------------------------------------------- wandering speed
-
-
-def _wandering(duration, fs, period, amp, snr_db, kind, seed, pitch=0.13333, v0=0.5):
-    """Speed v(t) = v0 (1 + w(t)), |w| <= amp; returns (signal, mean speed, pitch)."""
-    rng = np.random.default_rng(seed)
-    n = int(duration * fs)
-    t = np.arange(n) / fs
-    if kind == "sine":
-        w = amp * np.sin(2 * np.pi * t / period + rng.uniform(0, 2 * np.pi))
-    else:  # random walk through knots every period / 4, smoothed by linear interpolation
-        m = int(duration / period * 4) + 2
-        knots = np.cumsum(rng.standard_normal(m))
-        w = np.interp(t, np.linspace(0, duration, m), knots - knots.mean())
-        w = amp * w / np.max(np.abs(w))
-    v = v0 * (1 + w)
-    f = v / pitch
-    phi = 2 * np.pi * np.concatenate(([0.0], np.cumsum((f[1:] + f[:-1]) / 2) / fs))
-    amps = (1.0, 0.5, 0.3)
-    x = sum(a * np.cos((k + 1) * phi + 0.7 * k) for k, a in enumerate(amps))
-    sigma = np.sqrt(sum(a * a / 2 for a in amps) / 10 ** (snr_db / 10))
-    x = x + sigma * rng.standard_normal(n)
-    # mean speed over the record, as a wheel on the steps measures it (links passed x pitch / time)
-    v_mean = float(np.trapezoid(v, t) / t[-1])
-    return x, v_mean, pitch
-
+# support.chain.wandering: speed v(t) = v0 (1 + w(t)), |w| <= amp; returns (signal, mean speed, pitch)
 
 _GRID = [
     (dur, per, kind, snr)
@@ -255,6 +230,7 @@ def test_threshold_is_the_gamma_quantile():
     assert harmonic_sum_threshold(1e-3, 5, 3, 0.1) > t  # an uncertain floor raises it
 
 
+@pytest.mark.slow
 def test_false_alarm_rate_on_1000_noise_records():
     """Measured rates at 0.05, 0.01 and 1e-3 within their binomial 99.9 % intervals (1,000 records)."""
     rng = np.random.default_rng(2026)
@@ -280,6 +256,7 @@ def test_detects_a_weak_family():
     assert det.detected and det.frequency_hz == pytest.approx(3.75, abs=0.15)
 
 
+@pytest.mark.slow
 def test_false_alarm_rate_of_short_records_is_at_most_the_stated_one():
     """Records too short for two segments are tested once per piece, Bonferroni over the candidate
     bin tuples: conservative (rate at most the stated one, within binomial noise)."""

@@ -20,6 +20,7 @@ def leon_report(tmp_path_factory):
     return write_report(LEON, out, scene="sim/leon.toml", duration=4.0)
 
 
+@pytest.mark.slow
 def test_pages_and_text(leon_report):
     rep = leon_report
     titles = [t for t, _ in rep.pages]
@@ -53,6 +54,7 @@ def test_pages_and_text(leon_report):
     assert rep.summary["spikes"] == 6
 
 
+@pytest.mark.slow
 def test_reproducible_bytes(tmp_path, monkeypatch):
     monkeypatch.setenv("SOURCE_DATE_EPOCH", "1700000000")
     a, b = tmp_path / "a.pdf", tmp_path / "b.pdf"

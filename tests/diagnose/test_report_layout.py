@@ -108,12 +108,14 @@ def checked_reports(tmp_path_factory):
     return leon, phy, problems
 
 
+@pytest.mark.slow
 def test_no_text_overlaps_or_leaves_its_place(checked_reports):
     _, _, problems = checked_reports
     bad = {f"page {n} ({t})": p for (n, t), p in problems.items() if p}
     assert bad == {}
 
 
+@pytest.mark.slow
 def test_page_one_is_the_verdict(checked_reports):
     leon, _, _ = checked_reports
     title, texts = leon.pages[0]
@@ -130,6 +132,7 @@ def test_page_one_is_the_verdict(checked_reports):
     assert re.search(r"RMS / peak to peak\n?.*mm", text)
 
 
+@pytest.mark.slow
 def test_date_without_metadata_says_so(checked_reports):
     _, phy, _ = checked_reports
     assert "not stated in the file (give --date)" in "\n".join(phy.pages[0][1])

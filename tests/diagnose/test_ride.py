@@ -17,6 +17,7 @@ from vibkit.diagnose.ride import (
 from vibkit.signal import frequency_weighting_response
 
 from ..signal.test_signal_ride import synthetic_ride
+from support.recording import recording
 
 FS = 500.0
 AMP_Z, F_Z = 0.08, 6.3
@@ -91,12 +92,9 @@ def test_simulation_dataset_goes_through_the_same_path():
 
 
 def _dataset_recording(t, ax, ay, az):
-    attrs = {"units": "m/s^2", "quantity": "acceleration"}
-    return xr.Dataset(
-        {"ax": ("time", ax, attrs), "ay": ("time", ay, attrs), "az": ("time", az, attrs)},
-        coords={"time": t},
-        attrs={"source_file": "synthetic"},
-    )
+    channels = {"ax": ax, "ay": ay, "az": az}
+    attrs = {"source_file": "synthetic"}
+    return recording(channels, t=t, var_attrs={"quantity": "acceleration"}, time_units=None, attrs=attrs)
 
 
 def test_parsers():
@@ -163,6 +161,7 @@ def test_cli_ride_of_a_scene_simulates_it(capsys):
     assert all(math.isfinite(a["weighted"]["a95"]) and a["weighted"]["a95"] > 0 for a in d["axes"])
 
 
+@pytest.mark.slow
 def test_report_has_a_ride_quality_page(ride_csv, tmp_path):
     from vibkit.diagnose.report import write_report
 

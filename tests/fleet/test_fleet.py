@@ -29,6 +29,8 @@ from vibkit.fleet import (
 )
 from vibkit.fleet.trends import SECONDS_PER_YEAR
 
+from support.chain import random_phase_family
+
 ROOT = Path(__file__).resolve().parents[2]
 SPEED = 0.5  # m/s
 NOMINAL = 0.4 / 3  # m
@@ -41,12 +43,8 @@ T0 = dt.datetime(2023, 1, 15, tzinfo=dt.timezone.utc)
 
 def synth(path, pitch_m, seed, *, start=None, amps=AMPS, duration=DURATION):
     """A recording of a chain of pitch ``pitch_m`` at SPEED: harmonics of v/L plus white noise, CSV."""
-    rng = np.random.default_rng(seed)
     t = np.arange(int(duration * FS)) / FS
-    f = SPEED / pitch_m
-    x = NOISE * rng.standard_normal(t.size)
-    for k, a in enumerate(amps, 1):
-        x += a * np.cos(2 * np.pi * k * f * t + rng.uniform(0, 2 * np.pi))
+    x = random_phase_family(t, SPEED / pitch_m, np.random.default_rng(seed), amps, noise=NOISE)
     with open(path, "w") as fh:
         if start is None:
             fh.write("time_s,accel_m_s2\n")
@@ -667,6 +665,7 @@ def test_cli_add_replaced_starts_a_segment(tmp_path, capsys):
 
 # vibkit.runtime.cluster's local scheduler binds its HTTP server to port 8787 by default (dashboard off): where
 # another cluster holds the port, distributed warns and leaks the socket of its first try
+@pytest.mark.slow
 @pytest.mark.filterwarnings("ignore:Port 8787 is already in use:UserWarning")
 @pytest.mark.filterwarnings("ignore::ResourceWarning")
 @pytest.mark.filterwarnings("ignore::pytest.PytestUnraisableExceptionWarning")
@@ -689,6 +688,7 @@ def test_scan_on_dask_gives_the_plain_loop_numbers(fleet, tmp_path, capsys):
     assert got and all(got[k] == ref[k] for k in got)  # bit for bit
 
 
+@pytest.mark.slow
 def test_killed_scan_leaves_complete_rows(tmp_path):
     d = tmp_path / "visits"
     d.mkdir()

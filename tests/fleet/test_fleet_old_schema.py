@@ -9,7 +9,6 @@ import os
 import shutil
 import sqlite3
 import stat
-import sys
 from pathlib import Path
 
 import pytest
@@ -18,9 +17,9 @@ from vibkit.cli import main
 from vibkit.fleet import FleetDB, FleetError
 from vibkit.fleet.storage import migrate
 
+from corpus_fleet import SCHEMA_1_ROWS, schema1_db
+
 ROOT = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT / "tests" / "reliability"))
-from corpus_fleet import SCHEMA_1_ROWS, schema1_db  # noqa: E402
 
 NOTE = "read a schema-1 history without upgrading it"
 

@@ -249,6 +249,7 @@ def _synth(path, pitch_m, seed, fs=200.0, duration=10.0):
     path.write_text("time_s,accel_m_s2\n" + "".join(f"{ti:.3f},{xi:.6f}\n" for ti, xi in zip(t, x)))
 
 
+@pytest.mark.slow
 def test_killed_scan_on_postgres_leaves_complete_rows(tmp_path, pg_server):
     import psycopg
 
@@ -316,7 +317,6 @@ def test_killed_scan_on_postgres_leaves_complete_rows(tmp_path, pg_server):
 
 def _v1_schema():
     """The schema-1 DDL, written once in tests/reliability/corpus_fleet.py."""
-    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "reliability"))
     from corpus_fleet import SCHEMA_1_DDL
 
     return SCHEMA_1_DDL

@@ -7,20 +7,15 @@ import pytest
 
 from vibkit.io import RecordingError, read_recording
 
+from support.contracts import recording_error
+
 GOOD = "time (s),acc_z (m/s^2)\n0.00,0.1\n0.01,0.2\n0.02,0.3\n0.03,0.4\n"
 
 
 def expect(path, line, *words):
-    with pytest.raises(RecordingError) as info:
-        read_recording(path)
-    err = info.value
-    msg = str(err)
-    assert "\n" not in msg
-    assert msg.startswith(f"{path}, line {line}: " if line else f"{path}: ")
+    err = recording_error(path, lambda: read_recording(path), *words, line=line)
     assert err.path == os.fspath(path) and err.line == line
-    for w in words:
-        assert w in msg, msg
-    return msg
+    return str(err)
 
 
 @pytest.fixture

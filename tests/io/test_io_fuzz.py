@@ -1,6 +1,7 @@
 """Property-based tests: the CSV reader returns a valid recording or raises RecordingError, nothing else."""
 
 import numpy as np
+import pytest
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
@@ -54,6 +55,7 @@ def test_random_bytes(tmp_path, data):
     read_or_error(p)
 
 
+@pytest.mark.slow
 @SETTINGS
 @given(
     nrows=st.integers(2, 40),

@@ -1,4 +1,4 @@
-"""Issues 11 and 12, reader side: channel names as the file writes them, sample counters, epoch times,
+"""Reader inputs: channel names as the file writes them, sample counters, epoch times,
 UTF-16 text, non-regular files, the size limit, netCDF time checks and fill values."""
 
 import os
@@ -11,12 +11,13 @@ import xarray as xr
 from vibkit.diagnose.pitch import pick_channel
 from vibkit.io import (
     DEFAULT_MAX_RECORDING_BYTES,
-    RecordingError,
     max_recording_bytes,
     read_recording,
     resolve_channel,
     write_result,
 )
+
+from support.contracts import recording_error
 
 FS = 200.0
 T = np.arange(400) / FS
@@ -26,16 +27,6 @@ def write(tmp_path, text, name="rec.csv", encoding="utf-8"):
     p = tmp_path / name
     p.write_bytes(text.encode(encoding) if isinstance(text, str) else text)
     return p
-
-
-def one_line_error(path, fn, *words, line=None):
-    with pytest.raises(RecordingError) as info:
-        fn()
-    msg = str(info.value)
-    assert "\n" not in msg and msg.startswith(f"{path}, line {line}: " if line else f"{path}: "), msg
-    for w in words:
-        assert w in msg, msg
-    return msg
 
 
 # ----------------------------------------------------------------------------------- channel names
@@ -141,7 +132,7 @@ def test_epoch_unit_override_and_absurd_spacing(tmp_path):
     assert "in ms (given)" in ds.attrs["history"]
     # epoch ms by size, but a step of 1e9 ms (11 days) per sample: not a recording vibkit can guess
     p = write(tmp_path, "time,x (m)\n" + "".join(f"{EPOCH_S * 1000 + 10**9 * k},{k}\n" for k in range(5)), "far.csv")
-    one_line_error(p, lambda: read_recording(p), "Unix epoch time in ms", "pass time_unit=", line=2)
+    recording_error(p, lambda: read_recording(p), "Unix epoch time in ms", "pass time_unit=", line=2)
 
 
 def test_non_epoch_large_times_are_not_rescaled(tmp_path):
@@ -167,7 +158,7 @@ def test_utf16_and_utf32_text(tmp_path, codec):
 
 def test_broken_utf16_is_a_clear_error(tmp_path):
     p = write(tmp_path, b"\xff\xfe" + "time,x\n0,1\n".encode("utf-16-le") + b"\x00\xd8")  # lone surrogate
-    one_line_error(p, lambda: read_recording(p), "UTF-16 byte-order mark", "cannot be decoded")
+    recording_error(p, lambda: read_recording(p), "UTF-16 byte-order mark", "cannot be decoded")
 
 
 # ------------------------------------------------------------------------------------ files and limits
@@ -176,23 +167,23 @@ def test_broken_utf16_is_a_clear_error(tmp_path):
 def test_fifo_is_refused_without_opening_it(tmp_path):
     fifo = tmp_path / "logger.csv"
     os.mkfifo(fifo)
-    one_line_error(fifo, lambda: read_recording(fifo), "named pipe (FIFO)", "not a regular file")
+    recording_error(fifo, lambda: read_recording(fifo), "named pipe (FIFO)", "not a regular file")
 
 
 @pytest.mark.parametrize("dev", ["/dev/zero", "/dev/null", "/dev/urandom"])
 def test_devices_are_refused(dev):
     if not os.path.exists(dev) or not stat.S_ISCHR(os.stat(dev).st_mode):
         pytest.skip(f"{dev} is not a character device here")
-    one_line_error(dev, lambda: read_recording(dev), "character device")
+    recording_error(dev, lambda: read_recording(dev), "character device")
 
 
 def test_symlink_to_a_device_and_a_broken_symlink(tmp_path):
     link = tmp_path / "rec.csv"
     link.symlink_to("/dev/zero")
-    one_line_error(link, lambda: read_recording(link), "character device")
+    recording_error(link, lambda: read_recording(link), "character device")
     dangling = tmp_path / "gone.csv"
     dangling.symlink_to(tmp_path / "nowhere.csv")
-    one_line_error(dangling, lambda: read_recording(dangling), "cannot be read")
+    recording_error(dangling, lambda: read_recording(dangling), "cannot be read")
 
 
 def test_size_limit_by_keyword_and_environment(tmp_path, monkeypatch):
@@ -201,7 +192,7 @@ def test_size_limit_by_keyword_and_environment(tmp_path, monkeypatch):
     monkeypatch.delenv("VIBKIT_MAX_RECORDING_BYTES", raising=False)
     assert max_recording_bytes() == DEFAULT_MAX_RECORDING_BYTES == 4 * 1024**3
     assert read_recording(p, max_bytes=size).sizes["time"] == 400
-    one_line_error(
+    recording_error(
         p,
         lambda: read_recording(p, max_bytes=size - 1),
         f"is {size} bytes",
@@ -210,7 +201,7 @@ def test_size_limit_by_keyword_and_environment(tmp_path, monkeypatch):
         "VIBKIT_MAX_RECORDING_BYTES",
     )
     monkeypatch.setenv("VIBKIT_MAX_RECORDING_BYTES", str(size - 1))
-    one_line_error(p, lambda: read_recording(p), "limit")
+    recording_error(p, lambda: read_recording(p), "limit")
     assert read_recording(p, max_bytes=size).sizes["time"] == 400  # the keyword wins
     monkeypatch.setenv("VIBKIT_MAX_RECORDING_BYTES", "4GiB")
     with pytest.raises(ValueError, match="VIBKIT_MAX_RECORDING_BYTES='4GiB'"):
@@ -221,7 +212,7 @@ def test_size_limit_by_keyword_and_environment(tmp_path, monkeypatch):
 
 def test_time_column_out_of_range_names_the_file(tmp_path):
     p = write(tmp_path, "time (s),x (m)\n0,1\n1,2\n")
-    one_line_error(p, lambda: read_recording(p, time_column=5), "time_column=5 is out of range", line=1)
+    recording_error(p, lambda: read_recording(p, time_column=5), "time_column=5 is out of range", line=1)
 
 
 # ------------------------------------------------------------------------------------------ netCDF
@@ -249,7 +240,7 @@ def nc(tmp_path, t, x, name="r.nc", encoding=None):
 )
 def test_netcdf_time_checks_as_for_text(tmp_path, t, words):
     p = nc(tmp_path, t, [1, 2, 3, 4])
-    one_line_error(p, lambda: read_recording(p), *words)
+    recording_error(p, lambda: read_recording(p), *words)
 
 
 def test_netcdf_repair_time(tmp_path):
@@ -284,7 +275,7 @@ def hms(s):
 def test_midnight_crossing_refused_then_unwrapped(tmp_path):
     t = 86400 - 1.0 + np.arange(400) / FS  # 23:59:59.000 for 2 s
     p = write(tmp_path, "time,x (m)\n" + "".join(f"{hms(a)},{k}\n" for k, a in enumerate(t)))
-    one_line_error(
+    recording_error(
         p, lambda: read_recording(p), "time goes backwards", "crossing midnight", "repair_time=True", line=202
     )
     ds = read_recording(p, repair_time=True)

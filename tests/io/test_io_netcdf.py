@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
+import vibkit
 from vibkit.io import RecordingError, read_recording, write_result
 
 
@@ -34,7 +35,7 @@ def sim_like():
             "chain_speed_m_s": 0.5,
             "sprocket_teeth": 28,
             "scene": "[chain]\npitch = 0.1333\n",
-            "vibkit_version": "0.1.0",
+            "vibkit_version": vibkit.__version__,
         },
     )
 

@@ -1,4 +1,4 @@
-"""Layouts of loggers and apps read right with no options (issue 19), each from a file of that layout.
+"""Layouts of loggers and apps read right with no options, each from a file of that layout.
 
 The corpus in data/thirdparty has no MetaWear, Arduino or phyphox-with-a-repeated-stamp file, so these
 files are written here in the layout their makers document: MetaWear MetaBase CSV headers
@@ -16,22 +16,10 @@ import json
 import numpy as np
 import pytest
 
-from vibkit.cli import main
 from vibkit.io import RecordingError, read_recording
 from vibkit.io.text.units import STANDARD_GRAVITY
 
 F0 = 3.5  # test signal [Hz]
-
-
-@pytest.fixture
-def run(capsys):
-    def _run(*argv):
-        rc = main([str(a) for a in argv])
-        out, err = capsys.readouterr()
-        assert "Traceback" not in out + err
-        return rc, out, err
-
-    return _run
 
 
 def sine(t):

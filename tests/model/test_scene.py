@@ -1,10 +1,11 @@
-"""Scene loading: bad scenes give a clear error naming the file and the key (issue 2)."""
+"""Scene loading: bad scenes give a clear error naming the file and the key."""
 
+import math
 from pathlib import Path
 
 import pytest
 
-from vibkit.model.scene import SceneError, load_scene
+from vibkit.model.scene import SceneError, load_scene, parse_scene
 
 SIM = Path(__file__).resolve().parents[2] / "sim"
 
@@ -74,4 +75,78 @@ def test_closure_choice_is_checked(tmp_path):
     with pytest.raises(SceneError, match=r"'solver.closure' must be one of table, exact, got 'tabel'"):
         load_scene(p)
     p.write_text(text.replace('"tabel"', '"exact"'))
-    assert load_scene(p).section("solver")["closure"] == "exact"
+    assert load_scene(p).solver.closure == "exact"
+
+
+# --- the schema ------------------------------------------------------------------------------------
+
+
+def test_every_schema_key_states_unit_doc_and_default():
+    """No silent default: every key has a unit (possibly "" for a pure number), a doc, and a default,
+    or is required, or its doc says what happens when it is not set."""
+    from vibkit.model.schema import schema_fields
+
+    fields = schema_fields()
+    assert len(fields) > 50
+    for sec, f in fields:
+        m = f.metadata
+        where = f"{sec}.{f.name}"
+        assert isinstance(m["unit"], str), where
+        assert m["doc"].strip(), where
+        assert f.default is not None or m["required"] or "not set" in m["doc"], where
+        assert not (m["required"] and f.default is not None), where
+        if m["range"]:
+            lo, hi, _ = m["range"]
+            assert lo < hi, where
+            if f.default is not None and math.isfinite(f.default):
+                assert lo <= f.default <= hi, where
+
+
+def test_schema_table_has_a_row_per_key():
+    from vibkit.model.schema import schema_fields, schema_table
+
+    table = schema_table()
+    rows = table.splitlines()
+    assert rows[0] == "| section | key | unit | default | range | meaning |"
+    assert len(rows) == 2 + len(schema_fields())
+    assert (
+        "| [effects.contact] | exponent |  | 1.5 | [1, 3] | force-indentation exponent (1 linear, 1.5 Hertz) |" in rows
+    )
+    assert (
+        "| [effects.contact] | stiffness | N/m^exponent | required | [0, 1e+16] | roller-tooth contact stiffness |"
+        in rows
+    )
+
+
+def test_sections_and_ranges_are_derived_from_the_schema():
+    """The loader's tables come from the schema: the same keys and types as the scene files use."""
+    from vibkit.model.schema import EFFECTS, RANGES, SECTIONS
+
+    assert SECTIONS["run"] == {
+        "duration": float,
+        "output_step": float,
+        "start": float,
+        "initial_speed": float,
+        "seed": int,
+    }
+    assert SECTIONS["guide"]["head_radius"] == (float, str)
+    assert EFFECTS["contact"] == {"stiffness": float, "exponent": float, "damping": float}
+    assert EFFECTS["passengers"] == {"mass": list, "step": list, "board": list, "alight": list}
+    assert RANGES["effects.contact.exponent"] == (1.0, 3.0, "(1 linear, 1.5 Hertz)")
+    assert RANGES["solver.rtol"] == (1e-14, 0.1, "")
+    assert len(RANGES) == 16
+
+
+def test_defaults_are_typed_and_recorded():
+    """A key the file leaves out takes the schema's default and is listed in Scene.defaults."""
+    from vibkit.model.params import GRAVITY
+
+    text = (SIM / "thesis-forward.toml").read_text()
+    text = text.replace("contact = { stiffness = 1.0e6, exponent = 1.5 }", "contact = { stiffness = 1.0e6 }")
+    sc = parse_scene(text.replace("\nstart = 0.0", "\n"))
+    assert sc.effects["contact"].exponent == 1.5 and sc.effects["contact"].damping == 0.0
+    assert sc.effects["gravity"].g == GRAVITY == 9.81
+    assert "effects.contact.exponent" in sc.defaults and "effects.gravity.g" in sc.defaults
+    assert "effects.contact.stiffness" not in sc.defaults
+    assert sc.solver.atol_for(1e-7) == 1e-7 * 1e-2
+    assert sc.run.start == 0.0 and "run.start" in sc.defaults and "run.initial_speed" not in sc.defaults

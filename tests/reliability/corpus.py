@@ -625,6 +625,9 @@ def all_cases() -> list[Case]:
     """``CASES`` of this module and of every ``corpus_*.py`` next to it (names must be unique)."""
     cases = list(CASES)
     here = Path(__file__).resolve().parent
+    # the corpus_* modules import ``corpus``: where this module was loaded from its file under another name
+    # (benchmarks/reliability.py), they get this one
+    sys.modules.setdefault("corpus", sys.modules[__name__])
     for path in sorted(here.glob("corpus_*.py")):
         spec = importlib.util.spec_from_file_location(f"_vibkit_{path.stem}", path)
         mod = importlib.util.module_from_spec(spec)

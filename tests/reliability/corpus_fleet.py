@@ -1,13 +1,11 @@
-"""Reliability cases of ``vibkit fleet`` (issue 23): inputs outside their stated ranges refused before any
+"""Reliability cases of ``vibkit fleet``: inputs outside their stated ranges refused before any
 analysis, damaged / foreign databases in one line, read-only uses that never write."""
 
 import datetime as dt
 import sqlite3
-import sys
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from corpus import REC, Case  # noqa: E402
+from corpus import REC, Case
 
 ADD = ["fleet", "add", "{w}/rec.csv", "--db", "{w}/main.sqlite", "--unit", "E01"]
 

@@ -1,13 +1,9 @@
-"""Reliability cases of ``vibkit ride``, ``pitch`` and ``spectrum`` (issue 23): weighting lists map one to one
+"""Reliability cases of ``vibkit ride``, ``pitch`` and ``spectrum``: weighting lists map one to one
 onto axes or are refused; every error names the file, in vibkit's words."""
-
-import sys
-from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from corpus import Case  # noqa: E402
+from corpus import Case
 
 HEAD = "time [s],ax [m/s^2],ay [m/s^2],az [m/s^2]\n"
 

@@ -1,15 +1,12 @@
-"""Reliability cases of ``vibkit sweep`` (issue 23): sizes refused before anything is allocated, keys that
+"""Reliability cases of ``vibkit sweep``: sizes refused before anything is allocated, keys that
 would give identical runs, strict numbers, a start-up that leaves no samples, and signals during the runs.
 
 All but the signal cases are refused before a Dask cluster starts (a second or two each).
 """
 
 import signal
-import sys
-from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from corpus import SIM, Case, tiny  # noqa: E402
+from corpus import SIM, Case, tiny
 
 LEON = str(SIM / "leon.toml")
 FORWARD = str(SIM / "thesis-forward.toml")

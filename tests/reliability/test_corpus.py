@@ -3,7 +3,7 @@ one-line error or a result, never a traceback, and nothing a user gave lost or c
 
 Cases run in-process through ``vibkit.cli.main`` (fast); those that inject faults, send signals or
 could hang on a regression (a FIFO) run in a subprocess.  ``benchmarks/reliability.py`` runs the
-same corpus, all in subprocesses, and writes the table quoted in the README.
+same corpus, all in subprocesses, and writes the table quoted in the docs.
 """
 
 import importlib.util
@@ -21,7 +21,11 @@ all_cases, run_case = corpus.all_cases, corpus.run_case
 CASES = [c for c in all_cases() if not c.heavy]  # heavy ones: see their notes; the table runs them
 
 
-@pytest.mark.parametrize("case", CASES, ids=[c.name for c in CASES])
+# the cases that need a subprocess of their own (fault injection, signals, FIFOs) take a second or two each
+PARAMS = [pytest.param(c, marks=pytest.mark.slow) if c.needs_subprocess else c for c in CASES]
+
+
+@pytest.mark.parametrize("case", PARAMS, ids=[c.name for c in CASES])
 def test_case(case, tmp_path):
     res = run_case(case, tmp_path / "w", inprocess=True, timeout=240)
     assert res["passed"], f"{case.name}: {res['problems']} (message: {res['message']!r})"

@@ -1,17 +1,14 @@
-"""Fleet inputs outside their stated ranges, and SQLite's failures, as one line naming what to do (issue 23)."""
+"""Fleet inputs outside their stated ranges, and SQLite's failures, as one line naming what to do."""
 
 import datetime as dt
 import sqlite3
-import sys
-from pathlib import Path
 
 import pytest
 
 from vibkit.fleet import FleetDB, FleetError
 from vibkit.fleet.inputs import RANGES, check_date, check_inputs, check_pitch, check_speed, check_speed_sigma
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from corpus_fleet import make_db  # noqa: E402
+from corpus_fleet import make_db
 
 
 def test_ranges_are_checked_in_si_at_their_edges():

@@ -1,6 +1,6 @@
 """A read-only install run by a user without a home (service account, cron, container non-root).
 
-Issue 12: every command crashed at import with numba's ``RuntimeError: cannot cache function
+Once every command crashed at import with numba's ``RuntimeError: cannot cache function
 'locate': no locator available`` (even ``vibkit --version``).  This test installs the package
 non-editable into a temporary folder (``pip install --target``; a plain copy of the package if pip
 cannot build here), makes it read-only (``chmod -R a-w``) and runs every command as uid 65534 with
@@ -29,13 +29,18 @@ from pathlib import Path
 
 import pytest
 
+import vibkit
+
 ROOT = Path(__file__).resolve().parents[2]
 NOBODY = 65534
 
-pytestmark = pytest.mark.skipif(
-    not hasattr(os, "getuid") or os.getuid() != 0,
-    reason="needs root to run the commands as uid 65534 (os.setuid in preexec_fn)",
-)
+pytestmark = [
+    pytest.mark.skipif(
+        not hasattr(os, "getuid") or os.getuid() != 0,
+        reason="needs root to run the commands as uid 65534 (os.setuid in preexec_fn)",
+    ),
+    pytest.mark.slow,  # a pip install and every command in a fresh process
+]
 
 
 def _demote():
@@ -235,7 +240,7 @@ def test_version_and_help_compile_nothing(readonly):
         )
         assert proc.returncode == 0, proc.stderr
         assert "Traceback" not in proc.stderr
-    assert "vibkit 0.1" in _cli(readonly, "--version").stdout
+    assert f"vibkit {vibkit.__version__}" in _cli(readonly, "--version").stdout
 
 
 def test_every_command_runs_without_a_home(readonly):
@@ -317,7 +322,6 @@ def test_home_cache_preferred_and_no_cache_last_resort(readonly):
 def test_fleet_status_of_an_archived_schema_1_history(readonly):
     """A schema-1 history (an older vibkit's) that the user may only read, in a folder it may only read: status
     reads it without upgrading it (SQLite's immutable read: no -wal/-shm can be made), the file left as it was."""
-    sys.path.insert(0, str(Path(__file__).resolve().parent))
     from corpus_fleet import schema1_db
 
     archive = readonly["top"] / "archive"

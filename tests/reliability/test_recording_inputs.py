@@ -14,6 +14,8 @@ import pytest
 
 from vibkit.cli import main
 
+from support.cli import one_line_error
+
 FS = 200.0
 F0 = 3.5  # link-pass frequency of the test signals [Hz]
 
@@ -22,30 +24,6 @@ def signal(n=4000, fs=FS):
     t = np.arange(n) / fs
     x = np.sin(2 * np.pi * F0 * t) + 0.3 * np.sin(2 * np.pi * 2 * F0 * t + 0.5)
     return t, x
-
-
-@pytest.fixture
-def run(capsys):
-    """Run the CLI; returns (exit code, stdout, stderr), never raising for bad data."""
-
-    def _run(*argv):
-        rc = main([str(a) for a in argv])
-        out, err = capsys.readouterr()
-        assert "Traceback" not in out + err
-        return rc, out, err
-
-    return _run
-
-
-def one_line_error(result, path, *words):
-    rc, out, err = result
-    assert rc == 1, (rc, out, err)
-    lines = err.strip().splitlines()
-    assert len(lines) == 1, err
-    assert str(path) in lines[0], lines[0]
-    for w in words:
-        assert w in lines[0], lines[0]
-    return lines[0]
 
 
 def spectrum_json(run, *argv):

@@ -1,4 +1,4 @@
-"""Sweeps under absurd sizes, unused keys and concurrency (issue 23): checked from the plan before anything
+"""Sweeps under absurd sizes, unused keys and concurrency: checked from the plan before anything
 is allocated; identical sweeps at once end with one store and no leftovers; an interrupted store opens as
 what it holds."""
 
@@ -14,6 +14,8 @@ import xarray as xr
 from vibkit.runtime.budget import BudgetError
 from vibkit.sweep import SUMMARIES, SweepError, open_sweep, plan_sweep
 
+from corpus import tiny
+
 ROOT = Path(__file__).resolve().parents[2]
 LEON = ROOT / "sim" / "leon.toml"
 STORE = sys.modules["vibkit.sweep.store"]
@@ -21,9 +23,6 @@ RUN = sys.modules["vibkit.sweep.run"]
 import importlib  # noqa: E402
 
 LIMITS = importlib.import_module("vibkit.sweep.limits")
-
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from corpus import tiny  # noqa: E402
 
 
 def test_a_billion_runs_are_refused_from_the_shape_within_100_MB():

@@ -82,6 +82,7 @@ def test_events_report_spikes_with_time_and_size():
     assert ev[1].stop - ev[1].start == 2 and ev[1].deviation < 0
 
 
+@pytest.mark.slow
 def test_false_alarm_rate_is_what_n_sigma_really_gives():
     rng = np.random.default_rng(4)
     x = rng.standard_normal(400_000)
@@ -113,6 +114,7 @@ def test_bad_arguments(kwargs, match):
         hampel(**kwargs)
 
 
+@pytest.mark.slow
 def test_rate_of_a_wide_window_at_a_small_false_alarm_rate():
     """k = 50 (a 0.1 s half window at 500 Hz, as the report uses) at 1e-3: the threshold from the
     conditional tail probability flags white noise at the stated rate (2,000 expected flags in

@@ -14,6 +14,8 @@ from vibkit.signal import (
 )
 from vibkit.signal.orders import _vk_banded, _vk_solve, _vk_sparse
 
+from support.chain import family_of_phase
+
 FS = 2050.0
 
 
@@ -22,7 +24,7 @@ def wandering(seconds=60.0, seed=3):
     t = np.arange(int(FS * seconds)) / FS
     f_inst = 3.75 * (1 + 0.01 * np.sin(2 * np.pi * t / 15 + 0.3))  # +-1 %
     phi = 2 * np.pi * np.cumsum(f_inst) / FS
-    s = 1.0 * np.cos(phi) + 0.6 * np.cos(2 * phi + 1) + 0.3 * np.cos(3 * phi + 2)
+    s = family_of_phase(phi, (1.0, 0.6, 0.3), phases=(0, 1, 2))
     x = s + rng.standard_normal(t.size) * np.std(s)  # 0 dB: noise power = signal power
     return t, f_inst, phi, x
 

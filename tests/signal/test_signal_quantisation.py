@@ -79,6 +79,7 @@ def test_quantised_tone_detected_at_its_frequency(amplitude):
                 assert d.significant_orders == (1,), (f0, noise, rounded, d.significant_orders)
 
 
+@pytest.mark.slow
 def test_quantised_noise_keeps_its_false_alarm_rate():
     """Noise-only records rounded to a step of 0.2 .. 3 noise sigmas: false alarms at most p_fa."""
     rng = np.random.default_rng(19)

@@ -126,7 +126,7 @@ def test_interrupted_sweep_resumes_without_recomputing(scene_file, tmp_path, gri
     real = SW._simulate
 
     def counting(scene, duration):
-        calls.append((scene.chain.link_pitch, scene.effects["contact"]["stiffness"]))
+        calls.append((scene.chain.link_pitch, scene.effects["contact"].stiffness))
         return real(scene, duration)
 
     monkeypatch.setattr(SW, "_simulate", counting)
@@ -221,6 +221,7 @@ def test_bad_keys_and_values_are_named_before_any_run(scene_file, vary, match):
         plan_sweep(scene_file, vary)
 
 
+@pytest.mark.slow
 def test_cli_json(scene_file, tmp_path, capsys):
     out = tmp_path / "cli.zarr"
     argv = [
@@ -337,6 +338,7 @@ def test_varied_scene_text_reads_back_equal(path):
         assert c.guide.head_radius == c.sprocket.pitch_radius(0.1335) != a.guide.head_radius
 
 
+@pytest.mark.slow
 def test_cli_check_gives_a_converged_flag_per_run(scene_file, tmp_path, capsys):
     """`vibkit sweep --check`: every run's convergence verdict, the same as the single run's."""
     out = tmp_path / "checked.zarr"

@@ -1,4 +1,4 @@
-"""Does a forward run's physics still change with the tolerance? A verdict, not a guess (issue 20).
+"""Does a forward run's physics still change with the tolerance? A verdict, not a guess.
 
 A result counts only when it no longer changes with the tolerance. :func:`checked_forward` runs the
 scene at its tolerance and again at a tolerance 100 times tighter, and compares what a user reads
@@ -25,10 +25,13 @@ import time
 
 import numpy as np
 
+from ..model.schema import SolverSection
+
 __all__ = ["checked_forward", "summary", "compare", "verdict", "CHECK_FACTOR", "DEFAULT_MIN_RTOL"]
 
 CHECK_FACTOR = 100.0  # each check run is this much tighter than the one before
-DEFAULT_MIN_RTOL = 1e-12  # the tightest tolerance the search tries, unless [solver] check_min_rtol
+#: the tightest tolerance the search tries, unless [solver] check_min_rtol (the schema's default)
+DEFAULT_MIN_RTOL = SolverSection.check_min_rtol
 # outputs the comparison needs, computed at the output times whatever the scene asks for
 NEEDED = ("flank_force", "sprocket_speed", "delta")
 
@@ -205,14 +208,14 @@ def checked_forward(model, *, duration=None, progress=True, min_rtol=None, paral
     from .forward import default_rtol, forward_dynamics
 
     scene = model.scene
-    solver = scene.section("solver")
+    solver = scene.solver
     outputs = tuple(scene.outputs["variables"])
-    rtol = solver.get("rtol") or default_rtol(scene.effects)
-    atol = solver.get("atol", rtol * 1e-2)
-    min_rtol = min_rtol or solver.get("check_min_rtol", DEFAULT_MIN_RTOL)
+    rtol = solver.rtol or default_rtol(scene.effects)
+    atol = solver.atol_for(rtol)
+    min_rtol = min_rtol or solver.check_min_rtol
     want = tuple(dict.fromkeys(outputs + NEEDED))
-    duration = duration or scene.section("run")["duration"]
-    dt = scene.section("run")["output_step"]
+    duration = duration or scene.run.duration
+    dt = scene.run.output_step
 
     from ..model.escalator import EscalatorModel
 

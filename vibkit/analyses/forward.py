@@ -15,8 +15,66 @@ import numpy as np
 
 from ..model.chain import close_with_slope, closure_residual
 from ..model.dynamics import link_multipliers
-from ..model.effects import Work, clear_teeth, evaluate, motor_torque, pack_parameters, reset_closure
+from ..model.effects import (
+    Work,
+    clear_teeth,
+    contact_candidates,
+    evaluate,
+    motor_torque,
+    pack_parameters,
+    reset_closure,
+)
 from ..model.pitch_table import build_table, empty_table, table_applies, table_delta, table_evaluate, table_spacing
+from ..model.schema import effect_options, nominal_speed
+from ..model.slots import (
+    FP_CARRIAGE_MASS,
+    FP_CLOSURE_TOL,
+    FP_CX,
+    FP_CZ,
+    FP_EXPONENT,
+    FP_G,
+    FP_KI,
+    FP_KP,
+    FP_LT,
+    FP_P0,
+    FP_PRELOAD,
+    FP_REACH,
+    FP_ROLLER_RADIUS,
+    FP_ROOT_RADIUS,
+    FP_SPEED_REF,
+    FP_STIFFNESS,
+    FP_TENSIONER_STIFFNESS,
+    FP_TOOTH_PITCH,
+    FP_TORQUE_LIMIT,
+    HEAD_LINK_ERROR,
+    INFO_AT,
+    INFO_CURVATURE,
+    INFO_DELTA,
+    INFO_DELTA_DDOT,
+    INFO_DELTA_DOT,
+    INFO_ENERGY_C,
+    INFO_F_BACK,
+    INFO_F_DRIVE,
+    INFO_MOTOR,
+    INFO_SLOPE,
+    IP_GRAVITY,
+    IP_MOTOR,
+    IP_PASSENGERS,
+    IP_TEETH,
+    PASSENGERS_BY_PLACE,
+    PRM_CORNERS,
+    PRM_FP,
+    PRM_IP,
+    PRM_MASS,
+    PRM_PASS_ALIGHT,
+    PRM_PASS_BOARD,
+    PRM_PASS_STEP,
+    PRM_PITCHES,
+    PRM_TABLE,
+    TB_HEAD,
+    TB_SB,
+    WS_INFO,
+)
 from ..model.sprocket import contact_kernel
 from .integrate import IntegrationError, integrate
 from .results import make_dataset
@@ -29,7 +87,7 @@ class ForwardModel:
 
     def __init__(self, model, effects, *, start=0.0):
         self.model = model
-        self.effects = effects
+        self.effects = effect_options(effects)
         self.prm = pack_parameters(model, effects, start=start)
         self.work = Work(model.n, model.sprocket.teeth)
 
@@ -42,7 +100,7 @@ class ForwardModel:
 
     @property
     def info(self):
-        return self.work.arrays[18]
+        return self.work.arrays[WS_INFO]
 
 
 def initial_state(model, *, start=0.0, speed=0.0, theta=None):
@@ -77,27 +135,27 @@ def forward_dynamics(
     Keyword arguments override the scene's solver settings, outputs and effects (for benchmarks).
     """
     scene = model.scene
-    run = scene.section("run")
-    solver = scene.section("solver")
-    effects = scene.effects if effects is None else effects
+    run = scene.run
+    solver = scene.solver
+    effects = effect_options(scene.effects if effects is None else effects)
     outputs = scene.outputs["variables"] if outputs is None else outputs
-    duration = duration or run["duration"]
-    dt = run["output_step"]
+    duration = duration or run.duration
+    dt = run.output_step
     if t_out is None:
         t_out = np.arange(0.0, duration + 0.5 * dt, dt)
-    fm = ForwardModel(model, effects, start=run.get("start", 0.0))
-    y0, d0 = initial_state(model, start=run.get("start", 0.0), speed=run.get("initial_speed", 0.0))
+    fm = ForwardModel(model, effects, start=run.start)
+    y0, d0 = initial_state(model, start=run.start, speed=run.initial_speed)
     reset_closure(fm.info, d0)
-    method = method or solver.get("method", "dopri5")
-    rtol = rtol or solver.get("rtol") or default_rtol(effects)
-    atol = atol or solver.get("atol", rtol * 1e-2)
-    # dopri5 ends its steps where a roller crosses a curvature jump of the guide (issue 10)
+    method = method or solver.method
+    rtol = rtol or solver.rtol or default_rtol(effects)
+    atol = atol or solver.atol_for(rtol)
+    # dopri5 ends its steps where a roller crosses a curvature jump of the guide
     if events is None:
-        events = solver.get("events", True)
+        events = solver.events
     t_events = None
     crossings, t_events = _events(model, fm)
     events, t_events = (crossings, t_events) if events else (None, None)
-    table, closure = forward_table(model, fm, crossings[0], rtol, solver.get("closure", "table"))
+    table, closure = forward_table(model, fm, crossings[0], rtol, solver.closure)
     y_out, stats = integrate(
         fm.prm,
         fm.work.arrays,
@@ -106,9 +164,9 @@ def forward_dynamics(
         method=method,
         rtol=rtol,
         atol=atol,
-        max_step=solver.get("max_step", math.inf),
-        first_step=solver.get("first_step"),
-        max_wall_time=solver.get("max_wall_time", math.inf),
+        max_step=solver.max_step,
+        first_step=solver.first_step,
+        max_wall_time=math.inf if solver.max_wall_time is None else solver.max_wall_time,
         progress=progress,
         events=events,
         t_events=t_events,
@@ -138,7 +196,7 @@ ON_BREAKPOINT = 1e-11  # [m] as the integrator: a stage this close to a breakpoi
 
 def _observed_states(y, events):
     """The states at which the outputs are evaluated: ``y``, with s0_1 moved ``ON_BREAKPOINT`` to the
-    side the motion goes where it sits on a breakpoint of the guide (issue 20).
+    side the motion goes where it sits on a breakpoint of the guide.
 
     On a breakpoint (the start s0 = 0 is one) the right-hand side jumps, and its value there depended
     on where the closure's Newton iteration came from; the integrator takes it on the side the motion
@@ -178,12 +236,12 @@ def _events(model, fm):
     A roller on a curvature jump of the guide (or an end of a telescopic ramp); the middle roller of
     a passenger's step at the boarding or alighting place; a passenger's boarding or alighting time.
     """
-    mode = fm.prm[3][5]
+    mode = fm.prm[PRM_IP][IP_PASSENGERS]
     rollers_at = []
     times = np.zeros(0)
     if mode:
-        steps, pb, pa = fm.prm[6], fm.prm[7], fm.prm[8]
-        if mode == 2:
+        steps, pb, pa = fm.prm[PRM_PASS_STEP], fm.prm[PRM_PASS_BOARD], fm.prm[PRM_PASS_ALIGHT]
+        if mode == PASSENGERS_BY_PLACE:
             rollers_at = [(int(model.step_rollers(int(st))[1]), v) for st, b, a in zip(steps, pb, pa) for v in (b, a)]
         else:
             times = np.unique(np.concatenate([pb, pa]))
@@ -191,7 +249,7 @@ def _events(model, fm):
     return (cross, model.guide.p0), times
 
 
-# The tolerance at the reference contact stiffness (issues 10, 20; benchmarks/results/work_precision.md):
+# The tolerance at the reference contact stiffness (benchmarks/results/work_precision.md):
 # with steps that end on the guide's breakpoints, rtol 1e-6 is the loosest that gives the converged
 # contact history of the three shipped scenes, and the no-load chain with contact ten times softer
 # needs 1e-7 (its last grazing contact moves from 33.33 s to 33.07 s at 1e-6): 1e-7 leaves a margin.
@@ -200,18 +258,19 @@ REFERENCE_STIFFNESS = 1e6  # [N/m^1.5] the study's contact stiffness
 
 
 def default_rtol(effects):
-    """The tolerance a forward scene gets when it sets no ``[solver] rtol`` (issue 20).
+    """The tolerance a forward scene gets when it sets no ``[solver] rtol``.
 
     rtol = 1e-7 min(1, (1e6 / k)^3) for a contact stiffness k [N/m^exponent], at least 1e-11.
     Measured on the shipped scenes and their stiffness x0.1 and x10 variants against runs at 1e-12
-    (README, "Numerics"): at k = 1e7 the no-load chain needs 1e-10 (las-palmas, damped, 1e-9), at
+    (docs/explanation/numerics.md): at k = 1e7 the no-load chain needs 1e-10 (las-palmas, damped, 1e-9), at
     k <= 1e6 every scene is right at 1e-7. A stiffer contact makes each impact a shorter, harder
     event, and the undamped chain carries the error of every impact in where it sits in its
     backlash. Damping and speed are not used: the measurements do not ask for them. Where no
     tolerance gives a converged history (an undamped stiff chain rattling chaotically) no default
     can be right: ``check`` reports such a run as sensitive.
     """
-    k = effects.get("contact", {}).get("stiffness", 0.0) if "contact" in effects else 0.0
+    effects = effect_options(effects)
+    k = effects["contact"].stiffness if "contact" in effects else 0.0
     if not k > REFERENCE_STIFFNESS:
         return DEFAULT_RTOL
     return max(1e-11, float(f"{DEFAULT_RTOL * (REFERENCE_STIFFNESS / k) ** 3:.3g}"))
@@ -266,17 +325,18 @@ def _observe(
 
     Returns (status, index): status 0 ok, 1 closure failure, 2 non-finite state at ``index``.
     """
-    fp = prm[2]
-    mass = prm[4]
-    pitches = prm[9]
-    g = fp[3] if prm[3][2] == 1 else 0.0
-    k_s, pre, m_c = fp[11], fp[12], fp[13]
+    fp = prm[PRM_FP]
+    ip = prm[PRM_IP]
+    mass = prm[PRM_MASS]
+    pitches = prm[PRM_PITCHES]
+    g = fp[FP_G] if ip[IP_GRAVITY] == 1 else 0.0
+    k_s, pre, m_c = fp[FP_TENSIONER_STIFFNESS], fp[FP_PRELOAD], fp[FP_CARRIAGE_MASS]
     (s0a, kk, lam, xs, zs, part, alpha, beta, jac, gam, hacc, eta, sd, fx, fz, cand, ind_t, frc_t, info) = ws
     n = mass.size
     dy = np.empty(5)
     lam_buf = np.empty(n)
     rs_res = np.empty(n)
-    d1 = d2 = d3 = info[0]
+    d1 = d2 = d3 = info[INFO_DELTA]
     slope = 0.0
     for j in range(t.size):
         for i in range(5):
@@ -285,10 +345,10 @@ def _observe(
         if light_table:
             # from the pitch table, as the integrator saw them (no closure residual asked)
             table_evaluate(t[j], y[j], dy, prm, ws, need_teeth, tb)
-            scal[j, 0] = info[0]
-            scal[j, 2] = info[3]
-            scal[j, 10] = info[8]
-            scal[j, 11] = info[9]
+            scal[j, 0] = info[INFO_DELTA]
+            scal[j, 2] = info[INFO_MOTOR]
+            scal[j, 10] = info[INFO_F_DRIVE]
+            scal[j, 11] = info[INFO_F_BACK]
             if need_teeth:
                 _teeth_row(ind, cf, j, ind_t, frc_t)
             continue
@@ -296,9 +356,25 @@ def _observe(
             # positions only (delta, closure residual; torque from the state): no forces needed
             # delta extrapolated from the last three outputs, closed by chord steps on the last
             # Newton slope; a full Newton solve where they do not close
-            guess = 3.0 * (d1 - d2) + d3 if j >= 3 else info[0]
+            guess = 3.0 * (d1 - d2) + d3 if j >= 3 else info[INFO_DELTA]
             d, walks, st = close_with_slope(
-                prm[0], fp[0], fp[1], y[j, 0], guess, slope, pitches, n, s0a, kk, lam, xs, zs, part, alpha, beta, fp[21]
+                prm[PRM_TABLE],
+                fp[FP_P0],
+                fp[FP_LT],
+                y[j, 0],
+                guess,
+                slope,
+                pitches,
+                n,
+                s0a,
+                kk,
+                lam,
+                xs,
+                zs,
+                part,
+                alpha,
+                beta,
+                fp[FP_CLOSURE_TOL],
             )
             if st != 0:
                 return 1, j
@@ -307,29 +383,26 @@ def _observe(
             d3 = d2
             d2 = d1
             d1 = d
-            info[0] = d
+            info[INFO_DELTA] = d
             scal[j, 0] = d
             scal[j, 3] = closure_residual(xs, zs, n, pitches)
-            if prm[3][4] == 1:
-                scal[j, 2] = motor_torque(fp[9] - y[j, 3], y[j, 4], fp[7], fp[8], fp[10])[0]
+            if ip[IP_MOTOR] == 1:
+                scal[j, 2] = motor_torque(
+                    fp[FP_SPEED_REF] - y[j, 3], y[j, 4], fp[FP_KP], fp[FP_KI], fp[FP_TORQUE_LIMIT]
+                )[0]
             else:
                 scal[j, 2] = 0.0
             scal[j, 10] = 0.0
             scal[j, 11] = 0.0
             if light_contact:
                 # undamped contact forces need the positions only (the caller checked the damping)
-                ncand = 0
-                reach = fp[22] + 1e-9
                 for i in range(n):
-                    dxc = xs[i] - fp[17]
-                    dzc = zs[i] - fp[18]
                     fx[i] = 0.0
                     fz[i] = 0.0
-                    if dxc * dxc + dzc * dzc < reach * reach:
-                        cand[ncand] = i
-                        eta[i] = 0.0
-                        sd[i] = 0.0
-                        ncand += 1
+                ncand = contact_candidates(xs, zs, n, fp[FP_CX], fp[FP_CZ], fp[FP_REACH] + 1e-9, cand)
+                for jj in range(ncand):
+                    eta[cand[jj]] = 0.0
+                    sd[cand[jj]] = 0.0
                 clear_teeth(ind_t, frc_t)
                 res = contact_kernel(
                     xs,
@@ -340,15 +413,15 @@ def _observe(
                     ncand,
                     y[j, 2],
                     y[j, 3],
-                    fp[17],
-                    fp[18],
-                    prm[1],
-                    fp[19],
-                    fp[20],
-                    prm[3][1],
-                    fp[16],
-                    fp[4],
-                    fp[5],
+                    fp[FP_CX],
+                    fp[FP_CZ],
+                    prm[PRM_CORNERS],
+                    fp[FP_ROOT_RADIUS],
+                    fp[FP_TOOTH_PITCH],
+                    ip[IP_TEETH],
+                    fp[FP_ROLLER_RADIUS],
+                    fp[FP_STIFFNESS],
+                    fp[FP_EXPONENT],
                     0.0,
                     fx,
                     fz,
@@ -361,19 +434,19 @@ def _observe(
                 if need_teeth:
                     _teeth_row(ind, cf, j, ind_t, frc_t)
             continue
-        if tb[1].size > 0:
+        if tb[TB_SB].size > 0:
             # the closure from the table's delta (exact to 1e-13 m): one or two walks
-            info[0] = table_delta(tb, y[j, 0])
-            info[10] = y[j, 0]
-            info[11] = 0.0
-            info[14] = 0.0
+            info[INFO_DELTA] = table_delta(tb, y[j, 0])
+            info[INFO_AT] = y[j, 0]
+            info[INFO_SLOPE] = 0.0
+            info[INFO_CURVATURE] = 0.0
         if evaluate(t[j], y[j], dy, prm, ws, need_teeth) != 0:
             return 1, j
         sdot, sddot = y[j, 1], dy[1]
-        d = info[0]
+        d = info[INFO_DELTA]
         scal[j, 0] = d
-        scal[j, 1] = info[1]
-        scal[j, 2] = info[3]
+        scal[j, 1] = info[INFO_DELTA_DOT]
+        scal[j, 2] = info[INFO_MOTOR]
         scal[j, 3] = closure_residual(xs, zs, n, pitches)
         scal[j, 4] = math.hypot(jac[0, 0], jac[0, 1]) * abs(sdot)
         ke = 0.0
@@ -381,12 +454,12 @@ def _observe(
         for i in range(n):
             ke += mass[i] * (jac[i, 0] ** 2 + jac[i, 1] ** 2)
             pe += mass[i] * zs[i]
-        scal[j, 5] = 0.5 * ke * sdot * sdot + 0.5 * m_c * info[1] ** 2 + 0.5 * inertia * y[j, 3] ** 2
+        scal[j, 5] = 0.5 * ke * sdot * sdot + 0.5 * m_c * info[INFO_DELTA_DOT] ** 2 + 0.5 * inertia * y[j, 3] ** 2
         scal[j, 6] = g * pe
-        scal[j, 7] = info[5]
+        scal[j, 7] = info[INFO_ENERGY_C]
         scal[j, 8] = pre * d + 0.5 * k_s * d * d
-        scal[j, 10] = info[8]
-        scal[j, 11] = info[9]
+        scal[j, 10] = info[INFO_F_DRIVE]
+        scal[j, 11] = info[INFO_F_BACK]
         if need_teeth:
             _teeth_row(ind, cf, j, ind_t, frc_t)
         if need_accel:
@@ -405,7 +478,7 @@ def _observe(
             rk[j, q, 4] = jac[i, 0] * sddot + hacc[i, 0]
             rk[j, q, 5] = jac[i, 1] * sddot + hacc[i, 1]
         if need_tension:
-            rd = m_c * info[2] + (pre + k_s * d)
+            rd = m_c * info[INFO_DELTA_DDOT] + (pre + k_s * d)
             for i in range(n):
                 resx = mass[i] * (jac[i, 0] * sddot + hacc[i, 0]) - fx[i]
                 resz = mass[i] * (jac[i, 1] * sddot + hacc[i, 1]) - fz[i]
@@ -455,7 +528,7 @@ def _post_process(fm, t, y, outputs, stats, y_obs=None, table=None):
         "flank_force",
     }
     light_contact = bool({"indentation", "contact_force", "flank_force"} & want) and "contact" in fm.effects
-    if light_contact and fm.effects["contact"].get("damping", 0.0) != 0.0:
+    if light_contact and fm.effects["contact"].damping != 0.0:
         light = False  # damped contact forces need the rollers' velocities
     scal[:] = np.nan
     # light outputs come from the table where the run used one, unless the closure residual is asked
@@ -530,12 +603,12 @@ def _post_process(fm, t, y, outputs, stats, y_obs=None, table=None):
         for name, arr in (("roller_position", rp), ("roller_velocity", rv), ("roller_acceleration", ra)):
             if name in want:
                 data[name] = (("time", "roller", "axis"), arr)
-    nominal = fm.effects.get("motor", {}).get("speed", scene.section("run").get("initial_speed", 0.0))
+    nominal = nominal_speed(fm.effects, scene.run)
     attrs = {
         "chain_speed_m_s": float(nominal),
         "link_pass_frequency_hz": model.link_pass_frequency(nominal) if nominal else 0.0,
         # from the table: the tabulated chain's own link-length error (the outputs were read from it)
-        "closure_residual_max": float(tb[0][4]) if light_table else float(resid.max()),
+        "closure_residual_max": float(tb[TB_HEAD][HEAD_LINK_ERROR]) if light_table else float(resid.max()),
         "solver_method": stats["method"],
         "solver_steps": stats["steps"],
         "solver_rejected": stats["rejected"],

@@ -15,6 +15,7 @@ import math
 import numpy as np
 
 from ..model.dynamics import link_multipliers
+from ..model.schema import TensionerOptions, effect_options, gravity_of
 from ..runtime.progress import Progress
 from .results import make_dataset
 
@@ -59,12 +60,13 @@ def inverse_dynamics(model, *, speed, duration, step, start=0.0, effects=None, o
     -------
     xarray.Dataset with dimension ``time``.
     """
-    effects = effects or {}
+    effects = effect_options(effects)
     n = model.n
     t = np.arange(0.0, duration + 0.5 * step, step)
-    g = effects.get("gravity", {}).get("g", 0.0) if "gravity" in effects else 0.0
-    tens = effects.get("tensioner", {})
-    k_s, pre, m_c = tens.get("stiffness", 0.0), tens.get("preload", 0.0), tens.get("mass", 0.0)
+    g = effects["gravity"].g if "gravity" in effects else 0.0
+    # no tensioner effect: the carriage of the tensioner options' defaults (no spring, no mass)
+    tens = effects["tensioner"] if "tensioner" in effects else TensionerOptions()
+    k_s, pre, m_c = tens.stiffness, tens.preload, tens.mass
     want = set(outputs) | {"delta"}
     # what has to be computed for what was asked: positions always; motion for rates and forces
     need_motion = bool(want - {"delta", "closure_residual", "sprocket_angle", "sprocket_speed", "roller_position"})
@@ -130,7 +132,7 @@ def inverse_dynamics(model, *, speed, duration, step, start=0.0, effects=None, o
         fx = np.zeros(n)
         fz = -model.mass * g
         if "passengers" in effects:
-            model.passenger_forces(effects["passengers"], tj, g if g else 9.81, fz, s0=conf.s0, schedule=schedule)
+            model.passenger_forces(effects["passengers"], tj, gravity_of(effects), fz, s0=conf.s0, schedule=schedule)
         resx = model.mass * acc[:, 0] - fx
         resz = model.mass * acc[:, 1] - fz
         part = conf.partials

@@ -1,4 +1,4 @@
-"""The study's own formulation of the forward dynamics, kept as a reference (issue 3).
+"""The study's own formulation of the forward dynamics, kept as the independent reference.
 
 The study (model.md section 3; its chapters 5-7) describes the chain with all p + 2 coordinates
 
@@ -41,16 +41,16 @@ from __future__ import annotations
 import math
 import time
 
-import numba as nb
 import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.linalg import splu
 
-from ..model.effects import FP, IP, motor_torque, pack_parameters
-from ..model.guide import BX, BZ, KAPPA, S0, SIGP, local_inverse, local_map, local_point, locate, point_partials
+from ..model.effects import pack_parameters
+from ..model.guide import S0, SIGP, local_inverse
+from ..model.schema import effect_options, nominal_speed
 from .integrate import IntegrationError
 from .results import make_dataset
-from ..model.sprocket import contact_kernel
+from .study_kernels import assemble, kkt_pattern, study_closure_residual, study_kinematics
 
 __all__ = ["StudyFormulation", "run_study", "BAUMGARTE_ALPHA", "BAUMGARTE_BETA", "STUDY_SETTINGS"]
 
@@ -74,222 +74,6 @@ STUDY_SETTINGS = {"rtol": 1e-3, "atol": 1e-3, "max_step": 1e-3}
 
 _SOLVE_IVP_METHODS = ("BDF", "Radau", "LSODA", "RK45", "RK23", "DOP853")
 
-# parameter slots of vibkit.model.effects.pack_parameters (module constants, frozen into the compiled code)
-_P0, _G, _K, _EXPO, _DAMP = FP["p0"], FP["g"], FP["k"], FP["expo"], FP["damp"]
-_KP, _KI, _WREF, _TLIM = FP["kp"], FP["ki"], FP["wref"], FP["tlim"]
-_KS, _PRELOAD, _MC, _MURR, _INERTIA = FP["k_s"], FP["preload"], FP["m_c"], FP["mu_rr"], FP["inertia"]
-_RD, _CX, _CZ, _ROOT, _PSI = FP["r_d"], FP["cx"], FP["cz"], FP["root_r"], FP["psi"]
-_N, _NTEETH, _GRAV, _CONTACT, _MOTOR, _PASS, _TENS, _ROLL = IP["n"], IP["nteeth"], IP["gravity"], IP["contact"], \
-    IP["motor"], IP["passengers"], IP["tensioner"], IP["rolling"]
-
-
-# --------------------------------------------------------------------------------------------
-# compiled assembly
-
-@nb.njit(cache=True)
-def _kkt_pattern(p):
-    """Row and column of every non-zero of the KKT matrix, in the order :func:`_assemble` fills them."""
-    n = p + 2
-    nnz = 3 * p + 2 + 6 * p
-    rows = np.empty(nnz, dtype=np.int64)
-    cols = np.empty(nnz, dtype=np.int64)
-    k = 0
-    for i in range(p):  # M: diagonal of the rollers and the delta row/column
-        rows[k], cols[k] = i, i
-        k += 1
-        rows[k], cols[k] = i, p
-        k += 1
-        rows[k], cols[k] = p, i
-        k += 1
-    rows[k], cols[k] = p, p
-    k += 1
-    rows[k], cols[k] = p + 1, p + 1
-    k += 1
-    for j in range(p):  # Phi_q (rows n + j) and its transpose (columns n + j)
-        jn = j + 1 if j + 1 < p else 0
-        for c in (j, jn, p):
-            rows[k], cols[k] = n + j, c
-            k += 1
-            rows[k], cols[k] = c, n + j
-            k += 1
-    return rows, cols
-
-
-@nb.njit(cache=True)
-def study_partials(tab, k, s0loc, delta, out):
-    """r and its partials at s0loc = s0 - s0_k on segment k with the study's *linear* map.
-
-    On a telescopic run (undeformed length Lt) the local arc length is lam = sigma s0loc with
-    sigma = (Lt - delta)/Lt (the study's eqs. 4-5 to 4-8 and 5-1, 5-13); on fixed segments lam = s0loc.
-    Fills ``out`` (12) with x, z, r_s, r_d, r_ss, r_sd, r_dd (x and z of each), as
-    :func:`vibkit.model.guide.point_partials` does for vibkit's own map.
-    """
-    sigp = tab[k, SIGP]
-    sig = 1.0 + sigp * delta
-    lam = sig * s0loc
-    x, z, phi = local_point(tab, k, lam, delta)
-    kap = tab[k, KAPPA]
-    tx, tz = math.cos(phi), math.sin(phi)
-    nx, nz = -tz, tx
-    lam_d = sigp * s0loc
-    out[0] = x
-    out[1] = z
-    out[2] = sig * tx
-    out[3] = sig * tz
-    out[4] = tab[k, BX] + lam_d * tx
-    out[5] = tab[k, BZ] + lam_d * tz
-    out[6] = sig * sig * kap * nx
-    out[7] = sig * sig * kap * nz
-    out[8] = sigp * tx + sig * kap * lam_d * nx
-    out[9] = sigp * tz + sig * kap * lam_d * nz
-    out[10] = kap * lam_d * lam_d * nx
-    out[11] = kap * lam_d * lam_d * nz
-
-
-@nb.njit(cache=True)
-def _kinematics(tab, p0, q, qd, p, linear, part, vel, wq):
-    """Roller positions and partials (part (p, 12)), velocities (vel (p, 2)) and the
-    quadratic-velocity accelerations w_i (wq (p, 2)) at coordinates q and rates qd, with the
-    study's linear map (``linear``) or vibkit's smooth one (:func:`vibkit.model.guide.local_map`)."""
-    delta = q[p]
-    ddot = qd[p]
-    for i in range(p):
-        s0w = q[i] - p0 * math.floor(q[i] / p0)
-        k = locate(tab, s0w)
-        s0loc = s0w - tab[k, S0]
-        if linear:
-            study_partials(tab, k, s0loc, delta, part[i])
-        else:
-            point_partials(tab, k, local_map(tab, k, s0loc, delta)[0], s0loc, delta, part[i])
-        sd = qd[i]
-        vel[i, 0] = part[i, 2] * sd + part[i, 4] * ddot
-        vel[i, 1] = part[i, 3] * sd + part[i, 5] * ddot
-        wq[i, 0] = part[i, 6] * sd * sd + 2.0 * part[i, 8] * sd * ddot + part[i, 10] * ddot * ddot
-        wq[i, 1] = part[i, 7] * sd * sd + 2.0 * part[i, 9] * sd * ddot + part[i, 11] * ddot * ddot
-
-
-@nb.njit(cache=True)
-def _assemble(t, y, prm, pitches, linear, alpha, beta, ws, data, rhs):
-    """Fill the KKT values ``data`` (pattern of :func:`_kkt_pattern`) and right-hand side ``rhs``.
-
-    State y = [q (n), qdot (n), integral of the sprocket speed error]. Returns
-    (motor torque [N m], contact torque [N m], speed-error rate for the integral state [rad/s]).
-    ``ws`` = (part, vel, wq, fx, fz, cand, ind_t, frc_t, xs, zs, vx, vz).
-    """
-    # the first nine entries of vibkit.model.effects.pack_parameters (later ones, if any, are not needed)
-    tab, loc, fp, ip, mass, pm, ps, pb, pa = prm[0], prm[1], prm[2], prm[3], prm[4], prm[5], prm[6], prm[7], prm[8]
-    part, vel, wq, fx, fz, cand, ind_t, frc_t, xs, zs, vx, vz = ws
-    p = ip[_N]
-    n = p + 2
-    p0 = fp[_P0]
-    q = y[:n]
-    qd = y[n:2 * n]
-    _kinematics(tab, p0, q, qd, p, linear, part, vel, wq)
-    for i in range(p):
-        xs[i] = part[i, 0]
-        zs[i] = part[i, 1]
-    # applied forces on the rollers
-    g = fp[_G]
-    for i in range(p):
-        fx[i] = 0.0
-        fz[i] = -mass[i] * g if ip[_GRAV] == 1 else 0.0
-    if ip[_PASS] == 1:
-        for jp in range(pm.size):
-            if pb[jp] <= t < pa[jp]:
-                base = 3 * (ps[jp] - 1)
-                for r in range(3):
-                    fz[(base + r) % p] -= pm[jp] * g / 3.0
-    if ip[_ROLL] == 1:
-        mu = fp[_MURR]
-        for i in range(p):
-            sp_ = math.sqrt(vel[i, 0] * vel[i, 0] + vel[i, 1] * vel[i, 1] + 1e-6)
-            fx[i] -= mu * mass[i] * g * vel[i, 0] / sp_
-            fz[i] -= mu * mass[i] * g * vel[i, 1] / sp_
-    torque_c = 0.0
-    if ip[_CONTACT] == 1:
-        # candidates: the rollers whose circle can reach a tooth (centre within root + height + r_d)
-        ncand = 0
-        reach = fp[_ROOT] + loc[1, 1] + fp[_RD] + 1e-9
-        for i in range(p):
-            dxc = xs[i] - fp[_CX]
-            dzc = zs[i] - fp[_CZ]
-            if dxc * dxc + dzc * dzc < reach * reach:
-                cand[ncand] = i
-                ncand += 1
-        for i in range(p):
-            vx[i] = vel[i, 0]
-            vz[i] = vel[i, 1]
-        # the kernel's first return value is the torque on the sprocket (the others are diagnostics)
-        torque_c = contact_kernel(
-            xs, zs, vx, vz, cand, ncand, y[p + 1], y[n + p + 1], fp[_CX], fp[_CZ], loc, fp[_ROOT], fp[_PSI],
-            ip[_NTEETH], fp[_RD], fp[_K], fp[_EXPO], fp[_DAMP], fx, fz, ind_t, frc_t, False)[0]
-    f_c = 0.0
-    m_c = 0.0
-    if ip[_TENS] == 1:
-        f_c = -(fp[_PRELOAD] + fp[_KS] * q[p])
-        m_c = fp[_MC]
-    motor = 0.0
-    derr = 0.0
-    if ip[_MOTOR] == 1:
-        motor, derr = motor_torque(fp[_WREF] - qd[p + 1], y[2 * n], fp[_KP], fp[_KI], fp[_TLIM])
-    # mass matrix and generalised forces Q + Q_v
-    k = 0
-    mdd = m_c
-    qdel = f_c
-    for i in range(p):
-        rsx, rsz, rdx, rdz = part[i, 2], part[i, 3], part[i, 4], part[i, 5]
-        gx = fx[i] - mass[i] * wq[i, 0]
-        gz = fz[i] - mass[i] * wq[i, 1]
-        data[k] = mass[i] * (rsx * rsx + rsz * rsz)
-        off = mass[i] * (rsx * rdx + rsz * rdz)
-        data[k + 1] = off
-        data[k + 2] = off
-        k += 3
-        mdd += mass[i] * (rdx * rdx + rdz * rdz)
-        rhs[i] = rsx * gx + rsz * gz
-        qdel += rdx * gx + rdz * gz
-    data[k] = mdd
-    data[k + 1] = fp[_INERTIA]
-    k += 2
-    rhs[p] = qdel
-    rhs[p + 1] = motor + torque_c
-    # constraints, their Jacobian, and the Baumgarte-stabilised right-hand side
-    b2 = beta * beta
-    for j in range(p):
-        jn = j + 1 if j + 1 < p else 0
-        ux = part[jn, 0] - part[j, 0]
-        uz = part[jn, 1] - part[j, 1]
-        dvx = vel[jn, 0] - vel[j, 0]
-        dvz = vel[jn, 1] - vel[j, 1]
-        c_j = ux * ux + uz * uz - pitches[j] * pitches[j]
-        cdot = 2.0 * (ux * dvx + uz * dvz)
-        gam = -2.0 * (dvx * dvx + dvz * dvz) - 2.0 * (ux * (wq[jn, 0] - wq[j, 0]) + uz * (wq[jn, 1] - wq[j, 1]))
-        a0 = -2.0 * (ux * part[j, 2] + uz * part[j, 3])
-        a1 = 2.0 * (ux * part[jn, 2] + uz * part[jn, 3])
-        ad = 2.0 * (ux * (part[jn, 4] - part[j, 4]) + uz * (part[jn, 5] - part[j, 5]))
-        data[k] = a0
-        data[k + 1] = a0
-        data[k + 2] = a1
-        data[k + 3] = a1
-        data[k + 4] = ad
-        data[k + 5] = ad
-        k += 6
-        rhs[n + j] = gam - 2.0 * alpha * cdot - b2 * c_j
-    return motor, torque_c, derr
-
-
-@nb.njit(cache=True)
-def _closure_residual(part, p, pitches):
-    worst = 0.0
-    for i in range(p):
-        j = i + 1 if i + 1 < p else 0
-        d = abs(math.hypot(part[j, 0] - part[i, 0], part[j, 1] - part[i, 1]) - pitches[i])
-        if d > worst:
-            worst = d
-    return worst
-
-
-# --------------------------------------------------------------------------------------------
 
 class StudyFormulation:
     """The study's equations of motion in all p + 2 coordinates (see module docstring).
@@ -328,28 +112,37 @@ class StudyFormulation:
     delta, theta), an ordering in which the sparse LU makes almost no fill-in.
     """
 
-    def __init__(self, model, effects: dict, *, alpha: float = BAUMGARTE_ALPHA, beta: float = BAUMGARTE_BETA,
-                 coordinate_map: str = "study"):
+    def __init__(
+        self,
+        model,
+        effects: dict,
+        *,
+        alpha: float = BAUMGARTE_ALPHA,
+        beta: float = BAUMGARTE_BETA,
+        coordinate_map: str = "study",
+    ):
         if coordinate_map not in ("study", "vibkit"):
             raise ValueError(f"coordinate_map must be 'study' or 'vibkit', got {coordinate_map!r}")
         for name, value in (("alpha", alpha), ("beta", beta)):
-            if isinstance(value, bool) or not (isinstance(value, (int, float)) and math.isfinite(value)
-                                               and value >= 0):
+            if isinstance(value, bool) or not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0):
                 raise ValueError(f"Baumgarte constant {name} must be a finite number >= 0 [1/s], got {value!r}")
         self.model = model
-        self.effects = effects
+        self.effects = effects = effect_options(effects)
         self.alpha = float(alpha)
         self.beta = float(beta)
         self.coordinate_map = coordinate_map
         self.linear = coordinate_map == "study"
-        if "passengers" in effects and isinstance(list(effects["passengers"]["board"])[0], str):
-            raise ValueError("the study's formulation takes passengers by time (effects.passengers.board and "
-                             "alight in seconds), not by place")
+        if "passengers" in effects and isinstance(list(effects["passengers"].board)[0], str):
+            raise ValueError(
+                "the study's formulation takes passengers by time (effects.passengers.board and "
+                "alight in seconds), not by place"
+            )
         self.prm = pack_parameters(model, effects)
         # link j joins roller j and j + 1; its length (all equal unless the chain models worn links)
         pitches = getattr(model.chain, "pitches", None)
-        self.pitches = np.ascontiguousarray(pitches if pitches is not None else np.full(model.n, model.pitch),
-                                            dtype=float)
+        self.pitches = np.ascontiguousarray(
+            pitches if pitches is not None else np.full(model.n, model.pitch), dtype=float
+        )
         if self.pitches.shape != (model.n,):
             raise ValueError(f"link pitches must have shape ({model.n},), got {self.pitches.shape}")
         self.p = model.n
@@ -358,10 +151,21 @@ class StudyFormulation:
         self.evaluations = 0
         p, n = self.p, self.n
         nteeth = model.sprocket.teeth
-        self.work = (np.empty((p, 12)), np.empty((p, 2)), np.empty((p, 2)), np.empty(p), np.empty(p),
-                     np.empty(p, dtype=np.int64), np.zeros(nteeth), np.zeros(nteeth), np.empty(p), np.empty(p),
-                     np.empty(p), np.empty(p))
-        rows, cols = _kkt_pattern(p)
+        self.work = (
+            np.empty((p, 12)),
+            np.empty((p, 2)),
+            np.empty((p, 2)),
+            np.empty(p),
+            np.empty(p),
+            np.empty(p, dtype=np.int64),
+            np.zeros(nteeth),
+            np.zeros(nteeth),
+            np.empty(p),
+            np.empty(p),
+            np.empty(p),
+            np.empty(p),
+        )
+        rows, cols = kkt_pattern(p)
         self._dim = n + p
         # position of each unknown in the interleaved ordering used for the factorisation
         pos = np.empty(self._dim, dtype=np.int64)
@@ -391,8 +195,9 @@ class StudyFormulation:
         y = np.ascontiguousarray(y, dtype=float)
         if y.shape != (self.size,):
             raise ValueError(f"state y must have shape ({self.size},), got {y.shape}")
-        return _assemble(float(t), y, self.prm, self.pitches, self.linear, self.alpha, self.beta, self.work,
-                         self._data, self._rhs)
+        return assemble(
+            float(t), y, self.prm, self.pitches, self.linear, self.alpha, self.beta, self.work, self._data, self._rhs
+        )
 
     def kkt(self, t: float, y: np.ndarray):
         """The augmented system at (t, y), ordered [q, lambda].
@@ -419,7 +224,7 @@ class StudyFormulation:
         # threshold pivoting that prefers the diagonal keeps the band: about 2.5k non-zeros in L + U
         x = splu(self._matrix(self._interleaved), permc_spec="NATURAL", diag_pivot_thresh=0.1).solve(b)
         sol = x[self._pos]
-        return sol[:self.n], sol[self.n:], extras
+        return sol[: self.n], sol[self.n :], extras
 
     def rhs(self, t: float, y: np.ndarray) -> np.ndarray:
         """d/dt [q, qdot, integral] (the function handed to the integrator)."""
@@ -427,8 +232,8 @@ class StudyFormulation:
         n = self.n
         qdd, _, extras = self.solve(t, y)
         dy = np.empty(self.size)
-        dy[:n] = y[n:2 * n]
-        dy[n:2 * n] = qdd
+        dy[:n] = y[n : 2 * n]
+        dy[n : 2 * n] = qdd
         dy[2 * n] = extras[2]
         return dy
 
@@ -460,11 +265,11 @@ class StudyFormulation:
         y[p] = conf.delta
         y[p + 1] = y_ind[2]
         part = np.empty((p, 12))
-        _kinematics(tab, p0, y[:n], np.zeros(n), p, self.linear, part, np.empty((p, 2)), np.empty((p, 2)))
+        study_kinematics(tab, p0, y[:n], np.zeros(n), p, self.linear, part, np.empty((p, 2)), np.empty((p, 2)))
         v = jac * y_ind[1]
         ddot = c * y_ind[1]
         rs, rd = part[:, 2:4], part[:, 4:6]
-        y[n:n + p] = np.sum((v - rd * ddot) * rs, axis=1) / np.sum(rs * rs, axis=1)
+        y[n : n + p] = np.sum((v - rd * ddot) * rs, axis=1) / np.sum(rs * rs, axis=1)
         y[n + p] = ddot
         y[n + p + 1] = y_ind[3]
         y[2 * n] = y_ind[4]
@@ -511,14 +316,26 @@ class StudyFormulation:
             "roller_position": pos,
             "roller_velocity": vel.copy(),
             "roller_acceleration": acc,
-            "closure_residual": float(_closure_residual(part, p, self.pitches)),
+            "closure_residual": float(study_closure_residual(part, p, self.pitches)),
             "constraint_velocity": float(np.abs(2.0 * np.sum(u * dv, axis=1)).max()),
         }
 
 
-def run_study(scene, *, duration, rtol=1e-3, atol=1e-3, max_step=1e-3, method="BDF", alpha=BAUMGARTE_ALPHA,
-              beta=BAUMGARTE_BETA, coordinate_map="study", output_step=None, first_step=None,
-              max_wall_time=math.inf):
+def run_study(
+    scene,
+    *,
+    duration,
+    rtol=1e-3,
+    atol=1e-3,
+    max_step=1e-3,
+    method="BDF",
+    alpha=BAUMGARTE_ALPHA,
+    beta=BAUMGARTE_BETA,
+    coordinate_map="study",
+    output_step=None,
+    first_step=None,
+    max_wall_time=math.inf,
+):
     """Integrate a forward scene with the study's formulation (all p + 2 coordinates, Baumgarte).
 
     Parameters
@@ -573,7 +390,8 @@ def run_study(scene, *, duration, rtol=1e-3, atol=1e-3, max_step=1e-3, method="B
 
     References
     ----------
-    The study (``/work/shared/seed/000_76101f58a02dc30d.txt``), chapters 5-7, eqs. 6-8 to 6-14 and 7-14;
+    A. Cuevas López, Modelado y simulación de la cadena de tracción de una escalera mecánica como
+    sistema multicuerpo, Proyecto Fin de Carrera, Universidad de Sevilla, 2020 (the study), chapters 5-7, eqs. 6-8 to 6-14 and 7-14;
     J. Baumgarte, Comput. Methods Appl. Mech. Eng. 1 (1972) 1-16.
     """
     from ..model.escalator import EscalatorModel
@@ -582,20 +400,21 @@ def run_study(scene, *, duration, rtol=1e-3, atol=1e-3, max_step=1e-3, method="B
     if not isinstance(scene, Scene):
         scene = load_scene(scene)
     if scene.analysis != "forward":
-        raise ValueError(f"run_study needs a forward-dynamics scene, got analysis = {scene.analysis!r} "
-                         f"in {scene.source}")
+        raise ValueError(
+            f"run_study needs a forward-dynamics scene, got analysis = {scene.analysis!r} in {scene.source}"
+        )
     for name, value in (("duration", duration), ("rtol", rtol), ("atol", atol), ("max_step", max_step)):
         if not (isinstance(value, (int, float)) and value > 0):
             raise ValueError(f"{name} must be a positive number, got {value!r}")
     if method not in _SOLVE_IVP_METHODS:
         raise ValueError(f"method must be one of {', '.join(_SOLVE_IVP_METHODS)}, got {method!r}")
-    run = scene.section("run")
-    dt = output_step if output_step is not None else run["output_step"]
+    run = scene.run
+    dt = output_step if output_step is not None else run.output_step
     if not dt > 0:
         raise ValueError(f"output_step must be positive [s], got {dt!r}")
     model = EscalatorModel(scene)
     form = StudyFormulation(model, scene.effects, alpha=alpha, beta=beta, coordinate_map=coordinate_map)
-    y0 = form.initial_state(start=run.get("start", 0.0), speed=run.get("initial_speed", 0.0))
+    y0 = form.initial_state(start=run.start, speed=run.initial_speed)
     t_out = np.arange(0.0, duration + 0.5 * dt, dt)  # the grid of vibkit.analyses.forward.forward_dynamics
     from scipy.integrate import solve_ivp
 
@@ -612,8 +431,7 @@ def run_study(scene, *, duration, rtol=1e-3, atol=1e-3, max_step=1e-3, method="B
     sol = solve_ivp(fun, (0.0, float(t_out[-1])), y0, method=method, t_eval=t_out, **kw)
     wall = time.perf_counter() - t0
     if not sol.success:
-        raise IntegrationError(f"{method} (study formulation): {sol.message}",
-                               float(sol.t[-1]) if sol.t.size else 0.0)
+        raise IntegrationError(f"{method} (study formulation): {sol.message}", float(sol.t[-1]) if sol.t.size else 0.0)
     return _dataset(form, sol, wall, method, rtol, atol, max_step)
 
 
@@ -622,8 +440,15 @@ def _dataset(form, sol, wall, method, rtol, atol, max_step):
     scene = model.scene
     t = sol.t
     nt = t.size
-    scalars = ("delta", "chain_speed", "sprocket_speed", "sprocket_angle", "motor_torque", "closure_residual",
-               "constraint_velocity")
+    scalars = (
+        "delta",
+        "chain_speed",
+        "sprocket_speed",
+        "sprocket_angle",
+        "motor_torque",
+        "closure_residual",
+        "constraint_velocity",
+    )
     out = {name: np.empty(nt) for name in scalars}
     tension = np.empty((nt, form.p))
     for j in range(nt):
@@ -633,7 +458,7 @@ def _dataset(form, sol, wall, method, rtol, atol, max_step):
         tension[j] = obs["link_tension"]
     data = {name: (("time",), out[name]) for name in scalars}
     data["link_tension"] = (("time", "link"), tension)
-    nominal = form.effects.get("motor", {}).get("speed", scene.section("run").get("initial_speed", 0.0))
+    nominal = nominal_speed(form.effects, scene.run)
     attrs = {
         "formulation": "study: p + 2 coordinates, Lagrange multipliers, Baumgarte stabilisation",
         "baumgarte_alpha_per_s": form.alpha,
@@ -654,7 +479,8 @@ def _dataset(form, sol, wall, method, rtol, atol, max_step):
     }
     coords = {"time": t, "link": np.arange(1, form.p + 1)}
     ds = make_dataset(coords, data, attrs, scene)
-    ds["constraint_velocity"].attrs.update({"units": "m^2/s",
-                                            "long_name": "max over links of |dC_i/dt|, C_i = |r_i+1 - r_i|^2 - L^2"})
+    ds["constraint_velocity"].attrs.update(
+        {"units": "m^2/s", "long_name": "max over links of |dC_i/dt|, C_i = |r_i+1 - r_i|^2 - L^2"}
+    )
     ds.attrs["history"] += "\nintegrated with the study's formulation (vibkit.analyses.reference.run_study)"
     return ds

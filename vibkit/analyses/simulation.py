@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import dataclasses
-
 from ..model.escalator import EscalatorModel
 from ..model.scene import Scene, load_scene
 
@@ -48,7 +46,8 @@ def simulate(
     -------
     xarray.Dataset
         Kinematics: dimension ``advance`` [m]; inverse and forward dynamics: dimension ``time`` [s].
-        Every variable carries ``units`` and ``long_name``; attrs carry the scene text and version.
+        Every variable carries ``units`` and ``long_name``; attrs carry the scene text and version, and
+        ``scene_defaults``: the scene keys that took the schema's default (comma-separated).
 
     Raises
     ------
@@ -66,10 +65,8 @@ def simulate(
     budget.check_run(scene, duration=duration, limit_bytes=max_result_bytes)
     if scene.analysis == "forward":
         wall = budget.max_wall_time(scene, max_wall_time)
-        if scene.section("solver").get("max_wall_time") != wall:
-            sections = dict(scene.sections)
-            sections["solver"] = {**scene.section("solver"), "max_wall_time": wall}
-            scene = dataclasses.replace(scene, sections=sections)
+        if scene.solver.max_wall_time != wall:
+            scene = scene.with_solver(max_wall_time=wall)
     if check and scene.analysis != "forward":
         raise ValueError(
             f"{scene.source}: the convergence check applies to forward scenes; this one is "
@@ -81,35 +78,37 @@ def simulate(
     if scene.analysis == "kinematics":
         from .kinematics import kinematic_sweep
 
-        k = scene.section("kinematics")
-        stop = k["stop"] if duration is None else k["start"] + duration
-        return kinematic_sweep(model, k["start"], stop, k["step"], rollers=rollers, outputs=outputs, progress=progress)
+        k = scene.kinematics
+        stop = k.stop if duration is None else k.start + duration
+        ds = kinematic_sweep(model, k.start, stop, k.step, rollers=rollers, outputs=outputs, progress=progress)
+        return _stamp_defaults(ds, scene)
     if scene.analysis == "inverse":
         from .inverse import inverse_dynamics
 
-        m = scene.section("motion")
-        return inverse_dynamics(
+        m = scene.motion
+        ds = inverse_dynamics(
             model,
-            speed=m["speed"],
-            duration=duration or m["duration"],
-            step=m["step"],
-            start=m.get("start", 0.0),
+            speed=m.speed,
+            duration=duration or m.duration,
+            step=m.step,
+            start=m.start,
             effects=scene.effects,
             outputs=outputs,
             rollers=rollers,
             progress=progress,
         )
+        return _stamp_defaults(ds, scene)
     from .forward import forward_dynamics
     from .integrate import IntegrationError
 
     if check is None:
-        check = bool(scene.section("solver").get("check", False))
+        check = bool(scene.solver.check)
     try:
         if check:
             from .convergence import checked_forward
 
-            return checked_forward(model, duration=duration, progress=progress)
-        return forward_dynamics(model, duration=duration, progress=progress)
+            return _stamp_defaults(checked_forward(model, duration=duration, progress=progress), scene)
+        return _stamp_defaults(forward_dynamics(model, duration=duration, progress=progress), scene)
     except IntegrationError as exc:
         if "wall-time budget" not in str(exc):
             raise
@@ -120,3 +119,9 @@ def simulate(
         )
         hint.t, hint.y = exc.t, exc.y
         raise hint from None
+
+
+def _stamp_defaults(ds, scene):
+    """Record in the result which scene keys were not given and took the schema's default."""
+    ds.attrs["scene_defaults"] = ", ".join(scene.defaults)
+    return ds

@@ -255,7 +255,8 @@ def compare(
     """
     from ..io import read_recording
     from ..signal import compare_spectra
-    from .pitch import DEFAULT_PITCH_RANGE_M, pick_channel, uniform_bursts
+    from ..signal.bursts import uniform_bursts
+    from .pitch import DEFAULT_PITCH_RANGE_M, pick_channel
 
     if not 0 < float(confidence) < 1:
         raise ValueError(f"confidence must lie in (0, 1), got {confidence!r}")

@@ -48,6 +48,7 @@ __all__ = [
     "STATUS_NOT_FOUND",
     "STATUS_OK",
     "Decision",
+    "LinkPassEvidence",
     "decide",
     "elongation_verdict",
     "nearest_catalogue",
@@ -65,7 +66,7 @@ DEFAULT_LIMITS_PERCENT = (1.5, 2.0, 3.0)
 ELONGATION_WINDOW_PERCENT = (-1.0, 6.0)
 #: standard escalator step-chain pitches [m]: steps every ~406 mm carried on every 6th, 5th or 4th
 #: link (Tsubaki, The Complete Guide to Chain, 2.2.1 "Step (Escalator) Chain", table 2.5: 67.7,
-#: 81.3, 101.6 mm), 400 mm / 3 (the reference escalator of the study, /work/shared/spec), and the
+#: 81.3, 101.6 mm), 400 mm / 3 (the reference escalator of the study), and the
 #: Otis T135.4 step chain (135.46 mm, supplier data sheets)
 CATALOGUE_PITCHES_M = (0.0677, 0.0813, 0.1016, 0.4 / 3.0, 0.13546)
 CATALOGUE_SOURCES = (
@@ -76,8 +77,12 @@ CATALOGUE_SOURCES = (
 #: largest relative difference between the spectral and the mean-phase estimate of one record: an
 #: escalator's speed wanders by a few per cent with load, a chirp, a gait or a ride by more
 MAX_WANDER = 0.025
-#: the elongation must be resolved to this fraction of the first limit for a verdict
+#: the elongation must be resolved to this fraction of the first limit for a verdict: its sigma a third of
+#: the first limit puts the watch limit three sigmas from a new chain
 EVIDENCE_FRACTION = 1.0 / 3.0
+#: the estimate belongs to the detected family when it lies within the detection's bin width plus this
+#: many of its own sigmas of the detection's frequency (three sigmas: a 0.3 % chance to refuse a true family)
+SAME_FAMILY_SIGMAS = 3.0
 
 
 @dataclass(frozen=True)
@@ -172,29 +177,11 @@ def _mm(p):
     return f"{1000 * p:.1f} mm"
 
 
-def decide(
-    *,
-    detected,
-    detection_reason="",
-    detection_hz=float("nan"),
-    resolution_hz=float("nan"),
-    fundamental_hz=float("nan"),
-    fundamental_sigma_hz=float("nan"),
-    band_hz=None,
-    speed_m_s=None,
-    speed_sigma_m_s=0.0,
-    nominal_pitch_m=None,
-    limits_percent=DEFAULT_LIMITS_PERCENT,
-    spectral_hz=None,
-    mean_phase_hz=None,
-    window_percent=ELONGATION_WINDOW_PERCENT,
-    catalogue=CATALOGUE_PITCHES_M,
-    speed_source="given",
-    significant_orders=None,
-) -> Decision:
-    """The decision on one link-pass estimate (module notes).
+@dataclass(frozen=True)
+class LinkPassEvidence:
+    """What the detection and the estimation found about one record: the input of :func:`decide`.
 
-    Parameters
+    Attributes
     ----------
     detected : bool
         The detection test (:func:`vibkit.signal.detect.detect_link_pass`) found a family.
@@ -204,42 +191,97 @@ def decide(
         The family's fundamental as the test found it, and the test's bin width. [Hz]
     fundamental_hz, fundamental_sigma_hz : float
         The estimate and its standard deviation. [Hz]
-    band_hz : (float, float)
+    band_hz : (float, float), optional
         Search band. [Hz]
     speed_m_s, speed_sigma_m_s : float, optional
         Chain speed and its sigma; None: frequency only (no pitch, no plausibility). [m/s]
     nominal_pitch_m : float, optional
         Nominal pitch: plausibility against it, elongation verdict. [m]
     limits_percent : (float, float, float)
+        Elongation limits: watch, plan replacement, replace. [%]
     spectral_hz, mean_phase_hz : float, optional
         The two estimates of a record when both exist (steadiness check). [Hz]
-    window_percent : (float, float)
-        Physically possible elongation. [%]
-    catalogue : tuple of float
-        Standard pitches used without a nominal pitch. [m]
     speed_source : str
         Where the speed came from (named in the reasons).
     significant_orders : sequence of int, optional
         Harmonic orders individually significant in the detection; fewer than two (a lone spectral line,
         which a structural mode, a motor or a fan gives as well) make the result ``inconclusive``.
+    """
+
+    detected: bool
+    detection_reason: str = ""
+    detection_hz: float = float("nan")
+    resolution_hz: float = float("nan")
+    fundamental_hz: float = float("nan")
+    fundamental_sigma_hz: float = float("nan")
+    band_hz: tuple | None = None
+    speed_m_s: float | None = None
+    speed_sigma_m_s: float = 0.0
+    nominal_pitch_m: float | None = None
+    limits_percent: tuple = DEFAULT_LIMITS_PERCENT
+    spectral_hz: float | None = None
+    mean_phase_hz: float | None = None
+    speed_source: str = "given"
+    significant_orders: tuple | None = None
+
+
+def decide(
+    evidence: LinkPassEvidence, *, window_percent=ELONGATION_WINDOW_PERCENT, catalogue=CATALOGUE_PITCHES_M
+) -> Decision:
+    """The decision on one link-pass estimate (module notes).
+
+    The checks run in this order, the first that fails deciding: a family detected, a fundamental
+    estimated, the estimate the detected family's, in the band, steady (:func:`_check_family`); the pitch
+    it implies plausible (:func:`_check_plausible`); harmonics present (:func:`_check_harmonics`); the
+    elongation resolved for a verdict (:func:`_verdict`).
+
+    Parameters
+    ----------
+    evidence : LinkPassEvidence
+        What the detection and the estimation found.
+    window_percent : (float, float)
+        Physically possible elongation. [%]
+    catalogue : tuple of float
+        Standard pitches used without a nominal pitch. [m]
 
     Returns
     -------
     Decision
     """
+    ev = evidence
     checks = {}
-    if not detected:
+    refused = _check_family(ev, checks)
+    if refused is not None:
+        return refused
+    f = float(ev.fundamental_hz)
+    if ev.speed_m_s is None:
+        return Decision(
+            STATUS_OK, f"link-pass family at {f:.4g} Hz (no speed: no pitch, plausibility not checked)", checks=checks
+        )
+    p = float(ev.speed_m_s) / f
+    return (
+        _check_plausible(ev, p, checks, window_percent, catalogue)
+        or _check_harmonics(ev, p, checks)
+        or _verdict(ev, p, checks)
+    )
+
+
+def _check_family(ev, checks):
+    """A refusal (``no link-pass found``) unless a family was detected, its fundamental estimated, and the
+    estimate is the detected family's (within the resolution and :data:`SAME_FAMILY_SIGMAS`), in the band
+    and steady (:data:`MAX_WANDER`); None when every check passes."""
+    if not ev.detected:
         checks["detected"] = False
-        return Decision(STATUS_NOT_FOUND, detection_reason or "no harmonic family in the band", checks=checks)
+        return Decision(STATUS_NOT_FOUND, ev.detection_reason or "no harmonic family in the band", checks=checks)
     checks["detected"] = True
-    f, sf = float(fundamental_hz), float(fundamental_sigma_hz)
+    f, sf = float(ev.fundamental_hz), float(ev.fundamental_sigma_hz)
     if not (math.isfinite(f) and f > 0):
         checks["estimated"] = False
         return Decision(STATUS_NOT_FOUND, "a family was detected but no fundamental could be estimated", checks=checks)
     sf = sf if math.isfinite(sf) else 0.0
-    fd, res = float(detection_hz), float(resolution_hz)
+    fd, res = float(ev.detection_hz), float(ev.resolution_hz)
     if math.isfinite(fd) and math.isfinite(res):
-        same = abs(f - fd) <= res + 3.0 * sf
+        same = abs(f - fd) <= res + SAME_FAMILY_SIGMAS * sf
         checks["same family"] = bool(same)
         if not same:
             return Decision(
@@ -250,8 +292,8 @@ def decide(
                 ),
                 checks=checks,
             )
-    if band_hz is not None:
-        lo, hi = (float(v) for v in band_hz)
+    if ev.band_hz is not None:
+        lo, hi = (float(v) for v in ev.band_hz)
         inside = lo <= f <= hi
         checks["in band"] = bool(inside)
         if not inside:
@@ -263,86 +305,105 @@ def decide(
                 ),
                 checks=checks,
             )
-    if spectral_hz is not None and mean_phase_hz is not None:
-        rel = abs(float(spectral_hz) - float(mean_phase_hz)) / f
+    if ev.spectral_hz is not None and ev.mean_phase_hz is not None:
+        spectral, mean_phase = float(ev.spectral_hz), float(ev.mean_phase_hz)
+        rel = abs(spectral - mean_phase) / f
         steady = rel <= MAX_WANDER
         checks["steady"] = bool(steady)
         if not steady:
             return Decision(
                 STATUS_NOT_FOUND,
                 (
-                    f"the spectral ({float(spectral_hz):.4g} Hz) and mean-phase ({float(mean_phase_hz):.4g} Hz) estimates "
+                    f"the spectral ({spectral:.4g} Hz) and mean-phase ({mean_phase:.4g} Hz) estimates "
                     f"differ by {100 * rel:.2g} %: a chain's speed wanders by a few per cent at most "
                     f"({100 * MAX_WANDER:g} % allowed); this periodicity drifts like a gait, a ride or a sweep"
                 ),
                 checks=checks,
             )
-    if speed_m_s is None:
-        return Decision(
-            STATUS_OK, f"link-pass family at {f:.4g} Hz (no speed: no pitch, plausibility not checked)", checks=checks
-        )
-    v = float(speed_m_s)
-    p = v / f
+    return None
+
+
+def _check_plausible(ev, p, checks, window_percent, catalogue):
+    """``implausible`` when the pitch ``p`` [m] lies outside the window around the nominal pitch (or, without
+    one, around every catalogue pitch); None when plausible."""
+    f, v = float(ev.fundamental_hz), float(ev.speed_m_s)
     wlo, whi = (float(x) for x in window_percent)
-    if nominal_pitch_m is not None:
-        nom = float(nominal_pitch_m)
+    if ev.nominal_pitch_m is not None:
+        nom = float(ev.nominal_pitch_m)
         el = 100.0 * (p / nom - 1.0)
         ok = wlo <= el <= whi
         checks["plausible"] = bool(ok)
-        if not ok:
-            v_nom = f * nom
-            return Decision(
-                STATUS_IMPLAUSIBLE,
-                (
-                    f"the family at {f:.4g} Hz implies a pitch of {_mm(p)} at {v:g} m/s ({speed_source}), an elongation "
-                    f"of {el:+.1f} % of the nominal {_mm(nom)}, outside the physical window {wlo:+g} to {whi:+g} %: "
-                    f"not a verdict. Check the speed (the nominal pitch needs {v_nom:.3g} m/s), the channel (--channel), "
-                    "the nominal pitch, or whether the sensor was on this machine's step chain"
-                ),
-                implied_pitch_m=p,
-                checks=checks,
-            )
-    else:
-        c, dev = nearest_catalogue(p, catalogue)
-        ok = wlo <= dev <= whi
-        checks["plausible"] = bool(ok)
-        if not ok:
-            return Decision(
-                STATUS_IMPLAUSIBLE,
-                (
-                    f"the family at {f:.4g} Hz implies a pitch of {_mm(p)} at {v:g} m/s ({speed_source}), {dev:+.1f} % "
-                    f"from the nearest standard step-chain pitch {_mm(c)} (standard: "
-                    f"{', '.join(f'{1000 * q:.2f}' for q in catalogue)} mm; window {wlo:+g} to {whi:+g} %): not a step "
-                    "chain's link pass. Check the speed, the channel (--channel), give --nominal-pitch, or check "
-                    "that the recording is of an escalator"
-                ),
-                implied_pitch_m=p,
-                checks=checks,
-            )
-    if significant_orders is not None:
-        harmonics = len(set(significant_orders) - {1}) >= 1
-        checks["harmonics"] = bool(harmonics)
-        if not harmonics:
-            return Decision(
-                STATUS_INCONCLUSIVE,
-                (
-                    f"one spectral line at {f:.4g} Hz (pitch {_mm(p)}) without a significant harmonic: a tone (a structural "
-                    "mode, a motor, a fan) cannot be told from a link pass, whose roller impacts give harmonics; no "
-                    "verdict"
-                ),
-                verdict="inconclusive" if nominal_pitch_m is not None else None,
-                implied_pitch_m=p,
-                checks=checks,
-            )
-    if nominal_pitch_m is None:
+        if ok:
+            return None
+        v_nom = f * nom
+        return Decision(
+            STATUS_IMPLAUSIBLE,
+            (
+                f"the family at {f:.4g} Hz implies a pitch of {_mm(p)} at {v:g} m/s ({ev.speed_source}), an elongation "
+                f"of {el:+.1f} % of the nominal {_mm(nom)}, outside the physical window {wlo:+g} to {whi:+g} %: "
+                f"not a verdict. Check the speed (the nominal pitch needs {v_nom:.3g} m/s), the channel (--channel), "
+                "the nominal pitch, or whether the sensor was on this machine's step chain"
+            ),
+            implied_pitch_m=p,
+            checks=checks,
+        )
+    c, dev = nearest_catalogue(p, catalogue)
+    ok = wlo <= dev <= whi
+    checks["plausible"] = bool(ok)
+    if ok:
+        return None
+    return Decision(
+        STATUS_IMPLAUSIBLE,
+        (
+            f"the family at {f:.4g} Hz implies a pitch of {_mm(p)} at {v:g} m/s ({ev.speed_source}), {dev:+.1f} % "
+            f"from the nearest standard step-chain pitch {_mm(c)} (standard: "
+            f"{', '.join(f'{1000 * q:.2f}' for q in catalogue)} mm; window {wlo:+g} to {whi:+g} %): not a step "
+            "chain's link pass. Check the speed, the channel (--channel), give --nominal-pitch, or check "
+            "that the recording is of an escalator"
+        ),
+        implied_pitch_m=p,
+        checks=checks,
+    )
+
+
+def _check_harmonics(ev, p, checks):
+    """``inconclusive`` for one spectral line without a significant harmonic; None otherwise (or unknown)."""
+    if ev.significant_orders is None:
+        return None
+    harmonics = len(set(ev.significant_orders) - {1}) >= 1
+    checks["harmonics"] = bool(harmonics)
+    if harmonics:
+        return None
+    return Decision(
+        STATUS_INCONCLUSIVE,
+        (
+            f"one spectral line at {float(ev.fundamental_hz):.4g} Hz (pitch {_mm(p)}) without a significant "
+            "harmonic: a tone (a structural mode, a motor, a fan) cannot be told from a link pass, whose roller "
+            "impacts give harmonics; no verdict"
+        ),
+        verdict="inconclusive" if ev.nominal_pitch_m is not None else None,
+        implied_pitch_m=p,
+        checks=checks,
+    )
+
+
+def _verdict(ev, p, checks):
+    """``ok`` with the elongation verdict when the elongation is resolved to :data:`EVIDENCE_FRACTION` of the
+    first limit, else ``inconclusive``; ``ok`` without a verdict when there is no nominal pitch."""
+    f = float(ev.fundamental_hz)
+    if ev.nominal_pitch_m is None:
         return Decision(
             STATUS_OK,
             f"link-pass family at {f:.4g} Hz, pitch {_mm(p)} (no nominal pitch: no verdict)",
             implied_pitch_m=p,
             checks=checks,
         )
-    lim = check_limits(limits_percent)
-    rel = math.hypot(sf / f, float(speed_sigma_m_s or 0.0) / v)
+    nom, v = float(ev.nominal_pitch_m), float(ev.speed_m_s)
+    el = 100.0 * (p / nom - 1.0)
+    sf = float(ev.fundamental_sigma_hz)
+    sf = sf if math.isfinite(sf) else 0.0
+    lim = check_limits(ev.limits_percent)
+    rel = math.hypot(sf / f, float(ev.speed_sigma_m_s or 0.0) / v)
     el_sigma = 100.0 * p * rel / nom
     need = EVIDENCE_FRACTION * lim[0]
     resolved = el_sigma <= need

@@ -27,6 +27,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..runtime.constants import STANDARD_GRAVITY
 from ..signal.ride import LOWPASS_HZ, PeakToPeak, RideSegment, detect_ride_segment, lowpass_10hz, peak_to_peak
 from ..signal.weighting import frequency_weighting, get_weighting
 
@@ -45,7 +46,9 @@ __all__ = [
 
 #: ISO 2631-1 / ISO 18738: horizontal axes Wd, vertical Wk (an axis along the guide tangent: Wd)
 DEFAULT_WEIGHTINGS = {"x": "Wd", "y": "Wd", "z": "Wk", "tangential": "Wd"}
-G = 9.80665  # [m/s^2]
+#: a simulated roller's acceleration plus this is what an accelerometer on it reads (the conversion
+#: constant of g units, not the model's gravity of 9.81 m/s^2) [m/s^2]
+G = STANDARD_GRAVITY
 #: weighted signal discarded at the start of a record while the 0.4 Hz high-pass settles [s]
 SETTLE_S = 2.0
 
@@ -458,7 +461,7 @@ def ride_quality_from_recording(
         whose longest burst is too short; the errors of :func:`ride_quality`.
     """
     from ..io import read_recording
-    from .pitch import uniform_bursts
+    from ..signal.bursts import uniform_bursts
 
     opts = dict(read_options or {})
     if sample_rate is not None:

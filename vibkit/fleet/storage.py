@@ -372,9 +372,9 @@ class FleetDB:
         -------
         list of UnitTrend
         """
-        from ..diagnose.pitch import _check_limits
+        from ..diagnose.decision import check_limits
 
-        limits = _check_limits(limits_percent)
+        limits = check_limits(limits_percent)
         by_unit = {}
         for m in self.measurements():
             if units is None or m.unit in units:

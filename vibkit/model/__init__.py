@@ -7,7 +7,8 @@
 * :mod:`~vibkit.model.dynamics`: the reduced equation of motion and link multipliers;
 * :mod:`~vibkit.model.effects`: the right-hand side with only the effects a scene switches on;
 * :mod:`~vibkit.model.escalator`: :class:`EscalatorModel`, the three bodies assembled;
-* :mod:`~vibkit.model.scene`: scene files (TOML), validated, with units.
+* :mod:`~vibkit.model.schema`: every scene key with its unit, default, range and meaning;
+* :mod:`~vibkit.model.scene`: scene files (TOML), validated against the schema.
 
 Nothing here imports :mod:`vibkit.analyses`, :mod:`vibkit.diagnose` or the command line.
 """

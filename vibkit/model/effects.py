@@ -31,46 +31,72 @@ import numpy as np
 
 from .chain import acceleration_terms, close_with_slope, fill_partials, sensitivity, velocity_coefficients
 from .dynamics import reduced_equation
+from .schema import effect_options, gravity_of
+from .slots import (
+    FP,
+    FP_CARRIAGE_MASS,
+    FP_CLOSURE_TOL,
+    FP_CX,
+    FP_CZ,
+    FP_DAMPING,
+    FP_EXPONENT,
+    FP_G,
+    FP_INERTIA,
+    FP_KI,
+    FP_KP,
+    FP_LT,
+    FP_P0,
+    FP_PRELOAD,
+    FP_REACH,
+    FP_ROLLER_RADIUS,
+    FP_ROLLING,
+    FP_ROOT_RADIUS,
+    FP_SPEED_REF,
+    FP_STIFFNESS,
+    FP_TENSIONER_STIFFNESS,
+    FP_TOOTH_PITCH,
+    FP_TORQUE_LIMIT,
+    INFO_ACTIVE,
+    INFO_AT,
+    INFO_CURVATURE,
+    INFO_DELTA,
+    INFO_DELTA_DDOT,
+    INFO_DELTA_DOT,
+    INFO_DH_DDELTA,
+    INFO_ENERGY_C,
+    INFO_F_BACK,
+    INFO_F_DRIVE,
+    INFO_MEMORY,
+    INFO_MEMORY_END,
+    INFO_MOTOR,
+    INFO_NAMES,
+    INFO_SLOPE,
+    INFO_TORQUE_C,
+    INFO_WALKS,
+    INFO_WORST,
+    IP,
+    IP_CONTACT,
+    IP_GRAVITY,
+    IP_MOTOR,
+    IP_N,
+    IP_PASSENGERS,
+    IP_ROLLING,
+    IP_TEETH,
+    IP_TENSIONER,
+    PASSENGERS_BY_TIME,
+    WS_NAMES,
+)
 from .sprocket import contact_kernel
 
-__all__ = ["pack_parameters", "evaluate", "motor_torque", "FP", "IP"]
-
-# float parameter slots
-FP = {
-    name: i
-    for i, name in enumerate(
-        (
-            "p0",
-            "lt",
-            "pitch",
-            "g",
-            "k",
-            "expo",
-            "damp",
-            "kp",
-            "ki",
-            "wref",
-            "tlim",
-            "k_s",
-            "preload",
-            "m_c",
-            "mu_rr",
-            "inertia",
-            "r_d",
-            "cx",
-            "cz",
-            "root_r",
-            "psi",
-            "tol",
-            "reach",
-        )
-    )
-}
-# integer parameter slots
-IP = {
-    name: i
-    for i, name in enumerate(("n", "nteeth", "gravity", "contact", "motor", "passengers", "tensioner", "rolling"))
-}
+__all__ = [
+    "pack_parameters",
+    "evaluate",
+    "motor_torque",
+    "passenger_loads",
+    "contact_candidates",
+    "FP",
+    "IP",
+]
 
 
 class Work:
@@ -96,12 +122,16 @@ class Work:
             np.empty(n, dtype=np.int64),
             np.zeros(nteeth),
             np.zeros(nteeth),
-            np.zeros(15),
+            np.zeros(len(INFO_NAMES)),
         )
+        if len(self.arrays) != len(WS_NAMES):
+            raise RuntimeError("Work.arrays and vibkit.model.slots.WS_NAMES disagree")
 
 
 def pack_parameters(model, effects: dict, *, start: float = 0.0):
-    """Parameter arrays for the compiled kernels from a model and the scene's effects."""
+    """Parameter arrays for the compiled kernels from a model and the scene's effects (typed options or
+    plain tables: :func:`vibkit.model.schema.effect_options`)."""
+    effects = effect_options(effects)
     n = model.n
     fp = np.zeros(len(FP))
     ip = np.zeros(len(IP), dtype=np.int64)
@@ -125,17 +155,17 @@ def pack_parameters(model, effects: dict, *, start: float = 0.0):
     ip[IP["nteeth"]] = model.sprocket.teeth
     if "gravity" in effects:
         ip[IP["gravity"]] = 1
-        fp[FP["g"]] = effects["gravity"].get("g", 9.81)
+        fp[FP["g"]] = effects["gravity"].g
     if "contact" in effects:
         ip[IP["contact"]] = 1
         o = effects["contact"]
-        fp[FP["k"]], fp[FP["expo"]], fp[FP["damp"]] = o["stiffness"], o.get("exponent", 1.5), o.get("damping", 0.0)
+        fp[FP["k"]], fp[FP["expo"]], fp[FP["damp"]] = o.stiffness, o.exponent, o.damping
     if "motor" in effects:
         ip[IP["motor"]] = 1
         o = effects["motor"]
-        fp[FP["kp"]], fp[FP["ki"]] = o["kp"], o.get("ki", 0.0)
-        fp[FP["wref"]] = -o["speed"] / geo["pitch_radius"]
-        fp[FP["tlim"]] = o.get("torque_limit", math.inf)
+        fp[FP["kp"]], fp[FP["ki"]] = o.kp, o.ki
+        fp[FP["wref"]] = -o.speed / geo["pitch_radius"]
+        fp[FP["tlim"]] = o.torque_limit
     pm = np.zeros(0)
     ps = np.zeros(0, dtype=np.int64)
     pb = np.zeros(0)
@@ -144,27 +174,27 @@ def pack_parameters(model, effects: dict, *, start: float = 0.0):
         o = effects["passengers"]
         by_place, pb, pa = model.passenger_schedule(o, start)
         ip[IP["passengers"]] = 2 if by_place else 1
-        pm = np.asarray(o["mass"], dtype=float)
-        ps = np.asarray(o["step"], dtype=np.int64)
+        pm = np.asarray(o.mass, dtype=float)
+        ps = np.asarray(o.step, dtype=np.int64)
         if "gravity" not in effects:
-            fp[FP["g"]] = 9.81
+            fp[FP["g"]] = gravity_of(effects)
     if "tensioner" in effects:
         ip[IP["tensioner"]] = 1
         o = effects["tensioner"]
-        fp[FP["k_s"]], fp[FP["preload"]], fp[FP["m_c"]] = o["stiffness"], o["preload"], o["mass"]
+        fp[FP["k_s"]], fp[FP["preload"]], fp[FP["m_c"]] = o.stiffness, o.preload, o.mass
     if "rolling_resistance" in effects:
         ip[IP["rolling"]] = 1
-        fp[FP["mu_rr"]] = effects["rolling_resistance"]["coefficient"]
+        fp[FP["mu_rr"]] = effects["rolling_resistance"].coefficient
         if "gravity" not in effects:
-            fp[FP["g"]] = 9.81
+            fp[FP["g"]] = gravity_of(effects)
     return (model.guide.table, model.corners_local, fp, ip, model.mass.copy(), pm, ps, pb, pa, model.chain.pitches)
 
 
 def reset_closure(info, delta):
     """Start the next evaluation's closure from ``delta`` alone (no prediction, no stored slope)."""
-    info[0] = delta
-    info[10:13] = 0.0
-    info[14] = 0.0
+    info[INFO_DELTA] = delta
+    info[INFO_MEMORY:INFO_MEMORY_END] = 0.0
+    info[INFO_CURVATURE] = 0.0
 
 
 @nb.njit(cache=True, error_model="numpy")
@@ -203,27 +233,82 @@ def clear_teeth(ind_t, frc_t):
         frc_t[j] = 0.0
 
 
+@nb.njit(cache=True, error_model="numpy", inline="always")
+def within_reach(x, z, cx, cz, reach2):
+    """Whether a roller centre (x, z) is closer than sqrt(reach2) to the sprocket centre (cx, cz)."""
+    dxc = x - cx
+    dzc = z - cz
+    return dxc * dxc + dzc * dzc < reach2
+
+
+@nb.njit(cache=True, error_model="numpy")
+def contact_candidates(xs, zs, n, cx, cz, reach, cand):
+    """The contact candidates among rollers 0 .. n-1: those whose centre is closer than ``reach`` [m]
+    to the sprocket centre (cx, cz) (whose circle can reach a tooth). Their indices go to the front
+    of ``cand``, in order; returns how many."""
+    ncand = 0
+    reach2 = reach * reach
+    for i in range(n):
+        if within_reach(xs[i], zs[i], cx, cz, reach2):
+            cand[ncand] = i
+            ncand += 1
+    return ncand
+
+
+@nb.njit(cache=True, error_model="numpy", inline="always")
+def step_roller(ps, jp, r, n):
+    """Index of roller ``r`` (0, 1, 2: the middle one is 1) of passenger ``jp``'s step (``ps`` 1-based)."""
+    return (3 * (ps[jp] - 1) + r) % n
+
+
+@nb.njit(cache=True, error_model="numpy", inline="always")
+def aboard(jp, where, pb, pa):
+    """Whether passenger ``jp`` is aboard at ``where`` (a time, or its step's middle-roller place)."""
+    return pb[jp] <= where < pa[jp]
+
+
+@nb.njit(cache=True, error_model="numpy", inline="always")
+def step_load(jp, pm, g):
+    """Weight [N] passenger ``jp`` puts on each of the three rollers of its step: m g / 3."""
+    return pm[jp] * g / 3.0
+
+
+@nb.njit(cache=True, error_model="numpy")
+def passenger_loads(t, mode, s0, pm, ps, pb, pa, g, n, fz):
+    """Subtract from ``fz`` [N] the weight of every passenger aboard, shared by its step's three rollers.
+
+    ``mode`` 1: aboard by time (board <= t < alight); 2: by place, while the step's middle roller's
+    unwrapped s0 (``s0``, the rollers' coordinates) is between the boarding and alighting places.
+    """
+    for jp in range(pm.size):
+        where = t if mode == PASSENGERS_BY_TIME else s0[step_roller(ps, jp, 1, n)]
+        if aboard(jp, where, pb, pa):
+            w = step_load(jp, pm, g)
+            for r in range(3):
+                fz[step_roller(ps, jp, r, n)] -= w
+
+
 @nb.njit(cache=True, error_model="numpy")
 def finish(y, dy, info, fp, ip, sddot, torque_c, energy_c, worst, active, f_drive, f_back):
     """The state's rates from roller 1's acceleration ``sddot`` and the contact kernel's results
     (torque, energy, max indentation, active contacts, drive- and back-flank forces): fills ``dy``
-    and the info slots 3-9 (motor torque and the contact's results)."""
+    and the info slots of the motor torque and the contact's results."""
     motor = 0.0
     derr = 0.0
-    if ip[4] == 1:
-        motor, derr = motor_torque(fp[9] - y[3], y[4], fp[7], fp[8], fp[10])
+    if ip[IP_MOTOR] == 1:
+        motor, derr = motor_torque(fp[FP_SPEED_REF] - y[3], y[4], fp[FP_KP], fp[FP_KI], fp[FP_TORQUE_LIMIT])
     dy[0] = y[1]
     dy[1] = sddot
     dy[2] = y[3]
-    dy[3] = (motor + torque_c) / fp[15]
+    dy[3] = (motor + torque_c) / fp[FP_INERTIA]
     dy[4] = derr
-    info[3] = motor
-    info[4] = torque_c
-    info[5] = energy_c
-    info[6] = worst
-    info[7] = active
-    info[8] = f_drive
-    info[9] = f_back
+    info[INFO_MOTOR] = motor
+    info[INFO_TORQUE_C] = torque_c
+    info[INFO_ENERGY_C] = energy_c
+    info[INFO_WORST] = worst
+    info[INFO_ACTIVE] = active
+    info[INFO_F_DRIVE] = f_drive
+    info[INFO_F_BACK] = f_back
 
 
 @nb.njit(cache=True, error_model="numpy")
@@ -231,47 +316,57 @@ def evaluate(t, y, dy, prm, ws, want_teeth):
     """Right-hand side of the forward dynamics; fills ``dy`` and returns a status code.
 
     State y = [s0_1, s0dot_1, theta, thetadot, integral of the speed error]. On return the work
-    arrays ``ws`` hold the closed configuration, velocities and forces at (t, y), and ``ws[18]``
-    holds [delta, deltadot, deltaddot, motor torque, contact torque, contact energy, max indentation,
-    active contacts, driving-flank force, back-flank force, s0_1, ddelta/ds0_1, dh/ddelta, walks so
-    far, d2delta/ds0_1^2]; the next evaluation predicts delta from slots 0, 10, 11 and 14 and closes the chain with the
-    slope in slot 12 (zero it to close from delta alone: see ``reset_closure``). Status 0 is success; 1 means the chain could not be closed (the state left
-    the tensioner's travel).
+    arrays ``ws`` hold the closed configuration, velocities and forces at (t, y), and ``ws[WS_INFO]``
+    holds the ``INFO_*`` slots of :mod:`vibkit.model.slots` (delta and its rates, the motor and
+    contact quantities, and the closure's memory); the next evaluation predicts delta from
+    ``INFO_DELTA``, ``INFO_AT``, ``INFO_SLOPE`` and ``INFO_CURVATURE`` and closes the chain with the
+    slope ``INFO_DH_DDELTA`` (zero them to close from delta alone: see ``reset_closure``). Status 0
+    is success; 1 means the chain could not be closed (the state left the tensioner's travel).
     """
     tab, loc, fp, ip, mass, pm, ps, pb, pa, pitches = prm
     (s0, kk, lam, xs, zs, part, alpha, beta, jac, gam, hacc, eta, sd, fx, fz, cand, ind_t, frc_t, info) = ws
-    n = ip[0]
-    p0, lt = fp[0], fp[1]
+    n = ip[IP_N]
+    p0, lt = fp[FP_P0], fp[FP_LT]
     sdot = y[1]
     # the closure from delta predicted along ddelta/ds0_1 of the last evaluation, with its exact
-    # dh/ddelta (info[10:13]); the same tolerance as a full Newton solve
-    ds = y[0] - info[10]
-    guess = info[0] + ds * (info[11] + 0.5 * info[14] * ds)
+    # dh/ddelta (the closure's memory in info); the same tolerance as a full Newton solve
+    ds = y[0] - info[INFO_AT]
+    guess = info[INFO_DELTA] + ds * (info[INFO_SLOPE] + 0.5 * info[INFO_CURVATURE] * ds)
     delta, walks, st = close_with_slope(
-        tab, p0, lt, y[0], guess, info[12], pitches, n, s0, kk, lam, xs, zs, part, alpha, beta, fp[21]
+        tab,
+        p0,
+        lt,
+        y[0],
+        guess,
+        info[INFO_DH_DDELTA],
+        pitches,
+        n,
+        s0,
+        kk,
+        lam,
+        xs,
+        zs,
+        part,
+        alpha,
+        beta,
+        fp[FP_CLOSURE_TOL],
     )
     if st != 0:
         return 1
-    info[13] += walks
+    info[INFO_WALKS] += walks
     # partials and sensitivities over the n rollers and the ghost: beta[n] is dh/ddelta here
     fill_partials(tab, p0, s0, kk, lam, delta, n + 1, part)
     sensitivity(part, xs, zs, n + 1, alpha, beta)
     c = velocity_coefficients(part, xs, zs, n, alpha, beta, jac, gam)
     e = acceleration_terms(part, xs, zs, n, alpha, beta, gam, c, sdot, hacc, eta, sd)
-    g = fp[3]
+    g = fp[FP_G]
     for i in range(n):
         fx[i] = 0.0
-        fz[i] = -mass[i] * g if ip[2] == 1 else 0.0
-    if ip[5] != 0:
-        for jp in range(pm.size):
-            base = 3 * (ps[jp] - 1)
-            # by time (1), or by the place of the step's middle roller (2: unwrapped s0)
-            where = t if ip[5] == 1 else s0[(base + 1) % n]
-            if pb[jp] <= where < pa[jp]:
-                for r in range(3):
-                    fz[(base + r) % n] -= pm[jp] * g / 3.0
-    if ip[7] == 1:
-        mu = fp[14]
+        fz[i] = -mass[i] * g if ip[IP_GRAVITY] == 1 else 0.0
+    if ip[IP_PASSENGERS] != 0:
+        passenger_loads(t, ip[IP_PASSENGERS], s0, pm, ps, pb, pa, g, n, fz)
+    if ip[IP_ROLLING] == 1:
+        mu = fp[FP_ROLLING]
         for i in range(n):
             rx, rz = rolling_force(jac[i, 0] * sdot, jac[i, 1] * sdot, mu * mass[i] * g)
             fx[i] += rx
@@ -279,18 +374,8 @@ def evaluate(t, y, dy, prm, ws, want_teeth):
     torque_c, energy_c, worst, active, f_drive, f_back = 0.0, 0.0, 0.0, 0, 0.0, 0.0
     if want_teeth:
         clear_teeth(ind_t, frc_t)
-    if ip[3] == 1:
-        # candidates: rollers whose circle can reach a tooth (centre closer than the farthest
-        # corner's radius + r_d)
-        ncand = 0
-        reach = fp[22] + 1e-9
-        reach2 = reach * reach
-        for i in range(n):
-            dxc = xs[i] - fp[17]
-            dzc = zs[i] - fp[18]
-            if dxc * dxc + dzc * dzc < reach2:
-                cand[ncand] = i
-                ncand += 1
+    if ip[IP_CONTACT] == 1:
+        ncand = contact_candidates(xs, zs, n, fp[FP_CX], fp[FP_CZ], fp[FP_REACH] + 1e-9, cand)
         # roller velocities of the candidates (for damping): v = J sdot, stored in eta/sd scratch
         for jj in range(ncand):
             i = cand[jj]
@@ -305,16 +390,16 @@ def evaluate(t, y, dy, prm, ws, want_teeth):
             ncand,
             y[2],
             y[3],
-            fp[17],
-            fp[18],
+            fp[FP_CX],
+            fp[FP_CZ],
             loc,
-            fp[19],
-            fp[20],
-            ip[1],
-            fp[16],
-            fp[4],
-            fp[5],
-            fp[6],
+            fp[FP_ROOT_RADIUS],
+            fp[FP_TOOTH_PITCH],
+            ip[IP_TEETH],
+            fp[FP_ROLLER_RADIUS],
+            fp[FP_STIFFNESS],
+            fp[FP_EXPONENT],
+            fp[FP_DAMPING],
             fx,
             fz,
             ind_t,
@@ -323,18 +408,18 @@ def evaluate(t, y, dy, prm, ws, want_teeth):
         )
     f_c = 0.0
     m_c = 0.0
-    if ip[6] == 1:
-        f_c = -(fp[12] + fp[11] * delta)
-        m_c = fp[13]
+    if ip[IP_TENSIONER] == 1:
+        f_c = -(fp[FP_PRELOAD] + fp[FP_TENSIONER_STIFFNESS] * delta)
+        m_c = fp[FP_CARRIAGE_MASS]
     m_eff, q = reduced_equation(jac, hacc, fx, fz, mass, c, e, m_c, f_c)
     sddot = q / m_eff
     finish(y, dy, info, fp, ip, sddot, torque_c, energy_c, worst, active, f_drive, f_back)
-    info[0] = delta
-    info[10] = y[0]
-    info[11] = c
-    info[12] = beta[n]
+    info[INFO_DELTA] = delta
+    info[INFO_AT] = y[0]
+    info[INFO_SLOPE] = c
+    info[INFO_DH_DDELTA] = beta[n]
     # d2delta/ds0_1^2 (deltaddot = c sddot + e with e = c' sdot^2), for a second-order prediction
-    info[14] = e / (sdot * sdot) if sdot * sdot > 1e-12 else 0.0
-    info[1] = c * sdot
-    info[2] = c * sddot + e
+    info[INFO_CURVATURE] = e / (sdot * sdot) if sdot * sdot > 1e-12 else 0.0
+    info[INFO_DELTA_DOT] = c * sdot
+    info[INFO_DELTA_DDOT] = c * sddot + e
     return 0

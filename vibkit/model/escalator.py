@@ -62,8 +62,10 @@ class EscalatorModel:
         tab = self.guide.table
         return float(tab[seg, 0] + 0.5 * tab[seg, 1])
 
-    def passenger_schedule(self, opts: dict, start: float):
+    def passenger_schedule(self, opts, start: float):
         """Where or when each passenger is aboard: (by_place, board, alight) arrays.
+
+        ``opts`` are the passengers' options (:class:`vibkit.model.schema.PassengersOptions`).
 
         By place (the default): board and alight are the unwrapped undeformed coordinates that the
         middle roller of the passenger's step passes when it reaches the boarding and alighting
@@ -71,13 +73,13 @@ class EscalatorModel:
         already between the two at the start carries its passenger from t = 0. By time: the times
         given in the scene [s].
         """
-        board, alight = list(opts["board"]), list(opts["alight"])
+        board, alight = list(opts.board), list(opts.alight)
         if not isinstance(board[0], str):
             return False, np.asarray(board, dtype=float), np.asarray(alight, dtype=float)
         conf = self.chain.configure(float(start))
         p0 = self.guide.p0
         b_abs, a_abs = [], []
-        for step, b, a in zip(opts["step"], board, alight):
+        for step, b, a in zip(opts.step, board, alight):
             u0 = float(conf.s0[int(self.step_rollers(step)[1])])
             sb, sa = self.place(b), self.place(a)
             if sa <= sb:
@@ -87,14 +89,14 @@ class EscalatorModel:
             a_abs.append(sa + j * p0)
         return True, np.asarray(b_abs), np.asarray(a_abs)
 
-    def passenger_forces(self, opts: dict, t: float, g: float, fz: np.ndarray, *, s0=None, schedule=None) -> None:
+    def passenger_forces(self, opts, t: float, g: float, fz: np.ndarray, *, s0=None, schedule=None) -> None:
         """Add each passenger's weight, shared by the three rollers of its step, while aboard.
 
         ``schedule`` is :meth:`passenger_schedule`'s result; by place, ``s0`` holds the rollers'
         unwrapped undeformed coordinates (a :class:`~vibkit.model.chain.Configuration`'s ``s0``).
         """
-        by_place, board, alight = schedule if schedule is not None else (False, opts["board"], opts["alight"])
-        for m, step, b, a in zip(opts["mass"], opts["step"], board, alight):
+        by_place, board, alight = schedule if schedule is not None else (False, opts.board, opts.alight)
+        for m, step, b, a in zip(opts.mass, opts.step, board, alight):
             rollers = self.step_rollers(step)
             where = s0[rollers[1]] if by_place else t
             if b <= where < a:

@@ -1,4 +1,4 @@
-"""The chain's configuration tabulated over one link pitch of travel (issue 20).
+"""The chain's configuration tabulated over one link pitch of travel, interpolated instead of solved.
 
 With equal links and equal roller masses, the chain with roller 1 where roller 2 was is the same
 chain relabelled: every chain-only quantity of the forward dynamics (the generalised mass, gravity's
@@ -38,7 +38,57 @@ import numba as nb
 import numpy as np
 
 from .chain import acceleration_terms, close_with_slope, fill_partials, sensitivity, velocity_coefficients, walk_arrays
-from .effects import clear_teeth, evaluate, finish, rolling_force
+from .effects import aboard, clear_teeth, evaluate, finish, rolling_force, step_load, step_roller, within_reach
+from .slots import (
+    FP_CARRIAGE_MASS,
+    FP_CLOSURE_TOL,
+    FP_CX,
+    FP_CZ,
+    FP_DAMPING,
+    FP_EXPONENT,
+    FP_G,
+    FP_LT,
+    FP_P0,
+    FP_PRELOAD,
+    FP_REACH,
+    FP_ROLLER_RADIUS,
+    FP_ROLLING,
+    FP_ROOT_RADIUS,
+    FP_STIFFNESS,
+    FP_TENSIONER_STIFFNESS,
+    FP_TOOTH_PITCH,
+    HEAD_A,
+    HEAD_N,
+    HEAD_NAMES,
+    HEAD_P0,
+    HEAD_PIECES,
+    INFO_AT,
+    INFO_CURVATURE,
+    INFO_DELTA,
+    INFO_DELTA_DDOT,
+    INFO_DELTA_DOT,
+    INFO_SLOPE,
+    IP_CONTACT,
+    IP_GRAVITY,
+    IP_PASSENGERS,
+    IP_ROLLING,
+    IP_TEETH,
+    IP_TENSIONER,
+    PASSENGERS_BY_TIME,
+    TB_CAND,
+    TB_CC,
+    TB_DC,
+    TB_HEAD,
+    TB_MC,
+    TB_NAMES,
+    TB_SB,
+    TB_SC,
+    TB_UC,
+    TB_UP,
+    TB_VC,
+    TB_XC,
+    TB_ZC,
+)
 from .sprocket import contact_kernel
 
 __all__ = ["build_table", "empty_table", "table_evaluate", "table_delta", "rhs", "table_spacing", "table_applies"]
@@ -264,7 +314,7 @@ def build_table(model, prm, cross, spacing):
     tab, _, fp, ip, mass, *_ = prm
     chain = model.chain
     n = model.n
-    p0 = float(fp[0])
+    p0 = float(fp[FP_P0])
     cross = np.sort(np.mod(np.asarray(cross, dtype=float), p0))
     a = float(cross[0]) if cross.size else 0.0
     start = chain.configure(a)  # roller 1 on the first breakpoint: where roller 2 sits ends the pitch
@@ -293,19 +343,19 @@ def build_table(model, prm, cross, spacing):
                 inward.append(into if is_bp[j] else 0.0)
             slot[p, side] = len(pts) - 1
     mroll = float(mass[0])
-    m_c = float(fp[13]) if ip[6] == 1 else 0.0
+    m_c = float(fp[FP_CARRIAGE_MASS]) if ip[IP_TENSIONER] == 1 else 0.0
     data = np.zeros((len(pts), n + 1, 3, 3))
     mdd_pt = np.empty(len(pts))
     bad = _nodes(
         tab,
         p0,
-        fp[1],
+        fp[FP_LT],
         np.asarray(pts),
         np.asarray(inward),
         start.delta,
         chain.pitches,
         n,
-        fp[21],
+        fp[FP_CLOSURE_TOL],
         mroll,
         m_c,
         data,
@@ -316,7 +366,7 @@ def build_table(model, prm, cross, spacing):
     ends = data[slot]  # (npc, 2, n + 1, 3, 3)
     mdd = mdd_pt[slot]
     hu = np.diff(up)
-    g = float(fp[3]) if ip[2] == 1 else 0.0
+    g = float(fp[FP_G]) if ip[IP_GRAVITY] == 1 else 0.0
     x, z, s = ends[:, :, :n, 0, :], ends[:, :, :n, 1, :], ends[:, :, :n, 2, :]  # (npc, 2, n, 3)
     dl = ends[:, :, n, 0, :]  # delta, d delta/du, d2 delta/du2: (npc, 2, 3)
     mm = mroll * (x[..., 1] ** 2 + z[..., 1] ** 2).sum(-1) + m_c * dl[..., 1] ** 2
@@ -356,13 +406,18 @@ def build_table(model, prm, cross, spacing):
         np.zeros((n, npc)), du[:, 0].T, ddu[:, 0].T, np.broadcast_to(hu, (n, npc)), du[:, 1].T, ddu[:, 1].T, hs
     ).reshape(n * npc, 6)
     # contact candidates: table rollers that come within reach of a tooth anywhere in the pitch
-    reach = float(fp[22]) + 2.0 * spacing + 1e-6
-    dist = np.hypot(x[..., 0] - fp[17], z[..., 0] - fp[18])  # (npc, 2, n)
+    reach = float(fp[FP_REACH]) + 2.0 * spacing + 1e-6
+    dist = np.hypot(x[..., 0] - fp[FP_CX], z[..., 0] - fp[FP_CZ])  # (npc, 2, n)
     cand = np.flatnonzero((dist < reach).any(axis=(0, 1))).astype(np.int64)
     # the candidates' x and z polynomials side by side, piece by piece: one evaluation reads one block
     cc = np.ascontiguousarray(np.concatenate([xc[cand], zc[cand]], axis=-1).transpose(1, 0, 2))
     head = np.array([a, p0, float(npc), float(n), _link_error(xc, zc, chain.pitches)])
-    return (head, np.ascontiguousarray(sb), np.ascontiguousarray(uc), up, mc, vc, dc, xc, zc, sc, cand, cc)
+    if head.size != len(HEAD_NAMES):
+        raise RuntimeError("the table's header and vibkit.model.slots.HEAD_NAMES disagree")
+    tb = (head, np.ascontiguousarray(sb), np.ascontiguousarray(uc), up, mc, vc, dc, xc, zc, sc, cand, cc)
+    if len(tb) != len(TB_NAMES):
+        raise RuntimeError("the table and vibkit.model.slots.TB_NAMES disagree")
+    return tb
 
 
 def _link_error(xc, zc, pitches):
@@ -380,7 +435,20 @@ def _link_error(xc, zc, pitches):
 def empty_table():
     """The table's shape with nothing in it (the exact closure is used)."""
     z1, z2, z3 = np.zeros(0), np.zeros((0, 6)), np.zeros((0, 0, 6))
-    return (np.zeros(5), z1, z2, z1, z2, z2, z2, z3, z3, z3, np.zeros(0, dtype=np.int64), np.zeros((0, 0, 12)))
+    return (
+        np.zeros(len(HEAD_NAMES)),
+        z1,
+        z2,
+        z1,
+        z2,
+        z2,
+        z2,
+        z3,
+        z3,
+        z3,
+        np.zeros(0, dtype=np.int64),
+        np.zeros((0, 0, 12)),
+    )
 
 
 # --------------------------------------------------------------------------------------------
@@ -411,8 +479,8 @@ def _p5d(c, i, r, x, o=0):
 def locate(tb, s):
     """Where roller 1 at s sits in the table: (piece p, table roller k of roller 1, loops W,
     eta in [0, 1] along piece p, du/ds, d2u/ds2)."""
-    head, sb, uc, up = tb[0], tb[1], tb[2], tb[3]
-    a, p0, npc = head[0], head[1], int(head[2])
+    head, sb, uc, up = tb[TB_HEAD], tb[TB_SB], tb[TB_UC], tb[TB_UP]
+    a, p0, npc = head[HEAD_A], head[HEAD_P0], int(head[HEAD_PIECES])
     w = math.floor((s - a) / p0)
     r = s - w * p0
     j = np.searchsorted(sb, r, side="right") - 1
@@ -437,7 +505,7 @@ def locate(tb, s):
 def table_delta(tb, s):
     """delta [m] with roller 1 at s, from the table."""
     p, _, _, eta, _, _ = locate(tb, s)
-    return _p5(tb[6], p, eta)[0]
+    return _p5(tb[TB_DC], p, eta)[0]
 
 
 @nb.njit(cache=True, error_model="numpy")
@@ -448,9 +516,10 @@ def table_evaluate(t, y, dy, prm, ws, want_teeth, tb):
     candidates' positions land in ``ws``. Returns 0."""
     _, loc, fp, ip, mass, pm, ps, pb, pa, _ = prm
     (_, _, _, xs, zs, _, _, _, jac, _, _, vxs, vzs, fx, fz, cand, ind_t, frc_t, info) = ws
-    head, up, mc, vc, dc, xc, zc, sc, cand0, cc = tb[0], tb[3], tb[4], tb[5], tb[6], tb[7], tb[8], tb[9], tb[10], tb[11]
-    p0 = head[1]
-    n = int(head[3])
+    head, up, mc, vc, dc = tb[TB_HEAD], tb[TB_UP], tb[TB_MC], tb[TB_VC], tb[TB_DC]
+    xc, zc, sc, cand0, cc = tb[TB_XC], tb[TB_ZC], tb[TB_SC], tb[TB_CAND], tb[TB_CC]
+    p0 = head[HEAD_P0]
+    n = int(head[HEAD_N])
     s, sdot = y[0], y[1]
     p, k, w, eta, us, uss = locate(tb, s)
     hu = up[p + 1] - up[p]
@@ -462,23 +531,25 @@ def table_evaluate(t, y, dy, prm, ws, want_teeth, tb):
     delta, d_u, d_uu = _p5(dc, p, eta)
     d_u /= hu
     d_uu /= hu * hu
-    if ip[6] == 1:
-        q -= (fp[12] + fp[11] * delta) * d_u
-    g = fp[3]
-    if ip[5] != 0:
+    if ip[IP_TENSIONER] == 1:
+        q -= (fp[FP_PRELOAD] + fp[FP_TENSIONER_STIFFNESS] * delta) * d_u
+    g = fp[FP_G]
+    if ip[IP_PASSENGERS] != 0:
+        # the passengers' loads (vibkit.model.effects.passenger_loads) as generalised forces: the
+        # chain's roller i is table roller i + k, its place read from the table
         for jp in range(pm.size):
-            base = 3 * (ps[jp] - 1)
-            if ip[5] == 1:
+            if ip[IP_PASSENGERS] == PASSENGERS_BY_TIME:
                 where = t
             else:
-                tk = (base + 1) % n + k
+                tk = step_roller(ps, jp, 1, n) + k
                 where = _p5d(sc, tk % n, p, eta)[0] + (p0 if tk >= n else 0.0) + w * p0
-            if pb[jp] <= where < pa[jp]:
+            if aboard(jp, where, pb, pa):
+                load = step_load(jp, pm, g)
                 for r in range(3):
-                    i = ((base + r) % n + k) % n
-                    q -= pm[jp] * g / 3.0 * _p5d(zc, i, p, eta)[1] / hu
-    if ip[7] == 1:
-        mu = fp[14]
+                    i = (step_roller(ps, jp, r, n) + k) % n
+                    q -= load * _p5d(zc, i, p, eta)[1] / hu
+    if ip[IP_ROLLING] == 1:
+        mu = fp[FP_ROLLING]
         for i in range(n):
             jx = _p5d(xc, i, p, eta)[1] / hu
             jz = _p5d(zc, i, p, eta)[1] / hu
@@ -487,17 +558,16 @@ def table_evaluate(t, y, dy, prm, ws, want_teeth, tb):
     torque_c, energy_c, worst, active, f_drive, f_back = 0.0, 0.0, 0.0, 0, 0.0, 0.0
     if want_teeth:
         clear_teeth(ind_t, frc_t)
-    if ip[3] == 1:
+    if ip[IP_CONTACT] == 1:
+        # the candidates of vibkit.model.effects.contact_candidates among the table's candidates
         ncand = 0
-        reach = fp[22] + 1e-9
+        reach = fp[FP_REACH] + 1e-9
         reach2 = reach * reach
         for jj in range(cand0.size):
             i = cand0[jj]
             x, jx = _p5d(cc, p, jj, eta)
             z, jz = _p5d(cc, p, jj, eta, 6)
-            dxc = x - fp[17]
-            dzc = z - fp[18]
-            if dxc * dxc + dzc * dzc < reach2:
+            if within_reach(x, z, fp[FP_CX], fp[FP_CZ], reach2):
                 xs[i] = x
                 zs[i] = z
                 jac[i, 0] = jx / hu
@@ -517,16 +587,16 @@ def table_evaluate(t, y, dy, prm, ws, want_teeth, tb):
             ncand,
             y[2],
             y[3],
-            fp[17],
-            fp[18],
+            fp[FP_CX],
+            fp[FP_CZ],
             loc,
-            fp[19],
-            fp[20],
-            ip[1],
-            fp[16],
-            fp[4],
-            fp[5],
-            fp[6],
+            fp[FP_ROOT_RADIUS],
+            fp[FP_TOOTH_PITCH],
+            ip[IP_TEETH],
+            fp[FP_ROLLER_RADIUS],
+            fp[FP_STIFFNESS],
+            fp[FP_EXPONENT],
+            fp[FP_DAMPING],
             fx,
             fz,
             ind_t,
@@ -540,12 +610,12 @@ def table_evaluate(t, y, dy, prm, ws, want_teeth, tb):
     sddot = (uddot - uss * sdot * sdot) / us
     finish(y, dy, info, fp, ip, sddot, torque_c, energy_c, worst, active, f_drive, f_back)
     c_s = d_u * us
-    info[0] = delta
-    info[1] = c_s * sdot
-    info[2] = d_u * uddot + d_uu * udot * udot
-    info[10] = s
-    info[11] = c_s
-    info[14] = d_uu * us * us + d_u * uss
+    info[INFO_DELTA] = delta
+    info[INFO_DELTA_DOT] = c_s * sdot
+    info[INFO_DELTA_DDOT] = d_u * uddot + d_uu * udot * udot
+    info[INFO_AT] = s
+    info[INFO_SLOPE] = c_s
+    info[INFO_CURVATURE] = d_uu * us * us + d_u * uss
     return 0
 
 
@@ -553,6 +623,6 @@ def table_evaluate(t, y, dy, prm, ws, want_teeth, tb):
 def rhs(t, y, dy, prm, ws, want_teeth, tb):
     """The forward right-hand side: from the table ``tb`` where it has pieces, else from the exact
     closure (:func:`vibkit.model.effects.evaluate`). Returns the status (0 ok)."""
-    if tb[1].size > 0:
+    if tb[TB_SB].size > 0:
         return table_evaluate(t, y, dy, prm, ws, want_teeth, tb)
     return evaluate(t, y, dy, prm, ws, want_teeth)

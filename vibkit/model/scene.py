@@ -5,32 +5,40 @@ missing value or a non-physical number is a :class:`SceneError` that names the f
 A scene asks only for the effects and outputs it needs; :func:`vibkit.simulate` assembles,
 evaluates and stores only those.
 
-Layout (see ``sim/*.toml`` for complete examples)::
-
-    [scene]        name, analysis = "kinematics" | "inverse" | "forward", description
-    [guide]        tensioner_length, lower_landing, upper_landing, transition_radius,
-                   incline_angle_deg, incline_length, head_radius (or "sprocket")
-    [chain]        link_pitch, roller_radius, roller_mass, n_rollers (or "fill")
-    [sprocket]     teeth, base_width, tip_width, tooth_height, mass, inertia
-    [kinematics]   start, stop, step                      (analysis = "kinematics")
-    [motion]       speed, duration, step, start           (analysis = "inverse")
-    [run]          duration, output_step, start, initial_speed, seed   (analysis = "forward")
-    [effects.*]    gravity, contact, motor, passengers, tensioner, rolling_resistance
-    [solver]       method, rtol, atol, max_step, check (convergence verdict), check_min_rtol,
-                   closure ("table", the default, or "exact")
-    [outputs]      variables, rollers, step_accelerometer
+The sections are ``[scene]``, ``[guide]``, ``[chain]``, ``[sprocket]``, the analysis's own
+(``[kinematics]``, ``[motion]`` or ``[run]``), ``[solver]`` (forward), ``[effects.*]`` and ``[outputs]``
+(see ``sim/*.toml`` for complete examples). Every key, with its unit, default, plausible range and
+meaning, is declared once in :mod:`vibkit.model.schema` (:func:`~vibkit.model.schema.schema_table`
+renders them as a table); this module reads the TOML, checks it against the schema and the rules
+between keys (the chain closes on the guide, a tooth fits a link, ...), and builds the typed scene.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .params import ChainParams, GuideParams, SprocketParams, reference_chain, reference_guide, reference_sprocket
+from .params import ChainParams, GuideParams, SprocketParams
+from .schema import (
+    EFFECT_OPTIONS,
+    EFFECTS,
+    RANGES,
+    SECTION_CLASSES,
+    SECTIONS,
+    ChainSection,
+    GuideSection,
+    KinematicsSection,
+    MotionSection,
+    OutputsSection,
+    RunSection,
+    SolverSection,
+    SprocketSection,
+)
 
-__all__ = ["Scene", "SceneError", "load_scene", "parse_scene", "EFFECTS", "OUTPUTS"]
+__all__ = ["Scene", "SceneError", "load_scene", "parse_scene", "EFFECTS", "OUTPUTS", "RANGES", "SECTIONS"]
 
 ANALYSES = ("kinematics", "inverse", "forward")
 
@@ -40,35 +48,6 @@ SOLVER_METHODS = ("dopri5", "rk45", "dop853", "bdf", "radau", "lsoda", "cvode-bd
 
 #: a scene is a small text file; anything larger is not one
 MAX_SCENE_BYTES = 1 << 20
-
-#: plausible ranges [lo, hi] of numbers that a typo can make absurd (the message gives the range)
-RANGES = {
-    "effects.contact.stiffness": (0.0, 1e16, "N/m^exponent (steel about 1e10)"),
-    "effects.contact.exponent": (1.0, 3.0, "(1 linear, 1.5 Hertz)"),
-    "effects.contact.damping": (0.0, 1e3, "s/m"),
-    "effects.motor.kp": (0.0, 1e8, "N m s/rad"),
-    "effects.motor.ki": (0.0, 1e9, "N m/rad"),
-    "effects.motor.speed": (-10.0, 10.0, "m/s"),
-    "effects.motor.torque_limit": (0.0, 1e8, "N m"),
-    "effects.gravity.g": (0.0, 1000.0, "m/s^2"),
-    "effects.tensioner.stiffness": (0.0, 1e12, "N/m"),
-    "effects.tensioner.preload": (0.0, 1e9, "N"),
-    "effects.tensioner.mass": (0.0, 1e6, "kg"),
-    "solver.rtol": (1e-14, 0.1, ""),
-    "solver.atol": (0.0, 1.0, ""),
-    "solver.check_min_rtol": (1e-14, 0.1, "(the tightest tolerance the convergence check tries)"),
-    "motion.speed": (-10.0, 10.0, "m/s"),
-    "run.initial_speed": (-10.0, 10.0, "m/s"),
-}
-
-EFFECTS = {
-    "gravity": {"enabled": bool, "g": float},
-    "contact": {"stiffness": float, "exponent": float, "damping": float},
-    "motor": {"kp": float, "ki": float, "speed": float, "torque_limit": float},
-    "passengers": {"mass": list, "step": list, "board": list, "alight": list},
-    "tensioner": {"stiffness": float, "preload": float, "mass": float},
-    "rolling_resistance": {"coefficient": float},
-}
 
 OUTPUTS = {
     "kinematics": {"delta", "s1", "roller_position", "closure_residual"},
@@ -109,53 +88,6 @@ OUTPUTS = {
     },
 }
 
-SECTIONS = {
-    "scene": {"name": str, "analysis": str, "description": str},
-    "guide": {
-        "tensioner_length": float,
-        "lower_landing": float,
-        "upper_landing": float,
-        "transition_radius": float,
-        "incline_angle_deg": float,
-        "incline_length": float,
-        "head_radius": (float, str),
-    },
-    "chain": {
-        "link_pitch": float,
-        "roller_radius": float,
-        "roller_mass": float,
-        "n_rollers": (int, str),
-        "worn_link": int,
-        "worn_link_pitch": float,
-    },
-    "sprocket": {
-        "teeth": int,
-        "base_width": float,
-        "tip_width": float,
-        "tooth_height": float,
-        "mass": float,
-        "inertia": float,
-    },
-    "kinematics": {"start": float, "stop": float, "step": float},
-    "motion": {"speed": float, "duration": float, "step": float, "start": float},
-    "run": {"duration": float, "output_step": float, "start": float, "initial_speed": float, "seed": int},
-    "solver": {
-        "method": str,
-        "rtol": float,
-        "atol": float,
-        "max_step": float,
-        "first_step": float,
-        "max_wall_time": float,
-        "max_result_bytes": (float, str),
-        "events": bool,
-        "check": bool,
-        "check_min_rtol": float,
-        "closure": str,
-    },
-    "outputs": {"variables": list, "rollers": list, "step_accelerometer": int},
-}
-
-
 # how the forward dynamics gets the chain's configuration: read from the table over one pitch, or
 # solved at every evaluation (vibkit.model.pitch_table)
 CLOSURES = ("table", "exact")
@@ -177,9 +109,12 @@ class Scene:
     name, analysis, description : str
     guide, chain, sprocket : parameter dataclasses (SI)
     sections : dict
-        The analysis-specific sections (``kinematics``, ``motion``, ``run``, ``solver``) as plain dicts.
+        The keys the file gives in the analysis-specific sections (``kinematics``, ``motion``, ``run``,
+        ``solver``); read them typed, with the schema's defaults, as :attr:`kinematics`,
+        :attr:`motion`, :attr:`run` and :attr:`solver` (:mod:`vibkit.model.schema`).
     effects : dict
-        Effect name -> options, only the effects the scene asks for.
+        Effect name -> typed options (:data:`vibkit.model.schema.EFFECT_OPTIONS`), only the effects
+        the scene asks for.
     outputs : dict
         ``variables`` (tuple of names), ``rollers`` (tuple of 1-based roller numbers),
         ``step_accelerometer`` (1-based step number or None).
@@ -187,6 +122,9 @@ class Scene:
         The file the scene came from (or "<string>").
     text : str
         The TOML text, stored in results for provenance.
+    defaults : tuple of str
+        The dotted keys (of the sections and effects the scene uses) that took the schema's
+        default because the file does not give them; results record them in ``attrs["scene_defaults"]``.
     """
 
     name: str
@@ -200,9 +138,32 @@ class Scene:
     outputs: dict = field(default_factory=dict)
     source: str = "<string>"
     text: str = ""
+    defaults: tuple = ()
 
     def section(self, name: str) -> dict:
+        """The keys the file gives in section ``name`` (untyped; the analyses read the typed sections)."""
         return self.sections.get(name, {})
+
+    @property
+    def kinematics(self) -> KinematicsSection:
+        return KinematicsSection.from_mapping(self.section("kinematics"))
+
+    @property
+    def motion(self) -> MotionSection:
+        return MotionSection.from_mapping(self.section("motion"))
+
+    @property
+    def run(self) -> RunSection:
+        return RunSection.from_mapping(self.section("run"))
+
+    @property
+    def solver(self) -> SolverSection:
+        return SolverSection.from_mapping(self.section("solver"))
+
+    def with_solver(self, **keys) -> Scene:
+        """This scene with the ``[solver]`` keys ``keys`` set (as if the file gave them)."""
+        sections = dict(self.sections, solver={**self.section("solver"), **keys})
+        return dataclasses.replace(self, sections=sections)
 
 
 def _err(src, key, msg):
@@ -266,7 +227,8 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
 
     guide, chain, sprocket = _parameters(src, sec)
 
-    effects = _effects(src, data.get("effects", {}), analysis)
+    raw_effects = data.get("effects", {})
+    effects = _effects(src, raw_effects, analysis)
     outputs = _outputs(src, sec["outputs"], analysis, chain)
     _analysis_sections(src, sec, analysis)
     _validate_passenger_numbers(src, effects.get("passengers"), chain)
@@ -274,6 +236,7 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
     _check_sprocket_geometry(src, sec["sprocket"], sprocket, chain)
     _reduce_start(src, sec, analysis, guide)
     return Scene(
+        defaults=_defaults(sec, raw_effects, effects, analysis),
         name=scene_sec.get("name", Path(source).stem),
         analysis=analysis,
         description=scene_sec.get("description", ""),
@@ -289,7 +252,6 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
 
 
 def _parameters(src, sec):
-    ref_g, ref_c, ref_s = reference_guide(), reference_chain(), reference_sprocket()
     # sprocket
     s = sec["sprocket"]
     for key in ("base_width", "tip_width", "tooth_height", "mass", "inertia"):
@@ -297,43 +259,43 @@ def _parameters(src, sec):
             _positive(src, f"sprocket.{key}", s[key])
     if "teeth" in s and s["teeth"] < 3:
         raise SceneError(f"{src}: 'sprocket.teeth' must be an integer >= 3, got {s['teeth']!r}")
+    ts = SprocketSection.from_mapping(s)
     sprocket = SprocketParams(
-        **{
-            k: s.get(k, getattr(ref_s, k))
-            for k in ("teeth", "base_width", "tip_width", "tooth_height", "mass", "inertia")
-        }
+        **{k: getattr(ts, k) for k in ("teeth", "base_width", "tip_width", "tooth_height", "mass", "inertia")}
     )
     # chain
     c = sec["chain"]
     for key in ("link_pitch", "roller_radius", "roller_mass"):
         if key in c:
             _positive(src, f"chain.{key}", c[key])
-    pitch = c.get("link_pitch", ref_c.link_pitch)
+    tc = ChainSection.from_mapping(c)
+    pitch = tc.link_pitch
     # guide
     g = sec["guide"]
     for key in ("tensioner_length", "lower_landing", "upper_landing", "transition_radius", "incline_length"):
         if key in g:
             _positive(src, f"guide.{key}", g[key])
-    head = g.get("head_radius", "sprocket")
+    tg = GuideSection.from_mapping(g)
+    head = tg.head_radius
     if isinstance(head, str):
         if head != "sprocket":
             raise SceneError(f"{src}: 'guide.head_radius' must be a length [m] or \"sprocket\", got {head!r}")
         head = sprocket.pitch_radius(pitch)
     else:
         _positive(src, "guide.head_radius", head)
-    angle = g.get("incline_angle_deg", math.degrees(ref_g.incline_angle))
+    angle = tg.incline_angle_deg
     if not 0 < angle < 90:
         raise SceneError(f"{src}: 'guide.incline_angle_deg' must be in (0, 90) deg, got {angle!r}")
     guide = GuideParams(
-        tensioner_length=g.get("tensioner_length", ref_g.tensioner_length),
-        lower_landing=g.get("lower_landing", ref_g.lower_landing),
-        upper_landing=g.get("upper_landing", ref_g.upper_landing),
-        transition_radius=g.get("transition_radius", ref_g.transition_radius),
+        tensioner_length=tg.tensioner_length,
+        lower_landing=tg.lower_landing,
+        upper_landing=tg.upper_landing,
+        transition_radius=tg.transition_radius,
         incline_angle=math.radians(angle),
-        incline_length=g.get("incline_length", ref_g.incline_length),
+        incline_length=tg.incline_length,
         head_radius=head,
     )
-    n = c.get("n_rollers", "fill")
+    n = tc.n_rollers
     if isinstance(n, str):
         if n != "fill":
             raise SceneError(f"{src}: 'chain.n_rollers' must be an integer or \"fill\", got {n!r}")
@@ -350,8 +312,8 @@ def _parameters(src, sec):
         worn = ((c["worn_link"], c["worn_link_pitch"]),)
     chain = ChainParams(
         link_pitch=pitch,
-        roller_radius=c.get("roller_radius", ref_c.roller_radius),
-        roller_mass=c.get("roller_mass", ref_c.roller_mass),
+        roller_radius=tc.roller_radius,
+        roller_mass=tc.roller_mass,
         n_rollers=n,
         worn_links=worn,
     )
@@ -405,63 +367,58 @@ def _effects(src, raw, analysis):
 
 
 def _validate_effects(src, eff):
+    """Check the given options of each effect and replace them by typed options (schema defaults)."""
+    if "contact" in eff:
+        if "stiffness" not in eff["contact"]:
+            raise SceneError(f"{src}: missing value 'effects.contact.stiffness' [N/m^exponent]")
+    if "motor" in eff:
+        for key in ("kp", "speed"):
+            if key not in eff["motor"]:
+                raise SceneError(f"{src}: missing value 'effects.motor.{key}'")
+    if "rolling_resistance" in eff:
+        if "coefficient" not in eff["rolling_resistance"]:
+            raise SceneError(f"{src}: missing value 'effects.rolling_resistance.coefficient'")
+    if "passengers" in eff:
+        for key in ("mass", "step"):
+            if key not in eff["passengers"]:
+                raise SceneError(f"{src}: missing value 'effects.passengers.{key}' (a list, one entry per passenger)")
+    for name in eff:
+        eff[name] = EFFECT_OPTIONS[name].from_mapping(eff[name])
     if "contact" in eff:
         o = eff["contact"]
-        if "stiffness" not in o:
-            raise SceneError(f"{src}: missing value 'effects.contact.stiffness' [N/m^exponent]")
-        _positive(src, "effects.contact.stiffness", o["stiffness"])
-        o.setdefault("exponent", 1.5)
-        _positive(src, "effects.contact.exponent", o["exponent"])
-        o.setdefault("damping", 0.0)
-        if o["damping"] < 0:
-            raise SceneError(f"{src}: 'effects.contact.damping' must be >= 0 [s/m], got {o['damping']!r}")
+        _positive(src, "effects.contact.stiffness", o.stiffness)
+        _positive(src, "effects.contact.exponent", o.exponent)
+        if o.damping < 0:
+            raise SceneError(f"{src}: 'effects.contact.damping' must be >= 0 [s/m], got {o.damping!r}")
     if "motor" in eff:
         o = eff["motor"]
-        for key in ("kp", "speed"):
-            if key not in o:
-                raise SceneError(f"{src}: missing value 'effects.motor.{key}'")
-        _positive(src, "effects.motor.kp", o["kp"])
-        o.setdefault("ki", 0.0)
-        if o["ki"] < 0:
-            raise SceneError(f"{src}: 'effects.motor.ki' must be >= 0 [N m], got {o['ki']!r}")
-        if "torque_limit" in o:
-            _positive(src, "effects.motor.torque_limit", o["torque_limit"])
+        _positive(src, "effects.motor.kp", o.kp)
+        if o.ki < 0:
+            raise SceneError(f"{src}: 'effects.motor.ki' must be >= 0 [N m], got {o.ki!r}")
+        if o.torque_limit != math.inf:
+            _positive(src, "effects.motor.torque_limit", o.torque_limit)
     if "tensioner" in eff:
         o = eff["tensioner"]
-        o.setdefault("stiffness", 0.0)
-        o.setdefault("preload", 0.0)
-        o.setdefault("mass", 0.0)
         for key in ("stiffness", "preload", "mass"):
-            if o[key] < 0:
-                raise SceneError(f"{src}: 'effects.tensioner.{key}' must be >= 0, got {o[key]!r}")
+            if getattr(o, key) < 0:
+                raise SceneError(f"{src}: 'effects.tensioner.{key}' must be >= 0, got {getattr(o, key)!r}")
     if "rolling_resistance" in eff:
-        o = eff["rolling_resistance"]
-        if "coefficient" not in o:
-            raise SceneError(f"{src}: missing value 'effects.rolling_resistance.coefficient'")
-        if not 0 <= o["coefficient"] < 1:
-            raise SceneError(
-                f"{src}: 'effects.rolling_resistance.coefficient' must be in [0, 1), got {o['coefficient']!r}"
-            )
+        c = eff["rolling_resistance"].coefficient
+        if not 0 <= c < 1:
+            raise SceneError(f"{src}: 'effects.rolling_resistance.coefficient' must be in [0, 1), got {c!r}")
     if "gravity" in eff:
-        eff["gravity"].setdefault("g", 9.81)
-        eff["gravity"].pop("enabled", None)
-        _positive(src, "effects.gravity.g", eff["gravity"]["g"])
+        _positive(src, "effects.gravity.g", eff["gravity"].g)
     if "passengers" in eff:
         o = eff["passengers"]
-        for key in ("mass", "step"):
-            if key not in o:
-                raise SceneError(f"{src}: missing value 'effects.passengers.{key}' (a list, one entry per passenger)")
-        n = len(o["mass"])
-        # by place unless times are given: a step boards at the lower landing, alights at the upper
-        o.setdefault("board", ["lower_landing"] * n)
-        o.setdefault("alight", ["upper_landing"] * n)
+        n = len(o.mass)
         for key in ("step", "board", "alight"):
-            if len(o[key]) != n:
+            if len(getattr(o, key)) != n:
                 raise SceneError(
-                    f"{src}: 'effects.passengers.{key}' has {len(o[key])} entries, 'effects.passengers.mass' has {n}"
+                    f"{src}: 'effects.passengers.{key}' has {len(getattr(o, key))} entries, "
+                    f"'effects.passengers.mass' has {n}"
                 )
         for i in range(n):
-            m, st, b, a = o["mass"][i], o["step"][i], o["board"][i], o["alight"][i]
+            m, st, b, a = o.mass[i], o.step[i], o.board[i], o.alight[i]
             if not isinstance(m, (int, float)) or m <= 0:
                 raise SceneError(f"{src}: 'effects.passengers.mass[{i}]' must be positive [kg], got {m!r}")
             if not isinstance(st, int) or st < 1:
@@ -478,31 +435,57 @@ def _validate_effects(src, eff):
                         f"{src}: 'effects.passengers.{key}[{i}]' must be a place "
                         f"({', '.join(repr(p) for p in PLACES)}) or a time [s], got {v!r}"
                     )
-        kinds = {isinstance(v, str) for v in list(o["board"]) + list(o["alight"])}
+        kinds = {isinstance(v, str) for v in list(o.board) + list(o.alight)}
         if len(kinds) > 1:
             raise SceneError(
                 f"{src}: 'effects.passengers.board' and 'alight' must all be places or all be times [s], not a mix"
             )
         if kinds == {str}:
-            for i, (b, a) in enumerate(zip(o["board"], o["alight"])):
+            for i, (b, a) in enumerate(zip(o.board, o.alight)):
                 if b == a:
                     raise SceneError(f"{src}: passenger {i} boards and alights at the same place {b!r}")
         else:
-            for i, (b, a) in enumerate(zip(o["board"], o["alight"])):
+            for i, (b, a) in enumerate(zip(o.board, o.alight)):
                 if not a > b:
                     raise SceneError(f"{src}: passenger {i} alights (t = {a}) before boarding (t = {b})")
 
 
+#: the sections a scene of each analysis uses (the others it may give are not read)
+USED_SECTIONS = {
+    "kinematics": ("scene", "guide", "chain", "sprocket", "kinematics", "outputs"),
+    "inverse": ("scene", "guide", "chain", "sprocket", "motion", "outputs"),
+    "forward": ("scene", "guide", "chain", "sprocket", "run", "solver", "outputs"),
+}
+
+
+def _defaults(sec, raw_effects, effects, analysis) -> tuple:
+    """The dotted keys of the used sections and effects that take a value from the schema's defaults
+    because the file does not give them (keys whose default is "not set" are left out)."""
+    out = []
+    for name in USED_SECTIONS[analysis]:
+        cls = SECTION_CLASSES[name]
+        out += [f"{name}.{f.name}" for f in cls.fields() if f.default is not None and f.name not in sec[name]]
+    for name in effects:
+        given = raw_effects.get(name)
+        given = given if isinstance(given, dict) else {}
+        out += [
+            f"effects.{name}.{f.name}"
+            for f in EFFECT_OPTIONS[name].fields()
+            if (f.default is not None or f.metadata["derived"]) and f.name != "enabled" and f.name not in given
+        ]
+    return tuple(out)
+
+
 def _outputs(src, o, analysis, chain):
     allowed = OUTPUTS[analysis]
-    variables = o.get("variables", ["delta", "closure_residual"])
+    variables = list(o.get("variables", OutputsSection.variables))
     for v in variables:
         if not isinstance(v, str) or v not in allowed:
             raise SceneError(
                 f"{src}: unknown output {v!r} in 'outputs.variables' for a {analysis} scene "
                 f"(available: {', '.join(sorted(allowed))})"
             )
-    rollers = o.get("rollers", [])
+    rollers = list(o.get("rollers", OutputsSection.rollers))
     for r in rollers:
         if not isinstance(r, int) or isinstance(r, bool) or not 1 <= r <= chain.n_rollers:
             raise SceneError(f"{src}: 'outputs.rollers' entries must be roller numbers 1..{chain.n_rollers}, got {r!r}")
@@ -602,10 +585,10 @@ def _validate_passenger_numbers(src, o, chain) -> None:
     if not o:
         return
     n_steps = chain.n_rollers // 3
-    for i, m in enumerate(o.get("mass", [])):
+    for i, m in enumerate(o.mass):
         if isinstance(m, bool) or not isinstance(m, (int, float)) or not math.isfinite(m) or m <= 0:
             raise SceneError(f"{src}: 'effects.passengers.mass[{i}]' must be a finite positive mass [kg], got {m!r}")
-    for i, st in enumerate(o.get("step", [])):
+    for i, st in enumerate(o.step):
         if isinstance(st, bool) or not isinstance(st, int) or not 1 <= st <= n_steps:
             raise SceneError(
                 f"{src}: 'effects.passengers.step[{i}]' must be a step number 1..{n_steps} "
@@ -616,14 +599,15 @@ def _validate_passenger_numbers(src, o, chain) -> None:
 def _check_ranges(src, sec, effects) -> None:
     values = {}
     for name, opts in effects.items():
-        for key, v in opts.items():
-            values[f"effects.{name}.{key}"] = v
+        for f in dataclasses.fields(opts):
+            values[f"effects.{name}.{f.name}"] = getattr(opts, f.name)
     for name in ("solver", "motion", "run"):
         for key, v in sec[name].items():
             values[f"{name}.{key}"] = v
     for key, (lo, hi, unit) in RANGES.items():
         v = values.get(key)
-        if isinstance(v, (int, float)) and not isinstance(v, bool) and not lo <= v <= hi:
+        # a default that means "none" (torque_limit = inf) is not a number a typo can make absurd
+        if isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and not lo <= v <= hi:
             raise SceneError(f"{src}: '{key}' = {v!r} is outside the plausible range [{lo:g}, {hi:g}] {unit}".rstrip())
 
 

@@ -119,8 +119,8 @@ def max_result_bytes(scene, override=None) -> float:
     """The result-size limit [bytes] that applies to ``scene`` (see the module docstring)."""
     if override is not None:
         return parse_bytes(override)
-    if "max_result_bytes" in scene.section("solver"):
-        return parse_bytes(scene.section("solver")["max_result_bytes"])
+    if scene.solver.max_result_bytes is not None:
+        return parse_bytes(scene.solver.max_result_bytes)
     env = _env("VIBKIT_MAX_RESULT_BYTES", parse_bytes)
     return DEFAULT_MAX_RESULT_BYTES if env is None else env
 
@@ -129,8 +129,8 @@ def max_wall_time(scene, override=None) -> float:
     """The wall-time budget [s] of a forward run of ``scene`` (see the module docstring)."""
     if override is not None:
         return _seconds(override)
-    if "max_wall_time" in scene.section("solver"):
-        return float(scene.section("solver")["max_wall_time"])
+    if scene.solver.max_wall_time is not None:
+        return float(scene.solver.max_wall_time)
     env = _env("VIBKIT_MAX_WALL_TIME", _seconds)
     return DEFAULT_MAX_WALL_TIME if env is None else env
 
@@ -138,20 +138,20 @@ def max_wall_time(scene, override=None) -> float:
 def _samples(scene, duration):
     """(number of samples, the key that sets it, the span key) of a run; floats, no allocation."""
     if scene.analysis == "kinematics":
-        k = scene.section("kinematics")
-        span = duration if duration is not None else k["stop"] - k["start"]
+        k = scene.kinematics
+        span = duration if duration is not None else k.stop - k.start
         return (
-            span / k["step"] + 1,
+            span / k.step + 1,
             "kinematics.step",
             "kinematics.stop - kinematics.start" if duration is None else "--duration",
         )
     if scene.analysis == "inverse":
-        m = scene.section("motion")
-        span = duration or m["duration"]
-        return span / m["step"] + 1, "motion.step", "motion.duration" if duration is None else "--duration"
-    r = scene.section("run")
-    span = duration or r["duration"]
-    return span / r["output_step"] + 1, "run.output_step", "run.duration" if duration is None else "--duration"
+        m = scene.motion
+        span = duration or m.duration
+        return span / m.step + 1, "motion.step", "motion.duration" if duration is None else "--duration"
+    r = scene.run
+    span = duration or r.duration
+    return span / r.output_step + 1, "run.output_step", "run.duration" if duration is None else "--duration"
 
 
 def estimate_result(scene, duration=None) -> dict:
@@ -239,9 +239,9 @@ def check_run(scene, *, duration=None, limit_bytes=None) -> dict:
             "([solver] max_result_bytes, VIBKIT_MAX_RESULT_BYTES or --max-result-bytes)"
         )
     if scene.analysis == "forward":
-        ms = scene.section("solver").get("max_step")
-        span = duration or scene.section("run")["duration"]
-        if ms is not None and span / ms > MAX_INTEGRATOR_STEPS:
+        ms = scene.solver.max_step
+        span = duration or scene.run.duration
+        if span / ms > MAX_INTEGRATOR_STEPS:
             raise BudgetError(
                 f"{src}: 'solver.max_step' = {ms:g} s forces at least {span / ms:.3g} integrator steps over "
                 f"{span:g} s (more than {MAX_INTEGRATOR_STEPS:.0e}: hours of work); take max_step >= "

@@ -46,11 +46,7 @@ A family whose significant harmonics all share a common order ``g > 1`` (for ins
 at 8 Hz seen from 8/3 Hz: orders 3, 9, 15) is a family at ``g f``; when ``g f`` lies outside the
 band, no link-pass is found in the band.
 
-Invalid samples (:func:`flag_invalid`)
---------------------------------------
-Non-finite values, fill values (``|x| >= 1e30``, which covers netCDF's default 9.96921e36) and
-*absurd* values (further from the median than ``1e3`` times the median absolute deviation scaled to a
-Gaussian sigma, or ``1e6`` times when the MAD is zero) are not measurements.
+Invalid samples are flagged by :func:`vibkit.signal.bursts.flag_invalid` (re-exported here).
 """
 
 from __future__ import annotations
@@ -66,6 +62,7 @@ import scipy.special
 import scipy.stats
 
 from ._checks import check_fs
+from .bursts import ABSURD_FACTOR, FILL_THRESHOLD, InvalidSamples, flag_invalid
 from .peaks import climb_from_subharmonic
 from .quantisation import quantisation_floor, quantisation_step
 
@@ -80,84 +77,40 @@ __all__ = [
     "harmonic_sum_threshold",
 ]
 
-#: values at or above this magnitude are fill values, never data (netCDF's default fill is 9.96921e36)
-FILL_THRESHOLD = 1e30
-#: a sample further from the median than this many robust sigmas is absurd (not a measurement)
-ABSURD_FACTOR = 1e3
 #: running-median floor: +- max(_HALF_MIN bins, _HALF_PERIODS x band[0]) around each bin
 _HALF_MIN = 10
 #: shortest test segment, in periods of band[0] (the record must hold two)
 MIN_SEGMENT_PERIODS = 3.0
 _HALF_PERIODS = 1.0
-
-
-@dataclass(frozen=True)
-class InvalidSamples:
-    """Samples that are not measurements (see :func:`flag_invalid`).
-
-    Attributes
-    ----------
-    mask : ndarray of bool
-        True where a sample is invalid.
-    non_finite, fill_value, absurd : int
-        Counts by kind (disjoint).
-    """
-
-    mask: np.ndarray
-    non_finite: int
-    fill_value: int
-    absurd: int
-
-    @property
-    def count(self) -> int:
-        """Total number of invalid samples."""
-        return self.non_finite + self.fill_value + self.absurd
-
-    def as_dict(self) -> dict:
-        return {
-            "non_finite": self.non_finite,
-            "fill_value": self.fill_value,
-            "absurd": self.absurd,
-            "total": self.count,
-        }
-
-
-def flag_invalid(x, *, fill_threshold=FILL_THRESHOLD, absurd_factor=ABSURD_FACTOR) -> InvalidSamples:
-    """Flag non-finite, fill-value and absurd samples.
-
-    Parameters
-    ----------
-    x : array_like, 1-D
-        Samples. [x]
-    fill_threshold : float, optional
-        ``|x| >=`` this is a fill value. [x]
-    absurd_factor : float, optional
-        ``|x - median| > absurd_factor * 1.4826 MAD`` is absurd (with ``1e6`` instead of
-        ``absurd_factor`` and the median of the non-zero deviations when the MAD is 0).
-
-    Returns
-    -------
-    InvalidSamples
-    """
-    x = np.asarray(x, dtype=float)
-    with np.errstate(invalid="ignore", over="ignore"):
-        nonfin = ~np.isfinite(x)
-        fill = ~nonfin & (np.abs(x) >= float(fill_threshold))
-    bad = nonfin | fill
-    absurd = np.zeros_like(bad)
-    good = x[~bad]
-    if good.size >= 3:
-        med = float(np.median(good))
-        dev = np.abs(good - med)
-        mad = float(np.median(dev))
-        if mad > 0:
-            lim = float(absurd_factor) * 1.4826 * mad
-        else:
-            nz = dev[dev > 0]
-            lim = 1e6 * float(np.median(nz)) if nz.size else math.inf
-        with np.errstate(invalid="ignore", over="ignore"):
-            absurd[~bad] = dev > lim
-    return InvalidSamples(bad | absurd, int(nonfin.sum()), int(fill.sum()), int(absurd.sum()))
+#: test segments are this many periods of band[0] long ...
+SEGMENT_PERIODS = 20.0
+#: ... and at least this long [s]: twenty periods give bins a twentieth of the lowest fundamental wide,
+#: eight seconds keep the bins narrow when the band starts high
+MIN_SEGMENT_S = 8.0
+#: shortest segment in samples, whatever the rate: below 16 samples (9 spectral bins) there is no spectrum to test
+MIN_SEGMENT_SAMPLES = 16
+#: harmonics up to this many times the band's top count in the search: room for the default five harmonics
+#: of any fundamental in the band (the pitch estimate decimates to keep the same span)
+HARMONIC_SPAN = 10.0
+#: ... and never above this fraction of the sampling frequency: a margin below Nyquist, where anti-alias
+#: filters roll off
+F_TOP_NYQUIST_FRACTION = 0.45
+#: a harmonic gives evidence in the search only above this many times the max-filtered spectrum's median
+#: (6 dB): a bin of normalised noise (exponential at worst, mean 1) passes with probability below e^-4, 2 %
+SEARCH_EVIDENCE_FACTOR = 4.0
+#: a segment whose detrended range is below this fraction of its level holds nothing but rounding
+ROUNDING_LEVEL = 1e-9
+#: no floor is below this fraction of the strongest bin: double-precision rounding of the squares (module
+#: notes, "Floors of clean records")
+ROUNDING_FLOOR = 1e-12
+#: a single harmonic line is significant above its Gamma quantile raised by this many of the floor's
+#: relative sigmas (the floor is an estimate; its error must not make lines)
+LINE_FLOOR_SIGMAS = 3
+#: a family at g f (orders sharing the factor g) is outside the band when g f exceeds the band's top by
+#: more than this many bins (the rounding of f to the bin grid)
+COMMON_ORDER_BINS = 0.5
+#: fractional orders j/m checked for a fundamental below the band (f/2 and f/3: a gait's 2nd and 3rd)
+SUBHARMONIC_DIVISORS = (2, 3)
 
 
 # ------------------------------------------------------------------------------------------- the test
@@ -300,9 +253,9 @@ def _segments(pieces, fs, fmin):
     at least two segments of ``MIN_SEGMENT_PERIODS`` for the split-half test (else one segment per
     piece of the longest piece's length, for the Bonferroni test).
     """
-    target = int(round(fs * max(20.0 / fmin, 8.0)))
+    target = int(round(fs * max(SEGMENT_PERIODS / fmin, MIN_SEGMENT_S)))
     lens = sorted((p.size for p in pieces), reverse=True)
-    shortest = max(16, int(math.ceil(MIN_SEGMENT_PERIODS * fs / fmin)))
+    shortest = max(MIN_SEGMENT_SAMPLES, int(math.ceil(MIN_SEGMENT_PERIODS * fs / fmin)))
     nseg = target
     if sum(n // nseg for n in lens) < 2:
         nseg = min(target, max(lens[0] // 2, lens[1] if len(lens) > 1 else 0))
@@ -319,7 +272,7 @@ def _search(r, f, df, fmin, fmax, f_top):
     """Octave-safe harmonic-sum search on a normalised spectrum ``r`` (mean 1 noise)."""
     pmax = scipy.ndimage.maximum_filter1d(r, size=3, mode="nearest")
     sel = (f >= fmin / 2) & (f <= f_top)
-    thr = 4.0 * max(float(np.median(pmax[sel])), 1.0)
+    thr = SEARCH_EVIDENCE_FACTOR * max(float(np.median(pmax[sel])), 1.0)
     h_max = max(1, int(f_top // fmin))
     cands = np.arange(fmin, fmax + df / (4 * h_max), df / (2.0 * h_max))
     hf = cands[:, None] * np.arange(1, h_max + 1)[None, :]
@@ -357,7 +310,7 @@ def _floor(p, k, half, quant, w):
     med = scipy.ndimage.median_filter(p, size=2 * half + 1, mode="reflect") / _gamma_median(k)
     bound = max(
         quantisation_floor(quant[0], w, float(np.median(med)), decimation=quant[1]),
-        1e-12 * float(np.max(p)) + np.finfo(float).tiny,
+        ROUNDING_FLOOR * float(np.max(p)) + np.finfo(float).tiny,
     )
     return np.maximum(med, bound)
 
@@ -401,126 +354,36 @@ def detect_link_pass(x, fs, *, band, n_harmonics=5, p_fa=1e-3, f_top=None, quant
     verified by Monte Carlo in the tests and in ``benchmarks/bench_pitch.py``.
     """
     fs = check_fs(fs)
-    if isinstance(x, (list, tuple)):
-        pieces = [np.asarray(p, dtype=float) for p in x]
-    else:
-        pieces = [np.asarray(x, dtype=float)]
-    pieces = [p for p in pieces if p.size]
-    if not pieces or any(p.ndim != 1 for p in pieces):
-        raise ValueError("Parameter x must be a 1-D array or a list of 1-D arrays.")
-    if any(not np.isfinite(p).all() for p in pieces):
-        raise ValueError("Parameter x holds non-finite values; flag and repair them first (flag_invalid).")
+    pieces = _checked_pieces(x)
     fmin, fmax = (float(v) for v in band)
     if not 0 < fmin < fmax < fs / 2:
         raise ValueError(f"Parameter band={band!r} must satisfy 0 < low < high < fs/2 = {fs / 2:g} Hz.")
     if not 0 < float(p_fa) < 0.5:
         raise ValueError(f"Parameter p_fa={p_fa!r} must lie in (0, 0.5).")
     p_fa = float(p_fa)
-    f_top = min(10.0 * fmax, 0.45 * fs) if f_top is None else float(f_top)
+    f_top = min(HARMONIC_SPAN * fmax, F_TOP_NYQUIST_FRACTION * fs) if f_top is None else float(f_top)
     f_top = max(f_top, fmax)
-    segs, nseg, split = _segments(pieces, fs, fmin)
-    if segs is None:
-        longest = max(p.size for p in pieces) / fs
-        raise ValueError(
-            f"the record is too short to test for a link-pass family down to {fmin:.4g} Hz: two "
-            f"segments of {MIN_SEGMENT_PERIODS:g} periods ({2 * MIN_SEGMENT_PERIODS / fmin:.3g} s) are "
-            f"needed, the longest piece has {longest:.3g} s"
-        )
-    k_all = segs.shape[0]
-    seg_s = nseg / fs
-
-    def none(reason, f=float("nan"), extra=None):
-        return LinkPassDetection(
-            False, "no link-pass found", reason, f, 1.0, p_fa, 0.0, float("nan"), k_all, seg_s, 0, (), extra or {}
-        )
-
-    # scale first: huge or tiny values must not overflow or underflow in the squares
-    level = float(np.max(np.abs(segs)))
-    if not level > 0:
-        return none("the record is constant (every sample equal, or all zeros): no vibration at all")
-    segs = scipy.signal.detrend(segs / level, axis=1, type="linear")
-    scale = float(np.max(np.abs(segs)))
-    if not scale > 1e-9:
-        # what is left after the straight lines is rounding: nothing was measured
-        return none("the record is constant (or a straight line) within each segment, to rounding: no vibration")
-    segs /= scale
-    if quantum is None:
-        quantum = quantisation_step(np.concatenate(pieces))
-    w = scipy.signal.windows.hann(nseg, sym=False)
-    quant = (float(quantum) / (level * scale), float(decimation))
-    pw = np.abs(np.fft.rfft(segs * w, axis=1)) ** 2
-    f = np.fft.rfftfreq(nseg, 1.0 / fs)
-    df = fs / nseg
-    p_all = pw.mean(axis=0)
-    if not float(np.max(p_all[1:])) > 0:
-        return none("the record has no variation")
-    half = max(_HALF_MIN, int(round(_HALF_PERIODS * fmin / df)))
-    floor = _floor(p_all, k_all, half, quant, w)
-    ia, ib = np.arange(0, k_all, 2), np.arange(1, k_all, 2)
-    s_rel = _floor_rel_sd(k_all, 2 * half + 1)
+    sp = _spectra(pieces, fs, fmin, fmax, f_top, p_fa, quantum, decimation)
+    if isinstance(sp, LinkPassDetection):
+        return sp
     n_h = max(1, min(int(n_harmonics), int(f_top // fmax)))
-    tests = []
-    if not split:
-        # one segment per piece: no independent half to test on.  Bonferroni over every distinct
-        # tuple of harmonic bins that a fundamental in the band can use (few: the bins are wide).
-        r = p_all / floor
-        h_top = n_h
-        cands = np.arange(fmin, fmax + df / (4 * h_top), df / (2.0 * h_top))
-        kk = np.rint(np.outer(cands, np.arange(1, h_top + 1)) / df).astype(int)
-        kk = kk[np.all((kk >= 1) & (kk < f.size - 1), axis=1)]
-        if kk.size:
-            tuples = np.unique(kk, axis=0)
-            sums = r[tuples].sum(axis=1)
-            i = int(np.argmax(sums))
-            m_tests = tuples.shape[0]
-            t = float(sums[i])
-            pv = min(1.0, m_tests * float(harmonic_sum_pvalue(t, h_top, k_all, s_rel))) / 2.0
-            thr = harmonic_sum_threshold(p_fa / m_tests, h_top, k_all, s_rel)
-            tests.append((pv, t, thr, float(tuples[i, 0] * df), h_top))
-    for search_idx, test_idx in ((ia, ib), (ib, ia)) if split else ():
-        # each half normalised by its own floor: a transient (a step, an impulse) that lies in one half
-        # only raises that half's whole spectrum, which a floor shared with the other half would read
-        # as excess power at every harmonic
-        r_s = _normalised(pw[search_idx], half, quant, w)
-        r_t = _normalised(pw[test_idx], half, quant, w)
-        fc, _ = _search(r_s, f, df, fmin, fmax, f_top)
-        kb = _harmonic_bins(fc, df, n_h, f.size)
-        hh = kb.size
-        if hh == 0:
-            continue
-        t = float(r_t[kb].sum())
-        kt = test_idx.size
-        s_t = _floor_rel_sd(kt, 2 * half + 1)
-        pv = float(harmonic_sum_pvalue(t, hh, kt, s_t))
-        thr = harmonic_sum_threshold(p_fa / 2.0, hh, kt, s_t)
-        tests.append((pv, t, thr, fc, hh))
+    tests = _split_half_tests(sp, n_h) if sp.split else _bonferroni_test(sp, n_h)
     if not tests:
-        return none("no harmonic of the band lies below the analysed frequency range")
+        return _nothing(sp, "no harmonic of the band lies below the analysed frequency range")
     pv, t, thr, fc, hh = min(tests, key=lambda v: v[0])
     p_value = min(1.0, 2.0 * pv)
     detected = pv < p_fa / 2.0
-    # refine the frequency on all segments, and find which orders are individually significant
-    r_all = p_all / floor
-    f_best, _ = _search(r_all, f, df, fmin, fmax, f_top)
-    if detected and abs(f_best - fc) > df:
-        # the two halves and the whole disagree (low SNR): keep the tested candidate
-        f_best = fc
-    h_top = max(1, int(f_top // f_best))
-    kb = _harmonic_bins(f_best, df, h_top, f.size)
-    orders = np.arange(1, kb.size + 1)
-    lim = float(scipy.special.gammainccinv(k_all, p_fa / max(kb.size, 1))) / k_all * (1 + 3 * s_rel)
-    near = np.maximum(r_all[kb], np.maximum(r_all[np.maximum(kb - 1, 0)], r_all[np.minimum(kb + 1, f.size - 1)]))
-    sig = tuple(int(o) for o in orders[near > lim])
+    f_best, sig, lim = _refined(sp, fc, detected)
     base = dict(
         p_value=p_value,
         p_fa=p_fa,
         statistic=t,
         threshold=thr,
-        n_segments=k_all,
-        segment_s=seg_s,
+        n_segments=sp.k,
+        segment_s=sp.seg_s,
         n_harmonics=hh,
         significant_orders=sig,
-        extra={"test": "split-half" if split else "bonferroni (one segment per piece)"},
+        extra={"test": "split-half" if sp.split else "bonferroni (one segment per piece)"},
     )
     if not detected:
         return LinkPassDetection(
@@ -531,34 +394,211 @@ def detect_link_pass(x, fs, *, band, n_harmonics=5, p_fa=1e-3, f_top=None, quant
             float("nan"),
             **base,
         )
+    refused, f_best = _common_order(sp, f_best, sig, base)
+    if refused is not None:
+        return refused
+    refused = _subharmonic(sp, f_best, lim, base)
+    if refused is not None:
+        return refused
+    return LinkPassDetection(
+        True,
+        "ok",
+        f"harmonic family at {f_best:.4g} Hz: harmonic sum {t:.3g} over the "
+        f"threshold {thr:.3g} (p = {p_value:.2g}, false-alarm probability {p_fa:g})",
+        float(f_best),
+        **base,
+    )
+
+
+def _checked_pieces(x):
+    """``x`` as a list of non-empty finite 1-D float arrays, or ValueError."""
+    if isinstance(x, (list, tuple)):
+        pieces = [np.asarray(p, dtype=float) for p in x]
+    else:
+        pieces = [np.asarray(x, dtype=float)]
+    pieces = [p for p in pieces if p.size]
+    if not pieces or any(p.ndim != 1 for p in pieces):
+        raise ValueError("Parameter x must be a 1-D array or a list of 1-D arrays.")
+    if any(not np.isfinite(p).all() for p in pieces):
+        raise ValueError("Parameter x holds non-finite values; flag and repair them first (flag_invalid).")
+    return pieces
+
+
+@dataclass(frozen=True)
+class _Spectra:
+    """What every step of :func:`detect_link_pass` reads: the segments' Hann periodograms ``pw`` (K, bins) at
+    frequencies ``f`` (bin width ``df``), their average ``p_all`` over its floor ``floor`` (running median
+    over +-``half`` bins, never below the quantisation ``quant = (q, m)`` with window ``w``), the floor's
+    relative sigma ``s_rel``, and the test set-up (split-half or one segment per piece)."""
+
+    pw: np.ndarray
+    f: np.ndarray
+    df: float
+    p_all: np.ndarray
+    floor: np.ndarray
+    half: int
+    quant: tuple
+    w: np.ndarray
+    k: int
+    seg_s: float
+    s_rel: float
+    split: bool
+    fmin: float
+    fmax: float
+    f_top: float
+    p_fa: float
+
+    @property
+    def r_all(self):
+        """The average periodogram over its floor (mean 1 under the null)."""
+        return self.p_all / self.floor
+
+
+def _nothing(sp, reason, f=float("nan"), extra=None):
+    """No family: ``reason``."""
+    return LinkPassDetection(
+        False, "no link-pass found", reason, f, 1.0, sp.p_fa, 0.0, float("nan"), sp.k, sp.seg_s, 0, (), extra or {}
+    )
+
+
+def _spectra(pieces, fs, fmin, fmax, f_top, p_fa, quantum, decimation):
+    """The segments' periodograms and floors (:class:`_Spectra`), or a LinkPassDetection when the record
+    holds no variation at all.  Raises ValueError when it is too short for two segments."""
+    segs, nseg, split = _segments(pieces, fs, fmin)
+    if segs is None:
+        longest = max(p.size for p in pieces) / fs
+        raise ValueError(
+            f"the record is too short to test for a link-pass family down to {fmin:.4g} Hz: two "
+            f"segments of {MIN_SEGMENT_PERIODS:g} periods ({2 * MIN_SEGMENT_PERIODS / fmin:.3g} s) are "
+            f"needed, the longest piece has {longest:.3g} s"
+        )
+    k_all, seg_s = segs.shape[0], nseg / fs
+    blank = _Spectra(*(None,) * 8, k_all, seg_s, 0.0, split, fmin, fmax, f_top, p_fa)
+    # scale first: huge or tiny values must not overflow or underflow in the squares
+    level = float(np.max(np.abs(segs)))
+    if not level > 0:
+        return _nothing(blank, "the record is constant (every sample equal, or all zeros): no vibration at all")
+    segs = scipy.signal.detrend(segs / level, axis=1, type="linear")
+    scale = float(np.max(np.abs(segs)))
+    if not scale > ROUNDING_LEVEL:
+        # what is left after the straight lines is rounding: nothing was measured
+        return _nothing(
+            blank, "the record is constant (or a straight line) within each segment, to rounding: no vibration"
+        )
+    segs /= scale
+    if quantum is None:
+        quantum = quantisation_step(np.concatenate(pieces))
+    w = scipy.signal.windows.hann(nseg, sym=False)
+    quant = (float(quantum) / (level * scale), float(decimation))
+    pw = np.abs(np.fft.rfft(segs * w, axis=1)) ** 2
+    f = np.fft.rfftfreq(nseg, 1.0 / fs)
+    df = fs / nseg
+    p_all = pw.mean(axis=0)
+    if not float(np.max(p_all[1:])) > 0:
+        return _nothing(blank, "the record has no variation")
+    half = max(_HALF_MIN, int(round(_HALF_PERIODS * fmin / df)))
+    floor = _floor(p_all, k_all, half, quant, w)
+    s_rel = _floor_rel_sd(k_all, 2 * half + 1)
+    return _Spectra(pw, f, df, p_all, floor, half, quant, w, k_all, seg_s, s_rel, split, fmin, fmax, f_top, p_fa)
+
+
+def _bonferroni_test(sp, n_h):
+    """One segment per piece: no independent half to test on.  Bonferroni over every distinct tuple of
+    harmonic bins that a fundamental in the band can use (few: the bins are wide).  A list of at most one
+    ``(p, statistic, threshold, f, harmonics)``."""
+    r, df, f = sp.r_all, sp.df, sp.f
+    cands = np.arange(sp.fmin, sp.fmax + df / (4 * n_h), df / (2.0 * n_h))
+    kk = np.rint(np.outer(cands, np.arange(1, n_h + 1)) / df).astype(int)
+    kk = kk[np.all((kk >= 1) & (kk < f.size - 1), axis=1)]
+    if not kk.size:
+        return []
+    tuples = np.unique(kk, axis=0)
+    sums = r[tuples].sum(axis=1)
+    i = int(np.argmax(sums))
+    m_tests = tuples.shape[0]
+    t = float(sums[i])
+    pv = min(1.0, m_tests * float(harmonic_sum_pvalue(t, n_h, sp.k, sp.s_rel))) / 2.0
+    thr = harmonic_sum_threshold(sp.p_fa / m_tests, n_h, sp.k, sp.s_rel)
+    return [(pv, t, thr, float(tuples[i, 0] * df), n_h)]
+
+
+def _split_half_tests(sp, n_h):
+    """The split-half tests: the candidate searched on one half of the segments, tested on the other, both
+    ways round; a list of ``(p, statistic, threshold, f, harmonics)``."""
+    ia, ib = np.arange(0, sp.k, 2), np.arange(1, sp.k, 2)
+    tests = []
+    for search_idx, test_idx in ((ia, ib), (ib, ia)):
+        # each half normalised by its own floor: a transient (a step, an impulse) that lies in one half
+        # only raises that half's whole spectrum, which a floor shared with the other half would read
+        # as excess power at every harmonic
+        r_s = _normalised(sp.pw[search_idx], sp.half, sp.quant, sp.w)
+        r_t = _normalised(sp.pw[test_idx], sp.half, sp.quant, sp.w)
+        fc, _ = _search(r_s, sp.f, sp.df, sp.fmin, sp.fmax, sp.f_top)
+        kb = _harmonic_bins(fc, sp.df, n_h, sp.f.size)
+        hh = kb.size
+        if hh == 0:
+            continue
+        t = float(r_t[kb].sum())
+        kt = test_idx.size
+        s_t = _floor_rel_sd(kt, 2 * sp.half + 1)
+        pv = float(harmonic_sum_pvalue(t, hh, kt, s_t))
+        thr = harmonic_sum_threshold(sp.p_fa / 2.0, hh, kt, s_t)
+        tests.append((pv, t, thr, fc, hh))
+    return tests
+
+
+def _refined(sp, fc, detected):
+    """The frequency refined on all segments (the tested candidate ``fc`` kept when they disagree), the
+    harmonic orders individually significant there, and the significance level of one line."""
+    r_all, f, df = sp.r_all, sp.f, sp.df
+    f_best, _ = _search(r_all, f, df, sp.fmin, sp.fmax, sp.f_top)
+    if detected and abs(f_best - fc) > df:
+        # the two halves and the whole disagree (low SNR): keep the tested candidate
+        f_best = fc
+    h_top = max(1, int(sp.f_top // f_best))
+    kb = _harmonic_bins(f_best, df, h_top, f.size)
+    orders = np.arange(1, kb.size + 1)
+    # one line at p_fa over the orders, its level raised by the floor's error (LINE_FLOOR_SIGMAS sigmas)
+    lim = float(scipy.special.gammainccinv(sp.k, sp.p_fa / max(kb.size, 1))) / sp.k * (1 + LINE_FLOOR_SIGMAS * sp.s_rel)
+    near = np.maximum(r_all[kb], np.maximum(r_all[np.maximum(kb - 1, 0)], r_all[np.minimum(kb + 1, f.size - 1)]))
+    return f_best, tuple(int(o) for o in orders[near > lim]), lim
+
+
+def _common_order(sp, f_best, sig, base):
+    """A family whose significant orders share a factor ``g > 1`` is a family at ``g f``: ``(refusal, f)``
+    with the refusal when ``g f`` lies above the band (``base`` updated with the reduced orders)."""
     g = 0
     for o in sig:
         g = math.gcd(g, o)
-    if g > 1:
-        fg = g * f_best
-        if fg > fmax * (1 + 0.5 * df / fmax):
-            return LinkPassDetection(
-                False,
-                "no link-pass found",
-                f"a periodic signal is present, but its harmonics (orders {', '.join(map(str, sig[:6]))} "
-                f"of {f_best:.4g} Hz) make its fundamental {fg:.4g} Hz, outside the band "
-                f"{fmin:.4g}-{fmax:.4g} Hz",
-                float(fg),
-                **base,
-            )
-        f_best = fg
-        sig = tuple(o // g for o in sig)
-        base["significant_orders"] = sig
-    # a family with a line at a fractional order j/m (m = 2, 3: f/2, 3f/2, f/3 ...) at least as strong as
-    # its line at f has its fundamental at f/m, below the band (a gait at 1.6-2.2 Hz seen from its
-    # 2nd or 3rd harmonic; a modulated tone whose lines fall on a comb of f/2)
+    if g <= 1:
+        return None, f_best
+    fg = g * f_best
+    if fg > sp.fmax * (1 + COMMON_ORDER_BINS * sp.df / sp.fmax):
+        return LinkPassDetection(
+            False,
+            "no link-pass found",
+            f"a periodic signal is present, but its harmonics (orders {', '.join(map(str, sig[:6]))} "
+            f"of {f_best:.4g} Hz) make its fundamental {fg:.4g} Hz, outside the band "
+            f"{sp.fmin:.4g}-{sp.fmax:.4g} Hz",
+            float(fg),
+            **base,
+        ), f_best
+    base["significant_orders"] = tuple(o // g for o in sig)
+    return None, fg
+
+
+def _subharmonic(sp, f_best, lim, base):
+    """A refusal when the family has a line at a fractional order j/m (:data:`SUBHARMONIC_DIVISORS`: f/2,
+    3f/2, f/3 ...) at least as strong as its line at f: its fundamental is f/m, below the band (a gait at
+    1.6-2.2 Hz seen from its 2nd or 3rd harmonic; a modulated tone whose lines fall on a comb of f/2)."""
+    r_all, df, fmin = sp.r_all, sp.df, sp.fmin
     k1 = int(round(f_best / df))
     p_one = float(np.max(r_all[max(k1 - 1, 0) : k1 + 2]))
-    for m in (2, 3):
+    for m in SUBHARMONIC_DIVISORS:
         if f_best / m >= fmin or f_best / m < 2 * df:
             continue
-        ks = [int(round(j * f_best / m / df)) for j in range(1, 3 * m) if j % m and j * f_best / m < f_top]
-        p_sub = [float(np.max(r_all[k - 1 : k + 2])) if 1 <= k < f.size - 1 else 0.0 for k in ks]
+        ks = [int(round(j * f_best / m / df)) for j in range(1, 3 * m) if j % m and j * f_best / m < sp.f_top]
+        p_sub = [float(np.max(r_all[k - 1 : k + 2])) if 1 <= k < sp.f.size - 1 else 0.0 for k in ks]
         # a significant fractional line as strong as the line at f; for thirds the line at f/3 itself must be
         # there too (a structural mode near 4f/3 of a chain is not a subharmonic family; a carrier at exactly
         # 3f/2 between two sidebands at f and 2f is)
@@ -569,15 +609,8 @@ def detect_link_pass(x, fs, *, band, n_harmonics=5, p_fa=1e-3, f_top=None, quant
                 "no link-pass found",
                 f"a periodic signal is present, but its line at {f_best / m:.4g} Hz (f/{m}) is as "
                 f"strong as the one at {f_best:.4g} Hz: its fundamental is {f_best / m:.4g} Hz, "
-                f"below the band {fmin:.4g}-{fmax:.4g} Hz (a gait, a sway, not a link pass)",
+                f"below the band {fmin:.4g}-{sp.fmax:.4g} Hz (a gait, a sway, not a link pass)",
                 float(f_best / m),
                 **base,
             )
-    return LinkPassDetection(
-        True,
-        "ok",
-        f"harmonic family at {f_best:.4g} Hz: harmonic sum {t:.3g} over the "
-        f"threshold {thr:.3g} (p = {p_value:.2g}, false-alarm probability {p_fa:g})",
-        float(f_best),
-        **base,
-    )
+    return None

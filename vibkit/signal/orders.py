@@ -139,6 +139,7 @@ def track_phase(x, fs, *, band, n_harmonics=3, frame_s=None, bandwidth_hz=None, 
        ``bandwidth_hz``; its residual phase over ``h`` corrects the coarse phase.  Harmonics are
        combined with weights ``h**2 |a_h|**2`` (inverse phase-noise variance).
     3. Frequency: derivative of the combined phase, low-passed at ``bandwidth_hz``.
+
     The first and last ``1 / bandwidth_hz`` seconds carry filter end effects.
 
     References

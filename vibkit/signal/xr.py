@@ -15,6 +15,7 @@ import numpy as np
 import scipy.stats
 import xarray as xr
 
+from .bursts import split_segments
 from .hampel import hampel
 from .peaks import LinkPassEstimate, link_pass_estimate
 from .spectral import amplitude_spectrum, spectrogram, welch_psd
@@ -57,34 +58,6 @@ def sample_rate(da, *, rtol=1e-3) -> float:
             "split it into segments or resample it first."
         )
     return 1.0 / med
-
-
-def split_segments(obj, segment=None):
-    """Split a Dataset or DataArray into its bursts.
-
-    Parameters
-    ----------
-    obj : xarray.Dataset or xarray.DataArray
-        With dimension ``time``; a ``segment`` variable/coordinate numbers the bursts.
-    segment : array_like, optional
-        Segment numbers per sample, overriding the one in ``obj``.
-
-    Returns
-    -------
-    list of (int, same type as obj)
-        One entry per burst in ascending order; the whole object as segment 0 when continuous.
-    """
-    if segment is None:
-        if "segment" in getattr(obj, "coords", {}) or (isinstance(obj, xr.Dataset) and "segment" in obj):
-            segment = obj["segment"].values
-    if segment is None:
-        return [(0, obj)]
-    seg = np.asarray(segment)
-    if seg.shape != (obj.sizes["time"],):
-        raise ValueError(
-            f"Parameter segment must have one value per time sample ({obj.sizes['time']}), got {seg.shape}."
-        )
-    return [(int(s), obj.isel(time=np.flatnonzero(seg == s))) for s in np.unique(seg)]
 
 
 def amplitude_spectrum_da(da, **kwargs):

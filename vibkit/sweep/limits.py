@@ -100,13 +100,13 @@ def check_key_used(key: str, analysis: str, source: str, *, duration=None):
 def _span_and_step(scene, duration):
     """(span, output step, the step's key) of a run: seconds (kinematics: metres of advance)."""
     if scene.analysis == "kinematics":
-        k = scene.section("kinematics")
-        return (duration if duration is not None else k["stop"] - k["start"]), k["step"], "kinematics.step"
+        k = scene.kinematics
+        return (duration if duration is not None else k.stop - k.start), k.step, "kinematics.step"
     if scene.analysis == "inverse":
-        m = scene.section("motion")
-        return (duration or m["duration"]), m["step"], "motion.step"
-    r = scene.section("run")
-    return (duration or r["duration"]), r["output_step"], "run.output_step"
+        m = scene.motion
+        return (duration or m.duration), m.step, "motion.step"
+    r = scene.run
+    return (duration or r.duration), r.output_step, "run.output_step"
 
 
 def check_settle(scene, settle, duration, source):

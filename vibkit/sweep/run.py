@@ -111,7 +111,7 @@ def summarize(ds, scene, *, settle: float | None = None) -> dict:
         advance = float(g.s0_to_s(s0[-1], d[-1]) - g.s0_to_s(s0[0], d[0])) + loops * g.perimeter(0.5 * (d[0] + d[-1]))
         out["link_pass_frequency"] = abs(advance) / (tt[-1] - tt[0]) / mean_pitch
     elif scene.analysis == "inverse":
-        out["link_pass_frequency"] = abs(float(scene.section("motion")["speed"])) / mean_pitch
+        out["link_pass_frequency"] = abs(float(scene.motion.speed)) / mean_pitch
     if "delta" in ds:
         d = np.asarray(ds["delta"].values)[steady]
         out["delta_mean"] = float(d.mean())

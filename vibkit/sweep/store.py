@@ -21,62 +21,12 @@ import os
 import shutil
 from pathlib import Path
 
+from ..model.schema import key_units
 from .plan import SweepError, _jsonval
 from .records import PENDING, STATUS, SUMMARIES, _failed_record
 
-# units of the scene keys a sweep can vary (the coordinates' ``units``)
-KEY_UNITS = {
-    "guide.tensioner_length": "m",
-    "guide.lower_landing": "m",
-    "guide.upper_landing": "m",
-    "guide.transition_radius": "m",
-    "guide.incline_angle_deg": "deg",
-    "guide.incline_length": "m",
-    "guide.head_radius": "m",
-    "chain.link_pitch": "m",
-    "chain.roller_radius": "m",
-    "chain.roller_mass": "kg",
-    "chain.n_rollers": "1",
-    "chain.worn_link": "1",
-    "chain.worn_link_pitch": "m",
-    "sprocket.teeth": "1",
-    "sprocket.base_width": "m",
-    "sprocket.tip_width": "m",
-    "sprocket.tooth_height": "m",
-    "sprocket.mass": "kg",
-    "sprocket.inertia": "kg m^2",
-    "kinematics.start": "m",
-    "kinematics.stop": "m",
-    "kinematics.step": "m",
-    "motion.speed": "m/s",
-    "motion.duration": "s",
-    "motion.step": "s",
-    "motion.start": "m",
-    "run.duration": "s",
-    "run.output_step": "s",
-    "run.start": "m",
-    "run.initial_speed": "m/s",
-    "run.seed": "1",
-    "solver.method": "",
-    "solver.rtol": "1",
-    "solver.atol": "1",
-    "solver.max_step": "s",
-    "solver.first_step": "s",
-    "solver.max_wall_time": "s",
-    "effects.gravity.g": "m/s^2",
-    "effects.gravity.enabled": "",
-    "effects.contact.stiffness": "N/m^exponent",
-    "effects.contact.exponent": "1",
-    "effects.contact.damping": "s/m",
-    "effects.motor.kp": "N m s",
-    "effects.motor.ki": "N m",
-    "effects.motor.speed": "m/s",
-    "effects.motor.torque_limit": "N m",
-    "effects.tensioner.stiffness": "N/m",
-    "effects.tensioner.preload": "N",
-    "effects.tensioner.mass": "kg",
-    "effects.rolling_resistance.coefficient": "1",
-}
+# units of the scene keys a sweep can vary (the coordinates' ``units``), from the scene schema
+KEY_UNITS = key_units()
 
 
 # ------------------------------------------------------------------------------------------------ the store

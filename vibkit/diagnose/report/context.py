@@ -43,7 +43,7 @@ class ReportContext:
         Simulated time as given [s].
     hampel_half_window_s, hampel_false_alarm_rate : float
     bursts : list
-        Uniform bursts of the channel (:func:`vibkit.diagnose.pitch.uniform_bursts`).
+        Uniform bursts of the channel (:func:`vibkit.signal.bursts.uniform_bursts`).
     pitch : PitchEstimate or None
         None without a speed or without a detected link-pass.
     f0 : float
@@ -127,11 +127,11 @@ def _scene_speed(scene):
     if scene is None:
         return None
     if scene.analysis == "inverse":
-        return float(scene.section("motion")["speed"])
+        return float(scene.motion.speed)
     if scene.analysis == "forward":
-        return (
-            float(scene.effects.get("motor", {}).get("speed", scene.section("run").get("initial_speed", 0.0))) or None
-        )
+        from ...model.schema import nominal_speed
+
+        return float(nominal_speed(scene.effects, scene.run)) or None
     return None
 
 
@@ -199,8 +199,9 @@ def analyse(
     from ...io.channels import own_samples
     from ...model.scene import Scene, load_scene
     from ...signal import hampel_events
+    from ...signal.bursts import uniform_bursts
     from ..channels import estimate_channels
-    from ..pitch import DEFAULT_LIMITS_PERCENT, pick_channel, uniform_bursts
+    from ..pitch import DEFAULT_LIMITS_PERCENT, pick_channel
 
     limits = tuple(limits_percent) if limits_percent is not None else DEFAULT_LIMITS_PERCENT
     from ...io import RecordingError

@@ -15,6 +15,8 @@ import math
 import re
 from dataclasses import dataclass
 
+# standard gravity converts g -> m/s^2 (the unit's definition, not the model's 9.81)
+from ...runtime.constants import STANDARD_GRAVITY
 from .loggers import header_unit
 
 __all__ = [
@@ -25,9 +27,6 @@ __all__ = [
     "split_name_unit",
     "is_time_name",
 ]
-
-#: Standard acceleration of gravity (CGPM 1901), used for g -> m/s^2. [m/s^2]
-STANDARD_GRAVITY = 9.80665
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,17 @@
+"""Helpers shared by the tests and the benchmark scripts: what several of them built each for itself.
+
+* :mod:`support.chain`: synthetic chain signals (a harmonic family of the link-pass frequency, a family
+  on a given phase, a family under a wandering speed, the fleet's recordings);
+* :mod:`support.recording`: the recording dataset the readers return, built from arrays;
+* :mod:`support.cli`: the ``run`` fixture (``vibkit.cli.main`` in-process) and the one-line error check
+  of a command;
+* :mod:`support.contracts`: the one-line ``RecordingError`` check of a reader.
+
+The tests import it as ``support`` (``pythonpath`` in pyproject.toml's pytest section puts ``tests/`` on
+the path); the benchmark scripts get it from ``benchmarks/_common.py``. :mod:`support.cli` and
+:mod:`support.contracts` need pytest, the other two only numpy and xarray.
+"""
+
+from . import chain, recording
+
+__all__ = ["chain", "recording"]

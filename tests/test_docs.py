@@ -1,0 +1,47 @@
+"""The API reference lists what vibkit.signal exports, and every docs page is reachable from a toctree.
+
+The Sphinx build itself (``make docs``, warnings as errors) checks the pages' syntax, references and
+docstrings; these checks are the ones it cannot make: a name added to ``vibkit.signal.__all__`` but not
+to a topic of ``docs/api/signal.rst`` would silently be missing from the reference.
+"""
+
+import re
+from pathlib import Path
+
+import vibkit.signal
+
+DOCS = Path(__file__).resolve().parents[1] / "docs"
+
+
+def test_every_signal_export_is_in_the_reference():
+    text = (DOCS / "api" / "signal.rst").read_text(encoding="utf-8")
+    listed = set(re.findall(r"^   (\w+)$", text, re.M)) | set(re.findall(r"``(\w+)``", text))
+    missing = sorted(set(vibkit.signal.__all__) - listed)
+    assert missing == [], f"vibkit.signal exports {missing}: list each under its topic in docs/api/signal.rst"
+    unknown = sorted(n for n in re.findall(r"^   (\w+)$", text, re.M) if n not in vibkit.signal.__all__)
+    assert unknown == [], f"docs/api/signal.rst lists names vibkit.signal does not export: {unknown}"
+
+
+def test_every_page_is_in_a_toctree():
+    pages = {
+        p.relative_to(DOCS).with_suffix("").as_posix()
+        for p in DOCS.rglob("*")
+        if p.suffix in (".md", ".rst") and not {"_build", "_templates", "generated", "results"} & set(p.parts)
+    }
+    linked = {"index"}
+    for page in pages:
+        path = next(DOCS.glob(page + ".*"))
+        folder = Path(page).parent
+        for block in re.findall(r"```\{toctree\}(.*?)```|\.\. toctree::(.*?)(?:\n\S|\Z)", path.read_text(), re.S):
+            for line in "".join(block).splitlines():
+                line = line.strip()
+                if line and not line.startswith(":"):
+                    linked.add((folder / line).as_posix())
+    assert sorted(pages - linked) == []
+
+
+def test_the_signal_package_docstring_lists_every_export_under_a_topic():
+    doc = vibkit.signal.__doc__
+    listed = set(re.findall(r"\b(\w+)\b", doc.split("Spectral analysis", 1)[1].split("Everything else", 1)[0]))
+    missing = sorted(set(vibkit.signal.__all__) - listed)
+    assert missing == [], f"vibkit.signal's docstring does not list {missing} under a topic"

@@ -1,0 +1,278 @@
+"""Compiled kernels of the study's formulation (:mod:`vibkit.analyses.reference`): the sparse KKT
+system's pattern and values, the roller kinematics in the study's coordinates, and the closure residual.
+
+The applied forces are the forward model's own: gravity, the passengers' weight by time and the
+contact candidates come from the shared kernels of :mod:`vibkit.model.effects`, and the contact
+forces from :func:`vibkit.model.sprocket.contact_kernel`; parameters are read by named slot
+(:mod:`vibkit.model.slots`).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba as nb
+import numpy as np
+
+from ..model.effects import contact_candidates, motor_torque, passenger_loads
+from ..model.guide import BX, BZ, KAPPA, S0, SIGP, local_map, local_point, locate, point_partials
+from ..model.slots import (
+    FP_CARRIAGE_MASS,
+    FP_CX,
+    FP_CZ,
+    FP_DAMPING,
+    FP_EXPONENT,
+    FP_G,
+    FP_INERTIA,
+    FP_KI,
+    FP_KP,
+    FP_P0,
+    FP_PRELOAD,
+    FP_ROLLER_RADIUS,
+    FP_ROLLING,
+    FP_ROOT_RADIUS,
+    FP_SPEED_REF,
+    FP_STIFFNESS,
+    FP_TENSIONER_STIFFNESS,
+    FP_TOOTH_PITCH,
+    FP_TORQUE_LIMIT,
+    IP_CONTACT,
+    IP_GRAVITY,
+    IP_MOTOR,
+    IP_N,
+    IP_PASSENGERS,
+    IP_ROLLING,
+    IP_TEETH,
+    IP_TENSIONER,
+    PASSENGERS_BY_TIME,
+    PRM_CORNERS,
+    PRM_FP,
+    PRM_IP,
+    PRM_MASS,
+    PRM_PASS_ALIGHT,
+    PRM_PASS_BOARD,
+    PRM_PASS_MASS,
+    PRM_PASS_STEP,
+    PRM_TABLE,
+)
+from ..model.sprocket import contact_kernel
+
+__all__ = ["kkt_pattern", "study_partials", "study_kinematics", "assemble", "study_closure_residual"]
+
+
+@nb.njit(cache=True)
+def kkt_pattern(p):
+    """Row and column of every non-zero of the KKT matrix, in the order :func:`assemble` fills them."""
+    n = p + 2
+    nnz = 3 * p + 2 + 6 * p
+    rows = np.empty(nnz, dtype=np.int64)
+    cols = np.empty(nnz, dtype=np.int64)
+    k = 0
+    for i in range(p):  # M: diagonal of the rollers and the delta row/column
+        rows[k], cols[k] = i, i
+        k += 1
+        rows[k], cols[k] = i, p
+        k += 1
+        rows[k], cols[k] = p, i
+        k += 1
+    rows[k], cols[k] = p, p
+    k += 1
+    rows[k], cols[k] = p + 1, p + 1
+    k += 1
+    for j in range(p):  # Phi_q (rows n + j) and its transpose (columns n + j)
+        jn = j + 1 if j + 1 < p else 0
+        for c in (j, jn, p):
+            rows[k], cols[k] = n + j, c
+            k += 1
+            rows[k], cols[k] = c, n + j
+            k += 1
+    return rows, cols
+
+
+@nb.njit(cache=True)
+def study_partials(tab, k, s0loc, delta, out):
+    """r and its partials at s0loc = s0 - s0_k on segment k with the study's *linear* map.
+
+    On a telescopic run (undeformed length Lt) the local arc length is lam = sigma s0loc with
+    sigma = (Lt - delta)/Lt (the study's eqs. 4-5 to 4-8 and 5-1, 5-13); on fixed segments lam = s0loc.
+    Fills ``out`` (12) with x, z, r_s, r_d, r_ss, r_sd, r_dd (x and z of each), as
+    :func:`vibkit.model.guide.point_partials` does for vibkit's own map.
+    """
+    sigp = tab[k, SIGP]
+    sig = 1.0 + sigp * delta
+    lam = sig * s0loc
+    x, z, phi = local_point(tab, k, lam, delta)
+    kap = tab[k, KAPPA]
+    tx, tz = math.cos(phi), math.sin(phi)
+    nx, nz = -tz, tx
+    lam_d = sigp * s0loc
+    out[0] = x
+    out[1] = z
+    out[2] = sig * tx
+    out[3] = sig * tz
+    out[4] = tab[k, BX] + lam_d * tx
+    out[5] = tab[k, BZ] + lam_d * tz
+    out[6] = sig * sig * kap * nx
+    out[7] = sig * sig * kap * nz
+    out[8] = sigp * tx + sig * kap * lam_d * nx
+    out[9] = sigp * tz + sig * kap * lam_d * nz
+    out[10] = kap * lam_d * lam_d * nx
+    out[11] = kap * lam_d * lam_d * nz
+
+
+@nb.njit(cache=True)
+def study_kinematics(tab, p0, q, qd, p, linear, part, vel, wq):
+    """Roller positions and partials (part (p, 12)), velocities (vel (p, 2)) and the
+    quadratic-velocity accelerations w_i (wq (p, 2)) at coordinates q and rates qd, with the
+    study's linear map (``linear``) or vibkit's smooth one (:func:`vibkit.model.guide.local_map`)."""
+    delta = q[p]
+    ddot = qd[p]
+    for i in range(p):
+        s0w = q[i] - p0 * math.floor(q[i] / p0)
+        k = locate(tab, s0w)
+        s0loc = s0w - tab[k, S0]
+        if linear:
+            study_partials(tab, k, s0loc, delta, part[i])
+        else:
+            point_partials(tab, k, local_map(tab, k, s0loc, delta)[0], s0loc, delta, part[i])
+        sd = qd[i]
+        vel[i, 0] = part[i, 2] * sd + part[i, 4] * ddot
+        vel[i, 1] = part[i, 3] * sd + part[i, 5] * ddot
+        wq[i, 0] = part[i, 6] * sd * sd + 2.0 * part[i, 8] * sd * ddot + part[i, 10] * ddot * ddot
+        wq[i, 1] = part[i, 7] * sd * sd + 2.0 * part[i, 9] * sd * ddot + part[i, 11] * ddot * ddot
+
+
+@nb.njit(cache=True)
+def assemble(t, y, prm, pitches, linear, alpha, beta, ws, data, rhs):
+    """Fill the KKT values ``data`` (pattern of :func:`kkt_pattern`) and right-hand side ``rhs``.
+
+    State y = [q (n), qdot (n), integral of the sprocket speed error]. Returns
+    (motor torque [N m], contact torque [N m], speed-error rate for the integral state [rad/s]).
+    ``ws`` = (part, vel, wq, fx, fz, cand, ind_t, frc_t, xs, zs, vx, vz).
+    """
+    # the first nine entries of vibkit.model.effects.pack_parameters (later ones, if any, are not needed)
+    tab, loc, fp, ip, mass = prm[PRM_TABLE], prm[PRM_CORNERS], prm[PRM_FP], prm[PRM_IP], prm[PRM_MASS]
+    pm, ps, pb, pa = prm[PRM_PASS_MASS], prm[PRM_PASS_STEP], prm[PRM_PASS_BOARD], prm[PRM_PASS_ALIGHT]
+    part, vel, wq, fx, fz, cand, ind_t, frc_t, xs, zs, vx, vz = ws
+    p = ip[IP_N]
+    n = p + 2
+    p0 = fp[FP_P0]
+    q = y[:n]
+    qd = y[n : 2 * n]
+    study_kinematics(tab, p0, q, qd, p, linear, part, vel, wq)
+    for i in range(p):
+        xs[i] = part[i, 0]
+        zs[i] = part[i, 1]
+    # applied forces on the rollers
+    g = fp[FP_G]
+    for i in range(p):
+        fx[i] = 0.0
+        fz[i] = -mass[i] * g if ip[IP_GRAVITY] == 1 else 0.0
+    if ip[IP_PASSENGERS] == PASSENGERS_BY_TIME:  # StudyFormulation refuses passengers by place
+        passenger_loads(t, PASSENGERS_BY_TIME, q, pm, ps, pb, pa, g, p, fz)
+    if ip[IP_ROLLING] == 1:
+        mu = fp[FP_ROLLING]
+        for i in range(p):
+            sp_ = math.sqrt(vel[i, 0] * vel[i, 0] + vel[i, 1] * vel[i, 1] + 1e-6)
+            fx[i] -= mu * mass[i] * g * vel[i, 0] / sp_
+            fz[i] -= mu * mass[i] * g * vel[i, 1] / sp_
+    torque_c = 0.0
+    if ip[IP_CONTACT] == 1:
+        # candidates: the rollers whose circle can reach a tooth (centre within root + height + r_d;
+        # loc[1, 1] is the height of the tooth's corner B in its own frame)
+        reach = fp[FP_ROOT_RADIUS] + loc[1, 1] + fp[FP_ROLLER_RADIUS] + 1e-9
+        ncand = contact_candidates(xs, zs, p, fp[FP_CX], fp[FP_CZ], reach, cand)
+        for i in range(p):
+            vx[i] = vel[i, 0]
+            vz[i] = vel[i, 1]
+        # the kernel's first return value is the torque on the sprocket (the others are diagnostics)
+        torque_c = contact_kernel(
+            xs,
+            zs,
+            vx,
+            vz,
+            cand,
+            ncand,
+            y[p + 1],
+            y[n + p + 1],
+            fp[FP_CX],
+            fp[FP_CZ],
+            loc,
+            fp[FP_ROOT_RADIUS],
+            fp[FP_TOOTH_PITCH],
+            ip[IP_TEETH],
+            fp[FP_ROLLER_RADIUS],
+            fp[FP_STIFFNESS],
+            fp[FP_EXPONENT],
+            fp[FP_DAMPING],
+            fx,
+            fz,
+            ind_t,
+            frc_t,
+            False,
+        )[0]
+    f_c = 0.0
+    m_c = 0.0
+    if ip[IP_TENSIONER] == 1:
+        f_c = -(fp[FP_PRELOAD] + fp[FP_TENSIONER_STIFFNESS] * q[p])
+        m_c = fp[FP_CARRIAGE_MASS]
+    motor = 0.0
+    derr = 0.0
+    if ip[IP_MOTOR] == 1:
+        motor, derr = motor_torque(fp[FP_SPEED_REF] - qd[p + 1], y[2 * n], fp[FP_KP], fp[FP_KI], fp[FP_TORQUE_LIMIT])
+    # mass matrix and generalised forces Q + Q_v
+    k = 0
+    mdd = m_c
+    qdel = f_c
+    for i in range(p):
+        rsx, rsz, rdx, rdz = part[i, 2], part[i, 3], part[i, 4], part[i, 5]
+        gx = fx[i] - mass[i] * wq[i, 0]
+        gz = fz[i] - mass[i] * wq[i, 1]
+        data[k] = mass[i] * (rsx * rsx + rsz * rsz)
+        off = mass[i] * (rsx * rdx + rsz * rdz)
+        data[k + 1] = off
+        data[k + 2] = off
+        k += 3
+        mdd += mass[i] * (rdx * rdx + rdz * rdz)
+        rhs[i] = rsx * gx + rsz * gz
+        qdel += rdx * gx + rdz * gz
+    data[k] = mdd
+    data[k + 1] = fp[FP_INERTIA]
+    k += 2
+    rhs[p] = qdel
+    rhs[p + 1] = motor + torque_c
+    # constraints, their Jacobian, and the Baumgarte-stabilised right-hand side
+    b2 = beta * beta
+    for j in range(p):
+        jn = j + 1 if j + 1 < p else 0
+        ux = part[jn, 0] - part[j, 0]
+        uz = part[jn, 1] - part[j, 1]
+        dvx = vel[jn, 0] - vel[j, 0]
+        dvz = vel[jn, 1] - vel[j, 1]
+        c_j = ux * ux + uz * uz - pitches[j] * pitches[j]
+        cdot = 2.0 * (ux * dvx + uz * dvz)
+        gam = -2.0 * (dvx * dvx + dvz * dvz) - 2.0 * (ux * (wq[jn, 0] - wq[j, 0]) + uz * (wq[jn, 1] - wq[j, 1]))
+        a0 = -2.0 * (ux * part[j, 2] + uz * part[j, 3])
+        a1 = 2.0 * (ux * part[jn, 2] + uz * part[jn, 3])
+        ad = 2.0 * (ux * (part[jn, 4] - part[j, 4]) + uz * (part[jn, 5] - part[j, 5]))
+        data[k] = a0
+        data[k + 1] = a0
+        data[k + 2] = a1
+        data[k + 3] = a1
+        data[k + 4] = ad
+        data[k + 5] = ad
+        k += 6
+        rhs[n + j] = gam - 2.0 * alpha * cdot - b2 * c_j
+    return motor, torque_c, derr
+
+
+@nb.njit(cache=True)
+def study_closure_residual(part, p, pitches):
+    """Largest | |r_{i+1} - r_i| - L_i | over the links (the last joins roller p to roller 1). [m]"""
+    worst = 0.0
+    for i in range(p):
+        j = i + 1 if i + 1 < p else 0
+        d = abs(math.hypot(part[j, 0] - part[i, 0], part[j, 1] - part[i, 1]) - pitches[i])
+        if d > worst:
+            worst = d
+    return worst

@@ -1,0 +1,503 @@
+"""The steps of :func:`vibkit.diagnose.pitch.estimate_pitch`, in the order it runs them.
+
+bursts (:func:`prepare_bursts`) -> detection (:func:`detect`) -> per-burst estimates
+(:func:`estimate_bursts`) -> method (:func:`choose_methods`) -> combination (:func:`combine`) ->
+pitch (:func:`pitch_from`) -> decision (:func:`evidence` for :func:`vibkit.diagnose.decision.decide`).
+The rows of the result come from :func:`harmonic_rows`, :func:`burst_rows` and :func:`hypotheses`.
+Small frozen dataclasses carry what one step hands to the next; each step says why in its docstring,
+and every tuning number is a named constant here with its reason.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..signal.bursts import FILL_THRESHOLD, MAX_GAP_S, Burst, dropped_samples, flag_invalid, uniform_bursts
+from ..signal.detect import HARMONIC_SPAN
+from ..signal.quantisation import quantisation_step
+from .decision import LinkPassEvidence, nearest_catalogue
+
+#: samples (from the start) whose levels give the recorder's quantisation step
+QUANTUM_SAMPLES = 1 << 20
+#: the decimated rate is at least this many times the highest frequency kept: its Nyquist frequency 1.25
+#: times it, so that the decimation's low-pass (at 0.8 of Nyquist) passes it flat
+DECIMATION_OVERSAMPLE = 2.5
+#: the detection test needs one sampling frequency: bursts whose rate differs from the median rate by more
+#: than this fraction are left out of it (they are still estimated)
+SAME_FS_TOLERANCE = 0.01
+#: spectral and mean-phase estimates further apart than this many combined sigmas: not stationary
+DISAGREE_SIGMAS = 5.0
+#: shortest burst for the mean-phase estimate, in periods of the fundamental
+MIN_TRACK_PERIODS = 40
+#: harmonics tracked in phase at most: the strongest few carry the phase, higher ones add noise
+TRACK_HARMONICS = 3
+#: the tracked frequency wanders when it spreads over more than this many spectral bins (half a bin
+#: moves the spectral peak) ...
+WANDER_BINS = 0.5
+#: ... and over more than this many times the spread that noise alone gives
+WANDER_NOISE_FACTOR = 2.0
+#: burst estimates scattering more than this chi^2 per degree of freedom (an rms scatter of two sigmas)
+#: disagree beyond their sigmas (speed drift between bursts): the combined sigma is widened by sqrt(chi^2)
+CHI2_WIDEN = 4.0
+#: a fundamental within 2 % of an edge of the search band may be cut off by it: warned
+BAND_EDGE_LOW = 1.02
+BAND_EDGE_HIGH = 0.98
+#: a predicted line this far over the floor is "seen" in the hypotheses (100 x the floor's power) [dB]
+SEEN_SNR_DB = 20.0
+#: the floor of the hypotheses' SNR: the median spectrum between these frequencies, above the drift and the
+#: leakage of the mean, below 50 Hz where a link pass's first harmonics lie at any escalator speed (not the
+#: floor of a fast recorder's empty upper band) [Hz]
+SNR_FLOOR_BAND_HZ = (0.2, 50.0)
+#: zero padding of the hypotheses' spectrum (FFT length >= this many times the record)
+SNR_ZERO_PAD = 4
+#: power and floor are kept above this in the SNR's logarithm (an empty spectrum is not -inf dB)
+TINY_POWER = 1e-300
+
+
+@dataclass(frozen=True)
+class Request:
+    """The checked arguments of :func:`vibkit.diagnose.pitch.estimate_pitch` that the steps read (SI): speed
+    and its sigma [m/s], search band [Hz], plausible pitches [m], elongation limits [%], the nominal pitch
+    as given [m] (or None), sprocket teeth, and whether the speed is a placeholder (frequency only)."""
+
+    speed: float
+    speed_sigma: float
+    band: tuple
+    pitch_range: tuple
+    limits: tuple
+    nominal_pitch: object
+    teeth: int
+    frequency_only: bool
+
+
+@dataclass(frozen=True)
+class PreparedBursts:
+    """The bursts of one channel (:func:`prepare_bursts`): as read (``raw``) and scaled and decimated for
+    the spectrum (``bursts``, ``x_raw = scale x``), with the recorder's quantisation step in the scaled
+    units, the invalid-sample counts and the warnings they give."""
+
+    raw: list
+    bursts: list
+    scale: float
+    quantum: float
+    invalid: dict
+    warnings: list
+
+
+@dataclass(frozen=True)
+class BurstEstimate:
+    """One burst's spectral estimate (:class:`vibkit.signal.LinkPassEstimate`), its mean-phase estimate
+    (None when too short to track), and the method chosen (:func:`choose_methods`) with its frequency."""
+
+    burst: Burst
+    spectral: object
+    mean_phase: object
+    method: str = ""
+    reason: str = ""
+    frequency_hz: float = float("nan")
+    sigma_hz: float = float("nan")
+
+
+@dataclass(frozen=True)
+class Combination:
+    """The bursts' frequencies combined (:func:`combine`): ``f0`` and its sigma, chi^2 per degree of freedom
+    (NaN for one burst), the weights, the method (``"mixed"`` when bursts differ) and its reason."""
+
+    f0: float
+    sigma: float
+    chi2: float
+    weights: np.ndarray
+    method: str
+    method_reason: str
+    warnings: list
+
+
+def prepare_bursts(recording, name, band):
+    """The channel's uniform bursts (:func:`vibkit.signal.bursts.uniform_bursts`), checked against the band's
+    Nyquist frequency, counted for invalid samples, scaled and decimated (:func:`_scaled`)."""
+    raw = uniform_bursts(recording, name)
+    warnings = []
+    nyq = min(b.fs for b in raw) / 2
+    if band[1] >= nyq:
+        raise ValueError(
+            f"band {band[0]:.4g}-{band[1]:.4g} Hz reaches the Nyquist frequency {nyq:.4g} Hz of channel {name!r}"
+        )
+    if any(b.resampled for b in raw):
+        warnings.append("irregular time stamps: bursts resampled linearly to a uniform grid before the spectrum")
+    invalid = {k: sum(b.invalid.get(k, 0) for b in raw) for k in ("non_finite", "fill_value", "absurd", "total")}
+    n_dropped = dropped_samples(recording, name, raw)
+    if invalid["total"] or n_dropped:
+        invalid["dropped"] = n_dropped
+        warnings.append(
+            f"{invalid['total'] + n_dropped} invalid sample(s) ({invalid['non_finite']} non-finite, "
+            f"{invalid['fill_value']} fill values |x| >= {FILL_THRESHOLD:g}, {invalid['absurd']} absurd) "
+            f"excluded: {invalid['total']} in runs of at most {MAX_GAP_S:g} s interpolated, "
+            f"{n_dropped} in longer runs or at the ends cut out (the record split there)"
+        )
+    bursts, scale = _scaled(raw, band)
+    # the recorder's step (its valid levels, before scaling and decimation) bounds the noise floors
+    x_rec = np.asarray(recording[name].values[:QUANTUM_SAMPLES], dtype=float).ravel()
+    quantum = quantisation_step(x_rec[~flag_invalid(x_rec).mask]) / scale
+    return PreparedBursts(raw, bursts, scale, quantum, invalid, warnings)
+
+
+def _scaled(bursts, band):
+    """Bursts scaled to unit size (no overflow or underflow in squares) and decimated to what the
+    harmonics need (``HARMONIC_SPAN band[1]`` kept, the span the detection searches); returns ``(bursts, scale)`` with ``x_original = scale x``."""
+    from ..signal._checks import decimate_for_band
+
+    scale = max(float(np.max(np.abs(b.x - np.median(b.x)))) for b in bursts)
+    if not (scale > 0 and math.isfinite(scale)):
+        scale = 1.0
+    out = []
+    for b in bursts:
+        x = (b.x - np.median(b.x)) / scale
+        x, fs, _q = decimate_for_band(x, b.fs, HARMONIC_SPAN * band[1], oversample=DECIMATION_OVERSAMPLE)
+        out.append(Burst(b.segment, b.t0, fs, x, b.resampled, b.invalid))
+    return out, scale
+
+
+def detect(prep, *, band, n_harmonics, p_fa):
+    """Is there a link-pass family at all? :func:`vibkit.signal.detect.detect_link_pass` on the bursts at
+    the median sampling frequency."""
+    from ..signal.detect import detect_link_pass
+
+    fs_det = float(np.median([b.fs for b in prep.bursts]))
+    decimation = max(1.0, float(np.median([b.fs for b in prep.raw])) / fs_det)
+    pieces = [b.x for b in prep.bursts if abs(b.fs / fs_det - 1) < SAME_FS_TOLERANCE]
+    return detect_link_pass(
+        pieces, fs_det, band=band, n_harmonics=n_harmonics, p_fa=p_fa, quantum=prep.quantum, decimation=decimation
+    )
+
+
+def estimate_bursts(prep, *, name, band, n_harmonics):
+    """Spectral and mean-phase estimates of each burst, never bridged; ``(estimates, warnings)``.
+
+    Raises
+    ------
+    ValueError
+        No burst is long enough for an estimate.
+    """
+    from ..signal import link_pass_estimate
+
+    ests, skipped = [], []
+    for b, b_raw in zip(prep.bursts, prep.raw):
+        try:
+            e = link_pass_estimate(
+                b.x, b.fs, band=band, n_harmonics=n_harmonics, quantum=prep.quantum, decimation=b_raw.fs / b.fs
+            )
+        except ValueError as exc:
+            skipped.append(f"burst {b.segment}: {exc}")
+            continue
+        ests.append(BurstEstimate(b, e, _burst_mean_phase(b, e)))
+    if not ests:
+        raise ValueError(
+            f"channel {name!r}: no burst long enough to estimate a link-pass frequency in "
+            f"{band[0]:.3g}-{band[1]:.3g} Hz ({'; '.join(skipped)})"
+        )
+    return ests, [f"{len(skipped)} burst(s) too short, skipped"] if skipped else []
+
+
+def _burst_mean_phase(b, e):
+    """Mean-phase estimate of one burst (None when too short or when tracking fails)."""
+    from ..signal.meanfreq import mean_link_pass_frequency
+
+    f0 = e.fundamental_hz
+    if b.x.size / b.fs * f0 < MIN_TRACK_PERIODS:
+        return None
+    try:
+        return mean_link_pass_frequency(
+            b.x,
+            b.fs,
+            f0=f0,
+            amplitudes=[h.amplitude for h in e.harmonics],
+            n_harmonics=min(TRACK_HARMONICS, len(e.harmonics)),
+        )
+    except ValueError:
+        return None
+
+
+def choose_methods(ests):
+    """Each burst with its method (:func:`_choose_method`) and the frequency and sigma that method gives."""
+    out = []
+    for be in ests:
+        m, why = _choose_method(be.spectral, be.mean_phase)
+        if m == "mean-phase":
+            f, s = be.mean_phase.frequency_hz, be.mean_phase.sigma_hz
+        else:
+            f, s = be.spectral.fundamental_hz, be.spectral.fundamental_sigma_hz
+        out.append(BurstEstimate(be.burst, be.spectral, be.mean_phase, m, why, f, s))
+    return out
+
+
+def _choose_method(e, mp):
+    """``("spectral" | "mean-phase", why)`` for one burst.
+
+    The mean-phase estimate is used when the frequency wanders: the tracked instantaneous frequency
+    spreads over more than :data:`WANDER_BINS` spectral bins (``spread x T > 0.5``) and more than
+    :data:`WANDER_NOISE_FACTOR` times what noise alone gives, or the two estimates disagree by more than
+    :data:`DISAGREE_SIGMAS` combined sigmas.
+    """
+    if mp is None:
+        return "spectral", "record too short to track the phase; spectral estimate"
+    dis = abs(mp.frequency_hz - e.fundamental_hz) / math.hypot(mp.sigma_hz, e.fundamental_sigma_hz)
+    wander = mp.spread_bins > WANDER_BINS and mp.spread_hz > WANDER_NOISE_FACTOR * mp.noise_spread_hz
+    if wander or dis > DISAGREE_SIGMAS:
+        why = (
+            f"not stationary: the tracked frequency spreads {mp.spread_hz:.3g} Hz (std), "
+            f"{mp.spread_bins:.2g} spectral bins over {mp.span_s:.4g} s (noise alone: {mp.noise_spread_hz:.2g} Hz); "
+            f"spectral and mean-phase estimates differ by {dis:.1f} sigma: mean link-pass frequency from the total "
+            f"tracked phase ({mp.cycles:.1f} link passes)"
+        )
+        return "mean-phase", why
+    return "spectral", (
+        f"stationary: the tracked frequency spreads {mp.spread_bins:.2g} spectral bins over "
+        f"{mp.span_s:.4g} s (noise alone: {mp.noise_spread_hz:.2g} Hz) and agrees with the spectral "
+        f"estimate ({dis:.1f} sigma): harmonic least squares (Cramer-Rao sigma)"
+    )
+
+
+def combine(ests):
+    """Inverse-variance mean of the bursts' chosen frequencies, its sigma widened by sqrt(chi^2) when the
+    bursts scatter beyond :data:`CHI2_WIDEN`; a plain mean and standard deviation when a sigma is zero."""
+    methods = [be.method for be in ests]
+    method = methods[0] if len(set(methods)) == 1 else "mixed"
+    if len(ests) == 1:
+        method_reason = ests[0].reason
+    else:
+        method_reason = "; ".join(f"burst {be.burst.segment}: {be.reason}" for be in ests)
+    f = np.array([be.frequency_hz for be in ests])
+    s = np.array([be.sigma_hz for be in ests])
+    warnings = []
+    if np.all(s > 0):
+        w = 1.0 / s**2
+        f0 = float(np.sum(w * f) / np.sum(w))
+        sf = float(1.0 / np.sqrt(np.sum(w)))
+        chi2 = float(np.sum(w * (f - f0) ** 2) / (f.size - 1)) if f.size > 1 else float("nan")
+    else:
+        f0, sf, chi2 = float(np.mean(f)), float(np.std(f)), float("nan")
+        w = np.ones_like(f)
+    if f.size > 1 and chi2 > CHI2_WIDEN:
+        # bursts disagree more than their sigmas allow (speed drift between bursts): widen
+        sf *= math.sqrt(chi2)
+        warnings.append(
+            f"burst estimates scatter {math.sqrt(chi2):.1f} x more than their sigmas (speed drift?); "
+            "sigma widened accordingly"
+        )
+    return Combination(f0, sf, chi2, w, method, method_reason, warnings)
+
+
+def pitch_from(comb, req):
+    """``(pitch, sigma, warnings, notes)``: ``L = v / f`` with ``sigma_L = L hypot(sigma_f / f, sigma_v / v)``,
+    a warning when ``f`` sits at an edge of the band or the speed's uncertainty dominates."""
+    f0, sf = comb.f0, comb.sigma
+    speed, speed_sigma, band, teeth = req.speed, req.speed_sigma, req.band, req.teeth
+    warnings, notes = [], []
+    if f0 < band[0] * BAND_EDGE_LOW or f0 > band[1] * BAND_EDGE_HIGH:
+        warnings.append(
+            f"the fundamental {f0:.4g} Hz lies at the edge of the search band "
+            f"{band[0]:.3g}-{band[1]:.3g} Hz; widen --band or check the speed"
+        )
+    pitch = speed / f0
+    rel_f = sf / f0
+    rel_v = speed_sigma / speed
+    psig = pitch * math.hypot(rel_f, rel_v)
+    if rel_v > rel_f:
+        warnings.append(
+            f"the speed's uncertainty ({100 * rel_v:.3g} %) dominates the pitch's "
+            f"(frequency {100 * rel_f:.3g} %): to see 0.5 % elongation the speed must be known to "
+            "about 0.1 %"
+        )
+    if speed_sigma == 0:
+        notes.append(
+            "no speed uncertainty given: pitch_sigma_m is the frequency's part only; to see 0.5 % "
+            "elongation the speed must be known to about 0.1 %"
+        )
+    notes.append(
+        "a speed derived from the motor's rpm and the nominal sprocket returns the nominal pitch by "
+        f"construction: one sprocket turn always moves Z = {teeth} links, whatever their length; "
+        "measure the speed on the steps or handrail"
+    )
+    return pitch, psig, warnings, notes
+
+
+def harmonic_rows(ests, comb, scale):
+    """Harmonics: the weighted mean amplitude over bursts (in the channel's units), detected in any."""
+    k = min(len(be.spectral.harmonics) for be in ests)
+    harm = []
+    for i in range(k):
+        amps = np.array([be.spectral.harmonics[i].amplitude for be in ests]) * scale
+        hdet = any(be.spectral.harmonics[i].detected for be in ests)
+        harm.append(
+            {
+                "order": i + 1,
+                "frequency_hz": (i + 1) * comb.f0,
+                "amplitude": float(np.sum(comb.weights * amps) / np.sum(comb.weights)),
+                "detected": bool(hdet),
+            }
+        )
+    return harm
+
+
+def burst_rows(ests):
+    """One row per burst: its estimates, the method used, and the mean-phase tracking when there is one."""
+    per = []
+    for be in ests:
+        b, e, mp = be.burst, be.spectral, be.mean_phase
+        row = {
+            "segment": b.segment,
+            "t0_s": b.t0,
+            "duration_s": b.x.size / b.fs,
+            "fs_hz": b.fs,
+            "fundamental_hz": be.frequency_hz,
+            "fundamental_sigma_hz": be.sigma_hz,
+            "method": be.method,
+            "spectral_hz": e.fundamental_hz,
+            "spectral_sigma_hz": e.fundamental_sigma_hz,
+            "snr_db": e.snr_db,
+            "resampled": b.resampled,
+        }
+        if mp is not None:
+            row.update(
+                mean_phase_hz=mp.frequency_hz,
+                mean_phase_sigma_hz=mp.sigma_hz,
+                tracked_spread_hz=mp.spread_hz,
+                tracked_spread_bins=mp.spread_bins,
+            )
+        per.append(row)
+    return per
+
+
+def evidence(det, ests, comb, req, *, speed_source):
+    """What :func:`vibkit.diagnose.decision.decide` weighs: the detection, the combined estimate, and the
+    burst whose spectral and mean-phase estimates differ most (its steadiness check)."""
+    worst = max(
+        (
+            (
+                abs(be.spectral.fundamental_hz - be.mean_phase.frequency_hz),
+                be.spectral.fundamental_hz,
+                be.mean_phase.frequency_hz,
+            )
+            for be in ests
+            if be.mean_phase is not None
+        ),
+        default=None,
+    )
+    return LinkPassEvidence(
+        detected=True,
+        detection_reason=det.reason,
+        detection_hz=det.frequency_hz,
+        resolution_hz=1.0 / det.segment_s,
+        fundamental_hz=comb.f0,
+        fundamental_sigma_hz=comb.sigma,
+        band_hz=req.band,
+        speed_m_s=None if req.frequency_only else req.speed,
+        speed_sigma_m_s=req.speed_sigma,
+        nominal_pitch_m=None if req.frequency_only else req.nominal_pitch,
+        limits_percent=req.limits,
+        spectral_hz=worst[1] if worst else None,
+        mean_phase_hz=worst[2] if worst else None,
+        speed_source=speed_source,
+        significant_orders=det.significant_orders,
+    )
+
+
+@dataclass(frozen=True)
+class Hypothesis:
+    """One reading of a spectral periodicity.
+
+    Attributes
+    ----------
+    name : str
+        What the periodicity would be (``"link pass"``, ``"step pass"``, ``"sprocket shaft"`` ...).
+    frequency_hz : float
+        [Hz]
+    snr_db : float
+        Spectral power near that frequency over the noise floor. [dB]
+    implied_pitch_m : float
+        The link pitch this reading implies at the given speed. [m]
+    nearest_catalogue_m : float
+        Nearest catalogue pitch. [m]
+    deviation_percent : float
+        ``implied / nearest - 1`` [%]
+    chosen : bool
+    reason : str
+    """
+
+    name: str
+    frequency_hz: float
+    snr_db: float
+    implied_pitch_m: float
+    nearest_catalogue_m: float
+    deviation_percent: float
+    chosen: bool
+    reason: str
+
+
+def _snr_at(bursts, f):
+    """Mean (over bursts) power near f over the median spectral floor (:data:`SNR_FLOOR_BAND_HZ`) [dB]."""
+    vals = []
+    for b in bursts:
+        n = b.x.size
+        if f >= b.fs / 2 or n / b.fs * f < 1.0:
+            continue
+        nfft = 1 << int(np.ceil(np.log2(SNR_ZERO_PAD * n)))
+        p = np.abs(np.fft.rfft((b.x - b.x.mean()) * np.hanning(n), nfft)) ** 2
+        fr = np.fft.rfftfreq(nfft, 1.0 / b.fs)
+        df = b.fs / n
+        near = np.abs(fr - f) <= df
+        lo, hi = SNR_FLOOR_BAND_HZ
+        floor = np.median(p[(fr > lo) & (fr < min(b.fs / 2, hi))]) / np.log(2.0)
+        vals.append(10 * np.log10(max(p[near].max(), TINY_POWER) / max(floor, TINY_POWER)))
+    return float(np.mean(vals)) if vals else float("nan")
+
+
+def hypotheses(bursts, f0, speed, teeth, pitch_range):
+    """Readings of the chosen peak f and of the periodicities it implies, with the pitch each gives."""
+    lo, hi = pitch_range
+    snr_f = _snr_at(bursts, f0)
+    rows = []
+
+    def row(name, f_link, chosen, reason):
+        p = speed / f_link
+        c, dev = nearest_catalogue(p)
+        return Hypothesis(name, float(f_link), _snr_at(bursts, f_link), float(p), c, float(dev), chosen, reason)
+
+    rows.append(
+        row(
+            "f is the link pass",
+            f0,
+            True,
+            f"strongest harmonic family in {1000 * lo:.0f}-{1000 * hi:.0f} mm (octave-safe harmonic-sum "
+            f"search), {snr_f:.0f} dB over the floor",
+        )
+    )
+    others = (
+        ("f is the 2nd link-pass harmonic", 0.5),
+        ("f is half the link pass", 2.0),
+        ("f is the step pass (3 links)", 3.0),
+        (f"f is the sprocket shaft (Z = {teeth})", teeth),
+    )
+    for name, factor in others:
+        fl = f0 * factor
+        p = speed / fl
+        if not lo <= p <= hi:
+            why = f"rejected: implies {1000 * p:.1f} mm, outside the plausible {1000 * lo:.0f}-{1000 * hi:.0f} mm"
+        else:
+            why = "rejected: less harmonic evidence than f in the family search"
+        rows.append(row(name, fl, False, why))
+    # what the chosen reading predicts elsewhere in the spectrum
+    for name, fe in (("step pass expected at f/3", f0 / 3.0), (f"sprocket shaft expected at f/{teeth}", f0 / teeth)):
+        snr = _snr_at(bursts, fe)
+        seen = (
+            "not resolved"
+            if math.isnan(snr)
+            else (f"seen, {snr:.0f} dB" if snr > SEEN_SNR_DB else f"weak, {snr:.0f} dB")
+        )
+        c, dev = nearest_catalogue(speed / f0)
+        reason = f"consequence of the chosen reading ({seen}); not a link-pass candidate"
+        rows.append(Hypothesis(name, float(fe), snr, float(speed / f0), c, float(dev), False, reason))
+    return rows
