@@ -224,6 +224,7 @@ READER_FLAGS = {
     "delimiter": "--delimiter",
     "decimal": "--decimal",
     "encoding": "--encoding",
+    "date_order": "--date-order",
 }
 _DELIMS = {
     "comma": ",",
@@ -306,6 +307,12 @@ def add_recording(sp, *, positional=True, channel=True):
     )
     g.add_argument("--decimal", choices=(".", ","), help="text files: the decimal mark (default: detected)")
     g.add_argument("--encoding", help="text files: the encoding, e.g. cp1252 (default: UTF-8, else cp1252)")
+    g.add_argument(
+        "--date-order",
+        choices=("dmy", "mdy"),
+        help="text files: numeric dates are day/month/year (dmy) or month/day/year (mdy) (default: "
+        "the order a day above 12 shows; dates that could be either are refused)",
+    )
 
 
 def reader_options(a, *, channel=False):
@@ -325,6 +332,7 @@ def reader_options(a, *, channel=False):
         delimiter=getattr(a, "delimiter", None),
         decimal=getattr(a, "decimal", None),
         encoding=getattr(a, "encoding", None),
+        date_order=getattr(a, "date_order", None),
     )
     if channel and getattr(a, "channel", None):
         opts["channel"] = a.channel

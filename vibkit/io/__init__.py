@@ -8,6 +8,9 @@ the table in :mod:`vibkit.io.registry`, in this order:
   (``CDF\\x01``) -> :mod:`vibkit.io.netcdf`;
 * waveform formats obspy reads (miniSEED, SAC, ...: by suffix, or binary content
   that is not HDF5) -> :mod:`vibkit.io.seismic`;
+* gzip and zip files holding one recording: unpacked, the recording read as below;
+* device exports with their own header (Empatica E4, ActiGraph RAW CSV, LabVIEW ``.lvm``)
+  -> :mod:`vibkit.io.devices`, :mod:`vibkit.io.lvm`; a WitMotion binary log is named and refused;
 * text (CSV, TSV, logger and spreadsheet exports) -> :mod:`vibkit.io.text.csv`.
 
 Every dataset carries ``source_file``, ``sha256``, ``reader``,
@@ -137,7 +140,7 @@ def _open_checked(spath: str, limit: int):
     return data
 
 
-def _check_options(sample_rate, resample, gap_factor, delimiter, decimal):
+def _check_options(sample_rate, resample, gap_factor, delimiter, decimal, date_order=None):
     if sample_rate is not None:
         try:
             fs = float(sample_rate)
@@ -157,6 +160,8 @@ def _check_options(sample_rate, resample, gap_factor, delimiter, decimal):
         raise ValueError(f"delimiter must be one of ',', ';', '\\t', '|', ' ' (whitespace), got {delimiter!r}")
     if decimal is not None and decimal not in (".", ","):
         raise ValueError(f"decimal must be '.' or ',', got {decimal!r}")
+    if date_order is not None and date_order not in ("dmy", "mdy"):
+        raise ValueError(f"date_order must be 'dmy' (day/month/year) or 'mdy' (month/day/year), got {date_order!r}")
 
 
 def read_recording(
@@ -175,6 +180,7 @@ def read_recording(
     encoding=None,
     max_bytes=None,
     format=None,
+    date_order=None,
 ):
     """Read a field recording (or a vibkit result) into an xarray Dataset.
 
@@ -226,6 +232,10 @@ def read_recording(
         :func:`format_names`: ``"netcdf"``, ``"seismic"``, ``"text"``) instead of
         the one its content and suffix choose (see :mod:`vibkit.io.registry`).
 
+    date_order : {"dmy", "mdy"}, optional
+        Text files: the order of numeric dates ``05/11/2025``.  Default: the order a field above
+        12 shows; dates that could be either are refused, naming this option.
+
     Returns
     -------
     xarray.Dataset
@@ -252,7 +262,7 @@ def read_recording(
     >>> ds["tensioner_displacement"].attrs["units"]  # doctest: +SKIP
     'm'
     """
-    _check_options(sample_rate, resample, gap_factor, delimiter, decimal)
+    _check_options(sample_rate, resample, gap_factor, delimiter, decimal, date_order)
     fmt = None if format is None else get_format(format)
     if not isinstance(path, (str, os.PathLike)):
         raise ValueError(f"path must be a file path (str or os.PathLike), got {type(path).__name__}")
@@ -272,6 +282,7 @@ def read_recording(
         delimiter=delimiter,
         decimal=decimal,
         encoding=encoding,
+        date_order=date_order,
     )
     entry = detect_format(spath, data, encoding) if fmt is None else fmt
     return entry.read(spath, data, options)

@@ -196,10 +196,12 @@ def analyse(
 ) -> ReportContext:
     """Everything :func:`vibkit.diagnose.report.write_report` draws (same parameters, no output)."""
     from ...io import read_recording
+    from ...io.channels import own_samples
     from ...model.scene import Scene, load_scene
     from ...signal import hampel_events
     from ...signal.bursts import uniform_bursts
-    from ..pitch import DEFAULT_LIMITS_PERCENT, estimate_pitch, pick_channel
+    from ..channels import estimate_channels
+    from ..pitch import DEFAULT_LIMITS_PERCENT, pick_channel
 
     limits = tuple(limits_percent) if limits_percent is not None else DEFAULT_LIMITS_PERCENT
     from ...io import RecordingError
@@ -215,7 +217,6 @@ def analyse(
         rec = read_recording(recording, channel=channel, **opts)  # e.g. traces on different time bases
     measured, measured_source = measurement_date(rec, date)
     ch = pick_channel(rec, channel)
-    units = str(rec[ch].attrs.get("units", "1"))
     sc = None
     if scene is not None:
         sc = scene if isinstance(scene, Scene) else load_scene(scene)
@@ -234,32 +235,35 @@ def analyse(
             )
     if nominal_pitch is None and sc is not None:
         nominal_pitch = sc.chain.link_pitch
-    bursts = uniform_bursts(rec, ch)
-    pitch = None
-    f0 = None
+    # the per-channel decision of `spectrum` and `pitch` (vibkit.diagnose.channels.estimate_channels): every
+    # vibration channel (or the one asked for) estimated, channels that disagree refused, the numbers
+    # from the channel with the smallest sigma
     if speed is not None:
-        pitch = estimate_pitch(
-            rec,
+        kw = dict(
             speed=speed,
             speed_sigma=speed_sigma,
-            channel=ch,
             band=band,
             nominal_pitch=nominal_pitch,
             limits_percent=limits,
             teeth=sc.sprocket.teeth if sc else 28,
         )
-        f0 = pitch.fundamental_hz
-    else:
-        # frequency only: the same burst-combined estimator, with a unit "speed"
-        fonly = estimate_pitch(rec, speed=1.0, channel=ch, band=band or (2.5, 6.0), frequency_only=True)
-        f0 = fonly.fundamental_hz
+    else:  # frequency only: the same burst-combined estimator, with a unit "speed"
+        kw = dict(speed=1.0, band=band or (2.5, 6.0), frequency_only=True)
         notes.append("no speed known: link-pass frequency only, no pitch (give --speed)")
-    decided = pitch if pitch is not None else fonly  # the shared decision (vibkit.diagnose.decision)
-    found = decided.has_link_pass
+    decided = estimate_channels(rec, channel=channel, **kw)
+    found = decided.best is not None
+    est = decided.best if found else next((e for e in decided.estimates if e.channel == ch), decided.estimates[0])
+    ch = est.channel
+    units = str(rec[ch].attrs.get("units", "1"))
+    bursts = uniform_bursts(own_samples(rec, ch), ch)
+    f0 = est.fundamental_hz
+    pitch = est if speed is not None else None
+    if found and len(decided.estimates) > 1:
+        notes.append(f"channel {ch}: {decided.reason}")
     if not found:
         notes.insert(0, f"{decided.status.upper()}: {decided.reason}; no frequency, pitch or elongation can be given")
         # the pages below mark harmonics of f0: show the search band's centre, unmarked
-        band_used = (pitch if pitch is not None else fonly).band_hz
+        band_used = est.band_hz
         f0 = float(np.sqrt(band_used[0] * band_used[1]))
         pitch = None
     comp = None
@@ -297,7 +301,7 @@ def analyse(
         np.sum(np.isclose(x_all, hi, rtol=0, atol=1e-9 * max(abs(hi), 1e-30)))
         + np.sum(np.isclose(x_all, lo, rtol=0, atol=1e-9 * max(abs(lo), 1e-30)))
     )
-    clipped = clip_n > 4
+    clipped = clip_n > 4 and not _quantisation_explains_extremes(x_all, rec[ch].attrs.get("quantum"))
     date = report_date()
     summary = {
         "file": os.path.basename(os.fspath(recording)),
@@ -366,6 +370,25 @@ def analyse(
         measurement_date_source=measured_source,
         ride=ride,
     )
+
+
+def _quantisation_explains_extremes(x, q):
+    """Whether the samples at the extreme values of a quantised channel are its resolution, not clipping.
+
+    A signal quantised in steps ``q`` sits at its extreme levels for as long as it moves less than a
+    step there (a sine at 0.1 m/s^2 resolution holds its crest level about 1.4 times as long as the
+    level next to it); a clipped one piles up there: the extreme level then holds over 3 times the
+    samples of the level next to it.
+    """
+    if not q:
+        return False
+    lo, hi = float(np.min(x)), float(np.max(x))
+    tol = 0.25 * float(q)
+
+    def count(v):
+        return int(np.sum(np.abs(x - v) < tol))
+
+    return count(hi) <= 3 * max(count(hi - q), 1) and count(lo) <= 3 * max(count(lo + q), 1)
 
 
 def _ride(rec, result, sc, notes):
