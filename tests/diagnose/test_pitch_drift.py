@@ -143,3 +143,31 @@ def test_field_files_keep_their_verdicts(path, speed, f, verdict):
     assert est.status == STATUS_OK and est.verdict == verdict
     assert abs(est.fundamental_hz - f) < 0.01
     assert est.parts["checked"] and est.parts["wander_percent"] < 100 * MAX_PART_WANDER
+
+
+def test_decide_on_the_parts_wander():
+    """At the thresholds: up to MAX_PART_WANDER a verdict, over it inconclusive naming the wander, over
+    MAX_WANDER no link-pass; not checked (None) changes nothing."""
+    from vibkit.diagnose.decision import MAX_WANDER, STATUS_NOT_FOUND, LinkPassEvidence, decide
+
+    base = dict(
+        detected=True,
+        detection_hz=3.76,
+        resolution_hz=0.05,
+        fundamental_hz=3.76,
+        fundamental_sigma_hz=1e-4,
+        band_hz=(2.5, 6.25),
+        speed_m_s=0.5,
+        nominal_pitch_m=0.5 / 3.76,
+        part_summary="8 parts of 75 s give 3.75-3.77 Hz",
+    )
+    assert decide(LinkPassEvidence(**base)).verdict == "ok"
+    assert decide(LinkPassEvidence(**base, part_wander=MAX_PART_WANDER)).verdict == "ok"
+    over = decide(LinkPassEvidence(**base, part_wander=1.5 * MAX_PART_WANDER))
+    assert over.status == STATUS_INCONCLUSIVE and over.verdict == "inconclusive"
+    assert "wanders 0.15 % between parts" in over.reason and "3.75-3.77 Hz" in over.reason
+    assert not over.checks["steady between parts"]
+    far = decide(LinkPassEvidence(**base, part_wander=1.2 * MAX_WANDER))
+    assert far.status == STATUS_NOT_FOUND and "wanders 3 %" in far.reason
+    no_nominal = decide(LinkPassEvidence(**{**base, "nominal_pitch_m": None}, part_wander=0.004))
+    assert no_nominal.status == STATUS_INCONCLUSIVE and no_nominal.verdict is None
