@@ -15,13 +15,14 @@ nominal pitch by construction: one sprocket turn always moves Z links whatever t
 link-pass frequency is Z times the shaft frequency and ``v_nominal / f = L_nominal``.
 
 :func:`estimate_pitch` runs the steps of :mod:`vibkit.diagnose.pitch_steps` in order: bursts ->
-detection -> per-burst estimates -> method -> combination -> pitch -> decision.
+detection -> per-burst estimates -> method -> combination -> parts check (:mod:`vibkit.diagnose.pitch_parts`:
+the sigma against the record's own spread, the source's wander) -> pitch -> decision.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -40,6 +41,7 @@ from .decision import (
     decide,
     elongation_verdict,
 )
+from .pitch_parts import check_parts
 from .pitch_steps import Hypothesis
 
 __all__ = [
@@ -120,6 +122,7 @@ class PitchEstimate:
     invalid_samples: dict = field(default_factory=dict)
     decision: Decision | None = None
     speed_source: str = "given"
+    parts: dict = field(default_factory=dict)
 
     @property
     def has_link_pass(self) -> bool:
@@ -174,6 +177,7 @@ class PitchEstimate:
             "harmonics": [dict(h) for h in self.harmonics],
             "bursts": [dict(b) for b in self.per_burst],
             "burst_chi2_per_dof": None if math.isnan(self.chi2_per_dof) else self.chi2_per_dof,
+            "parts": dict(self.parts),
             "hypotheses": [vars(h).copy() for h in self.hypotheses],
             "warnings": list(self.warnings),
             "notes": list(self.notes),
@@ -282,13 +286,18 @@ def estimate_pitch(
     ests, skipped = steps.estimate_bursts(prep, name=name, band=req.band, n_harmonics=n_harmonics)
     ests = steps.choose_methods(ests)
     comb = steps.combine(ests)
-    warnings = [*prep.warnings, *skipped, *comb.warnings]
+    parts, sigma = check_parts(ests, comb)
+    comb = replace(comb, sigma=sigma)
+    warnings = [*prep.warnings, *skipped, *comb.warnings, *parts.warnings]
     for w in (w for be in ests for w in be.spectral.warnings):
         if w not in warnings:
             warnings.append(w)
     pitch, psig, caveats, notes = steps.pitch_from(comb, req)
     warnings += caveats
-    dec = decide(steps.evidence(det, ests, comb, req, speed_source=speed_source))
+    notes.append(f"parts check: {parts.reason}")
+    ev = steps.evidence(det, ests, comb, req, speed_source=speed_source)
+    ev = replace(ev, part_wander=parts.wander if parts.checked else None, part_summary=_part_summary(parts))
+    dec = decide(ev)
     if not dec.has_link_pass:
         # refused: no frequency, pitch or verdict leaves this function (the reason says what the family implies)
         return _refusal(common, det, dec, [dec.reason, *warnings], notes, comb.method, comb.method_reason)
@@ -305,9 +314,18 @@ def estimate_pitch(
         detection=det.as_dict(),
         decision=dec,
         status=dec.status,
+        parts=parts.as_dict(),
         **common,
     )
     return PitchEstimate(**res, **_numbers(ests, comb, req, pitch, psig, dec))
+
+
+def _part_summary(parts):
+    """The parts' frequencies in a few words, for the decision's reason (empty when not checked)."""
+    if not parts.checked:
+        return ""
+    f = parts.frequencies_hz
+    return f"{parts.n_parts} parts of {parts.part_s:.3g} s give {min(f):.5g}-{max(f):.5g} Hz"
 
 
 def _request(speed, speed_sigma, band, nominal_pitch, limits_percent, pitch_range, teeth, p_fa, frequency_only):
