@@ -136,3 +136,14 @@ def test_three_worn_links_converge_at_the_default_tolerance():
     ds = vibkit.simulate(sc, progress=False)
     v = json.loads(ds.attrs["convergence"])
     assert v["converged"] is True and v["agrees_at_rtol"] == pytest.approx(1e-7), v["message"]
+
+
+def test_a_larger_roller_indents_the_teeth_by_its_extra_radius():
+    """A roller's own radius reaches the contact: a roller on the sprocket 10 mm and 11 mm larger than
+    its neighbours indents a tooth, 1 mm more for the 1 mm more radius (to rounding); the others
+    stay clear."""
+    worst = {}
+    for r in (0.045, 0.046):
+        worst[r], model = t0_penetration(scene(f"roller_radius_by_roller = [[72, {r}]]"))
+    assert worst[0.045] > 0.0
+    assert worst[0.046] - worst[0.045] == pytest.approx(1e-3, abs=1e-12)

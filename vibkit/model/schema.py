@@ -107,7 +107,10 @@ class ChainSection(_Section):
     roller_radius: float = key("m", "roller radius r_d", _RC.roller_radius)
     roller_mass: float = key("kg", "point mass per roller (a third of a step plus one pitch of chain)", _RC.roller_mass)
     n_rollers: int | str = key(
-        "", 'number of rollers, or "fill": as many links as fit the guide', "fill", types=(int, str)
+        "",
+        'number of rollers, or "fill": as many links of link_pitch as fit the guide (an elongated chain keeps them)',
+        "fill",
+        types=(int, str),
     )
     worn_link: int = key(
         "", "number (1..n) of one link of another pitch (with worn_link_pitch); not set: no worn link", types=(int,)
