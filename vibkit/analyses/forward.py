@@ -289,7 +289,8 @@ def default_rtol(effects):
 
     rtol = 1e-7 min(1, (1e6 / k)^3, (0.3 / c)^2) for a contact stiffness k [N/m^exponent] and a
     contact damping c [s/m], at least 1e-11. Measured on the shipped scenes and their stiffness x0.1
-    and x10 variants against runs at 1e-12 (README, "Numerics"): at k = 1e7 the no-load chain needs
+    and x10 variants against runs at 1e-12
+    (docs/explanation/numerics.md): at k = 1e7 the no-load chain needs
     1e-10 (las-palmas, damped, 1e-9), at k <= 1e6 every scene is right at 1e-7. A stiffer contact
     makes each impact a shorter, harder event, and the undamped chain carries the error of every
     impact in where it sits in its backlash. Damping: las-palmas (c = 0.3 s/m) is right at 1e-7,
