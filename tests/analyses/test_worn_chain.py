@@ -147,3 +147,17 @@ def test_a_larger_roller_indents_the_teeth_by_its_extra_radius():
         worst[r], model = t0_penetration(scene(f"roller_radius_by_roller = [[72, {r}]]"))
     assert worst[0.045] > 0.0
     assert worst[0.046] - worst[0.045] == pytest.approx(1e-3, abs=1e-12)
+
+
+@pytest.mark.slow
+def test_elongated_chain_on_the_table_finds_the_exact_closures_history(elongated_run):
+    """With the table (its nodes halved for the extended tensioner) the check at the default
+    tolerance says what it says with the exact closure: not converged at 1e-7, converged from 1e-9,
+    with the exact closure's contact history (with 2 mm nodes no two tolerances agreed)."""
+    ds = vibkit.simulate(scene(ELONGATED, solver="check = true"), progress=False)
+    v = json.loads(ds.attrs["convergence"])
+    assert v["converged"] is False and v["agrees_at_rtol"] == pytest.approx(1e-9), v["message"]
+    exact = json.loads(elongated_run.attrs["convergence"])["runs"][0]
+    table = next(r for r in v["runs"] if r["rtol"] == pytest.approx(1e-9))
+    assert table["contact_episodes"] == exact["contact_episodes"]
+    assert table["last_contact_s"] == pytest.approx(exact["last_contact_s"], abs=0.01)
