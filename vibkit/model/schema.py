@@ -113,7 +113,10 @@ class ChainSection(_Section):
         types=(int, str),
     )
     worn_link: int = key(
-        "", "number (1..n) of one link of another pitch (with worn_link_pitch); not set: no worn link", types=(int,)
+        "",
+        "number (1..n) of one link of another pitch (with worn_link_pitch): shorthand for worn_links = "
+        "[[worn_link, worn_link_pitch]]; not set: none",
+        types=(int,),
     )
     worn_link_pitch: float = key("m", "pitch of the worn link (with worn_link); not set: no worn link")
     worn_links: tuple = key(
