@@ -66,6 +66,16 @@ def test_stiff_contact_not_converged_at_1e_6_and_found_at_1e_10():
     assert "set [solver] rtol = 1e-10" in v["message"]
 
 
+def test_damped_contact_gets_a_converged_default_tolerance():
+    """Las Palmas with ten times its contact damping (3 s/m) is not converged at 1e-7; the default
+    tolerance accounts for the damping (1e-9) and the check finds it converged there."""
+    sc = scene("las-palmas", solver={"check": True})
+    sc = replace(sc, effects=dict(sc.effects, contact=replace(sc.effects["contact"], damping=3.0)))
+    v = convergence(vibkit.simulate(sc, progress=False))
+    assert v["rtol"] == pytest.approx(1e-9)
+    assert v["converged"] is True, v["message"]
+
+
 def test_conservative_stiff_chain_is_reported_sensitive():
     """No motor, no damping, k = 1e7, 25 s from 0.5 m/s: the chain rattles chaotically in its
     backlash, no two tolerances from 1e-6 to 1e-12 give the same contact history; what is still

@@ -53,6 +53,7 @@ from ..model.slots import (
     PRM_PASS_BOARD,
     PRM_PASS_MASS,
     PRM_PASS_STEP,
+    PRM_RADII,
     PRM_TABLE,
 )
 from ..model.sprocket import contact_kernel
@@ -202,6 +203,7 @@ def assemble(t, y, prm, pitches, linear, alpha, beta, ws, data, rhs):
             fp[FP_TOOTH_PITCH],
             ip[IP_TEETH],
             fp[FP_ROLLER_RADIUS],
+            prm[PRM_RADII],
             fp[FP_STIFFNESS],
             fp[FP_EXPONENT],
             fp[FP_DAMPING],

@@ -140,7 +140,7 @@ def pack_parameters(model, effects: dict, *, start: float = 0.0):
     fp[FP["lt"]] = model.guide.params.tensioner_length
     fp[FP["pitch"]] = model.pitch
     fp[FP["inertia"]] = model.sprocket.inertia
-    fp[FP["r_d"]] = model.scene.chain.roller_radius
+    fp[FP["r_d"]] = float(model.radii.max())  # the largest roller: how far a roller can reach
     fp[FP["cx"]], fp[FP["cz"]] = model.centre
     fp[FP["root_r"]] = geo["root_radius"]
     fp[FP["psi"]] = geo["tooth_pitch"]
@@ -148,9 +148,7 @@ def pack_parameters(model, effects: dict, *, start: float = 0.0):
     # contact candidates: roller centres within reach of a tooth's farthest corner (the tip corners
     # B and C lie beyond R^F + h: sqrt((R^F + h)^2 + (tip width / 2)^2))
     loc = model.corners_local
-    fp[FP["reach"]] = (
-        float(np.max(np.hypot(loc[:, 0], geo["root_radius"] + loc[:, 1]))) + model.scene.chain.roller_radius
-    )
+    fp[FP["reach"]] = float(np.max(np.hypot(loc[:, 0], geo["root_radius"] + loc[:, 1]))) + fp[FP["r_d"]]
     ip[IP["n"]] = n
     ip[IP["nteeth"]] = model.sprocket.teeth
     if "gravity" in effects:
@@ -187,7 +185,8 @@ def pack_parameters(model, effects: dict, *, start: float = 0.0):
         fp[FP["mu_rr"]] = effects["rolling_resistance"].coefficient
         if "gravity" not in effects:
             fp[FP["g"]] = gravity_of(effects)
-    return (model.guide.table, model.corners_local, fp, ip, model.mass.copy(), pm, ps, pb, pa, model.chain.pitches)
+    prm = (model.guide.table, model.corners_local, fp, ip, model.mass.copy(), pm, ps, pb, pa, model.chain.pitches)
+    return prm + (model.radii.copy(),)
 
 
 def reset_closure(info, delta):
@@ -323,7 +322,7 @@ def evaluate(t, y, dy, prm, ws, want_teeth):
     slope ``INFO_DH_DDELTA`` (zero them to close from delta alone: see ``reset_closure``). Status 0
     is success; 1 means the chain could not be closed (the state left the tensioner's travel).
     """
-    tab, loc, fp, ip, mass, pm, ps, pb, pa, pitches = prm
+    tab, loc, fp, ip, mass, pm, ps, pb, pa, pitches, radii = prm
     (s0, kk, lam, xs, zs, part, alpha, beta, jac, gam, hacc, eta, sd, fx, fz, cand, ind_t, frc_t, info) = ws
     n = ip[IP_N]
     p0, lt = fp[FP_P0], fp[FP_LT]
@@ -397,6 +396,7 @@ def evaluate(t, y, dy, prm, ws, want_teeth):
             fp[FP_TOOTH_PITCH],
             ip[IP_TEETH],
             fp[FP_ROLLER_RADIUS],
+            radii,
             fp[FP_STIFFNESS],
             fp[FP_EXPONENT],
             fp[FP_DAMPING],

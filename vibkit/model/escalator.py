@@ -28,10 +28,13 @@ class EscalatorModel:
         self.sprocket = scene.sprocket
         self.n = scene.chain.n_rollers
         self.pitch = scene.chain.link_pitch
-        self.mass = np.full(self.n, scene.chain.roller_mass)
+        #: the pitch the sprocket's teeth are cut for (the chain's own unless the scene says otherwise) [m]
+        self.sprocket_pitch = self.sprocket.cut_pitch(self.pitch)
+        self.mass = scene.chain.masses()
+        self.radii = scene.chain.radii()
         self.centre = np.array(scene.guide.sprocket_centre)
-        self.geometry = tooth_geometry(self.sprocket, self.pitch, scene.chain.roller_radius)
-        self.corners_local = local_corners(self.sprocket, self.pitch, scene.chain.roller_radius)
+        self.geometry = tooth_geometry(self.sprocket, self.sprocket_pitch, scene.chain.roller_radius)
+        self.corners_local = local_corners(self.sprocket, self.sprocket_pitch, scene.chain.roller_radius)
 
     @property
     def pitch_radius(self) -> float:

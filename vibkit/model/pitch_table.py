@@ -104,6 +104,8 @@ def table_applies(model) -> str | None:
         return "the links' pitches differ (the chain does not repeat after one pitch)"
     if not np.all(model.mass == model.mass[0]):
         return "the rollers' masses differ"
+    if not np.all(model.radii == model.radii[0]):
+        return "the rollers' radii differ"
     return None
 
 
@@ -514,7 +516,7 @@ def table_evaluate(t, y, dy, prm, ws, want_teeth, tb):
     ``info`` slots as :func:`vibkit.model.effects.evaluate` (delta, its rates, motor and contact
     quantities), with the closure read from the table instead of solved. Only the contact
     candidates' positions land in ``ws``. Returns 0."""
-    _, loc, fp, ip, mass, pm, ps, pb, pa, _ = prm
+    _, loc, fp, ip, mass, pm, ps, pb, pa, _, radii = prm
     (_, _, _, xs, zs, _, _, _, jac, _, _, vxs, vzs, fx, fz, cand, ind_t, frc_t, info) = ws
     head, up, mc, vc, dc = tb[TB_HEAD], tb[TB_UP], tb[TB_MC], tb[TB_VC], tb[TB_DC]
     xc, zc, sc, cand0, cc = tb[TB_XC], tb[TB_ZC], tb[TB_SC], tb[TB_CAND], tb[TB_CC]
@@ -594,6 +596,7 @@ def table_evaluate(t, y, dy, prm, ws, want_teeth, tb):
             fp[FP_TOOTH_PITCH],
             ip[IP_TEETH],
             fp[FP_ROLLER_RADIUS],
+            radii,
             fp[FP_STIFFNESS],
             fp[FP_EXPONENT],
             fp[FP_DAMPING],

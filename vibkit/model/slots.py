@@ -38,7 +38,19 @@ def _slots(names: tuple[str, ...]) -> dict[str, int]:
 
 
 # --- the parameter tuple ------------------------------------------------------------------------
-PRM_NAMES = ("table", "corners", "fp", "ip", "mass", "pass_mass", "pass_step", "pass_board", "pass_alight", "pitches")
+PRM_NAMES = (
+    "table",
+    "corners",
+    "fp",
+    "ip",
+    "mass",
+    "pass_mass",
+    "pass_step",
+    "pass_board",
+    "pass_alight",
+    "pitches",
+    "radii",
+)
 PRM = _slots(PRM_NAMES)
 PRM_TABLE = PRM["table"]  # the guide's segment table (vibkit.model.guide)
 PRM_CORNERS = PRM["corners"]  # tooth corners in the tooth's own frame (4, 2) [m]
@@ -50,6 +62,7 @@ PRM_PASS_STEP = PRM["pass_step"]  # passengers' steps (1-based)
 PRM_PASS_BOARD = PRM["pass_board"]  # boarding time [s] or place (s0 of the step's middle roller) [m]
 PRM_PASS_ALIGHT = PRM["pass_alight"]  # alighting time [s] or place [m]
 PRM_PITCHES = PRM["pitches"]  # link lengths (n) [m]
+PRM_RADII = PRM["radii"]  # roller radii (n) [m]
 
 # --- float parameters ---------------------------------------------------------------------------
 FP_NAMES = (
