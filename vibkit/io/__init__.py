@@ -82,6 +82,28 @@ def max_recording_bytes(max_bytes=None) -> int:
     return int(max_bytes)
 
 
+def read_bounded(f, size_hint: int, limit: int) -> bytes:
+    """At most ``limit + 1`` bytes of the binary stream ``f``, with memory in proportion to what it holds.
+
+    The first read asks for the size the file states (``size_hint`` + 1, at least 64 KiB), so a
+    regular file is read in one call; a stream that holds more (a file that grows, ``/proc``,
+    stdin) is read on in chunks that double, never past ``limit + 1``: a buffer of the limit's
+    size is never reserved up front.
+    """
+    want = min(limit + 1, max(int(size_hint) + 1, 1 << 16))
+    data = f.read(want)
+    if len(data) < want:
+        return data
+    chunks, total = [data], len(data)
+    while total <= limit:
+        chunk = f.read(min(limit + 1 - total, max(total, 1 << 20)))
+        if not chunk:
+            break
+        chunks.append(chunk)
+        total += len(chunk)
+    return b"".join(chunks)
+
+
 def _open_checked(spath: str, limit: int):
     """Open a regular file for reading, refusing anything else before it is opened."""
     if not os.path.lexists(spath):
@@ -122,7 +144,7 @@ def _open_checked(spath: str, limit: int):
         if not stat.S_ISREG(st2.st_mode):
             raise RecordingError(spath, None, "is not a regular file; expected a recording file on disk")
         with os.fdopen(fd, "rb", closefd=False) as f:
-            data = f.read(limit + 1)  # bounded: a file that grows (or /proc) cannot exhaust memory
+            data = read_bounded(f, st2.st_size, limit)
     except OSError as exc:
         raise RecordingError(spath, None, f"cannot be read: {exc.strerror or exc}") from None
     finally:
