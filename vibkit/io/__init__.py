@@ -181,6 +181,57 @@ def _check_options(sample_rate, resample, gap_factor, delimiter, decimal):
         raise ValueError(f"decimal must be '.' or ',', got {decimal!r}")
 
 
+#: the path that names standard input (``vibkit pitch -``); its records name it :data:`STDIN_NAME`
+STDIN = "-"
+STDIN_NAME = "<stdin>"
+
+
+_stdin_read: list = [None, b""]  # the stream read and its bytes
+
+
+def _read_stdin(fmt, limit, options):
+    """Read a recording from standard input: its bytes (bounded by ``limit``), sniffed like a file's.
+
+    Standard input is read once per process (a second read of ``"-"`` gets the same bytes).
+    The text reader reads the bytes; a format whose library opens a path (netCDF, obspy's) gets
+    them in a temporary file that is removed after the read, and its messages name ``<stdin>``.
+    """
+    import sys
+    import tempfile
+
+    stream = getattr(sys.stdin, "buffer", sys.stdin)
+    if stream is None or stream.isatty():
+        raise RecordingError(STDIN_NAME, None, "standard input is a terminal; pipe a recording into it (cat rec.csv |)")
+    if stream is not _stdin_read[0]:  # read once: a second read of "-" (a retry with --channel) gets the same bytes
+        try:
+            _stdin_read[:] = [stream, read_bounded(stream, 0, limit)]
+        except OSError as exc:
+            raise RecordingError(STDIN_NAME, None, f"cannot be read: {exc.strerror or exc}") from None
+    data = _stdin_read[1]
+    if len(data) > limit:
+        raise RecordingError(
+            STDIN_NAME,
+            None,
+            f"holds more than the {_gib(limit)} limit for a recording "
+            f"(raise it with max_bytes= or the environment variable {_MAX_ENV})",
+        )
+    if not data:
+        raise RecordingError(STDIN_NAME, None, "is empty (0 bytes); expected a recording")
+    entry = detect_format(STDIN_NAME, data, options["encoding"]) if fmt is None else fmt
+    if entry.name == "text":
+        return entry.read(STDIN_NAME, data, options)
+    with tempfile.TemporaryDirectory(prefix="vibkit-stdin-") as folder:
+        tmp = os.path.join(folder, "stdin" + (".nc" if entry.name == "netcdf" else ""))
+        with open(tmp, "wb") as f:
+            f.write(data)
+        try:
+            ds = entry.read(tmp, data, options)
+        except RecordingError as err:
+            raise RecordingError(STDIN_NAME, err.line, err.message.replace(tmp, STDIN_NAME)) from None
+    ds.attrs["source_file"] = STDIN_NAME
+    return ds
+
+
 def read_recording(
     path,
     *,
@@ -203,7 +254,8 @@ def read_recording(
     Parameters
     ----------
     path : str or os.PathLike
-        CSV/text export, waveform file (miniSEED, SAC ...) or netCDF4/HDF5.
+        CSV/text export, waveform file (miniSEED, SAC ...) or netCDF4/HDF5; ``"-"`` reads standard
+        input (its format sniffed from its bytes; the result's ``source_file`` is ``<stdin>``).
     channel : str or list of str, optional
         Keep only these channels, matched (case-insensitively) against the
         column header as found, its name without unit, or the variable name;
@@ -278,10 +330,6 @@ def read_recording(
     fmt = None if format is None else get_format(format)
     if not isinstance(path, (str, os.PathLike)):
         raise ValueError(f"path must be a file path (str or os.PathLike), got {type(path).__name__}")
-    spath = os.fspath(path)
-    data = _open_checked(spath, max_recording_bytes(max_bytes))
-    if not data:
-        raise RecordingError(spath, None, "file is empty (0 bytes); expected a recording")
     options = dict(
         channel=channel,
         sample_rate=sample_rate,
@@ -295,5 +343,11 @@ def read_recording(
         decimal=decimal,
         encoding=encoding,
     )
+    spath = os.fspath(path)
+    if spath == STDIN:
+        return _read_stdin(fmt, max_recording_bytes(max_bytes), options)
+    data = _open_checked(spath, max_recording_bytes(max_bytes))
+    if not data:
+        raise RecordingError(spath, None, "file is empty (0 bytes); expected a recording")
     entry = detect_format(spath, data, encoding) if fmt is None else fmt
     return entry.read(spath, data, options)
