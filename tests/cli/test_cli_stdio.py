@@ -90,6 +90,7 @@ def test_simulate_to_stdout_writes_the_result_and_no_file(monkeypatch, tmp_path,
     (tmp_path / "k.nc").write_bytes(data)
     ds = vibkit.read_recording(tmp_path / "k.nc")
     assert ds["delta"].attrs["units"] == "m"
+    assert ds.attrs["Conventions"] == "CF-1.10"
 
 
 def test_stdout_output_with_json_is_refused(tmp_path, monkeypatch, capsys):
