@@ -18,7 +18,10 @@ class BuildWithScenes(build_py):
         super().run()
         target = Path(self.build_lib) / "vibkit" / "scenes"
         target.mkdir(parents=True, exist_ok=True)
-        for scene in sorted((HERE / "sim").glob("*.toml")):
+        scenes = sorted((HERE / "sim").glob("*.toml"))
+        if not scenes:
+            raise RuntimeError(f"{HERE / 'sim'}: no scene (*.toml) to ship in vibkit/scenes/")
+        for scene in scenes:
             shutil.copyfile(scene, target / scene.name)
 
 

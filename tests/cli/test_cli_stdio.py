@@ -108,3 +108,15 @@ def test_folder_outputs_refuse_stdout(tmp_path, monkeypatch, capsys):
     err = capsys.readouterr().err
     assert rc == 1 and "-o -" in err and "Zarr" in err
     assert os.listdir(tmp_path) == []
+
+
+def test_ride_reads_stdin_and_takes_a_shipped_scene_name(monkeypatch, capsys):
+    phyphox = ROOT / "data" / "field" / "layouts" / "phyphox.csv"
+    assert main(["ride", str(phyphox), "--segment", "0.5:3", "--json"]) == 0
+    from_file = json.loads(capsys.readouterr().out)
+    _stdin(monkeypatch, phyphox.read_bytes())
+    assert main(["ride", "-", "--segment", "0.5:3", "--json"]) == 0
+    piped = json.loads(capsys.readouterr().out)
+    assert piped.pop("source") == "-"
+    from_file.pop("source")
+    assert piped == from_file
