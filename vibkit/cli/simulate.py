@@ -11,7 +11,7 @@ from .output import check_output, is_stdout, output_path, print_json, table
 
 EPILOG = (
     "examples:\n  vibkit simulate sim/leon.toml -o reports/leon.nc --duration 10\n"
-    "  vibkit simulate las-palmas --duration 1 -o - > out.nc   (a shipped scene by name; netCDF to stdout)"
+    "  vibkit simulate las-palmas -o - > lp.nc   (a shipped scene by name; netCDF on stdout)"
 )
 
 
