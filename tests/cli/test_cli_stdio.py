@@ -120,3 +120,15 @@ def test_ride_reads_stdin_and_takes_a_shipped_scene_name(monkeypatch, capsys):
     assert piped.pop("source") == "-"
     from_file.pop("source")
     assert piped == from_file
+
+
+@pytest.mark.slow  # a report simulates the scene
+def test_report_from_stdin_to_stdout(monkeypatch, tmp_path, capsys):
+    monkeypatch.chdir(tmp_path)
+    _stdin(monkeypatch, LEON.read_bytes())
+    buf = _stdout(monkeypatch)
+    rc = main(["report", "-", "--scene", str(ROOT / "sim" / "leon.toml"), "--duration", "2", "-o", "-"])
+    assert rc == 0, capsys.readouterr().err
+    assert buf.getvalue().startswith(b"%PDF-") and buf.getvalue().rstrip().endswith(b"%%EOF")
+    assert "wrote - (" in capsys.readouterr().err
+    assert os.listdir(tmp_path) == []
