@@ -17,7 +17,7 @@ from .options import (
     speed_sigma,
     workers,
 )
-from .output import CLIError, check_output, msg, print_json, table
+from .output import CLIError, check_output, is_stdout, msg, output_path, print_json, table
 
 EPILOG = (
     "examples (on the shipped example fleet, data/fleet-example/):\n"
@@ -240,9 +240,14 @@ def run_status(a):
 
 
 def run_report(a):
+    with output_path(a.output, ".pdf") as target:  # '-o -': written to a temporary file, then to stdout
+        return _run_report(a, target)
+
+
+def _run_report(a, target):
     from vibkit.diagnose.report import write_fleet_report
 
-    check_output(a.output, [], a.force)
+    check_output(a.output, [], a.force, json_flag=a.json)
     with _fleet_db(a, create=False) as db:
         check_output(a.output, [db.path], a.force)
         trends = db.status(limits_percent=a.limits)
@@ -250,12 +255,13 @@ def run_report(a):
         path = db.path
     if not trends:
         raise CLIError(f"{path}: no measurement stored yet; nothing to report")
-    rep = write_fleet_report(trends, meas, a.output, limits_percent=a.limits, database=path)
+    rep = write_fleet_report(trends, meas, target, limits_percent=a.limits, database=path)
+    shown = a.output if is_stdout(a.output) else rep.path
     if a.json:
         print_json(
             "fleet.report",
             {
-                "output": rep.path,
+                "output": shown,
                 "database": path,
                 "pages": [t for t, _ in rep.pages],
                 "units": len(trends),
@@ -264,7 +270,7 @@ def run_report(a):
         )
     else:
         print(
-            f"wrote {rep.path} ({len(rep.pages)} page(s): the work list, then {rep.summary['units_drawn']} of "
+            f"wrote {shown} ({len(rep.pages)} page(s): the work list, then {rep.summary['units_drawn']} of "
             f"{len(trends)} units drawn)"
         )
     return 0

@@ -271,7 +271,7 @@ def add_recording(sp, *, positional=True, channel=True):
     :func:`reader_options` turns the parsed options into :func:`vibkit.read_recording` arguments.
     """
     if positional:
-        sp.add_argument("recording", help="recording file (CSV/text, miniSEED ..., netCDF)")
+        sp.add_argument("recording", help="recording file (CSV/text, miniSEED ..., netCDF); '-': read stdin")
     g = sp.add_argument_group("reading the recording (all optional: the file says it)")
     if channel:
         add_channel(g)

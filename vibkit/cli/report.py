@@ -16,7 +16,7 @@ from .options import (
     speed_sigma,
     speed_uncertainty,
 )
-from .output import check_output, print_json, table
+from .output import check_output, is_stdout, output_path, print_json, table
 
 EPILOG = (
     "example:\n  vibkit report data/field/leon-tensioner.csv --scene sim/leon.toml --date 2020-02-14 \\\n"
@@ -29,7 +29,7 @@ def add_parser(subparsers):
     add_recording(s)
     add_json(s)
     s.add_argument("--scene", help="scene describing the escalator and sensor (simulated and compared)")
-    s.add_argument("-o", "--output", required=True, help="PDF to write; a new path unless --force")
+    s.add_argument("-o", "--output", required=True, help="PDF to write; a new path unless --force; '-': stdout")
     add_force_overwrite(s, "PDF")
     s.add_argument("--speed", type=chain_speed, help="chain speed [m/s] (default: recording's or scene's)")
     s.add_argument("--speed-uncertainty", type=speed_uncertainty, help="speed standard deviation, in m/s or in %%")
@@ -43,13 +43,18 @@ def add_parser(subparsers):
 
 
 def run(a):
+    check_output(a.output, [a.recording, a.scene], a.force, json_flag=a.json)
+    with output_path(a.output, ".pdf") as target:  # '-o -': written to a temporary file, then to stdout
+        return _run(a, target)
+
+
+def _run(a, target):
     from vibkit.diagnose.report import write_report
 
-    check_output(a.output, [a.recording, a.scene], a.force)
     sigma = speed_sigma(a.speed_uncertainty, a.speed) if (a.speed_uncertainty and a.speed) else 0.0
     rep = write_report(
         a.recording,
-        a.output,
+        target,
         scene=a.scene,
         speed=a.speed,
         speed_sigma=sigma,
@@ -64,8 +69,15 @@ def run(a):
         date=a.date,
     )
     if a.json:
-        print_json("report", {"output": rep.path, "pages": [t for t, _ in rep.pages], "summary": rep.summary})
+        print_json(
+            "report",
+            {
+                "output": a.output if is_stdout(a.output) else rep.path,
+                "pages": [t for t, _ in rep.pages],
+                "summary": rep.summary,
+            },
+        )
     else:
-        print(f"wrote {rep.path} ({len(rep.pages)} pages)")
+        print(f"wrote {a.output if is_stdout(a.output) else rep.path} ({len(rep.pages)} pages)")
         print(table([[k, f"{v:.6g}" if isinstance(v, float) else v] for k, v in rep.summary.items()]))
     return 0

@@ -6,7 +6,7 @@ import os
 import sys
 
 from .options import add_command, add_json, add_recording, positive, reader_options
-from .output import CLIError, msg, print_json, table
+from .output import STDIO, CLIError, msg, print_json, table
 
 EPILOG = (
     "examples:\n  vibkit ride data/field/layouts/phyphox.csv --segment 0.5:3 --json\n"
@@ -68,8 +68,13 @@ def run(a):
 
     segment = parse_segment(a.segment) if a.segment else None
     weightings = _weightings(a.weighting)
-    if not os.path.exists(a.input):
-        raise CLIError(f"{a.input}: file not found (expected a recording or a scene .toml)")
+    if a.input != STDIO and not os.path.exists(a.input):  # '-': a recording on stdin
+        from vibkit.scenes import find
+
+        shipped = find(a.input)  # a shipped scene's name
+        if shipped is None:
+            raise CLIError(f"{a.input}: file not found (expected a recording or a scene .toml)")
+        a.input = str(shipped)
     is_scene = a.input.lower().endswith(".toml")
     if is_scene and a.channels:
         raise CLIError("--channels applies to a recording, not to a scene")

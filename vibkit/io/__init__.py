@@ -85,6 +85,28 @@ def max_recording_bytes(max_bytes=None) -> int:
     return int(max_bytes)
 
 
+def read_bounded(f, size_hint: int, limit: int) -> bytes:
+    """At most ``limit + 1`` bytes of the binary stream ``f``, with memory in proportion to what it holds.
+
+    The first read asks for the size the file states (``size_hint`` + 1, at least 64 KiB), so a
+    regular file is read in one call; a stream that holds more (a file that grows, ``/proc``,
+    stdin) is read on in chunks that double, never past ``limit + 1``: a buffer of the limit's
+    size is never reserved up front.
+    """
+    want = min(limit + 1, max(int(size_hint) + 1, 1 << 16))
+    data = f.read(want)
+    if len(data) < want:
+        return data
+    chunks, total = [data], len(data)
+    while total <= limit:
+        chunk = f.read(min(limit + 1 - total, max(total, 1 << 20)))
+        if not chunk:
+            break
+        chunks.append(chunk)
+        total += len(chunk)
+    return b"".join(chunks)
+
+
 def _open_checked(spath: str, limit: int):
     """Open a regular file for reading, refusing anything else before it is opened."""
     if not os.path.lexists(spath):
@@ -125,7 +147,7 @@ def _open_checked(spath: str, limit: int):
         if not stat.S_ISREG(st2.st_mode):
             raise RecordingError(spath, None, "is not a regular file; expected a recording file on disk")
         with os.fdopen(fd, "rb", closefd=False) as f:
-            data = f.read(limit + 1)  # bounded: a file that grows (or /proc) cannot exhaust memory
+            data = read_bounded(f, st2.st_size, limit)
     except OSError as exc:
         raise RecordingError(spath, None, f"cannot be read: {exc.strerror or exc}") from None
     finally:
@@ -164,6 +186,57 @@ def _check_options(sample_rate, resample, gap_factor, delimiter, decimal, date_o
         raise ValueError(f"date_order must be 'dmy' (day/month/year) or 'mdy' (month/day/year), got {date_order!r}")
 
 
+#: the path that names standard input (``vibkit pitch -``); its records name it :data:`STDIN_NAME`
+STDIN = "-"
+STDIN_NAME = "<stdin>"
+
+
+_stdin_read: list = [None, b""]  # the stream read and its bytes
+
+
+def _read_stdin(fmt, limit, options):
+    """Read a recording from standard input: its bytes (bounded by ``limit``), sniffed like a file's.
+
+    Standard input is read once per process (a second read of ``"-"`` gets the same bytes).
+    The text reader reads the bytes; a format whose library opens a path (netCDF, obspy's) gets
+    them in a temporary file that is removed after the read, and its messages name ``<stdin>``.
+    """
+    import sys
+    import tempfile
+
+    stream = getattr(sys.stdin, "buffer", sys.stdin)
+    if stream is None or stream.isatty():
+        raise RecordingError(STDIN_NAME, None, "standard input is a terminal; pipe a recording into it (cat rec.csv |)")
+    if stream is not _stdin_read[0]:  # read once: a second read of "-" (a retry with --channel) gets the same bytes
+        try:
+            _stdin_read[:] = [stream, read_bounded(stream, 0, limit)]
+        except OSError as exc:
+            raise RecordingError(STDIN_NAME, None, f"cannot be read: {exc.strerror or exc}") from None
+    data = _stdin_read[1]
+    if len(data) > limit:
+        raise RecordingError(
+            STDIN_NAME,
+            None,
+            f"holds more than the {_gib(limit)} limit for a recording "
+            f"(raise it with max_bytes= or the environment variable {_MAX_ENV})",
+        )
+    if not data:
+        raise RecordingError(STDIN_NAME, None, "is empty (0 bytes); expected a recording")
+    entry = detect_format(STDIN_NAME, data, options["encoding"]) if fmt is None else fmt
+    if entry.name == "text":
+        return entry.read(STDIN_NAME, data, options)
+    with tempfile.TemporaryDirectory(prefix="vibkit-stdin-") as folder:
+        tmp = os.path.join(folder, "stdin" + (".nc" if entry.name == "netcdf" else ""))
+        with open(tmp, "wb") as f:
+            f.write(data)
+        try:
+            ds = entry.read(tmp, data, options)
+        except RecordingError as err:
+            raise RecordingError(STDIN_NAME, err.line, err.message.replace(tmp, STDIN_NAME)) from None
+    ds.attrs["source_file"] = STDIN_NAME
+    return ds
+
+
 def read_recording(
     path,
     *,
@@ -187,7 +260,8 @@ def read_recording(
     Parameters
     ----------
     path : str or os.PathLike
-        CSV/text export, waveform file (miniSEED, SAC ...) or netCDF4/HDF5.
+        CSV/text export, waveform file (miniSEED, SAC ...) or netCDF4/HDF5; ``"-"`` reads standard
+        input (its format sniffed from its bytes; the result's ``source_file`` is ``<stdin>``).
     channel : str or list of str, optional
         Keep only these channels, matched (case-insensitively) against the
         column header as found, its name without unit, or the variable name;
@@ -266,10 +340,6 @@ def read_recording(
     fmt = None if format is None else get_format(format)
     if not isinstance(path, (str, os.PathLike)):
         raise ValueError(f"path must be a file path (str or os.PathLike), got {type(path).__name__}")
-    spath = os.fspath(path)
-    data = _open_checked(spath, max_recording_bytes(max_bytes))
-    if not data:
-        raise RecordingError(spath, None, "file is empty (0 bytes); expected a recording")
     options = dict(
         channel=channel,
         sample_rate=sample_rate,
@@ -284,5 +354,11 @@ def read_recording(
         encoding=encoding,
         date_order=date_order,
     )
+    spath = os.fspath(path)
+    if spath == STDIN:
+        return _read_stdin(fmt, max_recording_bytes(max_bytes), options)
+    data = _open_checked(spath, max_recording_bytes(max_bytes))
+    if not data:
+        raise RecordingError(spath, None, "file is empty (0 bytes); expected a recording")
     entry = detect_format(spath, data, encoding) if fmt is None else fmt
     return entry.read(spath, data, options)

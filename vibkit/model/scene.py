@@ -555,6 +555,8 @@ def load_scene(path) -> Scene:
     Parameters
     ----------
     path : str or Path
+        The file, or where no such file exists the name of a shipped scene (``"las-palmas"``,
+        ``"sim/las-palmas.toml"``; see :mod:`vibkit.scenes`).
 
     Returns
     -------
@@ -566,7 +568,9 @@ def load_scene(path) -> Scene:
         The file is missing, not TOML, or has an unknown key, a missing value or a non-physical
         number; the message names the file and the key.
     """
-    p = Path(path)
+    from ..scenes import find
+
+    p = find(path) or Path(path)  # a shipped scene's name ("las-palmas") where no such file exists
     _check_scene_file(p)
     try:
         text = p.read_text(encoding="utf-8")
