@@ -199,13 +199,13 @@ def test_energy_conserved_without_motor_and_damping():
     assert drift[1e-8] < drift[1e-6]
 
 
-def _passenger_run(motor, *, alight=100.0, duration=4.0, outputs=("sprocket_speed", "motor_torque")):
+def _passenger_run(motor, *, alight=100.0, duration=4.0, outputs=("sprocket_speed", "motor_torque"), mass=160.0):
     effects = {
         "gravity": {"g": 9.81},
         "contact": {"stiffness": 1e6, "exponent": 1.5, "damping": 0.0},
         "motor": motor,
         # 160 kg on step 7 (rollers 19-21, on the incline from t = 0 for 10 s)
-        "passengers": {"mass": [160.0], "step": [7], "board": [0.0], "alight": [alight]},
+        "passengers": {"mass": [mass], "step": [7], "board": [0.0], "alight": [alight]},
     }
     return vibkit.simulate(
         variant(effects=effects, run={"initial_speed": 0.5}, outputs=list(outputs)), duration=duration, progress=False
@@ -346,3 +346,26 @@ def test_flank_forces_from_positions_equal_those_of_the_full_evaluation():
     assert float(full.drive_flank_force.max()) > 100.0  # the teeth take the start-up's load
     for name in ("drive_flank_force", "back_flank_force"):
         np.testing.assert_allclose(light[name].values, full[name].values, rtol=1e-9, atol=1e-6)
+
+
+def test_links_in_compression_are_reported_and_a_preload_removes_them():
+    """Without a tensioner preload the spin-up puts links into compression (a roller chain cannot push):
+    the result says so; a preload of twice the worst compression keeps every link in tension."""
+    bare = vibkit.simulate(variant(outputs=["link_tension"]), duration=0.5, progress=False)
+    worst = float(bare.link_tension.min())
+    assert worst < -1.0
+    assert "go into compression" in bare.attrs["warnings"] and "preload" in bare.attrs["warnings"]
+    effects = {**variant().effects, "tensioner": {"preload": -2.0 * worst}}
+    held = vibkit.simulate(variant(effects=effects, outputs=["link_tension"]), duration=0.5, progress=False)
+    assert float(held.link_tension.min()) > 0.0
+    assert "compression" not in held.attrs.get("warnings", "")
+
+
+def test_a_stalled_motor_is_reported():
+    """1,440 kg on a step against the P controller of the reference (kp = 600): the chain never gets up
+    to speed; the result says so instead of running on silently (started at 0.5 m/s, the speed falls
+    by about 70 % within the first seconds)."""
+    ds = _passenger_run({"kp": 600.0, "speed": 0.5}, duration=3.0, mass=1440.0)
+    assert "the speed droops" in ds.attrs["warnings"] and "cannot hold the speed" in ds.attrs["warnings"]
+    ok = _passenger_run({"kp": 6000.0, "ki": 30000.0, "speed": 0.5}, duration=3.0)
+    assert "speed" not in ok.attrs.get("warnings", "")
