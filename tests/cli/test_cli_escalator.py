@@ -11,6 +11,7 @@ from support.cli import one_line_error
 
 LEON = "data/field/leon-tensioner.csv"
 E07 = "data/fleet-example/escalators/E07.toml"
+E12 = "data/fleet-example/escalators/E12.toml"
 MISFIT = """
 [escalator]
 unit = "W4"
@@ -47,13 +48,15 @@ def test_scene_of_a_geometry_that_cannot_run_names_the_key(run, tmp_path):
 
 
 def test_pitch_takes_speed_sigma_and_pitch_from_the_profile(run):
-    rc, out, err = run("pitch", LEON, "--escalator", E07, "--json")
+    rc, out, err = run("pitch", LEON, "--escalator", E12, "--json")
     d = json.loads(out)
-    assert d["speed_m_s"] == 0.5 and "E07" in d["speed_source"]
+    assert d["speed_m_s"] == 0.5 and "E12, rated" in d["speed_source"]
     # not stated in the profile: the rated speed's tolerance, 5 % / sqrt(3)
     assert d["speed_sigma_m_s"] == pytest.approx(0.5 * 0.05 / 3**0.5)
     assert d["nominal_pitch_m"] == 0.13333
-    assert "from the profile" in err
+    assert "from the profile" in err and "EN 115-1" in err
+    rc, out, err = run("pitch", LEON, "--escalator", E07, "--json")
+    assert json.loads(out)["speed_sigma_m_s"] == 0.0005  # stated: drive.speed_uncertainty
 
 
 def test_explicit_flags_win_over_the_profile(run):

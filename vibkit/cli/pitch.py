@@ -74,7 +74,8 @@ def resolve_speed(a, rec, *, required=True, profile=None):
     if a.speed is not None:
         return a.speed, "--speed"
     if profile is not None:
-        return profile.speed, f"rated speed of {profile.unit}, {profile.source}"
+        rated = ", rated" if profile.speed_sigma_from_standard else ""
+        return profile.speed, f"speed of {profile.unit}{rated}, {profile.source}"
     v, src = speed_from_recording(rec)
     if v is not None or not required:
         return v, src
@@ -103,7 +104,8 @@ def from_profile(a, profile, speed, source):
         teeth_ = profile.teeth
         taken.append(f"{teeth_} sprocket teeth")
     if taken:
-        msg(textwrap.fill(f"note: from the profile {profile.source}: {'; '.join(taken)}", 100, subsequent_indent="  "))
+        note = f"note: from the profile {profile.source}: {'; '.join(taken)}"
+        msg(textwrap.fill(note, 100, subsequent_indent="  ", break_on_hyphens=False))
     return sigma, nominal, search, teeth_
 
 
