@@ -369,3 +369,21 @@ def test_a_stalled_motor_is_reported():
     assert "the speed droops" in ds.attrs["warnings"] and "cannot hold the speed" in ds.attrs["warnings"]
     ok = _passenger_run({"kp": 6000.0, "ki": 30000.0, "speed": 0.5}, duration=3.0)
     assert "speed" not in ok.attrs.get("warnings", "")
+
+
+def test_rollers_inside_the_teeth_at_the_start_are_refused(tmp_path):
+    """A 101.6 mm chain with the 133.33 mm chain's rollers and teeth starts with 12 mm of roller inside a
+    tooth: refused, naming the keys to change, instead of a run reported converged."""
+    from vibkit.model.escalator import EscalatorModel
+    from vibkit.model.scene import SceneError
+
+    text = (SIM / "thesis-forward.toml").read_text()
+    path = tmp_path / "w.toml"
+    path.write_text(
+        text.replace("link_pitch = 0.13333333333333333", "link_pitch = 0.1016").replace("= 159", '= "fill"')
+    )
+    scene = load_scene(path)
+    assert EscalatorModel(scene).initial_indentation(0.0) == pytest.approx(0.01207, abs=1e-4)
+    with pytest.raises(SceneError, match=r"w.toml: .* 12.1 mm inside the sprocket's teeth .*chain.roller_radius"):
+        vibkit.simulate(scene, duration=0.1, progress=False)
+    assert EscalatorModel(load_scene(SIM / "thesis-forward.toml")).initial_indentation(0.0) == 0.0

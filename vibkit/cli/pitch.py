@@ -82,7 +82,7 @@ def resolve_speed(a, rec, *, required=True, profile=None):
     raise CLIError(f"{a.recording}: the file states no chain speed; give --speed (e.g. --speed 0.5 or --speed 50cm/s)")
 
 
-def from_profile(a, profile, speed, source):
+def from_profile(a, profile, speed, source, *, sigma_and_teeth=True):
     """(speed sigma, nominal pitch, band, teeth) of a run: the flags, else the profile's (the note says
     which came from the profile), else the defaults."""
     sigma = speed_sigma(a.speed_uncertainty, speed) if a.speed_uncertainty else 0.0
@@ -90,9 +90,11 @@ def from_profile(a, profile, speed, source):
     if profile is None:
         return sigma, nominal, search, teeth_ or 28
     taken = []
-    if not a.speed_uncertainty and a.speed is None:
+    if sigma_and_teeth and not a.speed_uncertainty and a.speed is None:
         sigma, why = profile.speed_sigma
         taken.append(f"speed {speed:g} +- {sigma:.2g} m/s ({why})")
+    elif a.speed is None:
+        taken.append(f"speed {speed:g} m/s")
     if nominal is None:
         nominal = profile.nominal_pitch
         taken.append(f"nominal pitch {1000 * nominal:g} mm")
@@ -102,7 +104,8 @@ def from_profile(a, profile, speed, source):
         taken.append(f"search band {search[0]:.4g}-{search[1]:.4g} Hz (0.8-1.25 x speed / nominal pitch)")
     if teeth_ is None:
         teeth_ = profile.teeth
-        taken.append(f"{teeth_} sprocket teeth")
+        if sigma_and_teeth:
+            taken.append(f"{teeth_} sprocket teeth")
     if taken:
         note = f"note: from the profile {profile.source}: {'; '.join(taken)}"
         msg(textwrap.fill(note, 100, subsequent_indent="  ", break_on_hyphens=False))

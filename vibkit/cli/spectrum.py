@@ -46,7 +46,10 @@ def run(a):
     profile = escalator_profile(a)
     speed, source = resolve_speed(a, rec, required=False, profile=profile)
     a.speed_uncertainty = None  # spectrum states no speed uncertainty
-    _, nominal, search, _ = from_profile(a, profile, speed, source) if speed else (0, None, None, 0)
+    if speed:
+        _, nominal, search, _ = from_profile(a, profile, speed, source, sigma_and_teeth=False)
+    else:
+        nominal, search = None, None
     search = search or (None if speed else (2.5, 6.0))
     try:
         res = estimate_channels(

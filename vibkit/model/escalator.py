@@ -55,6 +55,26 @@ class EscalatorModel:
         """Sprocket angle that meshes with configuration ``conf`` (rollers midway between teeth). [rad]"""
         return mesh_phase(conf.position, self.centre, self.sprocket, self.pitch)
 
+    def initial_indentation(self, start: float) -> float:
+        """Deepest roller-tooth overlap [m] with roller 1 at ``start`` [m of undeformed guide] and the
+        sprocket meshed (:meth:`meshed_angle`): 0 when every roller clears the teeth, as a run must start."""
+        from .sprocket import contact_kernel
+
+        conf = self.chain.configure(float(start))
+        theta = self.meshed_angle(conf)
+        n, z = self.n, self.sprocket.teeth
+        pos = np.ascontiguousarray(conf.position, dtype=float)
+        zeros = np.zeros(n)
+        geo = self.geometry
+        return float(
+            contact_kernel(
+                pos[:, 0].copy(), pos[:, 1].copy(), zeros, zeros, np.arange(n, dtype=np.int64), n, theta, 0.0,
+                self.centre[0], self.centre[1], self.corners_local, geo["root_radius"], geo["tooth_pitch"], z,
+                self.scene.chain.roller_radius, 1.0, 1.0, 0.0, np.zeros(n), np.zeros(n), np.zeros(z), np.zeros(z),
+                False,
+            )[2]
+        )  # fmt: skip
+
     def step_rollers(self, step: int) -> np.ndarray:
         """0-based indices of the rollers (``links_per_step``: 3, or 4) of 1-based step ``step``; the
         middle one (index 1 of 3 or 4) is where a step is placed."""
