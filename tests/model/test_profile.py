@@ -139,6 +139,8 @@ def test_every_fleet_profile_simulates_converged_at_its_speed(unit):
     f = mean_frequency(ds.delta.values, 1 / float(ds.time[1] - ds.time[0]), prof.speed / prof.nominal_pitch)
     assert f == pytest.approx(prof.speed / prof.nominal_pitch, rel=5e-4)
     assert ds.attrs["link_pass_frequency_hz"] == pytest.approx(prof.speed / prof.nominal_pitch, rel=1e-12)
+    inverse = vibkit.simulate(prof.scene("inverse", duration=1.0), progress=False)
+    assert float(inverse.link_tension.min()) > 0.0 and "warnings" not in inverse.attrs
 
 
 def test_profile_scene_fills_from_standard_proportions_and_says_so():
