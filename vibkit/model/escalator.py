@@ -28,6 +28,8 @@ class EscalatorModel:
         self.sprocket = scene.sprocket
         self.n = scene.chain.n_rollers
         self.pitch = scene.chain.link_pitch
+        # the chain's mean link length: the chain advances Z of them per sprocket turn (worn links included)
+        self.mean_pitch = float(scene.chain.pitches().mean()) if scene.chain.worn_links else self.pitch
         self.mass = np.full(self.n, scene.chain.roller_mass)
         self.centre = np.array(scene.guide.sprocket_centre)
         self.geometry = tooth_geometry(self.sprocket, self.pitch, scene.chain.roller_radius)
@@ -43,13 +45,14 @@ class EscalatorModel:
         The chain advances Z link pitches per turn of a Z-tooth sprocket, so its mean speed on the
         straight is Z L omega / (2 pi) (not the pitch circle's omega R^P, 0.21 % faster at Z = 28):
         thetadot = -2 pi v / (Z L), negative because the sprocket turns clockwise while the steps go up.
+        L is the chain's mean link length (a worn link moves the chain further per tooth, not the teeth).
         The link-pass frequency is then v / L = Z |thetadot| / (2 pi) exactly.
         """
-        return -2.0 * math.pi * chain_speed / (self.sprocket.teeth * self.pitch)
+        return -2.0 * math.pi * chain_speed / (self.sprocket.teeth * self.mean_pitch)
 
     def link_pass_frequency(self, speed: float) -> float:
-        """f_link = |v| / L_link. [Hz]"""
-        return abs(speed) / self.pitch
+        """f_link = |v| / L_link, L_link the chain's mean link length. [Hz]"""
+        return abs(speed) / self.mean_pitch
 
     def meshed_angle(self, conf) -> float:
         """Sprocket angle that meshes with configuration ``conf`` (rollers midway between teeth). [rad]"""
