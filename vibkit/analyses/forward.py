@@ -25,7 +25,7 @@ from ..model.effects import (
     reset_closure,
 )
 from ..model.pitch_table import empty_table, table_applies, table_delta, table_evaluate, table_spacing
-from ..model.schema import effect_options, nominal_speed
+from ..model.schema import SceneError, effect_options, nominal_speed
 from ..model.slots import (
     FP_CARRIAGE_MASS,
     FP_CLOSURE_TOL,
@@ -110,35 +110,50 @@ def initial_state(model, *, start=0.0, speed=0.0, theta=None):
     """Closed, meshed initial state: roller 1 at ``start`` [m of undeformed guide], chain speed [m/s].
 
     The sprocket angle meshes the rollers on the head midway between teeth (no contact), and turns
-    with the chain (thetadot = -speed / R^P).
+    with the chain (thetadot = -2 pi speed / (Z L), :meth:`EscalatorModel.sprocket_speed`).
     """
     conf = model.chain.configure(start)
     th = model.meshed_angle(conf) if theta is None else theta
     jac, gam, c, _, _ = model.chain.jacobian(conf)
     # the chain speed is roller 1's speed |J_1| s0dot
     s0dot = speed / math.hypot(*jac[0]) if speed else 0.0
-    return np.array([start, s0dot, th, -speed / model.pitch_radius, 0.0]), conf.delta
+    return np.array([start, s0dot, th, model.sprocket_speed(speed), 0.0]), conf.delta
 
 
 SEAT_TOLERANCE = 1e-9  # [m] a roller this far inside a tooth at t = 0 is refused (the meshed start has none)
 
 
 def check_seated(fm, y0, d0):
-    """Refuse a start with a roller inside a tooth: the rollers on the head do not fit between the
-    sprocket's teeth (a guide head radius that is not where this chain seats on these teeth)."""
+    """Refuse a start with a roller inside a tooth: the contact would fling it out, and the run would not
+    be of the escalator meant. Either the head is not where this chain seats on these teeth (a guide head
+    radius of another chain), or the rollers and teeth do not fit the pitch (a roller too large for the
+    gap between two teeth); the message names the keys of the cause."""
     if "contact" not in fm.effects:
         return
     reset_closure(fm.info, d0)
     fm.rhs(0.0, y0)
     worst = float(fm.info[INFO_WORST])
-    if worst > SEAT_TOLERANCE:
-        model = fm.model
-        raise ValueError(
-            f"{model.scene.source}: at t = 0 a roller is {1e3 * worst:.3g} mm inside a tooth: rollers on a head of "
-            f"radius {model.guide.params.head_radius:.6g} m ('guide.head_radius') do not seat between teeth cut "
+    if worst <= SEAT_TOLERANCE:
+        return
+    model = fm.model
+    scene = model.scene
+    seat = model.sprocket.pitch_radius(model.pitch)
+    head = model.guide.params.head_radius
+    if abs(head - seat) > SEAT_TOLERANCE:
+        raise SceneError(
+            f"{scene.source}: at t = 0 a roller is {1e3 * worst:.3g} mm inside a tooth: rollers on a head of "
+            f"radius {head:.6g} m ('guide.head_radius') do not seat between teeth cut "
             f"for {model.sprocket_pitch:.6g} m ('sprocket.pitch'); give head_radius = \"sprocket\" (where this "
             "chain seats on these teeth)"
         )
+    sp = scene.sprocket
+    raise SceneError(
+        f"{scene.source}: the rollers ({1000 * scene.chain.roller_radius:.4g} mm radius) sit "
+        f"{1000 * worst:.3g} mm inside the sprocket's teeth at the start (teeth {1000 * sp.base_width:.4g} mm "
+        f"wide, {1000 * sp.tooth_height:.4g} mm high, pitch {1000 * model.sprocket_pitch:.5g} mm): change "
+        "chain.roller_radius or the teeth (sprocket.base_width, sprocket.tip_width, sprocket.tooth_height) "
+        "to fit the pitch"
+    )
 
 
 def forward_dynamics(
@@ -655,4 +670,5 @@ def _post_process(fm, t, y, outputs, stats, y_obs=None, table=None):
     }
     if step is not None:
         attrs["step_accelerometer"] = int(step)
+    attrs["links_per_step"] = int(scene.chain.links_per_step)
     return make_dataset(coords, data, attrs, scene)

@@ -412,3 +412,25 @@ def add_force_overwrite(sp, what):
 
 def add_limits(sp, help_="elongation limits watch,plan,replace [%%] (default 1.5,2,3)"):
     sp.add_argument("--limits", type=limits, default=DEFAULT_LIMITS, help=help_)
+
+
+ESCALATOR_HELP = "the escalator's profile (TOML): unit, speed, pitch, links; see docs/guide/escalator.md"
+
+
+def add_escalator(sp, help_=ESCALATOR_HELP):
+    """--escalator FILE: the user's escalator profile (vibkit.model.profile)."""
+    sp.add_argument("--escalator", metavar="FILE", help=help_)
+
+
+def escalator_profile(a):
+    """The profile named by ``--escalator`` (a Profile), None without one; a bad file is a CLIError."""
+    path = getattr(a, "escalator", None)
+    if not path:
+        return None
+    from vibkit.model.profile import load_profile
+    from vibkit.model.scene import SceneError
+
+    try:
+        return load_profile(path)
+    except SceneError as exc:
+        raise CLIError(f"--escalator: {exc}") from None

@@ -7,11 +7,13 @@ import textwrap
 
 from .options import (
     add_command,
+    add_escalator,
     add_json,
     add_limits,
     add_recording,
     band,
     chain_speed,
+    escalator_profile,
     pitch_length,
     read_recording,
     speed_sigma,
@@ -40,8 +42,15 @@ def add_parser(subparsers):
         "--speed-uncertainty", type=speed_uncertainty, help="speed standard deviation, in m/s or in %% (e.g. 0.1%%)"
     )
     add_limits(s)
-    s.add_argument("--band", type=band, help="search band LOW:HIGH [Hz] (default speed / 80-200 mm)")
-    s.add_argument("--teeth", type=teeth, default=28, help="sprocket teeth, for the shaft hypothesis (default 28)")
+    s.add_argument(
+        "--band",
+        type=band,
+        help="search band LOW:HIGH [Hz] (default speed / 80-200 mm; with --escalator around its link pass)",
+    )
+    s.add_argument(
+        "--teeth", type=teeth, help="sprocket teeth, for the shaft hypothesis (default the profile's, else 28)"
+    )
+    add_escalator(s)
     s.set_defaults(func=run)
     return s
 
@@ -57,34 +66,69 @@ def add_speed_options(
     )
 
 
-def resolve_speed(a, rec, *, required=True):
-    """``(speed, source)``: --speed, else the file's, else a CLIError (or ``(None, None)``)."""
+def resolve_speed(a, rec, *, required=True, profile=None):
+    """``(speed, source)``: --speed, else the profile's rated speed, else the file's, else a CLIError
+    (or ``(None, None)``)."""
     from vibkit.diagnose.channels import speed_from_recording
 
     if a.speed is not None:
         return a.speed, "--speed"
+    if profile is not None:
+        rated = ", rated" if profile.speed_sigma_from_standard else ""
+        return profile.speed, f"speed of {profile.unit}{rated}, {profile.source}"
     v, src = speed_from_recording(rec)
     if v is not None or not required:
         return v, src
     raise CLIError(f"{a.recording}: the file states no chain speed; give --speed (e.g. --speed 0.5 or --speed 50cm/s)")
 
 
+def from_profile(a, profile, speed, source, *, sigma_and_teeth=True):
+    """(speed sigma, nominal pitch, band, teeth) of a run: the flags, else the profile's (the note says
+    which came from the profile), else the defaults."""
+    sigma = speed_sigma(a.speed_uncertainty, speed) if a.speed_uncertainty else 0.0
+    nominal, search, teeth_ = a.nominal_pitch, a.band, getattr(a, "teeth", None)
+    if profile is None:
+        return sigma, nominal, search, teeth_ or 28
+    taken = []
+    if sigma_and_teeth and not a.speed_uncertainty and a.speed is None:
+        sigma, why = profile.speed_sigma
+        taken.append(f"speed {speed:g} +- {sigma:.2g} m/s ({why})")
+    elif a.speed is None:
+        taken.append(f"speed {speed:g} m/s")
+    if nominal is None:
+        nominal = profile.nominal_pitch
+        taken.append(f"nominal pitch {1000 * nominal:g} mm")
+    if search is None:
+        f = speed / profile.nominal_pitch
+        search = (0.8 * f, 1.25 * f)
+        taken.append(f"search band {search[0]:.4g}-{search[1]:.4g} Hz (0.8-1.25 x speed / nominal pitch)")
+    if teeth_ is None:
+        teeth_ = profile.teeth
+        if sigma_and_teeth:
+            taken.append(f"{teeth_} sprocket teeth")
+    if taken:
+        note = f"note: from the profile {profile.source}: {'; '.join(taken)}"
+        msg(textwrap.fill(note, 100, subsequent_indent="  ", break_on_hyphens=False))
+    return sigma, nominal, search, teeth_
+
+
 def run(a):
     from vibkit.diagnose.channels import estimate_channels
 
     rec = read_recording(a)
-    speed, source = resolve_speed(a, rec)
-    sigma = speed_sigma(a.speed_uncertainty, speed) if a.speed_uncertainty else 0.0
+    profile = escalator_profile(a)
+    speed, source = resolve_speed(a, rec, profile=profile)
+    sigma, nominal, search, teeth_ = from_profile(a, profile, speed, source)
     try:
         res = estimate_channels(
             rec,
             channel=a.channel,
             speed=speed,
             speed_sigma=sigma,
-            band=a.band,
-            nominal_pitch=a.nominal_pitch,
+            band=search,
+            nominal_pitch=nominal,
             limits_percent=a.limits,
-            teeth=a.teeth,
+            teeth=teeth_,
             speed_source=source,
         )
     except ValueError as exc:  # the analysis's words about the signal, with the file named

@@ -5,7 +5,7 @@ from __future__ import annotations
 import os
 import sys
 
-from .options import add_command, add_json, add_recording, positive, reader_options
+from .options import add_command, add_escalator, add_json, add_recording, positive, reader_options
 from .output import STDIO, CLIError, msg, print_json, table
 
 EPILOG = (
@@ -36,6 +36,7 @@ def add_parser(subparsers):
     s.add_argument("--duration", type=positive, help="simulated time [s] (default: the scene's)")
     add_recording(s, positional=False, channel=False)
     add_json(s)
+    add_escalator(s)
     s.set_defaults(func=run)
     return s
 

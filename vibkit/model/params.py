@@ -121,6 +121,9 @@ class ChainParams:
     roller_masses, roller_radii : tuple of (int, float)
         Rollers whose mass [kg] or radius [m] differs from ``roller_mass`` / ``roller_radius``:
         (1-based roller number, value).
+    links_per_step : int
+        Rollers (links) per step: 3 (the study's 133.33 mm chain under 400 mm steps) or 4 (101.6 mm
+        chains). Step s carries rollers links_per_step (s - 1) + 1 ... links_per_step s.
     """
 
     link_pitch: float
@@ -130,9 +133,12 @@ class ChainParams:
     worn_links: tuple = ()
     roller_masses: tuple = ()
     roller_radii: tuple = ()
+    links_per_step: int = 3
 
     def __post_init__(self):
         _positive(self, "link_pitch", "roller_radius", "roller_mass")
+        if self.links_per_step not in (3, 4):
+            raise ValueError(f"ChainParams.links_per_step must be 3 or 4, got {self.links_per_step!r}")
         if not isinstance(self.n_rollers, int) or self.n_rollers < 3:
             raise ValueError(f"ChainParams.n_rollers must be an integer >= 3, got {self.n_rollers!r}")
         for link, pitch in self.worn_links:

@@ -105,7 +105,9 @@ class GuideSection(_Section):
 class ChainSection(_Section):
     link_pitch: float = key("m", "distance between consecutive roller centres", _RC.link_pitch)
     roller_radius: float = key("m", "roller radius r_d", _RC.roller_radius)
-    roller_mass: float = key("kg", "point mass per roller (a third of a step plus one pitch of chain)", _RC.roller_mass)
+    roller_mass: float = key(
+        "kg", "point mass per roller (a step's share, 1 / links_per_step, plus one pitch of chain)", _RC.roller_mass
+    )
     n_rollers: int | str = key(
         "",
         'number of rollers, or "fill": as many links of link_pitch as fit the guide (an elongated chain keeps them)',
@@ -138,6 +140,9 @@ class ChainSection(_Section):
     )
     roller_mass_by_roller: tuple = key(
         "[1, kg]", "rollers of another mass, [[roller, mass_kg], ...]; not set: none", types=(list,)
+    )
+    links_per_step: int = key(
+        "", "rollers (links) per step: 3 (133.33 mm chains) or 4 (101.6 mm chains)", 3, types=(int,)
     )
 
 
