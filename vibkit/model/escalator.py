@@ -77,7 +77,7 @@ class EscalatorModel:
             contact_kernel(
                 pos[:, 0].copy(), pos[:, 1].copy(), zeros, zeros, np.arange(n, dtype=np.int64), n, theta, 0.0,
                 self.centre[0], self.centre[1], self.corners_local, geo["root_radius"], geo["tooth_pitch"], z,
-                self.scene.chain.roller_radius, 1.0, 1.0, 0.0, np.zeros(n), np.zeros(n), np.zeros(z), np.zeros(z),
+                float(np.max(self.radii)), self.radii, 1.0, 1.0, 0.0, np.zeros(n), np.zeros(n), np.zeros(z), np.zeros(z),
                 False,
             )[2]
         )  # fmt: skip
