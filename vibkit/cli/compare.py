@@ -4,7 +4,19 @@ from __future__ import annotations
 
 import os
 
-from .options import add_command, add_json, add_recording, band, positive, read_recording
+from vibkit.diagnose.rounding import fmt_pm
+
+from .options import (
+    add_command,
+    add_json,
+    add_recording,
+    add_speed_uncertainty,
+    band,
+    chain_speed,
+    positive,
+    read_recording,
+    run_speed,
+)
 from .output import CLIError, msg, print_json, table
 
 EPILOG = "example:\n  vibkit compare data/field/leon-tensioner.csv sim/leon.toml --duration 10"
@@ -23,6 +35,13 @@ def add_parser(subparsers):
     s.add_argument("--band", type=band, help="link-pass search band LOW:HIGH [Hz]")
     s.add_argument("--harmonics", type=int, default=5, help="harmonics compared (default 5)")
     s.add_argument("--duration", type=positive, help="simulated time when given a scene [s]")
+    s.add_argument(
+        "--speed",
+        type=chain_speed,
+        help="the recording's chain speed, measured on the steps: m/s or 49cm/s (default: the file's, "
+        "else the scene's nominal speed)",
+    )
+    add_speed_uncertainty(s)
     s.set_defaults(func=run)
     return s
 
@@ -35,8 +54,17 @@ def run(a):
     target = a.scene_or_result
     if not os.path.exists(target):
         raise CLIError(f"{target}: file not found (expected a scene .toml or a result file)")
+    sp = run_speed(a, rec=rec)
     comp = compare(
-        rec, target, channel=a.channel, n_harmonics=a.harmonics, band=a.band, duration=a.duration, progress=True
+        rec,
+        target,
+        channel=a.channel,
+        n_harmonics=a.harmonics,
+        band=a.band,
+        duration=a.duration,
+        progress=True,
+        speed=sp.value,
+        speed_sigma=sp.sigma,
     )
     del vibkit
     if a.json:
@@ -47,8 +75,12 @@ def run(a):
     print(f"recording {a.recording} [{comp.channel}] vs simulation {target} [{comp.variable}]")
     print(f"link-pass {comp.fundamental_meas_hz:.5f} Hz recorded, {comp.fundamental_sim_hz:.5f} Hz simulated")
     print(
-        f"pitch     {1000 * comp.pitch_meas_m:.3f} mm recorded, {1000 * comp.pitch_sim_m:.3f} mm simulated "
-        f"(ratio {comp.pitch_ratio:.5f}): {'consistent' if comp.pitch_consistent else 'NOT consistent'}"
+        f"speed     {sp.text if sp.value is not None else f'{comp.speed_meas_m_s:g} m/s (the scene' + chr(39) + 's)'}"
+    )
+    print(
+        f"pitch     {1000 * comp.pitch_meas_m:.2f} mm recorded, {1000 * comp.pitch_sim_m:.2f} mm simulated "
+        f"(pitch ratio recorded/simulated {fmt_pm(comp.pitch_ratio, comp.pitch_ratio_sigma)}): "
+        f"{'consistent' if comp.pitch_consistent else 'NOT consistent'}"
     )
     print(f"score     {comp.score:.3f}   log-spectral distance {comp.log_spectral_distance_db:.2f} dB")
     print()
@@ -59,13 +91,13 @@ def run(a):
                     h["order"],
                     f"{h['frequency_sim_hz']:.4f}",
                     f"{h['frequency_meas_hz']:.4f}",
-                    f"{h['frequency_ratio']:.5f} +- {h['frequency_ratio_sigma']:.1e}",
+                    fmt_pm(h["frequency_ratio"], h["frequency_ratio_sigma"]),
                     f"{h['amplitude_diff_db']:+.2f} [{h['amplitude_diff_db_ci'][0]:+.2f}, {h['amplitude_diff_db_ci'][1]:+.2f}]",
                     ("sim " if h["detected_sim"] else "") + ("rec" if h["detected_meas"] else ""),
                 ]
                 for h in comp.harmonics
             ],
-            ("order", "f sim [Hz]", "f rec [Hz]", "ratio rec/sim", "amplitude diff [dB]", "detected"),
+            ("order", "f sim [Hz]", "f rec [Hz]", "f rec / f sim", "amplitude diff [dB]", "detected"),
         )
     )
     for n in comp.notes:

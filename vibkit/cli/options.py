@@ -404,3 +404,57 @@ def add_force_overwrite(sp, what):
 
 def add_limits(sp, help_="elongation limits watch,plan,replace [%%] (default 1.5,2,3)"):
     sp.add_argument("--limits", type=limits, default=DEFAULT_LIMITS, help=help_)
+
+
+# ------------------------------------------------------------------------- one speed per run
+
+
+def add_speed_uncertainty(sp):
+    sp.add_argument(
+        "--speed-uncertainty",
+        type=speed_uncertainty,
+        help="standard deviation of the speed, in m/s or in %% (e.g. 0.1%%); without it the speed's "
+        "uncertainty is 'not stated' (an escalator profile's rated speed: the standard's tolerance)",
+    )
+
+
+def run_speed(a, *, rec=None, scene=None, profile=None):
+    """The run's one speed (:class:`vibkit.diagnose.speed.ResolvedSpeed`): --speed, else the escalator
+    profile's, else the recording's, else the scene's; --speed-uncertainty (m/s or % of that speed) its sigma."""
+    from vibkit.diagnose.speed import resolve_speed
+
+    if profile is None:
+        profile = _profile_of(a)
+    speed = getattr(a, "speed", None)
+    text = getattr(a, "speed_uncertainty", None)
+    base = resolve_speed(speed, None, profile=profile, recording=rec, scene=scene)
+    if text is None or base.value is None:
+        return base
+    return resolve_speed(speed, speed_sigma(text, base.value), profile=profile, recording=rec, scene=scene)
+
+
+def _profile_of(a):
+    """The escalator profile that --escalator names, or None (commands without the option)."""
+    if getattr(a, "escalator", None) is None:
+        return None
+    return escalator_profile(a)  # noqa: F821 (defined with the --escalator option)
+
+
+def add_segment(sp):
+    """--segment START:END [s], the one definition shared by ``ride`` and ``report``."""
+    sp.add_argument(
+        "--segment",
+        type=segment,
+        metavar="START:END",
+        help="ride segment START:END [s] from the first sample: the recording's ride quality (default: detected)",
+    )
+
+
+def segment(text):
+    """argparse type of --segment: (start, end) [s] (:func:`vibkit.diagnose.ride.parse_segment`)."""
+    from vibkit.diagnose.ride import parse_segment
+
+    try:
+        return parse_segment(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None

@@ -3,18 +3,20 @@
 from __future__ import annotations
 
 from .options import (
+    _profile_of,
     add_command,
     add_force_overwrite,
     add_json,
     add_limits,
     add_recording,
+    add_segment,
+    add_speed_uncertainty,
     band,
     chain_speed,
     pitch_length,
     positive,
     reader_options,
     speed_sigma,
-    speed_uncertainty,
 )
 from .output import check_output, print_json, table
 
@@ -31,8 +33,14 @@ def add_parser(subparsers):
     s.add_argument("--scene", help="scene describing the escalator and sensor (simulated and compared)")
     s.add_argument("-o", "--output", required=True, help="PDF to write; a new path unless --force")
     add_force_overwrite(s, "PDF")
-    s.add_argument("--speed", type=chain_speed, help="chain speed [m/s] (default: recording's or scene's)")
-    s.add_argument("--speed-uncertainty", type=speed_uncertainty, help="speed standard deviation, in m/s or in %%")
+    s.add_argument(
+        "--speed",
+        type=chain_speed,
+        help="chain speed measured on the steps [m/s], the one speed of every page "
+        "(default: the escalator profile's, the recording's or the scene's)",
+    )
+    add_speed_uncertainty(s)
+    add_segment(s)
     s.add_argument("--nominal-pitch", type=pitch_length, help="nominal link pitch [m] (default: the scene's)")
     add_limits(s, "elongation limits [%%]")
     s.add_argument("--band", type=band, help="link-pass search band LOW:HIGH [Hz]")
@@ -46,7 +54,9 @@ def run(a):
     from vibkit.diagnose.report import write_report
 
     check_output(a.output, [a.recording, a.scene], a.force)
-    sigma = speed_sigma(a.speed_uncertainty, a.speed) if (a.speed_uncertainty and a.speed) else 0.0
+    profile = _profile_of(a)
+    text = a.speed_uncertainty
+    sigma = None if text is None else text if text.strip().endswith("%") else speed_sigma(text, 1.0)
     rep = write_report(
         a.recording,
         a.output,
@@ -62,6 +72,8 @@ def run(a):
         overwrite=a.force,
         read_options=reader_options(a),
         date=a.date,
+        profile=profile,
+        segment=a.segment,
     )
     if a.json:
         print_json("report", {"output": rep.path, "pages": [t for t, _ in rep.pages], "summary": rep.summary})

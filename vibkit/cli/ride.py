@@ -5,7 +5,7 @@ from __future__ import annotations
 import os
 import sys
 
-from .options import add_command, add_json, add_recording, positive, reader_options
+from .options import add_command, add_json, add_recording, add_segment, positive, reader_options
 from .output import CLIError, msg, print_json, table
 
 EPILOG = (
@@ -28,7 +28,7 @@ def add_parser(subparsers):
         help="recording channels for x,y,z (travel, lateral, vertical; - skips one), "
         "or AXIS=NAME pairs (default: names ending in x, y, z); write --channels=-,-,az when x is skipped",
     )
-    s.add_argument("--segment", help="ride segment START:END [s] from the first sample (default: detected)")
+    add_segment(s)
     s.add_argument(
         "--weighting", help="Wk, Wd ... for every axis, three for x,y,z (Wd,Wd,Wk), or x=Wd,y=Wd,z=Wk (the default)"
     )
@@ -64,9 +64,9 @@ def _ride_rows(rq):
 
 
 def run(a):
-    from vibkit.diagnose.ride import parse_channels, parse_segment, ride_quality_from_recording, simulate_ride
+    from vibkit.diagnose.ride import parse_channels, ride_quality_from_recording, simulate_ride
 
-    segment = parse_segment(a.segment) if a.segment else None
+    segment = a.segment
     weightings = _weightings(a.weighting)
     if not os.path.exists(a.input):
         raise CLIError(f"{a.input}: file not found (expected a recording or a scene .toml)")

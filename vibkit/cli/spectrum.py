@@ -33,7 +33,8 @@ def run(a):
     from vibkit.diagnose.channels import estimate_channels
 
     rec = read_recording(a)
-    speed, source = resolve_speed(a, rec, required=False)
+    sp = resolve_speed(a, rec, required=False)
+    speed, source = sp.value, ("--speed" if sp.source == "given" else sp.source or None)
     search = a.band or (None if speed else (2.5, 6.0))
     try:
         res = estimate_channels(

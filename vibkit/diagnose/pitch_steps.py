@@ -19,6 +19,7 @@ from ..signal.bursts import FILL_THRESHOLD, MAX_GAP_S, Burst, dropped_samples, f
 from ..signal.detect import HARMONIC_SPAN
 from ..signal.quantisation import quantisation_step
 from .decision import LinkPassEvidence, nearest_catalogue
+from .speed import speed_part_too_large
 
 #: samples (from the start) whose levels give the recorder's quantisation step
 QUANTUM_SAMPLES = 1 << 20
@@ -64,7 +65,7 @@ class Request:
     as given [m] (or None), sprocket teeth, and whether the speed is a placeholder (frequency only)."""
 
     speed: float
-    speed_sigma: float
+    speed_sigma: float | None
     band: tuple
     pitch_range: tuple
     limits: tuple
@@ -303,18 +304,23 @@ def pitch_from(comb, req):
         )
     pitch = speed / f0
     rel_f = sf / f0
-    rel_v = speed_sigma / speed
+    rel_v = (speed_sigma or 0.0) / speed
     psig = pitch * math.hypot(rel_f, rel_v)
-    if rel_v > rel_f:
-        warnings.append(
-            f"the speed's uncertainty ({100 * rel_v:.3g} %) dominates the pitch's "
-            f"(frequency {100 * rel_f:.3g} %): to see 0.5 % elongation the speed must be known to "
-            "about 0.1 %"
+    elongation = 100.0 * (pitch / req.nominal_pitch - 1.0) if req.nominal_pitch is not None else None
+    if speed_part_too_large(rel_v, elongation, req.limits):
+        decision = (
+            f"the nearest limit is {min(abs(elongation - lim) for lim in req.limits):.2g} % away"
+            if elongation is not None
+            else f"a verdict needs the elongation's sigma under a third of the first limit ({req.limits[0]:g} %)"
         )
-    if speed_sigma == 0:
+        warnings.append(
+            f"the speed's uncertainty ({100 * rel_v:.2g} %) is too large for the verdict: {decision}; "
+            "measure the speed on the steps or the handrail"
+        )
+    if speed_sigma is None:
         notes.append(
-            "no speed uncertainty given: pitch_sigma_m is the frequency's part only; to see 0.5 % "
-            "elongation the speed must be known to about 0.1 %"
+            "speed uncertainty not stated: the pitch's and the elongation's sigmas are not known (the "
+            f"frequency alone gives {100 * rel_f:.2g} %); give --speed-uncertainty"
         )
     notes.append(
         "a speed derived from the motor's rpm and the nominal sprocket returns the nominal pitch by "
