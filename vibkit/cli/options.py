@@ -441,20 +441,22 @@ def _profile_of(a):
 
 
 def add_segment(sp):
-    """--segment START:END [s], the one definition shared by ``ride`` and ``report``."""
+    """--segment START:END [s], the one definition shared by ``ride`` and ``report`` (read by :func:`segment_of`)."""
     sp.add_argument(
         "--segment",
-        type=segment,
         metavar="START:END",
         help="ride segment START:END [s] from the first sample: the recording's ride quality (default: detected)",
     )
 
 
-def segment(text):
-    """argparse type of --segment: (start, end) [s] (:func:`vibkit.diagnose.ride.parse_segment`)."""
+def segment_of(a):
+    """--segment as (start, end) [s], or None; a bad value is a one-line CLIError (exit 1)."""
+    text = getattr(a, "segment", None)
+    if text is None:
+        return None
     from vibkit.diagnose.ride import parse_segment
 
     try:
         return parse_segment(text)
     except ValueError as exc:
-        raise argparse.ArgumentTypeError(str(exc)) from None
+        raise CLIError(str(exc)) from None

@@ -16,6 +16,7 @@ from .options import (
     pitch_length,
     positive,
     reader_options,
+    segment_of,
     speed_sigma,
 )
 from .output import check_output, print_json, table
@@ -73,7 +74,7 @@ def run(a):
         read_options=reader_options(a),
         date=a.date,
         profile=profile,
-        segment=a.segment,
+        segment=segment_of(a),
     )
     if a.json:
         print_json("report", {"output": rep.path, "pages": [t for t, _ in rep.pages], "summary": rep.summary})

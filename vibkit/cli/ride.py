@@ -5,7 +5,7 @@ from __future__ import annotations
 import os
 import sys
 
-from .options import add_command, add_json, add_recording, add_segment, positive, reader_options
+from .options import add_command, add_json, add_recording, add_segment, positive, reader_options, segment_of
 from .output import CLIError, msg, print_json, table
 
 EPILOG = (
@@ -66,7 +66,7 @@ def _ride_rows(rq):
 def run(a):
     from vibkit.diagnose.ride import parse_channels, ride_quality_from_recording, simulate_ride
 
-    segment = a.segment
+    segment = segment_of(a)
     weightings = _weightings(a.weighting)
     if not os.path.exists(a.input):
         raise CLIError(f"{a.input}: file not found (expected a recording or a scene .toml)")
