@@ -12,7 +12,7 @@ import tempfile
 import time
 from pathlib import Path
 
-# where the scripts write: benchmarks/results/ (what the README quotes; `make bench`), or the folder
+# where the scripts write: benchmarks/results/ (what the docs quote; `make bench`), or the folder
 # `vibkit bench -o DIR` gives them in VIBKIT_BENCH_RESULTS (default there: a new temporary folder)
 RESULTS = Path(os.environ.get("VIBKIT_BENCH_RESULTS") or Path(__file__).resolve().parent / "results")
 

@@ -51,7 +51,7 @@ CASES = {
             "motor": {"kp": 600.0, "speed": 0.5, "ki": 0.0},
         },
         ["delta", "sprocket_speed", "contact_force"],
-        "the study's no-load scene: delta, sprocket speed, contact forces (issue 10)",
+        "the study's no-load scene: delta, sprocket speed, contact forces",
     ),
     "contact, no load, stepping over breakpoints": (
         {
@@ -60,23 +60,23 @@ CASES = {
             "motor": {"kp": 600.0, "speed": 0.5, "ki": 0.0},
         },
         ["delta", "sprocket_speed", "contact_force"],
-        "the same, steps not ended on the guide's breakpoints (wrong contact history: README)",
+        "the same, steps not ended on the guide's breakpoints (wrong contact history: docs/explanation/numerics.md)",
     ),
     "contact, no load, rtol 1e-6": (
         NO_LOAD,
         NO_LOAD_OUT,
-        "the same at rtol 1e-6 (the tolerance shipped before issue 20)",
+        "the same at rtol 1e-6 (the tolerance shipped before the pitch table)",
     ),
     "contact, no load, rtol 1e-9": (NO_LOAD, NO_LOAD_OUT, "the same at rtol 1e-9"),
     "contact, no load, with check": (
         NO_LOAD,
         NO_LOAD_OUT,
-        "the same with the convergence check (a second run 100 times tighter, compared; issue 20)",
+        "the same with the convergence check (a second run 100 times tighter, compared)",
     ),
     "contact, no load, exact closure": (
         NO_LOAD,
         NO_LOAD_OUT,
-        "the same, the closure solved at every evaluation instead of read from the pitch table (before issue 20)",
+        "the same, the closure solved at every evaluation instead of read from the pitch table (as before the pitch table)",
     ),
     "contact, no load, exact closure, rtol 1e-9": (NO_LOAD, NO_LOAD_OUT, "the same at rtol 1e-9"),
     "contact, no load, default outputs": (None, None, "sim/thesis-forward.toml as shipped (link tensions etc.)"),

@@ -1,4 +1,4 @@
-"""Pitch you can trust (issues 11 and 18): the detector's false-alarm rate and detection probability, the
+"""Pitch you can trust: the detector's false-alarm rate and detection probability, the
 accuracy of the spectral and mean-phase estimators under a wandering speed, false verdicts on chain-free
 records of twelve kinds, the verdict rate on chain signals with +-2 % speed wander against SNR, and the
 end-to-end time of a 20 M-sample recording.
@@ -105,7 +105,7 @@ def wander(quick):
     return rows
 
 
-# ------------------------------------------------------------------- false verdicts (issue 18)
+# ------------------------------------------------------------------- false verdicts
 
 NOMINAL = 0.4 / 3.0
 SPEED = 0.5
@@ -121,7 +121,7 @@ def _coloured(n, rng, alpha):
 
 
 def chain_free(kind, rng):
-    """One chain-free record ``(x, fs)`` of a kind (issue 18's list); durations 10, 20 or 40 s."""
+    """One chain-free record ``(x, fs)`` of a kind; durations 10, 20 or 40 s."""
     fs = 250.0 if kind == "elevator hum" else FV_FS
     n = int(fs * rng.choice([10.0, 20.0, 40.0]))
     t = np.arange(n) / fs

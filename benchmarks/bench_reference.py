@@ -1,4 +1,4 @@
-"""vibkit's formulation against the study's, side by side in one process (issue 3).
+"""vibkit's formulation against the study's, side by side in one process.
 
     python benchmarks/bench_reference.py            # 44 s of sim/thesis-forward.toml (minutes)
     python benchmarks/bench_reference.py --quick    # 2 s
@@ -150,7 +150,7 @@ def write(res: dict, note: str, stem: str) -> None:
         w.writerow([name, f"{value:.6g}", unit, text])
     _atomic_write(RESULTS / f"{stem}.csv", buf.getvalue())
     md = [
-        "# vibkit's formulation against the study's (issue 3)",
+        "# vibkit's formulation against the study's",
         "",
         f"`python benchmarks/bench_reference.py` -- {dt.datetime.now(dt.timezone.utc):%Y-%m-%d %H:%M} UTC",
         "",

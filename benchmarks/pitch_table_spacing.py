@@ -1,4 +1,4 @@
-"""What the pitch table's node spacing costs and buys (issue 20).
+"""What the pitch table's node spacing costs and buys.
 
 The no-load scene (``sim/thesis-forward.toml``, 44 s) run with the closure read from tables of
 4, 2, 1 and 0.5 mm spacing and solved exactly, at rtol 1e-7 and 1e-9; each run against the exact

@@ -6,7 +6,7 @@ every method over a ladder of tolerances, with the chain's configuration read fr
 (the default) and, for dopri5, solved at every evaluation (exact closure); errors against a reference
 computed by vibkit's dopri5 at rtol 1e-11 with the exact closure: delta, chain speed, link tension (max abs over time and links), link-pass frequency
 (relative, from roller 1's mean advance over the steady part) and the closure residual; wall time
-of the whole call. Then what users see of the physics (issue 10): the contact history (episodes of
+of the whole call. Then what users see of the physics: the contact history (episodes of
 tooth contact, sampled at 200 Hz, and the time of the last one: converged, 23 and 7.87 s), the
 sprocket speed ripple after 8 s (converged 2e-4 %), and the energy error of the conservative scene
 (no motor, no damping, started at 0.5 m/s; 44 s) run at the same settings. dopri5 runs with its

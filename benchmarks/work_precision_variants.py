@@ -1,5 +1,5 @@
 """Work-precision of the shipped forward scenes and their contact stiffness x0.1 and x10 variants,
-and what the convergence check costs (issue 20).
+and what the convergence check costs.
 
 Each scene (full length) with k = 1e5, 1e6, 1e7 runs by dopri5 (steps ended on the breakpoints) at
 rtol 1e-6 ... 1e-12 and at its default tolerance (``default_rtol``: from the contact stiffness),

@@ -86,6 +86,25 @@ def write_benchmark_pages() -> None:
 write_benchmark_pages()
 
 
+def write_scene_keys_page() -> None:
+    """The scene reference: every key of the scene schema (vibkit.model.schema), rendered from it."""
+    from vibkit.model.schema import schema_table
+
+    text = (
+        "# Scene keys\n\n"
+        "Every key a scene file (`sim/*.toml`) may hold, with its unit, default and plausible range, "
+        "rendered from the scene schema (`vibkit/model/schema.py`) at each build: the schema is the one "
+        "place a key is declared, validated and documented. *required*: the scene must give it; "
+        "*not set*: the key is optional and its meaning says what happens without it.\n\n"
+        + schema_table()
+        + "\n"
+    )
+    _write_if_changed(DOCS / "api" / "generated" / "scene-keys.md", text)
+
+
+write_scene_keys_page()
+
+
 def _changelog_guard(app, docname, source):
     """The changelog page includes ``CHANGELOG.md`` from the repository root, given a title if its first
     heading is not one; without the file the page says so instead of failing the build."""

@@ -38,3 +38,10 @@ def test_every_page_is_in_a_toctree():
                 if line and not line.startswith(":"):
                     linked.add((folder / line).as_posix())
     assert sorted(pages - linked) == []
+
+
+def test_the_signal_package_docstring_lists_every_export_under_a_topic():
+    doc = vibkit.signal.__doc__
+    listed = set(re.findall(r"\b(\w+)\b", doc.split("Spectral analysis", 1)[1].split("Everything else", 1)[0]))
+    missing = sorted(set(vibkit.signal.__all__) - listed)
+    assert missing == [], f"vibkit.signal's docstring does not list {missing} under a topic"

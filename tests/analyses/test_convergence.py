@@ -1,4 +1,4 @@
-"""The convergence verdict of forward runs (issue 20): converged, not converged (and from which
+"""The convergence verdict of forward runs: converged, not converged (and from which
 tolerance), or sensitive (chaotic), against the converged runs measured independently in the issue
 (dopri5 at 1e-10 to 1e-12, CVODE-BDF at 1e-10)."""
 

@@ -1,4 +1,4 @@
-"""Forward dynamics against analytic truths and the study's published behaviour (issue 3)."""
+"""Forward dynamics against analytic truths and the study's published behaviour."""
 
 from dataclasses import replace
 from pathlib import Path
@@ -89,7 +89,7 @@ def test_delta_follows_tooth_mesh_frequency():
     assert mesh == pytest.approx(3.742, rel=1e-3)
 
 
-# The converged no-load scene (issue 10): dopri5 at rtol 1e-10 and 1e-11 here, and in the issue,
+# The converged no-load scene: dopri5 at rtol 1e-10 and 1e-11 here,
 # independently, dopri5 1e-9 ... 1e-11, dop853 1e-8 with max_step 2e-3 and cvode-adams 1e-8: the chain
 # touches the teeth in 23 episodes during spin-up, the last at t = 7.87 s, then coasts inside the
 # backlash without touching a tooth up to 44 s.
@@ -291,7 +291,7 @@ def test_passenger_scene_speed_drop():
 
 def test_contact_candidates_reach_the_tooth_tips():
     """Rollers are searched within the tip corners' radius + r_d: sqrt((R^F + h)^2 + (tip/2)^2) + r_d
-    = 0.66574 m for the reference sprocket, not R^F + h + r_d = 0.66543 m (issue 10)."""
+    = 0.66574 m for the reference sprocket, not R^F + h + r_d = 0.66543 m."""
     from vibkit.model.effects import FP, pack_parameters
     from vibkit.model.escalator import EscalatorModel
 
@@ -305,7 +305,7 @@ def test_contact_candidates_reach_the_tooth_tips():
 def test_t0_sample_does_not_depend_on_run_length():
     """The start s0 = 0 is a breakpoint of the guide: the right-hand side jumps there, and the t = 0
     outputs are taken on the side the motion goes (as the integrator takes them), not on whichever
-    side the closure's last guess led to (issue 20: las-palmas 9 s and 12 s differed by 2.57 N in
+    side the closure's last guess led to (las-palmas 9 s and 12 s differed by 2.57 N in
     the link tensions and 12 % in accel_step at t = 0). A run from speed and one from rest."""
     scene = load_scene(SIM / "las-palmas.toml")
     scene = replace(scene, outputs=dict(scene.outputs, variables=("accel_step", "link_tension", "delta")))

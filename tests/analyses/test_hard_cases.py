@@ -1,4 +1,4 @@
-"""Hard cases stay numerically stable (issue 7): each finishes without NaN or Inf, with the closure
+"""Hard cases stay numerically stable: each finishes without NaN or Inf, with the closure
 residual bounded and, where energy should be conserved, the energy error bounded; what truly cannot
 be integrated stops with a clear error within a wall-time budget."""
 

@@ -1,4 +1,4 @@
-"""Inverse dynamics: power balance, consistency with the kinematics, tensions (issue 2)."""
+"""Inverse dynamics: power balance, consistency with the kinematics, tensions."""
 
 from pathlib import Path
 

@@ -1,4 +1,4 @@
-"""A verdict only where the chain is (issue 18): one decision for spectrum, pitch, report, compare and the
+"""A verdict only where the chain is: one decision for spectrum, pitch, report, compare and the
 fleet; physical plausibility; inconclusive without evidence; every channel; speed from the file; units."""
 
 import argparse
@@ -93,11 +93,11 @@ def _thirdparty():
 @pytest.mark.parametrize("path", _thirdparty(), ids=os.path.basename)
 def test_thirdparty_corpus_gives_no_pitch(path):
     """Real recordings of everything but an escalator: every channel that reads gives no pitch, no verdict
-    (files the reader cannot read yet are issue 19's and listed in the report)."""
+    (files the reader cannot read yet are listed in the report)."""
     try:
         rec = vibkit.read_recording(path)
     except vibkit.io.RecordingError:
-        pytest.xfail("the reader does not read this file yet (issue 19)")
+        pytest.xfail("the reader does not read this file yet")
     for ch in vibration_channels(rec):
         try:
             est = estimate_pitch(rec, speed=0.5, channel=ch, nominal_pitch=NOMINAL)

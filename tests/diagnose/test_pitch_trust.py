@@ -1,4 +1,4 @@
-"""Pitch you can trust (issue 11): no link-pass, no number; invalid samples; wandering speed; the detector's
+"""Pitch you can trust: no link-pass, no number; invalid samples; wandering speed; the detector's
 false-alarm rate."""
 
 import json

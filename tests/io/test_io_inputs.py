@@ -1,4 +1,4 @@
-"""Issues 11 and 12, reader side: channel names as the file writes them, sample counters, epoch times,
+"""Reader inputs: channel names as the file writes them, sample counters, epoch times,
 UTF-16 text, non-regular files, the size limit, netCDF time checks and fill values."""
 
 import os

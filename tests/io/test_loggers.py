@@ -1,4 +1,4 @@
-"""Layouts of loggers and apps read right with no options (issue 19), each from a file of that layout.
+"""Layouts of loggers and apps read right with no options, each from a file of that layout.
 
 The corpus in data/thirdparty has no MetaWear, Arduino or phyphox-with-a-repeated-stamp file, so these
 files are written here in the layout their makers document: MetaWear MetaBase CSV headers

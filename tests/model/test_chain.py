@@ -1,4 +1,4 @@
-"""Chain closure, its velocity and acceleration recursions (issue 2)."""
+"""Chain closure, its velocity and acceleration recursions."""
 
 import numpy as np
 import pytest

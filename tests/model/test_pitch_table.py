@@ -1,4 +1,4 @@
-"""The chain tabulated over one pitch (issue 20) against the exact closure it stands for."""
+"""The chain tabulated over one pitch against the exact closure it stands for."""
 
 from dataclasses import replace
 from pathlib import Path

@@ -1,4 +1,4 @@
-"""Scene loading: bad scenes give a clear error naming the file and the key (issue 2)."""
+"""Scene loading: bad scenes give a clear error naming the file and the key."""
 
 import math
 from pathlib import Path

@@ -1,4 +1,4 @@
-"""Reliability cases of ``vibkit fleet`` (issue 23): inputs outside their stated ranges refused before any
+"""Reliability cases of ``vibkit fleet``: inputs outside their stated ranges refused before any
 analysis, damaged / foreign databases in one line, read-only uses that never write."""
 
 import datetime as dt

@@ -1,4 +1,4 @@
-"""Reliability cases of ``vibkit ride``, ``pitch`` and ``spectrum`` (issue 23): weighting lists map one to one
+"""Reliability cases of ``vibkit ride``, ``pitch`` and ``spectrum``: weighting lists map one to one
 onto axes or are refused; every error names the file, in vibkit's words."""
 
 import numpy as np

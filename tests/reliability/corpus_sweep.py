@@ -1,4 +1,4 @@
-"""Reliability cases of ``vibkit sweep`` (issue 23): sizes refused before anything is allocated, keys that
+"""Reliability cases of ``vibkit sweep``: sizes refused before anything is allocated, keys that
 would give identical runs, strict numbers, a start-up that leaves no samples, and signals during the runs.
 
 All but the signal cases are refused before a Dask cluster starts (a second or two each).

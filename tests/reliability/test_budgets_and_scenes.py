@@ -1,4 +1,4 @@
-"""Run budgets checked before work, and the scene validation gaps of issue 12."""
+"""Run budgets checked before work, and the scene validation gaps found by probing."""
 
 import math
 from pathlib import Path
@@ -115,7 +115,7 @@ def test_tiny_max_step_refused_before_work():
             {"stiffness = 1.0e6": "stiffness = 1e20"},
             r"'effects.contact.stiffness' = 1e\+20 is outside",
         ),
-        # the shipped scene sets no rtol since issue 20 (the default follows the contact stiffness)
+        # the shipped scene sets no rtol (the default follows the contact stiffness)
         ("thesis-forward", {'method = "dopri5"': 'method = "dopri5"\nrtol = 10'}, r"'solver.rtol' = 10"),
         ("thesis-forward", {"kp = 600.0": "kp = 1e20"}, r"'effects.motor.kp'"),
         ("thesis-forward", {"gravity = true": "gravity = { g = 1e10 }"}, r"'effects.gravity.g'"),

@@ -3,7 +3,7 @@ one-line error or a result, never a traceback, and nothing a user gave lost or c
 
 Cases run in-process through ``vibkit.cli.main`` (fast); those that inject faults, send signals or
 could hang on a regression (a FIFO) run in a subprocess.  ``benchmarks/reliability.py`` runs the
-same corpus, all in subprocesses, and writes the table quoted in the README.
+same corpus, all in subprocesses, and writes the table quoted in the docs.
 """
 
 import importlib.util

@@ -1,4 +1,4 @@
-"""Fleet inputs outside their stated ranges, and SQLite's failures, as one line naming what to do (issue 23)."""
+"""Fleet inputs outside their stated ranges, and SQLite's failures, as one line naming what to do."""
 
 import datetime as dt
 import sqlite3

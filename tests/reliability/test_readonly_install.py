@@ -1,6 +1,6 @@
 """A read-only install run by a user without a home (service account, cron, container non-root).
 
-Issue 12: every command crashed at import with numba's ``RuntimeError: cannot cache function
+Once every command crashed at import with numba's ``RuntimeError: cannot cache function
 'locate': no locator available`` (even ``vibkit --version``).  This test installs the package
 non-editable into a temporary folder (``pip install --target``; a plain copy of the package if pip
 cannot build here), makes it read-only (``chmod -R a-w``) and runs every command as uid 65534 with
@@ -28,6 +28,8 @@ import textwrap
 from pathlib import Path
 
 import pytest
+
+import vibkit
 
 ROOT = Path(__file__).resolve().parents[2]
 NOBODY = 65534
@@ -238,7 +240,7 @@ def test_version_and_help_compile_nothing(readonly):
         )
         assert proc.returncode == 0, proc.stderr
         assert "Traceback" not in proc.stderr
-    assert "vibkit 0.1" in _cli(readonly, "--version").stdout
+    assert f"vibkit {vibkit.__version__}" in _cli(readonly, "--version").stdout
 
 
 def test_every_command_runs_without_a_home(readonly):

@@ -1,4 +1,4 @@
-"""Ride weightings map one to one onto axes or are refused; ride errors name the file (issue 23)."""
+"""Ride weightings map one to one onto axes or are refused; ride errors name the file."""
 
 import pytest
 

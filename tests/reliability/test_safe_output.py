@@ -1,4 +1,4 @@
-"""vibkit.runtime.safe_output: regular files only, no clobbering, atomic, nothing left behind (issue 12)."""
+"""vibkit.runtime.safe_output: regular files only, no clobbering, atomic, nothing left behind."""
 
 import errno
 import io

@@ -1,4 +1,4 @@
-"""Sweeps under absurd sizes, unused keys and concurrency (issue 23): checked from the plan before anything
+"""Sweeps under absurd sizes, unused keys and concurrency: checked from the plan before anything
 is allocated; identical sweeps at once end with one store and no leftovers; an interrupted store opens as
 what it holds."""
 

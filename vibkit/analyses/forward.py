@@ -262,7 +262,7 @@ def default_rtol(effects):
 
     rtol = 1e-7 min(1, (1e6 / k)^3) for a contact stiffness k [N/m^exponent], at least 1e-11.
     Measured on the shipped scenes and their stiffness x0.1 and x10 variants against runs at 1e-12
-    (README, "Numerics"): at k = 1e7 the no-load chain needs 1e-10 (las-palmas, damped, 1e-9), at
+    (docs/explanation/numerics.md): at k = 1e7 the no-load chain needs 1e-10 (las-palmas, damped, 1e-9), at
     k <= 1e6 every scene is right at 1e-7. A stiffer contact makes each impact a shorter, harder
     event, and the undamped chain carries the error of every impact in where it sits in its
     backlash. Damping and speed are not used: the measurements do not ask for them. Where no

@@ -390,7 +390,8 @@ def run_study(
 
     References
     ----------
-    The study (``/work/shared/seed/000_76101f58a02dc30d.txt``), chapters 5-7, eqs. 6-8 to 6-14 and 7-14;
+    A. Cuevas López, Modelado y simulación de la cadena de tracción de una escalera mecánica como
+    sistema multicuerpo, Proyecto Fin de Carrera, Universidad de Sevilla, 2020 (the study), chapters 5-7, eqs. 6-8 to 6-14 and 7-14;
     J. Baumgarte, Comput. Methods Appl. Mech. Eng. 1 (1972) 1-16.
     """
     from ..model.escalator import EscalatorModel

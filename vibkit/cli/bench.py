@@ -1,7 +1,7 @@
 """``vibkit bench``: run the repository's benchmark scripts (benchmarks/bench_*.py).
 
 The scripts write their tables where ``-o`` says (passed to them as ``VIBKIT_BENCH_RESULTS``); by
-default into a new temporary folder, so that a run never rewrites the tables the README quotes:
+default into a new temporary folder, so that a run never rewrites the tables the docs quote:
 ``make bench`` (``vibkit bench -o benchmarks/results``) is what regenerates those.
 """
 
@@ -20,7 +20,7 @@ from .output import CLIError, msg, print_json, table
 EPILOG = (
     "examples:\n  vibkit bench --quick                   # a smoke run of every script, into a temporary folder\n"
     "  vibkit bench --only signal -o out/bench\n"
-    "  vibkit bench -o benchmarks/results     # what `make bench` runs: the tables the README quotes"
+    "  vibkit bench -o benchmarks/results     # what `make bench` runs: the tables the docs quote"
 )
 
 

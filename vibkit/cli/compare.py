@@ -8,6 +8,7 @@ from vibkit.diagnose.rounding import fmt_pm
 
 from .options import (
     add_command,
+    add_escalator,
     add_json,
     add_recording,
     add_speed_uncertainty,
@@ -31,6 +32,7 @@ def add_parser(subparsers):
     )
     add_recording(s)
     add_json(s)
+    add_escalator(s)
     s.add_argument("scene_or_result", metavar="SCENE_OR_RESULT", help="scene .toml or result .nc")
     s.add_argument("--band", type=band, help="link-pass search band LOW:HIGH [Hz]")
     s.add_argument("--harmonics", type=int, default=5, help="harmonics compared (default 5)")

@@ -7,6 +7,7 @@ import textwrap
 
 from .options import (
     add_command,
+    add_escalator,
     add_json,
     add_limits,
     add_recording,
@@ -66,6 +67,7 @@ def add_parser(subparsers):
         action="store_true",
         help="the unit's chain was replaced since its previous measurement: a new trend segment starts here",
     )
+    add_escalator(f)
     f.set_defaults(func=run_add)
 
     f = fleet_sub("scan", "add every recording of a folder that a catalogue describes, in parallel (Dask)")
@@ -78,6 +80,11 @@ def add_parser(subparsers):
         help="worker processes of the local cluster (default: one per core; 0: analyse in this process)",
     )
     add_recording(f, positional=False, channel=False)  # for every file; the catalogue's channel column per file
+    add_escalator(
+        f,
+        "the escalator's profile (TOML) of every file the catalogue's escalator column does not name; "
+        "see docs/guide/escalator.md",
+    )
     f.set_defaults(func=run_scan)
 
     f = fleet_sub(

@@ -437,7 +437,7 @@ def _profile_of(a):
     """The escalator profile that --escalator names, or None (commands without the option)."""
     if getattr(a, "escalator", None) is None:
         return None
-    return escalator_profile(a)  # noqa: F821 (defined with the --escalator option)
+    return escalator_profile(a)
 
 
 def add_segment(sp):
@@ -460,3 +460,25 @@ def segment_of(a):
         return parse_segment(text)
     except ValueError as exc:
         raise CLIError(str(exc)) from None
+
+
+ESCALATOR_HELP = "the escalator's profile (TOML): unit, speed, pitch, links; see docs/guide/escalator.md"
+
+
+def add_escalator(sp, help_=ESCALATOR_HELP):
+    """--escalator FILE: the user's escalator profile (vibkit.model.profile)."""
+    sp.add_argument("--escalator", metavar="FILE", help=help_)
+
+
+def escalator_profile(a):
+    """The profile named by ``--escalator`` (a Profile), None without one; a bad file is a CLIError."""
+    path = getattr(a, "escalator", None)
+    if not path:
+        return None
+    from vibkit.model.profile import load_profile
+    from vibkit.model.scene import SceneError
+
+    try:
+        return load_profile(path)
+    except SceneError as exc:
+        raise CLIError(f"--escalator: {exc}") from None

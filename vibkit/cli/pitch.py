@@ -9,12 +9,14 @@ from vibkit.diagnose.rounding import SPEED_SIGMA_NOT_STATED, fmt_length, fmt_pm
 
 from .options import (
     add_command,
+    add_escalator,
     add_json,
     add_limits,
     add_recording,
     add_speed_uncertainty,
     band,
     chain_speed,
+    escalator_profile,
     pitch_length,
     read_recording,
     run_speed,
@@ -40,8 +42,15 @@ def add_parser(subparsers):
     add_speed_options(s)
     add_speed_uncertainty(s)
     add_limits(s)
-    s.add_argument("--band", type=band, help="search band LOW:HIGH [Hz] (default speed / 80-200 mm)")
-    s.add_argument("--teeth", type=teeth, default=28, help="sprocket teeth, for the shaft hypothesis (default 28)")
+    s.add_argument(
+        "--band",
+        type=band,
+        help="search band LOW:HIGH [Hz] (default speed / 80-200 mm; with --escalator around its link pass)",
+    )
+    s.add_argument(
+        "--teeth", type=teeth, help="sprocket teeth, for the shaft hypothesis (default the profile's, else 28)"
+    )
+    add_escalator(s)
     s.set_defaults(func=run)
     return s
 
@@ -57,31 +66,58 @@ def add_speed_options(
     )
 
 
-def resolve_speed(a, rec, *, required=True):
-    """The run's speed (:func:`vibkit.cli.options.run_speed`: --speed, else the escalator profile's, else the
-    file's), else a CLIError (or a speed of None when not ``required``)."""
-    sp = run_speed(a, rec=rec)
+def resolve_speed(a, rec, *, required=True, profile=None):
+    """The run's speed (:func:`vibkit.cli.options.run_speed`: --speed, else the escalator profile's rated speed,
+    else the file's), else a CLIError (or a speed of None when not ``required``)."""
+    sp = run_speed(a, rec=rec, profile=profile)
     if sp.value is not None or not required:
         return sp
     raise CLIError(f"{a.recording}: the file states no chain speed; give --speed (e.g. --speed 0.5 or --speed 50cm/s)")
+
+
+def from_profile(a, profile, sp):
+    """(nominal pitch, band, teeth) of a run: the flags, else the profile's (the note says which came from the
+    profile), else the defaults; ``sp`` is the run's speed (:func:`vibkit.cli.options.run_speed`), which
+    takes the profile's speed and sigma itself."""
+    nominal, search, teeth_ = a.nominal_pitch, a.band, getattr(a, "teeth", None)
+    if profile is None:
+        return nominal, search, teeth_ or 28
+    taken = []
+    if sp.value is not None and sp.source != "given":
+        taken.append(f"speed {sp.text}")
+    if nominal is None:
+        nominal = profile.nominal_pitch
+        taken.append(f"nominal pitch {1000 * nominal:g} mm")
+    if search is None and sp.value is not None:
+        f = sp.value / profile.nominal_pitch
+        search = (0.8 * f, 1.25 * f)
+        taken.append(f"search band {search[0]:.4g}-{search[1]:.4g} Hz (0.8-1.25 x speed / nominal pitch)")
+    if teeth_ is None:
+        teeth_ = profile.teeth
+        taken.append(f"{teeth_} sprocket teeth")
+    if taken:
+        msg(textwrap.fill(f"note: from the profile {profile.source}: {'; '.join(taken)}", 100, subsequent_indent="  "))
+    return nominal, search, teeth_
 
 
 def run(a):
     from vibkit.diagnose.channels import estimate_channels
 
     rec = read_recording(a)
-    sp = resolve_speed(a, rec)
+    profile = escalator_profile(a)
+    sp = resolve_speed(a, rec, profile=profile)
     source = "--speed" if sp.source == "given" else sp.source
+    nominal, search, teeth_ = from_profile(a, profile, sp)
     try:
         res = estimate_channels(
             rec,
             channel=a.channel,
             speed=sp.value,
             speed_sigma=sp.sigma,
-            band=a.band,
-            nominal_pitch=a.nominal_pitch,
+            band=search,
+            nominal_pitch=nominal,
             limits_percent=a.limits,
-            teeth=a.teeth,
+            teeth=teeth_,
             speed_source=source,
         )
     except ValueError as exc:  # the analysis's words about the signal, with the file named

@@ -5,6 +5,7 @@ from __future__ import annotations
 from .options import (
     _profile_of,
     add_command,
+    add_escalator,
     add_force_overwrite,
     add_json,
     add_limits,
@@ -31,6 +32,7 @@ def add_parser(subparsers):
     s = add_command(subparsers, "report", "write the multi-page PDF diagnostic report of a recording", EPILOG)
     add_recording(s)
     add_json(s)
+    add_escalator(s)
     s.add_argument("--scene", help="scene describing the escalator and sensor (simulated and compared)")
     s.add_argument("-o", "--output", required=True, help="PDF to write; a new path unless --force")
     add_force_overwrite(s, "PDF")

@@ -5,7 +5,16 @@ from __future__ import annotations
 import os
 import sys
 
-from .options import add_command, add_json, add_recording, add_segment, positive, reader_options, segment_of
+from .options import (
+    add_command,
+    add_escalator,
+    add_json,
+    add_recording,
+    add_segment,
+    positive,
+    reader_options,
+    segment_of,
+)
 from .output import CLIError, msg, print_json, table
 
 EPILOG = (
@@ -36,6 +45,7 @@ def add_parser(subparsers):
     s.add_argument("--duration", type=positive, help="simulated time [s] (default: the scene's)")
     add_recording(s, positional=False, channel=False)
     add_json(s)
+    add_escalator(s)
     s.set_defaults(func=run)
     return s
 

@@ -66,7 +66,7 @@ DEFAULT_LIMITS_PERCENT = (1.5, 2.0, 3.0)
 ELONGATION_WINDOW_PERCENT = (-1.0, 6.0)
 #: standard escalator step-chain pitches [m]: steps every ~406 mm carried on every 6th, 5th or 4th
 #: link (Tsubaki, The Complete Guide to Chain, 2.2.1 "Step (Escalator) Chain", table 2.5: 67.7,
-#: 81.3, 101.6 mm), 400 mm / 3 (the reference escalator of the study, /work/shared/spec), and the
+#: 81.3, 101.6 mm), 400 mm / 3 (the reference escalator of the study), and the
 #: Otis T135.4 step chain (135.46 mm, supplier data sheets)
 CATALOGUE_PITCHES_M = (0.0677, 0.0813, 0.1016, 0.4 / 3.0, 0.13546)
 CATALOGUE_SOURCES = (

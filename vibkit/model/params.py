@@ -1,7 +1,7 @@
 """Parameters of the escalator chain model, as frozen dataclasses.
 
-Every physical quantity is SI and has no silent default: the reference escalator of the study
-(``../shared/spec/model.md``) is built explicitly by :func:`reference_guide`,
+Every physical quantity is SI and has no silent default: the reference escalator of the study (A. Cuevas López,
+Universidad de Sevilla, 2020; summarised in the docs' model page) is built explicitly by :func:`reference_guide`,
 :func:`reference_chain` and :func:`reference_sprocket`.
 """
 

@@ -1,9 +1,34 @@
-"""Signal analysis for chain vibration: spectra, Hampel filter, harmonic families, frequency
-estimation with Cramer-Rao sigmas, order tracking, Vold-Kalman filtering, spectrum comparison.
+"""Signal analysis for chain vibration, in the manner of :mod:`scipy.signal`.
 
-Functions follow scipy.signal conventions (array, ``fs`` [Hz], keyword-only options, ``axis=-1``);
-:mod:`vibkit.signal.xr` wraps them for xarray objects and keeps units.  This package imports
-numpy, scipy, xarray and numba only -- never the simulator.
+Functions take an array, the sample rate ``fs`` [Hz] and keyword-only options (``axis=-1`` where
+it applies); results with several fields are small frozen objects. This package imports numpy,
+scipy, xarray and numba only, never the simulator.
+
+Spectral analysis
+    amplitude_spectrum, welch_psd, WelchResult, spectrogram, study_power_spectrum, compare_spectra,
+    common_spectrograms, SpectrumComparison, HarmonicComparison
+Filtering and outliers
+    hampel, hampel_events, hampel_false_alarm_rate, hampel_n_sigma_for_rate, HampelResult,
+    OutlierEvent
+Peaks and frequency estimates
+    link_pass_estimate, LinkPassEstimate, find_fundamental, Fundamental, Harmonic, harmonic_ls,
+    interpolated_dft, FrequencyEstimate, crb_harmonic, crb_single_tone, mean_link_pass_frequency,
+    MeanFrequency
+Detection and invalid samples
+    detect_link_pass, LinkPassDetection, flag_invalid, InvalidSamples, quantisation_step
+Order tracking
+    track_phase, PhaseTrack, phase_from_tacho, phase_from_shaft_angle, AngleSignal,
+    resample_to_angle, order_spectrum, order_map, vold_kalman, VoldKalmanResult
+Ride metrics (ISO 2631-1)
+    frequency_weighting, frequency_weighting_response, frequency_weighting_sos, Weighting,
+    WEIGHTINGS, lowpass_10hz, detect_ride_segment, RideSegment, half_cycle_peaks, peak_to_peak,
+    peak_to_peak_values, PeakToPeak, a95
+xarray wrappers
+    amplitude_spectrum_da, welch_psd_da, spectrogram_da, hampel_da, link_pass_estimate_da,
+    CombinedEstimate, sample_rate, split_segments
+
+Everything else in the submodules is internal (kernels, helpers) and may change without notice;
+:mod:`vibkit.signal.xr` holds the xarray wrappers, each the twin of a function above.
 """
 
 from .compare import HarmonicComparison, SpectrumComparison, common_spectrograms, compare_spectra
@@ -56,67 +81,74 @@ from .xr import (
 )
 
 __all__ = [
-    "WEIGHTINGS",
-    "PeakToPeak",
-    "RideSegment",
-    "Weighting",
-    "a95",
-    "detect_ride_segment",
-    "frequency_weighting",
-    "frequency_weighting_response",
-    "frequency_weighting_sos",
-    "half_cycle_peaks",
-    "lowpass_10hz",
-    "peak_to_peak",
-    "peak_to_peak_values",
-    "InvalidSamples",
-    "LinkPassDetection",
-    "MeanFrequency",
-    "detect_link_pass",
-    "flag_invalid",
-    "mean_link_pass_frequency",
-    "quantisation_step",
-    "AngleSignal",
-    "CombinedEstimate",
-    "FrequencyEstimate",
-    "Fundamental",
-    "HampelResult",
-    "Harmonic",
-    "HarmonicComparison",
-    "LinkPassEstimate",
-    "OutlierEvent",
-    "PhaseTrack",
-    "SpectrumComparison",
-    "VoldKalmanResult",
-    "WelchResult",
+    # Spectral analysis
     "amplitude_spectrum",
-    "amplitude_spectrum_da",
-    "common_spectrograms",
+    "welch_psd",
+    "WelchResult",
+    "spectrogram",
+    "study_power_spectrum",
     "compare_spectra",
-    "crb_harmonic",
-    "crb_single_tone",
-    "find_fundamental",
+    "common_spectrograms",
+    "SpectrumComparison",
+    "HarmonicComparison",
+    # Filtering and outliers
     "hampel",
-    "hampel_da",
     "hampel_events",
     "hampel_false_alarm_rate",
     "hampel_n_sigma_for_rate",
+    "HampelResult",
+    "OutlierEvent",
+    # Peaks and frequency estimates
+    "link_pass_estimate",
+    "LinkPassEstimate",
+    "find_fundamental",
+    "Fundamental",
+    "Harmonic",
     "harmonic_ls",
     "interpolated_dft",
-    "link_pass_estimate",
-    "link_pass_estimate_da",
-    "order_map",
-    "order_spectrum",
-    "phase_from_shaft_angle",
-    "phase_from_tacho",
-    "resample_to_angle",
-    "sample_rate",
-    "spectrogram",
-    "spectrogram_da",
-    "split_segments",
-    "study_power_spectrum",
+    "FrequencyEstimate",
+    "crb_harmonic",
+    "crb_single_tone",
+    "mean_link_pass_frequency",
+    "MeanFrequency",
+    # Detection and invalid samples
+    "detect_link_pass",
+    "LinkPassDetection",
+    "flag_invalid",
+    "InvalidSamples",
+    "quantisation_step",
+    # Order tracking
     "track_phase",
+    "PhaseTrack",
+    "phase_from_tacho",
+    "phase_from_shaft_angle",
+    "AngleSignal",
+    "resample_to_angle",
+    "order_spectrum",
+    "order_map",
     "vold_kalman",
-    "welch_psd",
+    "VoldKalmanResult",
+    # Ride metrics (ISO 2631-1)
+    "frequency_weighting",
+    "frequency_weighting_response",
+    "frequency_weighting_sos",
+    "Weighting",
+    "WEIGHTINGS",
+    "lowpass_10hz",
+    "detect_ride_segment",
+    "RideSegment",
+    "half_cycle_peaks",
+    "peak_to_peak",
+    "peak_to_peak_values",
+    "PeakToPeak",
+    "a95",
+    # xarray wrappers
+    "amplitude_spectrum_da",
     "welch_psd_da",
+    "spectrogram_da",
+    "hampel_da",
+    "link_pass_estimate_da",
+    "CombinedEstimate",
+    "sample_rate",
+    "split_segments",
 ]
