@@ -233,3 +233,14 @@ def test_report_states_one_speed_and_pitch_and_names_the_unit(phone_file, tmp_pa
     # tolerance: an 8-s simulation finds its link pass to about 0.3 % (its transient and speed ripple)
     assert ratio == pytest.approx(LONG, abs=0.003)
     assert "ride quality (simulation)" not in text  # the shipped scene is not unit E07's
+
+
+def test_phone_timestamp_jitter_is_a_note_not_a_warning():
+    # a phone's sensor events +-3 ms around a 100 Hz grid: resampled, and the estimate does not depend on how
+    rng = np.random.default_rng(1)
+    t = np.sort(np.arange(6000) / 100.0 + rng.uniform(-0.003, 0.003, 6000))
+    x = family(t, SPEED / (NOMINAL * LONG), AMPS) + 0.05 * rng.standard_normal(t.size)
+    est = estimate_pitch(recording({"az": x}, t=t), speed=SPEED, speed_sigma=0.00025, nominal_pitch=NOMINAL)
+    assert est.warnings == []
+    assert [n for n in est.notes if "irregular time stamps" in n]
+    assert est.elongation_percent == pytest.approx(0.95, abs=3 * est.elongation_sigma_percent)

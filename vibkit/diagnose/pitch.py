@@ -299,12 +299,14 @@ def estimate_pitch(
     ests, skipped = steps.estimate_bursts(prep, name=name, band=req.band, n_harmonics=n_harmonics)
     ests = steps.choose_methods(ests)
     comb = steps.combine(ests)
-    warnings = [*prep.warnings, *skipped, *comb.warnings]
+    jitter_warnings, jitter_notes = steps.jitter_effect(recording, name, ests, req.band, n_harmonics)
+    warnings = [*prep.warnings, *jitter_warnings, *skipped, *comb.warnings]
     for w in (w for be in ests for w in be.spectral.warnings):
         if w not in warnings:
             warnings.append(w)
     pitch, psig, caveats, notes = steps.pitch_from(comb, req)
     warnings += caveats
+    notes = jitter_notes + notes
     dec = decide(steps.evidence(det, ests, comb, req, speed_source=speed_source))
     if not dec.has_link_pass:
         # refused: no frequency, pitch or verdict leaves this function (the reason says what the family implies)

@@ -8,7 +8,7 @@ import textwrap
 
 import numpy as np
 
-from .common import _PAGE, _fmt, _page_title, _table, speed_figure
+from .common import _PAGE, _fmt, _page_title, _table, fmt_length, speed_figure
 
 __all__ = ["data_quality_page", "parameters_page"]
 
@@ -50,7 +50,7 @@ def parameters_page(doc, ctx) -> None:
     rows = [
         ["channel", ctx.channel],
         ["chain speed", speed_figure(ctx)],
-        ["nominal pitch", _fmt(ctx.nominal_pitch, "m")],
+        ["nominal pitch", fmt_length(ctx.nominal_pitch) if ctx.nominal_pitch else "not given"],
         ["limits", " / ".join(f"{v:g} %" for v in ctx.limits)],
         ["search band", (f"{pitch.band_hz[0]:.4g} - {pitch.band_hz[1]:.4g} Hz" if pitch else str(ctx.band))],
         ["Hampel half window", f"{ctx.hampel_half_window_s:g} s"],
