@@ -159,7 +159,7 @@ def work_list_page(doc, ctx, rows, part, parts):
     _title(fig, "Fleet work list: most urgent first" + (f" ({part}/{parts})" if parts > 1 else ""), _subtitle(ctx))
     ax = fig.add_axes([0.04, 0.10, 0.92, 0.80])
     ax.axis("off")
-    widths = [0.03, 0.07, 0.08, 0.07, 0.08, 0.11, 0.055, 0.135, 0.37]
+    widths = [0.03, 0.055, 0.1, 0.07, 0.095, 0.11, 0.045, 0.16, 0.335]
     tab = ax.table(cellText=rows, colLabels=WORK_LIST_HEADER, colWidths=widths, loc="upper left", cellLoc="left")
     tab.auto_set_font_size(False)
     tab.set_fontsize(7)
