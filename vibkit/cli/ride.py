@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+import math
 import os
 import sys
 
@@ -11,8 +13,10 @@ from .options import (
     add_json,
     add_recording,
     add_segment,
+    chain_speed,
     positive,
     reader_options,
+    run_speed,
     segment_of,
 )
 from .output import CLIError, msg, print_json, table
@@ -39,6 +43,11 @@ def add_parser(subparsers):
     )
     add_segment(s)
     s.add_argument(
+        "--speed",
+        type=chain_speed,
+        help="chain speed measured on the steps [m/s] (default: the escalator profile's, else the file's)",
+    )
+    s.add_argument(
         "--weighting", help="Wk, Wd ... for every axis, three for x,y,z (Wd,Wd,Wk), or x=Wd,y=Wd,z=Wk (the default)"
     )
     s.add_argument("--scene", help="also simulate this scene's step and report it next to the recording")
@@ -57,17 +66,21 @@ def _weightings(text):
     return parse_weightings(text)
 
 
+def _num(v):
+    return f"{v:.4g}" if v is not None and math.isfinite(float(v)) else "n/a"
+
+
 def _ride_rows(rq):
     return [
         [
             a.axis,
             a.channel,
             a.weighting,
-            f"{a.weighted.max:.4g}",
-            f"{a.weighted.a95:.4g}",
-            f"{a.weighted.rms:.4g}",
-            f"{a.lowpass.max:.4g}",
-            f"{a.lowpass.a95:.4g}",
+            _num(a.weighted.max),
+            _num(a.weighted.a95),
+            _num(a.weighted.rms),
+            _num(a.lowpass.max),
+            _num(a.lowpass.a95),
         ]
         for a in rq.axes
     ]
@@ -97,6 +110,9 @@ def run(a):
             weightings=weightings,
             read_options=reader_options(a),
         )
+        sp = run_speed(a)  # --speed, else the escalator profile's: the run's one speed replaces the file's
+        if sp.value is not None:
+            rq = dataclasses.replace(rq, speed_m_s=sp.value)
     sim = None
     if a.scene:
         sim = simulate_ride(a.scene, duration=a.duration, weightings=weightings, progress=sys.stderr.isatty())

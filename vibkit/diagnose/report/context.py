@@ -8,6 +8,7 @@ family) and suspected clipping, and builds the JSON summary.  The page functions
 
 from __future__ import annotations
 
+import dataclasses
 import datetime as _dt
 import os
 from dataclasses import dataclass, field
@@ -280,7 +281,7 @@ def analyse(
         result = simulate(with_ride_outputs(sc), duration=duration, progress=progress)
         if found:  # no comparison of a link pass the recording does not carry
             comp = compare(rec, result, channel=ch, speed=speed, speed_sigma=speed_sigma)
-    ride = _ride(rec, result if scene_is_unit(sc, profile) else None, sc, notes, segment)
+    ride = _ride(rec, result if scene_is_unit(sc, profile) else None, sc, notes, segment, speed)
     if result is not None and not scene_is_unit(sc, profile):
         notes.append(
             f"no ride page of the simulation: scene {sc.name!r} is not "
@@ -396,7 +397,7 @@ def scene_is_unit(scene, profile) -> bool:
     return unit in names
 
 
-def _ride(rec, result, sc, notes, segment=None):
+def _ride(rec, result, sc, notes, segment=None, speed=None):
     """Ride qualities of the recording (over ``segment`` [s] when given) and the simulation; a one-line note
     where one that could be expected (a recording with x, y, z channels, a scene that names its step) cannot
     be assessed."""
@@ -405,7 +406,8 @@ def _ride(rec, result, sc, notes, segment=None):
     out = []
     axes = {m.group(1) for nm in rec.data_vars if (m := _AXIS_RE.search(str(nm).lower()))}
     try:
-        out.append(("recording", ride_quality_from_recording(rec, segment=segment)))
+        rq = ride_quality_from_recording(rec, segment=segment)
+        out.append(("recording", rq if speed is None else dataclasses.replace(rq, speed_m_s=speed)))  # one speed
     except ValueError as exc:
         if len(axes) >= 2:
             notes.append(
