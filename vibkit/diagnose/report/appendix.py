@@ -8,7 +8,7 @@ import textwrap
 
 import numpy as np
 
-from .common import _PAGE, _fmt, _page_title, _table, fmt_length, speed_figure
+from .common import _PAGE, _fmt, _page_title, _table, fmt_length, speed_source, speed_value
 
 __all__ = ["data_quality_page", "parameters_page"]
 
@@ -49,7 +49,8 @@ def parameters_page(doc, ctx) -> None:
     _page_title(fig, "Parameters", "everything needed to repeat this report")
     rows = [
         ["channel", ctx.channel],
-        ["chain speed", speed_figure(ctx)],
+        ["chain speed", speed_value(ctx)],
+        ["speed from", textwrap.shorten(speed_source(ctx), 70)],
         ["nominal pitch", fmt_length(ctx.nominal_pitch) if ctx.nominal_pitch else "not given"],
         ["limits", " / ".join(f"{v:g} %" for v in ctx.limits)],
         ["search band", (f"{pitch.band_hz[0]:.4g} - {pitch.band_hz[1]:.4g} Hz" if pitch else str(ctx.band))],

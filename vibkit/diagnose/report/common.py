@@ -139,6 +139,24 @@ def elongation_figure(pitch) -> str:
     return f"{pitch.elongation_percent:+.2f} % ({SPEED_SIGMA_NOT_STATED})"
 
 
+def speed_value(ctx) -> str:
+    """The run's speed alone (``0.50000 +- 0.00025 m/s``, or ``0.5 m/s, uncertainty not stated``), for a table."""
+    run = ctx.run_speed
+    if run is None or run.value is None:
+        return "not known (give --speed)"
+    if run.sigma is None or not run.sigma > 0:
+        return f"{run.value:g} m/s, uncertainty not stated"
+    return fmt_pm(run.value, run.sigma, "m/s")
+
+
+def speed_source(ctx) -> str:
+    """Where the run's speed and its sigma came from."""
+    run = ctx.run_speed
+    if run is None or run.value is None:
+        return "-"
+    return run.source + (f"; sigma: {run.sigma_source}" if run.sigma and run.sigma_source not in ("", "given") else "")
+
+
 def speed_figure(ctx) -> str:
     """The run's one speed as every page states it."""
     run = ctx.run_speed

@@ -391,6 +391,8 @@ def scene_is_unit(scene, profile) -> bool:
     unit = str(getattr(profile, "unit", "") or "").strip().lower()
     if not unit:
         return False
+    if getattr(scene, "source", None) and str(scene.source) == str(getattr(profile, "source", "")):
+        return True  # built from the profile
     names = {str(scene.name or "").strip().lower()}
     if getattr(scene, "source", None):
         names.add(os.path.splitext(os.path.basename(str(scene.source)))[0].lower())
