@@ -1,9 +1,12 @@
 """Escalator profiles: the user's machine in a small TOML; bad keys are one-line errors naming file and key."""
 
 import math
+from pathlib import Path
 
+import numpy as np
 import pytest
 
+import vibkit
 from vibkit.model.profile import STANDARD_SPEED_TOLERANCE, load_profile, parse_profile, profile_table
 from vibkit.model.scene import SceneError
 
@@ -87,3 +90,94 @@ def test_profile_table_lists_every_key():
     table = profile_table()
     for k in ("| [escalator] | unit |", "| [drive] | speed | m/s | required", "| [chain] | links_per_step |"):
         assert k in table
+
+
+# --- the scene of a profile ---------------------------------------------------------------------
+
+FLEET = Path(__file__).resolve().parents[2] / "data" / "fleet-example" / "escalators"
+CHAIN_101 = """
+[escalator]
+unit = "W4"
+[drive]
+speed = 0.5
+[chain]
+nominal_pitch = 0.1016
+links_per_step = 4
+n_links = 200
+"""
+
+
+def mean_frequency(x, fs, f0):
+    """Average frequency of the component of x near f0: the unwrapped phase of its analytic signal
+    (band-passed +-30 %), end minus start, over 2 pi T. [Hz]"""
+    from scipy.signal import butter, hilbert, sosfiltfilt
+
+    sos = butter(4, [0.7 * f0, 1.3 * f0], btype="band", fs=fs, output="sos")
+    phase = np.unwrap(np.angle(hilbert(sosfiltfilt(sos, x - x.mean()))))
+    trim = int(2 * fs)  # filter end effects
+    return (phase[-trim] - phase[trim]) / (2 * np.pi * (x.size - 2 * trim) / fs)
+
+
+def test_the_example_fleet_has_a_profile_per_unit():
+    units = {line.split(",")[1] for line in (FLEET.parent / "units.csv").read_text().splitlines()[1:]}
+    assert {p.stem for p in FLEET.glob("*.toml")} == units
+    for path in FLEET.glob("*.toml"):
+        prof = load_profile(path)
+        assert (prof.unit, prof.speed, prof.nominal_pitch) == (path.stem, 0.5, 0.13333)  # make_fleet_example.py
+
+
+@pytest.mark.parametrize("unit", ["E07", "E12", "E21"])
+def test_every_fleet_profile_simulates_converged_at_its_speed(unit):
+    """The scene built from each example profile runs, converged (the check), with every link in tension
+    and delta's link pass at the profile's speed / pitch within 0.05 % (measured: +0.006 %, -0.040 %,
+    -0.042 % over 20 s: the chain coasts in the tooth backlash at its start speed)."""
+    prof = load_profile(FLEET / f"{unit}.toml")
+    ds = vibkit.simulate(prof.scene("forward"), progress=False, check=True)
+    assert ds.attrs["converged"] == 1
+    assert "warnings" not in ds.attrs
+    assert float(ds.link_tension.min()) > 0.0
+    f = mean_frequency(ds.delta.values, 1 / float(ds.time[1] - ds.time[0]), prof.speed / prof.nominal_pitch)
+    assert f == pytest.approx(prof.speed / prof.nominal_pitch, rel=5e-4)
+    assert ds.attrs["link_pass_frequency_hz"] == pytest.approx(prof.speed / prof.nominal_pitch, rel=1e-12)
+
+
+def test_profile_scene_fills_from_standard_proportions_and_says_so():
+    prof = parse_profile(CHAIN_101, "w4.toml")
+    text = prof.scene_text("forward")
+    scene = prof.scene("forward")
+    # a 101.6 mm chain: rollers and teeth scaled with the pitch, 4 rollers per step, the loop from n_links
+    assert scene.chain.roller_radius == pytest.approx(0.035 * 0.1016 / (0.4 / 3), rel=1e-5)
+    assert scene.sprocket.base_width == pytest.approx(0.060 * 0.1016 / (0.4 / 3), rel=1e-5)
+    assert (scene.chain.n_rollers, scene.chain.links_per_step) == (200, 4)
+    assert scene.guide.head_radius == pytest.approx(scene.sprocket.pitch_radius(0.1016), rel=1e-12)
+    assert scene.effects["motor"].speed == 0.5 and scene.effects["tensioner"].preload > 0
+    assert "filled: reference 35 mm x pitch / 133.33 mm" in text and "chain.n_links" in text
+    assert scene.analysis == "forward" and prof.scene("inverse").motion.speed == 0.5
+
+
+def test_loop_from_rise_and_incline():
+    """The guide's incline from the rise: L = (rise - 2 r_t (1 - cos a)) / sin a, the links whole steps
+    that close the loop within the tensioner's travel."""
+    text = MINIMAL.replace("n_links = 160", "") + "[geometry]\nrise = 4.5\nincline_deg = 30\n"
+    scene = parse_profile(text, "e.toml").scene("inverse")
+    a = np.radians(30.0)
+    assert scene.guide.incline_length == pytest.approx((4.5 - 2 * 1.5 * (1 - np.cos(a))) / np.sin(a), rel=1e-6)
+    assert scene.chain.n_rollers % 3 == 0
+    assert abs(scene.guide.perimeter - scene.chain.n_rollers * 0.13333) / 2 < 0.36
+
+
+@pytest.mark.parametrize(
+    "edit, pattern",
+    [
+        # 35 mm rollers (the 133.33 mm chain's) on teeth cut for 101.6 mm
+        (lambda t: t.replace("n_links = 200", "n_links = 200\nroller_radius = 0.035"), r"inside the sprocket's teeth"),
+        (lambda t: t.replace("n_links = 200", "n_links = 300") + "[geometry]\nrise = 3.0\n", r"cannot close"),
+        (lambda t: t.replace("n_links = 200", "n_links = 40"), r"too few"),
+    ],
+)
+def test_geometry_that_cannot_run_is_refused_naming_the_key(edit, pattern):
+    with pytest.raises(SceneError, match=pattern) as exc:
+        parse_profile(edit(CHAIN_101), "w4.toml").scene("forward")
+    text = str(exc.value)
+    assert text.startswith("w4.toml: ") and "\n" not in text
+    assert any(k in text for k in ("chain.roller_radius", "chain.n_links", "geometry.rise"))

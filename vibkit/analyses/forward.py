@@ -107,14 +107,14 @@ def initial_state(model, *, start=0.0, speed=0.0, theta=None):
     """Closed, meshed initial state: roller 1 at ``start`` [m of undeformed guide], chain speed [m/s].
 
     The sprocket angle meshes the rollers on the head midway between teeth (no contact), and turns
-    with the chain (thetadot = -speed / R^P).
+    with the chain (thetadot = -2 pi speed / (Z L), :meth:`EscalatorModel.sprocket_speed`).
     """
     conf = model.chain.configure(start)
     th = model.meshed_angle(conf) if theta is None else theta
     jac, gam, c, _, _ = model.chain.jacobian(conf)
     # the chain speed is roller 1's speed |J_1| s0dot
     s0dot = speed / math.hypot(*jac[0]) if speed else 0.0
-    return np.array([start, s0dot, th, -speed / model.pitch_radius, 0.0]), conf.delta
+    return np.array([start, s0dot, th, model.sprocket_speed(speed), 0.0]), conf.delta
 
 
 def forward_dynamics(
@@ -619,4 +619,5 @@ def _post_process(fm, t, y, outputs, stats, y_obs=None, table=None):
     }
     if step is not None:
         attrs["step_accelerometer"] = int(step)
+    attrs["links_per_step"] = int(scene.chain.links_per_step)
     return make_dataset(coords, data, attrs, scene)

@@ -96,7 +96,8 @@ def from_profile(a, profile, sp):
         teeth_ = profile.teeth
         taken.append(f"{teeth_} sprocket teeth")
     if taken:
-        msg(textwrap.fill(f"note: from the profile {profile.source}: {'; '.join(taken)}", 100, subsequent_indent="  "))
+        note = f"note: from the profile {profile.source}: {'; '.join(taken)}"
+        msg(textwrap.fill(note, 100, subsequent_indent="  ", break_on_hyphens=False))
     return nominal, search, teeth_
 
 

@@ -4,10 +4,11 @@ from __future__ import annotations
 
 import json
 import os
+import textwrap
 import time
 
 from .options import add_command, add_force_overwrite, add_json, byte_size, positive, seconds_or_none
-from .output import check_output, print_json, table
+from .output import check_output, msg, print_json, table
 
 EPILOG = "example:\n  vibkit simulate sim/leon.toml -o reports/leon.nc --duration 10"
 
@@ -80,6 +81,9 @@ def run(a):
     }
     if "convergence" in ds.attrs:
         summary["convergence"] = json.loads(ds.attrs["convergence"])
+    summary["warnings"] = [w for w in ds.attrs.get("warnings", "").split("\n") if w]
+    for w in summary["warnings"]:
+        msg(textwrap.fill(f"warning: {w}", 100, subsequent_indent="  "))
     if a.json:
         print_json("simulate", summary)
     else:

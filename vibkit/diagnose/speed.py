@@ -97,7 +97,8 @@ def resolve_speed(speed=None, speed_sigma=None, *, profile=None, recording=None,
             raise ValueError(f"speed must be a positive number of m/s, got {speed!r}")
         return ResolvedSpeed(v, *stated[:1], source="given", sigma_source=stated[1])
     if profile is not None and getattr(profile, "speed", None):
-        name = f"escalator profile {getattr(profile, 'unit', '')}".strip()
+        rated = ", rated" if getattr(profile, "speed_sigma_from_standard", False) else ""
+        name = f"escalator profile {getattr(profile, 'unit', '')}{rated}"
         if speed_sigma is None:
             sig, why = profile.speed_sigma
             return ResolvedSpeed(float(profile.speed), sig, source=name, sigma_source=why)

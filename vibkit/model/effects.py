@@ -77,6 +77,7 @@ from .slots import (
     IP,
     IP_CONTACT,
     IP_GRAVITY,
+    IP_LINKS_PER_STEP,
     IP_MOTOR,
     IP_N,
     IP_PASSENGERS,
@@ -153,6 +154,7 @@ def pack_parameters(model, effects: dict, *, start: float = 0.0):
     )
     ip[IP["n"]] = n
     ip[IP["nteeth"]] = model.sprocket.teeth
+    ip[IP["links_per_step"]] = model.scene.chain.links_per_step
     if "gravity" in effects:
         ip[IP["gravity"]] = 1
         fp[FP["g"]] = effects["gravity"].g
@@ -164,7 +166,7 @@ def pack_parameters(model, effects: dict, *, start: float = 0.0):
         ip[IP["motor"]] = 1
         o = effects["motor"]
         fp[FP["kp"]], fp[FP["ki"]] = o.kp, o.ki
-        fp[FP["wref"]] = -o.speed / geo["pitch_radius"]
+        fp[FP["wref"]] = model.sprocket_speed(o.speed)  # motor.speed is the chain speed on the straight
         fp[FP["tlim"]] = o.torque_limit
     pm = np.zeros(0)
     ps = np.zeros(0, dtype=np.int64)
@@ -256,9 +258,10 @@ def contact_candidates(xs, zs, n, cx, cz, reach, cand):
 
 
 @nb.njit(cache=True, error_model="numpy", inline="always")
-def step_roller(ps, jp, r, n):
-    """Index of roller ``r`` (0, 1, 2: the middle one is 1) of passenger ``jp``'s step (``ps`` 1-based)."""
-    return (3 * (ps[jp] - 1) + r) % n
+def step_roller(ps, jp, r, n, k):
+    """Index of roller ``r`` (0 .. k - 1; the middle one, for 3 or 4 rollers, is 1) of passenger ``jp``'s
+    step (``ps`` 1-based) on a chain of ``k`` rollers per step."""
+    return (k * (ps[jp] - 1) + r) % n
 
 
 @nb.njit(cache=True, error_model="numpy", inline="always")
@@ -268,24 +271,24 @@ def aboard(jp, where, pb, pa):
 
 
 @nb.njit(cache=True, error_model="numpy", inline="always")
-def step_load(jp, pm, g):
-    """Weight [N] passenger ``jp`` puts on each of the three rollers of its step: m g / 3."""
-    return pm[jp] * g / 3.0
+def step_load(jp, pm, g, k):
+    """Weight [N] passenger ``jp`` puts on each of the ``k`` rollers of its step: m g / k."""
+    return pm[jp] * g / k
 
 
 @nb.njit(cache=True, error_model="numpy")
-def passenger_loads(t, mode, s0, pm, ps, pb, pa, g, n, fz):
-    """Subtract from ``fz`` [N] the weight of every passenger aboard, shared by its step's three rollers.
+def passenger_loads(t, mode, s0, pm, ps, pb, pa, g, n, k, fz):
+    """Subtract from ``fz`` [N] the weight of every passenger aboard, shared by its step's ``k`` rollers.
 
     ``mode`` 1: aboard by time (board <= t < alight); 2: by place, while the step's middle roller's
     unwrapped s0 (``s0``, the rollers' coordinates) is between the boarding and alighting places.
     """
     for jp in range(pm.size):
-        where = t if mode == PASSENGERS_BY_TIME else s0[step_roller(ps, jp, 1, n)]
+        where = t if mode == PASSENGERS_BY_TIME else s0[step_roller(ps, jp, 1, n, k)]
         if aboard(jp, where, pb, pa):
-            w = step_load(jp, pm, g)
-            for r in range(3):
-                fz[step_roller(ps, jp, r, n)] -= w
+            w = step_load(jp, pm, g, k)
+            for r in range(k):
+                fz[step_roller(ps, jp, r, n, k)] -= w
 
 
 @nb.njit(cache=True, error_model="numpy")
@@ -364,7 +367,7 @@ def evaluate(t, y, dy, prm, ws, want_teeth):
         fx[i] = 0.0
         fz[i] = -mass[i] * g if ip[IP_GRAVITY] == 1 else 0.0
     if ip[IP_PASSENGERS] != 0:
-        passenger_loads(t, ip[IP_PASSENGERS], s0, pm, ps, pb, pa, g, n, fz)
+        passenger_loads(t, ip[IP_PASSENGERS], s0, pm, ps, pb, pa, g, n, ip[IP_LINKS_PER_STEP], fz)
     if ip[IP_ROLLING] == 1:
         mu = fp[FP_ROLLING]
         for i in range(n):

@@ -37,6 +37,16 @@ class EscalatorModel:
     def pitch_radius(self) -> float:
         return self.geometry["pitch_radius"]
 
+    def sprocket_speed(self, chain_speed: float) -> float:
+        """Sprocket speed thetadot [rad/s] that moves the chain at ``chain_speed`` [m/s] on the straight.
+
+        The chain advances Z link pitches per turn of a Z-tooth sprocket, so its mean speed on the
+        straight is Z L omega / (2 pi) (not the pitch circle's omega R^P, 0.21 % faster at Z = 28):
+        thetadot = -2 pi v / (Z L), negative because the sprocket turns clockwise while the steps go up.
+        The link-pass frequency is then v / L = Z |thetadot| / (2 pi) exactly.
+        """
+        return -2.0 * math.pi * chain_speed / (self.sprocket.teeth * self.pitch)
+
     def link_pass_frequency(self, speed: float) -> float:
         """f_link = |v| / L_link. [Hz]"""
         return abs(speed) / self.pitch
@@ -46,8 +56,10 @@ class EscalatorModel:
         return mesh_phase(conf.position, self.centre, self.sprocket, self.pitch)
 
     def step_rollers(self, step: int) -> np.ndarray:
-        """0-based indices of the three rollers of 1-based step ``step``."""
-        return np.arange(3 * (step - 1), 3 * step) % self.n
+        """0-based indices of the rollers (``links_per_step``: 3, or 4) of 1-based step ``step``; the
+        middle one (index 1 of 3 or 4) is where a step is placed."""
+        k = self.scene.chain.links_per_step
+        return np.arange(k * (step - 1), k * step) % self.n
 
     def gravity_forces(self, g: float) -> tuple[np.ndarray, np.ndarray]:
         return np.zeros(self.n), -self.mass * g
@@ -90,7 +102,7 @@ class EscalatorModel:
         return True, np.asarray(b_abs), np.asarray(a_abs)
 
     def passenger_forces(self, opts, t: float, g: float, fz: np.ndarray, *, s0=None, schedule=None) -> None:
-        """Add each passenger's weight, shared by the three rollers of its step, while aboard.
+        """Add each passenger's weight, shared by the rollers of its step, while aboard.
 
         ``schedule`` is :meth:`passenger_schedule`'s result; by place, ``s0`` holds the rollers'
         unwrapped undeformed coordinates (a :class:`~vibkit.model.chain.Configuration`'s ``s0``).
@@ -100,7 +112,7 @@ class EscalatorModel:
             rollers = self.step_rollers(step)
             where = s0[rollers[1]] if by_place else t
             if b <= where < a:
-                fz[rollers] -= m * g / 3.0
+                fz[rollers] -= m * g / rollers.size
 
     def wrap_angle(self, theta: float) -> float:
         return math.remainder(theta, 2 * math.pi)

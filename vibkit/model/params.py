@@ -118,6 +118,9 @@ class ChainParams:
     worn_links : tuple of (int, float)
         Links whose pitch differs from ``link_pitch``: (1-based link number, pitch [m]). Link j
         joins roller j to roller j+1; link p closes the chain on roller 1.
+    links_per_step : int
+        Rollers (links) per step: 3 (the study's 133.33 mm chain under 400 mm steps) or 4 (101.6 mm
+        chains). Step s carries rollers links_per_step (s - 1) + 1 ... links_per_step s.
     """
 
     link_pitch: float
@@ -125,9 +128,12 @@ class ChainParams:
     roller_mass: float
     n_rollers: int
     worn_links: tuple = ()
+    links_per_step: int = 3
 
     def __post_init__(self):
         _positive(self, "link_pitch", "roller_radius", "roller_mass")
+        if self.links_per_step not in (3, 4):
+            raise ValueError(f"ChainParams.links_per_step must be 3 or 4, got {self.links_per_step!r}")
         if not isinstance(self.n_rollers, int) or self.n_rollers < 3:
             raise ValueError(f"ChainParams.n_rollers must be an integer >= 3, got {self.n_rollers!r}")
         for link, pitch in self.worn_links:

@@ -70,6 +70,7 @@ from .slots import (
     INFO_SLOPE,
     IP_CONTACT,
     IP_GRAVITY,
+    IP_LINKS_PER_STEP,
     IP_PASSENGERS,
     IP_ROLLING,
     IP_TEETH,
@@ -535,18 +536,19 @@ def table_evaluate(t, y, dy, prm, ws, want_teeth, tb):
         q -= (fp[FP_PRELOAD] + fp[FP_TENSIONER_STIFFNESS] * delta) * d_u
     g = fp[FP_G]
     if ip[IP_PASSENGERS] != 0:
+        kstep = ip[IP_LINKS_PER_STEP]
         # the passengers' loads (vibkit.model.effects.passenger_loads) as generalised forces: the
         # chain's roller i is table roller i + k, its place read from the table
         for jp in range(pm.size):
             if ip[IP_PASSENGERS] == PASSENGERS_BY_TIME:
                 where = t
             else:
-                tk = step_roller(ps, jp, 1, n) + k
+                tk = step_roller(ps, jp, 1, n, kstep) + k
                 where = _p5d(sc, tk % n, p, eta)[0] + (p0 if tk >= n else 0.0) + w * p0
             if aboard(jp, where, pb, pa):
-                load = step_load(jp, pm, g)
-                for r in range(3):
-                    i = (step_roller(ps, jp, r, n) + k) % n
+                load = step_load(jp, pm, g, kstep)
+                for r in range(kstep):
+                    i = (step_roller(ps, jp, r, n, kstep) + k) % n
                     q -= load * _p5d(zc, i, p, eta)[1] / hu
     if ip[IP_ROLLING] == 1:
         mu = fp[FP_ROLLING]

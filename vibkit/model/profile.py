@@ -189,6 +189,20 @@ class Profile:
         """The link-pass frequency of a new chain at the rated speed, speed / pitch. [Hz]"""
         return self.speed / self.nominal_pitch
 
+    def scene(self, analysis: str = "forward", duration: float | None = None):
+        """The scene of this escalator (a :class:`~vibkit.model.scene.Scene`, in memory): what the profile
+        says, the rest from standard step-chain proportions (:mod:`vibkit.model.profile_scene`); a
+        geometry that cannot run is a SceneError naming the profile key to change."""
+        from .profile_scene import profile_scene
+
+        return profile_scene(self, analysis, duration)
+
+    def scene_text(self, analysis: str = "forward", duration: float | None = None) -> str:
+        """The TOML text of :meth:`scene`, with comments saying where each value came from."""
+        from .profile_scene import scene_text
+
+        return scene_text(self, analysis, duration)
+
     def band(self, low=0.8, high=1.25) -> tuple[float, float]:
         """A search band of the link pass around :attr:`link_pass_frequency_hz` [Hz]: a worn chain
         (longer pitch) and a speed off its rating both stay inside."""

@@ -310,12 +310,15 @@ def _parameters(src, sec):
             raise SceneError(f"{src}: 'chain.worn_link' must be a link number 1..{n}, got {c['worn_link']!r}")
         _positive(src, "chain.worn_link_pitch", c["worn_link_pitch"])
         worn = ((c["worn_link"], c["worn_link_pitch"]),)
+    if tc.links_per_step not in (3, 4):
+        raise SceneError(f"{src}: 'chain.links_per_step' must be 3 or 4, got {tc.links_per_step!r}")
     chain = ChainParams(
         link_pitch=pitch,
         roller_radius=tc.roller_radius,
         roller_mass=tc.roller_mass,
         n_rollers=n,
         worn_links=worn,
+        links_per_step=tc.links_per_step,
     )
     # the chain must close within the tensioner travel: P0 - 2 delta ~ sum of pitches, |delta| < travel
     from .guide import TRAVEL
@@ -494,8 +497,9 @@ def _outputs(src, o, analysis, chain):
     step = o.get("step_accelerometer")
     if "accel_step" in variables and step is None:
         raise SceneError(f"{src}: output 'accel_step' needs 'outputs.step_accelerometer' (a step number)")
-    if step is not None and not 1 <= step <= chain.n_rollers // 3:
-        raise SceneError(f"{src}: 'outputs.step_accelerometer' must be a step 1..{chain.n_rollers // 3}, got {step!r}")
+    n_steps = chain.n_rollers // chain.links_per_step
+    if step is not None and not 1 <= step <= n_steps:
+        raise SceneError(f"{src}: 'outputs.step_accelerometer' must be a step 1..{n_steps}, got {step!r}")
     return {"variables": tuple(dict.fromkeys(variables)), "rollers": tuple(rollers), "step_accelerometer": step}
 
 
@@ -581,10 +585,10 @@ def _check_scene_file(p: Path) -> None:
 
 
 def _validate_passenger_numbers(src, o, chain) -> None:
-    """Passengers' masses finite and positive, steps whole numbers on the chain (1 .. n_rollers // 3)."""
+    """Passengers' masses finite and positive, steps whole numbers on the chain (1 .. n_rollers // links_per_step)."""
     if not o:
         return
-    n_steps = chain.n_rollers // 3
+    n_steps = chain.n_rollers // chain.links_per_step
     for i, m in enumerate(o.mass):
         if isinstance(m, bool) or not isinstance(m, (int, float)) or not math.isfinite(m) or m <= 0:
             raise SceneError(f"{src}: 'effects.passengers.mass[{i}]' must be a finite positive mass [kg], got {m!r}")
@@ -592,7 +596,7 @@ def _validate_passenger_numbers(src, o, chain) -> None:
         if isinstance(st, bool) or not isinstance(st, int) or not 1 <= st <= n_steps:
             raise SceneError(
                 f"{src}: 'effects.passengers.step[{i}]' must be a step number 1..{n_steps} "
-                f"(the chain has {chain.n_rollers} rollers, 3 per step), got {st!r}"
+                f"(the chain has {chain.n_rollers} rollers, {chain.links_per_step} per step), got {st!r}"
             )
 
 

@@ -94,7 +94,9 @@ class GuideSection(_Section):
 class ChainSection(_Section):
     link_pitch: float = key("m", "distance between consecutive roller centres", _RC.link_pitch)
     roller_radius: float = key("m", "roller radius r_d", _RC.roller_radius)
-    roller_mass: float = key("kg", "point mass per roller (a third of a step plus one pitch of chain)", _RC.roller_mass)
+    roller_mass: float = key(
+        "kg", "point mass per roller (a step's share, 1 / links_per_step, plus one pitch of chain)", _RC.roller_mass
+    )
     n_rollers: int | str = key(
         "", 'number of rollers, or "fill": as many links as fit the guide', "fill", types=(int, str)
     )
@@ -102,6 +104,9 @@ class ChainSection(_Section):
         "", "number (1..n) of one link of another pitch (with worn_link_pitch); not set: no worn link", types=(int,)
     )
     worn_link_pitch: float = key("m", "pitch of the worn link (with worn_link); not set: no worn link")
+    links_per_step: int = key(
+        "", "rollers (links) per step: 3 (133.33 mm chains) or 4 (101.6 mm chains)", 3, types=(int,)
+    )
 
 
 @dataclasses.dataclass(frozen=True)

@@ -103,7 +103,7 @@ FP_CLOSURE_TOL = FP["tol"]  # closure tolerance [m]
 FP_REACH = FP["reach"]  # farthest a roller centre touching a tooth sits from the sprocket centre [m]
 
 # --- integer parameters -------------------------------------------------------------------------
-IP_NAMES = ("n", "nteeth", "gravity", "contact", "motor", "passengers", "tensioner", "rolling")
+IP_NAMES = ("n", "nteeth", "gravity", "contact", "motor", "passengers", "tensioner", "rolling", "links_per_step")
 IP = _slots(IP_NAMES)
 IP_N = IP["n"]  # number of rollers
 IP_TEETH = IP["nteeth"]  # number of teeth
@@ -113,6 +113,7 @@ IP_MOTOR = IP["motor"]
 IP_PASSENGERS = IP["passengers"]  # 0 none, 1 by time, 2 by place
 IP_TENSIONER = IP["tensioner"]
 IP_ROLLING = IP["rolling"]
+IP_LINKS_PER_STEP = IP["links_per_step"]  # rollers per step (3, or 4 on 101.6 mm chains)
 
 PASSENGERS_BY_TIME = 1
 PASSENGERS_BY_PLACE = 2
