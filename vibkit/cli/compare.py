@@ -7,6 +7,7 @@ import os
 from vibkit.diagnose.rounding import fmt_pm
 
 from .options import (
+    _profile_of,
     add_command,
     add_escalator,
     add_json,
@@ -33,7 +34,12 @@ def add_parser(subparsers):
     add_recording(s)
     add_json(s)
     add_escalator(s)
-    s.add_argument("scene_or_result", metavar="SCENE_OR_RESULT", help="scene .toml or result .nc")
+    s.add_argument(
+        "scene_or_result",
+        metavar="SCENE_OR_RESULT",
+        nargs="?",
+        help="scene .toml or result .nc (default with --escalator: the scene built from the profile)",
+    )
     s.add_argument("--band", type=band, help="link-pass search band LOW:HIGH [Hz]")
     s.add_argument("--harmonics", type=int, default=5, help="harmonics compared (default 5)")
     s.add_argument("--duration", type=positive, help="simulated time when given a scene [s]")
@@ -48,15 +54,25 @@ def add_parser(subparsers):
     return s
 
 
+def _name(target):
+    """A scene or result as the output names it: its path, or the scene built from a profile."""
+    return target if isinstance(target, str) else f"{target.name} ({target.source})"
+
+
 def run(a):
     import vibkit
     from vibkit.diagnose.comparison import compare
 
     rec = read_recording(a)
     target = a.scene_or_result
-    if not os.path.exists(target):
+    profile = _profile_of(a)
+    if target is None:
+        if profile is None:
+            raise CLIError("give SCENE_OR_RESULT (a scene .toml or a result file), or --escalator FILE")
+        target = profile.scene("forward", a.duration)  # the unit's own scene, in memory
+    elif not os.path.exists(target):
         raise CLIError(f"{target}: file not found (expected a scene .toml or a result file)")
-    sp = run_speed(a, rec=rec)
+    sp = run_speed(a, rec=rec, profile=profile)
     comp = compare(
         rec,
         target,
@@ -71,10 +87,10 @@ def run(a):
     del vibkit
     if a.json:
         d = comp.as_dict()
-        d.update(recording=a.recording, simulation=target)
+        d.update(recording=a.recording, simulation=_name(target))
         print_json("compare", d)
         return 0
-    print(f"recording {a.recording} [{comp.channel}] vs simulation {target} [{comp.variable}]")
+    print(f"recording {a.recording} [{comp.channel}] vs simulation {_name(target)} [{comp.variable}]")
     print(f"link-pass {comp.fundamental_meas_hz:.5f} Hz recorded, {comp.fundamental_sim_hz:.5f} Hz simulated")
     print(
         f"speed     {sp.text if sp.value is not None else f'{comp.speed_meas_m_s:g} m/s (the scene' + chr(39) + 's)'}"

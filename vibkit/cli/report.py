@@ -33,7 +33,11 @@ def add_parser(subparsers):
     add_recording(s)
     add_json(s)
     add_escalator(s)
-    s.add_argument("--scene", help="scene describing the escalator and sensor (simulated and compared)")
+    s.add_argument(
+        "--scene",
+        help="scene describing the escalator and sensor (simulated and compared); default with --escalator: "
+        "the scene built from the profile",
+    )
     s.add_argument("-o", "--output", required=True, help="PDF to write; a new path unless --force")
     add_force_overwrite(s, "PDF")
     s.add_argument(
@@ -63,7 +67,7 @@ def run(a):
     rep = write_report(
         a.recording,
         a.output,
-        scene=a.scene,
+        scene=a.scene if a.scene or profile is None else profile.scene("forward", a.duration),
         speed=a.speed,
         speed_sigma=sigma,
         channel=a.channel,
