@@ -210,7 +210,7 @@ def print_channels(res):
                 [
                     r["channel"],
                     r["status"],
-                    f"{r['fundamental_hz']:.5f} +- {r['fundamental_sigma_hz']:.2g}" if "fundamental_hz" in r else "-",
+                    fmt_pm(r["fundamental_hz"], r["fundamental_sigma_hz"]) if "fundamental_hz" in r else "-",
                     f"{1000 * r['pitch_m']:.2f}" if "pitch_m" in r else "-",
                     r.get("verdict") or "-",
                 ]

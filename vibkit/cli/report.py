@@ -57,6 +57,27 @@ def add_parser(subparsers):
     return s
 
 
+#: summary keys whose value is rounded to their sigma's two significant digits
+_SIGMA_OF = {
+    "link_pass_hz": "fundamental_sigma_hz",
+    "pitch_m": "pitch_sigma_m",
+    "elongation_percent": "elongation_sigma_percent",
+    "speed_m_s": "speed_sigma_m_s",
+}
+
+
+def _shown(key, value, summary):
+    """A summary value as the table prints it: to its sigma when it has one, else 6 significant digits."""
+    from vibkit.diagnose.rounding import fmt_value
+
+    if not isinstance(value, float):
+        return "not stated" if value is None and key.endswith("sigma_m_s") else value
+    if "sigma" in key:
+        return f"{value:.2g}"  # two significant digits, the rule of every +-
+    sigma = summary.get(_SIGMA_OF.get(key, ""))
+    return fmt_value(value, sigma) if sigma else f"{value:.6g}"
+
+
 def run(a):
     from vibkit.diagnose.report import write_report
 
@@ -86,5 +107,5 @@ def run(a):
         print_json("report", {"output": rep.path, "pages": [t for t, _ in rep.pages], "summary": rep.summary})
     else:
         print(f"wrote {rep.path} ({len(rep.pages)} pages)")
-        print(table([[k, f"{v:.6g}" if isinstance(v, float) else v] for k, v in rep.summary.items()]))
+        print(table([[k, _shown(k, v, rep.summary)] for k, v in rep.summary.items()]))
     return 0
