@@ -247,3 +247,20 @@ def test_phone_timestamp_jitter_is_a_note_not_a_warning():
     assert est.warnings == []
     assert [n for n in est.notes if "irregular time stamps" in n]
     assert est.elongation_percent == pytest.approx(0.95, abs=3 * est.elongation_sigma_percent)
+
+
+def test_fleet_add_takes_unit_speed_and_sigma_from_the_profile(phone_file, tmp_path, capsys):
+    db = str(tmp_path / "f.sqlite")
+    prof = str(phone_file / "e07.toml")  # rated 0.5 m/s, no stated uncertainty: the standard's 2.9 %
+    assert (
+        main(
+            ["fleet", "add", str(phone_file / "phone.nc"), "--escalator", prof, "--date", "2025-01-01"]
+            + ["--db", db, "--json"]
+        )
+        == 0
+    )
+    m = json.loads(capsys.readouterr().out)["measurement"]
+    assert m["unit"] == "E07" and m["speed_m_s"] == 0.5 and m["nominal_pitch_m"] == pytest.approx(NOMINAL)
+    assert m["speed_sigma_m_s"] == pytest.approx(0.05 / 3**0.5 * 0.5)
+    assert main(["fleet", "add", str(phone_file / "phone.nc"), "--db", db]) == 1
+    assert "--unit" in capsys.readouterr().err

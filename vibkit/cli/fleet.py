@@ -6,6 +6,7 @@ import sys
 import textwrap
 
 from .options import (
+    _profile_of,
     add_command,
     add_escalator,
     add_json,
@@ -15,7 +16,7 @@ from .options import (
     cli_message,
     pitch_length,
     reader_options,
-    speed_sigma,
+    run_speed,
     workers,
 )
 from .output import CLIError, check_output, msg, print_json, table
@@ -54,8 +55,12 @@ def add_parser(subparsers):
 
     f = fleet_sub("add", "analyse one recording and store its pitch and elongation")
     add_recording(f)
-    f.add_argument("--unit", required=True, help="escalator identifier")
-    f.add_argument("--speed", type=chain_speed, required=True, help="chain speed measured on the steps [m/s]")
+    f.add_argument("--unit", help="escalator identifier (default: the --escalator profile's unit; else required)")
+    f.add_argument(
+        "--speed",
+        type=chain_speed,
+        help="chain speed measured on the steps [m/s] (default: the --escalator profile's; else required)",
+    )
     f.add_argument(
         "--speed-uncertainty",
         help="speed standard deviation, in m/s or in %% (e.g. 0.1%%); required: a measurement is stored with its sigma",
@@ -149,19 +154,26 @@ def _fmt_measurement(m):
 def run_add(a):
     from vibkit.fleet.inputs import check_inputs
 
-    # without --speed-uncertainty the speed's sigma is stored as 0, which the fleet reads as "not stated":
+    profile = _profile_of(a)
+    if a.unit is None and profile is None:
+        raise CLIError("fleet add: give --unit (or --escalator FILE, whose unit is used)")
+    if a.speed is None and profile is None:
+        raise CLIError("fleet add: give --speed, the chain speed measured on the steps (or --escalator FILE)")
+    unit = a.unit or profile.unit
+    sp = run_speed(a, profile=profile)  # --speed, else the profile's; --speed-uncertainty, else the profile's
+    nominal = a.nominal_pitch if a.nominal_pitch is not None else (profile.nominal_pitch if profile else None)
+    # without a stated speed uncertainty the speed's sigma is stored as 0, which the fleet reads as "not stated":
     # no +- is printed for it, and the trend of its unit is flagged (its intervals are too small)
-    sigma = speed_sigma(a.speed_uncertainty, a.speed) if a.speed_uncertainty else 0.0
-    # the stated ranges before the database is opened (or made) and before the recording is read
-    check_inputs(unit=a.unit, speed=a.speed, speed_sigma=sigma, nominal_pitch=a.nominal_pitch, date=a.date)
+    sigma = sp.sigma or 0.0
+    check_inputs(unit=unit, speed=sp.value, speed_sigma=sigma, nominal_pitch=nominal, date=a.date)
     with _fleet_db(a) as db:
         m = db.add(
             a.recording,
-            unit=a.unit,
-            speed=a.speed,
+            unit=unit,
+            speed=sp.value,
             speed_sigma=sigma,
             date=a.date,
-            nominal_pitch=a.nominal_pitch,
+            nominal_pitch=nominal,
             channel=a.channel,
             replaced=a.replaced,
             read_options=reader_options(a),
