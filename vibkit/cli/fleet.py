@@ -180,7 +180,7 @@ def run_add(a):
         )
         path = db.path
     if a.json:
-        print_json("fleet.add", {"database": path, "measurement": m.as_dict()})
+        print_json("fleet.add", {"database": path, "measurement": m.as_reported()})
     else:
         print(f"stored {_fmt_measurement(m)}")
         msg(f"note: database {path}; date from {m.date_source}")

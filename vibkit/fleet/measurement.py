@@ -59,10 +59,16 @@ class Measurement:
         return bool(self.speed_sigma_m_s)
 
     def as_dict(self) -> dict:
-        """JSON-ready dict; without a stated speed uncertainty the speed's, the pitch's and the elongation's
-        sigmas are null, with the reason, and the frequency's part under ``*_frequency_only``."""
+        """Every field as stored (``Measurement(**m.as_dict())`` is ``m``)."""
         d = asdict(self)
         d["warnings"] = list(self.warnings)
+        return d
+
+    def as_reported(self) -> dict:
+        """JSON-ready dict for users (``fleet add --json``): :meth:`as_dict`, but without a stated speed
+        uncertainty the speed's, the pitch's and the elongation's sigmas are null, with the reason, and the
+        frequency's part under ``*_frequency_only``."""
+        d = self.as_dict()
         if not self.speed_sigma_stated:
             d.update(
                 speed_sigma_m_s=None,
