@@ -102,9 +102,12 @@ def ride_quality_pages(doc, ctx) -> list:
     done = []
     for what, rq in ctx.ride:
         fig = plt.figure(figsize=_PAGE)
+        scene_file = os.path.basename(str(ctx.scene.source)) if ctx.scene is not None else ""
+        if " (scene built from the profile)" in scene_file:  # the profile's scene, in memory
+            scene_file = f"SCENE` of `vibkit scene {scene_file.split(' (')[0]} -o SCENE"
         same = (
             (
-                f"; the same figure as `vibkit ride {os.path.basename(str(ctx.scene.source))}"
+                f"; the same figure as `vibkit ride {scene_file}"
                 + (f" --duration {ctx.duration:g}`" if ctx.duration else "`")
             )
             if what == "simulation"
