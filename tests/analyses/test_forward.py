@@ -369,3 +369,37 @@ def test_a_stalled_motor_is_reported():
     assert "the speed droops" in ds.attrs["warnings"] and "cannot hold the speed" in ds.attrs["warnings"]
     ok = _passenger_run({"kp": 6000.0, "ki": 30000.0, "speed": 0.5}, duration=3.0)
     assert "speed" not in ok.attrs.get("warnings", "")
+
+
+def test_rollers_inside_the_teeth_at_the_start_are_refused(tmp_path):
+    """A 101.6 mm chain with the 133.33 mm chain's rollers and teeth starts with 12 mm of roller inside a
+    tooth: refused, naming the keys to change, instead of a run reported converged."""
+    from vibkit.model.escalator import EscalatorModel
+    from vibkit.model.scene import SceneError
+
+    text = (SIM / "thesis-forward.toml").read_text()
+    path = tmp_path / "w.toml"
+    path.write_text(
+        text.replace("link_pitch = 0.13333333333333333", "link_pitch = 0.1016").replace("= 159", '= "fill"')
+    )
+    scene = load_scene(path)
+    assert EscalatorModel(scene).initial_indentation(0.0) == pytest.approx(0.01207, abs=1e-4)
+    with pytest.raises(SceneError, match=r"w.toml: .* 12.1 mm inside the sprocket's teeth .*chain.roller_radius"):
+        vibkit.simulate(scene, duration=0.1, progress=False)
+    assert EscalatorModel(load_scene(SIM / "thesis-forward.toml")).initial_indentation(0.0) == 0.0
+
+
+def test_set_point_is_the_chain_speed_of_the_mean_link(tmp_path):
+    """The motor's reference turns the sprocket Z links per turn: -2 pi v / (Z L_mean), L_mean the mean link
+    length, so that a worn link (longer) does not make the chain run faster than motor.speed."""
+    from vibkit.model.escalator import EscalatorModel
+
+    model = EscalatorModel(load_scene(SIM / "thesis-forward.toml"))
+    assert model.sprocket_speed(0.5) == pytest.approx(W_REF, rel=1e-15)
+    text = (SIM / "thesis-forward.toml").read_text().replace("n_rollers = 159", "n_rollers = 159\nworn_link = 5")
+    path = tmp_path / "worn.toml"
+    path.write_text(text.replace("worn_link = 5", "worn_link = 5\nworn_link_pitch = 0.1436"))
+    worn = EscalatorModel(load_scene(path))
+    mean = (158 * PITCH + 0.1436) / 159
+    assert worn.sprocket_speed(0.5) == pytest.approx(-2 * np.pi * 0.5 / (28 * mean), rel=1e-12)
+    assert worn.link_pass_frequency(0.5) == pytest.approx(0.5 / mean, rel=1e-12)

@@ -139,6 +139,8 @@ def test_every_fleet_profile_simulates_converged_at_its_speed(unit):
     f = mean_frequency(ds.delta.values, 1 / float(ds.time[1] - ds.time[0]), prof.speed / prof.nominal_pitch)
     assert f == pytest.approx(prof.speed / prof.nominal_pitch, rel=5e-4)
     assert ds.attrs["link_pass_frequency_hz"] == pytest.approx(prof.speed / prof.nominal_pitch, rel=1e-12)
+    inverse = vibkit.simulate(prof.scene("inverse", duration=1.0), progress=False)
+    assert float(inverse.link_tension.min()) > 0.0 and "warnings" not in inverse.attrs
 
 
 def test_profile_scene_fills_from_standard_proportions_and_says_so():
@@ -181,3 +183,35 @@ def test_geometry_that_cannot_run_is_refused_naming_the_key(edit, pattern):
     text = str(exc.value)
     assert text.startswith("w4.toml: ") and "\n" not in text
     assert any(k in text for k in ("chain.roller_radius", "chain.n_links", "geometry.rise"))
+
+
+def test_a_step_of_four_links_carries_its_passenger_on_four_rollers():
+    """links_per_step = 4: step s is rollers 4 (s - 1) + 1 .. 4 s, and a passenger's weight is shared by
+    the four (the compiled kernel and the Python model agree)."""
+    from vibkit.model.effects import PASSENGERS_BY_TIME, passenger_loads
+    from vibkit.model.escalator import EscalatorModel
+
+    scene = parse_profile(CHAIN_101, "w4.toml").scene("forward")
+    model = EscalatorModel(scene)
+    assert list(model.step_rollers(3)) == [8, 9, 10, 11]
+    fz = np.zeros(model.n)
+    pm, ps = np.array([80.0]), np.array([3], dtype=np.int64)
+    passenger_loads(1.0, PASSENGERS_BY_TIME, np.zeros(model.n), pm, ps, np.array([0.0]), np.array([5.0]), 9.81,
+                    model.n, 4, fz)  # fmt: skip
+    assert np.flatnonzero(fz).tolist() == [8, 9, 10, 11]
+    np.testing.assert_allclose(fz[8:12], -80.0 * 9.81 / 4, rtol=1e-15)
+    assert fz.sum() == pytest.approx(-80.0 * 9.81, rel=1e-15)
+
+
+def test_scene_key_links_per_step(tmp_path):
+    from vibkit.model.scene import load_scene
+
+    base = (Path(__file__).resolve().parents[2] / "sim" / "thesis-forward.toml").read_text()
+    assert load_scene(Path(__file__).resolve().parents[2] / "sim" / "thesis-forward.toml").chain.links_per_step == 3
+    p = tmp_path / "five.toml"
+    p.write_text(base.replace("n_rollers = 159", "n_rollers = 159\nlinks_per_step = 5"))
+    with pytest.raises(SceneError, match=r"five.toml: 'chain.links_per_step' must be 3 or 4, got 5"):
+        load_scene(p)
+    p.write_text(base.replace("n_rollers = 159", "n_rollers = 159\nlinks_per_step = 4").replace("= 20", "= 40"))
+    with pytest.raises(SceneError, match=r"'outputs.step_accelerometer' must be a step 1..39"):
+        load_scene(p)

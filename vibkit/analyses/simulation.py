@@ -101,6 +101,9 @@ def simulate(
     from .forward import forward_dynamics
     from .integrate import IntegrationError
 
+    if "contact" in scene.effects:
+        _check_rollers_clear(model, scene)
+
     if check is None:
         check = bool(scene.solver.check)
     try:
@@ -121,6 +124,27 @@ def simulate(
         )
         hint.t, hint.y = exc.t, exc.y
         raise hint from None
+
+
+#: a start with rollers deeper than this fraction of their radius inside the teeth is refused
+MAX_START_OVERLAP = 0.02
+
+
+def _check_rollers_clear(model, scene):
+    """Refuse a forward run whose rollers start inside the sprocket's teeth (rollers or teeth that do
+    not fit the pitch): the contact would fling them out, and the run is not of the escalator meant."""
+    from ..model.scene import SceneError
+
+    worst = model.initial_indentation(scene.run.start)
+    if worst > MAX_START_OVERLAP * scene.chain.roller_radius:
+        sp = scene.sprocket
+        raise SceneError(
+            f"{scene.source}: the rollers ({1000 * scene.chain.roller_radius:.4g} mm radius) sit "
+            f"{1000 * worst:.3g} mm inside the sprocket's teeth at the start (teeth {1000 * sp.base_width:.4g} mm "
+            f"wide, {1000 * sp.tooth_height:.4g} mm high, pitch {1000 * scene.chain.link_pitch:.5g} mm): change "
+            "chain.roller_radius or the teeth (sprocket.base_width, sprocket.tip_width, sprocket.tooth_height) "
+            "to fit chain.link_pitch"
+        )
 
 
 def _warn(ds, scene, model):

@@ -75,16 +75,17 @@ def resolve_speed(a, rec, *, required=True, profile=None):
     raise CLIError(f"{a.recording}: the file states no chain speed; give --speed (e.g. --speed 0.5 or --speed 50cm/s)")
 
 
-def from_profile(a, profile, sp):
+def from_profile(a, profile, sp, *, sigma_and_teeth=True):
     """(nominal pitch, band, teeth) of a run: the flags, else the profile's (the note says which came from the
     profile), else the defaults; ``sp`` is the run's speed (:func:`vibkit.cli.options.run_speed`), which
-    takes the profile's speed and sigma itself."""
+    takes the profile's speed and sigma itself; ``sigma_and_teeth=False`` (``spectrum``): the note names
+    neither."""
     nominal, search, teeth_ = a.nominal_pitch, a.band, getattr(a, "teeth", None)
     if profile is None:
         return nominal, search, teeth_ or 28
     taken = []
     if sp.value is not None and sp.source != "given":
-        taken.append(f"speed {sp.text}")
+        taken.append(f"speed {sp.text}" if sigma_and_teeth else f"speed {sp.value:g} m/s")
     if nominal is None:
         nominal = profile.nominal_pitch
         taken.append(f"nominal pitch {1000 * nominal:g} mm")
@@ -94,7 +95,8 @@ def from_profile(a, profile, sp):
         taken.append(f"search band {search[0]:.4g}-{search[1]:.4g} Hz (0.8-1.25 x speed / nominal pitch)")
     if teeth_ is None:
         teeth_ = profile.teeth
-        taken.append(f"{teeth_} sprocket teeth")
+        if sigma_and_teeth:
+            taken.append(f"{teeth_} sprocket teeth")
     if taken:
         note = f"note: from the profile {profile.source}: {'; '.join(taken)}"
         msg(textwrap.fill(note, 100, subsequent_indent="  ", break_on_hyphens=False))

@@ -46,7 +46,7 @@ def run(a):
     profile = escalator_profile(a)
     sp = resolve_speed(a, rec, required=False, profile=profile)
     speed, source = sp.value, ("--speed" if sp.source == "given" else sp.source or None)
-    nominal, search, _ = from_profile(a, profile, sp) if speed else (None, None, None)
+    nominal, search, _ = from_profile(a, profile, sp, sigma_and_teeth=False) if speed else (None, None, None)
     search = search or (None if speed else (2.5, 6.0))
     try:
         res = estimate_channels(

@@ -28,6 +28,8 @@ class EscalatorModel:
         self.sprocket = scene.sprocket
         self.n = scene.chain.n_rollers
         self.pitch = scene.chain.link_pitch
+        # the chain's mean link length: the chain advances Z of them per sprocket turn (worn links included)
+        self.mean_pitch = float(scene.chain.pitches().mean()) if scene.chain.worn_links else self.pitch
         self.mass = np.full(self.n, scene.chain.roller_mass)
         self.centre = np.array(scene.guide.sprocket_centre)
         self.geometry = tooth_geometry(self.sprocket, self.pitch, scene.chain.roller_radius)
@@ -43,17 +45,38 @@ class EscalatorModel:
         The chain advances Z link pitches per turn of a Z-tooth sprocket, so its mean speed on the
         straight is Z L omega / (2 pi) (not the pitch circle's omega R^P, 0.21 % faster at Z = 28):
         thetadot = -2 pi v / (Z L), negative because the sprocket turns clockwise while the steps go up.
+        L is the chain's mean link length (a worn link moves the chain further per tooth, not the teeth).
         The link-pass frequency is then v / L = Z |thetadot| / (2 pi) exactly.
         """
-        return -2.0 * math.pi * chain_speed / (self.sprocket.teeth * self.pitch)
+        return -2.0 * math.pi * chain_speed / (self.sprocket.teeth * self.mean_pitch)
 
     def link_pass_frequency(self, speed: float) -> float:
-        """f_link = |v| / L_link. [Hz]"""
-        return abs(speed) / self.pitch
+        """f_link = |v| / L_link, L_link the chain's mean link length. [Hz]"""
+        return abs(speed) / self.mean_pitch
 
     def meshed_angle(self, conf) -> float:
         """Sprocket angle that meshes with configuration ``conf`` (rollers midway between teeth). [rad]"""
         return mesh_phase(conf.position, self.centre, self.sprocket, self.pitch)
+
+    def initial_indentation(self, start: float) -> float:
+        """Deepest roller-tooth overlap [m] with roller 1 at ``start`` [m of undeformed guide] and the
+        sprocket meshed (:meth:`meshed_angle`): 0 when every roller clears the teeth, as a run must start."""
+        from .sprocket import contact_kernel
+
+        conf = self.chain.configure(float(start))
+        theta = self.meshed_angle(conf)
+        n, z = self.n, self.sprocket.teeth
+        pos = np.ascontiguousarray(conf.position, dtype=float)
+        zeros = np.zeros(n)
+        geo = self.geometry
+        return float(
+            contact_kernel(
+                pos[:, 0].copy(), pos[:, 1].copy(), zeros, zeros, np.arange(n, dtype=np.int64), n, theta, 0.0,
+                self.centre[0], self.centre[1], self.corners_local, geo["root_radius"], geo["tooth_pitch"], z,
+                self.scene.chain.roller_radius, 1.0, 1.0, 0.0, np.zeros(n), np.zeros(n), np.zeros(z), np.zeros(z),
+                False,
+            )[2]
+        )  # fmt: skip
 
     def step_rollers(self, step: int) -> np.ndarray:
         """0-based indices of the rollers (``links_per_step``: 3, or 4) of 1-based step ``step``; the

@@ -270,10 +270,7 @@ def profile_scene(profile, analysis: str = "forward", duration: float | None = N
 
 def check_fits(scene, profile) -> None:
     """Refuse a scene whose rollers sit inside the teeth at t = 0, or whose heads are not the sprocket's."""
-    import numpy as np
-
     from .escalator import EscalatorModel
-    from .sprocket import contact_kernel
 
     src = profile.source
     rp = scene.sprocket.pitch_radius(scene.chain.link_pitch)
@@ -282,20 +279,8 @@ def check_fits(scene, profile) -> None:
             f"{src}: the head radius {scene.guide.head_radius:g} m is not the sprocket's pitch radius {rp:.6g} m "
             "(drive.teeth and chain.nominal_pitch set it)"
         )
-    model = EscalatorModel(scene)
     start = scene.run.start if scene.analysis == "forward" else scene.motion.start
-    conf = model.chain.configure(float(start))
-    theta = model.meshed_angle(conf)
-    n = model.n
-    pos = np.ascontiguousarray(conf.position)
-    zeros = np.zeros(n)
-    geo = model.geometry
-    worst = contact_kernel(
-        pos[:, 0].copy(), pos[:, 1].copy(), zeros, zeros, np.arange(n, dtype=np.int64), n, theta, 0.0,
-        model.centre[0], model.centre[1], model.corners_local, geo["root_radius"], geo["tooth_pitch"],
-        scene.sprocket.teeth, scene.chain.roller_radius, 1.0, 1.0, 0.0,
-        np.zeros(n), np.zeros(n), np.zeros(scene.sprocket.teeth), np.zeros(scene.sprocket.teeth), False,
-    )[2]  # fmt: skip
+    worst = EscalatorModel(scene).initial_indentation(start)
     if worst > 1e-6 * scene.chain.link_pitch:
         key = "chain.roller_radius" if profile.roller_radius is not None else "chain.nominal_pitch"
         raise SceneError(
