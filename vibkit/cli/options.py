@@ -414,6 +414,62 @@ def add_limits(sp, help_="elongation limits watch,plan,replace [%%] (default 1.5
     sp.add_argument("--limits", type=limits, default=DEFAULT_LIMITS, help=help_)
 
 
+# ------------------------------------------------------------------------- one speed per run
+
+
+def add_speed_uncertainty(sp):
+    sp.add_argument(
+        "--speed-uncertainty",
+        type=speed_uncertainty,
+        help="standard deviation of the speed, in m/s or in %% (e.g. 0.1%%); without it the speed's "
+        "uncertainty is 'not stated' (an escalator profile's rated speed: the standard's tolerance)",
+    )
+
+
+def run_speed(a, *, rec=None, scene=None, profile=None):
+    """The run's one speed (:class:`vibkit.diagnose.speed.ResolvedSpeed`): --speed, else the escalator
+    profile's, else the recording's, else the scene's; --speed-uncertainty (m/s or % of that speed) its sigma."""
+    from vibkit.diagnose.speed import resolve_speed
+
+    if profile is None:
+        profile = _profile_of(a)
+    speed = getattr(a, "speed", None)
+    text = getattr(a, "speed_uncertainty", None)
+    base = resolve_speed(speed, None, profile=profile, recording=rec, scene=scene)
+    if text is None or base.value is None:
+        return base
+    return resolve_speed(speed, speed_sigma(text, base.value), profile=profile, recording=rec, scene=scene)
+
+
+def _profile_of(a):
+    """The escalator profile that --escalator names, or None (commands without the option)."""
+    if getattr(a, "escalator", None) is None:
+        return None
+    return escalator_profile(a)
+
+
+def add_segment(sp):
+    """--segment START:END [s], the one definition shared by ``ride`` and ``report`` (read by :func:`segment_of`)."""
+    sp.add_argument(
+        "--segment",
+        metavar="START:END",
+        help="ride segment START:END [s] from the first sample: the recording's ride quality (default: detected)",
+    )
+
+
+def segment_of(a):
+    """--segment as (start, end) [s], or None; a bad value is a one-line CLIError (exit 1)."""
+    text = getattr(a, "segment", None)
+    if text is None:
+        return None
+    from vibkit.diagnose.ride import parse_segment
+
+    try:
+        return parse_segment(text)
+    except ValueError as exc:
+        raise CLIError(str(exc)) from None
+
+
 ESCALATOR_HELP = "the escalator's profile (TOML): unit, speed, pitch, links; see docs/guide/escalator.md"
 
 

@@ -44,12 +44,9 @@ def run(a):
 
     rec = read_recording(a)
     profile = escalator_profile(a)
-    speed, source = resolve_speed(a, rec, required=False, profile=profile)
-    a.speed_uncertainty = None  # spectrum states no speed uncertainty
-    if speed:
-        _, nominal, search, _ = from_profile(a, profile, speed, source, sigma_and_teeth=False)
-    else:
-        nominal, search = None, None
+    sp = resolve_speed(a, rec, required=False, profile=profile)
+    speed, source = sp.value, ("--speed" if sp.source == "given" else sp.source or None)
+    nominal, search, _ = from_profile(a, profile, sp, sigma_and_teeth=False) if speed else (None, None, None)
     search = search or (None if speed else (2.5, 6.0))
     try:
         res = estimate_channels(

@@ -8,6 +8,7 @@ family) and suspected clipping, and builds the JSON summary.  The page functions
 
 from __future__ import annotations
 
+import dataclasses
 import datetime as _dt
 import os
 from dataclasses import dataclass, field
@@ -31,10 +32,15 @@ class ReportContext:
         The recording as :func:`vibkit.read_recording` read it.
     channel, units : str
     scene : Scene or None
-    speed, speed_sigma : float or None, float
-        Resolved chain speed (the option, else the recording's, else the scene's) [m/s].
+    speed, speed_sigma : float or None
+        The run's one chain speed and its sigma [m/s] (``run_speed``); sigma None: not stated.
+    run_speed : ResolvedSpeed
+        That speed with its sources (:func:`vibkit.diagnose.speed.resolve_speed`): the option, else the
+        escalator profile's, else the recording's, else the scene's.  Every page and the comparison use it.
+    profile : Profile or None
+        The escalator profile (the unit that page 1 names).
     nominal_pitch : float or None
-        Resolved nominal pitch (the option, else the scene's) [m].
+        Resolved nominal pitch (the option, else the profile's, else the scene's) [m].
     limits : tuple of float
         Elongation limits [%].
     band : (float, float) or None
@@ -74,7 +80,7 @@ class ReportContext:
     units: str
     scene: object
     speed: float | None
-    speed_sigma: float
+    speed_sigma: float | None
     nominal_pitch: float | None
     limits: tuple
     band: tuple | None
@@ -98,6 +104,21 @@ class ReportContext:
     measurement_date: _dt.datetime | None = None
     measurement_date_source: str = ""
     ride: list = field(default_factory=list)  # ("recording" | "simulation", RideQuality), one page each
+    run_speed: object = None
+    profile: object = None
+
+    @property
+    def unit_text(self) -> str:
+        """The unit measured, as page 1 names it: the profile's identity, else how to name it."""
+        p = self.profile
+        if p is None:
+            return "unit not named: --escalator FILE (an escalator profile)"
+        parts = [str(getattr(p, "unit", "") or "")]
+        for key in ("site", "description"):
+            v = str(getattr(p, key, "") or "")
+            if v:
+                parts.append(v)
+        return ", ".join(x for x in parts if x)
 
     @property
     def date_fixed(self) -> bool:
@@ -121,18 +142,6 @@ class ReportContext:
     def fmax_hz(self) -> float:
         """Upper frequency of the spectrum and spectrogram pages [Hz]."""
         return min((max(self.harmonic_count, 5) + 2) * self.f0, min(b.fs for b in self.bursts) / 2)
-
-
-def _scene_speed(scene):
-    if scene is None:
-        return None
-    if scene.analysis == "inverse":
-        return float(scene.motion.speed)
-    if scene.analysis == "forward":
-        from ...model.schema import nominal_speed
-
-        return float(nominal_speed(scene.effects, scene.run)) or None
-    return None
 
 
 def _family_fit(x, fs, band):
@@ -181,7 +190,7 @@ def analyse(
     *,
     scene=None,
     speed=None,
-    speed_sigma=0.0,
+    speed_sigma=None,
     channel=None,
     nominal_pitch=None,
     limits_percent=None,
@@ -193,6 +202,8 @@ def analyse(
     progress=False,
     read_options=None,
     date=None,
+    profile=None,
+    segment=None,
 ) -> ReportContext:
     """Everything :func:`vibkit.diagnose.report.write_report` draws (same parameters, no output)."""
     from ...io import read_recording
@@ -221,23 +232,20 @@ def analyse(
     if scene is not None:
         sc = scene if isinstance(scene, Scene) else load_scene(scene)
     notes = []
-    if speed is None:
-        from ..channels import speed_from_recording
+    from ..speed import resolve_speed
 
-        speed, source = speed_from_recording(rec)
-        if speed is not None:
-            notes.append(f"speed {speed:g} m/s from the recording's metadata ({source})")
-        elif _scene_speed(sc):
-            speed = _scene_speed(sc)
-            notes.append(
-                f"speed {speed:g} m/s from the scene (the recording states none): the pitch then "
-                "assumes the scene's speed"
-            )
+    run = resolve_speed(speed, speed_sigma, profile=profile, recording=rec, scene=sc)
+    speed, speed_sigma = run.value, run.sigma
+    if speed is not None and run.source != "given":
+        notes.append(f"speed {speed:g} m/s from {run.source}; every page uses it")
+    if nominal_pitch is None and profile is not None and getattr(profile, "nominal_pitch", None):
+        nominal_pitch = float(profile.nominal_pitch)
     if nominal_pitch is None and sc is not None:
         nominal_pitch = sc.chain.link_pitch
     # the per-channel decision of `spectrum` and `pitch` (vibkit.diagnose.channels.estimate_channels): every
     # vibration channel (or the one asked for) estimated, channels that disagree refused, the numbers
     # from the channel with the smallest sigma
+    teeth = sc.sprocket.teeth if sc else int(getattr(profile, "teeth", None) or 28)
     if speed is not None:
         kw = dict(
             speed=speed,
@@ -245,7 +253,7 @@ def analyse(
             band=band,
             nominal_pitch=nominal_pitch,
             limits_percent=limits,
-            teeth=sc.sprocket.teeth if sc else 28,
+            teeth=teeth,
         )
     else:  # frequency only: the same burst-combined estimator, with a unit "speed"
         kw = dict(speed=1.0, band=band or (2.5, 6.0), frequency_only=True)
@@ -276,8 +284,13 @@ def analyse(
         # with the step's roller motion: the ride figure is then the one `vibkit ride SCENE` gives
         result = simulate(with_ride_outputs(sc), duration=duration, progress=progress)
         if found:  # no comparison of a link pass the recording does not carry
-            comp = compare(rec, result, channel=ch)
-    ride = _ride(rec, result, sc, notes)
+            comp = compare(rec, result, channel=ch, speed=speed, speed_sigma=speed_sigma)
+    ride = _ride(rec, result if scene_is_unit(sc, profile) else None, sc, notes, segment, speed)
+    if result is not None and not scene_is_unit(sc, profile):
+        notes.append(
+            f"no ride page of the simulation: scene {sc.name!r} is not "
+            + (f"unit {profile.unit}'s" if profile is not None else "a named unit's (--escalator FILE)")
+        )
     # statistics
     x_all = np.concatenate([b.x for b in bursts])
     rms = float(np.sqrt(np.mean((x_all - x_all.mean()) ** 2)))
@@ -369,6 +382,8 @@ def analyse(
         measurement_date=measured,
         measurement_date_source=measured_source,
         ride=ride,
+        run_speed=run,
+        profile=profile,
     )
 
 
@@ -391,22 +406,40 @@ def _quantisation_explains_extremes(x, q):
     return count(hi) <= 3 * max(count(hi - q), 1) and count(lo) <= 3 * max(count(lo + q), 1)
 
 
-def _ride(rec, result, sc, notes):
-    """Ride qualities of the recording and the simulation; a one-line note where one that could be
-    expected (a recording with x, y, z channels, a scene that names its step) cannot be assessed."""
+def scene_is_unit(scene, profile) -> bool:
+    """Whether ``scene`` simulates the profile's unit: the scene is the profile's (built from it), or its
+    name or file name is the unit's identifier.  Without a profile no scene is a named unit's."""
+    if scene is None or profile is None:
+        return False
+    unit = str(getattr(profile, "unit", "") or "").strip().lower()
+    if not unit:
+        return False
+    if getattr(scene, "source", None) and str(scene.source) == str(getattr(profile, "source", "")):
+        return True  # built from the profile
+    names = {str(scene.name or "").strip().lower()}
+    if getattr(scene, "source", None):
+        names.add(os.path.splitext(os.path.basename(str(scene.source)))[0].lower())
+    return unit in names
+
+
+def _ride(rec, result, sc, notes, segment=None, speed=None):
+    """Ride qualities of the recording (over ``segment`` [s] when given) and the simulation; a one-line note
+    where one that could be expected (a recording with x, y, z channels, a scene that names its step) cannot
+    be assessed."""
     from ..ride import _AXIS_RE, ride_quality_from_recording, ride_quality_from_simulation
 
     out = []
     axes = {m.group(1) for nm in rec.data_vars if (m := _AXIS_RE.search(str(nm).lower()))}
     try:
-        out.append(("recording", ride_quality_from_recording(rec)))
+        rq = ride_quality_from_recording(rec, segment=segment)
+        out.append(("recording", rq if speed is None else dataclasses.replace(rq, speed_m_s=speed)))  # one speed
     except ValueError as exc:
         if len(axes) >= 2:
             notes.append(
                 f"no ride-quality page for the recording ({', '.join(sorted(axes))} axes): "
-                f"{' '.join(str(exc).split())} (vibkit ride FILE --segment START:END)"
+                f"{' '.join(str(exc).split())} (--segment START:END)"
             )
-    if result is not None:
+    if result is not None:  # only the unit's own scene (scene_is_unit)
         try:
             out.append(("simulation", ride_quality_from_simulation(result)))
         except ValueError as exc:
