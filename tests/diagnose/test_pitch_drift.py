@@ -98,7 +98,7 @@ def test_gait_reason_names_the_measured_wander():
     assert est.status == STATUS_INCONCLUSIVE and est.verdict == "inconclusive"
     assert est.parts["wander_percent"] > 100 * MAX_PART_WANDER
     assert f"wanders {est.parts['wander_percent']:.2g} %" in est.reason
-    assert any("sigma widened" in w for w in est.warnings)
+    assert any("sigma widened" in w for w in est.notes)
     assert est.parts["widened"] and est.fundamental_sigma_hz > 5 * est.parts["sigma_before_hz"]
 
 

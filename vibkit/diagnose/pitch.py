@@ -306,14 +306,16 @@ def estimate_pitch(
     parts, sigma = check_parts(ests, comb)
     comb = replace(comb, sigma=sigma)
     jitter_warnings, jitter_notes = steps.jitter_effect(recording, name, ests, req.band, n_harmonics)
-    warnings = [*prep.warnings, *jitter_warnings, *skipped, *comb.warnings, *parts.warnings]
+    # a widened sigma is a note: the uncertainty stated is then the honest one; a wander too large for a
+    # chain is the decision's (inconclusive), not a warning beside a verdict
+    warnings = [*prep.warnings, *jitter_warnings, *skipped, *comb.warnings]
     for w in (w for be in ests for w in be.spectral.warnings):
         if w not in warnings:
             warnings.append(w)
     pitch, psig, caveats, notes = steps.pitch_from(comb, req)
     warnings += caveats
     notes.append(f"parts check: {parts.reason}")
-    notes = jitter_notes + notes
+    notes = jitter_notes + parts.warnings + notes
     ev = steps.evidence(det, ests, comb, req, speed_source=speed_source)
     ev = replace(ev, part_wander=parts.wander if parts.checked else None, part_summary=_part_summary(parts))
     dec = decide(ev)
