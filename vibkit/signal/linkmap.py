@@ -49,6 +49,7 @@ __all__ = [
     "scan_links",
     "sidak_threshold",
     "smooth_phase",
+    "link_pass_phase",
     "record_time_for_loops",
 ]
 
@@ -225,6 +226,56 @@ def _loop_mean(a, n):
     return (c[lo + n] - c[lo]) / n
 
 
+def _lowpass(y, fs, cutoff):
+    sos = scipy.signal.butter(2, float(cutoff), btype="low", fs=fs, output="sos")
+    padlen = min(y.size - 1, int(3.0 * fs / float(cutoff)))
+    return scipy.signal.sosfiltfilt(sos, y, padtype="even", padlen=padlen)
+
+
+def link_pass_phase(x, fs, f0, *, bandwidth_hz, n_harmonics=4):
+    """Link-pass phase by demodulation at the mean frequency: ``2 pi f t + psi(t)``. [rad]
+
+    Parameters
+    ----------
+    x : array_like, 1-D
+        Signal with a link-pass harmonic family (finite). [x]
+    fs : float
+        Sampling frequency. [Hz]
+    f0 : float
+        Approximate mean link-pass frequency (refined here to the peak of the strongest harmonic). [Hz]
+    bandwidth_hz : float
+        How fast the speed may wander: each harmonic is demodulated and low-passed at it. [Hz]
+    n_harmonics : int, optional
+
+    Notes
+    -----
+    Each harmonic ``h`` is demodulated by ``exp(-j h 2 pi f t)`` and low-passed; its unwrapped phase
+    over ``h`` is the phase's slow departure ``psi``; harmonics are combined with weights
+    ``h^2 |a_h|^2``.  Without a spectrogram ridge the phase follows the chain, not the frame grid:
+    on a chain at constant speed it stays within milliradians of the truth.
+    """
+    fs = check_fs(fs)
+    x = as_signal(x, min_samples=16)
+    x = x - x.mean()
+    t = np.arange(x.size) / fs
+    kmax = max(1, min(check_positive_int(n_harmonics, "n_harmonics"), int(0.45 * fs / f0)))
+    amps = [abs(np.mean(x * np.exp(-2j * np.pi * h * f0 * t))) for h in range(1, kmax + 1)]
+    hs = int(np.argmax(amps)) + 1
+    # refine the frequency on the strongest harmonic: the peak within +-2 bins
+    grid = f0 + np.linspace(-2.0, 2.0, 81) / (t[-1] * hs)
+    e = np.exp(-2j * np.pi * hs * np.outer(grid, t[:: max(1, x.size // 20000)]))
+    f = float(grid[int(np.argmax(np.abs(e @ x[:: max(1, x.size // 20000)])))])
+    acc, wsum = np.zeros(x.size), 0.0
+    for h in range(1, kmax + 1):
+        z = x * np.exp(-2j * np.pi * h * f * t)
+        zr, zi = _lowpass(z.real, fs, bandwidth_hz), _lowpass(z.imag, fs, bandwidth_hz)
+        psi = np.unwrap(np.arctan2(zi, zr)) / h
+        w = h * h * float(np.mean(zr * zr + zi * zi))
+        acc += w * (psi - psi.mean())
+        wsum += w
+    return 2.0 * np.pi * f * t + acc / wsum
+
+
 def smooth_phase(phase, fs, bandwidth_hz):
     """``phase`` with its departure from a straight line low-passed at ``bandwidth_hz``. [rad]
 
@@ -323,7 +374,7 @@ def _loops_showing(per_loop, k, amp, s1):
     )
 
 
-def scan_links(lmap, *, signature=None, scale=1.0, false_alarm=1e-2, max_flags=None):
+def scan_links(lmap, *, signature=None, scale=1.0, false_alarm=1e-2, max_flags=None, mismatch=0.25):
     """Flag the links whose deviation passes a threshold set for ``false_alarm`` over all links.
 
     Parameters
@@ -337,6 +388,11 @@ def scan_links(lmap, *, signature=None, scale=1.0, false_alarm=1e-2, max_flags=N
         Probability that a recording without a deviating link raises any flag.
     max_flags : int, optional
         Stop after this many flags (default ``n_links // 4``).
+    mismatch : float, optional
+        Relative error of the signature: after a flag of amplitude ``a``, links within its reach are
+        tested against ``mismatch * a * rho`` in addition to the noise (``rho`` the signature's
+        autocorrelation at their distance), so that what an imperfect signature leaves is not a
+        second flag.
 
     Returns
     -------
@@ -366,15 +422,26 @@ def scan_links(lmap, *, signature=None, scale=1.0, false_alarm=1e-2, max_flags=N
     norm = float(np.sum(tmpl * tmpl))
     # variance of the per-loop amplitude: sum over links of T_n C T_n, over |T|^4 (the same for every shift)
     var1 = float(np.einsum("ni,ij,nj->", tmpl, cov, tmpl)) / norm**2
+    # the signature's circular autocorrelation over links: how far one link's fit reaches its neighbours
+    ac = np.fft.irfft(np.abs(np.fft.rfft(tmpl, axis=0)) ** 2, n=n, axis=0).sum(axis=1)
+    rho = ac / ac[0]
+    per_loop = _fit_signature(lmap.shape, tmpl)
+    # drift from loop to loop that is common to neighbouring cycles (settling, wander) is missed by the
+    # cycle covariance: the per-loop amplitudes' own scatter, with its fewer degrees of freedom, then rules
+    var_emp = float(np.sum((per_loop - per_loop.mean(axis=0)) ** 2)) / dof
+    if var_emp > var1:
+        var1, dof = var_emp, dof / float(np.sum(rho * rho))
     s1 = math.sqrt(max(var1, 0.0))
     sig = s1 / math.sqrt(L)
     thr = sidak_threshold(alpha, n, dof)
     shape = lmap.shape.copy()
     flags, first = [], None
+    extra = np.zeros(n)  # what a flagged link's imperfect signature leaves near it (variance)
     for _ in range(max(max_flags, 1)):
         per_loop = _fit_signature(shape, tmpl)
         amp = per_loop.mean(axis=0)
-        tstat = np.abs(amp) / sig if sig > 0 else np.full(n, np.inf)
+        sd = np.sqrt(sig * sig + extra)
+        tstat = np.abs(amp) / sd if sig > 0 else np.full(n, np.inf)
         if first is None:
             first = (tstat, amp * scale, np.full(n, sig * scale))
         k = int(np.argmax(tstat))
@@ -383,6 +450,7 @@ def scan_links(lmap, *, signature=None, scale=1.0, false_alarm=1e-2, max_flags=N
         loops = _loops_showing(per_loop, k, amp[k], s1)
         flags.append(LinkFlag(k + 1, float(tstat[k]), float(amp[k] * scale), sig * scale, "signature", loops))
         shape -= amp[k] * np.roll(tmpl, k, axis=0)[None]
+        extra += (mismatch * amp[k] * np.roll(rho, k)) ** 2
     return LinkScan(tuple(flags), first[0], thr, alpha, dof, first[1], first[2], L, "signature")
 
 
