@@ -117,15 +117,13 @@ def link_number_of(model_link, links_passed, n_links):
     return (at_sensor - (model_link - 1)) % n_links + 1
 
 
-def _scene_with(scene, *, speed, worn=None, duration):
+def _scene_with(scene, *, speed, worn=None):
     chain = scene.chain if worn is None else dataclasses.replace(scene.chain, worn_links=(worn,))
     effects = dict(scene.effects)
     if "motor" in effects:
         effects["motor"] = dataclasses.replace(effects["motor"], speed=float(speed))
-    run = dict(scene.section("run"), duration=float(duration), initial_speed=0.0)
-    sections = dict(scene.sections, run=run)
     outputs = dict(scene.outputs, variables=tuple(sorted(set(SENSORS.values()) | {"sprocket_angle"})))
-    return dataclasses.replace(scene, chain=chain, effects=effects, sections=sections, outputs=outputs)
+    return dataclasses.replace(scene, chain=chain, effects=effects, outputs=outputs)
 
 
 @functools.lru_cache(maxsize=8)
@@ -134,6 +132,11 @@ def _signature_cached(scene_path, sensor, speed, fs, samples_per_cycle, excess, 
     from ..model.scene import load_scene
 
     scene = load_scene(scene_path)
+    if scene.analysis != "forward" or scene.run.start != 0.0:
+        raise ValueError(
+            f"{scene_path}: the worn link's signature needs a forward scene that starts with roller 1 at the top "
+            "of the lower head ([run] start = 0), so that its links can be numbered"
+        )
     n = scene.chain.n_rollers
     pitch = scene.chain.link_pitch
     f_lp = speed / pitch
@@ -142,7 +145,7 @@ def _signature_cached(scene_path, sensor, speed, fs, samples_per_cycle, excess, 
     var = SENSORS[sensor]
     maps = []
     for worn in (None, (1, pitch + excess)):
-        ds = simulate(_scene_with(scene, speed=speed, worn=worn, duration=duration), progress=False)
+        ds = simulate(_scene_with(scene, speed=speed, worn=worn), duration=duration, progress=False)
         t = ds.time.values
         keep = t >= settle
         x = np.interp(np.arange(t[keep][0], t[-1], 1.0 / fs), t, ds[var].values)

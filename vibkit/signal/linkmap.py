@@ -21,7 +21,12 @@ The decision (:func:`scan_links`):
   degrees of freedom), at the per-link level ``1 - (1 - alpha)^(1/N)`` (Sidak) so that a healthy
   recording raises a flag with probability at most ``alpha`` over all ``N`` links.  The largest
   passing link is flagged, its fitted signature removed, and the scan repeated (one flag per worn
-  link, not one per neighbour it overlaps);
+  link, not one per neighbour it overlaps); after a flag, the signature's own error (``mismatch``
+  near it, ``mismatch_floor`` everywhere, times its amplitude) is added to the noise, so that what an
+  imperfect signature leaves is not taken for a second link.  Drift common to neighbouring cycles
+  (settling, wander) is not in the cycles' covariance: where the per-loop amplitudes scatter more,
+  their scatter is the noise, with ``(L - 1) N / sum(rho^2)`` degrees of freedom (``rho`` the
+  signature's autocorrelation over links);
 * without a signature, each link's own cycle is tested: its mean level and its duration against
   the pooled loop-to-loop scatter (Student t with ``N (L - 1) - 1`` degrees of freedom), Sidak over
   ``2 N`` tests.
@@ -374,7 +379,9 @@ def _loops_showing(per_loop, k, amp, s1):
     )
 
 
-def scan_links(lmap, *, signature=None, scale=1.0, false_alarm=1e-2, max_flags=None, mismatch=0.25):
+def scan_links(
+    lmap, *, signature=None, scale=1.0, false_alarm=1e-2, max_flags=None, mismatch=0.25, mismatch_floor=0.05
+):
     """Flag the links whose deviation passes a threshold set for ``false_alarm`` over all links.
 
     Parameters
@@ -393,6 +400,10 @@ def scan_links(lmap, *, signature=None, scale=1.0, false_alarm=1e-2, max_flags=N
         tested against ``mismatch * a * rho`` in addition to the noise (``rho`` the signature's
         autocorrelation at their distance), so that what an imperfect signature leaves is not a
         second flag.
+    mismatch_floor : float, optional
+        The same at every link: after a flag of amplitude ``a``, every other link is tested against
+        ``mismatch_floor * a`` in addition (the signature of one scene does not reproduce a worn link
+        elsewhere on the chain to better than a few per cent).
 
     Returns
     -------
@@ -450,7 +461,7 @@ def scan_links(lmap, *, signature=None, scale=1.0, false_alarm=1e-2, max_flags=N
         loops = _loops_showing(per_loop, k, amp[k], s1)
         flags.append(LinkFlag(k + 1, float(tstat[k]), float(amp[k] * scale), sig * scale, "signature", loops))
         shape -= amp[k] * np.roll(tmpl, k, axis=0)[None]
-        extra += (mismatch * amp[k] * np.roll(rho, k)) ** 2
+        extra += (mismatch * amp[k] * np.roll(rho, k)) ** 2 + (mismatch_floor * amp[k]) ** 2
     return LinkScan(tuple(flags), first[0], thr, alpha, dof, first[1], first[2], L, "signature")
 
 
