@@ -181,7 +181,9 @@ def worn_link_signature(scene_path, *, sensor="tensioner", speed, fs, samples_pe
     """
     if sensor not in SENSORS:
         raise ValueError(f"sensor {sensor!r}: the model gives a worn link's signature for {', '.join(SENSORS)} only")
-    return _signature_cached(str(scene_path), sensor, float(speed), float(fs), int(samples_per_cycle), float(excess), 2)
+    return _signature_cached(
+        str(scene_path), sensor, round(float(speed), 9), round(float(fs), 6), int(samples_per_cycle), float(excess), 2
+    )
 
 
 def _pick_channel(recording, channel):
