@@ -19,14 +19,11 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import os
-import sys
 import time
 
 import numpy as np
 
-sys.path.insert(0, os.path.dirname(__file__))
-from _common import RESULTS, machine, markdown_table, today, write_csv, write_text  # noqa: E402
+from _common import RESULTS, machine, markdown_table, today, write_csv, write_text
 
 SCENE = "sim/thesis-forward.toml"
 WORN = 40
@@ -44,7 +41,7 @@ def base_run(scene, excess, loops=5):
 
     n, pitch = scene.chain.n_rollers, scene.chain.link_pitch
     settle = n * pitch / SPEED + 5.0
-    duration = settle + (loops * n + 8) * pitch / SPEED
+    duration = settle + (loops * n + 24) * pitch / SPEED
     chain = scene.chain if excess is None else dataclasses.replace(scene.chain, worn_links=((WORN, pitch + excess),))
     sc = dataclasses.replace(scene, chain=chain, outputs=dict(scene.outputs, variables=("delta", "sprocket_angle")))
     ds = vibkit.simulate(sc, duration=duration, progress=False)
@@ -59,7 +56,7 @@ def realisation(t, x, loops, n, rng):
     """One recording: the base run warped by a speed wander, cut to ``loops`` loops, with noise."""
     period = rng.uniform(60.0, 300.0)
     ph = rng.uniform(0, 2 * np.pi)
-    span = (loops * n + 2) * 0.13333333333333333 / SPEED
+    span = (loops * n + 3) * 0.13333333333333333 / SPEED * (1 + WANDER)  # loops + 3 links at the slowest
     tr = np.arange(0.0, span, 1.0 / FS)
     # the chain's own time runs at 1 + w(t): the signal at time tr is the base run at tau(tr)
     tau = tr + WANDER * period / (2 * np.pi) * (np.sin(2 * np.pi * tr / period + ph) - np.sin(ph))

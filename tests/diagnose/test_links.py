@@ -106,3 +106,35 @@ def test_the_step_channel_is_refused_with_a_scene(recordings):
     rec = xr.open_dataset(recordings[40][0])
     with pytest.raises(ValueError, match="tensioner"):
         find_worn_links(rec, speed=SPEED, n_links=N, channel="accel_step", scene=SCENE)
+
+
+def test_the_report_has_a_links_page_with_the_flagged_link(recordings, tmp_path):
+    import importlib.util
+    from pathlib import Path
+
+    from vibkit.diagnose.report import write_report
+    from vibkit.diagnose.report.common import PageSink
+
+    spec = importlib.util.spec_from_file_location("layout", Path(__file__).with_name("test_report_layout.py"))
+    layout = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(layout)
+    problems = {}
+    orig = PageSink.emit
+
+    def emit(self, fig, title):
+        if title == "links":
+            problems[title] = layout.layout_problems(fig)
+            problems["texts"] = " ".join(t.get_text() for t in fig.findobj(lambda a: hasattr(a, "get_text")))
+        return orig(self, fig, title)
+
+    path, passed = recordings[40]
+    mp = pytest.MonkeyPatch()
+    mp.setattr(PageSink, "emit", emit)
+    try:
+        rep = write_report(path, tmp_path / "r.pdf", scene=SCENE, speed=SPEED, duration=2.0, date="2026-11-26")
+    finally:
+        mp.undo()
+    assert "links" in [t for t, _ in rep.pages]
+    assert problems["links"] == []
+    assert f"link {link_number_of(40, passed, N)}:" in problems["texts"]
+    assert rep.summary["flagged_links"] == [link_number_of(40, passed, N)]

@@ -98,6 +98,7 @@ class ReportContext:
     measurement_date: _dt.datetime | None = None
     measurement_date_source: str = ""
     ride: list = field(default_factory=list)  # ("recording" | "simulation", RideQuality), one page each
+    links: object = None  # LinksResult: the link map, when a tensioner recording covers two loops of the scene's chain
 
     @property
     def date_fixed(self) -> bool:
@@ -334,7 +335,11 @@ def analyse(
         )
     if comp is not None:
         summary.update(score=comp.score, pitch_consistent=comp.pitch_consistent)
+    links = _links(rec, ch, units, sc, speed, notes)
+    if links is not None:
+        summary["flagged_links"] = [f["link"] for f in links.flagged]
     return ReportContext(
+        links=links,
         recording=recording,
         rec=rec,
         channel=ch,
@@ -366,6 +371,21 @@ def analyse(
         measurement_date_source=measured_source,
         ride=ride,
     )
+
+
+def _links(rec, ch, units, sc, speed, notes):
+    """The link map of a tensioner recording over two loops of the scene's chain, else None."""
+    from ..links import TooFewLoops, find_worn_links
+
+    if sc is None or not speed or units != "m" or sc.analysis != "forward" or sc.source == "<string>":
+        return None
+    try:
+        return find_worn_links(rec, speed=speed, n_links=sc.chain.n_rollers, channel=ch, scene=sc.source)
+    except TooFewLoops:
+        return None  # under two loops: no page (vibkit links says how long to record)
+    except ValueError as exc:
+        notes.append(f"link map: {exc}")
+        return None
 
 
 def _ride(rec, result, sc, notes):
