@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import math
 
-from .options import add_command, add_json, add_recording, band, chain_speed, read_recording
+from .options import _LENGTH_UNITS, _quantity, add_command, add_json, add_recording, band, chain_speed, read_recording
 from .output import in_file, msg, print_json, table
 from .pitch import resolve_speed
 
@@ -48,6 +48,15 @@ def seconds(text):
     return v
 
 
+def excess_length(text):
+    """--min-excess: metres, or with a unit (``0.2mm``); 0 or more."""
+    v, factor, _unit = _quantity(text, _LENGTH_UNITS, "an excess pitch", "0.2mm")
+    m = v * (factor or 1.0)
+    if not (math.isfinite(m) and 0 <= m < 0.05):
+        raise argparse.ArgumentTypeError(f"expected an excess pitch from 0 to 50 mm (e.g. 0.2mm), got {text!r}")
+    return m
+
+
 def add_parser(subparsers):
     s = add_command(
         subparsers, "links", "which link of the chain is worn, by number, from a tensioner recording", EPILOG
@@ -76,6 +85,12 @@ def add_parser(subparsers):
         default=0.01,
         help="probability that a chain without a worn link gets any flag, over all its links (default 0.01)",
     )
+    s.add_argument(
+        "--min-excess",
+        type=excess_length,
+        default=0.2e-3,
+        help="with --scene: flag a link only when its excess pitch is at least this: m, or 0.2mm (default 0.2 mm)",
+    )
     s.add_argument("--band", type=band, help="link-pass search band LOW:HIGH [Hz] (default speed / 200-80 mm)")
     s.set_defaults(func=run)
     return s
@@ -96,6 +111,7 @@ def run(a):
             marker_s=a.marker,
             false_alarm=a.false_alarm,
             band=a.band,
+            min_excess=a.min_excess,
             file=a.recording,
         )
     except TooFewLoops as exc:

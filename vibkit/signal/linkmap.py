@@ -7,8 +7,9 @@ phase ``phi`` (tracked or from a shaft angle), cycle ``j`` is ``2 pi j <= phi' <
 boundaries whatever the phase's origin).  The link of cycle ``j`` is ``(j - j_ref) mod N`` (0 for
 link 1), ``j_ref`` the cycle in progress at the start of the recording or at a marker time.
 
-Per cycle, two features: the waveform resampled at ``samples_per_cycle`` points of the phase, minus
-the record's mean cycle (the *shape*), and the cycle's duration.  Averaged per link over ``L``
+Per cycle, three features: the waveform resampled at ``samples_per_cycle`` points of the phase, minus
+the record's mean cycle and without its component along the mean cycle's slope (the *shape*: what a
+small phase error at that cycle cannot explain), its mean level, and the cycle's duration.  Averaged per link over ``L``
 complete loops, with their loop-to-loop scatter: :class:`LinkMap`.
 
 The decision (:func:`scan_links`):
@@ -199,7 +200,13 @@ def link_map(x, fs, phase, n_links, *, samples_per_cycle=16, marker_s=None):
     wave = wave - _loop_mean(wave, n)
     dur = dur - _loop_mean(dur, n)
     level = wave.mean(axis=1)
-    shape = wave - wave.mean(axis=0)
+    mean_cycle = wave.mean(axis=0)
+    shape = wave - mean_cycle
+    # a small error of the phase at one cycle shifts its waveform along the mean cycle's slope: that
+    # direction is taken out of every cycle's shape (the map keeps what the phase cannot explain)
+    slope = (np.roll(mean_cycle, -1) - np.roll(mean_cycle, 1)) / 2.0
+    if np.any(slope):
+        shape = shape - np.outer(shape @ slope / float(slope @ slope), slope)
     first_link = (first - ref) % n
     # roll so that axis 1 is the link number: cycle i of the record is link (first_link + i) mod n
     order = (first_link + np.arange(used)) % n
@@ -231,10 +238,10 @@ def _loop_mean(a, n):
     return (c[lo + n] - c[lo]) / n
 
 
-def _lowpass(y, fs, cutoff):
+def _lowpass(y, fs, cutoff, padtype="even"):
     sos = scipy.signal.butter(2, float(cutoff), btype="low", fs=fs, output="sos")
     padlen = min(y.size - 1, int(3.0 * fs / float(cutoff)))
-    return scipy.signal.sosfiltfilt(sos, y, padtype="even", padlen=padlen)
+    return scipy.signal.sosfiltfilt(sos, y, padtype=padtype, padlen=padlen)
 
 
 def link_pass_phase(x, fs, f0, *, bandwidth_hz, n_harmonics=4):
@@ -271,9 +278,11 @@ def link_pass_phase(x, fs, f0, *, bandwidth_hz, n_harmonics=4):
     e = np.exp(-2j * np.pi * hs * np.outer(grid, t[:: max(1, x.size // 20000)]))
     f = float(grid[int(np.argmax(np.abs(e @ x[:: max(1, x.size // 20000)])))])
     phase = 2.0 * np.pi * f * t
+    # harmonics weaker than a tenth of the strongest add noise and unwrapping slips, not information
+    used = [h for h in range(1, kmax + 1) if amps[h - 1] >= 0.1 * max(amps)]
     for _ in range(3):  # each pass demodulates around the last: the filter's loss on a wander shrinks geometrically
         acc, wsum = np.zeros(x.size), 0.0
-        for h in range(1, kmax + 1):
+        for h in used:
             z = x * np.exp(-1j * h * phase)
             zr, zi = _lowpass(z.real, fs, bandwidth_hz), _lowpass(z.imag, fs, bandwidth_hz)
             psi = np.unwrap(np.arctan2(zi, zr)) / h
@@ -281,6 +290,13 @@ def link_pass_phase(x, fs, f0, *, bandwidth_hz, n_harmonics=4):
             acc += w * (psi - psi.mean())
             wsum += w
         phase = phase + acc / wsum
+    if not np.all(np.diff(phase) > 0):
+        phase = smooth_phase(phase, fs, bandwidth_hz)
+    if not np.all(np.diff(phase) > 0):
+        raise ValueError(
+            "the link-pass phase could not be followed: it runs backwards somewhere (a dropout, or a speed "
+            "that changes faster than the tracking bandwidth)"
+        )
     return phase
 
 
