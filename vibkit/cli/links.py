@@ -50,6 +50,8 @@ def seconds(text):
 
 def excess_length(text):
     """--min-excess: metres, or with a unit (``0.2mm``); 0 or more."""
+    if text.strip().rstrip("m").rstrip("m") in ("0", "0.0"):  # 0, 0m, 0mm: no minimum
+        return 0.0
     v, factor, _unit = _quantity(text, _LENGTH_UNITS, "an excess pitch", "0.2mm")
     m = v * (factor or 1.0)
     if not (math.isfinite(m) and 0 <= m < 0.05):
