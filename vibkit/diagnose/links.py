@@ -64,7 +64,7 @@ class LinksResult:
         statistic), ``loops`` (1-based loops whose own fit shows it).
     threshold, false_alarm, dof : float
     statistic : ndarray (n_links,)
-        |t| of every link (the map the report draws).
+        Absolute t of every link (the map the report draws).
     excess_mm : ndarray (n_links,)
         Fitted excess pitch at every link. [mm]
     method : str

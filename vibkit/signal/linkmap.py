@@ -350,9 +350,9 @@ class LinkScan:
     ----------
     flagged : tuple of LinkFlag
     statistic : ndarray (n_links,)
-        The first pass's |t| per link (largest over features without a signature).
+        The first pass's absolute t per link (largest over features without a signature).
     threshold : float
-        |t| a link must pass.
+        The absolute t a link must pass.
     false_alarm : float
         Family-wise false-alarm probability over all links.
     dof : float

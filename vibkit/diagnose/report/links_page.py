@@ -11,7 +11,7 @@ __all__ = ["links_page"]
 
 
 def links_page(doc, ctx) -> None:
-    """|t| of every link against the threshold; the flagged links marked with their excess pitch."""
+    """The absolute t of every link against the threshold; the flagged links marked with their excess pitch."""
     res = ctx.links
     if res is None:
         return
