@@ -40,6 +40,15 @@ SOLVER = {
     "contact, no load, default outputs, exact closure": {"closure": "exact"},
 }
 
+# name: chain settings over the scene's (links 40, 70 and 100 one mm longer; every link 3 % longer)
+WORN = [[40, 0.4 / 3 + 1e-3], [70, 0.4 / 3 + 1e-3], [100, 0.4 / 3 + 1e-3]]
+CHAIN = {
+    "contact, no load, three worn links": {"worn_links": WORN},
+    "contact, no load, three worn links, with check": {"worn_links": WORN},
+    "contact, no load, 3 % elongated chain": {"elongation_percent": 3.0},
+}
+SOLVER["contact, no load, three worn links, with check"] = {"check": True}
+
 CASES = {
     # name: (effects, outputs, description)
     "kinematics only": ({}, ["delta"], "no force at all: the chain coasts (closure walk + reduced dynamics)"),
@@ -96,6 +105,17 @@ CASES = {
         ["delta", "sprocket_speed"],
         "two passengers (the study's chapter 7.4)",
     ),
+    "contact, no load, three worn links": (
+        NO_LOAD,
+        NO_LOAD_OUT,
+        "links 40, 70 and 100 one mm longer: the chain repeats after a loop, not a pitch (exact closure)",
+    ),
+    "contact, no load, three worn links, with check": (NO_LOAD, NO_LOAD_OUT, "the same with the convergence check"),
+    "contact, no load, 3 % elongated chain": (
+        NO_LOAD,
+        NO_LOAD_OUT,
+        "every link 3 % longer on the original sprocket (delta -0.229 m: the table's nodes 1 mm apart)",
+    ),
 }
 
 CHILD = r"""
@@ -103,8 +123,12 @@ import json, resource, sys, time
 from dataclasses import replace
 import vibkit
 from vibkit.model.scene import load_scene
-effects, outputs, duration, solver_over = json.loads(sys.argv[1])
+effects, outputs, duration, solver_over, chain_over = json.loads(sys.argv[1])
 scene = load_scene(sys.argv[2])
+if chain_over:
+    text = scene.text.replace("n_rollers = 159", "n_rollers = 159\n" + "\n".join(f"{k} = {json.dumps(v)}" for k, v in chain_over.items()))
+    from vibkit.model.scene import parse_scene
+    scene = parse_scene(text, scene.source)
 if effects is not None:
     scene = replace(scene, effects=effects)
 if outputs is not None:
@@ -139,7 +163,13 @@ def main(argv=None):
     for name, (effects, outputs, what) in list(CASES.items())[: 2 if args.quick else None]:
         print(f"{name} ...", file=sys.stderr, flush=True)
         out = subprocess.run(
-            [sys.executable, "-c", CHILD, json.dumps([effects, outputs, duration, SOLVER.get(name, {})]), scene],
+            [
+                sys.executable,
+                "-c",
+                CHILD,
+                json.dumps([effects, outputs, duration, SOLVER.get(name, {}), CHAIN.get(name)]),
+                scene,
+            ],
             capture_output=True,
             text=True,
             check=True,

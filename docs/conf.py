@@ -105,6 +105,24 @@ def write_scene_keys_page() -> None:
 write_scene_keys_page()
 
 
+def write_profile_keys_page() -> None:
+    """The escalator profile's reference: every key of a profile (vibkit.model.profile), rendered from it."""
+    from vibkit.model.profile import profile_table
+
+    text = (
+        "# Escalator profile keys\n\n"
+        "Every key an escalator profile (`--escalator FILE`, `vibkit scene FILE`) may hold, with its unit, "
+        "default and plausible range, rendered from `vibkit/model/profile.py` at each build with the scene "
+        "schema's machinery. *required*: the profile must give it; *not set*: optional, its meaning says "
+        "what happens without it. A profile gives `chain.n_links` or both `geometry.rise` and "
+        "`geometry.incline_deg`.\n\n" + profile_table() + "\n"
+    )
+    _write_if_changed(DOCS / "api" / "generated" / "profile-keys.md", text)
+
+
+write_profile_keys_page()
+
+
 def _changelog_guard(app, docname, source):
     """The changelog page includes ``CHANGELOG.md`` from the repository root, given a title if its first
     heading is not one; without the file the page says so instead of failing the build."""

@@ -1,6 +1,6 @@
 """The package's shape: few top-level modules, small modules, imports that run one way, no cycles.
 
-The layers, from the bottom: ``runtime`` (guards every layer shares) <- ``signal`` and ``io`` (never the
+The layers, from the bottom: ``runtime`` (guards every layer shares) and ``scenes`` (the shipped scene files) <- ``signal`` and ``io`` (never the
 model) <- ``model`` <- ``analyses`` <- ``diagnose`` <- ``fleet`` and ``sweep`` <- ``cli``. A module
 may import its own layer and the layers below it, never one above. The checks parse the sources
 (every import statement, also those inside functions), so a lazy import cannot hide an upward edge.
@@ -16,7 +16,18 @@ import pytest
 PKG = Path(__file__).resolve().parents[1] / "vibkit"
 
 #: layer of each subpackage: an import may go to the same or a lower number only
-LAYER = {"runtime": 0, "signal": 1, "io": 1, "model": 2, "analyses": 3, "diagnose": 4, "fleet": 5, "sweep": 5, "cli": 6}
+LAYER = {
+    "runtime": 0,
+    "scenes": 0,
+    "signal": 1,
+    "io": 1,
+    "model": 2,
+    "analyses": 3,
+    "diagnose": 4,
+    "fleet": 5,
+    "sweep": 5,
+    "cli": 6,
+}
 #: imports the layer numbers alone would allow but the architecture forbids
 FORBIDDEN = {("signal", "io"), ("io", "signal")}
 MAX_LINES = 700
@@ -245,7 +256,7 @@ def test_the_slot_check_can_fail():
 # --- scene keys are read through the schema -------------------------------------------------------
 
 #: the modules that read the raw scene (its TOML tables) and fill in defaults
-SCHEMA_MODULES = {"vibkit.model.schema", "vibkit.model.scene"}
+SCHEMA_MODULES = {"vibkit.model.schema", "vibkit.model.scene", "vibkit.model.profile"}
 #: modules that may parse scene TOML, and why
 RAW_TOML_ALLOWED = {
     "vibkit.sweep.plan": "writes varied copies of a scene's TOML text; each copy is validated when it is loaded",

@@ -11,7 +11,9 @@ from vibkit.model.scene import load_scene
 
 SIM = Path(__file__).resolve().parents[2] / "sim"
 R_P = 0.4 / 3 / (2 * np.sin(np.pi / 28))
-W_REF = -0.5 / R_P
+PITCH = 0.4 / 3
+# motor.speed is the chain speed on the straight: the set-point turns the sprocket Z L per turn at it
+W_REF = -2 * np.pi * 0.5 / (28 * PITCH)
 
 
 def variant(*, effects=None, run=None, solver=None, outputs=None):
@@ -48,8 +50,9 @@ def startup():
 
 def test_startup_torque_and_time_to_speed(startup):
     ds = startup
-    # initial torque kp * |thetadot_ref| = 600 * 0.8397 = 503.8 N m (the study: about 500 N m)
-    assert abs(float(ds.motor_torque[0])) == pytest.approx(600 * 0.5 / R_P, rel=1e-9)
+    # initial torque kp * |thetadot_ref| = 600 * 0.8415 = 504.9 N m (the study: about 500 N m, with the
+    # pitch-circle set-point 0.5 / R^P = 0.8397 rad/s)
+    assert abs(float(ds.motor_torque[0])) == pytest.approx(600 * abs(W_REF), rel=1e-9)
     w = ds.sprocket_speed.values
     t99 = ds.time.values[np.argmax(np.abs(w) >= 0.99 * abs(W_REF))]
     assert 3.0 <= t99 <= 5.0  # the study: 0.5 m/s in about 4 s
@@ -85,16 +88,16 @@ def test_delta_follows_tooth_mesh_frequency():
     f = mean_frequency(ds.delta.values[steady], 1 / 0.005, mesh)
     assert f == pytest.approx(mesh, rel=1e-3)
     assert peak_frequency(ds.delta.values[steady], 1 / 0.005) == pytest.approx(mesh, rel=3e-3)
-    # 3.742 Hz with the reference P controller (model.md section 9), a little under v / L = 3.75 Hz
-    assert mesh == pytest.approx(3.742, rel=1e-3)
+    # v / L = 3.75 Hz: the set-point is the chain speed (the study's pitch-circle set-point gave 3.742 Hz)
+    assert mesh == pytest.approx(0.5 / PITCH, rel=5e-4)
 
 
 # The converged no-load scene: dopri5 at rtol 1e-10 and 1e-11 here,
 # independently, dopri5 1e-9 ... 1e-11, dop853 1e-8 with max_step 2e-3 and cvode-adams 1e-8: the chain
-# touches the teeth in 23 episodes during spin-up, the last at t = 7.87 s, then coasts inside the
+# touches the teeth in 23 episodes during spin-up, the last at t = 7.855 s, then coasts inside the
 # backlash without touching a tooth up to 44 s.
 CONVERGED_EPISODES = 23
-CONVERGED_LAST_CONTACT_S = 7.87
+CONVERGED_LAST_CONTACT_S = 7.855
 
 
 def contact_episodes(ds):
@@ -118,6 +121,18 @@ def test_default_settings_give_the_converged_contact_history(no_load):
     # after spin-up the sprocket turns steadily: ripple below 1e-3 % (converged: 2e-4 %)
     w = no_load.sprocket_speed.sel(time=slice(8.0, None)).values
     assert (w.max() - w.min()) / abs(w.mean()) < 1e-5
+
+
+def test_link_pass_is_the_set_speed_over_the_pitch(no_load):
+    """motor.speed is the chain speed on the straight: delta's link-pass frequency in steady running is
+    motor.speed / pitch within 0.05 %, and so is the result's ``link_pass_frequency_hz``.
+
+    From 8 s the chain coasts inside the backlash (about 6.5 mm): over the 36 s left it can lead or
+    lag the sprocket by at most 0.0065 / (0.5 x 36) = 0.04 % of its mean advance."""
+    steady = no_load.time.values >= 8.0
+    f = mean_frequency(no_load.delta.values[steady], 1 / 0.005, 0.5 / PITCH)
+    assert f == pytest.approx(0.5 / PITCH, rel=5e-4)
+    assert no_load.attrs["link_pass_frequency_hz"] == pytest.approx(0.5 / PITCH, rel=1e-12)
 
 
 def test_result_does_not_depend_on_run_length_or_output_step(no_load):
@@ -184,13 +199,13 @@ def test_energy_conserved_without_motor_and_damping():
     assert drift[1e-8] < drift[1e-6]
 
 
-def _passenger_run(motor, *, alight=100.0, duration=4.0, outputs=("sprocket_speed", "motor_torque")):
+def _passenger_run(motor, *, alight=100.0, duration=4.0, outputs=("sprocket_speed", "motor_torque"), mass=160.0):
     effects = {
         "gravity": {"g": 9.81},
         "contact": {"stiffness": 1e6, "exponent": 1.5, "damping": 0.0},
         "motor": motor,
         # 160 kg on step 7 (rollers 19-21, on the incline from t = 0 for 10 s)
-        "passengers": {"mass": [160.0], "step": [7], "board": [0.0], "alight": [alight]},
+        "passengers": {"mass": [mass], "step": [7], "board": [0.0], "alight": [alight]},
     }
     return vibkit.simulate(
         variant(effects=effects, run={"initial_speed": 0.5}, outputs=list(outputs)), duration=duration, progress=False
@@ -331,3 +346,60 @@ def test_flank_forces_from_positions_equal_those_of_the_full_evaluation():
     assert float(full.drive_flank_force.max()) > 100.0  # the teeth take the start-up's load
     for name in ("drive_flank_force", "back_flank_force"):
         np.testing.assert_allclose(light[name].values, full[name].values, rtol=1e-9, atol=1e-6)
+
+
+def test_links_in_compression_are_reported_and_a_preload_removes_them():
+    """Without a tensioner preload the spin-up puts links into compression (a roller chain cannot push):
+    the result says so; a preload of twice the worst compression keeps every link in tension."""
+    bare = vibkit.simulate(variant(outputs=["link_tension"]), duration=0.5, progress=False)
+    worst = float(bare.link_tension.min())
+    assert worst < -1.0
+    assert "go into compression" in bare.attrs["warnings"] and "preload" in bare.attrs["warnings"]
+    effects = {**variant().effects, "tensioner": {"preload": -2.0 * worst}}
+    held = vibkit.simulate(variant(effects=effects, outputs=["link_tension"]), duration=0.5, progress=False)
+    assert float(held.link_tension.min()) > 0.0
+    assert "compression" not in held.attrs.get("warnings", "")
+
+
+def test_a_stalled_motor_is_reported():
+    """1,440 kg on a step against the P controller of the reference (kp = 600): the chain never gets up
+    to speed; the result says so instead of running on silently (started at 0.5 m/s, the speed falls
+    by about 70 % within the first seconds)."""
+    ds = _passenger_run({"kp": 600.0, "speed": 0.5}, duration=3.0, mass=1440.0)
+    assert "the speed droops" in ds.attrs["warnings"] and "cannot hold the speed" in ds.attrs["warnings"]
+    ok = _passenger_run({"kp": 6000.0, "ki": 30000.0, "speed": 0.5}, duration=3.0)
+    assert "speed" not in ok.attrs.get("warnings", "")
+
+
+def test_rollers_inside_the_teeth_at_the_start_are_refused(tmp_path):
+    """A 101.6 mm chain with the 133.33 mm chain's rollers and teeth starts with 12 mm of roller inside a
+    tooth: refused, naming the keys to change, instead of a run reported converged."""
+    from vibkit.model.escalator import EscalatorModel
+    from vibkit.model.scene import SceneError
+
+    text = (SIM / "thesis-forward.toml").read_text()
+    path = tmp_path / "w.toml"
+    path.write_text(
+        text.replace("link_pitch = 0.13333333333333333", "link_pitch = 0.1016").replace("= 159", '= "fill"')
+    )
+    scene = load_scene(path)
+    assert EscalatorModel(scene).initial_indentation(0.0) == pytest.approx(0.01207, abs=1e-4)
+    with pytest.raises(SceneError, match=r"w.toml: .* 12.1 mm inside the sprocket's teeth .*chain.roller_radius"):
+        vibkit.simulate(scene, duration=0.1, progress=False)
+    assert EscalatorModel(load_scene(SIM / "thesis-forward.toml")).initial_indentation(0.0) == 0.0
+
+
+def test_set_point_is_the_chain_speed_of_the_mean_link(tmp_path):
+    """The motor's reference turns the sprocket Z links per turn: -2 pi v / (Z L_mean), L_mean the mean link
+    length, so that a worn link (longer) does not make the chain run faster than motor.speed."""
+    from vibkit.model.escalator import EscalatorModel
+
+    model = EscalatorModel(load_scene(SIM / "thesis-forward.toml"))
+    assert model.sprocket_speed(0.5) == pytest.approx(W_REF, rel=1e-15)
+    text = (SIM / "thesis-forward.toml").read_text().replace("n_rollers = 159", "n_rollers = 159\nworn_link = 5")
+    path = tmp_path / "worn.toml"
+    path.write_text(text.replace("worn_link = 5", "worn_link = 5\nworn_link_pitch = 0.1436"))
+    worn = EscalatorModel(load_scene(path))
+    mean = (158 * PITCH + 0.1436) / 159
+    assert worn.sprocket_speed(0.5) == pytest.approx(-2 * np.pi * 0.5 / (28 * mean), rel=1e-12)
+    assert worn.link_pass_frequency(0.5) == pytest.approx(0.5 / mean, rel=1e-12)

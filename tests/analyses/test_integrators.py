@@ -66,7 +66,7 @@ def test_dopri5_is_fifth_order():
     thetadot(t) = thetadot_ref (1 - exp(-kp t / I)). The error at t = 0.2 s falls as h^5."""
     s = load_scene(SIM / "thesis-forward.toml")
     kp, inertia = 600.0, s.sprocket.inertia
-    w_ref = -0.5 / s.sprocket.pitch_radius(s.chain.link_pitch)
+    w_ref = -2 * np.pi * 0.5 / (s.sprocket.teeth * s.chain.link_pitch)  # the chain-speed set-point
     exact = w_ref * (1.0 - np.exp(-kp * 0.2 / inertia))
     errors = []
     for h in (0.2 / 4, 0.2 / 8, 0.2 / 16, 0.2 / 32):

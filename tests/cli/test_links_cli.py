@@ -60,6 +60,7 @@ def test_links_under_two_loops_is_refused_with_the_time_to_record(tmp_path, run)
     "args, words",
     [
         (["--links", "1"], "at least 2 links"),
+        (["--links", "40", "--min-excess", "-1mm"], "excess"),
         (["--links", "40", "--false-alarm", "2"], "probability"),
         (["--links", "40", "--marker", "-3"], "time"),
     ],

@@ -92,7 +92,8 @@ def test_irregular_sampling_resampled():
     x = _family(t, 3.9, [1.0, 0.4]) + 0.02 * rng.standard_normal(t.size)
     est = estimate_pitch(_rec(t, x), speed=0.52)
     assert est.fundamental_hz == pytest.approx(3.9, abs=2e-3)
-    assert any("resampled" in w for w in est.warnings)
+    # said in a note; a warning only when the resampling changes the estimate beyond its sigma
+    assert any("resampled" in n for n in est.notes) and not any("resampled" in w for w in est.warnings)
 
 
 def test_field_cases():

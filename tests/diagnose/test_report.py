@@ -39,10 +39,15 @@ def test_pages_and_text(leon_report):
     assert _page_count(rep.path) == len(titles)
     text = {t: "\n".join(x) for t, x in rep.pages}
     assert "leon-tensioner.csv" in text["recording"] and rep.summary["sha256"] in text["recording"]
-    assert "Leon shopping centre" in text["recording"] and "Leon shopping centre" in text["verdict"]
+    # no escalator profile: the unit is not named (a scene's description is not the unit's name)
+    assert "unit not named: --escalator FILE" in text["verdict"] and "Leon shopping centre" not in text["verdict"]
     # verdict: the published link-pass and pitch, elongation against the catalogue pitch
-    assert re.search(r"3\.53\d+ \+- 0\.0000\d\d Hz", text["verdict"])  # rounded to its sigma
-    assert re.search(r"138\.4\d+ \+- 0\.00\d\d mm", text["verdict"])
+    # the frequency the reconstruction was made with (3.54 Hz) within 2 of its sigma
+    f, sf = (float(v) for v in re.search(r"(3\.5\d+) \+- (0\.000\d+) Hz", text["verdict"]).groups())
+    assert abs(f - 3.54) <= 2 * sf
+    # the file's speed states no uncertainty: the pitch to 0.01 mm and no +-
+    assert re.search(r"138\.4\d mm \(speed uncertainty not stated\)", text["verdict"])
+    assert "+- 0 " not in text["verdict"] and not re.search(r"\+- 0\.00\d\d mm", text["verdict"])
     assert "REPLACE" in text["verdict"] and "NOT consistent" in text["verdict"]
     # lengths plotted in um, as the tables give them (the tensioner's ripple is tens of um)
     assert "frequency [Hz]" in text["spectrum"] and "amplitude [\u00b5m]" in text["spectrum"]

@@ -318,6 +318,8 @@ def test_add_date_from_start_time_or_refused(tmp_path, capsys):
                 "U1",
                 "--speed",
                 "0.5",
+                "--speed-uncertainty",
+                "0.05%",
                 "--nominal-pitch",
                 str(NOMINAL),
                 "--db",

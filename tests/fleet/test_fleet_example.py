@@ -23,7 +23,12 @@ def test_regenerated_byte_for_byte(tmp_path):
     mod = _script()
     assert mod.main(["--out", str(tmp_path)]) == 0
     made = sorted(p.relative_to(tmp_path).as_posix() for p in tmp_path.rglob("*") if p.is_file())
-    shipped = sorted(p.relative_to(FOLDER).as_posix() for p in FOLDER.rglob("*") if p.is_file())
+    # the escalator profiles (escalators/*.toml) are written by hand, not by the script
+    shipped = sorted(
+        p.relative_to(FOLDER).as_posix()
+        for p in FOLDER.rglob("*")
+        if p.is_file() and p.relative_to(FOLDER).parts[0] != "escalators"
+    )
     assert made == shipped
     for name in made:
         assert (tmp_path / name).read_bytes() == (FOLDER / name).read_bytes(), name

@@ -26,7 +26,7 @@ def meas(i, years, e, s=SIGMA, *, unit="U", quality=None, replaced=False):
         date_unix_s=t,
         date_source="given",
         speed_m_s=0.5,
-        speed_sigma_m_s=0.0,
+        speed_sigma_m_s=0.001,
         nominal_pitch_m=0.13333,
         channel="a",
         fundamental_hz=3.75,

@@ -16,7 +16,15 @@ from vibkit.io.registry import FORMATS, detect_format, get_format
 from vibkit.io.text.loggers import PROFILES
 
 DATA = Path(__file__).resolve().parents[2] / "data"
-READER_ATTR = {"netcdf": "vibkit.io.netcdf", "seismic": "vibkit.io.seismic", "text": "vibkit.io.csv"}
+READER_ATTR = {
+    "netcdf": "vibkit.io.netcdf",
+    "seismic": "vibkit.io.seismic",
+    "text": "vibkit.io.csv",
+    "e4": "vibkit.io.devices.e4",
+    "actigraph": "vibkit.io.devices.actigraph",
+    "lvm": "vibkit.io.lvm",
+    "gzip": "vibkit.io.devices.actigraph",  # the one shipped .gz holds an ActiGraph export
+}
 
 #: file -> (format entry, text the history must hold: the logger profile's decision, or None)
 SHIPPED = {
@@ -52,9 +60,27 @@ SHIPPED = {
     "thirdparty/sensorlogger_driving_total_acceleration.csv": ("text", "for TotalAcceleration.csv (file name)"),
     "thirdparty/sensorlogger_imu_accelerometer.csv": ("text", "for Accelerometer.csv (file name)"),
     "thirdparty/sensorlogger_walking_pdr_accelerometer.csv": ("text", "for Accelerometer.csv (file name)"),
+    "devices/actigraph/exampleRAW.csv.gz": ("gzip", "gzip file unpacked: exampleRAW.csv"),
+    **{f"devices/empatica_e4/{n}.csv": ("e4", "Empatica E4 export") for n in ("ACC", "BVP", "EDA", "HR", "TEMP")},
+    **{
+        f"devices/labview/{n}.lvm": ("lvm", "LabVIEW Measurement file")
+        for n in (
+            "long_single_header_first2048",
+            "multi_time_column",
+            "no_decimal_separator",
+            "short",
+            "with_comments",
+            "with_empty_fields",
+        )
+    },
+    "devices/science_journal/Untitled Experiment Trial 1.csv": ("text", None),
+    "devices/sensor_logger/AccelerometerUncalibrated.csv": ("text", "g on iOS and m/s^2 on Android"),
 }
-#: shipped files that are not recordings: the text entry claims them and refuses them in one line
-NOT_RECORDINGS = {"fleet-example/units.csv": "no data rows found"}
+#: shipped files that are not recordings: the entry named refuses them in one line
+NOT_RECORDINGS = {
+    "fleet-example/units.csv": ("text", "no data rows found"),
+    "devices/empatica_e4/IBI.csv": ("e4", "not a sampled signal"),
+}
 #: files beside the data that no reader is meant for
 SKIP_SUFFIXES = (".py", ".md", ".json")
 
@@ -80,15 +106,24 @@ def test_shipped_file_read_by_its_entry(rel):
 
 
 @pytest.mark.parametrize("rel", sorted(NOT_RECORDINGS))
-def test_shipped_non_recording_refused_by_the_text_entry(rel):
+def test_shipped_non_recording_refused_by_its_entry(rel):
     path = DATA / rel
-    assert detect_format(path, path.read_bytes()).name == "text"
-    with pytest.raises(RecordingError, match=NOT_RECORDINGS[rel]):
+    assert detect_format(path, path.read_bytes()).name == NOT_RECORDINGS[rel][0]
+    with pytest.raises(RecordingError, match=NOT_RECORDINGS[rel][1]):
         read_recording(path)
 
 
+def _witmotion_packets(n):
+    """``n`` WitMotion packets: 0x55, type 0x51-0x54, 8 data bytes, checksum (low byte of the sum)."""
+    out = b""
+    for k in range(n):
+        p = bytes([0x55, 0x51 + k % 4]) + bytes(range(k, k + 8))
+        out += p + bytes([sum(p) & 0xFF])
+    return out
+
+
 def test_order_is_fixed_and_the_last_entry_claims_everything():
-    assert format_names() == ("netcdf", "seismic", "text")
+    assert format_names() == ("netcdf", "gzip", "zip", "witmotion", "seismic", "e4", "actigraph", "lvm", "text")
     assert [f.name for f in FORMATS] == list(format_names())
     hdf5 = b"\x89HDF\r\n\x1a\n" + b"\x00" * 64
     cases = [  # (name, bytes, encoding, entry): each claimed by two sniffers goes to the first of them
@@ -103,6 +138,14 @@ def test_order_is_fixed_and_the_last_entry_claims_everything():
         ("x.txt", b"TIMESERIES XX_TEST__BHZ_R, 6 samples, 10 sps\n", None, "seismic"),
         ("x.txt", b"time,a\n0,1\n", None, "text"),
         ("noext", bytes(range(1, 256)), None, "text"),  # no NUL, no signature: the last entry
+        ("x.mseed", b"\x1f\x8b\x08\x00" + b"\x00" * 16, None, "gzip"),  # a container signature beats a suffix
+        ("x.csv", b"PK\x03\x04" + b"\x00" * 26, None, "zip"),
+        ("x.TXT", _witmotion_packets(6), None, "witmotion"),  # binary with valid 0x55 packets: named
+        ("x.TXT", b"\x55\x51" + b"\x00" * 64, None, "seismic"),  # 0x55 without valid checksums: binary
+        ("x.csv", b"1680686620.000000\n32.000000\n-34\n", None, "e4"),
+        ("x.csv", b"------------ Data File Created By ActiGraph GT3X+ at 30 Hz -----------\n", None, "actigraph"),
+        ("x.txt", b"LabVIEW Measurement\t\nWriter_Version\t2\n", None, "lvm"),
+        ("x.csv", b"1680686620\n32\n", None, "text"),  # two rows only: not an E4 export
     ]
     for name, data, encoding, want in cases:
         got = [detect_format(name, data, encoding).name for _ in range(3)]
@@ -113,8 +156,8 @@ def test_format_by_name(tmp_path):
     path = DATA / "field/layouts/phyphox.csv"
     auto, named = read_recording(path), read_recording(path, format="TEXT")
     assert auto.identical(named) and auto.attrs == named.attrs
-    assert get_format("seismic") is FORMATS[1]
-    with pytest.raises(ValueError, match=r"format must be one of 'netcdf', 'seismic', 'text', got 'xlsx'"):
+    assert get_format("seismic") is FORMATS[4]
+    with pytest.raises(ValueError, match=r"format must be one of 'netcdf', 'gzip', .*'lvm', 'text', got 'xlsx'"):
         read_recording(path, format="xlsx")
     with pytest.raises(ValueError, match="format must be one of"):
         read_recording(path, format=3)

@@ -65,7 +65,7 @@ def test_every_float_slot_reads_the_scene(every):
         "FP_DAMPING": 0.3,
         "FP_KP": 600.0,
         "FP_KI": 25.0,
-        "FP_SPEED_REF": -0.55 / model.pitch_radius,
+        "FP_SPEED_REF": -2 * math.pi * 0.55 / (scene.sprocket.teeth * scene.chain.link_pitch),
         "FP_TORQUE_LIMIT": 1.0e5,
         "FP_TENSIONER_STIFFNESS": 2.0e4,
         "FP_PRELOAD": 3000.0,
@@ -102,6 +102,7 @@ def test_every_integer_slot_reads_the_scene(every):
         "IP_PASSENGERS": slots.PASSENGERS_BY_PLACE,
         "IP_TENSIONER": 1,
         "IP_ROLLING": 1,
+        "IP_LINKS_PER_STEP": 3,
     }
     assert sorted(getattr(slots, k) for k in expected) == list(range(len(IP_NAMES)))
     for name, value in expected.items():

@@ -134,7 +134,7 @@ def test_sections_and_ranges_are_derived_from_the_schema():
     assert EFFECTS["passengers"] == {"mass": list, "step": list, "board": list, "alight": list}
     assert RANGES["effects.contact.exponent"] == (1.0, 3.0, "(1 linear, 1.5 Hertz)")
     assert RANGES["solver.rtol"] == (1e-14, 0.1, "")
-    assert len(RANGES) == 16
+    assert len(RANGES) == 17
 
 
 def test_defaults_are_typed_and_recorded():

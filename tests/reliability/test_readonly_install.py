@@ -83,7 +83,8 @@ def _install(target: Path) -> str:
     in the repository."""
     src = target.parent / "src"
     shutil.copytree(ROOT / "vibkit", src / "vibkit", ignore=shutil.ignore_patterns("__pycache__"))
-    for name in ("pyproject.toml", "README.md", "LICENSE"):
+    shutil.copytree(ROOT / "sim", src / "sim")  # the shipped scenes, which setup.py copies into the package
+    for name in ("pyproject.toml", "setup.py", "MANIFEST.in", "README.md", "LICENSE"):
         if (ROOT / name).exists():
             shutil.copy(ROOT / name, src / name)
     base = [sys.executable, "-m", "pip", "install", "--quiet", "--no-deps", "--no-compile", "--target", str(target)]

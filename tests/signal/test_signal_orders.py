@@ -84,7 +84,8 @@ def test_vold_kalman_extracts_order_amplitude_and_phase():
     t = np.arange(int(40 * FS)) / FS
     phi = 2 * np.pi * 3.75 * (t + 0.002 * t**2)
     x = np.cos(phi) + 0.7 * np.cos(2 * phi + 0.3) + rng.standard_normal(t.size)
-    v = vold_kalman(x, FS, phi, order=2, bandwidth_hz=0.2)
+    # 0.7 Hz: just above the narrowest band at 2050 Hz (condition number 1e12); 0.2 Hz is refused
+    v = vold_kalman(x, FS, phi, order=2, bandwidth_hz=0.7)
     inner = slice(int(5 * FS), -int(5 * FS))
     assert np.mean(v.amplitude[inner]) == pytest.approx(0.7, rel=0.02)
     assert np.angle(np.mean(v.envelope[inner])) == pytest.approx(0.3, abs=0.03)
@@ -119,3 +120,27 @@ def test_vk_solvers_agree():
 def test_bad_arguments(call, match):
     with pytest.raises(ValueError, match=match):
         call()
+
+
+def test_vold_kalman_refuses_a_band_past_its_condition_limit():
+    """The docstring's limit 16 r**2 <= 1e12 is enforced: the narrowest band passes, a narrower one is
+    refused with the parameter, the condition and the narrowest band allowed in the message."""
+    from vibkit.signal.orders import VK_MAX_CONDITION, vk_bandwidth_to_r, vk_min_bandwidth
+
+    fs = 2000.0
+    bmin = vk_min_bandwidth(fs)
+    assert 16 * vk_bandwidth_to_r(bmin, fs) ** 2 == pytest.approx(VK_MAX_CONDITION, rel=1e-9)
+    assert bmin == pytest.approx(3.183e-4 * fs, rel=1e-3)  # asin(1e-3) / pi
+    n = int(fs * 60)
+    phase = 2 * np.pi * 3.75 * np.arange(n) / fs
+    x = np.cos(phase)
+    res = vold_kalman(x, fs, phase, bandwidth_hz=bmin * 1.0001)
+    mid = slice(n // 4, 3 * n // 4)
+    np.testing.assert_allclose(res.amplitude[mid], 1.0, atol=1e-3)  # accurate at the limit
+    # the band at condition 1e14, where amplitudes drift (1.002 for 1.000 on some records), is refused
+    narrow = fs / np.pi * np.arcsin(np.sqrt(1 / (4 * np.sqrt(1e14 / 16))))
+    with pytest.raises(
+        ValueError, match=r"bandwidth_hz=0\.201\d* is too narrow .* 1\.0e\+14 exceeds the limit 1e\+12"
+    ) as err:
+        vold_kalman(x, fs, phase, bandwidth_hz=narrow)
+    assert f"bandwidth_hz >= {bmin:.4g} Hz" in str(err.value)

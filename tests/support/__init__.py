@@ -2,6 +2,7 @@
 
 * :mod:`support.chain`: synthetic chain signals (a harmonic family of the link-pass frequency, a family
   on a given phase, a family under a wandering speed, the fleet's recordings);
+* :mod:`support.drift`: sources whose frequency drifts (a linear drift, a random wander, a gait-like cadence);
 * :mod:`support.recording`: the recording dataset the readers return, built from arrays;
 * :mod:`support.cli`: the ``run`` fixture (``vibkit.cli.main`` in-process) and the one-line error check
   of a command;
@@ -9,9 +10,9 @@
 
 The tests import it as ``support`` (``pythonpath`` in pyproject.toml's pytest section puts ``tests/`` on
 the path); the benchmark scripts get it from ``benchmarks/_common.py``. :mod:`support.cli` and
-:mod:`support.contracts` need pytest, the other two only numpy and xarray.
+:mod:`support.contracts` need pytest, the others only numpy, scipy and xarray.
 """
 
-from . import chain, recording
+from . import chain, drift, recording
 
-__all__ = ["chain", "recording"]
+__all__ = ["chain", "drift", "recording"]

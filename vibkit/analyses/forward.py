@@ -24,8 +24,8 @@ from ..model.effects import (
     pack_parameters,
     reset_closure,
 )
-from ..model.pitch_table import build_table, empty_table, table_applies, table_delta, table_evaluate, table_spacing
-from ..model.schema import effect_options, nominal_speed
+from ..model.pitch_table import empty_table, table_applies, table_delta, table_evaluate, table_spacing
+from ..model.schema import SceneError, effect_options, nominal_speed
 from ..model.slots import (
     FP_CARRIAGE_MASS,
     FP_CLOSURE_TOL,
@@ -57,6 +57,7 @@ from ..model.slots import (
     INFO_F_DRIVE,
     INFO_MOTOR,
     INFO_SLOPE,
+    INFO_WORST,
     IP_GRAVITY,
     IP_MOTOR,
     IP_PASSENGERS,
@@ -70,12 +71,14 @@ from ..model.slots import (
     PRM_PASS_BOARD,
     PRM_PASS_STEP,
     PRM_PITCHES,
+    PRM_RADII,
     PRM_TABLE,
     TB_HEAD,
     TB_SB,
     WS_INFO,
 )
 from ..model.sprocket import contact_kernel
+from ..model.table_check import checked_table
 from .integrate import IntegrationError, integrate
 from .results import make_dataset
 
@@ -107,14 +110,50 @@ def initial_state(model, *, start=0.0, speed=0.0, theta=None):
     """Closed, meshed initial state: roller 1 at ``start`` [m of undeformed guide], chain speed [m/s].
 
     The sprocket angle meshes the rollers on the head midway between teeth (no contact), and turns
-    with the chain (thetadot = -speed / R^P).
+    with the chain (thetadot = -2 pi speed / (Z L), :meth:`EscalatorModel.sprocket_speed`).
     """
     conf = model.chain.configure(start)
     th = model.meshed_angle(conf) if theta is None else theta
     jac, gam, c, _, _ = model.chain.jacobian(conf)
     # the chain speed is roller 1's speed |J_1| s0dot
     s0dot = speed / math.hypot(*jac[0]) if speed else 0.0
-    return np.array([start, s0dot, th, -speed / model.pitch_radius, 0.0]), conf.delta
+    return np.array([start, s0dot, th, model.sprocket_speed(speed), 0.0]), conf.delta
+
+
+SEAT_TOLERANCE = 1e-9  # [m] a roller this far inside a tooth at t = 0 is refused (the meshed start has none)
+
+
+def check_seated(fm, y0, d0):
+    """Refuse a start with a roller inside a tooth: the contact would fling it out, and the run would not
+    be of the escalator meant. Either the head is not where this chain seats on these teeth (a guide head
+    radius of another chain), or the rollers and teeth do not fit the pitch (a roller too large for the
+    gap between two teeth); the message names the keys of the cause."""
+    if "contact" not in fm.effects:
+        return
+    reset_closure(fm.info, d0)
+    fm.rhs(0.0, y0)
+    worst = float(fm.info[INFO_WORST])
+    if worst <= SEAT_TOLERANCE:
+        return
+    model = fm.model
+    scene = model.scene
+    seat = model.sprocket.pitch_radius(model.pitch)
+    head = model.guide.params.head_radius
+    if abs(head - seat) > SEAT_TOLERANCE:
+        raise SceneError(
+            f"{scene.source}: at t = 0 a roller is {1e3 * worst:.3g} mm inside a tooth: rollers on a head of "
+            f"radius {head:.6g} m ('guide.head_radius') do not seat between teeth cut "
+            f"for {model.sprocket_pitch:.6g} m ('sprocket.pitch'); give head_radius = \"sprocket\" (where this "
+            "chain seats on these teeth)"
+        )
+    sp = scene.sprocket
+    raise SceneError(
+        f"{scene.source}: the rollers ({1000 * scene.chain.roller_radius:.4g} mm radius) sit "
+        f"{1000 * worst:.3g} mm inside the sprocket's teeth at the start (teeth {1000 * sp.base_width:.4g} mm "
+        f"wide, {1000 * sp.tooth_height:.4g} mm high, pitch {1000 * model.sprocket_pitch:.5g} mm): change "
+        "chain.roller_radius or the teeth (sprocket.base_width, sprocket.tip_width, sprocket.tooth_height) "
+        "to fit the pitch"
+    )
 
 
 def forward_dynamics(
@@ -145,6 +184,7 @@ def forward_dynamics(
         t_out = np.arange(0.0, duration + 0.5 * dt, dt)
     fm = ForwardModel(model, effects, start=run.start)
     y0, d0 = initial_state(model, start=run.start, speed=run.initial_speed)
+    check_seated(fm, y0, d0)
     reset_closure(fm.info, d0)
     method = method or solver.method
     rtol = rtol or solver.rtol or default_rtol(effects)
@@ -188,7 +228,8 @@ def forward_table(model, fm, crossings, rtol, closure="table"):
     why = table_applies(model)
     if why is not None:
         return None, f"exact ({why})"
-    return build_table(model, fm.prm, crossings, table_spacing(rtol)), "table"
+    table, _, _ = checked_table(model, fm.prm, crossings, table_spacing(rtol))
+    return table, "table"
 
 
 ON_BREAKPOINT = 1e-11  # [m] as the integrator: a stage this close to a breakpoint is on its side
@@ -255,25 +296,34 @@ def _events(model, fm):
 # needs 1e-7 (its last grazing contact moves from 33.33 s to 33.07 s at 1e-6): 1e-7 leaves a margin.
 DEFAULT_RTOL = 1e-7
 REFERENCE_STIFFNESS = 1e6  # [N/m^1.5] the study's contact stiffness
+REFERENCE_DAMPING = 0.3  # [s/m] the largest contact damping right at DEFAULT_RTOL (las-palmas)
 
 
 def default_rtol(effects):
     """The tolerance a forward scene gets when it sets no ``[solver] rtol``.
 
-    rtol = 1e-7 min(1, (1e6 / k)^3) for a contact stiffness k [N/m^exponent], at least 1e-11.
-    Measured on the shipped scenes and their stiffness x0.1 and x10 variants against runs at 1e-12
-    (docs/explanation/numerics.md): at k = 1e7 the no-load chain needs 1e-10 (las-palmas, damped, 1e-9), at
-    k <= 1e6 every scene is right at 1e-7. A stiffer contact makes each impact a shorter, harder
-    event, and the undamped chain carries the error of every impact in where it sits in its
-    backlash. Damping and speed are not used: the measurements do not ask for them. Where no
-    tolerance gives a converged history (an undamped stiff chain rattling chaotically) no default
-    can be right: ``check`` reports such a run as sensitive.
+    rtol = 1e-7 min(1, (1e6 / k)^3, (0.3 / c)^2) for a contact stiffness k [N/m^exponent] and a
+    contact damping c [s/m], at least 1e-11. Measured on the shipped scenes and their stiffness x0.1
+    and x10 variants against runs at 1e-12
+    (docs/explanation/numerics.md): at k = 1e7 the no-load chain needs
+    1e-10 (las-palmas, damped, 1e-9), at k <= 1e6 every scene is right at 1e-7. A stiffer contact
+    makes each impact a shorter, harder event, and the undamped chain carries the error of every
+    impact in where it sits in its backlash. Damping: las-palmas (c = 0.3 s/m) is right at 1e-7,
+    with c = 3 s/m it needs 1e-9 (the damping force 1.5 c k psi^e psidot changes within each impact
+    as fast as the impact velocity does). Where no tolerance gives a converged history (an undamped
+    stiff chain rattling chaotically) no default can be right: ``check`` reports such a run as sensitive.
     """
     effects = effect_options(effects)
     k = effects["contact"].stiffness if "contact" in effects else 0.0
-    if not k > REFERENCE_STIFFNESS:
+    c = effects["contact"].damping if "contact" in effects else 0.0
+    factor = 1.0
+    if k > REFERENCE_STIFFNESS:
+        factor = (REFERENCE_STIFFNESS / k) ** 3
+    if c > REFERENCE_DAMPING:
+        factor = min(factor, (REFERENCE_DAMPING / c) ** 2)
+    if factor >= 1.0:
         return DEFAULT_RTOL
-    return max(1e-11, float(f"{DEFAULT_RTOL * (REFERENCE_STIFFNESS / k) ** 3:.3g}"))
+    return max(1e-11, float(f"{DEFAULT_RTOL * factor:.3g}"))
 
 
 def event_gap(rtol):
@@ -420,6 +470,7 @@ def _observe(
                     fp[FP_TOOTH_PITCH],
                     ip[IP_TEETH],
                     fp[FP_ROLLER_RADIUS],
+                    prm[PRM_RADII],
                     fp[FP_STIFFNESS],
                     fp[FP_EXPONENT],
                     0.0,
@@ -619,4 +670,5 @@ def _post_process(fm, t, y, outputs, stats, y_obs=None, table=None):
     }
     if step is not None:
         attrs["step_accelerometer"] = int(step)
+    attrs["links_per_step"] = int(scene.chain.links_per_step)
     return make_dataset(coords, data, attrs, scene)

@@ -1,5 +1,6 @@
 """Inverse dynamics: impose roller 1's arc length s1 = s_start + v t on the deformed guide and the
-sprocket angle theta = theta0 + omega t, omega = -v / R^P; solve positions, velocities,
+sprocket angle theta = theta0 + omega t, omega = -2 pi v / (Z L) (the sprocket speed whose mean chain
+speed is v, :meth:`~vibkit.model.escalator.EscalatorModel.sprocket_speed`); solve positions, velocities,
 accelerations, link tensions (Lagrange multipliers, T_j = 2 lambda_j L) and the drag force.
 
 The imposed constraint D = s(s0_1, delta) - s_start - v t involves delta through the telescopic
@@ -92,7 +93,7 @@ def inverse_dynamics(model, *, speed, duration, step, start=0.0, effects=None, o
     rpos = np.empty((nt, ridx.size, 2))
     rvel = np.empty((nt, ridx.size, 2))
     racc = np.empty((nt, ridx.size, 2))
-    omega = -speed / model.pitch_radius
+    omega = model.sprocket_speed(speed)
     s0 = float(model.guide.s_to_s0(start, 0.0))
     schedule = model.passenger_schedule(effects["passengers"], s0) if "passengers" in effects else None
     lam = np.empty(n)

@@ -97,7 +97,7 @@ def simulate(
             rollers=rollers,
             progress=progress,
         )
-        return _stamp_defaults(ds, scene)
+        return _stamp_defaults(_warn(ds, scene, model), scene)
     from .forward import forward_dynamics
     from .integrate import IntegrationError
 
@@ -107,8 +107,10 @@ def simulate(
         if check:
             from .convergence import checked_forward
 
-            return _stamp_defaults(checked_forward(model, duration=duration, progress=progress), scene)
-        return _stamp_defaults(forward_dynamics(model, duration=duration, progress=progress), scene)
+            ds = checked_forward(model, duration=duration, progress=progress)
+        else:
+            ds = forward_dynamics(model, duration=duration, progress=progress)
+        return _stamp_defaults(_warn(ds, scene, model), scene)
     except IntegrationError as exc:
         if "wall-time budget" not in str(exc):
             raise
@@ -119,6 +121,17 @@ def simulate(
         )
         hint.t, hint.y = exc.t, exc.y
         raise hint from None
+
+
+def _warn(ds, scene, model):
+    """Record in ``attrs["warnings"]`` (one per line) what the physics of the run says a user should not
+    miss: links in compression, a stalled motor, a drooping speed (:mod:`vibkit.analyses.health`)."""
+    from .health import physics_warnings
+
+    found = physics_warnings(ds, scene, model)
+    if found:
+        ds.attrs["warnings"] = "\n".join(found)
+    return ds
 
 
 def _stamp_defaults(ds, scene):

@@ -38,6 +38,7 @@ from ..model.slots import (
     FP_TORQUE_LIMIT,
     IP_CONTACT,
     IP_GRAVITY,
+    IP_LINKS_PER_STEP,
     IP_MOTOR,
     IP_N,
     IP_PASSENGERS,
@@ -53,6 +54,7 @@ from ..model.slots import (
     PRM_PASS_BOARD,
     PRM_PASS_MASS,
     PRM_PASS_STEP,
+    PRM_RADII,
     PRM_TABLE,
 )
 from ..model.sprocket import contact_kernel
@@ -169,7 +171,7 @@ def assemble(t, y, prm, pitches, linear, alpha, beta, ws, data, rhs):
         fx[i] = 0.0
         fz[i] = -mass[i] * g if ip[IP_GRAVITY] == 1 else 0.0
     if ip[IP_PASSENGERS] == PASSENGERS_BY_TIME:  # StudyFormulation refuses passengers by place
-        passenger_loads(t, PASSENGERS_BY_TIME, q, pm, ps, pb, pa, g, p, fz)
+        passenger_loads(t, PASSENGERS_BY_TIME, q, pm, ps, pb, pa, g, p, ip[IP_LINKS_PER_STEP], fz)
     if ip[IP_ROLLING] == 1:
         mu = fp[FP_ROLLING]
         for i in range(p):
@@ -202,6 +204,7 @@ def assemble(t, y, prm, pitches, linear, alpha, beta, ws, data, rhs):
             fp[FP_TOOTH_PITCH],
             ip[IP_TEETH],
             fp[FP_ROLLER_RADIUS],
+            prm[PRM_RADII],
             fp[FP_STIFFNESS],
             fp[FP_EXPONENT],
             fp[FP_DAMPING],

@@ -15,7 +15,7 @@ import time
 from pathlib import Path
 
 from .options import add_command, add_json
-from .output import CLIError, msg, print_json, table
+from .output import CLIError, msg, no_stdout, print_json, table
 
 EPILOG = (
     "examples:\n  vibkit bench --quick                   # a smoke run of every script, into a temporary folder\n"
@@ -62,6 +62,7 @@ def run(a):
             raise CLIError(f"--only {a.only!r} matches no script in {bdir}")
     if not scripts:
         raise CLIError(f"{bdir}: no bench_*.py script")
+    no_stdout(a.output, "a folder of result tables")
     out = Path(a.output) if a.output else Path(tempfile.mkdtemp(prefix="vibkit-bench-"))
     out.mkdir(parents=True, exist_ok=True)
     env = dict(os.environ, VIBKIT_BENCH_RESULTS=str(out.resolve()))

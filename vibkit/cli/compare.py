@@ -4,7 +4,21 @@ from __future__ import annotations
 
 import os
 
-from .options import add_command, add_json, add_recording, band, positive, read_recording
+from vibkit.diagnose.rounding import fmt_pm
+
+from .options import (
+    _profile_of,
+    add_command,
+    add_escalator,
+    add_json,
+    add_recording,
+    add_speed_uncertainty,
+    band,
+    chain_speed,
+    positive,
+    read_recording,
+    run_speed,
+)
 from .output import CLIError, msg, print_json, table
 
 EPILOG = "example:\n  vibkit compare data/field/leon-tensioner.csv sim/leon.toml --duration 10"
@@ -19,12 +33,30 @@ def add_parser(subparsers):
     )
     add_recording(s)
     add_json(s)
-    s.add_argument("scene_or_result", metavar="SCENE_OR_RESULT", help="scene .toml or result .nc")
+    add_escalator(s)
+    s.add_argument(
+        "scene_or_result",
+        metavar="SCENE_OR_RESULT",
+        nargs="?",
+        help="scene .toml or result .nc (default with --escalator: the scene built from the profile)",
+    )
     s.add_argument("--band", type=band, help="link-pass search band LOW:HIGH [Hz]")
     s.add_argument("--harmonics", type=int, default=5, help="harmonics compared (default 5)")
     s.add_argument("--duration", type=positive, help="simulated time when given a scene [s]")
+    s.add_argument(
+        "--speed",
+        type=chain_speed,
+        help="the recording's chain speed, measured on the steps: m/s or 49cm/s (default: the file's, "
+        "else the scene's nominal speed)",
+    )
+    add_speed_uncertainty(s)
     s.set_defaults(func=run)
     return s
+
+
+def _name(target):
+    """A scene or result as the output names it: its path, or the scene built from a profile."""
+    return target if isinstance(target, str) else f"{target.name} ({target.source})"
 
 
 def run(a):
@@ -33,22 +65,40 @@ def run(a):
 
     rec = read_recording(a)
     target = a.scene_or_result
-    if not os.path.exists(target):
+    profile = _profile_of(a)
+    if target is None:
+        if profile is None:
+            raise CLIError("give SCENE_OR_RESULT (a scene .toml or a result file), or --escalator FILE")
+        target = profile.scene("forward", a.duration)  # the unit's own scene, in memory
+    elif not os.path.exists(target):
         raise CLIError(f"{target}: file not found (expected a scene .toml or a result file)")
+    sp = run_speed(a, rec=rec, profile=profile)
     comp = compare(
-        rec, target, channel=a.channel, n_harmonics=a.harmonics, band=a.band, duration=a.duration, progress=True
+        rec,
+        target,
+        channel=a.channel,
+        n_harmonics=a.harmonics,
+        band=a.band,
+        duration=a.duration,
+        progress=True,
+        speed=sp.value,
+        speed_sigma=sp.sigma,
     )
     del vibkit
     if a.json:
         d = comp.as_dict()
-        d.update(recording=a.recording, simulation=target)
+        d.update(recording=a.recording, simulation=_name(target))
         print_json("compare", d)
         return 0
-    print(f"recording {a.recording} [{comp.channel}] vs simulation {target} [{comp.variable}]")
+    print(f"recording {a.recording} [{comp.channel}] vs simulation {_name(target)} [{comp.variable}]")
     print(f"link-pass {comp.fundamental_meas_hz:.5f} Hz recorded, {comp.fundamental_sim_hz:.5f} Hz simulated")
     print(
-        f"pitch     {1000 * comp.pitch_meas_m:.3f} mm recorded, {1000 * comp.pitch_sim_m:.3f} mm simulated "
-        f"(ratio {comp.pitch_ratio:.5f}): {'consistent' if comp.pitch_consistent else 'NOT consistent'}"
+        f"speed     {sp.text if sp.value is not None else f'{comp.speed_meas_m_s:g} m/s (the scene' + chr(39) + 's)'}"
+    )
+    print(
+        f"pitch     {1000 * comp.pitch_meas_m:.2f} mm recorded, {1000 * comp.pitch_sim_m:.2f} mm simulated "
+        f"(pitch ratio recorded/simulated {fmt_pm(comp.pitch_ratio, comp.pitch_ratio_sigma)}): "
+        f"{'consistent' if comp.pitch_consistent else 'NOT consistent'}"
     )
     print(f"score     {comp.score:.3f}   log-spectral distance {comp.log_spectral_distance_db:.2f} dB")
     print()
@@ -59,13 +109,13 @@ def run(a):
                     h["order"],
                     f"{h['frequency_sim_hz']:.4f}",
                     f"{h['frequency_meas_hz']:.4f}",
-                    f"{h['frequency_ratio']:.5f} +- {h['frequency_ratio_sigma']:.1e}",
+                    fmt_pm(h["frequency_ratio"], h["frequency_ratio_sigma"]),
                     f"{h['amplitude_diff_db']:+.2f} [{h['amplitude_diff_db_ci'][0]:+.2f}, {h['amplitude_diff_db_ci'][1]:+.2f}]",
                     ("sim " if h["detected_sim"] else "") + ("rec" if h["detected_meas"] else ""),
                 ]
                 for h in comp.harmonics
             ],
-            ("order", "f sim [Hz]", "f rec [Hz]", "ratio rec/sim", "amplitude diff [dB]", "detected"),
+            ("order", "f sim [Hz]", "f rec [Hz]", "f rec / f sim", "amplitude diff [dB]", "detected"),
         )
     )
     for n in comp.notes:

@@ -6,7 +6,9 @@ import sys
 import textwrap
 
 from .options import (
+    _profile_of,
     add_command,
+    add_escalator,
     add_json,
     add_limits,
     add_recording,
@@ -14,10 +16,10 @@ from .options import (
     cli_message,
     pitch_length,
     reader_options,
-    speed_sigma,
+    run_speed,
     workers,
 )
-from .output import CLIError, check_output, msg, print_json, table
+from .output import CLIError, check_output, is_stdout, msg, output_path, print_json, table
 
 EPILOG = (
     "examples (on the shipped example fleet, data/fleet-example/):\n"
@@ -53,9 +55,16 @@ def add_parser(subparsers):
 
     f = fleet_sub("add", "analyse one recording and store its pitch and elongation")
     add_recording(f)
-    f.add_argument("--unit", required=True, help="escalator identifier")
-    f.add_argument("--speed", type=chain_speed, required=True, help="chain speed measured on the steps [m/s]")
-    f.add_argument("--speed-uncertainty", help="speed standard deviation, in m/s or in %% (e.g. 0.1%%)")
+    f.add_argument("--unit", help="escalator identifier (default: the --escalator profile's unit; else required)")
+    f.add_argument(
+        "--speed",
+        type=chain_speed,
+        help="chain speed measured on the steps [m/s] (default: the --escalator profile's; else required)",
+    )
+    f.add_argument(
+        "--speed-uncertainty",
+        help="speed standard deviation, in m/s or in %% (e.g. 0.1%%); required: a measurement is stored with its sigma",
+    )
     f.add_argument("--date", help="measurement date, ISO 8601 (default: the recording's start time)")
     f.add_argument("--nominal-pitch", type=pitch_length, help="nominal link pitch [m] (required for a new unit)")
     f.add_argument(
@@ -63,6 +72,7 @@ def add_parser(subparsers):
         action="store_true",
         help="the unit's chain was replaced since its previous measurement: a new trend segment starts here",
     )
+    add_escalator(f)
     f.set_defaults(func=run_add)
 
     f = fleet_sub("scan", "add every recording of a folder that a catalogue describes, in parallel (Dask)")
@@ -75,6 +85,11 @@ def add_parser(subparsers):
         help="worker processes of the local cluster (default: one per core; 0: analyse in this process)",
     )
     add_recording(f, positional=False, channel=False)  # for every file; the catalogue's channel column per file
+    add_escalator(
+        f,
+        "the escalator's profile (TOML) of every file the catalogue's escalator column does not name; "
+        "see docs/guide/escalator.md",
+    )
     f.set_defaults(func=run_scan)
 
     f = fleet_sub(
@@ -119,38 +134,61 @@ def _fleet_db(a, *, create=True):
 
 
 def _fmt_measurement(m):
+    from vibkit.diagnose.rounding import SPEED_SIGMA_NOT_STATED, fmt_length, fmt_pm
+
+    if m.speed_sigma_m_s:  # rounded to the sigma
+        numbers = (
+            f"pitch {fmt_length(m.pitch_m, m.pitch_sigma_m)}, "
+            f"elongation {fmt_pm(m.elongation_percent, m.elongation_sigma_percent, '%', sign=True)}"
+        )
+    else:  # stored before the speed's uncertainty was required: no +-
+        numbers = (
+            f"pitch {1000 * m.pitch_m:.2f} mm, elongation {m.elongation_percent:+.2f} % ({SPEED_SIGMA_NOT_STATED})"
+        )
     return (
-        f"#{m.id} unit {m.unit} {m.date_utc[:10]}: "
-        f"pitch {1000 * m.pitch_m:.3f} +- {1000 * m.pitch_sigma_m:.3f} mm, "
-        f"elongation {m.elongation_percent:+.3f} +- {m.elongation_sigma_percent:.3f} % "
-        f"(SNR {'n/a' if m.snr_db is None else f'{m.snr_db:.0f} dB'})"
+        f"#{m.id} unit {m.unit} {m.date_utc[:10]}: {numbers} "
+        f"(harmonic SNR {'n/a' if m.snr_db is None else f'{m.snr_db:.0f} dB'})"
     )
 
 
 def run_add(a):
     from vibkit.fleet.inputs import check_inputs
 
-    sigma = speed_sigma(a.speed_uncertainty, a.speed) if a.speed_uncertainty else 0.0
-    # the stated ranges before the database is opened (or made) and before the recording is read
-    check_inputs(unit=a.unit, speed=a.speed, speed_sigma=sigma, nominal_pitch=a.nominal_pitch, date=a.date)
+    profile = _profile_of(a)
+    if a.unit is None and profile is None:
+        raise CLIError("fleet add: give --unit (or --escalator FILE, whose unit is used)")
+    if a.speed is None and profile is None:
+        raise CLIError("fleet add: give --speed, the chain speed measured on the steps (or --escalator FILE)")
+    unit = a.unit or profile.unit
+    sp = run_speed(a, profile=profile)  # --speed, else the profile's; --speed-uncertainty, else the profile's
+    nominal = a.nominal_pitch if a.nominal_pitch is not None else (profile.nominal_pitch if profile else None)
+    # without a stated speed uncertainty the speed's sigma is stored as 0, which the fleet reads as "not stated":
+    # no +- is printed for it, and the trend of its unit is flagged (its intervals are too small)
+    sigma = sp.sigma or 0.0
+    check_inputs(unit=unit, speed=sp.value, speed_sigma=sigma, nominal_pitch=nominal, date=a.date)
     with _fleet_db(a) as db:
         m = db.add(
             a.recording,
-            unit=a.unit,
-            speed=a.speed,
+            unit=unit,
+            speed=sp.value,
             speed_sigma=sigma,
             date=a.date,
-            nominal_pitch=a.nominal_pitch,
+            nominal_pitch=nominal,
             channel=a.channel,
             replaced=a.replaced,
             read_options=reader_options(a),
         )
         path = db.path
     if a.json:
-        print_json("fleet.add", {"database": path, "measurement": m.as_dict()})
+        print_json("fleet.add", {"database": path, "measurement": m.as_reported()})
     else:
         print(f"stored {_fmt_measurement(m)}")
         msg(f"note: database {path}; date from {m.date_source}")
+    if not m.speed_sigma_m_s:
+        msg(
+            "warning: stored without a speed uncertainty (not stated): its elongation has no +-, and the unit's "
+            "rate and forecast intervals are too small; give --speed-uncertainty"
+        )
     if m.quality != "ok":
         msg(f"warning: stored flagged {m.quality}, left out of the trend: {m.quality_reason}")
     for w in m.warnings:
@@ -209,21 +247,30 @@ def run_status(a):
         path = db.path
     if a.unit and not trends:
         raise CLIError(f"{path}: no measurement of unit(s) {', '.join(a.unit)}")
+    from vibkit.diagnose.report.common import report_date
+
+    today = report_date()  # now, or SOURCE_DATE_EPOCH
     if a.json:
         print_json(
-            "fleet.status", {"database": path, "limits_percent": list(a.limits), "units": [t.as_dict() for t in trends]}
+            "fleet.status",
+            {
+                "database": path,
+                "limits_percent": list(a.limits),
+                "today_utc": today.strftime("%Y-%m-%d"),
+                "units": [t.as_dict(today.timestamp()) for t in trends],
+            },
         )
         return 0
     if not trends:
         print(f"{path}: no measurement stored yet")
         return 0
-    from vibkit.diagnose.report.fleet import WORK_LIST_HEADER, work_list_rows
+    from vibkit.diagnose.report.fleet import OVERDUE_MEANING, WORK_LIST_HEADER, work_list_rows
 
-    rows = work_list_rows(trends)
+    rows = work_list_rows(trends, today_unix_s=today.timestamp())
     # the flags column takes what is left of 100 columns (the whole list is in --json)
     used = sum(max(len(str(r[j])) for r in rows + [WORK_LIST_HEADER]) + 2 for j in range(len(WORK_LIST_HEADER) - 1))
     width = max(12, 100 - used)
-    print(table(work_list_rows(trends, flags_width=width), WORK_LIST_HEADER))
+    print(table(work_list_rows(trends, flags_width=width, today_unix_s=today.timestamp()), WORK_LIST_HEADER))
     for tr in trends:  # flags too long for the table, in full under it
         flags = "; ".join(tr.flags)
         if len(flags) > width:
@@ -232,17 +279,24 @@ def run_status(a):
         textwrap.fill(
             "note: most urgent first; latest usable elongation and the rate with 1 sigma; the next "
             "limit and the year-month it is reached, with its 2-sigma interval; flagged measurements and "
-            "outliers are left out of the trends (all of it: --json)",
+            f"outliers are left out of the trends (all of it: --json); today {today:%Y-%m-%d}",
             100,
         )
     )
+    if any(t.overdue(today.timestamp()) for t in trends):
+        msg(textwrap.fill(f"note: {OVERDUE_MEANING}", 100))
     return 0
 
 
 def run_report(a):
+    with output_path(a.output, ".pdf") as target:  # '-o -': written to a temporary file, then to stdout
+        return _run_report(a, target)
+
+
+def _run_report(a, target):
     from vibkit.diagnose.report import write_fleet_report
 
-    check_output(a.output, [], a.force)
+    check_output(a.output, [], a.force, json_flag=a.json)
     with _fleet_db(a, create=False) as db:
         check_output(a.output, [db.path], a.force)
         trends = db.status(limits_percent=a.limits)
@@ -250,12 +304,13 @@ def run_report(a):
         path = db.path
     if not trends:
         raise CLIError(f"{path}: no measurement stored yet; nothing to report")
-    rep = write_fleet_report(trends, meas, a.output, limits_percent=a.limits, database=path)
+    rep = write_fleet_report(trends, meas, target, limits_percent=a.limits, database=path)
+    shown = a.output if is_stdout(a.output) else rep.path
     if a.json:
         print_json(
             "fleet.report",
             {
-                "output": rep.path,
+                "output": shown,
                 "database": path,
                 "pages": [t for t, _ in rep.pages],
                 "units": len(trends),
@@ -264,7 +319,7 @@ def run_report(a):
         )
     else:
         print(
-            f"wrote {rep.path} ({len(rep.pages)} page(s): the work list, then {rep.summary['units_drawn']} of "
+            f"wrote {shown} ({len(rep.pages)} page(s): the work list, then {rep.summary['units_drawn']} of "
             f"{len(trends)} units drawn)"
         )
     return 0

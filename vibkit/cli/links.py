@@ -5,8 +5,19 @@ from __future__ import annotations
 import argparse
 import math
 
-from .options import _LENGTH_UNITS, _quantity, add_command, add_json, add_recording, band, chain_speed, read_recording
-from .output import in_file, msg, print_json, table
+from .options import (
+    _LENGTH_UNITS,
+    _quantity,
+    add_command,
+    add_escalator,
+    add_json,
+    add_recording,
+    band,
+    chain_speed,
+    escalator_profile,
+    read_recording,
+)
+from .output import CLIError, in_file, msg, print_json, table
 from .pitch import resolve_speed
 
 EPILOG = (
@@ -68,7 +79,8 @@ def add_parser(subparsers):
     s.add_argument(
         "--speed", type=chain_speed, help="chain speed: m/s, or 0.49m/s, 49cm/s (default: the speed the file states)"
     )
-    s.add_argument("--links", type=links_count, required=True, help="links in the chain (e.g. 159)")
+    s.add_argument("--links", type=links_count, help="links in the chain (e.g. 159; default the --escalator profile's)")
+    add_escalator(s)
     s.add_argument(
         "--scene",
         help="forward scene of the escalator: gives the worn link's signature on the tensioner (one number per "
@@ -102,12 +114,18 @@ def run(a):
     from vibkit.diagnose.links import TooFewLoops, find_worn_links
 
     rec = read_recording(a)
-    speed, _source = resolve_speed(a, rec)
+    profile = escalator_profile(a)
+    speed = resolve_speed(a, rec, profile=profile).value
+    n_links = a.links or (profile.n_links if profile is not None else None)
+    if n_links is None:
+        raise CLIError(
+            f"{a.recording}: give --links N, the chain's number of links (or --escalator FILE with chain.n_links)"
+        )
     try:
         res = find_worn_links(
             rec,
             speed=speed,
-            n_links=a.links,
+            n_links=n_links,
             channel=a.channel,
             scene=a.scene,
             marker_s=a.marker,

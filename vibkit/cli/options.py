@@ -224,6 +224,7 @@ READER_FLAGS = {
     "delimiter": "--delimiter",
     "decimal": "--decimal",
     "encoding": "--encoding",
+    "date_order": "--date-order",
 }
 _DELIMS = {
     "comma": ",",
@@ -270,7 +271,7 @@ def add_recording(sp, *, positional=True, channel=True):
     :func:`reader_options` turns the parsed options into :func:`vibkit.read_recording` arguments.
     """
     if positional:
-        sp.add_argument("recording", help="recording file (CSV/text, miniSEED ..., netCDF)")
+        sp.add_argument("recording", help="recording file (CSV/text, miniSEED ..., netCDF); '-': read stdin")
     g = sp.add_argument_group("reading the recording (all optional: the file says it)")
     if channel:
         add_channel(g)
@@ -306,6 +307,12 @@ def add_recording(sp, *, positional=True, channel=True):
     )
     g.add_argument("--decimal", choices=(".", ","), help="text files: the decimal mark (default: detected)")
     g.add_argument("--encoding", help="text files: the encoding, e.g. cp1252 (default: UTF-8, else cp1252)")
+    g.add_argument(
+        "--date-order",
+        choices=("dmy", "mdy"),
+        help="text files: numeric dates are day/month/year (dmy) or month/day/year (mdy) (default: "
+        "the order a day above 12 shows; dates that could be either are refused)",
+    )
 
 
 def reader_options(a, *, channel=False):
@@ -325,6 +332,7 @@ def reader_options(a, *, channel=False):
         delimiter=getattr(a, "delimiter", None),
         decimal=getattr(a, "decimal", None),
         encoding=getattr(a, "encoding", None),
+        date_order=getattr(a, "date_order", None),
     )
     if channel and getattr(a, "channel", None):
         opts["channel"] = a.channel
@@ -404,3 +412,81 @@ def add_force_overwrite(sp, what):
 
 def add_limits(sp, help_="elongation limits watch,plan,replace [%%] (default 1.5,2,3)"):
     sp.add_argument("--limits", type=limits, default=DEFAULT_LIMITS, help=help_)
+
+
+# ------------------------------------------------------------------------- one speed per run
+
+
+def add_speed_uncertainty(sp):
+    sp.add_argument(
+        "--speed-uncertainty",
+        type=speed_uncertainty,
+        help="standard deviation of the speed, in m/s or in %% (e.g. 0.1%%); without it the speed's "
+        "uncertainty is 'not stated' (an escalator profile's rated speed: the standard's tolerance)",
+    )
+
+
+def run_speed(a, *, rec=None, scene=None, profile=None):
+    """The run's one speed (:class:`vibkit.diagnose.speed.ResolvedSpeed`): --speed, else the escalator
+    profile's, else the recording's, else the scene's; --speed-uncertainty (m/s or % of that speed) its sigma."""
+    from vibkit.diagnose.speed import resolve_speed
+
+    if profile is None:
+        profile = _profile_of(a)
+    speed = getattr(a, "speed", None)
+    text = getattr(a, "speed_uncertainty", None)
+    base = resolve_speed(speed, None, profile=profile, recording=rec, scene=scene)
+    if text is None or base.value is None:
+        return base
+    return resolve_speed(speed, speed_sigma(text, base.value), profile=profile, recording=rec, scene=scene)
+
+
+def _profile_of(a):
+    """The escalator profile that --escalator names, or None (commands without the option)."""
+    if getattr(a, "escalator", None) is None:
+        return None
+    return escalator_profile(a)
+
+
+def add_segment(sp):
+    """--segment START:END [s], the one definition shared by ``ride`` and ``report`` (read by :func:`segment_of`)."""
+    sp.add_argument(
+        "--segment",
+        metavar="START:END",
+        help="ride segment START:END [s] from the first sample: the recording's ride quality (default: detected)",
+    )
+
+
+def segment_of(a):
+    """--segment as (start, end) [s], or None; a bad value is a one-line CLIError (exit 1)."""
+    text = getattr(a, "segment", None)
+    if text is None:
+        return None
+    from vibkit.diagnose.ride import parse_segment
+
+    try:
+        return parse_segment(text)
+    except ValueError as exc:
+        raise CLIError(str(exc)) from None
+
+
+ESCALATOR_HELP = "the escalator's profile (TOML): unit, speed, pitch, links; see docs/guide/escalator.md"
+
+
+def add_escalator(sp, help_=ESCALATOR_HELP):
+    """--escalator FILE: the user's escalator profile (vibkit.model.profile)."""
+    sp.add_argument("--escalator", metavar="FILE", help=help_)
+
+
+def escalator_profile(a):
+    """The profile named by ``--escalator`` (a Profile), None without one; a bad file is a CLIError."""
+    path = getattr(a, "escalator", None)
+    if not path:
+        return None
+    from vibkit.model.profile import load_profile
+    from vibkit.model.scene import SceneError
+
+    try:
+        return load_profile(path)
+    except SceneError as exc:
+        raise CLIError(f"--escalator: {exc}") from None

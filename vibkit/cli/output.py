@@ -3,6 +3,7 @@ messages on stderr, and :class:`CLIError` for a problem with the command's input
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import os
@@ -76,8 +77,51 @@ def table(rows, header=None):
     return "\n".join(lines)
 
 
-def check_output(out, inputs, force=False):
-    """Refuse an unsafe -o before any work (see :mod:`vibkit.runtime.safe_output`)."""
+#: the file name that means standard output (``-o -``) or standard input (a recording ``-``)
+STDIO = "-"
+
+
+def is_stdout(path) -> bool:
+    """Whether an output path is ``-``: the bytes go to standard output and no file is created."""
+    return path is not None and not isinstance(path, bytes) and os.fspath(path) == STDIO
+
+
+def check_output(out, inputs, force=False, *, json_flag=False):
+    """Refuse an unsafe -o before any work (see :mod:`vibkit.runtime.safe_output`).
+
+    ``-o -`` (standard output) is always safe, but not together with ``--json`` (``json_flag``):
+    both would write to standard output."""
     from vibkit.runtime.safe_output import check_output_path
 
-    check_output_path(out, overwrite=force, inputs=[p for p in inputs if p])
+    if is_stdout(out):
+        if json_flag:
+            raise CLIError("-o - writes the output to stdout, and so does --json: give one of them")
+        return
+    check_output_path(out, overwrite=force, inputs=[p for p in inputs if p and not is_stdout(p)])
+
+
+def no_stdout(out, what):
+    """Refuse ``-o -`` for an output that is not one stream of bytes (a folder, a store)."""
+    if is_stdout(out):
+        raise CLIError(f"-o -: the output is {what}, which cannot go to stdout; give its path")
+
+
+@contextlib.contextmanager
+def output_path(out, suffix=""):
+    """The path a command writes its output file to: ``out`` itself, or for ``-o -`` a temporary
+    file (named ``*suffix``) whose bytes are copied to standard output once the command wrote it;
+    what the command prints meanwhile goes to stderr. A failed command sends nothing to stdout."""
+    if not is_stdout(out):
+        yield out
+        return
+    import shutil
+    import tempfile
+
+    with tempfile.TemporaryDirectory(prefix="vibkit-stdout-") as folder:
+        tmp = os.path.join(folder, "output" + suffix)
+        with contextlib.redirect_stdout(sys.stderr):
+            yield tmp
+        sys.stdout.flush()
+        with open(tmp, "rb") as f:
+            shutil.copyfileobj(f, sys.stdout.buffer)
+        sys.stdout.buffer.flush()

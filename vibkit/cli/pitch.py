@@ -5,17 +5,21 @@ from __future__ import annotations
 import math
 import textwrap
 
+from vibkit.diagnose.rounding import SPEED_SIGMA_NOT_STATED, fmt_length, fmt_pm
+
 from .options import (
     add_command,
+    add_escalator,
     add_json,
     add_limits,
     add_recording,
+    add_speed_uncertainty,
     band,
     chain_speed,
+    escalator_profile,
     pitch_length,
     read_recording,
-    speed_sigma,
-    speed_uncertainty,
+    run_speed,
     teeth,
 )
 from .output import CLIError, in_file, msg, print_json, table
@@ -36,12 +40,17 @@ def add_parser(subparsers):
     add_recording(s)
     add_json(s)
     add_speed_options(s)
-    s.add_argument(
-        "--speed-uncertainty", type=speed_uncertainty, help="speed standard deviation, in m/s or in %% (e.g. 0.1%%)"
-    )
+    add_speed_uncertainty(s)
     add_limits(s)
-    s.add_argument("--band", type=band, help="search band LOW:HIGH [Hz] (default speed / 80-200 mm)")
-    s.add_argument("--teeth", type=teeth, default=28, help="sprocket teeth, for the shaft hypothesis (default 28)")
+    s.add_argument(
+        "--band",
+        type=band,
+        help="search band LOW:HIGH [Hz] (default speed / 80-200 mm; with --escalator around its link pass)",
+    )
+    s.add_argument(
+        "--teeth", type=teeth, help="sprocket teeth, for the shaft hypothesis (default the profile's, else 28)"
+    )
+    add_escalator(s)
     s.set_defaults(func=run)
     return s
 
@@ -57,34 +66,61 @@ def add_speed_options(
     )
 
 
-def resolve_speed(a, rec, *, required=True):
-    """``(speed, source)``: --speed, else the file's, else a CLIError (or ``(None, None)``)."""
-    from vibkit.diagnose.channels import speed_from_recording
-
-    if a.speed is not None:
-        return a.speed, "--speed"
-    v, src = speed_from_recording(rec)
-    if v is not None or not required:
-        return v, src
+def resolve_speed(a, rec, *, required=True, profile=None):
+    """The run's speed (:func:`vibkit.cli.options.run_speed`: --speed, else the escalator profile's rated speed,
+    else the file's), else a CLIError (or a speed of None when not ``required``)."""
+    sp = run_speed(a, rec=rec, profile=profile)
+    if sp.value is not None or not required:
+        return sp
     raise CLIError(f"{a.recording}: the file states no chain speed; give --speed (e.g. --speed 0.5 or --speed 50cm/s)")
+
+
+def from_profile(a, profile, sp, *, sigma_and_teeth=True):
+    """(nominal pitch, band, teeth) of a run: the flags, else the profile's (the note says which came from the
+    profile), else the defaults; ``sp`` is the run's speed (:func:`vibkit.cli.options.run_speed`), which
+    takes the profile's speed and sigma itself; ``sigma_and_teeth=False`` (``spectrum``): the note names
+    neither."""
+    nominal, search, teeth_ = a.nominal_pitch, a.band, getattr(a, "teeth", None)
+    if profile is None:
+        return nominal, search, teeth_ or 28
+    taken = []
+    if sp.value is not None and sp.source != "given":
+        taken.append(f"speed {sp.text}" if sigma_and_teeth else f"speed {sp.value:g} m/s")
+    if nominal is None:
+        nominal = profile.nominal_pitch
+        taken.append(f"nominal pitch {1000 * nominal:g} mm")
+    if search is None and sp.value is not None:
+        f = sp.value / profile.nominal_pitch
+        search = (0.8 * f, 1.25 * f)
+        taken.append(f"search band {search[0]:.4g}-{search[1]:.4g} Hz (0.8-1.25 x speed / nominal pitch)")
+    if teeth_ is None:
+        teeth_ = profile.teeth
+        if sigma_and_teeth:
+            taken.append(f"{teeth_} sprocket teeth")
+    if taken:
+        note = f"note: from the profile {profile.source}: {'; '.join(taken)}"
+        msg(textwrap.fill(note, 100, subsequent_indent="  ", break_on_hyphens=False))
+    return nominal, search, teeth_
 
 
 def run(a):
     from vibkit.diagnose.channels import estimate_channels
 
     rec = read_recording(a)
-    speed, source = resolve_speed(a, rec)
-    sigma = speed_sigma(a.speed_uncertainty, speed) if a.speed_uncertainty else 0.0
+    profile = escalator_profile(a)
+    sp = resolve_speed(a, rec, profile=profile)
+    source = "--speed" if sp.source == "given" else sp.source
+    nominal, search, teeth_ = from_profile(a, profile, sp)
     try:
         res = estimate_channels(
             rec,
             channel=a.channel,
-            speed=speed,
-            speed_sigma=sigma,
-            band=a.band,
-            nominal_pitch=a.nominal_pitch,
+            speed=sp.value,
+            speed_sigma=sp.sigma,
+            band=search,
+            nominal_pitch=nominal,
             limits_percent=a.limits,
-            teeth=a.teeth,
+            teeth=teeth_,
             speed_source=source,
         )
     except ValueError as exc:  # the analysis's words about the signal, with the file named
@@ -99,20 +135,30 @@ def run(a):
         )
         print_json("pitch", d)
         return res.exit_code
+    stated = est.speed_sigma_stated
+    speed_text = fmt_pm(est.speed_m_s, est.speed_sigma_m_s, "m/s") if stated else f"{est.speed_m_s:g} m/s"
     print(
-        f"{a.recording}: channel {est.channel}, speed {est.speed_m_s:g} +- {est.speed_sigma_m_s:.2g} m/s "
-        f"({est.speed_source})"
+        f"{a.recording}: channel {est.channel}, speed {speed_text} ({est.speed_source}"
+        + ("" if stated else f"; {SPEED_SIGMA_NOT_STATED}: --speed-uncertainty")
+        + ")"
     )
     print(
-        f"link-pass frequency  {est.fundamental_hz:.5f} +- {est.fundamental_sigma_hz:.2g} Hz "
+        f"link-pass frequency  {fmt_pm(est.fundamental_hz, est.fundamental_sigma_hz, 'Hz')} "
         f"({len(est.per_burst)} burst(s))"
     )
     print(f"method               {est.method}")
-    print(f"link pitch           {1000 * est.pitch_m:.3f} +- {1000 * est.pitch_sigma_m:.3f} mm")
+    if stated:
+        print(f"link pitch           {fmt_length(est.pitch_m, est.pitch_sigma_m)}")
+    else:  # the frequency's part is a lower bound: the value to its digits, no +-
+        print(f"link pitch           {1000 * est.pitch_m:.2f} mm ({SPEED_SIGMA_NOT_STATED})")
     if est.nominal_pitch_m is not None:
+        el = (
+            fmt_pm(est.elongation_percent, est.elongation_sigma_percent, "%", sign=True)
+            if stated
+            else f"{est.elongation_percent:+.2f} % ({SPEED_SIGMA_NOT_STATED})"
+        )
         print(
-            f"elongation           {est.elongation_percent:+.2f} +- {est.elongation_sigma_percent:.2f} % "
-            f"of {1000 * est.nominal_pitch_m:.2f} mm -> {est.verdict}\n"
+            f"elongation           {el} of {1000 * est.nominal_pitch_m:.2f} mm -> {est.verdict}\n"
             f"                     (limits {' / '.join(f'{v:g}' for v in est.limits_percent)} %)"
         )
     print()
@@ -130,9 +176,10 @@ def run(a):
                 ]
                 for h in est.hypotheses
             ],
-            ("hypothesis", "link pass [Hz]", "SNR [dB]", "pitch [mm]", "catalogue [mm]", ""),
+            ("hypothesis", "link pass [Hz]", "peak/floor [dB]", "pitch [mm]", "catalogue [mm]", ""),
         )
     )
+    msg("note: peak/floor: the spectrum's power at the frequency over its median floor (not the harmonic SNR)")
     for h in est.hypotheses:  # the reasons under the table: it stays within 100 columns
         print(textwrap.fill(f"{h.name}: {h.reason}", 100, subsequent_indent="    "))
     print()
@@ -165,7 +212,7 @@ def print_channels(res):
                 [
                     r["channel"],
                     r["status"],
-                    f"{r['fundamental_hz']:.5f} +- {r['fundamental_sigma_hz']:.2g}" if "fundamental_hz" in r else "-",
+                    fmt_pm(r["fundamental_hz"], r["fundamental_sigma_hz"]) if "fundamental_hz" in r else "-",
                     f"{1000 * r['pitch_m']:.2f}" if "pitch_m" in r else "-",
                     r.get("verdict") or "-",
                 ]

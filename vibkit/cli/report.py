@@ -3,20 +3,24 @@
 from __future__ import annotations
 
 from .options import (
+    _profile_of,
     add_command,
+    add_escalator,
     add_force_overwrite,
     add_json,
     add_limits,
     add_recording,
+    add_segment,
+    add_speed_uncertainty,
     band,
     chain_speed,
     pitch_length,
     positive,
     reader_options,
+    segment_of,
     speed_sigma,
-    speed_uncertainty,
 )
-from .output import check_output, print_json, table
+from .output import check_output, is_stdout, output_path, print_json, table
 
 EPILOG = (
     "example:\n  vibkit report data/field/leon-tensioner.csv --scene sim/leon.toml --date 2020-02-14 \\\n"
@@ -28,11 +32,22 @@ def add_parser(subparsers):
     s = add_command(subparsers, "report", "write the multi-page PDF diagnostic report of a recording", EPILOG)
     add_recording(s)
     add_json(s)
-    s.add_argument("--scene", help="scene describing the escalator and sensor (simulated and compared)")
-    s.add_argument("-o", "--output", required=True, help="PDF to write; a new path unless --force")
+    add_escalator(s)
+    s.add_argument(
+        "--scene",
+        help="scene describing the escalator and sensor (simulated and compared); default with --escalator: "
+        "the scene built from the profile",
+    )
+    s.add_argument("-o", "--output", required=True, help="PDF to write; a new path unless --force; '-': stdout")
     add_force_overwrite(s, "PDF")
-    s.add_argument("--speed", type=chain_speed, help="chain speed [m/s] (default: recording's or scene's)")
-    s.add_argument("--speed-uncertainty", type=speed_uncertainty, help="speed standard deviation, in m/s or in %%")
+    s.add_argument(
+        "--speed",
+        type=chain_speed,
+        help="chain speed measured on the steps [m/s], the one speed of every page "
+        "(default: the escalator profile's, the recording's or the scene's)",
+    )
+    add_speed_uncertainty(s)
+    add_segment(s)
     s.add_argument("--nominal-pitch", type=pitch_length, help="nominal link pitch [m] (default: the scene's)")
     add_limits(s, "elongation limits [%%]")
     s.add_argument("--band", type=band, help="link-pass search band LOW:HIGH [Hz]")
@@ -42,15 +57,43 @@ def add_parser(subparsers):
     return s
 
 
+#: summary keys whose value is rounded to their sigma's two significant digits
+_SIGMA_OF = {
+    "link_pass_hz": "fundamental_sigma_hz",
+    "pitch_m": "pitch_sigma_m",
+    "elongation_percent": "elongation_sigma_percent",
+    "speed_m_s": "speed_sigma_m_s",
+}
+
+
+def _shown(key, value, summary):
+    """A summary value as the table prints it: to its sigma when it has one, else 6 significant digits."""
+    from vibkit.diagnose.rounding import fmt_value
+
+    if not isinstance(value, float):
+        return "not stated" if value is None and key.endswith("sigma_m_s") else value
+    if "sigma" in key:
+        return f"{value:.2g}"  # two significant digits, the rule of every +-
+    sigma = summary.get(_SIGMA_OF.get(key, ""))
+    return fmt_value(value, sigma) if sigma else f"{value:.6g}"
+
+
 def run(a):
+    check_output(a.output, [a.recording, a.scene], a.force, json_flag=a.json)
+    with output_path(a.output, ".pdf") as target:  # '-o -': written to a temporary file, then to stdout
+        return _run(a, target)
+
+
+def _run(a, target):
     from vibkit.diagnose.report import write_report
 
-    check_output(a.output, [a.recording, a.scene], a.force)
-    sigma = speed_sigma(a.speed_uncertainty, a.speed) if (a.speed_uncertainty and a.speed) else 0.0
+    profile = _profile_of(a)
+    text = a.speed_uncertainty
+    sigma = None if text is None else text if text.strip().endswith("%") else speed_sigma(text, 1.0)
     rep = write_report(
         a.recording,
-        a.output,
-        scene=a.scene,
+        target,
+        scene=a.scene if a.scene or profile is None else profile.scene("forward", a.duration),
         speed=a.speed,
         speed_sigma=sigma,
         channel=a.channel,
@@ -62,10 +105,19 @@ def run(a):
         overwrite=a.force,
         read_options=reader_options(a),
         date=a.date,
+        profile=profile,
+        segment=segment_of(a),
     )
     if a.json:
-        print_json("report", {"output": rep.path, "pages": [t for t, _ in rep.pages], "summary": rep.summary})
+        print_json(
+            "report",
+            {
+                "output": a.output if is_stdout(a.output) else rep.path,
+                "pages": [t for t, _ in rep.pages],
+                "summary": rep.summary,
+            },
+        )
     else:
-        print(f"wrote {rep.path} ({len(rep.pages)} pages)")
-        print(table([[k, f"{v:.6g}" if isinstance(v, float) else v] for k, v in rep.summary.items()]))
+        print(f"wrote {a.output if is_stdout(a.output) else rep.path} ({len(rep.pages)} pages)")
+        print(table([[k, _shown(k, v, rep.summary)] for k, v in rep.summary.items()]))
     return 0

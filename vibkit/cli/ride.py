@@ -2,11 +2,24 @@
 
 from __future__ import annotations
 
+import dataclasses
+import math
 import os
 import sys
 
-from .options import add_command, add_json, add_recording, positive, reader_options
-from .output import CLIError, msg, print_json, table
+from .options import (
+    add_command,
+    add_escalator,
+    add_json,
+    add_recording,
+    add_segment,
+    chain_speed,
+    positive,
+    reader_options,
+    run_speed,
+    segment_of,
+)
+from .output import STDIO, CLIError, msg, print_json, table
 
 EPILOG = (
     "examples:\n  vibkit ride data/field/layouts/phyphox.csv --segment 0.5:3 --json\n"
@@ -28,7 +41,12 @@ def add_parser(subparsers):
         help="recording channels for x,y,z (travel, lateral, vertical; - skips one), "
         "or AXIS=NAME pairs (default: names ending in x, y, z); write --channels=-,-,az when x is skipped",
     )
-    s.add_argument("--segment", help="ride segment START:END [s] from the first sample (default: detected)")
+    add_segment(s)
+    s.add_argument(
+        "--speed",
+        type=chain_speed,
+        help="chain speed measured on the steps [m/s] (default: the escalator profile's, else the file's)",
+    )
     s.add_argument(
         "--weighting", help="Wk, Wd ... for every axis, three for x,y,z (Wd,Wd,Wk), or x=Wd,y=Wd,z=Wk (the default)"
     )
@@ -36,6 +54,7 @@ def add_parser(subparsers):
     s.add_argument("--duration", type=positive, help="simulated time [s] (default: the scene's)")
     add_recording(s, positional=False, channel=False)
     add_json(s)
+    add_escalator(s)
     s.set_defaults(func=run)
     return s
 
@@ -47,29 +66,38 @@ def _weightings(text):
     return parse_weightings(text)
 
 
+def _num(v):
+    return f"{v:.4g}" if v is not None and math.isfinite(float(v)) else "n/a"
+
+
 def _ride_rows(rq):
     return [
         [
             a.axis,
             a.channel,
             a.weighting,
-            f"{a.weighted.max:.4g}",
-            f"{a.weighted.a95:.4g}",
-            f"{a.weighted.rms:.4g}",
-            f"{a.lowpass.max:.4g}",
-            f"{a.lowpass.a95:.4g}",
+            _num(a.weighted.max),
+            _num(a.weighted.a95),
+            _num(a.weighted.rms),
+            _num(a.lowpass.max),
+            _num(a.lowpass.a95),
         ]
         for a in rq.axes
     ]
 
 
 def run(a):
-    from vibkit.diagnose.ride import parse_channels, parse_segment, ride_quality_from_recording, simulate_ride
+    from vibkit.diagnose.ride import parse_channels, ride_quality_from_recording, simulate_ride
 
-    segment = parse_segment(a.segment) if a.segment else None
+    segment = segment_of(a)
     weightings = _weightings(a.weighting)
-    if not os.path.exists(a.input):
-        raise CLIError(f"{a.input}: file not found (expected a recording or a scene .toml)")
+    if a.input != STDIO and not os.path.exists(a.input):  # '-': a recording on stdin
+        from vibkit.scenes import find
+
+        shipped = find(a.input)  # a shipped scene's name
+        if shipped is None:
+            raise CLIError(f"{a.input}: file not found (expected a recording or a scene .toml)")
+        a.input = str(shipped)
     is_scene = a.input.lower().endswith(".toml")
     if is_scene and a.channels:
         raise CLIError("--channels applies to a recording, not to a scene")
@@ -87,6 +115,9 @@ def run(a):
             weightings=weightings,
             read_options=reader_options(a),
         )
+        sp = run_speed(a)  # --speed, else the escalator profile's: the run's one speed replaces the file's
+        if sp.value is not None:
+            rq = dataclasses.replace(rq, speed_m_s=sp.value)
     sim = None
     if a.scene:
         sim = simulate_ride(a.scene, duration=a.duration, weightings=weightings, progress=sys.stderr.isatty())

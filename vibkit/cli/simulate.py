@@ -4,18 +4,24 @@ from __future__ import annotations
 
 import json
 import os
+import textwrap
 import time
 
 from .options import add_command, add_force_overwrite, add_json, byte_size, positive, seconds_or_none
-from .output import check_output, print_json, table
+from .output import check_output, is_stdout, msg, output_path, print_json, table
 
-EPILOG = "example:\n  vibkit simulate sim/leon.toml -o reports/leon.nc --duration 10"
+EPILOG = (
+    "examples:\n  vibkit simulate sim/leon.toml -o reports/leon.nc --duration 10\n"
+    "  vibkit simulate las-palmas -o - > lp.nc   (a shipped scene by name; netCDF on stdout)"
+)
 
 
 def add_parser(subparsers):
     s = add_command(subparsers, "simulate", "simulate a scene and write the result (netCDF4/HDF5)", EPILOG)
-    s.add_argument("scene", help="scene file (.toml)")
-    s.add_argument("-o", "--output", required=True, help="result file to write (.nc); a new path unless --force")
+    s.add_argument("scene", help="scene file (.toml), or the name of a shipped scene (las-palmas, leon ...)")
+    s.add_argument(
+        "-o", "--output", required=True, help="result file to write (.nc); a new path unless --force; '-': stdout"
+    )
     add_force_overwrite(s, "result file")
     s.add_argument("--duration", type=positive, help="override the scene's duration [s] (kinematics: [m])")
     s.add_argument(
@@ -49,8 +55,13 @@ def run(a):
     import vibkit
     from vibkit.io import write_result
 
-    check_output(a.output, [a.scene], a.force)
+    check_output(a.output, [a.scene], a.force, json_flag=a.json)
     scene = vibkit.load_scene(a.scene)
+    with output_path(a.output, ".nc") as target:  # '-o -': written to a temporary file, then to stdout
+        return _run(a, vibkit, write_result, scene, target)
+
+
+def _run(a, vibkit, write_result, scene, target):
     t0 = time.perf_counter()
     ds = vibkit.simulate(
         scene,
@@ -61,7 +72,8 @@ def run(a):
         check=a.check,
     )
     wall = time.perf_counter() - t0
-    path = write_result(ds, a.output, overwrite=a.force, inputs=[a.scene])
+    path = write_result(ds, target, overwrite=a.force, inputs=[a.scene])
+    path = a.output if is_stdout(a.output) else path
     resid = (
         float(ds["closure_residual"].max())
         if "closure_residual" in ds
@@ -80,6 +92,9 @@ def run(a):
     }
     if "convergence" in ds.attrs:
         summary["convergence"] = json.loads(ds.attrs["convergence"])
+    summary["warnings"] = [w for w in ds.attrs.get("warnings", "").split("\n") if w]
+    for w in summary["warnings"]:
+        msg(textwrap.fill(f"warning: {w}", 100, subsequent_indent="  "))
     if a.json:
         print_json("simulate", summary)
     else:

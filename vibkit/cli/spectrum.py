@@ -2,9 +2,18 @@
 
 from __future__ import annotations
 
-from .options import add_command, add_json, add_limits, add_recording, band, read_recording
+from .options import (
+    add_command,
+    add_escalator,
+    add_json,
+    add_limits,
+    add_recording,
+    band,
+    escalator_profile,
+    read_recording,
+)
 from .output import in_file, msg, print_json, table
-from .pitch import add_speed_options, print_channels, refused, resolve_speed
+from .pitch import add_speed_options, from_profile, print_channels, refused, resolve_speed
 
 EPILOG = (
     "example:\n  vibkit spectrum data/field/leon-tensioner.csv --band 2.5:6 --json\n"
@@ -25,6 +34,7 @@ def add_parser(subparsers):
     s.add_argument("--harmonics", type=int, default=5, help="harmonics listed (default 5)")
     add_speed_options(s, "chain speed (optional): m/s, or 49cm/s; default the file's; checks the pitch is plausible")
     add_limits(s)
+    add_escalator(s)
     s.set_defaults(func=run)
     return s
 
@@ -33,8 +43,11 @@ def run(a):
     from vibkit.diagnose.channels import estimate_channels
 
     rec = read_recording(a)
-    speed, source = resolve_speed(a, rec, required=False)
-    search = a.band or (None if speed else (2.5, 6.0))
+    profile = escalator_profile(a)
+    sp = resolve_speed(a, rec, required=False, profile=profile)
+    speed, source = sp.value, ("--speed" if sp.source == "given" else sp.source or None)
+    nominal, search, _ = from_profile(a, profile, sp, sigma_and_teeth=False) if speed else (None, None, None)
+    search = search or (None if speed else (2.5, 6.0))
     try:
         res = estimate_channels(
             rec,
@@ -42,7 +55,7 @@ def run(a):
             speed=speed or 1.0,
             band=search,
             n_harmonics=a.harmonics,
-            nominal_pitch=a.nominal_pitch if speed else None,
+            nominal_pitch=nominal if speed else None,
             limits_percent=a.limits,
             speed_source=source or "none",
             frequency_only=speed is None,

@@ -7,7 +7,7 @@ import os
 import time
 
 from .options import add_command, add_json, byte_size, positive
-from .output import CLIError, msg, print_json, table
+from .output import CLIError, msg, no_stdout, print_json, table
 
 EPILOG = (
     "examples:\n  vibkit sweep sim/thesis-forward.toml --vary chain.link_pitch=0.1333:0.1373:9 \\\n"
@@ -101,6 +101,7 @@ def run(a):
 
     import vibkit
 
+    no_stdout(a.output, "a Zarr store (a folder)")
     # a Zarr store is a folder, re-used to resume: only refuse one that is the scene itself (the
     # library refuses a folder that is not this sweep's store unless --force)
     if os.path.exists(a.output) and os.path.exists(a.scene) and os.path.samefile(a.output, a.scene):

@@ -1,7 +1,8 @@
 """Every vibration channel of a recording, one decision for the recording.
 
 :func:`estimate_channels` runs :func:`vibkit.diagnose.pitch.estimate_pitch` on every vibration channel
-(or the one asked for) and combines them: the result comes from the channels where the link pass is
+(or the one asked for; a sparse channel on its own samples, :func:`vibkit.io.channels.own_samples`) and
+combines them: the result comes from the channels where the link pass is
 found (status ``ok`` or ``inconclusive``); when several are, their fundamentals must agree within
 :data:`CONSISTENCY_SIGMAS` combined sigmas (else the recording is refused as ``implausible``: two
 periodicities, not one chain), and the channel with the smallest sigma gives the numbers.
@@ -46,13 +47,15 @@ def speed_from_recording(recording):
 
 def vibration_channels(recording) -> list:
     """Channels that may carry a vibration: along time, not the burst number, not a sample counter, not
-    a clock or a speed."""
-    from ..io.channels import COUNTER_ATTR
+    a clock or a speed, not a status column (an accuracy code, a column that never changes)."""
+    from ..io.channels import COUNTER_ATTR, STATUS_ATTR, is_status
 
     out = []
     for v in recording.data_vars:
         da = recording[v]
         if v == "segment" or da.dims != ("time",) or da.attrs.get(COUNTER_ATTR):
+            continue
+        if int(da.attrs.get(STATUS_ATTR, 0)) or is_status("", da.values):
             continue
         units = str(da.attrs.get("units", ""))
         if (
@@ -120,6 +123,7 @@ def estimate_channels(recording, *, channel=None, **kwargs) -> ChannelsResult:
     ValueError
         ``channel`` is given and cannot be analysed, or no channel can be analysed at all.
     """
+    from ..io.channels import own_samples
     from .pitch import estimate_pitch, pick_channel
 
     names = [pick_channel(recording, channel)] if channel is not None else vibration_channels(recording)
@@ -128,7 +132,7 @@ def estimate_channels(recording, *, channel=None, **kwargs) -> ChannelsResult:
     ests, errors = [], {}
     for name in names:
         try:
-            ests.append(estimate_pitch(recording, channel=name, **kwargs))
+            ests.append(estimate_pitch(own_samples(recording, name), channel=name, **kwargs))
         except ValueError as exc:
             if channel is not None or len(names) == 1:
                 raise

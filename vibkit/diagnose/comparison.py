@@ -21,6 +21,8 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.stats
 
+from .rounding import fmt_pm
+
 __all__ = ["Comparison", "compare", "matching_variable", "as_result"]
 
 # simulation variables that a sensor of each unit can be compared with, best first
@@ -106,11 +108,15 @@ class Comparison:
     rule : str
     speed_sim_m_s, speed_meas_m_s : float
         [m/s]; the simulation's is its mean ``chain_speed`` when stored (else its nominal speed);
-        the recording's is its stated ``chain_speed_m_s``, else the scene's nominal speed.
+        the recording's is the ``speed`` given, else its stated ``chain_speed_m_s``, else the scene's
+        nominal speed.
+    speed_meas_sigma_m_s : float or None
+        The recording's speed's standard deviation as stated (None: not stated).
     pitch_sim_m, pitch_meas_m : float
         Pitch implied by each signal, speed / fundamental. [m]
     pitch_ratio, pitch_ratio_sigma : float
-        ``pitch_meas_m / pitch_sim_m`` and its standard deviation (frequencies only).
+        ``pitch_meas_m / pitch_sim_m`` and its standard deviation (the frequencies' and the stated
+        speed uncertainty's).
     pitch_consistent : bool
         ``|pitch_ratio - 1| <= pitch_tolerance + z sigma`` (z of the confidence level).
     pitch_tolerance : float
@@ -146,6 +152,7 @@ class Comparison:
     order_amplitude_meas: np.ndarray
     signals: dict = field(repr=False, default_factory=dict)
     notes: list = field(default_factory=list)
+    speed_meas_sigma_m_s: float | None = None
 
     def as_dict(self) -> dict:
         """JSON-ready summary (no arrays except none)."""
@@ -157,6 +164,7 @@ class Comparison:
             "fundamental_meas_hz": self.fundamental_meas_hz,
             "speed_sim_m_s": self.speed_sim_m_s,
             "speed_meas_m_s": self.speed_meas_m_s,
+            "speed_meas_sigma_m_s": self.speed_meas_sigma_m_s,
             "pitch_sim_m": self.pitch_sim_m,
             "pitch_meas_m": self.pitch_meas_m,
             "pitch_ratio": self.pitch_ratio,
@@ -212,6 +220,8 @@ def compare(
     pitch_tolerance=0.005,
     duration=None,
     progress=False,
+    speed=None,
+    speed_sigma=None,
 ):
     """Compare a recording with a simulation in the order domain.
 
@@ -237,6 +247,12 @@ def compare(
         Relative pitch difference still counted as the same chain (what the speed is known to).
     duration : float, optional
         Simulated time when ``result`` is a scene. [s]
+    speed : float, optional
+        The recording's chain (step) speed, measured [m/s]: its order domain and implied pitch use it.
+        Default: the recording's stated ``chain_speed_m_s``, else the scene's nominal speed (with a note).
+    speed_sigma : float, optional
+        Its standard deviation [m/s]; it widens ``pitch_ratio_sigma``. None: not stated (the ratio's
+        sigma is then the frequencies' part only, and a note says so).
 
     Returns
     -------
@@ -277,7 +293,14 @@ def compare(
         # a controlled drive droops below its set speed: the simulated chain's own mean speed
         v_sim = float(np.abs(result["chain_speed"].values[result.sizes["time"] // 4 :]).mean())
         notes.append(f"simulated chain speed {v_sim:.5g} m/s (mean after the first quarter; set {v_nom:g} m/s)")
-    v_meas = float(recording.attrs.get("chain_speed_m_s", 0.0) or 0.0)
+    if speed is not None:
+        v_meas = float(speed)
+        if not (math.isfinite(v_meas) and v_meas > 0):
+            raise ValueError(f"speed must be a positive number of m/s, got {speed!r}")
+    else:
+        v_meas = float(recording.attrs.get("chain_speed_m_s", 0.0) or 0.0)
+    if speed_sigma is not None and not (math.isfinite(float(speed_sigma)) and float(speed_sigma) >= 0):
+        raise ValueError(f"speed_sigma must be >= 0 m/s, got {speed_sigma!r}")
     if not v_sim > 0:
         v_sim = v_meas
     if not v_meas > 0:
@@ -393,14 +416,17 @@ def compare(
     p_sim = v_sim / f_sim if v_sim > 0 else float("nan")
     p_meas = v_meas / f_meas if v_meas > 0 else float("nan")
     p_ratio = (v_meas / v_sim) / fr if v_sim > 0 else float("nan")
-    p_sig = p_ratio * fr_sig / fr if v_sim > 0 else float("nan")
+    rel_v = float(speed_sigma) / v_meas if (speed_sigma is not None and v_meas > 0) else 0.0
+    p_sig = p_ratio * math.hypot(fr_sig / fr, rel_v) if v_sim > 0 else float("nan")
+    if speed_sigma is None and speed is not None:
+        notes.append("speed uncertainty not stated: the pitch ratio's sigma is the frequencies' part only")
     z1 = float(scipy.stats.norm.ppf(0.5 + float(confidence) / 2))
     consistent = bool(v_sim > 0 and abs(p_ratio - 1) <= float(pitch_tolerance) + z1 * p_sig)
     if v_sim > 0:
         verdict = "consistent" if consistent else "NOT consistent"
         notes.append(
             f"pitch implied by the recording {1000 * p_meas:.2f} mm vs the simulation {1000 * p_sim:.2f} mm "
-            f"(ratio {p_ratio:.4f}): {verdict} within {100 * pitch_tolerance:g} % + {z1:.2f} sigma"
+            f"(pitch ratio {fmt_pm(p_ratio, p_sig)}): {verdict} within {100 * pitch_tolerance:g} % + {z1:.2f} sigma"
         )
     return Comparison(
         channel=channel,
@@ -426,4 +452,5 @@ def compare(
         order_amplitude_meas=a_meas,
         signals={"sim": (sim.fs, sim.x), "meas": [(b.t0, b.fs, b.x) for b, _ in runs]},
         notes=notes,
+        speed_meas_sigma_m_s=None if speed_sigma is None else float(speed_sigma),
     )

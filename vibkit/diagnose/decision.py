@@ -19,8 +19,9 @@ One function, :func:`decide`, shared by every consumer of a link-pass estimate (
 ``"inconclusive"``
     the family is there and plausible, but either its elongation is not resolved to a third of the
     first limit, or it is one spectral line without a significant harmonic (a tone that a structural
-    mode, a motor or a fan gives as well): frequency, pitch and elongation with their sigmas, verdict
-    ``"inconclusive"`` (exit 3).
+    mode, a motor or a fan gives as well), or its frequency wanders between parts of the record more
+    than a chain's speed can (:data:`MAX_PART_WANDER`: a gait, a cadence): frequency, pitch and
+    elongation with their sigmas, verdict ``"inconclusive"`` (exit 3).
 
 Why -1 % to +6 %: a roller chain only lengthens with wear (pins and bushes wear, the pitch grows); a
 new chain is made to its nominal length within a few tenths of a per cent (ISO 606 allows 0 to
@@ -42,6 +43,7 @@ __all__ = [
     "DEFAULT_LIMITS_PERCENT",
     "ELONGATION_WINDOW_PERCENT",
     "EXIT_CODES",
+    "MAX_PART_WANDER",
     "MAX_WANDER",
     "STATUS_IMPLAUSIBLE",
     "STATUS_INCONCLUSIVE",
@@ -77,6 +79,19 @@ CATALOGUE_SOURCES = (
 #: largest relative difference between the spectral and the mean-phase estimate of one record: an
 #: escalator's speed wanders by a few per cent with load, a chirp, a gait or a ride by more
 MAX_WANDER = 0.025
+#: largest wander of the link-pass frequency between parts of one record (the parts' standard deviation
+#: beyond their own sigmas, relative to the frequency) that still allows a verdict.  The speed given is one
+#: number, and a verdict needs it to about 0.1 % (the elongation resolved to 0.5 %, a third of the 1.5 %
+#: watch limit, with the frequency's part of the error as small): a frequency that moves by more within
+#: the record cannot be matched to one speed that well.  A chain under its speed controller holds it:
+#: the reference model's P controller runs 0.2 % below its set speed empty (3.742 for 3.75 Hz) and a
+#: steady load shifts that offset, not the wander within a record; EN 115-1 bounds the mean speed
+#: (+-5 % of nominal at no load), not a record's wander.  Steady chain signals scatter between parts
+#: by their noise (0.00-0.03 % excess at -5 dB per sample); a gait's cadence wandering +-1 % over minutes
+#: shows 0.2-0.5 % (benchmarks/bench_coverage.py).  The +-2 % speed wander of the stress signals of the
+#: estimators (tests/support/chain.py ``wandering``) shows 0.3-1.5 %: more than a chain under speed
+#: control does within one record, so those keep their pitch without a verdict
+MAX_PART_WANDER = 0.001
 #: the elongation must be resolved to this fraction of the first limit for a verdict: its sigma a third of
 #: the first limit puts the watch limit three sigmas from a new chain
 EVIDENCE_FRACTION = 1.0 / 3.0
@@ -206,6 +221,12 @@ class LinkPassEvidence:
     significant_orders : sequence of int, optional
         Harmonic orders individually significant in the detection; fewer than two (a lone spectral line,
         which a structural mode, a motor or a fan gives as well) make the result ``inconclusive``.
+    part_wander : float, optional
+        The frequency's wander between parts of the record (standard deviation beyond the parts' sigmas,
+        relative; :func:`vibkit.diagnose.pitch_parts.check_parts`); None when not checked.  Over
+        :data:`MAX_WANDER` refused, over :data:`MAX_PART_WANDER` ``inconclusive``.
+    part_summary : str
+        The parts' frequencies in a few words, quoted in the reason.
     """
 
     detected: bool
@@ -223,6 +244,8 @@ class LinkPassEvidence:
     mean_phase_hz: float | None = None
     speed_source: str = "given"
     significant_orders: tuple | None = None
+    part_wander: float | None = None
+    part_summary: str = ""
 
 
 def decide(
@@ -262,6 +285,7 @@ def decide(
     return (
         _check_plausible(ev, p, checks, window_percent, catalogue)
         or _check_harmonics(ev, p, checks)
+        or _check_parts_wander(ev, p, checks)
         or _verdict(ev, p, checks)
     )
 
@@ -320,6 +344,17 @@ def _check_family(ev, checks):
                 ),
                 checks=checks,
             )
+    if ev.part_wander is not None and ev.part_wander > MAX_WANDER:
+        checks["steady"] = False
+        return Decision(
+            STATUS_NOT_FOUND,
+            (
+                f"the frequency wanders {100 * ev.part_wander:.2g} % between parts of the record ({ev.part_summary}): "
+                f"a chain's speed wanders by a few per cent at most ({100 * MAX_WANDER:g} % allowed); this "
+                "periodicity drifts like a gait, a ride or a sweep"
+            ),
+            checks=checks,
+        )
     return None
 
 
@@ -380,6 +415,28 @@ def _check_harmonics(ev, p, checks):
             f"one spectral line at {float(ev.fundamental_hz):.4g} Hz (pitch {_mm(p)}) without a significant "
             "harmonic: a tone (a structural mode, a motor, a fan) cannot be told from a link pass, whose roller "
             "impacts give harmonics; no verdict"
+        ),
+        verdict="inconclusive" if ev.nominal_pitch_m is not None else None,
+        implied_pitch_m=p,
+        checks=checks,
+    )
+
+
+def _check_parts_wander(ev, p, checks):
+    """``inconclusive`` when the frequency wanders between parts of the record more than :data:`MAX_PART_WANDER`
+    (a gait, a cadence: no speed given as one number matches it); None otherwise (or not checked)."""
+    if ev.part_wander is None:
+        return None
+    steady = ev.part_wander <= MAX_PART_WANDER
+    checks["steady between parts"] = bool(steady)
+    if steady:
+        return None
+    return Decision(
+        STATUS_INCONCLUSIVE,
+        (
+            f"the frequency wanders {100 * ev.part_wander:.2g} % between parts of the record ({ev.part_summary}; "
+            f"pitch {_mm(p)}): more than a chain under speed control ({100 * MAX_PART_WANDER:g} %), as a gait or a "
+            "cadence does; no speed given as one number matches it, no verdict"
         ),
         verdict="inconclusive" if ev.nominal_pitch_m is not None else None,
         implied_pitch_m=p,

@@ -15,13 +15,14 @@ nominal pitch by construction: one sprocket turn always moves Z links whatever t
 link-pass frequency is Z times the shaft frequency and ``v_nominal / f = L_nominal``.
 
 :func:`estimate_pitch` runs the steps of :mod:`vibkit.diagnose.pitch_steps` in order: bursts ->
-detection -> per-burst estimates -> method -> combination -> pitch -> decision.
+detection -> per-burst estimates -> method -> combination -> parts check (:mod:`vibkit.diagnose.pitch_parts`:
+the sigma against the record's own spread, the source's wander) -> pitch -> decision.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -40,7 +41,9 @@ from .decision import (
     decide,
     elongation_verdict,
 )
+from .pitch_parts import check_parts
 from .pitch_steps import Hypothesis
+from .rounding import SPEED_SIGMA_NOT_STATED
 
 __all__ = [
     "CATALOGUE_PITCHES_M",
@@ -120,6 +123,13 @@ class PitchEstimate:
     invalid_samples: dict = field(default_factory=dict)
     decision: Decision | None = None
     speed_source: str = "given"
+    parts: dict = field(default_factory=dict)
+
+    @property
+    def speed_sigma_stated(self) -> bool:
+        """Whether the speed's uncertainty was stated; if not, ``pitch_sigma_m`` and
+        ``elongation_sigma_percent`` hold the frequency's part only (a lower bound)."""
+        return self.speed_sigma_m_s is not None
 
     @property
     def has_link_pass(self) -> bool:
@@ -169,11 +179,12 @@ class PitchEstimate:
             "fundamental_hz": self.fundamental_hz,
             "fundamental_sigma_hz": self.fundamental_sigma_hz,
             "pitch_m": self.pitch_m,
-            "pitch_sigma_m": self.pitch_sigma_m,
+            "pitch_sigma_m": self.pitch_sigma_m if self.speed_sigma_stated else None,
             "snr_db": self.snr_db,
             "harmonics": [dict(h) for h in self.harmonics],
             "bursts": [dict(b) for b in self.per_burst],
             "burst_chi2_per_dof": None if math.isnan(self.chi2_per_dof) else self.chi2_per_dof,
+            "parts": dict(self.parts),
             "hypotheses": [vars(h).copy() for h in self.hypotheses],
             "warnings": list(self.warnings),
             "notes": list(self.notes),
@@ -182,10 +193,18 @@ class PitchEstimate:
             d.update(
                 nominal_pitch_m=self.nominal_pitch_m,
                 elongation_percent=self.elongation_percent,
-                elongation_sigma_percent=self.elongation_sigma_percent,
+                elongation_sigma_percent=self.elongation_sigma_percent if self.speed_sigma_stated else None,
                 limits_percent=list(self.limits_percent),
                 verdict=self.verdict,
             )
+        if not self.speed_sigma_stated:  # null sigmas, with the reason and the part that is known
+            d["uncertainty"] = (
+                f"{SPEED_SIGMA_NOT_STATED}: the pitch's and the elongation's sigmas are unknown; "
+                "the *_frequency_only keys give the frequency's part, a lower bound"
+            )
+            d["pitch_sigma_frequency_only_m"] = self.pitch_sigma_m
+            if self.nominal_pitch_m is not None:
+                d["elongation_sigma_frequency_only_percent"] = self.elongation_sigma_percent
         return d
 
 
@@ -193,7 +212,7 @@ def estimate_pitch(
     recording,
     *,
     speed,
-    speed_sigma=0.0,
+    speed_sigma=None,
     channel=None,
     band=None,
     nominal_pitch=None,
@@ -214,8 +233,10 @@ def estimate_pitch(
         sampled or not.
     speed : float
         Chain (step) speed. [m/s]
-    speed_sigma : float, optional
-        Standard deviation of ``speed``. [m/s]
+    speed_sigma : float or None, optional
+        Standard deviation of ``speed`` [m/s]; None: not stated (the pitch's and the elongation's sigmas
+        are then the frequency's part only, and :meth:`PitchEstimate.as_dict` gives them as null with the
+        reason).
     channel : str, optional
         Channel to analyse (default: the first).
     band : (float, float), optional
@@ -282,13 +303,20 @@ def estimate_pitch(
     ests, skipped = steps.estimate_bursts(prep, name=name, band=req.band, n_harmonics=n_harmonics)
     ests = steps.choose_methods(ests)
     comb = steps.combine(ests)
-    warnings = [*prep.warnings, *skipped, *comb.warnings]
+    parts, sigma = check_parts(ests, comb)
+    comb = replace(comb, sigma=sigma)
+    jitter_warnings, jitter_notes = steps.jitter_effect(recording, name, ests, req.band, n_harmonics)
+    warnings = [*prep.warnings, *jitter_warnings, *skipped, *comb.warnings, *parts.warnings]
     for w in (w for be in ests for w in be.spectral.warnings):
         if w not in warnings:
             warnings.append(w)
     pitch, psig, caveats, notes = steps.pitch_from(comb, req)
     warnings += caveats
-    dec = decide(steps.evidence(det, ests, comb, req, speed_source=speed_source))
+    notes.append(f"parts check: {parts.reason}")
+    notes = jitter_notes + notes
+    ev = steps.evidence(det, ests, comb, req, speed_source=speed_source)
+    ev = replace(ev, part_wander=parts.wander if parts.checked else None, part_summary=_part_summary(parts))
+    dec = decide(ev)
     if not dec.has_link_pass:
         # refused: no frequency, pitch or verdict leaves this function (the reason says what the family implies)
         return _refusal(common, det, dec, [dec.reason, *warnings], notes, comb.method, comb.method_reason)
@@ -305,9 +333,18 @@ def estimate_pitch(
         detection=det.as_dict(),
         decision=dec,
         status=dec.status,
+        parts=parts.as_dict(),
         **common,
     )
     return PitchEstimate(**res, **_numbers(ests, comb, req, pitch, psig, dec))
+
+
+def _part_summary(parts):
+    """The parts' frequencies in a few words, for the decision's reason (empty when not checked)."""
+    if not parts.checked:
+        return ""
+    f = parts.frequencies_hz
+    return f"{parts.n_parts} parts of {parts.part_s:.3g} s give {min(f):.5g}-{max(f):.5g} Hz"
 
 
 def _request(speed, speed_sigma, band, nominal_pitch, limits_percent, pitch_range, teeth, p_fa, frequency_only):
@@ -316,9 +353,10 @@ def _request(speed, speed_sigma, band, nominal_pitch, limits_percent, pitch_rang
     speed = float(speed)
     if not (math.isfinite(speed) and speed > 0):
         raise ValueError(f"speed must be a positive number of m/s, got {speed!r}")
-    speed_sigma = float(speed_sigma)
-    if not (math.isfinite(speed_sigma) and speed_sigma >= 0):
-        raise ValueError(f"speed_sigma must be >= 0 m/s, got {speed_sigma!r}")
+    if speed_sigma is not None:  # None: not stated
+        speed_sigma = float(speed_sigma)
+        if not (math.isfinite(speed_sigma) and speed_sigma >= 0):
+            raise ValueError(f"speed_sigma must be >= 0 m/s, got {speed_sigma!r}")
     lo_p, hi_p = (float(v) for v in pitch_range)
     if not 0 < lo_p < hi_p:
         raise ValueError(f"pitch_range must be (min, max) with 0 < min < max [m], got {pitch_range!r}")

@@ -19,6 +19,7 @@ from ..signal.bursts import FILL_THRESHOLD, MAX_GAP_S, Burst, dropped_samples, f
 from ..signal.detect import HARMONIC_SPAN
 from ..signal.quantisation import quantisation_step
 from .decision import LinkPassEvidence, nearest_catalogue
+from .speed import speed_part_too_large
 
 #: samples (from the start) whose levels give the recorder's quantisation step
 QUANTUM_SAMPLES = 1 << 20
@@ -64,7 +65,7 @@ class Request:
     as given [m] (or None), sprocket teeth, and whether the speed is a placeholder (frequency only)."""
 
     speed: float
-    speed_sigma: float
+    speed_sigma: float | None
     band: tuple
     pitch_range: tuple
     limits: tuple
@@ -125,8 +126,7 @@ def prepare_bursts(recording, name, band):
         raise ValueError(
             f"band {band[0]:.4g}-{band[1]:.4g} Hz reaches the Nyquist frequency {nyq:.4g} Hz of channel {name!r}"
         )
-    if any(b.resampled for b in raw):
-        warnings.append("irregular time stamps: bursts resampled linearly to a uniform grid before the spectrum")
+    # irregular time stamps: resampled to a uniform grid; whether that matters is judged by jitter_effect
     invalid = {k: sum(b.invalid.get(k, 0) for b in raw) for k in ("non_finite", "fill_value", "absurd", "total")}
     n_dropped = dropped_samples(recording, name, raw)
     if invalid["total"] or n_dropped:
@@ -290,6 +290,46 @@ def combine(ests):
     return Combination(f0, sf, chi2, w, method, method_reason, warnings)
 
 
+def jitter_effect(recording, name, ests, band, n_harmonics):
+    """``(warnings, notes)`` on irregular time stamps.  A burst with irregular stamps was resampled linearly to
+    a uniform grid; it is resampled again with a cubic spline and estimated again: a warning only when the two
+    frequencies differ by more than the burst's sigma (the handling of the stamps then changes the estimate),
+    else a note."""
+    from scipy.interpolate import CubicSpline
+
+    from ..signal import link_pass_estimate
+    from ..signal.bursts import segment_numbers
+
+    warnings, notes = [], []
+    t_all = np.asarray(recording["time"].values, dtype=float)
+    x_all = np.asarray(recording[name].values, dtype=float)
+    seg = segment_numbers(recording)
+    for be in ests:
+        b = be.burst
+        if not b.resampled:
+            continue
+        grid = b.t0 + np.arange(b.x.size) / b.fs
+        keep = (t_all >= grid[0]) & (t_all <= grid[-1]) & np.isfinite(x_all)
+        if seg is not None:
+            keep &= np.asarray(seg) == b.segment
+        t, idx = np.unique(t_all[keep], return_index=True)
+        if t.size < 16:
+            continue
+        try:
+            xs = CubicSpline(t, x_all[keep][idx])(np.clip(grid, t[0], t[-1]))
+            alt = link_pass_estimate(xs, b.fs, band=band, n_harmonics=n_harmonics)
+        except ValueError:
+            continue
+        f, sf = be.spectral.fundamental_hz, be.spectral.fundamental_sigma_hz
+        delta = abs(alt.fundamental_hz - f)
+        text = (
+            f"burst {b.segment}: irregular time stamps, resampled to a uniform grid; resampled with a cubic spline "
+            f"instead, the link pass moves by {delta:.2g} Hz against its sigma {sf:.2g} Hz"
+        )
+        (warnings if delta > sf else notes).append(text + (": the stamps are too irregular" if delta > sf else ""))
+    return warnings, notes
+
+
 def pitch_from(comb, req):
     """``(pitch, sigma, warnings, notes)``: ``L = v / f`` with ``sigma_L = L hypot(sigma_f / f, sigma_v / v)``,
     a warning when ``f`` sits at an edge of the band or the speed's uncertainty dominates."""
@@ -303,18 +343,23 @@ def pitch_from(comb, req):
         )
     pitch = speed / f0
     rel_f = sf / f0
-    rel_v = speed_sigma / speed
+    rel_v = (speed_sigma or 0.0) / speed
     psig = pitch * math.hypot(rel_f, rel_v)
-    if rel_v > rel_f:
-        warnings.append(
-            f"the speed's uncertainty ({100 * rel_v:.3g} %) dominates the pitch's "
-            f"(frequency {100 * rel_f:.3g} %): to see 0.5 % elongation the speed must be known to "
-            "about 0.1 %"
+    elongation = 100.0 * (pitch / req.nominal_pitch - 1.0) if req.nominal_pitch is not None else None
+    if speed_part_too_large(rel_v, elongation, req.limits):
+        decision = (
+            f"the nearest limit is {min(abs(elongation - lim) for lim in req.limits):.2g} % away"
+            if elongation is not None
+            else f"a verdict needs the elongation's sigma under a third of the first limit ({req.limits[0]:g} %)"
         )
-    if speed_sigma == 0:
+        warnings.append(
+            f"the speed's uncertainty ({100 * rel_v:.2g} %) is too large for the verdict: {decision}; "
+            "measure the speed on the steps or the handrail"
+        )
+    if speed_sigma is None:
         notes.append(
-            "no speed uncertainty given: pitch_sigma_m is the frequency's part only; to see 0.5 % "
-            "elongation the speed must be known to about 0.1 %"
+            "speed uncertainty not stated: the pitch's and the elongation's sigmas are not known (the "
+            f"frequency alone gives {100 * rel_f:.2g} %); give --speed-uncertainty"
         )
     notes.append(
         "a speed derived from the motor's rpm and the nominal sprocket returns the nominal pitch by "

@@ -540,8 +540,9 @@ def _step_roller(ds):
     if "roller" not in ds.coords or "roller_acceleration" not in ds:
         return None
     rollers = [int(r) for r in ds["roller"].values]
-    if step is not None and 3 * int(step) - 1 in rollers:
-        return 3 * int(step) - 1
+    k = int(ds.attrs.get("links_per_step", 3))  # the middle roller of step s is k (s - 1) + 2 (1-based)
+    if step is not None and k * (int(step) - 1) + 2 in rollers:
+        return k * (int(step) - 1) + 2
     return rollers[0]
 
 

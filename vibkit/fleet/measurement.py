@@ -21,7 +21,10 @@ class Measurement:
 
     ``quality`` is ``"ok"``, ``"inconclusive"`` or ``"implausible"`` (:mod:`vibkit.fleet.quality`;
     ``quality_reason`` says why); only ``"ok"`` measurements enter a trend.  ``replaced``: the chain was
-    replaced before this measurement, which starts a new trend segment.
+    replaced before this measurement, which starts a new trend segment.  ``speed_sigma_m_s`` 0 means
+    the speed's uncertainty was not stated (``fleet add`` without ``--speed-uncertainty``, a catalogue
+    without ``speed_sigma_m_s``): ``pitch_sigma_m`` and ``elongation_sigma_percent`` then hold the
+    frequency's part only, and :meth:`as_dict` gives them as null.
     """
 
     id: int | None
@@ -50,9 +53,32 @@ class Measurement:
     quality_reason: str = ""
     replaced: bool = False
 
+    @property
+    def speed_sigma_stated(self) -> bool:
+        """Whether the speed's uncertainty was stated (a stored 0 means not stated)."""
+        return bool(self.speed_sigma_m_s)
+
     def as_dict(self) -> dict:
+        """Every field as stored (``Measurement(**m.as_dict())`` is ``m``)."""
         d = asdict(self)
         d["warnings"] = list(self.warnings)
+        return d
+
+    def as_reported(self) -> dict:
+        """JSON-ready dict for users (``fleet add --json``): :meth:`as_dict`, but without a stated speed
+        uncertainty the speed's, the pitch's and the elongation's sigmas are null, with the reason, and the
+        frequency's part under ``*_frequency_only``."""
+        d = self.as_dict()
+        if not self.speed_sigma_stated:
+            d.update(
+                speed_sigma_m_s=None,
+                pitch_sigma_m=None,
+                elongation_sigma_percent=None,
+                pitch_sigma_frequency_only_m=self.pitch_sigma_m,
+                elongation_sigma_frequency_only_percent=self.elongation_sigma_percent,
+                uncertainty="speed uncertainty not stated: the pitch's and the elongation's sigmas are unknown "
+                "(the *_frequency_only keys give the frequency's part, a lower bound)",
+            )
         return d
 
 
@@ -139,7 +165,9 @@ def analyse_recording(
             ) from None
         source = "recording start time"
     try:
-        est = estimate_pitch(rec, speed=speed, speed_sigma=speed_sigma, channel=channel, nominal_pitch=nominal_pitch)
+        est = estimate_pitch(
+            rec, speed=speed, speed_sigma=speed_sigma or None, channel=channel, nominal_pitch=nominal_pitch
+        )  # a sigma of 0 is stored for "not stated"
     except ValueError as exc:
         raise FleetError(f"{spath}: {' '.join(str(exc).split())}") from None
     if not est.has_link_pass:  # the shared decision (vibkit.diagnose.decision): no link pass, or implausible
@@ -155,7 +183,7 @@ def analyse_recording(
         date_unix_s=d.timestamp(),
         date_source=source,
         speed_m_s=float(est.speed_m_s),
-        speed_sigma_m_s=float(est.speed_sigma_m_s),
+        speed_sigma_m_s=float(est.speed_sigma_m_s or 0.0),
         nominal_pitch_m=float(est.nominal_pitch_m),
         channel=str(est.channel),
         fundamental_hz=float(est.fundamental_hz),

@@ -165,6 +165,11 @@ class LimitForecast:
     earliest_utc: str | None = None
     latest_utc: str | None = None
 
+    def overdue(self, today_unix_s) -> bool:
+        """Whether the forecast date has passed on ``today_unix_s``: the limit was probably reached since the
+        last measurement (re-measure)."""
+        return self.status == "forecast" and self.date_utc is not None and self.urgency_unix_s() <= today_unix_s
+
     def urgency_unix_s(self):
         """Date used to rank units: the forecast, else the earliest date; +inf without one."""
         d = self.date_utc or self.earliest_utc
@@ -296,17 +301,30 @@ class UnitTrend:
     replacements: tuple = ()
     point_labels: tuple = ()
     flags: tuple = ()
+    speed_sigma_stated: bool = True
 
     def next_limit(self):
         """The first limit not yet reached, as its :class:`LimitForecast` (None when all are reached)."""
         return next((f for f in self.forecasts if f.status != "reached"), None)
 
-    def as_dict(self) -> dict:
+    def overdue(self, today_unix_s) -> bool:
+        """Whether the next limit's forecast date has passed on ``today_unix_s`` (:meth:`LimitForecast.overdue`)."""
+        nxt = self.next_limit()
+        return nxt is not None and nxt.overdue(today_unix_s)
+
+    def as_dict(self, today_unix_s=None) -> dict:
+        """JSON-ready dict; with ``today_unix_s`` every forecast says whether it is ``overdue`` (its date passed)."""
         skip = ("forecasts", "fit", "outliers", "flagged", "replacements", "point_labels", "flags")
         d = {k: getattr(self, k) for k in self.__dataclass_fields__ if k not in skip}
         d["forecasts"] = [asdict(f) for f in self.forecasts]
         nxt = self.next_limit()
         d["next_limit"] = None if nxt is None else asdict(nxt)
+        if today_unix_s is not None:
+            for f, fd in zip(self.forecasts, d["forecasts"]):
+                fd["overdue"] = f.overdue(today_unix_s)
+            if d["next_limit"] is not None:
+                d["next_limit"]["overdue"] = nxt.overdue(today_unix_s)
+            d["overdue"] = self.overdue(today_unix_s)
         d["flags"] = list(self.flags)
         d["outliers"] = [dict(o) for o in self.outliers]
         d["flagged"] = [dict(o) for o in self.flagged]
@@ -387,6 +405,12 @@ def unit_trend(unit, measurements, *, limits_percent=DEFAULT_LIMITS_PERCENT, cov
             flags.append(f"{n} {q} measurement(s) left out")
     if repl:
         flags.append(f"chain replaced {repl[-1]['date_utc'][:10]} (new segment)")
+    unstated = sum(1 for m in used if not m.speed_sigma_m_s)
+    if unstated:
+        flags.append(
+            f"speed uncertainty not stated in {unstated} measurement(s) (stored 0): their sigmas, the rate's and "
+            "the forecast intervals are too small"
+        )
     if not used:
         flags.append("no usable measurement: the latest is flagged")
     elif ms[-1] is not last:
@@ -415,6 +439,7 @@ def unit_trend(unit, measurements, *, limits_percent=DEFAULT_LIMITS_PERCENT, cov
         replacements=repl,
         point_labels=tuple((m.id, scr.labels.get(m.id if m.id is not None else id(m), "ok")) for m in ms),
         flags=tuple(flags),
+        speed_sigma_stated=bool(last.speed_sigma_m_s),
     )
 
 

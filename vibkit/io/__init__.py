@@ -8,6 +8,9 @@ the table in :mod:`vibkit.io.registry`, in this order:
   (``CDF\\x01``) -> :mod:`vibkit.io.netcdf`;
 * waveform formats obspy reads (miniSEED, SAC, ...: by suffix, or binary content
   that is not HDF5) -> :mod:`vibkit.io.seismic`;
+* gzip and zip files holding one recording: unpacked, the recording read as below;
+* device exports with their own header (Empatica E4, ActiGraph RAW CSV, LabVIEW ``.lvm``)
+  -> :mod:`vibkit.io.devices`, :mod:`vibkit.io.lvm`; a WitMotion binary log is named and refused;
 * text (CSV, TSV, logger and spreadsheet exports) -> :mod:`vibkit.io.text.csv`.
 
 Every dataset carries ``source_file``, ``sha256``, ``reader``,
@@ -82,6 +85,28 @@ def max_recording_bytes(max_bytes=None) -> int:
     return int(max_bytes)
 
 
+def read_bounded(f, size_hint: int, limit: int) -> bytes:
+    """At most ``limit + 1`` bytes of the binary stream ``f``, with memory in proportion to what it holds.
+
+    The first read asks for the size the file states (``size_hint`` + 1, at least 64 KiB), so a
+    regular file is read in one call; a stream that holds more (a file that grows, ``/proc``,
+    stdin) is read on in chunks that double, never past ``limit + 1``: a buffer of the limit's
+    size is never reserved up front.
+    """
+    want = min(limit + 1, max(int(size_hint) + 1, 1 << 16))
+    data = f.read(want)
+    if len(data) < want:
+        return data
+    chunks, total = [data], len(data)
+    while total <= limit:
+        chunk = f.read(min(limit + 1 - total, max(total, 1 << 20)))
+        if not chunk:
+            break
+        chunks.append(chunk)
+        total += len(chunk)
+    return b"".join(chunks)
+
+
 def _open_checked(spath: str, limit: int):
     """Open a regular file for reading, refusing anything else before it is opened."""
     if not os.path.lexists(spath):
@@ -122,7 +147,7 @@ def _open_checked(spath: str, limit: int):
         if not stat.S_ISREG(st2.st_mode):
             raise RecordingError(spath, None, "is not a regular file; expected a recording file on disk")
         with os.fdopen(fd, "rb", closefd=False) as f:
-            data = f.read(limit + 1)  # bounded: a file that grows (or /proc) cannot exhaust memory
+            data = read_bounded(f, st2.st_size, limit)
     except OSError as exc:
         raise RecordingError(spath, None, f"cannot be read: {exc.strerror or exc}") from None
     finally:
@@ -137,7 +162,7 @@ def _open_checked(spath: str, limit: int):
     return data
 
 
-def _check_options(sample_rate, resample, gap_factor, delimiter, decimal):
+def _check_options(sample_rate, resample, gap_factor, delimiter, decimal, date_order=None):
     if sample_rate is not None:
         try:
             fs = float(sample_rate)
@@ -157,6 +182,59 @@ def _check_options(sample_rate, resample, gap_factor, delimiter, decimal):
         raise ValueError(f"delimiter must be one of ',', ';', '\\t', '|', ' ' (whitespace), got {delimiter!r}")
     if decimal is not None and decimal not in (".", ","):
         raise ValueError(f"decimal must be '.' or ',', got {decimal!r}")
+    if date_order is not None and date_order not in ("dmy", "mdy"):
+        raise ValueError(f"date_order must be 'dmy' (day/month/year) or 'mdy' (month/day/year), got {date_order!r}")
+
+
+#: the path that names standard input (``vibkit pitch -``); its records name it :data:`STDIN_NAME`
+STDIN = "-"
+STDIN_NAME = "<stdin>"
+
+
+_stdin_read: list = [None, b""]  # the stream read and its bytes
+
+
+def _read_stdin(fmt, limit, options):
+    """Read a recording from standard input: its bytes (bounded by ``limit``), sniffed like a file's.
+
+    Standard input is read once per process (a second read of ``"-"`` gets the same bytes).
+    The text reader reads the bytes; a format whose library opens a path (netCDF, obspy's) gets
+    them in a temporary file that is removed after the read, and its messages name ``<stdin>``.
+    """
+    import sys
+    import tempfile
+
+    stream = getattr(sys.stdin, "buffer", sys.stdin)
+    if stream is None or stream.isatty():
+        raise RecordingError(STDIN_NAME, None, "standard input is a terminal; pipe a recording into it (cat rec.csv |)")
+    if stream is not _stdin_read[0]:  # read once: a second read of "-" (a retry with --channel) gets the same bytes
+        try:
+            _stdin_read[:] = [stream, read_bounded(stream, 0, limit)]
+        except OSError as exc:
+            raise RecordingError(STDIN_NAME, None, f"cannot be read: {exc.strerror or exc}") from None
+    data = _stdin_read[1]
+    if len(data) > limit:
+        raise RecordingError(
+            STDIN_NAME,
+            None,
+            f"holds more than the {_gib(limit)} limit for a recording "
+            f"(raise it with max_bytes= or the environment variable {_MAX_ENV})",
+        )
+    if not data:
+        raise RecordingError(STDIN_NAME, None, "is empty (0 bytes); expected a recording")
+    entry = detect_format(STDIN_NAME, data, options["encoding"]) if fmt is None else fmt
+    if entry.name == "text":
+        return entry.read(STDIN_NAME, data, options)
+    with tempfile.TemporaryDirectory(prefix="vibkit-stdin-") as folder:
+        tmp = os.path.join(folder, "stdin" + (".nc" if entry.name == "netcdf" else ""))
+        with open(tmp, "wb") as f:
+            f.write(data)
+        try:
+            ds = entry.read(tmp, data, options)
+        except RecordingError as err:
+            raise RecordingError(STDIN_NAME, err.line, err.message.replace(tmp, STDIN_NAME)) from None
+    ds.attrs["source_file"] = STDIN_NAME
+    return ds
 
 
 def read_recording(
@@ -175,13 +253,15 @@ def read_recording(
     encoding=None,
     max_bytes=None,
     format=None,
+    date_order=None,
 ):
     """Read a field recording (or a vibkit result) into an xarray Dataset.
 
     Parameters
     ----------
     path : str or os.PathLike
-        CSV/text export, waveform file (miniSEED, SAC ...) or netCDF4/HDF5.
+        CSV/text export, waveform file (miniSEED, SAC ...) or netCDF4/HDF5; ``"-"`` reads standard
+        input (its format sniffed from its bytes; the result's ``source_file`` is ``<stdin>``).
     channel : str or list of str, optional
         Keep only these channels, matched (case-insensitively) against the
         column header as found, its name without unit, or the variable name;
@@ -226,6 +306,10 @@ def read_recording(
         :func:`format_names`: ``"netcdf"``, ``"seismic"``, ``"text"``) instead of
         the one its content and suffix choose (see :mod:`vibkit.io.registry`).
 
+    date_order : {"dmy", "mdy"}, optional
+        Text files: the order of numeric dates ``05/11/2025``.  Default: the order a field above
+        12 shows; dates that could be either are refused, naming this option.
+
     Returns
     -------
     xarray.Dataset
@@ -252,14 +336,10 @@ def read_recording(
     >>> ds["tensioner_displacement"].attrs["units"]  # doctest: +SKIP
     'm'
     """
-    _check_options(sample_rate, resample, gap_factor, delimiter, decimal)
+    _check_options(sample_rate, resample, gap_factor, delimiter, decimal, date_order)
     fmt = None if format is None else get_format(format)
     if not isinstance(path, (str, os.PathLike)):
         raise ValueError(f"path must be a file path (str or os.PathLike), got {type(path).__name__}")
-    spath = os.fspath(path)
-    data = _open_checked(spath, max_recording_bytes(max_bytes))
-    if not data:
-        raise RecordingError(spath, None, "file is empty (0 bytes); expected a recording")
     options = dict(
         channel=channel,
         sample_rate=sample_rate,
@@ -272,6 +352,13 @@ def read_recording(
         delimiter=delimiter,
         decimal=decimal,
         encoding=encoding,
+        date_order=date_order,
     )
+    spath = os.fspath(path)
+    if spath == STDIN:
+        return _read_stdin(fmt, max_recording_bytes(max_bytes), options)
+    data = _open_checked(spath, max_recording_bytes(max_bytes))
+    if not data:
+        raise RecordingError(spath, None, "file is empty (0 bytes); expected a recording")
     entry = detect_format(spath, data, encoding) if fmt is None else fmt
     return entry.read(spath, data, options)

@@ -18,7 +18,17 @@ import re
 
 import numpy as np
 
-__all__ = ["resolve_channel", "is_counter_name", "is_counter_ramp", "COUNTER_ATTR"]
+__all__ = [
+    "resolve_channel",
+    "is_counter_name",
+    "is_counter_ramp",
+    "COUNTER_ATTR",
+    "STATUS_ATTR",
+    "is_status",
+    "mark_status",
+    "channel_series",
+    "own_samples",
+]
 
 #: variable attr marking a column that counts samples
 COUNTER_ATTR = "sample_counter"
@@ -28,6 +38,58 @@ _COUNTER_NAME = re.compile(
     r"|(?:#|n|nr|no\.?|num|number|index|idx)[ _-]?(?:de[ _-])?(?:sample|muestra|point|row)s?)$",
     re.IGNORECASE,
 )
+
+
+#: variable attr marking a status column (an accuracy or state code, or a column that never changes)
+STATUS_ATTR = "status_column"
+_STATUS_NAME = re.compile(r"^(?:accuracy|status|state|flags?|quality|valid(?:ity)?|error|battery)(?:[ _].*)?$", re.I)
+
+
+def is_status(name, values) -> bool:
+    """Whether a column is a status and not a signal: named like one (``accuracy``, ``status``) and holding
+    few distinct integers, or holding one value only."""
+    try:
+        v = np.asarray(values, dtype=float).ravel()
+    except (TypeError, ValueError):  # text or stamps: not a signal vibkit analyses anyway
+        return False
+    v = v[np.isfinite(v)]
+    if v.size < 2:
+        return False
+    if np.all(v == v[0]):
+        return True
+    return bool(_STATUS_NAME.match(str(name).strip())) and np.all(v == np.round(v)) and np.unique(v).size <= 16
+
+
+def mark_status(channels, history):
+    """Mark the status columns among reader channels (attr :data:`STATUS_ATTR`), saying so in ``history``."""
+    found = []
+    for ch in channels:
+        if is_status(ch.long_name, ch.values):
+            ch.attrs[STATUS_ATTR] = 1
+            found.append(ch.name)
+    if found:
+        history.append(
+            "status or constant column(s) " + ", ".join(found) + ": kept, never the channel analysed by default"
+        )
+
+
+def channel_series(recording, name):
+    """(time [s], values) of one channel's own samples: the rows where it holds a value (sparse exports)."""
+    v = np.asarray(recording[name].values, dtype=float)
+    t = np.asarray(recording["time"].values, dtype=float)
+    ok = np.isfinite(v)
+    return t[ok], v[ok]
+
+
+def own_samples(recording, name):
+    """The recording cut to the rows where channel ``name`` holds a value, when it is sparse (attr ``sparse``:
+    a sensor that wrote only some rows); else the recording itself.
+
+    Analyses of a sparse channel run on its own samples and times, never on values filled in between them.
+    """
+    if not int(recording[name].attrs.get("sparse", 0)):
+        return recording
+    return recording.isel(time=np.flatnonzero(np.isfinite(np.asarray(recording[name].values, dtype=float))))
 
 
 def _norm(text) -> str:
@@ -66,6 +128,11 @@ def _counters(recording):
     ]
 
 
+def _is_status_var(recording, name) -> bool:
+    da = recording[name]
+    return bool(int(da.attrs.get(STATUS_ATTR, 0))) or (da.size > 1 and is_status("", da.values))
+
+
 def _where(recording) -> str:
     src = recording.attrs.get("source_file", "")
     return f"{src}: " if src else ""
@@ -101,6 +168,9 @@ def resolve_channel(recording, channel=None) -> str:
     if not names:
         raise ValueError(f"{where}recording has no 1-D channel along 'time'")
     if channel is None:
+        for n in names:
+            if n not in counters and not _is_status_var(recording, n):
+                return n
         for n in names:
             if n not in counters:
                 return n

@@ -4,12 +4,18 @@
 atomically: to a temporary file in the target's folder, then ``os.replace``,
 so a reader never sees half a file.  ``read_netcdf`` opens one back, loads it
 into memory and adds the provenance attrs of a recording.
+
+What is written follows the CF conventions (``Conventions = "CF-1.10"``, see :func:`cf_attrs`):
+``time`` counts ``seconds since`` a stated epoch, so that ``xarray.open_dataset`` (decoding
+times) gives the instants, and every variable has ``units`` and ``long_name``.
 """
 
 from __future__ import annotations
 
 import os
+import re
 import warnings
+from datetime import datetime, timezone
 
 import numpy as np
 import xarray as xr
@@ -18,7 +24,13 @@ from .errors import RecordingError
 from .recording import sha256_of
 from .timebase import check_order
 
-__all__ = ["read_netcdf", "write_result"]
+__all__ = ["read_netcdf", "write_result", "cf_attrs", "CONVENTIONS", "UNKNOWN_EPOCH"]
+
+#: the CF version the written files follow
+CONVENTIONS = "CF-1.10"
+#: the epoch written when a recording states no start time, and as a simulation's t = 0 (which has no date)
+UNKNOWN_EPOCH = "1970-01-01T00:00:00Z"
+_SINCE = re.compile(r"^\s*(?:s|sec|secs|second|seconds)\s+since\s+(\S.*?)\s*$", re.IGNORECASE)
 
 _ATTR_TYPES = (str, int, float, np.integer, np.floating)
 #: netCDF's default fill value of float and double variables (NC_FILL_FLOAT/NC_FILL_DOUBLE), written by
@@ -42,6 +54,72 @@ def _check_attrs(where: str, attrs: dict) -> None:
             f"attr {key!r} of {where} has type {type(value).__name__}; netCDF attrs must be "
             "strings, numbers or 1-D arrays of them"
         )
+
+
+def _epoch(start) -> str | None:
+    """``start`` (ISO 8601, as the readers state a start time) as the epoch of a CF time unit, else None."""
+    try:
+        t = datetime.fromisoformat(str(start).strip().replace(", ", "T").replace("Z", "+00:00"))
+    except ValueError:
+        return None
+    if t.tzinfo is not None:
+        t = t.astimezone(timezone.utc).replace(tzinfo=None)
+        return t.isoformat() + "Z"
+    return t.isoformat()  # local time of the logger, as the file states it
+
+
+def cf_attrs(ds: xr.Dataset) -> xr.Dataset:
+    """A shallow copy of ``ds`` with the CF-1.10 attributes that :func:`write_result` writes.
+
+    * ``Conventions = "CF-1.10"``;
+    * a ``time`` coordinate in seconds gets ``units = "seconds since EPOCH"``, ``standard_name =
+      "time"``, ``calendar`` and ``axis = "T"``; EPOCH is the recording's ``start_time`` (its time
+      counts seconds from it), else :data:`UNKNOWN_EPOCH`, named as such in the coordinate's
+      ``comment`` (a simulation's t = 0, a recording that states no start time);
+    * every variable gets ``long_name`` (its name where it has none) and ``units`` (``"1"``).
+    """
+    out = ds.copy(deep=False)
+    out.attrs["Conventions"] = CONVENTIONS
+    for name, var in out.variables.items():
+        var.attrs.setdefault("long_name", str(name))
+        if var.dtype.kind in "iuf" and name != "segment":
+            var.attrs.setdefault("units", "1")
+    if "time" in out.coords and out["time"].dtype.kind in "iuf" and out["time"].attrs.get("units", "s") == "s":
+        epoch = _epoch(ds.attrs["start_time"]) if "start_time" in ds.attrs else None
+        comment = (
+            f"seconds from the recording's start time {ds.attrs['start_time']}"
+            if epoch
+            else f"t = 0 is the start of the simulation or recording, which states no date (or none in ISO 8601): "
+            f"the epoch {UNKNOWN_EPOCH} stands for it"
+        )
+        attrs = out.variables["time"].attrs
+        attrs.update(
+            units=f"seconds since {epoch or UNKNOWN_EPOCH}",
+            standard_name="time",
+            calendar="proleptic_gregorian",
+            axis="T",
+        )
+        attrs.setdefault("comment", comment)
+    return out
+
+
+def _from_cf_time(ds: xr.Dataset, history: list) -> None:
+    """Undo :func:`cf_attrs` on ``time`` in place: ``units`` back to ``s``, the epoch kept as ``start_time``."""
+    if "time" not in ds.coords:
+        return
+    attrs = ds["time"].attrs
+    m = _SINCE.match(str(attrs.get("units", "")))
+    if not m:
+        return
+    epoch = m.group(1)
+    attrs["units"] = "s"
+    for key in ("standard_name", "calendar", "axis"):
+        attrs.pop(key, None)
+    if "stands for it" in str(attrs.get("comment", "")) or str(attrs.get("comment", "")).startswith("seconds from"):
+        attrs.pop("comment")
+    if epoch != UNKNOWN_EPOCH and "start_time" not in ds.attrs:
+        ds.attrs["start_time"] = epoch
+        history.append(f"time in seconds since {epoch} (the start time)")
 
 
 def write_result(ds: xr.Dataset, path, *, overwrite: bool = True, inputs=()) -> str:
@@ -85,7 +163,7 @@ def write_result(ds: xr.Dataset, path, *, overwrite: bool = True, inputs=()) -> 
     _check_attrs("the dataset", ds.attrs)
     for name, var in ds.variables.items():
         _check_attrs(f"variable {name!r}", var.attrs)
-    data = ds.to_netcdf(engine="h5netcdf")  # in memory: the HDF5 library never holds a file of ours
+    data = cf_attrs(ds).to_netcdf(engine="h5netcdf")  # in memory: the HDF5 library never holds a file of ours
     write_bytes(data, path, overwrite=overwrite, inputs=inputs)
     return path
 
@@ -188,6 +266,7 @@ def read_netcdf(path, data: bytes, *, channel=None, repair_time=False) -> xr.Dat
     history = [f"read with xarray ({engine}); {len(ds.data_vars)} variable(s)"]
     history += [f"backend warning: {w.message}" for w in caught]
     _mask_fill_values(ds, history)
+    _from_cf_time(ds, history)
     if "time" in ds.coords:
         ds = _check_time(path, ds, repair_time, history)
     if channel is not None:

@@ -7,10 +7,17 @@ names with ``format=``.  The order of :data:`FORMATS` is the priority, and it is
 1. ``netcdf``: netCDF4/HDF5 (signature ``\\x89HDF``) or netCDF3 (``CDF\\x01``, ``CDF\\x02``) by
    content, or a suffix of :data:`NETCDF_SUFFIXES` whatever the content (vibkit's own results,
    read by :mod:`vibkit.io.netcdf`);
-2. ``seismic``: a suffix of :data:`SEISMIC_SUFFIXES` whatever the content, binary content (a NUL
+2. ``gzip`` and ``zip``: containers by signature (``\\x1f\\x8b``, ``PK\\x03\\x04``), unpacked, the one
+   recording inside read by the entry that claims it (:mod:`vibkit.io.devices`);
+3. ``witmotion``: WitMotion WT901 SD-card logs (valid ``0x55`` packets): named and refused, saying
+   what reads them;
+4. ``seismic``: a suffix of :data:`SEISMIC_SUFFIXES` whatever the content, binary content (a NUL
    byte in the first 64 KiB that is not UTF-16/32 text, unless ``encoding=`` is given), or obspy's
    ASCII layouts that start with a ``TIMESERIES`` line (read by :mod:`vibkit.io.seismic`);
-3. ``text``: everything else: CSV, TSV, logger and spreadsheet exports (read by
+5. ``e4``, ``actigraph``, ``lvm``: text layouts whose header the generic text reader cannot read:
+   Empatica E4 (start time and rate rows), ActiGraph RAW CSV (``Data File Created By ActiGraph``
+   banner), NI LabVIEW ``.lvm`` (``LabVIEW Measurement``) (:mod:`vibkit.io.devices`, :mod:`vibkit.io.lvm`);
+6. ``text``: everything else: CSV, TSV, logger and spreadsheet exports (read by
    :mod:`vibkit.io.text.csv`, which refuses what is not text).
 
 A content signature beats a suffix only where the entry with the signature comes first; the last
@@ -160,13 +167,39 @@ def _read_netcdf(path, data, options):
 
 
 _COMMON = ("channel", "sample_rate", "resample", "gap_factor", "repair_time")
-_TEXT_OPTIONS = (*_COMMON, "time_column", "time_unit", "units", "delimiter", "decimal", "encoding")
+_TEXT_OPTIONS = (*_COMMON, "time_column", "time_unit", "units", "delimiter", "decimal", "encoding", "date_order")
 
 
 def _read_seismic(path, data, options):
     from .seismic import read_seismic
 
     return read_seismic(path, data, units=options["units"], **{k: options[k] for k in _COMMON})
+
+
+def _device(name):
+    """The reader ``name`` of :mod:`vibkit.io.devices`, imported when called."""
+
+    def read(path, data, options):
+        from . import devices
+
+        return getattr(devices, name)(path, data, options)
+
+    return read
+
+
+def _sniff(module, name):
+    def sniff(p):
+        import importlib
+
+        return getattr(importlib.import_module(f"vibkit.io.{module}"), name)(p)
+
+    return sniff
+
+
+def _read_lvm(path, data, options):
+    from .lvm import read_lvm
+
+    return read_lvm(path, data, options)
 
 
 def _read_text(path, data, options):
@@ -181,11 +214,42 @@ FORMATS: tuple[Format, ...] = (
         "netcdf", "netCDF4/HDF5 and netCDF3 (vibkit's results), by signature or suffix", _sniff_netcdf, _read_netcdf
     ),
     Format(
+        "gzip",
+        "gzip files (.gz) holding one recording, unpacked and read",
+        _sniff("devices", "sniff_gzip"),
+        _device("read_gzip"),
+    ),
+    Format(
+        "zip",
+        "zip archives holding exactly one recording, unpacked and read",
+        _sniff("devices", "sniff_zip"),
+        _device("read_zip"),
+    ),
+    Format(
+        "witmotion",
+        "WitMotion WT901 SD-card binary logs (0x55 packets): named and refused, with what reads them",
+        _sniff("devices", "sniff_witmotion"),
+        _device("read_witmotion"),
+    ),
+    Format(
         "seismic",
         "waveform formats obspy reads (miniSEED, SAC, GSE2, ...): by suffix, binary content or a TIMESERIES line",
         _sniff_seismic,
         _read_seismic,
     ),
+    Format(
+        "e4",
+        "Empatica E4 exports (row 1 start time, row 2 sample rate, then samples; ACC.csv in 1/64 g)",
+        _sniff("devices", "sniff_e4"),
+        _device("read_e4"),
+    ),
+    Format(
+        "actigraph",
+        "ActiGraph ActiLife RAW CSV ('Data File Created By ActiGraph ... at 30 Hz' banner, values in g)",
+        _sniff("devices", "sniff_actigraph"),
+        _device("read_actigraph"),
+    ),
+    Format("lvm", "NI LabVIEW Measurement files (.lvm)", _sniff("lvm", "sniff_lvm"), _read_lvm),
     Format(
         "text",
         "CSV, TSV, logger and spreadsheet exports (every file no entry above claims)",

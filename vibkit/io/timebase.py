@@ -18,7 +18,7 @@ import numpy as np
 
 from .errors import RecordingError
 
-__all__ = ["TimeDiagnosis", "check_order", "diagnose", "resample_linear", "held_update_rate"]
+__all__ = ["TimeDiagnosis", "check_order", "diagnose", "resample_linear", "held_update_rate", "quantum"]
 
 
 @dataclass(frozen=True)
@@ -231,12 +231,38 @@ def held_update_rate(t, values, *, held_fraction=0.3):
         None when the channel is not held, or constant.
     """
     v = np.asarray(values, dtype=float)
-    if v.size < 3:
+    if v.size < 3 or quantum(v) is not None:  # a quantised signal repeats values it was never held at
         return None
     change = np.flatnonzero(np.diff(v) != 0) + 1  # rows that bring a new value (NaN != NaN: counted)
     if change.size < 2 or 1 - change.size / (v.size - 1) <= held_fraction:
         return None
     return float((change.size - 1) / (t[change[-1]] - t[change[0]]))
+
+
+def quantum(values, *, tolerance=1e-3):
+    """The quantisation step of a channel whose repeated values come from its resolution, not from holds.
+
+    A sensor read at a coarse resolution (PASCO SPARKvue exports at 0.1 m/s^2) repeats a value while the
+    signal moves less than one step; a channel held between updates (multi-sensor phone exports) jumps by
+    whatever the signal did meanwhile.  The channel is quantised when every change is a whole multiple of
+    the smallest change ``q`` (within ``tolerance`` of ``q``) and at least half the changes are one
+    step (+-q): a held channel's changes are neither.
+
+    Returns
+    -------
+    float or None
+        ``q`` in the channel's units, or None when the repeats are not quantisation (or nothing repeats).
+    """
+    v = np.asarray(values, dtype=float)
+    d = np.diff(v[np.isfinite(v)])
+    nz = np.abs(d[d != 0])
+    if nz.size < 8 or nz.size > 0.95 * d.size:
+        return None
+    q = float(nz.min())
+    k = nz / q
+    if np.max(np.abs(k - np.round(k))) > tolerance or np.mean(np.round(k) == 1) < 0.5:
+        return None
+    return q
 
 
 def resample_linear(t, columns, segment, fs):

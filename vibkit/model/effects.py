@@ -77,6 +77,7 @@ from .slots import (
     IP,
     IP_CONTACT,
     IP_GRAVITY,
+    IP_LINKS_PER_STEP,
     IP_MOTOR,
     IP_N,
     IP_PASSENGERS,
@@ -140,7 +141,7 @@ def pack_parameters(model, effects: dict, *, start: float = 0.0):
     fp[FP["lt"]] = model.guide.params.tensioner_length
     fp[FP["pitch"]] = model.pitch
     fp[FP["inertia"]] = model.sprocket.inertia
-    fp[FP["r_d"]] = model.scene.chain.roller_radius
+    fp[FP["r_d"]] = float(model.radii.max())  # the largest roller: how far a roller can reach
     fp[FP["cx"]], fp[FP["cz"]] = model.centre
     fp[FP["root_r"]] = geo["root_radius"]
     fp[FP["psi"]] = geo["tooth_pitch"]
@@ -148,11 +149,10 @@ def pack_parameters(model, effects: dict, *, start: float = 0.0):
     # contact candidates: roller centres within reach of a tooth's farthest corner (the tip corners
     # B and C lie beyond R^F + h: sqrt((R^F + h)^2 + (tip width / 2)^2))
     loc = model.corners_local
-    fp[FP["reach"]] = (
-        float(np.max(np.hypot(loc[:, 0], geo["root_radius"] + loc[:, 1]))) + model.scene.chain.roller_radius
-    )
+    fp[FP["reach"]] = float(np.max(np.hypot(loc[:, 0], geo["root_radius"] + loc[:, 1]))) + fp[FP["r_d"]]
     ip[IP["n"]] = n
     ip[IP["nteeth"]] = model.sprocket.teeth
+    ip[IP["links_per_step"]] = model.scene.chain.links_per_step
     if "gravity" in effects:
         ip[IP["gravity"]] = 1
         fp[FP["g"]] = effects["gravity"].g
@@ -164,7 +164,7 @@ def pack_parameters(model, effects: dict, *, start: float = 0.0):
         ip[IP["motor"]] = 1
         o = effects["motor"]
         fp[FP["kp"]], fp[FP["ki"]] = o.kp, o.ki
-        fp[FP["wref"]] = -o.speed / geo["pitch_radius"]
+        fp[FP["wref"]] = model.sprocket_speed(o.speed)  # motor.speed is the chain speed on the straight
         fp[FP["tlim"]] = o.torque_limit
     pm = np.zeros(0)
     ps = np.zeros(0, dtype=np.int64)
@@ -187,7 +187,8 @@ def pack_parameters(model, effects: dict, *, start: float = 0.0):
         fp[FP["mu_rr"]] = effects["rolling_resistance"].coefficient
         if "gravity" not in effects:
             fp[FP["g"]] = gravity_of(effects)
-    return (model.guide.table, model.corners_local, fp, ip, model.mass.copy(), pm, ps, pb, pa, model.chain.pitches)
+    prm = (model.guide.table, model.corners_local, fp, ip, model.mass.copy(), pm, ps, pb, pa, model.chain.pitches)
+    return prm + (model.radii.copy(),)
 
 
 def reset_closure(info, delta):
@@ -256,9 +257,10 @@ def contact_candidates(xs, zs, n, cx, cz, reach, cand):
 
 
 @nb.njit(cache=True, error_model="numpy", inline="always")
-def step_roller(ps, jp, r, n):
-    """Index of roller ``r`` (0, 1, 2: the middle one is 1) of passenger ``jp``'s step (``ps`` 1-based)."""
-    return (3 * (ps[jp] - 1) + r) % n
+def step_roller(ps, jp, r, n, k):
+    """Index of roller ``r`` (0 .. k - 1; the middle one, for 3 or 4 rollers, is 1) of passenger ``jp``'s
+    step (``ps`` 1-based) on a chain of ``k`` rollers per step."""
+    return (k * (ps[jp] - 1) + r) % n
 
 
 @nb.njit(cache=True, error_model="numpy", inline="always")
@@ -268,24 +270,24 @@ def aboard(jp, where, pb, pa):
 
 
 @nb.njit(cache=True, error_model="numpy", inline="always")
-def step_load(jp, pm, g):
-    """Weight [N] passenger ``jp`` puts on each of the three rollers of its step: m g / 3."""
-    return pm[jp] * g / 3.0
+def step_load(jp, pm, g, k):
+    """Weight [N] passenger ``jp`` puts on each of the ``k`` rollers of its step: m g / k."""
+    return pm[jp] * g / k
 
 
 @nb.njit(cache=True, error_model="numpy")
-def passenger_loads(t, mode, s0, pm, ps, pb, pa, g, n, fz):
-    """Subtract from ``fz`` [N] the weight of every passenger aboard, shared by its step's three rollers.
+def passenger_loads(t, mode, s0, pm, ps, pb, pa, g, n, k, fz):
+    """Subtract from ``fz`` [N] the weight of every passenger aboard, shared by its step's ``k`` rollers.
 
     ``mode`` 1: aboard by time (board <= t < alight); 2: by place, while the step's middle roller's
     unwrapped s0 (``s0``, the rollers' coordinates) is between the boarding and alighting places.
     """
     for jp in range(pm.size):
-        where = t if mode == PASSENGERS_BY_TIME else s0[step_roller(ps, jp, 1, n)]
+        where = t if mode == PASSENGERS_BY_TIME else s0[step_roller(ps, jp, 1, n, k)]
         if aboard(jp, where, pb, pa):
-            w = step_load(jp, pm, g)
-            for r in range(3):
-                fz[step_roller(ps, jp, r, n)] -= w
+            w = step_load(jp, pm, g, k)
+            for r in range(k):
+                fz[step_roller(ps, jp, r, n, k)] -= w
 
 
 @nb.njit(cache=True, error_model="numpy")
@@ -323,7 +325,7 @@ def evaluate(t, y, dy, prm, ws, want_teeth):
     slope ``INFO_DH_DDELTA`` (zero them to close from delta alone: see ``reset_closure``). Status 0
     is success; 1 means the chain could not be closed (the state left the tensioner's travel).
     """
-    tab, loc, fp, ip, mass, pm, ps, pb, pa, pitches = prm
+    tab, loc, fp, ip, mass, pm, ps, pb, pa, pitches, radii = prm
     (s0, kk, lam, xs, zs, part, alpha, beta, jac, gam, hacc, eta, sd, fx, fz, cand, ind_t, frc_t, info) = ws
     n = ip[IP_N]
     p0, lt = fp[FP_P0], fp[FP_LT]
@@ -364,7 +366,7 @@ def evaluate(t, y, dy, prm, ws, want_teeth):
         fx[i] = 0.0
         fz[i] = -mass[i] * g if ip[IP_GRAVITY] == 1 else 0.0
     if ip[IP_PASSENGERS] != 0:
-        passenger_loads(t, ip[IP_PASSENGERS], s0, pm, ps, pb, pa, g, n, fz)
+        passenger_loads(t, ip[IP_PASSENGERS], s0, pm, ps, pb, pa, g, n, ip[IP_LINKS_PER_STEP], fz)
     if ip[IP_ROLLING] == 1:
         mu = fp[FP_ROLLING]
         for i in range(n):
@@ -397,6 +399,7 @@ def evaluate(t, y, dy, prm, ws, want_teeth):
             fp[FP_TOOTH_PITCH],
             ip[IP_TEETH],
             fp[FP_ROLLER_RADIUS],
+            radii,
             fp[FP_STIFFNESS],
             fp[FP_EXPONENT],
             fp[FP_DAMPING],

@@ -28,26 +28,65 @@ class EscalatorModel:
         self.sprocket = scene.sprocket
         self.n = scene.chain.n_rollers
         self.pitch = scene.chain.link_pitch
-        self.mass = np.full(self.n, scene.chain.roller_mass)
+        #: the pitch the sprocket's teeth are cut for (the chain's own unless the scene says otherwise) [m]
+        self.sprocket_pitch = self.sprocket.cut_pitch(self.pitch)
+        self.mass = scene.chain.masses()
+        self.radii = scene.chain.radii()
+        # the chain's mean link length: the chain advances Z of them per sprocket turn (worn links included)
+        pitches = scene.chain.pitches()
+        self.mean_pitch = float(pitches.mean()) if bool(np.any(pitches != self.pitch)) else self.pitch
         self.centre = np.array(scene.guide.sprocket_centre)
-        self.geometry = tooth_geometry(self.sprocket, self.pitch, scene.chain.roller_radius)
-        self.corners_local = local_corners(self.sprocket, self.pitch, scene.chain.roller_radius)
+        self.geometry = tooth_geometry(self.sprocket, self.sprocket_pitch, scene.chain.roller_radius)
+        self.corners_local = local_corners(self.sprocket, self.sprocket_pitch, scene.chain.roller_radius)
 
     @property
     def pitch_radius(self) -> float:
         return self.geometry["pitch_radius"]
 
+    def sprocket_speed(self, chain_speed: float) -> float:
+        """Sprocket speed thetadot [rad/s] that moves the chain at ``chain_speed`` [m/s] on the straight.
+
+        The chain advances Z link pitches per turn of a Z-tooth sprocket, so its mean speed on the
+        straight is Z L omega / (2 pi) (not the pitch circle's omega R^P, 0.21 % faster at Z = 28):
+        thetadot = -2 pi v / (Z L), negative because the sprocket turns clockwise while the steps go up.
+        L is the chain's mean link length (a worn link moves the chain further per tooth, not the teeth).
+        The link-pass frequency is then v / L = Z |thetadot| / (2 pi) exactly.
+        """
+        return -2.0 * math.pi * chain_speed / (self.sprocket.teeth * self.mean_pitch)
+
     def link_pass_frequency(self, speed: float) -> float:
-        """f_link = |v| / L_link. [Hz]"""
-        return abs(speed) / self.pitch
+        """f_link = |v| / L_link, L_link the chain's mean link length. [Hz]"""
+        return abs(speed) / self.mean_pitch
 
     def meshed_angle(self, conf) -> float:
         """Sprocket angle that meshes with configuration ``conf`` (rollers midway between teeth). [rad]"""
         return mesh_phase(conf.position, self.centre, self.sprocket, self.pitch)
 
+    def initial_indentation(self, start: float) -> float:
+        """Deepest roller-tooth overlap [m] with roller 1 at ``start`` [m of undeformed guide] and the
+        sprocket meshed (:meth:`meshed_angle`): 0 when every roller clears the teeth, as a run must start."""
+        from .sprocket import contact_kernel
+
+        conf = self.chain.configure(float(start))
+        theta = self.meshed_angle(conf)
+        n, z = self.n, self.sprocket.teeth
+        pos = np.ascontiguousarray(conf.position, dtype=float)
+        zeros = np.zeros(n)
+        geo = self.geometry
+        return float(
+            contact_kernel(
+                pos[:, 0].copy(), pos[:, 1].copy(), zeros, zeros, np.arange(n, dtype=np.int64), n, theta, 0.0,
+                self.centre[0], self.centre[1], self.corners_local, geo["root_radius"], geo["tooth_pitch"], z,
+                float(np.max(self.radii)), self.radii, 1.0, 1.0, 0.0, np.zeros(n), np.zeros(n), np.zeros(z), np.zeros(z),
+                False,
+            )[2]
+        )  # fmt: skip
+
     def step_rollers(self, step: int) -> np.ndarray:
-        """0-based indices of the three rollers of 1-based step ``step``."""
-        return np.arange(3 * (step - 1), 3 * step) % self.n
+        """0-based indices of the rollers (``links_per_step``: 3, or 4) of 1-based step ``step``; the
+        middle one (index 1 of 3 or 4) is where a step is placed."""
+        k = self.scene.chain.links_per_step
+        return np.arange(k * (step - 1), k * step) % self.n
 
     def gravity_forces(self, g: float) -> tuple[np.ndarray, np.ndarray]:
         return np.zeros(self.n), -self.mass * g
@@ -90,7 +129,7 @@ class EscalatorModel:
         return True, np.asarray(b_abs), np.asarray(a_abs)
 
     def passenger_forces(self, opts, t: float, g: float, fz: np.ndarray, *, s0=None, schedule=None) -> None:
-        """Add each passenger's weight, shared by the three rollers of its step, while aboard.
+        """Add each passenger's weight, shared by the rollers of its step, while aboard.
 
         ``schedule`` is :meth:`passenger_schedule`'s result; by place, ``s0`` holds the rollers'
         unwrapped undeformed coordinates (a :class:`~vibkit.model.chain.Configuration`'s ``s0``).
@@ -100,7 +139,7 @@ class EscalatorModel:
             rollers = self.step_rollers(step)
             where = s0[rollers[1]] if by_place else t
             if b <= where < a:
-                fz[rollers] -= m * g / 3.0
+                fz[rollers] -= m * g / rollers.size
 
     def wrap_angle(self, theta: float) -> float:
         return math.remainder(theta, 2 * math.pi)

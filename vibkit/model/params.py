@@ -118,6 +118,12 @@ class ChainParams:
     worn_links : tuple of (int, float)
         Links whose pitch differs from ``link_pitch``: (1-based link number, pitch [m]). Link j
         joins roller j to roller j+1; link p closes the chain on roller 1.
+    roller_masses, roller_radii : tuple of (int, float)
+        Rollers whose mass [kg] or radius [m] differs from ``roller_mass`` / ``roller_radius``:
+        (1-based roller number, value).
+    links_per_step : int
+        Rollers (links) per step: 3 (the study's 133.33 mm chain under 400 mm steps) or 4 (101.6 mm
+        chains). Step s carries rollers links_per_step (s - 1) + 1 ... links_per_step s.
     """
 
     link_pitch: float
@@ -125,9 +131,14 @@ class ChainParams:
     roller_mass: float
     n_rollers: int
     worn_links: tuple = ()
+    roller_masses: tuple = ()
+    roller_radii: tuple = ()
+    links_per_step: int = 3
 
     def __post_init__(self):
         _positive(self, "link_pitch", "roller_radius", "roller_mass")
+        if self.links_per_step not in (3, 4):
+            raise ValueError(f"ChainParams.links_per_step must be 3 or 4, got {self.links_per_step!r}")
         if not isinstance(self.n_rollers, int) or self.n_rollers < 3:
             raise ValueError(f"ChainParams.n_rollers must be an integer >= 3, got {self.n_rollers!r}")
         for link, pitch in self.worn_links:
@@ -135,6 +146,28 @@ class ChainParams:
                 raise ValueError(f"ChainParams.worn_links: link number must be 1..{self.n_rollers}, got {link!r}")
             if not (math.isfinite(pitch) and pitch > 0):
                 raise ValueError(f"ChainParams.worn_links: pitch of link {link} must be positive, got {pitch!r}")
+        for name in ("roller_masses", "roller_radii"):
+            for roller, value in getattr(self, name):
+                if not (isinstance(roller, int) and 1 <= roller <= self.n_rollers):
+                    raise ValueError(f"ChainParams.{name}: roller number must be 1..{self.n_rollers}, got {roller!r}")
+                if not (math.isfinite(value) and value > 0):
+                    raise ValueError(f"ChainParams.{name}: value of roller {roller} must be positive, got {value!r}")
+
+    def _by_roller(self, base, overrides):
+        import numpy as np
+
+        out = np.full(self.n_rollers, float(base))
+        for roller, value in overrides:
+            out[roller - 1] = value
+        return out
+
+    def masses(self):
+        """Mass of every roller. [kg]"""
+        return self._by_roller(self.roller_mass, self.roller_masses)
+
+    def radii(self):
+        """Radius of every roller. [m]"""
+        return self._by_roller(self.roller_radius, self.roller_radii)
 
     def pitches(self):
         """Pitch of every link, link j joining roller j to j+1 (the last closing on roller 1). [m]"""
@@ -160,6 +193,9 @@ class SprocketParams:
         Sprocket mass. [kg]
     inertia : float
         Moment of inertia about the axle. [kg m^2]
+    pitch : float or None
+        The chain pitch its teeth are cut for; None: the pitch of the chain it drives (a new chain
+        on a new sprocket). A worn chain keeps its original sprocket: give the original pitch. [m]
     """
 
     teeth: int
@@ -168,15 +204,23 @@ class SprocketParams:
     tooth_height: float
     mass: float
     inertia: float
+    pitch: float | None = None
 
     def __post_init__(self):
         if not isinstance(self.teeth, int) or self.teeth < 3:
             raise ValueError(f"SprocketParams.teeth must be an integer >= 3, got {self.teeth!r}")
         _positive(self, "base_width", "tip_width", "tooth_height", "mass", "inertia")
+        if self.pitch is not None:
+            _positive(self, "pitch")
 
     def pitch_radius(self, link_pitch: float) -> float:
-        """R^P = L_link / (2 sin(pi / Z)). [m]"""
+        """R^P = L_link / (2 sin(pi / Z)): the radius at which rollers ``link_pitch`` apart sit one
+        tooth pitch apart (the sprocket's pitch radius for links of its own pitch). [m]"""
         return link_pitch / (2.0 * math.sin(math.pi / self.teeth))
+
+    def cut_pitch(self, chain_pitch: float) -> float:
+        """The pitch the teeth are cut for: ``pitch``, or where it is not set ``chain_pitch``. [m]"""
+        return float(self.pitch) if self.pitch is not None else float(chain_pitch)
 
     @property
     def tooth_pitch(self) -> float:

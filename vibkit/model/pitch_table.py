@@ -70,6 +70,7 @@ from .slots import (
     INFO_SLOPE,
     IP_CONTACT,
     IP_GRAVITY,
+    IP_LINKS_PER_STEP,
     IP_PASSENGERS,
     IP_ROLLING,
     IP_TEETH,
@@ -104,6 +105,8 @@ def table_applies(model) -> str | None:
         return "the links' pitches differ (the chain does not repeat after one pitch)"
     if not np.all(model.mass == model.mass[0]):
         return "the rollers' masses differ"
+    if not np.all(model.radii == model.radii[0]):
+        return "the rollers' radii differ"
     return None
 
 
@@ -514,7 +517,7 @@ def table_evaluate(t, y, dy, prm, ws, want_teeth, tb):
     ``info`` slots as :func:`vibkit.model.effects.evaluate` (delta, its rates, motor and contact
     quantities), with the closure read from the table instead of solved. Only the contact
     candidates' positions land in ``ws``. Returns 0."""
-    _, loc, fp, ip, mass, pm, ps, pb, pa, _ = prm
+    _, loc, fp, ip, mass, pm, ps, pb, pa, _, radii = prm
     (_, _, _, xs, zs, _, _, _, jac, _, _, vxs, vzs, fx, fz, cand, ind_t, frc_t, info) = ws
     head, up, mc, vc, dc = tb[TB_HEAD], tb[TB_UP], tb[TB_MC], tb[TB_VC], tb[TB_DC]
     xc, zc, sc, cand0, cc = tb[TB_XC], tb[TB_ZC], tb[TB_SC], tb[TB_CAND], tb[TB_CC]
@@ -535,18 +538,19 @@ def table_evaluate(t, y, dy, prm, ws, want_teeth, tb):
         q -= (fp[FP_PRELOAD] + fp[FP_TENSIONER_STIFFNESS] * delta) * d_u
     g = fp[FP_G]
     if ip[IP_PASSENGERS] != 0:
+        kstep = ip[IP_LINKS_PER_STEP]
         # the passengers' loads (vibkit.model.effects.passenger_loads) as generalised forces: the
         # chain's roller i is table roller i + k, its place read from the table
         for jp in range(pm.size):
             if ip[IP_PASSENGERS] == PASSENGERS_BY_TIME:
                 where = t
             else:
-                tk = step_roller(ps, jp, 1, n) + k
+                tk = step_roller(ps, jp, 1, n, kstep) + k
                 where = _p5d(sc, tk % n, p, eta)[0] + (p0 if tk >= n else 0.0) + w * p0
             if aboard(jp, where, pb, pa):
-                load = step_load(jp, pm, g)
-                for r in range(3):
-                    i = (step_roller(ps, jp, r, n) + k) % n
+                load = step_load(jp, pm, g, kstep)
+                for r in range(kstep):
+                    i = (step_roller(ps, jp, r, n, kstep) + k) % n
                     q -= load * _p5d(zc, i, p, eta)[1] / hu
     if ip[IP_ROLLING] == 1:
         mu = fp[FP_ROLLING]
@@ -594,6 +598,7 @@ def table_evaluate(t, y, dy, prm, ws, want_teeth, tb):
             fp[FP_TOOTH_PITCH],
             ip[IP_TEETH],
             fp[FP_ROLLER_RADIUS],
+            radii,
             fp[FP_STIFFNESS],
             fp[FP_EXPONENT],
             fp[FP_DAMPING],

@@ -21,6 +21,7 @@ import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from .chain_keys import by_roller, check_seat, worn_links
 from .params import ChainParams, GuideParams, SprocketParams
 from .schema import (
     EFFECT_OPTIONS,
@@ -34,6 +35,7 @@ from .schema import (
     MotionSection,
     OutputsSection,
     RunSection,
+    SceneError,
     SolverSection,
     SprocketSection,
 )
@@ -94,10 +96,6 @@ CLOSURES = ("table", "exact")
 
 # places of the guide where passengers board and alight (vibkit.model.escalator.EscalatorModel.place)
 PLACES = ("lower_landing", "upper_landing")
-
-
-class SceneError(ValueError):
-    """A scene file that cannot be used; the message names the file and the key."""
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -260,16 +258,26 @@ def _parameters(src, sec):
     if "teeth" in s and s["teeth"] < 3:
         raise SceneError(f"{src}: 'sprocket.teeth' must be an integer >= 3, got {s['teeth']!r}")
     ts = SprocketSection.from_mapping(s)
-    sprocket = SprocketParams(
-        **{k: getattr(ts, k) for k in ("teeth", "base_width", "tip_width", "tooth_height", "mass", "inertia")}
-    )
     # chain
     c = sec["chain"]
     for key in ("link_pitch", "roller_radius", "roller_mass"):
         if key in c:
             _positive(src, f"chain.{key}", c[key])
     tc = ChainSection.from_mapping(c)
-    pitch = tc.link_pitch
+    nominal = tc.link_pitch
+    if "pitch" in s:
+        _positive(src, "sprocket.pitch", s["pitch"])
+    sprocket = SprocketParams(
+        **{k: getattr(ts, k) for k in ("teeth", "base_width", "tip_width", "tooth_height", "mass", "inertia")},
+        pitch=ts.pitch if ts.pitch is not None else nominal,
+    )
+    elongation = tc.elongation_percent
+    lo, hi, note = RANGES["chain.elongation_percent"]
+    if not lo <= elongation <= hi:
+        raise SceneError(
+            f"{src}: 'chain.elongation_percent' = {elongation!r} is outside the plausible range [{lo:g}, {hi:g}] {note}"
+        )
+    pitch = nominal * (1.0 + elongation / 100.0)  # the worn chain's pitch, on teeth cut for the nominal one
     # guide
     g = sec["guide"]
     for key in ("tensioner_length", "lower_landing", "upper_landing", "transition_radius", "incline_length"):
@@ -280,43 +288,53 @@ def _parameters(src, sec):
     if isinstance(head, str):
         if head != "sprocket":
             raise SceneError(f"{src}: 'guide.head_radius' must be a length [m] or \"sprocket\", got {head!r}")
+        # where rollers of the chain's pitch seat on the teeth: one tooth pitch apart on this circle
         head = sprocket.pitch_radius(pitch)
+        fitted = sprocket.pitch_radius(nominal)  # the head radius of the chain when it was new
     else:
         _positive(src, "guide.head_radius", head)
+        fitted = head
     angle = tg.incline_angle_deg
     if not 0 < angle < 90:
         raise SceneError(f"{src}: 'guide.incline_angle_deg' must be in (0, 90) deg, got {angle!r}")
-    guide = GuideParams(
+    guide_keys = dict(
         tensioner_length=tg.tensioner_length,
         lower_landing=tg.lower_landing,
         upper_landing=tg.upper_landing,
         transition_radius=tg.transition_radius,
         incline_angle=math.radians(angle),
         incline_length=tg.incline_length,
-        head_radius=head,
     )
+    guide = GuideParams(**guide_keys, head_radius=head)
     n = tc.n_rollers
     if isinstance(n, str):
         if n != "fill":
             raise SceneError(f"{src}: 'chain.n_rollers' must be an integer or \"fill\", got {n!r}")
-        n = int(math.floor(guide.perimeter / pitch))
+        # as many links as fitted the guide when the chain was new (an elongated chain keeps its links)
+        n = int(math.floor(GuideParams(**guide_keys, head_radius=fitted).perimeter / nominal))
     if n < 3:
         raise SceneError(f"{src}: 'chain.n_rollers' must be an integer >= 3, got {n!r}")
-    worn = ()
-    if ("worn_link" in c) != ("worn_link_pitch" in c):
-        raise SceneError(f"{src}: 'chain.worn_link' and 'chain.worn_link_pitch' go together (link number, pitch [m])")
-    if "worn_link" in c:
-        if not 1 <= c["worn_link"] <= n:
-            raise SceneError(f"{src}: 'chain.worn_link' must be a link number 1..{n}, got {c['worn_link']!r}")
-        _positive(src, "chain.worn_link_pitch", c["worn_link_pitch"])
-        worn = ((c["worn_link"], c["worn_link_pitch"]),)
+    worn = worn_links(src, c, n, nominal)
+    radii = by_roller(src, c, "roller_radius_by_roller", n, "radius", "m")
+    for roller, r in radii:
+        if not r < 0.5 * nominal:
+            raise SceneError(
+                f"{src}: 'chain.roller_radius_by_roller': radius {r:g} m of roller {roller} must be less than half "
+                f"the link pitch ({0.5 * nominal:g} m)"
+            )
+    if tc.links_per_step not in (3, 4):
+        raise SceneError(f"{src}: 'chain.links_per_step' must be 3 or 4, got {tc.links_per_step!r}")
     chain = ChainParams(
         link_pitch=pitch,
         roller_radius=tc.roller_radius,
         roller_mass=tc.roller_mass,
         n_rollers=n,
         worn_links=worn,
+        roller_masses=by_roller(src, c, "roller_mass_by_roller", n, "mass", "kg"),
+        roller_radii=radii,
+        links_per_step=tc.links_per_step,
     )
+    check_seat(src, guide, sprocket, chain)
     # the chain must close within the tensioner travel: P0 - 2 delta ~ sum of pitches, |delta| < travel
     from .guide import TRAVEL
 
@@ -494,8 +512,9 @@ def _outputs(src, o, analysis, chain):
     step = o.get("step_accelerometer")
     if "accel_step" in variables and step is None:
         raise SceneError(f"{src}: output 'accel_step' needs 'outputs.step_accelerometer' (a step number)")
-    if step is not None and not 1 <= step <= chain.n_rollers // 3:
-        raise SceneError(f"{src}: 'outputs.step_accelerometer' must be a step 1..{chain.n_rollers // 3}, got {step!r}")
+    n_steps = chain.n_rollers // chain.links_per_step
+    if step is not None and not 1 <= step <= n_steps:
+        raise SceneError(f"{src}: 'outputs.step_accelerometer' must be a step 1..{n_steps}, got {step!r}")
     return {"variables": tuple(dict.fromkeys(variables)), "rollers": tuple(rollers), "step_accelerometer": step}
 
 
@@ -540,6 +559,8 @@ def load_scene(path) -> Scene:
     Parameters
     ----------
     path : str or Path
+        The file, or where no such file exists the name of a shipped scene (``"las-palmas"``,
+        ``"sim/las-palmas.toml"``; see :mod:`vibkit.scenes`).
 
     Returns
     -------
@@ -551,7 +572,9 @@ def load_scene(path) -> Scene:
         The file is missing, not TOML, or has an unknown key, a missing value or a non-physical
         number; the message names the file and the key.
     """
-    p = Path(path)
+    from ..scenes import find
+
+    p = find(path) or Path(path)  # a shipped scene's name ("las-palmas") where no such file exists
     _check_scene_file(p)
     try:
         text = p.read_text(encoding="utf-8")
@@ -581,10 +604,10 @@ def _check_scene_file(p: Path) -> None:
 
 
 def _validate_passenger_numbers(src, o, chain) -> None:
-    """Passengers' masses finite and positive, steps whole numbers on the chain (1 .. n_rollers // 3)."""
+    """Passengers' masses finite and positive, steps whole numbers on the chain (1 .. n_rollers // links_per_step)."""
     if not o:
         return
-    n_steps = chain.n_rollers // 3
+    n_steps = chain.n_rollers // chain.links_per_step
     for i, m in enumerate(o.mass):
         if isinstance(m, bool) or not isinstance(m, (int, float)) or not math.isfinite(m) or m <= 0:
             raise SceneError(f"{src}: 'effects.passengers.mass[{i}]' must be a finite positive mass [kg], got {m!r}")
@@ -592,7 +615,7 @@ def _validate_passenger_numbers(src, o, chain) -> None:
         if isinstance(st, bool) or not isinstance(st, int) or not 1 <= st <= n_steps:
             raise SceneError(
                 f"{src}: 'effects.passengers.step[{i}]' must be a step number 1..{n_steps} "
-                f"(the chain has {chain.n_rollers} rollers, 3 per step), got {st!r}"
+                f"(the chain has {chain.n_rollers} rollers, {chain.links_per_step} per step), got {st!r}"
             )
 
 
@@ -601,7 +624,7 @@ def _check_ranges(src, sec, effects) -> None:
     for name, opts in effects.items():
         for f in dataclasses.fields(opts):
             values[f"effects.{name}.{f.name}"] = getattr(opts, f.name)
-    for name in ("solver", "motion", "run"):
+    for name in ("solver", "motion", "run", "chain"):
         for key, v in sec[name].items():
             values[f"{name}.{key}"] = v
     for key, (lo, hi, unit) in RANGES.items():
@@ -613,7 +636,7 @@ def _check_ranges(src, sec, effects) -> None:
 
 def _check_sprocket_geometry(src, given, sprocket, chain) -> None:
     """The tooth must fit the chain it drives: shorter than a link, narrower than a link, tip <= base."""
-    pitch = chain.link_pitch
+    pitch = sprocket.cut_pitch(chain.link_pitch)
     r = sprocket.pitch_radius(pitch)
     if sprocket.tooth_height >= min(pitch, r):
         raise SceneError(

@@ -28,6 +28,7 @@ __all__ = [
     "EFFECT_OPTIONS",
     "EFFECTS",
     "RANGES",
+    "SceneError",
     "SECTION_CLASSES",
     "SECTIONS",
     "effect_options",
@@ -37,6 +38,11 @@ __all__ = [
     "schema_fields",
     "schema_table",
 ]
+
+
+class SceneError(ValueError):
+    """A scene file that cannot be used; the message names the file and the key."""
+
 
 #: the absolute tolerance of a forward run that sets no ``solver.atol`` is rtol times this [m, rad]
 ATOL_PER_RTOL = 1e-2
@@ -86,7 +92,12 @@ class GuideSection(_Section):
     incline_angle_deg: float = key("deg", "angle of the incline, in (0, 90)", math.degrees(_RG.incline_angle))
     incline_length: float = key("m", "length L of the straight incline", _RG.incline_length)
     head_radius: float | str = key(
-        "m", 'radius of the heads, or "sprocket": the sprocket\'s pitch radius', "sprocket", types=(float, str)
+        "m",
+        'radius of the heads, or "sprocket": where the rollers seat on the sprocket\'s teeth, p / (2 sin(pi/Z)) '
+        "for the chain's pitch p (the sprocket's pitch radius for a chain of the sprocket's pitch, larger for an "
+        "elongated chain)",
+        "sprocket",
+        types=(float, str),
     )
 
 
@@ -94,14 +105,45 @@ class GuideSection(_Section):
 class ChainSection(_Section):
     link_pitch: float = key("m", "distance between consecutive roller centres", _RC.link_pitch)
     roller_radius: float = key("m", "roller radius r_d", _RC.roller_radius)
-    roller_mass: float = key("kg", "point mass per roller (a third of a step plus one pitch of chain)", _RC.roller_mass)
+    roller_mass: float = key(
+        "kg", "point mass per roller (a step's share, 1 / links_per_step, plus one pitch of chain)", _RC.roller_mass
+    )
     n_rollers: int | str = key(
-        "", 'number of rollers, or "fill": as many links as fit the guide', "fill", types=(int, str)
+        "",
+        'number of rollers, or "fill": as many links of link_pitch as fit the guide (an elongated chain keeps them)',
+        "fill",
+        types=(int, str),
     )
     worn_link: int = key(
-        "", "number (1..n) of one link of another pitch (with worn_link_pitch); not set: no worn link", types=(int,)
+        "",
+        "number (1..n) of one link of another pitch (with worn_link_pitch): shorthand for worn_links = "
+        "[[worn_link, worn_link_pitch]]; not set: none",
+        types=(int,),
     )
     worn_link_pitch: float = key("m", "pitch of the worn link (with worn_link); not set: no worn link")
+    worn_links: tuple = key(
+        "[1, m]",
+        "links of another pitch, [[link, pitch_m], ...] (link 1..n joins roller link to the next); not set: none",
+        types=(list,),
+    )
+    elongation_percent: float = key(
+        "%",
+        "uniform elongation of every link by wear: each pitch is link_pitch (1 + e/100) on a sprocket cut for "
+        "link_pitch",
+        0.0,
+        range=(-1.0, 10.0, "% (a chain is replaced at about 3 %)"),
+    )
+    roller_radius_by_roller: tuple = key(
+        "[1, m]",
+        "rollers of another radius (a damaged roller), [[roller, radius_m], ...]; not set: none",
+        types=(list,),
+    )
+    roller_mass_by_roller: tuple = key(
+        "[1, kg]", "rollers of another mass, [[roller, mass_kg], ...]; not set: none", types=(list,)
+    )
+    links_per_step: int = key(
+        "", "rollers (links) per step: 3 (133.33 mm chains) or 4 (101.6 mm chains)", 3, types=(int,)
+    )
 
 
 @dataclasses.dataclass(frozen=True)
@@ -112,6 +154,12 @@ class SprocketSection(_Section):
     tooth_height: float = key("m", "tooth height", _RS.tooth_height)
     mass: float = key("kg", "sprocket mass", _RS.mass)
     inertia: float = key("kg m^2", "sprocket moment of inertia", _RS.inertia)
+    pitch: float = key(
+        "m",
+        "the chain pitch the teeth are cut for (a worn chain keeps its original sprocket); not set: the chain's "
+        "link_pitch",
+        derived=True,
+    )
 
 
 @dataclasses.dataclass(frozen=True)

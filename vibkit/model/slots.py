@@ -38,7 +38,19 @@ def _slots(names: tuple[str, ...]) -> dict[str, int]:
 
 
 # --- the parameter tuple ------------------------------------------------------------------------
-PRM_NAMES = ("table", "corners", "fp", "ip", "mass", "pass_mass", "pass_step", "pass_board", "pass_alight", "pitches")
+PRM_NAMES = (
+    "table",
+    "corners",
+    "fp",
+    "ip",
+    "mass",
+    "pass_mass",
+    "pass_step",
+    "pass_board",
+    "pass_alight",
+    "pitches",
+    "radii",
+)
 PRM = _slots(PRM_NAMES)
 PRM_TABLE = PRM["table"]  # the guide's segment table (vibkit.model.guide)
 PRM_CORNERS = PRM["corners"]  # tooth corners in the tooth's own frame (4, 2) [m]
@@ -50,6 +62,7 @@ PRM_PASS_STEP = PRM["pass_step"]  # passengers' steps (1-based)
 PRM_PASS_BOARD = PRM["pass_board"]  # boarding time [s] or place (s0 of the step's middle roller) [m]
 PRM_PASS_ALIGHT = PRM["pass_alight"]  # alighting time [s] or place [m]
 PRM_PITCHES = PRM["pitches"]  # link lengths (n) [m]
+PRM_RADII = PRM["radii"]  # roller radii (n) [m]
 
 # --- float parameters ---------------------------------------------------------------------------
 FP_NAMES = (
@@ -103,7 +116,7 @@ FP_CLOSURE_TOL = FP["tol"]  # closure tolerance [m]
 FP_REACH = FP["reach"]  # farthest a roller centre touching a tooth sits from the sprocket centre [m]
 
 # --- integer parameters -------------------------------------------------------------------------
-IP_NAMES = ("n", "nteeth", "gravity", "contact", "motor", "passengers", "tensioner", "rolling")
+IP_NAMES = ("n", "nteeth", "gravity", "contact", "motor", "passengers", "tensioner", "rolling", "links_per_step")
 IP = _slots(IP_NAMES)
 IP_N = IP["n"]  # number of rollers
 IP_TEETH = IP["nteeth"]  # number of teeth
@@ -113,6 +126,7 @@ IP_MOTOR = IP["motor"]
 IP_PASSENGERS = IP["passengers"]  # 0 none, 1 by time, 2 by place
 IP_TENSIONER = IP["tensioner"]
 IP_ROLLING = IP["rolling"]
+IP_LINKS_PER_STEP = IP["links_per_step"]  # rollers per step (3, or 4 on 101.6 mm chains)
 
 PASSENGERS_BY_TIME = 1
 PASSENGERS_BY_PLACE = 2

@@ -59,13 +59,14 @@ def tooth_corners(sp: SprocketParams, link_pitch: float, roller_radius: float, c
     return out
 
 
-def mesh_phase(positions: np.ndarray, centre, sp: SprocketParams, link_pitch: float) -> float:
+def mesh_phase(positions: np.ndarray, centre, sp: SprocketParams, link_pitch: float, radius=None) -> float:
     """Sprocket angle that centres the rollers lying on the pitch circle between teeth. [rad]
 
-    Rollers within half a pitch of the pitch circle are used; the angle is a circular mean of
-    (phi_roller - psi/2) modulo psi, so every such roller sits midway between two teeth.
+    Rollers on the circle of ``radius`` (where they seat on the head; not given: the pitch radius of
+    links of ``link_pitch``) are used, else those within a quarter pitch of it; the angle is a
+    circular mean of (phi_roller - psi/2) modulo psi, so every such roller sits midway between two teeth.
     """
-    rp = sp.pitch_radius(link_pitch)
+    rp = sp.pitch_radius(link_pitch) if radius is None else float(radius)
     psi = 2.0 * math.pi / sp.teeth
     d = positions - np.asarray(centre)[None, :]
     rad = np.hypot(d[:, 0], d[:, 1])
@@ -96,6 +97,7 @@ def contact_kernel(
     psi,
     nteeth,
     r_d,
+    radii,
     k,
     expo,
     damp,
@@ -106,6 +108,8 @@ def contact_kernel(
     want_teeth,
 ):
     """Roller-tooth contact forces for the candidate rollers.
+
+    ``radii`` holds each roller's radius [m], ``r_d`` the largest of them (how far a roller reaches).
 
     Adds the contact force on each candidate roller to ``fx, fz`` [N] and returns
     (torque on the sprocket [N m], contact potential energy [J], max indentation [m],
@@ -174,7 +178,7 @@ def contact_kernel(
                 nlx = lx - (ax + u * ex)
                 nlz = lz - (az + u * ez)
                 dist = math.sqrt(nlx * nlx + nlz * nlz)
-                pen = r_d - dist
+                pen = radii[i] - dist
                 if pen <= 0.0 or dist == 0.0:
                     continue
                 # back to the world: the normal, and the closest point q on the flank

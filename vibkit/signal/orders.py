@@ -35,6 +35,8 @@ __all__ = [
     "vold_kalman",
     "VoldKalmanResult",
     "vk_bandwidth_to_r",
+    "vk_min_bandwidth",
+    "VK_MAX_CONDITION",
 ]
 
 
@@ -372,7 +374,15 @@ def order_map(x, fs, phase, *, samples_per_cycle=32, cycles_per_frame=16, overla
     return o, np.interp(centre_cycles, ang.cycles, ang.time_s), s
 
 
-_VK_MAX_CONDITION = 1e16
+#: the largest condition number ``16 r**2`` of the Vold-Kalman system that :func:`vold_kalman` solves
+VK_MAX_CONDITION = 1e12
+
+
+def vk_min_bandwidth(fs) -> float:
+    """The narrowest ``bandwidth_hz`` of :func:`vold_kalman` at sampling frequency ``fs`` [Hz]: the band
+    whose system has the condition number :data:`VK_MAX_CONDITION` (about ``3.2e-4 fs``). [Hz]"""
+    r_max = np.sqrt(VK_MAX_CONDITION / 16.0)
+    return float(fs / np.pi * np.arcsin(np.sqrt(1.0 / (4.0 * r_max))))
 
 
 def vk_bandwidth_to_r(bandwidth_hz, fs):
@@ -499,12 +509,21 @@ def vold_kalman(x, fs, phase, *, order=1.0, bandwidth_hz, solver="pentadiagonal"
     -------
     VoldKalmanResult
 
+    Raises
+    ------
+    ValueError
+        ``bandwidth_hz`` outside ``(0, fs/4)`` or narrower than :func:`vk_min_bandwidth` (the
+        system's condition number over :data:`VK_MAX_CONDITION`); the message names the parameter
+        and the limit.
+
     Notes
     -----
     Minimises ``sum |x e^{-j theta} - a|**2 + r**2 sum |a[n] - 2 a[n+1] + a[n+2]|**2`` with
     ``theta = order * phase``: ``(I + r**2 D^T D) a = x e^{-j theta}``.  ``r`` from
     :func:`vk_bandwidth_to_r`.  Very narrow bands at high ``fs`` make the system ill-conditioned
-    (condition about ``16 r**2``); keep ``16 r**2 < 1e12`` or decimate first.
+    (condition about ``16 r**2``): a band whose condition exceeds ``16 r**2 = 1e12``
+    (:data:`VK_MAX_CONDITION`; ``bandwidth_hz`` below :func:`vk_min_bandwidth`, about ``3.2e-4 fs``)
+    is refused; decimate first.
 
     References
     ----------
@@ -527,10 +546,11 @@ def vold_kalman(x, fs, phase, *, order=1.0, bandwidth_hz, solver="pentadiagonal"
         raise ValueError(f"Parameter solver={solver!r} must be 'pentadiagonal', 'banded' or 'sparse'.")
     r = vk_bandwidth_to_r(bw, fs)
     r2 = r * r
-    if 16.0 * r2 > _VK_MAX_CONDITION:
+    if 16.0 * r2 > VK_MAX_CONDITION:
         raise ValueError(
-            f"Parameter bandwidth_hz={bw:g} is too narrow for fs={fs:g} Hz (condition number {16 * r2:.1e}); "
-            "decimate the signal first or widen the band."
+            f"Parameter bandwidth_hz={bw:g} is too narrow for fs={fs:g} Hz: the filter's condition number "
+            f"16 r**2 = {16 * r2:.1e} exceeds the limit {VK_MAX_CONDITION:.0e} (amplitudes lose accuracy); "
+            f"give bandwidth_hz >= {vk_min_bandwidth(fs):.4g} Hz or decimate the signal first."
         )
     theta = float(order) * ph
     y = x * np.exp(-1j * theta)

@@ -1,7 +1,9 @@
 """Thin xarray wrappers that keep units, and per-segment processing of burst recordings.
 
 A DataArray must have a ``time`` dimension with a uniform ``time`` coordinate [s]; its
-``attrs["units"]`` give the output units.  If ``segment`` is given (or the DataArray carries a
+``attrs["units"]`` give the output units.  ``dim=`` names another dimension to work along (its
+coordinate in seconds): an N-D DataArray (``time`` x ``channel``) is processed column by column
+along ``dim``, each result equal to the call on that column alone, joined along the other dims.  If ``segment`` is given (or the DataArray carries a
 ``segment`` coordinate), each burst is processed alone and the results combined: Welch spectra
 averaged over all segments (weighted by their number of Welch segments), frequency estimates
 combined by inverse-variance weighting.  Bursts are never bridged.
@@ -43,11 +45,14 @@ def _squared(units):
     return f"{units}^2" if simple else f"({units})^2"
 
 
-def sample_rate(da, *, rtol=1e-3) -> float:
-    """Sampling frequency [Hz] from a uniform ``time`` coordinate [s] (within ``rtol``)."""
-    if "time" not in da.dims or "time" not in da.coords:
-        raise ValueError(f"DataArray {da.name!r} needs a 'time' dimension and coordinate [s].")
-    t = np.asarray(da["time"].values, dtype=float)
+def sample_rate(da, *, rtol=1e-3, dim="time") -> float:
+    """Sampling frequency [Hz] from a uniform coordinate ``dim`` [s] (default ``time``; within ``rtol``)."""
+    if dim not in da.dims or dim not in da.coords:
+        raise ValueError(
+            f"DataArray {da.name!r} needs a {dim!r} dimension and coordinate [s] (dims {tuple(da.dims)}; "
+            "name the time dimension with dim=)."
+        )
+    t = np.asarray(da[dim].values, dtype=float)
     if t.size < 2:
         raise ValueError(f"DataArray {da.name!r} has fewer than 2 time samples.")
     dt = np.diff(t)
@@ -60,26 +65,65 @@ def sample_rate(da, *, rtol=1e-3) -> float:
     return 1.0 / med
 
 
-def amplitude_spectrum_da(da, **kwargs):
-    """:func:`vibkit.signal.amplitude_spectrum` of a continuous DataArray; dim ``frequency`` [Hz]."""
-    fs = sample_rate(da)
-    axis = da.get_axis_num("time")
-    f, a = amplitude_spectrum(da.values, fs, axis=axis, **kwargs)
-    dims = list(da.dims)
-    dims[axis] = "frequency"
-    out = xr.DataArray(a, dims=dims, coords={"frequency": f})
+def _as_time(da, dim):
+    """``da`` with its dimension ``dim`` called ``time`` (what the 1-D wrappers work along)."""
+    if dim == "time":
+        return da
+    if dim not in da.dims:
+        raise ValueError(f"DataArray {da.name!r} has no dimension {dim!r} (dims {tuple(da.dims)}).")
+    if "time" in da.dims or "time" in da.coords:
+        raise ValueError(f"DataArray {da.name!r} has a 'time' besides dim={dim!r}; rename one of them.")
+    return da.rename({dim: "time"})
+
+
+def _per_column(da, fn, dim):
+    """``fn`` (a 1-D wrapper along ``time``) on each column of ``da`` along ``dim``, joined along the other
+    dims (their coordinates kept); ``time`` in the result is called ``dim`` again."""
+    da = _as_time(da, dim)
+
+    def apply(part, others):
+        if not others:
+            return fn(part)
+        d = others[0]
+        out = xr.concat([apply(part.isel({d: i}), others[1:]) for i in range(part.sizes[d])], dim=d)
+        return out.assign_coords({d: part[d].values}) if d in part.coords else out
+
+    out = apply(da, [d for d in da.dims if d != "time"])
+    return out if dim == "time" else out.rename({"time": dim})
+
+
+def amplitude_spectrum_da(da, *, dim="time", **kwargs):
+    """:func:`vibkit.signal.amplitude_spectrum` of a continuous DataArray along ``dim`` (default ``time``),
+    which becomes ``frequency`` [Hz]; other dims (channels) and their coordinates are kept."""
+    fs = sample_rate(da, dim=dim)
+    freqs = []
+
+    def spectrum(x):
+        f, a = amplitude_spectrum(x, fs, axis=-1, **kwargs)
+        freqs.append(f)
+        return a
+
+    out = xr.apply_ufunc(
+        spectrum, da, input_core_dims=[[dim]], output_core_dims=[["frequency"]], exclude_dims={dim}, keep_attrs=False
+    )
+    out = out.transpose(*["frequency" if d == dim else d for d in da.dims]).assign_coords(frequency=freqs[0])
     out["frequency"].attrs.update(units="Hz", long_name="frequency")
     out.attrs.update(units=_units(da), long_name=f"amplitude spectrum of {da.attrs.get('long_name', da.name)}")
     out.name = f"{da.name}_amplitude" if da.name else "amplitude"
     return out
 
 
-def welch_psd_da(da, *, segment=None, nperseg=None, confidence=0.95, **kwargs):
+def welch_psd_da(da, *, segment=None, nperseg=None, confidence=0.95, dim="time", **kwargs):
     """Welch PSD of a DataArray, averaged over bursts; returns a Dataset ``psd``, ``psd_lower``, ``psd_upper``.
 
     Bursts shorter than ``nperseg`` are an error naming the burst.  The interval uses the summed
-    equivalent degrees of freedom of all bursts.
+    equivalent degrees of freedom of all bursts.  Along ``dim`` (default ``time``); an N-D
+    DataArray gives one PSD per column, joined along its other dims.
     """
+    if da.ndim != 1 or dim != "time":
+        return _per_column(
+            da, lambda c: welch_psd_da(c, segment=segment, nperseg=nperseg, confidence=confidence, **kwargs), dim
+        )
     parts = split_segments(da, segment)
     fs = None
     acc = None
@@ -119,10 +163,11 @@ def welch_psd_da(da, *, segment=None, nperseg=None, confidence=0.95, **kwargs):
     return ds
 
 
-def spectrogram_da(da, **kwargs):
-    """:func:`vibkit.signal.spectrogram` (amplitude) of a 1-D DataArray; dims ``frequency``, ``time``."""
-    if da.ndim != 1:
-        raise ValueError(f"DataArray {da.name!r} must be 1-D (time) for spectrogram_da.")
+def spectrogram_da(da, *, dim="time", **kwargs):
+    """:func:`vibkit.signal.spectrogram` (amplitude) of a DataArray along ``dim`` (default ``time``);
+    dims ``frequency``, ``dim`` (frame centres), after the other dims of an N-D DataArray."""
+    if da.ndim != 1 or dim != "time":
+        return _per_column(da, lambda c: spectrogram_da(c, **kwargs), dim)
     fs = sample_rate(da)
     f, t, s = spectrogram(da.values, fs, **kwargs)
     t0 = float(da["time"].values[0])
@@ -135,10 +180,11 @@ def spectrogram_da(da, **kwargs):
     return out
 
 
-def hampel_da(da, half_window=3, n_sigma=None, **kwargs):
-    """:func:`vibkit.signal.hampel` of a 1-D DataArray, burst by burst; Dataset ``filtered``, ``is_outlier``."""
-    if da.ndim != 1:
-        raise ValueError(f"DataArray {da.name!r} must be 1-D (time) for hampel_da.")
+def hampel_da(da, half_window=3, n_sigma=None, *, dim="time", **kwargs):
+    """:func:`vibkit.signal.hampel` of a DataArray along ``dim`` (default ``time``), burst by burst;
+    Dataset ``filtered``, ``is_outlier`` (an N-D DataArray column by column)."""
+    if da.ndim != 1 or dim != "time":
+        return _per_column(da, lambda c: hampel_da(c, half_window, n_sigma, **kwargs), dim)
     filtered = np.empty(da.sizes["time"])
     mask = np.zeros(da.sizes["time"], dtype=bool)
     seg = da["segment"].values if "segment" in da.coords else np.zeros(da.sizes["time"], dtype=int)
@@ -185,10 +231,15 @@ class CombinedEstimate:
     chi2_per_dof: float
 
 
-def link_pass_estimate_da(da, *, segment=None, **kwargs):
-    """:func:`vibkit.signal.link_pass_estimate` per burst, combined by inverse-variance weighting."""
+def link_pass_estimate_da(da, *, segment=None, dim="time", **kwargs):
+    """:func:`vibkit.signal.link_pass_estimate` per burst along ``dim`` (default ``time``), combined by
+    inverse-variance weighting.  One estimate: ``da`` must be 1-D (select a channel first)."""
     if da.ndim != 1:
-        raise ValueError(f"DataArray {da.name!r} must be 1-D (time) for link_pass_estimate_da.")
+        raise ValueError(
+            f"DataArray {da.name!r} must be 1-D along {dim!r} for link_pass_estimate_da (one estimate); "
+            f"got dims {tuple(da.dims)}: select one column first, e.g. da.isel(channel=0)."
+        )
+    da = _as_time(da, dim)
     results = []
     for sid, part in split_segments(da, segment):
         est: LinkPassEstimate = link_pass_estimate(part.values, sample_rate(part), **kwargs)

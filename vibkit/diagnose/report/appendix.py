@@ -8,7 +8,7 @@ import textwrap
 
 import numpy as np
 
-from .common import _PAGE, _fmt, _page_title, _table
+from .common import _PAGE, _fmt, _page_title, _table, fmt_length, speed_source, speed_value
 
 __all__ = ["data_quality_page", "parameters_page"]
 
@@ -49,9 +49,9 @@ def parameters_page(doc, ctx) -> None:
     _page_title(fig, "Parameters", "everything needed to repeat this report")
     rows = [
         ["channel", ctx.channel],
-        ["speed", _fmt(ctx.speed, "m/s")],
-        ["speed sigma", _fmt(float(ctx.speed_sigma), "m/s")],
-        ["nominal pitch", _fmt(ctx.nominal_pitch, "m")],
+        ["chain speed", speed_value(ctx)],
+        ["speed from", textwrap.shorten(speed_source(ctx), 70)],
+        ["nominal pitch", fmt_length(ctx.nominal_pitch) if ctx.nominal_pitch else "not given"],
         ["limits", " / ".join(f"{v:g} %" for v in ctx.limits)],
         ["search band", (f"{pitch.band_hz[0]:.4g} - {pitch.band_hz[1]:.4g} Hz" if pitch else str(ctx.band))],
         ["Hampel half window", f"{ctx.hampel_half_window_s:g} s"],
@@ -61,7 +61,8 @@ def parameters_page(doc, ctx) -> None:
     res = getattr(ctx, "result", None)
     if res is not None and "solver_method" in res.attrs:
         # the simulation's numerics: its solver, and the convergence verdict ([solver] check = true)
-        rows.append(["solver", f"{res.attrs['solver_method']}, {res.attrs.get('solver_steps', '?')} steps"])
+        steps = res.attrs.get("solver_steps")
+        rows.append(["solver", f"{res.attrs['solver_method']}" + (f", {steps} steps" if steps is not None else "")])
         if "solver_closure" in res.attrs:
             rows.append(
                 [

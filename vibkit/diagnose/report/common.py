@@ -12,7 +12,16 @@ import os
 import textwrap
 from dataclasses import dataclass, field
 
+from ..rounding import SPEED_SIGMA_NOT_STATED, fmt_length, fmt_pm  # noqa: F401 (the one rounding rule)
+
 __all__ = ["Report", "report_date", "atomic_path", "PageSink", "TextColumn", "fmt_pm", "fmt_length", "length_scale"]
+
+#: the report's labels, each with one meaning on every page (stated once, where it first appears)
+HARMONIC_SNR = "harmonic SNR"
+HARMONIC_SNR_DEFINITION = "power of the fitted link-pass harmonics over the residual noise power, per sample"
+PITCH_RATIO = "pitch ratio"
+PITCH_RATIO_DEFINITION = "pitch recorded / pitch simulated, each speed / link-pass frequency"
+FREQUENCY_RATIO = "f rec / f sim"
 
 #: an example SOURCE_DATE_EPOCH (2000-01-01T00:00:00Z), kept for callers that pinned it
 FIXED_EPOCH = 946684800
@@ -115,28 +124,45 @@ def _texts(fig):
     return out
 
 
-def fmt_pm(value, sigma, unit="", digits=4):
-    """``value +- sigma unit`` with sigma to two significant digits and the value to the same decimal
-    place; without a positive finite sigma the value to ``digits`` significant digits (never ``+- 0``)."""
-    if value is None or not math.isfinite(float(value)):
-        return "n/a"
-    v = float(value)
-    u = f" {unit}" if unit else ""
-    if sigma is None or not math.isfinite(float(sigma)) or float(sigma) <= 0:
-        return f"{v:.{digits}g}{u}"
-    s = float(sigma)
-    dec = 1 - int(math.floor(math.log10(s)))  # two significant digits of sigma
-    if dec <= 0:
-        q = 10.0 ** (-dec)
-        return f"{round(v / q) * q:.0f} +- {round(s / q) * q:.0f}{u}"
-    return f"{v:.{dec}f} +- {s:.{dec}f}{u}"
+def pitch_figure(pitch) -> str:
+    """The pitch as every page states it: rounded to its sigma, or (speed uncertainty not stated) to 0.01 mm
+    and saying so; never ``+- 0``."""
+    if pitch.speed_sigma_stated:
+        return fmt_length(pitch.pitch_m, pitch.pitch_sigma_m)
+    return f"{1000 * pitch.pitch_m:.2f} mm ({SPEED_SIGMA_NOT_STATED})"
 
 
-def fmt_length(value_m, sigma_m=None, digits=5):
-    """A length given in m, shown in mm (rounded to its sigma when one is given)."""
-    if value_m is None:
-        return "n/a"
-    return fmt_pm(1000.0 * value_m, None if sigma_m is None else 1000.0 * sigma_m, "mm", digits)
+def elongation_figure(pitch) -> str:
+    """The elongation as every page states it (see :func:`pitch_figure`)."""
+    if pitch.speed_sigma_stated:
+        return fmt_pm(pitch.elongation_percent, pitch.elongation_sigma_percent, "%", sign=True)
+    return f"{pitch.elongation_percent:+.2f} % ({SPEED_SIGMA_NOT_STATED})"
+
+
+def speed_value(ctx) -> str:
+    """The run's speed alone (``0.50000 +- 0.00025 m/s``, or ``0.5 m/s, uncertainty not stated``), for a table."""
+    run = ctx.run_speed
+    if run is None or run.value is None:
+        return "not known (give --speed)"
+    if run.sigma is None or not run.sigma > 0:
+        return f"{run.value:g} m/s, uncertainty not stated"
+    return fmt_pm(run.value, run.sigma, "m/s")
+
+
+def speed_source(ctx) -> str:
+    """Where the run's speed and its sigma came from."""
+    run = ctx.run_speed
+    if run is None or run.value is None:
+        return "-"
+    return run.source + (f"; sigma: {run.sigma_source}" if run.sigma and run.sigma_source not in ("", "given") else "")
+
+
+def speed_figure(ctx) -> str:
+    """The run's one speed as every page states it."""
+    run = ctx.run_speed
+    if run is None or run.value is None:
+        return "not known (give --speed)"
+    return run.text
 
 
 class TextColumn:

@@ -7,7 +7,17 @@ import textwrap
 
 import numpy as np
 
-from .common import _PAGE, _WIDE, _page_title, length_scale
+from .common import (
+    _PAGE,
+    _WIDE,
+    FREQUENCY_RATIO,
+    PITCH_RATIO,
+    _page_title,
+    fmt_pm,
+    length_scale,
+    pitch_figure,
+    speed_figure,
+)
 
 __all__ = ["plot_comparison", "simulation_page", "harmonics_page"]
 
@@ -96,19 +106,14 @@ def simulation_page(doc, ctx) -> None:
     if comp is None:
         return
     fig = plt.figure(figsize=_WIDE)
-    verdict = (
-        f"; page 1's {1000 * ctx.pitch.pitch_m:.2f} mm is the harmonic least-squares estimate over every burst"
-        if ctx.pitch is not None
-        else ""
-    )
+    pitch = f"; pitch {pitch_figure(ctx.pitch)} (page 1)" if ctx.pitch is not None else ""
     _page_title(
         fig,
         "Simulation against recording",
-        f"scene {sc.name}: {comp.variable} vs {comp.channel}; pitch "
-        f"{'consistent' if comp.pitch_consistent else 'NOT consistent'} "
-        f"({1000 * comp.pitch_meas_m:.2f} mm recorded vs {1000 * comp.pitch_sim_m:.2f} mm simulated: "
-        f"each from its own link-pass peak, {comp.fundamental_meas_hz:.4g} and "
-        f"{comp.fundamental_sim_hz:.4g} Hz, as the comparison finds them{verdict})",
+        f"scene {sc.name}: {comp.variable} vs {comp.channel}; chain speed {speed_figure(ctx)}{pitch}; "
+        f"{PITCH_RATIO} {fmt_pm(comp.pitch_ratio, comp.pitch_ratio_sigma)}: "
+        f"{'consistent' if comp.pitch_consistent else 'NOT consistent'} (each signal's link-pass peak, "
+        f"{comp.fundamental_meas_hz:.4g} Hz recorded and {comp.fundamental_sim_hz:.4g} Hz simulated)",
     )
     plot_comparison(comp, fig, top=0.82)  # under a two-line subtitle
     doc.emit(fig, "simulation against recording")
@@ -125,13 +130,13 @@ def harmonics_page(doc, ctx) -> None:
     _page_title(fig, "Harmonics: recording / simulation", f"{100 * comp.confidence:.0f} % intervals")
     ax = fig.add_axes((0.04, 0.45, 0.92, 0.45))
     ax.axis("off")
-    head = ["order", "f sim [Hz]", "f rec [Hz]", "ratio", "amp. diff [dB]", "detected"]
+    head = ["order", "f sim [Hz]", "f rec [Hz]", FREQUENCY_RATIO, "amp. diff [dB]", "detected"]
     cells = [
         [
             str(h["order"]),
             f"{h['frequency_sim_hz']:.4f}",
             f"{h['frequency_meas_hz']:.4f}",
-            f"{h['frequency_ratio']:.4f} +- {h['frequency_ratio_sigma']:.1e}",
+            fmt_pm(h["frequency_ratio"], h["frequency_ratio_sigma"]),
             f"{h['amplitude_diff_db']:+.1f} [{h['amplitude_diff_db_ci'][0]:+.1f}, {h['amplitude_diff_db_ci'][1]:+.1f}]",
             ("sim " if h["detected_sim"] else "") + ("rec" if h["detected_meas"] else ""),
         ]
@@ -150,7 +155,14 @@ def harmonics_page(doc, ctx) -> None:
     fig.text(
         0.06,
         0.1,
-        "\n".join(textwrap.fill(m, 105) for m in [f"score rule: {comp.rule}"] + comp.notes),
+        "\n".join(
+            textwrap.fill(m, 105)
+            for m in [
+                f"score rule: {comp.rule}",
+                f"{FREQUENCY_RATIO}: each harmonic's frequency, recorded over simulated",
+            ]
+            + [n for n in comp.notes if not n.startswith("pitch implied")]  # page 1 states the pitch
+        ),
         fontsize=7.5,
         va="bottom",
     )

@@ -8,6 +8,7 @@ family) and suspected clipping, and builds the JSON summary.  The page functions
 
 from __future__ import annotations
 
+import dataclasses
 import datetime as _dt
 import os
 from dataclasses import dataclass, field
@@ -31,10 +32,15 @@ class ReportContext:
         The recording as :func:`vibkit.read_recording` read it.
     channel, units : str
     scene : Scene or None
-    speed, speed_sigma : float or None, float
-        Resolved chain speed (the option, else the recording's, else the scene's) [m/s].
+    speed, speed_sigma : float or None
+        The run's one chain speed and its sigma [m/s] (``run_speed``); sigma None: not stated.
+    run_speed : ResolvedSpeed
+        That speed with its sources (:func:`vibkit.diagnose.speed.resolve_speed`): the option, else the
+        escalator profile's, else the recording's, else the scene's.  Every page and the comparison use it.
+    profile : Profile or None
+        The escalator profile (the unit that page 1 names).
     nominal_pitch : float or None
-        Resolved nominal pitch (the option, else the scene's) [m].
+        Resolved nominal pitch (the option, else the profile's, else the scene's) [m].
     limits : tuple of float
         Elongation limits [%].
     band : (float, float) or None
@@ -74,7 +80,7 @@ class ReportContext:
     units: str
     scene: object
     speed: float | None
-    speed_sigma: float
+    speed_sigma: float | None
     nominal_pitch: float | None
     limits: tuple
     band: tuple | None
@@ -98,7 +104,22 @@ class ReportContext:
     measurement_date: _dt.datetime | None = None
     measurement_date_source: str = ""
     ride: list = field(default_factory=list)  # ("recording" | "simulation", RideQuality), one page each
+    run_speed: object = None
+    profile: object = None
     links: object = None  # LinksResult: the link map, when a tensioner recording covers two loops of the scene's chain
+
+    @property
+    def unit_text(self) -> str:
+        """The unit measured, as page 1 names it: the profile's identity, else how to name it."""
+        p = self.profile
+        if p is None:
+            return "unit not named: --escalator FILE (an escalator profile)"
+        parts = [str(getattr(p, "unit", "") or "")]
+        for key in ("site", "description"):
+            v = str(getattr(p, key, "") or "")
+            if v:
+                parts.append(v)
+        return ", ".join(x for x in parts if x)
 
     @property
     def date_fixed(self) -> bool:
@@ -122,18 +143,6 @@ class ReportContext:
     def fmax_hz(self) -> float:
         """Upper frequency of the spectrum and spectrogram pages [Hz]."""
         return min((max(self.harmonic_count, 5) + 2) * self.f0, min(b.fs for b in self.bursts) / 2)
-
-
-def _scene_speed(scene):
-    if scene is None:
-        return None
-    if scene.analysis == "inverse":
-        return float(scene.motion.speed)
-    if scene.analysis == "forward":
-        from ...model.schema import nominal_speed
-
-        return float(nominal_speed(scene.effects, scene.run)) or None
-    return None
 
 
 def _family_fit(x, fs, band):
@@ -182,7 +191,7 @@ def analyse(
     *,
     scene=None,
     speed=None,
-    speed_sigma=0.0,
+    speed_sigma=None,
     channel=None,
     nominal_pitch=None,
     limits_percent=None,
@@ -194,13 +203,17 @@ def analyse(
     progress=False,
     read_options=None,
     date=None,
+    profile=None,
+    segment=None,
 ) -> ReportContext:
     """Everything :func:`vibkit.diagnose.report.write_report` draws (same parameters, no output)."""
     from ...io import read_recording
+    from ...io.channels import own_samples
     from ...model.scene import Scene, load_scene
     from ...signal import hampel_events
     from ...signal.bursts import uniform_bursts
-    from ..pitch import DEFAULT_LIMITS_PERCENT, estimate_pitch, pick_channel
+    from ..channels import estimate_channels
+    from ..pitch import DEFAULT_LIMITS_PERCENT, pick_channel
 
     limits = tuple(limits_percent) if limits_percent is not None else DEFAULT_LIMITS_PERCENT
     from ...io import RecordingError
@@ -216,51 +229,50 @@ def analyse(
         rec = read_recording(recording, channel=channel, **opts)  # e.g. traces on different time bases
     measured, measured_source = measurement_date(rec, date)
     ch = pick_channel(rec, channel)
-    units = str(rec[ch].attrs.get("units", "1"))
     sc = None
     if scene is not None:
         sc = scene if isinstance(scene, Scene) else load_scene(scene)
     notes = []
-    if speed is None:
-        from ..channels import speed_from_recording
+    from ..speed import resolve_speed
 
-        speed, source = speed_from_recording(rec)
-        if speed is not None:
-            notes.append(f"speed {speed:g} m/s from the recording's metadata ({source})")
-        elif _scene_speed(sc):
-            speed = _scene_speed(sc)
-            notes.append(
-                f"speed {speed:g} m/s from the scene (the recording states none): the pitch then "
-                "assumes the scene's speed"
-            )
+    run = resolve_speed(speed, speed_sigma, profile=profile, recording=rec, scene=sc)
+    speed, speed_sigma = run.value, run.sigma
+    if speed is not None and run.source != "given":
+        notes.append(f"speed {speed:g} m/s from {run.source}; every page uses it")
+    if nominal_pitch is None and profile is not None and getattr(profile, "nominal_pitch", None):
+        nominal_pitch = float(profile.nominal_pitch)
     if nominal_pitch is None and sc is not None:
         nominal_pitch = sc.chain.link_pitch
-    bursts = uniform_bursts(rec, ch)
-    pitch = None
-    f0 = None
+    # the per-channel decision of `spectrum` and `pitch` (vibkit.diagnose.channels.estimate_channels): every
+    # vibration channel (or the one asked for) estimated, channels that disagree refused, the numbers
+    # from the channel with the smallest sigma
+    teeth = sc.sprocket.teeth if sc else int(getattr(profile, "teeth", None) or 28)
     if speed is not None:
-        pitch = estimate_pitch(
-            rec,
+        kw = dict(
             speed=speed,
             speed_sigma=speed_sigma,
-            channel=ch,
             band=band,
             nominal_pitch=nominal_pitch,
             limits_percent=limits,
-            teeth=sc.sprocket.teeth if sc else 28,
+            teeth=teeth,
         )
-        f0 = pitch.fundamental_hz
-    else:
-        # frequency only: the same burst-combined estimator, with a unit "speed"
-        fonly = estimate_pitch(rec, speed=1.0, channel=ch, band=band or (2.5, 6.0), frequency_only=True)
-        f0 = fonly.fundamental_hz
+    else:  # frequency only: the same burst-combined estimator, with a unit "speed"
+        kw = dict(speed=1.0, band=band or (2.5, 6.0), frequency_only=True)
         notes.append("no speed known: link-pass frequency only, no pitch (give --speed)")
-    decided = pitch if pitch is not None else fonly  # the shared decision (vibkit.diagnose.decision)
-    found = decided.has_link_pass
+    decided = estimate_channels(rec, channel=channel, **kw)
+    found = decided.best is not None
+    est = decided.best if found else next((e for e in decided.estimates if e.channel == ch), decided.estimates[0])
+    ch = est.channel
+    units = str(rec[ch].attrs.get("units", "1"))
+    bursts = uniform_bursts(own_samples(rec, ch), ch)
+    f0 = est.fundamental_hz
+    pitch = est if speed is not None else None
+    if found and len(decided.estimates) > 1:
+        notes.append(f"channel {ch}: {decided.reason}")
     if not found:
         notes.insert(0, f"{decided.status.upper()}: {decided.reason}; no frequency, pitch or elongation can be given")
         # the pages below mark harmonics of f0: show the search band's centre, unmarked
-        band_used = (pitch if pitch is not None else fonly).band_hz
+        band_used = est.band_hz
         f0 = float(np.sqrt(band_used[0] * band_used[1]))
         pitch = None
     comp = None
@@ -273,8 +285,13 @@ def analyse(
         # with the step's roller motion: the ride figure is then the one `vibkit ride SCENE` gives
         result = simulate(with_ride_outputs(sc), duration=duration, progress=progress)
         if found:  # no comparison of a link pass the recording does not carry
-            comp = compare(rec, result, channel=ch)
-    ride = _ride(rec, result, sc, notes)
+            comp = compare(rec, result, channel=ch, speed=speed, speed_sigma=speed_sigma)
+    ride = _ride(rec, result if scene_is_unit(sc, profile) else None, sc, notes, segment, speed)
+    if result is not None and not scene_is_unit(sc, profile):
+        notes.append(
+            f"no ride page of the simulation: scene {sc.name!r} is not "
+            + (f"unit {profile.unit}'s" if profile is not None else "a named unit's (--escalator FILE)")
+        )
     # statistics
     x_all = np.concatenate([b.x for b in bursts])
     rms = float(np.sqrt(np.mean((x_all - x_all.mean()) ** 2)))
@@ -298,7 +315,7 @@ def analyse(
         np.sum(np.isclose(x_all, hi, rtol=0, atol=1e-9 * max(abs(hi), 1e-30)))
         + np.sum(np.isclose(x_all, lo, rtol=0, atol=1e-9 * max(abs(lo), 1e-30)))
     )
-    clipped = clip_n > 4
+    clipped = clip_n > 4 and not _quantisation_explains_extremes(x_all, rec[ch].attrs.get("quantum"))
     date = report_date()
     summary = {
         "file": os.path.basename(os.fspath(recording)),
@@ -370,6 +387,8 @@ def analyse(
         measurement_date=measured,
         measurement_date_source=measured_source,
         ride=ride,
+        run_speed=run,
+        profile=profile,
     )
 
 
@@ -388,22 +407,59 @@ def _links(rec, ch, units, sc, speed, notes):
         return None
 
 
-def _ride(rec, result, sc, notes):
-    """Ride qualities of the recording and the simulation; a one-line note where one that could be
-    expected (a recording with x, y, z channels, a scene that names its step) cannot be assessed."""
+def _quantisation_explains_extremes(x, q):
+    """Whether the samples at the extreme values of a quantised channel are its resolution, not clipping.
+
+    A signal quantised in steps ``q`` sits at its extreme levels for as long as it moves less than a
+    step there (a sine at 0.1 m/s^2 resolution holds its crest level about 1.4 times as long as the
+    level next to it); a clipped one piles up there: the extreme level then holds over 3 times the
+    samples of the level next to it.
+    """
+    if not q:
+        return False
+    lo, hi = float(np.min(x)), float(np.max(x))
+    tol = 0.25 * float(q)
+
+    def count(v):
+        return int(np.sum(np.abs(x - v) < tol))
+
+    return count(hi) <= 3 * max(count(hi - q), 1) and count(lo) <= 3 * max(count(lo + q), 1)
+
+
+def scene_is_unit(scene, profile) -> bool:
+    """Whether ``scene`` simulates the profile's unit: the scene is the profile's (built from it), or its
+    name or file name is the unit's identifier.  Without a profile no scene is a named unit's."""
+    if scene is None or profile is None:
+        return False
+    unit = str(getattr(profile, "unit", "") or "").strip().lower()
+    if not unit:
+        return False
+    if getattr(scene, "source", None) and str(scene.source) == str(getattr(profile, "source", "")):
+        return True  # built from the profile
+    names = {str(scene.name or "").strip().lower()}
+    if getattr(scene, "source", None):
+        names.add(os.path.splitext(os.path.basename(str(scene.source)))[0].lower())
+    return unit in names
+
+
+def _ride(rec, result, sc, notes, segment=None, speed=None):
+    """Ride qualities of the recording (over ``segment`` [s] when given) and the simulation; a one-line note
+    where one that could be expected (a recording with x, y, z channels, a scene that names its step) cannot
+    be assessed."""
     from ..ride import _AXIS_RE, ride_quality_from_recording, ride_quality_from_simulation
 
     out = []
     axes = {m.group(1) for nm in rec.data_vars if (m := _AXIS_RE.search(str(nm).lower()))}
     try:
-        out.append(("recording", ride_quality_from_recording(rec)))
+        rq = ride_quality_from_recording(rec, segment=segment)
+        out.append(("recording", rq if speed is None else dataclasses.replace(rq, speed_m_s=speed)))  # one speed
     except ValueError as exc:
         if len(axes) >= 2:
             notes.append(
                 f"no ride-quality page for the recording ({', '.join(sorted(axes))} axes): "
-                f"{' '.join(str(exc).split())} (vibkit ride FILE --segment START:END)"
+                f"{' '.join(str(exc).split())} (--segment START:END)"
             )
-    if result is not None:
+    if result is not None:  # only the unit's own scene (scene_is_unit)
         try:
             out.append(("simulation", ride_quality_from_simulation(result)))
         except ValueError as exc:

@@ -48,7 +48,7 @@ def write_report(
     *,
     scene=None,
     speed=None,
-    speed_sigma=0.0,
+    speed_sigma=None,
     channel=None,
     nominal_pitch=None,
     limits_percent=None,
@@ -58,9 +58,11 @@ def write_report(
     hampel_half_window_s=0.1,
     hampel_false_alarm_rate=1e-4,
     progress=False,
-    overwrite=True,
+    overwrite=False,
     read_options=None,
     date=None,
+    profile=None,
+    segment=None,
 ) -> Report:
     """Write the PDF diagnostic report of a recording.
 
@@ -73,9 +75,11 @@ def write_report(
     scene : str, os.PathLike or Scene, optional
         Scene describing the escalator and sensor; simulated and compared with the recording.
     speed : float, optional
-        Chain speed [m/s]; default the recording's ``chain_speed_m_s``, else the scene's.
-    speed_sigma : float
-        Its standard deviation. [m/s]
+        Chain speed [m/s], the one speed of every page and of the comparison; default the profile's
+        rated speed, else the recording's ``chain_speed_m_s``, else the scene's.
+    speed_sigma : float or str, optional
+        Its standard deviation [m/s], or a percentage of it (``"0.05%"``); None: not stated (a profile's
+        rated speed then takes the profile's sigma).
     channel : str, optional
     nominal_pitch : float, optional
         [m]; default the scene's link pitch.
@@ -92,11 +96,18 @@ def write_report(
     hampel_false_alarm_rate : float
         Per-sample false-alarm probability of the spike detector on Gaussian noise.
     overwrite : bool
-        Replace an existing regular file ``out_path`` (default True; the CLI passes ``--force``).
+        Replace an existing regular file ``out_path`` (default False: an existing file is refused; the
+        CLI passes ``--force``).
     read_options : dict, optional
         More :func:`vibkit.read_recording` arguments (``time_unit``, ``units``, ``repair_time`` ...).
     date : str or datetime.datetime, optional
         When the recording was made (ISO 8601); default the file's start time, if it states one.
+    profile : Profile, optional
+        The escalator profile (:func:`vibkit.model.profile.load_profile`): page 1 names its unit; its rated
+        speed, nominal pitch and teeth are the defaults; a scene's simulated ride page is shown only when
+        the scene is this unit's.
+    segment : (float, float), optional
+        The recording's ride segment [s] (default: detected), for its ride-quality page.
 
     Returns
     -------
@@ -141,6 +152,8 @@ def write_report(
         progress=progress,
         read_options=read_options,
         date=date,
+        profile=profile,
+        segment=segment,
     )
     date, summary = ctx.date, ctx.summary
     meta = {

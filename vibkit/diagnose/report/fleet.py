@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .common import _WIDE, PageSink, Report, atomic_path
+from .common import _WIDE, PageSink, Report, atomic_path, fmt_pm
 
 __all__ = [
     "FLEET_PAGE_MAX_UNITS",
@@ -19,6 +19,8 @@ __all__ = [
     "WORK_LIST_HEADER",
     "fleet_page",
     "work_list_rows",
+    "fmt_elongation",
+    "OVERDUE_MEANING",
     "write_fleet_report",
 ]
 
@@ -43,8 +45,16 @@ WORK_LIST_HEADER = [
 ]
 
 
-def fmt_forecast(f):
-    """A limit forecast in a few words (year-month dates)."""
+#: what an overdue forecast means (the work list's note, ``fleet status``)
+OVERDUE_MEANING = "OVERDUE: the forecast date has passed: re-measure, the chain is probably over that limit now"
+#: row colours of the work list: a unit over watch, plan, replace; flags only
+_ROW_COLORS = ("#fff3cd", "#fcd9b6", "#f4c2c2")
+_FLAG_COLOR = "#e4ecf7"
+
+
+def fmt_forecast(f, today_unix_s=None):
+    """A limit forecast in a few words (year-month dates); ``OVERDUE`` when its date has passed on
+    ``today_unix_s``; an interval under a month is not drawn as ``(07..07)``."""
     if f is None:
         return "all reached"
     if f.status == "reached":
@@ -57,7 +67,9 @@ def fmt_forecast(f):
             lo, hi = lo[5:], hi[5:]
         elif lo[:4] != hi[:4] and hi[:2] != "af":  # years apart: the years alone, '2050-05 (2043..2063)'
             lo, hi = lo[:4], hi[:4]
-        return f"{f.date_utc[:7]} ({lo}..{hi})"
+        interval = "" if lo == hi else f" ({lo}..{hi})"
+        overdue = "OVERDUE " if today_unix_s is not None and f.overdue(today_unix_s) else ""
+        return f"{overdue}{f.date_utc[:7]}{interval}"
     if f.status == "not before":
         return f"not before {f.earliest_utc[:7]}" if f.earliest_utc else "-"
     if f.status == "implausible":
@@ -65,14 +77,22 @@ def fmt_forecast(f):
     return "-"
 
 
-def work_list_rows(trends, *, flags_width=None):
-    """The work list's rows (:data:`WORK_LIST_HEADER`) of ranked :class:`vibkit.fleet.trends.UnitTrend`."""
+def fmt_elongation(t) -> str:
+    """The latest elongation of a unit, rounded to its sigma; without a stated speed uncertainty, no +-."""
+    if not t.speed_sigma_stated:
+        return f"{t.latest_elongation_percent:+.2f} (speed unc. not stated)"
+    return fmt_pm(t.latest_elongation_percent, t.latest_elongation_sigma_percent, sign=True)
+
+
+def work_list_rows(trends, *, flags_width=None, today_unix_s=None):
+    """The work list's rows (:data:`WORK_LIST_HEADER`) of ranked :class:`vibkit.fleet.trends.UnitTrend`;
+    a forecast whose date has passed on ``today_unix_s`` reads ``OVERDUE`` (:func:`fmt_forecast`)."""
     rows = []
     for t in trends:
         slope = (
             "-"
             if t.slope_percent_per_year is None
-            else f"{t.slope_percent_per_year:+.2f} +- {t.slope_sigma_percent_per_year:.2f}"
+            else fmt_pm(t.slope_percent_per_year, t.slope_sigma_percent_per_year, sign=True)
         )
         nxt = t.next_limit()
         verdict = t.latest_verdict if t.rate_verdict != "implausible" else f"{t.latest_verdict}; rate implausible"
@@ -83,12 +103,12 @@ def work_list_rows(trends, *, flags_width=None):
             [
                 str(t.rank),
                 t.unit,
-                f"{t.latest_elongation_percent:+.2f} +- {t.latest_elongation_sigma_percent:.2f}",
+                fmt_elongation(t),
                 t.latest_date_utc[:10],
                 slope,
                 verdict,
                 "-" if nxt is None else f"{nxt.limit_percent:g} %",
-                fmt_forecast(nxt),
+                fmt_forecast(nxt, today_unix_s),
                 flags,
             ]
         )
@@ -139,7 +159,7 @@ def work_list_page(doc, ctx, rows, part, parts):
     _title(fig, "Fleet work list: most urgent first" + (f" ({part}/{parts})" if parts > 1 else ""), _subtitle(ctx))
     ax = fig.add_axes([0.04, 0.10, 0.92, 0.80])
     ax.axis("off")
-    widths = [0.03, 0.07, 0.08, 0.07, 0.08, 0.11, 0.055, 0.135, 0.37]
+    widths = [0.03, 0.055, 0.1, 0.07, 0.095, 0.11, 0.045, 0.16, 0.335]
     tab = ax.table(cellText=rows, colLabels=WORK_LIST_HEADER, colWidths=widths, loc="upper left", cellLoc="left")
     tab.auto_set_font_size(False)
     tab.set_fontsize(7)
@@ -150,16 +170,19 @@ def work_list_page(doc, ctx, rows, part, parts):
         if r == 0:
             cell.set_text_props(fontweight="bold")
             cell.set_facecolor("0.9")
-        elif by_unit[rows[r - 1][1]].over_limit_percent is not None:
-            cell.set_facecolor("#f6d5d5")  # over a limit now
+        elif by_unit[rows[r - 1][1]].over_limit_percent is not None:  # over a limit now: its colour
+            over = by_unit[rows[r - 1][1]].over_limit_percent
+            k = max((i for i, lim in enumerate(ctx.limits) if over >= lim), default=0)
+            cell.set_facecolor(_ROW_COLORS[k])
         elif by_unit[rows[r - 1][1]].flags:
-            cell.set_facecolor("#fff3cd")  # something to look at
+            cell.set_facecolor(_FLAG_COLOR)  # something to look at
     fig.text(
         0.04,
         0.05,
         "elongation: the latest usable measurement +- 1 sigma; rate: weighted least squares over the "
-        "current chain (after the last replacement), +- 1 sigma; red: over a limit now; yellow: flags (outliers, "
-        "flagged measurements, replacements, an implausible rate) - left out of the trend.",
+        "current chain (after the last replacement), +- 1 sigma; over a limit now: yellow watch, orange plan, red "
+        "replace; blue: flags (outliers, flagged measurements, replacements, an implausible rate) - left out of the "
+        f"trend. {OVERDUE_MEANING}.",
         fontsize=7,
         color="0.3",
         wrap=True,
@@ -212,7 +235,7 @@ def _draw_unit(ax, tr, ms, limits, ctx):
             fit.elongation_at(tt),
             color="tab:blue",
             lw=1.0,
-            label=f"trend {tr.slope_percent_per_year:+.2f} +- {tr.slope_sigma_percent_per_year:.2f} %/yr",
+            label=f"trend {fmt_pm(tr.slope_percent_per_year, tr.slope_sigma_percent_per_year, sign=True)} %/yr",
         )
     for lim, c, _name in zip(limits, _LIMIT_COLORS, _LIMIT_NAMES):
         ax.axhline(lim, color=c, lw=0.9, ls="--")
@@ -229,6 +252,9 @@ def _draw_unit(ax, tr, ms, limits, ctx):
             f"{nxt.latest_utc[:7]})",
         )
         ax.plot([_utc(nxt.date_utc)], [nxt.limit_percent], "|", color="tab:blue", ms=9)
+    today = ctx.date.timestamp()
+    t_end = max(t_end, today)
+    ax.axvline(_dt_of(today), color="0.25", lw=0.9, ls=":", label=f"today {ctx.date:%Y-%m-%d}")
     ax.set_ylim(ymin, ymax)
     span = max(t_end - t0, 30 * 86400)
     ax.set_xlim(_dt_of(t0 - 0.04 * span), _dt_of(t_end + 0.04 * span))
@@ -245,6 +271,12 @@ def _draw_unit(ax, tr, ms, limits, ctx):
         )
 
 
+def _limit_colour(tr, limits):
+    """The colour of the highest limit a unit is over (watch, plan, replace: three colours)."""
+    k = max((i for i, lim in enumerate(limits) if tr.over_limit_percent >= lim), default=0)
+    return _LIMIT_COLORS[k]
+
+
 def unit_pages(doc, ctx):
     import matplotlib.dates as mdates
     import matplotlib.pyplot as plt
@@ -259,20 +291,18 @@ def unit_pages(doc, ctx):
             ms = sorted(ctx.by_unit.get(tr.unit, []), key=lambda m: (m.date_unix_s, m.id or 0))
             _draw_unit(ax, tr, ms, ctx.limits, ctx)
             over = tr.over_limit_percent is not None
-            head = (
-                f"#{tr.rank} {tr.unit}: {tr.latest_elongation_percent:+.2f} +- "
-                f"{tr.latest_elongation_sigma_percent:.2f} %, {tr.latest_verdict}"
-            )
+            head = f"#{tr.rank} {tr.unit}: {fmt_elongation(tr)} %, {tr.latest_verdict}"
             if over:
                 head += f" - OVER {tr.over_limit_percent:g} %"
+            elif tr.overdue(ctx.date.timestamp()):
+                head += f" - OVERDUE: {tr.next_limit().limit_percent:g} % forecast {tr.next_limit().date_utc[:7]}"
             if tr.rate_verdict == "implausible":
                 head += " - rate implausible: re-measure"
-            ax.set_title(
-                head, loc="left", fontsize=8, color="#b2182b" if over else "k", fontweight="bold" if over else "normal"
-            )
+            colour = _limit_colour(tr, ctx.limits) if over else "k"
+            ax.set_title(head, loc="left", fontsize=8, color=colour, fontweight="bold" if over else "normal")
             if over:
                 for sp in ax.spines.values():
-                    sp.set_color("#b2182b")
+                    sp.set_color(colour)
                     sp.set_linewidth(1.4)
             loc = mdates.AutoDateLocator(minticks=2, maxticks=6)
             ax.xaxis.set_major_locator(loc)
@@ -294,7 +324,7 @@ def unit_pages(doc, ctx):
 
 def fleet_page(doc, ctx) -> None:
     """The work list page(s), then the unit pages."""
-    rows = work_list_rows(ctx.trends, flags_width=80)
+    rows = work_list_rows(ctx.trends, flags_width=80, today_unix_s=ctx.date.timestamp())
     parts = max(1, math.ceil(len(rows) / _ROWS_PER_TABLE))
     for k in range(parts):
         work_list_page(doc, ctx, rows[k * _ROWS_PER_TABLE : (k + 1) * _ROWS_PER_TABLE], k + 1, parts)

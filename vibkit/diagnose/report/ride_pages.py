@@ -3,12 +3,18 @@ acceleration channels) and of the simulation (when it has the step's motion); :f
 
 from __future__ import annotations
 
+import math
 import os
 import textwrap
 
 from .common import _PAGE, _page_title
 
 __all__ = ["plot_ride", "ride_quality_pages"]
+
+
+def _num(v, digits=4) -> str:
+    """A table value: ``n/a`` where the ride has none (a constant channel: no half-cycles), never ``nan``."""
+    return f"{v:.{digits}g}" if v is not None and math.isfinite(float(v)) else "n/a"
 
 
 def plot_ride(rq, fig=None):
@@ -34,11 +40,11 @@ def plot_ride(rq, fig=None):
             a.axis,
             a.channel[:32],
             a.weighting,
-            f"{a.weighted.max:.4g}",
-            f"{a.weighted.a95:.4g}",
-            f"{a.weighted.rms:.4g}",
-            f"{a.lowpass.max:.4g}",
-            f"{a.lowpass.a95:.4g}",
+            _num(a.weighted.max),
+            _num(a.weighted.a95),
+            _num(a.weighted.rms),
+            _num(a.lowpass.max),
+            _num(a.lowpass.a95),
         ]
         for a in rq.axes
     ]
@@ -68,11 +74,12 @@ def plot_ride(rq, fig=None):
         ax.plot(rq.time, y, lw=0.5, color="C0")
         ax.axvspan(seg.start_s, seg.end_s, color="C2", alpha=0.12, lw=0)
         tm = seg.start_s + a.weighted.time_of_max_s
-        ax.axvline(tm, color="C3", ls=":", lw=1)
+        if math.isfinite(tm):
+            ax.axvline(tm, color="C3", ls=":", lw=1)
         ax.set_ylabel(f"{a.axis}, {a.weighting} [m/s^2]")
         ax.set_title(
-            f"{a.axis}: weighted ({a.weighting}); max pk-pk {a.weighted.max:.3g} m/s^2 (dotted), "
-            f"A95 {a.weighted.a95:.3g} m/s^2",
+            f"{a.axis}: weighted ({a.weighting}); max pk-pk {_num(a.weighted.max, 3)} m/s^2 (dotted), "
+            f"A95 {_num(a.weighted.a95, 3)} m/s^2",
             fontsize=8.5,
         )
         ax.grid(alpha=0.3)
@@ -95,9 +102,12 @@ def ride_quality_pages(doc, ctx) -> list:
     done = []
     for what, rq in ctx.ride:
         fig = plt.figure(figsize=_PAGE)
+        scene_file = os.path.basename(str(ctx.scene.source)) if ctx.scene is not None else ""
+        if " (scene built from the profile)" in scene_file:  # the profile's scene, in memory
+            scene_file = f"SCENE` of `vibkit scene {scene_file.split(' (')[0]} -o SCENE"
         same = (
             (
-                f"; the same figure as `vibkit ride {os.path.basename(str(ctx.scene.source))}"
+                f"; the same figure as `vibkit ride {scene_file}"
                 + (f" --duration {ctx.duration:g}`" if ctx.duration else "`")
             )
             if what == "simulation"

@@ -11,7 +11,20 @@ from __future__ import annotations
 import math
 import textwrap
 
-from .common import _PAGE, TextColumn, _page_title, fmt_length, fmt_pm
+from .common import (
+    _PAGE,
+    HARMONIC_SNR,
+    HARMONIC_SNR_DEFINITION,
+    PITCH_RATIO,
+    PITCH_RATIO_DEFINITION,
+    TextColumn,
+    _page_title,
+    elongation_figure,
+    fmt_length,
+    fmt_pm,
+    pitch_figure,
+    speed_figure,
+)
 
 __all__ = ["verdict_page", "recording_page", "VERDICT_COLOURS"]
 
@@ -38,10 +51,10 @@ def _headline(ctx):
         )
     if status.lower() not in ("ok", ""):
         return status.upper(), _GREY, reason or "no verdict"
-    pitch_text = fmt_length(pitch.pitch_m, pitch.pitch_sigma_m)
+    pitch_text = pitch_figure(pitch)
     if pitch.verdict is None:
         return f"PITCH {pitch_text}", _GREY, "no nominal pitch given: no elongation verdict (--nominal-pitch)"
-    el = fmt_pm(pitch.elongation_percent, pitch.elongation_sigma_percent, "%")
+    el = elongation_figure(pitch)
     colour = VERDICT_COLOURS.get(str(pitch.verdict).lower(), _GREY)
     # the pitch and the nominal pitch are in the evidence below: each figure once
     under = (
@@ -59,11 +72,9 @@ def verdict_page(doc, ctx) -> None:
     fig = plt.figure(figsize=_PAGE)
     col = TextColumn(fig, x=0.07, y=0.965, width=0.86)
     col.text("Escalator drive-chain diagnostic", 16, weight="bold")
-    sc = ctx.scene
-    unit = (sc.description or sc.name) if sc is not None else "not given (no scene: --scene)"
     col.pairs(
         [
-            ("escalator", unit),
+            ("escalator", ctx.unit_text),
             ("measured", ctx.measurement_date_text),
             ("recording", f"{summary['file']}, channel {ctx.channel} [{ctx.units}]"),
             (
@@ -81,11 +92,6 @@ def verdict_page(doc, ctx) -> None:
     warnings = list(getattr(pitch, "warnings", []) or []) if pitch is not None else []
     if not ctx.found:
         warnings = []  # the headline says it, with the reason
-    elif pitch is not None and not (pitch.speed_sigma_m_s and pitch.speed_sigma_m_s > 0):
-        warnings.append(
-            "the speed's uncertainty was not given: the +- of the pitch and the elongation covers "
-            "the frequency only (give --speed-uncertainty)"
-        )
     col.gap(0.008)
     if warnings:
         col.text(f"{len(warnings)} WARNING{'S' if len(warnings) > 1 else ''}", _BIG, weight="bold", color="#b35900")
@@ -117,24 +123,15 @@ def evidence_rows(ctx):
         method = f" ({pitch.method})" if pitch is not None and getattr(pitch, "method", "") else ""
         rows.append(("link-pass frequency", fmt_pm(ctx.f0, sig, "Hz") + method))
     if pitch is not None:
-        sv = pitch.speed_sigma_m_s
-        rows.append(
-            (
-                "chain speed",
-                fmt_pm(pitch.speed_m_s, sv, "m/s")
-                + ("" if sv and sv > 0 else " (no uncertainty given: --speed-uncertainty)"),
-            )
-        )
-        rows.append(("link pitch = speed / frequency", fmt_length(pitch.pitch_m, pitch.pitch_sigma_m)))
+        rows.append(("chain speed", speed_figure(ctx)))
+        rows.append(("link pitch = speed / frequency", pitch_figure(pitch)))
         if pitch.nominal_pitch_m is not None:
             rows.append(("nominal pitch", fmt_length(pitch.nominal_pitch_m)))
             if pitch.verdict is None or str(getattr(pitch, "status", "ok") or "ok").lower() != "ok":
-                rows.append(
-                    ("elongation", fmt_pm(pitch.elongation_percent, pitch.elongation_sigma_percent, "%"))
-                )  # else it is under the verdict
+                rows.append(("elongation", elongation_figure(pitch)))  # else it is under the verdict
         snr = getattr(pitch, "snr_db", None)
         if snr is not None and math.isfinite(snr):
-            rows.append(("signal to noise", f"{snr:.0f} dB at the link-pass harmonics"))
+            rows.append((HARMONIC_SNR, f"{snr:.0f} dB ({HARMONIC_SNR_DEFINITION})"))
     scale, shown = (1000.0, "mm") if units == "m" else (1.0, units)
     rows.append(("RMS / peak to peak", f"{ctx.rms * scale:.3g} / {ctx.p2p * scale:.3g} {shown}"))
     rows.append(("spikes", f"{len(ctx.events)} (Hampel events; page 'time signal')"))
@@ -154,7 +151,7 @@ def evidence_rows(ctx):
             (
                 "pitch against the scene",
                 ("consistent" if comp.pitch_consistent else "NOT consistent")
-                + f" (ratio {comp.pitch_ratio:.4f}: recorded over simulated)",
+                + f" ({PITCH_RATIO} {fmt_pm(comp.pitch_ratio, comp.pitch_ratio_sigma)}: {PITCH_RATIO_DEFINITION})",
             )
         )
         rows.append(
@@ -186,7 +183,8 @@ def recording_page(doc, ctx) -> None:
             ("measured", ctx.measurement_date_text),
             ("report date (UTC)", ctx.date.strftime("%Y-%m-%d %H:%M")),
             ("vibkit version", __version__),
-            ("escalator", sc.description if sc else "not given (no scene)"),
+            ("escalator", ctx.unit_text),
+            ("chain speed", speed_figure(ctx)),
             (
                 "scene",
                 (f"{sc.name} ({sc.analysis}; pitch {fmt_length(sc.chain.link_pitch)}, Z = {sc.sprocket.teeth})")

@@ -30,9 +30,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..channels import mark_status
 from ..errors import RecordingError
 from ..recording import build_recording, metadata_attrs
-from ..timebase import check_order, diagnose, held_update_rate, resample_linear
+from ..timebase import check_order, diagnose, held_update_rate, quantum, resample_linear
 from .cells import _MAYBE_COMMENT, DELIMITERS, _is_comment
 from .columns import _build_channels, _column_names, _select_channels, _unit_overrides
 from .fastpath import _HEAD_BYTES, _Fallback, _fast_rows
@@ -64,6 +65,7 @@ def read_csv(
     delimiter=None,
     decimal=None,
     encoding=None,
+    date_order=None,
 ):
     """Read a CSV or text export into a recording Dataset.
 
@@ -100,6 +102,7 @@ def read_csv(
         delimiter=delimiter,
         decimal=decimal,
         encoding=encoding,
+        date_order=date_order,
     )
     try:
         return _read_csv(path, data, fast=True, **kw)
@@ -132,6 +135,7 @@ def _read_csv(
     delimiter=None,
     decimal=None,
     encoding=None,
+    date_order=None,
 ):
     """:func:`read_csv` through the fast path (``fast=True``, may raise :class:`_Fallback`) or line by line."""
     history = []
@@ -180,11 +184,13 @@ def _read_csv(
             rate_meta,
             history,
             extra_attrs,
+            date_order,
         )
         time_attrs["column"] = tname
     channels = _build_channels(
         path, cols, rownums, dec, chan_idx, explicit, override, colnames, scale_meta, header_line, history
     )
+    mark_status(channels, history)
     t, fs, segment = _time_base(
         path,
         t,
@@ -376,6 +382,7 @@ def _time_base(
             )
             segment = diag.segment
         _held_samples(t, channels, measured, history, extra_attrs)
+        _sparse_channels(t, channels, history)
         policy = "resampled below" if resample == "linear" else "kept as is"
         history.append(f"jitter rms {_pct(diag.jitter_rms)} % of the period (max {_pct(diag.jitter_max)} %), {policy}")
         if resample == "linear":
@@ -393,13 +400,23 @@ def _time_base(
 
 def _held_samples(t, channels, row_rate, history, extra_attrs):
     """Mark channels whose values are held between updates (multi-sensor phone exports) with their true rate."""
-    rates = {}
+    rates, steps = {}, {}
     for ch in channels:
+        q = quantum(ch.values)
+        if q is not None:
+            ch.attrs["quantum"] = q
+            steps[ch.name] = q
         r = held_update_rate(t, ch.values)
         if r is not None:
             ch.attrs["update_rate_hz"] = r
             ch.attrs["nyquist_hz"] = r / 2
             rates[ch.name] = r
+    if steps:
+        history.append(
+            "quantised: "
+            + ", ".join(f"{k} in steps of {v:.4g}" for k, v in steps.items())
+            + " (repeated values come from the resolution, not held between updates; attr quantum)"
+        )
     if rates:
         lo = min(rates.values())
         every = len(rates) == len(channels)
@@ -413,3 +430,30 @@ def _held_samples(t, channels, row_rate, history, extra_attrs):
         if every:
             extra_attrs["update_rate_hz"] = float(lo)
             extra_attrs["nyquist_hz"] = float(lo / 2)
+
+
+def _sparse_channels(t, channels, history):
+    """Mark channels that hold a value only in some rows (a row whenever any sensor updates): their own samples.
+
+    The cells a sensor left empty stay NaN: each such channel's samples are its finite values at their
+    own times (:func:`vibkit.io.channels.channel_series`), never filled in; attrs ``sparse``,
+    ``own_samples`` and ``own_rate_hz``.
+    """
+    notes = []
+    filled = np.zeros(t.size, dtype=int)
+    for ch in channels:
+        filled += np.isfinite(ch.values)
+    for ch in channels:
+        ok = np.isfinite(ch.values)
+        n = int(ok.sum())
+        # at least a tenth of the rows empty, and those rows hold another sensor's value
+        if n >= 2 and n <= 0.9 * ok.size and np.all(filled[~ok] > 0):
+            tt = t[ok]
+            ch.attrs.update({"sparse": 1, "own_samples": n, "own_rate_hz": float((n - 1) / (tt[-1] - tt[0]))})
+            notes.append(f"{ch.name} {n} samples ({ch.attrs['own_rate_hz']:.4g} Hz)")
+    if notes:
+        history.append(
+            "sparse columns (a row whenever any sensor updates): "
+            + ", ".join(notes)
+            + "; each keeps its own samples at their own times, NaN between them (attr sparse)"
+        )

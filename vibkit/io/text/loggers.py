@@ -94,8 +94,36 @@ def _is_sensor_logger(path, low, free_text):
     return low[:2] == ["time", "seconds_elapsed"] and {"x", "y", "z"} <= set(low)
 
 
+def _sensor_logger_platform(path):
+    """'ios' or 'android' from the Metadata.csv that Sensor Logger writes beside each sensor file, else None."""
+    meta = os.path.join(os.path.dirname(str(path)), "Metadata.csv")
+    try:
+        with open(meta, encoding="utf-8", errors="replace") as f:
+            head, row = f.readline().strip().split(","), f.readline().strip().split(",")
+    except OSError:
+        return None
+    if "platform" in head and len(row) == len(head):
+        p = row[head.index("platform")].strip().lower()
+        return p if p in ("ios", "android") else None
+    return None
+
+
 def _sensor_logger_units(path, names, low, units, history):
     base = re.sub(r"[^a-z]", "", os.path.basename(str(path)).lower())
+    if "uncalibrated" in base and "accelerometer" in base:
+        platform = _sensor_logger_platform(path)
+        unit = {"ios": "g", "android": "m/s^2"}.get(platform)
+        if unit is None:
+            history.append(
+                "Sensor Logger AccelerometerUncalibrated.csv: x, y, z are in g on iOS and m/s^2 on Android, and "
+                "no Metadata.csv beside the file says the platform; x, y, z keep no unit (pass units=)"
+            )
+            return {}
+        history.append(
+            f"Sensor Logger AccelerometerUncalibrated.csv on {platform} (Metadata.csv beside it): x, y, z in "
+            f"{unit}; pass units= to override"
+        )
+        return {j: unit for j, n in enumerate(low) if n in ("x", "y", "z") and units[j] is None}
     for key, unit, app_name in _SENSOR_LOGGER_FILES:
         if key in base:
             history.append(
@@ -145,6 +173,52 @@ def _picoquake_units(path, names, low, units, history):
     return out
 
 
+_SCIENCE_JOURNAL_UNITS = {  # Science Journal sensor ids -> unit (the app's sensor documentation)
+    "accx": "m/s^2",
+    "accy": "m/s^2",
+    "accz": "m/s^2",
+    "linearaccelerometersensor": "m/s^2",
+    "magneticrotationsensor": "uT",
+    "ambientlightsensor": "lx",
+    "barometersensor": "hPa",
+    "decibelsource": "dB",
+    "pitchsensor": "Hz",
+}
+
+
+def _is_science_journal(path, low, free_text):
+    return bool(low) and low[0] == "relative_time"
+
+
+def _science_journal_units(path, names, low, units, history):
+    out = {j: _SCIENCE_JOURNAL_UNITS[n] for j, n in enumerate(low) if n in _SCIENCE_JOURNAL_UNITS and units[j] is None}
+    history.append(
+        "Google Science Journal export ('relative_time' in ms, one column per sensor id, a row whenever a "
+        "sensor updates)" + (": " + ", ".join(f"{names[j]} in {u}" for j, u in out.items()) if out else "")
+    )
+    return out
+
+
+_ANDROID_FILES = (("acc", "m/s^2", "accelerometer"), ("grav", "m/s^2", "gravity"), ("gyro", "rad/s", "gyroscope"))
+
+
+def _is_android_sensor_event(path, low, free_text):
+    return bool(low) and low[0] in ("timestamp", "timestamp_ns", "elapsedrealtimenanos") and "accuracy" in low
+
+
+def _android_units(path, names, low, units, history):
+    base = os.path.basename(str(path)).lower()
+    for key, unit, what in _ANDROID_FILES:
+        if key in base:
+            history.append(
+                f"Android SensorEvent log ('timestamp' in ns since boot, 'accuracy' a status): x, y, z in {unit} "
+                f"as Android documents for the {what} (file name); pass units= to override"
+            )
+            return {j: unit for j, n in enumerate(low) if n in ("x", "y", "z") and units[j] is None}
+    history.append("Android SensorEvent log: the file name does not say the sensor, x, y, z keep no unit (units=)")
+    return {}
+
+
 #: the logger table; ``recognise`` is tried in this order and the first that claims a file decides its units
 PROFILES: tuple[LoggerProfile, ...] = (
     LoggerProfile(
@@ -152,9 +226,10 @@ PROFILES: tuple[LoggerProfile, ...] = (
         "Kelvin Choi, Sensor Logger for Android/iOS: export documentation, one CSV per sensor",
         recognise=_is_sensor_logger,
         column_units=_sensor_logger_units,
-        facts="header 'time,seconds_elapsed,z,y,x': time is Unix epoch in ns, seconds_elapsed a second clock; "
-        "the axes carry no unit, which the app documents per sensor file: Accelerometer.csv, "
-        "TotalAcceleration.csv, Gravity.csv in m/s^2, Gyroscope.csv in rad/s",
+        facts="header 'time,seconds_elapsed,z,y,x': time is Unix epoch in ns (UTC, not since boot), "
+        "seconds_elapsed a second clock; the axes carry no unit, which the app documents per sensor file: "
+        "Accelerometer.csv (gravity removed), TotalAcceleration.csv, Gravity.csv in m/s^2, Gyroscope.csv in "
+        "rad/s; AccelerometerUncalibrated.csv in g on iOS and m/s^2 on Android (Metadata.csv's platform)",
     ),
     LoggerProfile(
         "Physics Toolbox Sensor Suite",
@@ -194,6 +269,34 @@ PROFILES: tuple[LoggerProfile, ...] = (
         "Arduino reference: millis(), micros()",
         clock_columns={"micros": ("us", 1e-6), "millis": ("ms", 1e-3)},
         facts="sketches print an integer clock column with no unit; one named micros or millis is in us or ms",
+    ),
+    LoggerProfile(
+        "Google Science Journal",
+        "Google Science Journal (Arduino Science Journal): CSV export of a trial",
+        recognise=_is_science_journal,
+        column_units=_science_journal_units,
+        clock_columns={"relative_time": ("ms", 1e-3)},
+        facts="header 'relative_time,AccX,AccY,AccZ,...': relative_time in ms from the start, one column per "
+        "sensor id; a row whenever any sensor updates, holding only that sensor's value (the other cells "
+        "empty): each channel keeps its own samples (NaN elsewhere, attr sparse); the 2016 format "
+        "'timestamp,value' has epoch ms",
+    ),
+    LoggerProfile(
+        "Android SensorEvent logger",
+        "Android SensorEvent reference: timestamp in ns (SystemClock.elapsedRealtimeNanos base), values in SI, "
+        "accuracy a status (0-3)",
+        recognise=_is_android_sensor_event,
+        column_units=_android_units,
+        clock_columns={"elapsedrealtimenanos": ("ns", 1e-9), "timestamp_ns": ("ns", 1e-9)},
+        facts="header 'timestamp,x,y,z,accuracy': timestamp counts ns since boot (not an epoch); accuracy is a "
+        "status column, never a channel to analyse",
+    ),
+    LoggerProfile(
+        "PASCO SPARKvue / Capstone",
+        "PASCO SPARKvue and Capstone: CSV export",
+        facts="header 'Time (s) Run #1,Acceleration (m/s²) Run #1': the run goes to the name; values "
+        "quantised to the sensor's resolution (0.1 m/s^2 at 500 Hz): repeated values are quantisation, "
+        "not holds (vibkit.io.timebase.quantum)",
     ),
     LoggerProfile(
         "MetaWear",

@@ -104,12 +104,27 @@ def _choose_time_column(path, time_column, colnames: _ColumnNames, n, header_lin
     return tcol, clocks
 
 
-def _read_time(path, tcells, tname, unit_text, dec, rownums, header_line, time_unit, rate_meta, history, extra_attrs):
+def _read_time(
+    path,
+    tcells,
+    tname,
+    unit_text,
+    dec,
+    rownums,
+    header_line,
+    time_unit,
+    rate_meta,
+    history,
+    extra_attrs,
+    date_order=None,
+):
     """Seconds from the cells ``tcells`` of time column ``tname``; start time and offset go to ``extra_attrs``."""
     numeric = isinstance(tcells, np.ndarray) and tcells.dtype.kind in "fiu"
     if numeric and tcells.dtype.kind == "f" and np.isnan(tcells).any():
         raise _Fallback("a missing time")  # the line-by-line reader quotes the cell
-    stamps = None if numeric or _NUM[dec].fullmatch(tcells[0]) else _parse_stamps(tcells)
+    stamps = (
+        None if numeric or _NUM[dec].fullmatch(tcells[0]) else _parse_stamps(tcells, path, rownums, tname, date_order)
+    )
     if stamps is not None:
         t, start, kind, ok = stamps
         if not ok.all():
@@ -168,7 +183,7 @@ def _read_time(path, tcells, tname, unit_text, dec, rownums, header_line, time_u
         if vals.size and "start_time" not in extra_attrs and _EPOCH_RANGE_S[0] <= vals[0] * f <= _EPOCH_RANGE_S[1]:
             # a Unix epoch column with its unit in the header (MetaWear 'epoc (ms)')
             extra_attrs["start_time"] = datetime.fromtimestamp(float(vals[0]) * f, tz=timezone.utc).isoformat()
-        if vals.size and abs(vals[0]) * f > 1e6:
+        if vals.size and (abs(vals[0]) * f > 1e6 or (f == 1e-9 and vals[0] != 0)):  # epoch, or since boot
             extra_attrs["time_offset_s"] = float(vals[0] * f)
             history.append(f"time shifted by {vals[0] * f:.6f} s so that it starts at 0 (epoch-like values)")
             t = (vals - vals[0]) * f
@@ -194,28 +209,67 @@ def _counter_clock_unit(path, vals, step, tname, header_line, history):
         if named is not None
         else [
             (u, f)
-            for u, f in (("ms", 1e-3), ("us", 1e-6))
+            for u, f in (("ms", 1e-3), ("us", 1e-6), ("ns", 1e-9))
             if _CLOCK_RATES_HZ[0] <= 1 / (step * f) <= _CLOCK_RATES_HZ[1]
         ]
     )
     if len(fits) != 1:
-        rates = ", ".join(f"{1 / (step * f):.4g} Hz in {u}" for u, f in (("s", 1.0), ("ms", 1e-3), ("us", 1e-6)))
+        units = (("s", 1.0), ("ms", 1e-3), ("us", 1e-6))
+        units += (("ns", 1e-9),) if 1 / (step * 1e-9) <= _CLOCK_RATES_HZ[1] else ()
+        rates = ", ".join(f"{1 / (step * f):.4g} Hz in {u}" for u, f in units)
         raise RecordingError(
             path,
             header_line,
             f"time column '{tname}' has no unit and whole-number steps of "
-            f"{step:.6g} ({rates}): cannot tell its unit; pass time_unit= (s, ms, us)",
+            f"{step:.6g} ({rates}): cannot tell its unit; pass time_unit= ({', '.join(u for u, _ in units)})",
         )
     u, f = fits[0]
+    what = (
+        f"a clock in {u} (its name, as the logger profile says)"
+        if named is not None
+        else "a clock counting nanoseconds (Android's SensorEvent.timestamp, since boot)"
+        if u == "ns"
+        else "a microcontroller clock (Arduino millis()/micros())"
+    )
     history.append(
-        f"time column '{tname}' has no unit and whole-number steps of {step:.6g}: a microcontroller "
-        f"clock (Arduino millis()/micros()); read as {u}, giving {1 / (step * f):.6g} Hz (in seconds it "
-        f"would be {1 / step:.3g} Hz); pass time_unit= to override"
+        f"time column '{tname}' has no unit and whole-number steps of {step:.6g}: {what}; read as {u}, "
+        f"giving {1 / (step * f):.6g} Hz (in seconds it would be {1 / step:.3g} Hz); pass time_unit= to override"
     )
     return f
 
 
-def _parse_stamps(cells):
+def _date_order(cells, path, rownums, tname, date_order):
+    """``"dmy"`` or ``"mdy"`` for numeric dates ``a/b/yyyy``: as given, else where a field above 12 says.
+
+    Dates whose two first fields never exceed 12 could be either: refused, naming ``date_order=``.
+    """
+    parts = cells.str.extract(r"^([0-9]{1,2})[/.-]([0-9]{1,2})[/.-]")
+    a = pd.to_numeric(parts[0], errors="coerce").to_numpy()
+    b = pd.to_numeric(parts[1], errors="coerce").to_numpy()
+    if date_order is not None:
+        return date_order
+    day_first, month_first = np.flatnonzero(a > 12), np.flatnonzero(b > 12)
+    if day_first.size and month_first.size:
+        i, j = int(day_first[0]), int(month_first[0])
+        raise RecordingError(
+            path,
+            int(rownums[j]),
+            f"dates in column '{tname}' mix day/month/year ('{cells.iloc[i]}', line {int(rownums[i])}) and "
+            f"month/day/year ('{cells.iloc[j]}'); expected one order",
+        )
+    if day_first.size:
+        return "dmy"
+    if month_first.size:
+        return "mdy"
+    raise RecordingError(
+        path,
+        int(rownums[0]),
+        f"dates in column '{tname}' ('{cells.iloc[0]}' ...) could be day/month/year or month/day/year "
+        "(no field above 12 says which); pass date_order= (dmy or mdy)",
+    )
+
+
+def _parse_stamps(cells, path=None, rownums=None, tname="time", date_order=None):
     """Seconds since the first stamp, the first stamp as text, the format name; None if not stamps."""
     s = pd.Series(cells, dtype=object)
     first = s.iloc[0]
@@ -224,10 +278,16 @@ def _parse_stamps(cells):
         kind = "ISO 8601 timestamps"
         ok = t.notna().to_numpy()
     elif _STAMP_DMY.fullmatch(first):
-        norm = s.str.replace(r"^([0-9]{1,2})[/.-]([0-9]{1,2})[/.-]([0-9]{4})[ T]", r"\3-\2-\1 ", regex=True)
+        order = _date_order(s, path, rownums if rownums is not None else np.arange(1, s.size + 1), tname, date_order)
+        swap = r"\3-\2-\1 " if order == "dmy" else r"\3-\1-\2 "
+        norm = s.str.replace(r"^([0-9]{1,2})[/.-]([0-9]{1,2})[/.-]([0-9]{4})[ T]", swap, regex=True)
         norm = norm.str.replace(",", ".", regex=False)
         t = pd.to_datetime(norm, format="ISO8601", errors="coerce")
-        kind = "day/month/year timestamps"
+        kind = (
+            ("day/month/year" if order == "dmy" else "month/day/year")
+            + " timestamps"
+            + (" (date_order given)" if date_order else " (a field above 12 says the order)")
+        )
         ok = t.notna().to_numpy()
     elif _STAMP_TOD.fullmatch(first):
         norm = s.str.replace(r"^([0-9]{1,2}:[0-9]{2}:[0-9]{2})[.,:]([0-9]+)$", r"\1.\2", regex=True)

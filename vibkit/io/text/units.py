@@ -96,7 +96,7 @@ _VEL_RE = re.compile(rf"^({_LEN_ALT})(?:/s|\*?s\^?-1)$")
 _SUFFIX_UNITS = {"g", "mg", "m", "cm", "mm", "um", "nm", "ms", "s", "us", "m/s2", "mm/s", "m/s"}
 _TIME_NAME_RE = re.compile(
     r"^(?:t|time|tiempo|timestamp|time ?stamp|date ?time|date/time|datetime|fecha(?: y)? ?hora|hora"
-    r"|elapsed(?: time)?|seconds|secs?|zeit)(?:\b.*)?$",
+    r"|elapsed(?: time)?|seconds|secs?|zeit|temps|tempo|tijd|czas|relative[ _]?time|date|datum|heure)(?:\b.*)?$",
     re.IGNORECASE,
 )
 
@@ -232,6 +232,10 @@ def split_name_unit(header: str) -> tuple[str, str | None, str | None]:
     ('time', 'ms', None)
     """
     h = " ".join(str(header).strip().strip("\"'").split())
+    run = re.match(r"^(?P<head>.*\S)\s+(?P<run>run\s*#\s*[0-9]+)$", h, re.IGNORECASE)
+    if run:  # PASCO SPARKvue/Capstone: 'Acceleration (m/s²) Run #1'; the run goes to the name
+        name, unit, note = split_name_unit(run.group("head"))
+        return f"{name} {run.group('run')}", unit, note
     m = re.match(r"^(?P<name>.*?)\s*[\(\[\{]\s*(?P<unit>[^()\[\]{}]*?)\s*[\)\]\}]\s*$", h)
     if m and m.group("unit"):
         name = m.group("name") or h

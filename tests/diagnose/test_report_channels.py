@@ -1,0 +1,80 @@
+"""The report takes the per-channel decision of `spectrum` and `pitch`, never analyses a status column,
+and does not call a quantised signal's extreme levels clipping."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from vibkit.cli import main
+from vibkit.diagnose.report.context import _quantisation_explains_extremes, analyse
+
+
+def three_axes(path, freqs, fs=50.0, seconds=120.0, seed=2, status=False):
+    rng = np.random.default_rng(seed)
+    t = np.arange(int(fs * seconds)) / fs
+    cols = [
+        np.sin(2 * np.pi * f * t) + 0.3 * np.sin(4 * np.pi * f * t) + 0.2 * rng.standard_normal(t.size) for f in freqs
+    ]
+    head = "time (s),ax (m/s^2),ay (m/s^2),az (m/s^2)" + (",accuracy" if status else "")
+    with open(path, "w") as fh:
+        fh.write(head + "\n")
+        for k in range(t.size):
+            fh.write(f"{t[k]:.4f}," + ",".join(f"{c[k]:.5f}" for c in cols) + (",3" if status else "") + "\n")
+    return path
+
+
+def test_report_refuses_channels_that_disagree_as_spectrum_does(tmp_path, capsys):
+    """A wrist while running: three axes at 3.0, 3.1 and 3.2 Hz are not one chain, in `spectrum` and `report`."""
+    p = three_axes(tmp_path / "wrist.csv", (3.0, 3.1, 3.2))
+    rc = main(["spectrum", str(p), "--json"])
+    spec = json.loads(capsys.readouterr().out)
+    assert rc == 1 and spec["status"] == "implausible" and "the channels disagree" in spec["reason"]
+    ctx = analyse(str(p))
+    assert ctx.summary["status"] == "implausible" and "the channels disagree" in ctx.summary["reason"]
+    assert not ctx.found and ctx.notes[0].startswith("IMPLAUSIBLE: the channels disagree")
+
+
+def test_report_numbers_come_from_the_channel_spectrum_chooses(tmp_path, capsys):
+    p = three_axes(tmp_path / "chain.csv", (3.75, 3.75, 3.75), status=True)
+    rc = main(["spectrum", str(p), "--json"])
+    spec = json.loads(capsys.readouterr().out)
+    ctx = analyse(str(p))
+    assert rc == 0 and ctx.found and ctx.summary["status"] == spec["status"] == "ok"
+    assert ctx.channel == spec["channel"] != "accuracy"
+    assert ctx.summary["link_pass_hz"] == pytest.approx(spec["fundamental_hz"], rel=1e-12)
+
+
+def test_quantisation_is_not_clipping_but_a_clipped_quantised_signal_is():
+    t = np.arange(10000) / 500
+    x = np.round((0.6 * np.sin(2 * np.pi * 4 * t)) * 10) / 10
+    assert _quantisation_explains_extremes(x, 0.1)
+    clipped = np.minimum(x, 0.4)  # the top two levels cut: the 0.4 level piles up
+    assert not _quantisation_explains_extremes(clipped, 0.1)
+    assert not _quantisation_explains_extremes(x, None)  # not quantised: the generic test decides
+
+
+def test_report_on_an_android_log_never_analyses_its_status_column(tmp_path, capfd):
+    """The constant 'accuracy' column once went to the report: numpy RuntimeWarnings and LAPACK DLASCL lines."""
+    import warnings
+
+    rng = np.random.default_rng(4)
+    t = np.arange(2000) / 100.0
+    stamps = 81_234_567_890_123 + np.round(t * 1e9).astype(np.int64)  # ns since boot
+    x = 0.2 * np.sin(2 * np.pi * 3.75 * t) + 0.05 * np.sin(4 * np.pi * 3.75 * t) + 0.05 * rng.standard_normal(t.size)
+    p = tmp_path / "android_accelerometer.csv"
+    p.write_text(
+        "timestamp,accuracy,x,y,z\n"  # the status first: once the default channel
+        + "".join(
+            f"{s},3,{a:.5f},{0.05 * b:.5f},{9.81 + 0.05 * c:.5f}\n"
+            for s, a, b, c in zip(stamps, x, *rng.standard_normal((2, t.size)))
+        )
+    )
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        ctx = analyse(str(p), speed=0.5)
+    captured = capfd.readouterr()
+    assert ctx.channel == "x" and ctx.summary["status"] == "ok"
+    assert "DLASCL" not in captured.out + captured.err

@@ -1,0 +1,106 @@
+"""Warnings about the physics of a run that a user should not miss: links in compression, a stalled motor,
+a speed that droops.
+
+:func:`physics_warnings` reads a result (the outputs the scene asked for) and returns one line per
+finding; :func:`vibkit.simulate` stores them in ``attrs["warnings"]`` (newline-separated) and ``vibkit
+simulate`` prints them on stderr. A check whose output the scene did not ask for is skipped (the
+compression check needs ``link_tension``; the motor checks ``sprocket_speed`` or ``chain_speed``, and
+``motor_torque`` for the torque limit).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+__all__ = ["DROOP_FRACTION", "DROOP_WINDOW_S", "physics_warnings"]
+
+#: a speed more than this fraction below the set speed, averaged over DROOP_WINDOW_S, is a droop
+DROOP_FRACTION = 0.02
+#: the averaging window of the droop check [s]
+DROOP_WINDOW_S = 1.0
+#: a link in compression by less than this [N] is rounding, not physics
+COMPRESSION_TOLERANCE_N = 1.0
+
+
+def physics_warnings(ds, scene, model) -> list[str]:
+    """One line per finding of the result ``ds`` of ``scene`` (links in compression, motor stall or droop)."""
+    from ..model.schema import effect_options
+
+    effects = effect_options(scene.effects)  # typed (tests and benchmarks pass plain tables)
+    out = []
+    if "link_tension" in ds:
+        out += _compression(ds)
+    if scene.analysis == "forward" and "motor" in effects:
+        out += _motor(ds, effects["motor"], model)
+    return out
+
+
+def _compression(ds) -> list[str]:
+    tension = np.asarray(ds["link_tension"].values, dtype=float)
+    low = tension.min(axis=0)  # per link, over the run
+    bad = np.flatnonzero(low < -COMPRESSION_TOLERANCE_N)
+    if bad.size == 0:
+        return []
+    worst = int(np.argmin(low))
+    it = int(np.argmin(tension[:, worst]))
+    need = 2.0 * -float(low[worst])
+    need = math.ceil(need / 10 ** math.floor(math.log10(need))) * 10 ** math.floor(math.log10(need))
+    return [
+        f"{bad.size} of {tension.shape[1]} links go into compression (down to {low[worst]:.0f} N, link "
+        f"{worst + 1} at t = {float(ds.time.values[it]):.3g} s): a roller chain cannot push; give the "
+        f"tensioner a preload ([effects.tensioner] preload, about {need:.0f} N or more)"
+    ]
+
+
+def _chain_speed(ds, model):
+    if "sprocket_speed" in ds:
+        return np.abs(np.asarray(ds["sprocket_speed"].values)) * model.sprocket.teeth * model.pitch / (2 * math.pi)
+    if "chain_speed" in ds:
+        return np.abs(np.asarray(ds["chain_speed"].values))
+    return None
+
+
+def _motor(ds, motor, model) -> list[str]:
+    out = []
+    t = np.asarray(ds.time.values, dtype=float)
+    if t.size < 2:
+        return out
+    dt = float(t[1] - t[0])
+    if "motor_torque" in ds and math.isfinite(motor.torque_limit):
+        at_limit = np.abs(np.asarray(ds["motor_torque"].values)) >= 0.999 * motor.torque_limit
+        if at_limit.any():
+            frac = at_limit.mean()
+            out.append(
+                f"the motor is at its torque limit ({motor.torque_limit:g} N m) for {100 * frac:.0f} % of the run "
+                f"(first at t = {t[np.argmax(at_limit)]:.3g} s): it cannot hold the set speed under this load"
+            )
+    v = _chain_speed(ds, model)
+    set_speed = abs(motor.speed)
+    if v is None or set_speed == 0:
+        return out
+    w = max(1, int(round(DROOP_WINDOW_S / dt)))
+    if v.size < w:
+        return out
+    mean = np.convolve(v, np.ones(w) / w, mode="valid")  # windows of DROOP_WINDOW_S
+    floor = (1.0 - DROOP_FRACTION) * set_speed
+    reached = np.flatnonzero(mean >= floor)  # up to speed: the first window whose mean is
+    if reached.size == 0:
+        out.append(
+            f"the chain never reaches {100 * (1 - DROOP_FRACTION):g} % of the set speed {set_speed:g} m/s "
+            f"(at most {mean.max():.3g} m/s over {DROOP_WINDOW_S:g} s): the motor stalls (kp = {motor.kp:g} N m s"
+            + (f", torque limit {motor.torque_limit:g} N m" if math.isfinite(motor.torque_limit) else "")
+            + "); raise kp, add ki or lower the load"
+        )
+        return out
+    after = mean[reached[0] :]  # once up to speed
+    if after.size and after.min() < floor:
+        j = reached[0] + int(np.argmin(after))
+        out.append(
+            f"the speed droops {100 * (1 - after.min() / set_speed):.1f} % below the set {set_speed:g} m/s "
+            f"(mean over {DROOP_WINDOW_S:g} s from t = {t[j]:.3g} s; more than {100 * DROOP_FRACTION:g} %): "
+            f"the motor (kp = {motor.kp:g} N m s, ki = {motor.ki:g} N m) cannot hold the speed under this load; "
+            "raise kp or add ki"
+        )
+    return out

@@ -1,0 +1,190 @@
+"""The parts check of :func:`vibkit.diagnose.pitch.estimate_pitch`: does the stated sigma cover the record's own
+spread?
+
+A frequency's sigma (the Cramer-Rao bound of the spectral fit, the end-phase noise of the mean-phase
+estimate) says how well the record pins down *its* mean frequency; it says nothing of how the source's
+frequency moves.  A gait's cadence drifts 2.69-2.75 Hz between 5-minute windows while its mean-phase
+sigma over 20 minutes is 0.0004 Hz: another recording of the same source lands a hundred sigmas away.
+:func:`check_parts` therefore splits the record into ``K`` parts (4-8, each long enough for the estimator
+that the record used), estimates each with that estimator, and compares the parts' scatter with their
+own sigmas (the Birge ratio, chi^2 per degree of freedom):
+
+* when the scatter exceeds what the sigmas allow (the chi^2 beyond its :data:`PARTS_P_WIDEN` quantile),
+  the sigma is widened to the observed scatter of the mean, ``sqrt(s^2 / K)`` (``s`` the parts' standard
+  deviation), or, from eight parts, that of the ``K / 2`` means of neighbouring pairs when it is larger
+  (a wander slower than one part leaves neighbours alike), and a warning says so;
+* the parts' scatter beyond their sigmas, relative to the frequency, is the source's measured wander;
+  :func:`vibkit.diagnose.decision.decide` gives no verdict on a record that wanders more than a chain's
+  speed can (:data:`vibkit.diagnose.decision.MAX_PART_WANDER`).
+
+A record too short for :data:`MIN_PARTS` parts is not checked (the result says so in its notes).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+#: fewest parts the check runs on (three degrees of freedom for the scatter)
+MIN_PARTS = 4
+#: most parts: more, shorter parts add degrees of freedom but each estimate gets noisier, and a slow drift
+#: shows as well in eight parts as in more
+MAX_PARTS = 8
+#: shortest part for the spectral (harmonic least squares) estimator, in periods of the fundamental: a
+#: part's bin (f / periods) stays a small fraction of the frequency and the seeded fit converges
+PART_PERIODS_SPECTRAL = 30
+#: shortest part for the mean-phase estimator, in periods: what a burst needs to be tracked at all
+#: (:data:`vibkit.diagnose.pitch_steps.MIN_TRACK_PERIODS`)
+PART_PERIODS_MEAN_PHASE = 40
+#: the parts scatter more than their sigmas allow when their chi^2 exceeds its upper quantile at this
+#: probability: a steady record's sigma is widened by chance once in a thousand records
+PARTS_P_WIDEN = 1e-3
+
+
+@dataclass(frozen=True)
+class PartsCheck:
+    """What :func:`check_parts` found (all SI).
+
+    ``checked`` is False when the record is too short for :data:`MIN_PARTS` parts (``reason`` says so);
+    ``frequencies_hz`` and ``sigmas_hz`` are the parts' estimates, ``part_s`` their length, ``birge`` the
+    chi^2 per degree of freedom around their weighted mean, ``limit`` its :data:`PARTS_P_WIDEN` quantile,
+    ``widened`` whether the sigma was widened (from ``sigma_before_hz`` to ``sigma_hz``), and ``wander``
+    the parts' standard deviation beyond their own sigmas over the frequency (relative, 0 when within).
+    """
+
+    checked: bool
+    reason: str
+    frequencies_hz: tuple = ()
+    sigmas_hz: tuple = ()
+    part_s: float = float("nan")
+    birge: float = float("nan")
+    limit: float = float("nan")
+    widened: bool = False
+    sigma_before_hz: float = float("nan")
+    sigma_hz: float = float("nan")
+    wander: float = 0.0
+    warnings: list = field(default_factory=list)
+
+    @property
+    def n_parts(self) -> int:
+        return len(self.frequencies_hz)
+
+    def as_dict(self) -> dict:
+        """JSON-ready (keys carry units; the wander in per cent)."""
+        d = {"checked": self.checked, "reason": self.reason}
+        if self.checked:
+            d.update(
+                parts=self.n_parts,
+                part_s=self.part_s,
+                frequencies_hz=list(self.frequencies_hz),
+                sigmas_hz=list(self.sigmas_hz),
+                birge_ratio=self.birge,
+                birge_limit=self.limit,
+                widened=self.widened,
+                sigma_before_hz=self.sigma_before_hz,
+                sigma_hz=self.sigma_hz,
+                wander_percent=100.0 * self.wander,
+            )
+        return d
+
+
+def _part_estimate(x, fs, be, f0):
+    """``(frequency, sigma)`` of one part with the estimator its burst used, seeded at the record's ``f0``;
+    None when the part cannot be estimated."""
+    from ..signal.estimate import harmonic_ls
+    from ..signal.meanfreq import mean_link_pass_frequency
+
+    amps = [h.amplitude for h in be.spectral.harmonics]
+    try:
+        if be.method == "mean-phase":
+            from .pitch_steps import TRACK_HARMONICS
+
+            r = mean_link_pass_frequency(x, fs, f0=f0, amplitudes=amps, n_harmonics=min(TRACK_HARMONICS, len(amps)))
+            f, s = r.frequency_hz, r.sigma_hz
+        else:
+            k = max(1, min(len(amps), int(0.45 * fs // f0)))
+            r = harmonic_ls(x, fs, f_guess=f0, n_harmonics=k)
+            f, s = r.frequency_hz, r.sigma_hz
+    except (ValueError, np.linalg.LinAlgError):
+        return None
+    if not (math.isfinite(f) and math.isfinite(s) and s > 0 and abs(f / f0 - 1) < 0.5):
+        return None
+    return float(f), float(s)
+
+
+def _split(ests, f0):
+    """The parts: ``[(x, fs, burst estimate)]`` and their length [s]; every burst cut into equal parts of one
+    length (at least the estimator's shortest part, at most :data:`MAX_PARTS` over the record)."""
+    periods = PART_PERIODS_MEAN_PHASE if any(be.method == "mean-phase" for be in ests) else PART_PERIODS_SPECTRAL
+    total = sum(be.burst.x.size / be.burst.fs for be in ests)
+    part_s = max(periods / f0, total / MAX_PARTS)
+    parts = []
+    for be in ests:
+        b = be.burst
+        k = int((b.x.size / b.fs) // part_s)
+        if k < 1:
+            continue
+        m = b.x.size // k
+        parts += [(b.x[i * m : (i + 1) * m], b.fs, be) for i in range(k)]
+    if len(parts) < MIN_PARTS and len(ests) >= MIN_PARTS:
+        # many short bursts (a record of 2 s intervals): each burst is one part, estimated whole
+        parts = [(be.burst.x, be.burst.fs, be) for be in ests]
+        part_s = float(np.median([be.burst.x.size / be.burst.fs for be in ests]))
+    return parts, part_s, periods
+
+
+def check_parts(ests, comb):
+    """The parts check (module notes): ``(PartsCheck, sigma)`` with ``sigma`` the combined sigma, widened to
+    the parts' scatter of the mean when they disagree beyond their own sigmas."""
+    import scipy.stats
+
+    f0, sigma = comb.f0, comb.sigma
+    parts, part_s, periods = _split(ests, f0)
+    if len(parts) < MIN_PARTS:
+        why = (
+            f"record too short for the parts check ({MIN_PARTS} parts of {periods} periods, "
+            f"{MIN_PARTS * periods / f0:.3g} s, needed): the sigma is not checked against the record's spread"
+        )
+        return PartsCheck(False, why, sigma_before_hz=sigma, sigma_hz=sigma), sigma
+    est = [_part_estimate(x, fs, be, f0) for x, fs, be in parts]
+    est = [e for e in est if e is not None]
+    if len(est) < MIN_PARTS:
+        why = f"only {len(est)} of {len(parts)} parts could be estimated: the sigma is not checked"
+        return PartsCheck(False, why, sigma_before_hz=sigma, sigma_hz=sigma), sigma
+    f = np.array([e[0] for e in est])
+    s = np.array([e[1] for e in est])
+    k = f.size
+    w = 1.0 / s**2
+    fbar = float(np.sum(w * f) / np.sum(w))
+    birge = float(np.sum(w * (f - fbar) ** 2) / (k - 1))
+    limit = float(scipy.stats.chi2.isf(PARTS_P_WIDEN, k - 1) / (k - 1))
+    scatter2 = float(np.var(f, ddof=1))
+    wander = math.sqrt(max(scatter2 - float(np.mean(s**2)), 0.0)) / f0
+    warnings = []
+    widened = False
+    new = sigma
+    var_mean = scatter2 / k
+    if k >= 2 * MIN_PARTS:
+        # neighbouring parts paired: a wander slower than one part leaves neighbours alike, and the scatter of
+        # the mean over the parts alone would understate it (batch means at two lengths, the larger kept)
+        h = k // 2
+        pairs = (f[: 2 * h : 2] + f[1 : 2 * h : 2]) / 2
+        var_mean = max(var_mean, float(np.var(pairs, ddof=1)) / h)
+    if birge > limit:
+        new = max(sigma, math.sqrt(var_mean))
+        widened = new > sigma
+        if widened:
+            warnings.append(
+                f"the frequency's sigma widened from {sigma:.2g} to {new:.2g} Hz: {k} parts of {part_s:.3g} s give "
+                f"{f.min():.5g}-{f.max():.5g} Hz, a scatter {math.sqrt(birge):.1f} x what their sigmas allow "
+                f"(the source's frequency wanders {100 * wander:.2g} %)"
+            )
+    else:
+        wander = 0.0  # within what the parts' own sigmas allow: no measured wander
+    why = f"{k} parts of {part_s:.3g} s: Birge ratio {birge:.3g} (chi^2 per degree of freedom; limit {limit:.3g}); " + (
+        f"sigma widened to the parts' scatter of the mean ({new:.2g} Hz)" if widened else "sigma kept"
+    )
+    pc = PartsCheck(True, why, tuple(f), tuple(s), part_s, birge, limit, widened, sigma, new, wander, warnings)
+    return pc, new

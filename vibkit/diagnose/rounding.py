@@ -1,0 +1,65 @@
+"""Numbers as precise as what was measured: every value printed by a command, a report page or a fleet row is
+rounded here, to two significant digits of its standard deviation.
+
+:func:`fmt_pm` is the one rounding rule (``value +- sigma``); :func:`decimals_for` gives the decimal places it
+uses, for a table that prints the value and the sigma in separate columns; without a sigma a value gets a stated
+number of significant digits and the caller says why there is no ``+-`` (never ``+- 0``).
+"""
+
+from __future__ import annotations
+
+import math
+
+__all__ = ["fmt_pm", "fmt_length", "decimals_for", "fmt_value", "SPEED_SIGMA_NOT_STATED"]
+
+#: what a value whose uncertainty includes an unstated speed uncertainty says instead of ``+- 0``
+SPEED_SIGMA_NOT_STATED = "speed uncertainty not stated"
+
+
+def _finite_positive(sigma) -> bool:
+    return sigma is not None and math.isfinite(float(sigma)) and float(sigma) > 0
+
+
+def decimals_for(sigma, default=2) -> int:
+    """Decimal places of two significant digits of ``sigma`` (``default`` without a positive finite sigma);
+    may be negative (rounding to tens)."""
+    if not _finite_positive(sigma):
+        return default
+    return 1 - int(math.floor(math.log10(float(sigma))))
+
+
+def fmt_value(value, sigma, *, sign=False, default_decimals=2) -> str:
+    """``value`` alone, to the decimal place of two significant digits of ``sigma`` (``n/a`` when not finite)."""
+    if value is None or not math.isfinite(float(value)):
+        return "n/a"
+    dec = decimals_for(sigma, default_decimals)
+    s = "+" if sign else ""
+    if dec <= 0:
+        q = 10.0 ** (-dec)
+        return f"{round(float(value) / q) * q:{s}.0f}"
+    return f"{float(value):{s}.{dec}f}"
+
+
+def fmt_pm(value, sigma, unit="", digits=4, *, sign=False):
+    """``value +- sigma unit`` with sigma to two significant digits and the value to the same decimal
+    place; without a positive finite sigma the value to ``digits`` significant digits (never ``+- 0``)."""
+    if value is None or not math.isfinite(float(value)):
+        return "n/a"
+    v = float(value)
+    u = f" {unit}" if unit else ""
+    s = "+" if sign else ""
+    if not _finite_positive(sigma):
+        return f"{v:{s}.{digits}g}{u}"
+    sg = float(sigma)
+    dec = decimals_for(sg)
+    if dec <= 0:
+        q = 10.0 ** (-dec)
+        return f"{round(v / q) * q:{s}.0f} +- {round(sg / q) * q:.0f}{u}"
+    return f"{v:{s}.{dec}f} +- {sg:.{dec}f}{u}"
+
+
+def fmt_length(value_m, sigma_m=None, digits=5):
+    """A length given in m, shown in mm (rounded to its sigma when one is given)."""
+    if value_m is None:
+        return "n/a"
+    return fmt_pm(1000.0 * value_m, None if sigma_m is None else 1000.0 * sigma_m, "mm", digits)

@@ -1,0 +1,135 @@
+"""One speed per run: the chain (step) speed that every number of a command or a report uses, resolved once.
+
+:func:`resolve_speed` takes the speed given (``--speed``), else the escalator profile's rated speed, else the
+speed the recording states, else the scene's nominal speed, with its standard deviation and where each came
+from.  A speed given without an uncertainty keeps ``sigma=None``: it is *not stated*, and what is derived
+from it says so instead of printing ``+- 0``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from .rounding import SPEED_SIGMA_NOT_STATED, fmt_pm
+
+__all__ = ["ResolvedSpeed", "resolve_speed", "speed_part_too_large"]
+
+
+@dataclass(frozen=True)
+class ResolvedSpeed:
+    """The run's chain speed.
+
+    Attributes
+    ----------
+    value : float or None
+        [m/s]; None when nothing states a speed.
+    sigma : float or None
+        Its standard deviation [m/s]; None: not stated.
+    source, sigma_source : str
+        Where each came from (``"given"``, ``"escalator profile E07"``, ``"file: chain_speed_m_s"`` ...).
+    """
+
+    value: float | None
+    sigma: float | None = None
+    source: str = ""
+    sigma_source: str = ""
+
+    @property
+    def text(self) -> str:
+        """``0.5000 +- 0.0003 m/s (given)`` or ``0.5 m/s (given; speed uncertainty not stated)``."""
+        if self.value is None:
+            return "not known (give --speed)"
+        if self.sigma is None or not self.sigma > 0:
+            return f"{self.value:g} m/s ({self.source}; {SPEED_SIGMA_NOT_STATED})"
+        why = "" if self.sigma_source in ("", "given") else f"; sigma: {self.sigma_source}"
+        return f"{fmt_pm(self.value, self.sigma, 'm/s')} ({self.source}{why})"
+
+    def as_dict(self) -> dict:
+        return {
+            "speed_m_s": self.value,
+            "speed_sigma_m_s": self.sigma,
+            "speed_source": self.source,
+            "speed_sigma_source": self.sigma_source if self.sigma is not None else SPEED_SIGMA_NOT_STATED,
+        }
+
+
+def _scene_speed(scene):
+    if scene is None:
+        return None
+    if scene.analysis == "inverse":
+        return float(scene.motion.speed)
+    if scene.analysis == "forward":
+        from ..model.schema import nominal_speed
+
+        return float(nominal_speed(scene.effects, scene.run)) or None
+    return None
+
+
+def resolve_speed(speed=None, speed_sigma=None, *, profile=None, recording=None, scene=None) -> ResolvedSpeed:
+    """The run's speed: ``speed`` [m/s], else the profile's, else the recording's stated one, else the scene's.
+
+    ``speed_sigma`` [m/s, or a text like ``"0.05%"`` of the speed used] is the stated standard deviation of whichever speed is used; without it a profile's
+    speed takes the profile's (``Profile.speed_sigma``: stated, or the escalator standard's tolerance of a
+    rated speed), and any other speed has none (``sigma=None``: not stated).
+
+    Raises
+    ------
+    ValueError
+        A speed that is not positive, or a negative sigma.
+    """
+    if isinstance(speed_sigma, str) and speed_sigma.strip().endswith("%"):  # a percentage of the speed used
+        base = resolve_speed(speed, None, profile=profile, recording=recording, scene=scene)
+        if base.value is None:
+            return base
+        try:
+            speed_sigma = float(speed_sigma.strip()[:-1]) / 100.0 * base.value
+        except ValueError:
+            raise ValueError(f"speed_sigma: expected m/s or a percentage like 0.1%, got {speed_sigma!r}") from None
+    if speed_sigma is not None:
+        speed_sigma = float(speed_sigma)
+        if not (math.isfinite(speed_sigma) and speed_sigma >= 0):
+            raise ValueError(f"speed_sigma must be >= 0 m/s, got {speed_sigma!r}")
+    stated = (speed_sigma, "given") if speed_sigma is not None else (None, "")
+    if speed is not None:
+        v = float(speed)
+        if not (math.isfinite(v) and v > 0):
+            raise ValueError(f"speed must be a positive number of m/s, got {speed!r}")
+        return ResolvedSpeed(v, *stated[:1], source="given", sigma_source=stated[1])
+    if profile is not None and getattr(profile, "speed", None):
+        rated = ", rated" if getattr(profile, "speed_sigma_from_standard", False) else ""
+        name = f"escalator profile {getattr(profile, 'unit', '')}{rated}"
+        if speed_sigma is None:
+            sig, why = profile.speed_sigma
+            return ResolvedSpeed(float(profile.speed), sig, source=name, sigma_source=why)
+        return ResolvedSpeed(float(profile.speed), speed_sigma, source=name, sigma_source="given")
+    if recording is not None:
+        from .channels import speed_from_recording
+
+        v, source = speed_from_recording(recording)
+        if v is not None:
+            return ResolvedSpeed(v, stated[0], source=source, sigma_source=stated[1])
+    v = _scene_speed(scene)
+    if v:
+        return ResolvedSpeed(v, stated[0], source=f"the scene's nominal speed ({scene.name})", sigma_source=stated[1])
+    return ResolvedSpeed(None)
+
+
+def speed_part_too_large(rel_speed_sigma, elongation_percent=None, limits_percent=None, *, z=1.96, fraction=1 / 3):
+    """Whether the speed's relative sigma is too large for the decision at hand.
+
+    With an elongation and its limits: when ``z`` times the speed's part of the elongation's sigma reaches the
+    nearest limit (the verdict could change within the speed's uncertainty).  Without them: when the speed's
+    part exceeds ``fraction`` of the first limit (the decision's own rule for a resolved elongation; 0.5 % of
+    the default 1.5 %).
+    """
+    if rel_speed_sigma is None or not rel_speed_sigma > 0:
+        return False
+    part = 100.0 * float(rel_speed_sigma)
+    limits = tuple(limits_percent) if limits_percent is not None else (1.5, 2.0, 3.0)
+    if part > fraction * limits[0]:
+        return True
+    if elongation_percent is None or not math.isfinite(float(elongation_percent)):
+        return False
+    distance = min(abs(float(elongation_percent) - lim) for lim in limits)
+    return z * part >= distance

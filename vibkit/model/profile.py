@@ -1,0 +1,296 @@
+"""Escalator profiles: a small TOML file that describes the user's own escalator.
+
+A profile names the unit (``[escalator]``), states its rated step speed (``[drive]``), its chain
+(``[chain]``: the nominal pitch, links per step, the number of links) and, where the firm knows them,
+its geometry (``[geometry]``: rise and incline, from which the loop follows), the tensioner's preload
+(``[tensioner]``) and where the sensor sat (``[sensor]``). ``load_profile(path) -> Profile`` reads and
+checks it; a wrong or missing key is a :class:`~vibkit.model.scene.SceneError` naming the file and the
+key. Every key, with its unit, default, plausible range and meaning, is declared once below with the
+scene schema's :func:`~vibkit.model.schema.key` (:func:`profile_table` renders them as a table).
+
+A speed in a profile is the step (chain) speed on the straight, the speed a tachometer on a step
+reads; nothing else.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+
+from .scene import SceneError, _check_scene_file, _section
+from .schema import _fmt, _Section, key
+
+__all__ = [
+    "PROFILE_SECTIONS",
+    "STANDARD_SPEED_TOLERANCE",
+    "Profile",
+    "Sensor",
+    "load_profile",
+    "parse_profile",
+    "profile_fields",
+    "profile_table",
+]
+
+#: EN 115-1 (safety of escalators and moving walks): at nominal frequency and voltage the no-load speed
+#: may deviate from the nominal speed by at most +-5 %. A rated speed is known to no better than this.
+STANDARD_SPEED_TOLERANCE = 0.05
+
+SENSOR_KINDS = ("tensioner", "step")
+
+
+@dataclass(frozen=True)
+class EscalatorKeys(_Section):
+    unit: str = key("", "the unit's identifier (as in the fleet catalogue), e.g. E07", types=(str,), required=True)
+    site: str = key("", "where it stands, e.g. Leon, Plaza Mayor, east entrance", "", types=(str,))
+    description: str = key("", "one line on the machine (make, year, use)", "", types=(str,))
+
+
+@dataclass(frozen=True)
+class DriveKeys(_Section):
+    speed: float = key(
+        "m/s", "rated step (chain) speed on the straight", required=True, range=(0.05, 3.0, "m/s (escalators)")
+    )
+    speed_uncertainty: float = key(
+        "m/s",
+        "stated 1-sigma of the speed (a measurement); not set: the standard's tolerance, +-5 % uniform",
+        range=(0.0, 0.5, "m/s"),
+    )
+    teeth: int = key("", "teeth of the step-chain sprocket", 28, types=(int,), range=(8, 60, "teeth"))
+
+
+@dataclass(frozen=True)
+class ChainKeys(_Section):
+    nominal_pitch: float = key(
+        "m", "nominal link pitch of the step chain (new)", required=True, range=(0.05, 0.25, "m (step chains)")
+    )
+    links_per_step: int = key("", "links (rollers) per step: 3 or 4", 3, types=(int,), range=(3, 4, "links"))
+    n_links: int = key(
+        "",
+        "links of one chain strand (the closed loop); not set: from geometry.rise and geometry.incline_deg",
+        types=(int,),
+        range=(20, 5000, "links"),
+    )
+    roller_radius: float = key(
+        "m", "roller radius; not set: scaled from the reference chain with the pitch", range=(0.005, 0.1, "m")
+    )
+
+
+@dataclass(frozen=True)
+class GeometryKeys(_Section):
+    rise: float = key(
+        "m", "height between the landings; with incline_deg gives the loop if n_links is not set", range=(0.5, 30, "m")
+    )
+    incline_deg: float = key("deg", "angle of the incline (27.3, 30 or 35 for escalators)", range=(5.0, 45.0, "deg"))
+
+
+@dataclass(frozen=True)
+class TensionerKeys(_Section):
+    preload: float = key(
+        "N", "tensioner spring preload; not set: chosen so that no link goes into compression", range=(0.0, 1e6, "N")
+    )
+
+
+@dataclass(frozen=True)
+class SensorKeys(_Section):
+    kind: str = key("", '"tensioner" (displacement of the tension carriage) or "step" (on a step)', types=(str,))
+    step: int = key("", "1-based step carrying the sensor (kind = step)", types=(int,), range=(1, 2000, ""))
+
+
+#: section name -> its class, in the order of a profile file
+PROFILE_SECTIONS = {
+    "escalator": EscalatorKeys,
+    "drive": DriveKeys,
+    "chain": ChainKeys,
+    "geometry": GeometryKeys,
+    "tensioner": TensionerKeys,
+    "sensor": SensorKeys,
+}
+
+
+def profile_fields():
+    """(section, field) for every key of a profile, in the order of a profile file."""
+    return [(name, f) for name, cls in PROFILE_SECTIONS.items() for f in cls.fields()]
+
+
+def profile_table() -> str:
+    """The profile's keys as a Markdown table: section, key, unit, default, plausible range, meaning."""
+    rows = ["| section | key | unit | default | range | meaning |", "|---|---|---|---|---|---|"]
+    for sec, f in profile_fields():
+        m = f.metadata
+        default = "required" if m["required"] else _fmt(f.default)
+        rg = m["range"]
+        rng = f"[{rg[0]:g}, {rg[1]:g}]" if rg else ""
+        rows.append(f"| [{sec}] | {f.name} | {m['unit']} | {default} | {rng} | {m['doc']} |")
+    return "\n".join(rows) + "\n"
+
+
+@dataclass(frozen=True)
+class Sensor:
+    """Where the sensor of the recordings sat: ``kind`` "tensioner" or "step"; ``step`` (1-based) on a step."""
+
+    kind: str
+    step: int | None = None
+
+
+@dataclass(frozen=True, kw_only=True)
+class Profile:
+    """A validated escalator profile (SI units; see the module doc and :func:`profile_table`).
+
+    ``n_links`` is None when the profile gives the geometry instead (``rise`` and ``incline_deg``).
+    """
+
+    unit: str
+    speed: float
+    nominal_pitch: float
+    site: str = ""
+    description: str = ""
+    speed_uncertainty: float | None = None
+    links_per_step: int = 3
+    n_links: int | None = None
+    rise: float | None = None
+    incline_deg: float | None = None
+    teeth: int = 28
+    roller_radius: float | None = None
+    tensioner_preload: float | None = None
+    sensor: Sensor | None = None
+    source: str = "<string>"
+
+    @property
+    def speed_sigma(self) -> tuple[float, str]:
+        """(1-sigma of the speed [m/s], where it comes from).
+
+        The stated ``drive.speed_uncertainty`` when the profile gives one; else the tolerance of the
+        escalator standard: EN 115-1 allows the no-load speed to deviate by +-5 % from the nominal speed
+        at nominal frequency and voltage; taken as a uniform band, its standard deviation is
+        5 % / sqrt(3) = 2.9 % of the speed. :attr:`speed_sigma_from_standard` says which.
+        """
+        if self.speed_uncertainty is not None:
+            return self.speed_uncertainty, f"{self.source}: drive.speed_uncertainty"
+        sigma = STANDARD_SPEED_TOLERANCE / math.sqrt(3.0) * self.speed
+        return sigma, (
+            f"not stated in {self.source}: the rated speed's tolerance of EN 115-1 "
+            f"(+-{100 * STANDARD_SPEED_TOLERANCE:g} % uniform, sigma {100 * STANDARD_SPEED_TOLERANCE / math.sqrt(3):.1f} %)"
+        )
+
+    @property
+    def speed_sigma_from_standard(self) -> bool:
+        """True when :attr:`speed_sigma` is the standard's tolerance, not a measurement the profile states."""
+        return self.speed_uncertainty is None
+
+    @property
+    def name(self) -> str:
+        """The unit and its site, for a title: ``E07 (Leon, Plaza Mayor)``."""
+        return f"{self.unit} ({self.site})" if self.site else self.unit
+
+    @property
+    def link_pass_frequency_hz(self) -> float:
+        """The link-pass frequency of a new chain at the rated speed, speed / pitch. [Hz]"""
+        return self.speed / self.nominal_pitch
+
+    def scene(self, analysis: str = "forward", duration: float | None = None):
+        """The scene of this escalator (a :class:`~vibkit.model.scene.Scene`, in memory): what the profile
+        says, the rest from standard step-chain proportions (:mod:`vibkit.model.profile_scene`); a
+        geometry that cannot run is a SceneError naming the profile key to change."""
+        from .profile_scene import profile_scene
+
+        return profile_scene(self, analysis, duration)
+
+    def scene_text(self, analysis: str = "forward", duration: float | None = None) -> str:
+        """The TOML text of :meth:`scene`, with comments saying where each value came from."""
+        from .profile_scene import scene_text
+
+        return scene_text(self, analysis, duration)
+
+    def band(self, low=0.8, high=1.25) -> tuple[float, float]:
+        """A search band of the link pass around :attr:`link_pass_frequency_hz` [Hz]: a worn chain
+        (longer pitch) and a speed off its rating both stay inside."""
+        f = self.link_pass_frequency_hz
+        return (low * f, high * f)
+
+
+def parse_profile(text: str, source: str = "<string>") -> Profile:
+    """Validate a profile given as TOML text (see :func:`load_profile`)."""
+    src = source
+    if text.startswith("\ufeff"):
+        text = text[1:]
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise SceneError(f"{src}: not valid TOML: {exc}") from None
+    for name in data:
+        if name not in PROFILE_SECTIONS:
+            raise SceneError(f"{src}: unknown section [{name}] (known: {', '.join(PROFILE_SECTIONS)})")
+    sec = {}
+    for name, cls in PROFILE_SECTIONS.items():
+        schema = {
+            f.name: (f.metadata["types"][0] if len(f.metadata["types"]) == 1 else f.metadata["types"])
+            for f in cls.fields()
+        }
+        sec[name] = _section(src, data, name, schema)
+        for f in cls.fields():
+            where = f"{name}.{f.name}"
+            if f.metadata["required"] and f.name not in sec[name]:
+                raise SceneError(f"{src}: missing value '{where}' ({f.metadata['doc']})")
+            v = sec[name].get(f.name)
+            rg = f.metadata["range"]
+            if rg and isinstance(v, (int, float)) and not rg[0] <= v <= rg[1]:
+                raise SceneError(
+                    f"{src}: '{where}' = {v!r} is outside the plausible range [{rg[0]:g}, {rg[1]:g}] {rg[2]}"
+                )
+    e, d, c, g, t, s = (sec[n] for n in PROFILE_SECTIONS)
+    if "n_links" not in c and not ("rise" in g and "incline_deg" in g):
+        raise SceneError(
+            f"{src}: missing value 'chain.n_links' (or both 'geometry.rise' and 'geometry.incline_deg', "
+            "from which the loop follows)"
+        )
+    if not e["unit"].strip():
+        raise SceneError(f"{src}: 'escalator.unit' must not be empty (the unit's identifier, e.g. E07)")
+    sensor = None
+    if s:
+        if s.get("kind") not in SENSOR_KINDS:
+            raise SceneError(f"{src}: 'sensor.kind' must be one of {', '.join(SENSOR_KINDS)}, got {s.get('kind')!r}")
+        if s["kind"] == "step" and "step" not in s:
+            raise SceneError(f"{src}: missing value 'sensor.step' (the 1-based step carrying the sensor)")
+        if s["kind"] == "tensioner" and "step" in s:
+            raise SceneError(f"{src}: 'sensor.step' has no meaning with sensor.kind = \"tensioner\"")
+        sensor = Sensor(kind=s["kind"], step=s.get("step"))
+    return Profile(
+        unit=e["unit"],
+        site=e.get("site", ""),
+        description=e.get("description", ""),
+        speed=d["speed"],
+        speed_uncertainty=d.get("speed_uncertainty"),
+        teeth=d.get("teeth", DriveKeys.teeth),
+        nominal_pitch=c["nominal_pitch"],
+        links_per_step=c.get("links_per_step", ChainKeys.links_per_step),
+        n_links=c.get("n_links"),
+        roller_radius=c.get("roller_radius"),
+        rise=g.get("rise"),
+        incline_deg=g.get("incline_deg"),
+        tensioner_preload=t.get("preload"),
+        sensor=sensor,
+        source=source,
+    )
+
+
+def load_profile(path) -> Profile:
+    """Read and validate an escalator profile (TOML).
+
+    Raises
+    ------
+    SceneError
+        The file is missing, not TOML, or has an unknown key, a missing value or an implausible
+        number; the one-line message names the file and the key.
+    """
+    p = Path(path)
+    try:
+        _check_scene_file(p)
+    except SceneError as exc:
+        raise SceneError(str(exc).replace("scene file", "profile file")) from None
+    try:
+        text = p.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise SceneError(f"{p}: cannot read profile file ({exc})") from None
+    return parse_profile(text, str(p))

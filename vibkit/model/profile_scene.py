@@ -1,0 +1,295 @@
+"""The scene of a profiled escalator: what the profile says, the rest from standard step-chain proportions.
+
+:func:`scene_text` writes the TOML scene of a :class:`~vibkit.model.profile.Profile` (its comments say
+which values came from the profile and which were filled, and from what); :func:`profile_scene` loads
+it and refuses a geometry that cannot run, naming the profile key to change:
+
+- the chain must close on the guide within the tensioner's travel (``chain.n_links`` against
+  ``geometry.rise``/``geometry.incline_deg``);
+- no roller may sit inside a tooth at t = 0 (``chain.roller_radius`` against teeth cut for the pitch);
+- the heads' radius is the sprocket's pitch radius (the scene says ``head_radius = "sprocket"``).
+
+Filled from the reference escalator of the study (:mod:`vibkit.model.params`), scaled with the pitch
+where a size follows the chain: roller radius and tooth size (base, tip, height) in proportion to the
+pitch; the mass per metre of chain and steps (60 kg/m: 8 kg per roller at 133.33 mm) and so the
+roller mass; the sprocket's mass and inertia with its pitch radius (a disc of the reference's
+thickness: R^2 and R^4). Landings (0.8 m), transitions (1.5 m radius) and the tensioner's runs
+(0.4 m) are the reference's; the incline follows the rise (its length from the rise less the
+transitions' height) or the number of links (the loop n L plus the reference's tensioner slack).
+The speed controller (P, kp = 600 N m s) and the contact (k = 1e6 N/m^1.5, damping 0.3 s/m) are
+the reference's; the tensioner's preload, where the profile gives none, keeps every link in
+tension (:func:`default_preload`).
+"""
+
+from __future__ import annotations
+
+import math
+
+from .params import reference_chain, reference_guide, reference_sprocket
+from .scene import Scene, SceneError, parse_scene
+
+__all__ = ["profile_scene", "scene_text", "MASS_PER_METRE"]
+
+_RC, _RG, _RS = reference_chain(), reference_guide(), reference_sprocket()
+REFERENCE_PITCH = _RC.link_pitch
+#: mass of chain and steps per metre of chain of the reference (8 kg per roller at 133.33 mm) [kg/m]
+MASS_PER_METRE = _RC.roller_mass / REFERENCE_PITCH
+#: the reference chain's tensioner displacement at rest, (P0 - n L) / 2 [m]
+REFERENCE_SLACK = (_RG.perimeter - _RC.n_rollers * REFERENCE_PITCH) / 2.0
+DEFAULT_INCLINE_DEG = 30.0
+#: forward runs: settle after the start at speed, then enough link passes to read a frequency [s]
+DEFAULT_DURATION = {"forward": 20.0, "inverse": 10.0}
+OUTPUT_STEP = 0.005
+
+
+def _fmt(v) -> str:
+    return repr(float(v)) if isinstance(v, float) else str(v)
+
+
+class _Filled:
+    """The scene's numbers, each with where it came from (a profile key or what filled it)."""
+
+    def __init__(self, profile):
+        p = profile
+        self.profile = p
+        self.notes = []
+        scale = p.nominal_pitch / REFERENCE_PITCH
+        self.scale = scale
+        self.pitch = p.nominal_pitch
+        if p.roller_radius is not None:
+            self.roller_radius, self.roller_src = p.roller_radius, "chain.roller_radius"
+        else:
+            self.roller_radius = _RC.roller_radius * scale
+            self.roller_src = f"filled: reference {1000 * _RC.roller_radius:g} mm x pitch / 133.33 mm"
+        self.roller_mass = MASS_PER_METRE * self.pitch
+        self.teeth = p.teeth
+        self.base_width, self.tip_width, self.tooth_height = (
+            _RS.base_width * scale,
+            _RS.tip_width * scale,
+            _RS.tooth_height * scale,
+        )
+        rp = self.pitch / (2.0 * math.sin(math.pi / self.teeth))
+        ratio = rp / _RS.pitch_radius(REFERENCE_PITCH)
+        self.sprocket_mass, self.inertia = _RS.mass * ratio**2, _RS.inertia * ratio**4
+        self.pitch_radius = rp
+        self._guide()
+
+    def _guide(self):
+        p = self.profile
+        a_deg = p.incline_deg if p.incline_deg is not None else DEFAULT_INCLINE_DEG
+        a = math.radians(a_deg)
+        self.incline_deg = a_deg
+        rt, l1, l2, lt = _RG.transition_radius, _RG.lower_landing, _RG.upper_landing, _RG.tensioner_length
+        fixed = l1 + l2 + lt + math.pi * self.pitch_radius + 2.0 * a * rt  # half the perimeter less L
+        if p.rise is not None:
+            length = (p.rise - 2.0 * rt * (1.0 - math.cos(a))) / math.sin(a)
+            if length <= 0:
+                raise SceneError(
+                    f"{p.source}: 'geometry.rise' = {p.rise:g} m is lower than the transitions alone climb "
+                    f"({2 * rt * (1 - math.cos(a)):.3g} m at {a_deg:g} deg with the standard 1.5 m transition arcs)"
+                )
+            self.incline_length = length
+            self.length_src = (
+                f"from geometry.rise {p.rise:g} m and incline {a_deg:g} deg, less the transitions' "
+                f"{2 * rt * (1 - math.cos(a)):.3f} m"
+            )
+            perimeter = 2.0 * (length + fixed)
+            if p.n_links is None:
+                k = p.links_per_step
+                steps = round((perimeter - 2.0 * REFERENCE_SLACK) / (self.pitch * k))
+                self.n_links, self.links_src = (
+                    steps * k,
+                    (
+                        f"filled: whole steps of {k} links that close the loop of {perimeter:.4f} m with "
+                        f"the tensioner near the reference's {1000 * REFERENCE_SLACK:.0f} mm"
+                    ),
+                )
+            else:
+                self.n_links, self.links_src = p.n_links, "chain.n_links"
+        else:
+            self.n_links, self.links_src = p.n_links, "chain.n_links"
+            length = (self.n_links * self.pitch) / 2.0 + REFERENCE_SLACK - fixed
+            if length <= 0:
+                raise SceneError(
+                    f"{p.source}: 'chain.n_links' = {p.n_links} links of {1000 * self.pitch:g} mm are too few "
+                    f"for an escalator's landings and heads (at least "
+                    f"{math.ceil(2 * (fixed - REFERENCE_SLACK) / self.pitch) + 1}); give the rise (geometry.rise)"
+                )
+            self.incline_length = length
+            self.length_src = (
+                f"from chain.n_links {self.n_links} x {1000 * self.pitch:g} mm plus the reference's "
+                f"tensioner slack {1000 * REFERENCE_SLACK:.0f} mm"
+            )
+        self.rise = 2.0 * rt * (1.0 - math.cos(a)) + self.incline_length * math.sin(a)
+        perimeter = 2.0 * (self.incline_length + fixed)
+        slack = (perimeter - self.n_links * self.pitch) / 2.0
+        travel = 0.9 * lt  # vibkit.model.guide.TRAVEL of the tensioner's run
+        if not -travel < slack < travel:
+            raise SceneError(
+                f"{p.source}: 'chain.n_links' = {self.n_links} links of {1000 * self.pitch:g} mm "
+                f"({self.n_links * self.pitch:.3f} m) cannot close on the loop of the rise "
+                f"{p.rise:g} m at {a_deg:g} deg ({perimeter:.3f} m): the tensioner would move "
+                f"{1000 * slack:.0f} mm, beyond its travel of +-{1000 * travel:.0f} mm; change chain.n_links "
+                f"(about {round((perimeter - 2 * REFERENCE_SLACK) / self.pitch)}) or geometry.rise"
+            )
+        self.slack = slack
+
+
+def scene_text(profile, analysis: str = "forward", duration: float | None = None) -> str:
+    """The TOML scene of ``profile`` for ``analysis`` ("forward" or "inverse"), with comments that
+    say where each value came from."""
+    if analysis not in ("forward", "inverse"):
+        raise ValueError(f"analysis must be 'forward' or 'inverse', got {analysis!r}")
+    p = profile
+    f = _Filled(p)
+    dur = DEFAULT_DURATION[analysis] if duration is None else float(duration)
+    if not dur > 0:
+        raise ValueError(f"duration must be positive, got {duration!r}")
+    name = "".join(c if c.isalnum() or c in "-_" else "-" for c in p.unit).strip("-") or "escalator"
+    desc = f"{p.name}: {p.description}" if p.description else p.name
+    desc += f", {p.speed:g} m/s, {1000 * p.nominal_pitch:g} mm pitch, {p.links_per_step} links per step"
+    pre = p.tensioner_preload
+    lines = [
+        f"# The scene of escalator {p.unit}, built by vibkit from the profile {p.source}.",
+        "# From the profile: unit, speed, nominal pitch, links per step, sprocket teeth"
+        + (", number of links" if p.n_links is not None else "")
+        + (", rise" if p.rise is not None else "")
+        + (", incline" if p.incline_deg is not None else "")
+        + (", roller radius" if p.roller_radius is not None else "")
+        + (", tensioner preload" if pre is not None else "")
+        + ".",
+        "# Filled from the study's reference escalator (vibkit.model.profile_scene explains each rule):",
+        f"# tooth size and {'' if p.roller_radius is not None else 'roller radius '}scaled with the pitch "
+        f"(x {f.scale:.4f}), {MASS_PER_METRE:g} kg per metre of chain and steps,",
+        "# sprocket mass and inertia scaled with its pitch radius, landings, transitions and tensioner runs,",
+        "# contact stiffness and speed controller"
+        + (", tensioner preload (so that no link goes into compression)." if pre is None else "."),
+        "[scene]",
+        f'name = "{name}"',
+        f'analysis = "{analysis}"',
+        f"description = {_toml_str(desc)}",
+        "",
+        "[guide]",
+        f"tensioner_length = {_fmt(_RG.tensioner_length)}   # reference",
+        f"lower_landing = {_fmt(_RG.lower_landing)}      # reference",
+        f"upper_landing = {_fmt(_RG.upper_landing)}      # reference",
+        f"transition_radius = {_fmt(_RG.transition_radius)}  # reference",
+        f"incline_angle_deg = {_fmt(f.incline_deg)}  # "
+        + ("geometry.incline_deg" if p.incline_deg is not None else "filled: 30 deg, the common incline"),
+        f"incline_length = {f.incline_length:.6f}  # {f.length_src} (rise {f.rise:.3f} m)",
+        'head_radius = "sprocket"  # the heads turn on the sprocket\'s pitch circle',
+        "",
+        "[chain]",
+        f"link_pitch = {_fmt(f.pitch)}  # chain.nominal_pitch",
+        f"roller_radius = {f.roller_radius:.6g}  # {f.roller_src}",
+        f"roller_mass = {f.roller_mass:.6g}  # filled: {MASS_PER_METRE:g} kg/m of chain and steps x pitch",
+        f"n_rollers = {f.n_links}  # {f.links_src}",
+        f"links_per_step = {p.links_per_step}  # chain.links_per_step",
+        "",
+        "[sprocket]",
+        f"teeth = {f.teeth}  # drive.teeth",
+        f"base_width = {f.base_width:.6g}  # filled: reference 60 mm x pitch / 133.33 mm",
+        f"tip_width = {f.tip_width:.6g}  # filled: reference 40 mm x pitch / 133.33 mm",
+        f"tooth_height = {f.tooth_height:.6g}  # filled: reference 70 mm x pitch / 133.33 mm",
+        f"mass = {f.sprocket_mass:.6g}  # filled: reference 250.62 kg x (R / 0.5954 m)^2",
+        f"inertia = {f.inertia:.6g}  # filled: reference 43.78 kg m^2 x (R / 0.5954 m)^4",
+        "",
+    ]
+    preload = pre if pre is not None else default_preload(f)
+    pre_src = "tensioner.preload" if pre is not None else "filled: twice the weight of the steepest strand's chain"
+    if analysis == "forward":
+        lines += [
+            "[run]",
+            f"duration = {dur:g}  # [s]",
+            f"output_step = {OUTPUT_STEP:g}  # [s]",
+            "start = 0.0",
+            f"initial_speed = {_fmt(p.speed)}  # started at the rated speed: steady running from the start",
+            "",
+            "[effects]",
+            "gravity = true",
+            "contact = { stiffness = 1.0e6, exponent = 1.5, damping = 0.3 }  # reference",
+            f"motor = {{ kp = 600.0, speed = {_fmt(p.speed)} }}  # drive.speed: the step speed on the straight",
+            f"tensioner = {{ preload = {preload:.6g} }}  # {pre_src} [N]",
+            "",
+            "[solver]",
+            'method = "dopri5"',
+            "",
+            "[outputs]",
+            'variables = ["delta", "sprocket_speed", "motor_torque", "chain_speed", "link_tension",'
+            ' "closure_residual", "tensioner_displacement", "accel_step"]',
+        ]
+        step = p.sensor.step if p.sensor is not None and p.sensor.kind == "step" else None
+        n_steps = f.n_links // p.links_per_step
+        lines.append(f"step_accelerometer = {step if step and step <= n_steps else min(3, n_steps)}")
+    else:
+        lines += [
+            "[motion]",
+            f"speed = {_fmt(p.speed)}  # drive.speed: the step speed on the straight",
+            f"duration = {dur:g}  # [s]",
+            f"step = {OUTPUT_STEP:g}  # [s]",
+            "start = 0.0",
+            "",
+            "[effects]",
+            "gravity = true",
+            f"tensioner = {{ preload = {preload:.6g} }}  # {pre_src} [N]",
+            "",
+            "[outputs]",
+            'variables = ["delta", "link_tension", "drive_force", "closure_residual", "chain_speed", "energy"]',
+        ]
+    return "\n".join(lines) + "\n"
+
+
+def _toml_str(s: str) -> str:
+    return '"' + s.replace("\\", "\\\\").replace('"', '\\"') + '"'
+
+
+def default_preload(f) -> float:
+    """A tensioner preload that keeps every link in tension [N].
+
+    The return strand hangs from the sprocket: without a preload its links below the incline's top
+    carry the weight of the chain below them as compression where the guide pushes them down hill.
+    Twice the weight of one strand's incline (steps and chain, along the slope) keeps every link in
+    tension with a margin; a real tensioner's spring gives several kN.
+    """
+    a = math.radians(f.incline_deg)
+    strand = MASS_PER_METRE * f.incline_length * 9.81 * math.sin(a)
+    return round(2.0 * strand, -1)
+
+
+def profile_scene(profile, analysis: str = "forward", duration: float | None = None) -> Scene:
+    """The validated scene of ``profile`` (see :func:`scene_text`), refused where it cannot run."""
+    text = scene_text(profile, analysis, duration)
+    src = f"{profile.source} (scene built from the profile)"
+    try:
+        scene = parse_scene(text, src)
+    except SceneError as exc:
+        raise SceneError(f"{profile.source}: the scene built from the profile is not valid: {exc}") from None
+    check_fits(scene, profile)
+    return scene
+
+
+def check_fits(scene, profile) -> None:
+    """Refuse a scene whose rollers sit inside the teeth at t = 0, or whose heads are not the sprocket's."""
+    from .escalator import EscalatorModel
+
+    src = profile.source
+    rp = scene.sprocket.pitch_radius(scene.chain.link_pitch)
+    if not math.isclose(scene.guide.head_radius, rp, rel_tol=1e-12):
+        raise SceneError(
+            f"{src}: the head radius {scene.guide.head_radius:g} m is not the sprocket's pitch radius {rp:.6g} m "
+            "(drive.teeth and chain.nominal_pitch set it)"
+        )
+    start = scene.run.start if scene.analysis == "forward" else scene.motion.start
+    worst = EscalatorModel(scene).initial_indentation(start)
+    if worst > 1e-6 * scene.chain.link_pitch:
+        key = "chain.roller_radius" if profile.roller_radius is not None else "chain.nominal_pitch"
+        raise SceneError(
+            f"{src}: the rollers ({1000 * scene.chain.roller_radius:.4g} mm radius) sit {1000 * worst:.3g} mm "
+            f"inside the sprocket's teeth at the start (teeth cut for a {1000 * scene.chain.link_pitch:g} mm pitch, "
+            f"{scene.sprocket.teeth} teeth): change {key}"
+            + (
+                f" (the standard proportion is {1000 * _RC.roller_radius * scene.chain.link_pitch / REFERENCE_PITCH:.3g} mm)"
+                if profile.roller_radius is not None
+                else ""
+            )
+        )
