@@ -73,3 +73,18 @@ def test_links_usage_errors(tmp_path, capsys, args, words):
         main(["links", str(path), "--speed", "0.5", *args])
     assert e.value.code == 2
     assert words in capsys.readouterr().err
+
+
+def test_links_takes_the_chain_and_speed_from_an_escalator_profile(tmp_path, run):
+    """E07's profile: 159 links at 0.5 m/s; a recording of 1.2 loops of it is refused with the time to record."""
+    path = _recording(tmp_path / "e07.nc", 159, 1.2)
+    rc, out, err = run("links", path, "--escalator", "data/fleet-example/escalators/E07.toml")
+    assert rc == 1
+    assert "159 links" in err and "record at least 85 s" in err
+
+
+def test_links_without_a_number_of_links_says_how_to_give_it(tmp_path, run):
+    path = _recording(tmp_path / "n.nc", 40, 2.2)
+    rc, out, err = run("links", path, "--speed", SPEED)
+    assert rc == 1
+    assert "--links N" in err and str(path) in err
