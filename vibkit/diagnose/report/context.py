@@ -106,6 +106,7 @@ class ReportContext:
     ride: list = field(default_factory=list)  # ("recording" | "simulation", RideQuality), one page each
     run_speed: object = None
     profile: object = None
+    links: object = None  # LinksResult: the link map, when a tensioner recording covers two loops of the scene's chain
 
     @property
     def unit_text(self) -> str:
@@ -351,7 +352,11 @@ def analyse(
         )
     if comp is not None:
         summary.update(score=comp.score, pitch_consistent=comp.pitch_consistent)
+    links = _links(rec, ch, units, sc, speed, notes)
+    if links is not None:
+        summary["flagged_links"] = [f["link"] for f in links.flagged]
     return ReportContext(
+        links=links,
         recording=recording,
         rec=rec,
         channel=ch,
@@ -385,6 +390,21 @@ def analyse(
         run_speed=run,
         profile=profile,
     )
+
+
+def _links(rec, ch, units, sc, speed, notes):
+    """The link map of a tensioner recording over two loops of the scene's chain, else None."""
+    from ..links import TooFewLoops, find_worn_links
+
+    if sc is None or not speed or units != "m" or sc.analysis != "forward" or sc.source == "<string>":
+        return None
+    try:
+        return find_worn_links(rec, speed=speed, n_links=sc.chain.n_rollers, channel=ch, scene=sc.source)
+    except TooFewLoops:
+        return None  # under two loops: no page (vibkit links says how long to record)
+    except ValueError as exc:
+        notes.append(f"link map: {exc}")
+        return None
 
 
 def _quantisation_explains_extremes(x, q):

@@ -16,6 +16,7 @@ from .appendix import data_quality_page, parameters_page
 from .common import PageSink, Report, _pdf_in_memory
 from .comparison_pages import harmonics_page, simulation_page
 from .context import analyse
+from .links_page import links_page
 from .ride_pages import ride_quality_pages
 from .signal_pages import order_spectrum_page, spectrogram_page, spectrum_page, time_signal_page
 from .verdict import recording_page, verdict_page
@@ -32,6 +33,7 @@ PAGES = (
     spectrum_page,
     spectrogram_page,
     order_spectrum_page,
+    links_page,
     ride_quality_pages,
     simulation_page,
     harmonics_page,

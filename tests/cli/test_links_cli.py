@@ -1,0 +1,90 @@
+"""``vibkit links`` on constructed recordings: the table, --json with its flagged links, the refusal of
+a recording under two loops (exit 1, how long to record), and usage errors."""
+
+import json
+
+import numpy as np
+import pytest
+import xarray as xr
+
+FS = 200.0
+F_LP = 3.75
+SPEED = 0.5  # m/s: pitch 133.3 mm
+
+
+def _recording(path, n_links, loops, *, bump_link=None, bump=0.0, seed=0):
+    """A tensioner-like link-pass signal [m] over ``loops`` loops; link ``bump_link`` (from the start)
+    raises the level of its own cycle by ``bump``."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(int((loops * n_links + 2) / F_LP * FS)) / FS
+    phase = 2 * np.pi * (0.3 + F_LP * t)
+    x = 1e-5 * np.cos(phase) + 3e-6 * np.cos(2 * phase) + 1e-7 * rng.standard_normal(t.size)
+    if bump_link is not None:
+        cyc = phase / (2 * np.pi)
+        x = x + bump * (((np.floor(cyc) - np.floor(cyc[0])) % n_links) == bump_link - 1)
+    xr.Dataset({"delta": ("time", x, {"units": "m"})}, coords={"time": ("time", t, {"units": "s"})}).to_netcdf(path)
+    return path
+
+
+def test_links_flags_a_deviating_link_in_json_and_table(tmp_path, run):
+    path = _recording(tmp_path / "bump.nc", 40, 2.2, bump_link=12, bump=2e-7)
+    rc, out, err = run("links", path, "--speed", SPEED, "--links", 40, "--json")
+    assert rc == 0, err
+    d = json.loads(out)
+    assert d["schema"] == "vibkit.links/1"
+    assert [f["link"] for f in d["flagged"]] == [12]
+    assert d["loops"] == 2
+    assert d["false_alarm"] == 0.01
+    rc, out, err = run("links", path, "--speed", SPEED, "--links", 40)
+    assert rc == 0
+    assert "12" in out.split("----")[-1]
+    assert "note: without --scene" in err
+
+
+def test_links_on_a_clean_chain_flags_none(tmp_path, run):
+    path = _recording(tmp_path / "clean.nc", 40, 2.2)
+    rc, out, err = run("links", path, "--speed", SPEED, "--links", 40, "--json")
+    assert rc == 0
+    assert json.loads(out)["flagged"] == []
+
+
+def test_links_under_two_loops_is_refused_with_the_time_to_record(tmp_path, run):
+    path = _recording(tmp_path / "short.nc", 159, 1.2)
+    rc, out, err = run("links", path, "--speed", SPEED, "--links", 159)
+    assert rc == 1
+    assert str(path) in err
+    assert "record at least 85 s" in err  # (2 x 159 + 1) / 3.75 Hz
+
+
+@pytest.mark.parametrize(
+    "args, words",
+    [
+        (["--links", "1"], "at least 2 links"),
+        (["--links", "40", "--min-excess", "-1mm"], "excess"),
+        (["--links", "40", "--false-alarm", "2"], "probability"),
+        (["--links", "40", "--marker", "-3"], "time"),
+    ],
+)
+def test_links_usage_errors(tmp_path, capsys, args, words):
+    from vibkit.cli import main
+
+    path = _recording(tmp_path / "u.nc", 40, 2.2)
+    with pytest.raises(SystemExit) as e:
+        main(["links", str(path), "--speed", "0.5", *args])
+    assert e.value.code == 2
+    assert words in capsys.readouterr().err
+
+
+def test_links_takes_the_chain_and_speed_from_an_escalator_profile(tmp_path, run):
+    """E07's profile: 159 links at 0.5 m/s; a recording of 1.2 loops of it is refused with the time to record."""
+    path = _recording(tmp_path / "e07.nc", 159, 1.2)
+    rc, out, err = run("links", path, "--escalator", "data/fleet-example/escalators/E07.toml")
+    assert rc == 1
+    assert "159 links" in err and "record at least 85 s" in err
+
+
+def test_links_without_a_number_of_links_says_how_to_give_it(tmp_path, run):
+    path = _recording(tmp_path / "n.nc", 40, 2.2)
+    rc, out, err = run("links", path, "--speed", SPEED)
+    assert rc == 1
+    assert "--links N" in err and str(path) in err

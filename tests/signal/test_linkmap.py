@@ -1,0 +1,120 @@
+"""The link map on constructed link-pass signals: link numbering from the start or a marker, the
+refusal under two loops, and the false-alarm probability of both decisions on noise."""
+
+import numpy as np
+import pytest
+import scipy.stats
+
+from vibkit.signal.linkmap import TooFewLoops, link_map, scan_links, sidak_threshold, smooth_phase
+
+FS = 200.0
+F_LP = 3.75  # link passes per second
+
+
+def _signal(n_links, loops, *, rng, noise=0.05, bump_link=None, bump=0.0, start_cycles=0.3, wander=0.0):
+    """cos of the link-pass phase plus white noise; link ``bump_link`` (1-based, counted from the
+    start) carries an extra bump of height ``bump`` in the middle of its cycle."""
+    dur = (loops * n_links + 2) / F_LP
+    t = np.arange(int(dur * FS)) / FS
+    f = F_LP * (1 + wander * np.sin(2 * np.pi * 0.05 * t))
+    phase = 2 * np.pi * (start_cycles + np.concatenate(([0.0], np.cumsum((f[1:] + f[:-1]) / 2) / FS)))
+    x = np.cos(phase) + noise * rng.standard_normal(t.size)
+    if bump_link is not None:
+        cyc = phase / (2 * np.pi)
+        link = (np.floor(cyc) - np.floor(cyc[0])) % n_links
+        frac = cyc % 1.0
+        x = x + bump * ((link == bump_link - 1) & (np.abs(frac - 0.5) < 0.25))
+    return x, phase
+
+
+def test_links_are_numbered_from_the_start_and_from_a_marker():
+    rng = np.random.default_rng(1)
+    x, ph = _signal(30, 3, rng=rng, noise=0.02, bump_link=7, bump=0.05)
+    m = link_map(x, FS, ph, 30)
+    assert m.loops == 3
+    level = m.level.mean(axis=0)
+    assert int(np.argmax(level)) + 1 == 7
+    scan = scan_links(m)
+    assert [f.link for f in scan.flagged] == [7]
+    assert scan.flagged[0].loops == (1, 2, 3)
+    # the link passing 4.5 link cycles after the start is marked: it becomes link 1, the bump link 7 - 4
+    marker = (4.5 - 0.3) / F_LP
+    scan = scan_links(link_map(x, FS, ph, 30, marker_s=marker))
+    assert [f.link for f in scan.flagged] == [3]
+
+
+def test_a_signature_finds_its_link_and_its_amount():
+    rng = np.random.default_rng(2)
+    n, spc = 40, 16
+    x, ph = _signal(n, 3, rng=rng, noise=0.02, bump_link=11, bump=0.05)
+    m = link_map(x, FS, ph, n, samples_per_cycle=spc)
+    # the signature of a bump of 0.1 on link 1 (row 0): measured on a clean signal
+    x0, ph0 = _signal(n, 3, rng=rng, noise=0.0, bump_link=1, bump=0.1)
+    sig = link_map(x0, FS, ph0, n, samples_per_cycle=spc).mean_shape
+    scan = scan_links(m, signature=sig, scale=0.1)
+    assert [f.link for f in scan.flagged] == [11]
+    f = scan.flagged[0]
+    assert abs(f.amplitude - 0.05) < 4 * f.sigma
+    assert f.sigma < 0.01
+
+
+def test_fewer_than_two_loops_is_refused_with_the_time_to_record():
+    rng = np.random.default_rng(3)
+    x, ph = _signal(50, 1.5, rng=rng)
+    with pytest.raises(TooFewLoops, match=r"record at least 27 s"):
+        link_map(x, FS, ph, 50)
+
+
+def test_a_marker_outside_the_recording_is_refused():
+    x, ph = _signal(10, 3, rng=np.random.default_rng(4))
+    with pytest.raises(ValueError, match="marker_s"):
+        link_map(x, FS, ph, 10, marker_s=-1.0)
+
+
+@pytest.mark.parametrize("mode", ["own", "signature"])
+def test_false_alarms_hold_their_probability_on_noise(mode):
+    """On noise with speed wander and no deviating link, the share of recordings with any flag is at
+    most the stated probability, within its binomial error (99.9 % quantile)."""
+    alpha, trials, n = 0.1, 300, 24
+    rng = np.random.default_rng(5)
+    x0, ph0 = _signal(n, 2, rng=rng, noise=0.0, bump_link=1, bump=0.2)
+    sig = link_map(x0, FS, ph0, n, samples_per_cycle=8).mean_shape
+    hits = 0
+    for _ in range(trials):
+        x, ph = _signal(n, 2, rng=rng, noise=0.2, wander=0.01, start_cycles=rng.uniform())
+        m = link_map(x, FS, ph, n, samples_per_cycle=8)
+        scan = scan_links(m, signature=sig if mode == "signature" else None, false_alarm=alpha)
+        hits += bool(scan.flagged)
+    assert hits <= scipy.stats.binom.ppf(0.999, trials, alpha)
+    assert hits >= scipy.stats.binom.ppf(0.001, trials, alpha / 4)  # not so conservative as to be blind
+
+
+def test_sidak_threshold_is_the_per_test_quantile():
+    thr = sidak_threshold(0.01, 159, 1e6)
+    per = 1 - 0.99 ** (1 / 159)
+    assert thr == pytest.approx(scipy.stats.norm.isf(per / 2), rel=1e-4)
+
+
+def test_smooth_phase_increases_through_a_glitch():
+    t = np.arange(4000) / FS
+    ph = 2 * np.pi * F_LP * t
+    ph[2000:2003] -= 0.5
+    s = smooth_phase(ph, FS, F_LP / 40)
+    assert np.all(np.diff(s) > 0)
+    assert np.max(np.abs(s - 2 * np.pi * F_LP * t)[200:-200]) < 0.05
+
+
+def test_link_pass_phase_follows_a_wandering_speed():
+    """1 % speed wander with a 100 s period: the demodulated phase stays within 0.05 rad of the truth
+    (a link cycle is 6.28 rad), away from the filter's ends."""
+    from vibkit.signal.linkmap import link_pass_phase
+
+    t = np.arange(int(150 * FS)) / FS
+    phase = 2 * np.pi * F_LP * (t + 0.01 * 100 / (2 * np.pi) * np.sin(2 * np.pi * t / 100))
+    x = np.cos(phase) + 0.3 * np.cos(2 * phase + 1.0) + 0.05 * np.random.default_rng(6).standard_normal(t.size)
+    est = link_pass_phase(x, FS, 3.7, bandwidth_hz=F_LP / 40)
+    err = est - phase
+    err -= np.mean(err)
+    inner = slice(int(10 * FS), -int(10 * FS))
+    assert np.max(np.abs(err[inner])) < 0.05
+    assert np.all(np.diff(est) > 0)

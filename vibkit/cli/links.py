@@ -1,0 +1,171 @@
+"""``vibkit links``: which link of the chain is worn, by number, from a tensioner recording over two loops or more."""
+
+from __future__ import annotations
+
+import argparse
+import math
+
+from .options import (
+    _LENGTH_UNITS,
+    _quantity,
+    add_command,
+    add_escalator,
+    add_json,
+    add_recording,
+    band,
+    chain_speed,
+    escalator_profile,
+    read_recording,
+)
+from .output import CLIError, in_file, msg, print_json, table
+from .pitch import resolve_speed
+
+EPILOG = (
+    "example:\n  vibkit links tensioner.nc --speed 0.5 --links 159 --scene sim/thesis-forward.toml\n"
+    "exit status: 0 the links were scanned (flagged or not), 1 refused (fewer than two loops,\n"
+    "  no link pass, bad input), 2 usage error"
+)
+
+
+def links_count(text):
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number of links, got {text!r}") from None
+    if v < 2:
+        raise argparse.ArgumentTypeError(f"a chain has at least 2 links, got {v}")
+    return v
+
+
+def probability(text):
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a probability, got {text!r}") from None
+    if not 0.0 < v < 1.0:
+        raise argparse.ArgumentTypeError(f"expected a probability in (0, 1), got {text!r}")
+    return v
+
+
+def seconds(text):
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"expected a time in seconds from the recording's start, got {text!r}"
+        ) from None
+    if not (math.isfinite(v) and v >= 0):
+        raise argparse.ArgumentTypeError(f"expected a time >= 0 s from the recording's start, got {text!r}")
+    return v
+
+
+def excess_length(text):
+    """--min-excess: metres, or with a unit (``0.2mm``); 0 or more."""
+    if text.strip().rstrip("m").rstrip("m") in ("0", "0.0"):  # 0, 0m, 0mm: no minimum
+        return 0.0
+    v, factor, _unit = _quantity(text, _LENGTH_UNITS, "an excess pitch", "0.2mm")
+    m = v * (factor or 1.0)
+    if not (math.isfinite(m) and 0 <= m < 0.05):
+        raise argparse.ArgumentTypeError(f"expected an excess pitch from 0 to 50 mm (e.g. 0.2mm), got {text!r}")
+    return m
+
+
+def add_parser(subparsers):
+    s = add_command(
+        subparsers, "links", "which link of the chain is worn, by number, from a tensioner recording", EPILOG
+    )
+    add_recording(s)
+    add_json(s)
+    s.add_argument(
+        "--speed", type=chain_speed, help="chain speed: m/s, or 0.49m/s, 49cm/s (default: the speed the file states)"
+    )
+    s.add_argument("--links", type=links_count, help="links in the chain (e.g. 159; default the --escalator profile's)")
+    add_escalator(s)
+    s.add_argument(
+        "--scene",
+        help="forward scene of the escalator: gives the worn link's signature on the tensioner (one number per "
+        "worn link, its excess pitch in mm); without it each link's own cycle is tested",
+    )
+    s.add_argument(
+        "--marker",
+        type=seconds,
+        metavar="TIME",
+        help="time [s from the recording's start] at which a marked link (chalk, tape) passed the sensor: "
+        "it becomes link 1 (default: the link at the sensor when the recording starts)",
+    )
+    s.add_argument(
+        "--false-alarm",
+        type=probability,
+        default=0.01,
+        help="probability that a chain without a worn link gets any flag, over all its links (default 0.01)",
+    )
+    s.add_argument(
+        "--min-excess",
+        type=excess_length,
+        default=0.2e-3,
+        help="with --scene: flag a link only when its excess pitch is at least this: m, or 0.2mm (default 0.2 mm)",
+    )
+    s.add_argument("--band", type=band, help="link-pass search band LOW:HIGH [Hz] (default speed / 200-80 mm)")
+    s.set_defaults(func=run)
+    return s
+
+
+def run(a):
+    from vibkit.diagnose.links import TooFewLoops, find_worn_links
+
+    rec = read_recording(a)
+    profile = escalator_profile(a)
+    speed = resolve_speed(a, rec, profile=profile).value
+    n_links = a.links or (profile.n_links if profile is not None else None)
+    if n_links is None:
+        raise CLIError(
+            f"{a.recording}: give --links N, the chain's number of links (or --escalator FILE with chain.n_links)"
+        )
+    try:
+        res = find_worn_links(
+            rec,
+            speed=speed,
+            n_links=n_links,
+            channel=a.channel,
+            scene=a.scene,
+            marker_s=a.marker,
+            false_alarm=a.false_alarm,
+            band=a.band,
+            min_excess=a.min_excess,
+            file=a.recording,
+        )
+    except TooFewLoops as exc:
+        if a.json:
+            print_json("links", {"file": a.recording, "status": "too short", "reason": str(exc), "flagged": []})
+        msg(f"vibkit links: {a.recording}: {exc}")
+        return 1
+    except ValueError as exc:
+        raise in_file(a.recording, exc) from None
+    if a.json:
+        d = res.as_dict()
+        d["status"] = "ok"
+        print_json("links", d)
+        return 0
+    print(
+        f"{a.recording}: channel {res.channel}, {res.loops} loops of {res.n_links} links at "
+        f"{res.link_pass_hz:.4f} Hz link pass ({speed:g} m/s)"
+    )
+    print(f"method               {res.method}")
+    print(
+        f"threshold            |t| > {res.threshold:.2f} (false alarm {res.false_alarm:g} per recording over "
+        f"{res.n_links} links, {res.dof:.0f} degrees of freedom)"
+    )
+    link1 = f"marked at {res.marker_s:g} s" if res.marker_s is not None else "at the sensor at the start"
+    print(f"link 1               the link {link1}; numbers in the order the links pass")
+    print()
+    if res.flagged:
+        rows = []
+        for f in res.flagged:
+            ex = "-" if f["excess_pitch_mm"] is None else f"{f['excess_pitch_mm']:+.3f} +- {f['sigma_mm']:.3f}"
+            rows.append([f["link"], ex, f"{f['t']:.1f}", ",".join(str(i) for i in f["loops"]) or "-"])
+        print(table(rows, ("link", "excess pitch [mm]", "|t|", "loops that show it")))
+    else:
+        print("no link flagged")
+    for n in res.notes:
+        msg(f"note: {n}")
+    return 0

@@ -1,0 +1,365 @@
+"""Which link is worn: the link map of a tensioner recording and its decision.
+
+The signal layer (:mod:`vibkit.signal.linkmap`) numbers every link-pass cycle by its link and tests
+the per-link map; this module gives it what only the model knows: the *signature* of one worn link
+on the escalator, that is how one link of excess pitch changes the per-link map of the sensor.  On
+the tensioner it is not one odd cycle but a pattern over the links that follow the worn one (its
+wrap on the sprocket and on the lower head change the tensioner's mean by microns for ``Z / 2``
+link passes each), so the scan fits that pattern at every link and flags the links it finds.
+
+:func:`worn_link_signature` simulates the scene twice at the recording's speed (healthy, and with
+link 1 ``excess`` longer, exact closure), one loop of settling cut off, and processes both runs
+exactly as a recording; :func:`find_worn_links` reads the recording's channel, tracks its link-pass
+phase, builds the map and scans it.
+
+Link numbers count, in the order the links pass, from the link at the sensor when the recording
+starts (or the link marked at ``marker_s``).  In the signature's run, model link ``k`` is at the
+top of the lower head at ``t = 0`` (the scene's start) and links pass in decreasing model number,
+so the run's own numbering is known and its worn link is row 0 of the signature.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..signal import find_fundamental
+from ..signal.linkmap import MIN_LOOPS, TooFewLoops, link_map, link_pass_phase, record_time_for_loops, scan_links
+
+__all__ = [
+    "DEFAULT_FALSE_ALARM",
+    "LinksResult",
+    "find_worn_links",
+    "link_number_of",
+    "worn_link_signature",
+    "TooFewLoops",
+]
+
+DEFAULT_FALSE_ALARM = 1e-2
+#: tracking bandwidth of the link-pass phase, as a fraction of the link-pass frequency
+BANDWIDTH_FRACTION = 1.0 / 40.0
+SAMPLES_PER_CYCLE = 16
+#: excess pitch below which a link fitted by the signature is not flagged [m]: the simulated healthy chain
+#: of the study's escalator itself shows 0.05-0.15 mm at one link (loop after loop, whatever the noise)
+MIN_EXCESS_M = 0.2e-3
+#: the sensors the model gives a signature for: sensor -> the simulation's output
+SENSORS = {"tensioner": "delta"}
+
+
+@dataclass(frozen=True)
+class LinksResult:
+    """Result of :func:`find_worn_links`.
+
+    Attributes
+    ----------
+    file, channel, sensor : str
+    speed_m_s, link_pass_hz : float
+    n_links, loops : int
+    flagged : list of dict
+        Per flagged link: ``link`` (1-based), ``excess_pitch_mm`` and ``sigma_mm``, ``t`` (its
+        statistic), ``loops`` (1-based loops whose own fit shows it).
+    threshold, false_alarm, dof : float
+    statistic : ndarray (n_links,)
+        Absolute t of every link (the map the report draws).
+    excess_mm : ndarray (n_links,)
+        Fitted excess pitch at every link. [mm]
+    method : str
+    marker_s : float or None
+    notes : list of str
+    """
+
+    file: str
+    channel: str
+    sensor: str
+    speed_m_s: float
+    link_pass_hz: float
+    n_links: int
+    loops: int
+    flagged: list
+    threshold: float
+    false_alarm: float
+    dof: float
+    statistic: np.ndarray
+    excess_mm: np.ndarray
+    method: str
+    marker_s: float | None = None
+    notes: list = field(default_factory=list)
+
+    def as_dict(self):
+        return {
+            "file": self.file,
+            "channel": self.channel,
+            "sensor": self.sensor,
+            "speed_m_s": self.speed_m_s,
+            "link_pass_hz": self.link_pass_hz,
+            "n_links": self.n_links,
+            "loops": self.loops,
+            "false_alarm": self.false_alarm,
+            "threshold": self.threshold,
+            "dof": self.dof,
+            "method": self.method,
+            "marker_s": self.marker_s,
+            "flagged": self.flagged,
+            "notes": self.notes,
+        }
+
+
+def link_phase(x, fs, f_lp):
+    """The link-pass phase of ``x`` near ``f_lp`` [Hz], by demodulation. [rad]"""
+    return link_pass_phase(x, fs, f_lp, bandwidth_hz=f_lp * BANDWIDTH_FRACTION)
+
+
+def link_number_of(model_link, links_passed, n_links):
+    """Number (1-based, in passing order from the link at the sensor) of the scene's link
+    ``model_link`` after ``links_passed`` links have passed since the scene's start."""
+    at_sensor = (1 - int(math.floor(links_passed))) % n_links  # 0-based model link at the sensor
+    return (at_sensor - (model_link - 1)) % n_links + 1
+
+
+def _scene_with(scene, *, speed, worn=None):
+    chain = scene.chain if worn is None else dataclasses.replace(scene.chain, worn_links=(worn,))
+    effects = dict(scene.effects)
+    if "motor" in effects:
+        effects["motor"] = dataclasses.replace(effects["motor"], speed=float(speed))
+    outputs = dict(scene.outputs, variables=tuple(sorted(set(SENSORS.values()) | {"sprocket_angle"})))
+    # both runs on the exact closure (a worn chain needs it): the difference is the worn link's, not the closures'
+    return dataclasses.replace(scene, chain=chain, effects=effects, outputs=outputs).with_solver(closure="exact")
+
+
+@functools.lru_cache(maxsize=8)
+def _signature_cached(scene_path, sensor, speed, fs, samples_per_cycle, excess, loops):
+    from ..analyses.simulation import simulate
+    from ..model.scene import load_scene
+
+    scene = load_scene(scene_path)
+    if scene.analysis != "forward" or scene.run.start != 0.0:
+        raise ValueError(
+            f"{scene_path}: the worn link's signature needs a forward scene that starts with roller 1 at the top "
+            "of the lower head ([run] start = 0), so that its links can be numbered"
+        )
+    n = scene.chain.n_rollers
+    pitch = scene.chain.link_pitch
+    f_lp = speed / pitch
+    settle = n / f_lp + 5.0  # one loop and the start-up
+    duration = settle + (loops * n + 3) / f_lp
+    var = SENSORS[sensor]
+    maps = []
+    for worn in (None, (1, pitch + excess)):
+        ds = simulate(_scene_with(scene, speed=speed, worn=worn), duration=duration, progress=False)
+        t = ds.time.values
+        keep = t >= settle
+        x = np.interp(np.arange(t[keep][0], t[-1], 1.0 / fs), t, ds[var].values)
+        ph = link_phase(x, fs, f_lp)
+        maps.append(link_map(x, fs, ph, n, samples_per_cycle=samples_per_cycle))
+        theta = ds.sprocket_angle.values
+        passed = scene.sprocket.teeth * abs(float(np.interp(t[keep][0], t, theta)) - float(theta[0])) / (2 * np.pi)
+    sig = maps[1].mean_shape - maps[0].mean_shape
+    row = link_number_of(1, passed, n) - 1
+    return np.roll(sig, -row, axis=0), n
+
+
+def worn_link_signature(scene_path, *, sensor="tensioner", speed, fs, samples_per_cycle=SAMPLES_PER_CYCLE, excess=1e-3):
+    """The change of the per-link map that one link ``excess`` [m] longer makes, row 0 that link.
+
+    Parameters
+    ----------
+    scene_path : str or Path
+        A forward scene of the escalator (its chain, sprocket, guide and motor).
+    sensor : {"tensioner"}
+    speed : float
+        Chain speed of the recording (the scene's motor runs at it). [m/s]
+    fs : float
+        The recording's sample rate (the runs are sampled at it). [Hz]
+    samples_per_cycle : int, optional
+    excess : float, optional
+        Excess pitch of the simulated worn link. [m]
+
+    Returns
+    -------
+    signature : ndarray (n_links, samples_per_cycle)
+    n_links : int
+    """
+    if sensor not in SENSORS:
+        raise ValueError(f"sensor {sensor!r}: the model gives a worn link's signature for {', '.join(SENSORS)} only")
+    return _signature_cached(
+        str(scene_path), sensor, round(float(speed), 9), round(float(fs), 6), int(samples_per_cycle), float(excess), 2
+    )
+
+
+def _pick_channel(recording, channel):
+    from .channels import vibration_channels
+
+    chans = vibration_channels(recording)
+    if channel is not None:
+        return str(channel)
+    for c in chans:
+        if str(recording[c].attrs.get("units", "")) in ("m", "mm", "um"):
+            return c
+    if not chans:
+        raise ValueError("the recording has no vibration channel")
+    return chans[0]
+
+
+def find_worn_links(
+    recording,
+    *,
+    speed,
+    n_links,
+    channel=None,
+    scene=None,
+    marker_s=None,
+    false_alarm=DEFAULT_FALSE_ALARM,
+    band=None,
+    min_excess=MIN_EXCESS_M,
+    file="<recording>",
+):
+    """The links of a chain whose pitch departs from the others', from a tensioner recording.
+
+    Parameters
+    ----------
+    recording : xarray.Dataset
+        As :func:`vibkit.read_recording` gives (dimension ``time``).
+    speed : float
+        Chain speed. [m/s]
+    n_links : int
+        Links in the chain.
+    channel : str, optional
+        Default: the first channel in a length unit (a tensioner displacement).
+    scene : str or Path, optional
+        The escalator's forward scene, for the worn link's signature. Without one, each link's own
+        cycle is tested (its mean level and duration): a deviation is found and numbered but the
+        tensioner spreads it over the links that follow, and no excess pitch is given.
+    marker_s : float, optional
+        Time at which a marked link passed the sensor: it is link 1. [s]
+    false_alarm : float, optional
+        Probability that a chain without a deviating link gets any flag.
+    band : (float, float), optional
+        Search band of the link-pass frequency (default speed / 200 mm to speed / 80 mm). [Hz]
+    min_excess : float, optional
+        With a scene: a link passing the threshold is flagged only when its excess pitch is at least
+        this. [m]
+    file : str
+        The recording's name, for messages.
+
+    Returns
+    -------
+    LinksResult
+
+    Raises
+    ------
+    TooFewLoops
+        The recording covers fewer than two loops (the message says how long to record).
+    ValueError
+        A bad channel, no link pass found.
+    """
+    ch = _pick_channel(recording, channel)
+    if ch not in recording.data_vars:
+        raise ValueError(f"no channel {ch!r} (channels: {', '.join(map(str, recording.data_vars))})")
+    n = int(n_links)
+    if n < 2:
+        raise ValueError(f"--links {n_links!r}: a chain has at least 2 links")
+    speed = float(speed)
+    da = recording[ch]
+    t = np.asarray(recording.time.values, dtype=float)
+    if np.issubdtype(recording.time.dtype, np.datetime64):
+        t = (recording.time.values - recording.time.values[0]) / np.timedelta64(1, "s")
+    fs = (t.size - 1) / (t[-1] - t[0])
+    x = np.asarray(da.values, dtype=float)
+    x = np.interp(np.arange(t[0], t[-1], 1.0 / fs), t, x)  # uniform samples
+    ok = np.isfinite(x)
+    if not ok.all():
+        raise ValueError(f"channel {ch}: {np.count_nonzero(~ok)} missing samples; the link map needs a whole recording")
+    band = band or (speed / 0.2, speed / 0.08)
+    fund = find_fundamental(x, fs, band=band)
+    f_lp = fund.frequency_hz
+    span = (x.size - 1) / fs
+    if span * f_lp < MIN_LOOPS * n:
+        need = record_time_for_loops(n, f_lp)
+        raise TooFewLoops(
+            f"channel {ch}: {span:.1f} s at {f_lp:.4g} Hz link pass covers {span * f_lp / n:.2f} loops of "
+            f"the chain's {n} links; a link map needs {MIN_LOOPS} loops: record at least {need:.0f} s "
+            f"({MIN_LOOPS} x {n} / {f_lp:.4g} Hz plus one link)"
+        )
+    ph = link_phase(x, fs, f_lp)
+    lmap = link_map(x, fs, ph, n, samples_per_cycle=SAMPLES_PER_CYCLE, marker_s=marker_s)
+    notes = []
+    sensor = "tensioner" if str(da.attrs.get("units", "")) in ("m", "mm", "um") else "other"
+    if scene is not None:
+        if sensor != "tensioner":
+            raise ValueError(
+                f"channel {ch} (units {da.attrs.get('units', '?')!r}) is not a tensioner displacement: the "
+                "worn link's signature is known for the tensioner only (a step sensor rides the loop, and its "
+                "own path dominates its per-link pattern)"
+            )
+        sig, n_scene = worn_link_signature(scene, sensor="tensioner", speed=speed, fs=fs)
+        if n_scene != n:
+            raise ValueError(f"--links {n}: the scene {scene} has {n_scene} links")
+        scale = 1e-3
+        if units_scale(da) != 1.0:
+            sig = sig / units_scale(da)
+        scan = scan_links(lmap, signature=sig, scale=scale, false_alarm=false_alarm)
+        flagged = [
+            {
+                "link": f.link,
+                "excess_pitch_mm": 1e3 * f.amplitude,
+                "sigma_mm": 1e3 * f.sigma,
+                "t": f.t,
+                "loops": list(f.loops),
+            }
+            for f in scan.flagged
+            if abs(f.amplitude) >= min_excess
+        ]
+        small = len(scan.flagged) - len(flagged)
+        if small:
+            notes.append(
+                f"{small} link(s) passed the threshold with an excess under {1e3 * min_excess:g} mm "
+                "(--min-excess): not flagged"
+            )
+        excess = 1e3 * scan.amplitude
+        method = f"worn-link signature of the scene, excess at least {1e3 * min_excess:g} mm"
+    else:
+        scan = scan_links(lmap, false_alarm=false_alarm)
+        flagged = [
+            {
+                "link": f.link,
+                "feature": f.feature,
+                "excess_pitch_mm": 1e3 * f.amplitude * speed if f.feature == "duration" else None,
+                "sigma_mm": 1e3 * f.sigma * speed if f.feature == "duration" else None,
+                "t": f.t,
+                "loops": list(f.loops),
+            }
+            for f in scan.flagged
+        ]
+        excess = np.full(n, np.nan)
+        method = "each link's own cycle (level and duration)"
+        notes.append(
+            "without --scene each link's own cycle is tested: a worn link shows on the tensioner as a pattern "
+            "over the links that follow it, so several neighbouring numbers may be flagged"
+        )
+    return LinksResult(
+        file=str(file),
+        channel=ch,
+        sensor=sensor,
+        speed_m_s=speed,
+        link_pass_hz=lmap.link_pass_hz,
+        n_links=n,
+        loops=lmap.loops,
+        flagged=flagged,
+        threshold=scan.threshold,
+        false_alarm=scan.false_alarm,
+        dof=scan.dof,
+        statistic=scan.statistic,
+        excess_mm=excess,
+        method=method,
+        marker_s=marker_s,
+        notes=notes,
+    )
+
+
+def units_scale(da):
+    """Metres per unit of a length channel (the signature is in metres)."""
+    return {"m": 1.0, "mm": 1e-3, "um": 1e-6}.get(str(da.attrs.get("units", "m")), 1.0)

@@ -1,0 +1,47 @@
+"""The report's "links" page: the per-link map of a tensioner recording over two loops or more, with its
+threshold and the flagged links (:func:`vibkit.diagnose.links.find_worn_links`)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .common import _WIDE, _page_title
+
+__all__ = ["links_page"]
+
+
+def links_page(doc, ctx) -> None:
+    """The absolute t of every link against the threshold; the flagged links marked with their excess pitch."""
+    res = ctx.links
+    if res is None:
+        return
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=_WIDE)
+    fig.subplots_adjust(left=0.08, right=0.97, top=0.84, bottom=0.12)
+    _page_title(
+        fig,
+        "Links",
+        f"{res.loops} loops of {res.n_links} links, channel {res.channel}; {res.method}; a chain without a worn "
+        f"link passes the threshold |t| = {res.threshold:.2f} in at most {100 * res.false_alarm:g} % of its "
+        "recordings; link 1: the link at the sensor at the start, numbers in passing order",
+    )
+    links = np.arange(1, res.n_links + 1)
+    ax.vlines(links, 0, res.statistic, color="C0", lw=1.0)
+    ax.axhline(res.threshold, color="C3", lw=1.0, ls="--", label=f"threshold {res.threshold:.2f}")
+    for f in res.flagged:
+        label = f"link {f['link']}"
+        if f.get("excess_pitch_mm") is not None:
+            label += f": {f['excess_pitch_mm']:+.2f} +- {f['sigma_mm']:.2f} mm"
+        ax.plot([f["link"]], [f["t"]], "o", color="C3", ms=6)
+        ax.annotate(label, (f["link"], f["t"]), textcoords="offset points", xytext=(6, -4), fontsize=8)
+    if not res.flagged:
+        ax.text(0.02, 0.92, "no link flagged", transform=ax.transAxes, fontsize=9)
+    top = max(float(np.max(res.statistic)), res.threshold)
+    ax.set_ylim(0, 1.15 * top)
+    ax.set_xlim(0, res.n_links + 1)
+    ax.set_xlabel("link number")
+    ax.set_ylabel("|t| of the link's fit")
+    ax.legend(loc="upper right", fontsize=8)
+    ax.grid(alpha=0.3)
+    doc.emit(fig, "links")

@@ -1,0 +1,522 @@
+"""The link map: every link-pass cycle of a recording given the number of its link, per-link features
+averaged over the chain's loops, and a decision with a stated false-alarm probability.
+
+A chain of ``N`` links passes the sensor once per loop, ``N / f_lp`` seconds.  With the link-pass
+phase ``phi`` (tracked or from a shaft angle), cycle ``j`` is ``2 pi j <= phi' < 2 pi (j + 1)``, where
+``phi'`` is ``phi`` shifted so that the signal's fundamental peaks at ``phi' = 0`` (the same cycle
+boundaries whatever the phase's origin).  The link of cycle ``j`` is ``(j - j_ref) mod N`` (0 for
+link 1), ``j_ref`` the cycle in progress at the start of the recording or at a marker time.
+
+Per cycle, three features: the waveform resampled at ``samples_per_cycle`` points of the phase, minus
+the record's mean cycle and without its component along the mean cycle's slope (the *shape*: what a
+small phase error at that cycle cannot explain), its mean level, and the cycle's duration.  Averaged per link over ``L``
+complete loops, with their loop-to-loop scatter: :class:`LinkMap`.
+
+The decision (:func:`scan_links`):
+
+* with a *signature* ``T`` (``N`` links by ``samples_per_cycle``: what one link of excess pitch
+  ``scale`` adds to the map, link 0 being the worn link; the diagnose layer makes it with the
+  model), the amplitude of ``T`` shifted to every link ``k`` is fitted in every loop, ``a_kl``; its
+  mean ``a_k`` is tested against the noise of the cycles' shapes (their covariance over the points
+  of a cycle from the loop-to-loop scatter pooled over all links: Student t with ``N (L - 1)``
+  degrees of freedom), at the per-link level ``1 - (1 - alpha)^(1/N)`` (Sidak) so that a healthy
+  recording raises a flag with probability at most ``alpha`` over all ``N`` links.  The largest
+  passing link is flagged, its fitted signature removed, and the scan repeated (one flag per worn
+  link, not one per neighbour it overlaps); after a flag, the signature's own error (``mismatch``
+  near it, ``mismatch_floor`` everywhere, times its amplitude) is added to the noise, so that what an
+  imperfect signature leaves is not taken for a second link.  Drift common to neighbouring cycles
+  (settling, wander) is not in the cycles' covariance: where the per-loop amplitudes scatter more,
+  their scatter is the noise, with ``(L - 1) N / sum(rho^2)`` degrees of freedom (``rho`` the
+  signature's autocorrelation over links);
+* without a signature, each link's own cycle is tested: its mean level and its duration against
+  the pooled loop-to-loop scatter (Student t with ``N (L - 1) - 1`` degrees of freedom), Sidak over
+  ``2 N`` tests.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.signal
+import scipy.stats
+
+from ._checks import as_signal, check_fs, check_positive_int
+from .orders import resample_to_angle
+
+__all__ = [
+    "LinkMap",
+    "LinkFlag",
+    "LinkScan",
+    "TooFewLoops",
+    "canonical_phase",
+    "link_map",
+    "scan_links",
+    "sidak_threshold",
+    "smooth_phase",
+    "link_pass_phase",
+    "record_time_for_loops",
+]
+
+#: loops a decision needs at least (the scatter comes from loop-to-loop differences)
+MIN_LOOPS = 2
+
+
+class TooFewLoops(ValueError):
+    """The recording covers fewer than two complete loops of the chain; the message says how long to record."""
+
+
+def record_time_for_loops(n_links, link_pass_hz, loops=MIN_LOOPS):
+    """Recording time that covers ``loops`` loops of ``n_links`` links, plus one link cycle. [s]"""
+    return (loops * n_links + 1) / float(link_pass_hz)
+
+
+def canonical_phase(x, phase):
+    """``phase`` shifted so that the fundamental of ``x`` (one cycle of ``phase``) peaks at 0. [rad]"""
+    x = np.asarray(x, dtype=float)
+    a = float(np.mean((x - x.mean()) * np.cos(phase)))
+    b = float(np.mean((x - x.mean()) * np.sin(phase)))
+    return phase - math.atan2(b, a)
+
+
+def sidak_threshold(false_alarm, n_tests, dof):
+    """Two-sided Student t threshold for ``n_tests`` tests at family-wise probability ``false_alarm``."""
+    per = -math.expm1(math.log1p(-float(false_alarm)) / n_tests)
+    return float(scipy.stats.t.isf(per / 2.0, dof))
+
+
+@dataclass(frozen=True)
+class LinkMap:
+    """Result of :func:`link_map`: per-link features over ``loops`` complete loops.
+
+    Attributes
+    ----------
+    n_links, loops, samples_per_cycle : int
+    link_pass_hz : float
+        Mean link-pass frequency over the loops used. [Hz]
+    first_link : int
+        0-based number of the first complete cycle's link (its loop starts there).
+    start_s : float
+        Time of the first cycle used. [s]
+    shape : ndarray (loops, n_links, samples_per_cycle)
+        Each cycle's waveform minus the mean cycle, by loop and link number. [x]
+    duration_s : ndarray (loops, n_links)
+        Each cycle's duration minus the mean cycle duration. [s]
+    level : ndarray (loops, n_links)
+        Each cycle's mean level minus the record's. [x]
+    cycle_time_s : ndarray (loops, n_links)
+        Start time of each cycle. [s]
+    """
+
+    n_links: int
+    loops: int
+    samples_per_cycle: int
+    link_pass_hz: float
+    first_link: int
+    start_s: float
+    shape: np.ndarray
+    duration_s: np.ndarray
+    level: np.ndarray
+    cycle_time_s: np.ndarray
+
+    @property
+    def mean_shape(self):
+        """Per-link shape averaged over the loops, ``(n_links, samples_per_cycle)``. [x]"""
+        return self.shape.mean(axis=0)
+
+    @property
+    def loop_s(self):
+        """Time of one loop. [s]"""
+        return self.n_links / self.link_pass_hz
+
+
+def link_map(x, fs, phase, n_links, *, samples_per_cycle=16, marker_s=None):
+    """Per-link features of a recording over its complete loops.
+
+    Parameters
+    ----------
+    x : array_like, 1-D
+        Signal with a link-pass harmonic family (finite). [x]
+    fs : float
+        Sampling frequency. [Hz]
+    phase : array_like, 1-D
+        Link-pass phase at every sample, strictly increasing (:func:`vibkit.signal.track_phase`). [rad]
+    n_links : int
+        Links in the chain.
+    samples_per_cycle : int, optional
+        Points of the phase per link cycle.
+    marker_s : float, optional
+        Time at which a marked link passed the sensor: it becomes link 1. Default: the link whose
+        cycle is in progress at the first sample is link 1. [s]
+
+    Returns
+    -------
+    LinkMap
+
+    Raises
+    ------
+    TooFewLoops
+        When fewer than two complete loops are covered (the message says how long to record).
+    ValueError
+        On bad parameters.
+    """
+    fs = check_fs(fs)
+    x = as_signal(x, min_samples=16)
+    ph = as_signal(phase, "phase", min_samples=16)
+    n = check_positive_int(n_links, "n_links", minimum=2)
+    spc = check_positive_int(samples_per_cycle, "samples_per_cycle", minimum=4)
+    if x.ndim != 1 or ph.shape != x.shape:
+        raise ValueError(f"Parameters x and phase must be 1-D of equal length, got {x.shape} and {ph.shape}.")
+    t = np.arange(x.size) / fs
+    ph = canonical_phase(x, ph)
+    cyc = ph / (2.0 * np.pi)
+    span = (x.size - 1) / fs
+    f_lp = (cyc[-1] - cyc[0]) / span if span > 0 else 0.0
+    if marker_s is None:
+        ref = math.floor(cyc[0])
+    else:
+        m = float(marker_s)
+        if not (math.isfinite(m) and 0.0 <= m <= t[-1]):
+            raise ValueError(f"Parameter marker_s={marker_s!r} must lie within the recording, 0 to {t[-1]:.6g} s.")
+        ref = math.floor(float(np.interp(m, t, cyc)))
+    ang = resample_to_angle(x, fs, ph, samples_per_cycle=spc)
+    n_cyc = ang.x.size // spc
+    loops = n_cyc // n
+    if loops < MIN_LOOPS:
+        need = record_time_for_loops(n, f_lp) if f_lp > 0 else math.inf
+        raise TooFewLoops(
+            f"the recording covers {n_cyc / n:.2f} loops of the chain's {n} links ({span:.1f} s at "
+            f"{f_lp:.4g} Hz link pass); a link map needs {MIN_LOOPS} complete loops: record at least "
+            f"{need:.0f} s ({MIN_LOOPS} x {n} / {f_lp:.4g} Hz plus one link)"
+        )
+    first = int(round(ang.cycles[0]))
+    used = loops * n
+    wave = ang.x[: used * spc].reshape(used, spc)
+    bounds = np.interp(first + np.arange(used + 1), cyc, t)
+    dur = np.diff(bounds)
+    # slow drift (settling, temperature, load) removed by a moving mean over one loop: a loop-periodic
+    # pattern averages to a constant over any window of one loop, so it is kept
+    wave = wave - _loop_mean(wave, n)
+    dur = dur - _loop_mean(dur, n)
+    level = wave.mean(axis=1)
+    mean_cycle = wave.mean(axis=0)
+    shape = wave - mean_cycle
+    # a small error of the phase at one cycle shifts its waveform along the mean cycle's slope: that
+    # direction is taken out of every cycle's shape (the map keeps what the phase cannot explain)
+    slope = (np.roll(mean_cycle, -1) - np.roll(mean_cycle, 1)) / 2.0
+    if np.any(slope):
+        shape = shape - np.outer(shape @ slope / float(slope @ slope), slope)
+    first_link = (first - ref) % n
+    # roll so that axis 1 is the link number: cycle i of the record is link (first_link + i) mod n
+    order = (first_link + np.arange(used)) % n
+
+    def by_link(a):
+        out = np.empty((loops, n) + a.shape[1:])
+        lp = np.arange(used) // n
+        out[lp, order] = a
+        return out
+
+    return LinkMap(
+        n,
+        loops,
+        spc,
+        float(used / (bounds[-1] - bounds[0])),
+        int(first_link),
+        float(bounds[0]),
+        by_link(shape),
+        by_link(dur - dur.mean()),
+        by_link(level - level.mean()),
+        by_link(bounds[:-1]),
+    )
+
+
+def _loop_mean(a, n):
+    """Mean over the window of ``n`` cycles centred on each cycle (clipped to the record)."""
+    c = np.concatenate([np.zeros((1,) + a.shape[1:]), np.cumsum(a, axis=0)])
+    lo = np.clip(np.arange(a.shape[0]) - n // 2, 0, a.shape[0] - n)
+    return (c[lo + n] - c[lo]) / n
+
+
+def _lowpass(y, fs, cutoff, padtype="even"):
+    sos = scipy.signal.butter(2, float(cutoff), btype="low", fs=fs, output="sos")
+    padlen = min(y.size - 1, int(3.0 * fs / float(cutoff)))
+    return scipy.signal.sosfiltfilt(sos, y, padtype=padtype, padlen=padlen)
+
+
+def link_pass_phase(x, fs, f0, *, bandwidth_hz, n_harmonics=4):
+    """Link-pass phase by demodulation at the mean frequency: ``2 pi f t + psi(t)``. [rad]
+
+    Parameters
+    ----------
+    x : array_like, 1-D
+        Signal with a link-pass harmonic family (finite). [x]
+    fs : float
+        Sampling frequency. [Hz]
+    f0 : float
+        Approximate mean link-pass frequency (refined here to the peak of the strongest harmonic). [Hz]
+    bandwidth_hz : float
+        How fast the speed may wander: each harmonic is demodulated and low-passed at it. [Hz]
+    n_harmonics : int, optional
+
+    Notes
+    -----
+    Each harmonic ``h`` is demodulated by ``exp(-j h 2 pi f t)`` and low-passed; its unwrapped phase
+    over ``h`` is the phase's slow departure ``psi``; harmonics are combined with weights
+    ``h^2 |a_h|^2``; three passes, each around the phase of the last.  Without a spectrogram ridge the phase follows the chain, not the frame grid:
+    on a chain at constant speed it stays within milliradians of the truth.
+    """
+    fs = check_fs(fs)
+    x = as_signal(x, min_samples=16)
+    x = x - x.mean()
+    t = np.arange(x.size) / fs
+    kmax = max(1, min(check_positive_int(n_harmonics, "n_harmonics"), int(0.45 * fs / f0)))
+    amps = [abs(np.mean(x * np.exp(-2j * np.pi * h * f0 * t))) for h in range(1, kmax + 1)]
+    hs = int(np.argmax(amps)) + 1
+    # refine the frequency on the strongest harmonic: the peak within +-2 bins
+    grid = f0 + np.linspace(-2.0, 2.0, 81) / (t[-1] * hs)
+    e = np.exp(-2j * np.pi * hs * np.outer(grid, t[:: max(1, x.size // 20000)]))
+    f = float(grid[int(np.argmax(np.abs(e @ x[:: max(1, x.size // 20000)])))])
+    phase = 2.0 * np.pi * f * t
+    # harmonics weaker than a tenth of the strongest add noise and unwrapping slips, not information
+    used = [h for h in range(1, kmax + 1) if amps[h - 1] >= 0.1 * max(amps)]
+    for _ in range(3):  # each pass demodulates around the last: the filter's loss on a wander shrinks geometrically
+        acc, wsum = np.zeros(x.size), 0.0
+        for h in used:
+            z = x * np.exp(-1j * h * phase)
+            zr, zi = _lowpass(z.real, fs, bandwidth_hz), _lowpass(z.imag, fs, bandwidth_hz)
+            psi = np.unwrap(np.arctan2(zi, zr)) / h
+            w = h * h * float(np.mean(zr * zr + zi * zi))
+            acc += w * (psi - psi.mean())
+            wsum += w
+        phase = phase + acc / wsum
+    if not np.all(np.diff(phase) > 0):
+        phase = smooth_phase(phase, fs, bandwidth_hz)
+    if not np.all(np.diff(phase) > 0):
+        raise ValueError(
+            "the link-pass phase could not be followed: it runs backwards somewhere (a dropout, or a speed "
+            "that changes faster than the tracking bandwidth)"
+        )
+    return phase
+
+
+def smooth_phase(phase, fs, bandwidth_hz):
+    """``phase`` with its departure from a straight line low-passed at ``bandwidth_hz``. [rad]
+
+    A tracked phase can carry short glitches where the waveform changes; the link map needs a phase
+    that increases at every sample and follows the speed's wander, not those glitches.
+    """
+    ph = as_signal(phase, "phase", min_samples=16)
+    fs = check_fs(fs)
+    t = np.arange(ph.size) / fs
+    line = np.polyval(np.polyfit(t, ph, 1), t)
+    sos = scipy.signal.butter(2, float(bandwidth_hz), btype="low", fs=fs, output="sos")
+    padlen = min(ph.size - 1, int(3.0 * fs / float(bandwidth_hz)))
+    return line + scipy.signal.sosfiltfilt(sos, ph - line, padtype="even", padlen=padlen)
+
+
+@dataclass(frozen=True)
+class LinkFlag:
+    """One flagged link.
+
+    Attributes
+    ----------
+    link : int
+        1-based link number.
+    t : float
+        Its test statistic (amplitude over its standard deviation).
+    amplitude, sigma : float
+        The fitted amount (signature scale: e.g. excess pitch [m]; or the own-cycle feature), and
+        its standard deviation.
+    feature : str
+        ``"signature"``, ``"level"`` or ``"duration"``.
+    loops : tuple of int
+        1-based loops whose own fit shows it (same sign, beyond twice the single-loop sigma).
+    """
+
+    link: int
+    t: float
+    amplitude: float
+    sigma: float
+    feature: str
+    loops: tuple
+
+
+@dataclass(frozen=True)
+class LinkScan:
+    """Result of :func:`scan_links`.
+
+    Attributes
+    ----------
+    flagged : tuple of LinkFlag
+    statistic : ndarray (n_links,)
+        The first pass's absolute t per link (largest over features without a signature).
+    threshold : float
+        The absolute t a link must pass.
+    false_alarm : float
+        Family-wise false-alarm probability over all links.
+    dof : float
+        Degrees of freedom of the scatter.
+    amplitude, sigma : ndarray (n_links,)
+        The first pass's fitted amount per link and its standard deviation.
+    loops : int
+    method : str
+    """
+
+    flagged: tuple
+    statistic: np.ndarray
+    threshold: float
+    false_alarm: float
+    dof: float
+    amplitude: np.ndarray
+    sigma: np.ndarray
+    loops: int
+    method: str
+
+
+def _check_alpha(false_alarm):
+    a = float(false_alarm)
+    if not 0.0 < a < 1.0:
+        raise ValueError(f"Parameter false_alarm={false_alarm!r} must lie in (0, 1).")
+    return a
+
+
+def _fit_signature(shape, tmpl):
+    """Per-loop amplitude of ``tmpl`` shifted to every link: ``(loops, n_links)``."""
+    norm = float(np.sum(tmpl * tmpl))
+    ft = np.fft.rfft(tmpl, axis=0)
+    fx = np.fft.rfft(shape, axis=1)
+    # circular cross-correlation over links, summed over the points of the cycle
+    cc = np.fft.irfft(fx * np.conj(ft)[None], n=tmpl.shape[0], axis=1).sum(axis=2)
+    return cc / norm
+
+
+def _loops_showing(per_loop, k, amp, s1):
+    return tuple(
+        int(i) + 1
+        for i in np.flatnonzero((np.sign(per_loop[:, k]) == np.sign(amp)) & (np.abs(per_loop[:, k]) > 2 * s1))
+    )
+
+
+def scan_links(
+    lmap, *, signature=None, scale=1.0, false_alarm=1e-2, max_flags=None, mismatch=0.25, mismatch_floor=0.05
+):
+    """Flag the links whose deviation passes a threshold set for ``false_alarm`` over all links.
+
+    Parameters
+    ----------
+    lmap : LinkMap
+    signature : array_like (n_links, samples_per_cycle), optional
+        What one link of amount ``scale`` adds to the shape map, row 0 being that link.
+    scale : float, optional
+        The amount the signature stands for (e.g. an excess pitch [m]); amplitudes are in its unit.
+    false_alarm : float, optional
+        Probability that a recording without a deviating link raises any flag.
+    max_flags : int, optional
+        Stop after this many flags (default ``n_links // 4``).
+    mismatch : float, optional
+        Relative error of the signature: after a flag of amplitude ``a``, links within its reach are
+        tested against ``mismatch * a * rho`` in addition to the noise (``rho`` the signature's
+        autocorrelation at their distance), so that what an imperfect signature leaves is not a
+        second flag.
+    mismatch_floor : float, optional
+        The same at every link: after a flag of amplitude ``a``, every other link is tested against
+        ``mismatch_floor * a`` in addition (the signature of one scene does not reproduce a worn link
+        elsewhere on the chain to better than a few per cent).
+
+    Returns
+    -------
+    LinkScan
+    """
+    if not isinstance(lmap, LinkMap):
+        raise ValueError("Parameter lmap must be a LinkMap (from link_map).")
+    alpha = _check_alpha(false_alarm)
+    n, L = lmap.n_links, lmap.loops
+    max_flags = n // 4 if max_flags is None else int(max_flags)
+    if signature is None:
+        return _scan_own(lmap, alpha)
+    tmpl = np.asarray(signature, dtype=float)
+    if tmpl.shape != (n, lmap.samples_per_cycle):
+        raise ValueError(
+            f"Parameter signature must have shape (n_links, samples_per_cycle) = {(n, lmap.samples_per_cycle)}, "
+            f"got {tmpl.shape}."
+        )
+    if not np.all(np.isfinite(tmpl)) or not np.any(tmpl):
+        raise ValueError("Parameter signature must be finite and not all zero.")
+    tmpl = tmpl - tmpl.mean(axis=0)  # the mean cycle is removed from the map: remove it from the signature
+    # the noise of one cycle's shape: its covariance over the points of the cycle, pooled over the
+    # loop-to-loop differences of every link (independent from cycle to cycle)
+    dev = lmap.shape - lmap.shape.mean(axis=0)
+    dof = n * (L - 1)
+    cov = np.einsum("lni,lnj->ij", dev, dev) / dof
+    norm = float(np.sum(tmpl * tmpl))
+    # variance of the per-loop amplitude: sum over links of T_n C T_n, over |T|^4 (the same for every shift)
+    var1 = float(np.einsum("ni,ij,nj->", tmpl, cov, tmpl)) / norm**2
+    # the signature's circular autocorrelation over links: how far one link's fit reaches its neighbours
+    ac = np.fft.irfft(np.abs(np.fft.rfft(tmpl, axis=0)) ** 2, n=n, axis=0).sum(axis=1)
+    rho = ac / ac[0]
+    per_loop = _fit_signature(lmap.shape, tmpl)
+    # drift from loop to loop that is common to neighbouring cycles (settling, wander) is missed by the
+    # cycle covariance: the per-loop amplitudes' own scatter, with its fewer degrees of freedom, then rules
+    var_emp = float(np.sum((per_loop - per_loop.mean(axis=0)) ** 2)) / dof
+    if var_emp > var1:
+        var1, dof = var_emp, dof / float(np.sum(rho * rho))
+    s1 = math.sqrt(max(var1, 0.0))
+    sig = s1 / math.sqrt(L)
+    thr = sidak_threshold(alpha, n, dof)
+    shape = lmap.shape.copy()
+    flags, first = [], None
+    extra = np.zeros(n)  # what a flagged link's imperfect signature leaves near it (variance)
+    for _ in range(max(max_flags, 1)):
+        per_loop = _fit_signature(shape, tmpl)
+        amp = per_loop.mean(axis=0)
+        sd = np.sqrt(sig * sig + extra)
+        tstat = np.abs(amp) / sd if sig > 0 else np.full(n, np.inf)
+        if first is None:
+            first = (tstat, amp * scale, np.full(n, sig * scale))
+        k = int(np.argmax(tstat))
+        if not tstat[k] > thr or len(flags) >= max_flags:
+            break
+        loops = _loops_showing(per_loop, k, amp[k], s1)
+        flags.append(LinkFlag(k + 1, float(tstat[k]), float(amp[k] * scale), sig * scale, "signature", loops))
+        shape -= amp[k] * np.roll(tmpl, k, axis=0)[None]
+        extra += (mismatch * amp[k] * np.roll(rho, k)) ** 2 + (mismatch_floor * amp[k]) ** 2
+    return LinkScan(tuple(flags), first[0], thr, alpha, dof, first[1], first[2], L, "signature")
+
+
+def _scan_own(lmap, alpha):
+    """Each link's own cycle: mean level and duration against the pooled loop-to-loop scatter."""
+    n, L = lmap.n_links, lmap.loops
+    dof = n * (L - 1) - 1
+    thr = sidak_threshold(alpha, 2 * n, dof)
+    best_t = np.zeros(n)
+    best_a = np.zeros(n)
+    best_s = np.zeros(n)
+    flags = []
+    for name, feat in (("level", lmap.level), ("duration", lmap.duration_s)):
+        m = feat.mean(axis=0)
+        ss = np.sum((feat - m) ** 2, axis=0)  # per link
+        tot = float(ss.sum())
+        # leave the tested link's own scatter out of the pool (a deviating link may also scatter)
+        s2 = (tot - ss) / (n * (L - 1) - (L - 1))
+        d = m - m.mean()
+        sig = np.sqrt(s2 * (1.0 - 1.0 / n) / L)
+        # a feature without scatter (a duration from an exact shaft angle) gives no evidence
+        tstat = np.where(sig > 0, np.abs(d) / np.where(sig > 0, sig, 1.0), 0.0)
+        better = tstat > best_t
+        best_t = np.where(better, tstat, best_t)
+        best_a = np.where(better, d, best_a)
+        best_s = np.where(better, sig, best_s)
+        for k in np.flatnonzero(tstat > thr):
+            s1 = math.sqrt(s2[k])
+            loops = tuple(
+                int(i) + 1
+                for i in np.flatnonzero(
+                    (np.sign(feat[:, k] - m.mean()) == np.sign(d[k])) & (np.abs(feat[:, k] - m.mean()) > 2 * s1)
+                )
+            )
+            flags.append(LinkFlag(int(k) + 1, float(tstat[k]), float(d[k]), float(sig[k]), name, loops))
+    best = {}
+    for f in sorted(flags, key=lambda f: -f.t):  # one flag per link: its stronger feature
+        best.setdefault(f.link, f)
+    return LinkScan(tuple(best.values()), best_t, thr, alpha, float(dof), best_a, best_s, L, "own cycle")
