@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import os
 
-from .options import add_command, add_json, add_recording, band, positive, read_recording
+from .options import add_command, add_json, add_recording, band, harmonics, positive, read_recording
 from .output import CLIError, msg, print_json, table
 
 EPILOG = "example:\n  vibkit compare data/field/leon-tensioner.csv sim/leon.toml --duration 10"
@@ -21,7 +21,7 @@ def add_parser(subparsers):
     add_json(s)
     s.add_argument("scene_or_result", metavar="SCENE_OR_RESULT", help="scene .toml or result .nc")
     s.add_argument("--band", type=band, help="link-pass search band LOW:HIGH [Hz]")
-    s.add_argument("--harmonics", type=int, default=5, help="harmonics compared (default 5)")
+    s.add_argument("--harmonics", type=harmonics, default=5, help="harmonics compared (default 5)")
     s.add_argument("--duration", type=positive, help="simulated time when given a scene [s]")
     s.set_defaults(func=run)
     return s

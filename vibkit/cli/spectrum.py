@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from .options import add_command, add_json, add_limits, add_recording, band, read_recording
+from .options import add_command, add_json, add_limits, add_recording, band, harmonics, read_recording
 from .output import in_file, msg, print_json, table
 from .pitch import add_speed_options, print_channels, refused, resolve_speed
 
@@ -22,7 +22,7 @@ def add_parser(subparsers):
         type=band,
         help="search band of the link-pass LOW:HIGH [Hz] (default speed / 80-200 mm, or 2.5:6 without a speed)",
     )
-    s.add_argument("--harmonics", type=int, default=5, help="harmonics listed (default 5)")
+    s.add_argument("--harmonics", type=harmonics, default=5, help="harmonics listed (default 5)")
     add_speed_options(s, "chain speed (optional): m/s, or 49cm/s; default the file's; checks the pitch is plausible")
     add_limits(s)
     s.set_defaults(func=run)
