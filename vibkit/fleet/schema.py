@@ -70,6 +70,21 @@ QUALITY_FLAG_SQL, QUALITY_REASON_SQL = "vibkit_quality_flag", "vibkit_quality_re
 _V2_DEFAULTS = {"quality": "'ok'", "quality_reason": "''", "replaced": "0"}
 
 
+def signature_problem(have_columns):
+    """What keeps a ``measurement`` table with these columns from being vibkit's (None when it is, of any
+    schema version vibkit reads): checked before anything is written into a database."""
+    have = set(have_columns)
+    missing = [c for c in ("id",) + COLUMNS if c not in have and c not in _V2_DEFAULTS]
+    if not missing:
+        return None
+    shown = ", ".join(sorted(have)) or "none"
+    return (
+        f"not a vibkit fleet database: its table 'measurement' (columns {shown}) lacks "
+        f"{', '.join(missing[:4])}{' ...' if len(missing) > 4 else ''}; refusing to read or write it "
+        "(--db names another database)"
+    )
+
+
 def upgraded_view_sql(have_columns, name="temp.measurement", source="main.measurement"):
     """``CREATE VIEW`` of an older ``measurement`` table with the columns it has (``have_columns``), giving
     every row exactly as the upgrade to :data:`SCHEMA_VERSION` would store it (the same defaults, the quality
