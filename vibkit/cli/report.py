@@ -46,6 +46,10 @@ def run(a):
     from vibkit.diagnose.report import write_report
 
     check_output(a.output, [a.recording, a.scene], a.force)
+    if a.date is not None:  # before the recording is read: the date validator every command shares
+        from vibkit.runtime.dates import parse_iso_date
+
+        parse_iso_date(a.date, "--date")
     sigma = speed_sigma(a.speed_uncertainty, a.speed) if (a.speed_uncertainty and a.speed) else 0.0
     rep = write_report(
         a.recording,
