@@ -23,9 +23,25 @@ SCENE = """
 name = "sweep-test"
 analysis = "forward"
 
+[guide]
+tensioner_length = 0.4
+lower_landing = 0.8
+upper_landing = 0.8
+transition_radius = 1.5
+incline_angle_deg = 30.0
+incline_length = 5.19615
+
 [chain]
 link_pitch = 0.13333333333333333
 n_rollers = 159
+
+[sprocket]
+teeth = 28
+base_width = 0.060
+tip_width = 0.040
+tooth_height = 0.070
+mass = 250.62
+inertia = 43.78
 
 [run]
 duration = 2.0
