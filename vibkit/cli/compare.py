@@ -35,9 +35,15 @@ def run(a):
     target = a.scene_or_result
     if not os.path.exists(target):
         raise CLIError(f"{target}: file not found (expected a scene .toml or a result file)")
-    comp = compare(
-        rec, target, channel=a.channel, n_harmonics=a.harmonics, band=a.band, duration=a.duration, progress=True
-    )
+    try:
+        comp = compare(
+            rec, target, channel=a.channel, n_harmonics=a.harmonics, band=a.band, duration=a.duration, progress=True
+        )
+    except ValueError as exc:  # a message that names neither file is about the simulation side
+        text = " ".join(str(exc).split())
+        if os.fspath(target) in text or os.fspath(a.recording) in text:
+            raise
+        raise CLIError(f"{target}: {text}") from None
     del vibkit
     if a.json:
         d = comp.as_dict()

@@ -446,6 +446,7 @@ def plain_message(text: str, args) -> str:
     ``--sample-rate``).
     """
     text = _EXC_NAME.sub("", text)
+    text = text.replace("give band=(low, high) [Hz]", "give --band LOW:HIGH [Hz]")
     given = {k: v for k, v in vars(args).items() if v not in (None, False)}
     if "band" in given and "--band" not in text:
         text = re.sub(r"\bband (?=[0-9])", "--band ", text, count=1)
