@@ -192,7 +192,10 @@ def test_forecast_limits_analytic():
 def test_parse_date():
     assert parse_date("2026-03-01").isoformat() == "2026-03-01T00:00:00+00:00"
     assert parse_date("2026-03-01T10:00:00+01:00").isoformat() == "2026-03-01T09:00:00+00:00"
-    assert parse_date("01/03/2026 10:00:00").isoformat() == "2026-03-01T10:00:00+00:00"
+    assert parse_date("13/03/2026 10:00:00").isoformat() == "2026-03-13T10:00:00+00:00"
+    assert parse_date("01/03/2026 10:00:00", ambiguous_ok=True).isoformat() == "2026-03-01T10:00:00+00:00"
+    with pytest.raises(FleetError, match=r"ambiguous.*01 March.*03 January.*2026-03-01"):
+        parse_date("01/03/2026")  # a person's date: day/month or month/day cannot be told
     assert parse_date("2019-03-12, 10:25:14,500").isoformat() == "2019-03-12T10:25:14.500000+00:00"  # GCDC
     for bad, match in (
         ("12:00:00", "no calendar date"),

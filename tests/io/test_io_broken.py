@@ -71,8 +71,15 @@ def test_text_in_the_time_column(write):
     expect(write(GOOD.replace("0.02,", "zz,")), 4, "expected a time in column 'time (s)', found 'zz'")
 
 
-def test_infinite_value(write):
-    expect(write(GOOD.replace("0.2", "1e999")), 3, "expected a finite number")
+def test_infinite_value_is_missing_like_nan(write):
+    """An infinity (1e999, inf, -Infinity) is no measurement: read as NaN, which the analyses interpolate or cut
+    as they do NaN, and the history says so; in the time column it stays an error."""
+    for cell in ("1e999", "inf", "-Infinity"):
+        rec = read_recording(write(GOOD.replace("0.2", cell)))
+        values = np.asarray(rec[list(rec.data_vars)[0]].values)
+        assert np.isnan(values[1]) and np.isfinite(values[[0, 2, 3]]).all(), cell
+        assert "1 infinite value(s) (first on line 3) read as missing, like NaN" in rec.attrs["history"], cell
+    expect(write(GOOD.replace("0.02,", "1e999,")), 4, "time")
 
 
 def test_time_going_backwards(write):

@@ -24,6 +24,7 @@ import importlib.util
 import io
 import json
 import os
+import re
 import signal
 import stat
 import subprocess
@@ -57,6 +58,8 @@ class Case:
         ``"error"`` (exit 1), ``"usage"`` (exit 2), ``"ok"`` (exit 0), ``"interrupted"`` (130/143).
     expect_in : tuple of str
         Substrings the message must contain (``{w}`` replaced), e.g. the file and the key.
+    stdout_in : tuple of str
+        Substrings the output on stdout must contain (what a result says).
     protect : tuple of str
         Paths (``{w}`` replaced) whose type and content must be the same afterwards.
     outputs : tuple of str
@@ -85,6 +88,7 @@ class Case:
     setup: object = None
     expect: str = "error"
     expect_in: tuple = ()
+    stdout_in: tuple = ()
     protect: tuple = ()
     outputs: tuple = ()
     absent: tuple = ()
@@ -768,6 +772,10 @@ def _error_lines(stderr: str) -> list[str]:
     return [ln for ln in lines if not ln.startswith(skip) and "Warning" not in ln]
 
 
+#: an exception's class name as Python prints it (``OSError:``, ``KeyError:``, ``SacIOError``)
+_PYTHON_NAME = re.compile(r"\b[A-Z][A-Za-z]*(?:Error|Exception)\b(?=:|\(| |$)")
+
+
 def judge(case: Case, work: Path, before: dict, rc, stdout: str, stderr: str) -> dict:
     """Classify a run (see the module docstring); ``passed`` says whether it met the case's expectation."""
     res = {"case": case.name, "item": case.item, "returncode": rc, "problems": []}
@@ -811,6 +819,12 @@ def judge(case: Case, work: Path, before: dict, rc, stdout: str, stderr: str) ->
     for s in case.expect_in:
         if _sub(s, work) not in stderr:
             res["problems"].append(f"message lacks {_sub(s, work)!r}")
+    for s in case.stdout_in:
+        if _sub(s, work) not in stdout:
+            res["problems"].append(f"output lacks {_sub(s, work)!r}")
+    python_name = _PYTHON_NAME.search(stderr) if not tb else None
+    if python_name:  # a message for a person, not an exception's class name
+        res["problems"].append(f"message shows the Python name {python_name.group(0)!r}")
     if case.expect == "ok":
         for p in case.outputs:
             if not os.path.isfile(_sub(p, work)):

@@ -1,6 +1,7 @@
 """Sweeps (vibkit.sweep.run, `vibkit sweep`): equal to single runs bit for bit, resumable, failures recorded."""
 
 import json
+import shutil
 import sys
 from pathlib import Path
 
@@ -15,6 +16,7 @@ from vibkit.sweep import SweepError, plan_sweep
 
 SW = sys.modules["vibkit.sweep.run"]  # the module (vibkit.sweep is the function)
 SP = sys.modules["vibkit.sweep.plan"]  # the plan and the varied scene texts
+ST = sys.modules["vibkit.sweep.store"]  # the store and open_sweep
 
 # the no-load forward scene from rest with a stiff P controller (at speed within 0.5 s), 2 s: short; from rest
 # the teeth take load at once
@@ -23,9 +25,25 @@ SCENE = """
 name = "sweep-test"
 analysis = "forward"
 
+[guide]
+tensioner_length = 0.4
+lower_landing = 0.8
+upper_landing = 0.8
+transition_radius = 1.5
+incline_angle_deg = 30.0
+incline_length = 5.19615
+
 [chain]
 link_pitch = 0.13333333333333333
 n_rollers = 159
+
+[sprocket]
+teeth = 28
+base_width = 0.060
+tip_width = 0.040
+tooth_height = 0.070
+mass = 250.62
+inertia = 43.78
 
 [run]
 duration = 2.0
@@ -143,11 +161,39 @@ def test_interrupted_sweep_resumes_without_recomputing(scene_file, tmp_path, gri
     attrs = json.loads(zattrs.read_text())
     attrs.pop("done")
     zattrs.write_text(json.dumps(attrs))
+    # a run with a chunk overwritten and one with a chunk deleted are redone too (their checksums say so)
+    chunk = sorted((runs[1] / "delta").glob("[0-9]*"))[0]
+    chunk.write_bytes(b"\x02\x01garbage" * 8)
+    sorted((runs[2] / "delta").glob("[0-9]*"))[0].unlink()
     calls.clear()
     full = vibkit.sweep(scene_file, VARY, output=out, keep=["delta"], client=threaded_client, progress=False)
-    assert len(calls) == 9 - 4 + 1 and len(set(calls)) == len(calls)
-    assert full.attrs["runs_computed"] == 6 and full.attrs["runs_reused"] == 3
+    assert len(calls) == 9 - 4 + 3 and len(set(calls)) == len(calls)
+    assert full.attrs["runs_computed"] == 8 and full.attrs["runs_reused"] == 1
     np.testing.assert_array_equal(full["delta"].values, grid[0]["delta"].values)
+
+
+def test_a_damaged_complete_store_is_refused_then_recomputed_with_force(grid, scene_file, threaded_client, tmp_path):
+    ds, out = grid
+    copy = tmp_path / "damaged.zarr"
+    shutil.copytree(out, copy)
+    sorted((copy / "delta").glob("[0-9]*"))[0].unlink()  # zarr would read it back as fill values
+    with pytest.raises(SweepError, match=r"damaged: chunk\(s\) delta/\S+ missing.*--force"):
+        vibkit.sweep(
+            scene_file, VARY, output=copy, keep=["delta", "link_tension"], client=threaded_client, progress=False
+        )
+    with pytest.raises(SweepError, match="damaged"):
+        ST.open_sweep(copy)
+    again = vibkit.sweep(
+        scene_file,
+        VARY,
+        output=copy,
+        keep=["delta", "link_tension"],
+        client=threaded_client,
+        progress=False,
+        force=True,
+    )
+    assert again.attrs["runs_computed"] == 9
+    np.testing.assert_array_equal(again["delta"].values, ds["delta"].values)
 
 
 def test_a_different_sweep_on_the_store_is_refused_unless_forced(grid, scene_file, threaded_client):

@@ -72,9 +72,10 @@ def main(argv=None) -> int:
             text = f"{where}{exc.strerror}" + (
                 " (the disk is full; nothing was written)" if exc.errno == errno.ENOSPC else ""
             )
-        from .options import cli_message
+        from .options import cli_message, plain_message
 
         text = cli_message(text)  # the reader's Python arguments named as their flags
+        text = plain_message(text, args)
         prefix = "\033[31merror\033[0m" if color() else "error"
         msg(f"vibkit {args.command}: {prefix}: {text}")
         return 1

@@ -38,6 +38,11 @@ def add_parser(subparsers):
         metavar="DIR",
         help="folder the scripts write their tables into (default: a new temporary folder, printed)",
     )
+    s.add_argument(
+        "--force",
+        action="store_true",
+        help="write into a -o folder that already holds files (the scripts replace theirs, e.g. read_quick.md)",
+    )
     s.add_argument("--root", help="repository root holding benchmarks/ (default: next to the vibkit package)")
     add_json(s, "JSON on stdout")
     s.set_defaults(func=run)
@@ -63,6 +68,8 @@ def run(a):
     if not scripts:
         raise CLIError(f"{bdir}: no bench_*.py script")
     no_stdout(a.output, "a folder of result tables")
+    if a.output is not None:
+        _check_output_folder(Path(a.output), a.force)
     out = Path(a.output) if a.output else Path(tempfile.mkdtemp(prefix="vibkit-bench-"))
     out.mkdir(parents=True, exist_ok=True)
     env = dict(os.environ, VIBKIT_BENCH_RESULTS=str(out.resolve()))
@@ -93,6 +100,23 @@ def run(a):
     if failed:
         raise CLIError(f"{failed} of {len(rows)} benchmark script(s) failed")
     return 0
+
+
+def _check_output_folder(out: Path, force: bool):
+    """-o names a folder the scripts write their tables into: refused when it is something else, or when it
+    already holds files (a script would replace one of the user's, e.g. read_quick.md) unless --force."""
+    if not str(out).strip():
+        raise CLIError("-o is empty; expected a folder for the benchmark tables")
+    if out.exists() and not out.is_dir():
+        raise CLIError(f"-o {out}: is not a folder; expected a folder for the benchmark tables")
+    if out.is_dir() and not force:
+        held = sorted(p.name for p in out.iterdir())
+        if held:
+            raise CLIError(
+                f"-o {out}: the folder already holds {len(held)} file(s) ({', '.join(held[:3])}"
+                f"{' ...' if len(held) > 3 else ''}) that the scripts may replace; give --force to write there "
+                "anyway, or a new or empty folder"
+            )
 
 
 def _run_scripts(scripts, root, env, *, quick, parallel):

@@ -15,6 +15,7 @@ from .options import (
     add_speed_uncertainty,
     band,
     chain_speed,
+    harmonics,
     positive,
     read_recording,
     run_speed,
@@ -41,7 +42,7 @@ def add_parser(subparsers):
         help="scene .toml or result .nc (default with --escalator: the scene built from the profile)",
     )
     s.add_argument("--band", type=band, help="link-pass search band LOW:HIGH [Hz]")
-    s.add_argument("--harmonics", type=int, default=5, help="harmonics compared (default 5)")
+    s.add_argument("--harmonics", type=harmonics, default=5, help="harmonics compared (default 5)")
     s.add_argument("--duration", type=positive, help="simulated time when given a scene [s]")
     s.add_argument(
         "--speed",
@@ -73,17 +74,23 @@ def run(a):
     elif not os.path.exists(target):
         raise CLIError(f"{target}: file not found (expected a scene .toml or a result file)")
     sp = run_speed(a, rec=rec, profile=profile)
-    comp = compare(
-        rec,
-        target,
-        channel=a.channel,
-        n_harmonics=a.harmonics,
-        band=a.band,
-        duration=a.duration,
-        progress=True,
-        speed=sp.value,
-        speed_sigma=sp.sigma,
-    )
+    try:
+        comp = compare(
+            rec,
+            target,
+            channel=a.channel,
+            n_harmonics=a.harmonics,
+            band=a.band,
+            duration=a.duration,
+            progress=True,
+            speed=sp.value,
+            speed_sigma=sp.sigma,
+        )
+    except ValueError as exc:  # a message that names neither file is about the simulation side
+        text = " ".join(str(exc).split())
+        if _name(target) in text or os.fspath(a.recording) in text:
+            raise
+        raise CLIError(f"{_name(target)}: {text}") from None
     del vibkit
     if a.json:
         d = comp.as_dict()

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import contextlib
+import os
 import sys
 import textwrap
 
@@ -73,7 +75,7 @@ def add_parser(subparsers):
         help="the unit's chain was replaced since its previous measurement: a new trend segment starts here",
     )
     add_escalator(f)
-    f.set_defaults(func=run_add)
+    f.set_defaults(func=_guarded(run_add, lambda a: a.db))
 
     f = fleet_sub("scan", "add every recording of a folder that a catalogue describes, in parallel (Dask)")
     f.add_argument("directory", metavar="DIR", help="folder of recordings (searched recursively)")
@@ -90,7 +92,7 @@ def add_parser(subparsers):
         "the escalator's profile (TOML) of every file the catalogue's escalator column does not name; "
         "see docs/guide/escalator.md",
     )
-    f.set_defaults(func=run_scan)
+    f.set_defaults(func=_guarded(run_scan, lambda a: a.db))
 
     f = fleet_sub(
         "status",
@@ -116,12 +118,35 @@ def add_parser(subparsers):
     f.add_argument("--from", dest="source", required=True, help="the existing database (path or URL)")
     f.add_argument("--to", dest="target", required=True, help="the receiving database (created if missing)")
     add_json(f)
-    f.set_defaults(func=run_migrate)
+    f.set_defaults(func=_guarded(run_migrate, lambda a: a.target))
     return s
 
 
 #: exit code of ``fleet scan`` when some files failed and others were stored (or already were)
 SCAN_SOME_FAILED = 3
+
+
+@contextlib.contextmanager
+def _no_new_files_on_failure(db):
+    """A command that fails leaves no new file: a SQLite database it created (and its journal files) is
+    removed again when the command raises; an existing one is left as it is."""
+    from vibkit.fleet.storage import is_server_url, resolve_db_path
+
+    spec = resolve_db_path(db)
+    path = None if is_server_url(spec) else os.path.abspath(spec)
+    new = (
+        []
+        if path is None
+        else [f for f in (path, path + "-wal", path + "-shm", path + "-journal") if not os.path.lexists(f)]
+    )
+    try:
+        yield
+    except BaseException:
+        for f in new:
+            with contextlib.suppress(OSError):
+                if os.path.isfile(f) and not os.path.islink(f):
+                    os.unlink(f)
+        raise
 
 
 def _fleet_db(a, *, create=True):
@@ -345,3 +370,11 @@ _RUN = {"add": run_add, "scan": run_scan, "status": run_status, "report": run_re
 def run(a):
     """Run the fleet subcommand ``a.fleet_command`` (each subparser also sets its own ``func``)."""
     return _RUN[a.fleet_command](a)
+
+
+def _guarded(func, db_of):
+    def run_guarded(a):
+        with _no_new_files_on_failure(db_of(a)):
+            return func(a)
+
+    return run_guarded

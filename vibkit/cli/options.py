@@ -23,9 +23,37 @@ def band(text):
         lo, hi = (float(v) for v in text.replace(",", ":").split(":"))
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected LOW:HIGH in Hz (e.g. 2.5:6), got {text!r}") from None
-    if not 0 < lo < hi:
-        raise argparse.ArgumentTypeError(f"expected 0 < LOW < HIGH, got {text!r}")
+    if not (math.isfinite(lo) and math.isfinite(hi) and 0 < lo < hi):
+        raise argparse.ArgumentTypeError(f"expected finite 0 < LOW < HIGH in Hz, got {text!r}")
     return (lo, hi)
+
+
+#: sample rates a recording may be given [Hz]: a chain's link pass (a few Hz) needs more than 1 Hz,
+#: no accelerometer logger writes more than 10 MHz
+SAMPLE_RATE_RANGE_HZ = (1.0, 1e7)
+
+
+def sample_rate(text):
+    """--sample-rate: a number of Hz within :data:`SAMPLE_RATE_RANGE_HZ` (1e308 would overflow every filter)."""
+    lo, hi = SAMPLE_RATE_RANGE_HZ
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a sample rate in Hz such as 200, got {text!r}") from None
+    if not (math.isfinite(v) and lo <= v <= hi):
+        raise argparse.ArgumentTypeError(f"expected a sample rate of {lo:g} Hz to {hi:g} Hz, got {text!r}")
+    return v
+
+
+def harmonics(text):
+    """--harmonics: a whole number of harmonics, 1 to 50."""
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number of harmonics such as 5, got {text!r}") from None
+    if not 1 <= v <= 50:
+        raise argparse.ArgumentTypeError(f"expected 1 to 50 harmonics, got {text!r}")
+    return v
 
 
 def limits(text):
@@ -202,7 +230,7 @@ def add_json(sp, help_=JSON_HELP):
 
 
 def add_sample_rate(sp):
-    sp.add_argument("--sample-rate", type=positive, help="sample rate for files without time [Hz]")
+    sp.add_argument("--sample-rate", type=sample_rate, help="sample rate for files without time [Hz]")
 
 
 def add_channel(
@@ -490,3 +518,30 @@ def escalator_profile(a):
         return load_profile(path)
     except SceneError as exc:
         raise CLIError(f"--escalator: {exc}") from None
+
+
+#: an exception's class name before its text (``OSError: ``, ``TypeError: Error: ``)
+_EXC_NAME = re.compile(r"\b(?:[A-Z][A-Za-z]*(?:Error|Exception)|Error): ")
+
+
+def plain_message(text: str, args) -> str:
+    """A message without Python's exception names, naming the flag the user gave that it is about.
+
+    The library says ``band 60-80 Hz``, ``units['ax']=...``, ``cannot decode as X``: when the user
+    gave that option, the message names its flag (``--band``, ``--units``, ``--encoding``, ``--channels``,
+    ``--sample-rate``).
+    """
+    text = _EXC_NAME.sub("", text)
+    text = text.replace("give band=(low, high) [Hz]", "give --band LOW:HIGH [Hz]")
+    given = {k: v for k, v in vars(args).items() if v not in (None, False)}
+    if "band" in given and "--band" not in text:
+        text = re.sub(r"\bband (?=[0-9])", "--band ", text, count=1)
+    if "units" in given and "--units" not in text:
+        text = re.sub(r"\bunits(?=[\[:])", "--units", text, count=1)
+    if "encoding" in given and "--encoding" not in text:
+        text = text.replace("cannot decode as ", "cannot decode as --encoding ", 1)
+    if "channels" in given and "--channels" not in text and "channel" in text:
+        text += f" (from --channels {given['channels']})"
+    if "sample_rate" in given and "--sample-rate" not in text and ("Nyquist" in text or "matrix" in text):
+        text += f" (from --sample-rate {given['sample_rate']:g})"
+    return text

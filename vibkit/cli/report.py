@@ -90,6 +90,10 @@ def _run(a, target):
     profile = _profile_of(a)
     text = a.speed_uncertainty
     sigma = None if text is None else text if text.strip().endswith("%") else speed_sigma(text, 1.0)
+    if a.date is not None:  # before the recording is read: the date validator every command shares
+        from vibkit.runtime.dates import parse_iso_date
+
+        parse_iso_date(a.date, "--date")
     rep = write_report(
         a.recording,
         target,

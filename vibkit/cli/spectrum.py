@@ -10,6 +10,7 @@ from .options import (
     add_recording,
     band,
     escalator_profile,
+    harmonics,
     read_recording,
 )
 from .output import in_file, msg, print_json, table
@@ -31,7 +32,7 @@ def add_parser(subparsers):
         type=band,
         help="search band of the link-pass LOW:HIGH [Hz] (default speed / 80-200 mm, or 2.5:6 without a speed)",
     )
-    s.add_argument("--harmonics", type=int, default=5, help="harmonics listed (default 5)")
+    s.add_argument("--harmonics", type=harmonics, default=5, help="harmonics listed (default 5)")
     add_speed_options(s, "chain speed (optional): m/s, or 49cm/s; default the file's; checks the pitch is plausible")
     add_limits(s)
     add_escalator(s)

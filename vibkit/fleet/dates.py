@@ -18,11 +18,14 @@ __all__ = ["parse_date"]
 _DMY = re.compile(r"([0-9]{1,2})[/.-]([0-9]{1,2})[/.-]([0-9]{4})(?:[ T](.*))?")
 
 
-def parse_date(text, *, what="date") -> _dt.datetime:
+def parse_date(text, *, what="date", ambiguous_ok=False) -> _dt.datetime:
     """A timezone-aware UTC datetime from ISO 8601 text (or day/month/year as loggers write it).
 
     A date without time is midnight; a time without zone is UTC.  Dates outside 1970-2100 or more
     than a day in the future are refused (:func:`vibkit.fleet.inputs.check_date`).
+
+    A day/month/year date whose day and month could be swapped (``05/11/2025``) is refused unless
+    ``ambiguous_ok`` (a logger's start time, whose convention is day/month): write ISO 8601.
 
     Raises
     ------
@@ -34,6 +37,19 @@ def parse_date(text, *, what="date") -> _dt.datetime:
         raise FleetError(f"{what} is empty; expected ISO 8601 such as 2026-11-23 or 2026-11-23T10:15:00Z")
     t = re.sub(r",\s*", " ", re.sub(r"(?<=[0-9]),(?=[0-9])", ".", s))  # decimal comma; "date, time"
     m = _DMY.fullmatch(t)
+    if (
+        m
+        and not ambiguous_ok
+        and int(m.group(1)) <= 12
+        and int(m.group(2)) <= 12
+        and m.group(1).lstrip("0") != m.group(2).lstrip("0")
+    ):
+        day, month = int(m.group(1)), int(m.group(2))
+        raise FleetError(
+            f"{what} {s!r} is ambiguous: day/month ({_dt.date(2000, month, day):%d %B}) or month/day "
+            f"({_dt.date(2000, day, month):%d %B})? Write it as ISO 8601 (year-month-day, e.g. "
+            f"{m.group(3)}-{month:02d}-{day:02d})"
+        )
     if m:
         t = f"{m.group(3)}-{int(m.group(2)):02d}-{int(m.group(1)):02d}" + (f"T{m.group(4)}" if m.group(4) else "")
     if re.match(r"^[0-9]{1,2}:[0-9]{2}", t):

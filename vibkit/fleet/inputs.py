@@ -20,6 +20,7 @@ from __future__ import annotations
 import datetime as _dt
 import math
 
+from ..runtime.dates import DATE_YEARS
 from .errors import FleetError
 
 __all__ = ["RANGES", "check_pitch", "check_speed", "check_speed_sigma", "check_date", "check_inputs"]
@@ -29,7 +30,7 @@ RANGES = {
     "nominal_pitch": (0.05, 0.3, "m"),
     "speed": (0.1, 2.0, "m/s"),
     "speed_sigma_fraction": (0.0, 0.2, "of the speed"),
-    "date_year": (1970, 2100, "UTC"),
+    "date_year": (*DATE_YEARS, "UTC"),
 }
 
 
@@ -75,16 +76,14 @@ def check_speed_sigma(value, speed, what="speed uncertainty") -> float:
 
 
 def check_date(d: _dt.datetime, what="date", text=None) -> _dt.datetime:
-    """A timezone-aware UTC datetime within 1970-2100 and not more than a day in the future."""
-    lo, hi, _ = RANGES["date_year"]
-    shown = repr(text) if text is not None else d.isoformat()
-    if d.tzinfo is None:
-        d = d.replace(tzinfo=_dt.timezone.utc)
-    if not lo <= d.year <= hi:
-        raise FleetError(f"{what} {shown} is outside {lo}-{hi}; expected the date of the measurement")
-    if d > _dt.datetime.now(_dt.timezone.utc) + _dt.timedelta(days=1):
-        raise FleetError(f"{what} {shown} lies in the future; expected the date of the measurement")
-    return d
+    """A timezone-aware UTC datetime within 1970-2100 and not more than a day in the future (the validator
+    every command shares: :func:`vibkit.runtime.dates.check_date`)."""
+    from ..runtime import dates
+
+    try:
+        return dates.check_date(d, what, text)
+    except ValueError as exc:
+        raise FleetError(str(exc)) from None
 
 
 def check_inputs(*, unit, speed, speed_sigma=0.0, nominal_pitch=None, date=None):

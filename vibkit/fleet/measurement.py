@@ -158,7 +158,7 @@ def analyse_recording(
                 "(--date, or the catalogue's date column) as ISO 8601, e.g. 2026-11-23"
             )
         try:
-            d = parse_date(start, what="the recording's start time")
+            d = parse_date(start, what="the recording's start time", ambiguous_ok=True)
         except FleetError as exc:
             raise FleetError(
                 f"{spath}: {exc}; give the measurement date (--date, or the catalogue's date column)"

@@ -17,7 +17,7 @@ import contextlib
 import re
 
 from .errors import FleetError
-from .schema import APPLICATION_ID, COLUMNS, SCHEMA_VERSION, measurement_ddl
+from .schema import APPLICATION_ID, COLUMNS, SCHEMA_VERSION, measurement_ddl, signature_problem
 from .store import Store
 
 __all__ = ["PostgresStore", "redact_url"]
@@ -112,6 +112,13 @@ class PostgresStore(Store):
                 f"{self.location}: table {_META} names application {meta.get('application')!r}, "
                 f"not {_APPLICATION!r}; refusing to write into it"
             )
+        have = con.execute(
+            "SELECT column_name FROM information_schema.columns WHERE table_schema = current_schema() "
+            "AND table_name = 'measurement'"
+        ).fetchall()
+        problem = signature_problem(r[0] for r in have)
+        if problem:  # the table's signature before anything is written
+            raise FleetError(f"{self.location}: {problem}")
         ver = int(meta.get("schema_version", "0"))
         if ver > SCHEMA_VERSION:
             raise FleetError(

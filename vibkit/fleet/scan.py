@@ -122,7 +122,9 @@ def date_from_name(name):
     return None
 
 
-def _candidate_files(directory, exclude):
+def _candidate_files(directory, exclude, skipped=None):
+    """Recordings under ``directory`` (relative paths); a FIFO, device or socket with a recording's name is
+    never opened (reading a FIFO waits forever): its path goes to ``skipped``."""
     out = []
     for root, dirs, files in os.walk(directory):
         dirs[:] = sorted(d for d in dirs if not d.startswith("."))
@@ -131,6 +133,10 @@ def _candidate_files(directory, exclude):
                 continue
             full = os.path.join(root, f)
             if os.path.abspath(full) in exclude:
+                continue
+            if not os.path.isfile(full):
+                if skipped is not None:
+                    skipped.append(full)
                 continue
             out.append(os.path.relpath(full, directory).replace(os.sep, "/"))
     return sorted(out)
@@ -180,7 +186,9 @@ def scan_folder(
             on_failure(name, why)
 
     exclude = {os.path.abspath(os.fspath(catalogue)), *getattr(db, "local_files", ())}
-    files = _candidate_files(d, exclude)
+    skipped = []
+    files = _candidate_files(d, exclude, skipped)
+    res.notes += [f"{p}: not a regular file (a FIFO, device or socket); skipped" for p in skipped]
     # a file the catalogue names exactly is a recording whatever its suffix
     named = [
         r.file

@@ -10,7 +10,9 @@ a view that gives every row as the upgrade would have stored it, the file left u
 
 from __future__ import annotations
 
+import datetime as _dt
 import json
+import math
 
 from .measurement import Measurement
 
@@ -70,6 +72,21 @@ QUALITY_FLAG_SQL, QUALITY_REASON_SQL = "vibkit_quality_flag", "vibkit_quality_re
 _V2_DEFAULTS = {"quality": "'ok'", "quality_reason": "''", "replaced": "0"}
 
 
+def signature_problem(have_columns):
+    """What keeps a ``measurement`` table with these columns from being vibkit's (None when it is, of any
+    schema version vibkit reads): checked before anything is written into a database."""
+    have = set(have_columns)
+    missing = [c for c in ("id",) + COLUMNS if c not in have and c not in _V2_DEFAULTS]
+    if not missing:
+        return None
+    shown = ", ".join(sorted(have)) or "none"
+    return (
+        f"not a vibkit fleet database: its table 'measurement' (columns {shown}) lacks "
+        f"{', '.join(missing[:4])}{' ...' if len(missing) > 4 else ''}; refusing to read or write it "
+        "(--db names another database)"
+    )
+
+
 def upgraded_view_sql(have_columns, name="temp.measurement", source="main.measurement"):
     """``CREATE VIEW`` of an older ``measurement`` table with the columns it has (``have_columns``), giving
     every row exactly as the upgrade to :data:`SCHEMA_VERSION` would store it (the same defaults, the quality
@@ -117,9 +134,37 @@ def measurement_values(m: Measurement) -> list:
     return out
 
 
+def _checked_row(d):
+    """Raise ValueError naming the column when a row holds what vibkit never writes (a value another tool
+    put there: text in a number column, NaN, a date that is not a date)."""
+    for c in COLUMNS:
+        v = d[c]
+        if _TYPES[c][0] == "REAL" and not (v is None and c == "snr_db"):
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+                raise ValueError(f"column {c} holds {v!r}, not a finite number")
+    if not -62135596800.0 < d["date_unix_s"] < 253402300800.0:  # years 1-9999, what a calendar date can be
+        raise ValueError(f"column date_unix_s holds {d['date_unix_s']!r}, not seconds since 1970 of a date")
+    try:
+        _dt.datetime.fromisoformat(str(d["date_utc"]).replace("Z", "+00:00"))
+    except ValueError:
+        raise ValueError(f"column date_utc holds {d['date_utc']!r}, not an ISO 8601 date") from None
+
+
 def row_to_measurement(row) -> Measurement:
-    """A :class:`Measurement` from a row ``(id, *COLUMNS)``."""
+    """A :class:`Measurement` from a row ``(id, *COLUMNS)``.
+
+    Raises
+    ------
+    ValueError
+        The row holds a value vibkit never writes (the message names the measurement and the column).
+    """
     d = dict(zip(("id",) + COLUMNS, row))
-    d["warnings"] = tuple(json.loads(d["warnings"]))
+    try:
+        _checked_row(d)
+        d["warnings"] = tuple(json.loads(d["warnings"]))
+    except (TypeError, ValueError) as exc:
+        raise ValueError(
+            f"measurement #{d['id']}: {exc}; the row was changed outside vibkit (correct or delete it)"
+        ) from None
     d["replaced"] = bool(d["replaced"])
     return Measurement(**d)

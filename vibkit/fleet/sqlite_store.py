@@ -24,6 +24,7 @@ from .schema import (
     V2_COLUMNS,
     column_def,
     measurement_ddl,
+    signature_problem,
     upgraded_view_sql,
 )
 from .store import Store
@@ -139,9 +140,13 @@ class SQLiteStore(Store):
         tables = [r[0] for r in con.execute("SELECT name FROM sqlite_master WHERE type = 'table'")]
         if app not in (0, APPLICATION_ID) or (app == 0 and tables and "measurement" not in tables):
             raise FleetError(
-                f"{self.path}: a SQLite database of another application (tables: "
+                f"{self.path}: not a vibkit fleet database: a SQLite database of another application (tables: "
                 f"{', '.join(tables) or 'none'}); refusing to write into it"
             )
+        if "measurement" in tables:  # the table's signature before anything is written (not even the journal mode)
+            problem = signature_problem(r[1] for r in con.execute("PRAGMA main.table_info(measurement)"))
+            if problem:
+                raise FleetError(f"{self.path}: {problem}")
         if ver > SCHEMA_VERSION:
             raise FleetError(f"{self.path}: written by a newer vibkit (schema {ver}, this one reads {SCHEMA_VERSION})")
         if self.readonly:

@@ -51,7 +51,12 @@ def resolve_db_path(db=None) -> str:
     FleetError
         A URL of another scheme, or an in-memory SQLite one.
     """
-    spec = db if db not in (None, "") else (os.environ.get(DB_ENV) or DEFAULT_DB_NAME)
+    if db is not None and not os.fspath(db).strip():
+        raise FleetError(
+            "--db / database is empty; expected a database file such as fleet.sqlite, sqlite:///PATH or "
+            "postgresql://user@host/dbname (leave --db out for $VIBKIT_FLEET_DB, else ./vibkit-fleet.sqlite)"
+        )
+    spec = db if db is not None else (os.environ.get(DB_ENV) or DEFAULT_DB_NAME)
     spec = os.fspath(spec)
     m = re.match(r"^([A-Za-z][A-Za-z0-9+.-]*)://", spec)
     if not m:

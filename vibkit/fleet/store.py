@@ -61,7 +61,10 @@ class Store(abc.ABC):
 
     def rows(self, where="", args=()):
         cur = self.execute(self.q(f"SELECT id, {', '.join(COLUMNS)} FROM measurement {where}"), args)
-        return [row_to_measurement(r) for r in cur.fetchall()]
+        try:
+            return [row_to_measurement(r) for r in cur.fetchall()]
+        except ValueError as exc:
+            raise FleetError(f"{self.location}: {exc}") from None
 
     def find(self, sha256):
         r = self.rows("WHERE sha256 = ?", (str(sha256),))

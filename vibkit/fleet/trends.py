@@ -33,6 +33,9 @@ __all__ = [
 ]
 
 SECONDS_PER_YEAR = 365.25 * 86400.0
+#: no rate and no forecast from usable visits spanning less than this [days]: within a month a chain's wear is far
+#: below what a measurement resolves, so a slope would be noise divided by a short time
+MIN_TREND_SPAN_DAYS = 30.0
 #: a rate below zero by more than this many of its sigmas is implausible (a chain does not shorten)
 IMPLAUSIBLE_RATE_SIGMA = 3.0
 
@@ -352,7 +355,9 @@ def unit_trend(unit, measurements, *, limits_percent=DEFAULT_LIMITS_PERCENT, cov
     scr = screen_unit(ms)
     used = scr.used
     fit = None
-    if len(used) >= 2:
+    span_days = (used[-1].date_unix_s - used[0].date_unix_s) / 86400.0 if len(used) >= 2 else 0.0
+    short = len(used) >= 2 and span_days < MIN_TREND_SPAN_DAYS
+    if len(used) >= 2 and not short:
         try:
             fit = fit_trend(
                 [m.date_unix_s for m in used],
@@ -363,6 +368,11 @@ def unit_trend(unit, measurements, *, limits_percent=DEFAULT_LIMITS_PERCENT, cov
             fit = None
     last = used[-1] if used else ms[-1]
     flags = []
+    if short:
+        flags.append(
+            f"visits span {span_days:.2g} days, less than {MIN_TREND_SPAN_DAYS:g} days: no rate and no forecast "
+            "(measure again later)"
+        )
     if fit is None:
         rate = "too few"
     elif fit.slope_percent_per_year + IMPLAUSIBLE_RATE_SIGMA * fit.slope_sigma_percent_per_year < 0:

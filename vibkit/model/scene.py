@@ -223,6 +223,7 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
     if analysis not in ANALYSES:
         raise SceneError(f"{src}: 'scene.analysis' must be one of {', '.join(ANALYSES)}, got {analysis!r}")
 
+    _escalator_stated(src, data)
     guide, chain, sprocket = _parameters(src, sec)
 
     raw_effects = data.get("effects", {})
@@ -246,6 +247,32 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
         outputs=outputs,
         source=source,
         text=text,
+    )
+
+
+#: the sections that describe the escalator: a scene states them (the study's values are never filled in)
+ESCALATOR_SECTIONS = ("guide", "chain", "sprocket")
+
+
+def _escalator_stated(src, data):
+    """Refuse a scene that leaves out part of the escalator, naming every missing section and key at once."""
+    missing_sections, missing_keys = [], []
+    for name in ESCALATOR_SECTIONS:
+        required = [f.name for f in SECTION_CLASSES[name].fields() if f.metadata["required"]]
+        if name not in data:
+            missing_sections.append(f"[{name}]")
+        else:
+            missing_keys += [f"'{name}.{k}'" for k in required if k not in data[name]]
+    if not (missing_sections or missing_keys):
+        return
+    parts = []
+    if missing_sections:
+        parts.append(f"missing section{'s' if len(missing_sections) > 1 else ''} {', '.join(missing_sections)}")
+    if missing_keys:
+        parts.append(f"missing value{'s' if len(missing_keys) > 1 else ''} {', '.join(missing_keys)}")
+    raise SceneError(
+        f"{src}: {'; '.join(parts)}: a scene states the escalator it describes (guide geometry, link pitch, "
+        "sprocket); copy them from a scene in sim/ and set your escalator's values"
     )
 
 

@@ -21,7 +21,7 @@ import math
 from collections.abc import Mapping
 
 from ..runtime.budget import DEFAULT_MAX_RESULT_BYTES, DEFAULT_MAX_WALL_TIME
-from .params import GRAVITY, reference_chain, reference_guide, reference_sprocket
+from .params import GRAVITY, reference_chain
 
 __all__ = [
     "ATOL_PER_RTOL",
@@ -59,7 +59,7 @@ def key(unit, doc, default=None, *, types=(float,), required=False, range=None, 
     return dataclasses.field(default=default, metadata=meta)
 
 
-_RG, _RC, _RS = reference_guide(), reference_chain(), reference_sprocket()
+_RC = reference_chain()
 
 
 class _Section:
@@ -83,14 +83,12 @@ class SceneSection(_Section):
 
 @dataclasses.dataclass(frozen=True)
 class GuideSection(_Section):
-    tensioner_length: float = key(
-        "m", "length Lt of each telescopic run of the tensioner, undeformed", _RG.tensioner_length
-    )
-    lower_landing: float = key("m", "length L1 of the horizontal lower landing", _RG.lower_landing)
-    upper_landing: float = key("m", "length L2 of the horizontal upper landing", _RG.upper_landing)
-    transition_radius: float = key("m", "radius r_t of the four transition arcs", _RG.transition_radius)
-    incline_angle_deg: float = key("deg", "angle of the incline, in (0, 90)", math.degrees(_RG.incline_angle))
-    incline_length: float = key("m", "length L of the straight incline", _RG.incline_length)
+    tensioner_length: float = key("m", "length Lt of each telescopic run of the tensioner, undeformed", required=True)
+    lower_landing: float = key("m", "length L1 of the horizontal lower landing", required=True)
+    upper_landing: float = key("m", "length L2 of the horizontal upper landing", required=True)
+    transition_radius: float = key("m", "radius r_t of the four transition arcs", required=True)
+    incline_angle_deg: float = key("deg", "angle of the incline, in (0, 90)", required=True)
+    incline_length: float = key("m", "length L of the straight incline", required=True)
     head_radius: float | str = key(
         "m",
         'radius of the heads, or "sprocket": where the rollers seat on the sprocket\'s teeth, p / (2 sin(pi/Z)) '
@@ -103,7 +101,7 @@ class GuideSection(_Section):
 
 @dataclasses.dataclass(frozen=True)
 class ChainSection(_Section):
-    link_pitch: float = key("m", "distance between consecutive roller centres", _RC.link_pitch)
+    link_pitch: float = key("m", "distance between consecutive roller centres", required=True)
     roller_radius: float = key("m", "roller radius r_d", _RC.roller_radius)
     roller_mass: float = key(
         "kg", "point mass per roller (a step's share, 1 / links_per_step, plus one pitch of chain)", _RC.roller_mass
@@ -148,12 +146,12 @@ class ChainSection(_Section):
 
 @dataclasses.dataclass(frozen=True)
 class SprocketSection(_Section):
-    teeth: int = key("", "number of teeth (>= 3)", _RS.teeth, types=(int,))
-    base_width: float = key("m", "tooth width at the root", _RS.base_width)
-    tip_width: float = key("m", "tooth width at the tip", _RS.tip_width)
-    tooth_height: float = key("m", "tooth height", _RS.tooth_height)
-    mass: float = key("kg", "sprocket mass", _RS.mass)
-    inertia: float = key("kg m^2", "sprocket moment of inertia", _RS.inertia)
+    teeth: int = key("", "number of teeth (>= 3)", types=(int,), required=True)
+    base_width: float = key("m", "tooth width at the root", required=True)
+    tip_width: float = key("m", "tooth width at the tip", required=True)
+    tooth_height: float = key("m", "tooth height", required=True)
+    mass: float = key("kg", "sprocket mass", required=True)
+    inertia: float = key("kg m^2", "sprocket moment of inertia", required=True)
     pitch: float = key(
         "m",
         "the chain pitch the teeth are cut for (a worn chain keeps its original sprocket); not set: the chain's "

@@ -157,8 +157,10 @@ def estimate_sweep(scene, runs: int, keep=(), duration=None) -> dict:
 
 def check_size(scene, runs: int, *, keep=(), duration=None, limit_bytes=None, source=""):
     """Refuse a sweep whose result would exceed the result budget, in one line naming size and option."""
-    from ..runtime.budget import BudgetError, _fmt_bytes, max_result_bytes
+    from ..runtime.budget import BudgetError, _fmt_bytes, check_run, max_result_bytes
 
+    if duration is not None:  # each run as simulate would refuse it (--duration 1e308: every run would fail)
+        check_run(scene, duration=duration)
     est = estimate_sweep(scene, runs, keep, duration)
     limit = max_result_bytes(scene, limit_bytes)
     est["limit_bytes"] = limit

@@ -361,6 +361,7 @@ def sweep(
     n = len(plan.points)
     try:
         if store is not None and store.complete:
+            store.check_intact()
             return _reopen(store, n)
         records = store.done_runs() if store is not None else {}
         reused = len(records)

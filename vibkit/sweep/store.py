@@ -64,7 +64,9 @@ class _Store:
                 raise SweepError(
                     f"{self.path}: exists and is not a vibkit sweep store; choose another output (nothing was changed)"
                 )
-            if existing != definition:
+            if existing == definition and force and self._state() == "complete" and self.damage():
+                shutil.rmtree(self.path)  # a damaged result, recomputed as asked
+            elif existing != definition:
                 if not force:
                     raise SweepError(
                         f"{self.path}: holds a different sweep ({_differences(existing, definition)}); "
@@ -141,6 +143,20 @@ class _Store:
     def _state(self):
         return (self._attrs() or {}).get("vibkit_sweep_state")
 
+    def damage(self) -> str | None:
+        """What is missing or corrupt in a complete store's result (None: intact)."""
+        return _damage(self.path, (self._attrs() or {}).get("vibkit_chunks"))
+
+    def check_intact(self):
+        """Refuse to read back a complete result whose chunks are missing or damaged (they would read as fill
+        values, or fail to decompress)."""
+        problem = self.damage()
+        if problem:
+            raise SweepError(
+                f"{self.path}: the stored sweep is damaged: {problem}; give --force (force=True) to compute it "
+                "again into this store, or choose another output"
+            )
+
     def done_runs(self, *, read_data=True) -> dict:
         """Run index -> record, for every run whose done flag is on disk (without the kept series if not
         ``read_data``)."""
@@ -159,8 +175,8 @@ class _Store:
                 attrs = dict(g.attrs)
             except Exception:  # noqa: BLE001 - a half-written run is redone
                 continue
-            if attrs.get("done") is not True:
-                continue
+            if attrs.get("done") is not True or _damage(d, attrs.get("chunks")):
+                continue  # a run with a chunk missing or damaged is computed again
             rec = _failed_record(
                 int(d.name[1:]), int(attrs["status"]), attrs.get("error", ""), _num(attrs.get("wall_time"))
             )
@@ -205,6 +221,7 @@ class _Store:
                             _array(g, f"coord_{c}", np.asarray(vals))
                 g.attrs.update(
                     {
+                        "chunks": json.dumps(_chunk_manifest(tmp)),
                         "index": rec["index"],
                         "status": rec["status"],
                         "error": rec["error"],
@@ -218,8 +235,8 @@ class _Store:
                         "done": True,
                     }
                 )
-                if final.exists() and not _done(final):
-                    shutil.rmtree(final, ignore_errors=True)  # half a run from an older vibkit: redone
+                if final.exists() and (not _done(final) or _run_damage(final)):
+                    shutil.rmtree(final, ignore_errors=True)  # half a run, or a damaged one: redone
                 try:
                     os.rename(tmp, final)
                 except OSError:
@@ -271,7 +288,9 @@ class _Store:
             ds.attrs["comment"] = "a complete vibkit sweep (xarray.open_zarr reads it)"
             self._clear_root()
             ds.to_zarr(str(self.path), mode="a", consolidated=False, **_zkw())
-            zarr.open_group(str(self.path), mode="r+", **_zkw()).attrs.update({"vibkit_sweep_state": "complete"})
+            zarr.open_group(str(self.path), mode="r+", **_zkw()).attrs.update(
+                {"vibkit_sweep_state": "complete", "vibkit_chunks": json.dumps(_chunk_manifest(self.path))}
+            )
             self.complete = True
             self._tidy()
         return True
@@ -321,6 +340,8 @@ def open_sweep(path):
     if probe._state() == "complete":
         import xarray as xr
 
+        probe.check_intact()
+
         return xr.open_zarr(str(path), chunks=None)
     try:
         plan = plan_sweep(
@@ -342,8 +363,61 @@ def open_sweep(path):
     return ds
 
 
+def _chunk_manifest(root: Path, *, skip_runs=True) -> dict:
+    """Relative path -> CRC-32 of every chunk file under ``root`` (metadata dot-files and, with ``skip_runs``, the
+    per-run groups left out): written beside the data, checked when they are read back."""
+    import zlib
+
+    out = {}
+    for dirpath, dirs, files in os.walk(root):
+        rel_dir = os.path.relpath(dirpath, root)
+        dirs[:] = sorted(
+            d for d in dirs if not d.startswith(".") and not (skip_runs and rel_dir == "." and d == "runs")
+        )
+        for f in sorted(files):
+            if f.startswith("."):
+                continue
+            with open(os.path.join(dirpath, f), "rb") as fh:
+                crc = 0
+                for block in iter(lambda: fh.read(1 << 20), b""):
+                    crc = zlib.crc32(block, crc)
+            out[os.path.relpath(os.path.join(dirpath, f), root).replace(os.sep, "/")] = crc
+    return out
+
+
+def _damage(root: Path, manifest) -> str | None:
+    """What is wrong with the chunks under ``root`` against ``manifest`` (None: all there and intact; a store
+    written before manifests were kept cannot be checked)."""
+    if not manifest:
+        return None
+    if isinstance(manifest, str):
+        manifest = json.loads(manifest)
+    now = _chunk_manifest(root)
+    missing = [k for k in manifest if k not in now]
+    changed = [k for k in manifest if k in now and now[k] != manifest[k]]
+    if not (missing or changed):
+        return None
+    parts = []
+    if missing:
+        parts.append(f"chunk(s) {', '.join(missing[:3])}{' ...' if len(missing) > 3 else ''} missing")
+    if changed:
+        parts.append(
+            f"chunk(s) {', '.join(changed[:3])}{' ...' if len(changed) > 3 else ''} overwritten or damaged "
+            "(their checksums differ from those written with them)"
+        )
+    return "; ".join(parts)
+
+
 def _array(g, name, data):
     return g.create_array(name, data=data) if hasattr(g, "create_array") else g.create_dataset(name, data=data)
+
+
+def _run_damage(group_dir):
+    try:
+        attrs = json.loads((group_dir / ".zattrs").read_text())
+    except (OSError, ValueError):
+        return "unreadable attributes"
+    return _damage(group_dir, attrs.get("chunks"))
 
 
 def _done(group_dir):

@@ -170,16 +170,15 @@ def measurement_date(rec, date=None):
         source = "the file's start time"
         if not d:
             return None, ""
+    if source == "given":  # the validator every command shares (ISO 8601, 1970-2100, not in the future)
+        from ...runtime.dates import check_date, parse_iso_date
+
+        d = check_date(d, "--date") if isinstance(d, _dt.datetime) else parse_iso_date(d, "--date")
     if not isinstance(d, _dt.datetime):
         text = str(d).strip().replace("Z", "+00:00")
         try:
             d = _dt.datetime.fromisoformat(text)
         except ValueError:
-            if source == "given":
-                raise ValueError(
-                    f"measurement date {date!r} is not an ISO 8601 date (e.g. 2026-11-23 or "
-                    "2026-11-23T10:15:00Z); --date"
-                ) from None
             return None, ""
     if d.tzinfo is None:
         d = d.replace(tzinfo=_dt.timezone.utc)

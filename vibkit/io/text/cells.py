@@ -25,6 +25,7 @@ _NUM = {
 _NOT_NUMBER_CHAR = {".": re.compile(r"[^0-9eE+\-.\n]"), ",": re.compile(r"[^0-9eE+\-,\n]")}
 _MAYBE_COMMENT = "#%/!; \t"
 _MISSING = frozenset({"", "nan", "-nan", "+nan", "na", "n/a", "#n/a", "null", "none"})
+_INFINITE = frozenset({"inf", "+inf", "-inf", "infinity", "+infinity", "-infinity"})
 _STAMP_ISO = re.compile(
     r"[0-9]{4}-[0-9]{2}-[0-9]{2}[T ][0-9]{2}:[0-9]{2}(?::[0-9]{2}(?:[.,][0-9]+)?)?(?:Z|[+-][0-9]{2}:?[0-9]{2})?"
 )
@@ -37,6 +38,8 @@ def _kind(cell: str, dec: str) -> str:
     """'num', 'missing', 'stamp' or 'text'."""
     if cell.lower() in _MISSING:
         return "missing"
+    if cell.lower() in _INFINITE:
+        return "num"
     if _NUM[dec].fullmatch(cell):
         return "num"
     if _STAMP_ISO.fullmatch(cell) or _STAMP_DMY.fullmatch(cell) or _STAMP_TOD.fullmatch(cell):
@@ -106,8 +109,10 @@ def _parse_numbers(cells, dec):
     low = s.str.lower()
     missing = low.isin(_MISSING).to_numpy()
     isnum = s.str.fullmatch(_NUM[dec].pattern).fillna(False).to_numpy(dtype=bool)
-    bad = np.flatnonzero(~missing & ~isnum)
+    infinite = low.isin(_INFINITE).to_numpy()  # 'inf', '-Infinity': reported among the infinities
+    bad = np.flatnonzero(~missing & ~isnum & ~infinite)
     vals = np.full(len(cells), np.nan)
+    vals[infinite] = np.where(low[infinite].str.startswith("-").to_numpy(dtype=bool), -np.inf, np.inf)
     if isnum.any():
         t = s[isnum]
         if dec == ",":

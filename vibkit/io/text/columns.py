@@ -117,10 +117,12 @@ def _build_channels(
         if bad.size:
             i = int(bad[0])
             raise RecordingError(path, int(rownums[i]), f"expected a number in column '{head}', found '{cells[i]}'")
-        if inf.size:
-            i = int(inf[0])
-            raise RecordingError(
-                path, int(rownums[i]), f"expected a finite number in column '{head}', found '{cells[i]}'"
+        if inf.size:  # an infinity is no measurement: missing like NaN (interpolated or cut as NaN is), and said so
+            vals = vals.copy()
+            vals[inf] = np.nan
+            history.append(
+                f"column '{head}': {inf.size} infinite value(s) (first on line {int(rownums[int(inf[0])])}) read "
+                "as missing, like NaN"
             )
         nmiss = int(np.count_nonzero(np.isnan(vals)))
         if nmiss == vals.size:
