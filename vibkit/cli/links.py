@@ -24,7 +24,8 @@ from .pitch import resolve_speed
 EPILOG = (
     "example:\n  vibkit links tensioner.nc --speed 0.5 --links 159 --scene sim/thesis-forward.toml\n"
     "exit status: 0 the links were scanned (flagged or not), 1 refused (fewer than two loops,\n"
-    "  no link pass, bad input), 2 usage error, 3 inconclusive (without a scene, a pattern over many links)"
+    "  no link pass, bad input), 2 usage error,\n"
+    "  3 inconclusive (without a scene, a pattern over many links)"
 )
 
 
