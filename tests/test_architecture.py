@@ -256,7 +256,7 @@ def test_the_slot_check_can_fail():
 # --- scene keys are read through the schema -------------------------------------------------------
 
 #: the modules that read the raw scene (its TOML tables) and fill in defaults
-SCHEMA_MODULES = {"vibkit.model.schema", "vibkit.model.scene", "vibkit.model.profile"}
+SCHEMA_MODULES = {"vibkit.model.schema", "vibkit.model.scene", "vibkit.model.scene_checks", "vibkit.model.profile"}
 #: modules that may parse scene TOML, and why
 RAW_TOML_ALLOWED = {
     "vibkit.sweep.plan": "writes varied copies of a scene's TOML text; each copy is validated when it is loaded",

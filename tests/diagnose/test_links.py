@@ -138,3 +138,13 @@ def test_the_report_has_a_links_page_with_the_flagged_link(recordings, tmp_path)
     assert problems["links"] == []
     assert f"link {link_number_of(40, passed, N)}:" in problems["texts"]
     assert rep.summary["flagged_links"] == [link_number_of(40, passed, N)]
+
+
+def test_without_a_scene_a_worn_link_gives_no_number(recordings, capsys):
+    """Without the scene's signature, each link's own cycle is tested: a worn link moves the tensioner over
+    the links that follow it, so many links deviate; no link number is given (inconclusive, exit 3)."""
+    path, _ = recordings[40]
+    rc = main(["links", str(path), "--speed", "0.5", "--links", str(N), "--json"])
+    d = json.loads(capsys.readouterr().out)
+    assert (rc, d["status"], d["flagged"]) == (3, "inconclusive", []), d["reason"]
+    assert "--scene or --escalator" in d["reason"]

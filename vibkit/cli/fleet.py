@@ -87,11 +87,6 @@ def add_parser(subparsers):
         help="worker processes of the local cluster (default: one per core; 0: analyse in this process)",
     )
     add_recording(f, positional=False, channel=False)  # for every file; the catalogue's channel column per file
-    add_escalator(
-        f,
-        "the escalator's profile (TOML) of every file the catalogue's escalator column does not name; "
-        "see docs/guide/escalator.md",
-    )
     f.set_defaults(func=_guarded(run_scan, lambda a: a.db))
 
     f = fleet_sub(

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 
 from .options import (
     _LENGTH_UNITS,
@@ -23,7 +24,8 @@ from .pitch import resolve_speed
 EPILOG = (
     "example:\n  vibkit links tensioner.nc --speed 0.5 --links 159 --scene sim/thesis-forward.toml\n"
     "exit status: 0 the links were scanned (flagged or not), 1 refused (fewer than two loops,\n"
-    "  no link pass, bad input), 2 usage error"
+    "  no link pass, bad input), 2 usage error,\n"
+    "  3 inconclusive (without a scene, a pattern over many links)"
 )
 
 
@@ -110,6 +112,23 @@ def add_parser(subparsers):
     return s
 
 
+def _profile_scene_file(profile):
+    """The profile's forward scene as a file (the signature is simulated from a scene file, and cached by its
+    path): written once per profile into the user's temporary folder."""
+    import hashlib
+    import tempfile
+    from pathlib import Path
+
+    text = profile.scene_text("forward")
+    digest = hashlib.sha256(text.encode()).hexdigest()[:16]
+    path = Path(tempfile.gettempdir()) / f"vibkit-links-{digest}.toml"
+    if not path.exists():
+        tmp = path.with_suffix(f".{os.getpid()}.tmp")
+        tmp.write_text(text, encoding="utf-8")
+        os.replace(tmp, path)
+    return str(path)
+
+
 def run(a):
     from vibkit.diagnose.links import TooFewLoops, find_worn_links
 
@@ -121,13 +140,16 @@ def run(a):
         raise CLIError(
             f"{a.recording}: give --links N, the chain's number of links (or --escalator FILE with chain.n_links)"
         )
+    scene = a.scene
+    if scene is None and profile is not None:
+        scene = _profile_scene_file(profile)
     try:
         res = find_worn_links(
             rec,
             speed=speed,
             n_links=n_links,
             channel=a.channel,
-            scene=a.scene,
+            scene=scene,
             marker_s=a.marker,
             false_alarm=a.false_alarm,
             band=a.band,
@@ -141,11 +163,13 @@ def run(a):
         return 1
     except ValueError as exc:
         raise in_file(a.recording, exc) from None
+    code = 3 if res.status == "inconclusive" else 0
     if a.json:
-        d = res.as_dict()
-        d["status"] = "ok"
-        print_json("links", d)
-        return 0
+        print_json("links", res.as_dict())
+        return code
+    if res.status == "inconclusive":
+        msg(f"vibkit links: {a.recording}: inconclusive: {res.reason}")
+        return code
     print(
         f"{a.recording}: channel {res.channel}, {res.loops} loops of {res.n_links} links at "
         f"{res.link_pass_hz:.4f} Hz link pass ({speed:g} m/s)"

@@ -48,7 +48,8 @@ def run(a):
     sp = resolve_speed(a, rec, required=False, profile=profile)
     speed, source = sp.value, ("--speed" if sp.source == "given" else sp.source or None)
     nominal, search, _ = from_profile(a, profile, sp, sigma_and_teeth=False) if speed else (None, None, None)
-    search = search or (None if speed else (2.5, 6.0))
+    if not speed:  # frequency only: the band given, else 2.5-6 Hz
+        search = a.band or (2.5, 6.0)
     try:
         res = estimate_channels(
             rec,

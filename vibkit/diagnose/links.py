@@ -46,6 +46,10 @@ SAMPLES_PER_CYCLE = 16
 #: excess pitch below which a link fitted by the signature is not flagged [m]: the simulated healthy chain
 #: of the study's escalator itself shows 0.05-0.15 mm at one link (loop after loop, whatever the noise)
 MIN_EXCESS_M = 0.2e-3
+#: without a scene, more links flagged than this is a pattern, not worn links: a worn link moves the tensioner
+#: over about half the sprocket's teeth of link passes, twice a loop (on the sprocket and on the lower head),
+#: so each link's own cycle test flags dozens of neighbours; no number is then given
+MAX_OWN_CYCLE_FLAGS = 3
 #: the sensors the model gives a signature for: sensor -> the simulation's output
 SENSORS = {"tensioner": "delta"}
 
@@ -88,6 +92,9 @@ class LinksResult:
     method: str
     marker_s: float | None = None
     notes: list = field(default_factory=list)
+    #: "ok" (the links were scanned), or "inconclusive" (deviations no link number can be given for)
+    status: str = "ok"
+    reason: str = ""
 
     def as_dict(self):
         return {
@@ -103,6 +110,8 @@ class LinksResult:
             "dof": self.dof,
             "method": self.method,
             "marker_s": self.marker_s,
+            "status": self.status,
+            "reason": self.reason,
             "flagged": self.flagged,
             "notes": self.notes,
         }
@@ -340,6 +349,18 @@ def find_worn_links(
             "without --scene each link's own cycle is tested: a worn link shows on the tensioner as a pattern "
             "over the links that follow it, so several neighbouring numbers may be flagged"
         )
+        if len(flagged) > MAX_OWN_CYCLE_FLAGS:
+            reason = (
+                f"{len(flagged)} of {n} links deviate beyond the threshold: a pattern over many links (a worn link "
+                "moves the tensioner over the links that follow it), not a link number; give the escalator's "
+                "scene (--scene or --escalator) so that the worn link's signature is fitted"
+            )
+            return _result(file, ch, sensor, speed, lmap, n, [], scan, excess, method, marker_s, notes,
+                           status="inconclusive", reason=reason)  # fmt: skip
+    return _result(file, ch, sensor, speed, lmap, n, flagged, scan, excess, method, marker_s, notes)
+
+
+def _result(file, ch, sensor, speed, lmap, n, flagged, scan, excess, method, marker_s, notes, **kw):
     return LinksResult(
         file=str(file),
         channel=ch,
@@ -357,6 +378,7 @@ def find_worn_links(
         method=method,
         marker_s=marker_s,
         notes=notes,
+        **kw,
     )
 
 

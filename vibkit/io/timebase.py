@@ -259,6 +259,8 @@ def quantum(values, *, tolerance=1e-3):
     if nz.size < 8 or nz.size > 0.95 * d.size:
         return None
     q = float(nz.min())
+    if not q > 1e-12 * float(nz.max()):  # a step twelve decades under the largest change is no resolution
+        return None
     k = nz / q
     if np.max(np.abs(k - np.round(k))) > tolerance or np.mean(np.round(k) == 1) < 0.5:
         return None

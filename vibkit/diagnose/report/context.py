@@ -284,7 +284,10 @@ def analyse(
         # with the step's roller motion: the ride figure is then the one `vibkit ride SCENE` gives
         result = simulate(with_ride_outputs(sc), duration=duration, progress=progress)
         if found:  # no comparison of a link pass the recording does not carry
-            comp = compare(rec, result, channel=ch, speed=speed, speed_sigma=speed_sigma)
+            try:
+                comp = compare(rec, result, channel=ch, speed=speed, speed_sigma=speed_sigma)
+            except ValueError as exc:  # e.g. a channel in a unit the simulation has no variable in
+                notes.append(f"no comparison with the simulation: {' '.join(str(exc).split())}")
     ride = _ride(rec, result if scene_is_unit(sc, profile) else None, sc, notes, segment, speed)
     if result is not None and not scene_is_unit(sc, profile):
         notes.append(

@@ -1,0 +1,89 @@
+"""Checks of a parsed scene that relate its values to each other or to the plausible ranges: passengers on
+the chain's steps, the ranges of the schema, a tooth that fits the chain it drives, start positions within
+reach of the guide. Called by :func:`vibkit.model.scene.parse_scene`; each error names the file and the key."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+from .schema import RANGES, SceneError
+
+
+def _validate_passenger_numbers(src, o, chain) -> None:
+    """Passengers' masses finite and positive, steps whole numbers on the chain (1 .. n_rollers // links_per_step)."""
+    if not o:
+        return
+    n_steps = chain.n_rollers // chain.links_per_step
+    for i, m in enumerate(o.mass):
+        if isinstance(m, bool) or not isinstance(m, (int, float)) or not math.isfinite(m) or m <= 0:
+            raise SceneError(f"{src}: 'effects.passengers.mass[{i}]' must be a finite positive mass [kg], got {m!r}")
+    for i, st in enumerate(o.step):
+        if isinstance(st, bool) or not isinstance(st, int) or not 1 <= st <= n_steps:
+            raise SceneError(
+                f"{src}: 'effects.passengers.step[{i}]' must be a step number 1..{n_steps} "
+                f"(the chain has {chain.n_rollers} rollers, {chain.links_per_step} per step), got {st!r}"
+            )
+
+
+def _check_ranges(src, sec, effects) -> None:
+    values = {}
+    for name, opts in effects.items():
+        for f in dataclasses.fields(opts):
+            values[f"effects.{name}.{f.name}"] = getattr(opts, f.name)
+    for name in ("solver", "motion", "run", "chain"):
+        for key, v in sec[name].items():
+            values[f"{name}.{key}"] = v
+    for key, (lo, hi, unit) in RANGES.items():
+        v = values.get(key)
+        # a default that means "none" (torque_limit = inf) is not a number a typo can make absurd
+        if isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and not lo <= v <= hi:
+            raise SceneError(f"{src}: '{key}' = {v!r} is outside the plausible range [{lo:g}, {hi:g}] {unit}".rstrip())
+
+
+def _check_sprocket_geometry(src, given, sprocket, chain) -> None:
+    """The tooth must fit the chain it drives: shorter than a link, narrower than a link, tip <= base."""
+    pitch = sprocket.cut_pitch(chain.link_pitch)
+    r = sprocket.pitch_radius(pitch)
+    if sprocket.tooth_height >= min(pitch, r):
+        raise SceneError(
+            f"{src}: 'sprocket.tooth_height' = {sprocket.tooth_height:g} m is not plausible for a "
+            f"sprocket of pitch radius {r:.4g} m driving links of {pitch:g} m (expected less than "
+            f"{min(pitch, r):.4g} m)"
+        )
+    if sprocket.base_width >= pitch:
+        raise SceneError(
+            f"{src}: 'sprocket.base_width' = {sprocket.base_width:g} m must be less than the link "
+            f"pitch {pitch:g} m (a tooth sits between two rollers)"
+        )
+    if sprocket.tip_width > sprocket.base_width:
+        raise SceneError(
+            f"{src}: 'sprocket.tip_width' = {sprocket.tip_width:g} m must not exceed "
+            f"'sprocket.base_width' = {sprocket.base_width:g} m (a trapezoidal tooth)"
+        )
+
+
+#: starting positions beyond this many guide perimeters are refused (kinematics) [-]
+MAX_START_LOOPS = 100
+
+
+def _reduce_start(src, sec, analysis, guide) -> None:
+    """Bring a start position to within one loop of the guide (the same configuration, full accuracy).
+
+    ``run.start`` and ``motion.start`` are reduced modulo the guide's perimeter; a kinematic sweep's
+    ``start``/``stop`` (its output coordinate) must lie within :data:`MAX_START_LOOPS` perimeters.
+    """
+    perimeter = guide.perimeter
+    for name in ("run", "motion"):
+        if "start" in sec[name]:
+            sec[name]["start"] = math.fmod(sec[name]["start"], perimeter)
+    if analysis == "kinematics":
+        bound = MAX_START_LOOPS * perimeter
+        for key in ("start", "stop"):
+            v = sec["kinematics"].get(key)
+            if v is not None and abs(v) > bound:
+                raise SceneError(
+                    f"{src}: 'kinematics.{key}' = {v:g} m is more than {MAX_START_LOOPS} loops of "
+                    f"the guide ({bound:.6g} m): positions that far lose accuracy; give the advance "
+                    f"within one loop (perimeter {perimeter:.6g} m)"
+                )
