@@ -484,6 +484,23 @@ def test_catalogue_optional_columns_and_semicolons(tmp_path):
     assert r.date == "2025-01-01T00:00:00Z"
 
 
+def test_catalogue_takes_unit_speed_and_pitch_from_an_escalator_profile(tmp_path):
+    """An escalator column names the unit's profile: the empty cells (and absent columns) are the profile's;
+    a cell given wins; the profile's stated speed uncertainty, else the standard's tolerance (2.9 %)."""
+    profile = (ROOT / "data" / "fleet-example" / "escalators" / "E07.toml").read_text()
+    (tmp_path / "E07.toml").write_text(profile)
+    (tmp_path / "rated.toml").write_text(profile.replace("speed_uncertainty", "# speed_uncertainty"))
+    cat = tmp_path / "units.csv"
+    cat.write_text("file,date,escalator,speed_m_s\na.csv,,E07.toml,\nb.csv,,E07.toml,0.49\nc.csv,,rated.toml,\n")
+    a, b, c = read_catalogue(cat)
+    assert (a.unit, a.speed_m_s, a.speed_sigma_m_s, a.nominal_pitch_m) == ("E07", 0.5, pytest.approx(0.0005), 0.13333)
+    assert b.speed_m_s == 0.49
+    assert c.speed_sigma_m_s == pytest.approx(0.05 / math.sqrt(3) * 0.5)
+    cat.write_text("file,date,escalator\na.csv,,missing.toml\n")
+    with pytest.raises(FleetError, match="line 2: column escalator: .*missing.toml"):
+        read_catalogue(cat)
+
+
 def test_database_location_and_refusals(tmp_path, monkeypatch, capsys):
     monkeypatch.chdir(tmp_path)
     monkeypatch.delenv("VIBKIT_FLEET_DB", raising=False)

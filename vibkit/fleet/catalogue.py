@@ -19,6 +19,10 @@ column                    required  meaning
                                     line of the catalogue or from the database
 ``speed_sigma_m_s``       no        standard deviation of the speed [m/s] (default 0)
 ``channel``               no        channel to analyse (default: the first)
+``escalator``             no        the unit's escalator profile (TOML, path relative to the
+                                    catalogue): an empty ``unit``, ``speed_m_s``,
+                                    ``speed_sigma_m_s`` or ``nominal_pitch_m`` cell (or column) is
+                                    the profile's (:mod:`vibkit.model.profile`)
 ========================  ========  ============================================================
 """
 
@@ -39,7 +43,9 @@ __all__ = ["CATALOGUE_COLUMNS", "CatalogueRow", "read_catalogue"]
 
 #: required and optional catalogue columns
 CATALOGUE_COLUMNS = ("file", "unit", "speed_m_s", "date", "nominal_pitch_m")
-CATALOGUE_OPTIONAL = ("speed_sigma_m_s", "channel")
+CATALOGUE_OPTIONAL = ("speed_sigma_m_s", "channel", "escalator")
+#: columns a profile (the escalator column) can stand in for
+FROM_PROFILE = ("unit", "speed_m_s", "nominal_pitch_m")
 
 
 @dataclass(frozen=True)
@@ -67,6 +73,28 @@ def _number(text, path, line, col, *, lo, hi, unit, hint=""):
         raise FleetError(f"{path}, line {line}: column {col}: expected a number [{unit}], got {text!r}") from None
     if not (math.isfinite(v) and lo <= v <= hi) or (lo == 0 and v == 0 and col != "speed_sigma_m_s"):
         raise FleetError(f"{path}, line {line}: column {col}: {text!r} is outside {lo:g}-{hi:g} {unit}{hint}")
+    return v
+
+
+def _with_profile(v, spath, line):
+    """The row's cells, the empty ones (unit, speed, its sigma, nominal pitch) filled from its profile."""
+    from ..model.profile import load_profile
+    from ..model.schema import SceneError
+
+    where = os.path.join(os.path.dirname(os.path.abspath(spath)), v["escalator"])
+    try:
+        prof = load_profile(where)
+    except (SceneError, OSError) as exc:
+        raise FleetError(f"{spath}, line {line}: column escalator: {' '.join(str(exc).split())}") from None
+    v = dict(v)
+    if not v.get("unit"):
+        v["unit"] = prof.unit
+    if not v.get("speed_m_s"):
+        v["speed_m_s"] = repr(float(prof.speed))
+        if not v.get("speed_sigma_m_s"):  # the profile's stated sigma, else the standard's tolerance
+            v["speed_sigma_m_s"] = repr(float(prof.speed_sigma[0]))
+    if not v.get("nominal_pitch_m"):
+        v["nominal_pitch_m"] = repr(float(prof.nominal_pitch))
     return v
 
 
@@ -101,7 +129,7 @@ def read_catalogue(path):
     delim = ";" if head.count(";") > head.count(",") else ","
     cells = lambda s: next(csv.reader(io.StringIO(s), delimiter=delim, skipinitialspace=True))  # noqa: E731
     header = [c.strip().lower() for c in cells(head)]
-    missing = [c for c in CATALOGUE_COLUMNS if c not in header]
+    missing = [c for c in CATALOGUE_COLUMNS if c not in header and not ("escalator" in header and c in FROM_PROFILE)]
     if missing:
         raise FleetError(
             f"{spath}, line {head_line}: missing column(s) {', '.join(missing)}; a catalogue has the "
@@ -124,8 +152,10 @@ def read_catalogue(path):
                 f"({', '.join(header)}); a missing value is an empty cell between commas"
             )
         v = dict(zip(header, c))
+        if v.get("escalator"):
+            v = _with_profile(v, spath, n)
         for col in ("file", "unit", "speed_m_s"):
-            if not v[col]:
+            if not v.get(col):
                 raise FleetError(f"{spath}, line {n}: column {col} is empty")
         if os.path.isabs(v["file"]) or ".." in v["file"].replace("\\", "/").split("/"):
             raise FleetError(f"{spath}, line {n}: file {v['file']!r} must be relative to the scanned folder")
@@ -147,7 +177,7 @@ def read_catalogue(path):
             except FleetError as exc:
                 raise FleetError(f"{spath}, line {n}: {exc}") from None
         nom = None
-        if v["nominal_pitch_m"]:
+        if v.get("nominal_pitch_m"):
             nom = _number(
                 v["nominal_pitch_m"],
                 spath,
