@@ -81,8 +81,9 @@ def measurement_quality(elongation_percent, sigma_percent, *, limits_percent=DEF
             "the nominal pitch"
         )
     word = _decision_word(decision)
+    why = getattr(decision, "reason", None) or decision  # a Decision's reason, not its repr
     if word == "implausible":
-        return "implausible", f"the pitch analysis calls it implausible ({decision})"
+        return "implausible", f"the pitch analysis calls it implausible ({why})"
     need = min(float(x) for x in limits_percent) / 3.0
     if not s <= need:
         return "inconclusive", (
@@ -90,5 +91,5 @@ def measurement_quality(elongation_percent, sigma_percent, *, limits_percent=DEF
             f"({need:.2f} %): record longer or closer to the chain"
         )
     if word == "inconclusive":
-        return "inconclusive", f"the pitch analysis calls it inconclusive ({decision})"
+        return "inconclusive", f"the pitch analysis calls it inconclusive ({why})"
     return "ok", ""
