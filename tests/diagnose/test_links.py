@@ -22,12 +22,13 @@ SPEED = 0.5
 FS = 200.0
 
 
-def _record(scene, worn, rng):
-    """Three loops after one loop and 5 s of settling, with noise; and the links passed before it."""
+def _record(scene, worn, rng, excess=1e-3):
+    """Three loops after one loop and 5 s of settling, with noise; the links passed before it; and the
+    tensioner's displacement without noise."""
     pitch = scene.chain.link_pitch
     settle = N * pitch / SPEED + 5.0
     duration = settle + (3 * N + 3) * pitch / SPEED
-    chain = scene.chain if worn is None else dataclasses.replace(scene.chain, worn_links=((worn, pitch + 1e-3),))
+    chain = scene.chain if worn is None else dataclasses.replace(scene.chain, worn_links=((worn, pitch + excess),))
     sc = dataclasses.replace(
         scene,
         chain=chain,
@@ -45,7 +46,7 @@ def _record(scene, worn, rng):
         },
         coords={"time": ("time", t[keep] - t[keep][0], {"units": "s"})},
     )
-    return rec, passed
+    return rec, passed, ds.delta.values[keep]
 
 
 @pytest.fixture(scope="module")
@@ -55,10 +56,12 @@ def recordings(tmp_path_factory):
     out = {}
     folder = tmp_path_factory.mktemp("links")
     for worn in (None, 40, 70):
-        rec, passed = _record(scene, worn, rng)
+        rec, passed, clean = _record(scene, worn, rng)
         path = folder / f"worn-{worn}.nc"
         rec.to_netcdf(path)
         out[worn] = (path, passed)
+        if worn is None:
+            out["clean"] = (rec.time.values, clean)
     return out
 
 
@@ -148,3 +151,35 @@ def test_without_a_scene_a_worn_link_gives_no_number(recordings, capsys):
     d = json.loads(capsys.readouterr().out)
     assert (rc, d["status"], d["flagged"]) == (3, "inconclusive", []), d["reason"]
     assert "--scene or --escalator" in d["reason"]
+
+
+def _tensioner(t, x):
+    return xr.Dataset({"delta": ("time", x, {"units": "m"})}, coords={"time": t})
+
+
+def test_the_healthy_chain_has_no_special_link(recordings):
+    """The simulated healthy chain fits no excess at any link: without noise at most 0.003 mm (it reads
+    0.0004 mm), and with a slow 1 % speed wander at most 0.02 mm (it reads 0.009 mm; a phase tracked at
+    f_lp / 100 reads 0.039 mm there). Nothing is flagged even without a minimum excess."""
+    t, x = recordings["clean"]
+    steady = find_worn_links(_tensioner(t, x), speed=SPEED, n_links=N, scene=SCENE, min_excess=0.0)
+    assert steady.flagged == []
+    assert np.max(np.abs(steady.excess_mm)) < 0.003
+    # the chain's own time runs at 1 + 0.01 cos(2 pi t / 135 s + 2.66): the recording at t is the run at tau(t)
+    period, phase = 135.0, 2.66
+    tr = t[t < t[-1] - 0.01 * period / np.pi]
+    tau = tr + 0.01 * period / (2 * np.pi) * (np.sin(2 * np.pi * tr / period + phase) - np.sin(phase))
+    wander = find_worn_links(_tensioner(tr, np.interp(tau, t, x)), speed=SPEED, n_links=N, scene=SCENE, min_excess=0.0)
+    assert wander.flagged == []
+    assert wander.loops == 3
+    assert np.max(np.abs(wander.excess_mm)) < 0.02
+
+
+def test_a_link_one_tenth_of_a_millimetre_long_is_flagged_by_its_number():
+    """With the default minimum excess (0.05 mm), a link 0.1 mm long is found alone, by its number, from
+    three loops with 1 um of noise; its excess reads 0.1 mm within 0.03 mm."""
+    scene = load_scene(SCENE)
+    rec, passed, _ = _record(scene, 40, np.random.default_rng(40), excess=0.1e-3)
+    res = find_worn_links(rec, speed=SPEED, n_links=N, scene=SCENE)
+    assert [f["link"] for f in res.flagged] == [link_number_of(40, passed, N)]
+    assert abs(res.flagged[0]["excess_pitch_mm"] - 0.1) < 0.03

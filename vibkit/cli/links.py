@@ -104,8 +104,7 @@ def add_parser(subparsers):
     s.add_argument(
         "--min-excess",
         type=excess_length,
-        default=0.2e-3,
-        help="with --scene: flag a link only when its excess pitch is at least this: m, or 0.2mm (default 0.2 mm)",
+        help="with --scene: flag a link only when its excess pitch is at least this: m, or 0.05mm (default 0.05 mm)",
     )
     s.add_argument("--band", type=band, help="link-pass search band LOW:HIGH [Hz] (default speed / 200-80 mm)")
     s.set_defaults(func=run)
@@ -153,8 +152,8 @@ def run(a):
             marker_s=a.marker,
             false_alarm=a.false_alarm,
             band=a.band,
-            min_excess=a.min_excess,
             file=a.recording,
+            **({} if a.min_excess is None else {"min_excess": a.min_excess}),
         )
     except TooFewLoops as exc:
         if a.json:
