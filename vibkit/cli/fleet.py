@@ -35,7 +35,8 @@ EPILOG = (
     "exit codes: 0 done; 1 error; 3 scan: some files failed (others were stored)\n"
     "catalogue columns: file (name or glob), unit, speed_m_s, date (ISO 8601; empty: an ISO date\n"
     "  in the file name, else the recording's start time), nominal_pitch_m (empty: the unit's),\n"
-    "  optional speed_sigma_m_s, channel"
+    "  optional speed_sigma_m_s, channel, escalator, n_links (the links are scanned), marker_s\n"
+    "  (when a marked link passed the sensor: its numbers follow the same links across visits)"
 )
 
 
