@@ -331,3 +331,72 @@ def test_scan_with_a_marked_link_follows_it_across_two_visits(tmp_path, capsys):
         h = fdb.links_history("E30")
     assert h.comparable and [(x.link, x.verdict) for x in h.links] == [(12, "flagged again")]  # a level: no pitch
     assert os.path.exists(db)
+
+
+PROFILE_90 = """[escalator]
+unit = "E90"
+[drive]
+speed = 0.5
+speed_uncertainty = 0.0005
+teeth = 28
+[chain]
+nominal_pitch = 0.13333
+n_links = 90
+[sensor]
+kind = "tensioner"
+"""
+
+
+def _simulated_visit(scene, path, excess, seed):
+    """2.3 loops of the tensioner [m, 1 um noise] of a 90-link escalator whose link 20 is ``excess`` [m] long, after
+    one loop and 5 s of settling: every visit starts from the scene's start, so the same link is at the sensor at
+    the recording's start (the marker at 0 s marks it).  Returns the number that link has from there."""
+    import dataclasses
+
+    import numpy as np
+    import xarray as xr
+
+    import vibkit
+    from vibkit.diagnose.links import link_number_of
+
+    pitch, n = scene.chain.link_pitch, scene.chain.n_rollers
+    settle = n * pitch / 0.5 + 5.0
+    worn = dataclasses.replace(scene.chain, worn_links=((20, pitch + excess),))
+    sc = dataclasses.replace(scene, chain=worn, outputs=dict(scene.outputs, variables=("delta", "sprocket_angle")))
+    ds = vibkit.simulate(sc.with_solver(closure="exact"), duration=settle + (2.3 * n + 3) * pitch / 0.5, progress=False)
+    t = ds.time.values
+    keep = t >= settle
+    x = ds.delta.values[keep] + np.random.default_rng(seed).normal(0, 1e-6, keep.sum())
+    xr.Dataset(
+        {"delta": ("time", x, {"units": "m"})}, coords={"time": ("time", t[keep] - t[keep][0], {"units": "s"})}
+    ).to_netcdf(path)
+    theta = ds.sprocket_angle.values
+    return link_number_of(20, scene.sprocket.teeth * abs(float(theta[keep][0] - theta[0])) / (2 * np.pi), n)
+
+
+@pytest.mark.slow
+def test_scan_of_simulated_visits_finds_the_marked_link_worse(tmp_path, capsys):
+    """End to end on the model (about 10 s of CPU): a 90-link escalator's profile (tensioner), two visits whose link
+    20 is 1 mm, then 2 mm long; the scan fits the profile scene's signature (simulated once for both files) and
+    fleet status reports the marked link, by its number, worse."""
+    from vibkit.model.profile import parse_profile
+
+    (tmp_path / "E90").mkdir()
+    (tmp_path / "E90.toml").write_text(PROFILE_90)
+    scene = parse_profile(PROFILE_90, "E90.toml").scene("forward")
+    number = _simulated_visit(scene, tmp_path / "E90/2025-03-01.nc", 1.0e-3, 1)
+    assert _simulated_visit(scene, tmp_path / "E90/2026-03-01.nc", 2.0e-3, 2) == number
+    cat = tmp_path / "units.csv"
+    cat.write_text("file,date,escalator,marker_s\nE90/*.nc,,E90.toml,0\n")
+    db = tmp_path / "f.sqlite"
+    assert main(["fleet", "scan", str(tmp_path), "--catalogue", str(cat), "--workers", "0", "--db", str(db)]) == 0
+    capsys.readouterr()
+    assert main(["fleet", "status", "--db", str(db), "--unit", "E90", "--json"]) == 0
+    (u,) = json.loads(capsys.readouterr().out)["units"]
+    assert [s["status"] for s in u["link_scans"]] == ["ok", "ok"]
+    assert all(s["method"].startswith("worn-link signature") for s in u["link_scans"])
+    (link,) = u["links"]
+    assert link["link"] == number and link["verdict"] == "worse"
+    got = [v["excess_pitch_m"] for v in link["visits"]]
+    # the fit gives 1.05 mm for the 1 mm link and 1.69 mm for the 2 mm one (each +- 0.02-0.03 mm)
+    assert got[0] == pytest.approx(1.0e-3, abs=0.1e-3) and got[1] - got[0] > 0.4e-3
