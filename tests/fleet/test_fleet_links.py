@@ -252,12 +252,23 @@ def test_without_markers_numbers_are_not_matched(tmp_path):
         h = db.links_history("E07")
     assert not h.comparable and "cannot be matched" in h.statement and "marker_s" in h.statement
     assert [(x.link, x.verdict) for x in h.links] == [(12, "unmatched")] and len(h.links[0].visits) == 1
+    assert h.links[0].detail.startswith("+0.90 +- 0.05 mm; counted from the link at the sensor")
     # a marker on the later visit only: still nothing to compare with
     q = _two_visits(tmp_path / "g.sqlite", [(12, 0.4, 0.05)], [(12, 0.9, 0.05)], markers=(None, 2.0))
     with FleetDB(q, readonly=True) as db:
         h = db.links_history("E07")
     assert not h.comparable and "no earlier scan of unit E07 does" in h.statement
     assert [x.verdict for x in h.links] == ["flagged"]
+
+
+def test_a_later_visit_without_a_scan_is_named_and_not_read_as_clean(tmp_path):
+    p = _two_visits(tmp_path / "f.sqlite", [(12, 0.4, 0.05)], [(12, 0.9, 0.05)])
+    with FleetDB(p) as db:
+        db.insert(fake(3, "E07", 2.0, 1.4), LinkScan("too few loops", reason="0.23 loops", n_links=159))
+        h = db.links_history("E07")
+    assert h.comparable and [x.verdict for x in h.links] == ["worse"]  # the two scanned visits
+    assert "the latest visit, 2025-01-14, has no link scan: too few loops: 0.23 loops" in h.statement
+    assert [s.status for _, s in h.visits] == ["ok", "ok", "too few loops"]
 
 
 def test_status_json_and_text_give_the_links(tmp_path, capsys):

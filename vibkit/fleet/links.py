@@ -315,6 +315,13 @@ def _mm(v):
     return "-" if v is None else f"{1e3 * v:+.2f} mm"
 
 
+def _flag_words(f):
+    if f.excess_pitch_m is None:
+        return f"a deviating {f.feature or 'cycle'} (no excess pitch)"
+    sigma = "" if f.sigma_m is None else f" +- {1e3 * f.sigma_m:.2f}"
+    return f"{1e3 * f.excess_pitch_m:+.2f}{sigma} mm"
+
+
 def _compare(now, before, k):
     """Verdict and its words for a link flagged ``now`` against its visit ``before`` (LinkVisits)."""
     if not before.flagged:
@@ -355,6 +362,16 @@ def links_history(db, unit, *, coverage_sigma=2.0) -> UnitLinks:
     ms = db.measurements(unit)
     scans = db.link_scans(unit)
     visits = tuple((m, scans.get(m.id) or LinkScan.not_run(BEFORE_LINK_SCANS, measurement_id=m.id)) for m in ms)
+    out = _history(visits, str(unit), k)
+    done = [m for m, s in visits if s.scanned]
+    if done and visits[-1][0].id != done[-1].id:  # the latest visit was not scanned: say so
+        m, s = visits[-1]
+        note = f" (the latest visit, {m.date_utc[:10]}, has no link scan: {s.status}: {s.reason})"
+        out = UnitLinks(out.unit, out.visits, out.comparable, out.statement + note, out.links, k)
+    return out
+
+
+def _history(visits, unit, k):
     done = [(m, s) for m, s in visits if s.scanned]
     if not done:
         why = visits[-1][1].reason if visits else "no measurement"
@@ -367,7 +384,7 @@ def links_history(db, unit, *, coverage_sigma=2.0) -> UnitLinks:
             LinkHistory(
                 f.link,
                 "unmatched",
-                "numbered from the link at the sensor at the start",
+                f"{_flag_words(f)}; counted from the link at the sensor at the start",
                 (_visit(m_now, s_now, f.link),),
             )
             for f in s_now.flagged
@@ -382,7 +399,10 @@ def links_history(db, unit, *, coverage_sigma=2.0) -> UnitLinks:
     if not earlier:
         links = tuple(
             LinkHistory(
-                f.link, "flagged", "no earlier scan counts from the marked link", (_visit(m_now, s_now, f.link),)
+                f.link,
+                "flagged",
+                f"{_flag_words(f)}; no earlier scan counts from the marked link",
+                (_visit(m_now, s_now, f.link),),
             )
             for f in s_now.flagged
         )
