@@ -46,7 +46,16 @@ CHAIN = {
     "contact, no load, three worn links": {"worn_links": WORN},
     "contact, no load, three worn links, with check": {"worn_links": WORN},
     "contact, no load, 3 % elongated chain": {"elongation_percent": 3.0},
+    "contact, no load, rollers of their own mass and radius": {
+        "roller_mass_by_roller": [[3, 9.5], [50, 12.0], [120, 6.0]],
+        "roller_radius_by_roller": [[12, 0.033], [90, 0.034]],
+    },
+    "contact, no load, rollers of their own mass and radius, exact closure": {
+        "roller_mass_by_roller": [[3, 9.5], [50, 12.0], [120, 6.0]],
+        "roller_radius_by_roller": [[12, 0.033], [90, 0.034]],
+    },
 }
+SOLVER["contact, no load, rollers of their own mass and radius, exact closure"] = {"closure": "exact"}
 SOLVER["contact, no load, three worn links, with check"] = {"check": True}
 
 CASES = {
@@ -115,6 +124,16 @@ CASES = {
         NO_LOAD,
         NO_LOAD_OUT,
         "every link 3 % longer on the original sprocket (delta -0.229 m: the table's nodes 1 mm apart)",
+    ),
+    "contact, no load, rollers of their own mass and radius": (
+        NO_LOAD,
+        NO_LOAD_OUT,
+        "three rollers of 6-12 kg, two of 33-34 mm radius: the table, summed roller by roller",
+    ),
+    "contact, no load, rollers of their own mass and radius, exact closure": (
+        NO_LOAD,
+        NO_LOAD_OUT,
+        "the same, exact closure",
     ),
 }
 

@@ -604,32 +604,52 @@ class Chain:
         bps = self.guide.breakpoints() if breakpoints is None else np.asarray(breakpoints, dtype=float)
         uniform = bool(np.all(self.pitches == self.pitches[0]))
         out = []
+        rollers, places, starts = [], [], []  # with unequal links: each pair refined by Newton's method
         for b in bps:
             vals = np.mod(self.configure(float(b)).s0, p0)
-            if not uniform:
+            if uniform:
+                out.append(vals)
+            else:
                 # with roller 1 at vals[j] it is roller (n - j) mod n that sits on b
-                vals = np.array([self._crossing(int((n - j) % n), float(b), float(v)) for j, v in enumerate(vals)])
-            out.append(vals)
+                rollers.append((n - np.arange(n)) % n)
+                places.append(np.full(n, float(b)))
+                starts.append(vals)
         for k, place in rollers_at:
             vals = np.mod(self.configure(float(place)).s0, p0)
-            out.append([self._crossing(int(k), float(place), float(vals[(n - int(k)) % n]))])
+            rollers.append([int(k)])
+            places.append([float(place)])
+            starts.append([float(vals[(n - int(k)) % n])])
+        if rollers:
+            out.append(self._crossings(np.concatenate(rollers), np.concatenate(places), np.concatenate(starts)))
         tab = np.unique(np.mod(np.concatenate(out), p0))
         # rollers that cross breakpoints together (the guide's symmetries) give one value
         keep = np.concatenate([[True], np.diff(tab) > 1e-12 * p0])
         return np.ascontiguousarray(tab[keep])
 
-    def _crossing(self, k, b, x):
-        """s0_1 near x at which roller k (from 0) sits at undeformed coordinate b, by Newton's
-        method with d s0_k / d s0_1 from the velocity recursion. [m]"""
-        p0 = self.guide.p0
-        for _ in range(30):
-            conf = self.configure(x)
-            f = float(np.mod(conf.s0[k] - b + 0.5 * p0, p0) - 0.5 * p0)
-            if abs(f) < 1e-13:
-                break
-            _, gam, _, _, _ = self.jacobian(conf)
-            x -= f / float(gam[k])
-        return x % p0
+    def _crossings(self, rollers, places, starts):
+        """s0_1 near each of ``starts`` at which roller ``rollers[i]`` (from 0) sits at undeformed
+        coordinate ``places[i]`` (:func:`vibkit.model.crossings.crossing_values`). [m]"""
+        from .crossings import crossing_values  # the kernel builds on this module's
+
+        g = self.guide
+        out = np.empty(len(starts))
+        guess = self._delta_guess if self._delta_guess is not None else self.find_delta_bracket(float(starts[0]))
+        bad = crossing_values(
+            g.table,
+            g.p0,
+            self._lt,
+            self.pitches,
+            self.n,
+            self.tol,
+            np.ascontiguousarray(rollers, dtype=np.int64),
+            np.ascontiguousarray(places, dtype=float),
+            np.ascontiguousarray(starts, dtype=float),
+            float(guess),
+            out,
+        )
+        if bad >= 0:
+            raise ClosureError(f"chain closure did not converge at s0_1 = {starts[bad]:.9g} m")
+        return out
 
     # -- sweep ------------------------------------------------------------------------------
     def sweep(self, s0_values: np.ndarray, delta_guess: float | None = None):

@@ -58,6 +58,7 @@ from .slots import (
     FP_TENSIONER_STIFFNESS,
     FP_TOOTH_PITCH,
     HEAD_A,
+    HEAD_BY_ROLLER,
     HEAD_N,
     HEAD_NAMES,
     HEAD_P0,
@@ -99,15 +100,20 @@ FD = 1e-6  # [m] step of the differences that give d2M/du2 from the exact dM/du
 
 
 def table_applies(model) -> str | None:
-    """Why the table cannot stand for the closure on ``model`` (None when it can)."""
+    """Why the table cannot stand for the closure on ``model`` (None when it can).
+
+    Rollers of different masses or radii leave the chain's configuration repeating after one pitch
+    (only the links' lengths place the rollers): the table then gives each roller's place, and the
+    generalised mass, gravity's force and the contact are summed roller by roller with its own mass
+    and radius."""
     pitches = np.asarray(model.chain.pitches)
     if not np.all(pitches == pitches[0]):
         return "the links' pitches differ (the chain does not repeat after one pitch)"
-    if not np.all(model.mass == model.mass[0]):
-        return "the rollers' masses differ"
-    if not np.all(model.radii == model.radii[0]):
-        return "the rollers' radii differ"
     return None
+
+
+def _by_roller(model) -> bool:
+    return not (np.all(model.mass == model.mass[0]) and np.all(model.radii == model.radii[0]))
 
 
 def table_spacing(rtol: float) -> float:
@@ -414,7 +420,7 @@ def build_table(model, prm, cross, spacing):
     cand = np.flatnonzero((dist < reach).any(axis=(0, 1))).astype(np.int64)
     # the candidates' x and z polynomials side by side, piece by piece: one evaluation reads one block
     cc = np.ascontiguousarray(np.concatenate([xc[cand], zc[cand]], axis=-1).transpose(1, 0, 2))
-    head = np.array([a, p0, float(npc), float(n), _link_error(xc, zc, chain.pitches)])
+    head = np.array([a, p0, float(npc), float(n), _link_error(xc, zc, chain.pitches), float(_by_roller(model))])
     if head.size != len(HEAD_NAMES):
         raise RuntimeError("the table's header and vibkit.model.slots.HEAD_NAMES disagree")
     tb = (head, np.ascontiguousarray(sb), np.ascontiguousarray(uc), up, mc, vc, dc, xc, zc, sc, cand, cc)
@@ -511,6 +517,38 @@ def table_delta(tb, s):
     return _p5(tb[TB_DC], p, eta)[0]
 
 
+@nb.njit(cache=True, error_model="numpy", inline="always")
+def _p5dd(c, i, r, x):
+    """d/dx and d2/dx2 at x of the quintic with coefficients c[i, r, :]."""
+    c1, c2, c3, c4, c5 = c[i, r, 1], c[i, r, 2], c[i, r, 3], c[i, r, 4], c[i, r, 5]
+    d = c1 + x * (2.0 * c2 + x * (3.0 * c3 + x * (4.0 * c4 + x * 5.0 * c5)))
+    dd = 2.0 * c2 + x * (6.0 * c3 + x * (12.0 * c4 + x * 20.0 * c5))
+    return d, dd
+
+
+@nb.njit(cache=True, error_model="numpy")
+def _mass_by_roller(xc, zc, p, eta, hu, k, n, mass, fp, ip, d_u, d_uu):
+    """Generalised mass M(u), dM/du and gravity's generalised force -dV/du summed over the table's
+    rollers, each with the mass of the chain's roller it is (chain roller i is table roller i + k);
+    ``d_u``, ``d_uu``: d delta/du and d2 delta/du2."""
+    m_j = 0.0
+    m_jh = 0.0
+    m_z = 0.0
+    for t in range(n):
+        mi = mass[(t - k) % n]
+        jx, hx = _p5dd(xc, t, p, eta)
+        jz, hz = _p5dd(zc, t, p, eta)
+        m_j += mi * (jx * jx + jz * jz)
+        m_jh += mi * (jx * hx + jz * hz)
+        m_z += mi * jz
+    m_c = fp[FP_CARRIAGE_MASS] if ip[IP_TENSIONER] == 1 else 0.0
+    g = fp[FP_G] if ip[IP_GRAVITY] == 1 else 0.0
+    h2 = hu * hu
+    m_u = m_j / h2 + m_c * d_u * d_u
+    mp_u = 2.0 * m_jh / (h2 * hu) + 2.0 * m_c * d_u * d_uu
+    return m_u, mp_u, -g * m_z / hu
+
+
 @nb.njit(cache=True, error_model="numpy")
 def table_evaluate(t, y, dy, prm, ws, want_teeth, tb):
     """Right-hand side of the forward dynamics from the table: the same equations and the same
@@ -526,14 +564,17 @@ def table_evaluate(t, y, dy, prm, ws, want_teeth, tb):
     s, sdot = y[0], y[1]
     p, k, w, eta, us, uss = locate(tb, s)
     hu = up[p + 1] - up[p]
-    m_u, mp_u, _ = _p5(mc, p, eta)
-    mp_u /= hu
-    _, v_u, _ = _p5(vc, p, eta)
-    q = -v_u / hu
     udot = us * sdot
     delta, d_u, d_uu = _p5(dc, p, eta)
     d_u /= hu
     d_uu /= hu * hu
+    if head[HEAD_BY_ROLLER] == 0.0:
+        m_u, mp_u, _ = _p5(mc, p, eta)
+        mp_u /= hu
+        _, v_u, _ = _p5(vc, p, eta)
+        q = -v_u / hu
+    else:
+        m_u, mp_u, q = _mass_by_roller(xc, zc, p, eta, hu, k, n, mass, fp, ip, d_u, d_uu)
     if ip[IP_TENSIONER] == 1:
         q -= (fp[FP_PRELOAD] + fp[FP_TENSIONER_STIFFNESS] * delta) * d_u
     g = fp[FP_G]
@@ -557,7 +598,7 @@ def table_evaluate(t, y, dy, prm, ws, want_teeth, tb):
         for i in range(n):
             jx = _p5d(xc, i, p, eta)[1] / hu
             jz = _p5d(zc, i, p, eta)[1] / hu
-            rx, rz = rolling_force(jx * udot, jz * udot, mu * mass[i] * g)
+            rx, rz = rolling_force(jx * udot, jz * udot, mu * mass[(i - k) % n] * g)
             q += jx * rx + jz * rz
     torque_c, energy_c, worst, active, f_drive, f_back = 0.0, 0.0, 0.0, 0, 0.0, 0.0
     if want_teeth:
@@ -568,7 +609,7 @@ def table_evaluate(t, y, dy, prm, ws, want_teeth, tb):
         reach = fp[FP_REACH] + 1e-9
         reach2 = reach * reach
         for jj in range(cand0.size):
-            i = cand0[jj]
+            i = (cand0[jj] - k) % n  # the chain's roller that is this table roller: its own radius
             x, jx = _p5d(cc, p, jj, eta)
             z, jz = _p5d(cc, p, jj, eta, 6)
             if within_reach(x, z, fp[FP_CX], fp[FP_CZ], reach2):

@@ -212,10 +212,11 @@ TB_SC = TB["sc"]  # s0 of each table roller
 TB_CAND = TB["cand"]  # table rollers that can reach a tooth
 TB_CC = TB["cc"]  # the candidates' x and z quintics side by side (pieces, candidates, 12)
 
-HEAD_NAMES = ("a", "p0", "pieces", "n", "link_error")
+HEAD_NAMES = ("a", "p0", "pieces", "n", "link_error", "by_roller")
 HEAD = _slots(HEAD_NAMES)
 HEAD_A = HEAD["a"]  # the first breakpoint, where the pitch starts [m]
 HEAD_P0 = HEAD["p0"]  # loop length [m]
 HEAD_PIECES = HEAD["pieces"]  # pieces over one pitch
 HEAD_N = HEAD["n"]  # rollers
 HEAD_LINK_ERROR = HEAD["link_error"]  # the tabulated chain's largest link-length error [m]
+HEAD_BY_ROLLER = HEAD["by_roller"]  # 1.0: the rollers' masses or radii differ (sums taken roller by roller)
