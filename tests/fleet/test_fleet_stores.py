@@ -10,9 +10,7 @@ import random
 import signal
 import subprocess
 import sys
-import tempfile
 import time
-import warnings
 from pathlib import Path
 
 import numpy as np
@@ -22,37 +20,12 @@ from vibkit.cli import main
 from vibkit.fleet import DuplicateRecordingError, FleetDB, FleetError, Measurement
 from vibkit.fleet.storage import migrate
 
+from support.fleet import NOMINAL, T0, fake
+
 ROOT = Path(__file__).resolve().parents[2]
-NOMINAL = 0.4 / 3
-T0 = dt.datetime(2023, 1, 15, tzinfo=dt.timezone.utc)
 
 
-@pytest.fixture(scope="session")
-def pg_server():
-    """A PostgreSQL server of this test session (pgserver ships the binaries; as root it runs them as the
-    system user 'pgserver', which it creates).  Skipped, with the reason, where it cannot start."""
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")  # platformdirs warns when XDG_RUNTIME_DIR is unset
-            import pgserver
-        import psycopg  # noqa: F401
-    except ImportError as exc:
-        pytest.skip(f"PostgreSQL tests need pgserver and psycopg (pip install -e '.[test]'): {exc}")
-    # its own folder under the system temp dir: as root, pgserver opens every parent folder of the data
-    # directory to its 'pgserver' user, which must not loosen pytest's private temp folder
-    data = tempfile.mkdtemp(prefix="vibkit-pg-")
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            srv = pgserver.get_server(data, cleanup_mode="delete")
-    except Exception as exc:  # noqa: BLE001 - report why, skip the server tests
-        pytest.skip(f"pgserver could not start a PostgreSQL server in {data}: {type(exc).__name__}: {exc}")
-    yield srv
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        srv.cleanup()
-
-
+# pg_server: the session's PostgreSQL server (tests/fleet/conftest.py)
 _N_DB = [0]
 
 
@@ -72,37 +45,6 @@ def store(request, tmp_path):
     if request.param == "sqlite":
         return str(tmp_path / "fleet.sqlite")
     return _fresh_pg_url(request.getfixturevalue("pg_server"))
-
-
-def fake(i, unit, years, e, *, s=0.05, quality="ok", replaced=False, nominal=NOMINAL):
-    t = T0.timestamp() + years * 365.25 * 86400
-    return Measurement(
-        id=None,
-        unit=unit,
-        date_utc=dt.datetime.fromtimestamp(t, dt.timezone.utc).isoformat(timespec="seconds").replace("+00:00", "Z"),
-        date_unix_s=t,
-        date_source="given",
-        speed_m_s=0.5,
-        speed_sigma_m_s=0.001,
-        nominal_pitch_m=nominal,
-        channel="accel",
-        fundamental_hz=3.75,
-        fundamental_sigma_hz=1e-3,
-        pitch_m=nominal * (1 + e / 100),
-        pitch_sigma_m=nominal * s / 100,
-        elongation_percent=e,
-        elongation_sigma_percent=s,
-        snr_db=None if i % 5 == 0 else 20.0 + i,
-        warnings=("w",) if i % 3 == 0 else (),
-        sha256=f"{i:064x}",
-        path=f"/visits/r{i}.csv",
-        size_bytes=1000 + i,
-        vibkit_version="t",
-        analysed_utc="2026-11-23T10:00:00Z",
-        quality=quality,
-        quality_reason="" if quality == "ok" else "given",
-        replaced=replaced,
-    )
 
 
 def _fleet(n=24):
@@ -342,7 +284,7 @@ def test_version_1_sqlite_file_is_upgraded_and_flagged(tmp_path):
     # the issue's unit: no -112 %/year trend, the two impossible points flagged
     assert tr.slope_percent_per_year is None and tr.latest_elongation_percent == 3.8 and len(tr.flagged) == 2
     con = sqlite3.connect(p)
-    assert con.execute("PRAGMA user_version").fetchone()[0] == 2
+    assert con.execute("PRAGMA user_version").fetchone()[0] == 3
     con.close()
 
 

@@ -35,7 +35,8 @@ EPILOG = (
     "exit codes: 0 done; 1 error; 3 scan: some files failed (others were stored)\n"
     "catalogue columns: file (name or glob), unit, speed_m_s, date (ISO 8601; empty: an ISO date\n"
     "  in the file name, else the recording's start time), nominal_pitch_m (empty: the unit's),\n"
-    "  optional speed_sigma_m_s, channel"
+    "  optional speed_sigma_m_s, channel, escalator, n_links (the links are scanned), marker_s\n"
+    "  (when a marked link passed the sensor: its numbers follow the same links across visits)"
 )
 
 
@@ -246,7 +247,9 @@ def run_scan(a):
             f"  [database {path}]"
         )
         for m in res.added:
-            print(f"  added {_fmt_measurement(m)}")
+            scan = res.link_scans.get(m.sha256)
+            links = "" if scan is None else f"; links: {_fmt_scan(scan)}"
+            print(f"  added {_fmt_measurement(m)}{links}")
     flagged = sum(1 for m in res.added if m.quality != "ok")
     msg(
         f"vibkit fleet scan: {len(res.added)} added ({flagged} flagged), {len(res.skipped)} already stored, "
@@ -261,9 +264,31 @@ def run_scan(a):
     return SCAN_SOME_FAILED if res.failed else 0
 
 
+def _fmt_scan(scan):
+    """A link scan in a few words: its status, what it flagged, what link 1 is."""
+    if not scan.scanned:
+        return scan.status
+    one = "link 1 marked" if scan.marker_s is not None else "link 1 at the start, no marker"
+    return f"{scan.loops} loops, {len(scan.flagged)} flagged ({one})"
+
+
+def _print_links(hist, always):
+    """The link lines of one unit under the work list: the statement, then a table of its links."""
+    if not hist.scanned and not always:
+        return
+    print()
+    print(textwrap.fill(f"{hist.unit} links: {hist.statement}", 100, subsequent_indent="    "))
+    if hist.links:
+        rows = [[h.link, h.verdict, h.detail] for h in hist.links]
+        print(table(rows, ("link", "verdict", "excess pitch [mm] and change")))
+    elif hist.scanned:
+        print("no link flagged")
+
+
 def run_status(a):
     with _fleet_db(a, create=False) as db:
         trends = db.status(limits_percent=a.limits, units=a.unit or None)
+        links = {t.unit: db.links_history(t.unit) for t in trends}
         path = db.path
     if a.unit and not trends:
         raise CLIError(f"{path}: no measurement of unit(s) {', '.join(a.unit)}")
@@ -277,7 +302,7 @@ def run_status(a):
                 "database": path,
                 "limits_percent": list(a.limits),
                 "today_utc": today.strftime("%Y-%m-%d"),
-                "units": [t.as_dict(today.timestamp()) for t in trends],
+                "units": [{**t.as_dict(today.timestamp()), **_links_json(links[t.unit])} for t in trends],
             },
         )
         return 0
@@ -305,7 +330,19 @@ def run_status(a):
     )
     if any(t.overdue(today.timestamp()) for t in trends):
         msg(textwrap.fill(f"note: {OVERDUE_MEANING}", 100))
+    for t in trends:
+        _print_links(links[t.unit], always=bool(a.unit))
     return 0
+
+
+def _links_json(hist):
+    d = hist.as_dict()
+    return {
+        "links": d["links"],
+        "links_comparable": d["comparable"],
+        "links_statement": d["statement"],
+        "link_scans": d["visits"],
+    }
 
 
 def run_report(a):

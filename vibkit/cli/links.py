@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import math
-import os
 
 from .options import (
     _LENGTH_UNITS,
@@ -111,25 +110,8 @@ def add_parser(subparsers):
     return s
 
 
-def _profile_scene_file(profile):
-    """The profile's forward scene as a file (the signature is simulated from a scene file, and cached by its
-    path): written once per profile into the user's temporary folder."""
-    import hashlib
-    import tempfile
-    from pathlib import Path
-
-    text = profile.scene_text("forward")
-    digest = hashlib.sha256(text.encode()).hexdigest()[:16]
-    path = Path(tempfile.gettempdir()) / f"vibkit-links-{digest}.toml"
-    if not path.exists():
-        tmp = path.with_suffix(f".{os.getpid()}.tmp")
-        tmp.write_text(text, encoding="utf-8")
-        os.replace(tmp, path)
-    return str(path)
-
-
 def run(a):
-    from vibkit.diagnose.links import TooFewLoops, find_worn_links
+    from vibkit.diagnose.links import TooFewLoops, find_worn_links, profile_scene_file
 
     rec = read_recording(a)
     profile = escalator_profile(a)
@@ -141,7 +123,7 @@ def run(a):
         )
     scene = a.scene
     if scene is None and profile is not None:
-        scene = _profile_scene_file(profile)
+        scene = profile_scene_file(profile)
     try:
         res = find_worn_links(
             rec,

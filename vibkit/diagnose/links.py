@@ -35,6 +35,8 @@ __all__ = [
     "LinksResult",
     "find_worn_links",
     "link_number_of",
+    "links_channel",
+    "profile_scene_file",
     "worn_link_signature",
     "TooFewLoops",
 ]
@@ -201,7 +203,9 @@ def worn_link_signature(scene_path, *, sensor="tensioner", speed, fs, samples_pe
     )
 
 
-def _pick_channel(recording, channel):
+def links_channel(recording, channel=None):
+    """The channel :func:`find_worn_links` reads: ``channel``, else the first in a length unit (a tensioner
+    displacement), else the first vibration channel."""
     from .channels import vibration_channels
 
     chans = vibration_channels(recording)
@@ -267,7 +271,7 @@ def find_worn_links(
     ValueError
         A bad channel, no link pass found.
     """
-    ch = _pick_channel(recording, channel)
+    ch = links_channel(recording, channel)
     if ch not in recording.data_vars:
         raise ValueError(f"no channel {ch!r} (channels: {', '.join(map(str, recording.data_vars))})")
     n = int(n_links)
@@ -382,6 +386,29 @@ def _result(file, ch, sensor, speed, lmap, n, flagged, scan, excess, method, mar
         notes=notes,
         **kw,
     )
+
+
+def is_tensioner_channel(recording, channel):
+    """Whether ``channel`` is a displacement (a length unit): the sensor the worn link's signature is known for."""
+    return str(recording[channel].attrs.get("units", "")) in ("m", "mm", "um")
+
+
+def profile_scene_file(profile):
+    """An escalator profile's forward scene as a file (the signature is simulated from a scene file and cached by
+    its path, speed and rate): written once per profile text into the user's temporary folder."""
+    import hashlib
+    import os
+    import tempfile
+    from pathlib import Path
+
+    text = profile.scene_text("forward")
+    digest = hashlib.sha256(text.encode()).hexdigest()[:16]
+    path = Path(tempfile.gettempdir()) / f"vibkit-links-{digest}.toml"
+    if not path.exists():
+        tmp = path.with_suffix(f".{os.getpid()}.tmp")
+        tmp.write_text(text, encoding="utf-8")
+        os.replace(tmp, path)
+    return str(path)
 
 
 def units_scale(da):

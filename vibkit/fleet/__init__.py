@@ -19,6 +19,10 @@ measurements fit for a trend are fitted: each is stored with a quality flag (ok 
 implausible); outliers (> 5 sigma from the trend of the others) are left out and listed; a drop in
 elongation (or ``replaced``) starts a new segment; a shortening rate is implausible, not forecast.
 
+Each measurement also stores its recording's link scan, when :meth:`FleetDB.scan` knows the number of links
+(:mod:`vibkit.fleet.links`): its status and the links it flagged; :func:`links_history` says which link came back
+worse, only between visits whose link numbers count from a marked link.
+
 Dates are stored as UTC ISO 8601 text and as seconds since 1970 (``date_unix_s``); trends are in
 percent per Julian year (365.25 days).
 
@@ -32,7 +36,9 @@ Modules
 :mod:`~vibkit.fleet.measurement`  :class:`Measurement`, :func:`analyse_recording`
 :mod:`~vibkit.fleet.catalogue`    the CSV catalogue of a scan (its columns), :func:`read_catalogue`
 :mod:`~vibkit.fleet.scan`         folder scans: file matching, Dask workers, :class:`ScanResult`
-:mod:`~vibkit.fleet.schema`       the ``measurement`` table of both stores
+:mod:`~vibkit.fleet.links`        :class:`LinkScan`, :func:`links_history`: worn links across visits
+:mod:`~vibkit.fleet.link_scan`    the link scan of a scan's recording (never costs its measurement)
+:mod:`~vibkit.fleet.schema`       the ``measurement`` and link-scan tables of both stores
 :mod:`~vibkit.fleet.store`        what both stores share: queries, the one-transaction insert
 :mod:`~vibkit.fleet.sqlite_store` the SQLite file
 :mod:`~vibkit.fleet.postgres_store` the PostgreSQL server (psycopg 3, advisory locks per unit)
@@ -42,6 +48,7 @@ Modules
 from .catalogue import CATALOGUE_COLUMNS, CatalogueRow, read_catalogue
 from .dates import parse_date
 from .errors import DuplicateRecordingError, FleetError
+from .links import FlaggedLink, LinkScan, UnitLinks, links_history
 from .measurement import Measurement, analyse_recording
 from .scan import ScanResult
 from .storage import DB_ENV, DEFAULT_DB_NAME, FleetDB, migrate, resolve_db_path
@@ -53,16 +60,20 @@ __all__ = [
     "CATALOGUE_COLUMNS",
     "CatalogueRow",
     "DuplicateRecordingError",
+    "FlaggedLink",
     "FleetDB",
     "FleetError",
     "LimitForecast",
+    "LinkScan",
     "Measurement",
     "ScanResult",
     "TrendFit",
+    "UnitLinks",
     "UnitTrend",
     "analyse_recording",
     "fit_trend",
     "forecast_limits",
+    "links_history",
     "migrate",
     "parse_date",
     "read_catalogue",

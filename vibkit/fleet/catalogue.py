@@ -22,7 +22,16 @@ column                    required  meaning
 ``escalator``             no        the unit's escalator profile (TOML, path relative to the
                                     catalogue): an empty ``unit``, ``speed_m_s``,
                                     ``speed_sigma_m_s`` or ``nominal_pitch_m`` cell (or column) is
-                                    the profile's (:mod:`vibkit.model.profile`)
+                                    the profile's (:mod:`vibkit.model.profile`); its
+                                    ``chain.n_links`` fills an empty ``n_links`` and its forward
+                                    scene gives a tensioner's worn-link signature
+``n_links``               no        links in the chain: the scan numbers them and flags worn ones
+                                    when the recording covers two loops (empty: the profile's;
+                                    none: the links are not scanned)
+``marker_s``              no        time [s from the recording's start] at which a marked link
+                                    (paint, a tag) passed the sensor: it is link 1, and the same
+                                    link can be followed across visits; empty: link 1 is the link
+                                    at the sensor at the start (numbers not comparable)
 ========================  ========  ============================================================
 """
 
@@ -43,7 +52,7 @@ __all__ = ["CATALOGUE_COLUMNS", "CatalogueRow", "read_catalogue"]
 
 #: required and optional catalogue columns
 CATALOGUE_COLUMNS = ("file", "unit", "speed_m_s", "date", "nominal_pitch_m")
-CATALOGUE_OPTIONAL = ("speed_sigma_m_s", "channel", "escalator")
+CATALOGUE_OPTIONAL = ("speed_sigma_m_s", "channel", "escalator", "n_links", "marker_s")
 #: columns a profile (the escalator column) can stand in for
 FROM_PROFILE = ("unit", "speed_m_s", "nominal_pitch_m")
 
@@ -60,6 +69,10 @@ class CatalogueRow:
     date: str | None = None
     nominal_pitch_m: float | None = None
     channel: str | None = None
+    n_links: int | None = None
+    marker_s: float | None = None
+    #: the escalator profile (absolute path), whose forward scene gives the link scan its signature
+    escalator: str | None = None
 
     @property
     def is_glob(self) -> bool:
@@ -71,7 +84,7 @@ def _number(text, path, line, col, *, lo, hi, unit, hint=""):
         v = float(text)
     except ValueError:
         raise FleetError(f"{path}, line {line}: column {col}: expected a number [{unit}], got {text!r}") from None
-    if not (math.isfinite(v) and lo <= v <= hi) or (lo == 0 and v == 0 and col != "speed_sigma_m_s"):
+    if not (math.isfinite(v) and lo <= v <= hi) or (lo == 0 and v == 0 and col not in ("speed_sigma_m_s", "marker_s")):
         raise FleetError(f"{path}, line {line}: column {col}: {text!r} is outside {lo:g}-{hi:g} {unit}{hint}")
     return v
 
@@ -95,6 +108,9 @@ def _with_profile(v, spath, line):
             v["speed_sigma_m_s"] = repr(float(prof.speed_sigma[0]))
     if not v.get("nominal_pitch_m"):
         v["nominal_pitch_m"] = repr(float(prof.nominal_pitch))
+    if not v.get("n_links") and prof.n_links is not None:
+        v["n_links"] = str(int(prof.n_links))
+    v["escalator"] = where
     return v
 
 
@@ -199,6 +215,19 @@ def read_catalogue(path):
                     f"{prev[0]:g} on line {prev[1]}"
                 )
             nominal.setdefault(v["unit"], (nom, n))
+        n_links = None
+        if v.get("n_links"):
+            try:
+                n_links = int(v["n_links"])
+            except ValueError:
+                raise FleetError(
+                    f"{spath}, line {n}: column n_links: expected a whole number of links, got {v['n_links']!r}"
+                ) from None
+            if not 2 <= n_links <= 100000:
+                raise FleetError(f"{spath}, line {n}: column n_links: {n_links} is outside 2-100000 links")
+        marker = None
+        if v.get("marker_s"):
+            marker = _number(v["marker_s"], spath, n, "marker_s", lo=0.0, hi=1e7, unit="s from the recording's start")
         rows.append(
             CatalogueRow(
                 n,
@@ -209,6 +238,9 @@ def read_catalogue(path):
                 date,
                 nom,
                 v.get("channel") or None,
+                n_links,
+                marker,
+                v.get("escalator") or None,
             )
         )
     if not rows:

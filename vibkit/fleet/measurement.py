@@ -102,6 +102,7 @@ def analyse_recording(
     replaced=False,
     date_source="given",
     read_options=None,
+    recording=None,
 ):
     """Read and analyse one recording; the :class:`Measurement` it gives (not stored, ``id`` None).
 
@@ -124,6 +125,9 @@ def analyse_recording(
         The chain was replaced since the unit's previous measurement (a new trend segment starts).
     date_source : str
         Where ``date`` came from (stored as ``date_source``; e.g. ``"file name"``).
+    recording : xarray.Dataset, optional
+        The file already read by :func:`vibkit.read_recording` (with ``read_options`` and ``channel``): it is not
+        read again.
 
     The measurement carries its quality flag (:func:`vibkit.fleet.quality.measurement_quality`):
     implausible and inconclusive ones are stored flagged and left out of trends.
@@ -147,7 +151,7 @@ def analyse_recording(
     if nominal_pitch is None:
         raise FleetError(f"nominal_pitch must be a length in 0.05-0.3 m, got {nominal_pitch!r}")
     spath = os.fspath(path)
-    rec = read_recording(spath, **{**(read_options or {}), "channel": channel})
+    rec = recording if recording is not None else read_recording(spath, **{**(read_options or {}), "channel": channel})
     if given is not None:
         d, source = given, str(date_source)
     else:

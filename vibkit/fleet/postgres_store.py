@@ -17,7 +17,7 @@ import contextlib
 import re
 
 from .errors import FleetError
-from .schema import APPLICATION_ID, COLUMNS, SCHEMA_VERSION, measurement_ddl, signature_problem
+from .schema import APPLICATION_ID, COLUMNS, SCHEMA_VERSION, link_ddl, measurement_ddl, signature_problem
 from .store import Store
 
 __all__ = ["PostgresStore", "redact_url"]
@@ -37,14 +37,18 @@ def _one_line(exc):
 
 
 class PostgresStore(Store):
-    """A fleet history on a PostgreSQL server.  ``create=False``: no tables are created."""
+    """A fleet history on a PostgreSQL server.  ``create=False``: no tables are created; ``readonly=True``: nothing
+    is written (a history of an older schema is read as it is, without link scans: :attr:`notes` says so)."""
 
     dialect = "postgresql"
     placeholder = "%s"
     local_files = ()
 
-    def __init__(self, url, *, create=True, db_env="VIBKIT_FLEET_DB"):
+    def __init__(self, url, *, create=True, readonly=False, db_env="VIBKIT_FLEET_DB"):
         self.location = self.path = redact_url(url)
+        self.readonly = bool(readonly)
+        #: what opening it did that a user should know (one line each, for stderr)
+        self.notes = []
         try:
             import psycopg
         except ImportError:
@@ -99,7 +103,7 @@ class PostgresStore(Store):
                 con.execute("SELECT pg_advisory_xact_lock(%s)", (APPLICATION_ID,))  # one creator at a time
                 have_m, have_meta = self._tables()
                 if not have_meta:
-                    for stmt in measurement_ddl("postgresql"):
+                    for stmt in measurement_ddl("postgresql") + link_ddl("postgresql"):
                         con.execute(stmt)
                     con.execute(f"CREATE TABLE {_META} (key TEXT PRIMARY KEY, value TEXT NOT NULL)")
                     con.execute(
@@ -124,8 +128,38 @@ class PostgresStore(Store):
             raise FleetError(
                 f"{self.location}: written by a newer vibkit (schema {ver}, this one reads {SCHEMA_VERSION})"
             )
-        if ver < SCHEMA_VERSION:  # pragma: no cover - no older PostgreSQL schema exists yet
-            raise FleetError(f"{self.location}: schema {ver} is older than this vibkit's ({SCHEMA_VERSION})")
+        if ver < 2:  # pragma: no cover - every PostgreSQL history has been schema 2 or later
+            raise FleetError(f"{self.location}: schema {ver} is older than this vibkit reads (2 to {SCHEMA_VERSION})")
+        if ver < SCHEMA_VERSION:
+            self._upgrade(ver)
+
+    def _upgrade(self, ver):
+        """Schema 2 -> 3 (the link scans): in place, in one transaction under the creators' lock; read only, the
+        history is read as it is (every measurement's link scan "not run")."""
+        if self.readonly:
+            self.has_link_tables = False
+            self.notes.append(
+                f"{self.location}: read a schema-{ver} history without upgrading it (no link scans); vibkit fleet "
+                f"add or scan upgrades it to schema {SCHEMA_VERSION}"
+            )
+            return
+        from .links import BEFORE_LINK_SCANS
+
+        con = self._con
+        with con.transaction():
+            con.execute("SELECT pg_advisory_xact_lock(%s)", (APPLICATION_ID,))  # one upgrader at a time
+            now = int(con.execute(f"SELECT value FROM {_META} WHERE key = 'schema_version'").fetchone()[0])
+            if now >= SCHEMA_VERSION:  # another process upgraded it a moment ago
+                return
+            for stmt in link_ddl("postgresql"):
+                con.execute(stmt)
+            con.execute(
+                "INSERT INTO link_scan (measurement_id, status, reason) SELECT id, 'not run', %s FROM measurement "
+                "WHERE id NOT IN (SELECT measurement_id FROM link_scan)",
+                (BEFORE_LINK_SCANS,),
+            )
+            con.execute(f"UPDATE {_META} SET value = %s WHERE key = 'schema_version'", (str(SCHEMA_VERSION),))
+        self.notes.append(f"{self.location}: upgraded in place from schema {ver} to schema {SCHEMA_VERSION}")
 
     @contextlib.contextmanager
     def write_transaction(self, unit):

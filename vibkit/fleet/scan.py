@@ -4,7 +4,10 @@ A recording's date is the catalogue's; where the catalogue has none, an ISO date
 (``E22-2026-01-01.csv``: ``date_source`` "file name"); else the recording's start time.
 
 The workers only analyse (:func:`_analyse_job`); the calling process alone writes, one committed
-transaction per recording, so a killed scan leaves complete rows only.
+transaction per recording, so a killed scan leaves complete rows only.  Where the number of links is known (the
+catalogue's ``n_links`` or the escalator profile's), a worker also scans the recording's links
+(:mod:`vibkit.fleet.link_scan`), with the catalogue's ``marker_s``; the scan's status is stored with the
+measurement, which a failed link scan never costs.
 """
 
 from __future__ import annotations
@@ -52,11 +55,18 @@ class _Job:
     sha256: str
     read_options: dict | None = None
     date_source: str = "given"
+    n_links: int | None = None
+    marker_s: float | None = None
+    scene: str | None = None
 
 
 def _analyse_job(job):
-    """Worker side of a scan: analyse one recording; never raises (a failure is a message)."""
+    """Worker side of a scan: analyse one recording and scan its links; never raises (a failure is a message)."""
+    from ..io import read_recording
+    from .link_scan import link_scan_of
+
     try:
+        rec = read_recording(job.path, **{**(job.read_options or {}), "channel": job.channel})
         m = analyse_recording(
             job.path,
             unit=job.unit,
@@ -67,8 +77,18 @@ def _analyse_job(job):
             channel=job.channel,
             read_options=job.read_options,
             date_source=job.date_source,
+            recording=rec,
         )
-        return {"ok": True, "measurement": m}
+        scan = link_scan_of(
+            rec,
+            path=job.path,
+            speed=job.speed_m_s,
+            n_links=job.n_links,
+            channel=job.channel,
+            scene=job.scene,
+            marker_s=job.marker_s,
+        )
+        return {"ok": True, "measurement": m, "link_scan": scan}
     except (ValueError, OSError) as exc:  # RecordingError and FleetError are ValueErrors
         msg = " ".join(str(exc).split()) or type(exc).__name__
         if not msg.startswith(job.path):
@@ -90,12 +110,15 @@ class ScanResult:
     failed : list of (str, str)
         Files (or catalogue lines) that could not be added, with the reason.
     notes : list of str
+    link_scans : dict
+        ``{sha256: LinkScan}`` of the added measurements (:mod:`vibkit.fleet.links`).
     """
 
     added: list = field(default_factory=list)
     skipped: list = field(default_factory=list)
     failed: list = field(default_factory=list)
     notes: list = field(default_factory=list)
+    link_scans: dict = field(default_factory=dict)
 
     def as_dict(self) -> dict:
         return {
@@ -105,6 +128,11 @@ class ScanResult:
             "added_files": [m.path for m in self.added],
             "skipped_files": [{"file": p, "reason": r} for p, r in self.skipped],
             "failed_files": [{"file": p, "reason": r} for p, r in self.failed],
+            "link_scans": [
+                {"file": m.path, **self.link_scans[m.sha256].as_dict()}
+                for m in self.added
+                if m.sha256 in self.link_scans
+            ],
             "notes": list(self.notes),
         }
 
@@ -203,7 +231,7 @@ def scan_folder(
         if r.nominal_pitch_m is not None:
             unit_nominal.setdefault(r.unit, r.nominal_pitch_m)
     used = set()
-    jobs, seen = [], {}
+    jobs, seen, scenes = [], {}, {}
     for rel in files:
         full = os.path.join(d, rel)
         r = _match(rel, rows)
@@ -232,6 +260,7 @@ def scan_folder(
                 "on one line of the unit)",
             )
             continue
+        scene = _scene_of(r, scenes, res.notes) if r.n_links is not None else None
         date, source = r.date, "given"
         if date is None and date_from_name(rel) is not None:
             date, source = date_from_name(rel), "file name"
@@ -247,6 +276,9 @@ def scan_folder(
                 sha,
                 read_options,
                 source,
+                r.n_links,
+                r.marker_s,
+                scene,
             )
         )
     for r in rows:
@@ -266,8 +298,11 @@ def scan_folder(
         if not outcome["ok"]:
             fail(job.path, outcome["error"])
             return
+        scan = outcome.get("link_scan")
         try:
-            res.added.append(db.insert(outcome["measurement"]))
+            res.added.append(db.insert(outcome["measurement"], scan))
+            if scan is not None:
+                res.link_scans[outcome["measurement"].sha256] = scan
         except DuplicateRecordingError as exc:
             res.skipped.append((job.path, str(exc)))
         except FleetError as exc:
@@ -285,6 +320,27 @@ def scan_folder(
     finally:
         bar.close()
     return res
+
+
+def _scene_of(row, scenes, notes):
+    """The forward scene file of a row's escalator profile, built once per profile in a scan (None without one,
+    or with a note when the profile's geometry gives no scene)."""
+    if row.escalator is None:
+        return None
+    if row.escalator not in scenes:
+        from ..diagnose.links import profile_scene_file
+        from ..model.profile import load_profile
+        from ..model.schema import SceneError
+
+        try:
+            scenes[row.escalator] = profile_scene_file(load_profile(row.escalator))
+        except (SceneError, OSError, ValueError) as exc:
+            scenes[row.escalator] = None
+            notes.append(
+                f"{row.escalator}: no scene for the worn link's signature ({' '.join(str(exc).split())}); "
+                "its recordings' links are scanned without it"
+            )
+    return scenes[row.escalator]
 
 
 def _scan_dask(jobs, take, bar, *, client, scheduler, n_workers):

@@ -6,6 +6,12 @@ flag (``quality``, ``quality_reason``) and ``replaced`` (a chain replacement sta
 segment); a version-1 SQLite file is upgraded in place, its rows flagged by the same rules, when it is
 opened for writing.  Read-only use reads a version-1 file as it is, through :func:`upgraded_view_sql`:
 a view that gives every row as the upgrade would have stored it, the file left untouched.
+
+Schema version 3 added the link scans (:mod:`vibkit.fleet.links`): ``link_scan``, one row per measurement
+(whether its links were scanned, the status, the numbering reference ``marker_s``), and ``flagged_link``,
+one row per link a scan flagged; both cascade when their measurement is deleted.  An older file or server
+is upgraded in place when opened for writing (every measurement gets a ``link_scan`` row "not run"); read
+only, it is read as it is, every measurement "not run".
 """
 
 from __future__ import annotations
@@ -26,9 +32,11 @@ __all__ = [
     "upgraded_view_sql",
     "QUALITY_FLAG_SQL",
     "QUALITY_REASON_SQL",
+    "LINK_STATUSES",
+    "link_ddl",
 ]
 
-SCHEMA_VERSION = 2
+SCHEMA_VERSION = 3
 #: SQLite ``PRAGMA application_id`` of a vibkit fleet database ("VBKF"); PostgreSQL: its advisory lock key
 APPLICATION_ID = 0x56424B46
 #: stored columns, in :class:`Measurement` order (without ``id``)
@@ -122,6 +130,41 @@ def measurement_ddl(dialect):
     return [
         f"CREATE TABLE IF NOT EXISTS measurement (\n    {cols}\n)",
         "CREATE INDEX IF NOT EXISTS measurement_unit_date ON measurement (unit, date_unix_s)",
+    ]
+
+
+#: the status of a measurement's link scan: scanned ("ok": flagged links or none), "inconclusive" (deviations
+#: no link number can be given for), "too few loops" (the recording covers fewer than two loops of the chain),
+#: "failed" (the scan stopped on an error, named in the reason), "not run" (not attempted: the reason says why)
+LINK_STATUSES = ("ok", "inconclusive", "too few loops", "failed", "not run")
+
+
+def link_ddl(dialect):
+    """``CREATE TABLE`` statements of the link scans (schema version 3) for ``"sqlite"`` or ``"postgresql"``."""
+    pg = dialect == "postgresql"
+    real, mid = ("DOUBLE PRECISION", "BIGINT") if pg else ("REAL", "INTEGER")
+    statuses = ", ".join(f"'{s}'" for s in LINK_STATUSES)
+    return [
+        f"""CREATE TABLE IF NOT EXISTS link_scan (
+    measurement_id {mid} PRIMARY KEY REFERENCES measurement (id) ON DELETE CASCADE,
+    status TEXT NOT NULL CHECK (status IN ({statuses})),
+    reason TEXT NOT NULL DEFAULT '',
+    n_links INTEGER CHECK (n_links IS NULL OR n_links >= 2),
+    loops INTEGER,
+    marker_s {real} CHECK (marker_s IS NULL OR marker_s >= 0),
+    method TEXT NOT NULL DEFAULT '',
+    false_alarm {real}
+)""",
+        f"""CREATE TABLE IF NOT EXISTS flagged_link (
+    measurement_id {mid} NOT NULL REFERENCES link_scan (measurement_id) ON DELETE CASCADE,
+    link INTEGER NOT NULL CHECK (link >= 1),
+    excess_pitch_m {real},
+    sigma_m {real} CHECK (sigma_m IS NULL OR sigma_m >= 0),
+    statistic {real},
+    feature TEXT NOT NULL DEFAULT '',
+    loops TEXT NOT NULL DEFAULT '[]',
+    PRIMARY KEY (measurement_id, link)
+)""",
     ]
 
 

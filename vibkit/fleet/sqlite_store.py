@@ -23,6 +23,7 @@ from .schema import (
     SCHEMA_VERSION,
     V2_COLUMNS,
     column_def,
+    link_ddl,
     measurement_ddl,
     signature_problem,
     upgraded_view_sql,
@@ -155,6 +156,7 @@ class SQLiteStore(Store):
                     f"{self.path}: a SQLite database without vibkit's measurement table, not a fleet "
                     f"history (vibkit fleet add or scan makes one; --db names another); left as it is"
                 )
+            self.has_link_tables = "link_scan" in tables
             if ver < SCHEMA_VERSION:
                 self._read_older_schema(ver)
             return
@@ -185,6 +187,9 @@ class SQLiteStore(Store):
         and no time that grow with the file."""
         con = self._con
         have = [r[1] for r in con.execute("PRAGMA main.table_info(measurement)")]
+        if set(V2_COLUMNS) <= set(have):  # schema 2: the rows are as stored; only the link scans are missing
+            self.notes.append(self._older_note(ver))
+            return
         try:
             sql = upgraded_view_sql(have)
         except ValueError as exc:
@@ -200,13 +205,16 @@ class SQLiteStore(Store):
         con.create_function(QUALITY_REASON_SQL, 2, reason, deterministic=True)
         con.execute("PRAGMA temp_store=MEMORY")
         con.execute(sql)
-        self.notes.append(
-            f"{self.path}: read a schema-{ver} history without upgrading it (left as it is); run "
+        self.notes.append(self._older_note(ver))
+
+    def _older_note(self, ver):
+        return (
+            f"{self.path}: read a schema-{ver} history without upgrading it (left as it is; no link scans); run "
             f"vibkit fleet add or scan on it with write access to upgrade it to schema {SCHEMA_VERSION}"
         )
 
     def _create_or_upgrade(self):
-        """Inside the write lock: create the table, or bring a version-1 file to the current schema."""
+        """Inside the write lock: create the tables, or bring a version-1 or -2 file to the current schema."""
         con = self._con
         tables = [r[0] for r in con.execute("SELECT name FROM sqlite_master WHERE type = 'table'")]
         if "measurement" not in tables:
@@ -217,13 +225,25 @@ class SQLiteStore(Store):
             for col in V2_COLUMNS:
                 if col not in have:
                     con.execute(f"ALTER TABLE measurement ADD COLUMN {column_def(col, 'sqlite')}")
-            # the rows of a version-1 file get the quality flag by today's rules
+            # the rows of a version-1 file get the quality flag by today's rules (a version-2 file's rows have it)
+            v1 = not set(V2_COLUMNS) <= have
             for rid, e, s in con.execute(
-                "SELECT id, elongation_percent, elongation_sigma_percent FROM measurement WHERE quality = 'ok'"
+                "SELECT id, elongation_percent, elongation_sigma_percent FROM measurement WHERE quality = 'ok' AND ?",
+                (int(v1),),
             ).fetchall():
                 flag, why = measurement_quality(e, s)
                 if flag != "ok":
                     con.execute("UPDATE measurement SET quality = ?, quality_reason = ? WHERE id = ?", (flag, why, rid))
+        for stmt in link_ddl("sqlite"):
+            con.execute(stmt)
+        from .links import BEFORE_LINK_SCANS
+
+        # every measurement stored before the link scans: "not run", so that none reads as scanned without a flag
+        con.execute(
+            "INSERT INTO link_scan (measurement_id, status, reason) SELECT id, 'not run', ? FROM measurement "
+            "WHERE id NOT IN (SELECT measurement_id FROM link_scan)",
+            (BEFORE_LINK_SCANS,),
+        )
         con.execute(f"PRAGMA application_id={APPLICATION_ID}")
         con.execute(f"PRAGMA user_version={SCHEMA_VERSION}")
 

@@ -82,7 +82,7 @@ def _open_store(spec, create, readonly):
     if is_server_url(spec):
         from .postgres_store import PostgresStore
 
-        return PostgresStore(spec, create=create and not readonly, db_env=DB_ENV)
+        return PostgresStore(spec, create=create and not readonly, readonly=readonly, db_env=DB_ENV)
     from .sqlite_store import SQLiteStore
 
     return SQLiteStore(spec, create=create, readonly=readonly, db_env=DB_ENV)
@@ -190,6 +190,18 @@ class FleetDB:
         return self._store.units()
 
     @_translated
+    def link_scans(self, unit=None):
+        """``{measurement id: LinkScan}``: the stored link scans (of one unit if given; :mod:`vibkit.fleet.links`)."""
+        return self._store.link_scans(unit)
+
+    @_translated
+    def links_history(self, unit, *, coverage_sigma=2.0):
+        """The link scans of a unit's visits and which links came back worse (:func:`vibkit.fleet.links.links_history`)."""
+        from .links import links_history
+
+        return links_history(self, unit, coverage_sigma=coverage_sigma)
+
+    @_translated
     def nominal_pitch(self, unit):
         """The nominal pitch stored for a unit [m], or None for a new unit."""
         return self._store.nominal_pitch(unit)
@@ -201,8 +213,9 @@ class FleetDB:
 
     # ---------------------------------------------------------------------------------- writing
     @_translated
-    def insert(self, m: Measurement) -> Measurement:
-        """Store one analysed measurement in its own transaction; the stored row (with its id).
+    def insert(self, m: Measurement, link_scan=None) -> Measurement:
+        """Store one analysed measurement and its link scan (:class:`~vibkit.fleet.links.LinkScan`; default "not
+        run") in its own transaction; the stored row (with its id).
 
         Safe when other processes (on other machines, for PostgreSQL) insert at the same time.
 
@@ -213,12 +226,13 @@ class FleetDB:
         FleetError
             The unit is stored with another nominal pitch.
         """
-        return self._store.insert(m)
+        return self._store.insert(m, link_scan)
 
     @_translated
-    def insert_many(self, measurements):
-        """Store measurements in one transaction, leaving out those already stored; ``(added, skipped)``."""
-        return self._store.insert_many(measurements)
+    def insert_many(self, measurements, link_scans=None):
+        """Store measurements in one transaction, leaving out those already stored; ``(added, skipped)``.
+        ``link_scans``: ``{sha256: LinkScan}`` (a measurement without one is stored "not run")."""
+        return self._store.insert_many(measurements, link_scans)
 
     @_translated
     def add(
@@ -408,8 +422,8 @@ def migrate(source, target):
     Notes
     -----
     One transaction on the target: a failed or interrupted migration copies nothing, and running it
-    again copies only what is missing.  Rows keep every field (provenance, quality flag, replaced)
-    except ``id``, which the target numbers.
+    again copies only what is missing.  Rows keep every field (provenance, quality flag, replaced) and
+    their link scans, except ``id``, which the target numbers.
 
     Raises
     ------
@@ -428,10 +442,14 @@ def migrate(source, target):
         raise FleetError(f"{src_spec}: source and target of the migration are the same database")
     with FleetDB(src_spec, create=False, readonly=True) as src:  # the source is read, never upgraded
         rows = sorted(src.measurements(), key=lambda m: m.id)
+        scans = src.link_scans()
+        from .links import BEFORE_LINK_SCANS, LinkScan
+
+        scans = {m.sha256: scans.get(m.id) or LinkScan.not_run(BEFORE_LINK_SCANS) for m in rows}
         with FleetDB(dst_spec) as dst:
             if src.path == dst.path and src.kind == dst.kind:
                 raise FleetError(f"{src.path}: source and target of the migration are the same database")
-            added, skipped = dst.insert_many(rows)
+            added, skipped = dst.insert_many(rows, scans)
             return {
                 "source": src.path,
                 "target": dst.path,

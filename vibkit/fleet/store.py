@@ -5,7 +5,8 @@ supplies a connection, its parameter placeholder and :meth:`Store.write_transact
 the writers of one unit (SQLite: the database's write lock, ``BEGIN IMMEDIATE``; PostgreSQL: a
 transaction-scoped advisory lock per unit).  The check for a duplicate (same SHA-256) and for the
 unit's nominal pitch and the ``INSERT`` run inside it; the ``UNIQUE`` constraint on ``sha256`` is the
-last word when two processes store the same file under different units at once.
+last word when two processes store the same file under different units at once.  A measurement's link scan
+(:mod:`vibkit.fleet.links`) is written in the same transaction as its row.
 """
 
 from __future__ import annotations
@@ -28,6 +29,8 @@ class Store(abc.ABC):
     placeholder = "?"
     #: where the data live, for messages: a path, or a URL without its password
     location = ""
+    #: whether the link-scan tables exist (False: an older schema read without upgrading it)
+    has_link_tables = True
 
     # ----------------------------------------------------------------- to be supplied by a store
     @abc.abstractmethod
@@ -90,7 +93,12 @@ class Store(abc.ABC):
             f"{m.date_utc[:10]}, from {m.path}"
         )
 
-    def _check_and_insert(self, m):
+    def link_scans(self, unit=None):
+        from .links import read_link_scans
+
+        return read_link_scans(self, unit)
+
+    def _check_and_insert(self, m, link_scan=None):
         old = self.find(m.sha256)
         if old is not None:
             raise DuplicateRecordingError(self.duplicate_message(m.path, old), old)
@@ -100,10 +108,15 @@ class Store(abc.ABC):
                 f"unit {m.unit!r} is stored with nominal pitch {nom:g} m, not "
                 f"{m.nominal_pitch_m:g} m; one unit has one nominal pitch"
             )
-        return self._insert_row(measurement_values(m))
+        rid = self._insert_row(measurement_values(m))
+        from .links import NOT_SCANNED, LinkScan, write_link_scan
 
-    def insert(self, m: Measurement) -> Measurement:
-        """Store one measurement in its own transaction; the stored row (with its id).
+        write_link_scan(self, rid, link_scan if link_scan is not None else LinkScan.not_run(NOT_SCANNED))
+        return rid
+
+    def insert(self, m: Measurement, link_scan=None) -> Measurement:
+        """Store one measurement and its link scan (default: "not run") in its own transaction; the stored row
+        (with its id).
 
         Raises
         ------
@@ -114,7 +127,7 @@ class Store(abc.ABC):
         """
         try:
             with self.write_transaction(m.unit):
-                rid = self._check_and_insert(m)
+                rid = self._check_and_insert(m, link_scan)
         except (DuplicateRecordingError, FleetError):
             raise
         except Exception as exc:
@@ -132,8 +145,9 @@ class Store(abc.ABC):
             raise DuplicateRecordingError(self.duplicate_message(m.path, old), old) from None
         return replace(m, id=rid)
 
-    def insert_many(self, measurements):
-        """Store measurements in one transaction, leaving out those already stored (same SHA-256).
+    def insert_many(self, measurements, link_scans=None):
+        """Store measurements in one transaction, leaving out those already stored (same SHA-256); their link
+        scans from ``link_scans`` (``{sha256: LinkScan}``; a missing one is stored "not run").
 
         Returns ``(added, skipped)`` counts.  Any other refusal (a nominal pitch that differs from the
         unit's) rolls the whole transaction back and raises :class:`FleetError`.
@@ -144,7 +158,7 @@ class Store(abc.ABC):
         with self.write_transaction(units):
             for m in ms:
                 try:
-                    self._check_and_insert(m)
+                    self._check_and_insert(m, (link_scans or {}).get(m.sha256))
                     added += 1
                 except DuplicateRecordingError:
                     skipped += 1

@@ -1,0 +1,440 @@
+"""Worn links across visits: the link scan stored with each measurement, and which link came back worse.
+
+Each measurement of the fleet may carry the link scan of its recording (:func:`vibkit.diagnose.links.find_worn_links`):
+:class:`LinkScan`, its status (``ok``, ``inconclusive``, ``too few loops``, ``failed``, ``not run``), so that a visit
+without flagged links is told apart from a visit whose links were not scanned, and the links it flagged
+(:class:`FlaggedLink`: number, excess pitch and its sigma, the loops that show it).
+
+A link number names a physical link only when the recording counts from a marked link (``marker_s``: when a link
+marked with paint or a tag passed the sensor): without a marker, link 1 is whichever link was at the sensor when the
+recording started, a different one at every visit, and the numbers of two visits cannot be matched.
+:func:`links_history` therefore compares visits only when both count from the marked link: a link flagged now with a
+larger excess than at the previous marked visit, by more than ``coverage_sigma`` (2) combined sigmas, is ``worse``;
+one flagged now and not then is ``new``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+
+from .schema import LINK_STATUSES
+
+__all__ = [
+    "FlaggedLink",
+    "LinkHistory",
+    "LinkScan",
+    "LinkVisit",
+    "UnitLinks",
+    "links_history",
+    "read_link_scans",
+    "write_link_scan",
+]
+
+#: the reason of a measurement stored before vibkit kept link scans (schema 2 and older)
+BEFORE_LINK_SCANS = "stored before the fleet kept link scans"
+#: the reason of a measurement stored without a link scan (fleet add; a scan without the number of links says so)
+NOT_SCANNED = "the links were not scanned (vibkit fleet scan scans them when it knows the number of links)"
+
+
+def _num(v):
+    return None if v is None else float(v)
+
+
+@dataclass(frozen=True)
+class FlaggedLink:
+    """One link a scan flagged.  ``link`` 1-based, counted as the scan's :attr:`LinkScan.numbering` says;
+    ``excess_pitch_m`` and ``sigma_m`` [m] (None where the signal gives none: without the escalator's scene a
+    deviating level gives no pitch); ``loops``: the 1-based loops whose own fit shows it; ``statistic`` its |t|;
+    ``feature`` what deviates (``signature``, ``level``, ``duration``)."""
+
+    link: int
+    excess_pitch_m: float | None
+    sigma_m: float | None
+    loops: tuple = ()
+    statistic: float | None = None
+    feature: str = ""
+
+    def as_dict(self):
+        return {
+            "link": self.link,
+            "excess_pitch_m": self.excess_pitch_m,
+            "sigma_m": self.sigma_m,
+            "loops": list(self.loops),
+            "statistic": self.statistic,
+            "feature": self.feature,
+        }
+
+
+@dataclass(frozen=True)
+class LinkScan:
+    """The link scan of one measurement (see the module docstring).
+
+    ``status``: ``ok`` (scanned: ``flagged`` holds what it found, maybe nothing), ``inconclusive`` (deviations that
+    no link number can be given for), ``too few loops`` (the recording covers fewer than two loops), ``failed``
+    (``reason`` names the error), ``not run`` (``reason`` says why: no number of links, or stored before scans
+    were kept).  ``marker_s`` [s]: the time the marked link passed the sensor (link 1), None when the numbers count
+    from the link at the sensor at the recording's start.
+    """
+
+    status: str
+    reason: str = ""
+    n_links: int | None = None
+    loops: int | None = None
+    marker_s: float | None = None
+    method: str = ""
+    false_alarm: float | None = None
+    flagged: tuple = ()
+    measurement_id: int | None = None
+
+    def __post_init__(self):
+        if self.status not in LINK_STATUSES:
+            raise ValueError(f"link scan status {self.status!r}: expected one of {', '.join(LINK_STATUSES)}")
+
+    @classmethod
+    def not_run(cls, reason, **kw):
+        return cls("not run", reason=str(reason), **kw)
+
+    @classmethod
+    def from_result(cls, res):
+        """From a :class:`vibkit.diagnose.links.LinksResult` (its ``*_mm`` in metres here)."""
+        flagged = tuple(
+            FlaggedLink(
+                link=int(f["link"]),
+                excess_pitch_m=None if f.get("excess_pitch_mm") is None else 1e-3 * float(f["excess_pitch_mm"]),
+                sigma_m=None if f.get("sigma_mm") is None else 1e-3 * float(f["sigma_mm"]),
+                loops=tuple(int(i) for i in f.get("loops", ())),
+                statistic=_num(f.get("t")),
+                feature=str(f.get("feature", "signature")),
+            )
+            for f in res.flagged
+        )
+        return cls(
+            status="ok" if res.status == "ok" else "inconclusive",
+            reason=res.reason,
+            n_links=int(res.n_links),
+            loops=int(res.loops),
+            marker_s=_num(res.marker_s),
+            method=res.method,
+            false_alarm=_num(res.false_alarm),
+            flagged=flagged,
+        )
+
+    @property
+    def scanned(self) -> bool:
+        """Whether the links were scanned and numbered (status ``ok``)."""
+        return self.status == "ok"
+
+    @property
+    def numbering(self) -> str:
+        """What link 1 is: ``"marker"`` (the marked link) or ``"start"`` (the link at the sensor at the start)."""
+        return "marker" if self.marker_s is not None else "start"
+
+    def flag(self, link):
+        return next((f for f in self.flagged if f.link == link), None)
+
+    def as_dict(self):
+        return {
+            "status": self.status,
+            "reason": self.reason,
+            "n_links": self.n_links,
+            "loops": self.loops,
+            "marker_s": self.marker_s,
+            "numbering": self.numbering,
+            "method": self.method,
+            "false_alarm": self.false_alarm,
+            "flagged": [f.as_dict() for f in self.flagged],
+        }
+
+
+# ------------------------------------------------------------------------------------------ storage
+_SCAN_COLS = ("status", "reason", "n_links", "loops", "marker_s", "method", "false_alarm")
+_FLAG_COLS = ("link", "excess_pitch_m", "sigma_m", "statistic", "feature", "loops")
+
+
+def write_link_scan(store, measurement_id, scan: LinkScan):
+    """Insert the link scan of a stored measurement (inside the store's write transaction)."""
+    cols = ("measurement_id",) + _SCAN_COLS
+    vals = [int(measurement_id)] + [getattr(scan, c) for c in _SCAN_COLS]
+    store.execute(store.q(f"INSERT INTO link_scan ({', '.join(cols)}) VALUES ({', '.join('?' * len(cols))})"), vals)
+    fcols = ("measurement_id",) + _FLAG_COLS
+    for f in scan.flagged:
+        store.execute(
+            store.q(f"INSERT INTO flagged_link ({', '.join(fcols)}) VALUES ({', '.join('?' * len(fcols))})"),
+            [
+                int(measurement_id),
+                f.link,
+                f.excess_pitch_m,
+                f.sigma_m,
+                f.statistic,
+                f.feature,
+                json.dumps(list(f.loops)),
+            ],
+        )
+
+
+def read_link_scans(store, unit=None) -> dict:
+    """``{measurement id: LinkScan}`` of the stored scans (of one unit if given); a store without the link tables
+    (an older schema read without upgrading it) has none."""
+    if not getattr(store, "has_link_tables", True):
+        return {}
+    where, args = ("WHERE m.unit = ?", (str(unit),)) if unit is not None else ("", ())
+    scans = {}
+    for r in store.execute(
+        store.q(
+            f"SELECT s.measurement_id, {', '.join('s.' + c for c in _SCAN_COLS)} FROM link_scan s "
+            f"JOIN measurement m ON m.id = s.measurement_id {where}"
+        ),
+        args,
+    ).fetchall():
+        d = dict(zip(("measurement_id",) + _SCAN_COLS, r))
+        scans[int(r[0])] = d
+    flags = {}
+    for r in store.execute(
+        store.q(
+            f"SELECT f.measurement_id, {', '.join('f.' + c for c in _FLAG_COLS)} FROM flagged_link f "
+            f"JOIN measurement m ON m.id = f.measurement_id {where} ORDER BY f.measurement_id, f.link"
+        ),
+        args,
+    ).fetchall():
+        d = dict(zip(_FLAG_COLS, r[1:]))
+        flags.setdefault(int(r[0]), []).append(
+            FlaggedLink(
+                link=int(d["link"]),
+                excess_pitch_m=_num(d["excess_pitch_m"]),
+                sigma_m=_num(d["sigma_m"]),
+                loops=tuple(json.loads(d["loops"] or "[]")),
+                statistic=_num(d["statistic"]),
+                feature=d["feature"],
+            )
+        )
+    out = {}
+    for mid, d in scans.items():
+        out[mid] = LinkScan(
+            status=d["status"],
+            reason=d["reason"],
+            n_links=None if d["n_links"] is None else int(d["n_links"]),
+            loops=None if d["loops"] is None else int(d["loops"]),
+            marker_s=_num(d["marker_s"]),
+            method=d["method"],
+            false_alarm=_num(d["false_alarm"]),
+            flagged=tuple(flags.get(mid, ())),
+            measurement_id=mid,
+        )
+    return out
+
+
+# ------------------------------------------------------------------------------------------ history
+@dataclass(frozen=True)
+class LinkVisit:
+    """One visit of one link: whether that visit's scan flagged it, and with what excess pitch [m]."""
+
+    measurement_id: int
+    date_utc: str
+    flagged: bool
+    excess_pitch_m: float | None = None
+    sigma_m: float | None = None
+    loops: tuple = ()
+
+    def as_dict(self):
+        return {
+            "measurement_id": self.measurement_id,
+            "date_utc": self.date_utc,
+            "flagged": self.flagged,
+            "excess_pitch_m": self.excess_pitch_m,
+            "sigma_m": self.sigma_m,
+            "loops": list(self.loops),
+        }
+
+
+@dataclass(frozen=True)
+class LinkHistory:
+    """One link number over the visits it can be compared across.
+
+    ``verdict`` for the latest scan against the previous one counting from the marked link: ``worse`` (the excess
+    grew by more than ``coverage_sigma`` combined sigmas), ``new`` (flagged now, not then), ``unchanged``,
+    ``smaller``, ``flagged again`` (no sigma or no excess to compare), ``not flagged now``; ``flagged`` when there is
+    no earlier visit to compare with, ``unmatched`` when the latest scan has no marker (its number names no link)."""
+
+    link: int
+    verdict: str
+    detail: str
+    visits: tuple
+
+    def as_dict(self):
+        return {
+            "link": self.link,
+            "verdict": self.verdict,
+            "detail": self.detail,
+            "visits": [v.as_dict() for v in self.visits],
+        }
+
+
+@dataclass(frozen=True)
+class UnitLinks:
+    """What :func:`links_history` says of one unit: every visit with its scan (``(Measurement, LinkScan)``, by
+    date), whether the latest scan can be compared with an earlier one (``comparable``), a ``statement`` saying so
+    in words, and the links (``links``: :class:`LinkHistory`, worse first)."""
+
+    unit: str
+    visits: tuple
+    comparable: bool
+    statement: str
+    links: tuple = field(default_factory=tuple)
+    coverage_sigma: float = 2.0
+
+    @property
+    def scanned(self) -> bool:
+        return any(s.scanned for _, s in self.visits)
+
+    def as_dict(self):
+        return {
+            "unit": self.unit,
+            "comparable": self.comparable,
+            "statement": self.statement,
+            "coverage_sigma": self.coverage_sigma,
+            "visits": [
+                {"measurement_id": m.id, "date_utc": m.date_utc, "path": m.path, **s.as_dict()} for m, s in self.visits
+            ],
+            "links": [h.as_dict() for h in self.links],
+        }
+
+
+_ORDER = {"worse": 0, "new": 1, "flagged again": 2, "unchanged": 3, "smaller": 4, "not flagged now": 5}
+
+
+def _visit(m, s, link):
+    f = s.flag(link)
+    if f is None:
+        return LinkVisit(m.id, m.date_utc, False)
+    return LinkVisit(m.id, m.date_utc, True, f.excess_pitch_m, f.sigma_m, f.loops)
+
+
+def _mm(v):
+    return "-" if v is None else f"{1e3 * v:+.2f} mm"
+
+
+def _flag_words(f):
+    if f.excess_pitch_m is None:
+        return f"a deviating {f.feature or 'cycle'} (no excess pitch)"
+    sigma = "" if f.sigma_m is None else f" +- {1e3 * f.sigma_m:.2f}"
+    return f"{1e3 * f.excess_pitch_m:+.2f}{sigma} mm"
+
+
+def _compare(now, before, k):
+    """Verdict and its words for a link flagged ``now`` against its visit ``before`` (LinkVisits)."""
+    if not before.flagged:
+        return "new", f"flagged now ({_mm(now.excess_pitch_m)}), not on {before.date_utc[:10]}"
+    if None in (now.excess_pitch_m, before.excess_pitch_m, now.sigma_m, before.sigma_m):
+        return "flagged again", f"flagged on {before.date_utc[:10]} too; no excess pitch with a sigma to compare"
+    diff = now.excess_pitch_m - before.excess_pitch_m
+    comb = math.hypot(now.sigma_m, before.sigma_m)
+    words = (
+        f"{_mm(before.excess_pitch_m)} on {before.date_utc[:10]} -> {_mm(now.excess_pitch_m)}: "
+        f"{1e3 * diff:+.2f} +- {1e3 * comb:.2f} mm"
+    )
+    if diff > k * comb:
+        return "worse", words
+    if diff < -k * comb:
+        return "smaller", words
+    return "unchanged", words + f" (within {k:g} sigma)"
+
+
+def links_history(db, unit, *, coverage_sigma=2.0) -> UnitLinks:
+    """The link scans of one unit's visits and which links came back worse.
+
+    Parameters
+    ----------
+    db : FleetDB
+    unit : str
+    coverage_sigma : float
+        A link is ``worse`` when its excess pitch grew by more than this many combined standard deviations.
+
+    Returns
+    -------
+    UnitLinks
+        The latest scanned visit is compared with the previous one only when both count their links from the
+        marked link (``marker_s``) with the same number of links; otherwise ``comparable`` is False and
+        ``statement`` says why (without a marker a link number names no physical link).
+    """
+    k = float(coverage_sigma)
+    ms = db.measurements(unit)
+    scans = db.link_scans(unit)
+    visits = tuple((m, scans.get(m.id) or LinkScan.not_run(BEFORE_LINK_SCANS, measurement_id=m.id)) for m in ms)
+    out = _history(visits, str(unit), k)
+    done = [m for m, s in visits if s.scanned]
+    if done and visits[-1][0].id != done[-1].id:  # the latest visit was not scanned: say so
+        m, s = visits[-1]
+        note = f" (the latest visit, {m.date_utc[:10]}, has no link scan: {s.status}: {s.reason})"
+        out = UnitLinks(out.unit, out.visits, out.comparable, out.statement + note, out.links, k)
+    return out
+
+
+def _history(visits, unit, k):
+    done = [(m, s) for m, s in visits if s.scanned]
+    if not done:
+        why = visits[-1][1].reason if visits else "no measurement"
+        last = f" (latest: {visits[-1][1].status}: {why})" if visits else ""
+        return UnitLinks(str(unit), visits, False, f"no visit of unit {unit} has a link scan{last}", (), k)
+    m_now, s_now = done[-1]
+    day = m_now.date_utc[:10]
+    if s_now.marker_s is None:
+        links = tuple(
+            LinkHistory(
+                f.link,
+                "unmatched",
+                f"{_flag_words(f)}; counted from the link at the sensor at the start",
+                (_visit(m_now, s_now, f.link),),
+            )
+            for f in s_now.flagged
+        )
+        statement = (
+            f"the link numbers of the {day} scan count from whichever link was at the sensor when the recording "
+            "started (no marker): they name no physical link and cannot be matched with another visit's; record "
+            "with a marked link (the catalogue's marker_s) to follow a link across visits"
+        )
+        return UnitLinks(str(unit), visits, False, statement, links, k)
+    earlier = [(m, s) for m, s in done[:-1] if s.marker_s is not None and s.n_links == s_now.n_links]
+    if not earlier:
+        links = tuple(
+            LinkHistory(
+                f.link,
+                "flagged",
+                f"{_flag_words(f)}; no earlier scan counts from the marked link",
+                (_visit(m_now, s_now, f.link),),
+            )
+            for f in s_now.flagged
+        )
+        others = len(done) - 1
+        statement = (
+            f"the {day} scan counts from the marked link; no earlier scan of unit {unit} does"
+            + (f" ({others} earlier scan(s) count from the link at the sensor at their start)" if others else "")
+            + ": nothing to compare yet"
+        )
+        return UnitLinks(str(unit), visits, False, statement, links, k)
+    marked = earlier + [(m_now, s_now)]
+    m_before, s_before = earlier[-1]
+    numbers = sorted({f.link for _, s in marked for f in s.flagged})
+    out = []
+    for n in numbers:
+        vs = tuple(_visit(m, s, n) for m, s in marked)
+        now, before = vs[-1], vs[-2]
+        if now.flagged:
+            verdict, words = _compare(now, before, k)
+        elif before.flagged:
+            verdict, words = (
+                "not flagged now",
+                f"flagged on {before.date_utc[:10]} ({_mm(before.excess_pitch_m)}), not now",
+            )
+        else:
+            last = next(v for v in reversed(vs) if v.flagged)
+            verdict, words = "not flagged now", f"last flagged on {last.date_utc[:10]}"
+        out.append(LinkHistory(n, verdict, words, vs))
+    out.sort(key=lambda h: (_ORDER.get(h.verdict, 9), h.link))
+    statement = (
+        f"links numbered from the marked link on {len(marked)} visits; the {day} scan compared with "
+        f"{m_before.date_utc[:10]}'s: worse is an excess grown by more than {k:g} combined sigmas (the same link "
+        "must be marked at every visit)"
+    )
+    return UnitLinks(str(unit), visits, True, statement, tuple(out), k)
