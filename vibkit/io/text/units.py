@@ -247,6 +247,10 @@ def split_name_unit(header: str) -> tuple[str, str | None, str | None]:
     m = re.match(r"^(?P<name>.*\S)\s+in\s+(?P<unit>\S+)$", h)
     if m and (parse_unit(m.group("unit")) or parse_time_unit(m.group("unit"))):
         return m.group("name"), m.group("unit"), None
+    # a unit spelt in a programmer's name, its slash an underscore: "accel_m_s2", "disp_mm", "vel_mm_s"
+    m = re.match(r"^(?P<name>.*?[A-Za-z0-9])_(?P<len>m|cm|mm|um)_s(?P<sq>_?2)?$", h)
+    if m:
+        return m.group("name"), f"{m.group('len')}/s{'^2' if m.group('sq') else ''}", None
     m = re.match(r"^(?P<name>.*?[A-Za-z0-9])[ _\-](?P<unit>[A-Za-zµμ/0-9^]+)$", h)
     if m and _normalise(m.group("unit")) in _SUFFIX_UNITS:
         return m.group("name"), m.group("unit"), None
