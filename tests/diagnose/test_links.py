@@ -105,10 +105,13 @@ def test_a_marker_renumbers_from_the_marked_link(recordings, capsys):
     assert (plain - marked) % N in (10, 11)
 
 
-def test_the_step_channel_is_refused_with_a_scene(recordings):
+def test_the_step_channel_is_refused_with_or_without_a_scene(recordings):
+    """The simulated step accelerometer (5 mm/s^2 noise) of the worn chain gets no link number: its passes
+    round the heads change as much from run to run as the worn link changes them."""
     rec = xr.open_dataset(recordings[40][0])
-    with pytest.raises(ValueError, match="tensioner"):
-        find_worn_links(rec, speed=SPEED, n_links=N, channel="accel_step", scene=SCENE)
+    for scene in (SCENE, None):
+        with pytest.raises(ValueError, match="step accelerometer gives no link number"):
+            find_worn_links(rec, speed=SPEED, n_links=N, channel="accel_step", scene=scene)
 
 
 def test_the_report_has_a_links_page_with_the_flagged_link(recordings, tmp_path):

@@ -56,6 +56,15 @@ MIN_EXCESS_M = 0.05e-3
 MAX_OWN_CYCLE_FLAGS = 3
 #: the sensors the model gives a signature for: sensor -> the simulation's output
 SENSORS = {"tensioner": "delta"}
+#: units of a step accelerometer's channel (refused: see ``STEP_REFUSAL``)
+ACCELERATION_UNITS = ("m/s^2", "m/s2", "m s-2", "mm/s^2", "g")
+#: why a step accelerometer gives no link number (measured on the no-load scene, 0.5 m/s, exact closure)
+STEP_REFUSAL = (
+    "a step accelerometer gives no link number: the step rides the chain, and each time it goes round the "
+    "sprocket or the lower head its own acceleration changes by 0.04-0.05 m/s^2 from loop to loop and from run "
+    "to run; those changes come at the same times whichever link is worn (simulated links 40, 70 and 100, "
+    "1 mm long), and they are as large as what a 1 mm worn link changes; record the tensioner's displacement"
+)
 
 
 @dataclass(frozen=True)
@@ -269,11 +278,14 @@ def find_worn_links(
     TooFewLoops
         The recording covers fewer than two loops (the message says how long to record).
     ValueError
-        A bad channel, no link pass found.
+        A bad channel, no link pass found; an acceleration channel (a step accelerometer: its own passes
+        round the heads change from loop to loop as much as a worn link changes them, ``STEP_REFUSAL``).
     """
     ch = links_channel(recording, channel)
     if ch not in recording.data_vars:
         raise ValueError(f"no channel {ch!r} (channels: {', '.join(map(str, recording.data_vars))})")
+    if str(recording[ch].attrs.get("units", "")) in ACCELERATION_UNITS:
+        raise ValueError(f"channel {ch} (units {recording[ch].attrs['units']}): {STEP_REFUSAL}")
     n = int(n_links)
     if n < 2:
         raise ValueError(f"--links {n_links!r}: a chain has at least 2 links")
