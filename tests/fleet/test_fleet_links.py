@@ -7,7 +7,6 @@ import json
 import os
 import shutil
 import sqlite3
-import sys
 from pathlib import Path
 
 import pytest
@@ -292,8 +291,9 @@ def test_status_json_and_text_give_the_links(tmp_path, capsys):
 
 # ------------------------------------------------------------------------------------------ scan plumbing
 def test_scan_stores_too_few_loops_and_not_run(tmp_path, capsys):
-    """The example fleet's 10 s step recordings cover 0.23 loops of the profile's 159 links: stored with their
-    pitch and the scan's status; a unit without a number of links is not scanned."""
+    """The example fleet's step accelerometers (10 s, 0.23 loops of the profile's 159 links) are stored with
+    their pitch and a scan "not run" that says why a step gives no link number; a unit without a number of
+    links is not scanned either."""
     shutil.copytree(ROOT / "data/fleet-example/E07", tmp_path / "E07")
     shutil.copytree(ROOT / "data/fleet-example/E12", tmp_path / "E12")
     shutil.copytree(ROOT / "data/fleet-example/escalators", tmp_path / "escalators")
@@ -305,13 +305,13 @@ def test_scan_stores_too_few_loops_and_not_run(tmp_path, capsys):
     )
     db = tmp_path / "f.sqlite"
     assert main(["fleet", "scan", str(tmp_path), "--catalogue", str(cat), "--workers", "0", "--db", str(db)]) == 0
-    assert "links: too few loops" in capsys.readouterr().out
+    assert "links: not run" in capsys.readouterr().out
     with FleetDB(db, readonly=True) as fdb:
         ms = {m.id: m for m in fdb.measurements()}
         scans = fdb.link_scans()
     assert len(ms) == 6 and sorted(scans) == sorted(ms)
     e07 = [s for i, s in scans.items() if ms[i].unit == "E07"]
-    assert {s.status for s in e07} == {"too few loops"} and all("record at least" in s.reason for s in e07)
+    assert {s.status for s in e07} == {"not run"} and all("step accelerometer" in s.reason for s in e07)
     assert {(s.n_links, s.marker_s) for s in e07} == {(159, 3.5)}
     assert {(s.status, s.reason) for i, s in scans.items() if ms[i].unit == "E12"} == {("not run", NO_LINK_COUNT)}
 
@@ -319,8 +319,7 @@ def test_scan_stores_too_few_loops_and_not_run(tmp_path, capsys):
 def test_scan_with_a_marked_link_follows_it_across_two_visits(tmp_path, capsys):
     """Two constructed tensioner recordings (40 links, 2.2 loops) whose link 12 deviates, each with a marker:
     scanned, numbered from the marked link, and the second visit compares link 12 with the first."""
-    sys.path.insert(0, str(ROOT / "tests/cli"))
-    from test_links_cli import _recording
+    from cli.test_links_cli import _recording
 
     (tmp_path / "E30").mkdir()
     _recording(tmp_path / "E30/2025-01-10.nc", 40, 2.2, bump_link=12, bump=2e-7, seed=1)

@@ -45,11 +45,20 @@ def link_scan_of(recording, *, path, speed, n_links, channel=None, scene=None, m
     """
     if n_links is None:
         return LinkScan.not_run(NO_LINK_COUNT, marker_s=marker_s)
-    from ..diagnose.links import TooFewLoops, find_worn_links, is_tensioner_channel, links_channel
+    from ..diagnose.links import (
+        ACCELERATION_UNITS,
+        STEP_REFUSAL,
+        TooFewLoops,
+        find_worn_links,
+        is_tensioner_channel,
+        links_channel,
+    )
 
     keep = {"n_links": int(n_links), "marker_s": marker_s}
     try:
         ch = links_channel(recording, channel)
+        if ch in recording and recording[ch].attrs.get("units") in ACCELERATION_UNITS:
+            return LinkScan.not_run(f"channel {ch}: {STEP_REFUSAL}", **keep)
         use_scene = scene if scene is not None and ch in recording and is_tensioner_channel(recording, ch) else None
         res = find_worn_links(
             recording, speed=speed, n_links=n_links, channel=ch, scene=use_scene, marker_s=marker_s, file=path
