@@ -284,7 +284,7 @@ def find_worn_links(
     ch = links_channel(recording, channel)
     if ch not in recording.data_vars:
         raise ValueError(f"no channel {ch!r} (channels: {', '.join(map(str, recording.data_vars))})")
-    if str(recording[ch].attrs.get("units", "")) in ACCELERATION_UNITS:
+    if is_step_channel(recording, ch):
         raise ValueError(f"channel {ch} (units {recording[ch].attrs['units']}): {STEP_REFUSAL}")
     n = int(n_links)
     if n < 2:
@@ -398,6 +398,11 @@ def _result(file, ch, sensor, speed, lmap, n, flagged, scan, excess, method, mar
         notes=notes,
         **kw,
     )
+
+
+def is_step_channel(recording, channel):
+    """Whether ``channel`` is an acceleration (a step accelerometer): refused, see ``STEP_REFUSAL``."""
+    return str(recording[channel].attrs.get("units", "")) in ACCELERATION_UNITS
 
 
 def is_tensioner_channel(recording, channel):

@@ -46,10 +46,10 @@ def link_scan_of(recording, *, path, speed, n_links, channel=None, scene=None, m
     if n_links is None:
         return LinkScan.not_run(NO_LINK_COUNT, marker_s=marker_s)
     from ..diagnose.links import (
-        ACCELERATION_UNITS,
         STEP_REFUSAL,
         TooFewLoops,
         find_worn_links,
+        is_step_channel,
         is_tensioner_channel,
         links_channel,
     )
@@ -57,7 +57,7 @@ def link_scan_of(recording, *, path, speed, n_links, channel=None, scene=None, m
     keep = {"n_links": int(n_links), "marker_s": marker_s}
     try:
         ch = links_channel(recording, channel)
-        if ch in recording and recording[ch].attrs.get("units") in ACCELERATION_UNITS:
+        if ch in recording and is_step_channel(recording, ch):
             return LinkScan.not_run(f"channel {ch}: {STEP_REFUSAL}", **keep)
         use_scene = scene if scene is not None and ch in recording and is_tensioner_channel(recording, ch) else None
         res = find_worn_links(
