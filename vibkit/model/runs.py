@@ -1,0 +1,390 @@
+"""The chain closed run by run: the exact closure at a cost that grows with the guide's segments.
+
+Between two *joints* (a link that crosses from one segment of the guide to the next, or a link of
+another pitch than its neighbours) the rollers form a *run* of equal links on one segment: on a line
+each is one pitch further on, on an arc each is the previous one turned by the chord angle, and the
+segment itself moves, if at all, rigidly with delta (:mod:`vibkit.model.guide`: r = A_k + B_k delta +
+f_k(lam)). So a run moves as one body: every roller of it has the same rate of local arc length,
+lam-dot = alpha s-dot + beta delta-dot, and the same lam-ddot = alpha s-ddot + beta delta-ddot + q.
+
+A walk (:func:`run_walk`) visits joints only: the end of a run in closed form (how many links fit on
+the segment, and the last roller's place), one exact link over each joint (the same
+:func:`vibkit.model.guide.circle_hit` as :func:`vibkit.model.chain.walk`), and the rates carried across
+the joint by the link's constraint, u . (v_B - v_A) = 0. The ghost of roller 1 (model.md section 3)
+gives the residual h and, from the same rates, dh/ddelta for Newton's method. With the rates' closure
+(the ghost's s0-dot is roller 1's) fixing c = ddelta/ds and the accelerations' (u . (a_B - a_A) +
+|v_B - v_A|^2 = 0 across each joint) fixing e (delta-ddot = c s-ddot + e), :func:`run_fill` writes
+every roller's place, J = dr/ds and h (a = J s-ddot + h) into the work arrays that
+:func:`vibkit.model.effects.evaluate_forces` takes from there.
+
+Nothing is tabulated or approximated: this is the exact closure, walked in about 20 joints instead
+of 160 links, for any chain (worn links, rollers of their own mass or radius, passengers, rolling
+resistance). ``tests/model/test_runs.py`` compares it with :func:`vibkit.model.effects.evaluate`.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba as nb
+import numpy as np
+
+from .chain import closure_residual
+from .effects import evaluate, evaluate_forces
+from .guide import (
+    BX,
+    BZ,
+    COS0,
+    KAPPA,
+    LEN0,
+    RAMP,
+    S0,
+    SIGP,
+    SIN0,
+    circle_hit,
+    local_frame,
+    local_inverse,
+    local_map,
+    locate,
+    seg_length,
+)
+from .slots import (
+    FP_CLOSURE_TOL,
+    FP_P0,
+    HEAD_LINK_ERROR,
+    HEAD_NAMES,
+    HEAD_RUNS,
+    INFO_AT,
+    INFO_CURVATURE,
+    INFO_DELTA,
+    INFO_SLOPE,
+    INFO_WALKS,
+    IP_N,
+    IP_PASSENGERS,
+    PASSENGERS_BY_PLACE,
+    PRM_FP,
+    PRM_IP,
+    PRM_PITCHES,
+    PRM_TABLE,
+    TB_HEAD,
+    TB_RAUX,
+    TB_RNEXT,
+    TB_RSTEP,
+    TB_RUNS,
+)
+
+__all__ = ["build_runs", "run_close", "run_fill", "run_walk", "runs_evaluate"]
+
+# columns of a run's record (one row per run, in walking order)
+R_SEG, R_FIRST, R_LAST, R_LAM, R_WRAPS = 0, 1, 2, 3, 4
+R_X, R_Z, R_TX, R_TZ = 5, 6, 7, 8  # the run's first roller: place and unit tangent
+R_ALPHA, R_BETA, R_Q = 9, 10, 11  # lam-dot = alpha s-dot + beta delta-dot; q: lam-ddot's constant
+R_XE, R_ZE, R_TXE, R_TZE = 12, 13, 14, 15  # the run's last roller
+R_STEP = 16  # the arc length of one link along the segment [m]
+R_COLS = 17
+# the auxiliary slots: local_map's partials at roller 1 and at the ghost, the runs walked
+A_ONE, A_GHOST, A_RUNS = 0, 4, 8
+A_COLS = 9
+
+MAX_NEWTON = 30
+
+
+def _nominal(pitches):
+    """The pitch most links have (the one runs are made of). [m]"""
+    values, counts = np.unique(pitches, return_counts=True)
+    return float(values[np.argmax(counts)])
+
+
+def run_steps(tab, pitch):
+    """Per segment: the arc length one link of ``pitch`` spans along it, and the cosine and sine of
+    the angle it turns on an arc (inf where the link is longer than the arc's diameter). (nseg, 3)"""
+    out = np.zeros((tab.shape[0], 3))
+    for k in range(tab.shape[0]):
+        kap = tab[k, KAPPA]
+        if kap == 0.0:
+            out[k] = (pitch, 1.0, 0.0)
+            continue
+        rho = 1.0 / abs(kap)
+        if pitch >= 2.0 * rho:
+            out[k] = (math.inf, 1.0, 0.0)
+            continue
+        step = 2.0 * rho * math.asin(pitch / (2.0 * rho))
+        out[k] = (step, math.cos(kap * step), math.sin(kap * step))
+    return out
+
+
+def next_other(pitches, nominal):
+    """For each roller i in 0..n: the first r >= i whose link (to roller r + 1) is not of the nominal
+    pitch, or n. (n + 1,) int64"""
+    n = pitches.size
+    out = np.full(n + 1, n, dtype=np.int64)
+    nxt = n
+    for r in range(n - 1, -1, -1):
+        if pitches[r] != nominal:
+            nxt = r
+        out[r] = nxt
+    return out
+
+
+@nb.njit(cache=True, error_model="numpy")
+def _link(tab, delta, k, lo, qx, qz, pitch, wraps):
+    """One link of ``pitch`` from the roller on segment k at local arc length lo, place (qx, qz):
+    the next roller's (segment, lam, x, z, tx, tz, wraps), segment -1 where the guide has no point at
+    that distance. The same construction as :func:`vibkit.model.chain.walk`."""
+    nseg = tab.shape[0]
+    kap = tab[k, KAPPA]
+    length = seg_length(tab, k, delta)
+    if kap == 0.0:
+        found = lo + pitch
+        if found <= length:
+            c0, s0 = tab[k, COS0], tab[k, SIN0]
+            return k, found, qx + pitch * c0, qz + pitch * s0, c0, s0, wraps
+    else:
+        rho = 1.0 / abs(kap)
+        if pitch < 2.0 * rho:
+            found = lo + 2.0 * rho * math.asin(pitch / (2.0 * rho))
+            if found <= length:
+                x, z, tx, tz = local_frame(tab, k, found, delta)
+                return k, found, x, z, tx, tz, wraps
+    found = -1.0
+    k += 1
+    if k == nseg:
+        k = 0
+        wraps += 1
+    for _ in range(nseg + 1):
+        found = circle_hit(tab, k, delta, qx, qz, pitch, 0.0)
+        if found != -1.0:
+            break
+        k += 1
+        if k == nseg:
+            k = 0
+            wraps += 1
+    if found == -1.0:
+        return -1, 0.0, 0.0, 0.0, 0.0, 0.0, wraps
+    x, z, tx, tz = local_frame(tab, k, found, delta)
+    return k, found, x, z, tx, tz, wraps
+
+
+@nb.njit(cache=True, error_model="numpy", inline="always")
+def _inverse(tab, k, lam, delta):
+    """s0 - s0_k at local arc length lam on segment k: closed form on a telescopic run's straight
+    middle (where the map is linear), else :func:`vibkit.model.guide.local_inverse`."""
+    if tab[k, SIGP] != 0.0:
+        lt = tab[k, LEN0]
+        a = 1.0 / (1.0 - RAMP)
+        x = (lam - 0.5 * delta * a * RAMP) / (1.0 - delta * a / lt)
+        if RAMP * lt < x < (1.0 - RAMP) * lt:
+            return x
+    return local_inverse(tab, k, lam, delta)
+
+
+@nb.njit(cache=True, error_model="numpy")
+def run_walk(tab, p0, s, delta, pitches, n, rstep, rnext, runs, aux):
+    """Walk the chain from roller 1 at s0 = s at trial ``delta``, run by run (see the module
+    docstring), recording each run in ``runs`` with its rate coefficients. Returns (h, dh/ddelta):
+    the ghost's residual s0_ghost - (s + P0) and its derivative; h is NaN where a link finds no guide
+    point. ``aux`` receives local_map's partials at roller 1 and at the ghost and the number of runs."""
+    wraps = math.floor(s / p0)
+    sl = s - wraps * p0
+    k = locate(tab, sl)
+    lam, ls, ld, lss, lsd = local_map(tab, k, sl - tab[k, S0], delta)
+    aux[A_ONE], aux[A_ONE + 1], aux[A_ONE + 2], aux[A_ONE + 3] = ls, ld, lss, lsd
+    x, z, tx, tz = local_frame(tab, k, lam, delta)
+    al, be = ls, ld
+    i = 0
+    r = 0
+    while True:
+        step = rstep[k, 0]
+        m = 0
+        room = seg_length(tab, k, delta) - lam
+        if room >= step:
+            m = int(room / step)
+            cap = min(rnext[i], n) - i
+            if m > cap:
+                m = cap
+        row = runs[r]
+        row[R_SEG], row[R_FIRST], row[R_LAST], row[R_LAM], row[R_WRAPS] = k, i, i + m, lam, wraps
+        row[R_X], row[R_Z], row[R_TX], row[R_TZ] = x, z, tx, tz
+        row[R_ALPHA], row[R_BETA], row[R_STEP] = al, be, step
+        if m > 0:
+            lam += m * step
+            x, z, tx, tz = local_frame(tab, k, lam, delta)
+        row[R_XE], row[R_ZE], row[R_TXE], row[R_TZE] = x, z, tx, tz
+        r += 1
+        i += m
+        if i == n:
+            break
+        kn, ln, xn, zn, txn, tzn, wraps = _link(tab, delta, k, lam, x, z, pitches[i], wraps)
+        if kn < 0:
+            aux[A_RUNS] = r
+            return math.nan, 0.0
+        # the rates across the joint: u . (v_B - v_A) = 0 with v = B_k delta-dot + T lam-dot
+        ux, uz = xn - x, zn - z
+        uta = ux * tx + uz * tz
+        utb = ux * txn + uz * tzn
+        uba = ux * tab[k, BX] + uz * tab[k, BZ]
+        ubb = ux * tab[kn, BX] + uz * tab[kn, BZ]
+        al = uta * al / utb
+        be = (uba + uta * be - ubb) / utb
+        k, lam, x, z, tx, tz = kn, ln, xn, zn, txn, tzn
+        i += 1
+    aux[A_RUNS] = r
+    # the ghost (roller n) is the last run's last roller
+    s0loc = _inverse(tab, k, lam, delta)
+    _, lsg, ldg, lssg, lsdg = local_map(tab, k, s0loc, delta)
+    aux[A_GHOST], aux[A_GHOST + 1], aux[A_GHOST + 2], aux[A_GHOST + 3] = lsg, ldg, lssg, lsdg
+    h = wraps * p0 + tab[k, S0] + s0loc - (s + p0)
+    return h, (be - ldg) / lsg
+
+
+@nb.njit(cache=True, error_model="numpy")
+def run_close(tab, p0, s, guess, pitches, n, tol, rstep, rnext, runs, aux):
+    """Newton's method on delta from ``guess`` with the walk's own dh/ddelta. Returns (delta, walks,
+    status): status 0 closed to ``tol``, 1 not (the caller falls back to the safeguarded exact
+    closure)."""
+    d = guess
+    for it in range(MAX_NEWTON):
+        h, dh = run_walk(tab, p0, s, d, pitches, n, rstep, rnext, runs, aux)
+        if math.isnan(h) or not dh > 0.0:
+            return d, it + 1, 1
+        if abs(h) <= tol:
+            return d, it + 1, 0
+        dn = d - h / dh
+        if abs(dn - d) <= 8.0 * 2.220446049250313e-16 * max(abs(d), 1e-3):
+            # stalled at the resolution of delta; the walk is the one at d
+            return d, it + 1, 0 if abs(h) < 1e3 * tol else 1
+        d = dn
+    return d, MAX_NEWTON, 1
+
+
+@nb.njit(cache=True, error_model="numpy")
+def run_fill(tab, p0, n, delta, sdot, runs, aux, xs, zs, jac, hacc, s0, want_s0):
+    """From the closed walk: c = ddelta/ds, e (delta-ddot = c s-ddot + e) and every roller's place,
+    J = dr/ds and h (a = J s-ddot + h) at roller-1 speed ``sdot``; each roller's s0 as well where
+    ``want_s0``. Returns (c, e, dh/ddelta)."""
+    nr = int(aux[A_RUNS])
+    g = runs[nr - 1]
+    lsg, ldg = aux[A_GHOST], aux[A_GHOST + 1]
+    c = (lsg - g[R_ALPHA]) / (g[R_BETA] - ldg)
+    sd2 = sdot * sdot
+    ddot = c * sdot
+    # lam-ddot's constant q, run by run: u . (a_B - a_A) + |v_B - v_A|^2 = 0 across each joint
+    q = (aux[A_ONE + 2] + 2.0 * aux[A_ONE + 3] * c) * sd2
+    runs[0, R_Q] = q
+    for r in range(1, nr):
+        a, b = runs[r - 1], runs[r]
+        ka, kb = int(a[R_SEG]), int(b[R_SEG])
+        lda = (a[R_ALPHA] + a[R_BETA] * c) * sdot
+        ldb = (b[R_ALPHA] + b[R_BETA] * c) * sdot
+        txa, tza, txb, tzb = a[R_TXE], a[R_TZE], b[R_TX], b[R_TZ]
+        ux, uz = b[R_X] - a[R_XE], b[R_Z] - a[R_ZE]
+        dvx = (tab[kb, BX] - tab[ka, BX]) * ddot + txb * ldb - txa * lda
+        dvz = (tab[kb, BZ] - tab[ka, BZ]) * ddot + tzb * ldb - tza * lda
+        una = -ux * tza + uz * txa
+        unb = -ux * tzb + uz * txb
+        q = (
+            (ux * txa + uz * tza) * q
+            + tab[ka, KAPPA] * una * lda * lda
+            - tab[kb, KAPPA] * unb * ldb * ldb
+            - (dvx * dvx + dvz * dvz)
+        ) / (ux * txb + uz * tzb)
+        b[R_Q] = q
+    qg = (aux[A_GHOST + 2] + 2.0 * aux[A_GHOST + 3] * c) * sd2
+    e = (qg - q) / (g[R_BETA] - ldg)
+    # every roller: J = B c + T g, h = B e + T (beta e + q) + kappa N lam-dot^2
+    for r in range(nr):
+        row = runs[r]
+        first, last = int(row[R_FIRST]), int(row[R_LAST])
+        if last > n - 1:
+            last = n - 1
+        if first > last:
+            continue
+        k = int(row[R_SEG])
+        kap = tab[k, KAPPA]
+        gr = row[R_ALPHA] + row[R_BETA] * c
+        w = row[R_BETA] * e + row[R_Q]
+        cen = kap * (gr * sdot) ** 2
+        cbx, cbz, ebx, ebz = tab[k, BX] * c, tab[k, BZ] * c, tab[k, BX] * e, tab[k, BZ] * e
+        x, z, tx, tz = row[R_X], row[R_Z], row[R_TX], row[R_TZ]
+        step = row[R_STEP]
+        if kap != 0.0:
+            cx, cz = x - tz / kap, z + tx / kap
+            cd, sg = math.cos(kap * step), math.sin(kap * step)
+        for i in range(first, last + 1):
+            if kap == 0.0:
+                xs[i] = x + (i - first) * step * tx
+                zs[i] = z + (i - first) * step * tz
+            else:
+                if i > first:
+                    tx, tz = tx * cd - tz * sg, tz * cd + tx * sg
+                xs[i] = cx + tz / kap
+                zs[i] = cz - tx / kap
+            jac[i, 0] = cbx + tx * gr
+            jac[i, 1] = cbz + tz * gr
+            hacc[i, 0] = ebx + tx * w - tz * cen
+            hacc[i, 1] = ebz + tz * w + tx * cen
+            if want_s0:
+                s0[i] = row[R_WRAPS] * p0 + tab[k, S0] + _inverse(tab, k, row[R_LAM] + (i - first) * step, delta)
+        if first <= int(row[R_LAST]) <= n - 1:
+            # the run's last roller as the walk placed it (the rotations above agree to rounding)
+            xs[last] = row[R_XE]
+            zs[last] = row[R_ZE]
+    return c, e, (g[R_BETA] - ldg) / lsg
+
+
+@nb.njit(cache=True, error_model="numpy")
+def runs_evaluate(t, y, dy, prm, ws, want_teeth, tb):
+    """Right-hand side of the forward dynamics from the closure walked run by run: the same
+    equations, work arrays and ``info`` slots as :func:`vibkit.model.effects.evaluate` (which it
+    falls back to where Newton's method from the predicted delta does not close). Returns 0, or 1
+    where the chain cannot close."""
+    tab, fp, ip, pitches = prm[PRM_TABLE], prm[PRM_FP], prm[PRM_IP], prm[PRM_PITCHES]
+    s0, xs, zs, jac, hacc, info = ws[0], ws[3], ws[4], ws[8], ws[10], ws[18]
+    n = ip[IP_N]
+    p0 = fp[FP_P0]
+    ds = y[0] - info[INFO_AT]
+    guess = info[INFO_DELTA] + ds * (info[INFO_SLOPE] + 0.5 * info[INFO_CURVATURE] * ds)
+    runs, aux = tb[TB_RUNS], tb[TB_RAUX]
+    delta, walks, st = run_close(
+        tab, p0, y[0], guess, pitches, n, fp[FP_CLOSURE_TOL], tb[TB_RSTEP], tb[TB_RNEXT], runs, aux
+    )
+    if st != 0:
+        return evaluate(t, y, dy, prm, ws, want_teeth)
+    info[INFO_WALKS] += walks
+    want_s0 = ip[IP_PASSENGERS] == PASSENGERS_BY_PLACE
+    c, e, dh = run_fill(tab, p0, n, delta, y[1], runs, aux, xs, zs, jac, hacc, s0, want_s0)
+    return evaluate_forces(t, y, dy, prm, ws, want_teeth, delta, c, e, dh)
+
+
+def build_runs(model, prm, empty, s, delta):
+    """The run-by-run closure's data for ``model`` in the pitch table's tuple ``empty`` (an empty
+    table, :func:`vibkit.model.pitch_table.empty_table`): the head marked, each segment's step for
+    the links most of the chain has, where the other links are, scratch for the walk. The head's
+    link error is the walk's own (the largest | |r_{i+1} - r_i| - L_i |) closed at roller-1
+    coordinate ``s`` from ``delta``. [m]"""
+    pitches = np.asarray(model.chain.pitches, dtype=float)
+    n = pitches.size
+    tab = model.guide.table
+    head = empty[TB_HEAD].copy()
+    if head.size != len(HEAD_NAMES):
+        raise RuntimeError("the table's header and vibkit.model.slots.HEAD_NAMES disagree")
+    head[HEAD_RUNS] = 1.0
+    nominal = _nominal(pitches)
+    tb = list(empty)
+    tb[TB_HEAD] = head
+    tb[TB_RSTEP] = run_steps(tab, nominal)
+    tb[TB_RNEXT] = next_other(pitches, nominal)
+    tb[TB_RUNS] = np.zeros((n + 2, R_COLS))
+    tb[TB_RAUX] = np.zeros(A_COLS)
+    fp = prm[PRM_FP]
+    p0 = float(fp[FP_P0])
+    rstep, rnext, runs, aux = tb[TB_RSTEP], tb[TB_RNEXT], tb[TB_RUNS], tb[TB_RAUX]
+    delta, _, st = run_close(
+        tab, p0, float(s), float(delta), pitches, n, float(fp[FP_CLOSURE_TOL]), rstep, rnext, runs, aux
+    )
+    head[HEAD_LINK_ERROR] = math.nan
+    if st == 0:
+        xs, zs, two = np.empty(n + 1), np.empty(n + 1), np.empty((n, 2))
+        run_fill(tab, p0, n, delta, 0.0, runs, aux, xs, zs, two, two.copy(), xs, False)
+        head[HEAD_LINK_ERROR] = closure_residual(xs, zs, n, pitches)
+    return tuple(tb)
