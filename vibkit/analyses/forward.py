@@ -25,7 +25,7 @@ from ..model.effects import (
     reset_closure,
 )
 from ..model.pitch_table import empty_table, rhs, table_applies, table_delta, table_spacing
-from ..model.runs import build_runs
+from ..model.runs_rhs import build_runs
 from ..model.schema import SceneError, effect_options, nominal_speed
 from ..model.slots import (
     FP_CARRIAGE_MASS,

@@ -39,7 +39,7 @@ import numpy as np
 
 from .chain import acceleration_terms, close_with_slope, fill_partials, sensitivity, velocity_coefficients, walk_arrays
 from .effects import aboard, clear_teeth, evaluate, finish, rolling_force, step_load, step_roller, within_reach
-from .runs import runs_evaluate
+from .runs_rhs import runs_evaluate
 from .slots import (
     FP_CARRIAGE_MASS,
     FP_CLOSURE_TOL,
@@ -472,7 +472,7 @@ def empty_table():
         z3,
         np.zeros(0, dtype=np.int64),
         np.zeros((0, 0, 12)),
-        np.zeros((0, 3)),
+        np.zeros((0, 5)),
         np.zeros(0, dtype=np.int64),
         np.zeros((0, 17)),
         z1,

@@ -29,8 +29,6 @@ import math
 import numba as nb
 import numpy as np
 
-from .chain import closure_residual
-from .effects import evaluate, evaluate_forces
 from .guide import (
     BX,
     BZ,
@@ -48,32 +46,8 @@ from .guide import (
     locate,
     seg_length,
 )
-from .slots import (
-    FP_CLOSURE_TOL,
-    FP_P0,
-    HEAD_LINK_ERROR,
-    HEAD_NAMES,
-    HEAD_RUNS,
-    INFO_AT,
-    INFO_CURVATURE,
-    INFO_DELTA,
-    INFO_SLOPE,
-    INFO_WALKS,
-    IP_N,
-    IP_PASSENGERS,
-    PASSENGERS_BY_PLACE,
-    PRM_FP,
-    PRM_IP,
-    PRM_PITCHES,
-    PRM_TABLE,
-    TB_HEAD,
-    TB_RAUX,
-    TB_RNEXT,
-    TB_RSTEP,
-    TB_RUNS,
-)
 
-__all__ = ["build_runs", "run_close", "run_fill", "run_walk", "runs_evaluate"]
+__all__ = ["next_other", "run_close", "run_fill", "run_rates", "run_steps", "run_walk"]
 
 # columns of a run's record (one row per run, in walking order)
 R_SEG, R_FIRST, R_LAST, R_LAM, R_WRAPS = 0, 1, 2, 3, 4
@@ -83,8 +57,8 @@ R_XE, R_ZE, R_TXE, R_TZE = 12, 13, 14, 15  # the run's last roller
 R_STEP = 16  # the arc length of one link along the segment [m]
 R_COLS = 17
 # the auxiliary slots: local_map's partials at roller 1 and at the ghost, the runs walked
-A_ONE, A_GHOST, A_RUNS = 0, 4, 8
-A_COLS = 9
+A_ONE, A_GHOST, A_RUNS, A_DEP = 0, 4, 8, 9
+A_COLS = 10
 
 MAX_NEWTON = 30
 
@@ -97,19 +71,21 @@ def _nominal(pitches):
 
 def run_steps(tab, pitch):
     """Per segment: the arc length one link of ``pitch`` spans along it, and the cosine and sine of
-    the angle it turns on an arc (inf where the link is longer than the arc's diameter). (nseg, 3)"""
-    out = np.zeros((tab.shape[0], 3))
+    the angle it turns on an arc, 0 (the column :func:`vibkit.model.runs_rhs.build_runs` marks segments
+    within the sprocket's reach in) and the sine of half the angle (inf where the link is longer than
+    the arc's diameter). (nseg, 5)"""
+    out = np.zeros((tab.shape[0], 5))
     for k in range(tab.shape[0]):
         kap = tab[k, KAPPA]
         if kap == 0.0:
-            out[k] = (pitch, 1.0, 0.0)
+            out[k] = (pitch, 1.0, 0.0, 0.0, 0.0)
             continue
         rho = 1.0 / abs(kap)
         if pitch >= 2.0 * rho:
-            out[k] = (math.inf, 1.0, 0.0)
+            out[k] = (math.inf, 1.0, 0.0, 0.0, 0.0)
             continue
         step = 2.0 * rho * math.asin(pitch / (2.0 * rho))
-        out[k] = (step, math.cos(kap * step), math.sin(kap * step))
+        out[k] = (step, math.cos(kap * step), math.sin(kap * step), 0.0, math.sin(0.5 * kap * step))
     return out
 
 
@@ -127,25 +103,27 @@ def next_other(pitches, nominal):
 
 
 @nb.njit(cache=True, error_model="numpy")
-def _link(tab, delta, k, lo, qx, qz, pitch, wraps):
+def _link(tab, delta, k, lo, qx, qz, pitch, wraps, within):
     """One link of ``pitch`` from the roller on segment k at local arc length lo, place (qx, qz):
     the next roller's (segment, lam, x, z, tx, tz, wraps), segment -1 where the guide has no point at
-    that distance. The same construction as :func:`vibkit.model.chain.walk`."""
+    that distance. The same construction as :func:`vibkit.model.chain.walk`; ``within`` False skips
+    the try on segment k (the caller knows the link does not end on it)."""
     nseg = tab.shape[0]
-    kap = tab[k, KAPPA]
-    length = seg_length(tab, k, delta)
-    if kap == 0.0:
-        found = lo + pitch
-        if found <= length:
-            c0, s0 = tab[k, COS0], tab[k, SIN0]
-            return k, found, qx + pitch * c0, qz + pitch * s0, c0, s0, wraps
-    else:
-        rho = 1.0 / abs(kap)
-        if pitch < 2.0 * rho:
-            found = lo + 2.0 * rho * math.asin(pitch / (2.0 * rho))
+    if within:
+        kap = tab[k, KAPPA]
+        length = seg_length(tab, k, delta)
+        if kap == 0.0:
+            found = lo + pitch
             if found <= length:
-                x, z, tx, tz = local_frame(tab, k, found, delta)
-                return k, found, x, z, tx, tz, wraps
+                c0, s0 = tab[k, COS0], tab[k, SIN0]
+                return k, found, qx + pitch * c0, qz + pitch * s0, c0, s0, wraps
+        else:
+            rho = 1.0 / abs(kap)
+            if pitch < 2.0 * rho:
+                found = lo + 2.0 * rho * math.asin(pitch / (2.0 * rho))
+                if found <= length:
+                    x, z, tx, tz = local_frame(tab, k, found, delta)
+                    return k, found, x, z, tx, tz, wraps
     found = -1.0
     k += 1
     if k == nseg:
@@ -178,30 +156,71 @@ def _inverse(tab, k, lam, delta):
     return local_inverse(tab, k, lam, delta)
 
 
+@nb.njit(cache=True, error_model="numpy", inline="always")
+def _moving(tab, k):
+    """Whether segment k moves or stretches with delta."""
+    return tab[k, BX] != 0.0 or tab[k, BZ] != 0.0 or tab[k, SIGP] != 0.0
+
+
 @nb.njit(cache=True, error_model="numpy")
-def run_walk(tab, p0, s, delta, pitches, n, rstep, rnext, runs, aux):
+def run_walk(tab, p0, s, delta, pitches, n, rstep, rnext, runs, aux, resume):
     """Walk the chain from roller 1 at s0 = s at trial ``delta``, run by run (see the module
     docstring), recording each run in ``runs`` with its rate coefficients. Returns (h, dh/ddelta):
     the ghost's residual s0_ghost - (s + P0) and its derivative; h is NaN where a link finds no guide
-    point. ``aux`` receives local_map's partials at roller 1 and at the ghost and the number of runs."""
-    wraps = math.floor(s / p0)
-    sl = s - wraps * p0
-    k = locate(tab, sl)
-    lam, ls, ld, lss, lsd = local_map(tab, k, sl - tab[k, S0], delta)
-    aux[A_ONE], aux[A_ONE + 1], aux[A_ONE + 2], aux[A_ONE + 3] = ls, ld, lss, lsd
-    x, z, tx, tz = local_frame(tab, k, lam, delta)
-    al, be = ls, ld
-    i = 0
-    r = 0
+    point. ``aux`` receives local_map's partials at roller 1 and at the ghost, the number of runs and
+    the first run on a segment that moves with delta. With ``resume`` > 0 the walk keeps the runs
+    before that one (of an earlier walk at the same s, none of which moves with delta) and walks on
+    from there."""
+    if resume > 0:
+        prev = runs[resume - 1]
+        k, i, wraps = int(prev[R_SEG]), int(prev[R_LAST]), prev[R_WRAPS]
+        lam = prev[R_LAM] + (prev[R_LAST] - prev[R_FIRST]) * prev[R_STEP]
+        x, z, tx, tz = prev[R_XE], prev[R_ZE], prev[R_TXE], prev[R_TZE]
+        al, be = prev[R_ALPHA], prev[R_BETA]
+        r = resume
+        dep = resume
+    else:
+        wraps = math.floor(s / p0)
+        sl = s - wraps * p0
+        k = locate(tab, sl)
+        lam, ls, ld, lss, lsd = local_map(tab, k, sl - tab[k, S0], delta)
+        aux[A_ONE], aux[A_ONE + 1], aux[A_ONE + 2], aux[A_ONE + 3] = ls, ld, lss, lsd
+        x, z, tx, tz = local_frame(tab, k, lam, delta)
+        al, be = ls, ld
+        i = 0
+        r = 0
+        dep = -1
+    link = resume > 0
+    within = True
     while True:
+        if link:
+            kn, ln, xn, zn, txn, tzn, wraps = _link(tab, delta, k, lam, x, z, pitches[i], wraps, within)
+            if kn < 0:
+                aux[A_RUNS] = r
+                return math.nan, 0.0
+            # the rates across the joint: u . (v_B - v_A) = 0 with v = B_k delta-dot + T lam-dot
+            ux, uz = xn - x, zn - z
+            uta = ux * tx + uz * tz
+            utb = ux * txn + uz * tzn
+            uba = ux * tab[k, BX] + uz * tab[k, BZ]
+            ubb = ux * tab[kn, BX] + uz * tab[kn, BZ]
+            al = uta * al / utb
+            be = (uba + uta * be - ubb) / utb
+            k, lam, x, z, tx, tz = kn, ln, xn, zn, txn, tzn
+            i += 1
+        link = True
+        if dep < 0 and _moving(tab, k):
+            dep = r
         step = rstep[k, 0]
         m = 0
         room = seg_length(tab, k, delta) - lam
+        cap = min(rnext[i], n) - i
         if room >= step:
             m = int(room / step)
-            cap = min(rnext[i], n) - i
             if m > cap:
                 m = cap
+        # the next link is tried on this segment unless it is of the run's pitch and found no room
+        within = m == cap or room >= (m + 1) * step
         row = runs[r]
         row[R_SEG], row[R_FIRST], row[R_LAST], row[R_LAM], row[R_WRAPS] = k, i, i + m, lam, wraps
         row[R_X], row[R_Z], row[R_TX], row[R_TZ] = x, z, tx, tz
@@ -214,21 +233,8 @@ def run_walk(tab, p0, s, delta, pitches, n, rstep, rnext, runs, aux):
         i += m
         if i == n:
             break
-        kn, ln, xn, zn, txn, tzn, wraps = _link(tab, delta, k, lam, x, z, pitches[i], wraps)
-        if kn < 0:
-            aux[A_RUNS] = r
-            return math.nan, 0.0
-        # the rates across the joint: u . (v_B - v_A) = 0 with v = B_k delta-dot + T lam-dot
-        ux, uz = xn - x, zn - z
-        uta = ux * tx + uz * tz
-        utb = ux * txn + uz * tzn
-        uba = ux * tab[k, BX] + uz * tab[k, BZ]
-        ubb = ux * tab[kn, BX] + uz * tab[kn, BZ]
-        al = uta * al / utb
-        be = (uba + uta * be - ubb) / utb
-        k, lam, x, z, tx, tz = kn, ln, xn, zn, txn, tzn
-        i += 1
     aux[A_RUNS] = r
+    aux[A_DEP] = dep
     # the ghost (roller n) is the last run's last roller
     s0loc = _inverse(tab, k, lam, delta)
     _, lsg, ldg, lssg, lsdg = local_map(tab, k, s0loc, delta)
@@ -239,12 +245,14 @@ def run_walk(tab, p0, s, delta, pitches, n, rstep, rnext, runs, aux):
 
 @nb.njit(cache=True, error_model="numpy")
 def run_close(tab, p0, s, guess, pitches, n, tol, rstep, rnext, runs, aux):
-    """Newton's method on delta from ``guess`` with the walk's own dh/ddelta. Returns (delta, walks,
-    status): status 0 closed to ``tol``, 1 not (the caller falls back to the safeguarded exact
-    closure)."""
+    """Newton's method on delta from ``guess`` with the walk's own dh/ddelta; after the first walk
+    only the runs from the first segment that moves with delta are walked again. Returns (delta,
+    walks, status): status 0 closed to ``tol``, 1 not (the caller falls back to the safeguarded
+    exact closure)."""
     d = guess
+    resume = 0
     for it in range(MAX_NEWTON):
-        h, dh = run_walk(tab, p0, s, d, pitches, n, rstep, rnext, runs, aux)
+        h, dh = run_walk(tab, p0, s, d, pitches, n, rstep, rnext, runs, aux, resume)
         if math.isnan(h) or not dh > 0.0:
             return d, it + 1, 1
         if abs(h) <= tol:
@@ -254,14 +262,14 @@ def run_close(tab, p0, s, guess, pitches, n, tol, rstep, rnext, runs, aux):
             # stalled at the resolution of delta; the walk is the one at d
             return d, it + 1, 0 if abs(h) < 1e3 * tol else 1
         d = dn
+        resume = max(int(aux[A_DEP]), 0)
     return d, MAX_NEWTON, 1
 
 
 @nb.njit(cache=True, error_model="numpy")
-def run_fill(tab, p0, n, delta, sdot, runs, aux, xs, zs, jac, hacc, s0, want_s0):
-    """From the closed walk: c = ddelta/ds, e (delta-ddot = c s-ddot + e) and every roller's place,
-    J = dr/ds and h (a = J s-ddot + h) at roller-1 speed ``sdot``; each roller's s0 as well where
-    ``want_s0``. Returns (c, e, dh/ddelta)."""
+def run_rates(tab, sdot, runs, aux):
+    """From the closed walk: c = ddelta/ds, e (delta-ddot = c s-ddot + e) and each run's q (its
+    lam-ddot = alpha s-ddot + beta delta-ddot + q) at roller-1 speed ``sdot``. Returns (c, e, dh/ddelta)."""
     nr = int(aux[A_RUNS])
     g = runs[nr - 1]
     lsg, ldg = aux[A_GHOST], aux[A_GHOST + 1]
@@ -291,6 +299,14 @@ def run_fill(tab, p0, n, delta, sdot, runs, aux, xs, zs, jac, hacc, s0, want_s0)
         b[R_Q] = q
     qg = (aux[A_GHOST + 2] + 2.0 * aux[A_GHOST + 3] * c) * sd2
     e = (qg - q) / (g[R_BETA] - ldg)
+    return c, e, (g[R_BETA] - ldg) / lsg
+
+
+@nb.njit(cache=True, error_model="numpy")
+def run_fill(tab, p0, n, delta, sdot, c, e, runs, aux, xs, zs, jac, hacc, s0, want_s0):
+    """Every roller's place, J = dr/ds and h (a = J s-ddot + h) at roller-1 speed ``sdot`` from the
+    closed walk and its rates (:func:`run_rates`); each roller's s0 as well where ``want_s0``."""
+    nr = int(aux[A_RUNS])
     # every roller: J = B c + T g, h = B e + T (beta e + q) + kappa N lam-dot^2
     for r in range(nr):
         row = runs[r]
@@ -329,62 +345,3 @@ def run_fill(tab, p0, n, delta, sdot, runs, aux, xs, zs, jac, hacc, s0, want_s0)
             # the run's last roller as the walk placed it (the rotations above agree to rounding)
             xs[last] = row[R_XE]
             zs[last] = row[R_ZE]
-    return c, e, (g[R_BETA] - ldg) / lsg
-
-
-@nb.njit(cache=True, error_model="numpy")
-def runs_evaluate(t, y, dy, prm, ws, want_teeth, tb):
-    """Right-hand side of the forward dynamics from the closure walked run by run: the same
-    equations, work arrays and ``info`` slots as :func:`vibkit.model.effects.evaluate` (which it
-    falls back to where Newton's method from the predicted delta does not close). Returns 0, or 1
-    where the chain cannot close."""
-    tab, fp, ip, pitches = prm[PRM_TABLE], prm[PRM_FP], prm[PRM_IP], prm[PRM_PITCHES]
-    s0, xs, zs, jac, hacc, info = ws[0], ws[3], ws[4], ws[8], ws[10], ws[18]
-    n = ip[IP_N]
-    p0 = fp[FP_P0]
-    ds = y[0] - info[INFO_AT]
-    guess = info[INFO_DELTA] + ds * (info[INFO_SLOPE] + 0.5 * info[INFO_CURVATURE] * ds)
-    runs, aux = tb[TB_RUNS], tb[TB_RAUX]
-    delta, walks, st = run_close(
-        tab, p0, y[0], guess, pitches, n, fp[FP_CLOSURE_TOL], tb[TB_RSTEP], tb[TB_RNEXT], runs, aux
-    )
-    if st != 0:
-        return evaluate(t, y, dy, prm, ws, want_teeth)
-    info[INFO_WALKS] += walks
-    want_s0 = ip[IP_PASSENGERS] == PASSENGERS_BY_PLACE
-    c, e, dh = run_fill(tab, p0, n, delta, y[1], runs, aux, xs, zs, jac, hacc, s0, want_s0)
-    return evaluate_forces(t, y, dy, prm, ws, want_teeth, delta, c, e, dh)
-
-
-def build_runs(model, prm, empty, s, delta):
-    """The run-by-run closure's data for ``model`` in the pitch table's tuple ``empty`` (an empty
-    table, :func:`vibkit.model.pitch_table.empty_table`): the head marked, each segment's step for
-    the links most of the chain has, where the other links are, scratch for the walk. The head's
-    link error is the walk's own (the largest | |r_{i+1} - r_i| - L_i |) closed at roller-1
-    coordinate ``s`` from ``delta``. [m]"""
-    pitches = np.asarray(model.chain.pitches, dtype=float)
-    n = pitches.size
-    tab = model.guide.table
-    head = empty[TB_HEAD].copy()
-    if head.size != len(HEAD_NAMES):
-        raise RuntimeError("the table's header and vibkit.model.slots.HEAD_NAMES disagree")
-    head[HEAD_RUNS] = 1.0
-    nominal = _nominal(pitches)
-    tb = list(empty)
-    tb[TB_HEAD] = head
-    tb[TB_RSTEP] = run_steps(tab, nominal)
-    tb[TB_RNEXT] = next_other(pitches, nominal)
-    tb[TB_RUNS] = np.zeros((n + 2, R_COLS))
-    tb[TB_RAUX] = np.zeros(A_COLS)
-    fp = prm[PRM_FP]
-    p0 = float(fp[FP_P0])
-    rstep, rnext, runs, aux = tb[TB_RSTEP], tb[TB_RNEXT], tb[TB_RUNS], tb[TB_RAUX]
-    delta, _, st = run_close(
-        tab, p0, float(s), float(delta), pitches, n, float(fp[FP_CLOSURE_TOL]), rstep, rnext, runs, aux
-    )
-    head[HEAD_LINK_ERROR] = math.nan
-    if st == 0:
-        xs, zs, two = np.empty(n + 1), np.empty(n + 1), np.empty((n, 2))
-        run_fill(tab, p0, n, delta, 0.0, runs, aux, xs, zs, two, two.copy(), xs, False)
-        head[HEAD_LINK_ERROR] = closure_residual(xs, zs, n, pitches)
-    return tuple(tb)
