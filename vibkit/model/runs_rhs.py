@@ -87,6 +87,12 @@ from .slots import (
     TB_RNEXT,
     TB_RSTEP,
     TB_RUNS,
+    WS_HACC,
+    WS_INFO,
+    WS_JAC,
+    WS_S0,
+    WS_X,
+    WS_Z,
 )
 from .sprocket import contact_kernel
 
@@ -123,7 +129,7 @@ def runs_evaluate(t, y, dy, prm, ws, want_teeth, tb):
     falls back to where Newton's method from the predicted delta does not close). Returns 0, or 1
     where the chain cannot close."""
     tab, fp, ip = prm[PRM_TABLE], prm[PRM_FP], prm[PRM_IP]
-    info = ws[18]
+    info = ws[WS_INFO]
     if tb[TB_HEAD][HEAD_BY_ROLLER] == 0.0 and ip[IP_PASSENGERS] == 0 and ip[IP_ROLLING] == 0:
         return runs_fast(t, y, dy, prm, ws, want_teeth, tb)
     delta, walks, st = _close(y, prm, tb, info)
@@ -133,7 +139,8 @@ def runs_evaluate(t, y, dy, prm, ws, want_teeth, tb):
     runs, aux = tb[TB_RUNS], tb[TB_RAUX]
     c, e, dh = run_rates(tab, y[1], runs, aux)
     want_s0 = ip[IP_PASSENGERS] == PASSENGERS_BY_PLACE
-    run_fill(tab, fp[FP_P0], ip[IP_N], delta, y[1], c, e, runs, aux, ws[3], ws[4], ws[8], ws[10], ws[0], want_s0)
+    xs, zs, jac, hacc = ws[WS_X], ws[WS_Z], ws[WS_JAC], ws[WS_HACC]
+    run_fill(tab, fp[FP_P0], ip[IP_N], delta, y[1], c, e, runs, aux, xs, zs, jac, hacc, ws[WS_S0], want_s0)
     return evaluate_forces(t, y, dy, prm, ws, want_teeth, delta, c, e, dh)
 
 

@@ -155,6 +155,7 @@ WS_NAMES = (
 )
 WS = _slots(WS_NAMES)
 WS_INFO = WS["info"]
+WS_S0, WS_X, WS_Z, WS_JAC, WS_HACC = WS["s0"], WS["x"], WS["z"], WS["jac"], WS["hacc"]
 
 # --- what an evaluation leaves (ws[WS_INFO]) ----------------------------------------------------
 INFO_NAMES = (
@@ -229,7 +230,9 @@ TB_SC = TB["sc"]  # s0 of each table roller
 TB_CAND = TB["cand"]  # table rollers that can reach a tooth
 TB_CC = TB["cc"]  # the candidates' x and z quintics side by side (pieces, candidates, 12)
 # the closure walked run by run (vibkit.model.runs), for chains the table cannot stand for; empty otherwise
-TB_RSTEP = TB["rstep"]  # per segment: one link's arc length, its turn's cosine and sine, near the sprocket, sine of half the turn (nseg, 5)
+TB_RSTEP = TB[
+    "rstep"
+]  # per segment: one link's arc length, its turn's cosine and sine, near the sprocket, sine of half the turn (nseg, 5)
 TB_RNEXT = TB["rnext"]  # (n + 1,) int64: the first link at or after each roller of another pitch
 TB_RUNS = TB["runs"]  # scratch: one row per run of the last walk
 TB_RAUX = TB["raux"]  # scratch: the walk's partials at roller 1 and the ghost, runs walked
