@@ -221,14 +221,25 @@ def run_walk(tab, p0, s, delta, pitches, n, rstep, rnext, runs, aux, resume):
                 m = cap
         # the next link is tried on this segment unless it is of the run's pitch and found no room
         within = m == cap or room >= (m + 1) * step
-        row = runs[r]
-        row[R_SEG], row[R_FIRST], row[R_LAST], row[R_LAM], row[R_WRAPS] = k, i, i + m, lam, wraps
-        row[R_X], row[R_Z], row[R_TX], row[R_TZ] = x, z, tx, tz
-        row[R_ALPHA], row[R_BETA], row[R_STEP] = al, be, step
+        runs[r, R_SEG] = k
+        runs[r, R_FIRST] = i
+        runs[r, R_LAST] = i + m
+        runs[r, R_LAM] = lam
+        runs[r, R_WRAPS] = wraps
+        runs[r, R_X] = x
+        runs[r, R_Z] = z
+        runs[r, R_TX] = tx
+        runs[r, R_TZ] = tz
+        runs[r, R_ALPHA] = al
+        runs[r, R_BETA] = be
+        runs[r, R_STEP] = step
         if m > 0:
             lam += m * step
             x, z, tx, tz = local_frame(tab, k, lam, delta)
-        row[R_XE], row[R_ZE], row[R_TXE], row[R_TZE] = x, z, tx, tz
+        runs[r, R_XE] = x
+        runs[r, R_ZE] = z
+        runs[r, R_TXE] = tx
+        runs[r, R_TZE] = tz
         r += 1
         i += m
         if i == n:
