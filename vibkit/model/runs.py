@@ -47,7 +47,7 @@ from .guide import (
     seg_length,
 )
 
-__all__ = ["next_other", "run_close", "run_fill", "run_rates", "run_steps", "run_walk"]
+__all__ = ["next_other", "roller_s0", "run_close", "run_fill", "run_rates", "run_steps", "run_walk"]
 
 # columns of a run's record (one row per run, in walking order)
 R_SEG, R_FIRST, R_LAST, R_LAM, R_WRAPS = 0, 1, 2, 3, 4
@@ -157,6 +157,12 @@ def _inverse(tab, k, lam, delta):
 
 
 @nb.njit(cache=True, error_model="numpy", inline="always")
+def roller_s0(tab, p0, k, lam, wraps, delta):
+    """s0 of a roller on segment k at local arc length lam, ``wraps`` loops on. [m]"""
+    return wraps * p0 + tab[k, S0] + _inverse(tab, k, lam, delta)
+
+
+@nb.njit(cache=True, error_model="numpy", inline="always")
 def _moving(tab, k):
     """Whether segment k moves or stretches with delta."""
     return tab[k, BX] != 0.0 or tab[k, BZ] != 0.0 or tab[k, SIGP] != 0.0
@@ -172,11 +178,11 @@ def run_walk(tab, p0, s, delta, pitches, n, rstep, rnext, runs, aux, resume):
     before that one (of an earlier walk at the same s, none of which moves with delta) and walks on
     from there."""
     if resume > 0:
-        prev = runs[resume - 1]
-        k, i, wraps = int(prev[R_SEG]), int(prev[R_LAST]), prev[R_WRAPS]
-        lam = prev[R_LAM] + (prev[R_LAST] - prev[R_FIRST]) * prev[R_STEP]
-        x, z, tx, tz = prev[R_XE], prev[R_ZE], prev[R_TXE], prev[R_TZE]
-        al, be = prev[R_ALPHA], prev[R_BETA]
+        pr = resume - 1
+        k, i, wraps = int(runs[pr, R_SEG]), int(runs[pr, R_LAST]), runs[pr, R_WRAPS]
+        lam = runs[pr, R_LAM] + (runs[pr, R_LAST] - runs[pr, R_FIRST]) * runs[pr, R_STEP]
+        x, z, tx, tz = runs[pr, R_XE], runs[pr, R_ZE], runs[pr, R_TXE], runs[pr, R_TZE]
+        al, be = runs[pr, R_ALPHA], runs[pr, R_BETA]
         r = resume
         dep = resume
     else:
@@ -282,21 +288,21 @@ def run_rates(tab, sdot, runs, aux):
     """From the closed walk: c = ddelta/ds, e (delta-ddot = c s-ddot + e) and each run's q (its
     lam-ddot = alpha s-ddot + beta delta-ddot + q) at roller-1 speed ``sdot``. Returns (c, e, dh/ddelta)."""
     nr = int(aux[A_RUNS])
-    g = runs[nr - 1]
+    g = nr - 1
     lsg, ldg = aux[A_GHOST], aux[A_GHOST + 1]
-    c = (lsg - g[R_ALPHA]) / (g[R_BETA] - ldg)
+    c = (lsg - runs[g, R_ALPHA]) / (runs[g, R_BETA] - ldg)
     sd2 = sdot * sdot
     ddot = c * sdot
     # lam-ddot's constant q, run by run: u . (a_B - a_A) + |v_B - v_A|^2 = 0 across each joint
     q = (aux[A_ONE + 2] + 2.0 * aux[A_ONE + 3] * c) * sd2
     runs[0, R_Q] = q
     for r in range(1, nr):
-        a, b = runs[r - 1], runs[r]
-        ka, kb = int(a[R_SEG]), int(b[R_SEG])
-        lda = (a[R_ALPHA] + a[R_BETA] * c) * sdot
-        ldb = (b[R_ALPHA] + b[R_BETA] * c) * sdot
-        txa, tza, txb, tzb = a[R_TXE], a[R_TZE], b[R_TX], b[R_TZ]
-        ux, uz = b[R_X] - a[R_XE], b[R_Z] - a[R_ZE]
+        a, b = r - 1, r
+        ka, kb = int(runs[a, R_SEG]), int(runs[b, R_SEG])
+        lda = (runs[a, R_ALPHA] + runs[a, R_BETA] * c) * sdot
+        ldb = (runs[b, R_ALPHA] + runs[b, R_BETA] * c) * sdot
+        txa, tza, txb, tzb = runs[a, R_TXE], runs[a, R_TZE], runs[b, R_TX], runs[b, R_TZ]
+        ux, uz = runs[b, R_X] - runs[a, R_XE], runs[b, R_Z] - runs[a, R_ZE]
         dvx = (tab[kb, BX] - tab[ka, BX]) * ddot + txb * ldb - txa * lda
         dvz = (tab[kb, BZ] - tab[ka, BZ]) * ddot + tzb * ldb - tza * lda
         una = -ux * tza + uz * txa
@@ -307,10 +313,10 @@ def run_rates(tab, sdot, runs, aux):
             - tab[kb, KAPPA] * unb * ldb * ldb
             - (dvx * dvx + dvz * dvz)
         ) / (ux * txb + uz * tzb)
-        b[R_Q] = q
+        runs[b, R_Q] = q
     qg = (aux[A_GHOST + 2] + 2.0 * aux[A_GHOST + 3] * c) * sd2
-    e = (qg - q) / (g[R_BETA] - ldg)
-    return c, e, (g[R_BETA] - ldg) / lsg
+    e = (qg - q) / (runs[g, R_BETA] - ldg)
+    return c, e, (runs[g, R_BETA] - ldg) / lsg
 
 
 @nb.njit(cache=True, error_model="numpy")
@@ -320,20 +326,19 @@ def run_fill(tab, p0, n, delta, sdot, c, e, runs, aux, xs, zs, jac, hacc, s0, wa
     nr = int(aux[A_RUNS])
     # every roller: J = B c + T g, h = B e + T (beta e + q) + kappa N lam-dot^2
     for r in range(nr):
-        row = runs[r]
-        first, last = int(row[R_FIRST]), int(row[R_LAST])
+        first, last = int(runs[r, R_FIRST]), int(runs[r, R_LAST])
         if last > n - 1:
             last = n - 1
         if first > last:
             continue
-        k = int(row[R_SEG])
+        k = int(runs[r, R_SEG])
         kap = tab[k, KAPPA]
-        gr = row[R_ALPHA] + row[R_BETA] * c
-        w = row[R_BETA] * e + row[R_Q]
+        gr = runs[r, R_ALPHA] + runs[r, R_BETA] * c
+        w = runs[r, R_BETA] * e + runs[r, R_Q]
         cen = kap * (gr * sdot) ** 2
         cbx, cbz, ebx, ebz = tab[k, BX] * c, tab[k, BZ] * c, tab[k, BX] * e, tab[k, BZ] * e
-        x, z, tx, tz = row[R_X], row[R_Z], row[R_TX], row[R_TZ]
-        step = row[R_STEP]
+        x, z, tx, tz = runs[r, R_X], runs[r, R_Z], runs[r, R_TX], runs[r, R_TZ]
+        step = runs[r, R_STEP]
         if kap != 0.0:
             cx, cz = x - tz / kap, z + tx / kap
             cd, sg = math.cos(kap * step), math.sin(kap * step)
@@ -351,8 +356,8 @@ def run_fill(tab, p0, n, delta, sdot, c, e, runs, aux, xs, zs, jac, hacc, s0, wa
             hacc[i, 0] = ebx + tx * w - tz * cen
             hacc[i, 1] = ebz + tz * w + tx * cen
             if want_s0:
-                s0[i] = row[R_WRAPS] * p0 + tab[k, S0] + _inverse(tab, k, row[R_LAM] + (i - first) * step, delta)
-        if first <= int(row[R_LAST]) <= n - 1:
+                s0[i] = roller_s0(tab, p0, k, runs[r, R_LAM] + (i - first) * step, runs[r, R_WRAPS], delta)
+        if first <= int(runs[r, R_LAST]) <= n - 1:
             # the run's last roller as the walk placed it (the rotations above agree to rounding)
-            xs[last] = row[R_XE]
-            zs[last] = row[R_ZE]
+            xs[last] = runs[r, R_XE]
+            zs[last] = runs[r, R_ZE]

@@ -169,25 +169,24 @@ def runs_fast(t, y, dy, prm, ws, want_teeth, tb):
     q = 0.0
     ncand = 0
     for r in range(int(aux[A_RUNS])):
-        row = runs[r]
-        first, last = int(row[R_FIRST]), int(row[R_LAST])
+        first, last = int(runs[r, R_FIRST]), int(runs[r, R_LAST])
         if last > n - 1:
             last = n - 1
         if first > last:
             continue
         cnt = last - first + 1
-        k = int(row[R_SEG])
+        k = int(runs[r, R_SEG])
         kap = tab[k, KAPPA]
-        g = row[R_ALPHA] + row[R_BETA] * c
-        w = row[R_BETA] * e + row[R_Q]
+        g = runs[r, R_ALPHA] + runs[r, R_BETA] * c
+        w = runs[r, R_BETA] * e + runs[r, R_Q]
         cen = kap * (g * sdot) ** 2
         bx, bz = tab[k, BX], tab[k, BZ]
-        tx, tz = row[R_TX], row[R_TZ]
+        tx, tz = runs[r, R_TX], runs[r, R_TZ]
         # the sum of the run's tangents (on an arc each is the last turned by the link's angle)
         if kap == 0.0 or cnt == 1:
             stx, stz = cnt * tx, cnt * tz
         else:
-            half = 0.5 * kap * row[R_STEP]
+            half = 0.5 * kap * runs[r, R_STEP]
             f = math.sin(cnt * half) / rstep[k, 4]
             th = (cnt - 1) * half
             ct, sn = math.cos(th), math.sin(th)
@@ -199,7 +198,7 @@ def runs_fast(t, y, dy, prm, ws, want_teeth, tb):
         jh = cnt * bb * c * e + (c * w + g * e) * bst + c * cen * bsn + cnt * g * w
         q -= m * (grav * (cnt * bz * c + g * stz) + jh)
         if contact and rstep[k, NEAR] != 0.0:
-            x, z, step = row[R_X], row[R_Z], row[R_STEP]
+            x, z, step = runs[r, R_X], runs[r, R_Z], runs[r, R_STEP]
             if kap != 0.0:
                 ccx, ccz = x - tz / kap, z + tx / kap
                 cd, sg = rstep[k, 1], rstep[k, 2]
