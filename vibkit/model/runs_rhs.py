@@ -122,7 +122,7 @@ def _close(y, prm, tb, info):
     )
 
 
-@nb.njit(cache=True, error_model="numpy")
+@nb.njit(cache=True, error_model="numpy", inline="always")
 def runs_evaluate(t, y, dy, prm, ws, want_teeth, tb):
     """Right-hand side of the forward dynamics from the closure walked run by run: the same
     equations, work arrays and ``info`` slots as :func:`vibkit.model.effects.evaluate` (which it
@@ -144,7 +144,7 @@ def runs_evaluate(t, y, dy, prm, ws, want_teeth, tb):
     return evaluate_forces(t, y, dy, prm, ws, want_teeth, delta, c, e, dh)
 
 
-@nb.njit(cache=True, error_model="numpy")
+@nb.njit(cache=True, error_model="numpy", inline="always")
 def runs_fast(t, y, dy, prm, ws, want_teeth, tb):
     """:func:`runs_evaluate` for rollers of one mass without passengers or rolling resistance: each
     run's share of the reduced equation in closed form, rollers placed one by one only on the
