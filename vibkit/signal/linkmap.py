@@ -29,11 +29,12 @@ The decision (:func:`scan_links`):
   their scatter is the noise, with ``(L - 1) N / sum(rho^2)`` degrees of freedom (``rho`` the
   signature's autocorrelation over links).  A flagged link's number is stated alone only when the data
   separate it from every other placement of the signature: a placement ``j`` outside the flag's own lobe
-  (the links where ``rho > 0``) that is a local maximum of the statistic, with the same sign, itself
-  past the threshold and with ``t_k - t_j < z sqrt(2 (1 - r_kj)) + e t_k sqrt(2 (1 - rho_kj))`` is an
-  *alternative* (``z`` the normal quantile at the false-alarm probability, ``r_kj`` the correlation of the
-  two fits' noise, ``e`` the signature's relative error: the second term bounds what an error of that
-  size can move the difference, by Cauchy-Schwarz).  A signature whose halves repeat (a worn link on the
+  (the links where ``rho > 0``) that is a local maximum of the statistic, with the same sign, past the
+  threshold of one link tested alone (``alpha`` two-sided, no Sidak correction) and with
+  ``t_k - t_j < z sqrt(2 (1 - r_kj)) + e t_k sqrt(2 (1 - rho_kj))`` is an *alternative* (``z`` the normal
+  quantile at the false-alarm probability, ``r_kj`` the correlation of the two fits' noise, ``e`` the
+  signature's relative error: the second term bounds what an error of that size can move the difference,
+  by Cauchy-Schwarz).  A signature whose halves repeat (a worn link on the
   sprocket and on the lower head, half a loop apart) gives such a second placement;
 * without a signature, each link's own cycle is tested: its mean level and its duration against
   the pooled loop-to-loop scatter (Student t with ``N (L - 1) - 1`` degrees of freedom), Sidak over
@@ -492,6 +493,7 @@ def scan_links(
     sig = s1 / math.sqrt(L)
     thr = sidak_threshold(alpha, n, dof)
     err = float(mismatch if signature_error is None else signature_error)
+    alone = float(scipy.stats.t.isf(alpha / 2.0, dof))  # one link's own threshold: where an alternative starts
     shape = lmap.shape.copy()
     flags, first = [], None
     extra = np.zeros(n)  # what a flagged link's imperfect signature leaves near it (variance)
@@ -506,16 +508,16 @@ def scan_links(
         if not tstat[k] > thr or len(flags) >= max_flags:
             break
         loops = _loops_showing(per_loop, k, amp[k], s1)
-        alt = _alternatives(np.sign(amp[k]) * amp / sd, k, rho, r_noise, thr, alpha, err)
+        alt = _alternatives(np.sign(amp[k]) * amp / sd, k, rho, r_noise, alone, alpha, err)
         flags.append(LinkFlag(k + 1, float(tstat[k]), float(amp[k] * scale), sig * scale, "signature", loops, alt))
         shape -= amp[k] * np.roll(tmpl, k, axis=0)[None]
         extra += (mismatch * amp[k] * np.roll(rho, k)) ** 2 + (mismatch_floor * amp[k]) ** 2
     return LinkScan(tuple(flags), first[0], thr, alpha, dof, first[1], first[2], L, "signature")
 
 
-def _alternatives(t, k, rho, r_noise, thr, alpha, err):
+def _alternatives(t, k, rho, r_noise, floor, alpha, err):
     """1-based links ``j`` where the signature fits nearly as well as at ``k`` (``t`` signed so that ``t[k] > 0``):
-    local maxima outside ``k``'s lobe, past ``thr``, with ``t[k] - t[j]`` under the noise's one-sided ``alpha``
+    local maxima outside ``k``'s lobe, past ``floor``, with ``t[k] - t[j]`` under the noise's one-sided ``alpha``
     quantile of that difference plus what a signature error ``err`` (relative) can move it."""
     n = t.size
     lobe = int(np.argmax(rho <= 0.0)) if np.any(rho <= 0.0) else n  # first lag where the fits stop overlapping
@@ -523,7 +525,7 @@ def _alternatives(t, k, rho, r_noise, thr, alpha, err):
     out = []
     for j in np.argsort(-t):
         d = (int(j) - k) % n
-        if t[j] <= thr or min(d, n - d) < lobe or not (t[j] >= t[(j - 1) % n] and t[j] >= t[(j + 1) % n]):
+        if t[j] <= floor or min(d, n - d) < lobe or not (t[j] >= t[(j - 1) % n] and t[j] >= t[(j + 1) % n]):
             continue
         allowed = z * math.sqrt(max(2.0 * (1.0 - r_noise[d]), 0.0)) + err * t[k] * math.sqrt(
             max(2.0 * (1.0 - rho[d]), 0.0)
