@@ -154,7 +154,7 @@ def detection_rows(label, base, loops_list, trials, noise, n, rng):
     rows = []
     for ex, (t, x, expected) in base.items():
         for loops in loops_list:
-            det = right = top = near = 0
+            det = right = top = near = alt = 0
             amps = []
             for _ in range(trials):
                 res = scan(*realisation(t, x, loops, n, rng, noise), n)
@@ -164,6 +164,7 @@ def detection_rows(label, base, loops_list, trials, noise, n, rng):
                     top += f["link"] == expected
                     near += min((f["link"] - expected) % n, (expected - f["link"]) % n) <= 2
                     right += f["link"] == expected and len(res.flagged) == 1
+                    alt += bool(f["alternatives"])
                     amps.append(f["excess_pitch_mm"])
             rows.append(
                 {
@@ -176,6 +177,7 @@ def detection_rows(label, base, loops_list, trials, noise, n, rng):
                     "strongest flag right": top / trials,
                     "strongest within 2 links": near / trials,
                     "right link alone": right / trials,
+                    "with alternatives": alt / trials,
                     "median excess found [mm]": f"{np.median(amps):.3f}" if amps else "-",
                 }
             )
@@ -311,6 +313,8 @@ def main():
 
 
 def _report(suffix, n, rows, fa, step, p90, t0, sim_cpu, n_sims, draws):
+    from vibkit.diagnose.links import MIN_EXCESS_M
+
     three = [r for r in rows if r["loops"] == 3]
     others = [r for r in rows if r["loops"] != 3]
     p90_lines = "\n".join(
@@ -331,8 +335,9 @@ def _report(suffix, n, rows, fa, step, p90, t0, sim_cpu, n_sims, draws):
         "## Detection from 3 loops\n\n" + markdown_table(three) + "\n\n"
         "*detected*: any link flagged; *strongest flag right*: the link with the largest statistic is the worn "
         "one (other links may be flagged too), *within 2 links*: it is at most 2 links from it; *right link alone*: exactly one link flagged and it is the worn one; "
-        "*median excess found*: over the recordings with a flag, `-` where none had one. Links under the "
-        "minimum excess (0.2 mm) are not flagged by design.\n\n"
+        "*with alternatives*: the strongest flag names other links where the signature fits nearly as well "
+        "(`A or B`); *median excess found*: over the recordings with a flag, `-` where none had one. Links under "
+        f"the minimum excess ({1e3 * MIN_EXCESS_M:g} mm) are not flagged by design.\n\n"
         "Smallest excess found, and numbered right, with probability 0.9 from 3 loops:\n\n"
         + p90_lines
         + "\n\n"
@@ -345,8 +350,8 @@ def _report(suffix, n, rows, fa, step, p90, t0, sim_cpu, n_sims, draws):
         f"other simulation with passengers as above), {draws} noise and speed-wander draws on each (noise "
         f"alternately {1e6 * NOISE:g} and {1e6 * FIELD_NOISE:g} um). *rate* must not exceed *stated* by more than "
         "two binomial sigmas (*within*). *under the minimum excess*: recordings where a link passed the "
-        "statistical threshold with an excess under 0.2 mm (not flagged; the simulated healthy chain's own "
-        f"0.05-0.15 mm near its closing link). Recordings refused (the phase could not be followed): "
+        f"statistical threshold with an excess under {1e3 * MIN_EXCESS_M:g} mm (not flagged). Recordings refused "
+        "(the phase could not be followed): "
         f"{len(REFUSED)}.\n\n"
         "## Step accelerometer\n\n"
         "`vibkit links` refuses a step accelerometer. The same scene with the accelerometer on step 20, "

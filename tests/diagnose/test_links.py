@@ -22,18 +22,20 @@ SPEED = 0.5
 FS = 200.0
 
 
-def _record(scene, worn, rng, excess=1e-3):
-    """Three loops after one loop and 5 s of settling, with noise; the links passed before it; and the
+def _record(scene, worn, rng, excess=1e-3, loops=3, exact=False):
+    """``loops`` loops after one loop and 5 s of settling, with noise; the links passed before it; and the
     tensioner's displacement without noise."""
-    pitch = scene.chain.link_pitch
-    settle = N * pitch / SPEED + 5.0
-    duration = settle + (3 * N + 3) * pitch / SPEED
+    pitch, n = scene.chain.link_pitch, scene.chain.n_rollers
+    settle = n * pitch / SPEED + 5.0
+    duration = settle + (loops * n + 3) * pitch / SPEED
     chain = scene.chain if worn is None else dataclasses.replace(scene.chain, worn_links=((worn, pitch + excess),))
     sc = dataclasses.replace(
         scene,
         chain=chain,
         outputs=dict(scene.outputs, variables=("delta", "accel_step", "sprocket_angle")),
     )
+    if exact:
+        sc = sc.with_solver(closure="exact")  # as the signature's runs
     ds = vibkit.simulate(sc, duration=duration, progress=False)
     t = ds.time.values
     keep = t >= settle
@@ -78,6 +80,8 @@ def test_one_worn_link_is_flagged_by_its_number(recordings, capsys):
         d = _links(path, capsys)
         assert len(d["flagged"]) == 1, d["flagged"]
         f = d["flagged"][0]
+        # the data separate it from every other placement of the signature: one number, no alternative
+        assert f["alternatives"] == []
         # the number in passing order from the link at the sensor when the recording starts
         assert f["link"] == link_number_of(worn, passed, N)
         assert f["loops"] == [1, 2, 3]
@@ -186,3 +190,70 @@ def test_a_link_one_tenth_of_a_millimetre_long_is_flagged_by_its_number():
     res = find_worn_links(rec, speed=SPEED, n_links=N, scene=SCENE)
     assert [f["link"] for f in res.flagged] == [link_number_of(40, passed, N)]
     assert abs(res.flagged[0]["excess_pitch_mm"] - 0.1) < 0.03
+
+
+#: a 90-link escalator (28-tooth sprocket, 0.5 m/s, tensioner): its worn link's signature repeats half a loop
+#: later (the link on the sprocket, then on the lower head, 45 links apart) and changes with the excess
+PROFILE_90 = """[escalator]
+unit = "E90"
+[drive]
+speed = 0.5
+speed_uncertainty = 0.0005
+teeth = 28
+[chain]
+nominal_pitch = 0.13333
+n_links = 90
+[sensor]
+kind = "tensioner"
+"""
+
+
+@pytest.fixture(scope="module")
+def profile_90(tmp_path_factory):
+    from vibkit.model.profile import parse_profile
+
+    path = tmp_path_factory.mktemp("e90") / "E90.toml"
+    path.write_text(PROFILE_90)
+    return path, parse_profile(PROFILE_90, "E90.toml").scene("forward")
+
+
+def test_a_link_half_a_loop_from_its_twin_is_given_with_both_numbers(profile_90, tmp_path, capsys):
+    """On the 90-link profile scene a 0.5 mm link (link 20, 2.3 loops, 1 um noise) fits the 1 mm signature
+    better half a loop away than at itself, and that signature differs from the 0.5 mm one by 93 % of its norm:
+    the flag names both numbers, the true one among them, in --json and in the table."""
+    path, scene = profile_90
+    rec, passed, _ = _record(scene, 20, np.random.default_rng(5), excess=0.5e-3, loops=2.3, exact=True)
+    rec.to_netcdf(tmp_path / "e90.nc")
+    true = link_number_of(20, passed, 90)
+    d = _links_with(tmp_path / "e90.nc", capsys, "--escalator", str(path), "--json")
+    (f,) = d["flagged"]
+    assert true in [f["link"], *f["alternatives"]]
+    assert len(f["alternatives"]) >= 1 and f["link"] not in f["alternatives"]
+    assert "relative error 0.9" in d["method"]
+    _links_with(tmp_path / "e90.nc", capsys, "--escalator", str(path))
+    out, err = capsys.readouterr()
+    assert " or ".join(str(k) for k in [f["link"], *f["alternatives"]]) in out
+    assert "cannot tell them apart" in err
+
+
+def test_a_two_millimetre_link_is_fitted_again_with_a_longer_signature(profile_90):
+    """The 1 mm signature reads a 2 mm link of the 90-link scene as 1.69 mm; the fit repeated with the signature
+    of a 1.7 mm link reads 2.05 mm (noise 0.03 mm): within 0.15 mm of the truth, by the same number."""
+    from vibkit.diagnose.links import profile_scene_file
+    from vibkit.model.profile import parse_profile
+
+    path, scene = profile_90
+    rec, passed, _ = _record(scene, 20, np.random.default_rng(6), excess=2e-3, loops=2.3, exact=True)
+    res = find_worn_links(rec, speed=SPEED, n_links=90, scene=profile_scene_file(parse_profile(PROFILE_90, "p")))
+    f = max(res.flagged, key=lambda f: f["t"])
+    assert f["link"] == link_number_of(20, passed, 90)
+    assert abs(f["excess_pitch_mm"] - 2.0) < 0.15
+    assert "(1.7 mm, relative error" in res.method
+
+
+def _links_with(path, capsys, *args):
+    rc = main(["links", str(path), *args])
+    assert rc == 0
+    if "--json" in args:
+        return json.loads(capsys.readouterr().out)
+    return None

@@ -167,7 +167,8 @@ def run(a):
         rows = []
         for f in res.flagged:
             ex = "-" if f["excess_pitch_mm"] is None else f"{f['excess_pitch_mm']:+.3f} +- {f['sigma_mm']:.3f}"
-            rows.append([f["link"], ex, f"{f['t']:.1f}", ",".join(str(i) for i in f["loops"]) or "-"])
+            link = " or ".join(str(k) for k in [f["link"], *f.get("alternatives", ())])
+            rows.append([link, ex, f"{f['t']:.1f}", ",".join(str(i) for i in f["loops"]) or "-"])
         print(table(rows, ("link", "excess pitch [mm]", "|t|", "loops that show it")))
     else:
         print("no link flagged")

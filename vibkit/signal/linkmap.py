@@ -27,7 +27,15 @@ The decision (:func:`scan_links`):
   imperfect signature leaves is not taken for a second link.  Drift common to neighbouring cycles
   (settling, wander) is not in the cycles' covariance: where the per-loop amplitudes scatter more,
   their scatter is the noise, with ``(L - 1) N / sum(rho^2)`` degrees of freedom (``rho`` the
-  signature's autocorrelation over links);
+  signature's autocorrelation over links).  A flagged link's number is stated alone only when the data
+  separate it from every other placement of the signature: a placement ``j`` outside the flag's own lobe
+  (the links where ``rho > 0``) that is a local maximum of the statistic, with the same sign, past the
+  threshold of one link tested alone (``alpha`` two-sided, no Sidak correction) and with
+  ``t_k - t_j < z sqrt(2 (1 - r_kj)) + e t_k sqrt(2 (1 - rho_kj))`` is an *alternative* (``z`` the normal
+  quantile at the false-alarm probability, ``r_kj`` the correlation of the two fits' noise, ``e`` the
+  signature's relative error: the second term bounds what an error of that size can move the difference,
+  by Cauchy-Schwarz).  A signature whose halves repeat (a worn link on the
+  sprocket and on the lower head, half a loop apart) gives such a second placement;
 * without a signature, each link's own cycle is tested: its mean level and its duration against
   the pooled loop-to-loop scatter (Student t with ``N (L - 1) - 1`` degrees of freedom), Sidak over
   ``2 N`` tests.
@@ -332,6 +340,9 @@ class LinkFlag:
         ``"signature"``, ``"level"`` or ``"duration"``.
     loops : tuple of int
         1-based loops whose own fit shows it (same sign, beyond twice the single-loop sigma).
+    alternatives : tuple of int
+        1-based links where the signature fits nearly as well (within what the noise and the signature's
+        error allow): the data do not tell them from ``link``. Empty when they do.
     """
 
     link: int
@@ -340,6 +351,7 @@ class LinkFlag:
     sigma: float
     feature: str
     loops: tuple
+    alternatives: tuple = ()
 
 
 @dataclass(frozen=True)
@@ -399,7 +411,15 @@ def _loops_showing(per_loop, k, amp, s1):
 
 
 def scan_links(
-    lmap, *, signature=None, scale=1.0, false_alarm=1e-2, max_flags=None, mismatch=0.25, mismatch_floor=0.05
+    lmap,
+    *,
+    signature=None,
+    scale=1.0,
+    false_alarm=1e-2,
+    max_flags=None,
+    mismatch=0.25,
+    mismatch_floor=0.05,
+    signature_error=None,
 ):
     """Flag the links whose deviation passes a threshold set for ``false_alarm`` over all links.
 
@@ -423,6 +443,9 @@ def scan_links(
         The same at every link: after a flag of amplitude ``a``, every other link is tested against
         ``mismatch_floor * a`` in addition (the signature of one scene does not reproduce a worn link
         elsewhere on the chain to better than a few per cent).
+    signature_error : float, optional
+        Relative error of the signature (``|error| / |signature|``) for the decision between two placements
+        of it (a flag's ``alternatives``); default ``mismatch``.
 
     Returns
     -------
@@ -459,11 +482,18 @@ def scan_links(
     # drift from loop to loop that is common to neighbouring cycles (settling, wander) is missed by the
     # cycle covariance: the per-loop amplitudes' own scatter, with its fewer degrees of freedom, then rules
     var_emp = float(np.sum((per_loop - per_loop.mean(axis=0)) ** 2)) / dof
+    # correlation of two placements' fitted amplitudes over their noise (of the cycles' covariance)
+    ft = np.fft.rfft(tmpl, axis=0)
+    ac_noise = np.fft.irfft(np.sum(np.conj(np.fft.rfft(tmpl @ cov, axis=0)) * ft, axis=1), n=n)
+    r_noise = ac_noise / ac_noise[0] if ac_noise[0] > 0 else rho
     if var_emp > var1:
         var1, dof = var_emp, dof / float(np.sum(rho * rho))
+        r_noise = rho
     s1 = math.sqrt(max(var1, 0.0))
     sig = s1 / math.sqrt(L)
     thr = sidak_threshold(alpha, n, dof)
+    err = float(mismatch if signature_error is None else signature_error)
+    alone = float(scipy.stats.t.isf(alpha / 2.0, dof))  # one link's own threshold: where an alternative starts
     shape = lmap.shape.copy()
     flags, first = [], None
     extra = np.zeros(n)  # what a flagged link's imperfect signature leaves near it (variance)
@@ -478,10 +508,31 @@ def scan_links(
         if not tstat[k] > thr or len(flags) >= max_flags:
             break
         loops = _loops_showing(per_loop, k, amp[k], s1)
-        flags.append(LinkFlag(k + 1, float(tstat[k]), float(amp[k] * scale), sig * scale, "signature", loops))
+        alt = _alternatives(np.sign(amp[k]) * amp / sd, k, rho, r_noise, alone, alpha, err)
+        flags.append(LinkFlag(k + 1, float(tstat[k]), float(amp[k] * scale), sig * scale, "signature", loops, alt))
         shape -= amp[k] * np.roll(tmpl, k, axis=0)[None]
         extra += (mismatch * amp[k] * np.roll(rho, k)) ** 2 + (mismatch_floor * amp[k]) ** 2
     return LinkScan(tuple(flags), first[0], thr, alpha, dof, first[1], first[2], L, "signature")
+
+
+def _alternatives(t, k, rho, r_noise, floor, alpha, err):
+    """1-based links ``j`` where the signature fits nearly as well as at ``k`` (``t`` signed so that ``t[k] > 0``):
+    local maxima outside ``k``'s lobe, past ``floor``, with ``t[k] - t[j]`` under the noise's one-sided ``alpha``
+    quantile of that difference plus what a signature error ``err`` (relative) can move it."""
+    n = t.size
+    lobe = int(np.argmax(rho <= 0.0)) if np.any(rho <= 0.0) else n  # first lag where the fits stop overlapping
+    z = float(scipy.stats.norm.isf(alpha))
+    out = []
+    for j in np.argsort(-t):
+        d = (int(j) - k) % n
+        if t[j] <= floor or min(d, n - d) < lobe or not (t[j] >= t[(j - 1) % n] and t[j] >= t[(j + 1) % n]):
+            continue
+        allowed = z * math.sqrt(max(2.0 * (1.0 - r_noise[d]), 0.0)) + err * t[k] * math.sqrt(
+            max(2.0 * (1.0 - rho[d]), 0.0)
+        )
+        if t[k] - t[j] < allowed:
+            out.append(int(j) + 1)
+    return tuple(out)
 
 
 def _scan_own(lmap, alpha):

@@ -30,7 +30,7 @@ def links_page(doc, ctx) -> None:
     ax.vlines(links, 0, res.statistic, color="C0", lw=1.0)
     ax.axhline(res.threshold, color="C3", lw=1.0, ls="--", label=f"threshold {res.threshold:.2f}")
     for f in res.flagged:
-        label = f"link {f['link']}"
+        label = "link " + " or ".join(str(k) for k in [f["link"], *f.get("alternatives", ())])
         if f.get("excess_pitch_mm") is not None:
             label += f": {f['excess_pitch_mm']:+.2f} +- {f['sigma_mm']:.2f} mm"
         ax.plot([f["link"]], [f["t"]], "o", color="C3", ms=6)
