@@ -49,7 +49,7 @@ from .guide import (
     seg_length,
 )
 from .params import ChainParams
-from .runs import A_COLS, R_COLS, next_other, run_steps
+from .runs import A_COLS, R_COLS, next_other, nominal_pitch, run_steps
 
 __all__ = ["Chain", "Configuration", "ClosureError"]
 
@@ -634,8 +634,7 @@ class Chain:
         g = self.guide
         out = np.empty(len(starts))
         guess = self._delta_guess if self._delta_guess is not None else self.find_delta_bracket(float(starts[0]))
-        values, counts = np.unique(self.pitches, return_counts=True)
-        nominal = float(values[np.argmax(counts)])
+        nominal = nominal_pitch(self.pitches)
         bad = crossing_values(
             g.table,
             g.p0,

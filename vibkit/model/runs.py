@@ -47,7 +47,7 @@ from .guide import (
     seg_length,
 )
 
-__all__ = ["next_other", "roller_s0", "run_close", "run_fill", "run_rates", "run_steps", "run_walk"]
+__all__ = ["next_other", "nominal_pitch", "roller_s0", "run_close", "run_fill", "run_rates", "run_steps", "run_walk"]
 
 # columns of a run's record (one row per run, in walking order)
 R_SEG, R_FIRST, R_LAST, R_LAM, R_WRAPS = 0, 1, 2, 3, 4
@@ -63,7 +63,7 @@ A_COLS = 10
 MAX_NEWTON = 30
 
 
-def _nominal(pitches):
+def nominal_pitch(pitches):
     """The pitch most links have (the one runs are made of). [m]"""
     values, counts = np.unique(pitches, return_counts=True)
     return float(values[np.argmax(counts)])

@@ -36,6 +36,7 @@ from .runs import (
     R_X,
     R_Z,
     next_other,
+    nominal_pitch,
     run_close,
     run_fill,
     run_rates,
@@ -302,8 +303,7 @@ def build_runs(model, prm, empty, s, delta):
         raise RuntimeError("the table's header and vibkit.model.slots.HEAD_NAMES disagree")
     head[HEAD_RUNS] = 1.0
     head[HEAD_BY_ROLLER] = float(not np.all(model.mass == model.mass[0]))
-    values, counts = np.unique(pitches, return_counts=True)
-    nominal = float(values[np.argmax(counts)])
+    nominal = nominal_pitch(pitches)
     rstep = run_steps(tab, nominal)
     rstep[:, NEAR] = _near(tab, fp[FP_CX], fp[FP_CZ], fp[FP_REACH] + float(pitches.max()) + 1e-3, fp[FP_LT])
     tb = list(empty)
