@@ -20,7 +20,7 @@ LINKS_HEADER = ("link", "verdict", "excess pitch [mm]", "loops", "since the prev
 _COLUMNS_X = (0.06, 0.11, 0.20, 0.33, 0.42)  # figure x of each column
 _VERDICT_COLORS = {"worse": "#b2182b", "new": "#e0661b"}
 _TOP, _BOTTOM, _STEP = 0.89, 0.08, 0.0175  # figure y of the first and last line, and the line step
-_WRAP = 190  # characters of a wrapped line at 7 pt across the page
+_WRAP = 175  # characters of a wrapped line at 7 pt across the page
 _MEANING = (
     "worse: the link's excess pitch grew by more than 2 combined sigmas since the previous visit that counts from "
     "the marked link; new: flagged now, not then. A link number names a physical link only when the recordings "
