@@ -387,19 +387,26 @@ def _simulated_visit(scene, path, excess, seed):
 @pytest.mark.slow
 def test_scan_of_simulated_visits_finds_the_marked_link_worse(tmp_path, capsys):
     """End to end on the model (about 10 s of CPU): a 90-link escalator's profile (tensioner), two visits whose link
-    20 is 1 mm, then 2 mm long; the scan fits the profile scene's signature (simulated once for both files) and
-    fleet status reports the marked link, by its number, worse."""
+    20 is 1 mm, then 2 mm long; fleet scan stores the first, fleet add (with the profile) the second, both fitting
+    the profile scene's signature (simulated once for both files); fleet status reports the marked link, by its
+    number, worse, and so does the fleet report's links page."""
+    from vibkit.diagnose.report import write_fleet_report
     from vibkit.model.profile import parse_profile
 
-    (tmp_path / "E90").mkdir()
+    (tmp_path / "visits/E90").mkdir(parents=True)
     (tmp_path / "E90.toml").write_text(PROFILE_90)
     scene = parse_profile(PROFILE_90, "E90.toml").scene("forward")
-    number = _simulated_visit(scene, tmp_path / "E90/2025-03-01.nc", 1.0e-3, 1)
-    assert _simulated_visit(scene, tmp_path / "E90/2026-03-01.nc", 2.0e-3, 2) == number
+    number = _simulated_visit(scene, tmp_path / "visits/E90/2025-03-01.nc", 1.0e-3, 1)
+    assert _simulated_visit(scene, tmp_path / "2026-03-01.nc", 2.0e-3, 2) == number
     cat = tmp_path / "units.csv"
     cat.write_text("file,date,escalator,marker_s\nE90/*.nc,,E90.toml,0\n")
     db = tmp_path / "f.sqlite"
-    assert main(["fleet", "scan", str(tmp_path), "--catalogue", str(cat), "--workers", "0", "--db", str(db)]) == 0
+    assert (
+        main(["fleet", "scan", str(tmp_path / "visits"), "--catalogue", str(cat), "--workers", "0", "--db", str(db)])
+        == 0
+    )
+    later = ["fleet", "add", str(tmp_path / "2026-03-01.nc"), "--escalator", str(tmp_path / "E90.toml")]
+    assert main(later + ["--date", "2026-03-01", "--marker", "0", "--db", str(db)]) == 0
     capsys.readouterr()
     assert main(["fleet", "status", "--db", str(db), "--unit", "E90", "--json"]) == 0
     (u,) = json.loads(capsys.readouterr().out)["units"]
@@ -410,3 +417,13 @@ def test_scan_of_simulated_visits_finds_the_marked_link_worse(tmp_path, capsys):
     got = [v["excess_pitch_m"] for v in link["visits"]]
     # the fit gives 1.05 mm for the 1 mm link and 2.05 mm for the 2 mm one (fitted again with the 1.7 mm signature)
     assert got[0] == pytest.approx(1.0e-3, abs=0.1e-3) and got[1] == pytest.approx(2.0e-3, abs=0.15e-3)
+    with FleetDB(db, readonly=True) as fdb:
+        trends = fdb.status()
+        rep = write_fleet_report(
+            trends, fdb.measurements(), tmp_path / "fleet.pdf", links={"E90": fdb.links_history("E90")}
+        )
+    (texts,) = [t for title, t in rep.pages if title == "fleet links"]
+    i = texts.index(str(number))
+    assert (
+        texts[i + 1] == "worse" and texts[i + 2] == f"{1e3 * got[1]:+.2f} +- {1e3 * link['visits'][1]['sigma_m']:.2f}"
+    )

@@ -7,6 +7,7 @@ import os
 import sys
 import textwrap
 
+from .links import links_count, seconds
 from .options import (
     _profile_of,
     add_command,
@@ -76,6 +77,19 @@ def add_parser(subparsers):
         help="the unit's chain was replaced since its previous measurement: a new trend segment starts here",
     )
     add_escalator(f)
+    f.add_argument(
+        "--links",
+        type=links_count,
+        help="links in the chain: the links are scanned as fleet scan scans them (default the --escalator "
+        "profile's chain.n_links; neither: the scan is stored 'not run')",
+    )
+    f.add_argument(
+        "--marker",
+        type=seconds,
+        metavar="TIME",
+        help="time [s from the recording's start] at which a marked link passed the sensor: it is link 1, and "
+        "its numbers follow the same links across visits (the catalogue's marker_s)",
+    )
     f.set_defaults(func=_guarded(run_add, lambda a: a.db))
 
     f = fleet_sub("scan", "add every recording of a folder that a catalogue describes, in parallel (Dask)")
@@ -98,7 +112,9 @@ def add_parser(subparsers):
     add_limits(f)
     f.set_defaults(func=run_status)
 
-    f = fleet_sub("report", "PDF: the work list (page 1), then elongation against date per unit")
+    f = fleet_sub(
+        "report", "PDF: the work list (page 1), then elongation against date per unit, then the flagged links"
+    )
     f.add_argument("-o", "--output", required=True, help="PDF to write")
     f.add_argument("--force", action="store_true", help="replace an existing output file")
     add_limits(f, "elongation limits [%%]")
@@ -188,6 +204,7 @@ def run_add(a):
     sigma = sp.sigma or 0.0
     check_inputs(unit=unit, speed=sp.value, speed_sigma=sigma, nominal_pitch=nominal, date=a.date)
     with _fleet_db(a) as db:
+        n_notes = len(db.notes)
         m = db.add(
             a.recording,
             unit=unit,
@@ -198,12 +215,25 @@ def run_add(a):
             channel=a.channel,
             replaced=a.replaced,
             read_options=reader_options(a),
+            n_links=a.links,
+            marker_s=a.marker,
+            escalator=a.escalator,
         )
+        scan = db.link_scans(m.unit).get(m.id)
+        for n in db.notes[n_notes:]:  # e.g. a profile whose geometry gives no scene for the signature
+            msg(f"note: {n}")
         path = db.path
     if a.json:
-        print_json("fleet.add", {"database": path, "measurement": m.as_reported()})
+        print_json(
+            "fleet.add",
+            {"database": path, "measurement": m.as_reported(), "link_scan": None if scan is None else scan.as_dict()},
+        )
     else:
         print(f"stored {_fmt_measurement(m)}")
+        if scan is not None:
+            why = f": {scan.reason}" if scan.reason and not scan.scanned else ""
+            flagged = ", ".join(str(f.link) for f in scan.flagged)
+            print(f"links: {_fmt_scan(scan)}{why}" + (f" (links {flagged})" if flagged else ""))
         msg(f"note: database {path}; date from {m.date_source}")
     if not m.speed_sigma_m_s:
         msg(
@@ -358,10 +388,11 @@ def _run_report(a, target):
         check_output(a.output, [db.path], a.force)
         trends = db.status(limits_percent=a.limits)
         meas = db.measurements()
+        links = {t.unit: db.links_history(t.unit) for t in trends}  # what fleet status says of the links
         path = db.path
     if not trends:
         raise CLIError(f"{path}: no measurement stored yet; nothing to report")
-    rep = write_fleet_report(trends, meas, target, limits_percent=a.limits, database=path)
+    rep = write_fleet_report(trends, meas, target, limits_percent=a.limits, database=path, links=links)
     shown = a.output if is_stdout(a.output) else rep.path
     if a.json:
         print_json(
@@ -375,9 +406,10 @@ def _run_report(a, target):
             },
         )
     else:
+        n_links = sum(1 for t, _ in rep.pages if t == "fleet links")
         print(
             f"wrote {shown} ({len(rep.pages)} page(s): the work list, then {rep.summary['units_drawn']} of "
-            f"{len(trends)} units drawn)"
+            f"{len(trends)} units drawn, then {n_links} of links)"
         )
     return 0
 

@@ -1,6 +1,7 @@
-"""The link scan of a scan's recording: which links are worn, stored with its measurement (:mod:`vibkit.fleet.links`).
+"""The link scan of a recording: which links are worn, stored with its measurement (:mod:`vibkit.fleet.links`).
 
-:func:`link_scan_of` runs :func:`vibkit.diagnose.links.find_worn_links` on a recording already read, when the
+:func:`measure_with_links` reads a recording once and gives its measurement and its link scan: ``fleet scan``'s
+workers and ``fleet add`` (:meth:`vibkit.fleet.FleetDB.add`) both call it.  :func:`link_scan_of` runs :func:`vibkit.diagnose.links.find_worn_links` on a recording already read, when the
 number of links is known, and never raises: a recording shorter than two loops is ``too few loops``, an error is
 ``failed`` with its message, a missing number of links ``not run``; the measurement is stored whatever the scan
 gives.  A tensioner displacement with the escalator's forward scene is fitted with the worn link's simulated
@@ -12,19 +13,23 @@ from __future__ import annotations
 
 from .links import LinkScan
 
-__all__ = ["link_scan_of", "NO_LINK_COUNT"]
+__all__ = ["link_scan_of", "measure_with_links", "profile_scene", "NO_LINK_COUNT", "NO_LINK_COUNT_ADD"]
 
 #: why a scan's recording was not scanned for worn links when the number of links is unknown
 NO_LINK_COUNT = (
     "the number of links is not known (the catalogue's n_links column, or an escalator profile with chain.n_links)"
 )
+#: the same for ``fleet add``: the options that give the number of links
+NO_LINK_COUNT_ADD = "the number of links is not known (fleet add --links N, or --escalator FILE with chain.n_links)"
 
 
 def _one_line(exc):
     return " ".join(str(exc).split()) or type(exc).__name__
 
 
-def link_scan_of(recording, *, path, speed, n_links, channel=None, scene=None, marker_s=None) -> LinkScan:
+def link_scan_of(
+    recording, *, path, speed, n_links, channel=None, scene=None, marker_s=None, no_count=NO_LINK_COUNT
+) -> LinkScan:
     """The :class:`~vibkit.fleet.links.LinkScan` of one recording (never raises).
 
     Parameters
@@ -42,9 +47,11 @@ def link_scan_of(recording, *, path, speed, n_links, channel=None, scene=None, m
         The escalator's forward scene file: used for a tensioner displacement channel.
     marker_s : float, optional
         When the marked link passed the sensor (it is link 1). [s]
+    no_count : str
+        The reason stored when ``n_links`` is None (which options would give it).
     """
     if n_links is None:
-        return LinkScan.not_run(NO_LINK_COUNT, marker_s=marker_s)
+        return LinkScan.not_run(no_count, marker_s=marker_s)
     from ..diagnose.links import (
         STEP_REFUSAL,
         TooFewLoops,
@@ -70,3 +77,57 @@ def link_scan_of(recording, *, path, speed, n_links, channel=None, scene=None, m
     except Exception as exc:  # noqa: BLE001 - the link scan never costs the pitch measurement
         return LinkScan("failed", reason=f"unexpected {type(exc).__name__}: {_one_line(exc)}", **keep)
     return LinkScan.from_result(res)
+
+
+def measure_with_links(path, *, n_links=None, marker_s=None, scene=None, no_count=NO_LINK_COUNT, **analysis):
+    """Read a recording once; its :class:`~vibkit.fleet.measurement.Measurement` and its link scan.
+
+    Parameters
+    ----------
+    path : str
+        The recording.
+    n_links, marker_s, scene, no_count
+        As :func:`link_scan_of` takes them.
+    **analysis
+        :func:`vibkit.fleet.measurement.analyse_recording`'s keywords (``unit``, ``speed``, ``speed_sigma``,
+        ``nominal_pitch``, ``date``, ``channel``, ``read_options`` ...).
+
+    Returns
+    -------
+    (Measurement, LinkScan)
+        The link scan never raises (a failure is its status); the analysis raises as ``analyse_recording`` does.
+    """
+    from ..io import read_recording
+    from .measurement import analyse_recording
+
+    channel = analysis.get("channel")
+    rec = read_recording(path, **{**(analysis.get("read_options") or {}), "channel": channel})
+    m = analyse_recording(path, recording=rec, **analysis)
+    scan = link_scan_of(
+        rec,
+        path=path,
+        speed=analysis["speed"],
+        n_links=n_links,
+        channel=channel,
+        scene=scene,
+        marker_s=marker_s,
+        no_count=no_count,
+    )
+    return m, scan
+
+
+def profile_scene(escalator, notes):
+    """The forward scene file of an escalator profile (a path), for a tensioner's worn-link signature; None, with
+    a line appended to ``notes``, when the profile's geometry gives no scene (its links are scanned without it)."""
+    from ..diagnose.links import profile_scene_file
+    from ..model.profile import load_profile
+    from ..model.schema import SceneError
+
+    try:
+        return profile_scene_file(load_profile(escalator))
+    except (SceneError, OSError, ValueError) as exc:
+        notes.append(
+            f"{escalator}: no scene for the worn link's signature ({' '.join(str(exc).split())}); "
+            "its recordings' links are scanned without it"
+        )
+        return None

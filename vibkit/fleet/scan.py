@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 from .catalogue import read_catalogue
 from .dates import _iso, parse_date
 from .errors import DuplicateRecordingError, FleetError
-from .measurement import _file_sha256, analyse_recording
+from .measurement import _file_sha256
 
 __all__ = ["RECORDING_SUFFIXES", "ScanResult", "scan_folder"]
 
@@ -62,13 +62,14 @@ class _Job:
 
 def _analyse_job(job):
     """Worker side of a scan: analyse one recording and scan its links; never raises (a failure is a message)."""
-    from ..io import read_recording
-    from .link_scan import link_scan_of
+    from .link_scan import measure_with_links
 
     try:
-        rec = read_recording(job.path, **{**(job.read_options or {}), "channel": job.channel})
-        m = analyse_recording(
+        m, scan = measure_with_links(
             job.path,
+            n_links=job.n_links,
+            marker_s=job.marker_s,
+            scene=job.scene,
             unit=job.unit,
             speed=job.speed_m_s,
             speed_sigma=job.speed_sigma_m_s,
@@ -77,16 +78,6 @@ def _analyse_job(job):
             channel=job.channel,
             read_options=job.read_options,
             date_source=job.date_source,
-            recording=rec,
-        )
-        scan = link_scan_of(
-            rec,
-            path=job.path,
-            speed=job.speed_m_s,
-            n_links=job.n_links,
-            channel=job.channel,
-            scene=job.scene,
-            marker_s=job.marker_s,
         )
         return {"ok": True, "measurement": m, "link_scan": scan}
     except (ValueError, OSError) as exc:  # RecordingError and FleetError are ValueErrors
@@ -328,18 +319,9 @@ def _scene_of(row, scenes, notes):
     if row.escalator is None:
         return None
     if row.escalator not in scenes:
-        from ..diagnose.links import profile_scene_file
-        from ..model.profile import load_profile
-        from ..model.schema import SceneError
+        from .link_scan import profile_scene
 
-        try:
-            scenes[row.escalator] = profile_scene_file(load_profile(row.escalator))
-        except (SceneError, OSError, ValueError) as exc:
-            scenes[row.escalator] = None
-            notes.append(
-                f"{row.escalator}: no scene for the worn link's signature ({' '.join(str(exc).split())}); "
-                "its recordings' links are scanned without it"
-            )
+        scenes[row.escalator] = profile_scene(row.escalator, notes)
     return scenes[row.escalator]
 
 

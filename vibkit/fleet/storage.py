@@ -20,7 +20,7 @@ import sqlite3
 
 from ..diagnose.pitch import DEFAULT_LIMITS_PERCENT
 from .errors import DuplicateRecordingError, FleetError
-from .measurement import Measurement, _file_sha256, analyse_recording
+from .measurement import Measurement, _file_sha256
 from .scan import scan_folder
 from .schema import APPLICATION_ID, SCHEMA_VERSION  # noqa: F401 - public through vibkit.fleet.history
 from .trends import rank_units, unit_trend
@@ -247,8 +247,11 @@ class FleetDB:
         channel=None,
         replaced=False,
         read_options=None,
+        n_links=None,
+        marker_s=None,
+        escalator=None,
     ):
-        """Analyse a recording and store its measurement.
+        """Analyse a recording and store its measurement with its link scan.
 
         Parameters
         ----------
@@ -266,12 +269,21 @@ class FleetDB:
             The unit's chain was replaced since its previous measurement: a new trend segment starts.
         read_options : dict, optional
             More :func:`vibkit.read_recording` arguments (``time_unit``, ``units``, ``repair_time`` ...).
+        n_links : int, optional
+            Links in the chain (default: the ``escalator`` profile's ``chain.n_links``): the links are scanned as
+            :meth:`scan` scans them (:func:`vibkit.fleet.link_scan.measure_with_links`); without it the scan is
+            stored "not run" with the reason.
+        marker_s : float, optional
+            When a marked link passed the sensor [s from the recording's start]: it is link 1.
+        escalator : str or os.PathLike, optional
+            The unit's escalator profile: its number of links, and its forward scene for a tensioner's worn-link
+            signature (a profile whose geometry gives no scene: a line in :attr:`notes`).
 
         Returns
         -------
         Measurement
             The stored row, with its quality flag (an implausible or inconclusive one is stored
-            flagged and left out of the trend).
+            flagged and left out of the trend); its link scan: ``link_scans(unit)[m.id]``.
 
         Raises
         ------
@@ -295,8 +307,22 @@ class FleetDB:
         if nom is None:
             raise FleetError(f"unit {str(unit)!r} is new: give its nominal link pitch (--nominal-pitch, in m)")
         check_pitch(nom, f"the nominal pitch stored for unit {str(unit)!r} in {self.path}")
-        m = analyse_recording(
+        from .link_scan import NO_LINK_COUNT_ADD, measure_with_links, profile_scene
+
+        scene = None
+        if escalator is not None:
+            if n_links is None:
+                from ..model.profile import load_profile
+
+                n_links = load_profile(escalator).n_links
+            if n_links is not None:
+                scene = profile_scene(os.fspath(escalator), self.notes)
+        m, link_scan = measure_with_links(
             spath,
+            n_links=n_links,
+            marker_s=marker_s,
+            scene=scene,
+            no_count=NO_LINK_COUNT_ADD,
             unit=unit,
             speed=speed,
             speed_sigma=speed_sigma,
@@ -306,7 +332,7 @@ class FleetDB:
             replaced=replaced,
             read_options=read_options,
         )
-        return self.insert(m)
+        return self.insert(m, link_scan)
 
     @_translated
     def scan(

@@ -7,11 +7,12 @@ from __future__ import annotations
 import datetime as _dt
 import math
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from .common import _WIDE, PageSink, Report, atomic_path, fmt_pm
+from .fleet_links import fleet_links_pages
 
 __all__ = [
     "FLEET_PAGE_MAX_UNITS",
@@ -118,7 +119,8 @@ def work_list_rows(trends, *, flags_width=None, today_unix_s=None):
 @dataclass
 class FleetContext:
     """What the fleet pages draw: ``trends`` (all, ranked), ``shown`` (drawn), ``measurements``, ``by_unit``,
-    ``limits`` [%], ``database`` and ``date`` (of the report)."""
+    ``limits`` [%], ``database`` and ``date`` (of the report), ``links`` (``{unit: UnitLinks}`` of
+    :func:`vibkit.fleet.links_history`; empty: no links pages)."""
 
     trends: list
     shown: list
@@ -127,6 +129,7 @@ class FleetContext:
     limits: tuple
     database: str
     date: _dt.datetime
+    links: dict = field(default_factory=dict)
 
 
 def _utc(text):
@@ -323,12 +326,13 @@ def unit_pages(doc, ctx):
 
 
 def fleet_page(doc, ctx) -> None:
-    """The work list page(s), then the unit pages."""
+    """The work list page(s), then the unit pages, then the links pages (where ``ctx.links`` holds any)."""
     rows = work_list_rows(ctx.trends, flags_width=80, today_unix_s=ctx.date.timestamp())
     parts = max(1, math.ceil(len(rows) / _ROWS_PER_TABLE))
     for k in range(parts):
         work_list_page(doc, ctx, rows[k * _ROWS_PER_TABLE : (k + 1) * _ROWS_PER_TABLE], k + 1, parts)
     unit_pages(doc, ctx)
+    fleet_links_pages(doc, ctx, _title, _subtitle(ctx))
 
 
 def fleet_report_date() -> _dt.datetime:
@@ -343,9 +347,17 @@ def fleet_report_date() -> _dt.datetime:
 
 
 def write_fleet_report(
-    trends, measurements, out_path, *, limits_percent=None, database="", max_units=FLEET_PAGE_MAX_UNITS
+    trends,
+    measurements,
+    out_path,
+    *,
+    limits_percent=None,
+    database="",
+    max_units=FLEET_PAGE_MAX_UNITS,
+    links=None,
 ) -> Report:
-    """The fleet PDF: the work list (page 1), then elongation against date for the most urgent units.
+    """The fleet PDF: the work list (page 1), then elongation against date for the most urgent units, then
+    the flagged links of each unit's latest visit.
 
     Parameters
     ----------
@@ -361,6 +373,10 @@ def write_fleet_report(
         Named in the subtitles.
     max_units : int
         Units drawn (the most urgent); the work list lists all of them.
+    links : dict, optional
+        ``{unit: UnitLinks}`` as :meth:`vibkit.fleet.FleetDB.links_history` gives them: the links pages say per
+        unit which links the latest visit's scan flagged, which marked link came back worse or is new, and why a
+        unit has no scan (none given: no links pages).
 
     Returns
     -------
@@ -390,6 +406,7 @@ def write_fleet_report(
         limits=limits,
         database=database,
         date=date,
+        links=dict(links or {}),
     )
     meta = {
         "Title": "vibkit fleet report",
