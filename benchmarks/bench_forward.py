@@ -45,6 +45,7 @@ WORN = [[40, 0.4 / 3 + 1e-3], [70, 0.4 / 3 + 1e-3], [100, 0.4 / 3 + 1e-3]]
 CHAIN = {
     "contact, no load, three worn links": {"worn_links": WORN},
     "contact, no load, three worn links, with check": {"worn_links": WORN},
+    "contact, no load, three worn links, exact closure": {"worn_links": WORN},
     "contact, no load, 3 % elongated chain": {"elongation_percent": 3.0},
     "contact, no load, rollers of their own mass and radius": {
         "roller_mass_by_roller": [[3, 9.5], [50, 12.0], [120, 6.0]],
@@ -57,6 +58,8 @@ CHAIN = {
 }
 SOLVER["contact, no load, rollers of their own mass and radius, exact closure"] = {"closure": "exact"}
 SOLVER["contact, no load, three worn links, with check"] = {"check": True}
+SOLVER["contact, no load, three worn links, exact closure"] = {"closure": "exact"}
+SOLVER["contact, no load, run-by-run closure"] = {"closure": "runs"}
 
 CASES = {
     # name: (effects, outputs, description)
@@ -117,9 +120,19 @@ CASES = {
     "contact, no load, three worn links": (
         NO_LOAD,
         NO_LOAD_OUT,
-        "links 40, 70 and 100 one mm longer: the chain repeats after a loop, not a pitch (exact closure)",
+        "links 40, 70 and 100 one mm longer: the chain repeats after a loop, not a pitch (closed run by run)",
     ),
     "contact, no load, three worn links, with check": (NO_LOAD, NO_LOAD_OUT, "the same with the convergence check"),
+    "contact, no load, three worn links, exact closure": (
+        NO_LOAD,
+        NO_LOAD_OUT,
+        "the same, the closure walked link by link (as before the run-by-run closure)",
+    ),
+    "contact, no load, run-by-run closure": (
+        NO_LOAD,
+        NO_LOAD_OUT,
+        "the healthy chain closed run by run instead of read from the pitch table (what exactness costs)",
+    ),
     "contact, no load, 3 % elongated chain": (
         NO_LOAD,
         NO_LOAD_OUT,

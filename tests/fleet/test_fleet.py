@@ -648,7 +648,44 @@ def test_fleet_pages_have_no_overlapping_text(fleet):
     )
     with matplotlib.rc_context({"font.size": 7, "axes.titlesize": 8}):
         fleet_page(Doc(), ctx)
-    assert found == []
+    assert found == [], found
+
+
+def test_work_list_cells_hold_their_text(fleet):
+    """A unit with long flags: every cell's text ends inside its cell (the flags cut short with '...')."""
+    import dataclasses
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from vibkit.diagnose.report.fleet import WORK_LIST_FLAGS_WIDTH, FleetContext, work_list_page, work_list_rows
+
+    with FleetDB(fleet["db"], create=False) as db:
+        trends, meas = db.status(), db.measurements()
+    long = ("no usable measurement: the latest reading was flagged by the operator as taken at another speed",)
+    trends = [dataclasses.replace(trends[0], flags=long * 2), *trends[1:]]
+    ctx = FleetContext(
+        trends, trends, meas, {}, (1.5, 2.0, 3.0), "fleet.sqlite", dt.datetime(2026, 11, 23, tzinfo=dt.timezone.utc)
+    )
+    found = []
+
+    class Doc:
+        def emit(self, fig, title):
+            fig.canvas.draw()
+            r = fig.canvas.get_renderer()
+            (table,) = fig.axes[0].tables
+            for (row, col), cell in table.get_celld().items():
+                text, box = cell.get_text(), cell.get_window_extent(r)
+                if text.get_text() and text.get_window_extent(r).x1 > box.x1 + 0.5:
+                    found.append((row, col, text.get_text()))
+            plt.close(fig)
+
+    rows = work_list_rows(trends, flags_width=None)
+    assert len(rows[0][-1]) > 150  # the flags as status prints them
+    work_list_page(Doc(), ctx, work_list_rows(trends, flags_width=WORK_LIST_FLAGS_WIDTH), 1, 1)
+    assert found == [], found
 
 
 def test_cli_add_replaced_starts_a_segment(tmp_path, capsys):

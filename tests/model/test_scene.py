@@ -72,7 +72,7 @@ def test_closure_choice_is_checked(tmp_path):
     )
     p = tmp_path / "closure.toml"
     p.write_text(text)
-    with pytest.raises(SceneError, match=r"'solver.closure' must be one of table, exact, got 'tabel'"):
+    with pytest.raises(SceneError, match=r"'solver.closure' must be one of table, exact, runs, got 'tabel'"):
         load_scene(p)
     p.write_text(text.replace('"tabel"', '"exact"'))
     assert load_scene(p).solver.closure == "exact"

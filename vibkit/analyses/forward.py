@@ -24,7 +24,8 @@ from ..model.effects import (
     pack_parameters,
     reset_closure,
 )
-from ..model.pitch_table import empty_table, table_applies, table_delta, table_evaluate, table_spacing
+from ..model.pitch_table import empty_table, rhs, table_applies, table_delta, table_spacing
+from ..model.runs_rhs import build_runs
 from ..model.schema import SceneError, effect_options, nominal_speed
 from ..model.slots import (
     FP_CARRIAGE_MASS,
@@ -195,7 +196,7 @@ def forward_dynamics(
     t_events = None
     crossings, t_events = _events(model, fm)
     events, t_events = (crossings, t_events) if events else (None, None)
-    table, closure = forward_table(model, fm, crossings[0], rtol, solver.closure)
+    table, closure = forward_table(model, fm, crossings[0], rtol, solver.closure, (y0[0], d0))
     y_out, stats = integrate(
         fm.prm,
         fm.work.arrays,
@@ -220,14 +221,16 @@ def forward_dynamics(
     return _post_process(fm, t_out, y_out, outputs, stats, y_obs, table)
 
 
-def forward_table(model, fm, crossings, rtol, closure="table"):
-    """The pitch table for the run and how the closure is taken: ("table" or "exact", and where the
-    table cannot stand for the closure, why)."""
+def forward_table(model, fm, crossings, rtol, closure="table", start=(0.0, 0.0)):
+    """The pitch table for the run and how the closure is taken: ("table", "exact" or "runs", and
+    where the table cannot stand for the closure, why). ``start``: roller 1's coordinate and delta
+    at the start (where the run-by-run closure measures its link error)."""
     if closure == "exact":
         return None, "exact"
     why = table_applies(model)
-    if why is not None:
-        return None, f"exact ({why})"
+    if closure == "runs" or why is not None:
+        runs = build_runs(model, fm.prm, empty_table(), *start)
+        return runs, "runs" if why is None else f"runs ({why})"
     table, _, _ = checked_table(model, fm.prm, crossings, table_spacing(rtol))
     return table, "table"
 
@@ -394,7 +397,7 @@ def _observe(
                 return 2, j
         if light_table:
             # from the pitch table, as the integrator saw them (no closure residual asked)
-            table_evaluate(t[j], y[j], dy, prm, ws, need_teeth, tb)
+            rhs(t[j], y[j], dy, prm, ws, need_teeth, tb)
             scal[j, 0] = info[INFO_DELTA]
             scal[j, 2] = info[INFO_MOTOR]
             scal[j, 10] = info[INFO_F_DRIVE]

@@ -156,8 +156,9 @@ def _scene_with(scene, *, speed, worn=None):
     if "motor" in effects:
         effects["motor"] = dataclasses.replace(effects["motor"], speed=float(speed))
     outputs = dict(scene.outputs, variables=tuple(sorted(set(SENSORS.values()) | {"sprocket_angle"})))
-    # both runs on the exact closure (a worn chain needs it): the difference is the worn link's, not the closures'
-    return dataclasses.replace(scene, chain=chain, effects=effects, outputs=outputs).with_solver(closure="exact")
+    # both runs on the closure walked run by run (exact, and what a worn chain takes): the difference is the
+    # worn link's, not the closures'
+    return dataclasses.replace(scene, chain=chain, effects=effects, outputs=outputs).with_solver(closure="runs")
 
 
 @functools.lru_cache(maxsize=32)

@@ -25,6 +25,7 @@ from dataclasses import dataclass
 import numba as nb
 import numpy as np
 
+from .crossings import crossing_values
 from .guide import (
     AX,
     AZ,
@@ -48,6 +49,7 @@ from .guide import (
     seg_length,
 )
 from .params import ChainParams
+from .runs import A_COLS, R_COLS, next_other, nominal_pitch, run_steps
 
 __all__ = ["Chain", "Configuration", "ClosureError"]
 
@@ -629,18 +631,20 @@ class Chain:
     def _crossings(self, rollers, places, starts):
         """s0_1 near each of ``starts`` at which roller ``rollers[i]`` (from 0) sits at undeformed
         coordinate ``places[i]`` (:func:`vibkit.model.crossings.crossing_values`). [m]"""
-        from .crossings import crossing_values  # the kernel builds on this module's
-
         g = self.guide
         out = np.empty(len(starts))
         guess = self._delta_guess if self._delta_guess is not None else self.find_delta_bracket(float(starts[0]))
+        nominal = nominal_pitch(self.pitches)
         bad = crossing_values(
             g.table,
             g.p0,
-            self._lt,
             self.pitches,
             self.n,
             self.tol,
+            run_steps(g.table, nominal),
+            next_other(self.pitches, nominal),
+            np.zeros((self.n + 2, R_COLS)),
+            np.zeros(A_COLS),
             np.ascontiguousarray(rollers, dtype=np.int64),
             np.ascontiguousarray(places, dtype=float),
             np.ascontiguousarray(starts, dtype=float),

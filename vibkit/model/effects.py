@@ -361,6 +361,19 @@ def evaluate(t, y, dy, prm, ws, want_teeth):
     sensitivity(part, xs, zs, n + 1, alpha, beta)
     c = velocity_coefficients(part, xs, zs, n, alpha, beta, jac, gam)
     e = acceleration_terms(part, xs, zs, n, alpha, beta, gam, c, sdot, hacc, eta, sd)
+    return evaluate_forces(t, y, dy, prm, ws, want_teeth, delta, c, e, beta[n])
+
+
+@nb.njit(cache=True, error_model="numpy")
+def evaluate_forces(t, y, dy, prm, ws, want_teeth, delta, c, e, dh):
+    """The forces and the reduced equation of :func:`evaluate` from a closed configuration: ``ws``
+    holding every roller's s0, position, J and h, with delta, c = d delta/ds0_1, e (delta-ddot =
+    c s-ddot + e) and ``dh`` = dh/d delta of the closure (its memory for the next evaluation).
+    Returns 0."""
+    tab, loc, fp, ip, mass, pm, ps, pb, pa, pitches, radii = prm
+    (s0, kk, lam, xs, zs, part, alpha, beta, jac, gam, hacc, eta, sd, fx, fz, cand, ind_t, frc_t, info) = ws
+    n = ip[IP_N]
+    sdot = y[1]
     g = fp[FP_G]
     for i in range(n):
         fx[i] = 0.0
@@ -420,7 +433,7 @@ def evaluate(t, y, dy, prm, ws, want_teeth):
     info[INFO_DELTA] = delta
     info[INFO_AT] = y[0]
     info[INFO_SLOPE] = c
-    info[INFO_DH_DDELTA] = beta[n]
+    info[INFO_DH_DDELTA] = dh
     # d2delta/ds0_1^2 (deltaddot = c sddot + e with e = c' sdot^2), for a second-order prediction
     info[INFO_CURVATURE] = e / (sdot * sdot) if sdot * sdot > 1e-12 else 0.0
     info[INFO_DELTA_DOT] = c * sdot

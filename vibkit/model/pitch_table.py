@@ -39,6 +39,7 @@ import numpy as np
 
 from .chain import acceleration_terms, close_with_slope, fill_partials, sensitivity, velocity_coefficients, walk_arrays
 from .effects import aboard, clear_teeth, evaluate, finish, rolling_force, step_load, step_roller, within_reach
+from .runs_rhs import runs_evaluate
 from .slots import (
     FP_CARRIAGE_MASS,
     FP_CLOSURE_TOL,
@@ -63,6 +64,7 @@ from .slots import (
     HEAD_NAMES,
     HEAD_P0,
     HEAD_PIECES,
+    HEAD_RUNS,
     INFO_AT,
     INFO_CURVATURE,
     INFO_DELTA,
@@ -420,10 +422,23 @@ def build_table(model, prm, cross, spacing):
     cand = np.flatnonzero((dist < reach).any(axis=(0, 1))).astype(np.int64)
     # the candidates' x and z polynomials side by side, piece by piece: one evaluation reads one block
     cc = np.ascontiguousarray(np.concatenate([xc[cand], zc[cand]], axis=-1).transpose(1, 0, 2))
-    head = np.array([a, p0, float(npc), float(n), _link_error(xc, zc, chain.pitches), float(_by_roller(model))])
+    head = np.array([a, p0, float(npc), float(n), _link_error(xc, zc, chain.pitches), float(_by_roller(model)), 0.0])
     if head.size != len(HEAD_NAMES):
         raise RuntimeError("the table's header and vibkit.model.slots.HEAD_NAMES disagree")
-    tb = (head, np.ascontiguousarray(sb), np.ascontiguousarray(uc), up, mc, vc, dc, xc, zc, sc, cand, cc)
+    tb = (
+        head,
+        np.ascontiguousarray(sb),
+        np.ascontiguousarray(uc),
+        up,
+        mc,
+        vc,
+        dc,
+        xc,
+        zc,
+        sc,
+        cand,
+        cc,
+    ) + empty_table()[12:]
     if len(tb) != len(TB_NAMES):
         raise RuntimeError("the table and vibkit.model.slots.TB_NAMES disagree")
     return tb
@@ -457,6 +472,10 @@ def empty_table():
         z3,
         np.zeros(0, dtype=np.int64),
         np.zeros((0, 0, 12)),
+        np.zeros((0, 5)),
+        np.zeros(0, dtype=np.int64),
+        np.zeros((0, 17)),
+        z1,
     )
 
 
@@ -668,7 +687,10 @@ def table_evaluate(t, y, dy, prm, ws, want_teeth, tb):
 @nb.njit(cache=True, error_model="numpy", nogil=True)
 def rhs(t, y, dy, prm, ws, want_teeth, tb):
     """The forward right-hand side: from the table ``tb`` where it has pieces, else from the exact
-    closure (:func:`vibkit.model.effects.evaluate`). Returns the status (0 ok)."""
+    closure (:func:`vibkit.model.effects.evaluate`), or walked run by run where the table's head says
+    so (:func:`vibkit.model.runs.runs_evaluate`). Returns the status (0 ok)."""
+    if tb[TB_HEAD][HEAD_RUNS] != 0.0:
+        return runs_evaluate(t, y, dy, prm, ws, want_teeth, tb)
     if tb[TB_SB].size > 0:
         return table_evaluate(t, y, dy, prm, ws, want_teeth, tb)
     return evaluate(t, y, dy, prm, ws, want_teeth)

@@ -98,7 +98,7 @@ OUTPUTS = {
 
 # how the forward dynamics gets the chain's configuration: read from the table over one pitch, or
 # solved at every evaluation (vibkit.model.pitch_table)
-CLOSURES = ("table", "exact")
+CLOSURES = ("table", "exact", "runs")
 
 # places of the guide where passengers board and alight (vibkit.model.escalator.EscalatorModel.place)
 PLACES = ("lower_landing", "upper_landing")

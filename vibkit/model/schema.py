@@ -215,7 +215,12 @@ class SolverSection(_Section):
         1e-12,
         range=(1e-14, 0.1, "(the tightest tolerance the convergence check tries)"),
     )
-    closure: str = key("", '"table" (over one pitch) or "exact" (solved at every evaluation)', "table", types=(str,))
+    closure: str = key(
+        "",
+        '"table" (over one pitch), "exact" (solved at every evaluation) or "runs" (solved run by run)',
+        "table",
+        types=(str,),
+    )
 
     def atol_for(self, rtol: float) -> float:
         """The absolute tolerance of a run at ``rtol``: ``atol`` if given, else rtol x :data:`ATOL_PER_RTOL`."""

@@ -155,6 +155,7 @@ WS_NAMES = (
 )
 WS = _slots(WS_NAMES)
 WS_INFO = WS["info"]
+WS_S0, WS_X, WS_Z, WS_JAC, WS_HACC = WS["s0"], WS["x"], WS["z"], WS["jac"], WS["hacc"]
 
 # --- what an evaluation leaves (ws[WS_INFO]) ----------------------------------------------------
 INFO_NAMES = (
@@ -197,7 +198,24 @@ if (INFO_SLOPE, INFO_DH_DDELTA) != (INFO_AT + 1, INFO_AT + 2):
     raise ValueError("the closure's memory slots must be consecutive")
 
 # --- the pitch table ----------------------------------------------------------------------------
-TB_NAMES = ("head", "sb", "uc", "up", "mc", "vc", "dc", "xc", "zc", "sc", "cand", "cc")
+TB_NAMES = (
+    "head",
+    "sb",
+    "uc",
+    "up",
+    "mc",
+    "vc",
+    "dc",
+    "xc",
+    "zc",
+    "sc",
+    "cand",
+    "cc",
+    "rstep",
+    "rnext",
+    "runs",
+    "raux",
+)
 TB = _slots(TB_NAMES)
 TB_HEAD = TB["head"]  # see HEAD_NAMES
 TB_SB = TB["sb"]  # piece ends along roller 1's coordinate, the whole loop [m]
@@ -211,8 +229,15 @@ TB_ZC = TB["zc"]  # z of each table roller
 TB_SC = TB["sc"]  # s0 of each table roller
 TB_CAND = TB["cand"]  # table rollers that can reach a tooth
 TB_CC = TB["cc"]  # the candidates' x and z quintics side by side (pieces, candidates, 12)
+# the closure walked run by run (vibkit.model.runs), for chains the table cannot stand for; empty otherwise
+TB_RSTEP = TB[
+    "rstep"
+]  # per segment: one link's arc length, its turn's cosine and sine, near the sprocket, sine of half the turn (nseg, 5)
+TB_RNEXT = TB["rnext"]  # (n + 1,) int64: the first link at or after each roller of another pitch
+TB_RUNS = TB["runs"]  # scratch: one row per run of the last walk
+TB_RAUX = TB["raux"]  # scratch: the walk's partials at roller 1 and the ghost, runs walked
 
-HEAD_NAMES = ("a", "p0", "pieces", "n", "link_error", "by_roller")
+HEAD_NAMES = ("a", "p0", "pieces", "n", "link_error", "by_roller", "runs")
 HEAD = _slots(HEAD_NAMES)
 HEAD_A = HEAD["a"]  # the first breakpoint, where the pitch starts [m]
 HEAD_P0 = HEAD["p0"]  # loop length [m]
@@ -220,3 +245,4 @@ HEAD_PIECES = HEAD["pieces"]  # pieces over one pitch
 HEAD_N = HEAD["n"]  # rollers
 HEAD_LINK_ERROR = HEAD["link_error"]  # the tabulated chain's largest link-length error [m]
 HEAD_BY_ROLLER = HEAD["by_roller"]  # 1.0: the rollers' masses or radii differ (sums taken roller by roller)
+HEAD_RUNS = HEAD["runs"]  # 1.0: no table; the chain is closed run by run (vibkit.model.runs)

@@ -85,6 +85,9 @@ def fmt_elongation(t) -> str:
     return fmt_pm(t.latest_elongation_percent, t.latest_elongation_sigma_percent, sign=True)
 
 
+WORK_LIST_FLAGS_WIDTH = 50  # characters of a unit's flags in the PDF's work list (the whole text: fleet status)
+
+
 def work_list_rows(trends, *, flags_width=None, today_unix_s=None):
     """The work list's rows (:data:`WORK_LIST_HEADER`) of ranked :class:`vibkit.fleet.trends.UnitTrend`;
     a forecast whose date has passed on ``today_unix_s`` reads ``OVERDUE`` (:func:`fmt_forecast`)."""
@@ -162,7 +165,7 @@ def work_list_page(doc, ctx, rows, part, parts):
     _title(fig, "Fleet work list: most urgent first" + (f" ({part}/{parts})" if parts > 1 else ""), _subtitle(ctx))
     ax = fig.add_axes([0.04, 0.10, 0.92, 0.80])
     ax.axis("off")
-    widths = [0.03, 0.055, 0.1, 0.07, 0.095, 0.11, 0.045, 0.16, 0.335]
+    widths = [0.03, 0.055, 0.16, 0.07, 0.095, 0.11, 0.045, 0.16, 0.275]
     tab = ax.table(cellText=rows, colLabels=WORK_LIST_HEADER, colWidths=widths, loc="upper left", cellLoc="left")
     tab.auto_set_font_size(False)
     tab.set_fontsize(7)
@@ -327,7 +330,7 @@ def unit_pages(doc, ctx):
 
 def fleet_page(doc, ctx) -> None:
     """The work list page(s), then the unit pages, then the links pages (where ``ctx.links`` holds any)."""
-    rows = work_list_rows(ctx.trends, flags_width=80, today_unix_s=ctx.date.timestamp())
+    rows = work_list_rows(ctx.trends, flags_width=WORK_LIST_FLAGS_WIDTH, today_unix_s=ctx.date.timestamp())
     parts = max(1, math.ceil(len(rows) / _ROWS_PER_TABLE))
     for k in range(parts):
         work_list_page(doc, ctx, rows[k * _ROWS_PER_TABLE : (k + 1) * _ROWS_PER_TABLE], k + 1, parts)
