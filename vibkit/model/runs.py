@@ -12,8 +12,8 @@ the segment, and the last roller's place), one exact link over each joint (the s
 :func:`vibkit.model.guide.circle_hit` as :func:`vibkit.model.chain.walk`), and the rates carried across
 the joint by the link's constraint, u . (v_B - v_A) = 0. The ghost of roller 1 (model.md section 3)
 gives the residual h and, from the same rates, dh/ddelta for Newton's method. With the rates' closure
-(the ghost's s0-dot is roller 1's) fixing c = ddelta/ds and the accelerations' (u . (a_B - a_A) +
-|v_B - v_A|^2 = 0 across each joint) fixing e (delta-ddot = c s-ddot + e), :func:`run_fill` writes
+(the ghost's s0-dot is roller 1's) fixing c = ddelta/ds and the accelerations'
+(``u . (a_B - a_A) + |v_B - v_A|^2 = 0`` across each joint) fixing e (delta-ddot = c s-ddot + e), :func:`run_fill` writes
 every roller's place, J = dr/ds and h (a = J s-ddot + h) into the work arrays that
 :func:`vibkit.model.effects.evaluate_forces` takes from there.
 

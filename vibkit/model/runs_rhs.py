@@ -293,7 +293,7 @@ def build_runs(model, prm, empty, s, delta):
     table, :func:`vibkit.model.pitch_table.empty_table`): the head marked, each segment's step for
     the links most of the chain has (and whether it is within the sprocket's reach), where the other
     links are, scratch for the walk. The head's link error is the walk's own (the largest
-    | |r_{i+1} - r_i| - L_i |) closed at roller-1 coordinate ``s`` from ``delta``. [m]"""
+    ``| |r_{i+1} - r_i| - L_i |``) closed at roller-1 coordinate ``s`` from ``delta``. [m]"""
     pitches = np.asarray(model.chain.pitches, dtype=float)
     n = pitches.size
     tab = model.guide.table
