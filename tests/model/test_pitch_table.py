@@ -14,23 +14,9 @@ from vibkit.model.escalator import EscalatorModel
 from vibkit.model.pitch_table import _quintic, build_table, table_applies, table_evaluate, table_spacing
 from vibkit.model.scene import load_scene
 
-SIM = Path(__file__).resolve().parents[2] / "sim"
+from support.effects import ALL_EFFECTS
 
-# every effect the table path has a branch for: damped contact, the carriage, passengers by place,
-# rolling resistance
-ALL_EFFECTS = {
-    "gravity": {"g": 9.81},
-    "contact": {"stiffness": 1.0e6, "exponent": 1.5, "damping": 0.3},
-    "motor": {"kp": 600.0, "speed": 0.5},
-    "tensioner": {"stiffness": 2.0e4, "preload": 3000.0, "mass": 40.0},
-    "passengers": {
-        "mass": [70.0, 90.0],
-        "step": [3, 53],
-        "board": ["lower_landing"] * 2,
-        "alight": ["upper_landing"] * 2,
-    },
-    "rolling_resistance": {"coefficient": 0.01},
-}
+SIM = Path(__file__).resolve().parents[2] / "sim"
 
 
 def test_quintic_interpolates_a_quintic_exactly():

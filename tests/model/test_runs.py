@@ -15,25 +15,11 @@ from vibkit.model.runs_rhs import build_runs, runs_evaluate
 from vibkit.model.scene import load_scene, parse_scene
 from vibkit.model.slots import HEAD_BY_ROLLER, HEAD_LINK_ERROR, INFO_DELTA, INFO_SLOPE, INFO_WALKS, TB_HEAD
 
+from support.effects import ALL_EFFECTS
+
 SIM = Path(__file__).resolve().parents[2] / "sim"
 PITCH = 0.4 / 3
 WORN = f"worn_links = [[40, {PITCH + 1e-3}], [70, {PITCH + 1e-3}], [100, {PITCH + 1e-3}]]"
-
-# every effect the general path has a branch for: damped contact, the carriage, passengers by place,
-# rolling resistance
-ALL_EFFECTS = {
-    "gravity": {"g": 9.81},
-    "contact": {"stiffness": 1.0e6, "exponent": 1.5, "damping": 0.3},
-    "motor": {"kp": 600.0, "speed": 0.5},
-    "tensioner": {"stiffness": 2.0e4, "preload": 3000.0, "mass": 40.0},
-    "passengers": {
-        "mass": [70.0, 90.0],
-        "step": [3, 53],
-        "board": ["lower_landing"] * 2,
-        "alight": ["upper_landing"] * 2,
-    },
-    "rolling_resistance": {"coefficient": 0.01},
-}
 
 
 def _scene(name, chain="", effects=None):

@@ -23,6 +23,7 @@ from ..model.effects import (
     motor_torque,
     pack_parameters,
     reset_closure,
+    sprocket_contact,
 )
 from ..model.pitch_table import empty_table, rhs, table_applies, table_delta, table_spacing
 from ..model.runs_rhs import build_runs
@@ -32,7 +33,6 @@ from ..model.slots import (
     FP_CLOSURE_TOL,
     FP_CX,
     FP_CZ,
-    FP_EXPONENT,
     FP_G,
     FP_KI,
     FP_KP,
@@ -40,12 +40,8 @@ from ..model.slots import (
     FP_P0,
     FP_PRELOAD,
     FP_REACH,
-    FP_ROLLER_RADIUS,
-    FP_ROOT_RADIUS,
     FP_SPEED_REF,
-    FP_STIFFNESS,
     FP_TENSIONER_STIFFNESS,
-    FP_TOOTH_PITCH,
     FP_TORQUE_LIMIT,
     HEAD_LINK_ERROR,
     INFO_AT,
@@ -62,9 +58,7 @@ from ..model.slots import (
     IP_GRAVITY,
     IP_MOTOR,
     IP_PASSENGERS,
-    IP_TEETH,
     PASSENGERS_BY_PLACE,
-    PRM_CORNERS,
     PRM_FP,
     PRM_IP,
     PRM_MASS,
@@ -72,13 +66,11 @@ from ..model.slots import (
     PRM_PASS_BOARD,
     PRM_PASS_STEP,
     PRM_PITCHES,
-    PRM_RADII,
     PRM_TABLE,
     TB_HEAD,
     TB_SB,
     WS_INFO,
 )
-from ..model.sprocket import contact_kernel
 from ..model.table_check import checked_table
 from .integrate import IntegrationError, integrate
 from .results import make_dataset
@@ -457,32 +449,7 @@ def _observe(
                     eta[cand[jj]] = 0.0
                     sd[cand[jj]] = 0.0
                 clear_teeth(ind_t, frc_t)
-                res = contact_kernel(
-                    xs,
-                    zs,
-                    eta,
-                    sd,
-                    cand,
-                    ncand,
-                    y[j, 2],
-                    y[j, 3],
-                    fp[FP_CX],
-                    fp[FP_CZ],
-                    prm[PRM_CORNERS],
-                    fp[FP_ROOT_RADIUS],
-                    fp[FP_TOOTH_PITCH],
-                    ip[IP_TEETH],
-                    fp[FP_ROLLER_RADIUS],
-                    prm[PRM_RADII],
-                    fp[FP_STIFFNESS],
-                    fp[FP_EXPONENT],
-                    0.0,
-                    fx,
-                    fz,
-                    ind_t,
-                    frc_t,
-                    need_teeth,
-                )
+                res = sprocket_contact(prm, y[j], xs, zs, eta, sd, cand, ncand, 0.0, fx, fz, ind_t, frc_t, need_teeth)
                 scal[j, 10] = res[4]
                 scal[j, 11] = res[5]
                 if need_teeth:

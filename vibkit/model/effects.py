@@ -85,6 +85,10 @@ from .slots import (
     IP_TEETH,
     IP_TENSIONER,
     PASSENGERS_BY_TIME,
+    PRM_CORNERS,
+    PRM_FP,
+    PRM_IP,
+    PRM_RADII,
     WS_NAMES,
 )
 from .sprocket import contact_kernel
@@ -232,6 +236,40 @@ def clear_teeth(ind_t, frc_t):
     for j in range(ind_t.size):
         ind_t[j] = 0.0
         frc_t[j] = 0.0
+
+
+@nb.njit(cache=True, error_model="numpy", inline="always")
+def sprocket_contact(prm, y, xs, zs, vx, vz, cand, ncand, damping, fx, fz, ind_t, frc_t, want_teeth):
+    """:func:`vibkit.model.sprocket.contact_kernel` on the ``ncand`` candidates ``cand`` (places xs, zs,
+    velocities vx, vz) with the scene's sprocket (``prm``) at the state ``y`` (its angle and speed) and the
+    contact's ``damping``: adds the forces to fx, fz and returns what contact_kernel returns."""
+    fp, ip = prm[PRM_FP], prm[PRM_IP]
+    return contact_kernel(
+        xs,
+        zs,
+        vx,
+        vz,
+        cand,
+        ncand,
+        y[2],
+        y[3],
+        fp[FP_CX],
+        fp[FP_CZ],
+        prm[PRM_CORNERS],
+        fp[FP_ROOT_RADIUS],
+        fp[FP_TOOTH_PITCH],
+        ip[IP_TEETH],
+        fp[FP_ROLLER_RADIUS],
+        prm[PRM_RADII],
+        fp[FP_STIFFNESS],
+        fp[FP_EXPONENT],
+        damping,
+        fx,
+        fz,
+        ind_t,
+        frc_t,
+        want_teeth,
+    )
 
 
 @nb.njit(cache=True, error_model="numpy", inline="always")
@@ -396,31 +434,8 @@ def evaluate_forces(t, y, dy, prm, ws, want_teeth, delta, c, e, dh):
             i = cand[jj]
             eta[i] = jac[i, 0] * sdot
             sd[i] = jac[i, 1] * sdot
-        torque_c, energy_c, worst, active, f_drive, f_back = contact_kernel(
-            xs,
-            zs,
-            eta,
-            sd,
-            cand,
-            ncand,
-            y[2],
-            y[3],
-            fp[FP_CX],
-            fp[FP_CZ],
-            loc,
-            fp[FP_ROOT_RADIUS],
-            fp[FP_TOOTH_PITCH],
-            ip[IP_TEETH],
-            fp[FP_ROLLER_RADIUS],
-            radii,
-            fp[FP_STIFFNESS],
-            fp[FP_EXPONENT],
-            fp[FP_DAMPING],
-            fx,
-            fz,
-            ind_t,
-            frc_t,
-            want_teeth,
+        torque_c, energy_c, worst, active, f_drive, f_back = sprocket_contact(
+            prm, y, xs, zs, eta, sd, cand, ncand, fp[FP_DAMPING], fx, fz, ind_t, frc_t, want_teeth
         )
     f_c = 0.0
     m_c = 0.0

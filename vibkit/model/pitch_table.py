@@ -38,7 +38,17 @@ import numba as nb
 import numpy as np
 
 from .chain import acceleration_terms, close_with_slope, fill_partials, sensitivity, velocity_coefficients, walk_arrays
-from .effects import aboard, clear_teeth, evaluate, finish, rolling_force, step_load, step_roller, within_reach
+from .effects import (
+    aboard,
+    clear_teeth,
+    evaluate,
+    finish,
+    rolling_force,
+    sprocket_contact,
+    step_load,
+    step_roller,
+    within_reach,
+)
 from .runs_rhs import runs_evaluate
 from .slots import (
     FP_CARRIAGE_MASS,
@@ -46,18 +56,13 @@ from .slots import (
     FP_CX,
     FP_CZ,
     FP_DAMPING,
-    FP_EXPONENT,
     FP_G,
     FP_LT,
     FP_P0,
     FP_PRELOAD,
     FP_REACH,
-    FP_ROLLER_RADIUS,
     FP_ROLLING,
-    FP_ROOT_RADIUS,
-    FP_STIFFNESS,
     FP_TENSIONER_STIFFNESS,
-    FP_TOOTH_PITCH,
     HEAD_A,
     HEAD_BY_ROLLER,
     HEAD_N,
@@ -76,7 +81,6 @@ from .slots import (
     IP_LINKS_PER_STEP,
     IP_PASSENGERS,
     IP_ROLLING,
-    IP_TEETH,
     IP_TENSIONER,
     PASSENGERS_BY_TIME,
     TB_CAND,
@@ -93,7 +97,6 @@ from .slots import (
     TB_XC,
     TB_ZC,
 )
-from .sprocket import contact_kernel
 
 __all__ = ["build_table", "empty_table", "table_evaluate", "table_delta", "rhs", "table_spacing", "table_applies"]
 
@@ -642,31 +645,8 @@ def table_evaluate(t, y, dy, prm, ws, want_teeth, tb):
                 fz[i] = 0.0
                 cand[ncand] = i
                 ncand += 1
-        torque_c, energy_c, worst, active, f_drive, f_back = contact_kernel(
-            xs,
-            zs,
-            vxs,
-            vzs,
-            cand,
-            ncand,
-            y[2],
-            y[3],
-            fp[FP_CX],
-            fp[FP_CZ],
-            loc,
-            fp[FP_ROOT_RADIUS],
-            fp[FP_TOOTH_PITCH],
-            ip[IP_TEETH],
-            fp[FP_ROLLER_RADIUS],
-            radii,
-            fp[FP_STIFFNESS],
-            fp[FP_EXPONENT],
-            fp[FP_DAMPING],
-            fx,
-            fz,
-            ind_t,
-            frc_t,
-            want_teeth,
+        torque_c, energy_c, worst, active, f_drive, f_back = sprocket_contact(
+            prm, y, xs, zs, vxs, vzs, cand, ncand, fp[FP_DAMPING], fx, fz, ind_t, frc_t, want_teeth
         )
         for jj in range(ncand):
             i = cand[jj]

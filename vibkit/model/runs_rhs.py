@@ -18,7 +18,7 @@ import numba as nb
 import numpy as np
 
 from .chain import closure_residual
-from .effects import clear_teeth, evaluate, evaluate_forces, finish, within_reach
+from .effects import clear_teeth, evaluate, evaluate_forces, finish, sprocket_contact, within_reach
 from .guide import BX, BZ, KAPPA, local_frame, seg_length
 from .runs import (
     A_COLS,
@@ -48,17 +48,12 @@ from .slots import (
     FP_CX,
     FP_CZ,
     FP_DAMPING,
-    FP_EXPONENT,
     FP_G,
     FP_LT,
     FP_P0,
     FP_PRELOAD,
     FP_REACH,
-    FP_ROLLER_RADIUS,
-    FP_ROOT_RADIUS,
-    FP_STIFFNESS,
     FP_TENSIONER_STIFFNESS,
-    FP_TOOTH_PITCH,
     HEAD_BY_ROLLER,
     HEAD_LINK_ERROR,
     HEAD_NAMES,
@@ -76,7 +71,6 @@ from .slots import (
     IP_N,
     IP_PASSENGERS,
     IP_ROLLING,
-    IP_TEETH,
     IP_TENSIONER,
     PASSENGERS_BY_PLACE,
     PRM_FP,
@@ -95,7 +89,6 @@ from .slots import (
     WS_X,
     WS_Z,
 )
-from .sprocket import contact_kernel
 
 __all__ = ["build_runs", "runs_evaluate", "runs_fast"]
 
@@ -227,31 +220,8 @@ def runs_fast(t, y, dy, prm, ws, want_teeth, tb):
     if want_teeth:
         clear_teeth(ind_t, frc_t)
     if contact:
-        torque_c, energy_c, worst, active, f_drive, f_back = contact_kernel(
-            xs,
-            zs,
-            vxs,
-            vzs,
-            cand,
-            ncand,
-            y[2],
-            y[3],
-            cx0,
-            cz0,
-            loc,
-            fp[FP_ROOT_RADIUS],
-            fp[FP_TOOTH_PITCH],
-            ip[IP_TEETH],
-            fp[FP_ROLLER_RADIUS],
-            radii,
-            fp[FP_STIFFNESS],
-            fp[FP_EXPONENT],
-            fp[FP_DAMPING],
-            fx,
-            fz,
-            ind_t,
-            frc_t,
-            want_teeth,
+        torque_c, energy_c, worst, active, f_drive, f_back = sprocket_contact(
+            prm, y, xs, zs, vxs, vzs, cand, ncand, fp[FP_DAMPING], fx, fz, ind_t, frc_t, want_teeth
         )
         for jj in range(ncand):
             i = cand[jj]
