@@ -220,3 +220,10 @@ def test_status_json_text_and_report_give_both_numbers(tmp_path, capsys):
     rep = write_fleet_report(trends, meas, tmp_path / "fleet.pdf", links=links)
     (texts,) = [t for title, t in rep.pages if title == "fleet links"]
     assert texts[texts.index("55 or 10") + 1] == "worse"
+
+
+def test_an_earlier_ambiguous_flag_is_the_link_of_its_best_number_when_both_are_flagged_now(tmp_path):
+    """The earlier "55 or 10"; now 10 and 55 each flagged alone: 55 (its best number) is compared, 10 is new."""
+    h = _visits(tmp_path / "f.sqlite", [(55, 0.5, 0.1, (10,))], [(10, 0.4, 0.1, ()), (55, 1.0, 0.1, ())])
+    assert [(x.link, x.verdict) for x in h.links] == [(55, "worse"), (10, "new")]
+    assert "as 55 or 10" in h.links[0].detail

@@ -397,32 +397,31 @@ def _compare(now, before, k):
     return "unchanged", words + f" (within {k:g} sigma)"
 
 
-def _same_link(ref, free):
-    """The flag of ``free`` that is the link ``ref`` flagged (same best number; else one naming ref's best number or
-    named by ref; else one sharing any number), None when none shares a number with it."""
-    for same in (
-        lambda g: g.link == ref.link,
-        lambda g: ref.link in g.numbers or g.link in ref.numbers,
-        lambda g: set(g.numbers) & set(ref.numbers),
-    ):
-        hit = next((g for g in free if same(g)), None)
-        if hit is not None:
-            return hit
-    return None
+#: when an earlier flag ``g`` is the link a later flag ``ref`` flagged, in order of preference: the same best number;
+#: one names the other's best number; any shared number
+_SAME_LINK = (
+    lambda g, ref: g.link == ref.link,
+    lambda g, ref: ref.link in g.numbers or g.link in ref.numbers,
+    lambda g, ref: bool(set(g.numbers) & set(ref.numbers)),
+)
 
 
 def _follow(marked):
     """The flags of the marked visits grouped by link, newest visit first: a list per link of each visit's flag
-    (None: not flagged then).  An earlier flag joins the link of the nearest later flag it shares a number with."""
+    (None: not flagged then).  An earlier flag joins the link of the nearest later flag it shares a number with,
+    the closer matches (:data:`_SAME_LINK`) paired first over all links."""
     groups = []
     for i in reversed(range(len(marked))):
         free = list(marked[i][1].flagged)
-        for g in groups:
-            ref = next(f for f in g[i + 1 :] if f is not None)
-            hit = _same_link(ref, free)
-            if hit is not None:
-                g[i] = hit
-                free.remove(hit)
+        for same in _SAME_LINK:
+            for g in groups:
+                if g[i] is not None:
+                    continue
+                ref = next(f for f in g[i + 1 :] if f is not None)
+                hit = next((f for f in free if same(f, ref)), None)
+                if hit is not None:
+                    g[i] = hit
+                    free.remove(hit)
         for f in free:
             g = [None] * len(marked)
             g[i] = f
