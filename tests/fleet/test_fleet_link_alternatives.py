@@ -1,6 +1,7 @@
 """A flagged link the recording cannot place uniquely ("55 or 10"): its alternatives stored and read back on SQLite
 and PostgreSQL (a real server), schema-3 histories read as they are and upgraded in place with every row and flag
-kept, and the comparison across visits that takes an earlier "10 or 55" for the link now flagged as 55."""
+kept, migrated with their measurements, and the comparison across visits that takes an earlier "10 or 55" for the
+link now flagged as 55."""
 
 import json
 import sqlite3
@@ -13,6 +14,7 @@ from vibkit.diagnose.report import write_fleet_report
 from vibkit.fleet import FleetDB
 from vibkit.fleet.links import FlaggedLink, LinkScan
 from vibkit.fleet.schema import measurement_values
+from vibkit.fleet.storage import migrate
 
 from support.fleet import fake
 
@@ -89,6 +91,18 @@ def test_alternatives_round_trip(store):
         got = db.link_scans()[a.id]
     assert got.flagged == tuple(sorted(scan.flagged, key=lambda f: f.link))  # read back by link
     assert [(f.link, f.alternatives, f.label) for f in got.flagged] == [(30, (), "30"), (55, (10,), "55 or 10")]
+
+
+def test_migration_keeps_the_alternatives(tmp_path, new_pg_url):
+    src = tmp_path / "src.sqlite"
+    scan = _scan([(55, 1.0, 0.1, (10,))])
+    with FleetDB(src) as db:
+        db.insert(fake(1, "E07", 0.0, 1.0), scan)
+    url = new_pg_url()
+    assert migrate(src, url)["copied"] == 1
+    with FleetDB(url, readonly=True) as db:
+        (s,) = db.link_scans().values()
+    assert s.flagged == scan.flagged and s.flagged[0].label == "55 or 10"
 
 
 def test_schema_3_sqlite_read_only_then_upgraded_with_its_rows_and_flags(tmp_path):
