@@ -284,7 +284,7 @@ def test_version_1_sqlite_file_is_upgraded_and_flagged(tmp_path):
     # the unit: no -112 %/year trend, the two impossible points flagged
     assert tr.slope_percent_per_year is None and tr.latest_elongation_percent == 3.8 and len(tr.flagged) == 2
     con = sqlite3.connect(p)
-    assert con.execute("PRAGMA user_version").fetchone()[0] == 3
+    assert con.execute("PRAGMA user_version").fetchone()[0] == 4
     con.close()
 
 

@@ -232,7 +232,7 @@ def run_add(a):
         print(f"stored {_fmt_measurement(m)}")
         if scan is not None:
             why = f": {scan.reason}" if scan.reason and not scan.scanned else ""
-            flagged = ", ".join(str(f.link) for f in scan.flagged)
+            flagged = ", ".join(f.label for f in scan.flagged)
             print(f"links: {_fmt_scan(scan)}{why}" + (f" (links {flagged})" if flagged else ""))
         msg(f"note: database {path}; date from {m.date_source}")
     if not m.speed_sigma_m_s:
@@ -309,7 +309,7 @@ def _print_links(hist, always):
     print()
     print(textwrap.fill(f"{hist.unit} links: {hist.statement}", 100, subsequent_indent="    "))
     if hist.links:
-        rows = [[h.link, h.verdict, h.detail] for h in hist.links]
+        rows = [[h.label, h.verdict, h.detail] for h in hist.links]
         print(table(rows, ("link", "verdict", "excess pitch [mm] and change")))
     elif hist.scanned:
         print("no link flagged")

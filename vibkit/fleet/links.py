@@ -47,7 +47,9 @@ class FlaggedLink:
     """One link a scan flagged.  ``link`` 1-based, counted as the scan's :attr:`LinkScan.numbering` says;
     ``excess_pitch_m`` and ``sigma_m`` [m] (None where the signal gives none: without the escalator's scene a
     deviating level gives no pitch); ``loops``: the 1-based loops whose own fit shows it; ``statistic`` its |t|;
-    ``feature`` what deviates (``signature``, ``level``, ``duration``)."""
+    ``feature`` what deviates (``signature``, ``level``, ``duration``); ``alternatives``: the other numbers of a link
+    the recording cannot place uniquely (its signature fits nearly as well there), empty when ``link`` is the one
+    number."""
 
     link: int
     excess_pitch_m: float | None
@@ -55,10 +57,22 @@ class FlaggedLink:
     loops: tuple = ()
     statistic: float | None = None
     feature: str = ""
+    alternatives: tuple = ()
+
+    @property
+    def numbers(self) -> tuple:
+        """The numbers the flag may be: ``link`` first, then its alternatives."""
+        return (self.link, *self.alternatives)
+
+    @property
+    def label(self) -> str:
+        """``"55"``, or ``"55 or 10"`` for an ambiguous flag."""
+        return " or ".join(str(n) for n in self.numbers)
 
     def as_dict(self):
         return {
             "link": self.link,
+            "alternatives": list(self.alternatives),
             "excess_pitch_m": self.excess_pitch_m,
             "sigma_m": self.sigma_m,
             "loops": list(self.loops),
@@ -107,6 +121,7 @@ class LinkScan:
                 loops=tuple(int(i) for i in f.get("loops", ())),
                 statistic=_num(f.get("t")),
                 feature=str(f.get("feature", "signature")),
+                alternatives=tuple(int(i) for i in f.get("alternatives", ())),
             )
             for f in res.flagged
         )
@@ -150,7 +165,7 @@ class LinkScan:
 
 # ------------------------------------------------------------------------------------------ storage
 _SCAN_COLS = ("status", "reason", "n_links", "loops", "marker_s", "method", "false_alarm")
-_FLAG_COLS = ("link", "excess_pitch_m", "sigma_m", "statistic", "feature", "loops")
+_FLAG_COLS = ("link", "excess_pitch_m", "sigma_m", "statistic", "feature", "loops", "alternatives")
 
 
 def write_link_scan(store, measurement_id, scan: LinkScan):
@@ -170,15 +185,17 @@ def write_link_scan(store, measurement_id, scan: LinkScan):
                 f.statistic,
                 f.feature,
                 json.dumps(list(f.loops)),
+                json.dumps([int(i) for i in f.alternatives]),
             ],
         )
 
 
 def read_link_scans(store, unit=None) -> dict:
     """``{measurement id: LinkScan}`` of the stored scans (of one unit if given); a store without the link tables
-    (an older schema read without upgrading it) has none."""
+    (schema 2 or older read without upgrading it) has none; a schema-3 one read as it is, no alternatives."""
     if not getattr(store, "has_link_tables", True):
         return {}
+    fcols = _FLAG_COLS if getattr(store, "has_link_alternatives", True) else _FLAG_COLS[:-1]
     where, args = ("WHERE m.unit = ?", (str(unit),)) if unit is not None else ("", ())
     scans = {}
     for r in store.execute(
@@ -193,12 +210,12 @@ def read_link_scans(store, unit=None) -> dict:
     flags = {}
     for r in store.execute(
         store.q(
-            f"SELECT f.measurement_id, {', '.join('f.' + c for c in _FLAG_COLS)} FROM flagged_link f "
+            f"SELECT f.measurement_id, {', '.join('f.' + c for c in fcols)} FROM flagged_link f "
             f"JOIN measurement m ON m.id = f.measurement_id {where} ORDER BY f.measurement_id, f.link"
         ),
         args,
     ).fetchall():
-        d = dict(zip(_FLAG_COLS, r[1:]))
+        d = dict(zip(fcols, r[1:]))
         flags.setdefault(int(r[0]), []).append(
             FlaggedLink(
                 link=int(d["link"]),
@@ -207,6 +224,7 @@ def read_link_scans(store, unit=None) -> dict:
                 loops=tuple(json.loads(d["loops"] or "[]")),
                 statistic=_num(d["statistic"]),
                 feature=d["feature"],
+                alternatives=tuple(int(i) for i in json.loads(d.get("alternatives") or "[]")),
             )
         )
     out = {}
@@ -228,7 +246,8 @@ def read_link_scans(store, unit=None) -> dict:
 # ------------------------------------------------------------------------------------------ history
 @dataclass(frozen=True)
 class LinkVisit:
-    """One visit of one link: whether that visit's scan flagged it, and with what excess pitch [m]."""
+    """One visit of one link: whether that visit's scan flagged it, as which number(s) (``link`` and its
+    ``alternatives``: the flag of that visit), and with what excess pitch [m]."""
 
     measurement_id: int
     date_utc: str
@@ -236,12 +255,24 @@ class LinkVisit:
     excess_pitch_m: float | None = None
     sigma_m: float | None = None
     loops: tuple = ()
+    link: int | None = None
+    alternatives: tuple = ()
+
+    @property
+    def numbers(self) -> tuple:
+        return () if self.link is None else (self.link, *self.alternatives)
+
+    @property
+    def label(self) -> str:
+        return " or ".join(str(n) for n in self.numbers)
 
     def as_dict(self):
         return {
             "measurement_id": self.measurement_id,
             "date_utc": self.date_utc,
             "flagged": self.flagged,
+            "link": self.link,
+            "alternatives": list(self.alternatives),
             "excess_pitch_m": self.excess_pitch_m,
             "sigma_m": self.sigma_m,
             "loops": list(self.loops),
@@ -250,21 +281,32 @@ class LinkVisit:
 
 @dataclass(frozen=True)
 class LinkHistory:
-    """One link number over the visits it can be compared across.
+    """One flagged link over the visits it can be compared across: ``link`` the number its latest flag gives best,
+    ``alternatives`` the other numbers that flag may be (the recording cannot tell which: "55 or 10").  A visit's
+    flag is the same link when it shares a number with the later flag: a link flagged as "55 or 10" and then as
+    "10" is one link.
 
     ``verdict`` for the latest scan against the previous one counting from the marked link: ``worse`` (the excess
-    grew by more than ``coverage_sigma`` combined sigmas), ``new`` (flagged now, not then), ``unchanged``,
-    ``smaller``, ``flagged again`` (no sigma or no excess to compare), ``not flagged now``; ``flagged`` when there is
-    no earlier visit to compare with, ``unmatched`` when the latest scan has no marker (its number names no link)."""
+    grew by more than ``coverage_sigma`` combined sigmas), ``new`` (flagged now, none of its numbers then),
+    ``unchanged``, ``smaller``, ``flagged again`` (no sigma or no excess to compare), ``not flagged now``;
+    ``flagged`` when there is no earlier visit to compare with, ``unmatched`` when the latest scan has no marker
+    (its number names no link).  ``detail`` says it in words, and says when a flag is ambiguous."""
 
     link: int
     verdict: str
     detail: str
     visits: tuple
+    alternatives: tuple = ()
+
+    @property
+    def label(self) -> str:
+        """``"55"``, or ``"55 or 10"`` when the latest flag is ambiguous."""
+        return " or ".join(str(n) for n in (self.link, *self.alternatives))
 
     def as_dict(self):
         return {
             "link": self.link,
+            "alternatives": list(self.alternatives),
             "verdict": self.verdict,
             "detail": self.detail,
             "visits": [v.as_dict() for v in self.visits],
@@ -304,11 +346,11 @@ class UnitLinks:
 _ORDER = {"worse": 0, "new": 1, "flagged again": 2, "unchanged": 3, "smaller": 4, "not flagged now": 5}
 
 
-def _visit(m, s, link):
-    f = s.flag(link)
+def _visit(m, f):
+    """The LinkVisit of measurement ``m`` whose scan flagged ``f`` (None: not flagged on that visit)."""
     if f is None:
         return LinkVisit(m.id, m.date_utc, False)
-    return LinkVisit(m.id, m.date_utc, True, f.excess_pitch_m, f.sigma_m, f.loops)
+    return LinkVisit(m.id, m.date_utc, True, f.excess_pitch_m, f.sigma_m, f.loops, f.link, tuple(f.alternatives))
 
 
 def _mm(v):
@@ -322,23 +364,69 @@ def _flag_words(f):
     return f"{1e3 * f.excess_pitch_m:+.2f}{sigma} mm"
 
 
+def _ambiguous(v):
+    """Words for a flag (FlaggedLink or LinkVisit) that names more than one number; empty for one number."""
+    if len(v.numbers) < 2:
+        return ""
+    others = " or ".join(str(n) for n in v.numbers[1:])
+    return f"; ambiguous: link {v.numbers[0]} or {others}, the recording cannot tell which (look at both)"
+
+
+def _as(before, now):
+    """' as 55 or 10' when the earlier flag named other numbers than the later one."""
+    return f" as {before.label}" if before.numbers != now.numbers else ""
+
+
 def _compare(now, before, k):
     """Verdict and its words for a link flagged ``now`` against its visit ``before`` (LinkVisits)."""
     if not before.flagged:
-        return "new", f"flagged now ({_mm(now.excess_pitch_m)}), not on {before.date_utc[:10]}"
+        where = "not" if len(now.numbers) < 2 else "none of them"
+        return "new", f"flagged now ({_mm(now.excess_pitch_m)}), {where} on {before.date_utc[:10]}"
+    was = f"{before.date_utc[:10]}{_as(before, now)}"
     if None in (now.excess_pitch_m, before.excess_pitch_m, now.sigma_m, before.sigma_m):
-        return "flagged again", f"flagged on {before.date_utc[:10]} too; no excess pitch with a sigma to compare"
+        return "flagged again", f"flagged on {was} too; no excess pitch with a sigma to compare"
     diff = now.excess_pitch_m - before.excess_pitch_m
     comb = math.hypot(now.sigma_m, before.sigma_m)
     words = (
-        f"{_mm(before.excess_pitch_m)} on {before.date_utc[:10]} -> {_mm(now.excess_pitch_m)}: "
-        f"{1e3 * diff:+.2f} +- {1e3 * comb:.2f} mm"
+        f"{_mm(before.excess_pitch_m)} on {was} -> {_mm(now.excess_pitch_m)}: {1e3 * diff:+.2f} +- {1e3 * comb:.2f} mm"
     )
     if diff > k * comb:
         return "worse", words
     if diff < -k * comb:
         return "smaller", words
     return "unchanged", words + f" (within {k:g} sigma)"
+
+
+#: when an earlier flag ``g`` is the link a later flag ``ref`` flagged, in order of preference: the same best number;
+#: one names the other's best number; any shared number
+_SAME_LINK = (
+    lambda g, ref: g.link == ref.link,
+    lambda g, ref: ref.link in g.numbers or g.link in ref.numbers,
+    lambda g, ref: bool(set(g.numbers) & set(ref.numbers)),
+)
+
+
+def _follow(marked):
+    """The flags of the marked visits grouped by link, newest visit first: a list per link of each visit's flag
+    (None: not flagged then).  An earlier flag joins the link of the nearest later flag it shares a number with,
+    the closer matches (:data:`_SAME_LINK`) paired first over all links."""
+    groups = []
+    for i in reversed(range(len(marked))):
+        free = list(marked[i][1].flagged)
+        for same in _SAME_LINK:
+            for g in groups:
+                if g[i] is not None:
+                    continue
+                ref = next(f for f in g[i + 1 :] if f is not None)
+                hit = next((f for f in free if same(f, ref)), None)
+                if hit is not None:
+                    g[i] = hit
+                    free.remove(hit)
+        for f in free:
+            g = [None] * len(marked)
+            g[i] = f
+            groups.append(g)
+    return groups
 
 
 def links_history(db, unit, *, coverage_sigma=2.0) -> UnitLinks:
@@ -384,8 +472,9 @@ def _history(visits, unit, k):
             LinkHistory(
                 f.link,
                 "unmatched",
-                f"{_flag_words(f)}; counted from the link at the sensor at the start",
-                (_visit(m_now, s_now, f.link),),
+                f"{_flag_words(f)}; counted from the link at the sensor at the start{_ambiguous(f)}",
+                (_visit(m_now, f),),
+                tuple(f.alternatives),
             )
             for f in s_now.flagged
         )
@@ -401,8 +490,9 @@ def _history(visits, unit, k):
             LinkHistory(
                 f.link,
                 "flagged",
-                f"{_flag_words(f)}; no earlier scan counts from the marked link",
-                (_visit(m_now, s_now, f.link),),
+                f"{_flag_words(f)}; no earlier scan counts from the marked link{_ambiguous(f)}",
+                (_visit(m_now, f),),
+                tuple(f.alternatives),
             )
             for f in s_now.flagged
         )
@@ -415,22 +505,27 @@ def _history(visits, unit, k):
         return UnitLinks(str(unit), visits, False, statement, links, k)
     marked = earlier + [(m_now, s_now)]
     m_before, s_before = earlier[-1]
-    numbers = sorted({f.link for _, s in marked for f in s.flagged})
     out = []
-    for n in numbers:
-        vs = tuple(_visit(m, s, n) for m, s in marked)
+    for g in _follow(marked):
+        vs = tuple(_visit(m, f) for (m, _), f in zip(marked, g))
         now, before = vs[-1], vs[-2]
+        latest = next(f for f in reversed(g) if f is not None)
         if now.flagged:
             verdict, words = _compare(now, before, k)
+            words += _ambiguous(now)
         elif before.flagged:
             verdict, words = (
                 "not flagged now",
-                f"flagged on {before.date_utc[:10]} ({_mm(before.excess_pitch_m)}), not now",
+                f"flagged on {before.date_utc[:10]}{_ambiguous(before) and ' as ' + before.label} "
+                f"({_mm(before.excess_pitch_m)}), not now",
             )
         else:
             last = next(v for v in reversed(vs) if v.flagged)
-            verdict, words = "not flagged now", f"last flagged on {last.date_utc[:10]}"
-        out.append(LinkHistory(n, verdict, words, vs))
+            verdict, words = (
+                "not flagged now",
+                f"last flagged on {last.date_utc[:10]}{_ambiguous(last) and ' as ' + last.label}",
+            )
+        out.append(LinkHistory(latest.link, verdict, words, vs, tuple(latest.alternatives)))
     out.sort(key=lambda h: (_ORDER.get(h.verdict, 9), h.link))
     statement = (
         f"links numbered from the marked link on {len(marked)} visits; the {day} scan compared with "

@@ -17,7 +17,15 @@ import contextlib
 import re
 
 from .errors import FleetError
-from .schema import APPLICATION_ID, COLUMNS, SCHEMA_VERSION, link_ddl, measurement_ddl, signature_problem
+from .schema import (
+    APPLICATION_ID,
+    COLUMNS,
+    FLAG_ALTERNATIVES_DDL,
+    SCHEMA_VERSION,
+    link_ddl,
+    measurement_ddl,
+    signature_problem,
+)
 from .store import Store
 
 __all__ = ["PostgresStore", "redact_url"]
@@ -134,12 +142,15 @@ class PostgresStore(Store):
             self._upgrade(ver)
 
     def _upgrade(self, ver):
-        """Schema 2 -> 3 (the link scans): in place, in one transaction under the creators' lock; read only, the
-        history is read as it is (every measurement's link scan "not run")."""
+        """Schema 2 -> 3 (the link scans) and 3 -> 4 (a flagged link's alternatives): in place, in one transaction
+        under the creators' lock; read only, the history is read as it is (schema 2: every measurement's link scan
+        "not run"; schema 3: its flagged links without alternatives)."""
         if self.readonly:
-            self.has_link_tables = False
+            self.has_link_tables = ver >= 3
+            self.has_link_alternatives = False
+            lacks = "no alternative link numbers" if self.has_link_tables else "no link scans"
             self.notes.append(
-                f"{self.location}: read a schema-{ver} history without upgrading it (no link scans); vibkit fleet "
+                f"{self.location}: read a schema-{ver} history without upgrading it ({lacks}); vibkit fleet "
                 f"add or scan upgrades it to schema {SCHEMA_VERSION}"
             )
             return
@@ -153,6 +164,7 @@ class PostgresStore(Store):
                 return
             for stmt in link_ddl("postgresql"):
                 con.execute(stmt)
+            con.execute(f"ALTER TABLE flagged_link ADD COLUMN IF NOT EXISTS {FLAG_ALTERNATIVES_DDL}")
             con.execute(
                 "INSERT INTO link_scan (measurement_id, status, reason) SELECT id, 'not run', %s FROM measurement "
                 "WHERE id NOT IN (SELECT measurement_id FROM link_scan)",

@@ -12,6 +12,10 @@ Schema version 3 added the link scans (:mod:`vibkit.fleet.links`): ``link_scan``
 one row per link a scan flagged; both cascade when their measurement is deleted.  An older file or server
 is upgraded in place when opened for writing (every measurement gets a ``link_scan`` row "not run"); read
 only, it is read as it is, every measurement "not run".
+
+Schema version 4 added ``alternatives`` to ``flagged_link``: the other numbers of a link the recording cannot place
+uniquely (a JSON list, ``[]`` when it is one number; "55 or 10").  A version-3 file or server gets the column (every
+stored flag ``[]``) when opened for writing; read only, it is read as it is, its flags without alternatives.
 """
 
 from __future__ import annotations
@@ -34,9 +38,10 @@ __all__ = [
     "QUALITY_REASON_SQL",
     "LINK_STATUSES",
     "link_ddl",
+    "FLAG_ALTERNATIVES_DDL",
 ]
 
-SCHEMA_VERSION = 3
+SCHEMA_VERSION = 4
 #: SQLite ``PRAGMA application_id`` of a vibkit fleet database ("VBKF"); PostgreSQL: its advisory lock key
 APPLICATION_ID = 0x56424B46
 #: stored columns, in :class:`Measurement` order (without ``id``)
@@ -139,8 +144,12 @@ def measurement_ddl(dialect):
 LINK_STATUSES = ("ok", "inconclusive", "too few loops", "failed", "not run")
 
 
+#: the column that schema version 4 added to ``flagged_link`` (a version-3 table gets it by ALTER TABLE)
+FLAG_ALTERNATIVES_DDL = "alternatives TEXT NOT NULL DEFAULT '[]'"
+
+
 def link_ddl(dialect):
-    """``CREATE TABLE`` statements of the link scans (schema version 3) for ``"sqlite"`` or ``"postgresql"``."""
+    """``CREATE TABLE`` statements of the link scans (schema versions 3 and 4) for ``"sqlite"`` or ``"postgresql"``."""
     pg = dialect == "postgresql"
     real, mid = ("DOUBLE PRECISION", "BIGINT") if pg else ("REAL", "INTEGER")
     statuses = ", ".join(f"'{s}'" for s in LINK_STATUSES)
@@ -163,6 +172,7 @@ def link_ddl(dialect):
     statistic {real},
     feature TEXT NOT NULL DEFAULT '',
     loops TEXT NOT NULL DEFAULT '[]',
+    {FLAG_ALTERNATIVES_DDL},
     PRIMARY KEY (measurement_id, link)
 )""",
     ]

@@ -18,6 +18,7 @@ from .quality import measurement_quality
 from .schema import (
     APPLICATION_ID,
     COLUMNS,
+    FLAG_ALTERNATIVES_DDL,
     QUALITY_FLAG_SQL,
     QUALITY_REASON_SQL,
     SCHEMA_VERSION,
@@ -157,6 +158,7 @@ class SQLiteStore(Store):
                     f"history (vibkit fleet add or scan makes one; --db names another); left as it is"
                 )
             self.has_link_tables = "link_scan" in tables
+            self.has_link_alternatives = self.has_link_tables and "alternatives" in self._flag_columns()
             if ver < SCHEMA_VERSION:
                 self._read_older_schema(ver)
             return
@@ -179,6 +181,9 @@ class SQLiteStore(Store):
                 ) from None
             if "measurement" in tables:
                 self.notes.append(f"{self.path}: upgraded in place from schema {ver} to schema {SCHEMA_VERSION}")
+
+    def _flag_columns(self):
+        return {r[1] for r in self._con.execute("PRAGMA main.table_info(flagged_link)")}
 
     def _read_older_schema(self, ver):
         """Read-only: the rows of an older schema as the upgrade would store them, through a ``temp`` view that
@@ -208,13 +213,14 @@ class SQLiteStore(Store):
         self.notes.append(self._older_note(ver))
 
     def _older_note(self, ver):
+        lacks = "no alternative link numbers" if self.has_link_tables else "no link scans"
         return (
-            f"{self.path}: read a schema-{ver} history without upgrading it (left as it is; no link scans); run "
+            f"{self.path}: read a schema-{ver} history without upgrading it (left as it is; {lacks}); run "
             f"vibkit fleet add or scan on it with write access to upgrade it to schema {SCHEMA_VERSION}"
         )
 
     def _create_or_upgrade(self):
-        """Inside the write lock: create the tables, or bring a version-1 or -2 file to the current schema."""
+        """Inside the write lock: create the tables, or bring a version-1, -2 or -3 file to the current schema."""
         con = self._con
         tables = [r[0] for r in con.execute("SELECT name FROM sqlite_master WHERE type = 'table'")]
         if "measurement" not in tables:
@@ -236,6 +242,8 @@ class SQLiteStore(Store):
                     con.execute("UPDATE measurement SET quality = ?, quality_reason = ? WHERE id = ?", (flag, why, rid))
         for stmt in link_ddl("sqlite"):
             con.execute(stmt)
+        if "alternatives" not in self._flag_columns():  # a version-3 file: its flags are one number each
+            con.execute(f"ALTER TABLE flagged_link ADD COLUMN {FLAG_ALTERNATIVES_DDL}")
         from .links import BEFORE_LINK_SCANS
 
         # every measurement stored before the link scans: "not run", so that none reads as scanned without a flag

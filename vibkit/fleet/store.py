@@ -31,6 +31,8 @@ class Store(abc.ABC):
     location = ""
     #: whether the link-scan tables exist (False: an older schema read without upgrading it)
     has_link_tables = True
+    #: whether ``flagged_link`` keeps each flag's alternative numbers (False: schema 3 read without upgrading it)
+    has_link_alternatives = True
 
     # ----------------------------------------------------------------- to be supplied by a store
     @abc.abstractmethod

@@ -17,13 +17,14 @@ __all__ = ["fleet_links_pages", "LINKS_HEADER"]
 
 #: the columns of a unit's links (the fleet report's links pages)
 LINKS_HEADER = ("link", "verdict", "excess pitch [mm]", "loops", "since the previous visit")
-_COLUMNS_X = (0.06, 0.11, 0.20, 0.33, 0.42)  # figure x of each column
+_COLUMNS_X = (0.06, 0.125, 0.215, 0.345, 0.435)  # figure x of each column (a link may read "155 or 110")
 _VERDICT_COLORS = {"worse": "#b2182b", "new": "#e0661b"}
 _TOP, _BOTTOM, _STEP = 0.89, 0.08, 0.0175  # figure y of the first and last line, and the line step
 _WRAP = 175  # characters of a wrapped line at 7 pt across the page
 _MEANING = (
     "worse: the link's excess pitch grew by more than 2 combined sigmas since the previous visit that counts from "
-    "the marked link; new: flagged now, not then. A link number names a physical link only when the recordings "
+    "the marked link; new: flagged now, not then (none of its numbers). '55 or 10': the recording cannot tell which of "
+    "the two it is (look at both); an earlier flag sharing a number is the same link. A link number names a physical link only when the recordings "
     "count from a marked link (the catalogue's marker_s): without one, link 1 is whichever link was at the sensor "
     "when the recording started, and the numbers of two visits cannot be matched."
 )
@@ -58,7 +59,7 @@ def _block(hist):
             excess = _mm(now.excess_pitch_m, now.sigma_m) if flagged_now else "-"
             loops = ",".join(str(i) for i in now.loops) if flagged_now and now.loops else "-"
             detail = textwrap.shorten(h.detail, 110, placeholder=" ...")
-            lines.append(("row", (str(h.link), h.verdict, excess, loops, detail)))
+            lines.append(("row", (h.label, h.verdict, excess, loops, detail)))
     elif scanned:
         lines.append(("text", "no link flagged on the latest scan"))
     return lines
