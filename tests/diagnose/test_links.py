@@ -14,6 +14,8 @@ from vibkit.cli import main
 from vibkit.diagnose.links import find_worn_links, link_number_of
 from vibkit.model.scene import load_scene
 
+from support.profiles import PROFILE_90
+
 pytestmark = pytest.mark.slow
 
 SCENE = "sim/thesis-forward.toml"
@@ -190,22 +192,6 @@ def test_a_link_one_tenth_of_a_millimetre_long_is_flagged_by_its_number():
     res = find_worn_links(rec, speed=SPEED, n_links=N, scene=SCENE)
     assert [f["link"] for f in res.flagged] == [link_number_of(40, passed, N)]
     assert abs(res.flagged[0]["excess_pitch_mm"] - 0.1) < 0.03
-
-
-#: a 90-link escalator (28-tooth sprocket, 0.5 m/s, tensioner): its worn link's signature repeats half a loop
-#: later (the link on the sprocket, then on the lower head, 45 links apart) and changes with the excess
-PROFILE_90 = """[escalator]
-unit = "E90"
-[drive]
-speed = 0.5
-speed_uncertainty = 0.0005
-teeth = 28
-[chain]
-nominal_pitch = 0.13333
-n_links = 90
-[sensor]
-kind = "tensioner"
-"""
 
 
 @pytest.fixture(scope="module")

@@ -19,6 +19,7 @@ from vibkit.fleet.schema import measurement_values
 from vibkit.fleet.storage import migrate
 
 from support.fleet import fake
+from support.profiles import PROFILE_90
 
 ROOT = Path(__file__).resolve().parents[2]
 MM = 1e-3
@@ -341,20 +342,6 @@ def test_scan_with_a_marked_link_follows_it_across_two_visits(tmp_path, capsys):
         h = fdb.links_history("E30")
     assert h.comparable and [(x.link, x.verdict) for x in h.links] == [(12, "flagged again")]  # a level: no pitch
     assert os.path.exists(db)
-
-
-PROFILE_90 = """[escalator]
-unit = "E90"
-[drive]
-speed = 0.5
-speed_uncertainty = 0.0005
-teeth = 28
-[chain]
-nominal_pitch = 0.13333
-n_links = 90
-[sensor]
-kind = "tensioner"
-"""
 
 
 def _simulated_visit(scene, path, excess, seed):

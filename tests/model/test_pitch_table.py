@@ -14,7 +14,7 @@ from vibkit.model.escalator import EscalatorModel
 from vibkit.model.pitch_table import _quintic, build_table, table_applies, table_evaluate, table_spacing
 from vibkit.model.scene import load_scene
 
-from support.effects import ALL_EFFECTS
+from support.effects import ALL_EFFECTS, random_state
 
 SIM = Path(__file__).resolve().parents[2] / "sim"
 
@@ -44,15 +44,7 @@ def _errors(model, fm, tb, rng, count=400):
     worst = np.zeros(4)
     scale = np.zeros(2)
     for _ in range(count):
-        y = np.array(
-            [
-                rng.uniform(0.0, 2.0 * p0),
-                rng.uniform(-0.6, 0.6),
-                rng.uniform(0.0, 2 * np.pi),
-                rng.uniform(-1.0, 0.0),
-                rng.uniform(-0.01, 0.01),
-            ]
-        )
+        y = random_state(rng, p0)
         exact, fast = np.empty(5), np.empty(5)
         fm.info[:] = 0.0
         fm.info[0] = model.chain.configure(y[0]).delta

@@ -15,7 +15,7 @@ from vibkit.model.runs_rhs import build_runs, runs_evaluate
 from vibkit.model.scene import load_scene, parse_scene
 from vibkit.model.slots import HEAD_BY_ROLLER, HEAD_LINK_ERROR, INFO_DELTA, INFO_SLOPE, INFO_WALKS, TB_HEAD
 
-from support.effects import ALL_EFFECTS
+from support.effects import ALL_EFFECTS, random_state
 
 SIM = Path(__file__).resolve().parents[2] / "sim"
 PITCH = 0.4 / 3
@@ -41,15 +41,7 @@ def _errors(scene, rng, count=300):
     worst, scale = np.zeros(4), np.zeros(2)
     walks = 0.0
     for _ in range(count):
-        y = np.array(
-            [
-                rng.uniform(0.0, 2.0 * p0),
-                rng.uniform(-0.6, 0.6),
-                rng.uniform(0.0, 2 * np.pi),
-                rng.uniform(-1.0, 0.0),
-                rng.uniform(-0.01, 0.01),
-            ]
-        )
+        y = random_state(rng, p0)
         exact, runs = np.empty(5), np.empty(5)
         delta = model.chain.configure(y[0]).delta
         fm.info[:] = 0.0

@@ -1,4 +1,6 @@
-"""Scene effects shared by the closure tests: every effect with a branch in the compiled right-hand sides."""
+"""What the closure tests share: every effect with a branch in the compiled right-hand sides, random states."""
+
+import numpy as np
 
 # damped contact, the carriage, passengers by place, rolling resistance
 ALL_EFFECTS = {
@@ -14,3 +16,17 @@ ALL_EFFECTS = {
     },
     "rolling_resistance": {"coefficient": 0.01},
 }
+
+
+def random_state(rng, p0):
+    """A forward state [s0_1, s0_1-dot, theta, theta-dot, speed-error integral] anywhere on two loops of a
+    guide of period ``p0``, moving either way, the sprocket at any angle."""
+    return np.array(
+        [
+            rng.uniform(0.0, 2.0 * p0),
+            rng.uniform(-0.6, 0.6),
+            rng.uniform(0.0, 2 * np.pi),
+            rng.uniform(-1.0, 0.0),
+            rng.uniform(-0.01, 0.01),
+        ]
+    )

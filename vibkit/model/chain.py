@@ -40,7 +40,7 @@ from .guide import (
     SIN0,
     TRAVEL,
     Guide,
-    circle_hit,
+    hit_next,
     local_frame,
     local_inverse,
     local_map,
@@ -75,7 +75,6 @@ def walk(tab, p0, s0_1, delta, pitches, n, s0, kk, lam, xs, zs):
     roller 1). Returns the ghost residual h = s0[n] - (s0_1 + P0) [m], or NaN when a link finds no
     guide point at its pitch (delta outside what the guide allows).
     """
-    nseg = tab.shape[0]
     wraps = math.floor(s0_1 / p0)
     s = s0_1 - wraps * p0
     k = locate(tab, s)
@@ -135,21 +134,8 @@ def walk(tab, p0, s0_1, delta, pitches, n, s0, kk, lam, xs, zs):
                 xs[i] = cx + cd * rx - sg * rz
                 zs[i] = cz + sg * rx + cd * rz
                 continue
-        found = -1.0
-        k += 1
-        lo = 0.0
-        if k == nseg:
-            k = 0
-            wraps += 1
-        for _ in range(nseg + 1):
-            found = circle_hit(tab, k, delta, qx, qz, pitch, lo)
-            if found != -1.0:
-                break
-            k += 1
-            if k == nseg:
-                k = 0
-                wraps += 1
-        if found == -1.0:
+        k, found, wraps = hit_next(tab, delta, k, qx, qz, pitch, wraps)
+        if k < 0:
             return math.nan
         kk[i] = k
         lam[i] = found

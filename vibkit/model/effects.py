@@ -445,12 +445,21 @@ def evaluate_forces(t, y, dy, prm, ws, want_teeth, delta, c, e, dh):
     m_eff, q = reduced_equation(jac, hacc, fx, fz, mass, c, e, m_c, f_c)
     sddot = q / m_eff
     finish(y, dy, info, fp, ip, sddot, torque_c, energy_c, worst, active, f_drive, f_back)
+    remember_closure(info, y, sddot, delta, c, e, dh)
+    return 0
+
+
+@nb.njit(cache=True, error_model="numpy", inline="always")
+def remember_closure(info, y, sddot, delta, c, e, dh):
+    """The closure's results and memory in ``info`` after an evaluation at the state ``y``: delta and its
+    rates (delta-dot = c s-dot, delta-ddot = c s-ddot + e), and what the next evaluation predicts delta
+    from (here, the slope c, d2delta/ds0_1^2 = e / s-dot^2 for a second-order prediction, and ``dh`` =
+    dh/ddelta of the closure)."""
+    sdot = y[1]
     info[INFO_DELTA] = delta
     info[INFO_AT] = y[0]
     info[INFO_SLOPE] = c
     info[INFO_DH_DDELTA] = dh
-    # d2delta/ds0_1^2 (deltaddot = c sddot + e with e = c' sdot^2), for a second-order prediction
     info[INFO_CURVATURE] = e / (sdot * sdot) if sdot * sdot > 1e-12 else 0.0
     info[INFO_DELTA_DOT] = c * sdot
     info[INFO_DELTA_DDOT] = c * sddot + e
-    return 0

@@ -335,6 +335,26 @@ def circle_hit(tab, k, delta, qx, qz, radius, lam_lo):
     return best if found else -1.0
 
 
+@nb.njit(cache=True, error_model="numpy", inline="always")
+def hit_next(tab, delta, k, qx, qz, radius, wraps):
+    """The first point at ``radius`` from q on the segments after segment k (round the loop, counting
+    ``wraps``): (segment, local arc length, wraps), segment -1 where the guide has none."""
+    nseg = tab.shape[0]
+    k += 1
+    if k == nseg:
+        k = 0
+        wraps += 1
+    for _ in range(nseg + 1):
+        found = circle_hit(tab, k, delta, qx, qz, radius, 0.0)
+        if found != -1.0:
+            return k, found, wraps
+        k += 1
+        if k == nseg:
+            k = 0
+            wraps += 1
+    return -1, 0.0, wraps
+
+
 # --------------------------------------------------------------------------------------------
 
 

@@ -39,7 +39,7 @@ from .guide import (
     S0,
     SIGP,
     SIN0,
-    circle_hit,
+    hit_next,
     local_frame,
     local_inverse,
     local_map,
@@ -108,7 +108,6 @@ def _link(tab, delta, k, lo, qx, qz, pitch, wraps, within):
     the next roller's (segment, lam, x, z, tx, tz, wraps), segment -1 where the guide has no point at
     that distance. The same construction as :func:`vibkit.model.chain.walk`; ``within`` False skips
     the try on segment k (the caller knows the link does not end on it)."""
-    nseg = tab.shape[0]
     if within:
         kap = tab[k, KAPPA]
         length = seg_length(tab, k, delta)
@@ -124,20 +123,8 @@ def _link(tab, delta, k, lo, qx, qz, pitch, wraps, within):
                 if found <= length:
                     x, z, tx, tz = local_frame(tab, k, found, delta)
                     return k, found, x, z, tx, tz, wraps
-    found = -1.0
-    k += 1
-    if k == nseg:
-        k = 0
-        wraps += 1
-    for _ in range(nseg + 1):
-        found = circle_hit(tab, k, delta, qx, qz, pitch, 0.0)
-        if found != -1.0:
-            break
-        k += 1
-        if k == nseg:
-            k = 0
-            wraps += 1
-    if found == -1.0:
+    k, found, wraps = hit_next(tab, delta, k, qx, qz, pitch, wraps)
+    if k < 0:
         return -1, 0.0, 0.0, 0.0, 0.0, 0.0, wraps
     x, z, tx, tz = local_frame(tab, k, found, delta)
     return k, found, x, z, tx, tz, wraps

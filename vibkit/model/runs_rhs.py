@@ -18,7 +18,7 @@ import numba as nb
 import numpy as np
 
 from .chain import closure_residual
-from .effects import clear_teeth, evaluate, evaluate_forces, finish, sprocket_contact, within_reach
+from .effects import clear_teeth, evaluate, evaluate_forces, finish, remember_closure, sprocket_contact, within_reach
 from .guide import BX, BZ, KAPPA, local_frame, seg_length
 from .runs import (
     A_COLS,
@@ -61,9 +61,6 @@ from .slots import (
     INFO_AT,
     INFO_CURVATURE,
     INFO_DELTA,
-    INFO_DELTA_DDOT,
-    INFO_DELTA_DOT,
-    INFO_DH_DDELTA,
     INFO_SLOPE,
     INFO_WALKS,
     IP_CONTACT,
@@ -232,13 +229,7 @@ def runs_fast(t, y, dy, prm, ws, want_teeth, tb):
         q += c * (-(fp[FP_PRELOAD] + fp[FP_TENSIONER_STIFFNESS] * delta) - m_c * e)
     sddot = q / m_eff
     finish(y, dy, info, fp, ip, sddot, torque_c, energy_c, worst, active, f_drive, f_back)
-    info[INFO_DELTA] = delta
-    info[INFO_AT] = y[0]
-    info[INFO_SLOPE] = c
-    info[INFO_DH_DDELTA] = dh
-    info[INFO_CURVATURE] = e / (sdot * sdot) if sdot * sdot > 1e-12 else 0.0
-    info[INFO_DELTA_DOT] = c * sdot
-    info[INFO_DELTA_DDOT] = c * sddot + e
+    remember_closure(info, y, sddot, delta, c, e, dh)
     return 0
 
 
