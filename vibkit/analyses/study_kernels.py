@@ -34,7 +34,6 @@ from ..model.slots import (
     FP_SPEED_REF,
     FP_STIFFNESS,
     FP_TENSIONER_STIFFNESS,
-    FP_TOOTH_PITCH,
     FP_TORQUE_LIMIT,
     IP_CONTACT,
     IP_GRAVITY,
@@ -43,7 +42,6 @@ from ..model.slots import (
     IP_N,
     IP_PASSENGERS,
     IP_ROLLING,
-    IP_TEETH,
     IP_TENSIONER,
     PASSENGERS_BY_TIME,
     PRM_CORNERS,
@@ -56,6 +54,7 @@ from ..model.slots import (
     PRM_PASS_STEP,
     PRM_RADII,
     PRM_TABLE,
+    PRM_TEETH,
 )
 from ..model.sprocket import contact_kernel
 
@@ -199,11 +198,7 @@ def assemble(t, y, prm, pitches, linear, alpha, beta, ws, data, rhs):
             y[n + p + 1],
             fp[FP_CX],
             fp[FP_CZ],
-            loc,
-            fp[FP_ROOT_RADIUS],
-            fp[FP_TOOTH_PITCH],
-            ip[IP_TEETH],
-            fp[FP_ROLLER_RADIUS],
+            prm[PRM_TEETH],
             prm[PRM_RADII],
             fp[FP_STIFFNESS],
             fp[FP_EXPONENT],

@@ -48,13 +48,10 @@ from .slots import (
     FP_P0,
     FP_PRELOAD,
     FP_REACH,
-    FP_ROLLER_RADIUS,
     FP_ROLLING,
-    FP_ROOT_RADIUS,
     FP_SPEED_REF,
     FP_STIFFNESS,
     FP_TENSIONER_STIFFNESS,
-    FP_TOOTH_PITCH,
     FP_TORQUE_LIMIT,
     INFO_ACTIVE,
     INFO_AT,
@@ -82,13 +79,11 @@ from .slots import (
     IP_N,
     IP_PASSENGERS,
     IP_ROLLING,
-    IP_TEETH,
     IP_TENSIONER,
     PASSENGERS_BY_TIME,
-    PRM_CORNERS,
     PRM_FP,
-    PRM_IP,
     PRM_RADII,
+    PRM_TEETH,
     WS_NAMES,
 )
 from .sprocket import contact_kernel
@@ -192,7 +187,7 @@ def pack_parameters(model, effects: dict, *, start: float = 0.0):
         if "gravity" not in effects:
             fp[FP["g"]] = gravity_of(effects)
     prm = (model.guide.table, model.corners_local, fp, ip, model.mass.copy(), pm, ps, pb, pa, model.chain.pitches)
-    return prm + (model.radii.copy(),)
+    return prm + (model.radii.copy(), model.teeth)
 
 
 def reset_closure(info, delta):
@@ -243,7 +238,7 @@ def sprocket_contact(prm, y, xs, zs, vx, vz, cand, ncand, damping, fx, fz, ind_t
     """:func:`vibkit.model.sprocket.contact_kernel` on the ``ncand`` candidates ``cand`` (places xs, zs,
     velocities vx, vz) with the scene's sprocket (``prm``) at the state ``y`` (its angle and speed) and the
     contact's ``damping``: adds the forces to fx, fz and returns what contact_kernel returns."""
-    fp, ip = prm[PRM_FP], prm[PRM_IP]
+    fp = prm[PRM_FP]
     return contact_kernel(
         xs,
         zs,
@@ -255,11 +250,7 @@ def sprocket_contact(prm, y, xs, zs, vx, vz, cand, ncand, damping, fx, fz, ind_t
         y[3],
         fp[FP_CX],
         fp[FP_CZ],
-        prm[PRM_CORNERS],
-        fp[FP_ROOT_RADIUS],
-        fp[FP_TOOTH_PITCH],
-        ip[IP_TEETH],
-        fp[FP_ROLLER_RADIUS],
+        prm[PRM_TEETH],
         prm[PRM_RADII],
         fp[FP_STIFFNESS],
         fp[FP_EXPONENT],
@@ -363,7 +354,7 @@ def evaluate(t, y, dy, prm, ws, want_teeth):
     slope ``INFO_DH_DDELTA`` (zero them to close from delta alone: see ``reset_closure``). Status 0
     is success; 1 means the chain could not be closed (the state left the tensioner's travel).
     """
-    tab, loc, fp, ip, mass, pm, ps, pb, pa, pitches, radii = prm
+    tab, loc, fp, ip, mass, pm, ps, pb, pa, pitches, radii, _ = prm
     (s0, kk, lam, xs, zs, part, alpha, beta, jac, gam, hacc, eta, sd, fx, fz, cand, ind_t, frc_t, info) = ws
     n = ip[IP_N]
     p0, lt = fp[FP_P0], fp[FP_LT]
@@ -408,7 +399,7 @@ def evaluate_forces(t, y, dy, prm, ws, want_teeth, delta, c, e, dh):
     holding every roller's s0, position, J and h, with delta, c = d delta/ds0_1, e (delta-ddot =
     c s-ddot + e) and ``dh`` = dh/d delta of the closure (its memory for the next evaluation).
     Returns 0."""
-    tab, loc, fp, ip, mass, pm, ps, pb, pa, pitches, radii = prm
+    tab, loc, fp, ip, mass, pm, ps, pb, pa, pitches, radii, _ = prm
     (s0, kk, lam, xs, zs, part, alpha, beta, jac, gam, hacc, eta, sd, fx, fz, cand, ind_t, frc_t, info) = ws
     n = ip[IP_N]
     sdot = y[1]

@@ -8,7 +8,7 @@ import numpy as np
 
 from .chain import Chain
 from .guide import Guide
-from .sprocket import local_corners, mesh_phase, tooth_geometry
+from .sprocket import local_corners, mesh_phase, tooth_geometry, tooth_table
 
 __all__ = ["EscalatorModel"]
 
@@ -38,6 +38,14 @@ class EscalatorModel:
         self.centre = np.array(scene.guide.sprocket_centre)
         self.geometry = tooth_geometry(self.sprocket, self.sprocket_pitch, scene.chain.roller_radius)
         self.corners_local = local_corners(self.sprocket, self.sprocket_pitch, scene.chain.roller_radius)
+        #: what the contact kernel needs of the teeth (:func:`vibkit.model.sprocket.tooth_table`)
+        self.teeth = tooth_table(
+            self.corners_local,
+            self.geometry["root_radius"],
+            self.geometry["tooth_pitch"],
+            self.sprocket.teeth,
+            float(np.max(self.radii)),
+        )
 
     @property
     def pitch_radius(self) -> float:
@@ -72,12 +80,10 @@ class EscalatorModel:
         n, z = self.n, self.sprocket.teeth
         pos = np.ascontiguousarray(conf.position, dtype=float)
         zeros = np.zeros(n)
-        geo = self.geometry
         return float(
             contact_kernel(
                 pos[:, 0].copy(), pos[:, 1].copy(), zeros, zeros, np.arange(n, dtype=np.int64), n, theta, 0.0,
-                self.centre[0], self.centre[1], self.corners_local, geo["root_radius"], geo["tooth_pitch"], z,
-                float(np.max(self.radii)), self.radii, 1.0, 1.0, 0.0, np.zeros(n), np.zeros(n), np.zeros(z), np.zeros(z),
+                self.centre[0], self.centre[1], self.teeth, self.radii, 1.0, 1.0, 0.0, np.zeros(n), np.zeros(n), np.zeros(z), np.zeros(z),
                 False,
             )[2]
         )  # fmt: skip

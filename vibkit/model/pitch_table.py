@@ -577,7 +577,7 @@ def table_evaluate(t, y, dy, prm, ws, want_teeth, tb):
     ``info`` slots as :func:`vibkit.model.effects.evaluate` (delta, its rates, motor and contact
     quantities), with the closure read from the table instead of solved. Only the contact
     candidates' positions land in ``ws``. Returns 0."""
-    _, loc, fp, ip, mass, pm, ps, pb, pa, _, radii = prm
+    _, loc, fp, ip, mass, pm, ps, pb, pa, _, radii, _ = prm
     (_, _, _, xs, zs, _, _, _, jac, _, _, vxs, vzs, fx, fz, cand, ind_t, frc_t, info) = ws
     head, up, mc, vc, dc = tb[TB_HEAD], tb[TB_UP], tb[TB_MC], tb[TB_VC], tb[TB_DC]
     xc, zc, sc, cand0, cc = tb[TB_XC], tb[TB_ZC], tb[TB_SC], tb[TB_CAND], tb[TB_CC]

@@ -140,7 +140,7 @@ def runs_fast(t, y, dy, prm, ws, want_teeth, tb):
     """:func:`runs_evaluate` for rollers of one mass without passengers or rolling resistance: each
     run's share of the reduced equation in closed form, rollers placed one by one only on the
     segments within the sprocket's reach. Returns 0, or 1 where the chain cannot close."""
-    tab, loc, fp, ip, mass, pm, ps, pb, pa, pitches, radii = prm
+    tab, loc, fp, ip, mass, pm, ps, pb, pa, pitches, radii, _ = prm
     (s0, kk, lam, xs, zs, part, _, _, jac, gam, hacc, vxs, vzs, fx, fz, cand, ind_t, frc_t, info) = ws
     delta, walks, st = _close(y, prm, tb, info)
     if st != 0:

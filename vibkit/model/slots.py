@@ -50,6 +50,7 @@ PRM_NAMES = (
     "pass_alight",
     "pitches",
     "radii",
+    "teeth",
 )
 PRM = _slots(PRM_NAMES)
 PRM_TABLE = PRM["table"]  # the guide's segment table (vibkit.model.guide)
@@ -63,6 +64,7 @@ PRM_PASS_BOARD = PRM["pass_board"]  # boarding time [s] or place (s0 of the step
 PRM_PASS_ALIGHT = PRM["pass_alight"]  # alighting time [s] or place [m]
 PRM_PITCHES = PRM["pitches"]  # link lengths (n) [m]
 PRM_RADII = PRM["radii"]  # roller radii (n) [m]
+PRM_TEETH = PRM["teeth"]  # the sprocket's tooth table (vibkit.model.sprocket.tooth_table)
 
 # --- float parameters ---------------------------------------------------------------------------
 FP_NAMES = (

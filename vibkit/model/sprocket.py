@@ -20,7 +20,7 @@ import numpy as np
 
 from .params import SprocketParams
 
-__all__ = ["tooth_geometry", "tooth_corners", "mesh_phase", "contact_kernel"]
+__all__ = ["tooth_geometry", "tooth_corners", "tooth_table", "mesh_phase", "contact_kernel"]
 
 
 def tooth_geometry(sp: SprocketParams, link_pitch: float, roller_radius: float) -> dict:
@@ -80,6 +80,63 @@ def mesh_phase(positions: np.ndarray, centre, sp: SprocketParams, link_pitch: fl
     return float(np.angle(z) * psi / (2.0 * math.pi))
 
 
+# the tooth table (:func:`tooth_table`): rows 0 and 1 the flanks AB and DC in the tooth's frame
+# (start x, z; direction x, z; 1 / length^2; unit normal x, z), row 2 the constants, then one row per
+# tooth j with cos(psi j), sin(psi j)
+T_FLANK_AB, T_FLANK_DC, T_CONST, T_ROT = 0, 1, 2, 3
+T_ZMID, T_BOUND2, T_PSI, T_NTEETH, T_WINDOW = 0, 1, 2, 3, 4  # columns of the constants' row
+T_COLS = 7
+
+
+def tooth_table(loc: np.ndarray, root_r: float, psi: float, nteeth: int, r_d: float) -> np.ndarray:
+    """What :func:`contact_kernel` needs of the teeth, computed once per model: each flank in the
+    tooth's frame (``loc``: the corners, :func:`local_corners`, above the root point at ``root_r``), a
+    circle round each tooth that a roller of radius up to ``r_d`` touching it must reach, each tooth's
+    rotation psi j (``psi`` the tooth pitch [rad], ``nteeth`` teeth), and how many teeth beyond the two
+    that bracket a roller's angle it can touch (0 unless a roller is wider than the gap between two
+    teeth). (nteeth + 3, 7)"""
+    loc = np.asarray(loc, dtype=float)
+    t = np.zeros((nteeth + T_ROT, T_COLS))
+    for row, (i0, i1) in ((T_FLANK_AB, (0, 1)), (T_FLANK_DC, (3, 2))):
+        ax, az = loc[i0, 0], loc[i0, 1] + root_r
+        ex, ez = loc[i1, 0] - loc[i0, 0], loc[i1, 1] - loc[i0, 1]
+        length = math.hypot(ex, ez)
+        t[row] = (ax, az, ex, ez, 1.0 / length**2, -ez / length, ex / length)
+    zmid = root_r + 0.5 * (loc[:, 1].min() + loc[:, 1].max())
+    bound = max(math.hypot(loc[q, 0], loc[q, 1] + root_r - zmid) for q in range(4)) + r_d
+    # the widest angle from a tooth's axis at which a roller can touch it: the tooth's half-width at
+    # its base seen from the centre, plus the roller's own angular radius there (at least; closer
+    # in, a roller would sit inside the sprocket's body), plus the fast arctangent's error
+    base = root_r + loc[:, 1].min()
+    reach = math.atan2(np.abs(loc[:, 0]).max(), base) + math.asin(min(1.0, r_d / base)) + 1e-3
+    window = max(0, math.ceil(reach / psi) - 1)
+    t[T_CONST, :5] = (zmid, bound * bound, psi, nteeth, window)
+    for j in range(nteeth):
+        t[T_ROT + j, 0] = math.cos(psi * j)
+        t[T_ROT + j, 1] = math.sin(psi * j)
+    return t
+
+
+@nb.njit(cache=True, error_model="numpy", inline="always")
+def fast_atan2(y, x):
+    """atan2(y, x) to about 1e-5 rad (a rational approximation on one octant, folded): good for
+    choosing teeth, not for placing anything."""
+    ax, ay = abs(x), abs(y)
+    mx = max(ax, ay)
+    if mx == 0.0:
+        return 0.0
+    a = min(ax, ay) / mx
+    s = a * a
+    r = ((-0.0464964749 * s + 0.15931422) * s - 0.327622764) * s * a + a
+    if ay > ax:
+        r = 1.5707963267948966 - r
+    if x < 0.0:
+        r = 3.141592653589793 - r
+    if y < 0.0:
+        r = -r
+    return r
+
+
 @nb.njit(cache=True, error_model="numpy")
 def contact_kernel(
     xs,
@@ -92,11 +149,7 @@ def contact_kernel(
     omega,
     cx,
     cz,
-    loc,
-    root_r,
-    psi,
-    nteeth,
-    r_d,
+    teeth,
     radii,
     k,
     expo,
@@ -109,7 +162,7 @@ def contact_kernel(
 ):
     """Roller-tooth contact forces for the candidate rollers.
 
-    ``radii`` holds each roller's radius [m], ``r_d`` the largest of them (how far a roller reaches).
+    ``teeth`` is the sprocket's :func:`tooth_table`, ``radii`` each roller's radius [m].
 
     Adds the contact force on each candidate roller to ``fx, fz`` [N] and returns
     (torque on the sprocket [N m], contact potential energy [J], max indentation [m],
@@ -125,93 +178,84 @@ def contact_kernel(
     f_back = 0.0
     if ncand == 0:
         return torque, energy, worst, active, f_drive, f_back
-    # each tooth's rotation, theta + psi j, by recurrence from two sines and cosines (not eight per roller)
-    cos_t = np.empty(nteeth)
-    sin_t = np.empty(nteeth)
-    cp, sp = math.cos(psi), math.sin(psi)
-    cos_t[0], sin_t[0] = math.cos(theta), math.sin(theta)
-    for j in range(1, nteeth):
-        cos_t[j] = cos_t[j - 1] * cp - sin_t[j - 1] * sp
-        sin_t[j] = sin_t[j - 1] * cp + cos_t[j - 1] * sp
-    # the flanks in the tooth's frame: start, direction and 1/length^2 (AB: corners 0-1, DC: 3-2)
-    fl = np.empty((2, 5))
-    for flank in range(2):
-        i0 = 0 if flank == 0 else 3
-        i1 = 1 if flank == 0 else 2
-        fl[flank, 0] = loc[i0, 0]
-        fl[flank, 1] = loc[i0, 1] + root_r
-        fl[flank, 2] = loc[i1, 0] - loc[i0, 0]
-        fl[flank, 3] = loc[i1, 1] - loc[i0, 1]
-        fl[flank, 4] = 1.0 / (fl[flank, 2] ** 2 + fl[flank, 3] ** 2)
-    # a circle round each tooth (on its axis) that a roller touching it must reach: teeth farther
-    # off are not looked at
-    zlo = min(min(loc[0, 1], loc[1, 1]), min(loc[2, 1], loc[3, 1]))
-    zhi = max(max(loc[0, 1], loc[1, 1]), max(loc[2, 1], loc[3, 1]))
-    zmid = root_r + 0.5 * (zlo + zhi)
-    bound = 0.0
-    for q in range(4):
-        bound = max(bound, math.hypot(loc[q, 0], loc[q, 1] + root_r - zmid))
-    bound += r_d
-    bound2 = bound * bound
+    zmid, bound2 = teeth[T_CONST, T_ZMID], teeth[T_CONST, T_BOUND2]
+    psi, nteeth, window = teeth[T_CONST, T_PSI], int(teeth[T_CONST, T_NTEETH]), int(teeth[T_CONST, T_WINDOW])
+    ct, st = math.cos(theta), math.sin(theta)
     for jj in range(ncand):
         i = candidates[jj]
         px, pz = xs[i], zs[i]
         dx, dz = px - cx, pz - cz
-        phi = math.atan2(-dx, dz)
-        rel = phi - theta
-        j0 = math.floor(rel / psi)
-        for tj in (j0 - 1, j0, j0 + 1, j0 + 2):
-            tooth = tj % nteeth
-            c, s = cos_t[tooth], sin_t[tooth]
-            # the roller's centre in the tooth's frame (x tangential, z radial)
-            lx = c * dx + s * dz
-            lz = c * dz - s * dx
-            if lx * lx + (lz - zmid) * (lz - zmid) >= bound2:
-                continue
-            for flank in range(2):
-                ax, az, ex, ez = fl[flank, 0], fl[flank, 1], fl[flank, 2], fl[flank, 3]
-                u = ((lx - ax) * ex + (lz - az) * ez) * fl[flank, 4]
-                if u < 0.0:
-                    u = 0.0
-                elif u > 1.0:
-                    u = 1.0
-                nlx = lx - (ax + u * ex)
-                nlz = lz - (az + u * ez)
-                dist = math.sqrt(nlx * nlx + nlz * nlz)
-                pen = radii[i] - dist
-                if pen <= 0.0 or dist == 0.0:
-                    continue
-                # back to the world: the normal, and the closest point q on the flank
-                nx = c * nlx - s * nlz
-                nz = s * nlx + c * nlz
-                qx = px - nx
-                qz = pz - nz
-                nx /= dist
-                nz /= dist
-                f = k * pen**expo
-                energy += k * pen ** (expo + 1.0) / (expo + 1.0)
-                if damp > 0.0:
-                    # tooth point velocity: omega x (q - C) = omega (-(qz - cz), qx - cx)
-                    tvx = -omega * (qz - cz)
-                    tvz = omega * (qx - cx)
-                    pendot = -((vx[i] - tvx) * nx + (vz[i] - tvz) * nz)
-                    fd = 1.0 + 1.5 * damp * pendot
-                    if fd < 0.0:
-                        fd = 0.0
-                    f *= fd
-                fx[i] += f * nx
-                fz[i] += f * nz
-                # reaction -f n applied at q on the sprocket
-                torque += (qx - cx) * (-f * nz) - (qz - cz) * (-f * nx)
-                if pen > worst:
-                    worst = pen
-                active += 1
-                if flank == 1:
-                    f_drive += f
-                else:
-                    f_back += f
-                if want_teeth:
-                    if pen > ind_tooth[tooth]:
-                        ind_tooth[tooth] = pen
-                    force_tooth[tooth] += f
+        ri = radii[i]
+        # the roller's centre in tooth 0's frame (x tangential, z radial), and the teeth on either
+        # side of its angle (and ``window`` more each side)
+        a = ct * dx + st * dz
+        b = ct * dz - st * dx
+        j0 = math.floor(fast_atan2(-a, b) / psi)
+        tooth = (j0 - window) % nteeth
+        for _ in range(2 + 2 * window):
+            cj, sj = teeth[T_ROT + tooth, 0], teeth[T_ROT + tooth, 1]
+            # in this tooth's frame
+            lx = cj * a + sj * b
+            lz = cj * b - sj * a
+            if lx * lx + (lz - zmid) * (lz - zmid) < bound2:
+                for flank in range(2):
+                    ax, az = teeth[flank, 0], teeth[flank, 1]
+                    # the distance to the flank's line bounds the distance to the flank
+                    dl = (lx - ax) * teeth[flank, 5] + (lz - az) * teeth[flank, 6]
+                    if dl >= ri or dl <= -ri:
+                        continue
+                    ex, ez = teeth[flank, 2], teeth[flank, 3]
+                    u = ((lx - ax) * ex + (lz - az) * ez) * teeth[flank, 4]
+                    if u < 0.0:
+                        u = 0.0
+                    elif u > 1.0:
+                        u = 1.0
+                    nlx = lx - (ax + u * ex)
+                    nlz = lz - (az + u * ez)
+                    d2 = nlx * nlx + nlz * nlz
+                    if d2 >= ri * ri or d2 == 0.0:
+                        continue
+                    dist = math.sqrt(d2)
+                    pen = ri - dist
+                    # back to the world: the normal, and the closest point q on the flank
+                    c = ct * cj - st * sj
+                    s = st * cj + ct * sj
+                    nx = c * nlx - s * nlz
+                    nz = s * nlx + c * nlz
+                    qx = px - nx
+                    qz = pz - nz
+                    nx /= dist
+                    nz /= dist
+                    if expo == 1.5:
+                        f = k * pen * math.sqrt(pen)
+                    else:
+                        f = k * pen**expo
+                    energy += f * pen / (expo + 1.0)
+                    if damp > 0.0:
+                        # tooth point velocity: omega x (q - C) = omega (-(qz - cz), qx - cx)
+                        tvx = -omega * (qz - cz)
+                        tvz = omega * (qx - cx)
+                        pendot = -((vx[i] - tvx) * nx + (vz[i] - tvz) * nz)
+                        fd = 1.0 + 1.5 * damp * pendot
+                        if fd < 0.0:
+                            fd = 0.0
+                        f *= fd
+                    fx[i] += f * nx
+                    fz[i] += f * nz
+                    # reaction -f n applied at q on the sprocket
+                    torque += (qx - cx) * (-f * nz) - (qz - cz) * (-f * nx)
+                    if pen > worst:
+                        worst = pen
+                    active += 1
+                    if flank == T_FLANK_DC:
+                        f_drive += f
+                    else:
+                        f_back += f
+                    if want_teeth:
+                        if pen > ind_tooth[tooth]:
+                            ind_tooth[tooth] = pen
+                        force_tooth[tooth] += f
+            tooth += 1
+            if tooth == nteeth:
+                tooth = 0
     return torque, energy, worst, active, f_drive, f_back
