@@ -134,7 +134,7 @@ def walk(tab, p0, s0_1, delta, pitches, n, s0, kk, lam, xs, zs):
                 xs[i] = cx + cd * rx - sg * rz
                 zs[i] = cz + sg * rx + cd * rz
                 continue
-        k, found, wraps = hit_next(tab, delta, k, qx, qz, pitch, wraps)
+        k, found, wraps, _, _ = hit_next(tab, delta, k, qx, qz, pitch, wraps)
         if k < 0:
             return math.nan
         kk[i] = k
@@ -627,7 +627,7 @@ class Chain:
             self.pitches,
             self.n,
             self.tol,
-            run_steps(g.table, nominal),
+            run_steps(g.table, nominal, self.n),
             next_other(self.pitches, nominal),
             np.zeros((self.n + 2, R_COLS)),
             np.zeros(A_COLS),

@@ -282,10 +282,9 @@ def seg_length(tab, k, delta):
 
 @nb.njit(cache=True, error_model="numpy")
 def circle_hit(tab, k, delta, qx, qz, radius, lam_lo):
-    """Smallest local arc length lam >= lam_lo on segment k whose point is at ``radius`` from q.
-
-    Returns -1.0 when the segment holds no such point. Exact (closed form) for lines and arcs.
-    """
+    """Smallest local arc length lam >= lam_lo on segment k whose point is at ``radius`` from q, and
+    that point: (lam, x, z), lam = -1.0 when the segment holds no such point. Exact (closed form)
+    for lines and arcs."""
     tol = 1e-12
     length = seg_length(tab, k, delta)
     kap = tab[k, KAPPA]
@@ -293,6 +292,7 @@ def circle_hit(tab, k, delta, qx, qz, radius, lam_lo):
     x0 = tab[k, AX] + tab[k, BX] * delta
     z0 = tab[k, AZ] + tab[k, BZ] * delta
     best = -1.0
+    bx = bz = 0.0
     if kap == 0.0:
         tx, tz = tab[k, COS0], tab[k, SIN0]
         wx, wz = x0 - qx, z0 - qz
@@ -300,20 +300,25 @@ def circle_hit(tab, k, delta, qx, qz, radius, lam_lo):
         c = wx * wx + wz * wz - radius * radius
         disc = b * b - c
         if disc < 0.0:
-            return -1.0
+            return -1.0, 0.0, 0.0
         sq = math.sqrt(disc)
+        hit = False
         for lam in (-b - sq, -b + sq):
+            # (a hit just before the start, within tol, counts: the walk's tolerance allows it)
             if lam >= lam_lo - tol and lam <= length + tol:
                 if best < 0.0 or lam < best:
                     best = lam
-        return best
+                    hit = True
+        if not hit:
+            return -1.0, 0.0, 0.0
+        return best, x0 + best * tx, z0 + best * tz
     rho = 1.0 / abs(kap)
     cx = x0 - tab[k, SIN0] / kap
     cz = z0 + tab[k, COS0] / kap
     dx, dz = qx - cx, qz - cz
     d = math.sqrt(dx * dx + dz * dz)
     if d > rho + radius or d < abs(rho - radius) or d == 0.0:
-        return -1.0
+        return -1.0, 0.0, 0.0
     a = (rho * rho - radius * radius + d * d) / (2.0 * d)
     h2 = rho * rho - a * a
     h = math.sqrt(h2) if h2 > 0.0 else 0.0
@@ -331,28 +336,29 @@ def circle_hit(tab, k, delta, qx, qz, radius, lam_lo):
         if lam >= lam_lo - tol and lam <= length + tol:
             if not found or lam < best:
                 best = lam
+                bx, bz = px, pz
                 found = True
-    return best if found else -1.0
+    return (best, bx, bz) if found else (-1.0, 0.0, 0.0)
 
 
 @nb.njit(cache=True, error_model="numpy", inline="always")
 def hit_next(tab, delta, k, qx, qz, radius, wraps):
     """The first point at ``radius`` from q on the segments after segment k (round the loop, counting
-    ``wraps``): (segment, local arc length, wraps), segment -1 where the guide has none."""
+    ``wraps``): (segment, local arc length, wraps, x, z), segment -1 where the guide has none."""
     nseg = tab.shape[0]
     k += 1
     if k == nseg:
         k = 0
         wraps += 1
     for _ in range(nseg + 1):
-        found = circle_hit(tab, k, delta, qx, qz, radius, 0.0)
+        found, x, z = circle_hit(tab, k, delta, qx, qz, radius, 0.0)
         if found != -1.0:
-            return k, found, wraps
+            return k, found, wraps, x, z
         k += 1
         if k == nseg:
             k = 0
             wraps += 1
-    return -1, 0.0, wraps
+    return -1, 0.0, wraps, 0.0, 0.0
 
 
 # --------------------------------------------------------------------------------------------

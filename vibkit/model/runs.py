@@ -30,6 +30,8 @@ import numba as nb
 import numpy as np
 
 from .guide import (
+    AX,
+    AZ,
     BX,
     BZ,
     COS0,
@@ -47,7 +49,17 @@ from .guide import (
     seg_length,
 )
 
-__all__ = ["next_other", "nominal_pitch", "roller_s0", "run_close", "run_fill", "run_rates", "run_steps", "run_walk"]
+__all__ = [
+    "TURNS",
+    "next_other",
+    "nominal_pitch",
+    "roller_s0",
+    "run_close",
+    "run_fill",
+    "run_rates",
+    "run_steps",
+    "run_walk",
+]
 
 # columns of a run's record (one row per run, in walking order)
 R_SEG, R_FIRST, R_LAST, R_LAM, R_WRAPS = 0, 1, 2, 3, 4
@@ -61,6 +73,7 @@ A_ONE, A_GHOST, A_RUNS, A_DEP = 0, 4, 8, 9
 A_COLS = 10
 
 MAX_NEWTON = 30
+TURNS = 5  # run_steps' first column of the half-angle turns
 
 
 def nominal_pitch(pitches):
@@ -69,23 +82,30 @@ def nominal_pitch(pitches):
     return float(values[np.argmax(counts)])
 
 
-def run_steps(tab, pitch):
+def run_steps(tab, pitch, n):
     """Per segment: the arc length one link of ``pitch`` spans along it, and the cosine and sine of
     the angle it turns on an arc, 0 (the column :func:`vibkit.model.runs_rhs.build_runs` marks segments
     within the sprocket's reach in) and the sine of half the angle (inf where the link is longer than
-    the arc's diameter). (nseg, 5)"""
-    out = np.zeros((tab.shape[0], 5))
+    the arc's diameter); then, from column ``TURNS``, the cosine and sine of m half-angles for m = 0 ..
+    2 n + 2 side by side (a run of m links on an arc turns by 2 m of them: no trigonometry in a walk
+    or a run's sums). (nseg, TURNS + 4 n + 6)"""
+    out = np.zeros((tab.shape[0], TURNS + 2 * (2 * n + 3)))
+    m = np.arange(2 * n + 3)
     for k in range(tab.shape[0]):
         kap = tab[k, KAPPA]
+        out[k, TURNS::2] = 1.0
         if kap == 0.0:
-            out[k] = (pitch, 1.0, 0.0, 0.0, 0.0)
+            out[k, :5] = (pitch, 1.0, 0.0, 0.0, 0.0)
             continue
         rho = 1.0 / abs(kap)
         if pitch >= 2.0 * rho:
-            out[k] = (math.inf, 1.0, 0.0, 0.0, 0.0)
+            out[k, :5] = (math.inf, 1.0, 0.0, 0.0, 0.0)
             continue
         step = 2.0 * rho * math.asin(pitch / (2.0 * rho))
-        out[k] = (step, math.cos(kap * step), math.sin(kap * step), 0.0, math.sin(0.5 * kap * step))
+        half = 0.5 * kap * step
+        out[k, :5] = (step, math.cos(kap * step), math.sin(kap * step), 0.0, math.sin(half))
+        out[k, TURNS::2] = np.cos(m * half)
+        out[k, TURNS + 1 :: 2] = np.sin(m * half)
     return out
 
 
@@ -123,11 +143,16 @@ def _link(tab, delta, k, lo, qx, qz, pitch, wraps, within):
                 if found <= length:
                     x, z, tx, tz = local_frame(tab, k, found, delta)
                     return k, found, x, z, tx, tz, wraps
-    k, found, wraps = hit_next(tab, delta, k, qx, qz, pitch, wraps)
+    k, found, wraps, x, z = hit_next(tab, delta, k, qx, qz, pitch, wraps)
     if k < 0:
         return -1, 0.0, 0.0, 0.0, 0.0, 0.0, wraps
-    x, z, tx, tz = local_frame(tab, k, found, delta)
-    return k, found, x, z, tx, tz, wraps
+    kap = tab[k, KAPPA]
+    if kap == 0.0:
+        return k, found, x, z, tab[k, COS0], tab[k, SIN0], wraps
+    # on an arc the tangent is the radius turned a quarter: (x, z) = centre + (sin phi, -cos phi) / kappa
+    cx = tab[k, AX] + tab[k, BX] * delta - tab[k, SIN0] / kap
+    cz = tab[k, AZ] + tab[k, BZ] * delta + tab[k, COS0] / kap
+    return k, found, x, z, -(z - cz) * kap, (x - cx) * kap, wraps
 
 
 @nb.njit(cache=True, error_model="numpy", inline="always")
@@ -228,7 +253,15 @@ def run_walk(tab, p0, s, delta, pitches, n, rstep, rnext, runs, aux, resume):
         runs[r, R_STEP] = step
         if m > 0:
             lam += m * step
-            x, z, tx, tz = local_frame(tab, k, lam, delta)
+            kap = tab[k, KAPPA]
+            if kap == 0.0:
+                x, z, tx, tz = local_frame(tab, k, lam, delta)
+            else:
+                # the first roller's tangent turned by the m links' 2 m half-angles, about the arc's centre
+                cx, cz = x - tz / kap, z + tx / kap
+                ct, st = rstep[k, TURNS + 4 * m], rstep[k, TURNS + 4 * m + 1]
+                tx, tz = tx * ct - tz * st, tz * ct + tx * st
+                x, z = cx + tz / kap, cz - tx / kap
         runs[r, R_XE] = x
         runs[r, R_ZE] = z
         runs[r, R_TXE] = tx

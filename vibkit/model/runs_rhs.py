@@ -35,6 +35,7 @@ from .runs import (
     R_TZ,
     R_X,
     R_Z,
+    TURNS,
     next_other,
     nominal_pitch,
     run_close,
@@ -177,10 +178,9 @@ def runs_fast(t, y, dy, prm, ws, want_teeth, tb):
         if kap == 0.0 or cnt == 1:
             stx, stz = cnt * tx, cnt * tz
         else:
-            half = 0.5 * kap * runs[r, R_STEP]
-            f = math.sin(cnt * half) / rstep[k, 4]
-            th = (cnt - 1) * half
-            ct, sn = math.cos(th), math.sin(th)
+            # sin(cnt h) / sin(h) and the turn by (cnt - 1) h, h the half-angle of one link
+            f = rstep[k, TURNS + 2 * cnt + 1] / rstep[k, 4]
+            ct, sn = rstep[k, TURNS + 2 * cnt - 2], rstep[k, TURNS + 2 * cnt - 1]
             stx, stz = f * (tx * ct - tz * sn), f * (tz * ct + tx * sn)
         bst = bx * stx + bz * stz
         bsn = -bx * stz + bz * stx
@@ -265,7 +265,7 @@ def build_runs(model, prm, empty, s, delta):
     head[HEAD_RUNS] = 1.0
     head[HEAD_BY_ROLLER] = float(not np.all(model.mass == model.mass[0]))
     nominal = nominal_pitch(pitches)
-    rstep = run_steps(tab, nominal)
+    rstep = run_steps(tab, nominal, n)
     rstep[:, NEAR] = _near(tab, fp[FP_CX], fp[FP_CZ], fp[FP_REACH] + float(pitches.max()) + 1e-3, fp[FP_LT])
     tb = list(empty)
     tb[TB_HEAD] = head
