@@ -26,7 +26,7 @@ from ..model.effects import (
     sprocket_contact,
 )
 from ..model.pitch_table import empty_table, rhs, table_applies, table_delta, table_spacing
-from ..model.runs_rhs import build_runs
+from ..model.runs_rhs import build_runs, runs_observe
 from ..model.schema import SceneError, effect_options, nominal_speed
 from ..model.slots import (
     FP_CARRIAGE_MASS,
@@ -44,6 +44,7 @@ from ..model.slots import (
     FP_TENSIONER_STIFFNESS,
     FP_TORQUE_LIMIT,
     HEAD_LINK_ERROR,
+    HEAD_RUNS,
     INFO_AT,
     INFO_CURVATURE,
     INFO_DELTA,
@@ -388,8 +389,13 @@ def _observe(
             if not math.isfinite(y[j, i]):
                 return 2, j
         if light_table:
-            # from the pitch table, as the integrator saw them (no closure residual asked)
-            rhs(t[j], y[j], dy, prm, ws, need_teeth, tb)
+            # from the pitch table, as the integrator saw them (no closure residual asked); a chain
+            # closed run by run from one walk where that closes it to first order
+            if tb[TB_HEAD][HEAD_RUNS] != 0.0:
+                if runs_observe(t[j], y[j], dy, prm, ws, need_teeth, tb) != 0:
+                    return 1, j
+            else:
+                rhs(t[j], y[j], dy, prm, ws, need_teeth, tb)
             scal[j, 0] = info[INFO_DELTA]
             scal[j, 2] = info[INFO_MOTOR]
             scal[j, 10] = info[INFO_F_DRIVE]

@@ -42,6 +42,7 @@ from .runs import (
     run_fill,
     run_rates,
     run_steps,
+    run_walk,
 )
 from .slots import (
     FP_CARRIAGE_MASS,
@@ -88,7 +89,7 @@ from .slots import (
     WS_Z,
 )
 
-__all__ = ["build_runs", "runs_evaluate", "runs_fast"]
+__all__ = ["build_runs", "runs_evaluate", "runs_fast", "runs_observe"]
 
 NEAR = 3  # rstep's column: 1.0 where a roller on the segment can come within the sprocket's reach
 
@@ -230,6 +231,77 @@ def runs_fast(t, y, dy, prm, ws, want_teeth, tb):
     sddot = q / m_eff
     finish(y, dy, info, fp, ip, sddot, torque_c, energy_c, worst, active, f_drive, f_back)
     remember_closure(info, y, sddot, delta, c, e, dh)
+    return 0
+
+
+LINEAR_SHIFT = 1e-7  # [m] the largest Newton step runs_observe takes by a first-order shift instead of a walk
+
+
+@nb.njit(cache=True, error_model="numpy")
+def runs_observe(t, y, dy, prm, ws, want_teeth, tb):
+    """What an output needs of the positions alone (delta, the contact forces without damping, the
+    motor torque) from one walk: where the walk from the predicted delta leaves a Newton step under
+    ``LINEAR_SHIFT``, delta and the rollers within the sprocket's reach are moved by it to first
+    order (each run rigidly: r += step (B_k + T beta), beta its lam's rate with delta), which leaves
+    an error of order step^2 (below 1e-13 m); otherwise the exact closure (:func:`runs_evaluate`).
+    Fills ``info`` as an evaluation does (delta, motor, flank forces, the prediction's memory) and
+    ``ind_t``, ``frc_t`` with ``want_teeth``; ``dy`` is scratch. Returns 0, or 1 where the chain cannot
+    close."""
+    tab, fp, ip, pitches = prm[PRM_TABLE], prm[PRM_FP], prm[PRM_IP], prm[PRM_PITCHES]
+    (_, _, _, xs, zs, _, _, _, _, _, _, vxs, vzs, fx, fz, cand, ind_t, frc_t, info) = ws
+    runs, aux, rstep = tb[TB_RUNS], tb[TB_RAUX], tb[TB_RSTEP]
+    n = ip[IP_N]
+    ds = y[0] - info[INFO_AT]
+    d = info[INFO_DELTA] + ds * (info[INFO_SLOPE] + 0.5 * info[INFO_CURVATURE] * ds)
+    h, dh = run_walk(tab, fp[FP_P0], y[0], d, pitches, n, rstep, tb[TB_RNEXT], runs, aux, 0)
+    if math.isnan(h) or not dh > 0.0 or abs(h) > LINEAR_SHIFT * dh:
+        return runs_evaluate(t, y, dy, prm, ws, want_teeth, tb)
+    info[INFO_WALKS] += 1
+    shift = -h / dh if abs(h) > fp[FP_CLOSURE_TOL] else 0.0
+    sdot = y[1]
+    c, e, _ = run_rates(tab, sdot, runs, aux)
+    reach = fp[FP_REACH] + 1e-9
+    reach2 = reach * reach
+    cx0, cz0 = fp[FP_CX], fp[FP_CZ]
+    ncand = 0
+    for r in range(int(aux[A_RUNS])):
+        k = int(runs[r, R_SEG])
+        first, last = int(runs[r, R_FIRST]), min(int(runs[r, R_LAST]), n - 1)
+        if rstep[k, NEAR] == 0.0 or first > last:
+            continue
+        kap = tab[k, KAPPA]
+        x, z, tx, tz, step = runs[r, R_X], runs[r, R_Z], runs[r, R_TX], runs[r, R_TZ], runs[r, R_STEP]
+        mx, mz, be = shift * tab[k, BX], shift * tab[k, BZ], shift * runs[r, R_BETA]
+        if kap != 0.0:
+            ccx, ccz = x - tz / kap, z + tx / kap
+        for i in range(first, last + 1):
+            if kap == 0.0:
+                xi = x + (i - first) * step * tx
+                zi = z + (i - first) * step * tz
+            else:
+                if i > first:
+                    tx, tz = tx * rstep[k, 1] - tz * rstep[k, 2], tz * rstep[k, 1] + tx * rstep[k, 2]
+                xi = ccx + tz / kap
+                zi = ccz - tx / kap
+            xi += mx + be * tx
+            zi += mz + be * tz
+            if within_reach(xi, zi, cx0, cz0, reach2):
+                xs[i] = xi
+                zs[i] = zi
+                fx[i] = 0.0
+                fz[i] = 0.0
+                cand[ncand] = i
+                ncand += 1
+    torque_c, energy_c, worst, active, f_drive, f_back = 0.0, 0.0, 0.0, 0, 0.0, 0.0
+    if want_teeth:
+        clear_teeth(ind_t, frc_t)
+    if ip[IP_CONTACT] == 1:
+        torque_c, energy_c, worst, active, f_drive, f_back = sprocket_contact(
+            prm, y, xs, zs, vxs, vzs, cand, ncand, 0.0, fx, fz, ind_t, frc_t, want_teeth
+        )
+    # the motor and contact slots as an evaluation leaves them (s-ddot is not computed: 0)
+    finish(y, dy, info, fp, ip, 0.0, torque_c, energy_c, worst, active, f_drive, f_back)
+    remember_closure(info, y, 0.0, d + shift, c, e, dh)
     return 0
 
 
