@@ -115,25 +115,6 @@ def _time_to(dist, v, a):
 
 
 @nb.njit(cache=True, error_model="numpy")
-def _time_to_cubic(dist, v, a, j, h):
-    """:func:`_time_to` with the jerk ``j`` as well: v h + a h^2 / 2 + j h^3 / 6 = dist by Newton's
-    method from the quadratic's ``h`` (kept where Newton does not settle nearby). [s]"""
-    t = h
-    for _ in range(4):
-        f = t * (v + t * (0.5 * a + t * j / 6.0)) - dist
-        df = v + t * (a + 0.5 * j * t)
-        if df * dist <= 0.0:
-            return h
-        tn = t - f / df
-        if not (0.5 * h < tn < 2.0 * h):
-            return h
-        if abs(tn - t) <= 1e-15 * tn:
-            return tn
-        t = tn
-    return t
-
-
-@nb.njit(cache=True, error_model="numpy")
 def _dense_component(th, y0, y1, k1, k7, h, r5):
     r2 = y1 - y0
     r3 = h * k1 - r2
@@ -176,7 +157,7 @@ def _dopri5_chunk(
     sequence does not depend on where the pauses fall).
     ``ctl`` carries the controller's memory between calls: [previous error, last step rejected,
     step size before a breakpoint cut it, the step starts on a breakpoint, that breakpoint, its
-    direction, y[0]'s jerk over the last step]. The step-size controller is Hairer's PI (Lund) stabilisation of DOPRI5
+    direction]. The step-size controller is Hairer's PI (Lund) stabilisation of DOPRI5
     (beta = 0.04). ``counters`` accumulates [steps, rejected, evaluations, breakpoint steps, steps taken again
     because they passed a breakpoint].
 
@@ -221,12 +202,7 @@ def _dopri5_chunk(
                     if _start_past(t, y, yt, k1, s_on, direction, tiny, prm, ws, ctl, counters, tb) != 0:
                         return 1, t, h, idx
             sc = _next_crossing(y[0], direction, cross, p0, gap)
-            # when y[0] reaches it: from its velocity, acceleration and the last step's jerk (a step cut
-            # to end on the breakpoint that passes it by more than the gap is taken again)
-            jerk = ctl[6]
             hc = _time_to(sc - y[0], v, k1[1])
-            if jerk != 0.0 and hc < math.inf:
-                hc = _time_to_cubic(sc - y[0], v, k1[1], jerk, hc)
             if hc <= h:
                 h = hc
                 ctl[2] = hnat
@@ -329,7 +305,6 @@ def _dopri5_chunk(
                     y_out[idx, i] = y[i] + th * (r2 + (1.0 - th) * (r3 + th * (r4 + (1.0 - th) * r5)))
                 idx += 1
             t = t_stop if last else tn
-            ctl[6] = (k7[1] - k1[1]) / h  # y[0]'s jerk over the step, for the next breakpoint's time
             for i in range(m):
                 y[i] = y1[i]
                 k1[i] = k7[i]
@@ -432,7 +407,7 @@ def integrate(
     bar = Progress(t_out[-1], label, enabled=progress)
     if method == "dopri5":
         counters = np.zeros(5, dtype=np.int64)
-        ctl = np.array([1e-4, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0])
+        ctl = np.array([1e-4, 0.0, 0.0, 0.0, 0.0, 1.0])
         cross = np.ascontiguousarray(events[0], dtype=float) if events is not None else np.zeros(0)
         period = float(events[1]) if events is not None else 1.0
         # times at which the right-hand side jumps (passengers by time): steps end on them, the
