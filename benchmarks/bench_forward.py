@@ -4,7 +4,8 @@ effect costs.
 Each case runs in a fresh subprocess (so that the peak resident memory is its own), after one
 warm-up call that loads the compiled kernels from numba's cache; the time reported is the whole
 ``vibkit.simulate`` call (integration and outputs), in wall time and in CPU time of the process
-(``time.process_time``: what a loaded machine does not inflate), best of three calls.
+(``time.process_time``: what a loaded machine does not inflate), best of five calls (this machine's
+timings vary by 10-30 % from one minute to the next).
 
 Run: ``python benchmarks/bench_forward.py [--quick]``; writes benchmarks/results/forward.{csv,md}.
 """
@@ -170,13 +171,14 @@ solver = dict(scene.sections["solver"], **solver_over)
 scene = replace(scene, sections=dict(scene.sections, run=run, solver=solver))
 vibkit.simulate(scene, duration=0.5, progress=False)  # warm-up: compiled kernels from the cache
 wall = cpu = float("inf")
-for _ in range(3):
+for _ in range(5):
     t0, c0 = time.perf_counter(), time.process_time()
     ds = vibkit.simulate(scene, duration=duration, progress=False)
     wall, cpu = min(wall, time.perf_counter() - t0), min(cpu, time.process_time() - c0)
 from vibkit.analyses.forward import default_rtol
 print(json.dumps({"wall": wall, "cpu": cpu, "rtol": solver.get("rtol") or default_rtol(scene.effects), "integration": ds.attrs["solver_wall_time_s"], "steps": ds.attrs["solver_steps"],
                   "closure_mode": ds.attrs["solver_closure"],
+                  "converged": {1: "yes", 0: "no"}.get(ds.attrs.get("converged"), ""),
                   "evaluations": ds.attrs["solver_evaluations"],
                   "maxrss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
                   "closure": float(ds.closure_residual.max()) if "closure_residual" in ds else float("nan"),
@@ -220,6 +222,7 @@ def main(argv=None):
                 "integration_s": res["integration"],
                 "steps": res["steps"],
                 "evaluations": res["evaluations"],
+                "converged": res["converged"],
                 "peak_memory_MB": res["maxrss_mb"],
                 "result_MB": res["nbytes_mb"],
                 "what": what,
@@ -230,7 +233,8 @@ def main(argv=None):
     md = (
         f"# Forward dynamics speed\n\n{machine()}; {today()}; {duration:g} s simulated, dopri5 at the "
         f"default tolerance (from the contact stiffness: 1e-7 at k = 1e6) unless the case says, one core, each "
-        f"case in a fresh process after a warm-up, best of three calls; CPU time is the process's "
+        f"case in a fresh process after a warm-up, best of five calls; converged: the convergence check's "
+        f"verdict where the case runs it; CPU time is the process's "
         f"(time.process_time); load average {load0:.1f} at the start, {os.getloadavg()[0]:.1f} at the end.\n\n"
         + markdown_table(rows)
         + "\n"

@@ -43,10 +43,12 @@ VARIABLES = {
 
 def make_dataset(coords: dict, data: dict, attrs: dict, scene) -> xr.Dataset:
     """Dataset from ``data`` (name -> (dims, array)) with units/long_name from :data:`VARIABLES`."""
-    ds = xr.Dataset(coords=coords)
+    # built in one call (setting the variables one by one aligns them one by one: 10 ms of a 0.2 s run)
+    variables = {}
     for name, (dims, arr) in data.items():
         units, long_name = VARIABLES.get(name, ("1", name))
-        ds[name] = xr.DataArray(np.asarray(arr), dims=dims, attrs={"units": units, "long_name": long_name})
+        variables[name] = xr.Variable(dims, np.asarray(arr), attrs={"units": units, "long_name": long_name})
+    ds = xr.Dataset(coords=coords).assign(variables)
     for name, (units, long_name) in {
         "time": ("s", "time"),
         "advance": ("m", "roller 1 coordinate s0 on the undeformed guide"),
