@@ -8,7 +8,14 @@ import numpy as np
 import pytest
 
 from vibkit.model.params import reference_chain, reference_sprocket
-from vibkit.model.sprocket import contact_kernel, local_corners, tooth_corners, tooth_geometry, tooth_table
+from vibkit.model.sprocket import (
+    contact_kernel,
+    fast_atan2,
+    local_corners,
+    tooth_corners,
+    tooth_geometry,
+    tooth_table,
+)
 
 
 def _segment_distance(p, a, b):
@@ -128,3 +135,13 @@ def test_the_window_is_what_wide_rollers_need():
     )  # fmt: skip
     _, ref = _reference(pos, np.full(m, r), 0.3, centre, sp, pitch, r, 1e6, 1.5)
     assert out[3] < ref[3]
+
+
+def test_fast_arctangent_within_the_tooth_tables_allowance():
+    """The arctangent that picks a roller's teeth errs by less than the 1e-3 rad the tooth table
+    allows it (measured 2e-4 rad), at every angle and radius."""
+    rng = np.random.default_rng(3)
+    ang = rng.uniform(-math.pi, math.pi, 20000)
+    rho = np.exp(rng.uniform(-5.0, 5.0, 20000))
+    err = [abs(math.remainder(fast_atan2(r * math.sin(a), r * math.cos(a)) - a, 2 * math.pi)) for a, r in zip(ang, rho)]
+    assert max(err) < 3e-4

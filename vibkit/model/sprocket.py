@@ -106,7 +106,7 @@ def tooth_table(loc: np.ndarray, root_r: float, psi: float, nteeth: int, r_d: fl
     bound = max(math.hypot(loc[q, 0], loc[q, 1] + root_r - zmid) for q in range(4)) + r_d
     # the widest angle from a tooth's axis at which a roller can touch it: the tooth's half-width at
     # its base seen from the centre, plus the roller's own angular radius there (at least; closer
-    # in, a roller would sit inside the sprocket's body), plus the fast arctangent's error
+    # in, a roller would sit inside the sprocket's body), plus more than the fast arctangent's error
     base = root_r + loc[:, 1].min()
     reach = math.atan2(np.abs(loc[:, 0]).max(), base) + math.asin(min(1.0, r_d / base)) + 1e-3
     window = max(0, math.ceil(reach / psi) - 1)
@@ -119,8 +119,8 @@ def tooth_table(loc: np.ndarray, root_r: float, psi: float, nteeth: int, r_d: fl
 
 @nb.njit(cache=True, error_model="numpy", inline="always")
 def fast_atan2(y, x):
-    """atan2(y, x) to about 1e-5 rad (a rational approximation on one octant, folded): good for
-    choosing teeth, not for placing anything."""
+    """atan2(y, x) to 2e-4 rad (a polynomial on one octant, folded): good for choosing teeth (the
+    tooth table allows 1e-3 rad for it), not for placing anything."""
     ax, ay = abs(x), abs(y)
     mx = max(ax, ay)
     if mx == 0.0:
