@@ -1,0 +1,113 @@
+"""Two revisions of vibkit side by side in one process: the 44 s no-load scene (healthy, and with three
+worn links), the revisions taking turns, best CPU time of each.
+
+This machine's speed varies by 10-40 % from one hour to the next, so two benchmark runs an hour apart
+cannot tell a 20 % change from the weather; two copies of the package taking turns in one process can.
+Each revision's ``vibkit/`` is exported with ``git archive`` into a temporary folder under its own
+package name (its absolute ``vibkit`` imports renamed), compiled once (a warm-up), then timed.
+
+Run: ``python benchmarks/ab_forward.py main HEAD [--rounds 8]``; writes benchmarks/results/ab_forward.md.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import io
+import json
+import re
+import subprocess
+import sys
+import tarfile
+import tempfile
+import time
+from dataclasses import replace
+from pathlib import Path
+
+from _common import RESULTS, machine, markdown_table, today, write_text
+
+ROOT = Path(__file__).resolve().parents[1]
+SCENE = ROOT / "sim" / "thesis-forward.toml"
+NO_LOAD = {
+    "gravity": {"g": 9.81},
+    "contact": {"stiffness": 1e6, "exponent": 1.5, "damping": 0.0},
+    "motor": {"kp": 600.0, "speed": 0.5, "ki": 0.0},
+}
+WORN = [[40, 0.4 / 3 + 1e-3], [70, 0.4 / 3 + 1e-3], [100, 0.4 / 3 + 1e-3]]
+IMPORT = re.compile(r"\b(from|import) vibkit\b")
+
+
+def export(rev: str, name: str, where: Path) -> None:
+    """``rev``'s package as ``where/name`` (its absolute imports of vibkit renamed)."""
+    blob = subprocess.run(["git", "archive", rev, "vibkit"], cwd=ROOT, capture_output=True, check=True).stdout
+    with tarfile.open(fileobj=io.BytesIO(blob)) as tar:
+        tar.extractall(where, filter="data")
+    (where / "vibkit").rename(where / name)
+    for path in (where / name).rglob("*.py"):
+        text = path.read_text()
+        new = IMPORT.sub(lambda m: f"{m.group(1)} {name}", text).replace('"vibkit.', f'"{name}.')
+        if new != text:
+            path.write_text(new)
+
+
+def scene_for(name: str, worn: bool):
+    sc = importlib.import_module(name + ".model.scene")
+    scene = sc.load_scene(str(SCENE))
+    if worn:
+        text = scene.text.replace("n_rollers = 159", "n_rollers = 159\nworn_links = " + json.dumps(WORN))
+        scene = sc.parse_scene(text, scene.source)
+    scene = replace(scene, effects=NO_LOAD)
+    return replace(scene, outputs=dict(scene.outputs, variables=("delta", "sprocket_speed", "contact_force")))
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("a", help="the baseline revision (e.g. main)")
+    ap.add_argument("b", help="the revision compared with it (e.g. HEAD)")
+    ap.add_argument("--rounds", type=int, default=8)
+    args = ap.parse_args(argv)
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        names = {}
+        for i, rev in enumerate((args.a, args.b)):
+            names[rev] = f"vibkit_ab{i}"
+            export(rev, names[rev], Path(tmp))
+        sys.path.insert(0, tmp)
+        for worn in (False, True):
+            runs = {}
+            for rev, name in names.items():
+                print(f"{rev} ({'worn' if worn else 'healthy'}): warm-up ...", file=sys.stderr, flush=True)
+                vk = importlib.import_module(name)
+                scene = scene_for(name, worn)
+                vk.simulate(scene, duration=1.0, progress=False)  # compiles into the copy's own cache
+                runs[rev] = (vk, scene)
+            best = dict.fromkeys(names, float("inf"))
+            for _ in range(args.rounds):
+                for rev, (vk, scene) in runs.items():
+                    c0 = time.process_time()
+                    vk.simulate(scene, duration=44.0, progress=False)
+                    best[rev] = min(best[rev], time.process_time() - c0)
+            for rev in names:
+                rows.append(
+                    {
+                        "chain": "three worn links (run by run)" if worn else "healthy (pitch table)",
+                        "revision": rev,
+                        "cpu_s": best[rev],
+                        "realtime_factor_cpu": 44.0 / best[rev],
+                        "ratio_to_baseline": best[rev] / best[args.a],
+                    }
+                )
+    md = (
+        f"# Two revisions side by side\n\n{machine()}; {today()}; the 44 s no-load scene (delta, sprocket speed, "
+        f"contact force), `{args.a}` against `{args.b}` in one process taking turns, best CPU time of "
+        f"{args.rounds} rounds each (`python benchmarks/ab_forward.py {args.a} {args.b}`).\n\n"
+        + markdown_table(rows)
+        + "\n"
+    )
+    write_text(RESULTS / "ab_forward.md", md)
+    print(md)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
