@@ -4,8 +4,8 @@ With equal links the crossing values of one configuration are those of every rol
 (:meth:`vibkit.model.chain.Chain.crossing_table`); with unequal links each pair (roller, place) needs
 its own value of s0_1. Each is found by Newton's method on f(s0_1) = s0_k(s0_1) - b with
 df/ds0_1 = ds0_k/ds0_1, the chain closed run by run (:mod:`vibkit.model.runs`, the exact closure)
-from the last solve's delta (the tensioner moves by millimetres over a loop, so that is always a
-close guess), from the uniform chain's value shifted as the last pair's was.
+from the last solve's delta moved along its slope (the tensioner moves by millimetres over a loop, so
+that is always a close guess), from the uniform chain's value shifted as the last pair's was.
 """
 
 from __future__ import annotations
@@ -44,15 +44,20 @@ def crossing_values(tab, p0, pitches, n, tol, rstep, rnext, runs, aux, rollers, 
     Returns the index of a pair whose chain could not be closed, or -1."""
     d = delta0
     shift = 0.0  # the last pair's value less its start: neighbouring rollers on one place shift alike
+    x_last = starts[0]  # where the last closure was, and its slope ddelta/ds0_1 there: the next guess
+    c = 0.0
     for i in range(rollers.size):
         k = rollers[i]
         b = places[i]
         x = starts[i] + shift
         for _ in range(MAX_ITERATIONS):
-            d, _, st = run_close(tab, p0, x, d, pitches, n, tol, rstep, rnext, runs, aux)
+            d, _, st = run_close(tab, p0, x, d + c * (x - x_last), pitches, n, tol, rstep, rnext, runs, aux)
             if st != 0:
                 return i
             nr = int(aux[A_RUNS])
+            g = nr - 1
+            c = (aux[A_GHOST] - runs[g, R_ALPHA]) / (runs[g, R_BETA] - aux[A_GHOST + 1])
+            x_last = x
             r = 0
             while r < nr - 1 and runs[r, R_LAST] < k:
                 r += 1
@@ -64,8 +69,6 @@ def crossing_values(tab, p0, pitches, n, tol, rstep, rnext, runs, aux, rollers, 
             if abs(f) < TOLERANCE:
                 break
             # ds0_k/ds0_1 from the run's rate, lam-dot = alpha s-dot + beta delta-dot, and delta-dot = c s-dot
-            g = nr - 1
-            c = (aux[A_GHOST] - runs[g, R_ALPHA]) / (runs[g, R_BETA] - aux[A_GHOST + 1])
             _, ls, ld, _, _ = local_map(tab, seg, s0k - runs[r, R_WRAPS] * p0 - tab[seg, S0], d)
             x -= f / ((runs[r, R_ALPHA] + runs[r, R_BETA] * c - ld * c) / ls)
         shift = x - starts[i]
