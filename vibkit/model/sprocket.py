@@ -85,6 +85,8 @@ def mesh_phase(positions: np.ndarray, centre, sp: SprocketParams, link_pitch: fl
 # tooth j with cos(psi j), sin(psi j)
 T_FLANK_AB, T_FLANK_DC, T_CONST, T_ROT = 0, 1, 2, 3
 T_ZMID, T_BOUND2, T_PSI, T_NTEETH, T_WINDOW = 0, 1, 2, 3, 4  # columns of the constants' row
+F_AX, F_AZ, F_EX, F_EZ, F_INV, F_NX, F_NZ = 0, 1, 2, 3, 4, 5, 6  # columns of a flank's row
+T_COS, T_SIN = 0, 1  # columns of a tooth's row
 T_COLS = 7
 
 
@@ -112,8 +114,8 @@ def tooth_table(loc: np.ndarray, root_r: float, psi: float, nteeth: int, r_d: fl
     window = max(0, math.ceil(reach / psi) - 1)
     t[T_CONST, :5] = (zmid, bound * bound, psi, nteeth, window)
     for j in range(nteeth):
-        t[T_ROT + j, 0] = math.cos(psi * j)
-        t[T_ROT + j, 1] = math.sin(psi * j)
+        t[T_ROT + j, T_COS] = math.cos(psi * j)
+        t[T_ROT + j, T_SIN] = math.sin(psi * j)
     return t
 
 
@@ -193,19 +195,19 @@ def contact_kernel(
         j0 = math.floor(fast_atan2(-a, b) / psi)
         tooth = (j0 - window) % nteeth
         for _ in range(2 + 2 * window):
-            cj, sj = teeth[T_ROT + tooth, 0], teeth[T_ROT + tooth, 1]
+            cj, sj = teeth[T_ROT + tooth, T_COS], teeth[T_ROT + tooth, T_SIN]
             # in this tooth's frame
             lx = cj * a + sj * b
             lz = cj * b - sj * a
             if lx * lx + (lz - zmid) * (lz - zmid) < bound2:
                 for flank in range(2):
-                    ax, az = teeth[flank, 0], teeth[flank, 1]
+                    ax, az = teeth[flank, F_AX], teeth[flank, F_AZ]
                     # the distance to the flank's line bounds the distance to the flank
-                    dl = (lx - ax) * teeth[flank, 5] + (lz - az) * teeth[flank, 6]
+                    dl = (lx - ax) * teeth[flank, F_NX] + (lz - az) * teeth[flank, F_NZ]
                     if dl >= ri or dl <= -ri:
                         continue
-                    ex, ez = teeth[flank, 2], teeth[flank, 3]
-                    u = ((lx - ax) * ex + (lz - az) * ez) * teeth[flank, 4]
+                    ex, ez = teeth[flank, F_EX], teeth[flank, F_EZ]
+                    u = ((lx - ax) * ex + (lz - az) * ez) * teeth[flank, F_INV]
                     if u < 0.0:
                         u = 0.0
                     elif u > 1.0:
