@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import importlib.util
 import io
 import json
 import re
@@ -50,6 +51,18 @@ def export(rev: str, name: str, where: Path) -> None:
             path.write_text(new)
 
 
+def load(name: str, where: Path):
+    """The exported package ``where/name``, imported under its own name (no change to sys.path: its
+    submodules are found through the package's own path)."""
+    spec = importlib.util.spec_from_file_location(
+        name, where / name / "__init__.py", submodule_search_locations=[str(where / name)]
+    )
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module
+    spec.loader.exec_module(module)
+    return module
+
+
 def scene_for(name: str, worn: bool):
     sc = importlib.import_module(name + ".model.scene")
     scene = sc.load_scene(str(SCENE))
@@ -72,12 +85,11 @@ def main(argv=None):
         for i, rev in enumerate((args.a, args.b)):
             names[rev] = f"vibkit_ab{i}"
             export(rev, names[rev], Path(tmp))
-        sys.path.insert(0, tmp)
         for worn in (False, True):
             runs = {}
             for rev, name in names.items():
                 print(f"{rev} ({'worn' if worn else 'healthy'}): warm-up ...", file=sys.stderr, flush=True)
-                vk = importlib.import_module(name)
+                vk = sys.modules.get(name) or load(name, Path(tmp))
                 scene = scene_for(name, worn)
                 vk.simulate(scene, duration=1.0, progress=False)  # compiles into the copy's own cache
                 runs[rev] = (vk, scene)
