@@ -116,6 +116,18 @@ def _close(y, prm, tb, info):
 
 
 @nb.njit(cache=True, error_model="numpy", inline="always")
+def _contact(prm, y, xs, zs, vxs, vzs, cand, ncand, damping, fx, fz, ind_t, frc_t, want_teeth):
+    """The sprocket's contact on the ``ncand`` candidates where the scene has it (what
+    :func:`vibkit.model.effects.sprocket_contact` returns, zeros otherwise), the per-tooth arrays cleared
+    first with ``want_teeth``."""
+    if want_teeth:
+        clear_teeth(ind_t, frc_t)
+    if prm[PRM_IP][IP_CONTACT] != 1:
+        return 0.0, 0.0, 0.0, 0, 0.0, 0.0
+    return sprocket_contact(prm, y, xs, zs, vxs, vzs, cand, ncand, damping, fx, fz, ind_t, frc_t, want_teeth)
+
+
+@nb.njit(cache=True, error_model="numpy", inline="always")
 def runs_evaluate(t, y, dy, prm, ws, want_teeth, tb):
     """Right-hand side of the forward dynamics from the closure walked run by run: the same
     equations, work arrays and ``info`` slots as :func:`vibkit.model.effects.evaluate` (which it
@@ -214,13 +226,10 @@ def runs_fast(t, y, dy, prm, ws, want_teeth, tb):
                     fz[i] = 0.0
                     cand[ncand] = i
                     ncand += 1
-    torque_c, energy_c, worst, active, f_drive, f_back = 0.0, 0.0, 0.0, 0, 0.0, 0.0
-    if want_teeth:
-        clear_teeth(ind_t, frc_t)
+    torque_c, energy_c, worst, active, f_drive, f_back = _contact(
+        prm, y, xs, zs, vxs, vzs, cand, ncand, fp[FP_DAMPING], fx, fz, ind_t, frc_t, want_teeth
+    )
     if contact:
-        torque_c, energy_c, worst, active, f_drive, f_back = sprocket_contact(
-            prm, y, xs, zs, vxs, vzs, cand, ncand, fp[FP_DAMPING], fx, fz, ind_t, frc_t, want_teeth
-        )
         for jj in range(ncand):
             i = cand[jj]
             q += jac[i, 0] * fx[i] + jac[i, 1] * fz[i]
@@ -292,13 +301,9 @@ def runs_observe(t, y, dy, prm, ws, want_teeth, tb):
                 fz[i] = 0.0
                 cand[ncand] = i
                 ncand += 1
-    torque_c, energy_c, worst, active, f_drive, f_back = 0.0, 0.0, 0.0, 0, 0.0, 0.0
-    if want_teeth:
-        clear_teeth(ind_t, frc_t)
-    if ip[IP_CONTACT] == 1:
-        torque_c, energy_c, worst, active, f_drive, f_back = sprocket_contact(
-            prm, y, xs, zs, vxs, vzs, cand, ncand, 0.0, fx, fz, ind_t, frc_t, want_teeth
-        )
+    torque_c, energy_c, worst, active, f_drive, f_back = _contact(
+        prm, y, xs, zs, vxs, vzs, cand, ncand, 0.0, fx, fz, ind_t, frc_t, want_teeth
+    )
     # the motor and contact slots as an evaluation leaves them (s-ddot is not computed: 0)
     finish(y, dy, info, fp, ip, 0.0, torque_c, energy_c, worst, active, f_drive, f_back)
     remember_closure(info, y, 0.0, d + shift, c, e, dh)
