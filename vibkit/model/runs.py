@@ -50,6 +50,11 @@ from .guide import (
 )
 
 __all__ = [
+    "RS_COS",
+    "RS_NEAR",
+    "RS_SIN",
+    "RS_SIN_HALF",
+    "RS_STEP",
     "TURNS",
     "next_other",
     "nominal_pitch",
@@ -73,7 +78,10 @@ A_ONE, A_GHOST, A_RUNS, A_DEP = 0, 4, 8, 9
 A_COLS = 10
 
 MAX_NEWTON = 30
-TURNS = 5  # run_steps' first column of the half-angle turns
+# columns of run_steps' table: one link's arc length along the segment, the cosine and sine of its turn,
+# whether the segment comes within the sprocket's reach (set by runs_rhs.build_runs), the sine of half the
+# turn; from TURNS on, the cosine and sine of m half-turns side by side
+RS_STEP, RS_COS, RS_SIN, RS_NEAR, RS_SIN_HALF, TURNS = 0, 1, 2, 3, 4, 5
 
 
 def nominal_pitch(pitches):
@@ -229,7 +237,7 @@ def run_walk(tab, p0, s, delta, pitches, n, rstep, rnext, runs, aux, resume):
         link = True
         if dep < 0 and _moving(tab, k):
             dep = r
-        step = rstep[k, 0]
+        step = rstep[k, RS_STEP]
         m = 0
         room = seg_length(tab, k, delta) - lam
         cap = min(rnext[i], n) - i

@@ -35,6 +35,10 @@ from .runs import (
     R_TZ,
     R_X,
     R_Z,
+    RS_COS,
+    RS_NEAR,
+    RS_SIN,
+    RS_SIN_HALF,
     TURNS,
     next_other,
     nominal_pitch,
@@ -90,8 +94,6 @@ from .slots import (
 )
 
 __all__ = ["build_runs", "runs_evaluate", "runs_fast", "runs_observe"]
-
-NEAR = 3  # rstep's column: 1.0 where a roller on the segment can come within the sprocket's reach
 
 
 @nb.njit(cache=True, error_model="numpy", inline="always")
@@ -192,7 +194,7 @@ def runs_fast(t, y, dy, prm, ws, want_teeth, tb):
             stx, stz = cnt * tx, cnt * tz
         else:
             # sin(cnt h) / sin(h) and the turn by (cnt - 1) h, h the half-angle of one link
-            f = rstep[k, TURNS + 2 * cnt + 1] / rstep[k, 4]
+            f = rstep[k, TURNS + 2 * cnt + 1] / rstep[k, RS_SIN_HALF]
             ct, sn = rstep[k, TURNS + 2 * cnt - 2], rstep[k, TURNS + 2 * cnt - 1]
             stx, stz = f * (tx * ct - tz * sn), f * (tz * ct + tx * sn)
         bst = bx * stx + bz * stz
@@ -201,11 +203,11 @@ def runs_fast(t, y, dy, prm, ws, want_teeth, tb):
         m_eff += m * (cnt * (bb * c * c + g * g) + 2.0 * c * g * bst)
         jh = cnt * bb * c * e + (c * w + g * e) * bst + c * cen * bsn + cnt * g * w
         q -= m * (grav * (cnt * bz * c + g * stz) + jh)
-        if contact and rstep[k, NEAR] != 0.0:
+        if contact and rstep[k, RS_NEAR] != 0.0:
             x, z, step = runs[r, R_X], runs[r, R_Z], runs[r, R_STEP]
             if kap != 0.0:
                 ccx, ccz = x - tz / kap, z + tx / kap
-                cd, sg = rstep[k, 1], rstep[k, 2]
+                cd, sg = rstep[k, RS_COS], rstep[k, RS_SIN]
             for i in range(first, last + 1):
                 if kap == 0.0:
                     xi = x + (i - first) * step * tx
@@ -276,7 +278,7 @@ def runs_observe(t, y, dy, prm, ws, want_teeth, tb):
     for r in range(int(aux[A_RUNS])):
         k = int(runs[r, R_SEG])
         first, last = int(runs[r, R_FIRST]), min(int(runs[r, R_LAST]), n - 1)
-        if rstep[k, NEAR] == 0.0 or first > last:
+        if rstep[k, RS_NEAR] == 0.0 or first > last:
             continue
         kap = tab[k, KAPPA]
         x, z, tx, tz, step = runs[r, R_X], runs[r, R_Z], runs[r, R_TX], runs[r, R_TZ], runs[r, R_STEP]
@@ -289,7 +291,8 @@ def runs_observe(t, y, dy, prm, ws, want_teeth, tb):
                 zi = z + (i - first) * step * tz
             else:
                 if i > first:
-                    tx, tz = tx * rstep[k, 1] - tz * rstep[k, 2], tz * rstep[k, 1] + tx * rstep[k, 2]
+                    cd, sg = rstep[k, RS_COS], rstep[k, RS_SIN]
+                    tx, tz = tx * cd - tz * sg, tz * cd + tx * sg
                 xi = ccx + tz / kap
                 zi = ccz - tx / kap
             xi += mx + be * tx
@@ -343,7 +346,7 @@ def build_runs(model, prm, empty, s, delta):
     head[HEAD_BY_ROLLER] = float(not np.all(model.mass == model.mass[0]))
     nominal = nominal_pitch(pitches)
     rstep = run_steps(tab, nominal, n)
-    rstep[:, NEAR] = _near(tab, fp[FP_CX], fp[FP_CZ], fp[FP_REACH] + float(pitches.max()) + 1e-3, fp[FP_LT])
+    rstep[:, RS_NEAR] = _near(tab, fp[FP_CX], fp[FP_CZ], fp[FP_REACH] + float(pitches.max()) + 1e-3, fp[FP_LT])
     tb = list(empty)
     tb[TB_HEAD] = head
     tb[TB_RSTEP] = rstep
