@@ -62,6 +62,7 @@ __all__ = [
     "run_close",
     "run_fill",
     "run_rates",
+    "run_roller",
     "run_steps",
     "run_walk",
 ]
@@ -347,6 +348,18 @@ def run_rates(tab, sdot, runs, aux):
     return c, e, (runs[g, R_BETA] - ldg) / lsg
 
 
+@nb.njit(cache=True, error_model="numpy", inline="always")
+def run_roller(kap, x, z, tx, tz, j, step, cd, sg, ccx, ccz):
+    """Roller j of a run (0: its first, at (x, z)) and its unit tangent: on a line j links of arc length
+    ``step`` along the tangent (tx, tz); on an arc (curvature ``kap``, centre (ccx, ccz)) the previous
+    roller's tangent (tx, tz) turned by one link (cosine ``cd``, sine ``sg``). (x, z, tx, tz)"""
+    if kap == 0.0:
+        return x + j * step * tx, z + j * step * tz, tx, tz
+    if j > 0:
+        tx, tz = tx * cd - tz * sg, tz * cd + tx * sg
+    return ccx + tz / kap, ccz - tx / kap, tx, tz
+
+
 @nb.njit(cache=True, error_model="numpy")
 def run_fill(tab, p0, n, delta, sdot, c, e, runs, aux, xs, zs, jac, hacc, s0, want_s0):
     """Every roller's place, J = dr/ds and h (a = J s-ddot + h) at roller-1 speed ``sdot`` from the
@@ -367,18 +380,12 @@ def run_fill(tab, p0, n, delta, sdot, c, e, runs, aux, xs, zs, jac, hacc, s0, wa
         cbx, cbz, ebx, ebz = tab[k, BX] * c, tab[k, BZ] * c, tab[k, BX] * e, tab[k, BZ] * e
         x, z, tx, tz = runs[r, R_X], runs[r, R_Z], runs[r, R_TX], runs[r, R_TZ]
         step = runs[r, R_STEP]
+        cx = cz = cd = sg = 0.0
         if kap != 0.0:
             cx, cz = x - tz / kap, z + tx / kap
             cd, sg = math.cos(kap * step), math.sin(kap * step)
         for i in range(first, last + 1):
-            if kap == 0.0:
-                xs[i] = x + (i - first) * step * tx
-                zs[i] = z + (i - first) * step * tz
-            else:
-                if i > first:
-                    tx, tz = tx * cd - tz * sg, tz * cd + tx * sg
-                xs[i] = cx + tz / kap
-                zs[i] = cz - tx / kap
+            xs[i], zs[i], tx, tz = run_roller(kap, x, z, tx, tz, i - first, step, cd, sg, cx, cz)
             jac[i, 0] = cbx + tx * gr
             jac[i, 1] = cbz + tz * gr
             hacc[i, 0] = ebx + tx * w - tz * cen

@@ -45,6 +45,7 @@ from .runs import (
     run_close,
     run_fill,
     run_rates,
+    run_roller,
     run_steps,
     run_walk,
 )
@@ -205,18 +206,12 @@ def runs_fast(t, y, dy, prm, ws, want_teeth, tb):
         q -= m * (grav * (cnt * bz * c + g * stz) + jh)
         if contact and rstep[k, RS_NEAR] != 0.0:
             x, z, step = runs[r, R_X], runs[r, R_Z], runs[r, R_STEP]
+            ccx = ccz = 0.0
             if kap != 0.0:
                 ccx, ccz = x - tz / kap, z + tx / kap
-                cd, sg = rstep[k, RS_COS], rstep[k, RS_SIN]
+            cd, sg = rstep[k, RS_COS], rstep[k, RS_SIN]
             for i in range(first, last + 1):
-                if kap == 0.0:
-                    xi = x + (i - first) * step * tx
-                    zi = z + (i - first) * step * tz
-                else:
-                    if i > first:
-                        tx, tz = tx * cd - tz * sg, tz * cd + tx * sg
-                    xi = ccx + tz / kap
-                    zi = ccz - tx / kap
+                xi, zi, tx, tz = run_roller(kap, x, z, tx, tz, i - first, step, cd, sg, ccx, ccz)
                 if within_reach(xi, zi, cx0, cz0, reach2):
                     xs[i] = xi
                     zs[i] = zi
@@ -283,18 +278,12 @@ def runs_observe(t, y, dy, prm, ws, want_teeth, tb):
         kap = tab[k, KAPPA]
         x, z, tx, tz, step = runs[r, R_X], runs[r, R_Z], runs[r, R_TX], runs[r, R_TZ], runs[r, R_STEP]
         mx, mz, be = shift * tab[k, BX], shift * tab[k, BZ], shift * runs[r, R_BETA]
+        ccx = ccz = 0.0
         if kap != 0.0:
             ccx, ccz = x - tz / kap, z + tx / kap
+        cd, sg = rstep[k, RS_COS], rstep[k, RS_SIN]
         for i in range(first, last + 1):
-            if kap == 0.0:
-                xi = x + (i - first) * step * tx
-                zi = z + (i - first) * step * tz
-            else:
-                if i > first:
-                    cd, sg = rstep[k, RS_COS], rstep[k, RS_SIN]
-                    tx, tz = tx * cd - tz * sg, tz * cd + tx * sg
-                xi = ccx + tz / kap
-                zi = ccz - tx / kap
+            xi, zi, tx, tz = run_roller(kap, x, z, tx, tz, i - first, step, cd, sg, ccx, ccz)
             xi += mx + be * tx
             zi += mz + be * tz
             if within_reach(xi, zi, cx0, cz0, reach2):
