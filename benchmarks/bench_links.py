@@ -1,7 +1,7 @@
 """Which link is worn, on simulated recordings of the study's escalator: detection probability against
 the excess pitch of one link for 2, 3 and 5 loops, how often the flagged number is the worn link, with
 and without passengers aboard, at two noise levels; false alarms on healthy-chain recordings from many
-independent simulations; and what a step accelerometer sees.
+independent simulations (what a step accelerometer sees: ``bench_links_step.py``).
 
 Run:  python benchmarks/bench_links.py [--quick]
 
@@ -233,43 +233,6 @@ def false_alarms(scene, n_sims, draws, loops, n, rng):
     return rows, cpu
 
 
-def step_findings(scene, loops=3):
-    """What a step accelerometer shows of a worn link: the times (s after the cut) where the step's
-    acceleration of the chain with link 40, 70 or 100 1 mm long departs from the healthy chain's by more
-    than 0.025 m/s^2, and the healthy step's own change from one loop to the next."""
-    import vibkit
-
-    n, pitch = scene.chain.n_rollers, scene.chain.link_pitch
-    settle = n * pitch / SPEED + 5.0
-    duration = settle + (loops * n + 3) * pitch / SPEED
-    acc = {}
-    for worn in (None, 40, 70, 100):
-        sc = variant(scene, variables=("accel_step",)).with_solver(closure="exact")
-        if worn is not None:
-            sc = dataclasses.replace(sc, chain=dataclasses.replace(scene.chain, worn_links=((worn, pitch + 1e-3),)))
-        ds = vibkit.simulate(sc, duration=duration, progress=False)
-        t = ds.time.values
-        acc[worn] = ds.accel_step.values[t >= settle]
-    t = t[t >= settle] - settle
-    events = {}
-    for worn in (40, 70, 100):
-        d = np.abs(acc[worn] - acc[None])
-        events[worn] = sorted({int(s) for s in t[d > 0.025]})
-    loop = n * pitch / SPEED
-    later = t + loop <= t[-1]
-    step_rms = float(np.std(acc[None]))
-    loop_change = np.interp(t[later] + loop, t, acc[None]) - acc[None][later]
-    shared = set(events[40]) & set(events[70]) & set(events[100])
-    return {
-        "healthy step r.m.s. [m/s^2]": step_rms,
-        "healthy, loop to loop r.m.s. [m/s^2]": float(np.std(loop_change)),
-        "healthy, loop to loop max [m/s^2]": float(np.max(np.abs(loop_change))),
-        "worn - healthy max [m/s^2]": {w: float(np.max(np.abs(acc[w] - acc[None]))) for w in (40, 70, 100)},
-        "seconds with |worn - healthy| > 0.025 m/s^2": events,
-        "shared by links 40, 70 and 100": len(shared),
-    }
-
-
 def main():
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--quick", action="store_true", help="two excess pitches, 3 loops, few recordings")
@@ -296,10 +259,6 @@ def main():
     rows += detection_rows("passengers", loaded, loops_list, trials, FIELD_NOISE, n, rng)
     fa, fa_cpu = false_alarms(scene, n_sims, draws, 3, n, rng)
     sim_cpu += fa_cpu
-    c0 = time.process_time()
-    step = step_findings(scene)
-    sim_cpu += time.process_time() - c0
-    print(step, flush=True)
     p90 = {}
     for key in (("none", 1e6 * NOISE), ("none", 1e6 * FIELD_NOISE), ("passengers", 1e6 * FIELD_NOISE)):
         three = [r for r in rows if r["loops"] == 3 and (r["load"], r["noise [um]"]) == key]
@@ -307,12 +266,12 @@ def main():
     suffix = "_quick" if a.quick else ""
     write_csv(RESULTS / f"links{suffix}.csv", rows)
     write_csv(RESULTS / f"links_false_alarms{suffix}.csv", fa)
-    write_text(RESULTS / f"links{suffix}.md", _report(suffix, n, rows, fa, step, p90, t0, sim_cpu, n_sims, draws))
+    write_text(RESULTS / f"links{suffix}.md", _report(suffix, n, rows, fa, p90, t0, sim_cpu, n_sims, draws))
     _plot(rows, RESULTS / f"links{suffix}.png")
     print((RESULTS / f"links{suffix}.md").read_text())
 
 
-def _report(suffix, n, rows, fa, step, p90, t0, sim_cpu, n_sims, draws):
+def _report(suffix, n, rows, fa, p90, t0, sim_cpu, n_sims, draws):
     from vibkit.diagnose.links import MIN_EXCESS_M
 
     three = [r for r in rows if r["loops"] == 3]
@@ -321,8 +280,6 @@ def _report(suffix, n, rows, fa, step, p90, t0, sim_cpu, n_sims, draws):
         f"- {load}, {noise:g} um: {'%g mm' % v if v is not None else 'none of those tried'}"
         for (load, noise), v in p90.items()
     )
-    ev = step["seconds with |worn - healthy| > 0.025 m/s^2"]
-    worn_max = ", ".join(f"link {w}: {v:.3f}" for w, v in step["worn - healthy max [m/s^2]"].items())
     return (
         f"# bench_links{suffix}\n\n{machine()}; {today()}; CPU {time.process_time() - t0:.0f} s "
         f"(simulations {sim_cpu:.0f} s)\n\n"
@@ -353,18 +310,7 @@ def _report(suffix, n, rows, fa, step, p90, t0, sim_cpu, n_sims, draws):
         f"statistical threshold with an excess under {1e3 * MIN_EXCESS_M:g} mm (not flagged). Recordings refused "
         "(the phase could not be followed): "
         f"{len(REFUSED)}.\n\n"
-        "## Step accelerometer\n\n"
-        "`vibkit links` refuses a step accelerometer. The same scene with the accelerometer on step 20, "
-        "3 loops after the settling, exact closure, no noise: the healthy step's acceleration has "
-        f"{step['healthy step r.m.s. [m/s^2]']:.4f} m/s^2 r.m.s. and changes from one loop to the next by "
-        f"{step['healthy, loop to loop r.m.s. [m/s^2]']:.4f} m/s^2 r.m.s. (at most "
-        f"{step['healthy, loop to loop max [m/s^2]']:.3f}); with one link 1 mm long it departs from the healthy "
-        f"chain's by at most {worn_max} m/s^2, and the seconds where it departs by more than 0.025 m/s^2 are "
-        f"{ev[40]} (link 40), {ev[70]} (link 70) and {ev[100]} (link 100): "
-        f"{step['shared by links 40, 70 and 100']} of them are shared by all three. They fall every half "
-        "loop, when the step itself goes round the sprocket and the lower head, whichever link is worn: "
-        "the step's own passage, not the worn link, and it changes from loop to loop as much as a worn "
-        "link changes it. No link number can be read from it.\n"
+        "A step accelerometer: `bench_links_step.py` (`links_step.md`).\n"
     )
 
 

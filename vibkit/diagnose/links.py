@@ -64,12 +64,15 @@ MAX_OWN_CYCLE_FLAGS = 3
 SENSORS = {"tensioner": "delta"}
 #: units of a step accelerometer's channel (refused: see ``STEP_REFUSAL``)
 ACCELERATION_UNITS = ("m/s^2", "m/s2", "m s-2", "mm/s^2", "g")
-#: why a step accelerometer gives no link number (measured on the no-load scene, 0.5 m/s, exact closure)
+#: why a step accelerometer gives no link number (measured on the no-load scene, 0.5 m/s, exact closure:
+#: benchmarks/bench_links_step.py)
 STEP_REFUSAL = (
-    "a step accelerometer gives no link number: the step rides the chain, and each time it goes round the "
-    "sprocket or the lower head its own acceleration changes by 0.04-0.05 m/s^2 from loop to loop and from run "
-    "to run; those changes come at the same times whichever link is worn (simulated links 40, 70 and 100, "
-    "1 mm long), and they are as large as what a 1 mm worn link changes; record the tensioner's displacement"
+    "a step accelerometer gives no link number: the step rides the chain, so its signal is its own trip round "
+    "the loop (0.015 m/s^2 r.m.s. on the study's escalator), and a 1 mm worn link changes it by about 0.004 "
+    "m/s^2 r.m.s.; only a model of this escalator could give the healthy trip to subtract, and even the "
+    "simulator's own trip, subtracted from its own recordings, reads a healthy chain as a 0.2 mm worn link and "
+    "numbers a 1 mm link a link or two off; record the tensioner's displacement, which sees every link at the "
+    "same place"
 )
 
 
@@ -301,8 +304,8 @@ def find_worn_links(
     TooFewLoops
         The recording covers fewer than two loops (the message says how long to record).
     ValueError
-        A bad channel, no link pass found; an acceleration channel (a step accelerometer: its own passes
-        round the heads change from loop to loop as much as a worn link changes them, ``STEP_REFUSAL``).
+        A bad channel, no link pass found; an acceleration channel (a step accelerometer: its signal is its own trip
+        round the loop, which only a model could subtract, ``STEP_REFUSAL``).
     """
     ch = links_channel(recording, channel)
     if ch not in recording.data_vars:

@@ -1,0 +1,227 @@
+"""What a step accelerometer shows of a worn link, and why ``vibkit links`` refuses it.
+
+``sim/thesis-forward.toml`` (no load, 0.5 m/s, 159 links), the accelerometer on step 20, exact closure,
+three loops after one loop of settling, sampled at 200 Hz: healthy, and with link 40, 70 or 100 one
+millimetre long.  Every comparison is made at the same sprocket angle (one loop: ``2 pi n / Z`` of it), not
+at the same time, so that a slow drift of the chain's phase is not counted as a change.
+
+1. The raw samples and the same low-passed at 15 Hz (4th-order Butterworth, zero phase; four link-pass
+   harmonics): the healthy step's change from one loop to the next, where it sits (the share of it in the
+   5 % of samples where the acceleration jumps most from one sample to the next), and what a worn link
+   changes.
+2. The best case a model could give: the simulated healthy step's own loop subtracted from the recording's
+   mean loop (the same simulator, the same sprocket-angle clock), and the change of every possible worn
+   link fitted, link by link.  The changes come from two runs that give every roller's acceleration
+   (healthy, and link 1 worn): a step ``k`` links behind a worn link sees what roller ``k`` links behind
+   link 1 sees, one link pass of sprocket angle later per roller.  10 noise draws (5 mm/s^2, the
+   must-show's level) per recording: the link read and its fitted excess.
+
+Writes ``links_step.md`` (``--quick``: 3 draws, ``links_step_quick.md``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import time
+
+import numpy as np
+
+from _common import RESULTS, machine, markdown_table, today, write_text
+
+SCENE = "sim/thesis-forward.toml"
+SPEED = 0.5
+FS = 200.0
+STEP = 20
+LOOPS = 3
+WORN = (40, 70, 100)
+EXCESS = 1e-3  # [m]
+NOISE = 5e-3  # step accelerometer noise of the must-show [m/s^2]
+CUTOFF = 15.0  # [Hz]
+GRID = 4000  # points per loop of sprocket angle
+
+
+def run(scene, *, worn=None, loops=LOOPS, every_roller=False):
+    """Time, sprocket angle (growing) and the step's acceleration (or every roller's, along its velocity)
+    from the end of the settling loop on."""
+    import vibkit
+
+    n, pitch = scene.chain.n_rollers, scene.chain.link_pitch
+    settle = n * pitch / SPEED + 5.0
+    duration = settle + (loops * n + 3) * pitch / SPEED
+    variables = ("accel_step", "sprocket_angle")
+    outputs = dict(scene.outputs, variables=variables, step_accelerometer=STEP)
+    if every_roller:
+        outputs.update(variables=variables + ("roller_velocity", "roller_acceleration"), rollers=tuple(range(1, n + 1)))
+    sc = dataclasses.replace(scene, outputs=outputs).with_solver(closure="exact")
+    if worn is not None:
+        sc = dataclasses.replace(sc, chain=dataclasses.replace(scene.chain, worn_links=((worn, pitch + EXCESS),)))
+    ds = vibkit.simulate(sc, duration=duration, progress=False)
+    t = ds.time.values
+    keep = t >= settle - 1.0
+    theta = np.abs(ds.sprocket_angle.values[keep] - ds.sprocket_angle.values[0])
+    if every_roller:
+        v, a = ds.roller_velocity.values[keep], ds.roller_acceleration.values[keep]
+        acc = np.sum(a * v, axis=-1) / np.linalg.norm(v, axis=-1)
+    else:
+        acc = ds.accel_step.values[keep]
+    return t[keep], theta, acc, settle
+
+
+def lowpass(x):
+    from scipy import signal
+
+    sos = signal.butter(4, CUTOFF, fs=FS, output="sos")
+    return signal.sosfiltfilt(sos, x, axis=0)
+
+
+def on_loop(theta, x, start, loop):
+    """``x`` (sampled at sprocket angle ``theta``) on ``GRID`` angles from ``start``, one loop, wrapped into
+    the angles ``theta`` covers."""
+    q = start + np.linspace(0.0, loop, GRID, endpoint=False)
+    q = theta[0] + (q - theta[0]) % loop
+    return np.interp(q, theta, x)
+
+
+def loops_of(theta, x, start, loop, count):
+    """``count`` consecutive loops of ``x`` from sprocket angle ``start``."""
+    g = np.linspace(0.0, loop, GRID, endpoint=False)
+    return np.array([np.interp(start + k * loop + g, theta, x) for k in range(count)])
+
+
+def raw_and_filtered(runs, loop, start):
+    """Rows: the healthy step's loop-to-loop change and a worn link's change, raw and low-passed."""
+    rows = []
+    for label, f in (("raw samples", lambda x: x), (f"low-passed at {CUTOFF:g} Hz", lowpass)):
+        t, th, a, _ = runs[None]
+        h = loops_of(th, f(a), start, loop, LOOPS)
+        change = np.diff(h, axis=0).ravel()
+        raw = loops_of(th, a, start, loop, LOOPS)
+        jump = np.abs(np.gradient(raw, axis=1)).ravel()[: change.size]
+        big = jump >= np.quantile(jump, 0.95)
+        row = {
+            "signal": label,
+            "healthy r.m.s. [m/s^2]": round(float(np.std(h)), 4),
+            "healthy loop to loop r.m.s.": round(float(np.std(change)), 4),
+            "max": round(float(np.max(np.abs(change))), 4),
+            "share at the 5 % sharpest samples": f"{np.sum(change[big] ** 2) / np.sum(change**2):.0%}",
+        }
+        for w in WORN:
+            tw, thw, aw, _ = runs[w]
+            d = loops_of(thw, f(aw), start, loop, LOOPS) - h
+            row[f"link {w} - healthy r.m.s."] = round(float(np.std(d)), 4)
+            row[f"link {w} max"] = round(float(np.max(np.abs(d))), 4)
+        rows.append(row)
+    return rows
+
+
+def template_trial(scene, runs, loop, start, draws, rng):
+    """The best case: the simulated healthy loop subtracted, every worn link's change fitted."""
+    from vibkit.model.escalator import EscalatorModel
+
+    n, teeth = scene.chain.n_rollers, scene.sprocket.teeth
+    per_link = 2 * np.pi / teeth
+    mid = int(EscalatorModel(scene).step_rollers(STEP)[1])  # 0-based roller of the step's accelerometer
+    _, th_h, a_h, _ = run(scene, loops=1, every_roller=True)
+    _, th_w, a_w, _ = run(scene, worn=1, loops=1, every_roller=True)
+    a_h, a_w = lowpass(a_h), lowpass(a_w)
+    healthy = on_loop(th_h, a_h[:, mid], start, loop)
+    # row k: the change that link (mid + 1 - k) worn makes at the step (roller k behind link 1 in the run)
+    sig = np.empty((n, GRID))
+    for k in range(n):
+        at = start - (k - mid) * per_link
+        sig[k] = on_loop(th_w, a_w[:, k], at, loop) - on_loop(th_h, a_h[:, k], at, loop)
+    link_of_row = (mid + 1 - np.arange(n)) % n
+    link_of_row[link_of_row == 0] = n
+    unit = sig / EXCESS
+    norm = np.sum(unit * unit, axis=1)
+    neighbour = [float(np.corrcoef(sig[k], sig[(k + 1) % n])[0, 1]) for k in range(n)]
+    rows = []
+    for worn in (None,) + WORN:
+        t, th, a, _ = runs[worn]
+        found = []
+        for _ in range(draws):
+            rec = lowpass(a + NOISE * rng.standard_normal(a.size))
+            resid = loops_of(th, rec, start, loop, LOOPS).mean(axis=0) - healthy
+            excess = unit @ resid / norm
+            k = int(np.argmax(excess))
+            found.append((int(link_of_row[k]), 1e3 * float(excess[k])))
+        links = [f for f, _ in found]
+        mode = max(set(links), key=links.count)
+        rows.append(
+            {
+                "recording": "healthy" if worn is None else f"link {worn}, 1 mm",
+                "draws": draws,
+                "link read (times)": ", ".join(f"{k} ({links.count(k)})" for k in sorted(set(links))),
+                "right": "-" if worn is None else f"{links.count(worn)} of {draws}",
+                "excess read [mm]": f"{min(e for _, e in found):.2f}-{max(e for _, e in found):.2f}",
+                "most read": mode,
+            }
+        )
+    return rows, float(np.median(neighbour))
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--quick", action="store_true", help="3 noise draws a recording")
+    a = p.parse_args()
+    from vibkit.model.scene import load_scene
+
+    t0 = time.process_time()
+    scene = load_scene(SCENE)
+    n, teeth = scene.chain.n_rollers, scene.sprocket.teeth
+    loop = 2 * np.pi * n / teeth
+    runs = {w: run(scene, worn=w) for w in (None,) + WORN}
+    _, th, _, settle = runs[None]
+    t = runs[None][0]
+    start = float(np.interp(settle, t, th))  # the first loop after the settling, by sprocket angle
+    rng = np.random.default_rng(29)
+    draws = 3 if a.quick else 10
+    first = raw_and_filtered(runs, loop, start)
+    trial, neighbour = template_trial(scene, runs, loop, start, draws, rng)
+    suffix = "_quick" if a.quick else ""
+    text = _report(suffix, first, trial, neighbour, time.process_time() - t0)
+    write_text(RESULTS / f"links_step{suffix}.md", text)
+    print(text)
+
+
+def _report(suffix, first, trial, neighbour, cpu):
+    raw, low = first
+    worn = [low[f"link {w} - healthy r.m.s."] for w in WORN]
+    low_worn = ", ".join(f"{v}" for v in worn) + " m/s^2 r.m.s."
+    low_ratio, high_ratio = (
+        min(worn) / low["healthy loop to loop r.m.s."],
+        max(worn) / low["healthy loop to loop r.m.s."],
+    )
+    healthy = next(r for r in trial if r["recording"] == "healthy")
+    return (
+        f"# bench_links_step{suffix}\n\n{machine()}; {today()}; CPU {cpu:.0f} s\n\n"
+        f"`{SCENE}` ({SPEED} m/s), the accelerometer on step {STEP}, exact closure, {LOOPS} loops after one loop "
+        f"of settling, {FS:g} Hz; worn links {', '.join(map(str, WORN))}, {1e3 * EXCESS:g} mm each, one at a "
+        "time. Loops compared at the same sprocket angle.\n\n"
+        "## The healthy step from loop to loop, and a worn link\n\n"
+        + markdown_table(first)
+        + "\n\n*share at the 5 % sharpest samples*: the part of the loop-to-loop change (its sum of squares) that "
+        "falls on the 5 % of samples where the raw acceleration changes most from one sample to the next: the "
+        "jumps where the step enters and leaves a curve and where a roller meets a tooth, which a few "
+        f"milliseconds of phase move from one sample to the next. Low-passed, the healthy step's change falls from "
+        f"{raw['healthy loop to loop r.m.s.']} to {low['healthy loop to loop r.m.s.']} m/s^2 r.m.s. (at most "
+        f"{raw['max']} to {low['max']}), and a worn link's change ({low_worn}) is "
+        f"{low_ratio:.1f} to {high_ratio:.1f} times the healthy step's own, in r.m.s.\n\n"
+        "## The best case a model could give\n\n"
+        f"The simulated healthy step's own loop subtracted from the recording's mean loop, and every link's change "
+        f"fitted; {NOISE * 1e3:g} mm/s^2 of noise, low-passed at {CUTOFF:g} Hz. *link read*: the link whose change "
+        "fits with the largest excess.\n\n"
+        + markdown_table(trial)
+        + f"\n\nThe changes of neighbouring links correlate at {neighbour:.3f} (median over the links), so the "
+        "number is unsure by a link or two even here; and the healthy step, its own simulated loop subtracted, "
+        f"still reads a worn link of {healthy['excess read [mm]']} mm: the simulated step does not repeat itself "
+        "from loop to loop to better than that. On an escalator the healthy step's loop would come from a model of "
+        f"that escalator, whose trip (the step's own acceleration, {low['healthy r.m.s. [m/s^2]']} m/s^2 r.m.s. "
+        f"here) no model predicts to the {min(worn)} m/s^2 r.m.s. a millimetre changes. The tensioner needs no "
+        "such pattern: it sees every link at the same place, and its links are compared with one another.\n"
+    )
+
+
+if __name__ == "__main__":
+    main()
