@@ -261,6 +261,7 @@ def checked_forward(model, *, duration=None, progress=True, min_rtol=None, paral
     else:
         ds, cpu = run(rtol, want, model, show=progress)
         pre = []
+
     def floor(r):
         return contact_floor(scene.effects, r)
 
