@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 import vibkit
-from vibkit.analyses.convergence import compare, verdict
+from vibkit.analyses.convergence import compare, contact_floor, summary, verdict
 from vibkit.model.scene import load_scene
 
 SIM = Path(__file__).resolve().parents[2] / "sim"
@@ -142,6 +142,35 @@ def test_verdict_logic():
     v = verdict([(1e-6, other, 0), (1e-8, base, 0)], 0.005, 10.0, 1e-8)
     assert (v["converged"], v["sensitive"], v["agrees_at_rtol"]) == (False, False, None)
     assert "budget" in v["message"]
+
+
+def test_a_graze_below_what_the_run_resolves_is_not_contact():
+    """The floor is the force of an indentation of ten times the tolerance, k (10 rtol)^e; a touch under
+    it makes no episode and no last contact, one over it does (a synthetic run: three touches and a graze)."""
+    import numpy as np
+    import xarray as xr
+
+    sc = load_scene(SIM / "thesis-forward.toml")
+    assert contact_floor(sc.effects, 1e-7) == pytest.approx(1e6 * (1e-6) ** 1.5)  # 1e-3 N
+    assert contact_floor(sc.effects, 1e-9) == pytest.approx(1e-6)
+    assert contact_floor({}, 1e-7) == 0.0  # no contact, no floor
+    t = np.arange(0.0, 10.0, 0.005)
+    drive = np.zeros_like(t)
+    for start, force in ((8.755, 0.317), (9.025, 0.169), (9.295, 0.0522), (9.565, 4.3e-4)):
+        drive[(t >= start - 1e-9) & (t < start + 0.01)] = force
+    ds = xr.Dataset(
+        {
+            "drive_flank_force": ("time", drive),
+            "back_flank_force": ("time", np.zeros_like(t)),
+            "sprocket_speed": ("time", np.full_like(t, -0.84)),
+            "delta": ("time", np.full_like(t, 0.033)),
+        },
+        coords={"time": t},
+    )
+    everything, resolved = summary(ds), summary(ds, contact_floor(sc.effects, 1e-7))
+    assert (everything["contact_episodes"], everything["last_contact_s"]) == (4, pytest.approx(9.57))
+    assert (resolved["contact_episodes"], resolved["last_contact_s"]) == (3, pytest.approx(9.30))
+    assert summary(ds, contact_floor(sc.effects, 1e-9))["contact_episodes"] == 4  # a tighter run resolves it
 
 
 def test_check_on_a_kinematic_scene_is_an_error():
