@@ -6,7 +6,12 @@ cannot tell a 20 % change from the weather; two copies of the package taking tur
 Each revision's ``vibkit/`` is exported with ``git archive`` into a temporary folder under its own
 package name (its absolute ``vibkit`` imports renamed), compiled once (a warm-up), then timed.
 
-Run: ``python benchmarks/ab_forward.py main HEAD [--rounds 8]``; writes benchmarks/results/ab_forward.md.
+With ``--errors`` it also compares what each revision computes: both chains at rtol 1e-6, 1e-7 and 1e-8,
+their evaluations and largest errors of delta, sprocket speed and total contact force against the baseline at
+rtol 1e-11 (the converged run both should approach).
+
+Run: ``python benchmarks/ab_forward.py main HEAD [--rounds 8] [--errors]``; writes
+benchmarks/results/ab_forward.md.
 """
 
 from __future__ import annotations
@@ -73,13 +78,38 @@ def scene_for(name: str, worn: bool):
     return replace(scene, outputs=dict(scene.outputs, variables=("delta", "sprocket_speed", "contact_force")))
 
 
+def error_rows(runs, baseline, worn):
+    """Each revision at rtol 1e-6, 1e-7, 1e-8 against the baseline at 1e-11."""
+    vk, scene = runs[baseline]
+    ref = vk.simulate(scene.with_solver(rtol=1e-11, atol=1e-13), duration=44.0, progress=False)
+    out = []
+    for rtol in (1e-6, 1e-7, 1e-8):
+        for rev, (vk, scene) in runs.items():
+            ds = vk.simulate(scene.with_solver(rtol=rtol, atol=rtol * 1e-2), duration=44.0, progress=False)
+            out.append(
+                {
+                    "chain": "three worn links" if worn else "healthy",
+                    "rtol": rtol,
+                    "revision": rev,
+                    "evaluations": int(ds.attrs["solver_evaluations"]),
+                    "delta_err_m": float(abs(ds.delta - ref.delta).max()),
+                    "speed_err_rad_s": float(abs(ds.sprocket_speed - ref.sprocket_speed).max()),
+                    "contact_force_err_N": float(
+                        abs(ds.contact_force.sum("tooth") - ref.contact_force.sum("tooth")).max()
+                    ),
+                }
+            )
+    return out
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("a", help="the baseline revision (e.g. main)")
     ap.add_argument("b", help="the revision compared with it (e.g. HEAD)")
     ap.add_argument("--rounds", type=int, default=8)
+    ap.add_argument("--errors", action="store_true", help="also each revision's errors against rtol 1e-11")
     args = ap.parse_args(argv)
-    rows = []
+    rows, errors = [], []
     with tempfile.TemporaryDirectory() as tmp:
         names = {}
         for i, rev in enumerate((args.a, args.b)):
@@ -99,6 +129,8 @@ def main(argv=None):
                     c0 = time.process_time()
                     vk.simulate(scene, duration=44.0, progress=False)
                     best[rev] = min(best[rev], time.process_time() - c0)
+            if args.errors:
+                errors += error_rows(runs, args.a, worn)
             for rev in names:
                 rows.append(
                     {
@@ -112,10 +144,16 @@ def main(argv=None):
     md = (
         f"# Two revisions side by side\n\n{machine()}; {today()}; the 44 s no-load scene (delta, sprocket speed, "
         f"contact force), `{args.a}` against `{args.b}` in one process taking turns, best CPU time of "
-        f"{args.rounds} rounds each (`python benchmarks/ab_forward.py {args.a} {args.b}`).\n\n"
-        + markdown_table(rows)
-        + "\n"
+        f"{args.rounds} rounds each (`python benchmarks/ab_forward.py {args.a} {args.b}"
+        f"{' --errors' if args.errors else ''}`).\n\n" + markdown_table(rows) + "\n"
     )
+    if errors:
+        md += (
+            "\n## What each computes\n\nLargest difference over the run from the baseline at rtol 1e-11 (atol "
+            "rtol / 100): delta [m], sprocket speed [rad/s], total contact force [N].\n\n"
+            + markdown_table(errors)
+            + "\n"
+        )
     write_text(RESULTS / "ab_forward.md", md)
     print(md)
     return 0
