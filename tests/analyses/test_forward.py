@@ -193,7 +193,7 @@ def test_energy_conserved_without_motor_and_damping():
         # relative to the kinetic energy: the potential energy's large constant would flatter the ratio
         drift[rtol] = np.abs(e - e[0]).max() / float(ds.kinetic_energy[0])
         assert float(ds.closure_residual.max()) <= 1e-9
-    # measured over 44 s: 2.4e-5 (rtol 1e-6) and 2.8e-6 (1e-8) of the kinetic energy; steps end on
+    # measured over 44 s: 1.5e-5 (rtol 1e-6) and 7e-6 (1e-8) of the kinetic energy; steps end on
     # the guide's breakpoints, so no step straddles a curvature jump
     assert drift[1e-6] < 1e-4
     assert drift[1e-8] < drift[1e-6]

@@ -323,13 +323,14 @@ def default_rtol(effects):
 
 
 def event_gap(rtol):
-    """How far from a breakpoint a step may end and be moved onto it along its dense output: rtol
-    metres, within [1e-11, 1e-6] m. [m]
+    """How far from a breakpoint a step may end and count as ending on it: rtol metres, within
+    [1e-11, 1e-6] m. [m]
 
-    A step predicted to end on the breakpoint keeps its stages on the near side; one that passes it by
-    more than the gap is taken again, cut where its dense output crosses it. The gap bounds how far
-    past the breakpoint those near-side stages may be evaluated (the right-hand side there is the
-    near side's, frozen at the breakpoint), so tighter tolerances get a proportionally smaller one.
+    Ending a step a distance d short of (or past) a breakpoint errs by the jump of the right-hand
+    side over d / v: measured on the conservative 44 s scene, d = 1 um costs about 1e-3 J, which is
+    below the tolerance's own error at rtol 1e-6 and halves the steps taken again after an
+    overshoot compared with 1e-9 m; tighter tolerances get a proportionally smaller gap, so that
+    they converge (at a fixed 1 um the energy error stalls at 1e-3 J from rtol 1e-7 on).
     """
     return min(1e-6, max(1e-11, rtol))
 

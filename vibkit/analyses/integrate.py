@@ -115,25 +115,6 @@ def _time_to(dist, v, a):
 
 
 @nb.njit(cache=True, error_model="numpy")
-def _time_to_cubic(dist, v, a, j, h):
-    """:func:`_time_to` with the jerk ``j`` as well: v h + a h^2 / 2 + j h^3 / 6 = dist by Newton's
-    method from the quadratic's ``h`` (kept where Newton does not settle nearby). [s]"""
-    t = h
-    for _ in range(4):
-        f = t * (v + t * (0.5 * a + t * j / 6.0)) - dist
-        df = v + t * (a + 0.5 * j * t)
-        if df * dist <= 0.0:
-            return h
-        tn = t - f / df
-        if not (0.5 * h < tn < 2.0 * h):
-            return h
-        if abs(tn - t) <= 1e-15 * tn:
-            return tn
-        t = tn
-    return t
-
-
-@nb.njit(cache=True, error_model="numpy")
 def _dense_component(th, y0, y1, k1, k7, h, r5):
     r2 = y1 - y0
     r3 = h * k1 - r2
@@ -176,19 +157,17 @@ def _dopri5_chunk(
     sequence does not depend on where the pauses fall).
     ``ctl`` carries the controller's memory between calls: [previous error, last step rejected,
     step size before a breakpoint cut it, the step starts on a breakpoint, that breakpoint, its
-    direction, y[0]'s jerk over the last step]. The step-size controller is Hairer's PI (Lund) stabilisation of DOPRI5
+    direction]. The step-size controller is Hairer's PI (Lund) stabilisation of DOPRI5
     (beta = 0.04). ``counters`` accumulates [steps, rejected, evaluations, breakpoint steps, steps taken again
     because they passed a breakpoint].
 
     Breakpoints: ``cross`` holds the values of y[0] (one period ``p0``, sorted) at which the
     right-hand side is not smooth (a roller on a curvature jump of the guide, a passenger's step at
     a landing). No step straddles one. A step that would reach the next one is cut to end on it
-    (predicted from the velocity, acceleration and last jerk of y[0]; located on the dense output and
-    taken again if it passes it by more than ``gap`` [m], or at all with its stages on the far side);
-    every stage of that step evaluates the right-hand side on the near side of the breakpoint, and
-    every stage of the next one on the far side. A step that ends within ``gap`` of it is moved onto
-    it along its dense output (to rounding). So each step integrates a smooth function and keeps the
-    method's order.
+    (predicted from the velocity and acceleration of y[0]; located on the dense output and taken
+    again if it passes it by more than ``gap`` [m]); every stage of that step evaluates the
+    right-hand side on the near side of the breakpoint, and every stage of the next one on the far
+    side. So each step integrates a smooth function and keeps the method's order.
     """
     m = y.size
     k2 = np.empty(m)
@@ -223,17 +202,13 @@ def _dopri5_chunk(
                     if _start_past(t, y, yt, k1, s_on, direction, tiny, prm, ws, ctl, counters, tb) != 0:
                         return 1, t, h, idx
             sc = _next_crossing(y[0], direction, cross, p0, gap)
-            # when y[0] reaches it: from its velocity, acceleration and the last step's jerk (a step cut
-            # to end on the breakpoint that passes it by more than the gap is taken again)
             hc = _time_to(sc - y[0], v, k1[1])
-            if ctl[6] != 0.0 and hc < math.inf:
-                hc = _time_to_cubic(sc - y[0], v, k1[1], ctl[6], hc)
             if hc <= h:
                 h = hc
                 ctl[2] = hnat
             # a step that ends on (or within a micrometre of) the breakpoint keeps its stages on
             # the near side of it
-            if (y[0] + h * (v + h * (0.5 * k1[1] + h * ctl[6] / 6.0)) - sc) * direction > -1e-6:
+            if (y[0] + h * (v + 0.5 * h * k1[1]) - sc) * direction > -1e-6:
                 has_hi = True
         has_lo = ctl[3] > 0.0
         lo = ctl[4]
@@ -298,7 +273,7 @@ def _dopri5_chunk(
             if (y1[0] - back) * direction < -gap:
                 over = gap + 1.0  # moved backwards past one (a reversal within the step)
                 s_hit = back
-            if over > gap or (over > 0.0 and not has_hi):  # past it with stages on its far side: redo
+            if over > gap:
                 r5 = h * (D1 * k1[0] + D3 * k3[0] + D4 * k4[0] + D5 * k5[0] + D6 * k6[0] + D7 * k7[0])
                 lo_t, hi_t = 0.0, 1.0
                 f_lo = y[0] - s_hit
@@ -318,18 +293,8 @@ def _dopri5_chunk(
                 h = max(lo_t * h, hmin)
                 continue
         if err <= 1.0:
-            snap = 1.0
-            if has_hi and not last and abs(y1[0] - sc) <= gap and k7[0] != 0.0:
-                # ended within the gap of the breakpoint: move the end onto it along the dense output
-                # (C1, so y[0]'s slope at theta = 1 is h k7[0]; short of it the near side is smooth,
-                # past it by under the gap the stages were kept on the near side)
-                r5 = h * (D1 * k1[0] + D3 * k3[0] + D4 * k4[0] + D5 * k5[0] + D6 * k6[0] + D7 * k7[0])
-                snap = 1.0 - (y1[0] - sc) / (h * k7[0])
-                for _ in range(2):
-                    f = _dense_component(snap, y[0], y1[0], k1[0], k7[0], h, r5) - sc
-                    snap -= f / (h * k7[0])
-            # dense output for the output times inside (t, t + snap h]
-            tn = t + snap * h
+            # dense output for the output times inside (t, t + h]
+            tn = t + h
             while idx < t_out.size and t_out[idx] <= tn + 1e-12 * max(1.0, abs(tn)):
                 th = (t_out[idx] - t) / h
                 for i in range(m):
@@ -339,13 +304,7 @@ def _dopri5_chunk(
                     r5 = h * (D1 * k1[i] + D3 * k3[i] + D4 * k4[i] + D5 * k5[i] + D6 * k6[i] + D7 * k7[i])
                     y_out[idx, i] = y[i] + th * (r2 + (1.0 - th) * (r3 + th * (r4 + (1.0 - th) * r5)))
                 idx += 1
-            if snap != 1.0:
-                for i in range(m):
-                    r5 = h * (D1 * k1[i] + D3 * k3[i] + D4 * k4[i] + D5 * k5[i] + D6 * k6[i] + D7 * k7[i])
-                    y1[i] = _dense_component(snap, y[i], y1[i], k1[i], k7[i], h, r5)
-                y1[0] = sc
             t = t_stop if last else tn
-            ctl[6] = (k7[1] - k1[1]) / h  # y[0]'s jerk over the step, for the next breakpoint's time
             for i in range(m):
                 y[i] = y1[i]
                 k1[i] = k7[i]
@@ -448,7 +407,7 @@ def integrate(
     bar = Progress(t_out[-1], label, enabled=progress)
     if method == "dopri5":
         counters = np.zeros(5, dtype=np.int64)
-        ctl = np.array([1e-4, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0])
+        ctl = np.array([1e-4, 0.0, 0.0, 0.0, 0.0, 1.0])
         cross = np.ascontiguousarray(events[0], dtype=float) if events is not None else np.zeros(0)
         period = float(events[1]) if events is not None else 1.0
         # times at which the right-hand side jumps (passengers by time): steps end on them, the
