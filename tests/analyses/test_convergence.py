@@ -51,19 +51,31 @@ def test_shipped_scenes_converged_at_their_defaults(name):
     assert set(ds.data_vars) == set(vibkit.simulate(scene(name), duration=0.05, progress=False).data_vars)
 
 
-def test_stiff_contact_not_converged_at_1e_6_and_found_at_1e_10():
+#: the converged contact history of the no-load scene with k = 1e7 over 12 s: the exact closure at rtol 1e-12
+#: and the table at 1e-10 and 1e-12 agree (38 episodes, the last ending at 10.785 s)
+STIFF_CONVERGED = (38, 10.785)
+
+
+def test_stiff_contact_not_converged_at_1e_6_and_found_where_the_history_is_right():
     """Contact ten times stiffer: at rtol 1e-6 the contact history is wrong (the issue: converged
-    needs 1e-10); the check says so and finds the tolerance from which the runs agree."""
+    needs 1e-10); the check says so and names a tolerance from which the runs agree, and the runs from
+    there have the converged history. Which tolerance that is sits on an edge: at 1e-8 a graze near
+    11.3 s comes and goes with the last bits of rounding (`guide.local_inverse` returning on its root
+    moved it), so the check may name 1e-8 or 1e-10; either is right only with the right history."""
     ds = vibkit.simulate(
         scene("thesis-forward", stiffness=1e7, solver={"rtol": 1e-6}), duration=12.0, progress=False, check=True
     )
     v = convergence(ds)
     assert v["converged"] is False and v["sensitive"] is False
     assert {"contact_episodes", "last_contact_s"} & set(v["differences"])  # the contact history differs
-    assert v["agrees_at_rtol"] == pytest.approx(1e-10)
-    tight = [r for r in v["runs"] if r["rtol"] <= 1e-10 * 1.001]
-    assert len(tight) == 2 and tight[0]["contact_episodes"] == tight[1]["contact_episodes"]
-    assert "set [solver] rtol = 1e-10" in v["message"]
+    assert (v["runs"][0]["contact_episodes"], v["runs"][0]["last_contact_s"]) != STIFF_CONVERGED
+    named = v["agrees_at_rtol"]
+    assert named in (pytest.approx(1e-8), pytest.approx(1e-10))
+    agreeing = [r for r in v["runs"] if r["rtol"] <= named * 1.001]
+    assert len(agreeing) >= 2
+    for r in agreeing:
+        assert (r["contact_episodes"], r["last_contact_s"]) == (STIFF_CONVERGED[0], pytest.approx(STIFF_CONVERGED[1]))
+    assert f"set [solver] rtol = {named:g}" in v["message"]
 
 
 def test_damped_contact_gets_a_converged_default_tolerance():

@@ -206,6 +206,8 @@ def local_inverse(tab, k, lam, delta):
     for _ in range(200):
         f, fs, _, _, _ = local_map(tab, k, x, delta)
         f -= lam
+        if f == 0.0:
+            return x  # on the root: a bisection from here would walk away from it
         if f > 0.0:
             hi = x
         else:
