@@ -2,6 +2,7 @@
 
 import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -19,6 +20,7 @@ from vibkit.signal import frequency_weighting_response
 from ..signal.test_signal_ride import synthetic_ride
 from support.recording import recording
 
+SIM = Path(__file__).resolve().parents[2] / "sim"
 FS = 500.0
 AMP_Z, F_Z = 0.08, 6.3
 AMP_X, F_X = 0.05, 2.0
@@ -89,6 +91,23 @@ def test_simulation_dataset_goes_through_the_same_path():
     ] and one.segment.method == "whole simulated time"  # nobody gave it
     with pytest.raises(ValueError, match="neither"):
         ride_quality_from_simulation(xr.Dataset({"delta": ("time", ax)}, coords={"time": t}))
+
+
+def test_simulated_step_rides_the_incline_not_a_head():
+    # the step goes round the sprocket, down the return run and round the lower head before it rides up the
+    # incline (from about 31 s): round a head it rises at up to the chain's speed, up the incline at v sin(30 deg)
+    import vibkit
+    from vibkit.diagnose.ride import with_ride_outputs
+    from vibkit.model.scene import load_scene
+
+    scene = with_ride_outputs(load_scene(SIM / "thesis-forward.toml"))
+    ds = vibkit.simulate(scene, duration=44.0, progress=False)
+    rq = ride_quality_from_simulation(ds)
+    assert rq.segment.plateau == pytest.approx(0.5 * math.sin(math.radians(30.0)), rel=0.01)
+    assert 30.0 < rq.segment.start_s < rq.segment.end_s < 44.0 and rq.segment.duration_s > 10.0
+    # 30 s reach only the lower head: no ride, said so (it used to measure the turn round the head)
+    with pytest.raises(ValueError, match="does not ride up the incline"):
+        ride_quality_from_simulation(ds.sel(time=slice(0.0, 30.0)))
 
 
 def _dataset_recording(t, ax, ay, az):

@@ -546,6 +546,12 @@ def _step_roller(ds):
     return rollers[0]
 
 
+def _runs(mask):
+    """(start, end) index pairs of the runs of True in ``mask`` (end exclusive)."""
+    d = np.diff(np.concatenate([[0], np.asarray(mask, dtype=np.int8), [0]]))
+    return list(zip(np.flatnonzero(d == 1), np.flatnonzero(d == -1)))
+
+
 def ride_quality_from_simulation(ds, *, segment=None, weightings=None, source=None) -> RideQuality:
     """Ride quality of a simulated step: the same path as a recording.
 
@@ -597,23 +603,27 @@ def ride_quality_from_simulation(ds, *, segment=None, weightings=None, source=No
             speed = np.hypot(vel[:, 0], vel[:, 1])
 
             def detect(fs_):
-                k = int(np.argmax(np.abs(vz)))
-                peak = float(vz[k])
-                if abs(peak) < 0.05:
+                # the ride: the step rising steadily up the incline (v sin(alpha)), not round a head, where
+                # its vertical speed peaks at the chain's speed for a moment
+                rising = _runs(vz > 0.05)
+                longest = max(rising, key=lambda r: r[1] - r[0], default=None)
+                part = vz[longest[0] : longest[1]] if longest else np.zeros(1)
+                plateau = float(np.median(part))
+                # up the incline most of the rise holds its speed; round a head it is an arch (about 1/8 within 10 %)
+                if longest is None or np.mean(np.abs(part - plateau) < 0.1 * plateau) < 0.5:
                     raise ValueError(
-                        f"the simulated step does not ride an incline in {t[-1] - t[0]:.3g} s (vertical "
-                        f"speed at most {abs(peak):.2g} m/s): simulate longer (--duration)"
+                        f"the simulated step does not ride up the incline in {t[-1] - t[0]:.3g} s (it rises only "
+                        "round a head, where its vertical speed does not hold): simulate longer (--duration) or "
+                        "give the segment (--segment)"
                     )
-                run = np.sign(peak) * vz > 0.5 * abs(peak)
-                d = np.diff(np.concatenate([[0], run.astype(np.int8), [0]]))
-                s0, s1 = np.flatnonzero(d == 1), np.flatnonzero(d == -1)
-                j = int(np.argmax(s1 - s0))
-                note = f"vertical speed {peak:+.3g} m/s of the simulated roller"
-                if s0[j] == 0 or s1[j] == vz.size:
+                inside = _runs(vz[longest[0] : longest[1]] > 0.5 * plateau)
+                a, b = max(inside, key=lambda r: r[1] - r[0])
+                a, b = a + longest[0], b + longest[0]
+                note = f"vertical speed {plateau:+.3g} m/s of the simulated roller (up the incline)"
+                if a == 0 or b == vz.size:
                     note += "; the incline reaches an end of the simulated time (simulate longer: --duration)"
-                return RideSegment(
-                    start_s=s0[j] / fs_, end_s=s1[j] / fs_, method="speed channel", plateau=peak, note=note
-                )
+                return RideSegment(start_s=a / fs_, end_s=b / fs_, method="speed channel", plateau=plateau, note=note)
+
     elif "accel_step" in ds:
         sig = {"tangential": ds["accel_step"].values}
         names = {"tangential": "accel_step"}
