@@ -25,6 +25,7 @@ from ..model.effects import (
     reset_closure,
     sprocket_contact,
 )
+from ..model.flat_roller import add_flats
 from ..model.pitch_table import empty_table, rhs, table_applies, table_delta, table_spacing
 from ..model.runs_rhs import build_runs, runs_observe
 from ..model.schema import SceneError, effect_options, nominal_speed
@@ -504,6 +505,7 @@ def _observe(
             rk[j, q, 3] = jac[i, 1] * sdot
             rk[j, q, 4] = jac[i, 0] * sddot + hacc[i, 0]
             rk[j, q, 5] = jac[i, 1] * sddot + hacc[i, 1]
+            rk[j, q, 6] = s0a[i]
         if need_tension:
             rd = m_c * info[INFO_DELTA_DDOT] + (pre + k_s * d)
             for i in range(n):
@@ -540,7 +542,7 @@ def _post_process(fm, t, y, outputs, stats, y_obs=None, table=None):
     ind = np.empty((nt, nteeth) if need_teeth else (0, nteeth))
     cf = np.empty((nt, nteeth) if need_teeth else (0, nteeth))
     ridx = rollers.astype(np.int64) if need_roller else np.zeros(0, dtype=np.int64)
-    rk = np.empty((nt, ridx.size, 6))
+    rk = np.empty((nt, ridx.size, 7))
     # outputs that need only positions and the state skip the forces altogether
     light = want <= {
         "delta",
@@ -588,6 +590,8 @@ def _post_process(fm, t, y, outputs, stats, y_obs=None, table=None):
     delta, ddot, motor, resid, speed, ke, pe, ce, se, acc_step = (scal[:, i] for i in range(10))
     flank = scal[:, 10:12]
     rp, rv, ra = rk[:, :, 0:2], rk[:, :, 2:4], rk[:, :, 4:6]
+    if need_roller:
+        add_flats(model, t, rk[:, :, 6], delta, ridx, rp, rv, ra)
     data = {}
     simple = {
         "delta": delta,

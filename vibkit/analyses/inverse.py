@@ -16,6 +16,7 @@ import math
 import numpy as np
 
 from ..model.dynamics import link_multipliers
+from ..model.flat_roller import add_flats
 from ..model.schema import TensionerOptions, effect_options, gravity_of
 from ..runtime.progress import Progress
 from .results import make_dataset
@@ -93,6 +94,7 @@ def inverse_dynamics(model, *, speed, duration, step, start=0.0, effects=None, o
     rpos = np.empty((nt, ridx.size, 2))
     rvel = np.empty((nt, ridx.size, 2))
     racc = np.empty((nt, ridx.size, 2))
+    rs0 = np.empty((nt, ridx.size))
     omega = model.sprocket_speed(speed)
     s0 = float(model.guide.s_to_s0(start, 0.0))
     schedule = model.passenger_schedule(effects["passengers"], s0) if "passengers" in effects else None
@@ -108,6 +110,7 @@ def inverse_dynamics(model, *, speed, duration, step, start=0.0, effects=None, o
         out["closure_residual"][j] = conf.closure_residual
         if ridx.size:
             rpos[j] = conf.position[ridx]
+            rs0[j] = conf.s0[ridx]
         if not need_motion:
             bar.update(j + 1)
             continue
@@ -179,6 +182,8 @@ def inverse_dynamics(model, *, speed, duration, step, start=0.0, effects=None, o
     if "link_tension" in want:
         coords["link"] = np.arange(1, n + 1)
     if ridx.size and any(v.startswith("roller_") for v in want):
+        motion = (rvel, racc) if need_motion else (None, None)
+        add_flats(model, t, rs0, out["delta"], ridx, rpos, *motion)
         coords["roller"] = np.asarray(rollers)
         coords["axis"] = ["x", "z"]
         for name, arr in (("roller_position", rpos), ("roller_velocity", rvel), ("roller_acceleration", racc)):

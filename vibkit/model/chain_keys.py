@@ -1,8 +1,8 @@
 """The scene keys of a worn chain, checked in one place: links of another pitch, rollers of another
-radius or mass, and where an elongated chain seats on its sprocket.
+radius or mass, rollers worn flat, and where an elongated chain seats on its sprocket.
 
 ``[chain] worn_links = [[link, pitch_m], ...]`` (and the one-link shorthand ``worn_link`` with
-``worn_link_pitch``), ``[chain] roller_radius_by_roller`` and ``roller_mass_by_roller`` are lists of
+``worn_link_pitch``), ``[chain] roller_radius_by_roller``, ``roller_mass_by_roller`` and ``roller_flat_by_roller`` are lists of
 [number, value] pairs; ``[chain] elongation_percent`` and ``[sprocket] pitch`` are read by
 :mod:`vibkit.model.scene`. Every error is a :class:`~vibkit.model.schema.SceneError` naming the file and the key.
 """
@@ -13,7 +13,7 @@ import math
 
 from .schema import SceneError
 
-__all__ = ["pairs", "by_roller", "worn_links", "check_seat"]
+__all__ = ["pairs", "by_roller", "worn_links", "check_seat", "check_flat_speed"]
 
 
 def _positive(src, where, value):
@@ -80,3 +80,30 @@ def check_seat(src, guide, sprocket, chain) -> None:
             f"({tip:.4g} m; teeth cut for 'sprocket.pitch' = {cut:g} m): the chain ({chain.link_pitch:.6g} m links, "
             "'chain.elongation_percent' or 'chain.link_pitch') has jumped the teeth"
         )
+
+
+def check_flat_speed(src, chain, guide, analysis, effects, sections) -> None:
+    """A flat roller's model holds while the step's weight keeps it on the flat's edges
+    (:func:`vibkit.model.flat_roller.flat_speed_limit`); a scene that runs faster is refused."""
+    if not chain.roller_flats:
+        return
+    from .flat_roller import flat_speed_limit
+
+    if analysis == "forward":
+        speed = effects["motor"].speed if "motor" in effects else sections["run"].get("initial_speed", 0.0)
+    elif analysis == "inverse":
+        speed = sections["motion"].get("speed", 0.0)
+    else:
+        return
+    speed = abs(speed)
+    radii = chain.radii()
+    for roller, _ in chain.roller_flats:
+        r = float(radii[roller - 1])
+        limit = flat_speed_limit(r, guide.incline_angle, guide.transition_radius)
+        if speed > limit:
+            raise SceneError(
+                f"{src}: 'chain.roller_flat_by_roller': at {speed:g} m/s the flat roller {roller} ({r * 1e3:.3g} mm) "
+                f"would fly over its flat: the step's weight keeps it on the flat's edges up to {limit:.3g} m/s on "
+                f"this {math.degrees(guide.incline_angle):.3g} deg incline (v^2 (1/r + 1/r_t) = g cos(alpha)), and "
+                "a roller in flight is not modelled"
+            )

@@ -121,6 +121,9 @@ class ChainParams:
     roller_masses, roller_radii : tuple of (int, float)
         Rollers whose mass [kg] or radius [m] differs from ``roller_mass`` / ``roller_radius``:
         (1-based roller number, value).
+    roller_flats : tuple of (int, float)
+        Rollers worn flat: (1-based roller number, chord of the flat [m]); the flat acts on the roller's
+        own motion (:mod:`vibkit.model.flat_roller`).
     links_per_step : int
         Rollers (links) per step: 3 (the study's 133.33 mm chain under 400 mm steps) or 4 (101.6 mm
         chains). Step s carries rollers links_per_step (s - 1) + 1 ... links_per_step s.
@@ -133,6 +136,7 @@ class ChainParams:
     worn_links: tuple = ()
     roller_masses: tuple = ()
     roller_radii: tuple = ()
+    roller_flats: tuple = ()
     links_per_step: int = 3
 
     def __post_init__(self):
@@ -146,7 +150,7 @@ class ChainParams:
                 raise ValueError(f"ChainParams.worn_links: link number must be 1..{self.n_rollers}, got {link!r}")
             if not (math.isfinite(pitch) and pitch > 0):
                 raise ValueError(f"ChainParams.worn_links: pitch of link {link} must be positive, got {pitch!r}")
-        for name in ("roller_masses", "roller_radii"):
+        for name in ("roller_masses", "roller_radii", "roller_flats"):
             for roller, value in getattr(self, name):
                 if not (isinstance(roller, int) and 1 <= roller <= self.n_rollers):
                     raise ValueError(f"ChainParams.{name}: roller number must be 1..{self.n_rollers}, got {roller!r}")

@@ -21,7 +21,7 @@ import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .chain_keys import by_roller, check_seat, worn_links
+from .chain_keys import by_roller, check_flat_speed, check_seat, worn_links
 from .params import ChainParams, GuideParams, SprocketParams
 from .scene_checks import (
     _check_ranges,
@@ -239,6 +239,7 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
     _validate_passenger_numbers(src, effects.get("passengers"), chain)
     _check_ranges(src, sec, effects)
     _check_sprocket_geometry(src, sec["sprocket"], sprocket, chain)
+    check_flat_speed(src, chain, guide, analysis, effects, sec)
     _reduce_start(src, sec, analysis, guide)
     return Scene(
         defaults=_defaults(sec, raw_effects, effects, analysis),
@@ -355,6 +356,15 @@ def _parameters(src, sec):
                 f"{src}: 'chain.roller_radius_by_roller': radius {r:g} m of roller {roller} must be less than half "
                 f"the link pitch ({0.5 * nominal:g} m)"
             )
+    flats = by_roller(src, c, "roller_flat_by_roller", n, "flat length", "m")
+    radius_of = dict(radii)
+    for roller, d in flats:
+        r = radius_of.get(roller, tc.roller_radius)
+        if not d < r:
+            raise SceneError(
+                f"{src}: 'chain.roller_flat_by_roller': the flat of roller {roller} ({d:g} m) must be shorter than "
+                f"the roller's radius ({r:g} m); a flat that long is a broken roller"
+            )
     if tc.links_per_step not in (3, 4):
         raise SceneError(f"{src}: 'chain.links_per_step' must be 3 or 4, got {tc.links_per_step!r}")
     chain = ChainParams(
@@ -365,6 +375,7 @@ def _parameters(src, sec):
         worn_links=worn,
         roller_masses=by_roller(src, c, "roller_mass_by_roller", n, "mass", "kg"),
         roller_radii=radii,
+        roller_flats=flats,
         links_per_step=tc.links_per_step,
     )
     check_seat(src, guide, sprocket, chain)

@@ -139,6 +139,12 @@ class ChainSection(_Section):
     roller_mass_by_roller: tuple = key(
         "[1, kg]", "rollers of another mass, [[roller, mass_kg], ...]; not set: none", types=(list,)
     )
+    roller_flat_by_roller: tuple = key(
+        "[1, m]",
+        "rollers worn flat, [[roller, flat_length_m], ...] (the chord of the flat; the roller's centre dips "
+        "toward its track once a turn, in the stored rollers' motion); not set: none",
+        types=(list,),
+    )
     links_per_step: int = key(
         "", "rollers (links) per step: 3 (133.33 mm chains) or 4 (101.6 mm chains)", 3, types=(int,)
     )

@@ -1,0 +1,166 @@
+"""A roller worn flat: where it rolls on a track, its centre dips toward the track once a turn.
+
+The guide is the path of the rollers' centres (model.md section 1), and a round roller's centre stays
+on it. A roller worn flat over a chord d (half-angle beta = asin(d / 2r)) is a circle with that chord
+cut off. Rolling on its track it pivots on the flat's two edges: the centre's height above the track
+is the cut circle's support, h(phi) = r cos(beta - |phi|) for |phi| < beta and r otherwise, phi the
+angle between the flat's outward normal and the direction to the track. The centre dips toward the
+track by
+
+    D(phi) = r (1 - cos(beta - |phi|)),    |phi| < beta,
+
+deepest, r (1 - cos beta), when the flat lies on the track. Its velocity toward the track,
+D'(phi) phi-dot, rises to v sin(beta) as the leading edge comes down and is -v sin(beta) once the roller
+pivots on the other edge: at phi = 0 the leading edge strikes the track and reverses it by
+2 v sin(beta), an impact (the knock of a flat roller), once a turn.
+
+Where. On the twelve track segments of the guide, not on the two heads: there the roller sits in a
+tooth of the sprocket or on the carriage's wheel and turns with it. The track is on the side of the
+guide facing down (the step's weight holds its rollers on their track on both runs). The flat's angle
+relative to the track's normal advances by (1/r - s kappa) per metre of travel (kappa the guide's
+signed curvature, s = +1 when the track is on the left of the direction of travel), and not at all on
+the heads. At the start of a run every flat faces away from its track (phi = pi).
+
+First order. The dip is 0.09 mm for a 5 mm flat on a 35 mm roller. Moving a roller by D across its
+track shortens the span of its two links by D^2 / p on a straight run (6e-8 m), so the closure, the
+tensioner and the chain's motion are those of the round roller to that order; the knock's impulse is
+normal to the track. So the flat is added to the roller's own motion (positions, velocities and
+accelerations of the rollers a scene stores), not to the chain's (:func:`flat_motion`). It holds while
+the step's weight keeps the roller on the flat's edges: the pivot asks v^2 / r of acceleration toward
+the track, which gravity gives up to v = sqrt(g r cos(alpha)) (:func:`flat_speed_limit`; above it the
+roller would fly over the flat and land, which is not modelled).
+
+Sampled. Positions and velocities are their values at the samples. The acceleration of the dip is its
+mean over the interval around each sample (the change of the dip's velocity from the midpoint before
+the sample to the midpoint after it, over the interval's length): the impact, which has no finite
+value, lands on one sample as 2 v sin(beta) over the output step, and the samples integrate to the
+velocity exactly. A real accelerometer reads the knock through the roller's tyre and its own
+filter; the impulse (the velocity's change) is what the model gives.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba as nb
+import numpy as np
+
+from .guide import KAPPA, S0, local_frame, local_map, locate
+
+__all__ = ["HEADS", "add_flats", "flat_dip", "flat_motion", "flat_speed_limit"]
+
+#: the guide's segments where a roller sits on a wheel or the sprocket, not on a track (model.md section 1)
+HEADS = (6, 13)
+
+
+def flat_dip(phi, radius, chord):
+    """The dip of the centre of a roller of ``radius`` with a flat of ``chord`` toward its track, and its
+    first and second derivatives with respect to the flat's angle ``phi`` (wrapped to [-pi, pi)). [m, m/rad,
+    m/rad^2]
+
+    ``D'`` jumps from +r sin(beta) to -r sin(beta) at phi = 0 (the impact); at phi = 0 itself it is 0.
+    """
+    beta = math.asin(chord / (2.0 * radius))
+    phi = np.mod(np.asarray(phi, dtype=float) + math.pi, 2.0 * math.pi) - math.pi
+    a = np.abs(phi)
+    on = a < beta
+    d = np.where(on, radius * (1.0 - np.cos(beta - a)), 0.0)
+    d1 = np.where(on, -radius * np.sin(beta - a) * np.sign(phi), 0.0)
+    d2 = np.where(on, radius * np.cos(beta - a), 0.0)
+    return d, d1, d2
+
+
+def flat_speed_limit(radius, incline_angle, transition_radius, g=9.81):
+    """The largest chain speed at which the step's weight keeps a flat roller of ``radius`` on the flat's
+    edges on an incline of ``incline_angle`` [rad]: v^2 (1/r + 1/r_t) = g cos(alpha) (the pivot's v^2 / r
+    toward the track, and the concave transition's v^2 / r_t away from it). [m/s]"""
+    return math.sqrt(g * math.cos(incline_angle) / (1.0 / radius + 1.0 / transition_radius))
+
+
+@nb.njit(cache=True, error_model="numpy")
+def _frames(tab, p0, s0, delta, out):
+    """x, z, tx, tz, kappa and 1.0 on a track (0.0 on a head) of the guide point at each s0 (at its delta)."""
+    for j in range(s0.size):
+        s = s0[j] - math.floor(s0[j] / p0) * p0
+        k = locate(tab, s)
+        lam = local_map(tab, k, s - tab[k, S0], delta[j])[0]
+        x, z, tx, tz = local_frame(tab, k, lam, delta[j])
+        out[j, 0] = x
+        out[j, 1] = z
+        out[j, 2] = tx
+        out[j, 3] = tz
+        out[j, 4] = tab[k, KAPPA]
+        out[j, 5] = 0.0 if (k == HEADS[0] or k == HEADS[1]) else 1.0
+
+
+def flat_motion(tab, p0, t, s0, delta, radius, chord, phase=math.pi):
+    """The flat's part of one roller's motion at the samples ``t``. [m, m/s, m/s^2]
+
+    ``tab``, ``p0``: the guide's segment table and undeformed perimeter; ``s0`` (nt,): the roller's
+    undeformed-guide coordinate at each sample (unwrapped); ``delta`` (nt,): the tensioner's; ``radius``
+    and ``chord`` the roller's and its flat's; ``phase``: the flat's angle at the first sample.
+    Returns the offsets of position, velocity (at the samples) and acceleration (its mean over each
+    sample's interval), each (nt, 2), and the flat's angle phi at the samples (nt,).
+    """
+    t = np.asarray(t, dtype=float)
+    nt = t.size
+    fr = np.empty((nt, 6))
+    _frames(tab, float(p0), np.asarray(s0, dtype=float), np.asarray(delta, dtype=float), fr)
+    x, z, tx, tz, kap, track = (fr[:, i] for i in range(6))
+    # the track's side: +1 on the left of travel where the left normal (-tz, tx) points down
+    side = np.where(tx < 0.0, 1.0, -1.0)
+    nx, nz = -side * tz, side * tx  # unit normal toward the track
+    rate = track * (1.0 / radius - side * kap)  # the flat's turn per metre of travel [rad/m]
+    if nt < 2:
+        phi = np.full(nt, float(phase))
+        zero = np.zeros((nt, 2))
+        d, _, _ = flat_dip(phi, radius, chord)
+        return np.column_stack([d * nx, d * nz]) * track[:, None], zero, zero.copy(), phi
+    step = np.hypot(np.diff(x), np.diff(z))  # travel between samples (chord of the arc: < 1e-9 relative)
+    dphi = step * 0.5 * (rate[1:] + rate[:-1])
+    phi = float(phase) + np.concatenate([[0.0], np.cumsum(dphi)])
+    dt = np.diff(t)
+    speed = np.gradient(np.concatenate([[0.0], np.cumsum(step)]), t)  # the roller's speed along the guide
+    phidot = np.gradient(phi, t)
+    d, d1, _ = flat_dip(phi, radius, chord)
+    pos = np.column_stack([d * nx, d * nz]) * track[:, None]
+    # d/dt of the normal toward the track: -s kappa v t
+    turn = -side * kap * speed
+    vel = (d1 * phidot)[:, None] * np.column_stack([nx, nz]) + (d * turn)[:, None] * np.column_stack([tx, tz])
+    vel *= track[:, None]
+    # the dip's velocity at the midpoints between samples, from the midpoint's angle and rate
+    pm = 0.5 * (phi[1:] + phi[:-1])
+    dm, d1m, _ = flat_dip(pm, radius, chord)
+    w0, w1 = track[:-1], track[1:]
+    mx, mz = w0 * nx[:-1] + w1 * nx[1:], w0 * nz[:-1] + w1 * nz[1:]
+    norm = np.hypot(mx, mz)
+    on = norm > 0.0
+    mx, mz = np.where(on, mx / np.where(on, norm, 1.0), 0.0), np.where(on, mz / np.where(on, norm, 1.0), 0.0)
+    mtx, mtz = mz * np.where(side[:-1] > 0, 1.0, -1.0), -mx * np.where(side[:-1] > 0, 1.0, -1.0)
+    kturn = -side[:-1] * 0.5 * (kap[1:] + kap[:-1]) * step / dt
+    um = (d1m * dphi / dt)[:, None] * np.column_stack([mx, mz]) + (dm * kturn)[:, None] * np.column_stack([mtx, mtz])
+    um *= on[:, None]
+    # the mean acceleration over each sample's interval: from the midpoint before to the one after
+    edges = np.concatenate([vel[:1], um, vel[-1:]])
+    span = np.concatenate([[0.5 * dt[0]], 0.5 * (dt[1:] + dt[:-1]), [0.5 * dt[-1]]])
+    acc = (edges[1:] - edges[:-1]) / span[:, None]
+    return pos, vel, acc, phi
+
+
+def add_flats(model, t, s0, delta, ridx, pos=None, vel=None, acc=None):
+    """Add the flats of ``model``'s chain (``[chain] roller_flat_by_roller``) to the motion of the stored
+    rollers ``ridx`` (0-based), in place: ``pos``, ``vel``, ``acc`` (nt, len(ridx), 2) where given, from
+    each roller's undeformed-guide coordinate ``s0`` (nt, len(ridx)) and the tensioner's ``delta`` (nt,)
+    at the samples ``t`` (:func:`flat_motion`). Returns the stored rollers that have a flat (1-based)."""
+    flats = dict(model.scene.chain.roller_flats)
+    done = []
+    for q, i in enumerate(np.asarray(ridx, dtype=int)):
+        chord = flats.get(int(i) + 1)
+        if chord is None:
+            continue
+        dp, dv, da, _ = flat_motion(model.guide.table, model.guide.p0, t, s0[:, q], delta, float(model.radii[i]), chord)
+        for arr, add in ((pos, dp), (vel, dv), (acc, da)):
+            if arr is not None:
+                arr[:, q] += add
+        done.append(int(i) + 1)
+    return done
