@@ -296,3 +296,22 @@ def test_compare_refuses_a_recording_without_the_link_pass(tmp_path, capsys):
         vibkit.compare(rec, vibkit.read_recording(LEON))
     assert main(["compare", str(p), LEON]) == 1
     assert "no link-pass found" in capsys.readouterr().err
+
+
+def test_a_simulations_closure_residual_is_not_a_channel(tmp_path):
+    """The closure residual is the solver's rounding (1e-14 m); its pattern repeats at the link pass as
+    everything in a simulation does, and with the smallest sigma it used to give the numbers."""
+    from vibkit.model.scene import load_scene
+
+    ds = vibkit.simulate(load_scene("sim/thesis-forward.toml"), duration=12.0, progress=False)
+    path = tmp_path / "sim.nc"
+    from vibkit.io import write_result
+
+    write_result(ds, path)
+    rec = vibkit.read_recording(path)
+    channels = vibration_channels(rec)
+    assert "closure_residual" in rec.data_vars and "closure_residual" not in channels
+    assert {"delta", "tensioner_displacement", "accel_step"} <= set(channels)
+    # a recording's own channel of that name is a channel
+    own = _rec({"closure_residual": np.sin(2 * np.pi * 3.75 * np.arange(2000) / FS)})
+    assert vibration_channels(own) == ["closure_residual"]

@@ -45,15 +45,25 @@ def speed_from_recording(recording):
     return None, None
 
 
+#: a simulation's numerical diagnostics, not signals of the machine: the closure residual is rounding
+#: (1e-14 m), and its pattern repeats with the link pass like everything else in a simulation
+SOLVER_DIAGNOSTICS = ("closure_residual",)
+_ANALYSES = ("kinematics", "inverse", "forward")
+
+
 def vibration_channels(recording) -> list:
     """Channels that may carry a vibration: along time, not the burst number, not a sample counter, not
-    a clock or a speed, not a status column (an accuracy code, a column that never changes)."""
+    a clock or a speed, not a status column (an accuracy code, a column that never changes), not a
+    simulation's numerical diagnostic (:data:`SOLVER_DIAGNOSTICS`)."""
     from ..io.channels import COUNTER_ATTR, STATUS_ATTR, is_status
 
+    simulated = recording.attrs.get("analysis") in _ANALYSES and "scene" in recording.attrs
     out = []
     for v in recording.data_vars:
         da = recording[v]
         if v == "segment" or da.dims != ("time",) or da.attrs.get(COUNTER_ATTR):
+            continue
+        if simulated and v in SOLVER_DIAGNOSTICS:
             continue
         if int(da.attrs.get(STATUS_ATTR, 0)) or is_status("", da.values):
             continue
