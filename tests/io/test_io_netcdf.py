@@ -1,5 +1,6 @@
 """vibkit results on disk: atomic netCDF4/HDF5 write, exact round trip, provenance on read."""
 
+import json
 import os
 
 import numpy as np
@@ -101,3 +102,44 @@ def test_hdf5_that_is_not_netcdf(tmp_path):
         f.create_group("a").create_group("b")
     with pytest.raises(RecordingError, match="plain.h5: "):
         read_recording(p)
+
+
+def test_a_component_of_a_variable_is_a_channel(tmp_path, capsys):
+    """``link_tension[2]`` (or ``roller_acceleration[59, z]``) names one component of a result's variable
+    along time and other dimensions: what `vibkit spectrum --channel` analyses."""
+    from vibkit.cli import main
+    from vibkit.io.channels import resolve_channel, with_component
+
+    path = tmp_path / "sim.nc"
+    t = np.arange(4000) / 200.0
+    ds = xr.Dataset(
+        {
+            "delta": ("time", 1e-5 * np.sin(2 * np.pi * 3.75 * t), {"units": "m"}),
+            "roller_acceleration": (
+                ("time", "roller", "axis"),
+                np.stack(
+                    [
+                        np.stack([0.1 * np.sin(2 * np.pi * 3.75 * t), 0.2 * np.sin(2 * np.pi * 4.1 * t)], axis=-1),
+                        np.zeros((t.size, 2)),
+                    ],
+                    axis=1,
+                ),
+                {"units": "m/s^2"},
+            ),
+        },
+        coords={"time": t, "roller": [59, 60], "axis": ["x", "z"]},
+    )
+    write_result(ds, path)
+    rec = with_component(read_recording(path), "roller_acceleration[59, z]")
+    assert resolve_channel(rec, "roller_acceleration[59, z]") == "roller_acceleration[59, z]"
+    assert np.array_equal(rec["roller_acceleration[59, z]"].values, ds.roller_acceleration.values[:, 0, 1])
+    assert rec["roller_acceleration[59, z]"].attrs["units"] == "m/s^2"
+    with pytest.raises(ValueError, match=r"has no roller '61' \(roller: 59, 60\)"):
+        with_component(rec, "roller_acceleration[61, z]")
+    with pytest.raises(ValueError, match="components: roller_acceleration\\[roller, axis\\]"):
+        resolve_channel(read_recording(path), "roller_acceleration")
+    # the command line: the 4.1 Hz line of roller 59's z axis, not the 3.75 Hz of its x axis
+    assert main(["spectrum", str(path), "--channel", "roller_acceleration[59, z]", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["channel"] == "roller_acceleration[59, z]"
+    assert out["fundamental_hz"] == pytest.approx(4.1, abs=0.01)

@@ -375,6 +375,7 @@ def read_recording(a):
     """
     import vibkit
     from vibkit.io import RecordingError
+    from vibkit.io.channels import with_component
 
     try:
         rec = vibkit.read_recording(a.recording, **reader_options(a))
@@ -382,6 +383,7 @@ def read_recording(a):
         if not getattr(a, "channel", None):
             raise
         rec = vibkit.read_recording(a.recording, **reader_options(a, channel=True))
+    rec = with_component(rec, getattr(a, "channel", None))
     _note_held_samples(rec)
     return rec
 

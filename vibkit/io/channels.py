@@ -20,6 +20,7 @@ import numpy as np
 
 __all__ = [
     "resolve_channel",
+    "with_component",
     "is_counter_name",
     "is_counter_ramp",
     "COUNTER_ATTR",
@@ -189,4 +190,62 @@ def resolve_channel(recording, channel=None) -> str:
     for n in names:
         src = recording[n].attrs.get("source_name")
         listed.append(n if not src or _norm(src) == n.lower() else f"{n} (file: {src!r})")
-    raise ValueError(f"{where}channel {channel!r} is not in the recording (channels: {', '.join(listed)})")
+    hint = ""
+    multi = _multi(recording)
+    if multi:
+        first = multi[0]
+        hint = "; components: " + ", ".join(
+            f"{v}[{', '.join(d[1:])}]" for v, d in ((m, recording[m].dims) for m in multi)
+        )
+        hint += f", e.g. {first}[{', '.join(str(recording[d].values[0]) for d in recording[first].dims[1:])}]"
+    raise ValueError(f"{where}channel {channel!r} is not in the recording (channels: {', '.join(listed)}{hint})")
+
+
+_COMPONENT = re.compile(r"^\s*([A-Za-z_]\w*)\s*\[(.+)\]\s*$")
+
+
+def _multi(recording):
+    """Variables along time and other labelled dimensions (a simulation's ``roller_acceleration``)."""
+    return [
+        str(v)
+        for v in recording.data_vars
+        if recording[v].ndim > 1
+        and recording[v].dims[0] == "time"
+        and all(d in recording.coords for d in recording[v].dims[1:])
+    ]
+
+
+def with_component(recording, channel):
+    """``recording`` with the component ``channel`` of a variable along time and other dimensions added
+    as a channel of that name: ``"roller_acceleration[59, z]"`` is roller 59's z axis (the labels in
+    the order of the variable's dimensions after time, as its coordinates write them). Unchanged when
+    ``channel`` is not such a name or is already a channel.
+
+    Raises
+    ------
+    ValueError
+        The variable has no such labels (the message lists the ones it has).
+    """
+    m = _COMPONENT.match(str(channel or ""))
+    if m is None or channel in recording.data_vars or m.group(1) not in _multi(recording):
+        return recording
+    name = m.group(1)
+    var = recording[name]
+    dims = var.dims[1:]
+    labels = [x.strip().strip("'\"") for x in m.group(2).split(",")]
+    where = _where(recording)
+    if len(labels) != len(dims):
+        raise ValueError(
+            f"{where}{name} has {len(dims)} dimension(s) after time ({', '.join(dims)}): name one label each"
+        )
+    index = {}
+    for dim, label in zip(dims, labels):
+        have = [str(c) for c in recording[dim].values]
+        if label not in have:
+            raise ValueError(f"{where}{name} has no {dim} {label!r} ({dim}: {', '.join(have)})")
+        index[dim] = have.index(label)
+    comp = var.isel(index, drop=True)
+    comp.attrs = dict(var.attrs, component_of=name)
+    out = recording.copy()
+    out[str(channel)] = comp
+    return out
