@@ -216,6 +216,7 @@ def analyse(
 
     limits = tuple(limits_percent) if limits_percent is not None else DEFAULT_LIMITS_PERCENT
     from ...io import RecordingError
+    from ...io.channels import with_component
 
     opts = dict(read_options or {})
     if sample_rate is not None:
@@ -226,6 +227,7 @@ def analyse(
         if channel is None:
             raise
         rec = read_recording(recording, channel=channel, **opts)  # e.g. traces on different time bases
+    rec = with_component(rec, channel)
     measured, measured_source = measurement_date(rec, date)
     ch = pick_channel(rec, channel)
     sc = None
