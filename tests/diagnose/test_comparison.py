@@ -82,3 +82,30 @@ def test_no_matching_variable(leon_short):
     rec = xr.Dataset({"v": ("time", np.sin(2 * np.pi * 3.7 * t), {"units": "K"})}, coords={"time": t})
     with pytest.raises(ValueError, match="no variable to compare"):
         compare(rec, res)
+
+
+def test_orders_that_disagree_widen_every_frequency_sigma():
+    """One chain gives every harmonic one frequency ratio; a recording whose orders' ratios scatter more
+    than their sigmas (here its 2nd and 3rd lines 0.1 % off the multiples) has errors beyond the noise,
+    and every ratio's sigma, the pitch ratio's included, grows by the scatter (Birge ratio)."""
+    rng = np.random.default_rng(1)
+    t = np.arange(8000) / 200.0
+    sim = _synthetic(t, 3.75, [1.0, 0.5, 0.25])
+    honest = compare(_synthetic(t, 3.75, [1.0, 0.5, 0.25], rng=rng), sim, n_harmonics=3)
+    assert not any("scatter" in n for n in honest.notes)
+    x = (
+        np.cos(2 * np.pi * 3.75 * t)
+        + 0.5 * np.cos(2 * np.pi * 7.5 * 1.001 * t)
+        + 0.25 * np.cos(2 * np.pi * 11.25 * 0.999 * t)
+        + 1e-3 * rng.standard_normal(t.size)
+    )
+    bent = compare(recording({"delta": x}, t=t, units="m", attrs={"chain_speed_m_s": 0.5}), sim, n_harmonics=3)
+    ratios = [h["frequency_ratio"] for h in bent.harmonics]
+    assert ratios == pytest.approx([1.0, 1.001, 0.999], abs=2e-4)
+    sig = np.array([h["frequency_ratio_sigma"] for h in bent.harmonics])
+    mean = np.average(ratios, weights=1 / sig**2)
+    # after widening the orders agree with one ratio within their sigmas (chi^2 / dof = 1)
+    assert np.sum(((np.array(ratios) - mean) / sig) ** 2) / 2 == pytest.approx(1.0, rel=1e-9)
+    assert any("scatter" in n for n in bent.notes)
+    assert bent.pitch_ratio_sigma > 20 * honest.pitch_ratio_sigma
+    assert abs(bent.pitch_ratio - 1) < 3 * bent.pitch_ratio_sigma

@@ -191,6 +191,36 @@ def _combine(values, sigmas):
     return float(np.mean(v)), float(np.std(v) / math.sqrt(v.size))
 
 
+def _widen_by_order_scatter(rows, z, notes):
+    """Every harmonic of a link-pass family shares one frequency ratio (f_k = k v / p in the recording and
+    in the simulation alike): where the orders' ratios scatter more than their sigmas say (Birge ratio
+    B = sqrt(chi^2 / dof) > 1 over the orders detected in both), the frequency estimates carry errors the
+    noise does not account for (leakage, a speed that drifts within a burst), and every ratio's sigma and
+    interval is widened by B (the Particle Data Group's scale factor)."""
+    both = [r for r in rows if r["detected_sim"] and r["detected_meas"] and r["frequency_ratio_sigma"] > 0]
+    if len(both) < 3:
+        return
+    v = np.array([r["frequency_ratio"] for r in both])
+    w = 1.0 / np.array([r["frequency_ratio_sigma"] for r in both]) ** 2
+    mean = float(np.sum(w * v) / np.sum(w))
+    birge = math.sqrt(float(np.sum(w * (v - mean) ** 2)) / (v.size - 1))
+    if not birge > 1.0:
+        return
+    for r in rows:
+        r["frequency_ratio_sigma"] *= birge
+        rs = r["frequency_ratio_sigma"]
+        r["frequency_ratio_ci"] = [r["frequency_ratio"] - z * rs, r["frequency_ratio"] + z * rs]
+        r["frequency_mismatch"] = bool(
+            r["detected_sim"]
+            and r["detected_meas"]
+            and not r["frequency_ratio_ci"][0] <= 1.0 <= r["frequency_ratio_ci"][1]
+        )
+    notes.append(
+        f"the orders' frequency ratios ({v.min():.6f}-{v.max():.6f}) scatter {birge:.2g} times their sigmas, where one "
+        f"chain gives them one ratio: every ratio's sigma (and the pitch ratio's) widened {birge:.2g} times"
+    )
+
+
 def _order_amplitude(x, fs, f0, spc):
     from ..signal import order_spectrum, resample_to_angle
 
@@ -395,6 +425,7 @@ def compare(
                 if det_s and det_m
                 else 0.0
             )
+    _widen_by_order_scatter(rows, z, notes)
     score = float(np.mean(scores)) if scores else 0.0
     c0 = runs[0][1]
     # order spectra on a common axis; each fine spectrum is reduced by its maximum within every
