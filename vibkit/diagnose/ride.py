@@ -28,7 +28,15 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..runtime.constants import STANDARD_GRAVITY
-from ..signal.ride import LOWPASS_HZ, PeakToPeak, RideSegment, detect_ride_segment, lowpass_10hz, peak_to_peak
+from ..signal.ride import (
+    LOWPASS_HZ,
+    PeakToPeak,
+    RideSegment,
+    detect_ride_segment,
+    incline_from_vertical_speed,
+    lowpass_10hz,
+    peak_to_peak,
+)
 from ..signal.weighting import frequency_weighting, get_weighting
 
 __all__ = [
@@ -546,12 +554,6 @@ def _step_roller(ds):
     return rollers[0]
 
 
-def _runs(mask):
-    """(start, end) index pairs of the runs of True in ``mask`` (end exclusive)."""
-    d = np.diff(np.concatenate([[0], np.asarray(mask, dtype=np.int8), [0]]))
-    return list(zip(np.flatnonzero(d == 1), np.flatnonzero(d == -1)))
-
-
 def ride_quality_from_simulation(ds, *, segment=None, weightings=None, source=None) -> RideQuality:
     """Ride quality of a simulated step: the same path as a recording.
 
@@ -603,26 +605,7 @@ def ride_quality_from_simulation(ds, *, segment=None, weightings=None, source=No
             speed = np.hypot(vel[:, 0], vel[:, 1])
 
             def detect(fs_):
-                # the ride: the step rising steadily up the incline (v sin(alpha)), not round a head, where
-                # its vertical speed peaks at the chain's speed for a moment
-                rising = _runs(vz > 0.05)
-                longest = max(rising, key=lambda r: r[1] - r[0], default=None)
-                part = vz[longest[0] : longest[1]] if longest else np.zeros(1)
-                plateau = float(np.median(part))
-                # up the incline most of the rise holds its speed; round a head it is an arch (about 1/8 within 10 %)
-                if longest is None or np.mean(np.abs(part - plateau) < 0.1 * plateau) < 0.5:
-                    raise ValueError(
-                        f"the simulated step does not ride up the incline in {t[-1] - t[0]:.3g} s (it rises only "
-                        "round a head, where its vertical speed does not hold): simulate longer (--duration) or "
-                        "give the segment (--segment)"
-                    )
-                inside = _runs(vz[longest[0] : longest[1]] > 0.5 * plateau)
-                a, b = max(inside, key=lambda r: r[1] - r[0])
-                a, b = a + longest[0], b + longest[0]
-                note = f"vertical speed {plateau:+.3g} m/s of the simulated roller (up the incline)"
-                if a == 0 or b == vz.size:
-                    note += "; the incline reaches an end of the simulated time (simulate longer: --duration)"
-                return RideSegment(start_s=a / fs_, end_s=b / fs_, method="speed channel", plateau=plateau, note=note)
+                return incline_from_vertical_speed(vz, fs_)
 
     elif "accel_step" in ds:
         sig = {"tangential": ds["accel_step"].values}

@@ -38,6 +38,7 @@ __all__ = [
     "RideSegment",
     "a95",
     "detect_ride_segment",
+    "incline_from_vertical_speed",
     "half_cycle_peaks",
     "lowpass_10hz",
     "peak_to_peak",
@@ -278,6 +279,39 @@ def _longest_run(mask):
     starts, stops = np.flatnonzero(d == 1), np.flatnonzero(d == -1)
     k = int(np.argmax(stops - starts))
     return int(starts[k]), int(stops[k])
+
+
+def incline_from_vertical_speed(vz, fs, *, min_speed=0.05):
+    """The incline of a ride from a step's vertical speed ``vz`` [m/s] (a simulation's, exact): the longest
+    rise above ``min_speed`` where the speed holds (most of it within 10 % of its median, v sin(alpha)),
+    not a turn round a head, where it peaks at the chain's speed for a moment and is an arch (about an
+    eighth of it within 10 %); the segment is where it exceeds half that median.
+
+    Returns
+    -------
+    RideSegment
+        ``method = "speed channel"``, ``plateau`` the median rising speed [m/s].
+
+    Raises
+    ------
+    ValueError
+        No rise that holds its speed (the record reaches no incline).
+    """
+    vz = np.asarray(vz, dtype=float)
+    longest = _longest_run(vz > min_speed)
+    part = vz[longest[0] : longest[1]] if longest else np.zeros(1)
+    plateau = float(np.median(part))
+    if longest is None or np.mean(np.abs(part - plateau) < 0.1 * plateau) < 0.5:
+        raise ValueError(
+            f"the simulated step does not ride up the incline in {vz.size / fs:.3g} s (it rises only round a head, "
+            "where its vertical speed does not hold): simulate longer (--duration) or give the segment (--segment)"
+        )
+    a, b = _longest_run(part > 0.5 * plateau)
+    a, b = a + longest[0], b + longest[0]
+    note = f"vertical speed {plateau:+.3g} m/s of the simulated roller (up the incline)"
+    if a == 0 or b == vz.size:
+        note += "; the incline reaches an end of the simulated time (simulate longer: --duration)"
+    return RideSegment(start_s=a / fs, end_s=b / fs, method="speed channel", plateau=plateau, note=note)
 
 
 def detect_ride_segment(
