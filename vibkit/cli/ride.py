@@ -86,6 +86,27 @@ def _ride_rows(rq):
     ]
 
 
+def _knocks(a, is_scene, rq, sim):
+    """The knock test of each ride (recording or scene, then --scene's simulation): a dict each (JSON)."""
+    from vibkit.diagnose.knock import ride_knock, step_rollers_of
+    from vibkit.model.scene import load_scene
+
+    from .options import escalator_profile
+
+    out = []
+    for r, scene in ((rq, a.input if is_scene else None), (sim, a.scene)):
+        if r is None:
+            out.append(None)
+            continue
+        rollers = step_rollers_of(scene=load_scene(scene)) if scene else step_rollers_of(profile=escalator_profile(a))
+        res, note = ride_knock(r, rollers)
+        d = {"checked": False, "reason": note} if res is None else {"checked": True, **res.as_dict(), "reason": note}
+        if rollers is not None:
+            d["roller_radius_m"], d["roller_radius_source"] = rollers[0], rollers[3]
+        out.append(d)
+    return out
+
+
 def run(a):
     from vibkit.diagnose.ride import parse_channels, ride_quality_from_recording, simulate_ride
 
@@ -121,10 +142,13 @@ def run(a):
     sim = None
     if a.scene:
         sim = simulate_ride(a.scene, duration=a.duration, weightings=weightings, progress=sys.stderr.isatty())
+    knocks = _knocks(a, is_scene, rq, sim)
     if a.json:
         d = rq.as_dict()
+        d["roller_knock"] = knocks[0]
         if sim is not None:
             d["simulation"] = sim.as_dict()
+            d["simulation"]["roller_knock"] = knocks[1]
         print_json("ride", d)
     else:
         head = ("axis", "channel", "weighting", "max pk-pk", "A95", "r.m.s.", "10 Hz max pk-pk", "10 Hz A95")
@@ -138,6 +162,8 @@ def run(a):
             )
             print("step vibration [m/s^2]: weighted (ISO 2631-1) and 0.4-10 Hz unweighted")
             print(table(_ride_rows(r), head))
+            k = knocks[0 if r is rq else 1]
+            print(f"roller knock: {k['reason']}")
             print()
         for r in (rq, sim):
             for n in [] if r is None else r.notes + ([r.segment.note] if r.segment.note else []):

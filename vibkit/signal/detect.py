@@ -51,6 +51,7 @@ Invalid samples are flagged by :func:`vibkit.signal.bursts.flag_invalid` (re-exp
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 from dataclasses import dataclass, field
@@ -292,10 +293,17 @@ def _search(r, f, df, fmin, fmax, f_top):
     return float(cands[i]), float(sc[i])
 
 
-def _normalised(pw, half, quant, w):
-    """Average of periodograms ``pw`` (K, bins) over its own floor (mean 1 under the null)."""
+def _normalised(pw, half, quant, w, mask=None, clip=None):
+    """Average of periodograms ``pw`` (K, bins) over its own floor (mean 1 under the null); the bins of
+    ``mask`` set to 1 (excluded lines), none above ``clip``."""
     p = pw.mean(axis=0)
-    return p / _floor(p, pw.shape[0], half, quant, w)
+    return _masked(p / _floor(p, pw.shape[0], half, quant, w), mask, clip)
+
+
+def _masked(r, mask, clip):
+    if mask is not None:
+        r = np.where(mask, 1.0, r)
+    return r if clip is None else np.minimum(r, clip)
 
 
 def _harmonic_bins(f0, df, n_harm, nbins):
@@ -315,7 +323,20 @@ def _floor(p, k, half, quant, w):
     return np.maximum(med, bound)
 
 
-def detect_link_pass(x, fs, *, band, n_harmonics=5, p_fa=1e-3, f_top=None, quantum=None, decimation=1):
+def detect_link_pass(
+    x,
+    fs,
+    *,
+    band,
+    n_harmonics=5,
+    p_fa=1e-3,
+    f_top=None,
+    quantum=None,
+    decimation=1,
+    exclude=None,
+    family_checks=True,
+    clip=None,
+):
     """Decide whether a harmonic family with its fundamental in ``band`` is present.
 
     Parameters
@@ -338,6 +359,19 @@ def detect_link_pass(x, fs, *, band, n_harmonics=5, p_fa=1e-3, f_top=None, quant
         (:func:`vibkit.signal.quantisation.quantisation_step`; 0 for continuous data). [x]
     decimation : float, optional
         ``x`` was low-pass filtered and decimated this many times since it was recorded.
+    exclude : (float, float), optional
+        ``(step, half_width)``: the bins within ``half_width`` bins of every multiple of ``step`` [Hz] take
+        the noise's mean (1) in every normalised spectrum. For lines the caller knows are there and are not the
+        family sought (a chain's link-pass lines under a roller's knock); lowering no bin's chance to
+        exceed, it keeps the false-alarm probability at most ``p_fa``.
+    clip : float, optional
+        No normalised bin counts more than this in the tested sums (the noise's mean is 1): a few strong
+        lines that are not the family (mains hum, a motor's) cannot make one; lowering every sum, it keeps
+        the false-alarm probability at most ``p_fa``. The search for the candidate is not clipped.
+    family_checks : bool, optional
+        Refuse a family whose significant orders share a factor or that has lines at f/2 or f/3 (its
+        fundamental would lie outside the band). False for a family known to live in its high orders
+        (a roller's knock, whose spectrum rises as f^2).
 
     Returns
     -------
@@ -366,6 +400,17 @@ def detect_link_pass(x, fs, *, band, n_harmonics=5, p_fa=1e-3, f_top=None, quant
     sp = _spectra(pieces, fs, fmin, fmax, f_top, p_fa, quantum, decimation)
     if isinstance(sp, LinkPassDetection):
         return sp
+    if exclude is not None:
+        step, bins = (float(v) for v in exclude)
+        if not (step > 0 and bins >= 0):
+            raise ValueError(f"Parameter exclude={exclude!r} must be (step > 0 [Hz], half_width >= 0 [bins]).")
+        width = (bins + 1e-9) * sp.df
+        off = np.abs(sp.f - step * np.round(sp.f / step))
+        sp = dataclasses.replace(sp, mask=(off <= width) & (sp.f >= step - width))
+    if clip is not None:
+        if not float(clip) > 1.0:
+            raise ValueError(f"Parameter clip={clip!r} must exceed 1 (the noise's mean).")
+        sp = dataclasses.replace(sp, clip=float(clip))
     n_h = max(1, min(int(n_harmonics), int(f_top // fmax)))
     tests = _split_half_tests(sp, n_h) if sp.split else _bonferroni_test(sp, n_h)
     if not tests:
@@ -394,12 +439,13 @@ def detect_link_pass(x, fs, *, band, n_harmonics=5, p_fa=1e-3, f_top=None, quant
             float("nan"),
             **base,
         )
-    refused, f_best = _common_order(sp, f_best, sig, base)
-    if refused is not None:
-        return refused
-    refused = _subharmonic(sp, f_best, lim, base)
-    if refused is not None:
-        return refused
+    if family_checks:
+        refused, f_best = _common_order(sp, f_best, sig, base)
+        if refused is not None:
+            return refused
+        refused = _subharmonic(sp, f_best, lim, base)
+        if refused is not None:
+            return refused
     return LinkPassDetection(
         True,
         "ok",
@@ -447,11 +493,13 @@ class _Spectra:
     fmax: float
     f_top: float
     p_fa: float
+    mask: np.ndarray | None = None
+    clip: float | None = None
 
     @property
     def r_all(self):
-        """The average periodogram over its floor (mean 1 under the null)."""
-        return self.p_all / self.floor
+        """The average periodogram over its floor (mean 1 under the null), excluded bins at 1."""
+        return _masked(self.p_all / self.floor, self.mask, None)
 
 
 def _nothing(sp, reason, f=float("nan"), extra=None):
@@ -506,7 +554,7 @@ def _bonferroni_test(sp, n_h):
     """One segment per piece: no independent half to test on.  Bonferroni over every distinct tuple of
     harmonic bins that a fundamental in the band can use (few: the bins are wide).  A list of at most one
     ``(p, statistic, threshold, f, harmonics)``."""
-    r, df, f = sp.r_all, sp.df, sp.f
+    r, df, f = _masked(sp.r_all, None, sp.clip), sp.df, sp.f
     cands = np.arange(sp.fmin, sp.fmax + df / (4 * n_h), df / (2.0 * n_h))
     kk = np.rint(np.outer(cands, np.arange(1, n_h + 1)) / df).astype(int)
     kk = kk[np.all((kk >= 1) & (kk < f.size - 1), axis=1)]
@@ -531,8 +579,9 @@ def _split_half_tests(sp, n_h):
         # each half normalised by its own floor: a transient (a step, an impulse) that lies in one half
         # only raises that half's whole spectrum, which a floor shared with the other half would read
         # as excess power at every harmonic
-        r_s = _normalised(sp.pw[search_idx], sp.half, sp.quant, sp.w)
-        r_t = _normalised(sp.pw[test_idx], sp.half, sp.quant, sp.w)
+        # the candidate searched on the full spectrum, tested on the clipped one
+        r_s = _normalised(sp.pw[search_idx], sp.half, sp.quant, sp.w, sp.mask)
+        r_t = _normalised(sp.pw[test_idx], sp.half, sp.quant, sp.w, sp.mask, sp.clip)
         fc, _ = _search(r_s, sp.f, sp.df, sp.fmin, sp.fmax, sp.f_top)
         kb = _harmonic_bins(fc, sp.df, n_h, sp.f.size)
         hh = kb.size

@@ -291,6 +291,7 @@ def analyse(
             except ValueError as exc:  # e.g. a channel in a unit the simulation has no variable in
                 notes.append(f"no comparison with the simulation: {' '.join(str(exc).split())}")
     ride = _ride(rec, result if scene_is_unit(sc, profile) else None, sc, notes, segment, speed)
+    ride = [(kind, _with_knock(rq, sc if kind == "simulation" else None, profile)) for kind, rq in ride]
     if result is not None and not scene_is_unit(sc, profile):
         notes.append(
             f"no ride page of the simulation: scene {sc.name!r} is not "
@@ -444,6 +445,16 @@ def scene_is_unit(scene, profile) -> bool:
     if getattr(scene, "source", None):
         names.add(os.path.splitext(os.path.basename(str(scene.source)))[0].lower())
     return unit in names
+
+
+def _with_knock(rq, scene, profile):
+    """``rq`` with the knock test of its step's rollers (:func:`vibkit.diagnose.knock.ride_knock`) among its
+    notes: the rollers of the scene (a simulation) or of the profile (a recording)."""
+    from ..knock import ride_knock, step_rollers_of
+
+    rollers = step_rollers_of(scene=scene) if scene is not None else step_rollers_of(profile=profile)
+    _, note = ride_knock(rq, rollers)
+    return dataclasses.replace(rq, notes=[*rq.notes, f"roller knock: {note}"])
 
 
 def _ride(rec, result, sc, notes, segment=None, speed=None):

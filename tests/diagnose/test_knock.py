@@ -1,0 +1,120 @@
+"""A roller that knocks once a turn (vibkit.diagnose.knock): found on the simulator's flat roller, not on its
+round one; the chain's own lines make no knock; the stated false-alarm probability holds."""
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from vibkit.cli import main
+from vibkit.diagnose.knock import roller_knock, without_chain_lines
+from vibkit.model.scene import load_scene
+from vibkit.signal.detect import detect_link_pass
+
+SIM = Path(__file__).resolve().parents[2] / "sim"
+FS, V, R, P = 200.0, 0.5, 0.035, 0.4 / 3
+F_TURN = V / (2 * math.pi * R)
+
+
+def _chain_lines(t, rng, f_lp=V / P * 0.998):
+    """A step's vertical acceleration from the chain alone: the link pass and 24 harmonics, strong and
+    clean (a simulation's), at a link pass 0.2 % off the nominal."""
+    return sum(0.05 / math.sqrt(k) * np.cos(2 * np.pi * k * f_lp * t + rng.uniform(0, 2 * np.pi)) for k in range(1, 25))
+
+
+def test_excluded_lines_make_no_family():
+    rng = np.random.default_rng(0)
+    t = np.arange(int(10 * FS)) / FS
+    lines = sum(np.cos(2 * np.pi * 1.25 * k * t) for k in range(1, 60))  # every multiple of 1.25 Hz
+    x = lines + 1e-3 * rng.standard_normal(t.size)
+    band = (1.2, 1.3)
+    assert detect_link_pass(x, FS, band=band, n_harmonics=20).detected
+    assert not detect_link_pass(x, FS, band=band, n_harmonics=20, exclude=(1.25, 1.0)).detected
+
+
+def test_chain_lines_are_removed_whatever_their_strength():
+    rng = np.random.default_rng(1)
+    t = np.arange(int(9 * FS)) / FS
+    for gain in (1.0, 100.0):
+        chain = gain * _chain_lines(t, rng)
+        noise = 0.005 * rng.standard_normal(t.size)
+        rest = without_chain_lines(chain + noise, FS, V / P / 3, 90.0)
+        # what is left of the chain: under a thousandth of it (its frequency found to about 1e-6 Hz)
+        left = math.sqrt(max(np.var(rest) - np.var(noise), 0.0))
+        assert left < max(1e-3 * np.std(chain), 0.1 * np.std(noise))
+
+
+def test_false_alarms_hold_their_probability_under_strong_chain_lines():
+    rng = np.random.default_rng(2)
+    t = np.arange(int(9 * FS)) / FS
+    n, p_fa = 60, 0.05
+    alarms = sum(
+        roller_knock(
+            _chain_lines(t, rng) + 0.005 * rng.standard_normal(t.size),
+            FS,
+            speed=V,
+            roller_radius=R,
+            link_pitch=P,
+            p_fa=p_fa,
+        ).detected
+        for _ in range(n)
+    )
+    assert alarms <= n * p_fa + 3 * math.sqrt(n * p_fa * (1 - p_fa))
+
+
+def test_a_knock_train_is_found_at_its_turn():
+    rng = np.random.default_rng(3)
+    t = np.arange(int(9 * FS)) / FS
+    # knocks as the sensor's filter gives them: the second derivative of a 3 ms Gaussian bump each turn
+    sigma, area = 3e-3, 2e-7
+    x = _chain_lines(t, rng) + 0.005 * rng.standard_normal(t.size)
+    for tk in np.arange(0.1, t[-1], 1 / F_TURN):
+        u = t - tk
+        x += (
+            area * (u**2 / sigma**4 - 1 / sigma**2) * np.exp(-0.5 * (u / sigma) ** 2) / (sigma * math.sqrt(2 * math.pi))
+        )
+    res = roller_knock(x, FS, speed=V, roller_radius=R, link_pitch=P)
+    assert res.detected
+    assert res.frequency_hz == pytest.approx(F_TURN, rel=2e-3)
+    assert res.radius_m == pytest.approx(R, rel=2e-3)
+
+
+def test_too_slow_a_sampling_is_refused():
+    with pytest.raises(ValueError, match="record at 200 Hz or more"):
+        roller_knock(np.zeros(500), 25.0, speed=V, roller_radius=R, link_pitch=P)
+
+
+def test_ride_finds_the_simulated_flat_roller_and_not_the_round_one(tmp_path, capsys):
+    """The step of sim/thesis-forward.toml (step 20, its middle roller 59) with and without a 5 mm flat on
+    roller 59: the command's knock test, on the simulation's own step (no noise: a clean simulation's
+    link-pass lines are the hardest case for the test)."""
+    text = load_scene(SIM / "thesis-forward.toml").text
+    found = {}
+    for name, extra in (("round", ""), ("flat", "roller_flat_by_roller = [[59, 0.005]]")):
+        path = tmp_path / f"{name}.toml"
+        path.write_text(text.replace("n_rollers = 159", "n_rollers = 159\n" + extra))
+        assert main(["ride", str(path), "--json"]) == 0
+        found[name] = json.loads(capsys.readouterr().out)["roller_knock"]
+    assert found["round"]["checked"] and not found["round"]["detected"]
+    flat = found["flat"]
+    assert flat["checked"] and flat["detected"]
+    assert flat["roller_radius_m"] == pytest.approx(0.035)
+    assert flat["frequency_hz"] == pytest.approx(V / (2 * math.pi * 0.035), rel=0.01)
+
+
+def test_a_recording_without_the_rollers_radius_says_so(capsys):
+    assert main(["ride", "data/field/layouts/phyphox.csv", "--segment", "0.5:3", "--json"]) == 0
+    knock = json.loads(capsys.readouterr().out)["roller_knock"]
+    assert not knock["checked"] and "--escalator" in knock["reason"]
+
+
+def test_a_strong_line_of_something_else_is_no_knock():
+    """Mains hum (50 Hz, 100 times the noise) and a motor's line: one strong line sits on some harmonic of
+    every candidate turn; clipped, it cannot make a family."""
+    rng = np.random.default_rng(4)
+    t = np.arange(int(9 * FS)) / FS
+    x = _chain_lines(t, rng) + 0.5 * np.cos(2 * np.pi * 50.0 * t) + 0.2 * np.cos(2 * np.pi * 24.7 * t)
+    x += 0.005 * rng.standard_normal(t.size)
+    assert not roller_knock(x, FS, speed=V, roller_radius=R, link_pitch=P).detected

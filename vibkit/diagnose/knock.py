@@ -1,0 +1,261 @@
+"""A roller that knocks once a turn: a flat (or out-of-round) roller under the step a sensor rides.
+
+A roller worn flat pivots over the flat's edges once a turn and the leading edge strikes its track
+(:mod:`vibkit.model.flat_roller`): the step's vertical acceleration carries a train of knocks at the
+roller's turn, f_r = v / (2 pi r) on a straight track (2.27 Hz for a 35 mm roller at 0.5 m/s), not
+locked to the link pass (v / p). A knock is a velocity reversal 2 v sin(beta) with the pivot's pull
+toward the track on either side of it, so its spectrum rises as f^2 up to about the inverse of the
+pivot's duration: the evidence is in the high harmonics (tens of Hz), which a step sensor sampled at
+200 Hz or more records.
+
+:func:`roller_knock` tests the vertical acceleration of a straight stretch of the ride for a harmonic
+family with its fundamental within :data:`RADIUS_TOLERANCE` of the roller's turn, summing the harmonics
+up to :data:`KNOCK_TOP_HZ` (:func:`vibkit.signal.detect.detect_link_pass`, with its stated false-alarm
+probability). The chain's own lines are left out of every sum: the bins within one bin of a multiple of
+the step pass (v / (p links_per_step), whose multiples hold the link pass's), which a step's vertical
+acceleration carries whatever its rollers. A family found gives the radius that turns at its frequency,
+v / (2 pi f).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..signal.detect import detect_link_pass
+
+__all__ = ["KNOCK_TOP_HZ", "RADIUS_TOLERANCE", "RollerKnock", "ride_knock", "roller_knock", "step_rollers_of"]
+
+#: harmonics are summed up to this frequency (and 0.45 fs) [Hz]: a knock's spectrum rises up to the
+#: inverse of the pivot's duration (10 ms for a 5 mm flat on a 35 mm roller at 0.5 m/s)
+KNOCK_TOP_HZ = 100.0
+#: the turn is searched this far (relative) around v / (2 pi r): a worn tyre, the speed's uncertainty,
+#: a trailer roller of another size
+RADIUS_TOLERANCE = 0.06
+#: half-width of the chain's lines left out of the sums [bins]
+CHAIN_LINE_BINS = 1.0
+#: no bin counts more than this in a sum (noise: mean 1): a knock is many harmonics, a few strong lines of
+#: something else (mains hum, a motor) cannot make one
+LINE_CLIP = 8.0
+
+
+@dataclass(frozen=True)
+class RollerKnock:
+    """Result of :func:`roller_knock`.
+
+    Attributes
+    ----------
+    detected : bool
+        A roller of the step knocks once a turn (at false-alarm probability ``p_fa``).
+    reason : str
+        One sentence: why.
+    frequency_hz : float
+        The knock's rate (NaN when none). [Hz]
+    radius_m : float
+        The rolling radius that turns at that rate at the speed, v / (2 pi f) (NaN when none). [m]
+    band_hz : (float, float)
+        Where the turn was searched. [Hz]
+    p_value, p_fa : float
+    n_harmonics : int
+        Harmonics summed (those not on the chain's lines count).
+    """
+
+    detected: bool
+    reason: str
+    frequency_hz: float
+    radius_m: float
+    band_hz: tuple
+    p_value: float
+    p_fa: float
+    n_harmonics: int
+
+    def as_dict(self) -> dict:
+        return {
+            "detected": self.detected,
+            "reason": self.reason,
+            "frequency_hz": self.frequency_hz if self.detected else None,
+            "radius_m": self.radius_m if self.detected else None,
+            "band_hz": list(self.band_hz),
+            "p_value": self.p_value,
+            "p_fa": self.p_fa,
+            "n_harmonics": self.n_harmonics,
+        }
+
+
+#: the chain's step pass is searched this far (relative) around speed / (pitch links_per_step)
+CHAIN_SPREAD = 0.01
+
+
+def without_chain_lines(x, fs, f_step, f_top):
+    """``x`` less a least-squares fit of every harmonic of the chain's step pass up to ``f_top``: the
+    link pass and its harmonics (every links_per_step-th) and the step pass's own. Their frequency is
+    refined within :data:`CHAIN_SPREAD` of ``f_step`` (where the harmonics hold the most power).
+    A clean simulation's link-pass lines stand so far over its floor that their leakage alone would make
+    families anywhere; what is left is the rest of the step's motion."""
+    x = np.asarray(x, dtype=float) - float(np.mean(x))
+    t = np.arange(x.size) / float(fs)
+    orders = np.arange(1, int(f_top // (f_step * (1 - CHAIN_SPREAD))) + 2)
+
+    def power(f):  # the harmonics' power in the periodogram: the fit's, for well-separated harmonics
+        z = np.exp(-2j * np.pi * f * t)
+        return float(np.sum(np.abs(x @ np.cumprod(np.repeat(z[:, None], orders.size, axis=1), axis=1)) ** 2))
+
+    # coarse: the harmonics' bins of a 16-fold zero-padded periodogram; fine: golden section on the power
+    pad = 16 * x.size
+    spec = np.abs(np.fft.rfft(x * np.hanning(x.size), pad)) ** 2
+    grid = f_step * (1.0 + CHAIN_SPREAD * np.linspace(-1.0, 1.0, 401))
+
+    def coarse(f):
+        k = np.rint(orders * f * pad / fs).astype(int)
+        return float(spec[k[k < spec.size]].sum())
+
+    best = max(grid, key=coarse)
+    # the coarse power steps with the padded bins: the fine search spans a bin of the fundamental either side
+    lo, hi = best - fs / pad, best + fs / pad
+    g = (math.sqrt(5.0) - 1.0) / 2.0
+    for _ in range(24):  # to 1e-7 of the bracket
+        a, b = hi - g * (hi - lo), lo + g * (hi - lo)
+        if power(a) > power(b):
+            hi = b
+        else:
+            lo = a
+    arg = 2.0 * np.pi * 0.5 * (lo + hi) * t[:, None] * orders[None, :]
+    m = np.concatenate([np.cos(arg), np.sin(arg)], axis=1)
+    coef, *_ = np.linalg.lstsq(m, x, rcond=None)
+    return x - m @ coef
+
+
+def roller_knock(x, fs, *, speed, roller_radius, link_pitch, links_per_step=3, p_fa=1e-3):
+    """Does a roller under the step knock once a turn?
+
+    Parameters
+    ----------
+    x : array_like
+        Vertical acceleration of a step over a straight stretch of track (the incline of the ride). [m/s^2]
+    fs : float
+        Sampling frequency. [Hz]
+    speed : float
+        Chain speed. [m/s]
+    roller_radius : float
+        The rollers' radius (the profile's ``roller_radius``). [m]
+    link_pitch : float
+        The chain's link pitch. [m]
+    links_per_step : int
+        Links per step (the step pass is the link pass over it).
+    p_fa : float
+        False-alarm probability of the test.
+
+    Returns
+    -------
+    RollerKnock
+
+    Raises
+    ------
+    ValueError
+        Bad arguments, a sampling too slow for the knock's harmonics, or a stretch too short to test.
+    """
+    speed, r, p = float(speed), float(roller_radius), float(link_pitch)
+    if not (speed > 0 and r > 0 and p > 0):
+        raise ValueError(f"speed, roller_radius and link_pitch must be positive, got {speed!r}, {r!r}, {p!r}")
+    f_turn = speed / (2.0 * math.pi * r)
+    band = (f_turn / (1.0 + RADIUS_TOLERANCE), f_turn / (1.0 - RADIUS_TOLERANCE))
+    f_top = min(KNOCK_TOP_HZ, 0.45 * float(fs))
+    n_h = int(f_top // band[1])
+    if n_h < 8:
+        raise ValueError(
+            f"a roller's knock shows in its harmonics up to {KNOCK_TOP_HZ:g} Hz; sampled at {fs:g} Hz the record "
+            f"holds {n_h} of the {f_turn:.3g} Hz turn: record at 200 Hz or more"
+        )
+    step_pass = speed / (p * int(links_per_step))
+    x = without_chain_lines(np.asarray(x, dtype=float), fs, step_pass, f_top)
+    det = detect_link_pass(
+        x,
+        fs,
+        band=band,
+        n_harmonics=n_h,
+        p_fa=p_fa,
+        f_top=f_top,
+        exclude=(step_pass, CHAIN_LINE_BINS),
+        family_checks=False,
+        clip=LINE_CLIP,
+    )
+    where = f"{band[0]:.3g}-{band[1]:.3g} Hz (the turn of a {1e3 * r:.3g} mm roller at {speed:.3g} m/s +- {100 * RADIUS_TOLERANCE:g} %)"
+    if det.detected:
+        f = float(det.frequency_hz)
+        radius = speed / (2.0 * math.pi * f)
+        reason = (
+            f"a roller knocks once a turn: a harmonic family at {f:.4g} Hz, the turn of a {1e3 * radius:.3g} mm "
+            f"roller at {speed:.3g} m/s (p = {det.p_value:.2g}, false-alarm probability {p_fa:g}): a flat or "
+            "out-of-round roller under this step"
+        )
+        return RollerKnock(True, reason, f, radius, band, det.p_value, p_fa, det.n_harmonics)
+    reason = f"no knock at {where}: {det.reason.split(': ', 1)[-1]}"
+    return RollerKnock(False, reason, float("nan"), float("nan"), band, det.p_value, p_fa, det.n_harmonics)
+
+
+#: the ride's straight part: its segment without this fraction at either end (the transition curves,
+#: where the roller's turn runs faster or slower than on the straight)
+TRIM = 0.15
+
+
+def step_rollers_of(scene=None, profile=None):
+    """``(radius [m], link pitch [m], links per step, where)`` of the step a sensor rides: a scene's
+    (the middle roller of its ``step_accelerometer`` step) or an escalator profile's (its
+    ``roller_radius``, else the reference 35 mm scaled with the pitch, as its scene is built); None
+    without either."""
+    if scene is not None:
+        from ..model.escalator import EscalatorModel
+
+        model = EscalatorModel(scene)
+        step = scene.outputs.get("step_accelerometer") or 1
+        roller = int(model.step_rollers(step)[1])
+        c = scene.chain
+        return (
+            float(model.radii[roller]),
+            float(c.link_pitch),
+            int(c.links_per_step),
+            f"roller {roller + 1} of the scene",
+        )
+    if profile is not None:
+        from ..model.params import reference_chain
+
+        if profile.roller_radius is not None:
+            return (
+                float(profile.roller_radius),
+                float(profile.nominal_pitch),
+                int(profile.links_per_step),
+                "the profile",
+            )
+        ref = reference_chain()
+        radius = ref.roller_radius * profile.nominal_pitch / ref.link_pitch
+        where = f"the reference {1e3 * ref.roller_radius:g} mm scaled with the pitch (no chain.roller_radius in the profile)"
+        return float(radius), float(profile.nominal_pitch), int(profile.links_per_step), where
+    return None
+
+
+def ride_knock(rq, rollers, *, p_fa=1e-3):
+    """The knock test (:func:`roller_knock`) on a ride's vertical axis: the ISO-weighted z of
+    :class:`vibkit.diagnose.ride.RideQuality` ``rq`` (a linear filter: every harmonic's signal-to-noise
+    ratio is the unweighted one's) over its segment without :data:`TRIM` at either end. ``rollers``:
+    :func:`step_rollers_of`. Returns ``(RollerKnock or None, note)``: None, and why, where the ride
+    cannot be tested."""
+    if rollers is None:
+        return None, "the step's rollers are not checked for a knock: their radius is unknown (--escalator FILE)"
+    if "z" not in rq.weighted:
+        return None, "the step's rollers are not checked for a knock: no vertical axis"
+    if not rq.speed_m_s:
+        return None, "the step's rollers are not checked for a knock: no chain speed (--speed)"
+    radius, pitch, per_step, _ = rollers
+    seg = rq.segment
+    a = seg.start_s + TRIM * seg.duration_s
+    b = seg.end_s - TRIM * seg.duration_s
+    z = rq.weighted["z"][int(round(a * rq.fs)) : int(round(b * rq.fs))]
+    try:
+        res = roller_knock(
+            z, rq.fs, speed=rq.speed_m_s, roller_radius=radius, link_pitch=pitch, links_per_step=per_step, p_fa=p_fa
+        )
+    except ValueError as exc:
+        return None, f"the step's rollers are not checked for a knock: {exc}"
+    return res, f"{res.reason} (over {a:.2f}-{b:.2f} s of the ride)"
