@@ -118,3 +118,10 @@ def test_a_strong_line_of_something_else_is_no_knock():
     x = _chain_lines(t, rng) + 0.5 * np.cos(2 * np.pi * 50.0 * t) + 0.2 * np.cos(2 * np.pi * 24.7 * t)
     x += 0.005 * rng.standard_normal(t.size)
     assert not roller_knock(x, FS, speed=V, roller_radius=R, link_pitch=P).detected
+
+
+def test_a_ride_too_short_for_eight_turns_is_not_tested(capsys):
+    profile = "data/fleet-example/escalators/E07.toml"
+    assert main(["ride", "data/field/layouts/phyphox.csv", "--segment", "0.5:3", "--escalator", profile, "--json"]) == 0
+    knock = json.loads(capsys.readouterr().out)["roller_knock"]
+    assert not knock["checked"] and "4.0 turns" in knock["reason"] and "needs 8" in knock["reason"]

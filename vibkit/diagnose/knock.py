@@ -195,6 +195,8 @@ def roller_knock(x, fs, *, speed, roller_radius, link_pitch, links_per_step=3, p
     return RollerKnock(False, reason, float("nan"), float("nan"), band, det.p_value, p_fa, det.n_harmonics)
 
 
+#: the fewest turns of the roller the test is run on (split in halves of at least three)
+MIN_TURNS = 8
 #: the ride's straight part: its segment without this fraction at either end (the transition curves,
 #: where the roller's turn runs faster or slower than on the straight)
 TRIM = 0.15
@@ -242,20 +244,26 @@ def ride_knock(rq, rollers, *, p_fa=1e-3):
     :func:`step_rollers_of`. Returns ``(RollerKnock or None, note)``: None, and why, where the ride
     cannot be tested."""
     if rollers is None:
-        return None, "the step's rollers are not checked for a knock: their radius is unknown (--escalator FILE)"
+        return None, "not checked: the rollers' radius is unknown (--escalator FILE)"
     if "z" not in rq.weighted:
-        return None, "the step's rollers are not checked for a knock: no vertical axis"
+        return None, "not checked: no vertical axis"
     if not rq.speed_m_s:
-        return None, "the step's rollers are not checked for a knock: no chain speed (--speed)"
+        return None, "not checked: no chain speed (--speed)"
     radius, pitch, per_step, _ = rollers
     seg = rq.segment
     a = seg.start_s + TRIM * seg.duration_s
     b = seg.end_s - TRIM * seg.duration_s
+    turns = (b - a) * rq.speed_m_s / (2.0 * math.pi * radius)
+    if turns < MIN_TURNS:
+        return None, (
+            f"not checked: the straight part of the ride ({a:.2f}-{b:.2f} s) "
+            f"holds {turns:.1f} turns of a {1e3 * radius:.3g} mm roller, the test needs {MIN_TURNS}"
+        )
     z = rq.weighted["z"][int(round(a * rq.fs)) : int(round(b * rq.fs))]
     try:
         res = roller_knock(
             z, rq.fs, speed=rq.speed_m_s, roller_radius=radius, link_pitch=pitch, links_per_step=per_step, p_fa=p_fa
         )
     except ValueError as exc:
-        return None, f"the step's rollers are not checked for a knock: {exc}"
+        return None, f"not checked: {exc}"
     return res, f"{res.reason} (over {a:.2f}-{b:.2f} s of the ride)"
