@@ -72,7 +72,7 @@ STEP_REFUSAL = (
     "m/s^2 r.m.s.; only a model of this escalator could give the healthy trip to subtract, and even the "
     "simulator's own trip, subtracted from its own recordings, reads a healthy chain as a 0.2 mm worn link and "
     "numbers a 1 mm link a link or two off; record the tensioner's displacement, which sees every link at the "
-    "same place"
+    "same place (a step's accelerometer does show a flat roller under that step: vibkit ride)"
 )
 
 
