@@ -125,3 +125,16 @@ def test_a_ride_too_short_for_eight_turns_is_not_tested(capsys):
     assert main(["ride", "data/field/layouts/phyphox.csv", "--segment", "0.5:3", "--escalator", profile, "--json"]) == 0
     knock = json.loads(capsys.readouterr().out)["roller_knock"]
     assert not knock["checked"] and "4.0 turns" in knock["reason"] and "needs 8" in knock["reason"]
+
+
+def test_a_real_recording_of_something_else_makes_no_knock():
+    """A seismometer's 253 s at 200 Hz (obspy's test data): a 2.266 Hz line, mains hum at 49.9 Hz (the 22nd
+    multiple of it) and a 20 Hz line make a family that passes the clipped sum with 27 segments; a knock
+    shows in many harmonics above 20 Hz, these in two."""
+    import vibkit
+    from vibkit.signal.bursts import uniform_bursts
+
+    rec = vibkit.read_recording("data/thirdparty/obspy_gaps.mseed")
+    burst = max(uniform_bursts(rec, "bw_bgld_ehe"), key=lambda b: b.x.size)
+    res = roller_knock(burst.x, burst.fs, speed=V, roller_radius=R, link_pitch=P)
+    assert not res.detected and "stand out alone" in res.reason

@@ -182,6 +182,16 @@ def roller_knock(x, fs, *, speed, roller_radius, link_pitch, links_per_step=3, p
         clip=LINE_CLIP,
     )
     where = f"{band[0]:.3g}-{band[1]:.3g} Hz (the turn of a {1e3 * r:.3g} mm roller at {speed:.3g} m/s +- {100 * RADIUS_TOLERANCE:g} %)"
+    high = [o for o in det.significant_orders if o * det.frequency_hz >= KNOCK_ORDERS_FROM_HZ]
+    if det.detected and len(high) < MIN_KNOCK_ORDERS:
+        reason = (
+            f"no knock at {where}: a harmonic family at {det.frequency_hz:.4g} Hz passes the test (p = "
+            f"{det.p_value:.2g}), but only {len(high)} of its harmonics above {KNOCK_ORDERS_FROM_HZ:g} Hz stand out "
+            f"alone (orders {', '.join(map(str, det.significant_orders[:8])) or 'none'}); a knock, a few "
+            f"milliseconds long, shows in {MIN_KNOCK_ORDERS} or more: a few lines of something else (hum, a "
+            "machine) or a gait"
+        )
+        return RollerKnock(False, reason, float("nan"), float("nan"), band, det.p_value, p_fa, det.n_harmonics)
     if det.detected:
         f = float(det.frequency_hz)
         radius = speed / (2.0 * math.pi * f)
@@ -195,6 +205,10 @@ def roller_knock(x, fs, *, speed, roller_radius, link_pitch, links_per_step=3, p
     return RollerKnock(False, reason, float("nan"), float("nan"), band, det.p_value, p_fa, det.n_harmonics)
 
 
+#: a knock is a few milliseconds long: a family is one only where at least MIN_KNOCK_ORDERS of its
+#: harmonics above KNOCK_ORDERS_FROM_HZ stand out alone (a gait's or a hum's do not)
+MIN_KNOCK_ORDERS = 5
+KNOCK_ORDERS_FROM_HZ = 20.0
 #: the fewest turns of the roller the test is run on (split in halves of at least three)
 MIN_TURNS = 8
 #: the ride's straight part: its segment without this fraction at either end (the transition curves,
