@@ -11,10 +11,14 @@ pivot's duration: the evidence is in the high harmonics (tens of Hz), which a st
 :func:`roller_knock` tests the vertical acceleration of a straight stretch of the ride for a harmonic
 family with its fundamental within :data:`RADIUS_TOLERANCE` of the roller's turn, summing the harmonics
 up to :data:`KNOCK_TOP_HZ` (:func:`vibkit.signal.detect.detect_link_pass`, with its stated false-alarm
-probability). The chain's own lines are left out of every sum: the bins within one bin of a multiple of
-the step pass (v / (p links_per_step), whose multiples hold the link pass's), which a step's vertical
-acceleration carries whatever its rollers. A family found gives the radius that turns at its frequency,
-v / (2 pi f).
+probability). A step's vertical acceleration carries the chain's own lines whatever its rollers: every
+harmonic of the step pass v / (p links_per_step), whose multiples hold the link pass's. They are fitted
+and removed first (:func:`without_chain_lines`) and their bins left out of every sum. No bin counts
+more than :data:`LINE_CLIP` noise means in a sum, and a family is a knock only where at least
+:data:`MIN_KNOCK_ORDERS` of its harmonics above :data:`KNOCK_ORDERS_FROM_HZ` stand out alone: a few
+strong lines of something else (mains hum, a machine) or a gait's low harmonics are not a knock. Each of
+these only removes detections, so the false-alarm probability stays at most the test's. A family found
+gives the radius that turns at its frequency, v / (2 pi f).
 """
 
 from __future__ import annotations
@@ -26,7 +30,15 @@ import numpy as np
 
 from ..signal.detect import detect_link_pass
 
-__all__ = ["KNOCK_TOP_HZ", "RADIUS_TOLERANCE", "RollerKnock", "ride_knock", "roller_knock", "step_rollers_of"]
+__all__ = [
+    "KNOCK_TOP_HZ",
+    "RADIUS_TOLERANCE",
+    "RollerKnock",
+    "ride_knock",
+    "roller_knock",
+    "step_rollers_of",
+    "without_chain_lines",
+]
 
 #: harmonics are summed up to this frequency (and 0.45 fs) [Hz]: a knock's spectrum rises up to the
 #: inverse of the pivot's duration (10 ms for a 5 mm flat on a 35 mm roller at 0.5 m/s)
@@ -39,6 +51,15 @@ CHAIN_LINE_BINS = 1.0
 #: no bin counts more than this in a sum (noise: mean 1): a knock is many harmonics, a few strong lines of
 #: something else (mains hum, a motor) cannot make one
 LINE_CLIP = 8.0
+#: a knock is a few milliseconds long: a family is one only where at least MIN_KNOCK_ORDERS of its
+#: harmonics above KNOCK_ORDERS_FROM_HZ stand out alone (a gait's or a hum's do not)
+MIN_KNOCK_ORDERS = 5
+KNOCK_ORDERS_FROM_HZ = 20.0
+#: the fewest turns of the roller the test is run on (split in halves of at least three)
+MIN_TURNS = 8
+#: the ride's straight part: its segment without this fraction at either end (the transition curves,
+#: where the roller's turn runs faster or slower than on the straight)
+TRIM = 0.15
 
 
 @dataclass(frozen=True)
@@ -203,17 +224,6 @@ def roller_knock(x, fs, *, speed, roller_radius, link_pitch, links_per_step=3, p
         return RollerKnock(True, reason, f, radius, band, det.p_value, p_fa, det.n_harmonics)
     reason = f"no knock at {where}: {det.reason.split(': ', 1)[-1]}"
     return RollerKnock(False, reason, float("nan"), float("nan"), band, det.p_value, p_fa, det.n_harmonics)
-
-
-#: a knock is a few milliseconds long: a family is one only where at least MIN_KNOCK_ORDERS of its
-#: harmonics above KNOCK_ORDERS_FROM_HZ stand out alone (a gait's or a hum's do not)
-MIN_KNOCK_ORDERS = 5
-KNOCK_ORDERS_FROM_HZ = 20.0
-#: the fewest turns of the roller the test is run on (split in halves of at least three)
-MIN_TURNS = 8
-#: the ride's straight part: its segment without this fraction at either end (the transition curves,
-#: where the roller's turn runs faster or slower than on the straight)
-TRIM = 0.15
 
 
 def step_rollers_of(scene=None, profile=None):
