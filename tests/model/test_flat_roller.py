@@ -222,3 +222,19 @@ def test_forward_run_gives_the_flat_to_its_roller_alone():
     n_late = int(np.sum(late[starts]))
     travelled = float(np.trapezoid(a.chain_speed.values[late], a.time.values[late]))
     assert abs(n_late - travelled / (2 * math.pi * R)) <= 1.5
+
+
+def test_a_flat_no_output_shows_is_said():
+    scene = _scene("thesis-forward.toml", "roller_flat_by_roller = [[40, 0.005]]")
+    ds = vibkit.simulate(scene, duration=0.5, progress=False)
+    assert "roller(s) 40 worn flat, but no output shows them" in ds.attrs.get("warnings", "")
+    shown = _scene(
+        "thesis-forward.toml",
+        "roller_flat_by_roller = [[40, 0.005]]",
+        **{
+            r"step_accelerometer = 20": "step_accelerometer = 20\nrollers = [40]",
+            r'"accel_step"\]': '"accel_step", "roller_acceleration"]',
+        },
+    )
+    ds = vibkit.simulate(shown, duration=0.5, progress=False)
+    assert "worn flat" not in ds.attrs.get("warnings", "")

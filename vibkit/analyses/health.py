@@ -34,7 +34,29 @@ def physics_warnings(ds, scene, model) -> list[str]:
         out += _compression(ds)
     if scene.analysis == "forward" and "motor" in effects:
         out += _motor(ds, effects["motor"], model)
+    out += _unseen_flats(scene)
     return out
+
+
+def _unseen_flats(scene) -> list[str]:
+    """A roller worn flat moves only itself (:mod:`vibkit.model.flat_roller`): said when no output shows it."""
+    flats = [roller for roller, _ in scene.chain.roller_flats]
+    if not flats:
+        return []
+    if scene.analysis == "kinematics":
+        return [f"roller(s) {', '.join(map(str, flats))} worn flat: a kinematics scene places the chain alone, no flat"]
+    shown = (
+        set(scene.outputs.get("rollers", ()))
+        if {"roller_position", "roller_velocity", "roller_acceleration"} & set(scene.outputs.get("variables", ()))
+        else set()
+    )
+    unseen = [r for r in flats if r not in shown]
+    if not unseen:
+        return []
+    return [
+        f"roller(s) {', '.join(map(str, unseen))} worn flat, but no output shows them: a flat moves its own roller "
+        "only (add them to [outputs] rollers with roller_acceleration; `vibkit ride` does that for its step)"
+    ]
 
 
 def _compression(ds) -> list[str]:
