@@ -126,7 +126,7 @@ def _convolved(u, half, rate, sigma, radius, chord):
         g = _knock_kernels(u[:, None] - tau, sigma)[0]
         for o, f in zip(out, (d, rate * d1, rate**2 * d2)):
             o += 0.5 * width * ((f * g) @ w)
-    jump = -2.0 * radius * math.sin(math.asin(chord / (2.0 * radius))) * rate
+    jump = -chord * rate  # -2 r sin(beta) rate
     out[2] += jump * _knock_kernels(u, sigma)[0]
     return out
 
