@@ -180,7 +180,7 @@ def _fmt_measurement(m):
         )
     else:  # stored before the speed's uncertainty was required: no +-
         numbers = (
-            f"pitch {1000 * m.pitch_m:.2f} mm, elongation {m.elongation_percent:+.2f} % ({SPEED_SIGMA_NOT_STATED})"
+            f"pitch {1000 * m.pitch_m:.2f} mm, elongation {m.elongation_percent:+z.2f} % ({SPEED_SIGMA_NOT_STATED})"
         )
     return (
         f"#{m.id} unit {m.unit} {m.date_utc[:10]}: {numbers} "

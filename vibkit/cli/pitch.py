@@ -155,7 +155,7 @@ def run(a):
         el = (
             fmt_pm(est.elongation_percent, est.elongation_sigma_percent, "%", sign=True)
             if stated
-            else f"{est.elongation_percent:+.2f} % ({SPEED_SIGMA_NOT_STATED})"
+            else f"{est.elongation_percent:+z.2f} % ({SPEED_SIGMA_NOT_STATED})"
         )
         print(
             f"elongation           {el} of {1000 * est.nominal_pitch_m:.2f} mm -> {est.verdict}\n"

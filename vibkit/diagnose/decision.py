@@ -469,7 +469,7 @@ def _verdict(ev, p, checks):
         return Decision(
             STATUS_INCONCLUSIVE,
             (
-                f"elongation {el:+.2f} +- {el_sigma:.2g} %: its sigma is more than a third of the first limit "
+                f"elongation {el:+z.2f} +- {el_sigma:.2g} %: its sigma is more than a third of the first limit "
                 f"({need:.2g} %); record longer, or measure the speed better, for a verdict"
             ),
             verdict="inconclusive",
@@ -479,7 +479,7 @@ def _verdict(ev, p, checks):
     verdict = elongation_verdict(el, lim)
     return Decision(
         STATUS_OK,
-        f"elongation {el:+.2f} +- {el_sigma:.2g} % of {_mm(nom)}: {verdict}",
+        f"elongation {el:+z.2f} +- {el_sigma:.2g} % of {_mm(nom)}: {verdict}",
         verdict=verdict,
         implied_pitch_m=p,
         checks=checks,

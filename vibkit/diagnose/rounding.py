@@ -54,8 +54,8 @@ def fmt_pm(value, sigma, unit="", digits=4, *, sign=False):
     dec = decimals_for(sg)
     if dec <= 0:
         q = 10.0 ** (-dec)
-        return f"{round(v / q) * q:{s}.0f} +- {round(sg / q) * q:.0f}{u}"
-    return f"{v:{s}.{dec}f} +- {sg:.{dec}f}{u}"
+        return f"{round(v / q) * q:{s}z.0f} +- {round(sg / q) * q:.0f}{u}"
+    return f"{v:{s}z.{dec}f} +- {sg:.{dec}f}{u}"
 
 
 def fmt_length(value_m, sigma_m=None, digits=5):

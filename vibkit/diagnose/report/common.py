@@ -136,7 +136,7 @@ def elongation_figure(pitch) -> str:
     """The elongation as every page states it (see :func:`pitch_figure`)."""
     if pitch.speed_sigma_stated:
         return fmt_pm(pitch.elongation_percent, pitch.elongation_sigma_percent, "%", sign=True)
-    return f"{pitch.elongation_percent:+.2f} % ({SPEED_SIGMA_NOT_STATED})"
+    return f"{pitch.elongation_percent:+z.2f} % ({SPEED_SIGMA_NOT_STATED})"
 
 
 def speed_value(ctx) -> str:
