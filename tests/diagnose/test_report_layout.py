@@ -154,3 +154,13 @@ def test_date_without_metadata_says_so(checked_reports):
 )
 def test_numbers_rounded_to_their_uncertainty(v, s, text):
     assert fmt_pm(v, s) == text
+
+
+def test_a_value_that_rounds_to_zero_has_no_minus_sign():
+    from types import SimpleNamespace
+
+    from vibkit.diagnose.report.common import elongation_figure
+
+    assert fmt_pm(-0.0003, 0.01, "%", sign=True) == "+0.000 +- 0.010 %"
+    pitch = SimpleNamespace(speed_sigma_stated=False, elongation_percent=-0.0003)
+    assert elongation_figure(pitch).startswith("+0.00 %")
