@@ -29,6 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..signal.detect import detect_link_pass
+from ..signal.estimate import harmonic_ls
 
 __all__ = [
     "KNOCK_TOP_HZ",
@@ -111,41 +112,29 @@ CHAIN_SPREAD = 0.01
 
 def without_chain_lines(x, fs, f_step, f_top):
     """``x`` less a least-squares fit of every harmonic of the chain's step pass up to ``f_top``: the
-    link pass and its harmonics (every links_per_step-th) and the step pass's own. Their frequency is
-    refined within :data:`CHAIN_SPREAD` of ``f_step`` (where the harmonics hold the most power).
-    A clean simulation's link-pass lines stand so far over its floor that their leakage alone would make
-    families anywhere; what is left is the rest of the step's motion."""
-    x = np.asarray(x, dtype=float) - float(np.mean(x))
-    t = np.arange(x.size) / float(fs)
-    orders = np.arange(1, int(f_top // (f_step * (1 - CHAIN_SPREAD))) + 2)
-
-    def power(f):  # the harmonics' power in the periodogram: the fit's, for well-separated harmonics
-        z = np.exp(-2j * np.pi * f * t)
-        return float(np.sum(np.abs(x @ np.cumprod(np.repeat(z[:, None], orders.size, axis=1), axis=1)) ** 2))
-
-    # coarse: the harmonics' bins of a 16-fold zero-padded periodogram; fine: golden section on the power
+    link pass and its harmonics (every links_per_step-th) and the step pass's own, their common frequency
+    found within :data:`CHAIN_SPREAD` of ``f_step`` (:func:`vibkit.signal.harmonic_ls`, started from the
+    harmonics' bins of a zero-padded periodogram). A clean simulation's link-pass lines stand so far over
+    its floor that their leakage alone would make families anywhere; what is left is the rest of the
+    step's motion."""
+    x = np.asarray(x, dtype=float)
+    n_h = min(int(f_top // (f_step * (1 - CHAIN_SPREAD))) + 1, int(0.49 * fs // (f_step * (1 + CHAIN_SPREAD))))
+    orders = np.arange(1, n_h + 1)
     pad = 16 * x.size
-    spec = np.abs(np.fft.rfft(x * np.hanning(x.size), pad)) ** 2
-    grid = f_step * (1.0 + CHAIN_SPREAD * np.linspace(-1.0, 1.0, 401))
+    spec = np.abs(np.fft.rfft((x - x.mean()) * np.hanning(x.size), pad)) ** 2
 
     def coarse(f):
         k = np.rint(orders * f * pad / fs).astype(int)
         return float(spec[k[k < spec.size]].sum())
 
-    best = max(grid, key=coarse)
-    # the coarse power steps with the padded bins: the fine search spans a bin of the fundamental either side
-    lo, hi = best - fs / pad, best + fs / pad
-    g = (math.sqrt(5.0) - 1.0) / 2.0
-    for _ in range(24):  # to 1e-7 of the bracket
-        a, b = hi - g * (hi - lo), lo + g * (hi - lo)
-        if power(a) > power(b):
-            hi = b
-        else:
-            lo = a
-    arg = 2.0 * np.pi * 0.5 * (lo + hi) * t[:, None] * orders[None, :]
-    m = np.concatenate([np.cos(arg), np.sin(arg)], axis=1)
-    coef, *_ = np.linalg.lstsq(m, x, rcond=None)
-    return x - m @ coef
+    f = max(f_step * (1.0 + CHAIN_SPREAD * np.linspace(-1.0, 1.0, 401)), key=coarse)
+    # a few harmonics first (a wide capture range), then all of them from there
+    for k in (min(10, n_h), n_h):
+        est = harmonic_ls(x, fs, f_guess=f, n_harmonics=k)
+        f = est.frequency_hz
+    arg = 2.0 * np.pi * f * np.arange(x.size) / fs
+    model = est.offset + sum(a * np.cos((h + 1) * arg + p) for h, (a, p) in enumerate(zip(est.amplitudes, est.phases)))
+    return x - model
 
 
 def roller_knock(x, fs, *, speed, roller_radius, link_pitch, links_per_step=3, p_fa=1e-3):
