@@ -234,19 +234,10 @@ def step_rollers_of(scene=None, profile=None):
             f"roller {roller + 1} of the scene",
         )
     if profile is not None:
-        from ..model.params import reference_chain
+        from ..model.profile_scene import roller_radius_of
 
-        if profile.roller_radius is not None:
-            return (
-                float(profile.roller_radius),
-                float(profile.nominal_pitch),
-                int(profile.links_per_step),
-                "the profile",
-            )
-        ref = reference_chain()
-        radius = ref.roller_radius * profile.nominal_pitch / ref.link_pitch
-        where = f"the reference {1e3 * ref.roller_radius:g} mm scaled with the pitch (no chain.roller_radius in the profile)"
-        return float(radius), float(profile.nominal_pitch), int(profile.links_per_step), where
+        radius, where = roller_radius_of(profile)
+        return radius, float(profile.nominal_pitch), int(profile.links_per_step), f"the profile ({where})"
     return None
 
 

@@ -28,7 +28,7 @@ import math
 from .params import reference_chain, reference_guide, reference_sprocket
 from .scene import Scene, SceneError, parse_scene
 
-__all__ = ["profile_scene", "scene_text", "MASS_PER_METRE"]
+__all__ = ["profile_scene", "scene_text", "roller_radius_of", "MASS_PER_METRE"]
 
 _RC, _RG, _RS = reference_chain(), reference_guide(), reference_sprocket()
 REFERENCE_PITCH = _RC.link_pitch
@@ -40,6 +40,15 @@ DEFAULT_INCLINE_DEG = 30.0
 #: forward runs: settle after the start at speed, then enough link passes to read a frequency [s]
 DEFAULT_DURATION = {"forward": 20.0, "inverse": 10.0}
 OUTPUT_STEP = 0.005
+
+
+def roller_radius_of(profile) -> tuple[float, str]:
+    """``(radius [m], where it came from)``: the profile's ``chain.roller_radius``, else the reference
+    roller scaled with the pitch (as the profile's scene is built)."""
+    if profile.roller_radius is not None:
+        return float(profile.roller_radius), "chain.roller_radius"
+    radius = _RC.roller_radius * profile.nominal_pitch / REFERENCE_PITCH
+    return float(radius), f"filled: reference {1000 * _RC.roller_radius:g} mm x pitch / 133.33 mm"
 
 
 def _fmt(v) -> str:
@@ -56,11 +65,7 @@ class _Filled:
         scale = p.nominal_pitch / REFERENCE_PITCH
         self.scale = scale
         self.pitch = p.nominal_pitch
-        if p.roller_radius is not None:
-            self.roller_radius, self.roller_src = p.roller_radius, "chain.roller_radius"
-        else:
-            self.roller_radius = _RC.roller_radius * scale
-            self.roller_src = f"filled: reference {1000 * _RC.roller_radius:g} mm x pitch / 133.33 mm"
+        self.roller_radius, self.roller_src = roller_radius_of(p)
         self.roller_mass = MASS_PER_METRE * self.pitch
         self.teeth = p.teeth
         self.base_width, self.tip_width, self.tooth_height = (
