@@ -68,11 +68,11 @@ ACCELERATION_UNITS = ("m/s^2", "m/s2", "m s-2", "mm/s^2", "g")
 #: benchmarks/bench_links_step.py)
 STEP_REFUSAL = (
     "a step accelerometer gives no link number: the step rides the chain, so its signal is its own trip round "
-    "the loop (0.015 m/s^2 r.m.s. on the study's escalator), and a 1 mm worn link changes it by about 0.004 "
-    "m/s^2 r.m.s.; only a model of this escalator could give the healthy trip to subtract, and even the "
-    "simulator's own trip, subtracted from its own recordings, reads a healthy chain as a 0.2 mm worn link and "
-    "numbers a 1 mm link a link or two off; record the tensioner's displacement, which sees every link at the "
-    "same place (a step's accelerometer does show a flat roller under that step: vibkit ride)"
+    "the loop (0.015 m/s^2 r.m.s. on the study's escalator), which a 1 mm worn link changes by 0.004; compared "
+    "with its own neighbouring cycles, a step shows a worn link only if the link passes the sprocket while the "
+    "step is on straight track (about half the links; the user guide's links page says more); record the "
+    "tensioner's displacement, which sees every link at the same place (a step's accelerometer does show a flat "
+    "roller under that step: vibkit ride)"
 )
 
 
