@@ -35,7 +35,8 @@ SPEED, RADIUS = 0.5, 0.035
 
 def _ride(flat_mm):
     import vibkit
-    from vibkit.diagnose.ride import ride_quality_from_simulation, with_ride_outputs
+    from vibkit.diagnose.ride import ride_quality_from_simulation
+    from vibkit.diagnose.ride_simulation import with_ride_outputs
     from vibkit.model.scene import load_scene, parse_scene
 
     text = load_scene(SCENE).text

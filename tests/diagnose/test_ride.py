@@ -97,7 +97,7 @@ def test_simulated_step_rides_the_incline_not_a_head():
     # the step goes round the sprocket, down the return run and round the lower head before it rides up the
     # incline (from about 31 s): round a head it rises at up to the chain's speed, up the incline at v sin(30 deg)
     import vibkit
-    from vibkit.diagnose.ride import with_ride_outputs
+    from vibkit.diagnose.ride_simulation import with_ride_outputs
     from vibkit.model.scene import load_scene
 
     scene = with_ride_outputs(load_scene(SIM / "thesis-forward.toml"))
@@ -108,6 +108,24 @@ def test_simulated_step_rides_the_incline_not_a_head():
     # 30 s reach only the lower head: no ride, said so (it used to measure the turn round the head)
     with pytest.raises(ValueError, match="does not ride up the incline"):
         ride_quality_from_simulation(ds.sel(time=slice(0.0, 30.0)))
+
+
+def test_simulate_ride_runs_on_to_the_incline_when_the_scene_ends_before_it():
+    # 30 s of the no-load scene end before step 20 reaches the incline (about 31-43 s): without a duration
+    # the scene is simulated again one loop longer (159 x 0.1333 m / 0.5 m/s = 42.4 s), and the notes say so
+    from vibkit.diagnose.ride_simulation import simulate_ride
+    from vibkit.model.scene import load_scene, parse_scene
+
+    shipped = load_scene(SIM / "thesis-forward.toml")
+    scene = parse_scene(shipped.text.replace("duration = 44.0", "duration = 30.0"), shipped.source)
+    rq = simulate_ride(scene)
+    assert rq.segment.plateau == pytest.approx(0.5 * math.sin(math.radians(30.0)), rel=0.01)
+    assert 30.0 < rq.segment.start_s and rq.segment.duration_s > 10.0
+    assert rq.time[-1] == pytest.approx(73.0, abs=0.01)  # ceil(30 + 42.4)
+    assert any("simulated 73 s: in the scene's 30 s step 20 does not ride up the incline" in n for n in rq.notes)
+    # a duration given is kept: no incline in it is an error that says what to do
+    with pytest.raises(ValueError, match="does not ride up the incline.*--duration"):
+        simulate_ride(scene, duration=30.0)
 
 
 def _dataset_recording(t, ax, ay, az):

@@ -108,7 +108,8 @@ def _knocks(a, is_scene, rq, sim):
 
 
 def run(a):
-    from vibkit.diagnose.ride import parse_channels, ride_quality_from_recording, simulate_ride
+    from vibkit.diagnose.ride import parse_channels, ride_quality_from_recording
+    from vibkit.diagnose.ride_simulation import simulate_ride
 
     segment = segment_of(a)
     weightings = _weightings(a.weighting)

@@ -8,7 +8,8 @@ One result type, :class:`RideQuality`, from three entry points that share one pa
 * :func:`ride_quality_from_simulation`: a simulation Dataset with the acceleration of a step
   roller (``roller_acceleration``: x horizontal, z vertical, as a sensor on the step tread sees them,
   gravity added) or only ``accel_step`` (along the guide tangent);
-* :func:`simulate_ride`: a scene (TOML) simulated with the step roller's motion added to its outputs.
+* :func:`vibkit.diagnose.ride_simulation.simulate_ride`: a scene (TOML) simulated with the step roller's
+  motion added to its outputs.
 
 For each axis: the ISO 2631-1 weighted signal (Wd for x and y, Wk for z, as ISO 18738 takes them) and
 its max peak-to-peak, A95, r.m.s. and peak over the ride segment; and the same on the 10 Hz
@@ -18,7 +19,6 @@ low-passed (unweighted) signal.  Definitions: :mod:`vibkit.signal.ride`,
 
 from __future__ import annotations
 
-import dataclasses
 import functools
 import math
 import os
@@ -47,7 +47,6 @@ __all__ = [
     "ride_quality_from_recording",
     "parse_weightings",
     "ride_quality_from_simulation",
-    "simulate_ride",
     "parse_channels",
     "parse_segment",
 ]
@@ -281,10 +280,6 @@ def _recording_source(recording, *args, **kwargs):
     if isinstance(recording, (str, os.PathLike)):
         return os.fspath(recording)
     return getattr(recording, "attrs", {}).get("source_file", "")
-
-
-def _scene_source(scene, *args, **kwargs):
-    return os.fspath(scene) if isinstance(scene, (str, os.PathLike)) else getattr(scene, "source", "")
 
 
 def _metrics(x, fs, i0, i1, notes, label):
@@ -639,50 +634,11 @@ def ride_quality_from_simulation(ds, *, segment=None, weightings=None, source=No
     )
 
 
-@_naming(_scene_source)
-def simulate_ride(scene, *, duration=None, segment=None, weightings=None, progress=False) -> RideQuality:
-    """Simulate a scene with its step accelerometer's roller motion as outputs, then assess the ride.
+def __getattr__(name):
+    """``simulate_ride`` and ``with_ride_outputs``, now in :mod:`vibkit.diagnose.ride_simulation`, importable from
+    here as they were first published."""
+    if name in ("simulate_ride", "with_ride_outputs"):
+        from . import ride_simulation
 
-    Parameters
-    ----------
-    scene : str, os.PathLike or Scene
-        An inverse or forward scene with ``outputs.step_accelerometer``.
-    duration : float, optional
-        Simulated time [s] (default the scene's); it must cover the step's ride up the incline.
-    segment, weightings
-        As :func:`ride_quality`.
-    progress : bool
-
-    Returns
-    -------
-    RideQuality
-
-    Raises
-    ------
-    SceneError, ValueError
-        A kinematics scene, or no ``outputs.step_accelerometer``.
-    """
-    from ..analyses.simulation import simulate
-    from ..model.scene import Scene, load_scene
-
-    sc = scene if isinstance(scene, Scene) else load_scene(scene)
-    if sc.analysis not in ("inverse", "forward"):
-        raise ValueError(f"{sc.source}: ride quality needs an inverse or forward scene, not {sc.analysis}")
-    if sc.outputs.get("step_accelerometer") is None:
-        raise ValueError(f"{sc.source}: the scene names no step ('outputs.step_accelerometer'); add one")
-    ds = simulate(with_ride_outputs(sc), duration=duration, progress=progress)
-    return ride_quality_from_simulation(ds, segment=segment, weightings=weightings, source=sc.source)
-
-
-def with_ride_outputs(sc):
-    """The scene with its step's roller (``outputs.step_accelerometer``) acceleration and velocity added
-    to its outputs: what the ride figure of a simulation is computed from, by ``vibkit ride SCENE``
-    and by the report alike (the scene unchanged when it names no step or is a kinematics scene)."""
-    step = sc.outputs.get("step_accelerometer")
-    if step is None or sc.analysis not in ("inverse", "forward"):
-        return sc
-    roller = 3 * int(step) - 1
-    out = dict(sc.outputs)
-    out["variables"] = tuple(dict.fromkeys(tuple(out["variables"]) + ("roller_acceleration", "roller_velocity")))
-    out["rollers"] = tuple(dict.fromkeys(tuple(out["rollers"]) + (roller,)))
-    return dataclasses.replace(sc, outputs=out)
+        return getattr(ride_simulation, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -54,7 +54,8 @@ class ResolvedSpeed:
         }
 
 
-def _scene_speed(scene):
+def scene_speed(scene):
+    """The nominal chain speed of an inverse or forward scene [m/s]; None for a kinematics scene or a speed of 0."""
     if scene is None:
         return None
     if scene.analysis == "inverse":
@@ -109,7 +110,7 @@ def resolve_speed(speed=None, speed_sigma=None, *, profile=None, recording=None,
         v, source = speed_from_recording(recording)
         if v is not None:
             return ResolvedSpeed(v, stated[0], source=source, sigma_source=stated[1])
-    v = _scene_speed(scene)
+    v = scene_speed(scene)
     if v:
         return ResolvedSpeed(v, stated[0], source=f"the scene's nominal speed ({scene.name})", sigma_source=stated[1])
     return ResolvedSpeed(None)

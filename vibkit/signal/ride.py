@@ -35,6 +35,7 @@ from ._checks import as_signal, check_fs, fill_nan
 __all__ = [
     "LOWPASS_HZ",
     "PeakToPeak",
+    "NoIncline",
     "RideSegment",
     "a95",
     "detect_ride_segment",
@@ -281,6 +282,10 @@ def _longest_run(mask):
     return int(starts[k]), int(stops[k])
 
 
+class NoIncline(ValueError):
+    """A simulated record in which the step reaches no incline (it rises only round a head)."""
+
+
 def incline_from_vertical_speed(vz, fs, *, min_speed=0.05):
     """The incline of a ride from a step's vertical speed ``vz`` [m/s] (a simulation's, exact): the longest
     rise above ``min_speed`` where the speed holds (most of it within 10 % of its median, v sin(alpha)),
@@ -294,7 +299,7 @@ def incline_from_vertical_speed(vz, fs, *, min_speed=0.05):
 
     Raises
     ------
-    ValueError
+    NoIncline
         No rise that holds its speed (the record reaches no incline).
     """
     vz = np.asarray(vz, dtype=float)
@@ -302,7 +307,7 @@ def incline_from_vertical_speed(vz, fs, *, min_speed=0.05):
     part = vz[longest[0] : longest[1]] if longest else np.zeros(1)
     plateau = float(np.median(part))
     if longest is None or np.mean(np.abs(part - plateau) < 0.1 * plateau) < 0.5:
-        raise ValueError(
+        raise NoIncline(
             f"the simulated step does not ride up the incline in {vz.size / fs:.3g} s (it rises only round a head, "
             "where its vertical speed does not hold): simulate longer (--duration) or give the segment (--segment)"
         )

@@ -281,7 +281,7 @@ def analyse(
     if sc is not None:
         from ...analyses.simulation import simulate
         from ..comparison import compare
-        from ..ride import with_ride_outputs
+        from ..ride_simulation import with_ride_outputs
 
         # with the step's roller motion: the ride figure is then the one `vibkit ride SCENE` gives
         result = simulate(with_ride_outputs(sc), duration=duration, progress=progress)
