@@ -3,6 +3,8 @@ chain's result is what it was without the check."""
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 
@@ -171,3 +173,41 @@ def test_decide_on_the_parts_wander():
     assert far.status == STATUS_NOT_FOUND and "wanders 3 %" in far.reason
     no_nominal = decide(LinkPassEvidence(**{**base, "nominal_pitch_m": None}, part_wander=0.004))
     assert no_nominal.status == STATUS_INCONCLUSIVE and no_nominal.verdict is None
+
+
+def test_decide_on_the_methods_disagreement():
+    """Spectral and mean-phase estimates apart by more than DISAGREE_SIGMAS *and* MAX_PART_WANDER: inconclusive,
+    naming both; either under its threshold: the verdict stands."""
+    from vibkit.diagnose.decision import DISAGREE_SIGMAS, LinkPassEvidence, decide
+
+    f = 3.76
+    base = dict(detected=True, detection_hz=f, resolution_hz=0.05, fundamental_hz=f, fundamental_sigma_hz=1e-4,
+                band_hz=(2.5, 6.25), speed_m_s=0.5, nominal_pitch_m=0.5 / f, spectral_hz=f)  # fmt: skip
+    apart = f * (1 + 2 * MAX_PART_WANDER)
+    over = decide(LinkPassEvidence(**base, mean_phase_hz=apart, methods_sigmas=2 * DISAGREE_SIGMAS))
+    assert over.status == STATUS_INCONCLUSIVE and over.verdict == "inconclusive"
+    assert "differ by 0.2 %" in over.reason and "riding a step" in over.reason
+    assert not over.checks["estimates agree"]
+    # significant but within a chain's own wander, or large but not significant (a noisy record): a verdict
+    near = f * (1 + 0.5 * MAX_PART_WANDER)
+    assert decide(LinkPassEvidence(**base, mean_phase_hz=near, methods_sigmas=10 * DISAGREE_SIGMAS)).verdict == "ok"
+    assert decide(LinkPassEvidence(**base, mean_phase_hz=apart, methods_sigmas=0.5 * DISAGREE_SIGMAS)).verdict == "ok"
+
+
+def test_a_step_sensor_going_round_a_curve_gets_no_verdict(run, tmp_path):
+    # a new chain (E07's profile, steady at 0.5 m/s from the start): step 3's accelerometer goes round the
+    # sprocket at about 15-20 s, where its own link-pass phase shifts by half a cycle; the total tracked phase
+    # then counts 74.5 link passes in 20 s (3.72 Hz, +0.7 % "elongation" at 0.0004 Hz) where the spectrum and
+    # the tensioner give 3.750 Hz: the two estimates disagree, and no verdict is given
+    scene, nc = tmp_path / "E07.toml", tmp_path / "E07.nc"
+    assert run("scene", "data/fleet-example/escalators/E07.toml", "--analysis", "forward", "-o", scene)[0] == 0
+    assert run("simulate", scene, "--duration", "20", "-o", nc)[0] == 0
+    rc, out, _ = run("pitch", nc, "--escalator", "data/fleet-example/escalators/E07.toml", "--channel", "accel_step",
+                     "--json")  # fmt: skip
+    d = json.loads(out)
+    assert rc == 3 and d["status"] == STATUS_INCONCLUSIVE and d["verdict"] == "inconclusive"
+    assert "estimates differ by" in d["reason"] and "riding a step goes round a curve" in d["reason"]
+    rc, out, _ = run("pitch", nc, "--escalator", "data/fleet-example/escalators/E07.toml", "--channel", "delta",
+                     "--json")  # fmt: skip
+    tensioner = json.loads(out)
+    assert abs(tensioner["fundamental_hz"] / 3.7503 - 1) < 2e-4 and tensioner["verdict"] == "ok"

@@ -92,6 +92,9 @@ MAX_WANDER = 0.025
 #: estimators (tests/support/chain.py ``wandering``) shows 0.3-1.5 %: more than a chain under speed
 #: control does within one record, so those keep their pitch without a verdict
 MAX_PART_WANDER = 0.001
+#: spectral and mean-phase estimates of one record further apart than this many combined sigmas: the
+#: link-pass frequency is not stationary within the record
+DISAGREE_SIGMAS = 5.0
 #: the elongation must be resolved to this fraction of the first limit for a verdict: its sigma a third of
 #: the first limit puts the watch limit three sigmas from a new chain
 EVIDENCE_FRACTION = 1.0 / 3.0
@@ -216,6 +219,9 @@ class LinkPassEvidence:
         Elongation limits: watch, plan replacement, replace. [%]
     spectral_hz, mean_phase_hz : float, optional
         The two estimates of a record when both exist (steadiness check). [Hz]
+    methods_sigmas : float, optional
+        Their difference in combined sigmas.  Over :data:`DISAGREE_SIGMAS` and :data:`MAX_PART_WANDER` of the
+        frequency: ``inconclusive`` (the frequency moves within the record).
     speed_source : str
         Where the speed came from (named in the reasons).
     significant_orders : sequence of int, optional
@@ -242,6 +248,7 @@ class LinkPassEvidence:
     limits_percent: tuple = DEFAULT_LIMITS_PERCENT
     spectral_hz: float | None = None
     mean_phase_hz: float | None = None
+    methods_sigmas: float | None = None
     speed_source: str = "given"
     significant_orders: tuple | None = None
     part_wander: float | None = None
@@ -285,6 +292,7 @@ def decide(
     return (
         _check_plausible(ev, p, checks, window_percent, catalogue)
         or _check_harmonics(ev, p, checks)
+        or _check_methods_agree(ev, p, checks)
         or _check_parts_wander(ev, p, checks)
         or _verdict(ev, p, checks)
     )
@@ -415,6 +423,34 @@ def _check_harmonics(ev, p, checks):
             f"one spectral line at {float(ev.fundamental_hz):.4g} Hz (pitch {_mm(p)}) without a significant "
             "harmonic: a tone (a structural mode, a motor, a fan) cannot be told from a link pass, whose roller "
             "impacts give harmonics; no verdict"
+        ),
+        verdict="inconclusive" if ev.nominal_pitch_m is not None else None,
+        implied_pitch_m=p,
+        checks=checks,
+    )
+
+
+def _check_methods_agree(ev, p, checks):
+    """``inconclusive`` when the spectral and the mean-phase estimates differ by more than
+    :data:`DISAGREE_SIGMAS` and by more than :data:`MAX_PART_WANDER` of the frequency: the link-pass phase moves
+    within the record (a load changing the speed, or a sensor riding a step round a curve, where the step's own
+    link-pass phase shifts); None otherwise (or not checked)."""
+    if ev.spectral_hz is None or ev.mean_phase_hz is None or ev.methods_sigmas is None:
+        return None
+    spectral, mean_phase = float(ev.spectral_hz), float(ev.mean_phase_hz)
+    rel = abs(spectral - mean_phase) / float(ev.fundamental_hz)
+    agree = rel <= MAX_PART_WANDER or ev.methods_sigmas <= DISAGREE_SIGMAS
+    checks["estimates agree"] = bool(agree)
+    if agree:
+        return None
+    return Decision(
+        STATUS_INCONCLUSIVE,
+        (
+            f"the spectral ({spectral:.5g} Hz) and mean-phase ({mean_phase:.5g} Hz) estimates differ by "
+            f"{100 * rel:.2g} % ({ev.methods_sigmas:.0f} sigma; pitch {_mm(p)}): the link-pass phase moves within "
+            f"the record more than a chain under speed control does ({100 * MAX_PART_WANDER:g} %), as when the load "
+            "changes the speed or a sensor riding a step goes round a curve (the step's own link-pass phase shifts "
+            "there); record the straight ride or a fixed sensor; no verdict"
         ),
         verdict="inconclusive" if ev.nominal_pitch_m is not None else None,
         implied_pitch_m=p,

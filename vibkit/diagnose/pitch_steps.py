@@ -18,7 +18,7 @@ import numpy as np
 from ..signal.bursts import FILL_THRESHOLD, MAX_GAP_S, Burst, dropped_samples, flag_invalid, uniform_bursts
 from ..signal.detect import HARMONIC_SPAN
 from ..signal.quantisation import quantisation_step
-from .decision import LinkPassEvidence, nearest_catalogue
+from .decision import DISAGREE_SIGMAS, LinkPassEvidence, nearest_catalogue
 from .speed import speed_part_too_large
 
 #: samples (from the start) whose levels give the recorder's quantisation step
@@ -29,8 +29,6 @@ DECIMATION_OVERSAMPLE = 2.5
 #: the detection test needs one sampling frequency: bursts whose rate differs from the median rate by more
 #: than this fraction are left out of it (they are still estimated)
 SAME_FS_TOLERANCE = 0.01
-#: spectral and mean-phase estimates further apart than this many combined sigmas: not stationary
-DISAGREE_SIGMAS = 5.0
 #: shortest burst for the mean-phase estimate, in periods of the fundamental
 MIN_TRACK_PERIODS = 40
 #: harmonics tracked in phase at most: the strongest few carry the phase, higher ones add noise
@@ -425,6 +423,8 @@ def evidence(det, ests, comb, req, *, speed_source):
                 abs(be.spectral.fundamental_hz - be.mean_phase.frequency_hz),
                 be.spectral.fundamental_hz,
                 be.mean_phase.frequency_hz,
+                abs(be.spectral.fundamental_hz - be.mean_phase.frequency_hz)
+                / math.hypot(be.spectral.fundamental_sigma_hz, be.mean_phase.sigma_hz),
             )
             for be in ests
             if be.mean_phase is not None
@@ -445,6 +445,7 @@ def evidence(det, ests, comb, req, *, speed_source):
         limits_percent=req.limits,
         spectral_hz=worst[1] if worst else None,
         mean_phase_hz=worst[2] if worst else None,
+        methods_sigmas=worst[3] if worst else None,
         speed_source=speed_source,
         significant_orders=det.significant_orders,
     )
