@@ -7,6 +7,7 @@ import math
 
 from .options import (
     _LENGTH_UNITS,
+    CHANNEL_LENGTH,
     _quantity,
     add_command,
     add_escalator,
@@ -75,7 +76,7 @@ def add_parser(subparsers):
     s = add_command(
         subparsers, "links", "which link of the chain is worn, by number, from a tensioner recording", EPILOG
     )
-    add_recording(s)
+    add_recording(s, channel_default=CHANNEL_LENGTH)
     add_json(s)
     s.add_argument(
         "--speed", type=chain_speed, help="chain speed: m/s, or 0.49m/s, 49cm/s (default: the speed the file states)"

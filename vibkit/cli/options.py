@@ -233,12 +233,17 @@ def add_sample_rate(sp):
     sp.add_argument("--sample-rate", type=sample_rate, help="sample rate for files without time [Hz]")
 
 
-def add_channel(
-    sp,
-    help_="channel to analyse, named as the file writes it or as vibkit does "
-    "(default: the first that is not a sample counter)",
-):
-    sp.add_argument("--channel", help=help_)
+#: what each command analyses without --channel (the end of --channel's help)
+CHANNEL_FIRST = "the first that is not a sample counter"
+CHANNEL_EVERY = "every vibration channel, the numbers from the one with the smallest sigma once the others agree"
+CHANNEL_LENGTH = "the first in a length unit, a tensioner displacement; else the first vibration channel"
+
+
+def add_channel(sp, default=CHANNEL_FIRST):
+    """--channel; ``default`` says what the command analyses without it."""
+    sp.add_argument(
+        "--channel", help=f"channel to analyse, named as the file writes it or as vibkit does (default: {default})"
+    )
 
 
 #: the reader's options: Python argument of :func:`vibkit.read_recording` -> command-line flag
@@ -291,18 +296,19 @@ def delimiter_option(text):
     return d
 
 
-def add_recording(sp, *, positional=True, channel=True):
+def add_recording(sp, *, positional=True, channel=True, channel_default=CHANNEL_FIRST):
     """The RECORDING argument and the recording reader's options, the same for every command that reads one.
 
     ``positional=False``: the command names its input itself (``ride``'s RECORDING_OR_SCENE);
-    ``channel=False``: the command picks channels its own way (``ride --channels``).
+    ``channel=False``: the command picks channels its own way (``ride --channels``);
+    ``channel_default``: what the command analyses without ``--channel`` (:data:`CHANNEL_EVERY` ...).
     :func:`reader_options` turns the parsed options into :func:`vibkit.read_recording` arguments.
     """
     if positional:
         sp.add_argument("recording", help="recording file (CSV/text, miniSEED ..., netCDF); '-': read stdin")
     g = sp.add_argument_group("reading the recording (all optional: the file says it)")
     if channel:
-        add_channel(g)
+        add_channel(g, channel_default)
     add_sample_rate(g)
     g.add_argument(
         "--time-column",

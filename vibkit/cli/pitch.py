@@ -8,6 +8,7 @@ import textwrap
 from vibkit.diagnose.rounding import SPEED_SIGMA_NOT_STATED, fmt_length, fmt_pm
 
 from .options import (
+    CHANNEL_EVERY,
     add_command,
     add_escalator,
     add_json,
@@ -37,7 +38,7 @@ def add_parser(subparsers):
     s = add_command(
         subparsers, "pitch", "link pitch from a recording's link-pass frequency and the chain speed", EPILOG
     )
-    add_recording(s)
+    add_recording(s, channel_default=CHANNEL_EVERY)
     add_json(s)
     add_speed_options(s)
     add_speed_uncertainty(s)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from .options import (
+    CHANNEL_EVERY,
     _profile_of,
     add_command,
     add_escalator,
@@ -30,7 +31,7 @@ EPILOG = (
 
 def add_parser(subparsers):
     s = add_command(subparsers, "report", "write the multi-page PDF diagnostic report of a recording", EPILOG)
-    add_recording(s)
+    add_recording(s, channel_default=CHANNEL_EVERY)
     add_json(s)
     add_escalator(s)
     s.add_argument(

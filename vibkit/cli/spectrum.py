@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from .options import (
+    CHANNEL_EVERY,
     add_command,
     add_escalator,
     add_json,
@@ -25,7 +26,7 @@ EPILOG = (
 
 def add_parser(subparsers):
     s = add_command(subparsers, "spectrum", "link-pass fundamental and harmonic peak table of a recording", EPILOG)
-    add_recording(s)
+    add_recording(s, channel_default=CHANNEL_EVERY)
     add_json(s)
     s.add_argument(
         "--band",
