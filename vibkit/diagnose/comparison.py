@@ -206,8 +206,38 @@ def _widen_by_order_scatter(rows, z, notes):
     birge = math.sqrt(float(np.sum(w * (v - mean) ** 2)) / (v.size - 1))
     if not birge > 1.0:
         return
+    _widen(rows, birge, z)
+    notes.append(
+        f"the orders' frequency ratios ({v.min():.6f}-{v.max():.6f}) scatter {birge:.2g} times their sigmas, where one "
+        f"chain gives them one ratio: every ratio's sigma (and the pitch ratio's) widened {birge:.2g} times"
+    )
+
+
+def _widen_by_parts(rows, dec, z, notes):
+    """The recording's own frequency sigma as :func:`vibkit.diagnose.pitch.estimate_pitch` states it: where its
+    parts check widened it (the record's parts scatter beyond their sigmas), it is added in quadrature to order
+    1's relative ratio sigma and every ratio's sigma widened by the same factor, so that the comparison claims no
+    more precision than ``vibkit pitch`` on the same record."""
+    parts = dec.parts or {}
+    before = parts.get("sigma_before_hz")
+    if not rows or not parts.get("widened") or not before or not dec.fundamental_sigma_hz > before:
+        return
+    own = rows[0]["frequency_ratio_sigma"] / rows[0]["frequency_ratio"]
+    if not own > 0:
+        return
+    factor = math.hypot(own, float(dec.fundamental_sigma_hz) / float(dec.fundamental_hz)) / own
+    _widen(rows, factor, z)
+    notes.append(
+        f"the recording's frequency sigma as vibkit pitch states it, widened by its parts' scatter ({before:.2g} to "
+        f"{dec.fundamental_sigma_hz:.2g} Hz), added to order 1's ratio sigma: every ratio's sigma (and the pitch "
+        f"ratio's) widened {factor:.2g} times"
+    )
+
+
+def _widen(rows, factor, z):
+    """Every row's frequency-ratio sigma times ``factor``, its interval and mismatch flag with it."""
     for r in rows:
-        r["frequency_ratio_sigma"] *= birge
+        r["frequency_ratio_sigma"] *= factor
         rs = r["frequency_ratio_sigma"]
         r["frequency_ratio_ci"] = [r["frequency_ratio"] - z * rs, r["frequency_ratio"] + z * rs]
         r["frequency_mismatch"] = bool(
@@ -215,10 +245,6 @@ def _widen_by_order_scatter(rows, z, notes):
             and r["detected_meas"]
             and not r["frequency_ratio_ci"][0] <= 1.0 <= r["frequency_ratio_ci"][1]
         )
-    notes.append(
-        f"the orders' frequency ratios ({v.min():.6f}-{v.max():.6f}) scatter {birge:.2g} times their sigmas, where one "
-        f"chain gives them one ratio: every ratio's sigma (and the pitch ratio's) widened {birge:.2g} times"
-    )
 
 
 def _order_amplitude(x, fs, f0, spc):
@@ -425,6 +451,7 @@ def compare(
                 if det_s and det_m
                 else 0.0
             )
+    _widen_by_parts(rows, dec, z, notes)
     _widen_by_order_scatter(rows, z, notes)
     score = float(np.mean(scores)) if scores else 0.0
     c0 = runs[0][1]
