@@ -194,6 +194,30 @@ def test_decide_rules():
     assert decide(LinkPassEvidence(detected=False, detection_reason="nothing")).reason == "nothing"
 
 
+def test_reason_without_a_stated_speed_sigma_gives_no_sigma():
+    """A speed without a stated uncertainty: the reason gives the elongation without +- (the frequency's part
+    alone would pretend to be the whole sigma) and says why; a stated sigma (even 0) keeps its +-."""
+    base = dict(
+        detected=True,
+        detection_hz=3.75,
+        resolution_hz=0.125,
+        fundamental_hz=3.75,
+        fundamental_sigma_hz=1e-3,
+        band_hz=(2.5, 6.25),
+        speed_m_s=0.5,
+        nominal_pitch_m=0.5 / 3.75,
+    )
+    stated = decide(LinkPassEvidence(**base, speed_sigma_m_s=0.0))
+    assert (stated.status, stated.verdict) == (STATUS_OK, "ok")
+    assert "elongation +0.00 +- 0.027 % of 133.3 mm: ok" in stated.reason  # 100 * 1e-3 / 3.75 = 0.0267 %
+    unstated = decide(LinkPassEvidence(**base, speed_sigma_m_s=None))
+    assert (unstated.status, unstated.verdict) == (STATUS_OK, "ok")  # the frequency's part resolves it
+    assert unstated.reason == "elongation +0.00 % of 133.3 mm: ok (speed uncertainty not stated)"
+    wide = decide(LinkPassEvidence(**{**base, "fundamental_sigma_hz": 0.03}, speed_sigma_m_s=None))
+    assert wide.status == STATUS_INCONCLUSIVE and "+-" not in wide.reason  # 0.8 %: over a third of 1.5 %
+    assert "speed uncertainty not stated): the frequency's part of its sigma alone, 0.8 %" in wide.reason
+
+
 # ------------------------------------------------------------------------------------ channels and speed
 
 

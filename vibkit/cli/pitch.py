@@ -76,17 +76,16 @@ def resolve_speed(a, rec, *, required=True, profile=None):
     raise CLIError(f"{a.recording}: the file states no chain speed; give --speed (e.g. --speed 0.5 or --speed 50cm/s)")
 
 
-def from_profile(a, profile, sp, *, sigma_and_teeth=True):
+def from_profile(a, profile, sp):
     """(nominal pitch, band, teeth) of a run: the flags, else the profile's (the note says which came from the
     profile), else the defaults; ``sp`` is the run's speed (:func:`vibkit.cli.options.run_speed`), which
-    takes the profile's speed and sigma itself; ``sigma_and_teeth=False`` (``spectrum``): the note names
-    neither."""
+    takes the profile's speed and sigma itself."""
     nominal, search, teeth_ = a.nominal_pitch, a.band, getattr(a, "teeth", None)
     if profile is None:
         return nominal, search, teeth_ or 28
     taken = []
     if sp.value is not None and sp.source != "given":
-        taken.append(f"speed {sp.text}" if sigma_and_teeth else f"speed {sp.value:g} m/s")
+        taken.append(f"speed {sp.text}")
     if nominal is None:
         nominal = profile.nominal_pitch
         taken.append(f"nominal pitch {1000 * nominal:g} mm")
@@ -96,8 +95,7 @@ def from_profile(a, profile, sp, *, sigma_and_teeth=True):
         taken.append(f"search band {search[0]:.4g}-{search[1]:.4g} Hz (0.8-1.25 x speed / nominal pitch)")
     if teeth_ is None:
         teeth_ = profile.teeth
-        if sigma_and_teeth:
-            taken.append(f"{teeth_} sprocket teeth")
+        taken.append(f"{teeth_} sprocket teeth")
     if taken:
         note = f"note: from the profile {profile.source}: {'; '.join(taken)}"
         msg(textwrap.fill(note, 100, subsequent_indent="  ", break_on_hyphens=False))
@@ -136,32 +134,13 @@ def run(a):
         )
         print_json("pitch", d)
         return res.exit_code
-    stated = est.speed_sigma_stated
-    speed_text = fmt_pm(est.speed_m_s, est.speed_sigma_m_s, "m/s") if stated else f"{est.speed_m_s:g} m/s"
-    print(
-        f"{a.recording}: channel {est.channel}, speed {speed_text} ({est.speed_source}"
-        + ("" if stated else f"; {SPEED_SIGMA_NOT_STATED}: --speed-uncertainty")
-        + ")"
-    )
+    print(f"{a.recording}: channel {est.channel}, speed {speed_text(est)}")
     print(
         f"link-pass frequency  {fmt_pm(est.fundamental_hz, est.fundamental_sigma_hz, 'Hz')} "
         f"({len(est.per_burst)} burst(s))"
     )
     print(f"method               {est.method}")
-    if stated:
-        print(f"link pitch           {fmt_length(est.pitch_m, est.pitch_sigma_m)}")
-    else:  # the frequency's part is a lower bound: the value to its digits, no +-
-        print(f"link pitch           {1000 * est.pitch_m:.2f} mm ({SPEED_SIGMA_NOT_STATED})")
-    if est.nominal_pitch_m is not None:
-        el = (
-            fmt_pm(est.elongation_percent, est.elongation_sigma_percent, "%", sign=True)
-            if stated
-            else f"{est.elongation_percent:+z.2f} % ({SPEED_SIGMA_NOT_STATED})"
-        )
-        print(
-            f"elongation           {el} of {1000 * est.nominal_pitch_m:.2f} mm -> {est.verdict}\n"
-            f"                     (limits {' / '.join(f'{v:g}' for v in est.limits_percent)} %)"
-        )
+    print_pitch(est)
     print()
     print_channels(res)
     print(
@@ -200,6 +179,34 @@ def run(a):
     if res.status != "ok":
         msg(textwrap.fill(f"vibkit pitch: {res.status}: {res.reason}", 100, subsequent_indent="  "))
     return res.exit_code
+
+
+def speed_text(est):
+    """``0.500 +- 0.014 m/s (escalator profile E12, rated)``, or without a stated sigma
+    ``0.5 m/s (--speed; speed uncertainty not stated: --speed-uncertainty)``."""
+    if est.speed_sigma_stated:
+        return f"{fmt_pm(est.speed_m_s, est.speed_sigma_m_s, 'm/s')} ({est.speed_source})"
+    return f"{est.speed_m_s:g} m/s ({est.speed_source}; {SPEED_SIGMA_NOT_STATED}: --speed-uncertainty)"
+
+
+def print_pitch(est):
+    """The link pitch and (with a nominal pitch) the elongation, its verdict and the limits: ``pitch`` and
+    ``spectrum`` with a speed; without a stated speed uncertainty no +- (the frequency's part is a lower bound)."""
+    stated = est.speed_sigma_stated
+    if stated:
+        print(f"link pitch           {fmt_length(est.pitch_m, est.pitch_sigma_m)}")
+    else:  # the frequency's part is a lower bound: the value to its digits, no +-
+        print(f"link pitch           {1000 * est.pitch_m:.2f} mm ({SPEED_SIGMA_NOT_STATED})")
+    if est.nominal_pitch_m is not None:
+        el = (
+            fmt_pm(est.elongation_percent, est.elongation_sigma_percent, "%", sign=True)
+            if stated
+            else f"{est.elongation_percent:+z.2f} % ({SPEED_SIGMA_NOT_STATED})"
+        )
+        print(
+            f"elongation           {el} of {1000 * est.nominal_pitch_m:.2f} mm -> {est.verdict}\n"
+            f"                     (limits {' / '.join(f'{v:g}' for v in est.limits_percent)} %)"
+        )
 
 
 def print_channels(res):

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import textwrap
+
 from .options import (
     CHANNEL_EVERY,
     add_command,
@@ -9,17 +11,27 @@ from .options import (
     add_json,
     add_limits,
     add_recording,
+    add_speed_uncertainty,
     band,
     escalator_profile,
     harmonics,
     read_recording,
 )
 from .output import in_file, msg, print_json, table
-from .pitch import add_speed_options, from_profile, print_channels, refused, resolve_speed
+from .pitch import (
+    add_speed_options,
+    from_profile,
+    print_channels,
+    print_pitch,
+    refused,
+    resolve_speed,
+    speed_text,
+)
 
 EPILOG = (
     "example:\n  vibkit spectrum data/field/leon-tensioner.csv --band 2.5:6 --json\n"
-    "with a speed (given or stated by the file) the same decision as `vibkit pitch` (exit 0, 1 or 3);\n"
+    "with a speed (--speed, --escalator's or the file's) the same decision as `vibkit pitch`:\n"
+    "the same pitch, elongation and verdict (exit 0, 1 or 3);\n"
     "without one the frequency only (search band 2.5-6 Hz)"
 )
 
@@ -34,7 +46,10 @@ def add_parser(subparsers):
         help="search band of the link-pass LOW:HIGH [Hz] (default speed / 80-200 mm, or 2.5:6 without a speed)",
     )
     s.add_argument("--harmonics", type=harmonics, default=5, help="harmonics listed (default 5)")
-    add_speed_options(s, "chain speed (optional): m/s, or 49cm/s; default the file's; checks the pitch is plausible")
+    add_speed_options(
+        s, "chain speed (optional): m/s, or 49cm/s; default the file's; gives the pitch as `vibkit pitch` does"
+    )
+    add_speed_uncertainty(s)
     add_limits(s)
     add_escalator(s)
     s.set_defaults(func=run)
@@ -48,18 +63,19 @@ def run(a):
     profile = escalator_profile(a)
     sp = resolve_speed(a, rec, required=False, profile=profile)
     speed, source = sp.value, ("--speed" if sp.source == "given" else sp.source or None)
-    nominal, search, _ = from_profile(a, profile, sp, sigma_and_teeth=False) if speed else (None, None, None)
-    if not speed:  # frequency only: the band given, else 2.5-6 Hz
-        search = a.band or (2.5, 6.0)
+    # with a speed the same analysis as `vibkit pitch` (its speed and sigma, nominal pitch, band, teeth)
+    nominal, search, teeth_ = from_profile(a, profile, sp) if speed else (None, a.band or (2.5, 6.0), 28)
     try:
         res = estimate_channels(
             rec,
             channel=a.channel,
             speed=speed or 1.0,
+            speed_sigma=sp.sigma if speed else None,
             band=search,
             n_harmonics=a.harmonics,
             nominal_pitch=nominal if speed else None,
             limits_percent=a.limits,
+            teeth=teeth_,
             speed_source=source or "none",
             frequency_only=speed is None,
         )
@@ -102,15 +118,19 @@ def run(a):
         "peaks": peaks,
         "channels": res.per_channel(),
         "warnings": est.warnings,
+        **est.pitch_fields(),  # with a speed: the pitch, elongation and verdict, as `vibkit pitch` names them
     }
     if a.json:
         print_json("spectrum", payload)
     else:
-        print(f"{a.recording}: channel {ch} [{units}]")
+        print(f"{a.recording}: channel {ch} [{units}]" + (f", speed {speed_text(est)}" if speed else ""))
         print(
             f"link-pass fundamental {est.fundamental_hz:.5f} +- {est.fundamental_sigma_hz:.2g} Hz "
             f"(search band {est.band_hz[0]:.4g}-{est.band_hz[1]:.4g} Hz)"
         )
+        if speed:
+            print_pitch(est)
+            print()
         print_channels(res)
         print(
             table(
@@ -122,7 +142,9 @@ def run(a):
             )
         )
         for w in est.warnings:
-            msg(f"warning: {w}")
+            msg(textwrap.fill(f"warning: {w}", 100, subsequent_indent="  "))
+        for n in est.notes if speed else []:  # a frequency-only estimate's notes are about its placeholder speed
+            msg(textwrap.fill(f"note: {n}", 100, subsequent_indent="  "))
         if res.status != "ok":
-            msg(f"vibkit spectrum: {res.status}: {res.reason}")
+            msg(textwrap.fill(f"vibkit spectrum: {res.status}: {res.reason}", 100, subsequent_indent="  "))
     return res.exit_code

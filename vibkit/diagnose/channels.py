@@ -78,6 +78,10 @@ def vibration_channels(recording) -> list:
     return out
 
 
+#: the pitch fields of a channel's row (:meth:`vibkit.diagnose.pitch.PitchEstimate.pitch_fields`)
+_ROW_PITCH_KEYS = ("pitch_m", "pitch_sigma_m", "elongation_percent", "elongation_sigma_percent", "verdict")
+
+
 @dataclass(frozen=True)
 class ChannelsResult:
     """Per-channel estimates and the recording's decision.
@@ -110,14 +114,8 @@ class ChannelsResult:
             r = {"channel": e.channel, "status": e.status, "reason": e.reason}
             if e.has_link_pass:
                 r.update(fundamental_hz=e.fundamental_hz, fundamental_sigma_hz=e.fundamental_sigma_hz)
-                if not e.extra.get("frequency_only"):
-                    r.update(pitch_m=e.pitch_m, pitch_sigma_m=e.pitch_sigma_m)
-                if e.verdict is not None:
-                    r.update(
-                        elongation_percent=e.elongation_percent,
-                        elongation_sigma_percent=e.elongation_sigma_percent,
-                        verdict=e.verdict,
-                    )
+                pf = e.pitch_fields()  # as the estimate's JSON: null sigmas without a stated speed uncertainty
+                r.update({k: pf[k] for k in _ROW_PITCH_KEYS if k in pf})
             elif e.decision is not None and e.decision.implied_pitch_m is not None:
                 r["implied_pitch_m"] = e.decision.implied_pitch_m
             rows.append(r)

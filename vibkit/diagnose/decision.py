@@ -37,6 +37,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+from .rounding import SPEED_SIGMA_NOT_STATED
+
 __all__ = [
     "CATALOGUE_PITCHES_M",
     "CATALOGUE_SOURCES",
@@ -212,7 +214,8 @@ class LinkPassEvidence:
     band_hz : (float, float), optional
         Search band. [Hz]
     speed_m_s, speed_sigma_m_s : float, optional
-        Chain speed and its sigma; None: frequency only (no pitch, no plausibility). [m/s]
+        Chain speed (None: frequency only, no pitch, no plausibility) and its sigma (None: not stated; the
+        reasons then give the elongation without a sigma, the frequency's part being a lower bound). [m/s]
     nominal_pitch_m : float, optional
         Nominal pitch: plausibility against it, elongation verdict. [m]
     limits_percent : (float, float, float)
@@ -243,7 +246,7 @@ class LinkPassEvidence:
     fundamental_sigma_hz: float = float("nan")
     band_hz: tuple | None = None
     speed_m_s: float | None = None
-    speed_sigma_m_s: float = 0.0
+    speed_sigma_m_s: float | None = 0.0
     nominal_pitch_m: float | None = None
     limits_percent: tuple = DEFAULT_LIMITS_PERCENT
     spectral_hz: float | None = None
@@ -501,13 +504,17 @@ def _verdict(ev, p, checks):
     need = EVIDENCE_FRACTION * lim[0]
     resolved = el_sigma <= need
     checks["resolved"] = bool(resolved)
+    stated = ev.speed_sigma_m_s is not None  # not stated: el_sigma is the frequency's part only, a lower bound
     if not resolved:
+        why = (
+            f"elongation {el:+z.2f} +- {el_sigma:.2g} %: its sigma is more than a third of the first limit "
+            if stated
+            else f"elongation {el:+z.2f} % ({SPEED_SIGMA_NOT_STATED}): the frequency's part of its sigma alone, "
+            f"{el_sigma:.2g} %, is more than a third of the first limit "
+        )
         return Decision(
             STATUS_INCONCLUSIVE,
-            (
-                f"elongation {el:+z.2f} +- {el_sigma:.2g} %: its sigma is more than a third of the first limit "
-                f"({need:.2g} %); record longer, or measure the speed better, for a verdict"
-            ),
+            f"{why}({need:.2g} %); record longer, or measure the speed better, for a verdict",
             verdict="inconclusive",
             implied_pitch_m=p,
             checks=checks,
@@ -515,7 +522,11 @@ def _verdict(ev, p, checks):
     verdict = elongation_verdict(el, lim)
     return Decision(
         STATUS_OK,
-        f"elongation {el:+z.2f} +- {el_sigma:.2g} % of {_mm(nom)}: {verdict}",
+        (
+            f"elongation {el:+z.2f} +- {el_sigma:.2g} % of {_mm(nom)}: {verdict}"
+            if stated
+            else f"elongation {el:+z.2f} % of {_mm(nom)}: {verdict} ({SPEED_SIGMA_NOT_STATED})"
+        ),
         verdict=verdict,
         implied_pitch_m=p,
         checks=checks,

@@ -145,7 +145,8 @@ class PitchEstimate:
         """Plain JSON-ready dict (keys carry units).
 
         Without a detected link-pass family (``status == "no link-pass found"``) the dict has no
-        frequency, pitch or elongation keys at all: there is no number to report.
+        frequency, pitch or elongation keys at all: there is no number to report; a frequency-only
+        estimate (no speed) has no pitch or elongation keys (:meth:`pitch_fields`).
         """
         head = {
             "status": self.status,
@@ -174,12 +175,9 @@ class PitchEstimate:
             "channel": self.channel,
             "speed_m_s": self.speed_m_s,
             "speed_source": self.speed_source,
-            "speed_sigma_m_s": self.speed_sigma_m_s,
             "band_hz": list(self.band_hz),
             "fundamental_hz": self.fundamental_hz,
             "fundamental_sigma_hz": self.fundamental_sigma_hz,
-            "pitch_m": self.pitch_m,
-            "pitch_sigma_m": self.pitch_sigma_m if self.speed_sigma_stated else None,
             "snr_db": self.snr_db,
             "harmonics": [dict(h) for h in self.harmonics],
             "bursts": [dict(b) for b in self.per_burst],
@@ -189,15 +187,31 @@ class PitchEstimate:
             "warnings": list(self.warnings),
             "notes": list(self.notes),
         }
+        d.update(self.pitch_fields())
+        return d
+
+    def pitch_fields(self) -> dict:
+        """The speed's sigma, the pitch and (with a nominal pitch) the elongation and verdict, JSON-ready, as
+        :meth:`as_dict` gives them (``vibkit spectrum`` with a speed adds these to its own): without a stated
+        speed uncertainty the sigmas are null, ``uncertainty`` says why and the ``*_frequency_only`` keys give
+        the frequency's part.  Empty without a link pass, or for a frequency-only estimate (no speed)."""
+        if not self.has_link_pass or self.extra.get("frequency_only"):
+            return {}
+        stated = self.speed_sigma_stated
+        d = {
+            "speed_sigma_m_s": self.speed_sigma_m_s,
+            "pitch_m": self.pitch_m,
+            "pitch_sigma_m": self.pitch_sigma_m if stated else None,
+        }
         if self.nominal_pitch_m is not None:
             d.update(
                 nominal_pitch_m=self.nominal_pitch_m,
                 elongation_percent=self.elongation_percent,
-                elongation_sigma_percent=self.elongation_sigma_percent if self.speed_sigma_stated else None,
+                elongation_sigma_percent=self.elongation_sigma_percent if stated else None,
                 limits_percent=list(self.limits_percent),
                 verdict=self.verdict,
             )
-        if not self.speed_sigma_stated:  # null sigmas, with the reason and the part that is known
+        if not stated:  # null sigmas, with the reason and the part that is known
             d["uncertainty"] = (
                 f"{SPEED_SIGMA_NOT_STATED}: the pitch's and the elongation's sigmas are unknown; "
                 "the *_frequency_only keys give the frequency's part, a lower bound"
