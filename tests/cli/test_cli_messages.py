@@ -91,3 +91,54 @@ def test_links_band_above_nyquist_names_the_flag(capsys):
     assert main(["links", str(LEON), "--links", "159", "--band", "2:150"]) == 1
     err = _error(capsys)
     assert f"{LEON}: --band 2-150 Hz reaches above the Nyquist frequency 100 Hz" in err, err
+
+
+SCIENCE_JOURNAL = ROOT / "data" / "devices" / "science_journal" / "Untitled Experiment Trial 1.csv"
+
+
+@pytest.mark.parametrize("argv", [["spectrum"], ["pitch", "--speed", "0.5"]])
+def test_bursts_at_different_rates_say_so(argv, capsys):
+    # two bursts (100 rows at 12.59 Hz, 38 at 13.55 Hz after a gap): the detection's one rate is neither's
+    assert main([argv[0], str(SCIENCE_JOURNAL), *argv[1:]]) == 1
+    err = capsys.readouterr().err.strip().splitlines()[-1]  # after the note on the held values
+    assert "Parameter" not in err
+    assert err.startswith(f"vibkit {argv[0]}: error: {SCIENCE_JOURNAL}: channel 'value': its 2 bursts"), err
+    assert "(100 samples at 12.59 Hz, 38 samples at 13.55 Hz)" in err
+    assert "needs bursts at one sample rate" in err
+
+
+@pytest.fixture
+def infinite_sigmas(monkeypatch):
+    """Every burst's chosen frequency with an infinite sigma (harmonics lost in the noise): zero weights."""
+    import dataclasses
+    import math
+
+    from vibkit.diagnose import pitch_steps
+
+    chosen = pitch_steps.choose_methods
+    monkeypatch.setattr(
+        pitch_steps,
+        "choose_methods",
+        lambda ests: [dataclasses.replace(be, sigma_hz=math.inf) for be in chosen(ests)],
+    )
+
+
+def test_zero_weights_give_a_plain_message_not_a_nan(infinite_sigmas, capsys):
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # the division by zero weights warned (numpy RuntimeWarning)
+        assert main(["pitch", str(LEON), "--json"]) == 1
+    err = _error(capsys)
+    assert "NaN" not in err and "integer" not in err
+    assert "channel 'tensioner_displacement': no burst gives a link-pass frequency with a finite uncertainty" in err
+
+
+def test_zero_weights_in_one_of_several_channels_are_its_error_row(infinite_sigmas, tmp_path, capsys):
+    lines = [ln for ln in LEON.read_text().splitlines() if not ln.startswith("#")]
+    two = [lines[0] + ",copy (mm)"] + [f"{ln},{ln.split(',')[1]}" for ln in lines[1:]]
+    path = tmp_path / "two.csv"
+    path.write_text("\n".join(two) + "\n")
+    assert main(["spectrum", str(path), "--json"]) == 1
+    err = _error(capsys)
+    assert "no channel could be analysed" in err and "finite uncertainty" in err and "NaN" not in err
