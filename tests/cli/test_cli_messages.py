@@ -142,3 +142,22 @@ def test_zero_weights_in_one_of_several_channels_are_its_error_row(infinite_sigm
     assert main(["spectrum", str(path), "--json"]) == 1
     err = _error(capsys)
     assert "no channel could be analysed" in err and "finite uncertainty" in err and "NaN" not in err
+
+
+def test_a_sprocket_speed_is_a_speed_channel_not_analysed():
+    # the guide: pitch and spectrum analyse every vibration channel, not a speed channel; a sprocket's angular
+    # speed (rad/s) is one, as a chain's (m/s) is; a gyroscope's rad/s (not named a speed) stays a vibration
+    import numpy as np
+
+    from vibkit.diagnose.channels import vibration_channels
+
+    from support.recording import recording
+
+    t = np.arange(2000) / 200.0
+    wiggle = np.sin(2 * np.pi * 3.75 * t)
+    rec = recording({"delta": wiggle, "sprocket_speed": 0.84 + 1e-3 * wiggle, "gyro_z": wiggle}, t=t)
+    for name, units in (("delta", "m"), ("sprocket_speed", "rad/s"), ("gyro_z", "rad/s")):
+        rec[name].attrs["units"] = units
+    assert vibration_channels(rec) == ["delta", "gyro_z"]
+    rec["sprocket_speed"].attrs["units"] = "rpm"
+    assert vibration_channels(rec) == ["delta", "gyro_z"]
