@@ -1,7 +1,8 @@
 """The ``vibkit`` command line: parses, calls the library, prints.  No physics in here.
 
 Data go to stdout (a readable table, or JSON with ``--json`` carrying ``"schema": "vibkit.<command>/1"``),
-messages to stderr.  Exit status: 0 success, 1 bad data or a failed run (one-line message, no
+messages to stderr.  Exit status: 0 success (also when the reader closes stdout early, as ``| head``
+does: quietly), 1 bad data or a failed run (one-line message, no
 traceback), 2 usage error (argparse).
 
 Each command is a module of this package with ``add_parser(subparsers)`` and ``run(args)``; the
@@ -55,7 +56,14 @@ def main(argv=None) -> int:
 
     try:
         with handle_termination():  # SIGTERM runs the same clean-up as Ctrl-C
-            return int(args.func(args))
+            status = int(args.func(args))
+            sys.stdout.flush()  # a closed pipe is found here, not at the interpreter's exit
+            return status
+    except BrokenPipeError:
+        # the reader closed stdout (``vibkit spectrum ... | head -1``): it has what it wanted; end quietly
+        # with 0 (the README's exit codes are 0-3) and no "Exception ignored" when Python flushes at exit
+        _stdout_to_devnull()
+        return 0
     except Interrupted as exc:
         written = getattr(exc, "vibkit_note", "nothing was written")  # e.g. a sweep's runs stored so far
         msg(f"vibkit {args.command}: interrupted (signal {exc.signum}); {written}")
@@ -79,6 +87,21 @@ def main(argv=None) -> int:
         prefix = "\033[31merror\033[0m" if color() else "error"
         msg(f"vibkit {args.command}: {prefix}: {text}")
         return 1
+
+
+def _stdout_to_devnull():
+    """Point the stdout file descriptor at the null device, so that the final flush of a closed pipe is silent."""
+    import os
+
+    try:
+        fd = sys.stdout.fileno()
+    except (AttributeError, OSError, ValueError):  # replaced by a test or a caller: nothing is flushed at exit
+        return
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    try:
+        os.dup2(devnull, fd)
+    finally:
+        os.close(devnull)
 
 
 def _is_user_error(exc) -> bool:

@@ -96,7 +96,8 @@ def _quantity(text, units, what, example):
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected {what} like {example}, got {text!r}") from None
     if not (math.isfinite(v) and v > 0):
-        raise argparse.ArgumentTypeError(f"expected a positive {what}, got {text!r}")
+        noun = what.split(" ", 1)[1] if what.startswith(("a ", "an ")) else what  # "a chain speed": no "a a"
+        raise argparse.ArgumentTypeError(f"expected a positive {noun}, got {text!r}")
     return v, factor, unit
 
 

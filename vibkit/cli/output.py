@@ -25,9 +25,20 @@ def color():
 
 
 def in_file(path, exc) -> Exception:
-    """``exc`` if its message names ``path``, else a ValueError whose one line starts with it."""
+    """``exc`` if its message names ``path``, else a ValueError whose one line starts with it.
+
+    A message that starts with the file's base name (the library names the file it read so) or with
+    ``<stdin>`` (for ``-``) has that name replaced by ``path``, not repeated after it."""
     text = " ".join(str(exc).split()) or type(exc).__name__
-    return exc if os.fspath(path) in text else ValueError(f"{os.fspath(path)}: {text}")
+    path = os.fspath(path)
+    if path in text:
+        return exc
+    if path == "-" and text.startswith("<stdin>: "):
+        return exc
+    name = os.path.basename(path)
+    if name and text.startswith(f"{name}: "):
+        text = text[len(name) + 2 :]
+    return ValueError(f"{path}: {text}")
 
 
 def msg(text):

@@ -24,6 +24,9 @@ __all__ = ["CONSISTENCY_SIGMAS", "ChannelsResult", "estimate_channels", "speed_f
 #: channels whose fundamentals differ by more than this many combined sigmas are not one chain
 CONSISTENCY_SIGMAS = 5.0
 _SPEED_KEY = re.compile(r"(speed|velocidad|velocity|geschwindigkeit|vitesse|velocita)", re.IGNORECASE)
+#: units of a channel named as a speed that is a speed channel, not a vibration: a chain's (m/s) or a sprocket's
+#: or motor's angular speed (a gyroscope's rad/s is not named a speed and stays a vibration channel)
+_SPEED_UNITS = ("m/s", "rad/s", "rpm", "1/min", "deg/s")
 _TIME_NAME = re.compile(r"(^|_)(time|timestamp|elapsed|seconds|epoch|date)(_|$)", re.IGNORECASE)
 
 
@@ -53,8 +56,8 @@ _ANALYSES = ("kinematics", "inverse", "forward")
 
 def vibration_channels(recording) -> list:
     """Channels that may carry a vibration: along time, not the burst number, not a sample counter, not
-    a clock or a speed, not a status column (an accuracy code, a column that never changes), not a
-    simulation's numerical diagnostic (:data:`SOLVER_DIAGNOSTICS`)."""
+    a clock or a speed (a chain's or a sprocket's: :data:`_SPEED_UNITS`), not a status column (an accuracy
+    code, a column that never changes), not a simulation's numerical diagnostic (:data:`SOLVER_DIAGNOSTICS`)."""
     from ..io.channels import COUNTER_ATTR, STATUS_ATTR, is_status
 
     simulated = recording.attrs.get("analysis") in _ANALYSES and "scene" in recording.attrs
@@ -71,7 +74,7 @@ def vibration_channels(recording) -> list:
         if (
             units in ("s", "ms", "us", "ns")
             or _TIME_NAME.search(str(v))
-            or (units == "m/s" and _SPEED_KEY.search(str(v)))
+            or (units in _SPEED_UNITS and _SPEED_KEY.search(str(v)))
         ):
             continue
         out.append(str(v))

@@ -326,6 +326,7 @@ def find_worn_links(
     ok = np.isfinite(x)
     if not ok.all():
         raise ValueError(f"channel {ch}: {np.count_nonzero(~ok)} missing samples; the link map needs a whole recording")
+    _check_rate(file, fs, speed, band)
     band = band or (speed / 0.2, speed / 0.08)
     fund = find_fundamental(x, fs, band=band)
     f_lp = fund.frequency_hz
@@ -420,6 +421,25 @@ def find_worn_links(
             return _result(file, ch, sensor, speed, lmap, n, [], scan, excess, method, marker_s, notes,
                            status="inconclusive", reason=reason)  # fmt: skip
     return _result(file, ch, sensor, speed, lmap, n, flagged, scan, excess, method, marker_s, notes)
+
+
+def _check_rate(file, fs, speed, band):
+    """ValueError in the reader's terms when the recording's Nyquist frequency is under the search band's top
+    (the band given, else the speed's: speed / 200-80 mm): most often a time column in the wrong unit."""
+    lo, hi = band if band else (speed / 0.2, speed / 0.08)
+    if not fs / 2 < hi:
+        return
+    rate = f"the recording's sample rate {fs:.4g} Hz (Nyquist frequency {fs / 2:.4g} Hz)"
+    if band:
+        raise ValueError(
+            f"{file}: band {lo:.4g}-{hi:.4g} Hz reaches above the Nyquist frequency {fs / 2:.4g} Hz of the "
+            f"recording (sample rate {fs:.4g} Hz); lower the band, or check the time column "
+            "and its unit (--time-unit)"
+        )
+    raise ValueError(
+        f"{file}: {rate} cannot show a link pass at {speed:g} m/s (speed / 200-80 mm: {lo:.4g}-{hi:.4g} Hz); "
+        "check the time column and its unit (--time-unit), or give --sample-rate"
+    )
 
 
 def _signature_scan(lmap, scene, speed, fs, metres_per_unit, false_alarm, excess):

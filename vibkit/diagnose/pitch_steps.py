@@ -158,14 +158,21 @@ def _scaled(bursts, band):
     return out, scale
 
 
-def detect(prep, *, band, n_harmonics, p_fa):
+def detect(prep, *, band, n_harmonics, p_fa, name="x"):
     """Is there a link-pass family at all? :func:`vibkit.signal.detect.detect_link_pass` on the bursts at
-    the median sampling frequency."""
+    the median sampling frequency.  ValueError naming channel ``name`` when no burst is at that rate."""
     from ..signal.detect import detect_link_pass
 
     fs_det = float(np.median([b.fs for b in prep.bursts]))
     decimation = max(1.0, float(np.median([b.fs for b in prep.raw])) / fs_det)
     pieces = [b.x for b in prep.bursts if abs(b.fs / fs_det - 1) < SAME_FS_TOLERANCE]
+    if not pieces:  # e.g. two bursts at different rates: their median rate is neither's
+        rates = ", ".join(f"{b.x.size} samples at {b.fs:.4g} Hz" for b in prep.raw)
+        raise ValueError(
+            f"channel {name!r}: its {len(prep.raw)} bursts are sampled at rates more than {SAME_FS_TOLERANCE:.0%} "
+            f"apart ({rates}); the link-pass test needs bursts at one sample rate (record without gaps, or "
+            "check the time column)"
+        )
     return detect_link_pass(
         pieces, fs_det, band=band, n_harmonics=n_harmonics, p_fa=p_fa, quantum=prep.quantum, decimation=decimation
     )
@@ -258,9 +265,15 @@ def _choose_method(e, mp):
     )
 
 
-def combine(ests):
+def combine(ests, name="x"):
     """Inverse-variance mean of the bursts' chosen frequencies, its sigma widened by sqrt(chi^2) when the
-    bursts scatter beyond :data:`CHI2_WIDEN`; a plain mean and standard deviation when a sigma is zero."""
+    bursts scatter beyond :data:`CHI2_WIDEN`; a plain mean and standard deviation when a sigma is zero.
+
+    Raises
+    ------
+    ValueError
+        Naming channel ``name``: every burst's sigma is infinite (or so large that its weight is zero), so
+        no burst gives a frequency to average."""
     methods = [be.method for be in ests]
     method = methods[0] if len(set(methods)) == 1 else "mixed"
     if len(ests) == 1:
@@ -272,6 +285,12 @@ def combine(ests):
     warnings = []
     if np.all(s > 0):
         w = 1.0 / s**2
+        if not np.sum(w) > 0:  # 0/0 below: no burst carries any weight
+            sigmas = ", ".join(f"{v:.3g}" for v in s)
+            raise ValueError(
+                f"channel {name!r}: no burst gives a link-pass frequency with a finite uncertainty (sigma {sigmas} "
+                "Hz): the harmonics found are lost in the noise, so there is no frequency to measure a pitch from"
+            )
         f0 = float(np.sum(w * f) / np.sum(w))
         sf = float(1.0 / np.sqrt(np.sum(w)))
         chi2 = float(np.sum(w * (f - f0) ** 2) / (f.size - 1)) if f.size > 1 else float("nan")

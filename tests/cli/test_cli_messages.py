@@ -1,0 +1,163 @@
+"""The command line's messages on a user's mistake or an unusable file: one line, naming the file, the flag
+or what was expected; no Python parameter names, no repeated file names, no numpy warnings."""
+
+from __future__ import annotations
+
+import io
+import sys
+from pathlib import Path
+
+import pytest
+
+from vibkit.cli import main
+
+ROOT = Path(__file__).resolve().parents[2]
+LEON = ROOT / "data" / "field" / "leon-tensioner.csv"
+
+
+def _error(capsys) -> str:
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err, err
+    assert "Parameter" not in err and "Traceback" not in err and "Warning" not in err, err
+    return err
+
+
+@pytest.mark.parametrize("command", ["pitch", "links", "report"])
+def test_negative_speed_is_a_positive_chain_speed(command, capsys):
+    with pytest.raises(SystemExit) as exc:
+        main([command, str(LEON), "--speed", "-1"])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert "expected a positive chain speed, got '-1'" in err
+    assert "positive a " not in err
+
+
+def test_unknown_channel_names_the_file_once(capsys):
+    assert main(["spectrum", str(LEON), "--channel", "nope"]) == 1
+    err = _error(capsys)
+    assert err.startswith(f"vibkit spectrum: error: {LEON}: channel 'nope' is not in the recording")
+    assert err.count("leon-tensioner.csv") == 1
+
+
+def test_unknown_channel_on_stdin_names_stdin_once(monkeypatch, capsys):
+    monkeypatch.setattr(sys, "stdin", io.TextIOWrapper(io.BytesIO(LEON.read_bytes())))
+    assert main(["spectrum", "-", "--channel", "nope"]) == 1
+    err = _error(capsys)
+    assert err.startswith("vibkit spectrum: error: <stdin>: channel 'nope' is not in the recording"), err
+    assert "-: " not in err
+
+
+class _ClosedPipe(io.TextIOBase):
+    """A stdout whose reader has gone (``| head -1``)."""
+
+    def writable(self):
+        return True
+
+    def write(self, s):
+        raise BrokenPipeError(32, "Broken pipe")
+
+
+def test_closed_stdout_ends_quietly_with_0(monkeypatch, capsys):
+    capsys.readouterr()
+    monkeypatch.setattr(sys, "stdout", _ClosedPipe())
+    assert main(["spectrum", str(LEON), "--json"]) == 0
+    assert capsys.readouterr().err == ""
+
+
+def _wrong_time_column(tmp_path) -> Path:
+    """Leon's recording with its time column 2e7 times too long (a unit mistaken): 1e-5 Hz rows."""
+    out = []
+    for line in LEON.read_text().splitlines():
+        if line[:1].isdigit():
+            t, rest = line.split(",", 1)
+            line = f"{float(t) * 2e7!r},{rest}"
+        out.append(line)
+    path = tmp_path / "wrong-time.csv"
+    path.write_text("\n".join(out) + "\n")
+    return path
+
+
+def test_links_on_a_wrong_time_column_names_the_rate_and_the_speed(tmp_path, capsys):
+    path = _wrong_time_column(tmp_path)
+    assert main(["links", str(path), "--links", "159", "--speed", "0.5"]) == 1
+    err = _error(capsys)
+    assert err.startswith(f"vibkit links: error: {path}: the recording's sample rate 1e-05 Hz"), err
+    assert "cannot show a link pass at 0.5 m/s (speed / 200-80 mm: 2.5-6.25 Hz)" in err
+    assert "check the time column" in err
+    assert err.count(path.name) == 1
+
+
+def test_links_band_above_nyquist_names_the_flag(capsys):
+    assert main(["links", str(LEON), "--links", "159", "--band", "2:150"]) == 1
+    err = _error(capsys)
+    assert f"{LEON}: --band 2-150 Hz reaches above the Nyquist frequency 100 Hz" in err, err
+
+
+SCIENCE_JOURNAL = ROOT / "data" / "devices" / "science_journal" / "Untitled Experiment Trial 1.csv"
+
+
+@pytest.mark.parametrize("argv", [["spectrum"], ["pitch", "--speed", "0.5"]])
+def test_bursts_at_different_rates_say_so(argv, capsys):
+    # two bursts (100 rows at 12.59 Hz, 38 at 13.55 Hz after a gap): the detection's one rate is neither's
+    assert main([argv[0], str(SCIENCE_JOURNAL), *argv[1:]]) == 1
+    err = capsys.readouterr().err.strip().splitlines()[-1]  # after the note on the held values
+    assert "Parameter" not in err
+    assert err.startswith(f"vibkit {argv[0]}: error: {SCIENCE_JOURNAL}: channel 'value': its 2 bursts"), err
+    assert "(100 samples at 12.59 Hz, 38 samples at 13.55 Hz)" in err
+    assert "needs bursts at one sample rate" in err
+
+
+@pytest.fixture
+def infinite_sigmas(monkeypatch):
+    """Every burst's chosen frequency with an infinite sigma (harmonics lost in the noise): zero weights."""
+    import dataclasses
+    import math
+
+    from vibkit.diagnose import pitch_steps
+
+    chosen = pitch_steps.choose_methods
+    monkeypatch.setattr(
+        pitch_steps,
+        "choose_methods",
+        lambda ests: [dataclasses.replace(be, sigma_hz=math.inf) for be in chosen(ests)],
+    )
+
+
+def test_zero_weights_give_a_plain_message_not_a_nan(infinite_sigmas, capsys):
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # the division by zero weights warned (numpy RuntimeWarning)
+        assert main(["pitch", str(LEON), "--json"]) == 1
+    err = _error(capsys)
+    assert "NaN" not in err and "integer" not in err
+    assert "channel 'tensioner_displacement': no burst gives a link-pass frequency with a finite uncertainty" in err
+
+
+def test_zero_weights_in_one_of_several_channels_are_its_error_row(infinite_sigmas, tmp_path, capsys):
+    lines = [ln for ln in LEON.read_text().splitlines() if not ln.startswith("#")]
+    two = [lines[0] + ",copy (mm)"] + [f"{ln},{ln.split(',')[1]}" for ln in lines[1:]]
+    path = tmp_path / "two.csv"
+    path.write_text("\n".join(two) + "\n")
+    assert main(["spectrum", str(path), "--json"]) == 1
+    err = _error(capsys)
+    assert "no channel could be analysed" in err and "finite uncertainty" in err and "NaN" not in err
+
+
+def test_a_sprocket_speed_is_a_speed_channel_not_analysed():
+    # the guide: pitch and spectrum analyse every vibration channel, not a speed channel; a sprocket's angular
+    # speed (rad/s) is one, as a chain's (m/s) is; a gyroscope's rad/s (not named a speed) stays a vibration
+    import numpy as np
+
+    from vibkit.diagnose.channels import vibration_channels
+
+    from support.recording import recording
+
+    t = np.arange(2000) / 200.0
+    wiggle = np.sin(2 * np.pi * 3.75 * t)
+    rec = recording({"delta": wiggle, "sprocket_speed": 0.84 + 1e-3 * wiggle, "gyro_z": wiggle}, t=t)
+    for name, units in (("delta", "m"), ("sprocket_speed", "rad/s"), ("gyro_z", "rad/s")):
+        rec[name].attrs["units"] = units
+    assert vibration_channels(rec) == ["delta", "gyro_z"]
+    rec["sprocket_speed"].attrs["units"] = "rpm"
+    assert vibration_channels(rec) == ["delta", "gyro_z"]
