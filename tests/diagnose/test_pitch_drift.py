@@ -211,3 +211,9 @@ def test_a_step_sensor_going_round_a_curve_gets_no_verdict(run, tmp_path):
                      "--json")  # fmt: skip
     tensioner = json.loads(out)
     assert abs(tensioner["fundamental_hz"] / 3.7503 - 1) < 2e-4 and tensioner["verdict"] == "ok"
+    # every channel at once: the step's channel, its estimates apart, is not "a second periodicity"; the numbers
+    # come from the tensioner
+    rc, out, _ = run("pitch", nc, "--escalator", "data/fleet-example/escalators/E07.toml", "--json")
+    both = json.loads(out)
+    assert rc == 0 and both["status"] == "ok" and both["channel"] in ("delta", "tensioner_displacement")
+    assert both["fundamental_hz"] == tensioner["fundamental_hz"]

@@ -164,7 +164,7 @@ def estimate_channels(recording, *, channel=None, **kwargs) -> ChannelsResult:
         for e in found
         if e is not best
         and abs(e.fundamental_hz - best.fundamental_hz)
-        > CONSISTENCY_SIGMAS * math.hypot(e.fundamental_sigma_hz, best.fundamental_sigma_hz)
+        > CONSISTENCY_SIGMAS * math.hypot(_agreement_sigma(e), _agreement_sigma(best))
     ]
     if bad:
         listing = ", ".join(
@@ -187,3 +187,13 @@ def estimate_channels(recording, *, channel=None, **kwargs) -> ChannelsResult:
             f"(within {CONSISTENCY_SIGMAS:g} sigma), numbers from {best.channel} (smallest sigma)"
         )
     return ChannelsResult(best.status, reason, best, ests, errors)
+
+
+def _agreement_sigma(e):
+    """A channel's frequency sigma for the channels' agreement: where its own spectral and mean-phase estimates
+    disagree (its decision's check "estimates agree" failed: the link-pass phase moves within the record, as on a
+    step going round a curve), the largest difference between them as well, which its sigma does not cover."""
+    if e.decision is None or e.decision.checks.get("estimates agree", True):
+        return e.fundamental_sigma_hz
+    spread = max((abs(r["spectral_hz"] - r["mean_phase_hz"]) for r in e.per_burst if "mean_phase_hz" in r), default=0.0)
+    return math.hypot(e.fundamental_sigma_hz, spread)
