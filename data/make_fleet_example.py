@@ -10,7 +10,8 @@ measurement date is the recording's start time). The chains lengthen at known ra
 (``UNITS`` below), so a scan must recover them. SYNTHETIC: no escalator was measured.
 
 ``units.csv`` is the catalogue ``vibkit fleet scan`` reads (its ``date`` column left empty: the
-recordings' start times are used). Every random number comes from numpy's PCG64 with a fixed seed
+recordings' start times are used; each row names its unit's profile, ``escalators/UNIT.toml``, which
+gives the speed and its uncertainty, so that the catalogue and ``vibkit pitch --escalator`` agree). Every random number comes from numpy's PCG64 with a fixed seed
 per file and every number has a fixed format, so the bytes are the same on every run
 (tests/test_fleet_example.py checks it).
 """
@@ -26,7 +27,6 @@ import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SPEED = 0.5  # chain speed [m/s]
-SPEED_SIGMA = 0.0005  # m/s: 0.1 % of the speed, a hand tachometer held on a step (the catalogue states it)
 NOMINAL = 0.13333  # nominal link pitch [m]
 FS = 100.0  # [Hz]
 DURATION = 10.0  # [s]
@@ -60,14 +60,14 @@ def recording(pitch_m: float, start: str, seed: int) -> bytes:
 def files() -> dict[str, bytes]:
     """Relative path -> bytes of every file of the example fleet."""
     out = {}
-    cat = ["file,unit,speed_m_s,date,nominal_pitch_m,speed_sigma_m_s"]
+    cat = ["file,unit,date,nominal_pitch_m,escalator"]
     seed = 2024_11_20
     for unit, elongations in UNITS.items():
         for i, (start, e) in enumerate(zip(VISITS, elongations)):
             seed += 1
             name = f"{unit}/{start[:10]}.csv"
             out[name] = recording(NOMINAL * (1 + e / 100), start, seed)
-            cat.append(f"{name},{unit},{SPEED},,{NOMINAL if i == 0 else ''},{SPEED_SIGMA}")
+            cat.append(f"{name},{unit},,{NOMINAL if i == 0 else ''},escalators/{unit}.toml")
     out["units.csv"] = ("\n".join(cat) + "\n").encode()
     return out
 

@@ -78,8 +78,8 @@ SHIPPED = {
 }
 #: shipped files that are not recordings: the entry named refuses them in one line
 NOT_RECORDINGS = {
-    # a catalogue: its date column is empty, so it is no time series
-    "fleet-example/units.csv": ("text", "expected a time in column 'date'"),
+    # a catalogue: no column of numbers (file names, units, empty dates, profile paths), so it is no time series
+    "fleet-example/units.csv": ("text", "no data rows found"),
     "devices/empatica_e4/IBI.csv": ("e4", "not a sampled signal"),
 }
 #: files beside the data that no reader is meant for (scripts, notes, escalator profiles)
