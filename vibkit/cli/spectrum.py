@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import textwrap
 
+from vibkit.diagnose.rounding import fmt_pm
+
 from .options import (
     CHANNEL_EVERY,
     add_command,
@@ -125,7 +127,7 @@ def run(a):
     else:
         print(f"{a.recording}: channel {ch} [{units}]" + (f", speed {speed_text(est)}" if speed else ""))
         print(
-            f"link-pass fundamental {est.fundamental_hz:.5f} +- {est.fundamental_sigma_hz:.2g} Hz "
+            f"link-pass fundamental {fmt_pm(est.fundamental_hz, est.fundamental_sigma_hz, 'Hz')} "
             f"(search band {est.band_hz[0]:.4g}-{est.band_hz[1]:.4g} Hz)"
         )
         if speed:
