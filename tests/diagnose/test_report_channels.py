@@ -78,3 +78,20 @@ def test_report_on_an_android_log_never_analyses_its_status_column(tmp_path, cap
     captured = capfd.readouterr()
     assert ctx.channel == "x" and ctx.summary["status"] == "ok"
     assert "DLASCL" not in captured.out + captured.err
+
+
+def test_a_profile_gives_the_report_its_sprocket_and_band_whatever_scene_is_beside_it():
+    # the unit's profile: 24 teeth; the scene given beside it (Leon's) has 28: the report's pitch is the unit's,
+    # searched in the profile's band as `vibkit pitch --escalator` searches it
+    from vibkit.diagnose.report.context import analyse
+    from vibkit.model.profile import parse_profile
+
+    prof = parse_profile(
+        '[escalator]\nunit = "X24"\n[drive]\nspeed = 0.49\nspeed_uncertainty = 0.0005\nteeth = 24\n'
+        "[chain]\nnominal_pitch = 0.13333\nlinks_per_step = 3\nn_links = 120\n",
+        "X24.toml",
+    )
+    ctx = analyse("data/field/leon-tensioner.csv", scene="sim/leon.toml", duration=2.0, profile=prof)
+    assert ctx.pitch.band_hz == pytest.approx(prof.search_band(0.49))
+    shaft = [h.name for h in ctx.pitch.hypotheses if "sprocket shaft" in h.name]
+    assert "f is the sprocket shaft (Z = 24)" in shaft and not any("28" in name for name in shaft), shaft

@@ -90,8 +90,7 @@ def from_profile(a, profile, sp):
         nominal = profile.nominal_pitch
         taken.append(f"nominal pitch {1000 * nominal:g} mm")
     if search is None and sp.value is not None:
-        f = sp.value / profile.nominal_pitch
-        search = (0.8 * f, 1.25 * f)
+        search = profile.search_band(sp.value)
         taken.append(f"search band {search[0]:.4g}-{search[1]:.4g} Hz (0.8-1.25 x speed / nominal pitch)")
     if teeth_ is None:
         teeth_ = profile.teeth

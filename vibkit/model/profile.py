@@ -157,6 +157,12 @@ class Profile:
     sensor: Sensor | None = None
     source: str = "<string>"
 
+    def search_band(self, speed) -> tuple[float, float]:
+        """The link-pass search band at ``speed`` [m/s]: 0.8 to 1.25 times speed / nominal pitch, wider than any
+        chain wears, narrow enough to keep the neighbouring periodicities out. [Hz]"""
+        f = float(speed) / self.nominal_pitch
+        return (0.8 * f, 1.25 * f)
+
     @property
     def speed_sigma(self) -> tuple[float, str]:
         """(1-sigma of the speed [m/s], where it comes from).

@@ -247,7 +247,11 @@ def analyse(
     # the per-channel decision of `spectrum` and `pitch` (vibkit.diagnose.channels.estimate_channels): every
     # vibration channel (or the one asked for) estimated, channels that disagree refused, the numbers
     # from the channel with the smallest sigma
-    teeth = sc.sprocket.teeth if sc else int(getattr(profile, "teeth", None) or 28)
+    # the unit's own sprocket and band where a profile names the unit (a scene given beside it may be another's)
+    teeth = int(profile.teeth) if profile is not None else sc.sprocket.teeth if sc else 28
+    if band is None and profile is not None and speed is not None:
+        band = profile.search_band(speed)
+        notes.append(f"search band {band[0]:.4g}-{band[1]:.4g} Hz from the profile (0.8-1.25 x speed / nominal pitch)")
     if speed is not None:
         kw = dict(
             speed=speed,
