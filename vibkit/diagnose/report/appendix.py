@@ -53,10 +53,10 @@ def parameters_page(doc, ctx) -> None:
         ["speed from", textwrap.shorten(speed_source(ctx), 70)],
         ["nominal pitch", fmt_length(ctx.nominal_pitch) if ctx.nominal_pitch else "not given"],
         ["limits", " / ".join(f"{v:g} %" for v in ctx.limits)],
-        ["search band", (f"{pitch.band_hz[0]:.4g} - {pitch.band_hz[1]:.4g} Hz" if pitch else str(ctx.band))],
+        ["search band", _band(pitch.band_hz if pitch else ctx.band)],
         ["Hampel half window", f"{ctx.hampel_half_window_s:g} s"],
         ["Hampel false-alarm rate", f"{ctx.hampel_false_alarm_rate:g} per sample"],
-        ["simulated duration", _fmt(duration, "s") if duration else "scene's"],
+        ["simulated duration", "no simulation" if sc is None else _fmt(duration, "s") if duration else "the scene's"],
     ]
     res = getattr(ctx, "result", None)
     if res is not None and "solver_method" in res.attrs:
@@ -85,7 +85,21 @@ def parameters_page(doc, ctx) -> None:
     ax = fig.add_axes((0.06, 0.62, 0.88, 0.3))
     _table(ax, rows, (0.4, 0.6), 9)
     if sc is not None:
-        lines = [ln for ln in sc.text.splitlines() if ln.strip() and not ln.lstrip().startswith("#")][:48]
+        lines = [ln for ln in sc.text.splitlines() if ln.strip() and not ln.lstrip().startswith("#")]
+        shown = [ln if len(ln) <= _WIDTH else ln[: _WIDTH - 3] + "..." for ln in lines[:_LINES]]
+        if len(lines) > _LINES:
+            shown[-1] = f"... {len(lines) - _LINES + 1} more lines: the scene file {sc.source} has them all"
         fig.text(0.06, 0.58, f"Scene {os.path.basename(sc.source)}:", fontsize=10, fontweight="bold")
-        fig.text(0.06, 0.565, "\n".join(ln[:100] for ln in lines), fontsize=6.5, family="monospace", va="top")
+        fig.text(0.06, 0.565, "\n".join(shown), fontsize=6.5, family="monospace", va="top")
     doc.emit(fig, "parameters")
+
+
+#: the scene's lines the parameters page lists, and their width in characters (a longer line ends in "...")
+_LINES, _WIDTH = 48, 100
+
+
+def _band(band):
+    """A search band as the page shows it: "LOW - HIGH Hz", or the default it stands for."""
+    if band is None:
+        return "default: speed / 200 mm to speed / 80 mm"
+    return f"{band[0]:.4g} - {band[1]:.4g} Hz"
