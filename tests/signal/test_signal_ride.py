@@ -190,3 +190,17 @@ def test_half_cycle_peaks_match_a_plain_reference(seed):
     x[:3] = 0.0 if seed % 2 else x[:3]
     _, idx = half_cycle_peaks(x)
     assert np.array_equal(idx, _peaks_by_groupby(x))
+
+
+def test_a_sensor_turned_over_is_not_an_incline():
+    # along-travel gravity component: 30 deg up an incline moves it by g sin 30 = 4.9 m/s^2 (a ride); a sensor
+    # turned over moves it by g (a wrist, a phone in a hand): more than the steepest escalator (35 deg) gives
+    from vibkit.signal.ride import MAX_TILT, detect_ride_segment
+
+    fs, t = 100.0, np.arange(0, 40, 0.01)
+    inside = (t > 10) & (t < 30)
+    ride = detect_ride_segment(fs, along=np.where(inside, 9.80665 * np.sin(np.radians(30.0)), 0.0))
+    assert ride.method == "gravity component" and abs(ride.start_s - 10) < 0.5 and abs(ride.end_s - 30) < 0.5
+    assert 9.80665 * np.sin(np.radians(35.0)) < MAX_TILT < 9.80665
+    with pytest.raises(ValueError, match="turned over rather than rode an incline"):
+        detect_ride_segment(fs, along=np.where(inside, 9.80665, 0.0))

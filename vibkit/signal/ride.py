@@ -49,6 +49,10 @@ __all__ = [
 #: corner of the low-pass that ISO 18738 applies to lift acceleration and that meters offer as the
 #: "unweighted" vibration channel [Hz]
 LOWPASS_HZ = 10.0
+#: the steepest escalator incline (EN 115-1: 30 deg, 35 deg for a rise up to 6 m): a sensor tilting with the chain
+#: sees gravity's along-travel component move by at most g sin(35 deg) = 5.6 m/s^2; a move beyond this margin over
+#: it is a sensor turned over (a wrist, a phone in a hand), not an incline [m/s^2]
+MAX_TILT = 9.80665 * 0.5736 * 1.15
 
 
 @nb.njit(cache=True)
@@ -392,6 +396,12 @@ def detect_ride_segment(
         dev = trend - base
         k = int(np.argmax(np.abs(dev)))
         step = float(dev[k])
+        if abs(step) > MAX_TILT:
+            raise ValueError(
+                f"no incline found: the along-travel gravity component moves by {step:+.3g} m/s^2, more than an "
+                f"escalator's steepest incline gives (g sin 35 deg = 5.6 m/s^2): the sensor turned over rather than "
+                "rode an incline; is this a step's recording? Give the segment as --segment START:END"
+            )
         if abs(step) >= min_tilt:
             run = _longest_run(np.abs(dev) > 0.5 * abs(step))
             i0, i1 = run
