@@ -209,7 +209,7 @@ def test_reason_without_a_stated_speed_sigma_gives_no_sigma():
     )
     stated = decide(LinkPassEvidence(**base, speed_sigma_m_s=0.0))
     assert (stated.status, stated.verdict) == (STATUS_OK, "ok")
-    assert "elongation +0.00 +- 0.027 % of 133.3 mm: ok" in stated.reason  # 100 * 1e-3 / 3.75 = 0.0267 %
+    assert "elongation +0.000 +- 0.027 % of 133.3 mm: ok" in stated.reason  # 100 * 1e-3 / 3.75 = 0.0267 %
     unstated = decide(LinkPassEvidence(**base, speed_sigma_m_s=None))
     assert (unstated.status, unstated.verdict) == (STATUS_OK, "ok")  # the frequency's part resolves it
     assert unstated.reason == "elongation +0.00 % of 133.3 mm: ok (speed uncertainty not stated)"

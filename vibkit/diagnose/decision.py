@@ -37,7 +37,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from .rounding import SPEED_SIGMA_NOT_STATED
+from .rounding import SPEED_SIGMA_NOT_STATED, fmt_pm
 
 __all__ = [
     "CATALOGUE_PITCHES_M",
@@ -507,7 +507,7 @@ def _verdict(ev, p, checks):
     stated = ev.speed_sigma_m_s is not None  # not stated: el_sigma is the frequency's part only, a lower bound
     if not resolved:
         why = (
-            f"elongation {el:+z.2f} +- {el_sigma:.2g} %: its sigma is more than a third of the first limit "
+            f"elongation {fmt_pm(el, el_sigma, sign=True)} %: its sigma is more than a third of the first limit "
             if stated
             else f"elongation {el:+z.2f} % ({SPEED_SIGMA_NOT_STATED}): the frequency's part of its sigma alone, "
             f"{el_sigma:.2g} %, is more than a third of the first limit "
@@ -523,7 +523,7 @@ def _verdict(ev, p, checks):
     return Decision(
         STATUS_OK,
         (
-            f"elongation {el:+z.2f} +- {el_sigma:.2g} % of {_mm(nom)}: {verdict}"
+            f"elongation {fmt_pm(el, el_sigma, sign=True)} % of {_mm(nom)}: {verdict}"
             if stated
             else f"elongation {el:+z.2f} % of {_mm(nom)}: {verdict} ({SPEED_SIGMA_NOT_STATED})"
         ),
