@@ -101,3 +101,12 @@ def test_length_scale_reads_as_the_tables():
     assert length_scale("m", 2.5) == (1.0, "m")
     assert length_scale("m/s^2", 0.4) == (1.0, "m/s^2")
     assert length_scale("m", float("nan")) == (1.0, "m")
+
+
+def test_without_a_speed_page_one_names_a_family_not_a_link_pass(tmp_path):
+    # a walk (a phone in a pocket, phyphox): its 2.94 Hz family lies in the band, and without a speed nothing tells
+    # it from a chain's link pass; page 1 says what was found and that it was not checked
+    rep = write_report("data/thirdparty/phyphox_walking_linear_accelerometer.csv", tmp_path / "walk.pdf")
+    text = "\n".join(rep.pages[0][1])
+    assert "FAMILY AT 2.937 Hz" in text and "not checked as a link\npass" in text
+    assert not any(line.startswith("LINK PASS") for line in rep.pages[0][1])  # the headline it gave before

@@ -44,10 +44,11 @@ def _headline(ctx):
     status = str(getattr(pitch, "status", "ok") or "ok") if pitch is not None else "ok"
     reason = str(getattr(pitch, "reason", "") or "") if pitch is not None else ""
     if pitch is None:
-        return (
-            f"LINK PASS {fmt_pm(ctx.f0, None, 'Hz')}",
+        return (  # without a speed nothing tells a chain's link pass from any other family in the band
+            f"FAMILY AT {fmt_pm(ctx.f0, None, 'Hz')}",
             _GREY,
-            "no chain speed known: no pitch and no verdict (give --speed)",
+            "a harmonic family in the band; no chain speed known, so not checked as a link pass: no pitch and no "
+            "verdict (give --speed or --escalator)",
         )
     if status.lower() not in ("ok", ""):
         return status.upper(), _GREY, reason or "no verdict"
