@@ -71,8 +71,12 @@ def _shown(key, value, summary):
     """A summary value as the table prints it: to its sigma when it has one, else 6 significant digits."""
     from vibkit.diagnose.rounding import fmt_value
 
+    if value is None:
+        return "not stated"
     if not isinstance(value, float):
-        return "not stated" if value is None and key.endswith("sigma_m_s") else value
+        return value
+    if key == "score":
+        return f"{value:.3f}"  # a similarity between 0 and 1: 2.4e-38 is 0.000
     if "sigma" in key:
         return f"{value:.2g}"  # two significant digits, the rule of every +-
     sigma = summary.get(_SIGMA_OF.get(key, ""))
