@@ -412,6 +412,18 @@ def _check_plausible(ev, p, checks, window_percent, catalogue):
     )
 
 
+def _inconclusive(ev, p, checks, reason):
+    """``inconclusive`` with ``reason``: the pitch ``p`` given, no verdict (``"inconclusive"`` where a nominal pitch
+    asked for one)."""
+    return Decision(
+        STATUS_INCONCLUSIVE,
+        reason,
+        verdict="inconclusive" if ev.nominal_pitch_m is not None else None,
+        implied_pitch_m=p,
+        checks=checks,
+    )
+
+
 def _check_harmonics(ev, p, checks):
     """``inconclusive`` for one spectral line without a significant harmonic; None otherwise (or unknown)."""
     if ev.significant_orders is None:
@@ -420,16 +432,15 @@ def _check_harmonics(ev, p, checks):
     checks["harmonics"] = bool(harmonics)
     if harmonics:
         return None
-    return Decision(
-        STATUS_INCONCLUSIVE,
+    return _inconclusive(
+        ev,
+        p,
+        checks,
         (
             f"one spectral line at {float(ev.fundamental_hz):.4g} Hz (pitch {_mm(p)}) without a significant "
             "harmonic: a tone (a structural mode, a motor, a fan) cannot be told from a link pass, whose roller "
             "impacts give harmonics; no verdict"
         ),
-        verdict="inconclusive" if ev.nominal_pitch_m is not None else None,
-        implied_pitch_m=p,
-        checks=checks,
     )
 
 
@@ -446,8 +457,10 @@ def _check_methods_agree(ev, p, checks):
     checks["estimates agree"] = bool(agree)
     if agree:
         return None
-    return Decision(
-        STATUS_INCONCLUSIVE,
+    return _inconclusive(
+        ev,
+        p,
+        checks,
         (
             f"the spectral ({spectral:.5g} Hz) and mean-phase ({mean_phase:.5g} Hz) estimates differ by "
             f"{100 * rel:.2g} % ({ev.methods_sigmas:.0f} sigma; pitch {_mm(p)}): the link-pass phase moves within "
@@ -455,9 +468,6 @@ def _check_methods_agree(ev, p, checks):
             "changes the speed or a sensor riding a step goes round a curve (the step's own link-pass phase shifts "
             "there); record the straight ride or a fixed sensor; no verdict"
         ),
-        verdict="inconclusive" if ev.nominal_pitch_m is not None else None,
-        implied_pitch_m=p,
-        checks=checks,
     )
 
 
@@ -470,16 +480,15 @@ def _check_parts_wander(ev, p, checks):
     checks["steady between parts"] = bool(steady)
     if steady:
         return None
-    return Decision(
-        STATUS_INCONCLUSIVE,
+    return _inconclusive(
+        ev,
+        p,
+        checks,
         (
             f"the frequency wanders {100 * ev.part_wander:.2g} % between parts of the record ({ev.part_summary}; "
             f"pitch {_mm(p)}): more than a chain under speed control ({100 * MAX_PART_WANDER:g} %), as a gait or a "
             "cadence does; no speed given as one number matches it, no verdict"
         ),
-        verdict="inconclusive" if ev.nominal_pitch_m is not None else None,
-        implied_pitch_m=p,
-        checks=checks,
     )
 
 
