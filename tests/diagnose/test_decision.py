@@ -186,7 +186,11 @@ def test_decide_rules():
     )  # drifts 3.7 %
     assert (
         decide(LinkPassEvidence(**base, spectral_hz=3.76, mean_phase_hz=3.80)).status == STATUS_OK
-    )  # 1 %: a chain's wander
+    )  # 1 %: not refused as a drift (a chain may wander so)...
+    assert (
+        decide(LinkPassEvidence(**base, spectral_hz=3.76, mean_phase_hz=3.80, methods_sigmas=40.0)).status
+        == STATUS_INCONCLUSIVE
+    )  # ...but, significant, more than a chain under speed control does within one record: no verdict
     # a third of the first limit: 0.5 % elongation sigma is the edge
     edge = 1.5 / 3 / 100 * 3.76
     assert decide(LinkPassEvidence(**{**base, "fundamental_sigma_hz": 0.9 * edge})).status == STATUS_OK
