@@ -243,3 +243,46 @@ def _links_with(path, capsys, *args):
     if "--json" in args:
         return json.loads(capsys.readouterr().out)
     return None
+
+
+X65 = """
+[escalator]
+unit = "X65"
+[drive]
+speed = 0.65
+speed_uncertainty = 0.00065
+teeth = 24
+[chain]
+nominal_pitch = 0.13546
+links_per_step = 3
+n_links = 120
+"""
+
+
+def test_the_number_is_the_link_at_the_sensor_wherever_the_recording_starts_within_its_passage(tmp_path):
+    """A 120-link scene at 0.65 m/s (4.8 Hz: the signature's runs start after 5 s, 24 links, on a link boundary) and
+    a 1 mm link 40: recordings started at several places within one link's passage at the sensor number it as
+    the link at the sensor then counts it (link_number_of).  The map counts links between the instants a roller
+    reaches the sensor (the offset the scene gives), not between the signal's cycle boundaries, which fall half-way
+    through a passage here: before, a recording started a fifth or a half of the way through read 84 for 83, and the
+    signature's own start on a boundary put every number one too high."""
+    from vibkit.diagnose.links import profile_scene_file
+    from vibkit.model.profile import parse_profile
+
+    scene_file = profile_scene_file(parse_profile(X65, "X65.toml"))
+    scene = load_scene(scene_file)
+    pitch = scene.chain.link_pitch
+    sc = dataclasses.replace(
+        scene,
+        chain=dataclasses.replace(scene.chain, worn_links=((40, pitch + 1e-3),)),
+        outputs=dict(scene.outputs, variables=("delta", "sprocket_angle")),
+    )
+    ds = vibkit.simulate(sc, duration=80.0, progress=False)
+    t, theta = ds.time.values, ds.sprocket_angle.values
+    passed = scene.sprocket.teeth * np.abs(theta - theta[0]) / (2 * np.pi)
+    rec = xr.Dataset({"delta": ("time", ds.delta.values, {"units": "m"})}, coords={"time": ("time", t, {"units": "s"})})
+    for start in (0.05, 0.1, 0.15, 0.2, 0.3):
+        res = find_worn_links(rec.sel(time=slice(start, None)), speed=0.65, n_links=120, scene=scene_file)
+        (f,) = res.flagged
+        p0 = float(np.interp(start, t, passed))
+        assert f["link"] == link_number_of(40, p0, 120), (start, p0, f)

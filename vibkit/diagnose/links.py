@@ -28,13 +28,22 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..signal import find_fundamental
-from ..signal.linkmap import MIN_LOOPS, TooFewLoops, link_map, link_pass_phase, record_time_for_loops, scan_links
+from ..signal.linkmap import (
+    MIN_LOOPS,
+    TooFewLoops,
+    canonical_phase,
+    link_map,
+    link_pass_phase,
+    record_time_for_loops,
+    scan_links,
+)
 
 __all__ = [
     "DEFAULT_FALSE_ALARM",
     "LinksResult",
     "find_worn_links",
     "link_number_of",
+    "link_offset",
     "links_channel",
     "profile_scene_file",
     "signature_error",
@@ -185,17 +194,39 @@ def _run_map_cached(scene_path, sensor, speed, fs, samples_per_cycle, excess, lo
     ds = simulate(_scene_with(scene, speed=speed, worn=worn), duration=duration, progress=False)
     t = ds.time.values
     keep = t >= settle
-    x = np.interp(np.arange(t[keep][0], t[-1], 1.0 / fs), t, ds[SENSORS[sensor]].values)
-    lmap = link_map(x, fs, link_phase(x, fs, f_lp), n, samples_per_cycle=samples_per_cycle)
-    theta = ds.sprocket_angle.values
-    passed = scene.sprocket.teeth * abs(float(np.interp(t[keep][0], t, theta)) - float(theta[0])) / (2 * np.pi)
-    return lmap.mean_shape, link_number_of(1, passed, n) - 1, n
+    tx = np.arange(t[keep][0], t[-1], 1.0 / fs)
+    x = np.interp(tx, t, ds[SENSORS[sensor]].values)
+    ph = link_phase(x, fs, f_lp)
+    # links passed since the start, on the sprocket; a roller is at the sensor where it is a whole number: where
+    # that falls in the signal's cycle (its fundamental's peak is 0) is the offset that numbers the links of the
+    # map, and of a recording of this escalator, by the link at the sensor rather than by the signal's cycle
+    passed = scene.sprocket.teeth * np.abs(np.interp(tx, t, ds.sprocket_angle.values) - ds.sprocket_angle.values[0])
+    passed /= 2 * np.pi
+    cyc = canonical_phase(x, ph) / (2 * np.pi)
+    lag = 2 * np.pi * (cyc - passed)
+    offset = float(np.angle(np.mean(np.exp(1j * lag))) / (2 * np.pi)) % 1.0
+    lmap = link_map(x, fs, ph, n, samples_per_cycle=samples_per_cycle, link_offset=offset)
+    # the map's first link as the map counts it (between the link boundaries the offset places in the signal),
+    # in links passed on the sprocket: at a start on a boundary the sprocket's count alone may differ by one
+    # (5 s at 4.8 Hz is 24 links: every number of a 120-link scene came out one too high)
+    whole = round(float(np.mean(cyc - offset - passed)))  # the phase's whole cycles before the sprocket's count
+    first = math.floor(cyc[0] - offset) - whole + 0.5
+    return lmap.mean_shape, link_number_of(1, first, n) - 1, n, offset
 
 
 def _signature_cached(scene_path, sensor, speed, fs, samples_per_cycle, excess, loops):
-    healthy, _, n = _run_map_cached(scene_path, sensor, speed, fs, samples_per_cycle, 0.0, loops)
-    worn, row, _ = _run_map_cached(scene_path, sensor, speed, fs, samples_per_cycle, excess, loops)
+    healthy, _, n, _ = _run_map_cached(scene_path, sensor, speed, fs, samples_per_cycle, 0.0, loops)
+    worn, row, _, _ = _run_map_cached(scene_path, sensor, speed, fs, samples_per_cycle, excess, loops)
     return np.roll(worn - healthy, -row, axis=0), n
+
+
+def link_offset(scene_path, *, sensor="tensioner", speed, fs, samples_per_cycle=SAMPLES_PER_CYCLE):
+    """Where a roller reaches the sensor in the signal's link-pass cycle of the scene's healthy chain, as a fraction of
+    a cycle after the fundamental's peak (:func:`vibkit.signal.linkmap.link_map`'s ``link_offset``): with it a
+    recording of this escalator numbers its links from the link at the sensor when it starts (or the marked link),
+    as the signature numbers them, wherever the recording starts within a link's passage."""
+    key = (str(scene_path), sensor, round(float(speed), 9), round(float(fs), 6), int(samples_per_cycle))
+    return _run_map_cached(*key, 0.0, 2)[3]
 
 
 def worn_link_signature(scene_path, *, sensor="tensioner", speed, fs, samples_per_cycle=SAMPLES_PER_CYCLE, excess=1e-3):
@@ -338,8 +369,6 @@ def find_worn_links(
             f"the chain's {n} links; a link map needs {MIN_LOOPS} loops: record at least {need:.0f} s "
             f"({MIN_LOOPS} x {n} / {f_lp:.4g} Hz plus one link)"
         )
-    ph = link_phase(x, fs, f_lp)
-    lmap = link_map(x, fs, ph, n, samples_per_cycle=SAMPLES_PER_CYCLE, marker_s=marker_s)
     notes = []
     sensor = "tensioner" if str(da.attrs.get("units", "")) in ("m", "mm", "um") else "other"
     if scene is not None:
@@ -349,6 +378,13 @@ def find_worn_links(
                 "worn link's signature is known for the tensioner only (a step sensor rides the loop, and its "
                 "own path dominates its per-link pattern)"
             )
+    # with a scene the links are counted between the instants a roller reaches the sensor, not between the
+    # signal's cycle boundaries: numbers as the signature gives them wherever the recording starts
+    offset = 0.0 if scene is None else link_offset(scene, sensor="tensioner", speed=speed, fs=fs)
+    lmap = link_map(
+        x, fs, link_phase(x, fs, f_lp), n, samples_per_cycle=SAMPLES_PER_CYCLE, marker_s=marker_s, link_offset=offset
+    )
+    if scene is not None:
         sig, n_scene = worn_link_signature(scene, sensor="tensioner", speed=speed, fs=fs)
         if n_scene != n:
             raise ValueError(f"--links {n}: the scene {scene} has {n_scene} links")

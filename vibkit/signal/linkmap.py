@@ -139,7 +139,7 @@ class LinkMap:
         return self.n_links / self.link_pass_hz
 
 
-def link_map(x, fs, phase, n_links, *, samples_per_cycle=16, marker_s=None):
+def link_map(x, fs, phase, n_links, *, samples_per_cycle=16, marker_s=None, link_offset=0.0):
     """Per-link features of a recording over its complete loops.
 
     Parameters
@@ -157,6 +157,12 @@ def link_map(x, fs, phase, n_links, *, samples_per_cycle=16, marker_s=None):
     marker_s : float, optional
         Time at which a marked link passed the sensor: it becomes link 1. Default: the link whose
         cycle is in progress at the first sample is link 1. [s]
+    link_offset : float, optional
+        Where the links' own boundaries (a roller at the sensor) fall in the signal's cycle, as a fraction
+        of a cycle after its zero (the fundamental's peak), when the escalator's geometry says so (a scene:
+        :func:`vibkit.diagnose.links.worn_link_signature`); the link in progress at the first sample (or at
+        ``marker_s``) is then counted between those boundaries, not the signal's.  Default 0: the signal's
+        cycles.
 
     Returns
     -------
@@ -182,12 +188,12 @@ def link_map(x, fs, phase, n_links, *, samples_per_cycle=16, marker_s=None):
     span = (x.size - 1) / fs
     f_lp = (cyc[-1] - cyc[0]) / span if span > 0 else 0.0
     if marker_s is None:
-        ref = math.floor(cyc[0])
+        ref = math.floor(cyc[0] - link_offset)
     else:
         m = float(marker_s)
         if not (math.isfinite(m) and 0.0 <= m <= t[-1]):
             raise ValueError(f"Parameter marker_s={marker_s!r} must lie within the recording, 0 to {t[-1]:.6g} s.")
-        ref = math.floor(float(np.interp(m, t, cyc)))
+        ref = math.floor(float(np.interp(m, t, cyc)) - link_offset)
     ang = resample_to_angle(x, fs, ph, samples_per_cycle=spc)
     n_cyc = ang.x.size // spc
     loops = n_cyc // n
