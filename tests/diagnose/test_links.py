@@ -286,3 +286,34 @@ def test_the_number_is_the_link_at_the_sensor_wherever_the_recording_starts_with
         (f,) = res.flagged
         p0 = float(np.interp(start, t, passed))
         assert f["link"] == link_number_of(40, p0, 120), (start, p0, f)
+
+
+def test_a_marked_link_counts_the_worn_one_as_the_rollers_pass_the_top_of_the_lower_head():
+    """The absolute count, from the rollers' own positions: link 50 marked (the time half-way between its rollers'
+    arrivals at the top of the lower head, x = delta, z > 0, rollers arriving in decreasing number), link 40 worn
+    1 mm: links 50, 49, ..., 40 pass in that order, so the worn link is link 11.  (The count once read 13: its
+    link at the sensor was two links ahead of the one going over the top.)"""
+    scene = load_scene(SCENE)
+    pitch = scene.chain.link_pitch
+    sc = dataclasses.replace(
+        scene,
+        chain=dataclasses.replace(scene.chain, worn_links=((40, pitch + 1e-3),)),
+        outputs=dict(scene.outputs, variables=("delta", "roller_position"), rollers=(50, 51)),
+    ).with_solver(closure="exact")
+    settle = N * pitch / SPEED + 5.0
+    ds = vibkit.simulate(sc, duration=settle + (2 * N + 30) * pitch / SPEED, progress=False)
+    t, d = ds.time.values, ds.delta.values
+
+    def arrival(roller, after):
+        """The first time after ``after`` the roller's centre is over the lower head's centre (delta, 0)."""
+        xz = ds.roller_position.sel(roller=roller).values
+        rel = xz[:, 0] - d
+        k = next(i for i in range(t.size - 1) if t[i] > after and xz[i, 1] > 0 and rel[i] < 0 <= rel[i + 1])
+        return t[k] + (t[k + 1] - t[k]) * rel[k] / (rel[k] - rel[k + 1])
+
+    keep = t >= settle
+    rec = xr.Dataset({"delta": ("time", d[keep], {"units": "m"})}, coords={"time": ("time", t[keep] - settle)})
+    first = arrival(51, settle + 5.0)
+    marker = 0.5 * (first + arrival(50, first)) - settle  # roller 51 reaches the top first, then roller 50
+    res = find_worn_links(rec, speed=SPEED, n_links=N, scene=SCENE, marker_s=marker)
+    assert [(f["link"], f["alternatives"]) for f in res.flagged] == [(11, [])]

@@ -13,9 +13,10 @@ exactly as a recording; :func:`find_worn_links` reads the recording's channel, t
 phase, builds the map and scans it.
 
 Link numbers count, in the order the links pass, from the link at the sensor when the recording
-starts (or the link marked at ``marker_s``).  In the signature's run, model link ``k`` is at the
-top of the lower head at ``t = 0`` (the scene's start) and links pass in decreasing model number,
-so the run's own numbering is known and its worn link is row 0 of the signature.
+starts (or the link marked at ``marker_s``), a link being at the sensor while it goes over the top of
+the lower head (:func:`link_number_of`).  In the signature's run, roller 1 is at the top of the lower
+head at ``t = 0`` (the scene's start) and links pass in decreasing model number, so the run's own
+numbering is known and its worn link is row 0 of the signature.
 """
 
 from __future__ import annotations
@@ -157,8 +158,13 @@ def link_phase(x, fs, f_lp):
 
 def link_number_of(model_link, links_passed, n_links):
     """Number (1-based, in passing order from the link at the sensor) of the scene's link
-    ``model_link`` after ``links_passed`` links have passed since the scene's start."""
-    at_sensor = (1 - int(math.floor(links_passed))) % n_links  # 0-based model link at the sensor
+    ``model_link`` after ``links_passed`` links have passed since the scene's start.
+
+    A link is at the sensor while it goes over the top of the lower head, from the arrival there of one of
+    its rollers to the other's.  At the scene's start roller 1 is at the top and rollers arrive in
+    decreasing number (2, 1, n, n - 1 ...): while ``j`` to ``j + 1`` links have passed, the link from roller
+    ``(-j - 1) mod n + 1`` to the next is at the sensor (link n, from roller n to roller 1, at first)."""
+    at_sensor = (-1 - int(math.floor(links_passed))) % n_links  # 0-based model link at the sensor
     return (at_sensor - (model_link - 1)) % n_links + 1
 
 
