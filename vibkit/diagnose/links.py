@@ -61,6 +61,8 @@ SAMPLES_PER_CYCLE = 16
 #: wander (the tracked phase's error at the record's ends); with 1 um of noise over three loops the links that
 #: pass the statistical threshold by chance read about 0.03 mm
 MIN_EXCESS_M = 0.05e-3
+#: loops (after one of settling) that the signature's runs average over
+SIGNATURE_LOOPS = 2
 #: excess pitch of the simulated worn link whose signature is fitted first [m]
 SIGNATURE_EXCESS_M = 1e-3
 #: a first fit above this many times ``SIGNATURE_EXCESS_M`` is fitted again with the signature of a link that long:
@@ -220,6 +222,11 @@ def _run_map_cached(scene_path, sensor, speed, fs, samples_per_cycle, excess, lo
     return lmap.mean_shape, link_number_of(1, first, n) - 1, n, offset
 
 
+def _cache_key(scene_path, sensor, speed, fs, samples_per_cycle):
+    """The cached runs' key: the same scene, speed and rate (rounded) are one run, whoever asks."""
+    return (str(scene_path), sensor, round(float(speed), 9), round(float(fs), 6), int(samples_per_cycle))
+
+
 def _signature_cached(scene_path, sensor, speed, fs, samples_per_cycle, excess, loops):
     healthy, _, n, _ = _run_map_cached(scene_path, sensor, speed, fs, samples_per_cycle, 0.0, loops)
     worn, row, _, _ = _run_map_cached(scene_path, sensor, speed, fs, samples_per_cycle, excess, loops)
@@ -231,8 +238,7 @@ def link_offset(scene_path, *, sensor="tensioner", speed, fs, samples_per_cycle=
     a cycle after the fundamental's peak (:func:`vibkit.signal.linkmap.link_map`'s ``link_offset``): with it a
     recording of this escalator numbers its links from the link at the sensor when it starts (or the marked link),
     as the signature numbers them, wherever the recording starts within a link's passage."""
-    key = (str(scene_path), sensor, round(float(speed), 9), round(float(fs), 6), int(samples_per_cycle))
-    return _run_map_cached(*key, 0.0, 2)[3]
+    return _run_map_cached(*_cache_key(scene_path, sensor, speed, fs, samples_per_cycle), 0.0, SIGNATURE_LOOPS)[3]
 
 
 def worn_link_signature(scene_path, *, sensor="tensioner", speed, fs, samples_per_cycle=SAMPLES_PER_CYCLE, excess=1e-3):
@@ -259,7 +265,7 @@ def worn_link_signature(scene_path, *, sensor="tensioner", speed, fs, samples_pe
     if sensor not in SENSORS:
         raise ValueError(f"sensor {sensor!r}: the model gives a worn link's signature for {', '.join(SENSORS)} only")
     return _signature_cached(
-        str(scene_path), sensor, round(float(speed), 9), round(float(fs), 6), int(samples_per_cycle), float(excess), 2
+        *_cache_key(scene_path, sensor, speed, fs, samples_per_cycle), float(excess), SIGNATURE_LOOPS
     )
 
 
@@ -267,9 +273,9 @@ def signature_error(scene_path, *, sensor="tensioner", speed, fs, samples_per_cy
     """The signature's relative error, as the model shows it: ``|S(e / 2) / (e / 2) - S(e) / e| / |S(e) / e|``,
     ``S(e)`` the signature of a link ``e`` longer (each without the mean over its links, as the scan fits it).
     A linear, reproducible signature gives 0; the study's 159-link scene at 0.5 m/s gives 0.15 at 1 mm."""
-    key = (str(scene_path), sensor, round(float(speed), 9), round(float(fs), 6), int(samples_per_cycle))
-    full, _ = _signature_cached(*key, float(excess), 2)
-    half, _ = _signature_cached(*key, float(excess) / 2.0, 2)
+    key = _cache_key(scene_path, sensor, speed, fs, samples_per_cycle)
+    full, _ = _signature_cached(*key, float(excess), SIGNATURE_LOOPS)
+    half, _ = _signature_cached(*key, float(excess) / 2.0, SIGNATURE_LOOPS)
     full = (full - full.mean(axis=0)) / float(excess)
     half = (half - half.mean(axis=0)) / (float(excess) / 2.0)
     return float(np.sqrt(np.sum((half - full) ** 2) / np.sum(full * full)))
