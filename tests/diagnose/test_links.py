@@ -1,6 +1,6 @@
 """Which link is worn, on simulated recordings of the study's escalator (no load, 0.5 m/s): three loops
-of the tensioner (1 um noise) and of a step accelerometer on step 20 (5 mm/s^2 noise) after one loop of
-settling, with link 40, then link 70, 1 mm long, and the healthy chain."""
+of the tensioner (1 um noise) and a step accelerometer (5 mm/s^2 noise) after one loop of settling,
+with link 40, then link 70, 1 mm long, and the healthy chain."""
 
 import dataclasses
 import json
@@ -111,52 +111,16 @@ def test_a_marker_renumbers_from_the_marked_link(recordings, capsys):
     assert (plain - marked) % N in (10, 11)
 
 
-#: step 20's accelerometer sits on the middle of its three rollers: roller 3 x 19 + 2
-STEP_ROLLER = 59
-
-
-def test_a_step_accelerometer_flags_the_worn_link_by_its_number(recordings, capsys):
-    """The step accelerometer (5 mm/s^2 noise) of the same recordings, with the scene: one link flagged each
-    time, numbered in passing order from the step's own link (from its accelerometer's roller to the one behind
-    it), so link 40 and link 70 read 30 apart; the healthy chain flags none."""
-    found = {}
-    for worn in (40, 70):
-        d = _links(recordings[worn][0], capsys, "--channel", "accel_step")
-        assert d["sensor"] == "step"
-        assert len(d["flagged"]) == 1, d["flagged"]
-        f = d["flagged"][0]
-        assert f["link"] == (STEP_ROLLER - worn) % N + 1
-        # the template is another link's change; 1 mm within what the step's own trip leaves
-        assert 0.6 < f["excess_pitch_mm"] < 1.3
-        assert 0 < f["sigma_mm"] < 0.15
-        assert len(f["loops"]) >= 2
-        found[worn] = f["link"]
-    assert (found[40] - found[70]) % N == 30
-    d = _links(recordings[None][0], capsys, "--channel", "accel_step")
-    assert d["flagged"] == []
-
-
-def test_a_step_accelerometer_without_a_scene_is_refused(recordings):
-    """Without the scene the step's trip cannot be told from a worn link: a clear refusal."""
+def test_the_step_channel_is_refused_with_or_without_a_scene(recordings):
+    """The simulated step accelerometer (5 mm/s^2 noise) of the worn chain gets no link number: its passes
+    round the heads change as much from run to run as the worn link changes them."""
     rec = xr.open_dataset(recordings[40][0])
-    with pytest.raises(ValueError, match="step accelerometer gives no link number without the escalator's scene"):
-        find_worn_links(rec, speed=SPEED, n_links=N, channel="accel_step")
+    for scene in (SCENE, None):
+        with pytest.raises(ValueError, match="step accelerometer gives no link number"):
+            find_worn_links(rec, speed=SPEED, n_links=N, channel="accel_step", scene=scene)
 
 
-def test_a_step_of_another_escalator_is_refused(recordings):
-    """A step signal whose trip is not the scene's (here a link-pass tone in noise, with no trip at all) is
-    refused, not numbered."""
-    rec = xr.open_dataset(recordings[None][0]).load()
-    t = rec.time.values
-    tone = 0.01 * np.sin(2 * np.pi * SPEED / load_scene(SCENE).chain.link_pitch * t)
-    rec["accel_step"].values[:] = tone + np.random.default_rng(1).normal(0, 5e-3, t.size)
-    with pytest.raises(ValueError, match="not a step of this scene's escalator"):
-        find_worn_links(rec, speed=SPEED, n_links=N, channel="accel_step", scene=SCENE)
-
-
-@pytest.mark.parametrize("channel", ["delta", "accel_step"])
-def test_the_report_has_a_links_page_with_the_flagged_link(recordings, tmp_path, channel):
-    """The tensioner's page, and the step's (numbered from the step's own link, its unseen links marked)."""
+def test_the_report_has_a_links_page_with_the_flagged_link(recordings, tmp_path):
     import importlib.util
     from pathlib import Path
 
@@ -179,18 +143,13 @@ def test_the_report_has_a_links_page_with_the_flagged_link(recordings, tmp_path,
     mp = pytest.MonkeyPatch()
     mp.setattr(PageSink, "emit", emit)
     try:
-        rep = write_report(
-            path, tmp_path / "r.pdf", scene=SCENE, speed=SPEED, duration=2.0, date="2026-11-26", channel=channel
-        )
+        rep = write_report(path, tmp_path / "r.pdf", scene=SCENE, speed=SPEED, duration=2.0, date="2026-11-26")
     finally:
         mp.undo()
     assert "links" in [t for t, _ in rep.pages]
     assert problems["links"] == []
-    number = link_number_of(40, passed, N) if channel == "delta" else (STEP_ROLLER - 40) % N + 1
-    assert f"link {number}:" in problems["texts"]
-    assert rep.summary["flagged_links"] == [number]
-    if channel == "accel_step":
-        assert "the step's own link" in problems["texts"] and "not seen from this step" in problems["texts"]
+    assert f"link {link_number_of(40, passed, N)}:" in problems["texts"]
+    assert rep.summary["flagged_links"] == [link_number_of(40, passed, N)]
 
 
 def test_without_a_scene_a_worn_link_gives_no_number(recordings, capsys):

@@ -293,8 +293,8 @@ def test_status_json_and_text_give_the_links(tmp_path, capsys):
 # ------------------------------------------------------------------------------------------ scan plumbing
 def test_scan_stores_too_few_loops_and_not_run(tmp_path, capsys):
     """The example fleet's step accelerometers (10 s, 0.23 loops of the profile's 159 links) are stored with
-    their pitch and a scan "too few loops" that says how long to record; a unit without a number of links is
-    not scanned."""
+    their pitch and a scan "not run" that says why a step gives no link number; a unit without a number of
+    links is not scanned either."""
     shutil.copytree(ROOT / "data/fleet-example/E07", tmp_path / "E07")
     shutil.copytree(ROOT / "data/fleet-example/E12", tmp_path / "E12")
     shutil.copytree(ROOT / "data/fleet-example/escalators", tmp_path / "escalators")
@@ -312,8 +312,7 @@ def test_scan_stores_too_few_loops_and_not_run(tmp_path, capsys):
         scans = fdb.link_scans()
     assert len(ms) == 6 and sorted(scans) == sorted(ms)
     e07 = [s for i, s in scans.items() if ms[i].unit == "E07"]
-    # with the unit's profile a step is read as a step (its scene gives the step's view): 10 s is too short
-    assert {s.status for s in e07} == {"too few loops"} and all("record at least" in s.reason for s in e07)
+    assert {s.status for s in e07} == {"not run"} and all("step accelerometer" in s.reason for s in e07)
     assert {(s.n_links, s.marker_s) for s in e07} == {(159, 3.5)}
     assert {(s.status, s.reason) for i, s in scans.items() if ms[i].unit == "E12"} == {("not run", NO_LINK_COUNT)}
 

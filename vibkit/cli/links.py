@@ -162,8 +162,6 @@ def run(a):
         f"{res.n_links} links, {res.dof:.0f} degrees of freedom)"
     )
     link1 = f"marked at {res.marker_s:g} s" if res.marker_s is not None else "at the sensor at the start"
-    if res.sensor == "step" and res.marker_s is None:
-        link1 = "of the step (from the accelerometer's roller to the one behind it)"
     print(f"link 1               the link {link1}; numbers in the order the links pass")
     print()
     if res.flagged:

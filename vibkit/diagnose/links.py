@@ -74,15 +74,17 @@ REFIT_ABOVE = 1.25
 MAX_OWN_CYCLE_FLAGS = 3
 #: the sensors the model gives a signature for: sensor -> the simulation's output
 SENSORS = {"tensioner": "delta"}
-#: units of a step accelerometer's channel (read with the scene's view of a step: ``vibkit.diagnose.links_step``)
+#: units of a step accelerometer's channel (refused: see ``STEP_REFUSAL``)
 ACCELERATION_UNITS = ("m/s^2", "m/s2", "m s-2", "mm/s^2", "g")
-#: why a step accelerometer needs the scene (measured on the no-load scene, 0.5 m/s: benchmarks/bench_links_step.py)
+#: why a step accelerometer gives no link number (measured on the no-load scene, 0.5 m/s, exact closure:
+#: benchmarks/bench_links_step.py)
 STEP_REFUSAL = (
-    "a step accelerometer gives no link number without the escalator's scene (--scene or --escalator): the step "
-    "rides the chain, so its signal is its own trip round the loop (0.015 m/s^2 r.m.s. on the study's escalator), "
-    "which a 1 mm worn link changes by 0.004; the scene says which cycles of the trip can show a worn link and "
-    "what a worn link changes there; or record the tensioner's displacement, which sees every link at the same "
-    "place"
+    "a step accelerometer gives no link number: the step rides the chain, so its signal is its own trip round "
+    "the loop (0.015 m/s^2 r.m.s. on the study's escalator), which a 1 mm worn link changes by 0.004; compared "
+    "with its own neighbouring cycles, a step shows a worn link only if the link passes the sprocket while the "
+    "step is on straight track (about half the links; the user guide's links page says more); record the "
+    "tensioner's displacement, which sees every link at the same place (a step's accelerometer does show a flat "
+    "roller under that step: vibkit ride)"
 )
 
 
@@ -345,14 +347,13 @@ def find_worn_links(
     TooFewLoops
         The recording covers fewer than two loops (the message says how long to record).
     ValueError
-        A bad channel, no link pass found; an acceleration channel (a step accelerometer) without a scene
-        (``STEP_REFUSAL``), or whose trip does not match the scene's.
+        A bad channel, no link pass found; an acceleration channel (a step accelerometer: its signal is its own trip
+        round the loop, which only a model could subtract, ``STEP_REFUSAL``).
     """
     ch = links_channel(recording, channel)
     if ch not in recording.data_vars:
         raise ValueError(f"no channel {ch!r} (channels: {', '.join(map(str, recording.data_vars))})")
-    step = is_step_channel(recording, ch)
-    if step and scene is None:
+    if is_step_channel(recording, ch):
         raise ValueError(f"channel {ch} (units {recording[ch].attrs['units']}): {STEP_REFUSAL}")
     n = int(n_links)
     if n < 2:
@@ -380,8 +381,6 @@ def find_worn_links(
             f"the chain's {n} links; a link map needs {MIN_LOOPS} loops: record at least {need:.0f} s "
             f"({MIN_LOOPS} x {n} / {f_lp:.4g} Hz plus one link)"
         )
-    if step:
-        return _step_links(file, ch, da, x, fs, f_lp, speed, n, scene, marker_s, false_alarm, min_excess)
     notes = []
     sensor = "tensioner" if str(da.attrs.get("units", "")) in ("m", "mm", "um") else "other"
     if scene is not None:
@@ -472,71 +471,6 @@ def find_worn_links(
     return _result(file, ch, sensor, speed, lmap, n, flagged, scan, excess, method, marker_s, notes)
 
 
-def _step_links(file, ch, da, x, fs, f_lp, speed, n, scene, marker_s, false_alarm, min_excess):
-    """:func:`find_worn_links` on a step accelerometer, with the scene's view of a step (:mod:`.links_step`)."""
-    from .links_step import scan_step, step_view
-
-    view = step_view(str(scene), round(float(speed), 9), round(float(fs), 6))
-    if view.n_links != n:
-        raise ValueError(f"--links {n}: the scene {scene} has {view.n_links} links")
-    scale = {"mm/s^2": 1e-3, "g": 9.80665}.get(str(da.attrs.get("units", "m/s^2")), 1.0)
-    scan = scan_step(x * scale, fs, f_lp, view, false_alarm=false_alarm)
-    if marker_s is None:
-        first, link1 = view.step_link, "the step's own link"
-    else:
-        if not 0.0 <= float(marker_s) <= (x.size - 1) / fs:
-            raise ValueError(f"--marker {marker_s:g} s lies outside the recording (0 to {(x.size - 1) / fs:.6g} s)")
-        cycle = int(np.argmin(np.abs(scan.cycle_start_s + 0.5 / f_lp - float(marker_s))) % n)
-        first, link1 = int(view.lower_head_link[cycle]), f"the link marked at {marker_s:g} s"
-    number = (first - np.arange(1, n + 1)) % n + 1  # of every scene link, in the order the links pass
-    sigma1 = scan.sigma_m * math.sqrt(scan.loops)
-    flagged = []
-    for w in scan.flagged:
-        ex, sd = float(scan.excess_m[w - 1]), float(scan.sigma_m[w - 1])
-        if abs(ex) < min_excess:
-            continue
-        per = scan.per_loop_m[:, w - 1]
-        show = np.flatnonzero((np.sign(per) == np.sign(ex)) & (np.abs(per) > 2 * sigma1[w - 1])) + 1
-        flagged.append(
-            {"link": int(number[w - 1]), "alternatives": [], "excess_pitch_mm": 1e3 * ex, "sigma_mm": 1e3 * sd,
-             "t": abs(ex) / sd, "loops": [int(i) for i in show]}
-        )  # fmt: skip
-    order = np.argsort(number)
-    t = np.abs(scan.excess_m) / scan.sigma_m
-    unseen = sorted(int(k) for k in number[~np.isfinite(t)])
-    notes = [
-        f"link 1 is {link1}; the recording was placed on the scene's loop by the step's trip (correlation "
-        f"{scan.correlation:.2f})"
-    ]
-    if unseen:
-        notes.append(
-            f"{len(unseen)} of {n} links are not seen from this step (they pass the sprocket and the lower head while "
-            f"the step rides a curve's end): {_ranges(unseen)}; a recording from another step sees them"
-        )
-    method = (
-        "each link-pass cycle of the step against its neighbours, the scene's worn-link change fitted "
-        f"(threshold from the healthy step's own residual), excess at least {1e3 * min_excess:g} mm"
-    )
-    return LinksResult(
-        file=str(file), channel=ch, sensor="step", speed_m_s=speed, link_pass_hz=f_lp, n_links=n,
-        loops=scan.loops, flagged=flagged, threshold=math.sqrt(scan.threshold), false_alarm=false_alarm,
-        dof=scan.dof, statistic=t[order], excess_mm=1e3 * scan.excess_m[order], method=method, marker_s=marker_s,
-        notes=notes,
-    )  # fmt: skip
-
-
-def _ranges(numbers):
-    """``[1, 2, 3, 7]`` as ``"1-3, 7"``."""
-    out, start = [], None
-    for i, k in enumerate(numbers):
-        if start is None:
-            start = k
-        if i + 1 == len(numbers) or numbers[i + 1] != k + 1:
-            out.append(str(start) if start == k else f"{start}-{k}")
-            start = None
-    return ", ".join(out)
-
-
 def _check_rate(file, fs, speed, band):
     """ValueError in the reader's terms when the recording's Nyquist frequency is under the search band's top
     (the band given, else the speed's: speed / 200-80 mm): most often a time column in the wrong unit."""
@@ -587,7 +521,7 @@ def _result(file, ch, sensor, speed, lmap, n, flagged, scan, excess, method, mar
 
 
 def is_step_channel(recording, channel):
-    """Whether ``channel`` is an acceleration (a step accelerometer: read with a scene, see ``STEP_REFUSAL``)."""
+    """Whether ``channel`` is an acceleration (a step accelerometer): refused, see ``STEP_REFUSAL``."""
     return str(recording[channel].attrs.get("units", "")) in ACCELERATION_UNITS
 
 

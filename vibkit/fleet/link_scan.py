@@ -44,7 +44,7 @@ def link_scan_of(
         Links in the chain (None: not scanned, status ``not run``).
     channel : str, optional
     scene : str, optional
-        The escalator's forward scene file: used for a tensioner displacement or a step accelerometer channel.
+        The escalator's forward scene file: used for a tensioner displacement channel.
     marker_s : float, optional
         When the marked link passed the sensor (it is link 1). [s]
     no_count : str
@@ -64,12 +64,9 @@ def link_scan_of(
     keep = {"n_links": int(n_links), "marker_s": marker_s}
     try:
         ch = links_channel(recording, channel)
-        step = ch in recording and is_step_channel(recording, ch)
-        if step and scene is None:
+        if ch in recording and is_step_channel(recording, ch):
             return LinkScan.not_run(f"channel {ch}: {STEP_REFUSAL}", **keep)
-        use_scene = (
-            scene if scene is not None and ch in recording and (step or is_tensioner_channel(recording, ch)) else None
-        )
+        use_scene = scene if scene is not None and ch in recording and is_tensioner_channel(recording, ch) else None
         res = find_worn_links(
             recording, speed=speed, n_links=n_links, channel=ch, scene=use_scene, marker_s=marker_s, file=path
         )

@@ -402,10 +402,10 @@ def analyse(
 
 
 def _links(rec, ch, units, sc, speed, notes):
-    """The link map of a tensioner or step recording over two loops of the scene's chain, else None."""
+    """The link map of a tensioner recording over two loops of the scene's chain, else None."""
     from ..links import TooFewLoops, find_worn_links
 
-    if sc is None or not speed or units not in ("m", "m/s^2") or sc.analysis != "forward" or sc.source == "<string>":
+    if sc is None or not speed or units != "m" or sc.analysis != "forward" or sc.source == "<string>":
         return None
     try:
         return find_worn_links(rec, speed=speed, n_links=sc.chain.n_rollers, channel=ch, scene=sc.source)

@@ -1,4 +1,4 @@
-"""The report's "links" page: the per-link map of a tensioner or step recording over two loops or more, with its
+"""The report's "links" page: the per-link map of a tensioner recording over two loops or more, with its
 threshold and the flagged links (:func:`vibkit.diagnose.links.find_worn_links`)."""
 
 from __future__ import annotations
@@ -17,12 +17,6 @@ def links_page(doc, ctx) -> None:
         return
     import matplotlib.pyplot as plt
 
-    if res.marker_s is not None:
-        first = f"the link marked at {res.marker_s:g} s"
-    elif res.sensor == "step":
-        first = "the step's own link (from its accelerometer's roller to the one behind it)"
-    else:
-        first = "the link at the sensor at the start"
     fig, ax = plt.subplots(figsize=_WIDE)
     fig.subplots_adjust(left=0.08, right=0.97, top=0.84, bottom=0.12)
     _page_title(
@@ -30,13 +24,10 @@ def links_page(doc, ctx) -> None:
         "Links",
         f"{res.loops} loops of {res.n_links} links, channel {res.channel}; {res.method}; a chain without a worn "
         f"link passes the threshold |t| = {res.threshold:.2f} in at most {100 * res.false_alarm:g} % of its "
-        f"recordings; link 1: {first}, numbers in passing order",
+        "recordings; link 1: the link at the sensor at the start, numbers in passing order",
     )
     links = np.arange(1, res.n_links + 1)
     ax.vlines(links, 0, res.statistic, color="C0", lw=1.0)
-    unseen = ~np.isfinite(res.statistic)
-    if unseen.any():  # a step does not see the links that pass while it rides a curve's end
-        ax.plot(links[unseen], np.zeros(unseen.sum()), "x", color="0.5", ms=4, label="not seen from this step")
     ax.axhline(res.threshold, color="C3", lw=1.0, ls="--", label=f"threshold {res.threshold:.2f}")
     for f in res.flagged:
         label = "link " + " or ".join(str(k) for k in [f["link"], *f.get("alternatives", ())])
@@ -46,7 +37,7 @@ def links_page(doc, ctx) -> None:
         ax.annotate(label, (f["link"], f["t"]), textcoords="offset points", xytext=(6, -4), fontsize=8)
     if not res.flagged:
         ax.text(0.02, 0.92, "no link flagged", transform=ax.transAxes, fontsize=9)
-    top = max(float(np.nanmax(res.statistic)), res.threshold)
+    top = max(float(np.max(res.statistic)), res.threshold)
     ax.set_ylim(0, 1.15 * top)
     ax.set_xlim(0, res.n_links + 1)
     ax.set_xlabel("link number")
