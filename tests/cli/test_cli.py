@@ -154,6 +154,27 @@ def test_data_errors_exit_1_one_line(argv, text, capsys, tmp_path, monkeypatch):
     assert err.count("\n") == 1
 
 
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["pitch", "missing.csv", "--speed", "0.5"],
+        ["spectrum", "missing.csv"],
+        ["links", "missing.csv", "--speed", "0.5", "--links", "40"],
+        ["report", "missing.csv", "-o", "r.pdf"],
+        ["report", LEON, "--scene", "missing.toml", "-o", "r.pdf"],
+    ],
+)
+def test_json_error_is_one_line_on_stderr_and_nothing_on_stdout(argv, capsys, tmp_path, monkeypatch):
+    """A bad input with --json: exit 1, the one-line message on stderr, stdout empty (no half document);
+    ``report`` as ``pitch``, ``spectrum`` and ``links`` (a refused analysis is data: its JSON has a status)."""
+    monkeypatch.chdir(tmp_path)
+    argv = [str(Path(__file__).parents[2] / a) if a == LEON else a for a in argv]  # read from tmp_path
+    assert main([*argv, "--json"]) == 1
+    out, err = capsys.readouterr()
+    assert out == "" and err.count("\n") == 1 and "missing." in err and "Traceback" not in err
+    assert not (tmp_path / "r.pdf").exists()
+
+
 def test_bench(tmp_path, capsys):
     b = tmp_path / "benchmarks"
     b.mkdir()

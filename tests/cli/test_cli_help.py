@@ -66,7 +66,7 @@ def _channel_help(command):
         (("report",), "every vibration channel"),
         (("links",), "the first in a length unit"),
         (("compare",), "the first that is not a sample counter"),
-        (("fleet", "add"), "the first that is not a sample counter"),
+        (("fleet", "add"), "every vibration channel"),
     ],
     ids=lambda v: " ".join(v) if isinstance(v, tuple) else None,
 )

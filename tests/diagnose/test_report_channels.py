@@ -1,5 +1,5 @@
-"""The report takes the per-channel decision of `spectrum` and `pitch`, never analyses a status column,
-and does not call a quantised signal's extreme levels clipping."""
+"""The report and `fleet add` take the per-channel decision of `spectrum` and `pitch`; the report never analyses a
+status column and does not call a quantised signal's extreme levels clipping."""
 
 from __future__ import annotations
 
@@ -27,8 +27,8 @@ def three_axes(path, freqs, fs=50.0, seconds=120.0, seed=2, status=False):
 
 
 def test_report_refuses_channels_that_disagree_as_spectrum_does(tmp_path, capsys):
-    """A wrist while running: three axes at 3.0, 3.1 and 3.2 Hz are not one chain, in `spectrum` and `report`."""
-    p = three_axes(tmp_path / "wrist.csv", (3.0, 3.1, 3.2))
+    """A two while running: three axes at 3.0, 3.1 and 3.2 Hz are not one chain, in `spectrum` and `report`."""
+    p = three_axes(tmp_path / "two.csv", (3.0, 3.1, 3.2))
     rc = main(["spectrum", str(p), "--json"])
     spec = json.loads(capsys.readouterr().out)
     assert rc == 1 and spec["status"] == "implausible" and "the channels disagree" in spec["reason"]
@@ -95,3 +95,37 @@ def test_a_profile_gives_the_report_its_sprocket_and_band_whatever_scene_is_besi
     assert ctx.pitch.band_hz == pytest.approx(prof.search_band(0.49))
     shaft = [h.name for h in ctx.pitch.hypotheses if "sprocket shaft" in h.name]
     assert "f is the sprocket shaft (Z = 24)" in shaft and not any("28" in name for name in shaft), shaft
+
+
+def test_fleet_add_takes_the_channel_decision_of_pitch(tmp_path, capsys):
+    """`fleet add` analyses every vibration channel as `pitch` does: a first channel without the link pass is
+    passed over for the one `pitch` chooses, and channels that disagree are refused with nothing stored."""
+    from vibkit.fleet import FleetDB
+
+    db = str(tmp_path / "f.sqlite")
+    speed = ["--speed", "0.5", "--speed-uncertainty", "0.1%"]
+
+    def add(path, unit):
+        return main(
+            ["fleet", "add", str(path), "--unit", unit, *speed, "--nominal-pitch", "0.13333", "--date", "2026-01-01"]
+            + ["--db", db, "--json"]
+        )
+
+    chain = three_axes(tmp_path / "chain.csv", (0.0, 3.75, 3.75))  # ax: noise alone
+    assert main(["pitch", str(chain), *speed, "--json"]) == 0
+    pitch = json.loads(capsys.readouterr().out)
+    assert pitch["channel"] != "ax" and pitch["channels"][0]["status"] == "no link-pass found"
+    assert add(chain, "U1") == 0
+    capsys.readouterr()
+    with FleetDB(db) as fdb:
+        (m,) = fdb.measurements("U1")
+    assert m.channel == pitch["channel"] and m.pitch_m == pytest.approx(pitch["pitch_m"], rel=1e-12)
+
+    two = three_axes(tmp_path / "two.csv", (3.70, 3.72, 3.74))  # each a chain 0.3-1.4 % long
+    assert main(["pitch", str(two), *speed, "--json"]) == 1
+    assert json.loads(capsys.readouterr().out)["status"] == "implausible"
+    assert add(two, "U2") == 1
+    err = capsys.readouterr().err
+    assert "implausible: the channels disagree" in err and "nothing stored" in err and err.count("\n") == 1
+    with FleetDB(db) as fdb:
+        assert fdb.measurements("U2") == []

@@ -164,3 +164,42 @@ def test_a_value_that_rounds_to_zero_has_no_minus_sign():
     assert fmt_pm(-0.0003, 0.01, "%", sign=True) == "+0.000 +- 0.010 %"
     pitch = SimpleNamespace(speed_sigma_stated=False, elongation_percent=-0.0003)
     assert elongation_figure(pitch).startswith("+0.00 %")
+
+
+def _simulated_ride(variables, coords):
+    import numpy as np
+    import xarray as xr
+
+    from vibkit.diagnose.ride import ride_quality_from_simulation
+
+    t = np.arange(0.0, 12.0, 1 / 400.0)
+    ds = xr.Dataset({k: (dims, f(t)) for k, (dims, f) in variables.items()}, coords={"time": t, **coords})
+    return ride_quality_from_simulation(ds, segment=(0.0, 12.0) if "roller_acceleration" in ds else None)
+
+
+def test_a_simulations_ride_table_fits_its_cells():
+    """The ride page of a simulation: the axis "tangential" (accel_step alone, over a 12 s "whole simulated
+    time" whose note is the longest) and a step roller's channel names each stay in their cell and on the page."""
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    from vibkit.diagnose.report import plot_ride
+
+    def wave(t):
+        return 0.05 * np.sin(2 * np.pi * 3.9 * t)
+
+    def rollers(t):
+        return np.stack([wave(t), wave(t) - 9.80665], axis=-1)[:, None, :]
+
+    tangential = _simulated_ride({"accel_step": ("time", wave)}, {})
+    step = _simulated_ride(
+        {"roller_acceleration": (("time", "roller", "axis"), rollers)}, {"roller": [59], "axis": ["x", "z"]}
+    )
+    assert [a.axis for a in tangential.axes] == ["tangential"]
+    assert [a.channel for a in step.axes] == ["roller_acceleration[59, x]", "roller_acceleration[59, z] + g"]
+    for rq in (tangential, step):
+        fig = plot_ride(rq)
+        try:
+            assert layout_problems(fig) == []
+        finally:
+            plt.close(fig)

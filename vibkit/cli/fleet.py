@@ -9,6 +9,7 @@ import textwrap
 
 from .links import links_count, seconds
 from .options import (
+    CHANNEL_EVERY,
     _profile_of,
     add_command,
     add_escalator,
@@ -58,7 +59,7 @@ def add_parser(subparsers):
         return sp
 
     f = fleet_sub("add", "analyse one recording and store its pitch and elongation")
-    add_recording(f)
+    add_recording(f, channel_default=CHANNEL_EVERY)
     f.add_argument("--unit", help="escalator identifier (default: the --escalator profile's unit; else required)")
     f.add_argument(
         "--speed",

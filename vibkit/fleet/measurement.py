@@ -119,6 +119,8 @@ def analyse_recording(
     date : str or datetime, optional
         Measurement date (ISO 8601); default the recording's start time.
     channel : str, optional
+        The channel to analyse; default every vibration channel, the numbers from the one with the smallest
+        sigma once the others agree (:func:`vibkit.diagnose.channels.estimate_channels`, as ``vibkit pitch``).
     read_options : dict, optional
         More :func:`vibkit.read_recording` arguments (``time_unit``, ``units``, ``repair_time`` ...).
     replaced : bool
@@ -135,12 +137,13 @@ def analyse_recording(
     Raises
     ------
     FleetError
-        No date (neither given nor in the recording), or no link-pass found in the recording.
+        No date (neither given nor in the recording), no link-pass found in the recording, or its channels
+        disagree (two periodicities, not one chain).
     RecordingError, ValueError
         The file cannot be read, or an option is invalid.
     """
     import vibkit
-    from vibkit.diagnose.pitch import estimate_pitch
+    from vibkit.diagnose.channels import estimate_channels
     from vibkit.io import read_recording
 
     from .inputs import check_inputs
@@ -168,14 +171,15 @@ def analyse_recording(
                 f"{spath}: {exc}; give the measurement date (--date, or the catalogue's date column)"
             ) from None
         source = "recording start time"
-    try:
-        est = estimate_pitch(
+    try:  # every vibration channel (or the one asked for), as `vibkit pitch` decides; a sigma of 0 is "not stated"
+        res = estimate_channels(
             rec, speed=speed, speed_sigma=speed_sigma or None, channel=channel, nominal_pitch=nominal_pitch
-        )  # a sigma of 0 is stored for "not stated"
+        )
     except ValueError as exc:
         raise FleetError(f"{spath}: {' '.join(str(exc).split())}") from None
-    if not est.has_link_pass:  # the shared decision (vibkit.diagnose.decision): no link pass, or implausible
-        raise FleetError(f"{spath}: {est.status}: {est.reason}; nothing stored")
+    if res.best is None:  # no link pass on any channel, an implausible one, or channels that disagree
+        raise FleetError(f"{spath}: {res.status}: {res.reason}; nothing stored")
+    est = res.best
     snr = float(est.snr_db) if math.isfinite(est.snr_db) else None
     quality, why = measurement_quality(
         est.elongation_percent, est.elongation_sigma_percent, decision=getattr(est, "decision", None)

@@ -12,6 +12,11 @@ from .common import _PAGE, _page_title
 __all__ = ["plot_ride", "ride_quality_pages"]
 
 
+#: the table's columns as fractions of its width: the axis column holds "tangential" (a simulation's
+#: accel_step), the channel column a simulated step roller's "roller_acceleration[59, z] + g"
+_COLUMN_WIDTHS = [0.1, 0.3, 0.09, 0.09, 0.08, 0.08, 0.14, 0.1]
+
+
 def _num(v, digits=4) -> str:
     """A table value: ``n/a`` where the ride has none (a constant channel: no half-cycles), never ``nan``."""
     return f"{v:.{digits}g}" if v is not None and math.isfinite(float(v)) else "n/a"
@@ -53,18 +58,20 @@ def plot_ride(rq, fig=None):
         colLabels=head,
         loc="upper center",
         cellLoc="center",
-        colWidths=[0.06, 0.27, 0.09, 0.1, 0.1, 0.1, 0.14, 0.12],
+        colWidths=_COLUMN_WIDTHS,
     )
     tab.auto_set_font_size(False)
     tab.set_fontsize(8)
     tab.scale(1, 1.3)
-    fig.text(
+    fig.text(  # two lines: a long segment method ("whole simulated time") would run off the page in one
         0.06,
-        0.745,
-        f"values in m/s^2 over the ride {seg.start_s:.2f}-{seg.end_s:.2f} s ({seg.method}); "
+        0.755,
+        f"values in m/s^2 over the ride {seg.start_s:.2f}-{seg.end_s:.2f} s ({seg.method})\n"
         "pk-pk: adjacent half-cycle peaks; A95: not exceeded by 95 % of them",
         fontsize=7.5,
         color="0.3",
+        va="top",
+        linespacing=1.3,
     )
     top, bottom = 0.7, 0.07
     h = (top - bottom) / max(n, 1)
