@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from vibkit.cli import main
-from vibkit.diagnose.report.context import _quantisation_explains_extremes, analyse
+from vibkit.diagnose.report.context import _quantisation_explains_extremes, analyse, held_extremes
 
 
 def three_axes(path, freqs, fs=50.0, seconds=120.0, seed=2, status=False):
@@ -54,6 +54,23 @@ def test_quantisation_is_not_clipping_but_a_clipped_quantised_signal_is():
     clipped = np.minimum(x, 0.4)  # the top two levels cut: the 0.4 level piles up
     assert not _quantisation_explains_extremes(clipped, 0.1)
     assert not _quantisation_explains_extremes(x, None)  # not quantised: the generic test decides
+
+
+def test_clipping_counts_held_extremes_not_a_value_that_recurs():
+    """A clipped sine holds its extremes for runs of samples; a simulation whose tensioner reaches the same table
+    value at five separate instants (the shipped no-load scene's delta over 6 s: four at its maximum, one at its
+    minimum) holds nothing."""
+    t = np.arange(2000) / 200.0
+    x = np.sin(2 * np.pi * 3.75 * t)
+    clipped = np.clip(x, -0.9, 0.9)
+    # 3.75 Hz at 200 Hz: about 2.4 % of each cycle above 0.9 at each crest, 5 samples a crest, 75 crests each way
+    assert held_extremes(clipped) > 500
+    recurring = x.copy()
+    recurring[[42, 425, 482, 529]] = 1.5  # the same extreme at four separate instants, and one minimum
+    recurring[106] = -1.5
+    assert held_extremes(recurring) == 0
+    recurring[43] = 1.5  # two in a row: a flat top of two samples
+    assert held_extremes(recurring) == 2
 
 
 def test_report_on_an_android_log_never_analyses_its_status_column(tmp_path, capfd):

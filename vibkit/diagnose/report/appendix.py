@@ -30,7 +30,7 @@ def data_quality_page(doc, ctx) -> None:
         ["gaps", (f"{len(gaps)}, {min(gaps):.4g} to {max(gaps):.4g} s" if gaps else "none")],
         ["time jitter (rms)", f"{float(rec.attrs.get('time_jitter_rms_percent', 0.0)):.3g} % of the period"],
         ["resampled to a uniform grid", "yes" if any(b.resampled for b in bursts) else "no"],
-        ["clipping", f"{ctx.clip_n} samples at the extremes" + (" (suspected)" if ctx.clipped else "")],
+        ["clipping", f"{ctx.clip_n} samples held at the extremes" + (" (suspected)" if ctx.clipped else "")],
         ["non-finite samples", f"{int(np.sum(~np.isfinite(rec[ctx.channel].values)))}"],
     ]
     _table(ax, rows, (0.4, 0.6), 9)

@@ -318,12 +318,7 @@ def analyse(
             resid, b.fs, half_window=hw, false_alarm_rate=hampel_false_alarm_rate, t0=b.t0, max_gap=hw // 4
         ):
             events.append((e.time_s, float(b.x[e.index]), e))
-    # clipping: samples sitting at the extreme values in runs
-    lo, hi = float(np.min(x_all)), float(np.max(x_all))
-    clip_n = int(
-        np.sum(np.isclose(x_all, hi, rtol=0, atol=1e-9 * max(abs(hi), 1e-30)))
-        + np.sum(np.isclose(x_all, lo, rtol=0, atol=1e-9 * max(abs(lo), 1e-30)))
-    )
+    clip_n = held_extremes(x_all)
     clipped = clip_n > 4 and not _quantisation_explains_extremes(x_all, rec[ch].attrs.get("quantum"))
     date = report_date()
     summary = {
@@ -414,6 +409,19 @@ def _links(rec, ch, units, sc, speed, notes):
     except ValueError as exc:
         notes.append(f"link map: {exc}")
         return None
+
+
+def held_extremes(x):
+    """Samples held at the record's extreme values: those equal to its maximum or minimum (to 1e-9 of it) in runs
+    of two or more consecutive samples, as a clipped sensor's flat tops are.  A simulation can reach the same
+    extreme at separate instants (a value read from a table recurs exactly): those are not counted."""
+    x = np.asarray(x, dtype=float)
+    n = 0
+    for v in (float(np.max(x)), float(np.min(x))):
+        at = np.isclose(x, v, rtol=0, atol=1e-9 * max(abs(v), 1e-30))
+        held = at & (np.r_[False, at[:-1]] | np.r_[at[1:], False])  # a neighbour is at it too
+        n += int(np.count_nonzero(held))
+    return n
 
 
 def _quantisation_explains_extremes(x, q):

@@ -139,11 +139,11 @@ def evidence_rows(ctx):
     rows.append(
         (
             "clipping",
-            f"{ctx.clip_n} sample(s) at the extreme values: "
+            f"{ctx.clip_n} sample(s) held at the extreme values: "
             + (
                 "suspected (more than 4)"
                 if ctx.clipped
-                else "not suspected (a clipped sensor holds its extreme for more than 4 samples)"
+                else "not suspected (a clipped sensor holds its extreme for more than 4 samples in a row)"
             ),
         )
     )
