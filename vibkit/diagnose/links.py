@@ -456,6 +456,12 @@ def find_worn_links(
         ]
         excess = np.full(n, np.nan)
         method = "each link's own cycle (level and duration)"
+        if scan.unsteady:
+            notes.append(
+                f"link(s) {', '.join(map(str, scan.unsteady))} deviated in some loops only (their own loop-to-loop "
+                "scatter is far beyond the other links'): a transient such as the start-up, not a worn link, which "
+                "is the same every loop; not flagged"
+            )
         notes.append(
             "without --scene each link's own cycle is tested: a worn link shows on the tensioner as a pattern "
             "over the links that follow it, so several neighbouring numbers may be flagged"

@@ -379,6 +379,9 @@ class LinkScan:
         The first pass's fitted amount per link and its standard deviation.
     loops : int
     method : str
+    unsteady : tuple of int
+        Own cycle only: 1-based links that passed the threshold but scatter from loop to loop far beyond the
+        pooled scatter (a start-up transient in one loop, not a link that is the same every loop): not flagged.
     """
 
     flagged: tuple
@@ -390,6 +393,7 @@ class LinkScan:
     sigma: np.ndarray
     loops: int
     method: str
+    unsteady: tuple = ()
 
 
 def _check_alpha(false_alarm):
@@ -546,10 +550,13 @@ def _scan_own(lmap, alpha):
     n, L = lmap.n_links, lmap.loops
     dof = n * (L - 1) - 1
     thr = sidak_threshold(alpha, 2 * n, dof)
+    # a worn link is the same every loop: its own loop-to-loop scatter is the pool's; one far beyond it (an F test
+    # at the same family-wise probability) is a deviation of some loops only, not flagged
+    f_max = float(scipy.stats.f.isf(-math.expm1(math.log1p(-alpha) / (2 * n)), L - 1, dof))
     best_t = np.zeros(n)
     best_a = np.zeros(n)
     best_s = np.zeros(n)
-    flags = []
+    flags, unsteady = [], set()
     for name, feat in (("level", lmap.level), ("duration", lmap.duration_s)):
         m = feat.mean(axis=0)
         ss = np.sum((feat - m) ** 2, axis=0)  # per link
@@ -565,6 +572,9 @@ def _scan_own(lmap, alpha):
         best_a = np.where(better, d, best_a)
         best_s = np.where(better, sig, best_s)
         for k in np.flatnonzero(tstat > thr):
+            if ss[k] / (L - 1) > f_max * s2[k]:
+                unsteady.add(int(k) + 1)
+                continue
             s1 = math.sqrt(s2[k])
             loops = tuple(
                 int(i) + 1
@@ -576,4 +586,7 @@ def _scan_own(lmap, alpha):
     best = {}
     for f in sorted(flags, key=lambda f: -f.t):  # one flag per link: its stronger feature
         best.setdefault(f.link, f)
-    return LinkScan(tuple(best.values()), best_t, thr, alpha, float(dof), best_a, best_s, L, "own cycle")
+    unsteady -= set(best)
+    return LinkScan(
+        tuple(best.values()), best_t, thr, alpha, float(dof), best_a, best_s, L, "own cycle", tuple(sorted(unsteady))
+    )
