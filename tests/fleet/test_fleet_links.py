@@ -109,6 +109,28 @@ def test_link_scans_round_trip_and_cascade(store, tmp_path):
         assert left == 0 and a.id not in db.link_scans()
 
 
+def test_numbers_stored_before_0_4_5_with_the_signature_read_two_lower(store):
+    """Before 0.4.5 a scan with the scene's signature numbered every link two too high: its stored numbers (and
+    alternatives) are read two lower, round the chain, with a note; a scan of each link's own cycle, and one stored
+    by 0.4.5, are read as stored."""
+    import dataclasses
+
+    old = dataclasses.replace(fake(1, "E07", 0.0, 1.0), vibkit_version="0.4.4")
+    sig = dataclasses.replace(
+        _scan([(107, 0.9, 0.02)]),
+        flagged=(dataclasses.replace(_scan([(107, 0.9, 0.02)]).flagged[0], alternatives=(1,)),),
+    )
+    own = dataclasses.replace(_scan([(50, None, None)]), method="each link's own cycle (level and duration)")
+    with FleetDB(store) as db:
+        a = db.insert(old, sig)
+        b = db.insert(dataclasses.replace(fake(2, "E07", 1.0, 1.1), vibkit_version="0.4.4"), own)
+        c = db.insert(dataclasses.replace(fake(3, "E07", 2.0, 1.2), vibkit_version="0.4.5"), sig)
+        got = db.link_scans("E07")
+    assert got[a.id].flagged[0].numbers == (105, 158) and "two too high" in got[a.id].note
+    assert got[b.id].flagged[0].numbers == (50,) and got[b.id].note == ""
+    assert got[c.id].flagged[0].numbers == (107, 1) and got[c.id].note == ""
+
+
 def test_migration_keeps_the_link_scans(tmp_path, new_pg_url):
     src = tmp_path / "src.sqlite"
     with FleetDB(src) as db:

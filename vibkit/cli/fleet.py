@@ -314,6 +314,9 @@ def _print_links(hist, always):
         print(table(rows, ("link", "verdict", "excess pitch [mm] and change")))
     elif hist.scanned:
         print("no link flagged")
+    for m, s in hist.visits:
+        if s.note:
+            msg(f"note: {hist.unit} {m.date_utc[:10]}: {s.note}")
 
 
 def run_status(a):

@@ -17,7 +17,8 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import dataclass, field
+import re
+from dataclasses import dataclass, field, replace
 
 from .schema import LINK_STATUSES
 
@@ -101,6 +102,8 @@ class LinkScan:
     false_alarm: float | None = None
     flagged: tuple = ()
     measurement_id: int | None = None
+    #: what was done to the stored numbers on reading them (:data:`RENUMBERED`), else empty
+    note: str = ""
 
     def __post_init__(self):
         if self.status not in LINK_STATUSES:
@@ -160,6 +163,7 @@ class LinkScan:
             "method": self.method,
             "false_alarm": self.false_alarm,
             "flagged": [f.as_dict() for f in self.flagged],
+            "note": self.note,
         }
 
 
@@ -200,12 +204,12 @@ def read_link_scans(store, unit=None) -> dict:
     scans = {}
     for r in store.execute(
         store.q(
-            f"SELECT s.measurement_id, {', '.join('s.' + c for c in _SCAN_COLS)} FROM link_scan s "
+            f"SELECT s.measurement_id, {', '.join('s.' + c for c in _SCAN_COLS)}, m.vibkit_version FROM link_scan s "
             f"JOIN measurement m ON m.id = s.measurement_id {where}"
         ),
         args,
     ).fetchall():
-        d = dict(zip(("measurement_id",) + _SCAN_COLS, r))
+        d = dict(zip(("measurement_id",) + _SCAN_COLS + ("vibkit_version",), r))
         scans[int(r[0])] = d
     flags = {}
     for r in store.execute(
@@ -229,18 +233,47 @@ def read_link_scans(store, unit=None) -> dict:
         )
     out = {}
     for mid, d in scans.items():
+        n = None if d["n_links"] is None else int(d["n_links"])
+        flagged, note = tuple(flags.get(mid, ())), ""
+        if n and flagged and counted_two_high(d["vibkit_version"], d["method"]):
+            flagged = tuple(_renumbered(f, n) for f in flagged)
+            note = RENUMBERED.format(version=d["vibkit_version"])
         out[mid] = LinkScan(
             status=d["status"],
             reason=d["reason"],
-            n_links=None if d["n_links"] is None else int(d["n_links"]),
+            n_links=n,
             loops=None if d["loops"] is None else int(d["loops"]),
             marker_s=_num(d["marker_s"]),
             method=d["method"],
             false_alarm=_num(d["false_alarm"]),
-            flagged=tuple(flags.get(mid, ())),
+            flagged=flagged,
             measurement_id=mid,
+            note=note,
         )
     return out
+
+
+#: before 0.4.5 a scan with the scene's signature numbered every link two too high (the link going over the top of
+#: the lower head was counted as the one two ahead of it): such stored numbers are read two lower
+RENUMBERED = (
+    "numbers stored by vibkit {version} read two lower: before 0.4.5 a scan with the scene's signature numbered "
+    "every link two too high"
+)
+
+
+def counted_two_high(version, method) -> bool:
+    """Whether a stored scan's numbers are two too high: made with the scene's signature by vibkit before 0.4.5."""
+    m = re.match(r"(\d+)\.(\d+)\.(\d+)", str(version or ""))
+    return bool(m) and tuple(map(int, m.groups())) < (0, 4, 5) and str(method).startswith("worn-link signature")
+
+
+def _renumbered(f, n):
+    """Flag ``f`` with its number and alternatives two lower, round a chain of ``n`` links."""
+
+    def lower(k):
+        return (int(k) - 3) % n + 1
+
+    return replace(f, link=lower(f.link), alternatives=tuple(lower(k) for k in f.alternatives))
 
 
 # ------------------------------------------------------------------------------------------ history
