@@ -51,6 +51,24 @@ def test_report_names_the_worse_and_the_new_link_and_why_others_are_not_scanned(
     assert "E12: latest visit not run: channel accel: a step accelerometer gives no link number" in rows
 
 
+def test_a_link_stored_two_high_before_0_4_5_is_the_same_link_now(tmp_path, capsys):
+    """Link 12 stored as 14 by vibkit 0.4.4 (the signature's numbers were two too high then) and as 12 today is
+    one link, grown 0.4 -> 0.9 mm: worse, in fleet status and on the report's links page, each saying why."""
+    import dataclasses
+
+    p = tmp_path / "f.sqlite"
+    with FleetDB(p) as db:
+        db.insert(dataclasses.replace(fake(1, "E07", 0.0, 1.0), vibkit_version="0.4.4"), _scan([(14, 0.4, 0.05)]))
+        db.insert(fake(2, "E07", 1.0, 1.2), _scan([(12, 0.9, 0.05)], marker=3.0))
+    (page,), _ = _report_texts(p, tmp_path / "fleet.pdf")
+    rows = page.split(" | ")
+    assert rows[rows.index("12") + 1] == "worse" and "14" not in rows
+    assert "read two lower" in page.replace(" | ", " ")
+    assert main(["fleet", "status", "--db", str(p), "--unit", "E07"]) == 0
+    out, err = capsys.readouterr()
+    assert "worse" in out and "numbers stored by vibkit 0.4.4 read two lower" in " ".join(err.split())
+
+
 def test_report_says_unmarked_numbers_cannot_be_matched(tmp_path):
     p = _two_visits(tmp_path / "f.sqlite", [(12, 0.4, 0.05)], [(12, 0.9, 0.05)], markers=(None, None))
     (page,), _ = _report_texts(p, tmp_path / "fleet.pdf")

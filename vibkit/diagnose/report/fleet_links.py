@@ -62,6 +62,9 @@ def _block(hist):
             lines.append(("row", (h.label, h.verdict, excess, loops, detail)))
     elif scanned:
         lines.append(("text", "no link flagged on the latest scan"))
+    for mm, ss in hist.visits:  # stored numbers read otherwise (numbers of an older vibkit), said once a visit
+        if ss.note:
+            lines += [("text", t) for t in textwrap.wrap(f"{mm.date_utc[:10]}: {ss.note}", _WRAP)]
     return lines
 
 
