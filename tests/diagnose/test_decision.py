@@ -198,18 +198,6 @@ def test_decide_rules():
     assert decide(LinkPassEvidence(detected=False, detection_reason="nothing")).reason == "nothing"
 
 
-def test_the_same_family_within_half_a_bin_and_three_sigmas():
-    """The detector's frequency is its nearest bin's: an estimate of the same family lies within half a bin of it
-    plus the estimate's own three sigmas. The 2 s LabVIEW record (bins 0.499 Hz): family detected at 3.992 Hz,
-    estimate 2.741 +- 0.253 Hz, 1.25 Hz apart, where half a bin and three sigmas allow 1.01 Hz (a whole bin
-    allowed 1.26 Hz and read it "ok")."""
-    base = dict(detected=True, detection_hz=3.992, resolution_hz=0.499, fundamental_sigma_hz=0.2526, band_hz=(2.5, 6))
-    assert decide(LinkPassEvidence(**base, fundamental_hz=2.741)).status == STATUS_NOT_FOUND
-    edge = 0.5 * 0.499 + 3 * 0.2526
-    assert decide(LinkPassEvidence(**base, fundamental_hz=3.992 - 0.99 * edge)).checks["same family"] is True
-    assert decide(LinkPassEvidence(**base, fundamental_hz=3.992 - 1.01 * edge)).checks["same family"] is False
-
-
 def test_reason_without_a_stated_speed_sigma_gives_no_sigma():
     """A speed without a stated uncertainty: the reason gives the elongation without +- (the frequency's part
     alone would pretend to be the whole sigma) and says why; a stated sigma (even 0) keeps its +-."""

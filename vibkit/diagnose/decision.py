@@ -100,9 +100,8 @@ DISAGREE_SIGMAS = 5.0
 #: the elongation must be resolved to this fraction of the first limit for a verdict: its sigma a third of
 #: the first limit puts the watch limit three sigmas from a new chain
 EVIDENCE_FRACTION = 1.0 / 3.0
-#: the estimate belongs to the detected family when it lies within half the detection's bin width (the detector's
-#: frequency is the nearest bin's) plus this many of its own sigmas of the detection's frequency (three sigmas: a
-#: 0.3 % chance to refuse a true family)
+#: the estimate belongs to the detected family when it lies within the detection's bin width plus this
+#: many of its own sigmas of the detection's frequency (three sigmas: a 0.3 % chance to refuse a true family)
 SAME_FAMILY_SIGMAS = 3.0
 
 
@@ -304,7 +303,7 @@ def decide(
 
 def _check_family(ev, checks):
     """A refusal (``no link-pass found``) unless a family was detected, its fundamental estimated, and the
-    estimate is the detected family's (within half the resolution and :data:`SAME_FAMILY_SIGMAS`), in the band
+    estimate is the detected family's (within the resolution and :data:`SAME_FAMILY_SIGMAS`), in the band
     and steady (:data:`MAX_WANDER`); None when every check passes."""
     if not ev.detected:
         checks["detected"] = False
@@ -317,7 +316,7 @@ def _check_family(ev, checks):
     sf = sf if math.isfinite(sf) else 0.0
     fd, res = float(ev.detection_hz), float(ev.resolution_hz)
     if math.isfinite(fd) and math.isfinite(res):
-        same = abs(f - fd) <= 0.5 * res + SAME_FAMILY_SIGMAS * sf
+        same = abs(f - fd) <= res + SAME_FAMILY_SIGMAS * sf
         checks["same family"] = bool(same)
         if not same:
             return Decision(
