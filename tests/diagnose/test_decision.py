@@ -198,6 +198,21 @@ def test_decide_rules():
     assert decide(LinkPassEvidence(detected=False, detection_reason="nothing")).reason == "nothing"
 
 
+def test_a_short_records_estimate_is_the_detected_familys_within_half_a_bin():
+    """The detector's frequency is its nearest bin's. A record too short to track the phase (a spectral estimate
+    only) must lie within half a bin of it plus three sigmas: the 2 s LabVIEW record (bins 0.499 Hz), family
+    detected at 3.992 Hz, estimate 2.741 +- 0.253 Hz, is 1.25 Hz away where 1.01 Hz is allowed (a whole bin
+    allowed 1.26 Hz and read it "ok"). A record whose phase was tracked keeps the whole bin: its frequency may
+    wander over more than half a bin."""
+    base = dict(detected=True, detection_hz=3.992, resolution_hz=0.499, fundamental_sigma_hz=0.2526, band_hz=(2.5, 6))
+    assert decide(LinkPassEvidence(**base, fundamental_hz=2.741)).status == STATUS_NOT_FOUND
+    half = 0.5 * 0.499 + 3 * 0.2526
+    assert decide(LinkPassEvidence(**base, fundamental_hz=3.992 - 0.99 * half)).checks["same family"] is True
+    assert decide(LinkPassEvidence(**base, fundamental_hz=3.992 - 1.01 * half)).checks["same family"] is False
+    tracked = dict(base, fundamental_hz=2.741, spectral_hz=2.741, mean_phase_hz=2.741)
+    assert decide(LinkPassEvidence(**tracked)).checks["same family"] is True
+
+
 def test_reason_without_a_stated_speed_sigma_gives_no_sigma():
     """A speed without a stated uncertainty: the reason gives the elongation without +- (the frequency's part
     alone would pretend to be the whole sigma) and says why; a stated sigma (even 0) keeps its +-."""

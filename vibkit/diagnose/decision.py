@@ -100,8 +100,9 @@ DISAGREE_SIGMAS = 5.0
 #: the elongation must be resolved to this fraction of the first limit for a verdict: its sigma a third of
 #: the first limit puts the watch limit three sigmas from a new chain
 EVIDENCE_FRACTION = 1.0 / 3.0
-#: the estimate belongs to the detected family when it lies within the detection's bin width plus this
-#: many of its own sigmas of the detection's frequency (three sigmas: a 0.3 % chance to refuse a true family)
+#: the estimate belongs to the detected family when it lies within the detection's bin width (half of it for a
+#: record too short to track the phase: a spectral estimate only) plus this many of its own sigmas of the
+#: detection's frequency (three sigmas: a 0.3 % chance to refuse a true family)
 SAME_FAMILY_SIGMAS = 3.0
 
 
@@ -316,7 +317,12 @@ def _check_family(ev, checks):
     sf = sf if math.isfinite(sf) else 0.0
     fd, res = float(ev.detection_hz), float(ev.resolution_hz)
     if math.isfinite(fd) and math.isfinite(res):
-        same = abs(f - fd) <= res + SAME_FAMILY_SIGMAS * sf
+        # the detector's frequency is its nearest bin's (half a bin away at most); a whole bin where the record was
+        # long enough to track the phase, whose frequency may wander over more than half a bin (a sinusoidal wander
+        # puts the spectral peak near its extremes): bench_pitch's +-2 % wander lost 3-9 % of its link passes to
+        # half a bin
+        slack = res if ev.mean_phase_hz is not None else 0.5 * res
+        same = abs(f - fd) <= slack + SAME_FAMILY_SIGMAS * sf
         checks["same family"] = bool(same)
         if not same:
             return Decision(
