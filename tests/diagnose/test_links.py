@@ -134,9 +134,9 @@ def test_the_report_has_a_links_page_with_the_flagged_link(recordings, tmp_path)
     orig = PageSink.emit
 
     def emit(self, fig, title):
-        if title == "links":
+        if title in ("links", "verdict"):
             problems[title] = layout.layout_problems(fig)
-            problems["texts"] = " ".join(t.get_text() for t in fig.findobj(lambda a: hasattr(a, "get_text")))
+            problems[title + " texts"] = " ".join(t.get_text() for t in fig.findobj(lambda a: hasattr(a, "get_text")))
         return orig(self, fig, title)
 
     path, passed = recordings[40]
@@ -147,9 +147,13 @@ def test_the_report_has_a_links_page_with_the_flagged_link(recordings, tmp_path)
     finally:
         mp.undo()
     assert "links" in [t for t, _ in rep.pages]
-    assert problems["links"] == []
-    assert f"link {link_number_of(40, passed, N)}:" in problems["texts"]
-    assert rep.summary["flagged_links"] == [link_number_of(40, passed, N)]
+    assert problems["links"] == [] and problems["verdict"] == []
+    number = link_number_of(40, passed, N)
+    assert f"link {number}:" in problems["links texts"]
+    assert rep.summary["flagged_links"] == [number]
+    assert rep.summary["flagged_links_detail"][0]["link"] == number
+    # page 1 says it too: the elongation is the chain's mean, and an "OK" must not hide a worn link
+    assert "1 WORN LINK FLAGGED" in problems["verdict texts"] and f"link {number}: +" in problems["verdict texts"]
 
 
 def test_without_a_scene_a_worn_link_gives_no_number(recordings, capsys):

@@ -80,8 +80,8 @@ ACCELERATION_UNITS = ("m/s^2", "m/s2", "m s-2", "mm/s^2", "g")
 #: benchmarks/bench_links_step.py)
 STEP_REFUSAL = (
     "a step accelerometer gives no link number: the step rides the chain, so its signal is its own trip round "
-    "the loop (0.015 m/s^2 r.m.s. on the study's escalator), which a 1 mm worn link changes by 0.004 at two places "
-    "a loop; on the simulator those places move with the link's excess as much as with its number (about 13 links "
+    "the loop (0.015 m/s^2 r.m.s. on the study's escalator), which a 1 mm worn link changes by 0.004 m/s^2 at two "
+    "places a loop; on the simulator those places move with the link's excess as much as with its number (about 13 links "
     "a millimetre), so a step cannot tell which link is worn from how much (the user guide's links page says "
     "more); record the tensioner's displacement, which sees every link at the same place (a step's accelerometer "
     "does show a flat roller under that step: vibkit ride)"

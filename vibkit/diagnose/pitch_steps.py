@@ -378,11 +378,12 @@ def pitch_from(comb, req):
             "speed uncertainty not stated: the pitch's and the elongation's sigmas are not known (the "
             f"frequency alone gives {100 * rel_f:.2g} %); give --speed-uncertainty"
         )
-    notes.append(
-        "a speed derived from the motor's rpm and the nominal sprocket returns the nominal pitch by "
-        f"construction: one sprocket turn always moves Z = {teeth} links, whatever their length; "
-        "measure the speed on the steps or handrail"
-    )
+        # a stated uncertainty says the speed was measured; without one it may be the motor's
+        notes.append(
+            "a speed derived from the motor's rpm and the nominal sprocket returns the nominal pitch by "
+            f"construction: one sprocket turn always moves Z = {teeth} links, whatever their length; "
+            "measure the speed on the steps or handrail"
+        )
     return pitch, psig, warnings, notes
 
 

@@ -359,6 +359,10 @@ def analyse(
     links = _links(rec, ch, units, sc, speed, notes)
     if links is not None:
         summary["flagged_links"] = [f["link"] for f in links.flagged]
+        summary["flagged_links_detail"] = [
+            {k: f.get(k) for k in ("link", "alternatives", "excess_pitch_mm", "sigma_mm", "loops")}
+            for f in links.flagged
+        ]
     return ReportContext(
         links=links,
         recording=recording,

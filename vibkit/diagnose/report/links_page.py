@@ -24,7 +24,10 @@ def links_page(doc, ctx) -> None:
         "Links",
         f"{res.loops} loops of {res.n_links} links, channel {res.channel}; {res.method}; a chain without a worn "
         f"link passes the threshold |t| = {res.threshold:.2f} in at most {100 * res.false_alarm:g} % of its "
-        "recordings; link 1: the link at the sensor at the start, numbers in passing order",
+        "recordings; link 1: the link at the sensor at the start, numbers in passing order. Bars: each link's fit "
+        "before any flagged link is taken out (a worn link's change fits its neighbours too, so many bars may pass "
+        "the line); the flagged link's change is then removed and the rest fitted again: only what still passes is "
+        "flagged",
     )
     links = np.arange(1, res.n_links + 1)
     ax.vlines(links, 0, res.statistic, color="C0", lw=1.0)

@@ -103,6 +103,12 @@ def verdict_page(doc, ctx) -> None:
             col.text(f"... and {len(warnings) - 6} more (JSON: vibkit pitch --json)", 10, color="#b35900")
     elif ctx.found:
         col.text("no warning from the estimator", 11, color=_GREY)
+    links = getattr(ctx, "links", None)
+    if links is not None and links.flagged:  # the elongation is the chain's mean: a worn link is said here too
+        n = len(links.flagged)
+        col.gap(0.006)
+        col.text(f"{n} WORN LINK{'S' if n > 1 else ''} FLAGGED", _BIG, weight="bold", color="#b35900")
+        col.text(f"{flagged_links_text(links)} (page 'links')", 11, weight="bold", color="#b35900")
     col.gap(0.012)
     col.text("Evidence", 12, weight="bold")
     col.pairs(evidence_rows(ctx), 9, key_width=0.3)
@@ -113,6 +119,17 @@ def verdict_page(doc, ctx) -> None:
         for n in notes[:5]:
             col.text("note: " + n, 8, color="0.3")
     doc.emit(fig, "verdict")
+
+
+def flagged_links_text(links):
+    """``"link 55 or 115: +1.50 +- 0.02 mm; link 8: ..."`` of a :class:`vibkit.diagnose.links.LinksResult`."""
+    parts = []
+    for f in links.flagged:
+        label = "link " + " or ".join(str(k) for k in [f["link"], *f.get("alternatives", ())])
+        if f.get("excess_pitch_mm") is not None:
+            label += ": " + fmt_pm(f["excess_pitch_mm"], f["sigma_mm"], "mm", sign=True)
+        parts.append(label)
+    return "; ".join(parts)
 
 
 def evidence_rows(ctx):
