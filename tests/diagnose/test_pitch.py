@@ -35,6 +35,11 @@ def test_speed_sigma_propagates_and_warns():
     assert rel == pytest.approx(np.hypot(0.01, est.fundamental_sigma_hz / est.fundamental_hz), rel=1e-9)
     assert any("speed's uncertainty" in w for w in est.warnings)
     assert any("by construction" in n for n in est.notes)
+    # a speed measured well enough for the verdict is not suspected of being the motor's
+    est = estimate_pitch(_rec(t, x), speed=0.5, speed_sigma=0.0005)  # 0.1 %
+    assert not any("speed's uncertainty" in w for w in est.warnings)
+    assert not any("by construction" in n for n in est.notes)
+    assert any("by construction" in n for n in estimate_pitch(_rec(t, x), speed=0.5).notes)  # not stated
 
 
 def test_dominant_second_harmonic_no_octave_error():

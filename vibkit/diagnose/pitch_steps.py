@@ -363,7 +363,8 @@ def pitch_from(comb, req):
     rel_v = (speed_sigma or 0.0) / speed
     psig = pitch * math.hypot(rel_f, rel_v)
     elongation = 100.0 * (pitch / req.nominal_pitch - 1.0) if req.nominal_pitch is not None else None
-    if speed_part_too_large(rel_v, elongation, req.limits):
+    too_large = speed_part_too_large(rel_v, elongation, req.limits)
+    if too_large:
         decision = (
             f"the nearest limit is {min(abs(elongation - lim) for lim in req.limits):.2g} % away"
             if elongation is not None
@@ -378,7 +379,9 @@ def pitch_from(comb, req):
             "speed uncertainty not stated: the pitch's and the elongation's sigmas are not known (the "
             f"frequency alone gives {100 * rel_f:.2g} %); give --speed-uncertainty"
         )
-        # a stated uncertainty says the speed was measured; without one it may be the motor's
+    if speed_sigma is None or too_large:
+        # a speed measured to what the verdict needs does not get it; one without its uncertainty, or one too
+        # uncertain for a verdict, may be the motor's
         notes.append(
             "a speed derived from the motor's rpm and the nominal sprocket returns the nominal pitch by "
             f"construction: one sprocket turn always moves Z = {teeth} links, whatever their length; "
