@@ -5,9 +5,18 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..rounding import fmt_pm
 from .common import _WIDE, _page_title
 
-__all__ = ["links_page"]
+__all__ = ["flag_label", "links_page"]
+
+
+def flag_label(f) -> str:
+    """``"link 55 or 115: +1.504 +- 0.017 mm"`` of one flag of :func:`vibkit.diagnose.links.find_worn_links`."""
+    label = "link " + " or ".join(str(k) for k in [f["link"], *f.get("alternatives", ())])
+    if f.get("excess_pitch_mm") is not None:
+        label += ": " + fmt_pm(f["excess_pitch_mm"], f["sigma_mm"], "mm", sign=True)
+    return label
 
 
 def links_page(doc, ctx) -> None:
@@ -33,9 +42,7 @@ def links_page(doc, ctx) -> None:
     ax.vlines(links, 0, res.statistic, color="C0", lw=1.0)
     ax.axhline(res.threshold, color="C3", lw=1.0, ls="--", label=f"threshold {res.threshold:.2f}")
     for f in res.flagged:
-        label = "link " + " or ".join(str(k) for k in [f["link"], *f.get("alternatives", ())])
-        if f.get("excess_pitch_mm") is not None:
-            label += f": {f['excess_pitch_mm']:+.2f} +- {f['sigma_mm']:.2f} mm"
+        label = flag_label(f)
         ax.plot([f["link"]], [f["t"]], "o", color="C3", ms=6)
         ax.annotate(label, (f["link"], f["t"]), textcoords="offset points", xytext=(6, -4), fontsize=8)
     if not res.flagged:

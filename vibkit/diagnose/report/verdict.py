@@ -25,6 +25,7 @@ from .common import (
     pitch_figure,
     speed_figure,
 )
+from .links_page import flag_label
 
 __all__ = ["verdict_page", "recording_page", "VERDICT_COLOURS"]
 
@@ -123,13 +124,7 @@ def verdict_page(doc, ctx) -> None:
 
 def flagged_links_text(links):
     """``"link 55 or 115: +1.50 +- 0.02 mm; link 8: ..."`` of a :class:`vibkit.diagnose.links.LinksResult`."""
-    parts = []
-    for f in links.flagged:
-        label = "link " + " or ".join(str(k) for k in [f["link"], *f.get("alternatives", ())])
-        if f.get("excess_pitch_mm") is not None:
-            label += ": " + fmt_pm(f["excess_pitch_mm"], f["sigma_mm"], "mm", sign=True)
-        parts.append(label)
-    return "; ".join(parts)
+    return "; ".join(flag_label(f) for f in links.flagged)
 
 
 def evidence_rows(ctx):
