@@ -26,6 +26,7 @@ from vibkit.diagnose.decision import (
 from vibkit.diagnose.pitch import estimate_pitch
 
 from support.chain import chain as _chain
+from support.evidence import chain_evidence
 from support.recording import recording
 
 LEON = "data/field/leon-tensioner.csv"
@@ -164,16 +165,7 @@ def test_unresolved_elongation_is_inconclusive(capsys, tmp_path):
 
 
 def test_decide_rules():
-    base = dict(
-        detected=True,
-        detection_hz=3.75,
-        resolution_hz=0.125,
-        fundamental_hz=3.76,
-        fundamental_sigma_hz=1e-3,
-        band_hz=(2.5, 6.25),
-        speed_m_s=0.5,
-        nominal_pitch_m=0.5 / 3.76,
-    )
+    base = chain_evidence(3.76, detection_hz=3.75)
     assert decide(LinkPassEvidence(**base)).status == STATUS_OK
     assert (
         decide(LinkPassEvidence(**{**base, "fundamental_hz": 3.5})).status == STATUS_NOT_FOUND
@@ -216,16 +208,7 @@ def test_a_short_records_estimate_is_the_detected_familys_within_half_a_bin():
 def test_reason_without_a_stated_speed_sigma_gives_no_sigma():
     """A speed without a stated uncertainty: the reason gives the elongation without +- (the frequency's part
     alone would pretend to be the whole sigma) and says why; a stated sigma (even 0) keeps its +-."""
-    base = dict(
-        detected=True,
-        detection_hz=3.75,
-        resolution_hz=0.125,
-        fundamental_hz=3.75,
-        fundamental_sigma_hz=1e-3,
-        band_hz=(2.5, 6.25),
-        speed_m_s=0.5,
-        nominal_pitch_m=0.5 / 3.75,
-    )
+    base = chain_evidence(3.75)
     stated = decide(LinkPassEvidence(**base, speed_sigma_m_s=0.0))
     assert (stated.status, stated.verdict) == (STATUS_OK, "ok")
     assert "elongation +0.000 +- 0.027 % of 133.3 mm: ok" in stated.reason  # 100 * 1e-3 / 3.75 = 0.0267 %

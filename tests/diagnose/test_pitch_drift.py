@@ -14,6 +14,7 @@ from vibkit.diagnose.pitch import estimate_pitch
 from vibkit.diagnose.pitch_parts import PartsCheck
 
 from support import chain, drift
+from support.evidence import chain_evidence
 from support.recording import recording
 
 NOMINAL = 0.4 / 3.0
@@ -152,16 +153,8 @@ def test_decide_on_the_parts_wander():
     MAX_WANDER no link-pass; not checked (None) changes nothing."""
     from vibkit.diagnose.decision import MAX_WANDER, STATUS_NOT_FOUND, LinkPassEvidence, decide
 
-    base = dict(
-        detected=True,
-        detection_hz=3.76,
-        resolution_hz=0.05,
-        fundamental_hz=3.76,
-        fundamental_sigma_hz=1e-4,
-        band_hz=(2.5, 6.25),
-        speed_m_s=0.5,
-        nominal_pitch_m=0.5 / 3.76,
-        part_summary="8 parts of 75 s give 3.75-3.77 Hz",
+    base = chain_evidence(
+        3.76, resolution_hz=0.05, fundamental_sigma_hz=1e-4, part_summary="8 parts of 75 s give 3.75-3.77 Hz"
     )
     assert decide(LinkPassEvidence(**base)).verdict == "ok"
     assert decide(LinkPassEvidence(**base, part_wander=MAX_PART_WANDER)).verdict == "ok"
