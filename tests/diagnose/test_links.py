@@ -50,7 +50,14 @@ def _record(scene, worn, rng, excess=1e-3, loops=3, exact=False):
         },
         coords={"time": ("time", t[keep] - t[keep][0], {"units": "s"})},
     )
-    return rec, passed, ds.delta.values[keep]
+    # the link-pass frequency the sprocket's mesh gives over the record: the truth of `vibkit pitch`
+    f_true = (
+        scene.sprocket.teeth
+        * abs(float(theta[keep][-1] - theta[keep][0]))
+        / (2 * np.pi)
+        / float(t[keep][-1] - t[keep][0])
+    )
+    return rec, passed, ds.delta.values[keep], f_true
 
 
 @pytest.fixture(scope="module")
@@ -60,10 +67,11 @@ def recordings(tmp_path_factory):
     out = {}
     folder = tmp_path_factory.mktemp("links")
     for worn in (None, 40, 70):
-        rec, passed, clean = _record(scene, worn, rng)
+        rec, passed, clean, f_true = _record(scene, worn, rng)
         path = folder / f"worn-{worn}.nc"
         rec.to_netcdf(path)
         out[worn] = (path, passed)
+        out["f", worn] = f_true
         if worn is None:
             out["clean"] = (rec.time.values, clean)
     return out
@@ -152,6 +160,9 @@ def test_the_report_has_a_links_page_with_the_flagged_link(recordings, tmp_path)
     assert f"link {number}:" in problems["links texts"]
     assert rep.summary["flagged_links"] == [number]
     assert rep.summary["flagged_links_detail"][0]["link"] == number
+    # and the chain's mean elongation still gets its verdict: the scene's 159 links align the parts check
+    # with the loops, so the worn link's once-a-loop pattern is not read as a wander
+    assert (rep.summary["status"], rep.summary.get("verdict")) == ("ok", "ok"), rep.summary["reason"]
     # page 1 says it too: the elongation is the chain's mean, and an "OK" must not hide a worn link
     assert "1 WORN LINK FLAGGED" in problems["verdict texts"] and f"link {number}: +" in problems["verdict texts"]
 
@@ -164,6 +175,34 @@ def test_without_a_scene_a_worn_link_gives_no_number(recordings, capsys):
     d = json.loads(capsys.readouterr().out)
     assert (rc, d["status"], d["flagged"]) == (3, "inconclusive", []), d["reason"]
     assert "--scene or --escalator" in d["reason"]
+
+
+def test_a_worn_link_keeps_the_elongation_verdict_given_the_number_of_links(recordings, run):
+    """A worn link changes the tensioner's shape once a loop, and the link-pass frequency of parts of the record
+    moves with it (0.12 %: "inconclusive, the frequency wanders" before).  With the number of links the parts
+    are taken at the same places of every loop: the verdict is given, and the frequency is the sprocket's mesh
+    frequency within three of its sigmas, a sigma that covers the loop's pattern but no wander."""
+    pitch = ["pitch", "--channel", "delta", "--speed", "0.5", "--speed-uncertainty", "0.05%"]
+    pitch += ["--nominal-pitch", "133.33mm", "--json"]
+    for worn in (40, 70):
+        path = str(recordings[worn][0])
+        rc, out, _ = run(*pitch, path, "--links", str(N))
+        d = json.loads(out)
+        assert (rc, d["status"], d["verdict"]) == (0, "ok", "ok"), d["reason"]
+        assert d["parts"]["aligned_to_loops_of_links"] == N and not d["parts"]["widened"]
+        f, sigma = d["fundamental_hz"], d["fundamental_sigma_hz"]
+        assert abs(f - recordings["f", worn]) < 3 * sigma
+        assert sigma < 1e-3  # the worn link's pattern (0.12 % over parts) is not a wander
+        # without the number of links the same pattern reads as a wander, and no verdict is given
+        rc, out, _ = run(*pitch, path)
+        d = json.loads(out)
+        assert (rc, d["status"]) == (3, "inconclusive") and "wanders" in d["reason"], d["reason"]
+    # the healthy chain: a verdict either way, within three sigmas of the sprocket's frequency
+    rc, out, _ = run(*pitch, str(recordings[None][0]), "--links", str(N))
+    d = json.loads(out)
+    assert (rc, d["verdict"]) == (0, "ok") and abs(d["fundamental_hz"] - recordings["f", None]) < 3 * d[
+        "fundamental_sigma_hz"
+    ]
 
 
 def _tensioner(t, x):
@@ -192,7 +231,7 @@ def test_a_link_one_tenth_of_a_millimetre_long_is_flagged_by_its_number():
     """With the default minimum excess (0.05 mm), a link 0.1 mm long is found alone, by its number, from
     three loops with 1 um of noise; its excess reads 0.1 mm within 0.03 mm."""
     scene = load_scene(SCENE)
-    rec, passed, _ = _record(scene, 40, np.random.default_rng(40), excess=0.1e-3)
+    rec, passed, _, _ = _record(scene, 40, np.random.default_rng(40), excess=0.1e-3)
     res = find_worn_links(rec, speed=SPEED, n_links=N, scene=SCENE)
     assert [f["link"] for f in res.flagged] == [link_number_of(40, passed, N)]
     assert abs(res.flagged[0]["excess_pitch_mm"] - 0.1) < 0.03
@@ -212,7 +251,7 @@ def test_a_link_half_a_loop_from_its_twin_is_given_with_both_numbers(profile_90,
     better half a loop away than at itself, and that signature differs from the 0.5 mm one by 93 % of its norm:
     the flag names both numbers, the true one among them, in --json and in the table."""
     path, scene = profile_90
-    rec, passed, _ = _record(scene, 20, np.random.default_rng(5), excess=0.5e-3, loops=2.3, exact=True)
+    rec, passed, _, _ = _record(scene, 20, np.random.default_rng(5), excess=0.5e-3, loops=2.3, exact=True)
     rec.to_netcdf(tmp_path / "e90.nc")
     true = link_number_of(20, passed, 90)
     d = _links_with(tmp_path / "e90.nc", capsys, "--escalator", str(path), "--json")
@@ -233,7 +272,7 @@ def test_a_two_millimetre_link_is_fitted_again_with_a_longer_signature(profile_9
     from vibkit.model.profile import parse_profile
 
     path, scene = profile_90
-    rec, passed, _ = _record(scene, 20, np.random.default_rng(6), excess=2e-3, loops=2.3, exact=True)
+    rec, passed, _, _ = _record(scene, 20, np.random.default_rng(6), excess=2e-3, loops=2.3, exact=True)
     res = find_worn_links(rec, speed=SPEED, n_links=90, scene=profile_scene_file(parse_profile(PROFILE_90, "p")))
     f = max(res.flagged, key=lambda f: f["t"])
     assert f["link"] == link_number_of(20, passed, 90)

@@ -105,7 +105,7 @@ def test_gait_reason_names_the_measured_wander():
     assert est.parts["widened"] and est.fundamental_sigma_hz > 5 * est.parts["sigma_before_hz"]
 
 
-def _without_check(ests, comb):
+def _without_check(ests, comb, n_links=None):
     return PartsCheck(False, "check off", sigma_before_hz=comb.sigma, sigma_hz=comb.sigma), comb.sigma
 
 

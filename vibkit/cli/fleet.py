@@ -7,7 +7,7 @@ import os
 import sys
 import textwrap
 
-from .links import links_count, seconds
+from .links import seconds
 from .options import (
     CHANNEL_EVERY,
     _profile_of,
@@ -15,6 +15,7 @@ from .options import (
     add_escalator,
     add_json,
     add_limits,
+    add_links,
     add_recording,
     chain_speed,
     cli_message,
@@ -78,10 +79,9 @@ def add_parser(subparsers):
         help="the unit's chain was replaced since its previous measurement: a new trend segment starts here",
     )
     add_escalator(f)
-    f.add_argument(
-        "--links",
-        type=links_count,
-        help="links in the chain: the links are scanned as fleet scan scans them (default the --escalator "
+    add_links(
+        f,
+        "links in the chain: the links are scanned as fleet scan scans them (default the --escalator "
         "profile's chain.n_links; neither: the scan is stored 'not run')",
     )
     f.add_argument(

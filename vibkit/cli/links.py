@@ -12,8 +12,10 @@ from .options import (
     add_command,
     add_escalator,
     add_json,
+    add_links,
     add_recording,
     band,
+    chain_links,
     chain_speed,
     escalator_profile,
     read_recording,
@@ -27,16 +29,6 @@ EPILOG = (
     "  no link pass, bad input), 2 usage error,\n"
     "  3 inconclusive (without a scene, a pattern over many links)"
 )
-
-
-def links_count(text):
-    try:
-        v = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number of links, got {text!r}") from None
-    if v < 2:
-        raise argparse.ArgumentTypeError(f"a chain has at least 2 links, got {v}")
-    return v
 
 
 def probability(text):
@@ -81,7 +73,7 @@ def add_parser(subparsers):
     s.add_argument(
         "--speed", type=chain_speed, help="chain speed: m/s, or 0.49m/s, 49cm/s (default: the speed the file states)"
     )
-    s.add_argument("--links", type=links_count, help="links in the chain (e.g. 159; default the --escalator profile's)")
+    add_links(s)
     add_escalator(s)
     s.add_argument(
         "--scene",
@@ -117,7 +109,7 @@ def run(a):
     rec = read_recording(a)
     profile = escalator_profile(a)
     speed = resolve_speed(a, rec, profile=profile).value
-    n_links = a.links or (profile.n_links if profile is not None else None)
+    n_links = chain_links(a, profile)
     if n_links is None:
         raise CLIError(
             f"{a.recording}: give --links N, the chain's number of links (or --escalator FILE with chain.n_links)"

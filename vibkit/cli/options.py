@@ -515,6 +515,35 @@ def add_escalator(sp, help_=ESCALATOR_HELP):
     sp.add_argument("--escalator", metavar="FILE", help=help_)
 
 
+def links_count(text):
+    """--links: a whole number of links, at least 2."""
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number of links, got {text!r}") from None
+    if v < 2:
+        raise argparse.ArgumentTypeError(f"a chain has at least 2 links, got {v}")
+    return v
+
+
+LINKS_HELP = "links in the chain (e.g. 159; default the --escalator profile's)"
+#: --links of pitch and spectrum: what the number of links does there
+LINKS_WANDER_HELP = (
+    "links in the chain (default the --escalator profile's): a record over two loops is then checked for "
+    "wander without the once-a-loop pattern a worn link gives"
+)
+
+
+def add_links(sp, help_=LINKS_HELP):
+    """--links N: the chain's number of links (else the escalator profile's, :func:`chain_links`)."""
+    sp.add_argument("--links", type=links_count, help=help_)
+
+
+def chain_links(a, profile):
+    """The chain's number of links: --links, else the profile's ``chain.n_links``, else None."""
+    return getattr(a, "links", None) or (profile.n_links if profile is not None else None)
+
+
 def escalator_profile(a):
     """The profile named by ``--escalator`` (a Profile), None without one; a bad file is a CLIError."""
     path = getattr(a, "escalator", None)

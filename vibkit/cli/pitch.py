@@ -9,13 +9,16 @@ from vibkit.diagnose.rounding import SPEED_SIGMA_NOT_STATED, fmt_length, fmt_pm
 
 from .options import (
     CHANNEL_EVERY,
+    LINKS_WANDER_HELP,
     add_command,
     add_escalator,
     add_json,
     add_limits,
+    add_links,
     add_recording,
     add_speed_uncertainty,
     band,
+    chain_links,
     chain_speed,
     escalator_profile,
     pitch_length,
@@ -52,6 +55,7 @@ def add_parser(subparsers):
         "--teeth", type=teeth, help="sprocket teeth, for the shaft hypothesis (default the profile's, else 28)"
     )
     add_escalator(s)
+    add_links(s, LINKS_WANDER_HELP)
     s.set_defaults(func=run)
     return s
 
@@ -119,6 +123,7 @@ def run(a):
             nominal_pitch=nominal,
             limits_percent=a.limits,
             teeth=teeth_,
+            n_links=chain_links(a, profile),
             speed_source=source,
         )
     except ValueError as exc:  # the analysis's words about the signal, with the file named

@@ -8,13 +8,16 @@ from vibkit.diagnose.rounding import fmt_pm
 
 from .options import (
     CHANNEL_EVERY,
+    LINKS_WANDER_HELP,
     add_command,
     add_escalator,
     add_json,
     add_limits,
+    add_links,
     add_recording,
     add_speed_uncertainty,
     band,
+    chain_links,
     escalator_profile,
     harmonics,
     read_recording,
@@ -54,6 +57,7 @@ def add_parser(subparsers):
     add_speed_uncertainty(s)
     add_limits(s)
     add_escalator(s)
+    add_links(s, LINKS_WANDER_HELP)
     s.set_defaults(func=run)
     return s
 
@@ -78,6 +82,7 @@ def run(a):
             nominal_pitch=nominal if speed else None,
             limits_percent=a.limits,
             teeth=teeth_,
+            n_links=chain_links(a, profile),
             speed_source=source or "none",
             frequency_only=speed is None,
         )

@@ -190,10 +190,20 @@ def estimate_channels(recording, *, channel=None, **kwargs) -> ChannelsResult:
 
 
 def _agreement_sigma(e):
-    """A channel's frequency sigma for the channels' agreement: where its own spectral and mean-phase estimates
-    disagree (its decision's check "estimates agree" failed: the link-pass phase moves within the record, as on a
-    step going round a curve), the largest difference between them as well, which its sigma does not cover."""
-    if e.decision is None or e.decision.checks.get("estimates agree", True):
+    """A channel's frequency sigma for the channels' agreement, with what its sigma does not cover where its
+    frequency moves within the record:
+
+    * its own spectral and mean-phase estimates disagree (its decision's check "estimates agree" failed, as on a
+      step going round a curve): the largest difference between them;
+    * its parts wander (the check "steady between parts" failed): the wander times the frequency.  A simulated
+      step accelerometer reads the link pass 0.5 % low, its parts wandering 0.2 %, beside a tensioner that
+      reads it to 0.01 %: one chain, not two periodicities."""
+    if e.decision is None:
         return e.fundamental_sigma_hz
-    spread = max((abs(r["spectral_hz"] - r["mean_phase_hz"]) for r in e.per_burst if "mean_phase_hz" in r), default=0.0)
-    return math.hypot(e.fundamental_sigma_hz, spread)
+    sigma = e.fundamental_sigma_hz
+    if not e.decision.checks.get("estimates agree", True):
+        rows = [r for r in e.per_burst if "mean_phase_hz" in r]
+        sigma = math.hypot(sigma, max((abs(r["spectral_hz"] - r["mean_phase_hz"]) for r in rows), default=0.0))
+    if not e.decision.checks.get("steady between parts", True):
+        sigma = math.hypot(sigma, 0.01 * (e.parts or {}).get("wander_percent", 0.0) * e.fundamental_hz)
+    return sigma

@@ -237,6 +237,7 @@ def estimate_pitch(
     p_fa=DEFAULT_P_FA,
     speed_source="given",
     frequency_only=False,
+    n_links=None,
 ):
     """Link pitch from a recording's link-pass frequency and an independently measured speed.
 
@@ -269,6 +270,11 @@ def estimate_pitch(
         Where ``speed`` came from (``"given"``, ``"file: chain_speed_m_s"`` ...), named in the result.
     frequency_only : bool
         ``speed`` is a placeholder (``vibkit spectrum`` without a known speed): no plausibility check.
+    n_links : int, optional
+        Links in the chain (an escalator profile's ``chain.n_links``).  A displacement record (the
+        tensioner's) over two loops is then checked for wander against its own once-per-loop pattern, which a
+        worn link gives (:func:`vibkit.diagnose.pitch_parts.check_parts`); without it such a pattern reads
+        as a wander.  Acceleration channels are checked as without it (``_loop_links``).
     p_fa : float
         False-alarm probability of the detection test run first
         (:func:`vibkit.signal.detect.detect_link_pass`): without a harmonic family in the band the
@@ -307,6 +313,8 @@ def estimate_pitch(
     0.1333
     """
     req = _request(speed, speed_sigma, band, nominal_pitch, limits_percent, pitch_range, teeth, p_fa, frequency_only)
+    if n_links is not None and (isinstance(n_links, bool) or not isinstance(n_links, (int, np.integer)) or n_links < 2):
+        raise ValueError(f"n_links must be an integer >= 2 (links in the chain), got {n_links!r}")
     name = pick_channel(recording, channel)
     prep = steps.prepare_bursts(recording, name, req.band)
     common = _common(recording, name, req, prep, speed_source)
@@ -317,7 +325,7 @@ def estimate_pitch(
     ests, skipped = steps.estimate_bursts(prep, name=name, band=req.band, n_harmonics=n_harmonics)
     ests = steps.choose_methods(ests)
     comb = steps.combine(ests, name=name)
-    parts, sigma = check_parts(ests, comb)
+    parts, sigma = check_parts(ests, comb, n_links=_loop_links(recording, name, n_links))
     comb = replace(comb, sigma=sigma)
     jitter_warnings, jitter_notes = steps.jitter_effect(recording, name, ests, req.band, n_harmonics)
     # a widened sigma is a note: the uncertainty stated is then the honest one; a wander too large for a
@@ -355,12 +363,23 @@ def estimate_pitch(
     return PitchEstimate(**res, **_numbers(ests, comb, req, pitch, psig, dec))
 
 
+def _loop_links(recording, name, n_links):
+    """The number of links the parts check aligns its parts with: ``n_links`` on a displacement (the tensioner,
+    a fixed sensor) only.  A sensor riding a step reads the link pass low where it goes round the heads, the same
+    way every loop (0.5 % on the shipped scene, every place of the loop low): parts aligned with the loops would
+    take that for the chain's own pattern, and give a verdict on it."""
+    from .links import is_tensioner_channel
+
+    return n_links if n_links and is_tensioner_channel(recording, name) else None
+
+
 def _part_summary(parts):
     """The parts' frequencies in a few words, for the decision's reason (empty when not checked)."""
     if not parts.checked:
         return ""
     f = parts.frequencies_hz
-    return f"{parts.n_parts} parts of {parts.part_s:.3g} s give {min(f):.5g}-{max(f):.5g} Hz"
+    where = f" at the same places of loops of {parts.n_links} links" if parts.n_links else ""
+    return f"{parts.n_parts} parts of {parts.part_s:.3g} s{where} give {min(f):.5g}-{max(f):.5g} Hz"
 
 
 def _request(speed, speed_sigma, band, nominal_pitch, limits_percent, pitch_range, teeth, p_fa, frequency_only):

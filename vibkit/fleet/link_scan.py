@@ -102,7 +102,7 @@ def measure_with_links(path, *, n_links=None, marker_s=None, scene=None, no_coun
 
     channel = analysis.get("channel")
     rec = read_recording(path, **{**(analysis.get("read_options") or {}), "channel": channel})
-    m = analyse_recording(path, recording=rec, **analysis)
+    m = analyse_recording(path, recording=rec, n_links=n_links, **analysis)
     scan = link_scan_of(
         rec,
         path=path,

@@ -103,6 +103,7 @@ def analyse_recording(
     date_source="given",
     read_options=None,
     recording=None,
+    n_links=None,
 ):
     """Read and analyse one recording; the :class:`Measurement` it gives (not stored, ``id`` None).
 
@@ -123,6 +124,9 @@ def analyse_recording(
         sigma once the others agree (:func:`vibkit.diagnose.channels.estimate_channels`, as ``vibkit pitch``).
     read_options : dict, optional
         More :func:`vibkit.read_recording` arguments (``time_unit``, ``units``, ``repair_time`` ...).
+    n_links : int, optional
+        Links in the chain: a worn link's once-per-loop pattern is then not read as a wander
+        (:func:`vibkit.diagnose.pitch.estimate_pitch`).
     replaced : bool
         The chain was replaced since the unit's previous measurement (a new trend segment starts).
     date_source : str
@@ -173,7 +177,12 @@ def analyse_recording(
         source = "recording start time"
     try:  # every vibration channel (or the one asked for), as `vibkit pitch` decides; a sigma of 0 is "not stated"
         res = estimate_channels(
-            rec, speed=speed, speed_sigma=speed_sigma or None, channel=channel, nominal_pitch=nominal_pitch
+            rec,
+            speed=speed,
+            speed_sigma=speed_sigma or None,
+            channel=channel,
+            nominal_pitch=nominal_pitch,
+            n_links=n_links,
         )
     except ValueError as exc:
         raise FleetError(f"{spath}: {' '.join(str(exc).split())}") from None

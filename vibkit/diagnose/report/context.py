@@ -252,6 +252,12 @@ def analyse(
     if band is None and profile is not None and speed is not None:
         band = profile.search_band(speed)
         notes.append(f"search band {band[0]:.4g}-{band[1]:.4g} Hz from the profile (0.8-1.25 x speed / nominal pitch)")
+    # the chain's links (the profile's, else the scene's where it is the escalator): a worn link's once-a-loop
+    # pattern is then not read as a wander by the parts check
+    if profile is not None:
+        n_links = profile.n_links or (sc.chain.n_rollers if scene_is_unit(sc, profile) else None)
+    else:
+        n_links = sc.chain.n_rollers if sc is not None else None
     if speed is not None:
         kw = dict(
             speed=speed,
@@ -264,7 +270,7 @@ def analyse(
     else:  # frequency only: the same burst-combined estimator, with a unit "speed"
         kw = dict(speed=1.0, band=band or (2.5, 6.0), frequency_only=True)
         notes.append("no speed known: link-pass frequency only, no pitch (give --speed)")
-    decided = estimate_channels(rec, channel=channel, **kw)
+    decided = estimate_channels(rec, channel=channel, n_links=n_links, **kw)
     found = decided.best is not None
     est = decided.best if found else next((e for e in decided.estimates if e.channel == ch), decided.estimates[0])
     ch = est.channel
