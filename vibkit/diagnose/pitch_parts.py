@@ -26,16 +26,18 @@ it: on the shipped scene with one link 1 mm long, eight parts of a tensioner rec
 :func:`check_parts` therefore cuts every burst that covers two loops or more into parts that start at the
 same places of each loop (:func:`_loop_split`, ``m`` parts per loop), and compares each part with the parts
 at the same place of the other loops (a one-way analysis of variance: the places' means are the pattern, the
-scatter around them is the wander).  The pattern itself still moves the record's mean frequency by the
-phase it has gathered where the record ends inside a loop; that bound, over ``sqrt(3)`` (a bias anywhere
-within it), is added to the sigma (``pattern_sigma_hz``).  The same record then reads 0.015 % of scatter
-beyond its sigmas and gets its verdict.
+scatter around them is the wander).  The sigma is the plain check's, from the parts in time order, as
+above: the pattern does move the record's mean frequency (by the phase it has gathered where the record
+ends inside a loop), and a sigma from loop-aligned parts covered the sprocket's frequency in only 75-90 %
+of healthy-chain records at three sigmas, against 95-100 % (``benchmarks/bench_worn_pitch.py``).
+The same record then reads 0.015 % of wander, within what a chain under speed control holds, and gets its
+verdict.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -82,7 +84,8 @@ class PartsCheck:
     wander: float = 0.0
     warnings: list = field(default_factory=list)
     n_links: int | None = None
-    pattern_sigma_hz: float = 0.0
+    place_birge: float = float("nan")
+    place_limit: float = float("nan")
 
     @property
     def n_parts(self) -> int:
@@ -105,7 +108,11 @@ class PartsCheck:
                 wander_percent=100.0 * self.wander,
             )
             if self.n_links:
-                d.update(aligned_to_loops_of_links=self.n_links, pattern_sigma_hz=self.pattern_sigma_hz)
+                d.update(
+                    aligned_to_loops_of_links=self.n_links,
+                    birge_ratio_around_places=self.place_birge,
+                    birge_limit_around_places=self.place_limit,
+                )
         return d
 
 
@@ -174,13 +181,11 @@ def _loop_split(ests, f0, n_links):
     return (parts, loop_s / m, m, periods) if parts else None
 
 
-def _loop_pattern(est, ests, part_s, m, loop_s):
-    """The scatter of the loop-aligned parts around their places' means, and the pattern's sigma on the record's
-    mean frequency: ``(chi^2, dof, scatter^2, variance of the mean from the loops' means or None, pattern sigma)``.
-    """
+def _around_places(est):
+    """The loop-aligned parts' scatter around their places' means: ``(chi^2, degrees of freedom, scatter^2)``,
+    every place (burst, place in the loop) with two parts or more counted."""
     chi2 = ss = 0.0
     dof = 0
-    means = {}
     for key in sorted({e[2] for e in est}):
         f = np.array([e[0] for e in est if e[2] == key])
         s = np.array([e[1] for e in est if e[2] == key])
@@ -191,93 +196,78 @@ def _loop_pattern(est, ests, part_s, m, loop_s):
         chi2 += float(np.sum(w * (f - mu) ** 2))
         ss += float(np.sum((f - f.mean()) ** 2))
         dof += f.size - 1
-        means[key] = float(f.mean())
-    # each burst's pattern: its places' deviations from the loop's mean, gathered into a phase (cycles), and
-    # the phase it holds where the burst ends inside a loop moves the burst's mean frequency
-    pattern = 0.0
-    loop_dev, loop_dof, n_loops = 0.0, 0, 0
-    for k in {key[0] for key in means}:
-        g = np.array([means.get((k, i), np.nan) for i in range(m)])
-        if not np.all(np.isfinite(g)):
-            continue
-        phase = part_s * np.concatenate(([0.0], np.cumsum(g - g.mean())))
-        b = ests[k].burst
-        span = b.x.size / b.fs
-        frac = span / loop_s - int(span // loop_s)
-        j = min(int(frac * m), m - 1)
-        pattern = max(pattern, max(abs(phase[j]), abs(phase[j + 1])) / span / math.sqrt(3.0))
-        # the loops' own means (a wander slower than one part shows between loops)
-        rows = {}
-        for f, _s, key in est:
-            if key[0] == k:
-                rows.setdefault(key[1], []).append(f)
-        counts = {len(v) for v in rows.values()}
-        if len(rows) == m and len(counts) == 1:
-            loops = np.mean(np.array([rows[i] for i in range(m)]), axis=0)
-            loop_dev += float(np.sum((loops - loops.mean()) ** 2))
-            loop_dof += loops.size - 1
-            n_loops += loops.size
-    var_loops = loop_dev / loop_dof / n_loops if loop_dof >= MIN_PARTS - 1 else None
-    return chi2, dof, ss / dof if dof else math.nan, var_loops, pattern
+    return chi2, dof, ss / dof if dof else math.nan
 
 
-def _check_loop_parts(split, ests, comb, n_links):
-    """The parts check on loop-aligned parts (module notes): ``(PartsCheck, sigma)``."""
+def _around_loop_places(pc, split, f0, n_links):
+    """The plain check ``pc`` with its wander measured around the places' means of loop-aligned parts (module
+    notes); ``pc`` with a reason's note where those give too few degrees of freedom."""
     import scipy.stats
 
     parts, part_s, m, _periods = split
-    f0, sigma = comb.f0, comb.sigma
     est = [(_part_estimate(x, fs, be, f0), key) for x, fs, be, key in parts]
     est = [(e[0], e[1], key) for e, key in est if e is not None]
-    chi2, dof, scatter2, var_loops, pattern = _loop_pattern(est, ests, part_s, m, n_links / f0)
+    chi2, dof, scatter2 = _around_places(est)
     if dof < MIN_PARTS - 1:
-        why = (
-            f"only {dof} degrees of freedom from {len(est)} of {len(parts)} parts at the same places of loops of "
-            f"{n_links} links: the sigma is not checked (record more loops)"
-        )
-        return PartsCheck(False, why, sigma_before_hz=sigma, sigma_hz=sigma, n_links=n_links), sigma
-    f = np.array([e[0] for e in est])
+        why = f"; {dof} degrees of freedom at the same places of loops of {n_links} links: too few to tell a wander"
+        return replace(pc, reason=pc.reason + why)
     s = np.array([e[1] for e in est])
     birge = chi2 / dof
     limit = float(scipy.stats.chi2.isf(PARTS_P_WIDEN, dof) / dof)
-    wander = math.sqrt(max(scatter2 - float(np.mean(s**2)), 0.0)) / f0
-    var_mean = scatter2 / f.size if var_loops is None else max(scatter2 / f.size, var_loops)
-    warnings = []
-    spread = max(sigma, math.sqrt(var_mean)) if birge > limit else sigma
-    new = math.hypot(spread, pattern)
-    widened = spread > sigma
-    place = f"{f.size} parts of {part_s:.3g} s at {m} places of loops of {n_links} links"
-    if widened:
-        warnings.append(
-            f"the frequency's sigma widened from {sigma:.2g} to {new:.2g} Hz: {place} scatter "
-            f"{math.sqrt(birge):.1f} x what their sigmas allow around their places' means (the source's "
-            f"frequency wanders {100 * wander:.2g} %)"
+    wander = math.sqrt(max(scatter2 - float(np.mean(s**2)), 0.0)) / f0 if birge > limit else 0.0
+    where = f"{len(est)} parts of {part_s:.3g} s at {m} places of loops of {n_links} links"
+    warnings = [
+        w.replace(
+            f"(the source's frequency wanders {100 * pc.wander:.2g} %)",
+            f"({where} scatter {math.sqrt(birge):.1f} x what their sigmas allow around their places' means: "
+            + (
+                f"the source's frequency wanders {100 * wander:.2g} %; the rest"
+                if wander > 0
+                else "no wander; the scatter"
+            )
+            + " is the chain's own pattern, which repeats every loop)",
         )
-    else:
-        wander = 0.0 if birge <= limit else wander
-    why = (
-        f"{place}: Birge ratio {birge:.3g} around the places' means (chi^2 per degree of freedom, {dof}; limit "
-        f"{limit:.3g}); "
-        + (f"sigma widened to the scatter of the mean ({spread:.2g} Hz)" if widened else "sigma kept")
-        + f"; the loop's own pattern adds {pattern:.2g} Hz"
+        for w in pc.warnings
+    ]
+    why = f"; {where}: Birge ratio {birge:.3g} around the places' means (limit {limit:.3g})"
+    return replace(
+        pc,
+        reason=pc.reason + why,
+        wander=wander,
+        warnings=warnings,
+        n_links=n_links,
+        place_birge=birge,
+        place_limit=limit,
     )
-    pc = PartsCheck(
-        True, why, tuple(f), tuple(s), part_s, birge, limit, widened, sigma, new, wander, warnings, n_links, pattern
-    )
-    return pc, new
+
+
+def _scatter(f, s, sigma):
+    """Parts in time order: ``(Birge ratio, its limit, sigma)`` with the sigma widened to the parts' scatter of
+    the mean when the Birge ratio passes its limit (the module notes)."""
+    import scipy.stats
+
+    k = f.size
+    w = 1.0 / s**2
+    fbar = float(np.sum(w * f) / np.sum(w))
+    birge = float(np.sum(w * (f - fbar) ** 2) / (k - 1))
+    limit = float(scipy.stats.chi2.isf(PARTS_P_WIDEN, k - 1) / (k - 1))
+    var_mean = float(np.var(f, ddof=1)) / k
+    if k >= 2 * MIN_PARTS:
+        # neighbouring parts paired: a wander slower than one part leaves neighbours alike, and the scatter of
+        # the mean over the parts alone would understate it (batch means at two lengths, the larger kept)
+        h = k // 2
+        pairs = (f[: 2 * h : 2] + f[1 : 2 * h : 2]) / 2
+        var_mean = max(var_mean, float(np.var(pairs, ddof=1)) / h)
+    new = max(sigma, math.sqrt(var_mean)) if birge > limit else sigma
+    return birge, limit, new
 
 
 def check_parts(ests, comb, n_links=None):
     """The parts check (module notes): ``(PartsCheck, sigma)`` with ``sigma`` the combined sigma, widened to
     the parts' scatter of the mean when they disagree beyond their own sigmas.  With the chain's number of links
-    ``n_links`` and a burst over two loops, the parts are aligned to the loops (:func:`_check_loop_parts`)."""
-    import scipy.stats
-
+    ``n_links`` and a burst over two loops, the wander is measured around the places' means of loop-aligned parts
+    (:func:`_around_loop_places`)."""
     f0, sigma = comb.f0, comb.sigma
-    if n_links:
-        split = _loop_split(ests, f0, n_links)
-        if split is not None:
-            return _check_loop_parts(split, ests, comb, int(n_links))
     parts, part_s, periods = _split(ests, f0)
     if len(parts) < MIN_PARTS:
         why = (
@@ -293,35 +283,22 @@ def check_parts(ests, comb, n_links=None):
     f = np.array([e[0] for e in est])
     s = np.array([e[1] for e in est])
     k = f.size
-    w = 1.0 / s**2
-    fbar = float(np.sum(w * f) / np.sum(w))
-    birge = float(np.sum(w * (f - fbar) ** 2) / (k - 1))
-    limit = float(scipy.stats.chi2.isf(PARTS_P_WIDEN, k - 1) / (k - 1))
-    scatter2 = float(np.var(f, ddof=1))
-    wander = math.sqrt(max(scatter2 - float(np.mean(s**2)), 0.0)) / f0
+    birge, limit, new = _scatter(f, s, sigma)
+    widened = new > sigma
+    # within what the parts' own sigmas allow: no measured wander
+    wander = math.sqrt(max(float(np.var(f, ddof=1)) - float(np.mean(s**2)), 0.0)) / f0 if birge > limit else 0.0
     warnings = []
-    widened = False
-    new = sigma
-    var_mean = scatter2 / k
-    if k >= 2 * MIN_PARTS:
-        # neighbouring parts paired: a wander slower than one part leaves neighbours alike, and the scatter of
-        # the mean over the parts alone would understate it (batch means at two lengths, the larger kept)
-        h = k // 2
-        pairs = (f[: 2 * h : 2] + f[1 : 2 * h : 2]) / 2
-        var_mean = max(var_mean, float(np.var(pairs, ddof=1)) / h)
-    if birge > limit:
-        new = max(sigma, math.sqrt(var_mean))
-        widened = new > sigma
-        if widened:
-            warnings.append(
-                f"the frequency's sigma widened from {sigma:.2g} to {new:.2g} Hz: {k} parts of {part_s:.3g} s give "
-                f"{f.min():.5g}-{f.max():.5g} Hz, a scatter {math.sqrt(birge):.1f} x what their sigmas allow "
-                f"(the source's frequency wanders {100 * wander:.2g} %)"
-            )
-    else:
-        wander = 0.0  # within what the parts' own sigmas allow: no measured wander
+    if widened:
+        warnings.append(
+            f"the frequency's sigma widened from {sigma:.2g} to {new:.2g} Hz: {k} parts of {part_s:.3g} s give "
+            f"{f.min():.5g}-{f.max():.5g} Hz, a scatter {math.sqrt(birge):.1f} x what their sigmas allow "
+            f"(the source's frequency wanders {100 * wander:.2g} %)"
+        )
     why = f"{k} parts of {part_s:.3g} s: Birge ratio {birge:.3g} (chi^2 per degree of freedom; limit {limit:.3g}); " + (
         f"sigma widened to the parts' scatter of the mean ({new:.2g} Hz)" if widened else "sigma kept"
     )
     pc = PartsCheck(True, why, tuple(f), tuple(s), part_s, birge, limit, widened, sigma, new, wander, warnings)
+    split = _loop_split(ests, f0, n_links) if n_links else None
+    if split is not None:
+        pc = _around_loop_places(pc, split, f0, int(n_links))
     return pc, new
