@@ -77,6 +77,19 @@ def test_issue_example_flags_instead_of_a_minus_112_percent_trend():
     assert "2 implausible measurement(s) left out" in tr.flags and "latest measurement" in " ".join(tr.flags)
 
 
+def test_a_unit_without_a_usable_measurement_says_so_once_and_marks_its_elongation():
+    """Every visit inconclusive: one flag says there is nothing to trend and why, and the work list's elongation
+    (the column of the latest usable measurement) shows the latest one marked as flagged."""
+    from vibkit.diagnose.report.fleet import fmt_elongation
+
+    ms = [meas(k, 0.5 * k, 0.3, 2.9) for k in (1, 2, 3)]  # sigma 2.9 %: cannot tell 1.5 % from 2 %
+    tr = unit_trend("E12", ms)
+    assert tr.n_used == 0 and tr.latest_verdict == "inconclusive"
+    assert tr.flags == ("no usable measurement (3 inconclusive)",)
+    assert fmt_elongation(tr).endswith("(flagged)")
+    assert not fmt_elongation(unit_trend("E07", [meas(1, 0.0, 1.7, 0.1)])).endswith("(flagged)")
+
+
 def test_flagged_points_left_out_of_the_fit():
     ms = line_unit(0.4, 0.5, YEARS, seed=1)
     clean = unit_trend("U", ms)

@@ -409,10 +409,10 @@ def unit_trend(unit, measurements, *, limits_percent=DEFAULT_LIMITS_PERCENT, cov
     repl = tuple({"id": m.id, "date_utc": m.date_utc, "reason": why} for m, why in scr.segment_starts)
     if outliers:
         flags.append(f"{len(outliers)} outlier(s) left out: " + ", ".join(o["date_utc"][:10] for o in outliers))
-    for q in ("implausible", "inconclusive"):
-        n = sum(1 for f in flagged if f["quality"] == q)
-        if n:
-            flags.append(f"{n} {q} measurement(s) left out")
+    left_out = [f"{n} {q}" for q in ("implausible", "inconclusive") if (n := sum(f["quality"] == q for f in flagged))]
+    if not used:  # one flag says it all: nothing to trend, and why
+        flags.append(f"no usable measurement ({', '.join(left_out)})" if left_out else "no usable measurement")
+    flags += [f"{lo} measurement(s) left out" for lo in left_out if used]
     if repl:
         flags.append(f"chain replaced {repl[-1]['date_utc'][:10]} (new segment)")
     unstated = sum(1 for m in used if not m.speed_sigma_m_s)
@@ -421,9 +421,7 @@ def unit_trend(unit, measurements, *, limits_percent=DEFAULT_LIMITS_PERCENT, cov
             f"speed uncertainty not stated in {unstated} measurement(s) (stored 0): their sigmas, the rate's and "
             "the forecast intervals are too small"
         )
-    if not used:
-        flags.append("no usable measurement: the latest is flagged")
-    elif ms[-1] is not last:
+    if used and ms[-1] is not last:
         flags.append(f"latest measurement ({ms[-1].date_utc[:10]}) not used")
     seg_start = repl[-1]["date_utc"] if repl else None
     return UnitTrend(

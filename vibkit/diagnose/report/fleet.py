@@ -79,13 +79,18 @@ def fmt_forecast(f, today_unix_s=None):
 
 
 def fmt_elongation(t) -> str:
-    """The latest elongation of a unit, rounded to its sigma; without a stated speed uncertainty, no +-."""
+    """The latest elongation of a unit, rounded to its sigma; without a stated speed uncertainty, no +-; a unit
+    without a usable measurement shows its latest one marked as flagged (the column is the latest usable one)."""
+    said = [] if t.speed_sigma_stated else ["speed unc. not stated"]
+    said += [] if t.n_used else ["flagged"]
     if not t.speed_sigma_stated:
-        return f"{t.latest_elongation_percent:+.2f} (speed unc. not stated)"
-    return fmt_pm(t.latest_elongation_percent, t.latest_elongation_sigma_percent, sign=True)
+        text = f"{t.latest_elongation_percent:+.2f}"
+    else:
+        text = fmt_pm(t.latest_elongation_percent, t.latest_elongation_sigma_percent, sign=True)
+    return f"{text} ({', '.join(said)})" if said else text
 
 
-WORK_LIST_FLAGS_WIDTH = 50  # characters of a unit's flags in the PDF's work list (the whole text: fleet status)
+WORK_LIST_FLAGS_WIDTH = 54  # characters of a unit's flags in the PDF's work list (the whole text: fleet status)
 
 
 def work_list_rows(trends, *, flags_width=None, today_unix_s=None):
@@ -165,7 +170,7 @@ def work_list_page(doc, ctx, rows, part, parts):
     _title(fig, "Fleet work list: most urgent first" + (f" ({part}/{parts})" if parts > 1 else ""), _subtitle(ctx))
     ax = fig.add_axes([0.04, 0.10, 0.92, 0.80])
     ax.axis("off")
-    widths = [0.03, 0.055, 0.16, 0.07, 0.095, 0.11, 0.045, 0.16, 0.275]
+    widths = [0.03, 0.055, 0.16, 0.07, 0.095, 0.10, 0.045, 0.14, 0.305]
     tab = ax.table(cellText=rows, colLabels=WORK_LIST_HEADER, colWidths=widths, loc="upper left", cellLoc="left")
     tab.auto_set_font_size(False)
     tab.set_fontsize(7)
@@ -185,7 +190,7 @@ def work_list_page(doc, ctx, rows, part, parts):
     fig.text(
         0.04,
         0.05,
-        "elongation: the latest usable measurement +- 1 sigma; rate: weighted least squares over the "
+        "elongation: the latest usable measurement +- 1 sigma (the latest, marked flagged, where none is usable); rate: weighted least squares over the "
         "current chain (after the last replacement), +- 1 sigma; over a limit now: yellow watch, orange plan, red "
         "replace; blue: flags (outliers, flagged measurements, replacements, an implausible rate) - left out of the "
         f"trend. {OVERDUE_MEANING}.",
