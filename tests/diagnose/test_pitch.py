@@ -135,3 +135,20 @@ def test_bad_input(kw, msg):
     t = np.arange(2000) / 200.0
     with pytest.raises(ValueError, match=msg):
         estimate_pitch(_rec(t, np.sin(2 * np.pi * 3.75 * t)), **kw)
+
+
+def test_an_elongation_that_is_another_catalogue_pitch_is_noted():
+    """E07's step accelerometer reads 135.6 mm: +1.70 % of its nominal 133.33 mm (watch), and within 0.1 % of the
+    catalogue's 135.46 mm, which a new chain of that pitch would read.  The note says both readings; Leon's
+    +3.8 % (138.4 mm, 2.2 % from any catalogue pitch) gets no such note."""
+    from vibkit import read_recording
+
+    e07 = estimate_pitch(
+        read_recording("data/fleet-example/E07/2026-11-23.csv"), speed=0.5, speed_sigma=5e-4, nominal_pitch=0.13333
+    )
+    assert e07.verdict == "watch"
+    assert any("within 0.1 % of the catalogue pitch 135.46 mm" in n for n in e07.notes), e07.notes
+    leon = estimate_pitch(
+        read_recording("data/field/leon-tensioner.csv"), speed=0.49, speed_sigma=4.9e-4, nominal_pitch=0.13333
+    )
+    assert leon.verdict == "replace" and not any("catalogue pitch" in n for n in leon.notes)

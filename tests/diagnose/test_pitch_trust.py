@@ -66,6 +66,8 @@ def test_square_wave_is_not_read_as_a_third_of_its_frequency():
     det = detect_link_pass(x, FS, band=(2.45, 6.125))
     assert not det.detected
     assert det.frequency_hz == pytest.approx(8.0, rel=0.02)  # named as the periodicity, outside the band
+    # in its own lines' words: the odd harmonics 8, 24, 40 ... Hz, all multiples of 8 Hz (not "orders 3, 5 of 2.7 Hz")
+    assert "significant lines (8" in det.reason and "are all multiples of 8" in det.reason, det.reason
     # a band that holds 8 Hz gives the right answer
     est = estimate_pitch(_rec(x), speed=1.0, band=(5.0, 10.0), frequency_only=True)
     assert est.detected and est.fundamental_hz == pytest.approx(8.0, abs=1e-3)

@@ -156,6 +156,17 @@ def test_numbers_rounded_to_their_uncertainty(v, s, text):
     assert fmt_pm(v, s) == text
 
 
+def test_settings_and_rounding_are_not_given_as_measured_precision():
+    from vibkit.diagnose.report.appendix import _band, _jitter
+    from vibkit.diagnose.rounding import fmt_band, fmt_value
+
+    assert fmt_band((3.9, 6.09375)) == "3.90-6.09 Hz" and _band((3.9, 6.09375)) == "3.90 - 6.09 Hz"
+    assert _jitter(8.66e-11) == "under 0.001 % of the period" and _jitter(0.0123) == "0.012 % of the period"
+    # a recorded harmonic known to +-0.18 of its ratio: 24.4 Hz, not 24.3632 Hz
+    assert fmt_value(24.3632, 0.18 * 24.3, default_decimals=4) == "24.4"  # two digits of its sigma, 4.4 Hz
+    assert fmt_value(3.75012, 1e-4, default_decimals=4) == "3.75012"
+
+
 def test_a_value_that_rounds_to_zero_has_no_minus_sign():
     from types import SimpleNamespace
 

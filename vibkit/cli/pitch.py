@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 import textwrap
 
-from vibkit.diagnose.rounding import SPEED_SIGMA_NOT_STATED, fmt_length, fmt_pm
+from vibkit.diagnose.rounding import SPEED_SIGMA_NOT_STATED, fmt_band, fmt_length, fmt_pm
 
 from .options import (
     CHANNEL_EVERY,
@@ -95,7 +95,7 @@ def from_profile(a, profile, sp):
         taken.append(f"nominal pitch {1000 * nominal:g} mm")
     if search is None and sp.value is not None:
         search = profile.search_band(sp.value)
-        taken.append(f"search band {search[0]:.4g}-{search[1]:.4g} Hz (0.8-1.25 x speed / nominal pitch)")
+        taken.append(f"search band {fmt_band(search)} (0.8-1.25 x speed / nominal pitch)")
     if teeth_ is None:
         teeth_ = profile.teeth
         taken.append(f"{teeth_} sprocket teeth")
@@ -257,5 +257,5 @@ def refused(cmd, a, res, extra):
         print(f"{a.recording}: channel{'s' if len(ests) > 1 else ''} {names}: {res.status}")
         print_channels(res)
     band = ests[0].band_hz
-    msg(f"vibkit {cmd}: {res.status} in {band[0]:.4g}-{band[1]:.4g} Hz: {res.reason}")
+    msg(f"vibkit {cmd}: {res.status} in {fmt_band(band)}: {res.reason}")
     return res.exit_code

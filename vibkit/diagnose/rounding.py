@@ -63,3 +63,10 @@ def fmt_length(value_m, sigma_m=None, digits=5):
     if value_m is None:
         return "n/a"
     return fmt_pm(1000.0 * value_m, None if sigma_m is None else 1000.0 * sigma_m, "mm", digits)
+
+
+def fmt_band(band, sep="-") -> str:
+    """A frequency band ``(low, high)`` [Hz] as ``"3.90-6.09 Hz"``: a setting, not a measurement, to one common
+    number of decimals (two: 0.01 Hz, a fraction of a per cent of a link pass)."""
+    lo, hi = (float(v) for v in band)
+    return f"{lo:.2f}{sep}{hi:.2f} Hz"

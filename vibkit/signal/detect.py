@@ -613,6 +613,22 @@ def _refined(sp, fc, detected):
     return f_best, tuple(int(o) for o in orders[near > lim]), lim
 
 
+def _above_band(sig, f_best, fg, sp):
+    """Why a family whose significant lines are all multiples of ``fg`` above the band is no link pass, in the
+    lines' own frequencies (not as orders of a fundamental the family does not have)."""
+    band = f"{sp.fmin:.2f}-{sp.fmax:.2f} Hz"
+    if len(sig) == 1:
+        return (
+            f"a periodic signal is present, but its one significant line, at {fg:.4g} Hz, lies above the band "
+            f"{band}: a tone, not a link pass in the band"
+        )
+    lines = ", ".join(f"{o * f_best:.4g}" for o in sig[:6]) + (" ..." if len(sig) > 6 else "")
+    return (
+        f"a periodic signal is present, but its significant lines ({lines} Hz) are all multiples of {fg:.4g} Hz, "
+        f"a fundamental above the band {band}"
+    )
+
+
 def _common_order(sp, f_best, sig, base):
     """A family whose significant orders share a factor ``g > 1`` is a family at ``g f``: ``(refusal, f)``
     with the refusal when ``g f`` lies above the band (``base`` updated with the reduced orders)."""
@@ -626,9 +642,7 @@ def _common_order(sp, f_best, sig, base):
         return LinkPassDetection(
             False,
             "no link-pass found",
-            f"a periodic signal is present, but its harmonics (orders {', '.join(map(str, sig[:6]))} "
-            f"of {f_best:.4g} Hz) make its fundamental {fg:.4g} Hz, outside the band "
-            f"{sp.fmin:.4g}-{sp.fmax:.4g} Hz",
+            _above_band(sig, f_best, fg, sp),
             float(fg),
             **base,
         ), f_best

@@ -8,6 +8,7 @@ import textwrap
 
 import numpy as np
 
+from ..rounding import fmt_band
 from .common import _PAGE, _fmt, _page_title, _table, fmt_length, speed_source, speed_value
 
 __all__ = ["data_quality_page", "parameters_page"]
@@ -28,7 +29,7 @@ def data_quality_page(doc, ctx) -> None:
         ["nominal sample rate", f"{rec.attrs.get('sample_rate_hz', 0):.6g} Hz"],
         ["bursts", f"{len(bursts)}"],
         ["gaps", (f"{len(gaps)}, {min(gaps):.4g} to {max(gaps):.4g} s" if gaps else "none")],
-        ["time jitter (rms)", f"{float(rec.attrs.get('time_jitter_rms_percent', 0.0)):.3g} % of the period"],
+        ["time jitter (rms)", _jitter(float(rec.attrs.get("time_jitter_rms_percent", 0.0)))],
         ["resampled to a uniform grid", "yes" if any(b.resampled for b in bursts) else "no"],
         ["clipping", f"{ctx.clip_n} samples held at the extremes" + (" (suspected)" if ctx.clipped else "")],
         ["non-finite samples", f"{int(np.sum(~np.isfinite(rec[ctx.channel].values)))}"],
@@ -102,4 +103,12 @@ def _band(band):
     """A search band as the page shows it: "LOW - HIGH Hz", or the default it stands for."""
     if band is None:
         return "default: speed / 200 mm to speed / 80 mm"
-    return f"{band[0]:.4g} - {band[1]:.4g} Hz"
+    return fmt_band(band, " - ")
+
+
+def _jitter(percent):
+    """The time stamps' rms jitter in per cent of the sampling period, to two digits; under 0.001 % (a clock's
+    rounding, 1e-10 % from stamps stored as floats) it is no jitter that matters."""
+    if not percent > 1e-3:
+        return "under 0.001 % of the period"
+    return f"{percent:.2g} % of the period"

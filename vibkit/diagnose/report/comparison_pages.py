@@ -14,6 +14,7 @@ from .common import (
     PITCH_RATIO,
     _page_title,
     fmt_pm,
+    fmt_value,
     length_scale,
     pitch_figure,
     speed_figure,
@@ -135,7 +136,9 @@ def harmonics_page(doc, ctx) -> None:
         [
             str(h["order"]),
             f"{h['frequency_sim_hz']:.4f}",
-            f"{h['frequency_meas_hz']:.4f}",
+            # the recording's harmonic to the digits its ratio's sigma gives it (a faint order 5 is not known to
+            # 0.1 mHz), the simulation's to 0.1 mHz
+            fmt_value(h["frequency_meas_hz"], h["frequency_ratio_sigma"] * h["frequency_sim_hz"], default_decimals=4),
             fmt_pm(h["frequency_ratio"], h["frequency_ratio_sigma"]),
             f"{h['amplitude_diff_db']:+.1f} [{h['amplitude_diff_db_ci'][0]:+.1f}, {h['amplitude_diff_db_ci'][1]:+.1f}]",
             ("sim " if h["detected_sim"] else "") + ("rec" if h["detected_meas"] else ""),

@@ -213,6 +213,7 @@ def analyse(
     from ...signal.bursts import uniform_bursts
     from ..channels import estimate_channels
     from ..pitch import DEFAULT_LIMITS_PERCENT, pick_channel
+    from ..rounding import fmt_band
 
     limits = tuple(limits_percent) if limits_percent is not None else DEFAULT_LIMITS_PERCENT
     from ...io import RecordingError
@@ -251,7 +252,7 @@ def analyse(
     teeth = int(profile.teeth) if profile is not None else sc.sprocket.teeth if sc else 28
     if band is None and profile is not None and speed is not None:
         band = profile.search_band(speed)
-        notes.append(f"search band {band[0]:.4g}-{band[1]:.4g} Hz from the profile (0.8-1.25 x speed / nominal pitch)")
+        notes.append(f"search band {fmt_band(band)} from the profile (0.8-1.25 x speed / nominal pitch)")
     # the chain's links (the profile's, else the scene's where it is the escalator): a worn link's once-a-loop
     # pattern is then not read as a wander by the parts check
     if profile is not None:

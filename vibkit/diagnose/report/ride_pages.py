@@ -17,8 +17,9 @@ __all__ = ["plot_ride", "ride_quality_pages"]
 _COLUMN_WIDTHS = [0.1, 0.3, 0.09, 0.09, 0.08, 0.08, 0.14, 0.1]
 
 
-def _num(v, digits=4) -> str:
-    """A table value: ``n/a`` where the ride has none (a constant channel: no half-cycles), never ``nan``."""
+def _num(v, digits=3) -> str:
+    """A table value to three digits (a ride statistic over a few hundred half-cycles is not known to four), ``n/a``
+    where the ride has none (a constant channel: no half-cycles), never ``nan``."""
     return f"{v:.{digits}g}" if v is not None and math.isfinite(float(v)) else "n/a"
 
 
