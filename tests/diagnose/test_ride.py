@@ -244,3 +244,17 @@ def test_a_vibkit_result_file_takes_the_simulation_path(tmp_path, capsys):
     assert rq.axes[0].lowpass.a95 == pytest.approx(
         0.1 * abs(1 / math.sqrt(1 + (3.9 / 10) ** 8)) / math.sqrt(1 + (0.4 / 3.9) ** 4), rel=0.01
     )
+
+
+def test_a_segment_in_the_filters_settling_gets_advice_for_its_kind():
+    """A ride segment that starts within the weighting's settling time: a recording is told to start earlier, a
+    simulation (which cannot be recorded earlier) to move its segment or its step."""
+    from vibkit.diagnose.ride import ride_quality
+
+    t = np.arange(0, 20, 1 / FS)
+    signals = {"z": 9.8 + 0.1 * np.sin(2 * np.pi * 5 * t)}
+    rec = ride_quality(signals, FS, segment=(0.5, 18))
+    sim = ride_quality(signals, FS, segment=(0.5, 18), kind="simulation")
+    assert any("record at least 2 s before the ride" in n for n in rec.notes), rec.notes
+    assert any("--segment" in n and "[run] start" in n for n in sim.notes), sim.notes
+    assert not any("record at least" in n for n in sim.notes)

@@ -370,7 +370,14 @@ def ride_quality(
     if seg.start_s < SETTLE_S:
         notes.append(
             f"the segment starts {seg.start_s:.3g} s into the record: the weighting's 0.4 Hz high-pass "
-            f"is still settling there (record at least {SETTLE_S:g} s before the ride)"
+            f"is still settling there ("
+            + (
+                f"the simulated step reaches the incline within {SETTLE_S:g} s of the start: give a --segment "
+                "that starts later, or place the step lower on its loop (the scene's [run] start)"
+                if kind == "simulation"
+                else f"record at least {SETTLE_S:g} s before the ride"
+            )
+            + ")"
         )
     if i1 - i0 < max(8, int(fs / 2)):
         raise ValueError(f"ride segment {seg.start_s:.4g}-{seg.end_s:.4g} s is too short (need at least 0.5 s)")
