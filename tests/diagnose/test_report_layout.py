@@ -214,3 +214,30 @@ def test_a_simulations_ride_table_fits_its_cells():
             assert layout_problems(fig) == []
         finally:
             plt.close(fig)
+
+
+def test_a_profile_in_a_long_folder_keeps_the_parameters_table_in_its_cells(tmp_path):
+    """A profile file deep in a folder with a long name: the parameters page names it by its file name (the
+    recording page has the whole path) and no cell's text leaves its cell."""
+    import shutil
+
+    from vibkit.model.profile import load_profile
+
+    folder = tmp_path / "a very long folder name for the escalator profiles of the north site" / "subfolder"
+    folder.mkdir(parents=True)
+    shutil.copy("data/fleet-example/escalators/E07.toml", folder / "E07-profile.toml")
+    problems = {}
+    orig = PageSink.emit
+
+    def emit(self, fig, title):
+        problems[title] = layout_problems(fig)
+        return orig(self, fig, title)
+
+    mp = pytest.MonkeyPatch()
+    mp.setattr(PageSink, "emit", emit)
+    try:
+        profile = load_profile(folder / "E07-profile.toml")
+        write_report("data/fleet-example/E07/2026-11-23.csv", tmp_path / "r.pdf", profile=profile, date="2026-11-23")
+    finally:
+        mp.undo()
+    assert problems["parameters"] == [] and problems["recording"] == [], problems

@@ -51,7 +51,7 @@ def parameters_page(doc, ctx) -> None:
     rows = [
         ["channel", ctx.channel],
         ["chain speed", speed_value(ctx)],
-        ["speed from", textwrap.shorten(speed_source(ctx), 70)],
+        ["speed from", _fit(_short_paths(speed_source(ctx), ctx))],
         ["nominal pitch", fmt_length(ctx.nominal_pitch) if ctx.nominal_pitch else "not given"],
         ["limits", " / ".join(f"{v:g} %" for v in ctx.limits)],
         ["search band", _band(pitch.band_hz if pitch else ctx.band)],
@@ -68,11 +68,10 @@ def parameters_page(doc, ctx) -> None:
             rows.append(
                 [
                     "chain closure",
-                    textwrap.shorten(
+                    _fit(
                         "read from the table over one pitch"
                         if res.attrs["solver_closure"] == "table"
-                        else f"solved at every step: {res.attrs['solver_closure']}",
-                        70,
+                        else f"solved at every step: {res.attrs['solver_closure']}"
                     ),
                 ]
             )
@@ -80,7 +79,7 @@ def parameters_page(doc, ctx) -> None:
             import json
 
             conv = json.loads(res.attrs["convergence"])
-            rows.append(["converged", textwrap.shorten(conv["message"], 70)])
+            rows.append(["converged", _fit(conv["message"])])
         else:
             rows.append(["converged", "not checked (set [solver] check = true)"])
     ax = fig.add_axes((0.06, 0.62, 0.88, 0.3))
@@ -97,6 +96,25 @@ def parameters_page(doc, ctx) -> None:
 
 #: the scene's lines the parameters page lists, and their width in characters (a longer line ends in "...")
 _LINES, _WIDTH = 48, 100
+
+
+#: characters a value cell of the parameters table holds at its font (9 pt, 0.6 of the table's width)
+_CELL_CHARS = 58
+
+
+def _fit(text):
+    """A value cell's text, shortened at a word to what the cell holds (the whole text is in the JSON)."""
+    return textwrap.shorten(text, _CELL_CHARS, placeholder=" [...]")
+
+
+def _short_paths(text, ctx):
+    """``text`` with the profile's and the scene's file paths given by their file names (the recording page
+    names them in full)."""
+    for obj in (getattr(ctx, "profile", None), getattr(ctx, "scene", None)):
+        src = str(getattr(obj, "source", "") or "")
+        if os.sep in src:
+            text = text.replace(src, os.path.basename(src))
+    return text
 
 
 def _band(band):
