@@ -198,6 +198,7 @@ def test_a_worn_link_keeps_the_elongation_verdict_given_the_number_of_links(reco
         rc, out, _ = run(*pitch, "--channel", "delta", path)
         d = json.loads(out)
         assert (rc, d["status"]) == (3, "inconclusive") and "wanders" in d["reason"], d["reason"]
+        assert any("--links N" in n for n in d["notes"])  # and the note says what would tell them apart
     # the healthy chain, every channel: the tensioner gives the numbers; the step accelerometer (whose link pass
     # reads 0.5 % low, its parts wandering 0.2 %) sees the same chain, not a second periodicity
     rc, out, _ = run(*pitch, str(recordings[None][0]), "--links", str(N))
