@@ -143,14 +143,20 @@ def chain_speed(text):
     return ms
 
 
-def teeth(text):
+def _whole_number(text, noun, least, at_least):
+    """An argparse type: ``text`` as an integer of at least ``least``, else an error naming ``noun`` (the count's
+    name) or ``at_least`` (what has at least ``least``)."""
     try:
         v = int(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number of sprocket teeth, got {text!r}") from None
-    if v < 3:
-        raise argparse.ArgumentTypeError(f"a sprocket has at least 3 teeth, got {text!r}")
+        raise argparse.ArgumentTypeError(f"expected a whole number of {noun}, got {text!r}") from None
+    if v < least:
+        raise argparse.ArgumentTypeError(f"{at_least}, got {text!r}")
     return v
+
+
+def teeth(text):
+    return _whole_number(text, "sprocket teeth", 3, "a sprocket has at least 3 teeth")
 
 
 def speed_sigma(text, speed):
@@ -517,13 +523,7 @@ def add_escalator(sp, help_=ESCALATOR_HELP):
 
 def links_count(text):
     """--links: a whole number of links, at least 2."""
-    try:
-        v = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number of links, got {text!r}") from None
-    if v < 2:
-        raise argparse.ArgumentTypeError(f"a chain has at least 2 links, got {v}")
-    return v
+    return _whole_number(text, "links", 2, "a chain has at least 2 links")
 
 
 LINKS_HELP = "links in the chain (e.g. 159; default the --escalator profile's)"
