@@ -30,8 +30,8 @@ scatter around them is the wander).  The sigma is the plain check's, from the pa
 above: the pattern does move the record's mean frequency (by the phase it has gathered where the record
 ends inside a loop), and a sigma from loop-aligned parts covered the sprocket's frequency in only 75-90 %
 of healthy-chain records at three sigmas, against 95-100 % (``benchmarks/bench_worn_pitch.py``).
-The same record then reads 0.015 % of wander, within what a chain under speed control holds, and gets its
-verdict.
+The same record's parts then scatter 0.8 times what their sigmas allow around their places' means: no wander,
+and the verdict is given.
 """
 
 from __future__ import annotations
@@ -69,6 +69,8 @@ class PartsCheck:
     chi^2 per degree of freedom around their weighted mean, ``limit`` its :data:`PARTS_P_WIDEN` quantile,
     ``widened`` whether the sigma was widened (from ``sigma_before_hz`` to ``sigma_hz``), and ``wander``
     the parts' standard deviation beyond their own sigmas over the frequency (relative, 0 when within).
+    With the chain's links (``n_links``), ``wander`` is measured around the places' means of loop-aligned parts
+    instead, whose Birge ratio and limit are ``place_birge`` and ``place_limit`` (the module notes).
     """
 
     checked: bool
