@@ -95,3 +95,34 @@ def test_kinematic_sweep_shows_lines_when_piped(monkeypatch, capfd):
     kin.kinematic_sweep(model, 3.0, 3.05, 0.001, rollers=(1,), outputs=("delta", "roller_position"), progress=True)
     err = capfd.readouterr().err
     assert "kinematic sweep: 0.0 %" in err and "kinematic sweep: done" in err
+
+
+def test_a_note_on_compiling_is_said_at_once_on_a_terminal_and_with_the_first_line_in_a_log(monkeypatch):
+    """A first run after an install compiles the kernels for about a minute before the bar moves: the bar says
+    so at once; a log's first line carries it (not every line)."""
+    import time
+
+    monkeypatch.setenv("TERM", "xterm")
+    tty = FakeTTY()
+    Progress(10, "work", stream=tty, note="compiling").close()
+    assert tty.getvalue().startswith("work: compiling\n")
+    monkeypatch.setenv("VIBKIT_PROGRESS_INTERVAL", "0.05")
+    piped = io.StringIO()
+    bar = Progress(2, "work", stream=piped, note="compiling")
+    assert piped.getvalue() == ""  # a short run stays quiet
+    for i in (1, 2):
+        time.sleep(0.06)
+        bar.update(i)
+    lines = piped.getvalue().splitlines()
+    assert lines[0] == "work: 50.0 % after 0 s (compiling)" and "compiling" not in lines[1]
+
+
+def test_a_kernel_is_cached_when_its_index_is_in_the_modules_pycache(tmp_path):
+    from vibkit.runtime.kernel_cache import kernel_cached
+
+    module = tmp_path / "pitch_table.py"
+    module.write_text("")
+    (tmp_path / "__pycache__").mkdir()
+    assert not kernel_cached(str(module), "rhs")
+    (tmp_path / "__pycache__" / "pitch_table.rhs-667.py311.nbi").write_bytes(b"")
+    assert kernel_cached(str(module), "rhs") and not kernel_cached(str(module), "table_delta")

@@ -346,6 +346,17 @@ def _dopri5_chunk(
     return 0, t, h, idx
 
 
+def _compile_note(method):
+    """What the progress bar says first when the right-hand side (and the dopri5 loop) is not compiled yet."""
+    from ..model import pitch_table
+    from ..runtime.kernel_cache import COMPILING_NOTE, kernel_cached
+
+    cold = not kernel_cached(pitch_table.__file__, "rhs")
+    if method == "dopri5":
+        cold = cold or not kernel_cached(__file__, "_dopri5_chunk")
+    return COMPILING_NOTE if cold else ""
+
+
 def _closure_message(status):
     return {
         1: "the chain could not be closed (delta left the tensioner's travel)",
@@ -404,7 +415,7 @@ def integrate(
     y = np.array(y0, dtype=float)
     y_out = np.full((t_out.size, y.size), np.nan)
     t0 = time.perf_counter()
-    bar = Progress(t_out[-1], label, enabled=progress)
+    bar = Progress(t_out[-1], label, enabled=progress, note=_compile_note(method) if progress else "")
     if method == "dopri5":
         counters = np.zeros(5, dtype=np.int64)
         ctl = np.array([1e-4, 0.0, 0.0, 0.0, 0.0, 1.0])

@@ -24,7 +24,10 @@ import stat
 import sys
 import tempfile
 
-__all__ = ["configure", "cache_dir", "remove_orphans"]
+__all__ = ["configure", "cache_dir", "remove_orphans", "kernel_cached", "COMPILING_NOTE"]
+
+#: what a progress bar says while kernels that are not cached yet compile
+COMPILING_NOTE = "compiling the kernels first (after an install or an update: about a minute, then cached)"
 
 _STATE = {"dir": None, "configured": False}
 
@@ -183,3 +186,20 @@ def remove_orphans(pkg_dir: str) -> list[str]:
 def cache_dir() -> str | None:
     """The folder chosen by :func:`configure` (None: numba's default, next to the sources)."""
     return _STATE["dir"]
+
+
+def kernel_cached(module_file: str, qualname: str) -> bool:
+    """Whether numba's cache holds an index for the kernel ``qualname`` of the module at ``module_file`` (in the
+    module's ``__pycache__``, or under the cache folder :func:`configure` chose).  True when it cannot tell (no
+    cache at all: nothing to announce)."""
+    import glob
+
+    stem = os.path.splitext(os.path.basename(module_file))[0]
+    pattern = f"{stem}.{qualname}-*.nbi"
+    folders = [os.path.join(os.path.dirname(os.path.abspath(module_file)), "__pycache__")]
+    root = _STATE["dir"] or os.environ.get("NUMBA_CACHE_DIR")
+    if root:
+        folders += [d for d, _sub, files in os.walk(root) if any(f.endswith(".nbi") for f in files)]
+    if not any(os.path.isdir(f) for f in folders):
+        return not _package_writable(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))) and not root
+    return any(glob.glob(os.path.join(glob.escape(f), pattern)) for f in folders)

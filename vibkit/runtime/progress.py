@@ -31,7 +31,7 @@ class Progress:
     one after that long.  Nothing at all when ``enabled`` is false.
     """
 
-    def __init__(self, total: float, label: str, *, enabled: bool = True, stream=None):
+    def __init__(self, total: float, label: str, *, enabled: bool = True, stream=None, note: str = ""):
         self.stream = stream or sys.stderr
         self.total = float(total) if total else 1.0
         self.label = label
@@ -43,6 +43,11 @@ class Progress:
         self._t0 = time.perf_counter()
         self._next_line = self._t0 + self.interval
         self._lines_written = 0
+        # a note on what the first moments hold (compiling kernels): on a terminal at once, in a log with the
+        # first line
+        self.note = note
+        if self.enabled and note:
+            self._write(f"{label}: {note}\n")
 
     def update(self, done: float) -> None:
         if self.lines:
@@ -51,10 +56,8 @@ class Progress:
                 frac = min(max(done / self.total, 0.0), 1.0)
                 self._next_line = now + self.interval
                 self._lines_written += 1
-                try:
-                    self.stream.write(f"{self.label}: {100 * frac:.1f} % after {now - self._t0:.0f} s\n")
-                    self.stream.flush()
-                except (OSError, ValueError):  # a closed or broken stderr must not stop the work
+                note = f" ({self.note})" if self.note and self._lines_written == 1 else ""
+                if not self._write(f"{self.label}: {100 * frac:.1f} % after {now - self._t0:.0f} s{note}\n"):
                     self.lines = False
             return
         if not self.enabled:
@@ -70,6 +73,14 @@ class Progress:
             f"\r{self.label} [{'#' * fill}{'.' * (width - fill)}] {100 * frac:5.1f}% {now - self._t0:6.1f} s"
         )
         self.stream.flush()
+
+    def _write(self, text) -> bool:
+        try:
+            self.stream.write(text)
+            self.stream.flush()
+        except (OSError, ValueError):  # a closed or broken stderr must not stop the work
+            return False
+        return True
 
     def close(self) -> None:
         if self.lines:
