@@ -284,6 +284,28 @@ def test_a_two_millimetre_link_is_fitted_again_with_a_longer_signature(profile_9
     assert "(1.7 mm, relative error" in res.method
 
 
+def test_a_report_from_the_escalator_profile_alone_scans_the_links(profile_90, tmp_path):
+    """`vibkit report --escalator` without a scene simulates the profile's scene in memory: the links are scanned
+    with the profile's scene file, as `vibkit links --escalator` does (they were not: page 1 said OK and nothing
+    of a worn link); and page 1 says when the links are not scanned, and why."""
+    from vibkit.diagnose.report import write_report
+    from vibkit.model.profile import load_profile
+
+    path, scene = profile_90
+    rec, passed, _, _ = _record(scene, 20, np.random.default_rng(7), loops=2.3, exact=True)
+    rec.to_netcdf(tmp_path / "e90.nc")
+    rep = write_report(tmp_path / "e90.nc", tmp_path / "r.pdf", profile=load_profile(path), duration=2.0)
+    assert "links" in [t for t, _ in rep.pages]
+    true = link_number_of(20, passed, 90)
+    assert true in [rep.summary["flagged_links"][0], *rep.summary["flagged_links_detail"][0]["alternatives"]]
+    # a recording under two loops: no links page, and page 1 says why
+    short = rec.isel(time=slice(0, rec.sizes["time"] // 3))
+    short.to_netcdf(tmp_path / "short.nc")
+    rep = write_report(tmp_path / "short.nc", tmp_path / "s.pdf", profile=load_profile(path), duration=2.0)
+    page1 = "\n".join(dict(rep.pages)["verdict"])
+    assert "links" not in [t for t, _ in rep.pages] and "worn links" in page1 and "record at least" in page1
+
+
 def _links_with(path, capsys, *args):
     rc = main(["links", str(path), *args])
     assert rc == 0

@@ -211,8 +211,12 @@ def _around_loop_places(pc, split, f0, n_links):
     est = [(e[0], e[1], key) for e, key in est if e is not None]
     chi2, dof, scatter2 = _around_places(est)
     if dof < MIN_PARTS - 1:
-        why = f"; {dof} degrees of freedom at the same places of loops of {n_links} links: too few to tell a wander"
-        return replace(pc, reason=pc.reason + why)
+        loops = 1 + math.ceil((MIN_PARTS - 1) / m)
+        why = (
+            f"; {dof} degrees of freedom at the same places of loops of {n_links} links: too few to tell a wander "
+            f"from the loop's own pattern (record {loops} loops)"
+        )
+        return replace(pc, reason=pc.reason + why, n_links=n_links)
     s = np.array([e[1] for e in est])
     birge = chi2 / dof
     limit = float(scipy.stats.chi2.isf(PARTS_P_WIDEN, dof) / dof)

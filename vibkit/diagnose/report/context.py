@@ -107,6 +107,7 @@ class ReportContext:
     run_speed: object = None
     profile: object = None
     links: object = None  # LinksResult: the link map, when a tensioner recording covers two loops of the scene's chain
+    links_note: str = ""  # why the links were not scanned (page 1 says it), empty when they were
 
     @property
     def unit_text(self) -> str:
@@ -363,7 +364,7 @@ def analyse(
         )
     if comp is not None:
         summary.update(score=comp.score, pitch_consistent=comp.pitch_consistent)
-    links = _links(rec, ch, units, sc, speed, notes)
+    links, links_note = _links(rec, ch, units, sc, speed, notes, profile)
     if links is not None:
         summary["flagged_links"] = [f["link"] for f in links.flagged]
         summary["flagged_links_detail"] = [
@@ -372,6 +373,7 @@ def analyse(
         ]
     return ReportContext(
         links=links,
+        links_note=links_note,
         recording=recording,
         rec=rec,
         channel=ch,
@@ -407,19 +409,37 @@ def analyse(
     )
 
 
-def _links(rec, ch, units, sc, speed, notes):
-    """The link map of a tensioner recording over two loops of the scene's chain, else None."""
-    from ..links import TooFewLoops, find_worn_links
+def _links(rec, ch, units, sc, speed, notes, profile=None):
+    """The link map of a tensioner recording over two loops of the scene's chain: ``(LinksResult, "")``, else
+    ``(None, why not)`` for page 1.  A scene built from the escalator profile (in memory) is scanned with the
+    profile's scene file, as ``vibkit links --escalator`` does."""
+    from ..links import TooFewLoops, find_worn_links, profile_scene_file
 
-    if sc is None or not speed or units != "m" or sc.analysis != "forward" or sc.source == "<string>":
-        return None
+    if sc is None and profile is not None:
+        try:  # the profile's own scene: its chain and the worn link's signature
+            sc = profile.scene("forward")
+        except ValueError as exc:
+            return None, f"not scanned: the profile gives no scene ({' '.join(str(exc).split())})"
+    if sc is None:
+        return None, "not scanned: no scene or escalator profile (its chain and the worn link's signature)"
+    if not speed:
+        return None, "not scanned: no chain speed"
+    if units != "m":
+        return None, f"not scanned: channel {ch} is not a tensioner displacement (the links are read from one)"
+    if sc.analysis != "forward":
+        return None, f"not scanned: the scene is a {sc.analysis} scene, the signature needs a forward one"
+    scene_file = sc.source
+    if profile is not None and str(scene_file).endswith("(scene built from the profile)"):
+        scene_file = profile_scene_file(profile)
+    elif scene_file == "<string>" or not os.path.isfile(str(scene_file)):
+        return None, "not scanned: the scene is not a file (the signature is simulated from one)"
     try:
-        return find_worn_links(rec, speed=speed, n_links=sc.chain.n_rollers, channel=ch, scene=sc.source)
-    except TooFewLoops:
-        return None  # under two loops: no page (vibkit links says how long to record)
+        return find_worn_links(rec, speed=speed, n_links=sc.chain.n_rollers, channel=ch, scene=scene_file), ""
+    except TooFewLoops as exc:  # under two loops: no page (vibkit links says how long to record)
+        return None, f"not scanned: {' '.join(str(exc).split())}"
     except ValueError as exc:
         notes.append(f"link map: {exc}")
-        return None
+        return None, f"not scanned: {' '.join(str(exc).split())}"
 
 
 def held_extremes(x):

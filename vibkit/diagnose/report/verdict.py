@@ -159,6 +159,11 @@ def evidence_rows(ctx):
             ),
         )
     )
+    links = getattr(ctx, "links", None)
+    if links is not None and not links.flagged:  # a flagged link is in large letters above
+        rows.append(("worn links", f"none flagged in {links.loops} loops of {links.n_links} links (page 'links')"))
+    elif links is None and getattr(ctx, "links_note", ""):
+        rows.append(("worn links", ctx.links_note))
     if comp is not None:
         rows.append(
             (
