@@ -105,3 +105,14 @@ def test_links_refuses_a_step_accelerometer_and_says_why(tmp_path, run):
     assert str(path) in err and "accel_step" in err
     assert "step accelerometer gives no link number" in err
     assert "record the tensioner's displacement" in err
+
+
+@pytest.mark.parametrize("command", ["links", "pitch", "spectrum"])
+def test_a_number_of_links_that_the_profile_contradicts_is_refused(tmp_path, run, command):
+    """E07's profile says 159 links: --links 140 beside it is one line naming both, not a scan of a chain that is
+    not there (a stranger's wrong count flagged nothing on a worn chain and exited 0)."""
+    path = _recording(tmp_path / "e07.nc", 159, 2.2)
+    profile = "data/fleet-example/escalators/E07.toml"
+    rc, out, err = run(command, path, "--escalator", profile, "--links", "140")
+    assert rc == 1 and out == "" and len(err.strip().splitlines()) == 1, err
+    assert "--links 140" in err and "chain.n_links = 159" in err and profile in err

@@ -17,6 +17,7 @@ from .options import (
     add_limits,
     add_links,
     add_recording,
+    chain_links,
     chain_speed,
     cli_message,
     pitch_length,
@@ -216,7 +217,7 @@ def run_add(a):
             channel=a.channel,
             replaced=a.replaced,
             read_options=reader_options(a),
-            n_links=a.links,
+            n_links=chain_links(a, profile),
             marker_s=a.marker,
             escalator=a.escalator,
         )

@@ -540,8 +540,16 @@ def add_links(sp, help_=LINKS_HELP):
 
 
 def chain_links(a, profile):
-    """The chain's number of links: --links, else the profile's ``chain.n_links``, else None."""
-    return getattr(a, "links", None) or (profile.n_links if profile is not None else None)
+    """The chain's number of links: --links, else the profile's ``chain.n_links``, else None; a --links that the
+    profile contradicts is a CLIError (a wrong count scans a chain that is not there and flags nothing)."""
+    given = getattr(a, "links", None)
+    own = profile.n_links if profile is not None else None
+    if given and own and given != own:
+        raise CLIError(
+            f"--links {given} contradicts the escalator profile {profile.source} (chain.n_links = {own}): give "
+            "one of them, or mend the profile"
+        )
+    return given or own
 
 
 def escalator_profile(a):

@@ -110,6 +110,7 @@ def run(a):
 
     rec = read_recording(a)
     profile = escalator_profile(a)
+    n_links = chain_links(a, profile)  # before the profile's note: a contradiction is the one line
     sp = resolve_speed(a, rec, profile=profile)
     source = "--speed" if sp.source == "given" else sp.source
     nominal, search, teeth_ = from_profile(a, profile, sp)
@@ -123,7 +124,7 @@ def run(a):
             nominal_pitch=nominal,
             limits_percent=a.limits,
             teeth=teeth_,
-            n_links=chain_links(a, profile),
+            n_links=n_links,
             speed_source=source,
         )
     except ValueError as exc:  # the analysis's words about the signal, with the file named

@@ -67,6 +67,7 @@ def run(a):
 
     rec = read_recording(a)
     profile = escalator_profile(a)
+    n_links = chain_links(a, profile)  # before the profile's note: a contradiction is the one line
     sp = resolve_speed(a, rec, required=False, profile=profile)
     speed, source = sp.value, ("--speed" if sp.source == "given" else sp.source or None)
     # with a speed the same analysis as `vibkit pitch` (its speed and sigma, nominal pitch, band, teeth)
@@ -82,7 +83,7 @@ def run(a):
             nominal_pitch=nominal if speed else None,
             limits_percent=a.limits,
             teeth=teeth_,
-            n_links=chain_links(a, profile),
+            n_links=n_links,
             speed_source=source or "none",
             frequency_only=speed is None,
         )
