@@ -161,3 +161,24 @@ def test_a_sprocket_speed_is_a_speed_channel_not_analysed():
     assert vibration_channels(rec) == ["delta", "gyro_z"]
     rec["sprocket_speed"].attrs["units"] = "rpm"
     assert vibration_channels(rec) == ["delta", "gyro_z"]
+
+
+def test_an_empty_source_date_epoch_is_unset_and_a_bad_one_is_named(tmp_path, run, monkeypatch):
+    """numpy (imported by scipy) reads SOURCE_DATE_EPOCH with int(): an empty one made every command fail with
+    "invalid literal for int()"; it now counts as unset, and a value that is no integer is named in one line."""
+    import os
+
+    import numpy as np
+    import xarray as xr
+
+    t = np.arange(6000) / 200.0
+    path = tmp_path / "c.nc"
+    xr.Dataset({"delta": ("time", 1e-5 * np.cos(2 * np.pi * 3.75 * t), {"units": "m"})}, coords={"time": t}).to_netcdf(
+        path
+    )
+    monkeypatch.setenv("SOURCE_DATE_EPOCH", "")
+    rc, out, err = run("spectrum", path, "--speed", "0.5")
+    assert rc != 1 and "error" not in err and "SOURCE_DATE_EPOCH" not in os.environ
+    monkeypatch.setenv("SOURCE_DATE_EPOCH", "yesterday")
+    rc, out, err = run("spectrum", path, "--speed", "0.5")
+    assert rc == 1 and out == "" and "SOURCE_DATE_EPOCH='yesterday' is not a whole number" in err

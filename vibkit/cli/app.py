@@ -54,6 +54,11 @@ def main(argv=None) -> int:
     args = _parser().parse_args(argv)
     from vibkit.runtime.safe_output import Interrupted, handle_termination
 
+    bad_epoch = _source_date_epoch()
+    if bad_epoch:
+        msg(f"vibkit {args.command}: error: {bad_epoch}")
+        return 1
+
     try:
         with handle_termination():  # SIGTERM runs the same clean-up as Ctrl-C
             status = int(args.func(args))
@@ -87,6 +92,28 @@ def main(argv=None) -> int:
         prefix = "\033[31merror\033[0m" if color() else "error"
         msg(f"vibkit {args.command}: {prefix}: {text}")
         return 1
+
+
+def _source_date_epoch():
+    """``SOURCE_DATE_EPOCH`` (a report's fixed date): empty is unset (removed, as numpy, imported by scipy, reads
+    it with ``int()`` and every command failed with "invalid literal for int()"); a value that is not a whole
+    number of seconds is the error message returned, else ``""``."""
+    import os
+
+    raw = os.environ.get("SOURCE_DATE_EPOCH")
+    if raw is None:
+        return ""
+    if not raw.strip():
+        del os.environ["SOURCE_DATE_EPOCH"]
+        return ""
+    try:
+        int(raw)
+    except ValueError:
+        return (
+            f"SOURCE_DATE_EPOCH={raw!r} is not a whole number of seconds since 1970 (it fixes a report's date); "
+            "unset it or give one, e.g. 1764201600"
+        )
+    return ""
 
 
 def _stdout_to_devnull():
