@@ -116,3 +116,9 @@ def test_a_number_of_links_that_the_profile_contradicts_is_refused(tmp_path, run
     rc, out, err = run(command, path, "--escalator", profile, "--links", "140")
     assert rc == 1 and out == "" and len(err.strip().splitlines()) == 1, err
     assert "--links 140" in err and "chain.n_links = 159" in err and profile in err
+
+
+def test_a_marker_outside_the_recording_is_named_by_its_flag(tmp_path, run):
+    path = _recording(tmp_path / "m.nc", 40, 2.2)
+    rc, out, err = run("links", path, "--speed", SPEED, "--links", "40", "--marker", "999")
+    assert rc == 1 and "--marker 999.0 s must lie within the recording" in err and "marker_s" not in err

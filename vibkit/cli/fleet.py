@@ -70,7 +70,8 @@ def add_parser(subparsers):
     )
     f.add_argument(
         "--speed-uncertainty",
-        help="speed standard deviation, in m/s or in %% (e.g. 0.1%%); required: a measurement is stored with its sigma",
+        help="speed standard deviation, in m/s or in %% (e.g. 0.1%%; default the --escalator profile's): without it "
+        "the visit is stored with a warning, and its unit's trend is flagged (its intervals are too small)",
     )
     f.add_argument("--date", help="measurement date, ISO 8601 (default: the recording's start time)")
     f.add_argument("--nominal-pitch", type=pitch_length, help="nominal link pitch [m] (required for a new unit)")

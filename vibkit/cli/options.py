@@ -584,6 +584,8 @@ def plain_message(text: str, args) -> str:
         text = re.sub(r"\bband (?=[0-9])", "--band ", text, count=1)
     if "units" in given and "--units" not in text:
         text = re.sub(r"\bunits(?=[\[:])", "--units", text, count=1)
+    if "marker" in given:  # the link map's "Parameter marker_s=999.0 must lie within the recording"
+        text = re.sub(r"\b(?:Parameter )?marker_s=([^ ]+)", r"--marker \1 s", text)
     if "encoding" in given and "--encoding" not in text:
         text = text.replace("cannot decode as ", "cannot decode as --encoding ", 1)
     if "channels" in given and "--channels" not in text and "channel" in text:
