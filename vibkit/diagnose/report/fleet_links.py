@@ -21,6 +21,7 @@ _COLUMNS_X = (0.06, 0.125, 0.215, 0.345, 0.435)  # figure x of each column (a li
 _VERDICT_COLORS = {"worse": "#b2182b", "new": "#e0661b"}
 _TOP, _BOTTOM, _STEP = 0.89, 0.08, 0.0175  # figure y of the first and last line, and the line step
 _WRAP = 175  # characters of a wrapped line at 7 pt across the page
+_DETAIL_WRAP = 110  # characters of a row's detail column at 7 pt
 _MEANING = (
     "worse: the link's excess pitch grew by more than 2 combined sigmas since the previous visit that counts from "
     "the marked link; new: flagged now, not then (none of its numbers). '55 or 10': the recording cannot tell which of "
@@ -58,8 +59,10 @@ def _block(hist):
             flagged_now = now is not None and now.flagged
             excess = _mm(now.excess_pitch_m, now.sigma_m) if flagged_now else "-"
             loops = ",".join(str(i) for i in now.loops) if flagged_now and now.loops else "-"
-            detail = textwrap.shorten(h.detail, 110, placeholder=" ...")
+            # the detail whole: what does not fit its column goes on lines under it
+            detail, *more = textwrap.wrap(h.detail, _DETAIL_WRAP) or [""]
             lines.append(("row", (h.label, h.verdict, excess, loops, detail)))
+            lines += [("detail", t) for t in more]
     elif scanned:
         lines.append(("text", "no link flagged on the latest scan"))
     for mm, ss in hist.visits:  # stored numbers read otherwise (numbers of an older vibkit), said once a visit
@@ -73,6 +76,8 @@ def _draw(fig, y, kind, payload):
         fig.text(0.04, y, payload, fontsize=8, fontweight="bold", ha="left", va="top")
     elif kind == "text":
         fig.text(0.06, y, payload, fontsize=7, color="0.3", ha="left", va="top")
+    elif kind == "detail":  # a row's detail, continued under its column
+        fig.text(_COLUMNS_X[-1], y, payload, fontsize=7, ha="left", va="top")
     else:
         bold = kind == "header"
         for x, cell in zip(_COLUMNS_X, payload):
