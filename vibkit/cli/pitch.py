@@ -177,7 +177,7 @@ def run(a):
             ("order", "frequency [Hz]", f"amplitude [{est.extra['units']}]", "detected"),
         )
     )
-    for w in est.warnings:
+    for w in (w for w in est.warnings if not w.startswith(f"{res.status}: ")):  # said last, once
         msg(textwrap.fill(f"warning: {w}", 100, subsequent_indent="  "))
     for n in est.notes + [f"method {est.method}: {est.method_reason}"]:
         msg(textwrap.fill(f"note: {n}", 100, subsequent_indent="  "))
@@ -258,5 +258,8 @@ def refused(cmd, a, res, extra):
         print(f"{a.recording}: channel{'s' if len(ests) > 1 else ''} {names}: {res.status}")
         print_channels(res)
     band = ests[0].band_hz
-    msg(f"vibkit {cmd}: {res.status} in {fmt_band(band)}: {res.reason}")
+    hint = ""
+    if not (getattr(a, "speed", None) or getattr(a, "escalator", None) or getattr(a, "band", None)):
+        hint = " (a band for any escalator without a speed: give --speed, --escalator or --band)"
+    msg(f"vibkit {cmd}: {res.status} in {fmt_band(band)}{hint}: {res.reason}")
     return res.exit_code

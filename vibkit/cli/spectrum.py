@@ -149,7 +149,7 @@ def run(a):
                 ("order", "frequency [Hz]", f"amplitude [{units}]", "detected"),
             )
         )
-        for w in est.warnings:
+        for w in (w for w in est.warnings if not w.startswith(f"{res.status}: ")):  # said last, once
             msg(textwrap.fill(f"warning: {w}", 100, subsequent_indent="  "))
         for n in est.notes if speed else []:  # a frequency-only estimate's notes are about its placeholder speed
             msg(textwrap.fill(f"note: {n}", 100, subsequent_indent="  "))
