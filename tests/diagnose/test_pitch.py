@@ -152,3 +152,15 @@ def test_an_elongation_that_is_another_catalogue_pitch_is_noted():
         read_recording("data/field/leon-tensioner.csv"), speed=0.49, speed_sigma=4.9e-4, nominal_pitch=0.13333
     )
     assert leon.verdict == "replace" and not any("catalogue pitch" in n for n in leon.notes)
+
+
+def test_a_four_link_step_passes_at_a_quarter_of_the_link_pass():
+    """Steps of 4 links (101.6 mm chains): the step-pass hypotheses divide by 4, not 3."""
+    x = _family(np.arange(12000) / 200.0, 3.75)
+    est = estimate_pitch(recording({"x": x}, 200.0), speed=0.5, links_per_step=4)
+    names = [h.name for h in est.hypotheses]
+    assert "f is the step pass (4 links)" in names and "step pass expected at f/4" in names
+    step = next(h for h in est.hypotheses if h.name == "step pass expected at f/4")
+    assert step.frequency_hz == pytest.approx(est.fundamental_hz / 4)
+    with pytest.raises(ValueError, match="links_per_step"):
+        estimate_pitch(recording({"x": x}, 200.0), speed=0.5, links_per_step=0)

@@ -258,3 +258,27 @@ def test_a_segment_in_the_filters_settling_gets_advice_for_its_kind():
     assert any("record at least 2 s before the ride" in n for n in rec.notes), rec.notes
     assert any("--segment" in n and "[run] start" in n for n in sim.notes), sim.notes
     assert not any("record at least" in n for n in sim.notes)
+
+
+def test_the_ride_of_a_four_link_step_is_its_middle_roller():
+    """A step of 4 links carries rollers 4 (s - 1) + 1 ... 4 s: its middle roller (the second) is 4 (s - 1) + 2,
+    not the 3-link step's 3 s - 1 (a stranger's 4-link escalator rode "roller 8 of step 3", a roller of step 2)."""
+    import dataclasses
+
+    from vibkit.diagnose.ride_simulation import with_ride_outputs
+    from vibkit.model.scene import load_scene
+
+    scene = load_scene(SIM / "thesis-forward.toml")
+    four = dataclasses.replace(scene, chain=dataclasses.replace(scene.chain, links_per_step=4, n_rollers=160))
+    assert (
+        10
+        in with_ride_outputs(dataclasses.replace(four, outputs={**four.outputs, "step_accelerometer": 3})).outputs[
+            "rollers"
+        ]
+    )
+    assert (
+        8
+        in with_ride_outputs(dataclasses.replace(scene, outputs={**scene.outputs, "step_accelerometer": 3})).outputs[
+            "rollers"
+        ]
+    )

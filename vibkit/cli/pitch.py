@@ -125,6 +125,7 @@ def run(a):
             limits_percent=a.limits,
             teeth=teeth_,
             n_links=n_links,
+            links_per_step=profile.links_per_step if profile is not None else 3,
             speed_source=source,
         )
     except ValueError as exc:  # the analysis's words about the signal, with the file named

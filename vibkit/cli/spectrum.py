@@ -84,6 +84,7 @@ def run(a):
             limits_percent=a.limits,
             teeth=teeth_,
             n_links=n_links,
+            links_per_step=profile.links_per_step if profile is not None else 3,
             speed_source=source or "none",
             frequency_only=speed is None,
         )

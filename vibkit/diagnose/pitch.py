@@ -238,6 +238,7 @@ def estimate_pitch(
     speed_source="given",
     frequency_only=False,
     n_links=None,
+    links_per_step=3,
 ):
     """Link pitch from a recording's link-pass frequency and an independently measured speed.
 
@@ -275,6 +276,8 @@ def estimate_pitch(
         tensioner's) over two loops is then checked for wander against its own once-per-loop pattern, which a
         worn link gives (:func:`vibkit.diagnose.pitch_parts.check_parts`); without it such a pattern reads
         as a wander.  Acceleration channels are checked as without it (``_loop_links``).
+    links_per_step : int
+        Links (rollers) per step, for the step-pass hypothesis (3, or 4 on 101.6 mm chains).
     p_fa : float
         False-alarm probability of the detection test run first
         (:func:`vibkit.signal.detect.detect_link_pass`): without a harmonic family in the band the
@@ -315,6 +318,8 @@ def estimate_pitch(
     req = _request(speed, speed_sigma, band, nominal_pitch, limits_percent, pitch_range, teeth, p_fa, frequency_only)
     if n_links is not None and (isinstance(n_links, bool) or not isinstance(n_links, (int, np.integer)) or n_links < 2):
         raise ValueError(f"n_links must be an integer >= 2 (links in the chain), got {n_links!r}")
+    if isinstance(links_per_step, bool) or not isinstance(links_per_step, (int, np.integer)) or links_per_step < 1:
+        raise ValueError(f"links_per_step must be a positive integer, got {links_per_step!r}")
     name = pick_channel(recording, channel)
     prep = steps.prepare_bursts(recording, name, req.band)
     common = _common(recording, name, req, prep, speed_source)
@@ -357,7 +362,9 @@ def estimate_pitch(
         pitch_sigma_m=psig,
         harmonics=steps.harmonic_rows(ests, comb, prep.scale),
         per_burst=steps.burst_rows(ests),
-        hypotheses=steps.hypotheses([be.burst for be in ests], comb.f0, req.speed, int(teeth), req.pitch_range),
+        hypotheses=steps.hypotheses(
+            [be.burst for be in ests], comb.f0, req.speed, int(teeth), req.pitch_range, int(links_per_step)
+        ),
         warnings=warnings,
         notes=notes,
         detection=det.as_dict(),

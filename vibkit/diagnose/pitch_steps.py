@@ -544,8 +544,9 @@ def _snr_at(bursts, f):
     return float(np.mean(vals)) if vals else float("nan")
 
 
-def hypotheses(bursts, f0, speed, teeth, pitch_range):
-    """Readings of the chosen peak f and of the periodicities it implies, with the pitch each gives."""
+def hypotheses(bursts, f0, speed, teeth, pitch_range, links_per_step=3):
+    """Readings of the chosen peak f and of the periodicities it implies, with the pitch each gives (the step
+    pass is the link pass over ``links_per_step``)."""
     lo, hi = pitch_range
     snr_f = _snr_at(bursts, f0)
     rows = []
@@ -567,7 +568,7 @@ def hypotheses(bursts, f0, speed, teeth, pitch_range):
     others = (
         ("f is the 2nd link-pass harmonic", 0.5),
         ("f is half the link pass", 2.0),
-        ("f is the step pass (3 links)", 3.0),
+        (f"f is the step pass ({links_per_step} links)", float(links_per_step)),
         (f"f is the sprocket shaft (Z = {teeth})", teeth),
     )
     for name, factor in others:
@@ -579,7 +580,8 @@ def hypotheses(bursts, f0, speed, teeth, pitch_range):
             why = "rejected: less harmonic evidence than f in the family search"
         rows.append(row(name, fl, False, why))
     # what the chosen reading predicts elsewhere in the spectrum
-    for name, fe in (("step pass expected at f/3", f0 / 3.0), (f"sprocket shaft expected at f/{teeth}", f0 / teeth)):
+    k = links_per_step
+    for name, fe in ((f"step pass expected at f/{k}", f0 / k), (f"sprocket shaft expected at f/{teeth}", f0 / teeth)):
         snr = _snr_at(bursts, fe)
         seen = (
             "not resolved"

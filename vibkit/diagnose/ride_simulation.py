@@ -73,7 +73,7 @@ def with_ride_outputs(sc):
     step = sc.outputs.get("step_accelerometer")
     if step is None or sc.analysis not in ("inverse", "forward"):
         return sc
-    roller = 3 * int(step) - 1
+    roller = sc.chain.links_per_step * (int(step) - 1) + 2  # the step's middle roller (1-based), 3 or 4 a step
     out = dict(sc.outputs)
     out["variables"] = tuple(dict.fromkeys(tuple(out["variables"]) + ("roller_acceleration", "roller_velocity")))
     out["rollers"] = tuple(dict.fromkeys(tuple(out["rollers"]) + (roller,)))

@@ -108,6 +108,7 @@ class ReportContext:
     profile: object = None
     links: object = None  # LinksResult: the link map, when a tensioner recording covers two loops of the scene's chain
     links_note: str = ""  # why the links were not scanned (page 1 says it), empty when they were
+    links_per_step: int = 3  # the step pass is the link pass over it (order spectrum, hypotheses)
 
     @property
     def unit_text(self) -> str:
@@ -272,7 +273,8 @@ def analyse(
     else:  # frequency only: the same burst-combined estimator, with a unit "speed"
         kw = dict(speed=1.0, band=band or (2.5, 6.0), frequency_only=True)
         notes.append("no speed known: link-pass frequency only, no pitch (give --speed)")
-    decided = estimate_channels(rec, channel=channel, n_links=n_links, **kw)
+    links_per_step = profile.links_per_step if profile is not None else sc.chain.links_per_step if sc else 3
+    decided = estimate_channels(rec, channel=channel, n_links=n_links, links_per_step=links_per_step, **kw)
     found = decided.best is not None
     est = decided.best if found else next((e for e in decided.estimates if e.channel == ch), decided.estimates[0])
     ch = est.channel
@@ -374,6 +376,7 @@ def analyse(
     return ReportContext(
         links=links,
         links_note=links_note,
+        links_per_step=links_per_step,
         recording=recording,
         rec=rec,
         channel=ch,

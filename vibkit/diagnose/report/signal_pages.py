@@ -113,18 +113,19 @@ def spectrogram_page(doc, ctx) -> None:
 
 
 def order_spectrum_page(doc, ctx) -> None:
-    """Bursts resampled to constant link-pass phase; order 1 = link pass, 1/3 = step pass."""
+    """Bursts resampled to constant link-pass phase; order 1 = link pass, 1/k = step pass (k links a step)."""
     import matplotlib.pyplot as plt
 
     from ...signal import order_spectrum, resample_to_angle
 
     bursts, f0, nh = ctx.bursts, ctx.f0, ctx.harmonic_count
+    lps = getattr(ctx, "links_per_step", 3)
     fig, ax = plt.subplots(figsize=_WIDE)
     fig.subplots_adjust(left=0.08, right=0.97, top=0.88, bottom=0.1)
     _page_title(
         fig,
         "Order spectrum",
-        f"resampled to constant link-pass phase ({f0:.5g} Hz); order 1 = link pass, 1/3 = step pass",
+        f"resampled to constant link-pass phase ({f0:.5g} Hz); order 1 = link pass, 1/{lps} = step pass",
     )
     spc = 32
     k, unit = _scale(ctx)
@@ -143,7 +144,7 @@ def order_spectrum_page(doc, ctx) -> None:
         ax.semilogy(o_ref[sel], np.maximum(k * acc[sel] / len(bursts), 1e-30), lw=0.9)
         for h in range(1, nh + 1):
             ax.axvline(h, color="C3", ls=":", lw=1)
-        ax.axvline(1 / 3, color="C2", ls="--", lw=1, label="step pass (1/3)")
+        ax.axvline(1 / lps, color="C2", ls="--", lw=1, label=f"step pass (1/{lps})")
         ax.legend(loc="upper right")
     ax.set_xlabel("order [cycles per link]")
     ax.set_ylabel(f"amplitude [{unit}]")
