@@ -98,7 +98,8 @@ class LinksResult:
     speed_m_s, link_pass_hz : float
     n_links, loops : int
     flagged : list of dict
-        Per flagged link: ``link`` (1-based), ``excess_pitch_mm`` and ``sigma_mm``, ``t`` (its
+        Per flagged link: ``link`` (1-based), ``excess_pitch_mm`` and ``sigma_mm`` (the noise's part; with a
+        scene, ``signature_relative_error`` is the worn-link signature's own error, relative), ``t`` (its
         statistic), ``loops`` (1-based loops whose own fit shows it); with a scene, ``alternatives``:
         the links where the signature fits nearly as well (the recording does not tell them from ``link``;
         empty when it does).
@@ -418,6 +419,8 @@ def find_worn_links(
                 "alternatives": list(f.alternatives),
                 "excess_pitch_mm": 1e3 * f.amplitude,
                 "sigma_mm": 1e3 * f.sigma,
+                # the sigma is the noise's part; the signature's own (model) error, relative, beside it
+                "signature_relative_error": err,
                 "t": f.t,
                 "loops": list(f.loops),
             }

@@ -110,6 +110,12 @@ def verdict_page(doc, ctx) -> None:
         col.gap(0.006)
         col.text(f"{n} WORN LINK{'S' if n > 1 else ''} FLAGGED", _BIG, weight="bold", color="#b35900")
         col.text(f"{flagged_links_text(links)} (page 'links')", 11, weight="bold", color="#b35900")
+        col.text(
+            "+- is the noise's part only; the worn-link signature is the model's, and its own error adds a few "
+            f"per cent of the excess (the signature's relative error here: {_signature_error(links)})",
+            8,
+            color="#b35900",
+        )
     col.gap(0.012)
     col.text("Evidence", 12, weight="bold")
     col.pairs(evidence_rows(ctx), 9, key_width=0.3)
@@ -120,6 +126,12 @@ def verdict_page(doc, ctx) -> None:
         for n in notes[:5]:
             col.text("note: " + n, 8, color="0.3")
     doc.emit(fig, "verdict")
+
+
+def _signature_error(links):
+    """The worn-link signature's relative error of the flags (``0.15``), else ``n/a``."""
+    errs = [f["signature_relative_error"] for f in links.flagged if f.get("signature_relative_error") is not None]
+    return f"{max(errs):.2f}" if errs else "n/a"
 
 
 def flagged_links_text(links):
