@@ -117,6 +117,12 @@ def test_a_marker_renumbers_from_the_marked_link(recordings, capsys):
     f_lp = SPEED / load_scene(SCENE).chain.link_pitch
     marked = _links(path, capsys, "--marker", str(10.5 / f_lp))["flagged"][0]["link"]
     assert (plain - marked) % N in (10, 11)
+    # the report numbers from the same marker (`vibkit report --marker`)
+    from vibkit.diagnose.report import write_report
+
+    out = path.parent / "marked.pdf"
+    rep = write_report(path, out, scene=SCENE, speed=SPEED, duration=2.0, marker_s=10.5 / f_lp, overwrite=True)
+    assert rep.summary["flagged_links"] == [marked]
 
 
 def test_the_step_channel_is_refused_with_or_without_a_scene(recordings):

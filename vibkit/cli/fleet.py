@@ -7,7 +7,6 @@ import os
 import sys
 import textwrap
 
-from .links import seconds
 from .options import (
     CHANNEL_EVERY,
     _profile_of,
@@ -16,6 +15,7 @@ from .options import (
     add_json,
     add_limits,
     add_links,
+    add_marker,
     add_recording,
     chain_links,
     chain_speed,
@@ -86,11 +86,9 @@ def add_parser(subparsers):
         "links in the chain: the links are scanned as fleet scan scans them (default the --escalator "
         "profile's chain.n_links; neither: the scan is stored 'not run')",
     )
-    f.add_argument(
-        "--marker",
-        type=seconds,
-        metavar="TIME",
-        help="time [s from the recording's start] at which a marked link passed the sensor: it is link 1, and "
+    add_marker(
+        f,
+        "time [s from the recording's start] at which a marked link passed the sensor: it is link 1, and "
         "its numbers follow the same links across visits (the catalogue's marker_s)",
     )
     f.set_defaults(func=_guarded(run_add, lambda a: a.db))

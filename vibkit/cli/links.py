@@ -13,6 +13,7 @@ from .options import (
     add_escalator,
     add_json,
     add_links,
+    add_marker,
     add_recording,
     band,
     chain_links,
@@ -38,18 +39,6 @@ def probability(text):
         raise argparse.ArgumentTypeError(f"expected a probability, got {text!r}") from None
     if not 0.0 < v < 1.0:
         raise argparse.ArgumentTypeError(f"expected a probability in (0, 1), got {text!r}")
-    return v
-
-
-def seconds(text):
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(
-            f"expected a time in seconds from the recording's start, got {text!r}"
-        ) from None
-    if not (math.isfinite(v) and v >= 0):
-        raise argparse.ArgumentTypeError(f"expected a time >= 0 s from the recording's start, got {text!r}")
     return v
 
 
@@ -80,13 +69,7 @@ def add_parser(subparsers):
         help="forward scene of the escalator: gives the worn link's signature on the tensioner (one number per "
         "worn link, its excess pitch in mm); without it each link's own cycle is tested",
     )
-    s.add_argument(
-        "--marker",
-        type=seconds,
-        metavar="TIME",
-        help="time [s from the recording's start] at which a marked link (chalk, tape) passed the sensor: "
-        "it becomes link 1 (default: the link at the sensor when the recording starts)",
-    )
+    add_marker(s)
     s.add_argument(
         "--false-alarm",
         type=probability,

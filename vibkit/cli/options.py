@@ -526,6 +526,30 @@ def links_count(text):
     return _whole_number(text, "links", 2, "a chain has at least 2 links")
 
 
+def seconds(text):
+    """--marker: a time in seconds from the recording's start, 0 or more."""
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"expected a time in seconds from the recording's start, got {text!r}"
+        ) from None
+    if not (math.isfinite(v) and v >= 0):
+        raise argparse.ArgumentTypeError(f"expected a time >= 0 s from the recording's start, got {text!r}")
+    return v
+
+
+MARKER_HELP = (
+    "time [s from the recording's start] at which a marked link (chalk, tape) passed the sensor: it becomes "
+    "link 1 (default: the link at the sensor when the recording starts)"
+)
+
+
+def add_marker(sp, help_=MARKER_HELP):
+    """--marker TIME: when a marked link passed the sensor (the link map numbers from it)."""
+    sp.add_argument("--marker", type=seconds, metavar="TIME", help=help_)
+
+
 LINKS_HELP = "links in the chain (e.g. 159; default the --escalator profile's)"
 #: --links of pitch and spectrum: what the number of links does there
 LINKS_WANDER_HELP = (

@@ -10,6 +10,7 @@ from .options import (
     add_force_overwrite,
     add_json,
     add_limits,
+    add_marker,
     add_recording,
     add_segment,
     add_speed_uncertainty,
@@ -49,6 +50,7 @@ def add_parser(subparsers):
     )
     add_speed_uncertainty(s)
     add_segment(s)
+    add_marker(s)
     s.add_argument("--nominal-pitch", type=pitch_length, help="nominal link pitch [m] (default: the scene's)")
     add_limits(s, "elongation limits [%%]")
     s.add_argument("--band", type=band, help="link-pass search band LOW:HIGH [Hz]")
@@ -116,6 +118,7 @@ def _run(a, target):
         date=a.date,
         profile=profile,
         segment=segment_of(a),
+        marker_s=a.marker,
     )
     if a.json:
         print_json(

@@ -206,6 +206,7 @@ def analyse(
     date=None,
     profile=None,
     segment=None,
+    marker_s=None,
 ) -> ReportContext:
     """Everything :func:`vibkit.diagnose.report.write_report` draws (same parameters, no output)."""
     from ...io import read_recording
@@ -366,7 +367,7 @@ def analyse(
         )
     if comp is not None:
         summary.update(score=comp.score, pitch_consistent=comp.pitch_consistent)
-    links, links_note = _links(rec, ch, units, sc, speed, notes, profile)
+    links, links_note = _links(rec, ch, units, sc, speed, notes, profile, marker_s)
     if links is not None:
         summary["flagged_links"] = [f["link"] for f in links.flagged]
         summary["flagged_links_detail"] = [
@@ -412,7 +413,7 @@ def analyse(
     )
 
 
-def _links(rec, ch, units, sc, speed, notes, profile=None):
+def _links(rec, ch, units, sc, speed, notes, profile=None, marker_s=None):
     """The link map of a tensioner recording over two loops of the scene's chain: ``(LinksResult, "")``, else
     ``(None, why not)`` for page 1.  A scene built from the escalator profile (in memory) is scanned with the
     profile's scene file, as ``vibkit links --escalator`` does."""
@@ -437,7 +438,10 @@ def _links(rec, ch, units, sc, speed, notes, profile=None):
     elif scene_file == "<string>" or not os.path.isfile(str(scene_file)):
         return None, "not scanned: the scene is not a file (the signature is simulated from one)"
     try:
-        return find_worn_links(rec, speed=speed, n_links=sc.chain.n_rollers, channel=ch, scene=scene_file), ""
+        res = find_worn_links(
+            rec, speed=speed, n_links=sc.chain.n_rollers, channel=ch, scene=scene_file, marker_s=marker_s
+        )
+        return res, ""
     except TooFewLoops as exc:  # under two loops: no page (vibkit links says how long to record)
         return None, f"not scanned: {' '.join(str(exc).split())}"
     except ValueError as exc:

@@ -63,6 +63,7 @@ def write_report(
     date=None,
     profile=None,
     segment=None,
+    marker_s=None,
 ) -> Report:
     """Write the PDF diagnostic report of a recording.
 
@@ -108,6 +109,9 @@ def write_report(
         the scene is this unit's.
     segment : (float, float), optional
         The recording's ride segment [s] (default: detected), for its ride-quality page.
+    marker_s : float, optional
+        When a marked link passed the sensor [s from the recording's start]: the links page numbers from it
+        (:func:`vibkit.diagnose.links.find_worn_links`).
 
     Returns
     -------
@@ -154,6 +158,7 @@ def write_report(
         date=date,
         profile=profile,
         segment=segment,
+        marker_s=marker_s,
     )
     date, summary = ctx.date, ctx.summary
     meta = {
