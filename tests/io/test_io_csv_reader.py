@@ -262,3 +262,20 @@ def test_units_row_below_the_header(tmp_path):
     np.testing.assert_allclose(ds["accel"].values, np.array([0.5, 1.0, 1.5]) * G)
     np.testing.assert_allclose(ds["disp"].values, [1e-3, 2e-3, 3e-3])
     assert "units row on line 2" in ds.attrs["history"]
+
+
+def test_a_time_stamp_without_a_zone_is_said_to_be_taken_as_utc(tmp_path):
+    """A logger's naive stamps: the start is taken as UTC (a report dates the recording so) and the reader's
+    history says it; a stamp with its zone says nothing of the kind."""
+    import vibkit
+
+    naive = tmp_path / "naive.csv"
+    naive.write_text(
+        "Timestamp,x\n" + "".join(f"2026-11-20T09:15:{i // 10:02d}.{i % 10}00,{i % 3}\n" for i in range(200))
+    )
+    zoned = tmp_path / "zoned.csv"
+    zoned.write_text(
+        "Timestamp,x\n" + "".join(f"2026-11-20T09:15:{i // 10:02d}.{i % 10}00+01:00,{i % 3}\n" for i in range(200))
+    )
+    assert "no time zone in the file: taken as UTC" in vibkit.read_recording(naive).attrs["history"]
+    assert "taken as UTC" not in vibkit.read_recording(zoned).attrs["history"]

@@ -104,6 +104,17 @@ def _choose_time_column(path, time_column, colnames: _ColumnNames, n, header_lin
     return tcol, clocks
 
 
+def _zone_note(start):
+    """`` (no time zone in the file: taken as UTC)`` for a naive start stamp, else empty: a report's dates are UTC."""
+    from datetime import datetime
+
+    try:
+        naive = datetime.fromisoformat(str(start)).tzinfo is None
+    except ValueError:
+        return ""
+    return " (no time zone in the file: taken as UTC)" if naive else ""
+
+
 def _read_time(
     path,
     tcells,
@@ -132,7 +143,7 @@ def _read_time(
             raise RecordingError(
                 path, int(rownums[i]), f"expected a time stamp like '{start}' in column '{tname}', found '{tcells[i]}'"
             )
-        history.append(f"time column '{tname}' holds {kind}; time = seconds since {start}")
+        history.append(f"time column '{tname}' holds {kind}; time = seconds since {start}{_zone_note(start)}")
         extra_attrs["start_time"] = start
     else:
         vals, missing, bad, inf = _parse_numbers(tcells, dec)
