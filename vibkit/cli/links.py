@@ -119,6 +119,8 @@ def run(a):
         msg(f"vibkit links: {a.recording}: {exc}")
         return 1
     except ValueError as exc:
+        if a.scene is None and profile is not None:  # the profile's scene is a temporary file: name the profile
+            exc = ValueError(str(exc).replace(str(scene), f"of the profile {profile.source}"))
         raise in_file(a.recording, exc) from None
     code = 3 if res.status == "inconclusive" else 0
     if a.json:
