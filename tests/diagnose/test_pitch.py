@@ -164,3 +164,19 @@ def test_a_four_link_step_passes_at_a_quarter_of_the_link_pass():
     assert step.frequency_hz == pytest.approx(est.fundamental_hz / 4)
     with pytest.raises(ValueError, match="links_per_step"):
         estimate_pitch(recording({"x": x}, 200.0), speed=0.5, links_per_step=0)
+
+
+def test_a_sensor_riding_a_step_is_warned_that_its_sigma_does_not_cover_its_bias():
+    """A step's link pass reads up to about 1 % off the chain's (it turns half a cycle at each head): a profile
+    whose sensor rides a step, or vibkit's simulated ``accel_step``, gets the warning; a tensioner does not."""
+    from vibkit import read_recording
+    from vibkit.diagnose.pitch import STEP_WARNING
+
+    rec = read_recording("data/fleet-example/E07/2026-11-23.csv")
+    kw = dict(speed=0.5, speed_sigma=5e-4, nominal_pitch=0.13333)
+    assert STEP_WARNING in estimate_pitch(rec, on_step=True, **kw).warnings
+    assert STEP_WARNING not in estimate_pitch(rec, **kw).warnings  # a channel named "accel", no profile
+    t = np.arange(12000) / 200.0
+    step = recording({"accel_step": _family(t, 3.75)}, 200.0)
+    assert STEP_WARNING in estimate_pitch(step, speed=0.5).warnings
+    assert STEP_WARNING not in estimate_pitch(step, speed=0.5, on_step=False).warnings

@@ -576,6 +576,12 @@ def chain_links(a, profile):
     return given or own
 
 
+def on_step(profile):
+    """True when the escalator profile says its sensor rides a step, None (the channel's name decides) without one."""
+    sensor = getattr(profile, "sensor", None) if profile is not None else None
+    return None if sensor is None else sensor.kind == "step"
+
+
 def escalator_profile(a):
     """The profile named by ``--escalator`` (a Profile), None without one; a bad file is a CLIError."""
     path = getattr(a, "escalator", None)

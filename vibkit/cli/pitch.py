@@ -21,6 +21,7 @@ from .options import (
     chain_links,
     chain_speed,
     escalator_profile,
+    on_step,
     pitch_length,
     read_recording,
     run_speed,
@@ -126,6 +127,7 @@ def run(a):
             teeth=teeth_,
             n_links=n_links,
             links_per_step=profile.links_per_step if profile is not None else 3,
+            on_step=on_step(profile),
             speed_source=source,
         )
     except ValueError as exc:  # the analysis's words about the signal, with the file named

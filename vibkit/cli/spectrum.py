@@ -20,6 +20,7 @@ from .options import (
     chain_links,
     escalator_profile,
     harmonics,
+    on_step,
     read_recording,
 )
 from .output import in_file, msg, print_json, table
@@ -85,6 +86,7 @@ def run(a):
             teeth=teeth_,
             n_links=n_links,
             links_per_step=profile.links_per_step if profile is not None else 3,
+            on_step=on_step(profile),
             speed_source=source or "none",
             frequency_only=speed is None,
         )

@@ -84,6 +84,15 @@ def pick_channel(recording, channel=None) -> str:
     return resolve_channel(recording, channel)
 
 
+#: what a result of a sensor riding a step says: its link pass turns half a cycle at each head (the fundamental,
+#: opposite on the two runs) and reads off the chain's by 0.06-1.3 % on the simulated study escalator (12 s to
+#: three loops), more than its sigma says (docs/explanation/limits.md)
+STEP_WARNING = (
+    "the sensor rides a step: a step's link pass reads up to about 1 % off the chain's (its fundamental turns "
+    "half a cycle at each head), more than this sigma says; a tensioner's elongation is good to its sigma"
+)
+
+
 @dataclass(frozen=True)
 class PitchEstimate:
     """Result of :func:`estimate_pitch` (all SI; see :meth:`as_dict` for the JSON form).
@@ -239,6 +248,7 @@ def estimate_pitch(
     frequency_only=False,
     n_links=None,
     links_per_step=3,
+    on_step=None,
 ):
     """Link pitch from a recording's link-pass frequency and an independently measured speed.
 
@@ -278,6 +288,10 @@ def estimate_pitch(
         as a wander.  Acceleration channels are checked as without it (``_loop_links``).
     links_per_step : int
         Links (rollers) per step, for the step-pass hypothesis (3, or 4 on 101.6 mm chains).
+    on_step : bool, optional
+        The sensor rides a step (an escalator profile's ``sensor.kind = "step"``); default: a channel named
+        ``accel_step`` (vibkit's simulated step).  Its link pass can read up to about 1 % off the chain's,
+        more than its sigma says (:data:`STEP_WARNING`): the result warns.
     p_fa : float
         False-alarm probability of the detection test run first
         (:func:`vibkit.signal.detect.detect_link_pass`): without a harmonic family in the band the
@@ -341,6 +355,8 @@ def estimate_pitch(
             warnings.append(w)
     pitch, psig, caveats, notes = steps.pitch_from(comb, req)
     warnings += caveats
+    if on_step if on_step is not None else name == "accel_step":
+        warnings.append(STEP_WARNING)
     notes.append(f"parts check: {parts.reason}")
     notes = jitter_notes + parts.warnings + notes
     ev = steps.evidence(det, ests, comb, req, speed_source=speed_source)
