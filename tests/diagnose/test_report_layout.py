@@ -241,3 +241,11 @@ def test_a_profile_in_a_long_folder_keeps_the_parameters_table_in_its_cells(tmp_
     finally:
         mp.undo()
     assert problems["parameters"] == [] and problems["recording"] == [], problems
+
+
+def test_a_report_without_a_link_pass_draws_no_order_spectrum(tmp_path):
+    """An order spectrum is the record resampled to the link-pass phase: without a link pass there is none to
+    draw (the band's centre was drawn as if it were one, the same 3.9528 Hz for every refused file)."""
+    rep = write_report("data/thirdparty/phyphox_elevator_linear_acc.csv", tmp_path / "e.pdf", speed=0.5)
+    assert rep.summary["link_pass_hz"] is None and rep.summary["status"] == "no link-pass found"
+    assert "order spectrum" not in [t for t, _ in rep.pages]

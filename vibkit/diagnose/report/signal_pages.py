@@ -118,6 +118,8 @@ def order_spectrum_page(doc, ctx) -> None:
 
     from ...signal import order_spectrum, resample_to_angle
 
+    if not ctx.found:  # no link pass: nothing to resample to (the band's centre would be drawn as if it were one)
+        return
     bursts, f0, nh = ctx.bursts, ctx.f0, ctx.harmonic_count
     lps = getattr(ctx, "links_per_step", 3)
     fig, ax = plt.subplots(figsize=_WIDE)
