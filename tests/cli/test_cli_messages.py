@@ -182,3 +182,12 @@ def test_an_empty_source_date_epoch_is_unset_and_a_bad_one_is_named(tmp_path, ru
     monkeypatch.setenv("SOURCE_DATE_EPOCH", "yesterday")
     rc, out, err = run("spectrum", path, "--speed", "0.5")
     assert rc == 1 and out == "" and "SOURCE_DATE_EPOCH='yesterday' is not a whole number" in err
+
+
+def test_a_bare_speed_uncertainty_as_large_as_a_speed_is_refused_with_the_percentage_meant(capsys):
+    """`--speed-uncertainty 5` is 5 m/s, ten times an escalator's speed: refused, asking whether 5 % was meant
+    (it gave 'speed 0.5 +- 5.0 m/s, link pitch 100 +- 1400 mm', status ok)."""
+    with pytest.raises(SystemExit) as e:
+        main(["pitch", "data/field/leon-tensioner.csv", "--speed", "0.49", "--speed-uncertainty", "5"])
+    assert e.value.code == 2 and "did you mean 5%?" in capsys.readouterr().err
+    assert main(["pitch", "data/field/leon-tensioner.csv", "--speed", "0.49", "--speed-uncertainty", "0.001"]) == 0

@@ -171,6 +171,12 @@ def speed_sigma(text, speed):
         raise CLIError(f"--speed-uncertainty: expected m/s or a percentage like 0.1%, got {text!r}") from None
     if not (math.isfinite(v) and v >= 0):
         raise CLIError(f"--speed-uncertainty must be >= 0, got {text!r}")
+    if not t.endswith("%") and v >= 0.1 * speed:
+        # a bare number is m/s: 5 is 5 m/s, ten times an escalator's speed; no tachometer is that bad
+        raise CLIError(
+            f"--speed-uncertainty {text} is {v:g} m/s, {100 * v / speed:.3g} % of the speed {speed:g} m/s: a bare "
+            f"number is in m/s; did you mean {t}%?"
+        )
     return v
 
 
