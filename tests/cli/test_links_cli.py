@@ -122,3 +122,20 @@ def test_a_marker_outside_the_recording_is_named_by_its_flag(tmp_path, run):
     path = _recording(tmp_path / "m.nc", 40, 2.2)
     rc, out, err = run("links", path, "--speed", SPEED, "--links", "40", "--marker", "999")
     assert rc == 1 and "--marker 999.0 s must lie within the recording" in err and "marker_s" not in err
+
+
+def test_a_profile_with_its_geometry_gives_the_links_its_scene_fills_in(tmp_path, run):
+    """A profile with rise and incline instead of chain.n_links: `links` takes the count its scene fills in (as
+    the report does), and says so; it asked for --links N before."""
+    profile = tmp_path / "geo.toml"
+    profile.write_text(
+        '[escalator]\nunit = "G1"\n[drive]\nspeed = 0.5\nspeed_uncertainty = 0.0005\n'
+        "[chain]\nnominal_pitch = 0.13333\n[geometry]\nrise = 4.5\nincline_deg = 30\n"
+    )
+    from vibkit.model.profile import load_profile
+
+    n = load_profile(profile).scene("forward").chain.n_rollers
+    path = _recording(tmp_path / "g.nc", 40, 2.2)
+    rc, out, err = run("links", path, "--escalator", profile)
+    assert rc == 1 and f"{n} links, filled in from its geometry" in err and f"{n} links" in err.splitlines()[-1]
+    assert "give --links N" not in err

@@ -570,8 +570,9 @@ def add_links(sp, help_=LINKS_HELP):
 
 
 def chain_links(a, profile):
-    """The chain's number of links: --links, else the profile's ``chain.n_links``, else None; a --links that the
-    profile contradicts is a CLIError (a wrong count scans a chain that is not there and flags nothing)."""
+    """The chain's number of links: --links, else the profile's ``chain.n_links``, else the number its scene fills
+    in from its geometry, else None; a --links that the profile's own ``chain.n_links`` contradicts is a CLIError
+    (a wrong count scans a chain that is not there and flags nothing)."""
     given = getattr(a, "links", None)
     own = profile.n_links if profile is not None else None
     if given and own and given != own:
@@ -579,7 +580,19 @@ def chain_links(a, profile):
             f"--links {given} contradicts the escalator profile {profile.source} (chain.n_links = {own}): give "
             "one of them, or mend the profile"
         )
-    return given or own
+    if given or own or profile is None:
+        return given or own
+    try:  # a profile with its geometry instead: the number of links its scene fills in (as the report uses)
+        n = profile.scene("forward").chain.n_rollers
+    except ValueError:
+        return None
+    from .output import msg
+
+    msg(
+        f"note: {profile.source}: {n} links, filled in from its geometry (whole steps that close the loop); give "
+        "chain.n_links or --links N when you know the chain's count"
+    )
+    return n
 
 
 def on_step(profile):
