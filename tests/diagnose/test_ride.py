@@ -282,3 +282,17 @@ def test_the_ride_of_a_four_link_step_is_its_middle_roller():
             "rollers"
         ]
     )
+
+
+def test_a_segment_of_a_few_half_cycles_is_said_to_give_no_ride_statistics():
+    """Five peak-to-peak values are no ride's A95 (a stranger's 2 s phone 'ride' read max pk-pk under its r.m.s.):
+    a note says so; a ride of hundreds gets none."""
+    from vibkit.diagnose.ride import MIN_PK_PK_VALUES, ride_quality
+
+    t = np.arange(0, 20, 1 / FS)
+    z = 9.8 + 0.1 * np.sin(2 * np.pi * 1.5 * t)
+    short = ride_quality({"z": z}, FS, segment=(4.0, 6.0))
+    assert any("in the segment: its maximum and A95 are not a ride's" in n for n in short.notes)
+    assert short.axis("z").weighted.n_values < MIN_PK_PK_VALUES
+    long = ride_quality({"z": 9.8 + 0.1 * np.sin(2 * np.pi * 5 * t)}, FS, segment=(4.0, 18.0))
+    assert not any("not a ride's" in n for n in long.notes)

@@ -282,16 +282,27 @@ def _recording_source(recording, *args, **kwargs):
     return getattr(recording, "attrs", {}).get("source_file", "")
 
 
+#: fewest peak-to-peak values whose maximum and A95 a ride page states without a note (one every half-cycle of
+#: the ride's vibration: a few seconds of it)
+MIN_PK_PK_VALUES = 20
+
+
 def _metrics(x, fs, i0, i1, notes, label):
     """Peak-to-peak summary over the segment; NaN (with a note) for a signal without two half-cycles."""
     try:
-        return peak_to_peak(x[i0:i1], fs)
+        pp = peak_to_peak(x[i0:i1], fs)
     except ValueError:
         notes.append(f"{label}: fewer than two complete half-cycles in the segment (a constant channel?): no values")
         nan = float("nan")
         return PeakToPeak(
             max=nan, a95=nan, rms=float(np.sqrt(np.mean(x[i0:i1] ** 2))), peak=nan, n_values=0, time_of_max_s=nan
         )
+    if pp.n_values < MIN_PK_PK_VALUES:
+        notes.append(
+            f"{label}: only {pp.n_values} peak-to-peak values in the segment: its maximum and A95 are not a ride's "
+            f"statistics (a ride gives hundreds; {MIN_PK_PK_VALUES} at least to read them)"
+        )
+    return pp
 
 
 def ride_quality(
