@@ -9,8 +9,8 @@ uncertainty of ``f`` and of ``v`` to ``L``:
 
     (sigma_L / L)^2 = (sigma_f / f)^2 + (sigma_v / v)^2
 
-The speed must be measured independently of the chain (a tachometer wheel on the handrail or step,
-a timed step count).  A speed derived from the motor's rpm and the *nominal* sprocket returns the
+The speed must be measured independently of the chain (a tachometer wheel on a step, not the handrail,
+which may run up to 2 % faster; a timed step count).  A speed derived from the motor's rpm and the *nominal* sprocket returns the
 nominal pitch by construction: one sprocket turn always moves Z links whatever their length, so the
 link-pass frequency is Z times the shaft frequency and ``v_nominal / f = L_nominal``.
 

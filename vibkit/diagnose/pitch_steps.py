@@ -372,7 +372,7 @@ def pitch_from(comb, req):
         )
         warnings.append(
             f"the speed's uncertainty ({100 * rel_v:.2g} %) is too large for the verdict: {decision}; "
-            "measure the speed on the steps or the handrail"
+            "measure the speed on the steps (not the handrail: it may run up to 2 % faster)"
         )
     if speed_sigma is None:
         notes.append(
@@ -385,7 +385,7 @@ def pitch_from(comb, req):
         notes.append(
             "a speed derived from the motor's rpm and the nominal sprocket returns the nominal pitch by "
             f"construction: one sprocket turn always moves Z = {teeth} links, whatever their length; "
-            "measure the speed on the steps or handrail"
+            "measure the speed on the steps (not the handrail: it may run up to 2 % faster)"
         )
     other = _other_catalogue_pitch(pitch, elongation, req)
     if other:

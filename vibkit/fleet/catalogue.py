@@ -10,7 +10,7 @@ column                    required  meaning
                                     (``E07/*.csv``); an exact name wins over a glob, else the
                                     first matching line
 ``unit``                  yes       escalator identifier
-``speed_m_s``             yes       chain (step) speed measured on the steps or handrail [m/s]
+``speed_m_s``             yes       chain (step) speed measured on the steps (not the handrail) [m/s]
 ``date``                  yes       measurement date, ISO 8601 (``2026-11-23``,
                                     ``2026-11-23T10:15:00+01:00``); empty: an ISO date in the
                                     file name (``E22-2026-01-01.csv``), else the recording's

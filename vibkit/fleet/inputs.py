@@ -10,7 +10,7 @@ input               range (SI)         why
 ==================  =================  ====================================================
 nominal pitch       0.05 - 0.3 m       escalator step chains: 100-200 mm (133.33 mm common)
 speed               0.1 - 2 m/s        escalators run at 0.3-0.75 m/s, moving walks up to 1
-speed uncertainty   0 - 20 % of speed  a handrail or step timing is good to a few %
+speed uncertainty   0 - 20 % of speed  a step timing is good to a few %
 measurement date    1970 - 2100 UTC    seconds since 1970 are stored; not in the future
 ==================  =================  ====================================================
 """
