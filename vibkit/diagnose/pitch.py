@@ -367,7 +367,7 @@ def estimate_pitch(
         return _refusal(common, det, dec, [dec.reason, *warnings], notes, comb.method, comb.method_reason)
     if dec.status == STATUS_INCONCLUSIVE:
         warnings.insert(0, f"inconclusive: {dec.reason}")
-        if not dec.checks.get("steady between parts", True) and not parts.n_links:
+        if not dec.checks.get("steady between parts", True) and not n_links and _loop_links(recording, name, 2):
             notes.append(
                 "a worn link's once-a-loop pattern moves the parts' frequency as a wander does: with the chain's "
                 "number of links (--links N, or a profile with chain.n_links) a tensioner record over two loops "
