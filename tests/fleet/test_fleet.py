@@ -839,3 +839,8 @@ def test_fleet_help_pages(sub, capsys):
     with pytest.raises(SystemExit) as ei:
         main(["fleet", *sub, "--help"])
     assert ei.value.code == 0 and "usage: vibkit fleet" in capsys.readouterr().out
+
+
+def test_migrate_from_a_missing_database_names_its_own_flag(tmp_path, run):
+    rc, out, err = run("fleet", "migrate", "--from", tmp_path / "none.sqlite", "--to", tmp_path / "t.sqlite")
+    assert rc == 1 and "--from names it" in err and "--db" not in err

@@ -419,9 +419,13 @@ def _run_report(a, target):
 
 
 def run_migrate(a):
+    from vibkit.fleet.errors import FleetError
     from vibkit.fleet.storage import migrate
 
-    r = migrate(a.source, a.target)
+    try:
+        r = migrate(a.source, a.target)
+    except FleetError as exc:  # the store names --db, the flag of the other commands: here it is --from
+        raise CLIError(str(exc).replace("; --db or VIBKIT_FLEET_DB names another", "; --from names it")) from None
     if a.json:
         print_json("fleet.migrate", r)
     else:
