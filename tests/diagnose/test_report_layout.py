@@ -249,3 +249,27 @@ def test_a_report_without_a_link_pass_draws_no_order_spectrum(tmp_path):
     rep = write_report("data/thirdparty/phyphox_elevator_linear_acc.csv", tmp_path / "e.pdf", speed=0.5)
     assert rep.summary["link_pass_hz"] is None and rep.summary["status"] == "no link-pass found"
     assert "order spectrum" not in [t for t, _ in rep.pages]
+
+
+def test_a_ride_page_with_long_notes_keeps_them_under_its_time_axis():
+    """Four long notes (a simulation's settling advice, a knock test, a roller, a vertical speed) took seven lines
+    and ran into the time axis' label: the plots now end above the notes."""
+    import types
+
+    import numpy as np
+
+    from vibkit.diagnose.report.ride_pages import ride_quality_pages
+    from vibkit.diagnose.ride import ride_quality
+
+    t = np.arange(0, 20, 1 / 200.0)
+    z = 9.8 + 0.02 * np.sin(2 * np.pi * 5 * t)
+    rq = ride_quality({"x": 0.01 * np.sin(2 * np.pi * 3 * t), "z": z}, 200.0, segment=(3.0, 17.0))
+    rq.notes[:] = [f"note {k}: " + "a long line of words about the ride and its segment " * 4 for k in range(4)]
+    found = {}
+
+    class Doc:
+        def emit(self, fig, title):
+            found[title] = layout_problems(fig)
+
+    ride_quality_pages(Doc(), types.SimpleNamespace(ride=[("recording", rq)], scene=None, duration=None))
+    assert found == {"ride quality (recording)": []}, found

@@ -23,7 +23,7 @@ def _num(v, digits=3) -> str:
     return f"{v:.{digits}g}" if v is not None and math.isfinite(float(v)) else "n/a"
 
 
-def plot_ride(rq, fig=None):
+def plot_ride(rq, fig=None, *, bottom=0.07):
     """Draw a :class:`vibkit.diagnose.ride.RideQuality` on one figure: the per-axis table (weighted and 10 Hz
     max pk-pk, A95, r.m.s.) and each axis's weighted acceleration with the ride segment shaded and
     its largest peak-to-peak pair marked.
@@ -74,7 +74,7 @@ def plot_ride(rq, fig=None):
         va="top",
         linespacing=1.3,
     )
-    top, bottom = 0.7, 0.07
+    top = 0.7
     h = (top - bottom) / max(n, 1)
     for j, a in enumerate(rq.axes):
         ax = fig.add_axes((0.1, top - (j + 1) * h + 0.04, 0.85, h - 0.06))
@@ -127,12 +127,14 @@ def ride_quality_pages(doc, ctx) -> list:
             f"{os.path.basename(rq.source)}: step vibration, ISO 2631-1 "
             f"weighted (x, y: Wd; z: Wk) and 0.4-10 Hz unweighted{same}",
         )
-        plot_ride(rq, fig)
         notes = rq.notes + ([rq.segment.note] if rq.segment.note else [])
+        text = "\n".join(textwrap.fill("- " + m, 115) for m in notes[:4])
+        # the plots end above the notes (6.5 pt lines, about 0.0095 of the page each) and the time axis' label
+        plot_ride(rq, fig, bottom=max(0.07, 0.025 + 0.0095 * (text.count("\n") + 1)))
         fig.text(
             0.06,
             0.015,
-            "\n".join(textwrap.fill("- " + m, 115) for m in notes[:4]),
+            text,
             fontsize=6.5,
             va="bottom",
             color="0.3",
