@@ -165,6 +165,11 @@ def test_settings_and_rounding_are_not_given_as_measured_precision():
     # a recorded harmonic known to +-0.18 of its ratio: 24.4 Hz, not 24.3632 Hz
     assert fmt_value(24.3632, 0.18 * 24.3, default_decimals=4) == "24.4"  # two digits of its sigma, 4.4 Hz
     assert fmt_value(3.75012, 1e-4, default_decimals=4) == "3.75012"
+    # an amplitude difference and its 95 % interval, to the interval's width (was "+19.62 [-82.07, +121.30]")
+    from vibkit.diagnose.rounding import fmt_interval
+
+    assert fmt_interval(19.62, -82.07, 121.30) == "+20 [-80, +120]"
+    assert fmt_interval(-0.33, -1.2, 0.55) == "-0.33 [-1.20, +0.55]"
 
 
 def test_a_value_that_rounds_to_zero_has_no_minus_sign():

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import os
 
-from vibkit.diagnose.rounding import fmt_pm
+from vibkit.diagnose.rounding import fmt_interval, fmt_pm
 
 from .options import (
     _profile_of,
@@ -117,7 +117,7 @@ def run(a):
                     f"{h['frequency_sim_hz']:.4f}",
                     f"{h['frequency_meas_hz']:.4f}",
                     fmt_pm(h["frequency_ratio"], h["frequency_ratio_sigma"]),
-                    f"{h['amplitude_diff_db']:+.2f} [{h['amplitude_diff_db_ci'][0]:+.2f}, {h['amplitude_diff_db_ci'][1]:+.2f}]",
+                    fmt_interval(h["amplitude_diff_db"], *h["amplitude_diff_db_ci"]),
                     ("sim " if h["detected_sim"] else "") + ("rec" if h["detected_meas"] else ""),
                 ]
                 for h in comp.harmonics

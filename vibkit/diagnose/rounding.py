@@ -70,3 +70,10 @@ def fmt_band(band, sep="-") -> str:
     number of decimals (two: 0.01 Hz, a fraction of a per cent of a link pass)."""
     lo, hi = (float(v) for v in band)
     return f"{lo:.2f}{sep}{hi:.2f} Hz"
+
+
+def fmt_interval(value, lo, hi, *, sign=True) -> str:
+    """``value [lo, hi]`` to the decimals that the interval's half-width allows (two significant digits of it, as
+    :func:`fmt_value` does for a sigma): ``+19.62 [-82.07, +121.30]`` reads ``+20 [-80, +120]``."""
+    half = (float(hi) - float(lo)) / 2.0
+    return f"{fmt_value(value, half, sign=sign)} [{fmt_value(lo, half, sign=sign)}, {fmt_value(hi, half, sign=sign)}]"

@@ -12,7 +12,7 @@ import os
 import textwrap
 from dataclasses import dataclass, field
 
-from ..rounding import SPEED_SIGMA_NOT_STATED, fmt_length, fmt_pm, fmt_value  # noqa: F401 (the one rounding rule)
+from ..rounding import SPEED_SIGMA_NOT_STATED, fmt_interval, fmt_length, fmt_pm, fmt_value  # noqa: F401 (the one rounding rule)
 
 __all__ = ["Report", "report_date", "atomic_path", "PageSink", "TextColumn", "fmt_pm", "fmt_length", "length_scale"]
 

@@ -13,6 +13,7 @@ from .common import (
     FREQUENCY_RATIO,
     PITCH_RATIO,
     _page_title,
+    fmt_interval,
     fmt_pm,
     fmt_value,
     length_scale,
@@ -140,7 +141,7 @@ def harmonics_page(doc, ctx) -> None:
             # 0.1 mHz), the simulation's to 0.1 mHz
             fmt_value(h["frequency_meas_hz"], h["frequency_ratio_sigma"] * h["frequency_sim_hz"], default_decimals=4),
             fmt_pm(h["frequency_ratio"], h["frequency_ratio_sigma"]),
-            f"{h['amplitude_diff_db']:+.1f} [{h['amplitude_diff_db_ci'][0]:+.1f}, {h['amplitude_diff_db_ci'][1]:+.1f}]",
+            fmt_interval(h["amplitude_diff_db"], *h["amplitude_diff_db_ci"]),
             ("sim " if h["detected_sim"] else "") + ("rec" if h["detected_meas"] else ""),
         ]
         for h in comp.harmonics
