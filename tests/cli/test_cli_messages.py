@@ -191,3 +191,12 @@ def test_a_bare_speed_uncertainty_as_large_as_a_speed_is_refused_with_the_percen
         main(["pitch", "data/field/leon-tensioner.csv", "--speed", "0.49", "--speed-uncertainty", "5"])
     assert e.value.code == 2 and "did you mean 5%?" in capsys.readouterr().err
     assert main(["pitch", "data/field/leon-tensioner.csv", "--speed", "0.49", "--speed-uncertainty", "0.001"]) == 0
+
+
+def test_a_usage_error_is_one_line_that_says_where_the_options_are(capsys):
+    """argparse printed its whole usage (12 lines) before the one line that says what is wrong."""
+    with pytest.raises(SystemExit) as e:
+        main(["pitch", "data/field/leon-tensioner.csv", "--speed-uncertainty"])
+    err = capsys.readouterr().err
+    assert e.value.code == 2 and len(err.strip().splitlines()) == 1, err
+    assert err.startswith("vibkit pitch: error:") and "'vibkit pitch --help'" in err

@@ -26,10 +26,19 @@ __all__ = ["main"]
 COMMANDS = (simulate, scene, spectrum, pitch, links, compare, report, sweep, ride, fleet, bench)
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse with a usage error in one line and where to look (argparse prints the whole usage first: 12
+    lines before the one that says what is wrong); its subcommands' parsers are of this class too."""
+
+    def error(self, message):
+        where = f"'{self.prog} --help'" if " " in self.prog else "'vibkit COMMAND --help'"
+        self.exit(2, f"{self.prog}: error: {message} (run {where} for the options)\n")
+
+
 def _parser():
     import vibkit
 
-    p = argparse.ArgumentParser(
+    p = _Parser(
         prog="vibkit",
         description="Escalator drive-chain vibration: simulate, analyse, compare, report.",
         formatter_class=argparse.RawDescriptionHelpFormatter,

@@ -516,7 +516,7 @@ def segment_of(a):
     try:
         return parse_segment(text)
     except ValueError as exc:
-        raise CLIError(str(exc)) from None
+        raise CLIError(re.sub(r"^segment\b", "--segment", str(exc))) from None
 
 
 ESCALATOR_HELP = "the escalator's profile (TOML): unit, speed, pitch, links; see docs/guide/escalator.md"
