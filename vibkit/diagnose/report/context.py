@@ -435,7 +435,8 @@ def _links(rec, ch, units, sc, speed, notes, profile=None, marker_s=None):
     if units != "m":
         return None, f"not scanned: channel {ch} is not a tensioner displacement (the links are read from one)"
     if sc.analysis != "forward":
-        return None, f"not scanned: the scene is a {sc.analysis} scene, the signature needs a forward one"
+        article = "an" if sc.analysis[:1] in "aeiou" else "a"
+        return None, f"not scanned: the scene is {article} {sc.analysis} scene, the signature needs a forward one"
     scene_file = sc.source
     if profile is not None and str(scene_file).endswith("(scene built from the profile)"):
         scene_file = profile_scene_file(profile)
