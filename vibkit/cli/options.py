@@ -597,8 +597,7 @@ def chain_links(a, profile):
 
 def on_step(profile):
     """True when the escalator profile says its sensor rides a step, None (the channel's name decides) without one."""
-    sensor = getattr(profile, "sensor", None) if profile is not None else None
-    return None if sensor is None else sensor.kind == "step"
+    return None if profile is None else profile.on_step
 
 
 def escalator_profile(a):

@@ -191,6 +191,12 @@ class Profile:
         return f"{self.unit} ({self.site})" if self.site else self.unit
 
     @property
+    def on_step(self) -> bool | None:
+        """Whether the recordings' sensor rides a step (``sensor.kind = "step"``); None when the profile does not
+        say where it sat."""
+        return None if self.sensor is None else self.sensor.kind == "step"
+
+    @property
     def link_pass_frequency_hz(self) -> float:
         """The link-pass frequency of a new chain at the rated speed, speed / pitch. [Hz]"""
         return self.speed / self.nominal_pitch

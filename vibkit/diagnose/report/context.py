@@ -275,8 +275,7 @@ def analyse(
         kw = dict(speed=1.0, band=band or (2.5, 6.0), frequency_only=True)
         notes.append("no speed known: link-pass frequency only, no pitch (give --speed)")
     links_per_step = profile.links_per_step if profile is not None else sc.chain.links_per_step if sc else 3
-    sensor = getattr(profile, "sensor", None) if profile is not None else None
-    on_step = None if sensor is None else sensor.kind == "step"
+    on_step = None if profile is None else profile.on_step
     decided = estimate_channels(
         rec, channel=channel, n_links=n_links, links_per_step=links_per_step, on_step=on_step, **kw
     )
