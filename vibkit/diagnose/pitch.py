@@ -10,9 +10,10 @@ uncertainty of ``f`` and of ``v`` to ``L``:
     (sigma_L / L)^2 = (sigma_f / f)^2 + (sigma_v / v)^2
 
 The speed must be measured independently of the chain (a tachometer wheel on a step, not the handrail,
-which may run up to 2 % faster; a timed step count).  A speed derived from the motor's rpm and the *nominal* sprocket returns the
-nominal pitch by construction: one sprocket turn always moves Z links whatever their length, so the
-link-pass frequency is Z times the shaft frequency and ``v_nominal / f = L_nominal``.
+which may run up to 2 % faster; a timed step count).  A speed derived from the motor's rpm and the
+*nominal* sprocket returns the nominal pitch by construction: one sprocket turn always moves Z links
+whatever their length, so the link-pass frequency is Z times the shaft frequency and
+``v_nominal / f = L_nominal``.
 
 :func:`estimate_pitch` runs the steps of :mod:`vibkit.diagnose.pitch_steps` in order: bursts ->
 detection -> per-burst estimates -> method -> combination -> parts check (:mod:`vibkit.diagnose.pitch_parts`:
@@ -407,8 +408,10 @@ def _part_summary(parts):
     if not parts.checked:
         return ""
     f = parts.frequencies_hz
-    where = f" at the same places of loops of {parts.n_links} links" if parts.n_links else ""
-    return f"{parts.n_parts} parts of {parts.part_s:.3g} s{where} give {min(f):.5g}-{max(f):.5g} Hz"
+    text = f"{parts.n_parts} parts of {parts.part_s:.3g} s give {min(f):.5g}-{max(f):.5g} Hz"
+    if parts.n_links and math.isfinite(parts.place_birge):
+        text += f"; the wander measured around the places of loops of {parts.n_links} links"
+    return text
 
 
 def _request(speed, speed_sigma, band, nominal_pitch, limits_percent, pitch_range, teeth, p_fa, frequency_only):
