@@ -844,3 +844,14 @@ def test_fleet_help_pages(sub, capsys):
 def test_migrate_from_a_missing_database_names_its_own_flag(tmp_path, run):
     rc, out, err = run("fleet", "migrate", "--from", tmp_path / "none.sqlite", "--to", tmp_path / "t.sqlite")
     assert rc == 1 and "--from names it" in err and "--db" not in err
+
+
+def test_fleet_add_warns_of_a_sensor_riding_a_step(tmp_path, run):
+    """E07's profile puts its sensor on a step: the visit is stored, with the warning `vibkit pitch` gives."""
+    from vibkit.diagnose.pitch import STEP_WARNING
+
+    rc, out, err = run(
+        "fleet", "add", "data/fleet-example/E07/2026-11-23.csv", "--escalator",
+        "data/fleet-example/escalators/E07.toml", "--db", tmp_path / "f.sqlite",
+    )  # fmt: skip
+    assert rc == 0 and "stored #1" in out and STEP_WARNING in " ".join(err.split())

@@ -243,6 +243,10 @@ def run_add(a):
         )
     if m.quality != "ok":
         msg(f"warning: stored flagged {m.quality}, left out of the trend: {m.quality_reason}")
+    if profile is not None and profile.on_step:  # as `vibkit pitch --escalator` says it
+        from vibkit.diagnose.pitch import STEP_WARNING
+
+        msg(f"warning: {STEP_WARNING}")
     for w in m.warnings:
         msg(f"warning: {w}")
     return 0
