@@ -154,6 +154,7 @@ class RideQuality:
                 "a95": "smallest pk-pk value that 95 % of the pk-pk values do not exceed",
                 "weighted": "ISO 2631-1 weighting (x, y: Wd; z: Wk)",
                 "lowpass_10hz": f"unweighted, 0.4 Hz high-pass and {LOWPASS_HZ:g} Hz low-pass",
+                "time_of_max_s": "time of the largest pk-pk value's second peak, from the segment's start",
             },
             "notes": list(self.notes),
         }
