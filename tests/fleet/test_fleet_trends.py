@@ -240,3 +240,12 @@ def test_few_false_alarms_on_clean_units(rate, spacing):
         tr = unit_trend("U", line_unit(0.5, rate, np.arange(8) * spacing, seed=5000 + s))
         alarms += bool(tr.replacements or tr.outliers or tr.rate_verdict == "implausible")
     assert alarms <= 3
+
+
+def test_an_outlier_found_by_its_drop_says_how_many_sigmas():
+    """+0.32, +1.16, -0.02 %: the middle visit rose and the next fell back; it is left out, with how far it rose
+    in combined sigmas (the JSON said null)."""
+    ms = [meas(1, 0.0, 0.32, 0.1), meas(2, 0.5, 1.16, 0.1), meas(3, 1.0, -0.02, 0.1)]
+    tr = unit_trend("S14", ms)
+    (o,) = tr.outliers
+    assert o["date_utc"] == ms[1].date_utc and o["deviation_sigma"] == pytest.approx(0.84 / np.hypot(0.1, 0.1))

@@ -117,7 +117,7 @@ def screen_unit(measurements, *, drop_sigma=DROP_SIGMA, outlier_sigma=OUTLIER_SI
                     and not _drop(prev, nxt, drop_sigma)[1]
                     and _drop(nxt, m, drop_sigma)[1]
                 ):
-                    out.outliers.append((m, float("nan")))  # the next point is back at the old level
+                    out.outliers.append((m, z))  # the next point is back at the old level; z: m's drop
                     out.labels[_key(m)] = "outlier"
                     continue
                 seg = segments[-1]
@@ -125,7 +125,7 @@ def screen_unit(measurements, *, drop_sigma=DROP_SIGMA, outlier_sigma=OUTLIER_SI
                 if pp is not None and _drop(prev, pp, drop_sigma)[1] and not _drop(pp, m, drop_sigma)[1]:
                     # prev rose above the point before it and m is back at that level: prev alone is wrong
                     seg.pop()
-                    out.outliers.append((prev, float("nan")))
+                    out.outliers.append((prev, _drop(prev, pp, drop_sigma)[0]))  # how far prev rose above pp
                     out.labels[_key(prev)] = "outlier"
                     dropped = False
             if dropped:

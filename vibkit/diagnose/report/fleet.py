@@ -206,7 +206,7 @@ def _draw_unit(ax, tr, ms, limits, ctx):
     styles = {
         "ok": dict(fmt="o", color="k", ms=3, label="measurement (1 sigma)"),
         "earlier segment": dict(fmt="o", color="0.65", ms=3, label="before the chain was replaced"),
-        "outlier": dict(fmt="x", color="#c00000", ms=6, label="outlier (> 5 sigma), left out"),
+        "outlier": dict(fmt="x", color="#c00000", ms=6, label="outlier, left out"),
         "inconclusive": dict(fmt="s", color="#8a6d00", ms=3.5, mfc="none", label="inconclusive, left out"),
         "implausible": dict(fmt="D", color="#7a1fa2", ms=3.5, mfc="none", label="implausible, left out"),
     }
