@@ -190,8 +190,8 @@ def cache_dir() -> str | None:
 
 def kernel_cached(module_file: str, qualname: str) -> bool:
     """Whether numba's cache holds an index for the kernel ``qualname`` of the module at ``module_file`` (in the
-    module's ``__pycache__``, or under the cache folder :func:`configure` chose).  True when it cannot tell (no
-    cache at all: nothing to announce)."""
+    module's ``__pycache__``, or under the cache folder :func:`configure` chose); False before the first run
+    after an install, when the kernels compile."""
     import glob
 
     stem = os.path.splitext(os.path.basename(module_file))[0]
@@ -200,6 +200,4 @@ def kernel_cached(module_file: str, qualname: str) -> bool:
     root = _STATE["dir"] or os.environ.get("NUMBA_CACHE_DIR")
     if root:
         folders += [d for d, _sub, files in os.walk(root) if any(f.endswith(".nbi") for f in files)]
-    if not any(os.path.isdir(f) for f in folders):
-        return not _package_writable(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))) and not root
     return any(glob.glob(os.path.join(glob.escape(f), pattern)) for f in folders)
