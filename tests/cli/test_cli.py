@@ -118,6 +118,11 @@ def test_report_json(leon_nc, tmp_path, capsys):
     assert main(["report", LEON, "-o", str(out), "--json"]) == 0
     d = _json(capsys)
     assert d["schema"] == "vibkit.report/1" and "verdict" in d["pages"] and out.exists()
+    # without --json: the summary table on stdout, what was written a message on stderr
+    assert main(["report", LEON, "-o", str(out), "--force"]) == 0
+    cap = capsys.readouterr()
+    assert cap.err.rstrip().endswith(f"vibkit report: wrote {out} ({len(d['pages'])} pages)")
+    assert "wrote" not in cap.out and "verdict" in cap.out
 
 
 @pytest.mark.parametrize(

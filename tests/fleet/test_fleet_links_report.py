@@ -83,6 +83,10 @@ def test_fleet_report_command_draws_the_links_pages(tmp_path, capsys):
     assert main(["fleet", "report", "--db", str(p), "-o", str(out), "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["pages"][-1] == "fleet links"
     assert out.read_bytes()[:5] == b"%PDF-"
+    # without --json: what was written is a message (stderr); standard output carries data only
+    assert main(["fleet", "report", "--db", str(p), "-o", str(out), "--force"]) == 0
+    cap = capsys.readouterr()
+    assert cap.out == "" and cap.err.startswith(f"vibkit fleet report: wrote {out} (")
 
 
 def test_links_pages_have_no_overlapping_text_and_break_between_units(tmp_path):

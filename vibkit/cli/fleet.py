@@ -415,9 +415,9 @@ def _run_report(a, target):
         )
     else:
         n_links = sum(1 for t, _ in rep.pages if t == "fleet links")
-        print(
-            f"wrote {shown} ({len(rep.pages)} page(s): the work list, then {rep.summary['units_drawn']} of "
-            f"{len(trends)} units drawn, then {n_links} of links)"
+        msg(
+            f"vibkit fleet report: wrote {shown} ({len(rep.pages)} page(s): the work list, then "
+            f"{rep.summary['units_drawn']} of {len(trends)} units drawn, then {n_links} of links)"
         )
     return 0
 

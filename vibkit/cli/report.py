@@ -22,7 +22,7 @@ from .options import (
     segment_of,
     speed_sigma,
 )
-from .output import check_output, is_stdout, output_path, print_json, table
+from .output import check_output, is_stdout, msg, output_path, print_json, table
 
 EPILOG = (
     "example:\n  vibkit report data/field/leon-tensioner.csv --scene sim/leon.toml --date 2020-02-14 \\\n"
@@ -130,6 +130,6 @@ def _run(a, target):
             },
         )
     else:
-        print(f"wrote {a.output if is_stdout(a.output) else rep.path} ({len(rep.pages)} pages)")
+        msg(f"vibkit report: wrote {a.output if is_stdout(a.output) else rep.path} ({len(rep.pages)} pages)")
         print(table([[k, _shown(k, v, rep.summary)] for k, v in rep.summary.items()]))
     return 0
