@@ -203,6 +203,17 @@ def test_flat_unit_within_noise_is_not_implausible():
     assert abs(tr.slope_percent_per_year) < 3 * tr.slope_sigma_percent_per_year
 
 
+def test_a_rate_below_zero_by_two_to_three_sigma_is_flat_and_flagged_for_a_check():
+    """Two visits a year apart, 0.32 % then 0.17 % (sigma 0.05 % each): -0.15 +- 0.071 %/year, 2.1 sigma below
+    zero: flat, with a note asking for a check; -0.10 %/year (1.4 sigma) gets no note."""
+    doubtful = unit_trend("U", [meas(1, 0.0, 0.32), meas(2, 1.0, 0.17)])
+    assert doubtful.rate_verdict == "flat"
+    assert doubtful.slope_percent_per_year == pytest.approx(-0.15, abs=1e-3)
+    assert any("below zero by 2.1 sigma" in f and "does not shorten" in f for f in doubtful.flags), doubtful.flags
+    within = unit_trend("U", [meas(1, 0.0, 0.32), meas(2, 1.0, 0.22)])  # -0.10: 1.4 sigma
+    assert within.rate_verdict == "flat" and not any("below zero" in f for f in within.flags)
+
+
 def test_work_list_order():
     units = {
         "over": line_unit(2.1, 0.1, YEARS, seed=11, unit="over", start_id=1),  # 2.4 % now: past 2 %

@@ -38,6 +38,8 @@ SECONDS_PER_YEAR = 365.25 * 86400.0
 MIN_TREND_SPAN_DAYS = 30.0
 #: a rate below zero by more than this many of its sigmas is implausible (a chain does not shorten)
 IMPLAUSIBLE_RATE_SIGMA = 3.0
+#: a rate below zero by more than this many of its sigmas (but not implausible) is flagged for a check
+DOUBTFUL_RATE_SIGMA = 2.0
 
 
 @dataclass(frozen=True)
@@ -382,6 +384,12 @@ def unit_trend(unit, measurements, *, limits_percent=DEFAULT_LIMITS_PERCENT, cov
         rate = "growing"
     else:
         rate = "flat"
+        if fit.slope_percent_per_year + DOUBTFUL_RATE_SIGMA * fit.slope_sigma_percent_per_year < 0:
+            flags.append(
+                f"rate {fit.slope_percent_per_year:+.2f} %/year is below zero by "
+                f"{-fit.slope_percent_per_year / fit.slope_sigma_percent_per_year:.1f} sigma: a chain does not "
+                "shorten; check the visits' speeds and sensors"
+            )
     reached = [lim for lim in limits_percent if last.elongation_percent >= lim]
     fc = forecast_limits(
         None if rate == "implausible" else fit,
