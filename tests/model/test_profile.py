@@ -215,3 +215,13 @@ def test_scene_key_links_per_step(tmp_path):
     p.write_text(base.replace("n_rollers = 159", "n_rollers = 159\nlinks_per_step = 4").replace("= 20", "= 40"))
     with pytest.raises(SceneError, match=r"'outputs.step_accelerometer' must be a step 1..39"):
         load_scene(p)
+
+
+def test_profile_scene_description_is_the_users_line_said_once():
+    """The scene's description is the unit, its site and the profile's own line; without one, the facts."""
+    described = parse_profile(
+        MINIMAL.replace('site = "Leon, Plaza Mayor"', 'site = "Leon"\ndescription = "up, 3-link steps"'), "d.toml"
+    )
+    assert described.scene("forward").description == "E07 (Leon): up, 3-link steps"
+    plain = parse_profile(MINIMAL, "p.toml")
+    assert plain.scene("forward").description == "E07 (Leon, Plaza Mayor): 0.5 m/s, 133.33 mm pitch, 3 links per step"

@@ -151,8 +151,9 @@ def scene_text(profile, analysis: str = "forward", duration: float | None = None
     if not dur > 0:
         raise ValueError(f"duration must be positive, got {duration!r}")
     name = "".join(c if c.isalnum() or c in "-_" else "-" for c in p.unit).strip("-") or "escalator"
-    desc = f"{p.name}: {p.description}" if p.description else p.name
-    desc += f", {p.speed:g} m/s, {1000 * p.nominal_pitch:g} mm pitch, {p.links_per_step} links per step"
+    # the user's own line where the profile has one (the scene's keys say the rest), else the facts
+    facts = f"{p.speed:g} m/s, {1000 * p.nominal_pitch:g} mm pitch, {p.links_per_step} links per step"
+    desc = f"{p.name}: {p.description or facts}"
     pre = p.tensioner_preload
     lines = [
         f"# The scene of escalator {p.unit}, built by vibkit from the profile {p.source}.",
