@@ -4,6 +4,7 @@ with link 40, then link 70, 1 mm long, and the healthy chain."""
 
 import dataclasses
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -123,6 +124,20 @@ def test_a_marker_renumbers_from_the_marked_link(recordings, capsys):
     out = path.parent / "marked.pdf"
     rep = write_report(path, out, scene=SCENE, speed=SPEED, duration=2.0, marker_s=10.5 / f_lp, overwrite=True)
     assert rep.summary["flagged_links"] == [marked]
+
+
+def test_a_link_pass_no_chain_of_the_nominal_pitch_has_is_refused(recordings):
+    """A stranger's profile gave the speed in km/h (2.34 for 0.65 m/s): the map took the link pass's second
+    harmonic and flagged links. Given the nominal pitch, a pitch 80 % long (or 3.6 times short) is refused; the
+    right speed is not."""
+    rec = xr.open_dataset(recordings[40][0])
+    nominal = load_scene(SCENE).chain.link_pitch
+    for speed in (SPEED * 3.6, SPEED / 3.6):
+        with pytest.raises(ValueError, match=r"from the nominal 133.33\d* mm .* not km/h"):
+            find_worn_links(rec, speed=speed, n_links=N, scene=SCENE, nominal_pitch=nominal)
+    # a rated speed 5 % off the chain's is still a chain
+    res = find_worn_links(rec, speed=SPEED * 1.05, n_links=N, nominal_pitch=nominal)
+    assert res.loops == 3
 
 
 def test_the_step_channel_is_refused_with_or_without_a_scene(recordings):
@@ -288,6 +303,35 @@ def test_a_two_millimetre_link_is_fitted_again_with_a_longer_signature(profile_9
     assert f["link"] == link_number_of(20, passed, 90)
     assert abs(f["excess_pitch_mm"] - 2.0) < 0.15
     assert "(1.7 mm, relative error" in res.method
+
+
+def test_a_wrong_number_of_links_gives_no_number_and_says_how_many(profile_90, tmp_path):
+    """A stranger's profile said 360 links for a chain of 364: the worn link was flagged under a wrong number,
+    exit 0. Counted as 92 links, the 90-link chain's worn link peaks 2 links earlier in every loop: no number, the
+    status inconclusive, and the count the peaks give. (Counted as 94 or 86, its fits spread so thin over the loops
+    that no link passes the threshold.)"""
+    from vibkit.diagnose.links import profile_scene_file
+    from vibkit.model.profile import parse_profile
+
+    _, scene = profile_90
+    rec, passed, _, _ = _record(scene, 20, np.random.default_rng(8), loops=3.2, exact=True)
+    right = find_worn_links(rec, speed=SPEED, n_links=90, scene=profile_scene_file(parse_profile(PROFILE_90, "p")))
+    assert [f["link"] for f in right.flagged] == [link_number_of(20, passed, 90)] and right.status == "ok"
+    wrong = PROFILE_90.replace("n_links = 90", "n_links = 92")
+    res = find_worn_links(rec, speed=SPEED, n_links=92, scene=profile_scene_file(parse_profile(wrong, "w")))
+    assert res.status == "inconclusive" and res.flagged == []
+    assert "counted as 92 links" in res.reason and "about 90 links" in res.reason
+
+
+def test_a_scene_with_worn_links_is_refused_as_the_signature_s_chain(recordings, tmp_path):
+    """A stranger gave `--scene` the very scene his worn recording came from: the excess read half, and a wrong
+    alternative. The signature is a worn link's change of the healthy chain: such a scene is refused."""
+    worn = tmp_path / "worn.toml"
+    text = Path(SCENE).read_text().replace("n_rollers = 159", "n_rollers = 159\nworn_links = [[40, 0.134333]]")
+    worn.write_text(text)
+    rec = xr.open_dataset(recordings[40][0])
+    with pytest.raises(ValueError, match=r"has worn links \(40\).*without worn_links"):
+        find_worn_links(rec, speed=SPEED, n_links=N, scene=str(worn))
 
 
 def test_a_report_from_the_escalator_profile_alone_scans_the_links(profile_90, tmp_path):

@@ -110,3 +110,16 @@ def test_without_a_speed_page_one_names_a_family_not_a_link_pass(tmp_path):
     text = "\n".join(rep.pages[0][1])
     assert "FAMILY AT 2.937 Hz" in text and "not checked as a link\npass" in text
     assert not any(line.startswith("LINK PASS") for line in rep.pages[0][1])  # the headline it gave before
+
+
+@pytest.mark.slow
+def test_a_worn_scene_s_nominal_pitch_is_its_sprocket_s(tmp_path, leon_report):
+    """A stranger compared Leon with a scene of a 3 % elongated chain on the original sprocket: page 1 measured the
+    elongation against the worn pitch and said OK (+0.79 % of 137.3 mm). The nominal pitch is the one the teeth are
+    cut for: the same +3.8 % as with the healthy scene."""
+    scene = tmp_path / "leon-elongated.toml"
+    text = Path("sim/leon.toml").read_text()
+    scene.write_text(text.replace("[chain]", "[chain]\nelongation_percent = 3.0", 1))
+    rep = write_report(LEON, tmp_path / "r.pdf", scene=str(scene), duration=4.0)
+    assert rep.summary["elongation_percent"] == pytest.approx(leon_report.summary["elongation_percent"], abs=1e-9)
+    assert rep.summary["elongation_percent"] > 3.5 and rep.summary["verdict"] == "replace"

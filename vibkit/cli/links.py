@@ -111,6 +111,7 @@ def run(a):
             false_alarm=a.false_alarm,
             band=a.band,
             file=a.recording,
+            nominal_pitch=None if profile is None else profile.nominal_pitch,
             **({} if a.min_excess is None else {"min_excess": a.min_excess}),
         )
     except TooFewLoops as exc:

@@ -33,11 +33,13 @@ from ..signal.linkmap import (
     MIN_LOOPS,
     TooFewLoops,
     canonical_phase,
+    count_drift,
     link_map,
     link_pass_phase,
     record_time_for_loops,
     scan_links,
 )
+from .decision import ELONGATION_WINDOW_PERCENT
 
 __all__ = [
     "DEFAULT_FALSE_ALARM",
@@ -298,6 +300,37 @@ def links_channel(recording, channel=None):
     return chans[0]
 
 
+#: the pitches a link map accepts, in % from the nominal: the elongations a chain can have
+#: (:data:`vibkit.diagnose.decision.ELONGATION_WINDOW_PERCENT`) widened by the 5 % by which an escalator's speed
+#: may differ from its rated one (EN 115-1)
+PITCH_WINDOW_PERCENT = (ELONGATION_WINDOW_PERCENT[0] - 5.0, ELONGATION_WINDOW_PERCENT[1] + 5.0)
+
+
+def _check_healthy(scene):
+    """Refuse a scene with worn links: the signature is one worn link's change of the escalator's chain without it."""
+    from ..model.scene import load_scene
+
+    worn = load_scene(scene).chain.worn_links
+    if worn:
+        raise ValueError(
+            f"the scene {scene} has worn links ({', '.join(str(k) for k, _ in worn)}): the worn link's signature is "
+            "simulated from the escalator's chain without them; give its scene without worn_links (a worn scene "
+            "halves the excess read and moves the link found)"
+        )
+
+
+def _check_pitch(ch, f_lp, speed, nominal):
+    """Refuse a link pass whose pitch (speed / frequency) no chain of this nominal pitch has."""
+    el = 100.0 * (speed / f_lp / nominal - 1.0)
+    lo, hi = PITCH_WINDOW_PERCENT
+    if not lo <= el <= hi:
+        raise ValueError(
+            f"channel {ch}: the link pass found, {f_lp:.4g} Hz, gives a link pitch of {1e3 * speed / f_lp:.1f} mm at "
+            f"{speed:g} m/s, {el:+.0f} % from the nominal {1e3 * nominal:g} mm (a chain is {lo:+g} to {hi:+g} %, "
+            "speed tolerance included): check the speed (in m/s, not km/h) and the nominal pitch; no link map"
+        )
+
+
 def find_worn_links(
     recording,
     *,
@@ -310,6 +343,7 @@ def find_worn_links(
     band=None,
     min_excess=MIN_EXCESS_M,
     file="<recording>",
+    nominal_pitch=None,
 ):
     """The links of a chain whose pitch departs from the others', from a tensioner recording.
 
@@ -338,6 +372,10 @@ def find_worn_links(
         this. [m]
     file : str
         The recording's name, for messages.
+    nominal_pitch : float, optional
+        The chain's nominal pitch [m]: the link pass found must then give a pitch within the elongations a
+        chain can have, widened by the escalator standard's 5 % speed tolerance (``PITCH_WINDOW_PERCENT``),
+        or the map is refused (a speed in km/h, a harmonic taken for the link pass).
 
     Returns
     -------
@@ -374,6 +412,8 @@ def find_worn_links(
     band = band or (speed / 0.2, speed / 0.08)
     fund = find_fundamental(x, fs, band=band)
     f_lp = fund.frequency_hz
+    if nominal_pitch is not None:
+        _check_pitch(ch, f_lp, speed, float(nominal_pitch))
     span = (x.size - 1) / fs
     if span * f_lp < MIN_LOOPS * n:
         need = record_time_for_loops(n, f_lp)
@@ -398,6 +438,7 @@ def find_worn_links(
         x, fs, link_phase(x, fs, f_lp), n, samples_per_cycle=SAMPLES_PER_CYCLE, marker_s=marker_s, link_offset=offset
     )
     if scene is not None:
+        _check_healthy(scene)
         sig, n_scene = worn_link_signature(scene, sensor="tensioner", speed=speed, fs=fs)
         if n_scene != n:
             raise ValueError(f"--links {n}: the scene {scene} has {n_scene} links")
@@ -444,6 +485,18 @@ def find_worn_links(
             f"worn-link signature of the scene ({1e3 * used:g} mm, relative error {err:.2f}), "
             f"excess at least {1e3 * min_excess:g} mm"
         )
+        drift = count_drift(scan.peaks, n) if flagged else 0
+        if drift:
+            # one worn link is at one number every loop; counted with the wrong number of links it moves by the
+            # difference from one loop to the next
+            reason = (
+                f"the deviation peaks at another link in every loop (links {', '.join(map(str, scan.peaks))} in loops "
+                f"1-{len(scan.peaks)}): counted as {n} links, a worn link moves by the difference from loop to loop; "
+                f"this chain has about {n + drift} links: check --links (or the profile's chain.n_links); no link "
+                "number"
+            )
+            return _result(file, ch, sensor, speed, lmap, n, [], scan, excess, method, marker_s, notes,
+                           status="inconclusive", reason=reason)  # fmt: skip
     else:
         scan = scan_links(lmap, false_alarm=false_alarm)
         flagged = [

@@ -28,7 +28,16 @@ def _one_line(exc):
 
 
 def link_scan_of(
-    recording, *, path, speed, n_links, channel=None, scene=None, marker_s=None, no_count=NO_LINK_COUNT
+    recording,
+    *,
+    path,
+    speed,
+    n_links,
+    channel=None,
+    scene=None,
+    marker_s=None,
+    no_count=NO_LINK_COUNT,
+    nominal_pitch=None,
 ) -> LinkScan:
     """The :class:`~vibkit.fleet.links.LinkScan` of one recording (never raises).
 
@@ -49,6 +58,8 @@ def link_scan_of(
         When the marked link passed the sensor (it is link 1). [s]
     no_count : str
         The reason stored when ``n_links`` is None (which options would give it).
+    nominal_pitch : float, optional
+        The unit's nominal pitch [m]: a link pass that gives no chain's pitch is a failed scan.
     """
     if n_links is None:
         return LinkScan.not_run(no_count, marker_s=marker_s)
@@ -68,7 +79,14 @@ def link_scan_of(
             return LinkScan.not_run(f"channel {ch}: {STEP_REFUSAL}", **keep)
         use_scene = scene if scene is not None and ch in recording and is_tensioner_channel(recording, ch) else None
         res = find_worn_links(
-            recording, speed=speed, n_links=n_links, channel=ch, scene=use_scene, marker_s=marker_s, file=path
+            recording,
+            speed=speed,
+            n_links=n_links,
+            channel=ch,
+            scene=use_scene,
+            marker_s=marker_s,
+            file=path,
+            nominal_pitch=nominal_pitch,
         )
     except TooFewLoops as exc:
         return LinkScan("too few loops", reason=_one_line(exc), **keep)
@@ -112,6 +130,7 @@ def measure_with_links(path, *, n_links=None, marker_s=None, scene=None, no_coun
         scene=scene,
         marker_s=marker_s,
         no_count=no_count,
+        nominal_pitch=analysis.get("nominal_pitch"),
     )
     return m, scan
 

@@ -57,6 +57,7 @@ __all__ = [
     "LinkMap",
     "LinkFlag",
     "LinkScan",
+    "count_drift",
     "TooFewLoops",
     "canonical_phase",
     "link_map",
@@ -382,6 +383,10 @@ class LinkScan:
     unsteady : tuple of int
         Own cycle only: 1-based links that passed the threshold but scatter from loop to loop far beyond the
         pooled scatter (a start-up transient in one loop, not a link that is the same every loop): not flagged.
+    peaks : tuple of int
+        Signature only, where a link is flagged and every loop's own fit of the signature peaks above
+        ``PEAK_SIGMA`` of its sigmas: the 1-based link where each peaks. One worn link peaks at one number every loop; a peak that moves by the same D links from loop to
+        loop says the chain has ``n_links + D`` links (see :func:`count_drift`).
     """
 
     flagged: tuple
@@ -394,6 +399,44 @@ class LinkScan:
     loops: int
     method: str
     unsteady: tuple = ()
+    peaks: tuple = ()
+
+
+#: a loop's own fit must peak above this many of its sigmas for :attr:`LinkScan.peaks` to be recorded
+PEAK_SIGMA = 5.0
+
+
+def count_drift(peaks, n_links):
+    """D, about how many links the per-loop peaks (:attr:`LinkScan.peaks`, 1-based) move from one loop to the
+    next, when they move (the chain then has about ``n_links + D`` links, not ``n_links``); 0 when they stay.
+
+    They move when every step from a loop to the next is the same D != 0 (at least 2 links over two loops), or,
+    over three loops or more, when their straight line climbs at least 2 links a loop and no peak is off it by
+    more than half of that.
+
+    Examples
+    --------
+    >>> count_drift((209, 213, 217), 360)
+    4
+    >>> count_drift((212, 206, 202), 368)
+    -5
+    >>> count_drift((210, 210, 211), 364)
+    0
+    """
+    if len(peaks) < 2:
+        return 0
+    half = n_links // 2
+    steps = [((b - a + half) % n_links) - half for a, b in zip(peaks[:-1], peaks[1:])]
+    if len(set(steps)) == 1 and (abs(steps[0]) >= 2 or len(peaks) >= 3):
+        return steps[0]
+    if len(peaks) < 3:
+        return 0
+    x = np.arange(len(peaks), dtype=float)
+    u = np.concatenate([[0.0], np.cumsum(steps)])
+    slope, icept = np.polyfit(x, u, 1)
+    if abs(slope) >= 2.0 and np.max(np.abs(u - (icept + slope * x))) <= abs(slope) / 2.0:
+        return int(round(slope))
+    return 0
 
 
 def _check_alpha(false_alarm):
@@ -505,7 +548,7 @@ def scan_links(
     err = float(mismatch if signature_error is None else signature_error)
     alone = float(scipy.stats.t.isf(alpha / 2.0, dof))  # one link's own threshold: where an alternative starts
     shape = lmap.shape.copy()
-    flags, first = [], None
+    flags, first, peaks = [], None, ()
     extra = np.zeros(n)  # what a flagged link's imperfect signature leaves near it (variance)
     for _ in range(max(max_flags, 1)):
         per_loop = _fit_signature(shape, tmpl)
@@ -518,11 +561,15 @@ def scan_links(
         if not tstat[k] > thr or len(flags) >= max_flags:
             break
         loops = _loops_showing(per_loop, k, amp[k], s1)
+        if not flags:  # where each loop's own fit peaks, for the first (largest) flag, where every loop shows it
+            best = [int(np.argmax(np.sign(amp[k]) * row)) for row in per_loop]
+            if all(abs(row[j]) > PEAK_SIGMA * s1 for row, j in zip(per_loop, best)):
+                peaks = tuple(j + 1 for j in best)
         alt = _alternatives(np.sign(amp[k]) * amp / sd, k, rho, r_noise, alone, alpha, err)
         flags.append(LinkFlag(k + 1, float(tstat[k]), float(amp[k] * scale), sig * scale, "signature", loops, alt))
         shape -= amp[k] * np.roll(tmpl, k, axis=0)[None]
         extra += (mismatch * amp[k] * np.roll(rho, k)) ** 2 + (mismatch_floor * amp[k]) ** 2
-    return LinkScan(tuple(flags), first[0], thr, alpha, dof, first[1], first[2], L, "signature")
+    return LinkScan(tuple(flags), first[0], thr, alpha, dof, first[1], first[2], L, "signature", peaks=peaks)
 
 
 def _alternatives(t, k, rho, r_noise, floor, alpha, err):

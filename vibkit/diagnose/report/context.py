@@ -247,7 +247,8 @@ def analyse(
     if nominal_pitch is None and profile is not None and getattr(profile, "nominal_pitch", None):
         nominal_pitch = float(profile.nominal_pitch)
     if nominal_pitch is None and sc is not None:
-        nominal_pitch = sc.chain.link_pitch
+        # the pitch the sprocket's teeth are cut for: a worn scene's chain pitch is the worn one
+        nominal_pitch = sc.sprocket.pitch
     # the per-channel decision of `spectrum` and `pitch` (vibkit.diagnose.channels.estimate_channels): every
     # vibration channel (or the one asked for) estimated, channels that disagree refused, the numbers
     # from the channel with the smallest sigma
@@ -443,7 +444,13 @@ def _links(rec, ch, units, sc, speed, notes, profile=None, marker_s=None):
         return None, "not scanned: the scene is not a file (the signature is simulated from one)"
     try:
         res = find_worn_links(
-            rec, speed=speed, n_links=sc.chain.n_rollers, channel=ch, scene=scene_file, marker_s=marker_s
+            rec,
+            speed=speed,
+            n_links=sc.chain.n_rollers,
+            channel=ch,
+            scene=scene_file,
+            marker_s=marker_s,
+            nominal_pitch=None if profile is None else profile.nominal_pitch,
         )
         return res, ""
     except TooFewLoops as exc:  # under two loops: no page (vibkit links says how long to record)
