@@ -436,3 +436,17 @@ def test_a_marked_link_counts_the_worn_one_as_the_rollers_pass_the_top_of_the_lo
     marker = 0.5 * (first + arrival(50, first)) - settle  # roller 51 reaches the top first, then roller 50
     res = find_worn_links(rec, speed=SPEED, n_links=N, scene=SCENE, marker_s=marker)
     assert [(f["link"], f["alternatives"]) for f in res.flagged] == [(11, [])]
+
+
+def test_a_channel_without_a_unit_is_told_how_to_give_one():
+    """A stranger's `time,tensioner` CSV (no unit) was refused as 'not a tensioner displacement' without the fix."""
+    t = np.arange(0.0, 100.0, 0.005)
+    rec = xr.Dataset(
+        {"tensioner": ("time", 1e-2 * np.sin(2 * np.pi * 3.75 * t), {"units": "unknown"})}, coords={"time": t}
+    )
+    with pytest.raises(ValueError, match=r"units 'unknown'.*give its unit \(--units mm\)"):
+        find_worn_links(rec, speed=SPEED, n_links=N, channel="tensioner", scene=SCENE)
+    rec["tensioner"].attrs["units"] = "m/s^2"  # an accelerometer's is refused as before, without the hint
+    with pytest.raises(ValueError) as err:
+        find_worn_links(rec, speed=SPEED, n_links=N, channel="tensioner", scene=SCENE)
+    assert "--units" not in str(err.value)

@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 import math
 
+from vibkit.diagnose.rounding import fmt_pm
+
 from .options import (
     _LENGTH_UNITS,
     CHANNEL_LENGTH,
@@ -145,7 +147,7 @@ def run(a):
     if res.flagged:
         rows = []
         for f in res.flagged:
-            ex = "-" if f["excess_pitch_mm"] is None else f"{f['excess_pitch_mm']:+.3f} +- {f['sigma_mm']:.3f}"
+            ex = "-" if f["excess_pitch_mm"] is None else fmt_pm(f["excess_pitch_mm"], f["sigma_mm"], sign=True)
             link = " or ".join(str(k) for k in [f["link"], *f.get("alternatives", ())])
             rows.append([link, ex, f"{f['t']:.1f}", ",".join(str(i) for i in f["loops"]) or "-"])
         print(table(rows, ("link", "excess pitch [mm]", "|t|", "loops that show it")))

@@ -426,10 +426,16 @@ def find_worn_links(
     sensor = "tensioner" if str(da.attrs.get("units", "")) in ("m", "mm", "um") else "other"
     if scene is not None:
         if sensor != "tensioner":
+            units = str(da.attrs.get("units", "") or "unknown")
+            hint = (
+                "; if it is one, give its unit (--units mm)"
+                if units.lower() in ("unknown", "", "1", "counts", "none")
+                else ""
+            )
             raise ValueError(
-                f"channel {ch} (units {da.attrs.get('units', '?')!r}) is not a tensioner displacement: the "
-                "worn link's signature is known for the tensioner only (a step sensor rides the loop, and its "
-                "own path dominates its per-link pattern)"
+                f"channel {ch} (units {units!r}) is not a tensioner displacement: the worn link's signature is "
+                "known for the tensioner only (a step sensor rides the loop, and its own path dominates its "
+                f"per-link pattern){hint}"
             )
     # with a scene the links are counted between the instants a roller reaches the sensor, not between the
     # signal's cycle boundaries: numbers as the signature gives them wherever the recording starts
