@@ -47,6 +47,8 @@ KNOCK_TOP_HZ = 100.0
 #: the turn is searched this far (relative) around v / (2 pi r): a worn tyre, the speed's uncertainty,
 #: a trailer roller of another size
 RADIUS_TOLERANCE = 0.06
+#: a family found within this (relative) of the search band's edge peaks outside it: no roller's turn
+EDGE = 1e-3
 #: half-width of the chain's lines left out of the sums [bins]
 CHAIN_LINE_BINS = 1.0
 #: no bin counts more than this in a sum (noise: mean 1): a knock is many harmonics, a few strong lines of
@@ -200,6 +202,13 @@ def roller_knock(x, fs, *, speed, roller_radius, link_pitch, links_per_step=3, p
             f"alone (orders {', '.join(map(str, det.significant_orders[:8])) or 'none'}); a knock, a few "
             f"milliseconds long, shows in {MIN_KNOCK_ORDERS} or more: a few lines of something else (hum, a "
             "machine) or a gait"
+        )
+        return RollerKnock(False, reason, float("nan"), float("nan"), band, det.p_value, p_fa, det.n_harmonics)
+    if det.detected and not band[0] * (1 + EDGE) < det.frequency_hz < band[1] * (1 - EDGE):
+        reason = (
+            f"no knock at {where}: the strongest harmonic family (p = {det.p_value:.2g}) lies at the band's edge, "
+            f"{det.frequency_hz:.4g} Hz: its peak is outside the turns a roller of this radius makes (the step's "
+            "own lines, not a roller's knock)"
         )
         return RollerKnock(False, reason, float("nan"), float("nan"), band, det.p_value, p_fa, det.n_harmonics)
     if det.detected:
