@@ -2,6 +2,7 @@
 
 import json
 import os
+import re
 import sys
 from pathlib import Path
 
@@ -123,6 +124,22 @@ def test_report_json(leon_nc, tmp_path, capsys):
     cap = capsys.readouterr()
     assert cap.err.rstrip().endswith(f"vibkit report: wrote {out} ({len(d['pages'])} pages)")
     assert "wrote" not in cap.out and "verdict" in cap.out
+    # values in their units, sigmas to two significant digits with their zeros
+    assert re.search(r"^rms +[0-9.e+-]+ m$", cap.out, re.M) and re.search(
+        r"^fundamental_sigma_hz +0\.000[0-9]{2}$", cap.out, re.M
+    )
+
+
+def test_report_table_gives_a_flagged_link_as_text():
+    """A stranger's report table printed the flagged links as a Python list of dicts with 16 digits."""
+    from vibkit.cli.report import _shown
+
+    flag = {"link": 210, "alternatives": [28], "excess_pitch_mm": 0.7906982260359852, "sigma_mm": 0.008363426626000377}
+    assert (
+        _shown("flagged_links_detail", [{**flag, "loops": [1, 2, 3]}], {})
+        == "210 (or 28): +0.7907 +- 0.0084 mm, loops 1,2,3"
+    )
+    assert _shown("flagged_links", [210, 14], {}) == "210, 14" and _shown("flagged_links", [], {}) == "none"
 
 
 @pytest.mark.parametrize(

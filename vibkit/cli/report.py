@@ -75,14 +75,34 @@ def _shown(key, value, summary):
 
     if value is None:
         return "not stated"
+    if key == "flagged_links_detail":
+        return "; ".join(_flag_text(f) for f in value) or "none"
+    if isinstance(value, (list, tuple)):
+        return ", ".join(str(v) for v in value) or "none"
     if not isinstance(value, float):
         return value
     if key == "score":
         return f"{value:.3f}"  # a similarity between 0 and 1: 2.4e-38 is 0.000
     if "sigma" in key:
-        return f"{value:.2g}"  # two significant digits, the rule of every +-
+        return f"{value:#.2g}"  # two significant digits (0.00010, not 0.0001), the rule of every +-
+    if key in ("rms", "peak_to_peak") and summary.get("units"):
+        return f"{value:.3g} {summary['units']}"  # of the channel, in its units
     sigma = summary.get(_SIGMA_OF.get(key, ""))
     return fmt_value(value, sigma) if sigma else f"{value:.6g}"
+
+
+def _flag_text(f):
+    """One flagged link as the table prints it: ``210 (or 28): +0.7907 +- 0.0084 mm, loops 1,2,3``."""
+    from vibkit.diagnose.rounding import fmt_pm
+
+    link = str(f["link"]) + (f" (or {', '.join(map(str, f['alternatives']))})" if f.get("alternatives") else "")
+    excess = (
+        ""
+        if f.get("excess_pitch_mm") is None
+        else ": " + fmt_pm(f["excess_pitch_mm"], f.get("sigma_mm"), "mm", sign=True)
+    )
+    loops = f.get("loops") or []
+    return link + excess + (f", loops {','.join(map(str, loops))}" if loops else "")
 
 
 def run(a):
