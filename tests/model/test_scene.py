@@ -150,3 +150,30 @@ def test_defaults_are_typed_and_recorded():
     assert "effects.contact.stiffness" not in sc.defaults
     assert sc.solver.atol_for(1e-7) == 1e-7 * 1e-2
     assert sc.run.start == 0.0 and "run.start" in sc.defaults and "run.initial_speed" not in sc.defaults
+
+
+@pytest.mark.parametrize(
+    "name, old, new, key",
+    [
+        ("thesis-forward.toml", "output_step = 0.005", "output_step = 50.0", "run.output_step"),
+        ("thesis-inverse.toml", "step = 0.005 ", "step = 100.0 ", "motion.step"),
+    ],
+)
+def test_an_output_step_longer_than_the_run_is_refused(tmp_path, name, old, new, key):
+    """A stranger's 50 s output step in a 44 s run gave a one-sample result, exit 0; `spectrum` failed later."""
+    text = (SIM / name).read_text()
+    assert old in text
+    p = tmp_path / name
+    p.write_text(text.replace(old, new))
+    with pytest.raises(SceneError, match=rf"'{key}' = .* is longer than .*duration"):
+        load_scene(p)
+
+
+def test_output_times_never_pass_the_run():
+    from vibkit.analyses.results import output_times
+
+    assert output_times(11.0, 4.0).tolist() == [0.0, 4.0, 8.0]
+    assert output_times(44.0, 0.005).size == 8801 and output_times(44.0, 0.005)[-1] == pytest.approx(44.0)
+    assert output_times(0.3, 0.1).size == 4  # 0.3 / 0.1 is 2.9999999999999996 in floats
+    with pytest.raises(ValueError, match="longer than the run"):
+        output_times(2.0, 3.0)

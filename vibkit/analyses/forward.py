@@ -75,7 +75,7 @@ from ..model.slots import (
 )
 from ..model.table_check import checked_table
 from .integrate import IntegrationError, integrate
-from .results import make_dataset
+from .results import make_dataset, output_times
 
 __all__ = ["forward_dynamics", "initial_state", "ForwardModel", "default_rtol"]
 
@@ -176,7 +176,7 @@ def forward_dynamics(
     duration = duration or run.duration
     dt = run.output_step
     if t_out is None:
-        t_out = np.arange(0.0, duration + 0.5 * dt, dt)
+        t_out = output_times(duration, dt)
     fm = ForwardModel(model, effects, start=run.start)
     y0, d0 = initial_state(model, start=run.start, speed=run.initial_speed)
     check_seated(fm, y0, d0)

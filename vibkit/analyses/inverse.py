@@ -19,7 +19,7 @@ from ..model.dynamics import link_multipliers
 from ..model.flat_roller import add_flats
 from ..model.schema import TensionerOptions, effect_options, gravity_of
 from ..runtime.progress import Progress
-from .results import make_dataset
+from .results import make_dataset, output_times
 
 __all__ = ["inverse_dynamics"]
 
@@ -64,7 +64,7 @@ def inverse_dynamics(model, *, speed, duration, step, start=0.0, effects=None, o
     """
     effects = effect_options(effects)
     n = model.n
-    t = np.arange(0.0, duration + 0.5 * step, step)
+    t = output_times(duration, step, "motion.step")
     g = effects["gravity"].g if "gravity" in effects else 0.0
     # no tensioner effect: the carriage of the tensioner options' defaults (no spring, no mass)
     tens = effects["tensioner"] if "tensioner" in effects else TensionerOptions()

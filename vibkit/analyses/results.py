@@ -9,7 +9,7 @@ import xarray as xr
 
 from .. import __version__
 
-__all__ = ["VARIABLES", "make_dataset"]
+__all__ = ["VARIABLES", "make_dataset", "output_times"]
 
 # name -> (units, long_name)
 VARIABLES = {
@@ -77,3 +77,21 @@ def make_dataset(coords: dict, data: dict, attrs: dict, scene) -> xr.Dataset:
 
 def utc_now() -> str:
     return _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
+
+
+def output_times(duration, step, key="run.output_step"):
+    """The output times 0, step, 2 step, ... up to ``duration`` (never past it). [s]
+
+    Raises
+    ------
+    ValueError
+        A step longer than the run (one sample: nothing to analyse); ``key`` names the scene's key.
+    """
+    duration, step = float(duration), float(step)
+    if step > duration:
+        raise ValueError(
+            f"the output step {step:g} s ('{key}') is longer than the run, {duration:g} s: the result would hold "
+            "one sample; shorten the step or lengthen the run"
+        )
+    n = int(np.floor(duration / step * (1.0 + 1e-12) + 1e-9))
+    return np.arange(n + 1) * step

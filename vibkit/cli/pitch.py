@@ -263,6 +263,9 @@ def refused(cmd, a, res, extra):
     band = ests[0].band_hz
     hint = ""
     if not (getattr(a, "speed", None) or getattr(a, "escalator", None) or getattr(a, "band", None)):
-        hint = " (a band for any escalator without a speed: give --speed, --escalator or --band)"
+        hint = (
+            " (the band searched without a speed: it misses a 101.6 mm chain above 0.6 m/s; give --speed, "
+            "--escalator or --band)"
+        )
     msg(f"vibkit {cmd}: {res.status} in {fmt_band(band)}{hint}: {res.reason}")
     return res.exit_code

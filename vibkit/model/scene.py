@@ -575,6 +575,12 @@ def _analysis_sections(src, sec, analysis):
     for key in ("step", "duration", "output_step"):
         if key in sec[name]:
             _positive(src, f"{name}.{key}", sec[name][key])
+    step_key = "output_step" if analysis == "forward" else "step"
+    if analysis != "kinematics" and sec[name][step_key] > sec[name]["duration"]:
+        raise SceneError(
+            f"{src}: '{name}.{step_key}' = {sec[name][step_key]!r} s is longer than '{name}.duration' = "
+            f"{sec[name]['duration']!r} s: the result would hold one sample"
+        )
     if analysis == "kinematics" and not sec[name]["stop"] > sec[name]["start"]:
         raise SceneError(f"{src}: 'kinematics.stop' must be greater than 'kinematics.start'")
     if analysis == "inverse" and sec["motion"]["speed"] == 0:
