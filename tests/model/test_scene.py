@@ -177,3 +177,16 @@ def test_output_times_never_pass_the_run():
     assert output_times(0.3, 0.1).size == 4  # 0.3 / 0.1 is 2.9999999999999996 in floats
     with pytest.raises(ValueError, match="longer than the run"):
         output_times(2.0, 3.0)
+
+
+def test_a_worn_link_s_pitch_as_a_string_is_a_type_error(tmp_path):
+    """A stranger's worn_links = [[40, "0.1343"]] read "must be positive, got '0.1343'": the problem is the type."""
+    text = (
+        (SIM / "thesis-forward.toml")
+        .read_text()
+        .replace("n_rollers = 159", 'n_rollers = 159\nworn_links = [[40, "0.1343"]]')
+    )
+    p = tmp_path / "s.toml"
+    p.write_text(text)
+    with pytest.raises(SceneError, match=r"pitch of link 40 must be a number \[m\], got str '0.1343'"):
+        load_scene(p)

@@ -157,7 +157,7 @@ def run(a):
                 [
                     h.name,
                     f"{h.frequency_hz:.4f}",
-                    "n/a" if math.isnan(h.snr_db) else f"{h.snr_db:.0f}",
+                    "n/a" if math.isnan(h.snr_db) else f"{h.snr_db:z.0f}",
                     f"{1000 * h.implied_pitch_m:.2f}",
                     f"{1000 * h.nearest_catalogue_m:.2f} ({h.deviation_percent:+.1f} %)",
                     "<-" if h.chosen else "",

@@ -562,7 +562,7 @@ def hypotheses(bursts, f0, speed, teeth, pitch_range, links_per_step=3):
             f0,
             True,
             f"strongest harmonic family in {1000 * lo:.0f}-{1000 * hi:.0f} mm (octave-safe harmonic-sum "
-            f"search), {snr_f:.0f} dB over the floor",
+            f"search), {snr_f:z.0f} dB over the floor",
         )
     )
     others = (
@@ -586,7 +586,7 @@ def hypotheses(bursts, f0, speed, teeth, pitch_range, links_per_step=3):
         seen = (
             "not resolved"
             if math.isnan(snr)
-            else (f"seen, {snr:.0f} dB" if snr > SEEN_SNR_DB else f"weak, {snr:.0f} dB")
+            else (f"seen, {snr:z.0f} dB" if snr > SEEN_SNR_DB else f"weak, {snr:z.0f} dB")
         )
         c, dev = nearest_catalogue(speed / f0)
         reason = f"consequence of the chosen reading ({seen}); not a link-pass candidate"

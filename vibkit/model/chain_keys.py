@@ -32,7 +32,12 @@ def pairs(src, c, key, n, what, unit, kind):
         number, value = entry
         if isinstance(number, bool) or not isinstance(number, int) or not 1 <= number <= n:
             raise SceneError(f"{src}: 'chain.{key}': {kind} number must be an integer 1..{n}, got {number!r}")
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0:
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise SceneError(
+                f"{src}: 'chain.{key}': {what} of {kind} {number} must be a number [{unit}], got "
+                f"{type(value).__name__} {value!r}"
+            )
+        if not math.isfinite(value) or value <= 0:
             raise SceneError(
                 f"{src}: 'chain.{key}': {what} of {kind} {number} must be positive [{unit}], got {value!r}"
             )
