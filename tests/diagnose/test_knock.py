@@ -3,6 +3,7 @@ round one; the chain's own lines make no knock; the stated false-alarm probabili
 
 import json
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -120,6 +121,22 @@ def test_ride_finds_the_simulated_flat_roller_and_not_the_round_one(tmp_path, ca
     assert flat["checked"] and flat["detected"]
     assert flat["roller_radius_m"] == pytest.approx(0.035)
     assert flat["frequency_hz"] == pytest.approx(V / (2 * math.pi * 0.035), rel=0.01)
+
+
+@pytest.mark.slow
+def test_a_scene_started_at_speed_rides_one_loop_later(tmp_path, capsys):
+    """A stranger's 12 s scene started at 0.5 m/s with step 20 at the top of the incline: `vibkit ride` said its
+    0.1 s ride was too short. The step rides the incline one loop later: the ride is simulated that long, and
+    finds the flat roller."""
+    text = load_scene(SIM / "thesis-forward.toml").text
+    text = text.replace("n_rollers = 159", "n_rollers = 159\nroller_flat_by_roller = [[59, 0.005]]")
+    text = re.sub(r"(?m)^duration = .*$", "duration = 12.0", text)
+    text = re.sub(r"(?m)^initial_speed = .*$", "initial_speed = 0.5", text)
+    path = tmp_path / "flat.toml"
+    path.write_text(text)
+    assert main(["ride", str(path), "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["roller_knock"]["detected"] and any("does not ride up the incline" in n for n in d["notes"])
 
 
 def test_a_recording_without_the_rollers_radius_says_so(capsys):

@@ -286,6 +286,12 @@ def _longest_run(mask):
     return int(starts[k]), int(stops[k])
 
 
+#: an incline cut by an end of the simulated time and shorter than this (the shortest ride weighed) is none [s]:
+#: a scene that starts with its step at the top of the incline rides it for a tenth of a second (its ride is one
+#: loop later)
+MIN_INCLINE_AT_AN_END_S = 0.5
+
+
 class NoIncline(ValueError):
     """A simulated record in which the step reaches no incline (it rises only round a head)."""
 
@@ -317,6 +323,12 @@ def incline_from_vertical_speed(vz, fs, *, min_speed=0.05):
         )
     a, b = _longest_run(part > 0.5 * plateau)
     a, b = a + longest[0], b + longest[0]
+    if (a == 0 or b == vz.size) and (b - a) / fs < MIN_INCLINE_AT_AN_END_S:
+        raise NoIncline(
+            f"the simulated step rides the incline for {(b - a) / fs:.2g} s only, at the "
+            f"{'start' if a == 0 else 'end'} of the {vz.size / fs:.3g} s simulated: simulate longer (--duration) or "
+            "give the segment (--segment)"
+        )
     note = f"vertical speed {plateau:+.3g} m/s of the simulated roller (up the incline)"
     if a == 0 or b == vz.size:
         note += "; the incline reaches an end of the simulated time (simulate longer: --duration)"
