@@ -107,7 +107,10 @@ def run(a):
         f"(pitch ratio recorded/simulated {fmt_pm(comp.pitch_ratio, comp.pitch_ratio_sigma)}): "
         f"{'consistent' if comp.pitch_consistent else 'NOT consistent'}"
     )
-    print(f"score     {comp.score:.3f}   log-spectral distance {comp.log_spectral_distance_db:.2f} dB")
+    print(
+        f"score     {comp.score:.3f} (0-1: the harmonics' agreement, frequency within 1 %, amplitude within 3 dB)   "
+        f"log-spectral distance {comp.log_spectral_distance_db:.2f} dB"
+    )
     print()
     print(
         table(
