@@ -40,6 +40,23 @@ def test_delimiter_and_decimal_detected(tmp_path, sep, dec):
     assert ("decimal comma detected" in ds.attrs["history"]) == (dec == ",")
 
 
+def test_decimal_commas_in_a_comma_separated_file_are_named(tmp_path):
+    """A stranger's 'time_s,displacement_mm' over rows like '0,005,-54,88112' was read as a 4-column file with its
+    header taken for metadata; the error asked for a time column, and --sample-rate analysed the digits."""
+    text = "time_s,displacement_mm\n" + "".join(
+        f"{t:.3f},{x:.5f}\n".replace(".", ",") for t, x in zip(T[1:], -54 + X[1:])
+    )
+    p = write(tmp_path, text)
+    with pytest.raises(RecordingError, match=r"line 2: rows of 4 whole numbers under 2 column names .*decimal commas"):
+        read_recording(p)
+    # the same numbers with ';' between the columns read as they were written
+    fixed = "time_s;displacement_mm\n" + "".join(
+        f"{t:.3f};{x:.5f}\n".replace(".", ",") for t, x in zip(T[1:], -54 + X[1:])
+    )
+    ds = read_recording(write(tmp_path, fixed, name="ok.csv"))
+    assert ds.sizes["time"] == T.size - 1
+
+
 def test_single_column_decimal_comma_with_header(tmp_path):
     p = write(
         tmp_path, "Sample rate: 100 Hz\nDesplazamiento (mm)\n" + "\n".join(f"{v:.4f}".replace(".", ",") for v in X)

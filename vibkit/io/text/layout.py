@@ -264,6 +264,8 @@ def _read_layout(path, text: str, delimiter, decimal, complete: bool, history: l
             dec = "."
 
     header, header_line, unit_row, unit_line = _header_rows(path, nonblank, n, dec)
+    if header is None and delimiter is None and decimal is None:
+        _split_decimals(path, lines, first, d, n, split)
     meta_lines = [i for i in range(first) if lines[i].strip() and i + 1 not in (header_line, unit_line)]
     pairs, free = _metadata(lines, meta_lines, d, dec)
     if header is None:
@@ -276,6 +278,27 @@ def _read_layout(path, text: str, delimiter, decimal, complete: bool, history: l
     if pairs:
         history.append(f"{len(pairs)} metadata line(s) above the data kept as attrs")
     return _Layout(lines, d, dec, n, trailing, split, first, header, header_line, unit_row, unit_line, pairs, free)
+
+
+def _split_decimals(path, lines, first, d, n, split):
+    """Raise for rows of whole numbers, twice as many as the names on the line above them, split by commas: a
+    decimal comma in a comma-separated file ('0,005' read as 0 and 5), which no option reads back."""
+    above = next((lines[i] for i in range(first - 1, -1, -1) if lines[i].strip()), None)
+    if d != "," or n % 2 or above is None:
+        return
+    names = split(above)
+    rows = [split(ln) for ln in lines[first : first + 50] if ln.strip()]
+    if (
+        2 * len(names) == n
+        and not any(re.fullmatch(r"[-+]?[0-9.eE+-]+", c.strip()) for c in names)
+        and all(re.fullmatch(r"[-+]?[0-9]+", c.strip()) for row in rows for c in row)
+    ):
+        raise RecordingError(
+            path,
+            first + 1,
+            f"rows of {n} whole numbers under {len(names)} column names ({above.strip()!r}): decimal commas in a "
+            "comma-separated file ('0,005' splits into 0 and 5)? save it with ';' or a tab between the columns",
+        )
 
 
 def _no_data(path, lines):
