@@ -132,7 +132,7 @@ class Comparison:
     channel: str
     variable: str
     units: str
-    harmonics: list
+    harmonics: list = field(repr=False)
     fundamental_sim_hz: float
     fundamental_meas_hz: float
     log_spectral_distance_db: float
@@ -147,9 +147,9 @@ class Comparison:
     pitch_consistent: bool
     pitch_tolerance: float
     confidence: float
-    orders: np.ndarray
-    order_amplitude_sim: np.ndarray
-    order_amplitude_meas: np.ndarray
+    orders: np.ndarray = field(repr=False)
+    order_amplitude_sim: np.ndarray = field(repr=False)
+    order_amplitude_meas: np.ndarray = field(repr=False)
     signals: dict = field(repr=False, default_factory=dict)
     notes: list = field(default_factory=list)
     speed_meas_sigma_m_s: float | None = None
