@@ -65,18 +65,23 @@ def test_false_alarms_hold_their_probability_under_strong_chain_lines():
     assert alarms <= n * p_fa + 3 * math.sqrt(n * p_fa * (1 - p_fa))
 
 
-def test_a_knock_train_is_found_at_its_turn():
-    rng = np.random.default_rng(3)
+def _knock_train(seed, period):
+    """9 s of chain lines and noise with a knock every ``period`` s, as the sensor's filter gives it: the second
+    derivative of a 3 ms Gaussian bump."""
+    rng = np.random.default_rng(seed)
     t = np.arange(int(9 * FS)) / FS
-    # knocks as the sensor's filter gives them: the second derivative of a 3 ms Gaussian bump each turn
     sigma, area = 3e-3, 2e-7
     x = _chain_lines(t, rng) + 0.005 * rng.standard_normal(t.size)
-    for tk in np.arange(0.1, t[-1], 1 / F_TURN):
+    for tk in np.arange(0.1, t[-1], period):
         u = t - tk
         x += (
             area * (u**2 / sigma**4 - 1 / sigma**2) * np.exp(-0.5 * (u / sigma) ** 2) / (sigma * math.sqrt(2 * math.pi))
         )
-    res = roller_knock(x, FS, speed=V, roller_radius=R, link_pitch=P)
+    return x
+
+
+def test_a_knock_train_is_found_at_its_turn():
+    res = roller_knock(_knock_train(3, 1 / F_TURN), FS, speed=V, roller_radius=R, link_pitch=P)
     assert res.detected
     assert res.frequency_hz == pytest.approx(F_TURN, rel=2e-3)
     assert res.radius_m == pytest.approx(R, rel=2e-3)
@@ -84,19 +89,10 @@ def test_a_knock_train_is_found_at_its_turn():
 
 def test_a_knock_train_just_outside_the_band_is_no_knock_at_its_edge():
     """A stranger's healthy simulated step (4-link steps, 0.65 m/s) gave 'a roller knocks' at 3.659 Hz, the search
-    band's lower edge to the digit: its peak lies outside the band. A knock train 6.5 % slower than the roller's turn (just
-    outside the +-6 % searched) is likewise no knock at the edge, and the reason says why. (7-8 % slower, a family
-    inside the band passes at a ratio of harmonics such as 11/10: see docs/explanation/limits.md.)"""
-    rng = np.random.default_rng(4)
-    t = np.arange(int(9 * FS)) / FS
-    sigma, area = 3e-3, 2e-7
-    x = _chain_lines(t, rng) + 0.005 * rng.standard_normal(t.size)
-    for tk in np.arange(0.1, t[-1], 1.065 / F_TURN):
-        u = t - tk
-        x += (
-            area * (u**2 / sigma**4 - 1 / sigma**2) * np.exp(-0.5 * (u / sigma) ** 2) / (sigma * math.sqrt(2 * math.pi))
-        )
-    res = roller_knock(x, FS, speed=V, roller_radius=R, link_pitch=P)
+    band's lower edge to the digit: its peak lies outside the band. A knock train 6.5 % slower than the roller's
+    turn (just outside the +-6 % searched) is likewise no knock at the edge, and the reason says why. (7-8 %
+    slower, a family inside the band passes at a ratio of harmonics such as 11/10: docs/explanation/limits.md.)"""
+    res = roller_knock(_knock_train(4, 1.065 / F_TURN), FS, speed=V, roller_radius=R, link_pitch=P)
     assert not res.detected and "lies at the band's edge" in res.reason
 
 
