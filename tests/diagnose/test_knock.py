@@ -135,6 +135,27 @@ def test_a_scene_started_at_speed_rides_one_loop_later(tmp_path, capsys):
     assert d["roller_knock"]["detected"] and any("does not ride up the incline" in n for n in d["notes"])
 
 
+@pytest.mark.slow
+def test_a_result_file_carries_its_rollers_radius(tmp_path, capsys):
+    """`vibkit ride flat.nc` on a simulation's own result said 'the rollers' radius is unknown (--escalator FILE)',
+    though the file carries its scene: the knock is now tested with the radius of that scene's step."""
+    import vibkit
+    from vibkit.diagnose.ride_simulation import with_ride_outputs
+    from vibkit.io import write_result
+
+    path = tmp_path / "flat.toml"
+    path.write_text(
+        load_scene(SIM / "thesis-forward.toml").text.replace(
+            "n_rollers = 159", "n_rollers = 159\nroller_flat_by_roller = [[59, 0.005]]"
+        )
+    )
+    write_result(vibkit.simulate(with_ride_outputs(load_scene(path)), progress=False), tmp_path / "flat.nc")
+    assert main(["ride", str(tmp_path / "flat.nc"), "--json"]) == 0
+    knock = json.loads(capsys.readouterr().out)["roller_knock"]
+    assert knock["checked"] and knock["detected"] and knock["roller_radius_m"] == pytest.approx(0.035)
+    assert knock["roller_radius_source"] == "roller 59 of the scene"
+
+
 def test_a_recording_without_the_rollers_radius_says_so(capsys):
     assert main(["ride", "data/field/layouts/phyphox.csv", "--segment", "0.5:3", "--json"]) == 0
     knock = json.loads(capsys.readouterr().out)["roller_knock"]

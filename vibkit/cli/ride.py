@@ -86,6 +86,27 @@ def _ride_rows(rq):
     ]
 
 
+def _carried_scene(path):
+    """The scene a vibkit result file carries in its attributes (``scene``: its TOML text), or None."""
+    if not str(path).lower().endswith((".nc", ".nc4", ".h5")) or not os.path.isfile(path):
+        return None
+    import xarray as xr
+
+    from vibkit.model.scene import SceneError, parse_scene
+
+    try:
+        with xr.open_dataset(path) as ds:
+            text, source = ds.attrs.get("scene"), ds.attrs.get("scene_source", "")
+    except (OSError, ValueError):
+        return None
+    if not text:
+        return None
+    try:
+        return parse_scene(str(text), f"{source or 'the scene'} (carried by {path})")
+    except (SceneError, ValueError, OSError):
+        return None
+
+
 def _knocks(a, is_scene, rq, sim):
     """The knock test of each ride (recording or scene, then --scene's simulation): a dict each (JSON)."""
     from vibkit.diagnose.knock import ride_knock, step_rollers_of
@@ -94,11 +115,17 @@ def _knocks(a, is_scene, rq, sim):
     from .options import escalator_profile
 
     out = []
+    profile = escalator_profile(a)
     for r, scene in ((rq, a.input if is_scene else None), (sim, a.scene)):
         if r is None:
             out.append(None)
             continue
-        rollers = step_rollers_of(scene=load_scene(scene)) if scene else step_rollers_of(profile=escalator_profile(a))
+        if scene:
+            rollers = step_rollers_of(scene=load_scene(scene))
+        elif profile is not None or r is not rq:
+            rollers = step_rollers_of(profile=profile)
+        else:  # a vibkit result file carries its scene
+            rollers = step_rollers_of(scene=_carried_scene(a.input))
         res, note = ride_knock(r, rollers)
         d = {"checked": False, "reason": note} if res is None else {"checked": True, **res.as_dict(), "reason": note}
         if rollers is not None:
