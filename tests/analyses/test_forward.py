@@ -361,6 +361,18 @@ def test_links_in_compression_are_reported_and_a_preload_removes_them():
     assert "compression" not in held.attrs.get("warnings", "")
 
 
+def test_what_the_outputs_cannot_check_is_said(capsys):
+    """A stranger's scene listed only delta, as the guide advises, and its 65 links in compression and its 3.3 %
+    droop went unsaid. The result names the checks its outputs could not make; `vibkit simulate` prints them."""
+    bare = vibkit.simulate(variant(outputs=["delta"]), duration=0.5, progress=False)
+    assert "warnings" not in bare.attrs
+    unchecked = bare.attrs["unchecked"]
+    assert "links in compression: not checked (add link_tension" in unchecked
+    assert "drooping speed: not checked (add sprocket_speed" in unchecked
+    full = vibkit.simulate(variant(outputs=["link_tension", "sprocket_speed"]), duration=0.5, progress=False)
+    assert "unchecked" not in full.attrs and "go into compression" in full.attrs["warnings"]
+
+
 def test_a_stalled_motor_is_reported():
     """1,440 kg on a step against the P controller of the reference (kp = 600): the chain never gets up
     to speed; the result says so instead of running on silently (started at 0.5 m/s, the speed falls

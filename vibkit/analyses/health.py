@@ -5,7 +5,8 @@ a speed that droops.
 finding; :func:`vibkit.simulate` stores them in ``attrs["warnings"]`` (newline-separated) and ``vibkit
 simulate`` prints them on stderr. A check whose output the scene did not ask for is skipped (the
 compression check needs ``link_tension``; the motor checks ``sprocket_speed`` or ``chain_speed``, and
-``motor_torque`` for the torque limit).
+``motor_torque`` for the torque limit): :func:`unchecked_physics` says which, and ``vibkit simulate`` prints
+those as notes (``attrs["unchecked"]``).
 """
 
 from __future__ import annotations
@@ -14,7 +15,7 @@ import math
 
 import numpy as np
 
-__all__ = ["DROOP_FRACTION", "DROOP_WINDOW_S", "physics_warnings"]
+__all__ = ["DROOP_FRACTION", "DROOP_WINDOW_S", "physics_warnings", "unchecked_physics"]
 
 #: a speed more than this fraction below the set speed, averaged over DROOP_WINDOW_S, is a droop
 DROOP_FRACTION = 0.02
@@ -35,6 +36,25 @@ def physics_warnings(ds, scene, model) -> list[str]:
     if scene.analysis == "forward" and "motor" in effects:
         out += _motor(ds, effects["motor"], model)
     out += _unseen_flats(scene)
+    return out
+
+
+def unchecked_physics(ds, scene) -> list[str]:
+    """One line per check of :func:`physics_warnings` that the result ``ds`` of ``scene`` could not make: the
+    output it needs was not asked for (asking for it costs the outputs' time)."""
+    from ..model.schema import effect_options
+
+    if scene.analysis not in ("inverse", "forward"):
+        return []
+    out = []
+    if "link_tension" not in ds:
+        out.append("links in compression: not checked (add link_tension to [outputs] variables)")
+    if (
+        scene.analysis == "forward"
+        and "motor" in effect_options(scene.effects)
+        and not {"sprocket_speed", "chain_speed"} & set(ds.data_vars)
+    ):
+        out.append("a stalled motor or a drooping speed: not checked (add sprocket_speed to [outputs] variables)")
     return out
 
 

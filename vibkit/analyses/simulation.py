@@ -126,11 +126,14 @@ def simulate(
 def _warn(ds, scene, model):
     """Record in ``attrs["warnings"]`` (one per line) what the physics of the run says a user should not
     miss: links in compression, a stalled motor, a drooping speed (:mod:`vibkit.analyses.health`)."""
-    from .health import physics_warnings
+    from .health import physics_warnings, unchecked_physics
 
     found = physics_warnings(ds, scene, model)
     if found:
         ds.attrs["warnings"] = "\n".join(found)
+    skipped = unchecked_physics(ds, scene)
+    if skipped:
+        ds.attrs["unchecked"] = "\n".join(skipped)
     return ds
 
 

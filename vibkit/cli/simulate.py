@@ -93,8 +93,11 @@ def _run(a, vibkit, write_result, scene, target):
     if "convergence" in ds.attrs:
         summary["convergence"] = json.loads(ds.attrs["convergence"])
     summary["warnings"] = [w for w in ds.attrs.get("warnings", "").split("\n") if w]
+    summary["unchecked"] = [w for w in ds.attrs.get("unchecked", "").split("\n") if w]
     for w in summary["warnings"]:
         msg(textwrap.fill(f"warning: {w}", 100, subsequent_indent="  "))
+    for w in summary["unchecked"]:
+        msg(f"note: {w}")
     if a.json:
         print_json("simulate", summary)
     else:
