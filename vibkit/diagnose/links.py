@@ -107,7 +107,10 @@ class LinksResult:
         empty when it does).
     threshold, false_alarm, dof : float
     statistic : ndarray (n_links,)
-        Absolute t of every link (the map the report draws).
+        Absolute t of every link before any flagged link's change is taken out (the map the report draws).
+    residual_statistic : ndarray (n_links,) or None
+        With a scene: the same once the flagged links' change is taken out (what decides that no other link is
+        flagged).
     excess_mm : ndarray (n_links,)
         Fitted excess pitch at every link. [mm]
     method : str
@@ -134,6 +137,7 @@ class LinksResult:
     #: "ok" (the links were scanned), or "inconclusive" (deviations no link number can be given for)
     status: str = "ok"
     reason: str = ""
+    residual_statistic: np.ndarray | None = None
 
     def as_dict(self):
         return {
@@ -580,6 +584,7 @@ def _result(file, ch, sensor, speed, lmap, n, flagged, scan, excess, method, mar
         false_alarm=scan.false_alarm,
         dof=scan.dof,
         statistic=scan.statistic,
+        residual_statistic=getattr(scan, "residual", None),
         excess_mm=excess,
         method=method,
         marker_s=marker_s,

@@ -383,6 +383,9 @@ class LinkScan:
     unsteady : tuple of int
         Own cycle only: 1-based links that passed the threshold but scatter from loop to loop far beyond the
         pooled scatter (a start-up transient in one loop, not a link that is the same every loop): not flagged.
+    residual : ndarray (n_links,) or None
+        Signature only: the absolute t of every link once the flagged links' change is taken out (what no
+        further link passed); None for the own cycle.
     peaks : tuple of int
         Signature only, where a link is flagged and every loop's own fit of the signature peaks above
         ``PEAK_SIGMA`` of its sigmas: the 1-based link where each peaks. One worn link peaks at one number every loop; a peak that moves by the same D links from loop to
@@ -400,6 +403,7 @@ class LinkScan:
     method: str
     unsteady: tuple = ()
     peaks: tuple = ()
+    residual: np.ndarray | None = None
 
 
 #: a loop's own fit must peak above this many of its sigmas for :attr:`LinkScan.peaks` to be recorded
@@ -569,7 +573,10 @@ def scan_links(
         flags.append(LinkFlag(k + 1, float(tstat[k]), float(amp[k] * scale), sig * scale, "signature", loops, alt))
         shape -= amp[k] * np.roll(tmpl, k, axis=0)[None]
         extra += (mismatch * amp[k] * np.roll(rho, k)) ** 2 + (mismatch_floor * amp[k]) ** 2
-    return LinkScan(tuple(flags), first[0], thr, alpha, dof, first[1], first[2], L, "signature", peaks=peaks)
+    residual = tstat if len(flags) < max_flags else None  # the last pass fitted what the flags left
+    return LinkScan(
+        tuple(flags), first[0], thr, alpha, dof, first[1], first[2], L, "signature", peaks=peaks, residual=residual
+    )
 
 
 def _alternatives(t, k, rho, r_noise, floor, alpha, err):

@@ -26,32 +26,46 @@ def links_page(doc, ctx) -> None:
         return
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(figsize=_WIDE)
-    fig.subplots_adjust(left=0.08, right=0.97, top=0.84, bottom=0.12)
+    residual = res.residual_statistic if res.flagged else None
+    if residual is None:
+        fig, ax = plt.subplots(figsize=_WIDE)
+        axes = [ax]
+    else:
+        fig, axes = plt.subplots(2, 1, figsize=_WIDE, sharex=True, gridspec_kw={"height_ratios": [2, 1]})
+        ax = axes[0]
+    fig.subplots_adjust(left=0.08, right=0.97, top=0.84, bottom=0.1, hspace=0.12)
     _page_title(
         fig,
         "Links",
         f"{res.loops} loops of {res.n_links} links, channel {res.channel}; {res.method}; a chain without a worn "
         f"link passes the threshold |t| = {res.threshold:.2f} in at most {100 * res.false_alarm:g} % of its "
-        "recordings; link 1: the link at the sensor at the start, numbers in passing order. Bars: each link's fit "
-        "before any flagged link is taken out (a worn link's change fits its neighbours too, so many bars may pass "
-        "the line); the flagged link's change is then removed and the rest fitted again: only what still passes is "
-        "flagged",
+        "recordings; link 1: the link at the sensor at the start, numbers in passing order. "
+        + (
+            "Above: each link's fit before any flagged link is taken out (a worn link's change fits its neighbours "
+            "too, so many bars may pass the line); below: each link's fit once the flagged links' change is taken "
+            "out, which no other link passes"
+            if residual is not None
+            else "Bars: each link's fit"
+        ),
     )
     links = np.arange(1, res.n_links + 1)
     ax.vlines(links, 0, res.statistic, color="C0", lw=1.0)
-    ax.axhline(res.threshold, color="C3", lw=1.0, ls="--", label=f"threshold {res.threshold:.2f}")
     for f in res.flagged:
         label = flag_label(f)
         ax.plot([f["link"]], [f["t"]], "o", color="C3", ms=6)
         ax.annotate(label, (f["link"], f["t"]), textcoords="offset points", xytext=(6, -4), fontsize=8)
     if not res.flagged:
         ax.text(0.02, 0.92, "no link flagged", transform=ax.transAxes, fontsize=9)
-    top = max(float(np.max(res.statistic)), res.threshold)
-    ax.set_ylim(0, 1.15 * top)
-    ax.set_xlim(0, res.n_links + 1)
-    ax.set_xlabel("link number")
+    ax.set_ylim(0, 1.15 * max(float(np.max(res.statistic)), res.threshold))
     ax.set_ylabel("|t| of the link's fit")
+    if residual is not None:
+        axes[1].vlines(links, 0, residual, color="C0", lw=1.0)
+        axes[1].set_ylim(0, 1.3 * max(float(np.max(residual)), res.threshold))
+        axes[1].set_ylabel("|t|, flagged\nlinks taken out")
+    for a in axes:
+        a.axhline(res.threshold, color="C3", lw=1.0, ls="--", label=f"threshold {res.threshold:.2f}")
+        a.set_xlim(0, res.n_links + 1)
+        a.grid(alpha=0.3)
+    axes[-1].set_xlabel("link number")
     ax.legend(loc="upper right", fontsize=8)
-    ax.grid(alpha=0.3)
     doc.emit(fig, "links")
