@@ -64,6 +64,7 @@ def test_geometry_instead_of_links_and_sensor():
         (lambda t: t.replace("nominal_pitch = 0.13333", ""), r"missing value 'chain.nominal_pitch'"),
         (lambda t: t.replace("n_links = 160", ""), r"missing value 'chain.n_links' \(or both 'geometry.rise'"),
         (lambda t: t.replace("speed = 0.5", "speed = 50"), r"'drive.speed' = 50.0 is outside"),
+        (lambda t: t.replace("speed = 0.5", "speed = 2.34"), r"'drive.speed' = 2.34 is outside .* km/h\?"),
         (lambda t: t.replace("speed = 0.5", 'speed = "fast"'), r"'drive.speed' expected float"),
         (lambda t: t.replace("n_links = 160", "n_links = 160\nlinks_per_step = 5"), r"'chain.links_per_step' = 5"),
         (lambda t: t.replace("n_links = 160", "n_links = 160\ncolour = 1"), r"unknown key 'chain.colour'"),

@@ -50,7 +50,10 @@ class EscalatorKeys(_Section):
 @dataclass(frozen=True)
 class DriveKeys(_Section):
     speed: float = key(
-        "m/s", "rated step (chain) speed on the straight", required=True, range=(0.05, 3.0, "m/s (escalators)")
+        "m/s",
+        "rated step (chain) speed on the straight",
+        required=True,
+        range=(0.05, 1.0, "m/s (escalators run at 0.75 m/s at most, EN 115-1: a speed in km/h?)"),
     )
     speed_uncertainty: float = key(
         "m/s",
