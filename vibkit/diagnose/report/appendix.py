@@ -9,7 +9,7 @@ import textwrap
 import numpy as np
 
 from ..rounding import fmt_band
-from .common import _PAGE, _fmt, _page_title, _table, fmt_length, speed_value
+from .common import _PAGE, _fmt, _page_title, _table, fmt_length, speed_sigma_source, speed_source, speed_value
 
 __all__ = ["data_quality_page", "parameters_page"]
 
@@ -48,11 +48,12 @@ def parameters_page(doc, ctx) -> None:
     pitch, sc, duration = ctx.pitch, ctx.scene, ctx.duration
     fig = plt.figure(figsize=_PAGE)
     _page_title(fig, "Parameters", "everything needed to repeat this report")
+    sigma_from = speed_sigma_source(ctx)  # a row of its own: beside the speed's source it overflowed the cell
     rows = [
         ["channel", ctx.channel],
         ["chain speed", speed_value(ctx)],
-        ["speed from", _fit(_short_paths(_speed_from(ctx), ctx))],
-        *([["speed sigma from", _fit(_short_paths(_sigma_from(ctx), ctx))]] if _sigma_from(ctx) else []),
+        ["speed from", _fit(_short_paths(speed_source(ctx), ctx))],
+        *([["speed sigma from", _fit(_short_paths(sigma_from, ctx))]] if sigma_from else []),
         ["nominal pitch", fmt_length(ctx.nominal_pitch) if ctx.nominal_pitch else "not given"],
         ["limits", " / ".join(f"{v:g} %" for v in ctx.limits)],
         ["search band", _band(pitch.band_hz if pitch else ctx.band)],
@@ -101,20 +102,6 @@ _LINES, _WIDTH = 48, 100
 
 #: characters a value cell of the parameters table holds at its font (9 pt, 0.6 of the table's width)
 _CELL_CHARS = 58
-
-
-def _speed_from(ctx):
-    """Where the run's speed came from (its sigma's source has a row of its own: together they overflowed)."""
-    run = ctx.run_speed
-    return "-" if run is None or run.value is None else run.source
-
-
-def _sigma_from(ctx):
-    """Where the speed's sigma came from, or "" where it is the speed's own (given) or not stated."""
-    run = ctx.run_speed
-    if run is None or run.value is None or not run.sigma or run.sigma_source in ("", "given"):
-        return ""
-    return run.sigma_source
 
 
 def _fit(text):

@@ -150,11 +150,17 @@ def speed_value(ctx) -> str:
 
 
 def speed_source(ctx) -> str:
-    """Where the run's speed and its sigma came from."""
+    """Where the run's speed came from ("-" without one)."""
     run = ctx.run_speed
-    if run is None or run.value is None:
-        return "-"
-    return run.source + (f"; sigma: {run.sigma_source}" if run.sigma and run.sigma_source not in ("", "given") else "")
+    return "-" if run is None or run.value is None else run.source
+
+
+def speed_sigma_source(ctx) -> str:
+    """Where the speed's sigma came from; "" where it is the speed's own (given) or not stated."""
+    run = ctx.run_speed
+    if run is None or run.value is None or not run.sigma or run.sigma_source in ("", "given"):
+        return ""
+    return run.sigma_source
 
 
 def speed_figure(ctx) -> str:
