@@ -146,6 +146,16 @@ def _start_past(t, y, yt, k1, s_b, direction, tiny, prm, ws, ctl, counters, tb):
     return rhs(t, yt, k1, prm, ws, False, tb)
 
 
+@nb.njit(cache=True, error_model="numpy", inline="always")
+def _scale(i, a, b, rtol, atol):
+    """The error scale of component ``i`` over a step from ``a`` to ``b``. Positions and angles (components 0
+    and 2) grow without bound: their tolerance is taken against a fixed 1 m / 1 rad, so that the accuracy does
+    not loosen over time."""
+    if i == 0 or i == 2:
+        return atol + rtol
+    return atol + rtol * max(abs(a), abs(b))
+
+
 #: a breakpoint closer than this share of the step ahead (the last step ended just short of it) is landed on
 #: by :func:`_land`, one evaluation, instead of a dopri5 step of six
 LAND = 0.01
@@ -166,11 +176,7 @@ def _land(t, y, hl, k1, k2, yt, y1, has_lo, lo, sc, direction, tiny, rtol, atol,
     err = 0.0
     for i in range(m):
         y1[i] = y[i] + 0.5 * hl * (k1[i] + k2[i])
-        if i == 0 or i == 2:
-            sc_i = atol + rtol
-        else:
-            sc_i = atol + rtol * max(abs(y[i]), abs(y1[i]))
-        ei = 0.5 * hl * (k2[i] - k1[i]) / sc_i
+        ei = 0.5 * hl * (k2[i] - k1[i]) / _scale(i, y[i], y1[i], rtol, atol)
         err += ei * ei
     err = math.sqrt(err / m)
     return 0 if err <= 1.0 else 2
@@ -316,12 +322,7 @@ def _dopri5_chunk(
         counters[2] += 6
         err = 0.0
         for i in range(m):
-            # positions and angles (components 0 and 2) grow without bound: their tolerance is
-            # taken against a fixed 1 m / 1 rad so that the accuracy does not loosen over time
-            if i == 0 or i == 2:
-                sc_i = atol + rtol
-            else:
-                sc_i = atol + rtol * max(abs(y[i]), abs(y1[i]))
+            sc_i = _scale(i, y[i], y1[i], rtol, atol)
             ei = h * (E1 * k1[i] + E3 * k3[i] + E4 * k4[i] + E5 * k5[i] + E6 * k6[i] + E7 * k7[i]) / sc_i
             err += ei * ei
         err = math.sqrt(err / m)
