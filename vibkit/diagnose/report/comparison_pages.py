@@ -164,6 +164,8 @@ def harmonics_page(doc, ctx) -> None:
             for m in [
                 f"score rule: {comp.rule}",
                 f"{FREQUENCY_RATIO}: each harmonic's frequency, recorded over simulated",
+                "f rec: each harmonic's own peak, to the digits its ratio's sigma allows; the link pass on page 1"
+                " is fitted to all harmonics at once, so order 1 here may differ from it within its sigma",
             ]
             + [n for n in comp.notes if not n.startswith("pitch implied")]  # page 1 states the pitch
         ),
