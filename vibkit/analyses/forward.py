@@ -75,7 +75,7 @@ from ..model.slots import (
 )
 from ..model.table_check import checked_table
 from .integrate import IntegrationError, integrate
-from .results import make_dataset, output_times
+from .results import make_dataset, output_times, run_speed
 
 __all__ = ["forward_dynamics", "initial_state", "ForwardModel", "default_rtol"]
 
@@ -635,9 +635,11 @@ def _post_process(fm, t, y, outputs, stats, y_obs=None, table=None):
             if name in want:
                 data[name] = (("time", "roller", "axis"), arr)
     nominal = nominal_speed(fm.effects, scene.run)
+    speed, f_lp = run_speed(t, y[:, 2], model.sprocket.teeth, model.mean_pitch, nominal)
     attrs = {
-        "chain_speed_m_s": float(nominal),
-        "link_pass_frequency_hz": model.link_pass_frequency(nominal) if nominal else 0.0,
+        "chain_speed_m_s": speed,
+        "speed_set_point_m_s": float(nominal),
+        "link_pass_frequency_hz": f_lp,
         # from the table: the tabulated chain's own link-length error (the outputs were read from it)
         "closure_residual_max": float(tb[TB_HEAD][HEAD_LINK_ERROR]) if light_table else float(resid.max()),
         "solver_method": stats["method"],

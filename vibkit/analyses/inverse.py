@@ -191,6 +191,7 @@ def inverse_dynamics(model, *, speed, duration, step, start=0.0, effects=None, o
                 data[name] = (("time", "roller", "axis"), arr)
     attrs = {
         "chain_speed_m_s": float(speed),
+        "speed_set_point_m_s": float(speed),  # imposed: roller 1 runs at it along the guide
         "closure_residual_max": float(out["closure_residual"].max()),
         "power_balance_max_W": float(np.abs(out["power_balance"]).max()) if need_forces else float("nan"),
         "link_pass_frequency_hz": model.link_pass_frequency(speed),

@@ -49,7 +49,7 @@ from ..model.effects import pack_parameters
 from ..model.guide import S0, SIGP, local_inverse
 from ..model.schema import effect_options, nominal_speed
 from .integrate import IntegrationError
-from .results import make_dataset
+from .results import make_dataset, run_speed
 from .study_kernels import assemble, kkt_pattern, study_closure_residual, study_kinematics
 
 __all__ = ["StudyFormulation", "run_study", "BAUMGARTE_ALPHA", "BAUMGARTE_BETA", "STUDY_SETTINGS"]
@@ -459,13 +459,15 @@ def _dataset(form, sol, wall, method, rtol, atol, max_step):
     data = {name: (("time",), out[name]) for name in scalars}
     data["link_tension"] = (("time", "link"), tension)
     nominal = nominal_speed(form.effects, scene.run)
+    speed, f_lp = run_speed(t, out["sprocket_angle"], model.sprocket.teeth, model.mean_pitch, nominal)
     attrs = {
         "formulation": "study: p + 2 coordinates, Lagrange multipliers, Baumgarte stabilisation",
         "baumgarte_alpha_per_s": form.alpha,
         "baumgarte_beta_per_s": form.beta,
         "coordinate_map": form.coordinate_map,
-        "chain_speed_m_s": float(nominal),
-        "link_pass_frequency_hz": model.link_pass_frequency(nominal) if nominal else 0.0,
+        "chain_speed_m_s": speed,
+        "speed_set_point_m_s": float(nominal),
+        "link_pass_frequency_hz": f_lp,
         "closure_residual_max": float(out["closure_residual"].max()),
         "solver_method": method,
         "solver_rtol": float(rtol),

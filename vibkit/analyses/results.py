@@ -9,7 +9,7 @@ import xarray as xr
 
 from .. import __version__
 
-__all__ = ["VARIABLES", "make_dataset", "output_times"]
+__all__ = ["VARIABLES", "make_dataset", "output_times", "run_speed"]
 
 # name -> (units, long_name)
 VARIABLES = {
@@ -39,6 +39,26 @@ VARIABLES = {
     "contact_energy": ("J", "elastic energy stored in roller-tooth contacts"),
     "spring_energy": ("J", "elastic energy of the tensioner spring"),
 }
+
+
+def run_speed(t, theta, teeth: int, mean_pitch: float, nominal: float):
+    """The chain speed [m/s] and link-pass frequency [Hz] a simulated record states: measured, not set.
+
+    One sprocket turn moves ``teeth`` links, whatever their length, so the links pass at the sprocket's
+    mesh frequency, teeth times its mean turning rate, and the chain runs at that frequency times its
+    mean link pitch. Both are taken over the record's second half (``theta``: the sprocket angle at the
+    times ``t``), after a start from rest: a drive whose speed controller droops under load, or a longer
+    chain on its original sprocket, runs at other than the set ``nominal`` speed, and a pitch read from
+    the record with the set speed would be off by as much. A record of fewer than three samples, or one
+    whose sprocket does not turn, states the ``nominal`` speed (and its link pass, nominal / mean_pitch)."""
+    t = np.asarray(t, dtype=float)
+    theta = np.asarray(theta, dtype=float)
+    half = t.size // 2
+    if t.size >= 3 and t[-1] > t[half]:
+        f_mesh = teeth * abs(theta[-1] - theta[half]) / (2.0 * np.pi * (t[-1] - t[half]))
+        if f_mesh * mean_pitch > 1e-9:
+            return float(f_mesh * mean_pitch), float(f_mesh)
+    return float(nominal), float(nominal / mean_pitch) if nominal else 0.0
 
 
 def make_dataset(coords: dict, data: dict, attrs: dict, scene) -> xr.Dataset:
