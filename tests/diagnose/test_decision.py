@@ -13,7 +13,7 @@ import scipy.signal
 import vibkit
 from vibkit.cli import main
 from vibkit.cli.options import chain_speed, pitch_length
-from vibkit.diagnose.channels import estimate_channels, speed_from_recording, vibration_channels
+from vibkit.diagnose.channels import decision_channels, estimate_channels, speed_from_recording, vibration_channels
 from vibkit.diagnose.decision import (
     EXIT_CODES,
     STATUS_IMPLAUSIBLE,
@@ -341,3 +341,21 @@ def test_a_simulations_closure_residual_is_not_a_channel(tmp_path):
     # a recording's own channel of that name is a channel
     own = _rec({"closure_residual": np.sin(2 * np.pi * 3.75 * np.arange(2000) / FS)})
     assert vibration_channels(own) == ["closure_residual"]
+    # one chain: its tensioner sensor decides, the step's biased link pass does not make it "two periodicities"
+    assert decision_channels(rec) == ["tensioner_displacement"]
+    assert decision_channels(own) == ["closure_residual"]
+
+
+def test_a_simulation_of_forces_and_energies_is_one_chain():
+    """A stranger's inverse scene of an escalator of its own (the shipped one here): its energies and drive
+    force each read the link pass with a bias of their own at microhertz sigmas, and the recording was refused
+    as two periodicities. Its tensioner decides; the link pass is speed / pitch within 0.1 % (an inverse run
+    holds roller 1's speed along the guide, and the links pass slower while it rides an arc: measured -0.006 %
+    over 10 s, -0.03 % over 20 s)."""
+    from vibkit.model.scene import load_scene
+
+    ds = vibkit.simulate(load_scene("sim/thesis-inverse.toml"), duration=10.0, progress=False)
+    assert {"kinetic_energy", "drive_force", "delta"} <= set(vibration_channels(ds))
+    res = estimate_channels(ds, speed=0.5)
+    assert res.status == STATUS_OK and res.best.channel == "delta"
+    assert res.best.fundamental_hz == pytest.approx(0.5 / (0.4 / 3), rel=1e-3)

@@ -5,7 +5,8 @@
 combines them: the result comes from the channels where the link pass is
 found (status ``ok`` or ``inconclusive``); when several are, their fundamentals must agree within
 :data:`CONSISTENCY_SIGMAS` combined sigmas (else the recording is refused as ``implausible``: two
-periodicities, not one chain), and the channel with the smallest sigma gives the numbers.
+periodicities, not one chain), and the channel with the smallest sigma gives the numbers. A vibkit
+simulation is one chain: its sensor decides alone (:func:`decision_channels`).
 
 :func:`speed_from_recording` finds a chain speed the file states (Leon's ``chain_speed_m_s``, a
 Spanish sheet's ``Velocidad (m/s)``).
@@ -19,7 +20,14 @@ from dataclasses import dataclass, field
 
 from .decision import EXIT_CODES, STATUS_IMPLAUSIBLE, STATUS_NOT_FOUND
 
-__all__ = ["CONSISTENCY_SIGMAS", "ChannelsResult", "estimate_channels", "speed_from_recording", "vibration_channels"]
+__all__ = [
+    "CONSISTENCY_SIGMAS",
+    "ChannelsResult",
+    "decision_channels",
+    "estimate_channels",
+    "speed_from_recording",
+    "vibration_channels",
+]
 
 #: channels whose fundamentals differ by more than this many combined sigmas are not one chain
 CONSISTENCY_SIGMAS = 5.0
@@ -52,6 +60,27 @@ def speed_from_recording(recording):
 #: (1e-14 m), and its pattern repeats with the link pass like everything else in a simulation
 SOLVER_DIAGNOSTICS = ("closure_residual",)
 _ANALYSES = ("kinematics", "inverse", "forward")
+#: what a simulation's decision reads, the first group present: the tensioner's displacement sensor (fixed, it
+#: sees every link at one place: its link pass is the chain's), else a step accelerometer. A simulation is one
+#: chain; its other outputs (forces, torques, energies) are the model's, not a sensor's, and each reads the link
+#: pass with a bias of its own at a sigma of microhertz, so that two of them would always "disagree"
+SIMULATED_SENSORS = (("tensioner_displacement", "delta"), ("accel_step",))
+
+
+def _simulated(recording) -> bool:
+    return recording.attrs.get("analysis") in _ANALYSES and "scene" in recording.attrs
+
+
+def decision_channels(recording) -> list:
+    """The channels whose link pass decides: every :func:`vibration_channels` one of a recording; of a vibkit
+    simulation, its sensor (:data:`SIMULATED_SENSORS`), or all of them where it has none."""
+    chans = vibration_channels(recording)
+    if _simulated(recording):
+        for group in SIMULATED_SENSORS:
+            present = [c for c in group if c in chans]
+            if present:
+                return present[:1]
+    return chans
 
 
 def vibration_channels(recording) -> list:
@@ -60,7 +89,7 @@ def vibration_channels(recording) -> list:
     code, a column that never changes), not a simulation's numerical diagnostic (:data:`SOLVER_DIAGNOSTICS`)."""
     from ..io.channels import COUNTER_ATTR, STATUS_ATTR, is_status
 
-    simulated = recording.attrs.get("analysis") in _ANALYSES and "scene" in recording.attrs
+    simulated = _simulated(recording)
     out = []
     for v in recording.data_vars:
         da = recording[v]
@@ -127,7 +156,7 @@ class ChannelsResult:
 
 
 def estimate_channels(recording, *, channel=None, **kwargs) -> ChannelsResult:
-    """:func:`estimate_pitch` on ``channel``, or on every :func:`vibration_channels` one, combined.
+    """:func:`estimate_pitch` on ``channel``, or on every :func:`decision_channels` one, combined.
 
     Raises
     ------
@@ -137,7 +166,7 @@ def estimate_channels(recording, *, channel=None, **kwargs) -> ChannelsResult:
     from ..io.channels import own_samples
     from .pitch import estimate_pitch, pick_channel
 
-    names = [pick_channel(recording, channel)] if channel is not None else vibration_channels(recording)
+    names = [pick_channel(recording, channel)] if channel is not None else decision_channels(recording)
     if not names:
         names = [pick_channel(recording, None)]
     ests, errors = [], {}
