@@ -132,15 +132,19 @@ def test_link_pass_is_the_set_speed_over_the_pitch(no_load):
     steady = no_load.time.values >= 8.0
     f = mean_frequency(no_load.delta.values[steady], 1 / 0.005, 0.5 / PITCH)
     assert f == pytest.approx(0.5 / PITCH, rel=5e-4)
-    # the result states its sprocket's mesh frequency: without load the drive holds the set speed
-    assert no_load.attrs["link_pass_frequency_hz"] == pytest.approx(0.5 / PITCH, rel=1e-6)
+    # the result states the links that passed over its second half: the chain coasting in the backlash, that is
+    # delta's own link pass there (measured: 5e-6), within the backlash's bound of the set speed's
+    stated = no_load.attrs["link_pass_frequency_hz"]
+    assert stated == pytest.approx(0.5 / PITCH, rel=5e-4)
+    second = no_load.time.values >= no_load.time.values[no_load.time.size // 2]
+    assert mean_frequency(no_load.delta.values[second], 1 / 0.005, stated) == pytest.approx(stated, rel=5e-5)
 
 
 def test_a_drooping_drive_states_the_speed_it_ran_at():
     """A proportional speed controller droops under a steady drag (rolling resistance 0.002): the result
-    states the speed its chain ran at, not the set one. delta's own link pass over the second half is the
-    stated ``link_pass_frequency_hz`` within 0.1 % (measured: 0.04 %, the chain's drift in the backlash),
-    where the set speed's is 2.9 % off; the stated speed is that link pass times the pitch, and the set
+    states the speed its chain ran at, not the set one. delta's own link pass over the second half is the stated
+    ``link_pass_frequency_hz`` (the links that passed there: the run starts from rest) within 0.05 % (the
+    phase is read 2 s in from the ends), where the set speed's is 2.9 % off; the stated speed is that link pass times the pitch, and the set
     speed stays in ``speed_set_point_m_s``."""
     effects = {
         "gravity": {"g": 9.81},
@@ -148,16 +152,13 @@ def test_a_drooping_drive_states_the_speed_it_ran_at():
         "motor": {"kp": 600.0, "speed": 0.5},
         "rolling_resistance": {"coefficient": 0.002},
     }
-    ds = vibkit.simulate(
-        variant(effects=effects, run={"initial_speed": 0.5}, outputs=["delta"]), duration=12.0, progress=False
-    )
+    ds = vibkit.simulate(variant(effects=effects, outputs=["delta"]), duration=16.0, progress=False)
     f_lp = ds.attrs["link_pass_frequency_hz"]
     assert ds.attrs["speed_set_point_m_s"] == 0.5
     assert ds.attrs["chain_speed_m_s"] == pytest.approx(f_lp * PITCH, rel=1e-12)
     t = ds.time.values
-    second = t >= t[t.size // 2]
-    f = mean_frequency(ds.delta.values[second], 200.0, f_lp)
-    assert f == pytest.approx(f_lp, rel=1e-3)
+    f = mean_frequency(ds.delta.values[t >= t[t.size // 2]], 200.0, f_lp)
+    assert f == pytest.approx(f_lp, rel=5e-4)
     assert abs(f / (0.5 / PITCH) - 1) > 0.02
 
 

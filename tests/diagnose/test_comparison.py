@@ -31,9 +31,10 @@ def test_round_trip_perfect_agreement(leon_short):
         assert h["frequency_ratio"] == pytest.approx(1.0, abs=1e-12)
         assert h["amplitude_diff_db"] == pytest.approx(0.0, abs=1e-9)
     assert c.log_spectral_distance_db == pytest.approx(0.0, abs=1e-9)
-    assert c.pitch_consistent and c.pitch_ratio == pytest.approx(1.0, abs=1e-12)
-    # the scene's pitch is what the simulated signal implies (0.49 m/s over 3.675 Hz)
-    assert c.pitch_sim_m == pytest.approx(0.4 / 3, rel=2e-3)
+    # the simulation states its chain's pitch; the file's implied pitch is its counted speed over its spectrum's
+    # fundamental, which an inverse run's link pass (varying within a loop) moves by 6e-5 from the count
+    assert c.pitch_sim_m == pytest.approx(0.4 / 3, rel=1e-12)
+    assert c.pitch_consistent and c.pitch_ratio == pytest.approx(1.0, abs=1e-4)
 
 
 def test_leon_pitch_not_consistent(leon_short):

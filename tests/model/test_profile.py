@@ -131,8 +131,8 @@ def test_the_example_fleet_has_a_profile_per_unit():
 def test_every_fleet_profile_simulates_converged_at_its_speed(unit):
     """The scene built from each example profile runs, converged (the check), with every link in tension
     and delta's link pass at the profile's speed / pitch within 0.05 % (measured: +0.006 %, -0.040 %,
-    -0.042 % over 20 s: the chain coasts in the tooth backlash at its start speed), as is the link pass the
-    result states (its sprocket's)."""
+    -0.042 % over 20 s: the chain coasts in the tooth backlash at its start speed), and the link pass the
+    result states (the links that passed over the run) is delta's within 0.01 %."""
     prof = load_profile(FLEET / f"{unit}.toml")
     ds = vibkit.simulate(prof.scene("forward"), progress=False, check=True)
     assert ds.attrs["converged"] == 1
@@ -140,8 +140,7 @@ def test_every_fleet_profile_simulates_converged_at_its_speed(unit):
     assert float(ds.link_tension.min()) > 0.0
     f = mean_frequency(ds.delta.values, 1 / float(ds.time[1] - ds.time[0]), prof.speed / prof.nominal_pitch)
     assert f == pytest.approx(prof.speed / prof.nominal_pitch, rel=5e-4)
-    # the result states the link pass its sprocket turned at: without load the drive holds the set speed (4e-9)
-    assert ds.attrs["link_pass_frequency_hz"] == pytest.approx(prof.speed / prof.nominal_pitch, rel=1e-6)
+    assert ds.attrs["link_pass_frequency_hz"] == pytest.approx(f, rel=1e-4)
     inverse = vibkit.simulate(prof.scene("inverse", duration=1.0), progress=False)
     assert float(inverse.link_tension.min()) > 0.0 and "warnings" not in inverse.attrs
 

@@ -635,7 +635,7 @@ def _post_process(fm, t, y, outputs, stats, y_obs=None, table=None):
             if name in want:
                 data[name] = (("time", "roller", "axis"), arr)
     nominal = nominal_speed(fm.effects, scene.run)
-    speed, f_lp = run_speed(t, y[:, 2], model.sprocket.teeth, model.mean_pitch, nominal)
+    speed, f_lp = run_speed(model, t, y[:, 0], nominal, from_rest=abs(y[0, 1]) < 1e-9)
     attrs = {
         "chain_speed_m_s": speed,
         "speed_set_point_m_s": float(nominal),

@@ -49,7 +49,7 @@ from ..model.effects import pack_parameters
 from ..model.guide import S0, SIGP, local_inverse
 from ..model.schema import effect_options, nominal_speed
 from .integrate import IntegrationError
-from .results import make_dataset, run_speed
+from .results import make_dataset
 from .study_kernels import assemble, kkt_pattern, study_closure_residual, study_kinematics
 
 __all__ = ["StudyFormulation", "run_study", "BAUMGARTE_ALPHA", "BAUMGARTE_BETA", "STUDY_SETTINGS"]
@@ -459,15 +459,21 @@ def _dataset(form, sol, wall, method, rtol, atol, max_step):
     data = {name: (("time",), out[name]) for name in scalars}
     data["link_tension"] = (("time", "link"), tension)
     nominal = nominal_speed(form.effects, scene.run)
-    speed, f_lp = run_speed(t, out["sprocket_angle"], model.sprocket.teeth, model.mean_pitch, nominal)
+    # the sprocket's turning rate: its mesh frequency is the chain's link pass where the chain rides its teeth
+    speed, f_lp = nominal, model.link_pass_frequency(nominal) if nominal else 0.0
+    half = nt // 2
+    if nt >= 3 and t[-1] > t[half]:
+        f_lp = model.sprocket.teeth * abs(out["sprocket_angle"][-1] - out["sprocket_angle"][half])
+        f_lp /= 2.0 * np.pi * (t[-1] - t[half])
+        speed = f_lp * model.mean_pitch
     attrs = {
         "formulation": "study: p + 2 coordinates, Lagrange multipliers, Baumgarte stabilisation",
         "baumgarte_alpha_per_s": form.alpha,
         "baumgarte_beta_per_s": form.beta,
         "coordinate_map": form.coordinate_map,
-        "chain_speed_m_s": speed,
+        "chain_speed_m_s": float(speed),
         "speed_set_point_m_s": float(nominal),
-        "link_pass_frequency_hz": f_lp,
+        "link_pass_frequency_hz": float(f_lp),
         "closure_residual_max": float(out["closure_residual"].max()),
         "solver_method": method,
         "solver_rtol": float(rtol),

@@ -41,24 +41,27 @@ VARIABLES = {
 }
 
 
-def run_speed(t, theta, teeth: int, mean_pitch: float, nominal: float):
+def run_speed(model, t, s0_1, nominal: float, *, from_rest: bool = False, speed_hint=None):
     """The chain speed [m/s] and link-pass frequency [Hz] a simulated record states: measured, not set.
 
-    One sprocket turn moves ``teeth`` links, whatever their length, so the links pass at the sprocket's
-    mesh frequency, teeth times its mean turning rate, and the chain runs at that frequency times its
-    mean link pitch. Both are taken over the record's second half (``theta``: the sprocket angle at the
-    times ``t``), after a start from rest: a drive whose speed controller droops under load, or a longer
-    chain on its original sprocket, runs at other than the set ``nominal`` speed, and a pitch read from
-    the record with the set speed would be off by as much. A record of fewer than three samples, or one
-    whose sprocket does not turn, states the ``nominal`` speed (and its link pass, nominal / mean_pitch)."""
+    The links that passed a fixed point over the record (roller 1 at undeformed coordinates ``s0_1`` at the
+    times ``t``; :meth:`vibkit.model.escalator.EscalatorModel.links_passed`; ``speed_hint`` [m/s], the chain's
+    speed to within half a loop over the record, default roller 1's), over its duration, and that times the chain's mean link pitch;
+    over the record's second half for a run that starts ``from_rest``. A drive whose speed controller droops
+    under load, an inverse run that holds roller 1's speed along the guide (the chain on the straight runs
+    slower while roller 1 rides a head), or a longer chain on its original sprocket runs at other than the
+    set ``nominal`` speed, and a pitch read from the record with the set speed would be off by as much. A
+    record of fewer than three samples, or one whose chain does not move, states the ``nominal`` speed and
+    its link pass."""
     t = np.asarray(t, dtype=float)
-    theta = np.asarray(theta, dtype=float)
-    half = t.size // 2
-    if t.size >= 3 and t[-1] > t[half]:
-        f_mesh = teeth * abs(theta[-1] - theta[half]) / (2.0 * np.pi * (t[-1] - t[half]))
-        if f_mesh * mean_pitch > 1e-9:
-            return float(f_mesh * mean_pitch), float(f_mesh)
-    return float(nominal), float(nominal / mean_pitch) if nominal else 0.0
+    first = t.size // 2 if from_rest else 0
+    if t.size >= 3 and t[-1] > t[first]:
+        a, b = float(s0_1[first]), float(s0_1[-1])
+        links = abs(model.links_passed(a, b, b - a if speed_hint is None else speed_hint * (t[-1] - t[first])))
+        f_lp = links / (t[-1] - t[first])
+        if f_lp > 0.0:
+            return float(f_lp * model.mean_pitch), float(f_lp)
+    return float(nominal), float(abs(nominal) / model.mean_pitch)
 
 
 def make_dataset(coords: dict, data: dict, attrs: dict, scene) -> xr.Dataset:

@@ -7,7 +7,7 @@ import math
 import numpy as np
 
 from .chain import Chain
-from .guide import Guide
+from .guide import LEN0, S0, SEGMENT_NAMES, Guide
 from .sprocket import local_corners, mesh_phase, tooth_geometry, tooth_table
 
 __all__ = ["EscalatorModel"]
@@ -46,6 +46,30 @@ class EscalatorModel:
             self.sprocket.teeth,
             float(np.max(self.radii)),
         )
+
+    def links_passed(self, s0_from: float, s0_to: float, travel: float) -> float:
+        """Links that pass a fixed point (the middle of the incline's top run) while roller 1 moves from
+        undeformed coordinate ``s0_from`` to ``s0_to`` [m], about ``travel`` metres of chain. (Fractional.)
+
+        Exact where the chain's speed varies within a loop: roller 1's own coordinate does not count links (a
+        link on a head or the tensioner's telescopic run spans more of it than one on a straight; over half a
+        loop that is 0.3 % on the study's escalator). The rollers on either side of the point are on one
+        straight, where the undeformed coordinate is the arc length. ``travel`` (to within half a loop) fixes
+        the whole loops."""
+        tab, p0, n = self.guide.table, self.guide.p0, self.n
+        k = SEGMENT_NAMES.index("incline, top run")
+        place = tab[k, S0] + 0.5 * tab[k, LEN0]
+
+        def index_at(s):
+            # rollers are numbered along the motion: the one just behind the point, plus the share of its link
+            s0 = self.chain.configure(float(s)).s0
+            d = np.mod(place - s0, p0)
+            j = int(np.argmin(d))
+            gap = np.mod((s0[j + 1] if j + 1 < n else s0[0] + p0) - s0[j], p0)
+            return j + d[j] / gap
+
+        within = np.mod(index_at(s0_from) - index_at(s0_to), n)
+        return float(within + n * round((n * travel / p0 - within) / n))
 
     @property
     def pitch_radius(self) -> float:

@@ -178,7 +178,9 @@ _SPEED = (-10.0, 10.0, "m/s")
 
 @dataclasses.dataclass(frozen=True)
 class MotionSection(_Section):
-    speed: float = key("m/s", "imposed speed of roller 1 (inverse)", required=True, range=_SPEED)
+    speed: float = key(
+        "m/s", "imposed speed of roller 1 along the guide, heads included (inverse)", required=True, range=_SPEED
+    )
     duration: float = key("s", "length of the run (inverse)", required=True)
     step: float = key("s", "output step (inverse)", required=True)
     start: float = key("m", "position of roller 1 at t = 0 (reduced modulo the perimeter)", 0.0)
