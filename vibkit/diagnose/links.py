@@ -484,6 +484,11 @@ def find_worn_links(
                 f"{small} link(s) passed the threshold with an excess under {1e3 * min_excess:g} mm "
                 "(--min-excess): not flagged"
             )
+        if flagged:
+            notes.append(
+                f"+- is the noise's part only: the signature's shape changes with the excess (relative error {err:.2f}), "
+                "which can move the excess read by up to that share of it"
+            )
         if any(f["alternatives"] for f in flagged):
             notes.append(
                 "a link given as 'A or B': the signature fits at B nearly as well as at A (within what the noise "

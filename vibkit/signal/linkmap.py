@@ -416,7 +416,8 @@ def count_drift(peaks, n_links):
 
     They move when every step from a loop to the next is the same D != 0 (at least 2 links over two loops), or,
     over three loops or more, when their straight line climbs at least 2 links a loop and no peak is off it by
-    more than half of that.
+    more than half of that. A step of half a loop (within a link) is no move: the signature's twin (a worn link
+    shows on the sprocket and on the lower head, half a loop apart), which one loop's fit may prefer.
 
     Examples
     --------
@@ -426,11 +427,14 @@ def count_drift(peaks, n_links):
     -5
     >>> count_drift((210, 210, 211), 364)
     0
+    >>> count_drift((14, 67, 14), 106)  # the twin, half a loop away, in loop 2
+    0
     """
     if len(peaks) < 2:
         return 0
     half = n_links // 2
     steps = [((b - a + half) % n_links) - half for a, b in zip(peaks[:-1], peaks[1:])]
+    steps = [s - half * int(np.sign(s)) if abs(abs(s) - n_links / 2) <= 1 else s for s in steps]
     if len(set(steps)) == 1 and (abs(steps[0]) >= 2 or len(peaks) >= 3):
         return steps[0]
     if len(peaks) < 3:

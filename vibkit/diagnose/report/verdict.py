@@ -111,8 +111,9 @@ def verdict_page(doc, ctx) -> None:
         col.text(f"{n} WORN LINK{'S' if n > 1 else ''} FLAGGED", _BIG, weight="bold", color="#b35900")
         col.text(f"{flagged_links_text(links)} (page 'links')", 11, weight="bold", color="#b35900")
         col.text(
-            "+- is the noise's part only; the worn-link signature is the model's, and its own error adds a few "
-            f"per cent of the excess (the signature's relative error here: {_signature_error(links)})",
+            "+- is the noise's part only; the worn-link signature is the model's, and its shape changes with the "
+            f"excess (its relative error here: {_signature_error(links)}), which can move the excess read by up to "
+            "that share of it",
             8,
             color="#b35900",
         )
