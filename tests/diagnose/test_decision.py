@@ -211,10 +211,10 @@ def test_reason_without_a_stated_speed_sigma_gives_no_sigma():
     base = chain_evidence(3.75)
     stated = decide(LinkPassEvidence(**base, speed_sigma_m_s=0.0))
     assert (stated.status, stated.verdict) == (STATUS_OK, "ok")
-    assert "elongation +0.000 +- 0.027 % of 133.3 mm: ok" in stated.reason  # 100 * 1e-3 / 3.75 = 0.0267 %
+    assert "elongation +0.000 +- 0.027 % of 133.333 mm: ok" in stated.reason  # 100 * 1e-3 / 3.75 = 0.0267 %
     unstated = decide(LinkPassEvidence(**base, speed_sigma_m_s=None))
     assert (unstated.status, unstated.verdict) == (STATUS_OK, "ok")  # the frequency's part resolves it
-    assert unstated.reason == "elongation +0.00 % of 133.3 mm: ok (speed uncertainty not stated)"
+    assert unstated.reason == "elongation +0.00 % of 133.333 mm: ok (speed uncertainty not stated)"
     wide = decide(LinkPassEvidence(**{**base, "fundamental_sigma_hz": 0.03}, speed_sigma_m_s=None))
     assert wide.status == STATUS_INCONCLUSIVE and "+-" not in wide.reason  # 0.8 %: over a third of 1.5 %
     assert "speed uncertainty not stated): the frequency's part of its sigma alone, 0.8 %" in wide.reason

@@ -150,6 +150,9 @@ def test_date_without_metadata_says_so(checked_reports):
         (1234.5, 56.0, "1234 +- 56"),
         (0.49, None, "0.49"),
         (3.5401234, 0.00123, "3.5401 +- 0.0012"),
+        # a sigma that rounds up to a third digit keeps two (a stranger's "-0.014 +- 0.100")
+        (-0.014, 0.09999, "-0.01 +- 0.10"),
+        (5.0, 9.97, "5 +- 10"),
     ],
 )
 def test_numbers_rounded_to_their_uncertainty(v, s, text):

@@ -198,6 +198,11 @@ def _mm(p):
     return f"{1000 * p:.1f} mm"
 
 
+def _nominal_mm(p):
+    """A pitch given (a nominal, a catalogue's) as given: 135.47 mm, 101.6 mm, not rounded to 135.5."""
+    return f"{1000 * p:.6g} mm"
+
+
 @dataclass(frozen=True)
 class LinkPassEvidence:
     """What the detection and the estimation found about one record: the input of :func:`decide`.
@@ -392,7 +397,7 @@ def _check_plausible(ev, p, checks, window_percent, catalogue):
             STATUS_IMPLAUSIBLE,
             (
                 f"the family at {f:.4g} Hz implies a pitch of {_mm(p)} at {v:g} m/s ({ev.speed_source}), an elongation "
-                f"of {el:+.1f} % of the nominal {_mm(nom)}, outside the physical window {wlo:+g} to {whi:+g} %: "
+                f"of {el:+.1f} % of the nominal {_nominal_mm(nom)}, outside the physical window {wlo:+g} to {whi:+g} %: "
                 f"not a verdict. Check the speed (the nominal pitch needs {v_nom:.3g} m/s), the channel (--channel), "
                 "the nominal pitch, or whether the sensor was on this machine's step chain"
             ),
@@ -408,7 +413,7 @@ def _check_plausible(ev, p, checks, window_percent, catalogue):
         STATUS_IMPLAUSIBLE,
         (
             f"the family at {f:.4g} Hz implies a pitch of {_mm(p)} at {v:g} m/s ({ev.speed_source}), {dev:+.1f} % "
-            f"from the nearest standard step-chain pitch {_mm(c)} (standard: "
+            f"from the nearest standard step-chain pitch {_nominal_mm(c)} (standard: "
             f"{', '.join(f'{1000 * q:.2f}' for q in catalogue)} mm; window {wlo:+g} to {whi:+g} %): not a step "
             "chain's link pass. Check the speed, the channel (--channel), give --nominal-pitch, or check "
             "that the recording is of an escalator"
@@ -538,9 +543,9 @@ def _verdict(ev, p, checks):
     return Decision(
         STATUS_OK,
         (
-            f"elongation {fmt_pm(el, el_sigma, sign=True)} % of {_mm(nom)}: {verdict}"
+            f"elongation {fmt_pm(el, el_sigma, sign=True)} % of {_nominal_mm(nom)}: {verdict}"
             if stated
-            else f"elongation {el:+z.2f} % of {_mm(nom)}: {verdict} ({SPEED_SIGMA_NOT_STATED})"
+            else f"elongation {el:+z.2f} % of {_nominal_mm(nom)}: {verdict} ({SPEED_SIGMA_NOT_STATED})"
         ),
         verdict=verdict,
         implied_pitch_m=p,

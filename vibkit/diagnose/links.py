@@ -423,7 +423,7 @@ def find_worn_links(
         need = record_time_for_loops(n, f_lp)
         raise TooFewLoops(
             f"channel {ch}: {span:.1f} s at {f_lp:.4g} Hz link pass covers {span * f_lp / n:.2f} loops of "
-            f"the chain's {n} links; a link map needs {MIN_LOOPS} loops: record at least {need:.0f} s "
+            f"the chain's {n} links; a link map needs {MIN_LOOPS} loops: record at least {math.ceil(need):.0f} s "
             f"({MIN_LOOPS} x {n} / {f_lp:.4g} Hz plus one link)"
         )
     notes = []

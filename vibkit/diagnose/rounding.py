@@ -25,7 +25,9 @@ def decimals_for(sigma, default=2) -> int:
     may be negative (rounding to tens)."""
     if not _finite_positive(sigma):
         return default
-    return 1 - int(math.floor(math.log10(float(sigma))))
+    d = 1 - int(math.floor(math.log10(float(sigma))))
+    # a sigma that rounds up to a third digit (0.09999 to 0.100) has its two digits one place to the left (0.10)
+    return d - 1 if round(float(sigma), d) >= 10.0 ** (2 - d) else d
 
 
 def fmt_value(value, sigma, *, sign=False, default_decimals=2) -> str:

@@ -203,7 +203,7 @@ def link_map(x, fs, phase, n_links, *, samples_per_cycle=16, marker_s=None, link
         raise TooFewLoops(
             f"the recording covers {n_cyc / n:.2f} loops of the chain's {n} links ({span:.1f} s at "
             f"{f_lp:.4g} Hz link pass); a link map needs {MIN_LOOPS} complete loops: record at least "
-            f"{need:.0f} s ({MIN_LOOPS} x {n} / {f_lp:.4g} Hz plus one link)"
+            f"{math.ceil(need):.0f} s ({MIN_LOOPS} x {n} / {f_lp:.4g} Hz plus one link)"
         )
     first = int(round(ang.cycles[0]))
     used = loops * n
