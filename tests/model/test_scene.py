@@ -43,6 +43,16 @@ def test_shipped_scenes_load():
         ),
         (lambda b: b + "\n[effects]\ngravity = true\n", r"no meaning in a kinematics scene"),
         (lambda b: b.replace("[scene]", "[scene"), r"not valid TOML"),
+        # a pitch in mm is named as such, not as a chain that cannot close (a stranger's 101.6)
+        (
+            lambda b: b.replace("link_pitch = 0.13333333333333333", "link_pitch = 133.33"),
+            r"'chain.link_pitch' = 133.33 is outside the plausible range \[0.02, 0.5\] m \(101.6 mm is 0.1016\)",
+        ),
+        # rollers that overlap are named as such, not as a chain that jumped the teeth
+        (
+            lambda b: b.replace("roller_radius = 0.035", "roller_radius = 0.07"),
+            r"'chain.roller_radius' = 0.07 m: neighbouring rollers overlap",
+        ),
     ],
 )
 def test_bad_scene_messages(tmp_path, edit, pattern):
@@ -134,7 +144,8 @@ def test_sections_and_ranges_are_derived_from_the_schema():
     assert EFFECTS["passengers"] == {"mass": list, "step": list, "board": list, "alight": list}
     assert RANGES["effects.contact.exponent"] == (1.0, 3.0, "(1 linear, 1.5 Hertz)")
     assert RANGES["solver.rtol"] == (1e-14, 0.1, "")
-    assert len(RANGES) == 17
+    assert len(RANGES) == 18
+    assert RANGES["chain.link_pitch"] == (0.02, 0.5, "m (101.6 mm is 0.1016)")
 
 
 def test_defaults_are_typed_and_recorded():

@@ -28,6 +28,7 @@ from .scene_checks import (
     _check_sprocket_geometry,
     _reduce_start,
     _validate_passenger_numbers,
+    check_chain_first,
 )
 from .schema import (
     EFFECT_OPTIONS,
@@ -230,6 +231,7 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
         raise SceneError(f"{src}: 'scene.analysis' must be one of {', '.join(ANALYSES)}, got {analysis!r}")
 
     _escalator_stated(src, data)
+    check_chain_first(src, sec)
     guide, chain, sprocket = _parameters(src, sec)
 
     raw_effects = data.get("effects", {})

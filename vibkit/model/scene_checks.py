@@ -41,6 +41,23 @@ def _check_ranges(src, sec, effects) -> None:
             raise SceneError(f"{src}: '{key}' = {v!r} is outside the plausible range [{lo:g}, {hi:g}] {unit}".rstrip())
 
 
+def check_chain_first(src, sec) -> None:
+    """The chain's keys as given, before the guide and the chain are built from them (a pitch in mm, rollers that
+    overlap, would otherwise fail later under another key's name): their plausible ranges, and rollers less than
+    half a pitch in radius."""
+    _check_ranges(src, {name: sec[name] if name == "chain" else {} for name in sec}, {})
+    chain = sec["chain"]
+    pitch = chain.get("link_pitch")
+    radii = [(k, r) for k, r in [("chain.roller_radius", chain.get("roller_radius"))] if r is not None]
+    radii += [(f"chain.roller_radius_by_roller (roller {k})", r) for k, r in chain.get("roller_radius_by_roller") or ()]
+    for key, r in radii:
+        if isinstance(pitch, (int, float)) and isinstance(r, (int, float)) and 2.0 * r >= pitch:
+            raise SceneError(
+                f"{src}: '{key}' = {r:g} m: neighbouring rollers overlap on links of {pitch:g} m (expected less "
+                f"than half the pitch, {pitch / 2:g} m)"
+            )
+
+
 def _check_sprocket_geometry(src, given, sprocket, chain) -> None:
     """The tooth must fit the chain it drives: shorter than a link, narrower than a link, tip <= base."""
     pitch = sprocket.cut_pitch(chain.link_pitch)
