@@ -15,7 +15,7 @@ Everything is SI inside: metres, kilograms, seconds, radians, newtons.
 
 __version__ = "0.4.8"
 
-__all__ = ["__version__", "load_scene", "simulate", "read_recording", "compare", "sweep"]
+__all__ = ["__version__", "load_scene", "simulate", "read_recording", "compare", "sweep", "signal", "io"]
 
 # eager (the module imports only the standard library): a lazy name would be replaced by the module
 # object the first time someone runs `import vibkit.sweep`; this way `vibkit.sweep` is the function
@@ -43,4 +43,8 @@ def __getattr__(name):  # lazy: `import vibkit` stays cheap (no numba, no obspy)
         from .diagnose.comparison import compare
 
         return compare
+    if name in ("signal", "io"):  # the public subpackages, as `vibkit.signal` without importing it first
+        import importlib
+
+        return importlib.import_module(f".{name}", __name__)
     raise AttributeError(f"module 'vibkit' has no attribute {name!r}")

@@ -118,3 +118,12 @@ def test_orders_that_disagree_widen_every_frequency_sigma():
     assert any("scatter" in n for n in bent.notes)
     assert bent.pitch_ratio_sigma > 20 * honest.pitch_ratio_sigma
     assert abs(bent.pitch_ratio - 1) < 3 * bent.pitch_ratio_sigma
+
+
+def test_a_kinematics_scene_is_named_not_its_outputs():
+    """A stranger compared a recording with a kinematics scene and was told to add delta to its outputs, which
+    it had: the scene has no time axis, and the error says so."""
+    rec = vibkit.read_recording("data/field/leon-tensioner.csv")
+    kin = vibkit.simulate("sim/thesis-kinematics.toml", progress=False)
+    with pytest.raises(ValueError, match="no time axis: a kinematics scene"):
+        compare(rec, kin)

@@ -70,6 +70,13 @@ def matching_variable(result, recording, channel) -> str:
     ValueError
         No variable of the result matches; the message lists the result's variables.
     """
+    if "time" not in result.dims:
+        what = result.attrs.get("analysis", "")
+        raise ValueError(
+            f"the simulation{f' ({what})' if what else ''} has no time axis: a kinematics scene gives the chain's "
+            "configurations along its advance, not signals in time; compare a recording with an inverse or a "
+            "forward scene"
+        )
     one_d = [str(v) for v in result.data_vars if result[v].dims == ("time",)]
     if channel in one_d:
         return channel

@@ -546,7 +546,7 @@ def _outputs(src, o, analysis, chain):
     for v in variables:
         if not isinstance(v, str) or v not in allowed:
             raise SceneError(
-                f"{src}: unknown output {v!r} in 'outputs.variables' for a {analysis} scene "
+                f"{src}: unknown output {v!r} in 'outputs.variables' for {'an' if analysis == 'inverse' else 'a'} {analysis} scene "
                 f"(available: {', '.join(sorted(allowed))})"
             )
     rollers = list(o.get("rollers", OutputsSection.rollers))

@@ -516,7 +516,7 @@ def plan_sweep(
         parent = next((o for o, kids in _PRODUCES.items() if name in kids), name)
         if parent not in OUTPUTS[base.analysis]:
             raise SweepError(
-                f"keep: unknown output {name!r} for a {base.analysis} scene "
+                f"keep: unknown output {name!r} for {'an' if base.analysis == 'inverse' else 'a'} {base.analysis} scene "
                 f"(available: {', '.join(sorted(OUTPUTS[base.analysis]))})"
             )
         if parent not in asked:
