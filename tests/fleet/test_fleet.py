@@ -855,3 +855,24 @@ def test_fleet_add_warns_of_a_sensor_riding_a_step(tmp_path, run):
         "data/fleet-example/escalators/E07.toml", "--db", tmp_path / "f.sqlite",
     )  # fmt: skip
     assert rc == 0 and "stored #1" in out and STEP_WARNING in " ".join(err.split())
+
+
+def test_a_catalogue_of_new_visits_skips_stored_files_and_catalogues(tmp_path, capsys):
+    """A stranger's second scan named only the new visit: the files stored before and the catalogues in the folder
+    were 13 failures and exit 3. A file stored before is already stored; a catalogue is a note; exit 0."""
+    d = tmp_path / "visits"
+    d.mkdir()
+    synth(d / "v1.csv", NOMINAL * 1.01, 21, duration=10.0)
+    synth(d / "v2.csv", NOMINAL * 1.01, 22, duration=10.0)
+    first = d / "first.csv"
+    first.write_text(f"file,unit,speed_m_s,date,nominal_pitch_m\nv1.csv,U1,{SPEED},2025-01-01,{NOMINAL}\n")
+    db = tmp_path / "f.sqlite"
+    assert main(["fleet", "scan", str(d), "--catalogue", str(first), "--db", str(db), "--workers", "0"]) == 3
+    capsys.readouterr()  # v2.csv had no line yet: a failure, as documented
+    second = d / "second.csv"
+    second.write_text(f"file,unit,speed_m_s,date,nominal_pitch_m\nv2.csv,U1,{SPEED},2026-01-01,{NOMINAL}\n")
+    rc = main(["fleet", "scan", str(d), "--catalogue", str(second), "--db", str(db), "--workers", "0", "--json"])
+    out, err = capsys.readouterr()
+    s = json.loads(out)
+    assert rc == 0 and (s["added"], s["skipped_duplicates"], s["failed"]) == (1, 1, 0), err
+    assert "first.csv: a catalogue (columns file, unit), not a recording; not scanned" in err

@@ -161,6 +161,24 @@ def _candidate_files(directory, exclude, skipped=None):
     return sorted(out)
 
 
+def _not_a_new_recording(full, db):
+    """Why a file no catalogue line describes is no failure (already stored, a catalogue), else None."""
+    try:
+        old = db.find(_file_sha256(full))
+    except OSError:
+        return None
+    if old is not None:
+        return f"already stored as measurement #{old.id} of unit {old.unit!r} (no line of this catalogue names it)"
+    try:
+        with open(full, encoding="utf-8-sig", errors="replace") as fh:
+            head = [c.strip().lower() for c in fh.readline().split(",")]
+    except OSError:
+        return None
+    if "file" in head and "unit" in head:
+        return "a catalogue (columns file, unit), not a recording"
+    return None
+
+
 def _match(rel, rows):
     base = rel.rsplit("/", 1)[-1]
     exact = [r for r in rows if not r.is_glob and r.file in (rel, base)]
@@ -227,7 +245,14 @@ def scan_folder(
         full = os.path.join(d, rel)
         r = _match(rel, rows)
         if r is None:
-            fail(full, "unknown unit: no catalogue line matches this file")
+            # a catalogue of new visits leaves out the files stored before, and the folder may hold catalogues
+            why = _not_a_new_recording(full, db)
+            if why is not None and why.startswith("a catalogue"):
+                res.notes.append(f"{full}: {why}; not scanned")
+            elif why is not None:
+                res.skipped.append((full, why))
+            else:
+                fail(full, "unknown unit: no catalogue line matches this file")
             continue
         used.add(r.line)
         try:
