@@ -152,3 +152,37 @@ def test_miniseed_written_with_obspy():
     np.testing.assert_allclose(ds["time"].values, np.arange(1000) / 200.0, atol=1e-12)
     assert "no physical units; values kept in counts" in ds.attrs["history"]
     assert ds.attrs["reader"] == "vibkit.io.seismic" and ds.attrs["station"] == "ESC01"
+
+
+@pytest.mark.parametrize(
+    "line, start",
+    [
+        ("# start: 2026-09-01T06:00:00Z", "2026-09-01T06:00:00+00:00"),
+        ("# Datum: 2026-09-01T06:00:00Z", "2026-09-01T06:00:00+00:00"),
+        ("# recorded: 2026-09-01 06:00", "2026-09-01T06:00:00"),
+        ("Start: 04.05.2026 07:30:00", "2026-05-04T07:30:00"),  # German day.month.year
+        ("# date: 2026/05/04", "2026-05-04T00:00:00"),
+        ("# Start time: 2026-09-01T06:00:00Z", "2026-09-01T06:00:00+00:00"),
+    ],
+)
+def test_a_start_stated_above_the_data_is_the_recordings_start(tmp_path, line, start):
+    """A stranger's files stated their start under keys other than 'start_time' (start, Datum, recorded), and
+    the report said "not stated in the file" and the fleet refused them. Any key that names a start, with a date
+    it can read, is the start, and the history names the line."""
+    import vibkit
+
+    p = tmp_path / "rec.csv"
+    rows = "".join(f"{i * 0.005:.3f},{0.001 * (i % 7):.4f}\n" for i in range(400))
+    p.write_text(f"{line}\ntime (s),disp (mm)\n{rows}")
+    rec = vibkit.read_recording(p)
+    assert rec.attrs["start_time"] == start
+    assert "from metadata line 1" in rec.attrs["history"]
+
+
+def test_a_slashed_day_month_start_is_not_guessed(tmp_path):
+    import vibkit
+
+    p = tmp_path / "rec.csv"
+    rows = "".join(f"{i * 0.005:.3f},{0.001 * (i % 7):.4f}\n" for i in range(400))
+    p.write_text(f"# start: 04/05/2026\ntime (s),disp (mm)\n{rows}")
+    assert vibkit.read_recording(p).attrs.get("start_time") is None  # 4 May or April 5th: not guessed

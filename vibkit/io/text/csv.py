@@ -39,7 +39,7 @@ from .columns import _build_channels, _column_names, _select_channels, _unit_ove
 from .fastpath import _HEAD_BYTES, _Fallback, _fast_rows
 from .layout import _decode, _decode_head, _read_layout
 from .loggers import app_units
-from .metadata import _meta_pair, _rate_from_meta, _scale_from_meta
+from .metadata import _meta_pair, _rate_from_meta, _scale_from_meta, start_from_meta
 from .timecolumn import _choose_time_column, _read_time
 
 __all__ = ["read_csv", "DELIMITERS"]
@@ -213,6 +213,12 @@ def _read_csv(
         pairs.append((0, "comment", "\n".join(free)))
     metadata = metadata_attrs([(k, v) for _, k, v in pairs])
     metadata.update(extra_attrs)
+    if "start_time" not in extra_attrs:  # no time stamps: the start a metadata line states, as ISO 8601
+        found = start_from_meta(pairs)
+        if found is not None:
+            iso, lineno, key, value = found
+            metadata["start_time"] = iso
+            history.append(f"start time {iso} from metadata line {lineno} ('{key}: {value}')")
     return build_recording(
         time=t,
         channels=channels,

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 import re
+from datetime import datetime
 
 from .cells import _NUM
 from .loggers import header_keys, rate_key_patterns
@@ -133,4 +134,46 @@ def _header_from_meta(pairs, n: int):
             cells = [c.strip() for c in re.split(r"[,;\t]", value)]
             if len(cells) == n:
                 return cells, lineno, key
+    return None
+
+
+#: metadata keys that name when a recording started (a logger's, a person's): English, German, Spanish
+_START_KEY = re.compile(
+    r"(start|start[ _-]?(time|date|datetime)|starttime|started|begin|beginn|date|datum|date[ _-]?time|recorded|"
+    r"recording[ _-]?(start|date|time)|aufnahme(beginn)?|fecha|inicio|fecha[ _-]?(de[ _-]?)?inicio)",
+    re.IGNORECASE,
+)
+_DMY_DOTS = re.compile(r"(\d{1,2})\.(\d{1,2})\.(\d{4})(?:[ T,]+(\d{1,2}:\d{2}(?::\d{2}(?:\.\d+)?)?))?")
+_YMD_SLASH = re.compile(r"(\d{4})/(\d{1,2})/(\d{1,2})(?:[ T,]+(\d{1,2}:\d{2}(?::\d{2}(?:\.\d+)?)?))?")
+
+
+def _start_value(text):
+    """An ISO 8601 text of a start written as ISO 8601, day.month.year (German) or year/month/day, with an optional
+    time; None for anything else (a day/month/year with slashes may be either way round: not guessed)."""
+    s = str(text).strip()
+    d = None
+    try:
+        d = datetime.fromisoformat(s.replace("Z", "+00:00"))
+    except ValueError:
+        for rx, order in ((_DMY_DOTS, (3, 2, 1)), (_YMD_SLASH, (1, 2, 3))):
+            m = rx.fullmatch(s)
+            if m:
+                y, mo, da = (int(m.group(i)) for i in order)
+                try:
+                    d = datetime.fromisoformat(f"{y:04d}-{mo:02d}-{da:02d}" + (f"T{m.group(4)}" if m.group(4) else ""))
+                except ValueError:
+                    return None
+    if d is None or not 1970 <= d.year <= 2100:
+        return None
+    return d.isoformat()
+
+
+def start_from_meta(pairs):
+    """``(ISO 8601 start, line, key, value)`` from the first metadata line that names a start (``start``,
+    ``date``, ``Datum``, ``recorded`` ...; :data:`_START_KEY`) with a date it can read, else None."""
+    for lineno, key, value in pairs:
+        if isinstance(value, str) and _START_KEY.fullmatch(key.strip()):
+            iso = _start_value(value)
+            if iso is not None:
+                return iso, lineno, key, value
     return None
