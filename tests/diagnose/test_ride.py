@@ -296,3 +296,17 @@ def test_a_segment_of_a_few_half_cycles_is_said_to_give_no_ride_statistics():
     assert short.axis("z").weighted.n_values < MIN_PK_PK_VALUES
     long = ride_quality({"z": 9.8 + 0.1 * np.sin(2 * np.pi * 5 * t)}, FS, segment=(4.0, 18.0))
     assert not any("not a ride's" in n for n in long.notes)
+
+
+def test_a_run_from_rest_is_a_ride_only_once_its_step_runs_at_speed():
+    """A stranger's scene started from rest with its step on the incline: the drive's start-up (0 to 0.45 m/s)
+    was read as ride vibration. The ride of a run from rest starts once the step runs at 98 % of the chain's
+    counted speed; a run at speed from its start is not cut."""
+    from vibkit.diagnose.ride import START_UP_SHARE, _start_up
+
+    t = np.arange(0, 5, 0.005)
+    ramp = 0.45 * np.minimum(1.0, t / 2.0)  # 0 to 0.45 m/s in 2 s
+    cut = _start_up(ramp, 0.45)
+    assert t[cut] == pytest.approx(2.0 * START_UP_SHARE, abs=0.006)
+    assert _start_up(np.full(t.size, 0.45), 0.45) == 0  # at speed from the start
+    assert _start_up(ramp, 0.0) == 0  # no speed known: nothing cut

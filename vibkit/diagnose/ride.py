@@ -19,6 +19,7 @@ low-passed (unweighted) signal.  Definitions: :mod:`vibkit.signal.ride`,
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 import os
@@ -568,6 +569,19 @@ def _step_roller(ds):
     return rollers[0]
 
 
+#: a simulated run from rest is a ride once its step runs at this share of the chain's (counted) speed
+START_UP_SHARE = 0.98
+
+
+def _start_up(speed, chain_speed):
+    """The first sample at which a step that starts at rest (below half the chain's speed) reaches
+    :data:`START_UP_SHARE` of ``chain_speed``; 0 when it does not start at rest or never gets there."""
+    if not chain_speed > 0 or speed.size == 0 or speed[0] >= 0.5 * chain_speed:
+        return 0
+    up = np.flatnonzero(speed >= START_UP_SHARE * chain_speed)
+    return int(up[0]) if up.size else 0
+
+
 def ride_quality_from_simulation(ds, *, segment=None, weightings=None, source=None) -> RideQuality:
     """Ride quality of a simulated step: the same path as a recording.
 
@@ -617,9 +631,28 @@ def ride_quality_from_simulation(ds, *, segment=None, weightings=None, source=No
             vz = ds["roller_velocity"].sel(roller=roller, axis="z").values
             vel = ds["roller_velocity"].sel(roller=roller).values
             speed = np.hypot(vel[:, 0], vel[:, 1])
+            cut = _start_up(speed, float(ds.attrs.get("chain_speed_m_s") or 0.0))
 
             def detect(fs_):
-                return incline_from_vertical_speed(vz, fs_)
+                if not cut:
+                    return incline_from_vertical_speed(vz, fs_)
+                # a run from rest: the drive's start-up is no ride; the incline is looked for after it
+                seg = incline_from_vertical_speed(vz[cut:], fs_)
+                note = seg.note or ""
+                if seg.start_s == 0.0:  # on the incline when the start-up ends: a longer run does not help
+                    note = note.replace(
+                        "the incline reaches an end of the simulated time (simulate longer: --duration)",
+                        "the step is on the incline when the start-up ends (start it lower on its loop: the scene's "
+                        "[run] start)",
+                    )
+                return dataclasses.replace(
+                    seg,
+                    start_s=seg.start_s + cut / fs_,
+                    end_s=seg.end_s + cut / fs_,
+                    note=(note + "; " if note else "")
+                    + f"the start-up from rest left out (the step at {START_UP_SHARE:.0%} of the chain's speed at "
+                    f"{cut / fs_:.1f} s)",
+                )
 
     elif "accel_step" in ds:
         sig = {"tangential": ds["accel_step"].values}
