@@ -200,3 +200,24 @@ def test_a_usage_error_is_one_line_that_says_where_the_options_are(capsys):
     err = capsys.readouterr().err
     assert e.value.code == 2 and len(err.strip().splitlines()) == 1, err
     assert err.startswith("vibkit pitch: error:") and "'vibkit pitch --help'" in err
+
+
+def test_pitch_takes_the_sprocket_and_steps_a_simulation_states(tmp_path, capsys):
+    """A stranger's simulated escalator of 17 teeth and 4-link steps got the study's Z = 28 and 3-link steps in
+    `pitch`'s hypotheses: a file that states them (a vibkit result) is read with its own."""
+    import numpy as np
+    import xarray as xr
+
+    from vibkit.cli.app import main
+
+    t = np.arange(0, 20, 0.005)
+    ds = xr.Dataset(
+        {"delta": ("time", 1e-4 * np.cos(2 * np.pi * 7.38 * t), {"units": "m"})},
+        coords={"time": ("time", t, {"units": "s"})},
+        attrs={"chain_speed_m_s": 0.75, "sprocket_teeth": 17, "links_per_step": 4},
+    )
+    path = tmp_path / "sim.nc"
+    ds.to_netcdf(path)
+    main(["pitch", str(path), "--nominal-pitch", "101.6mm"])
+    out = capsys.readouterr().out
+    assert "sprocket shaft (Z = 17)" in out and "step pass (4 links)" in out

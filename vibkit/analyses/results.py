@@ -91,6 +91,7 @@ def make_dataset(coords: dict, data: dict, attrs: dict, scene) -> xr.Dataset:
         "link_pitch_m": scene.chain.link_pitch,
         "n_rollers": scene.chain.n_rollers,
         "sprocket_teeth": scene.sprocket.teeth,
+        "links_per_step": int(scene.chain.links_per_step),
         "history": f"simulated by vibkit {__version__}",
     }
     base.update(attrs)

@@ -81,13 +81,26 @@ def resolve_speed(a, rec, *, required=True, profile=None):
     raise CLIError(f"{a.recording}: the file states no chain speed; give --speed (e.g. --speed 0.5 or --speed 50cm/s)")
 
 
-def from_profile(a, profile, sp):
+def file_chain(rec):
+    """(sprocket teeth, links per step) a recording states (a vibkit simulation's ``sprocket_teeth`` and
+    ``links_per_step``), else (28, 3), the study's."""
+    out = []
+    for key, default in (("sprocket_teeth", 28), ("links_per_step", 3)):
+        try:
+            v = int(rec.attrs.get(key, default))
+        except (TypeError, ValueError):
+            v = default
+        out.append(v if v >= 1 else default)
+    return tuple(out)
+
+
+def from_profile(a, profile, sp, rec=None):
     """(nominal pitch, band, teeth) of a run: the flags, else the profile's (the note says which came from the
-    profile), else the defaults; ``sp`` is the run's speed (:func:`vibkit.cli.options.run_speed`), which
-    takes the profile's speed and sigma itself."""
+    profile), else the recording's (:func:`file_chain`), else the defaults; ``sp`` is the run's speed
+    (:func:`vibkit.cli.options.run_speed`), which takes the profile's speed and sigma itself."""
     nominal, search, teeth_ = a.nominal_pitch, a.band, getattr(a, "teeth", None)
     if profile is None:
-        return nominal, search, teeth_ or 28
+        return nominal, search, teeth_ or (file_chain(rec)[0] if rec is not None else 28)
     taken = []
     if sp.value is not None and sp.source != "given":
         taken.append(f"speed {sp.text}")
@@ -114,7 +127,7 @@ def run(a):
     n_links = chain_links(a, profile)  # before the profile's note: a contradiction is the one line
     sp = resolve_speed(a, rec, profile=profile)
     source = "--speed" if sp.source == "given" else sp.source
-    nominal, search, teeth_ = from_profile(a, profile, sp)
+    nominal, search, teeth_ = from_profile(a, profile, sp, rec)
     try:
         res = estimate_channels(
             rec,
@@ -126,7 +139,7 @@ def run(a):
             limits_percent=a.limits,
             teeth=teeth_,
             n_links=n_links,
-            links_per_step=profile.links_per_step if profile is not None else 3,
+            links_per_step=profile.links_per_step if profile is not None else file_chain(rec)[1],
             on_step=on_step(profile),
             speed_source=source,
         )

@@ -26,6 +26,7 @@ from .options import (
 from .output import in_file, msg, print_json, table
 from .pitch import (
     add_speed_options,
+    file_chain,
     from_profile,
     print_channels,
     print_pitch,
@@ -72,7 +73,9 @@ def run(a):
     sp = resolve_speed(a, rec, required=False, profile=profile)
     speed, source = sp.value, ("--speed" if sp.source == "given" else sp.source or None)
     # with a speed the same analysis as `vibkit pitch` (its speed and sigma, nominal pitch, band, teeth)
-    nominal, search, teeth_ = from_profile(a, profile, sp) if speed else (None, a.band or (2.5, 6.0), 28)
+    nominal, search, teeth_ = (
+        from_profile(a, profile, sp, rec) if speed else (None, a.band or (2.5, 6.0), file_chain(rec)[0])
+    )
     try:
         res = estimate_channels(
             rec,
@@ -85,7 +88,7 @@ def run(a):
             limits_percent=a.limits,
             teeth=teeth_,
             n_links=n_links,
-            links_per_step=profile.links_per_step if profile is not None else 3,
+            links_per_step=profile.links_per_step if profile is not None else file_chain(rec)[1],
             on_step=on_step(profile),
             speed_source=source or "none",
             frequency_only=speed is None,
