@@ -221,3 +221,20 @@ def test_pitch_takes_the_sprocket_and_steps_a_simulation_states(tmp_path, capsys
     main(["pitch", str(path), "--nominal-pitch", "101.6mm"])
     out = capsys.readouterr().out
     assert "sprocket shaft (Z = 17)" in out and "step pass (4 links)" in out
+
+
+def test_compare_does_not_judge_a_pitch_without_the_recordings_speed(tmp_path, capsys):
+    """A stranger's recording stated no speed: compare took the scene's and printed a pitch ratio +- 0.000015,
+    a precision of a speed nobody measured. Without the recording's speed the pitch is not judged."""
+    import numpy as np
+
+    from vibkit.cli.app import main
+
+    t = np.arange(0, 20, 0.005)
+    x = 1e-4 * np.cos(2 * np.pi * 3.6 * t) + 2e-5 * np.cos(2 * np.pi * 7.2 * t + 1)
+    path = tmp_path / "rec.csv"
+    path.write_text("time_s,displacement_m\n" + "".join(f"{a:.3f},{b:.8f}\n" for a, b in zip(t, x)))
+    assert main(["compare", str(path), "sim/thesis-inverse.toml", "--duration", "20"]) == 0
+    out = capsys.readouterr().out
+    assert "pitch     not judged: the recording's speed is not known (give --speed)" in out
+    assert "+-" not in out.split("pitch ", 1)[1].split("\n", 1)[0]

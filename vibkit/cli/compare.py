@@ -102,11 +102,18 @@ def run(a):
     print(
         f"speed     {sp.text if sp.value is not None else f'{comp.speed_meas_m_s:g} m/s (the scene' + chr(39) + 's)'}"
     )
-    print(
-        f"pitch     {1000 * comp.pitch_meas_m:.2f} mm recorded, {1000 * comp.pitch_sim_m:.2f} mm simulated "
-        f"(pitch ratio recorded/simulated {fmt_pm(comp.pitch_ratio, comp.pitch_ratio_sigma)}): "
-        f"{'consistent' if comp.pitch_consistent else 'NOT consistent'}"
-    )
+    if sp.value is None:  # the recording taken at the scene's speed: a ratio of link passes, not of pitches
+        print(
+            f"pitch     not judged: the recording's speed is not known (give --speed); at the scene's speed its "
+            f"link pass gives {1000 * comp.pitch_meas_m:.2f} mm, the simulation {1000 * comp.pitch_sim_m:.2f} mm "
+            f"(link-pass ratio simulated/recorded {comp.pitch_ratio:.4g})"
+        )
+    else:
+        print(
+            f"pitch     {1000 * comp.pitch_meas_m:.2f} mm recorded, {1000 * comp.pitch_sim_m:.2f} mm simulated "
+            f"(pitch ratio recorded/simulated {fmt_pm(comp.pitch_ratio, comp.pitch_ratio_sigma)}): "
+            f"{'consistent' if comp.pitch_consistent else 'NOT consistent'}"
+        )
     print(
         f"score     {comp.score:.3f} (0-1: the harmonics' agreement, frequency within 1 %, amplitude within 3 dB)   "
         f"log-spectral distance {comp.log_spectral_distance_db:.2f} dB"
