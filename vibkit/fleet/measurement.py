@@ -190,8 +190,14 @@ def analyse_recording(
         raise FleetError(f"{spath}: {res.status}: {res.reason}; nothing stored")
     est = res.best
     snr = float(est.snr_db) if math.isfinite(est.snr_db) else None
+    rel_speed = (
+        100.0 * float(speed_sigma) / float(speed) if speed_sigma and speed and float(speed) > 0 else None
+    )  # [%] of the speed: where it makes the sigma, the advice is to measure the speed
     quality, why = measurement_quality(
-        est.elongation_percent, est.elongation_sigma_percent, decision=getattr(est, "decision", None)
+        est.elongation_percent,
+        est.elongation_sigma_percent,
+        decision=getattr(est, "decision", None),
+        speed_sigma_percent=rel_speed,
     )
     return Measurement(
         id=None,

@@ -49,7 +49,9 @@ def _decision_word(decision):
     return None
 
 
-def measurement_quality(elongation_percent, sigma_percent, *, limits_percent=DEFAULT_LIMITS_PERCENT, decision=None):
+def measurement_quality(
+    elongation_percent, sigma_percent, *, limits_percent=DEFAULT_LIMITS_PERCENT, decision=None, speed_sigma_percent=None
+):
     """The quality flag of one measurement and its reason: ``(flag, reason)``, flag in :data:`QUALITIES`.
 
     Parameters
@@ -60,6 +62,9 @@ def measurement_quality(elongation_percent, sigma_percent, *, limits_percent=DEF
         Elongation limits; the first sets the resolution a measurement needs. [%]
     decision : str or object, optional
         The pitch analysis' decision; ``"inconclusive"`` or ``"implausible"`` in it is kept.
+    speed_sigma_percent : float, optional
+        The speed's relative standard deviation [%]: where it makes most of the sigma, the advice is to measure the
+        speed, not to record longer.
 
     Examples
     --------
@@ -69,6 +74,8 @@ def measurement_quality(elongation_percent, sigma_percent, *, limits_percent=DEF
     'implausible'
     >>> measurement_quality(0.8, 0.9)[0]
     'inconclusive'
+    >>> measurement_quality(0.8, 2.93, speed_sigma_percent=2.9)[1]  # the speed's tolerance: recording longer won't help
+    "elongation sigma 2.93 % is wider than a third of the first limit (0.50 %): the speed's sigma alone is 2.90 %: measure the speed on the steps"
     """
     e, s = float(elongation_percent), float(sigma_percent)
     lo, hi = PHYSICAL_WINDOW_PERCENT
@@ -88,7 +95,12 @@ def measurement_quality(elongation_percent, sigma_percent, *, limits_percent=DEF
     if not s <= need:
         return "inconclusive", (
             f"elongation sigma {s:.2f} % is wider than a third of the first limit "
-            f"({need:.2f} %): record longer or closer to the chain"
+            f"({need:.2f} %): "
+            + (
+                f"the speed's sigma alone is {speed_sigma_percent:.2f} %: measure the speed on the steps"
+                if speed_sigma_percent is not None and speed_sigma_percent**2 >= 0.5 * s * s
+                else "record longer or closer to the chain"
+            )
         )
     if word == "inconclusive":
         return "inconclusive", f"the pitch analysis calls it inconclusive ({why})"
