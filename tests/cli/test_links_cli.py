@@ -139,3 +139,20 @@ def test_a_profile_with_its_geometry_gives_the_links_its_scene_fills_in(tmp_path
     rc, out, err = run("links", path, "--escalator", profile)
     assert rc == 1 and f"{n} links, filled in from its geometry" in err and f"{n} links" in err.splitlines()[-1]
     assert "give --links N" not in err
+
+
+def test_links_says_when_too_few_samples_a_cycle_read_the_excess_low(tmp_path, run):
+    """A stranger's 50 Hz recording (5.6 samples a link-pass cycle) read a 1 mm link as 0.75 mm with no word of
+    it; below 10 samples a cycle a note says the excess is read low and what rate to record at."""
+    global FS
+    keep = FS
+    FS = 30.0  # 8 samples a cycle at 3.75 Hz
+    try:
+        path = _recording(tmp_path / "slow.nc", 40, 2.2)
+    finally:
+        FS = keep
+    rc, out, err = run("links", path, "--speed", SPEED, "--links", 40)
+    err = " ".join(err.split())
+    assert "8.0 samples per link-pass cycle" in err and "record at 45 Hz or more" in err
+    rc, out, err = run("links", _recording(tmp_path / "fast.nc", 40, 2.2), "--speed", SPEED, "--links", 40)
+    assert "samples per link-pass cycle" not in err

@@ -58,6 +58,8 @@ DEFAULT_FALSE_ALARM = 1e-2
 #: tracking bandwidth of the link-pass phase, as a fraction of the link-pass frequency
 BANDWIDTH_FRACTION = 1.0 / 40.0
 SAMPLES_PER_CYCLE = 16
+#: a recording with fewer samples a link-pass cycle reads a worn link's excess low: a note says so
+FEW_SAMPLES_PER_CYCLE = 10
 #: excess pitch below which a link fitted by the signature is not flagged [m]: the simulated healthy chain of
 #: the study's escalator, without noise, fits at most 0.0004 mm at any link, and 0.012 mm with a 1 % speed
 #: wander (the tracked phase's error at the record's ends); with 1 um of noise over three loops the links that
@@ -441,6 +443,12 @@ def find_worn_links(
                 "known for the tensioner only (a step sensor rides the loop, and its own path dominates its "
                 f"per-link pattern){hint}"
             )
+    if fs / f_lp < FEW_SAMPLES_PER_CYCLE:
+        notes.append(
+            f"{fs / f_lp:.1f} samples per link-pass cycle: a worn link's sharp part falls between them and its excess "
+            "is read low (a stranger's 1 mm link read 0.75 +- 0.10 mm at 5.6 samples a cycle, 0.99 +- 0.01 at 11); "
+            f"record at {math.ceil(12 * f_lp)} Hz or more"
+        )
     # with a scene the links are counted between the instants a roller reaches the sensor, not between the
     # signal's cycle boundaries: numbers as the signature gives them wherever the recording starts
     offset = 0.0 if scene is None else link_offset(scene, sensor="tensioner", speed=speed, fs=fs)
