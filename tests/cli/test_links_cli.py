@@ -153,6 +153,6 @@ def test_links_says_when_too_few_samples_a_cycle_read_the_excess_low(tmp_path, r
         FS = keep
     rc, out, err = run("links", path, "--speed", SPEED, "--links", 40)
     err = " ".join(err.split())
-    assert "8.0 samples per link-pass cycle" in err and "record at 45 Hz or more" in err
+    assert "8.0 samples per link-pass cycle" in err and "record at 50 Hz or more" in err
     rc, out, err = run("links", _recording(tmp_path / "fast.nc", 40, 2.2), "--speed", SPEED, "--links", 40)
     assert "samples per link-pass cycle" not in err

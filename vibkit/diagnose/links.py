@@ -447,7 +447,7 @@ def find_worn_links(
         notes.append(
             f"{fs / f_lp:.1f} samples per link-pass cycle: a worn link's sharp part falls between them and its excess "
             "is read low (a stranger's 1 mm link read 0.75 +- 0.10 mm at 5.6 samples a cycle, 0.99 +- 0.01 at 11); "
-            f"record at {math.ceil(12 * f_lp)} Hz or more"
+            f"record at {5 * math.ceil(12 * f_lp / 5)} Hz or more"
         )
     # with a scene the links are counted between the instants a roller reaches the sensor, not between the
     # signal's cycle boundaries: numbers as the signature gives them wherever the recording starts
