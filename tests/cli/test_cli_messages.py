@@ -238,3 +238,14 @@ def test_compare_does_not_judge_a_pitch_without_the_recordings_speed(tmp_path, c
     out = capsys.readouterr().out
     assert "pitch     not judged: the recording's speed is not known (give --speed)" in out
     assert "+-" not in out.split("pitch ", 1)[1].split("\n", 1)[0]
+
+
+def test_a_time_column_in_ms_labelled_s_names_the_option(tmp_path, capsys):
+    """A stranger's 'Time [s]' column held milliseconds: the band error named neither the time column nor the
+    option that reads it (--time-unit ms)."""
+    from vibkit.cli.app import main
+
+    p = tmp_path / "rec.csv"
+    p.write_text("Time [s],disp [mm]\n" + "".join(f"{5 * i},{0.01 * (i % 7):.3f}\n" for i in range(4000)))
+    assert main(["pitch", str(p), "--speed", "0.65", "--nominal-pitch", "135.47mm"]) == 1
+    assert "(--time-unit ms)" in " ".join(capsys.readouterr().err.split())

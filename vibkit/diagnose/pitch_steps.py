@@ -121,8 +121,14 @@ def prepare_bursts(recording, name, band):
     warnings = []
     nyq = min(b.fs for b in raw) / 2
     if band[1] >= nyq:
+        hint = (
+            "; a rate this low is most often a time column in another unit than its header says: check it "
+            "(--time-unit ms), or give --sample-rate"
+            if nyq < 2.0
+            else ""
+        )
         raise ValueError(
-            f"band {band[0]:.4g}-{band[1]:.4g} Hz reaches the Nyquist frequency {nyq:.4g} Hz of channel {name!r}"
+            f"band {band[0]:.4g}-{band[1]:.4g} Hz reaches the Nyquist frequency {nyq:.4g} Hz of channel {name!r}{hint}"
         )
     # irregular time stamps: resampled to a uniform grid; whether that matters is judged by jitter_effect
     invalid = {k: sum(b.invalid.get(k, 0) for b in raw) for k in ("non_finite", "fill_value", "absurd", "total")}

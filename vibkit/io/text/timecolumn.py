@@ -150,7 +150,14 @@ def _read_time(
         badall = np.union1d(np.union1d(bad, inf), np.flatnonzero(missing))
         if badall.size:
             i = int(badall[0])
-            raise RecordingError(path, int(rownums[i]), f"expected a time in column '{tname}', found '{tcells[i]}'")
+            hint = (
+                "; it holds dates, which are no clock on their own: name the column of the times (--time-column NAME)"
+                if re.fullmatch(r"\s*\d{1,4}[/.-]\d{1,2}[/.-]\d{1,4}\s*", str(tcells[i]))
+                else ""
+            )
+            raise RecordingError(
+                path, int(rownums[i]), f"expected a time in column '{tname}', found '{tcells[i]}'{hint}"
+            )
         if time_unit is not None:
             f = parse_time_unit(time_unit)
             if f is None:
