@@ -316,15 +316,21 @@ def test_status_json_and_text_give_the_links(tmp_path, capsys):
 def test_scan_stores_too_few_loops_and_not_run(tmp_path, capsys):
     """The example fleet's step accelerometers (10 s, 0.23 loops of the profile's 159 links) are stored with
     their pitch and a scan "not run" that says why a step gives no link number; a unit without a number of
-    links is not scanned either."""
+    links is not scanned either; a step without one says the step, not the count, is what stops it (a stranger's
+    fleet said "the number of links is not known" of a step, which a count would not have mended)."""
+    from cli.test_links_cli import _recording
+
     shutil.copytree(ROOT / "data/fleet-example/E07", tmp_path / "E07")
     shutil.copytree(ROOT / "data/fleet-example/E12", tmp_path / "E12")
     shutil.copytree(ROOT / "data/fleet-example/escalators", tmp_path / "escalators")
+    (tmp_path / "E31").mkdir()
+    _recording(tmp_path / "E31/2025-01-10.nc", 40, 2.2, seed=3)  # a tensioner, no number of links
     cat = tmp_path / "units.csv"
     cat.write_text(
         "file,unit,speed_m_s,date,nominal_pitch_m,escalator,marker_s\n"
         "E07/*.csv,,,,,escalators/E07.toml,3.5\n"
         "E12/*.csv,E12,0.5,,0.13333,,\n"
+        "E31/*.nc,E31,0.5,,0.13333,,\n"
     )
     db = tmp_path / "f.sqlite"
     assert main(["fleet", "scan", str(tmp_path), "--catalogue", str(cat), "--workers", "0", "--db", str(db)]) == 0
@@ -332,11 +338,13 @@ def test_scan_stores_too_few_loops_and_not_run(tmp_path, capsys):
     with FleetDB(db, readonly=True) as fdb:
         ms = {m.id: m for m in fdb.measurements()}
         scans = fdb.link_scans()
-    assert len(ms) == 6 and sorted(scans) == sorted(ms)
+    assert len(ms) == 7 and sorted(scans) == sorted(ms)
     e07 = [s for i, s in scans.items() if ms[i].unit == "E07"]
     assert {s.status for s in e07} == {"not run"} and all("step accelerometer" in s.reason for s in e07)
     assert {(s.n_links, s.marker_s) for s in e07} == {(159, 3.5)}
-    assert {(s.status, s.reason) for i, s in scans.items() if ms[i].unit == "E12"} == {("not run", NO_LINK_COUNT)}
+    e12 = [s for i, s in scans.items() if ms[i].unit == "E12"]
+    assert {s.status for s in e12} == {"not run"} and all("step accelerometer" in s.reason for s in e12)
+    assert {(s.status, s.reason) for i, s in scans.items() if ms[i].unit == "E31"} == {("not run", NO_LINK_COUNT)}
 
 
 def test_scan_with_a_marked_link_follows_it_across_two_visits(tmp_path, capsys):

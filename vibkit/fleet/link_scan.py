@@ -61,8 +61,6 @@ def link_scan_of(
     nominal_pitch : float, optional
         The unit's nominal pitch [m]: a link pass that gives no chain's pitch is a failed scan.
     """
-    if n_links is None:
-        return LinkScan.not_run(no_count, marker_s=marker_s)
     from ..diagnose.links import (
         STEP_REFUSAL,
         TooFewLoops,
@@ -71,6 +69,16 @@ def link_scan_of(
         is_tensioner_channel,
         links_channel,
     )
+
+    if n_links is None:
+        # a step's sensor is refused whatever the count: that, not the count, is what the reason says
+        try:
+            ch = links_channel(recording, channel)
+            if ch in recording and is_step_channel(recording, ch):
+                return LinkScan.not_run(f"channel {ch}: {STEP_REFUSAL}", marker_s=marker_s)
+        except ValueError:
+            pass
+        return LinkScan.not_run(no_count, marker_s=marker_s)
 
     keep = {"n_links": int(n_links), "marker_s": marker_s}
     try:
