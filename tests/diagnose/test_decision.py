@@ -359,3 +359,20 @@ def test_a_simulation_of_forces_and_energies_is_one_chain():
     res = estimate_channels(ds, speed=0.5)
     assert res.status == STATUS_OK and res.best.channel == "delta"
     assert res.best.fundamental_hz == pytest.approx(0.5 / (0.4 / 3), rel=1e-3)
+
+
+@pytest.mark.parametrize("header, scale", [("chain_speed_m_s", 1.0), ("speed (km/h)", 3.6), ("speed [m/min]", 60.0)])
+def test_a_speed_channel_states_the_recordings_speed(tmp_path, header, scale):
+    """A stranger's logger wrote the chain speed in a column (m/s, km/h): it was analysed as a vibration, or not
+    used, and `pitch` asked for --speed. A speed channel is no vibration, and its mean is the file's speed."""
+    t = np.arange(0, 20, 1 / FS)
+    x = np.cos(2 * np.pi * 4.8 * t)
+    v = 0.65 * (1 + 0.002 * np.sin(2 * np.pi * 0.3 * t))
+    p = tmp_path / "rec.csv"
+    p.write_text(
+        f"time (s),disp (mm),{header}\n" + "".join(f"{a:.4f},{b:.5f},{c * scale:.5f}\n" for a, b, c in zip(t, x, v))
+    )
+    rec = vibkit.read_recording(p)
+    speed, source = speed_from_recording(rec)
+    assert speed == pytest.approx(0.65, abs=5e-4) and source.startswith("file: mean of channel")
+    assert vibration_channels(rec) == ["disp"]

@@ -18,6 +18,8 @@ import math
 import re
 from dataclasses import dataclass, field
 
+import numpy as np
+
 from .decision import EXIT_CODES, STATUS_IMPLAUSIBLE, STATUS_NOT_FOUND
 
 __all__ = [
@@ -42,7 +44,8 @@ def speed_from_recording(recording):
     """``(speed [m/s], source)`` that the recording states in its metadata, or ``(None, None)``.
 
     Keys ending in ``_m_s`` that name a speed (``chain_speed_m_s``, ``velocidad_m_s``, ``speed_m_s``)
-    count; the source names the key, e.g. ``"file: chain_speed_m_s"``.
+    count; the source names the key, e.g. ``"file: chain_speed_m_s"``. Else a channel along time named as a speed,
+    in m/s as read (a tachometer's, written in km/h or m/min too): its mean, ``"file: mean of channel speed"``.
     """
     for key in sorted(recording.attrs, key=lambda k: (k != "chain_speed_m_s", k)):
         if not (str(key).endswith("_m_s") and _SPEED_KEY.search(str(key))):
@@ -53,6 +56,16 @@ def speed_from_recording(recording):
             continue
         if math.isfinite(v) and v > 0:
             return v, f"file: {key}"
+    # a speed channel (a tachometer's, in m/s as read): its mean over the record
+    for name in recording.data_vars:
+        da = recording[name]
+        if da.dims == ("time",) and str(da.attrs.get("units", "")) == "m/s" and _SPEED_KEY.search(str(name)):
+            vals = np.abs(np.asarray(da.values, dtype=float))
+            vals = vals[np.isfinite(vals)]
+            # to four digits: a tachometer's calibration, not the mean's noise, bounds what it states
+            v = float(f"{vals.mean():.4g}") if vals.size else math.nan
+            if math.isfinite(v) and v > 0:
+                return v, f"file: mean of channel {name}"
     return None, None
 
 

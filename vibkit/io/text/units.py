@@ -101,6 +101,10 @@ _TIME_NAME_RE = re.compile(
 )
 
 
+#: speeds written per hour or per minute [m/s per unit]
+_SPEEDS = {"km/h": 1 / 3.6, "kmh": 1 / 3.6, "kph": 1 / 3.6, "m/min": 1 / 60, "ft/min": 0.3048 / 60, "fpm": 0.3048 / 60}
+
+
 def _normalise(text: str) -> str:
     t = text.strip().strip("\"'").strip()
     for a, b in (
@@ -139,6 +143,8 @@ def _parse_plain(t: str, text: str) -> Unit | None:
     m = _VEL_RE.match(t)
     if m:
         return Unit(text, _LENGTH[m.group(1)], "m/s", "velocity")
+    if t in _SPEEDS:  # a conveyor's or a tachometer's speed in a unit of its trade
+        return Unit(text, _SPEEDS[t], "m/s", "velocity")
     if t in _OTHER:
         f, si = _OTHER[t]
         return Unit(text, f, si, "other")
