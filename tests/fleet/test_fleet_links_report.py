@@ -172,3 +172,13 @@ def test_fleet_add_without_a_number_of_links_stores_not_run_with_the_reason(tmp_
         scans = [fdb.link_scans("E07")[m.id] for m in fdb.measurements("E07")]
     assert [(s.status, s.n_links) for s in scans] == [("not run", 159), ("not run", None)]  # by date
     assert "step accelerometer" in scans[0].reason and "step accelerometer" in scans[1].reason
+
+
+def test_fleet_add_refuses_a_unit_its_profile_contradicts(tmp_path, capsys):
+    """A stranger stored a visit with --escalator ES-101's profile under --unit ES-999 without a word: a trend that
+    is not the unit's. The contradiction is refused, as --links against the profile's count is."""
+    rec = ROOT / "data/fleet-example/E07/2026-11-23.csv"
+    prof = ROOT / "data/fleet-example/escalators/E07.toml"
+    args = ["fleet", "add", str(rec), "--escalator", str(prof), "--unit", "E99", "--db", str(tmp_path / "f.sqlite")]
+    assert main(args) == 1
+    assert "--unit E99 contradicts the escalator profile" in capsys.readouterr().err

@@ -197,6 +197,12 @@ def run_add(a):
         raise CLIError("fleet add: give --unit (or --escalator FILE, whose unit is used)")
     if a.speed is None and profile is None:
         raise CLIError("fleet add: give --speed, the chain speed measured on the steps (or --escalator FILE)")
+    if a.unit and profile is not None and profile.unit and a.unit.strip() != str(profile.unit).strip():
+        # a visit of one unit stored under another's name: a trend that is not the unit's
+        raise CLIError(
+            f"--unit {a.unit} contradicts the escalator profile {profile.source} (unit {profile.unit}): give one of "
+            "them, or the profile of that unit"
+        )
     unit = a.unit or profile.unit
     sp = run_speed(a, profile=profile)  # --speed, else the profile's; --speed-uncertainty, else the profile's
     nominal = a.nominal_pitch if a.nominal_pitch is not None else (profile.nominal_pitch if profile else None)
