@@ -3,6 +3,7 @@ none leaves the page, a text placed in an axes stays in it, a table cell's text 
 Page 1 is the verdict: unit, dates, recording, the verdict with its uncertainty, the warnings."""
 
 import re
+from pathlib import Path
 
 import pytest
 
@@ -281,3 +282,20 @@ def test_a_ride_page_with_long_notes_keeps_them_under_its_time_axis():
 
     ride_quality_pages(Doc(), types.SimpleNamespace(ride=[("recording", rq)], scene=None, duration=None))
     assert found == {"ride quality (recording)": []}, found
+
+
+def test_the_parameters_page_lists_the_whole_scene(tmp_path):
+    """'Everything needed to repeat this report': a stranger's scene lines were cut with '...' and its last lines
+    left out. Long lines go on, indented, on the next line, and lines past the page on a continuation page."""
+    sentence = "Leon shopping centre escalator, empty, 0.49 m/s; tensioner carriage displacement sensor"
+    lines = Path("sim/leon.toml").read_text().replace(sentence, "; ".join([sentence] * 3)).splitlines()
+    i = next(k for k, ln in enumerate(lines) if ln.startswith("variables"))
+    lines[i : i + 1] = ["variables = ["] + ['  "delta",'] * 40 + ["]"]  # 41 more lines of the scene's own
+    scene = tmp_path / "long.toml"
+    scene.write_text("\n".join(lines) + "\n")
+    rep = write_report(LEON, tmp_path / "r.pdf", scene=str(scene), duration=4.0, date="2020-02-14")
+    pages = {title: "\n".join(texts) for title, texts in rep.pages}
+    listed = pages["parameters"] + "\n" + pages["parameters (continued)"]
+    assert "..." not in listed
+    assert " ".join(listed.split()).count("tensioner carriage displacement sensor") == 3
+    assert listed.count('"delta",') == 40

@@ -86,18 +86,36 @@ def parameters_page(doc, ctx) -> None:
             rows.append(["converged", "not checked (set [solver] check = true)"])
     ax = fig.add_axes((0.06, 0.62, 0.88, 0.3))
     _table(ax, rows, (0.4, 0.6), 9)
-    if sc is not None:
-        lines = [ln for ln in sc.text.splitlines() if ln.strip() and not ln.lstrip().startswith("#")]
-        shown = [ln if len(ln) <= _WIDTH else ln[: _WIDTH - 3] + "..." for ln in lines[:_LINES]]
-        if len(lines) > _LINES:
-            shown[-1] = f"... {len(lines) - _LINES + 1} more lines: the scene file {sc.source} has them all"
-        fig.text(0.06, 0.58, f"Scene {os.path.basename(sc.source)}:", fontsize=10, fontweight="bold")
-        fig.text(0.06, 0.565, "\n".join(shown), fontsize=6.5, family="monospace", va="top")
+    if sc is None:
+        doc.emit(fig, "parameters")
+        return
+    # every line of the scene, long ones wrapped (a cut line cannot repeat the report), on as many pages as it takes
+    lines = []
+    for ln in sc.text.splitlines():
+        if ln.strip() and not ln.lstrip().startswith("#"):
+            lines += textwrap.wrap(ln, _WIDTH, subsequent_indent="      ", break_long_words=True) or [ln]
+    name = os.path.basename(sc.source)
+    built = " (scene built from the profile)"
+    if name.endswith(built):  # the profile's scene, in memory: the command that writes it to a file
+        name = name[: -len(built)]
+        heading = f"Scene built from the escalator profile {name} (vibkit scene {name} -o FILE writes it):"
+    else:
+        heading = f"Scene {name}:"
+    fig.text(0.06, 0.58, heading, fontsize=10, fontweight="bold")
+    fig.text(0.06, 0.565, "\n".join(lines[:_LINES]), fontsize=6.5, family="monospace", va="top")
     doc.emit(fig, "parameters")
+    rest = lines[_LINES:]
+    while rest:
+        fig = plt.figure(figsize=_PAGE)
+        _page_title(fig, "Parameters (continued)", heading.rstrip(":"))
+        fig.text(0.06, 0.9, "\n".join(rest[:_MORE_LINES]), fontsize=6.5, family="monospace", va="top")
+        doc.emit(fig, "parameters (continued)")
+        rest = rest[_MORE_LINES:]
 
 
-#: the scene's lines the parameters page lists, and their width in characters (a longer line ends in "...")
-_LINES, _WIDTH = 48, 100
+#: the scene's lines the parameters page lists, their width in characters (a longer line goes on, indented, on the
+#: next), and the lines a continuation page lists
+_LINES, _WIDTH, _MORE_LINES = 48, 100, 85
 
 
 #: characters a value cell of the parameters table holds at its font (9 pt, 0.6 of the table's width)
