@@ -426,7 +426,7 @@ def unit_trend(unit, measurements, *, limits_percent=DEFAULT_LIMITS_PERCENT, cov
     unstated = sum(1 for m in used if not m.speed_sigma_m_s)
     if unstated:
         flags.append(
-            f"speed uncertainty not stated in {unstated} measurement(s) (stored 0): their sigmas, the rate's and "
+            f"speed uncertainty not stated in {unstated} measurement(s) (stored as a sigma of 0): their sigmas, the rate's and "
             "the forecast intervals are too small"
         )
     if used and ms[-1] is not last:

@@ -193,7 +193,7 @@ def work_list_page(doc, ctx, rows, part, parts):
         "elongation: the latest usable measurement +- 1 sigma (the latest, marked flagged, where none is usable); rate: weighted least squares over the "
         "current chain (after the last replacement), +- 1 sigma; over a limit now: yellow watch, orange plan, red "
         "replace; blue: flags (outliers, flagged measurements, replacements, an implausible rate) - left out of the "
-        f"trend. {OVERDUE_MEANING}.",
+        f"trend. {OVERDUE_MEANING}. Flags longer than the cell end in '...': vibkit fleet status prints them whole.",
         fontsize=7,
         color="0.3",
         wrap=True,
