@@ -48,14 +48,12 @@ def check_chain_first(src, sec) -> None:
     _check_ranges(src, {name: sec[name] if name == "chain" else {} for name in sec}, {})
     chain = sec["chain"]
     pitch = chain.get("link_pitch")
-    radii = [(k, r) for k, r in [("chain.roller_radius", chain.get("roller_radius"))] if r is not None]
-    radii += [(f"chain.roller_radius_by_roller (roller {k})", r) for k, r in chain.get("roller_radius_by_roller") or ()]
-    for key, r in radii:
-        if isinstance(pitch, (int, float)) and isinstance(r, (int, float)) and 2.0 * r >= pitch:
-            raise SceneError(
-                f"{src}: '{key}' = {r:g} m: neighbouring rollers overlap on links of {pitch:g} m (expected less "
-                f"than half the pitch, {pitch / 2:g} m)"
-            )
+    r = chain.get("roller_radius")  # (a roller's own radius, roller_radius_by_roller, is checked with the chain)
+    if isinstance(pitch, (int, float)) and isinstance(r, (int, float)) and 2.0 * r >= pitch:
+        raise SceneError(
+            f"{src}: 'chain.roller_radius' = {r:g} m: neighbouring rollers overlap on links of {pitch:g} m (expected "
+            f"less than half the pitch, {pitch / 2:g} m)"
+        )
 
 
 def _check_sprocket_geometry(src, given, sprocket, chain) -> None:
