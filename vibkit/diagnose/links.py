@@ -424,9 +424,9 @@ def find_worn_links(
     if span * f_lp < MIN_LOOPS * n:
         need = record_time_for_loops(n, f_lp)
         raise TooFewLoops(
-            f"channel {ch}: {span:.1f} s at {f_lp:.4g} Hz link pass covers {span * f_lp / n:.2f} loops of "
+            f"channel {ch}: {span:.1f} s at about {f_lp:.3g} Hz link pass covers {span * f_lp / n:.2f} loops of "
             f"the chain's {n} links; a link map needs {MIN_LOOPS} loops: record at least {math.ceil(need):.0f} s "
-            f"({MIN_LOOPS} x {n} / {f_lp:.4g} Hz plus one link)"
+            f"({MIN_LOOPS} x {n} / {f_lp:.3g} Hz plus one link)"
         )
     notes = []
     sensor = "tensioner" if str(da.attrs.get("units", "")) in ("m", "mm", "um") else "other"
