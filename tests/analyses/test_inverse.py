@@ -94,10 +94,15 @@ def test_stated_link_pass_is_the_chains_not_roller_1s():
     """An inverse run holds roller 1's speed along the guide, heads included, where a roller runs (pi/z) /
     sin(pi/z) faster than the chain on the straight: over a loop the links pass slower than v / p by about
     z ((pi/z) / sin(pi/z) - 1) / N = 0.037 % (z = 28, N = 159; a stranger's derivation). The result states the
-    links that passed over the run (measured -0.040 % over the 42 s run), and the set speed beside."""
+    links that passed over the run (measured -0.040 % over the 42 s run), the set speed beside, and its sprocket
+    turns at that rate."""
     ds = vibkit.simulate(SIM / "thesis-inverse.toml", progress=False)
     z, n, v, p = 28, 159, 0.5, 0.4 / 3
     chordal = z * ((np.pi / z) / np.sin(np.pi / z) - 1) / n
     assert ds.attrs["speed_set_point_m_s"] == v
     assert ds.attrs["link_pass_frequency_hz"] / (v / p) - 1 == pytest.approx(-chordal, abs=1e-4)
     assert ds.attrs["chain_speed_m_s"] == pytest.approx(ds.attrs["link_pass_frequency_hz"] * p, rel=1e-12)
+    # the sprocket turns at the links' rate (it drifted 7.6 mm from the chain over the run at v / p teeth a second)
+    theta, t = ds.sprocket_angle.values, ds.time.values
+    turned = z * abs(theta[-1] - theta[0]) / (2 * np.pi * (t[-1] - t[0]))
+    assert turned == pytest.approx(ds.attrs["link_pass_frequency_hz"], rel=1e-12)

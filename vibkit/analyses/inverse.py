@@ -1,7 +1,8 @@
 """Inverse dynamics: impose roller 1's arc length s1 = s_start + v t on the deformed guide and the
-sprocket angle theta = theta0 + omega t, omega = -2 pi v / (Z L) (the sprocket speed whose mean chain
-speed is v, :meth:`~vibkit.model.escalator.EscalatorModel.sprocket_speed`); solve positions, velocities,
-accelerations, link tensions (Lagrange multipliers, T_j = 2 lambda_j L) and the drag force.
+sprocket angle theta = theta0 + omega t, omega = -2 pi f / Z with f the links' counted rate over the run (the
+sprocket in mesh with the chain on average; roller 1 rides the heads at v too, where the chain on the straight runs
+slower, so f is below v / L by about 0.04 %); solve positions, velocities, accelerations, link tensions (Lagrange
+multipliers, T_j = 2 lambda_j L) and the drag force.
 
 The imposed constraint D = s(s0_1, delta) - s_start - v t involves delta through the telescopic
 runs, so its derivatives dD/ds0_1 = sigma and dD/ddelta enter the multiplier solve; the drive force
@@ -165,6 +166,13 @@ def inverse_dynamics(model, *, speed, duration, step, start=0.0, effects=None, o
         out["power_balance"][j] = -mu * speed - dEdt
         bar.update(j + 1)
     bar.close()
+    # roller 1 runs at the imposed speed along the guide, heads included: the chain on the straight, whose speed
+    # the link pass counts, runs slower while roller 1 rides a head (0.037 % over a loop of the study's chain);
+    # the sprocket turns at the links' counted rate, so that it stays in mesh with the chain on average
+    chain_speed, f_lp = run_speed(model, t, s0_1, speed, speed_hint=abs(speed))
+    meshed = math.copysign(2.0 * math.pi * f_lp / model.sprocket.teeth, omega) if f_lp > 0 else omega
+    out["kinetic_energy"] += 0.5 * model.sprocket.inertia * (meshed**2 - omega**2)  # a constant, as before
+    omega = meshed
     data = {}
     for name in ("delta", "delta_dot", "delta_ddot", "drive_force", "closure_residual", "chain_speed"):
         if name in want:
@@ -191,9 +199,6 @@ def inverse_dynamics(model, *, speed, duration, step, start=0.0, effects=None, o
         for name, arr in (("roller_position", rpos), ("roller_velocity", rvel), ("roller_acceleration", racc)):
             if name in want:
                 data[name] = (("time", "roller", "axis"), arr)
-    # roller 1 runs at the imposed speed along the guide, heads included: the chain on the straight, whose speed
-    # the link pass counts, runs slower while roller 1 rides a head (0.037 % over a loop of the study's chain)
-    chain_speed, f_lp = run_speed(model, t, s0_1, speed, speed_hint=abs(speed))
     attrs = {
         "chain_speed_m_s": chain_speed,
         "speed_set_point_m_s": float(speed),  # imposed on roller 1, along the guide
