@@ -376,3 +376,11 @@ def test_a_speed_channel_states_the_recordings_speed(tmp_path, header, scale):
     speed, source = speed_from_recording(rec)
     assert speed == pytest.approx(0.65, abs=5e-4) and source.startswith("file: mean of channel")
     assert vibration_channels(rec) == ["disp"]
+
+
+def test_a_vibration_velocity_is_no_chain_speed(tmp_path):
+    """A velocity sensor's channel named 'velocity' in m/s swings about zero: its mean is no chain speed."""
+    t = np.arange(0, 20, 1 / FS)
+    p = tmp_path / "rec.csv"
+    p.write_text("time (s),velocity (m/s)\n" + "".join(f"{a:.4f},{0.002 * np.sin(2 * np.pi * 4 * a):.6f}\n" for a in t))
+    assert speed_from_recording(vibkit.read_recording(p)) == (None, None)

@@ -56,17 +56,25 @@ def speed_from_recording(recording):
             continue
         if math.isfinite(v) and v > 0:
             return v, f"file: {key}"
-    # a speed channel (a tachometer's, in m/s as read): its mean over the record
+    # a speed channel (a tachometer's, in m/s as read): its mean over the record, where it reads a chain's speed
+    # steadily (a vibration velocity swings about zero: not a speed)
     for name in recording.data_vars:
         da = recording[name]
         if da.dims == ("time",) and str(da.attrs.get("units", "")) == "m/s" and _SPEED_KEY.search(str(name)):
-            vals = np.abs(np.asarray(da.values, dtype=float))
+            vals = np.asarray(da.values, dtype=float)
             vals = vals[np.isfinite(vals)]
+            if vals.size < 2:
+                continue
+            mean = abs(float(vals.mean()))
+            if not (SPEED_CHANNEL_RANGE[0] <= mean <= SPEED_CHANNEL_RANGE[1] and float(vals.std()) < 0.1 * mean):
+                continue
             # to four digits: a tachometer's calibration, not the mean's noise, bounds what it states
-            v = float(f"{vals.mean():.4g}") if vals.size else math.nan
-            if math.isfinite(v) and v > 0:
-                return v, f"file: mean of channel {name}"
+            return float(f"{mean:.4g}"), f"file: mean of channel {name}"
     return None, None
+
+
+#: a speed channel's mean is the chain's speed only within this range [m/s] (steps and moving walks)
+SPEED_CHANNEL_RANGE = (0.05, 3.0)
 
 
 #: a simulation's numerical diagnostics, not signals of the machine: the closure residual is rounding
