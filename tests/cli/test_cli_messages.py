@@ -4,6 +4,7 @@ or what was expected; no Python parameter names, no repeated file names, no nump
 from __future__ import annotations
 
 import io
+import json
 import sys
 from pathlib import Path
 
@@ -235,9 +236,12 @@ def test_compare_does_not_judge_a_pitch_without_the_recordings_speed(tmp_path, c
     path = tmp_path / "rec.csv"
     path.write_text("time_s,displacement_m\n" + "".join(f"{a:.3f},{b:.8f}\n" for a, b in zip(t, x)))
     assert main(["compare", str(path), "sim/thesis-inverse.toml", "--duration", "20"]) == 0
-    out = capsys.readouterr().out
+    out, err = capsys.readouterr()
     assert "pitch     not judged: the recording's speed is not known (give --speed)" in out
     assert "+-" not in out.split("pitch ", 1)[1].split("\n", 1)[0]
+    assert "consistent" not in out + err  # nor in a note (a stranger found the verdict there)
+    assert main(["compare", str(path), "sim/thesis-inverse.toml", "--duration", "20", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["pitch_consistent"] is None
 
 
 def test_a_time_column_in_ms_labelled_s_names_the_option(tmp_path, capsys):

@@ -100,7 +100,7 @@ def run(a):
     print(f"recording {a.recording} [{comp.channel}] vs simulation {_name(target)} [{comp.variable}]")
     print(f"link-pass {comp.fundamental_meas_hz:.5f} Hz recorded, {comp.fundamental_sim_hz:.5f} Hz simulated")
     print(
-        f"speed     {sp.text if sp.value is not None else f'{comp.speed_meas_m_s:g} m/s (the scene' + chr(39) + 's)'}"
+        f"speed     {sp.text if sp.value is not None else f'{comp.speed_meas_m_s:.4g} m/s (the scene' + chr(39) + 's, assumed)'}"
     )
     if sp.value is None:  # the recording taken at the scene's speed: a ratio of link passes, not of pitches
         print(

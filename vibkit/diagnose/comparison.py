@@ -124,7 +124,7 @@ class Comparison:
     pitch_ratio, pitch_ratio_sigma : float
         ``pitch_meas_m / pitch_sim_m`` and its standard deviation (the frequencies' and the stated
         speed uncertainty's).
-    pitch_consistent : bool
+    pitch_consistent : bool or None
         ``|pitch_ratio - 1| <= pitch_tolerance + z sigma`` (z of the confidence level).
     pitch_tolerance : float
         Relative pitch difference accepted as the same chain (speed knowledge).
@@ -151,7 +151,7 @@ class Comparison:
     pitch_meas_m: float
     pitch_ratio: float
     pitch_ratio_sigma: float
-    pitch_consistent: bool
+    pitch_consistent: bool | None
     pitch_tolerance: float
     confidence: float
     orders: np.ndarray = field(repr=False)
@@ -366,14 +366,20 @@ def compare(
         if not (math.isfinite(v_meas) and v_meas > 0):
             raise ValueError(f"speed must be a positive number of m/s, got {speed!r}")
     else:
-        v_meas = float(recording.attrs.get("chain_speed_m_s", 0.0) or 0.0)
+        from .channels import speed_from_recording
+
+        v_meas = float(speed_from_recording(recording)[0] or 0.0)
+    speed_known = v_meas > 0
     if speed_sigma is not None and not (math.isfinite(float(speed_sigma)) and float(speed_sigma) >= 0):
         raise ValueError(f"speed_sigma must be >= 0 m/s, got {speed_sigma!r}")
     if not v_sim > 0:
         v_sim = v_meas
     if not v_meas > 0:
         v_meas = v_nom if v_nom > 0 else v_sim
-        notes.append(f"the recording states no speed: taken as the scene's nominal {v_meas:g} m/s")
+        notes.append(
+            f"the recording states no speed: the simulation's {v_meas:.4g} m/s assumed for its band and its link "
+            "pass's pitch, which is not judged (give --speed)"
+        )
     if band is None:
         if not v_sim > 0:
             raise ValueError("neither the result nor the recording states a chain speed; give band=(low, high) [Hz]")
@@ -499,7 +505,9 @@ def compare(
         notes.append("speed uncertainty not stated: the pitch ratio's sigma is the frequencies' part only")
     z1 = float(scipy.stats.norm.ppf(0.5 + float(confidence) / 2))
     consistent = bool(v_sim > 0 and abs(p_ratio - 1) <= float(pitch_tolerance) + z1 * p_sig)
-    if v_sim > 0:
+    if not speed_known:
+        consistent = None  # a pitch at an assumed speed is the link passes' ratio: no verdict on the pitch
+    elif v_sim > 0:
         verdict = "consistent" if consistent else "NOT consistent"
         notes.append(
             f"pitch implied by the recording {1000 * p_meas:.2f} mm vs the simulation {1000 * p_sim:.2f} mm "

@@ -109,12 +109,13 @@ def simulation_page(doc, ctx) -> None:
         return
     fig = plt.figure(figsize=_WIDE)
     pitch = f"; pitch {pitch_figure(ctx.pitch)} (page 1)" if ctx.pitch is not None else ""
+    judged = {True: "consistent", False: "NOT consistent"}.get(comp.pitch_consistent, "not judged (no speed)")
     _page_title(
         fig,
         "Simulation against recording",
         f"scene {sc.name}: {comp.variable} vs {comp.channel}; chain speed {speed_figure(ctx)}{pitch}; "
         f"{PITCH_RATIO} {fmt_pm(comp.pitch_ratio, comp.pitch_ratio_sigma)}: "
-        f"{'consistent' if comp.pitch_consistent else 'NOT consistent'} (each signal's link-pass peak, "
+        f"{judged} (each signal's link-pass peak, "
         f"{comp.fundamental_meas_hz:.4g} Hz recorded and {comp.fundamental_sim_hz:.4g} Hz simulated)",
     )
     plot_comparison(comp, fig, top=0.82)  # under a two-line subtitle

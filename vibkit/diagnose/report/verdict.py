@@ -181,7 +181,7 @@ def evidence_rows(ctx):
         rows.append(
             (
                 "pitch against the scene",
-                ("consistent" if comp.pitch_consistent else "NOT consistent")
+                {True: "consistent", False: "NOT consistent"}.get(comp.pitch_consistent, "not judged (no speed)")
                 + f" ({PITCH_RATIO} {fmt_pm(comp.pitch_ratio, comp.pitch_ratio_sigma)}: {PITCH_RATIO_DEFINITION})",
             )
         )
