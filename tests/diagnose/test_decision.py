@@ -344,6 +344,11 @@ def test_a_simulations_closure_residual_is_not_a_channel(tmp_path):
     # one chain: its tensioner sensor decides, the step's biased link pass does not make it "two periodicities"
     assert decision_channels(rec) == ["tensioner_displacement"]
     assert decision_channels(own) == ["closure_residual"]
+    # a run from rest is read where it counted its speed, after the start-up: the new chain reads new (a stranger's
+    # read +0.79 %, the whole run's link pass against the speed counted after the start-up)
+    res = estimate_channels(rec, speed=rec.attrs["chain_speed_m_s"], nominal_pitch=0.4 / 3)
+    assert abs(res.best.elongation_percent) < 0.02
+    assert any("start-up from rest" in n for n in res.best.notes)
 
 
 def test_a_simulation_of_forces_and_energies_is_one_chain():

@@ -635,9 +635,11 @@ def _post_process(fm, t, y, outputs, stats, y_obs=None, table=None):
             if name in want:
                 data[name] = (("time", "roller", "axis"), arr)
     nominal = nominal_speed(fm.effects, scene.run)
-    speed, f_lp = run_speed(model, t, y[:, 0], nominal, from_rest=abs(y[0, 1]) < 1e-9)
+    speed, f_lp, counted_from = run_speed(model, t, y[:, 0], nominal, from_rest=abs(y[0, 1]) < 1e-9)
     attrs = {
         "chain_speed_m_s": speed,
+        # a run from rest counts its speed after the start-up: what reads a link pass from it reads it there too
+        "speed_counted_from_s": counted_from,
         "speed_set_point_m_s": float(nominal),
         "link_pass_frequency_hz": f_lp,
         # from the table: the tabulated chain's own link-length error (the outputs were read from it)

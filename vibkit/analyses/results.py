@@ -52,7 +52,7 @@ def run_speed(model, t, s0_1, nominal: float, *, from_rest: bool = False, speed_
     slower while roller 1 rides a head), or a longer chain on its original sprocket runs at other than the
     set ``nominal`` speed, and a pitch read from the record with the set speed would be off by as much. A
     record of fewer than three samples, or one whose chain does not move, states the ``nominal`` speed and
-    its link pass."""
+    its link pass. Returns (speed, link pass, the time the count starts [s])."""
     t = np.asarray(t, dtype=float)
     first = t.size // 2 if from_rest else 0
     if t.size >= 3 and t[-1] > t[first]:
@@ -60,8 +60,8 @@ def run_speed(model, t, s0_1, nominal: float, *, from_rest: bool = False, speed_
         links = abs(model.links_passed(a, b, b - a if speed_hint is None else speed_hint * (t[-1] - t[first])))
         f_lp = links / (t[-1] - t[first])
         if f_lp > 0.0:
-            return float(f_lp * model.mean_pitch), float(f_lp)
-    return float(nominal), float(abs(nominal) / model.mean_pitch)
+            return float(f_lp * model.mean_pitch), float(f_lp), float(t[first])
+    return float(nominal), float(abs(nominal) / model.mean_pitch), float(t[0]) if t.size else 0.0
 
 
 def make_dataset(coords: dict, data: dict, attrs: dict, scene) -> xr.Dataset:

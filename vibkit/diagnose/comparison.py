@@ -344,12 +344,17 @@ def compare(
     if isinstance(recording, (str, os.PathLike)):
         recording = read_recording(recording)
     result = as_result(result, duration=duration, progress=progress)
+    from .channels import counted_part
+
+    # a simulation from rest, on either side, read where it counted its speed: after its start-up
+    recording, cut_rec = counted_part(recording)
+    result, cut_sim = counted_part(result)
     channel = pick_channel(recording, channel)
     if variable is None:
         variable = matching_variable(result, recording, channel)
     elif variable not in result.data_vars or result[variable].dims != ("time",):
         raise ValueError(f"variable {variable!r} is not a time variable of the simulation result")
-    notes = []
+    notes = [f"{side}: {cut}" for side, cut in (("recording", cut_rec), ("simulation", cut_sim)) if cut]
     v_nom = float(result.attrs.get("chain_speed_m_s", 0.0) or 0.0)
     v_sim = v_nom
     set_point = result.attrs.get("speed_set_point_m_s")
