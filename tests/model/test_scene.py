@@ -46,7 +46,7 @@ def test_shipped_scenes_load():
         # a pitch in mm is named as such, not as a chain that cannot close (a stranger's 101.6)
         (
             lambda b: b.replace("link_pitch = 0.13333333333333333", "link_pitch = 133.33"),
-            r"'chain.link_pitch' = 133.33 is outside the plausible range \[0.02, 0.5\] m \(101.6 mm is 0.1016\)",
+            r"'chain.link_pitch' = 133.33 is outside the plausible range \[0.02, 0.5\] m \(101.6 mm is 0.1016 m\)",
         ),
         # rollers that overlap are named as such, not as a chain that jumped the teeth
         (
@@ -144,8 +144,8 @@ def test_sections_and_ranges_are_derived_from_the_schema():
     assert EFFECTS["passengers"] == {"mass": list, "step": list, "board": list, "alight": list}
     assert RANGES["effects.contact.exponent"] == (1.0, 3.0, "(1 linear, 1.5 Hertz)")
     assert RANGES["solver.rtol"] == (1e-14, 0.1, "")
-    assert len(RANGES) == 18
-    assert RANGES["chain.link_pitch"] == (0.02, 0.5, "m (101.6 mm is 0.1016)")
+    assert len(RANGES) == 19
+    assert RANGES["chain.link_pitch"] == (0.02, 0.5, "m (101.6 mm is 0.1016 m)")
 
 
 def test_defaults_are_typed_and_recorded():

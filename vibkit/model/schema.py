@@ -102,9 +102,14 @@ class GuideSection(_Section):
 @dataclasses.dataclass(frozen=True)
 class ChainSection(_Section):
     link_pitch: float = key(
-        "m", "distance between consecutive roller centres", required=True, range=(0.02, 0.5, "m (101.6 mm is 0.1016)")
+        "m", "distance between consecutive roller centres", required=True, range=(0.02, 0.5, "m (101.6 mm is 0.1016 m)")
     )
-    roller_radius: float = key("m", "roller radius r_d, less than half the pitch", _RC.roller_radius)
+    roller_radius: float = key(
+        "m",
+        "roller radius r_d, less than half the pitch",
+        _RC.roller_radius,
+        range=(0.001, 0.25, "m (35 mm is 0.035 m)"),
+    )
     roller_mass: float = key(
         "kg", "point mass per roller (a step's share, 1 / links_per_step, plus one pitch of chain)", _RC.roller_mass
     )

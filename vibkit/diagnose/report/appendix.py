@@ -73,7 +73,7 @@ def parameters_page(doc, ctx) -> None:
                     _fit(
                         "read from the table over one pitch"
                         if res.attrs["solver_closure"] == "table"
-                        else f"solved at every step: {res.attrs['solver_closure']}"
+                        else f"solved at every step: {str(res.attrs['solver_closure']).split(' (')[0]}"
                     ),
                 ]
             )
@@ -98,7 +98,7 @@ def parameters_page(doc, ctx) -> None:
     built = " (scene built from the profile)"
     if name.endswith(built):  # the profile's scene, in memory: the command that writes it to a file
         name = name[: -len(built)]
-        heading = f"Scene built from the escalator profile {name} (vibkit scene {name} -o FILE writes it):"
+        heading = f"Scene built from the escalator profile {name} (vibkit scene PROFILE -o FILE writes it):"
     else:
         heading = f"Scene {name}:"
     fig.text(0.06, 0.58, heading, fontsize=10, fontweight="bold")
