@@ -299,3 +299,19 @@ def test_the_parameters_page_lists_the_whole_scene(tmp_path):
     assert "..." not in listed
     assert " ".join(listed.split()).count("tensioner carriage displacement sensor") == 3
     assert listed.count('"delta",') == 40
+
+
+def test_a_start_without_its_zone_is_not_called_utc(tmp_path):
+    """A German logger's 'Start: 04.05.2026 07:30:00' is local time: page 1 printed it as 07:30 UTC."""
+    import numpy as np
+
+    t = np.arange(0, 30, 0.005)
+    p = tmp_path / "german.csv"
+    p.write_text(
+        "Start: 04.05.2026 07:30:00\ntime (s),disp (mm)\n"
+        + "".join(f"{a:.3f},{0.05 * np.cos(2 * np.pi * 3.75 * a):.5f}\n" for a in t)
+    )
+    rep = write_report(str(p), tmp_path / "r.pdf", speed=0.5)
+    page1 = " ".join(rep.pages[0][1])
+    assert "2026-05-04 07:30 (the file's start time, its time zone not stated)" in page1
+    assert "07:30 UTC" not in page1

@@ -163,6 +163,9 @@ def test_miniseed_written_with_obspy():
         ("Start: 04.05.2026 07:30:00", "2026-05-04T07:30:00"),  # German day.month.year
         ("# date: 2026/05/04", "2026-05-04T00:00:00"),
         ("# Start time: 2026-09-01T06:00:00Z", "2026-09-01T06:00:00+00:00"),
+        ("# date: 25/04/2026", "2026-04-25T00:00:00"),  # a day above 12: day/month
+        ("Fecha de inicio: 04/25/2026 07:30", "2026-04-25T07:30:00"),  # month/day
+        ("# start: 04.05.26 07:30", "2026-05-04T07:30:00"),  # a two-digit year
     ],
 )
 def test_a_start_stated_above_the_data_is_the_recordings_start(tmp_path, line, start):
@@ -185,7 +188,9 @@ def test_a_slashed_day_month_start_is_not_guessed(tmp_path):
     p = tmp_path / "rec.csv"
     rows = "".join(f"{i * 0.005:.3f},{0.001 * (i % 7):.4f}\n" for i in range(400))
     p.write_text(f"# start: 04/05/2026\ntime (s),disp (mm)\n{rows}")
-    assert vibkit.read_recording(p).attrs.get("start_time") is None  # 4 May or April 5th: not guessed
+    rec = vibkit.read_recording(p)
+    assert rec.attrs.get("start_time") is None  # 4 May or April 5th: not guessed
+    assert "may be day/month or month/day: not read as the start (give the date: --date)" in rec.attrs["history"]
 
 
 def test_a_date_column_taken_for_the_clock_says_which_option_mends_it(tmp_path):

@@ -133,7 +133,10 @@ class ReportContext:
         if self.measurement_date is None:
             return "not stated in the file (give --date)"
         d = self.measurement_date
-        text = d.strftime("%Y-%m-%d") if (d.hour, d.minute, d.second) == (0, 0, 0) else d.strftime("%Y-%m-%d %H:%M UTC")
+        zone = "" if "time zone not stated" in self.measurement_date_source else " UTC"
+        text = (
+            d.strftime("%Y-%m-%d") if (d.hour, d.minute, d.second) == (0, 0, 0) else d.strftime(f"%Y-%m-%d %H:%M{zone}")
+        )
         return f"{text} ({self.measurement_date_source})"
 
     @property
@@ -182,8 +185,10 @@ def measurement_date(rec, date=None):
             d = _dt.datetime.fromisoformat(text)
         except ValueError:
             return None, ""
-    if d.tzinfo is None:
+    if d.tzinfo is None:  # a logger's local time without its zone: kept as written, not called UTC
         d = d.replace(tzinfo=_dt.timezone.utc)
+        if source != "given":
+            source += ", its time zone not stated"
     return d.astimezone(_dt.timezone.utc), source
 
 

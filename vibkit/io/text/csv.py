@@ -215,7 +215,13 @@ def _read_csv(
     metadata.update(extra_attrs)
     if "start_time" not in extra_attrs:  # no time stamps: the start a metadata line states, as ISO 8601
         found = start_from_meta(pairs)
-        if found is not None:
+        if found is not None and found[0] is None:
+            _, lineno, key, value = found
+            history.append(
+                f"metadata line {lineno} ('{key}: {value}') may be day/month or month/day: not read as the start "
+                "(give the date: --date)"
+            )
+        elif found is not None:
             iso, lineno, key, value = found
             metadata["start_time"] = iso
             history.append(f"start time {iso} from metadata line {lineno} ('{key}: {value}')")

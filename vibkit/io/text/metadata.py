@@ -143,22 +143,38 @@ _START_KEY = re.compile(
     r"recording[ _-]?(start|date|time)|aufnahme(beginn)?|fecha|inicio|fecha[ _-]?(de[ _-]?)?inicio)",
     re.IGNORECASE,
 )
-_DMY_DOTS = re.compile(r"(\d{1,2})\.(\d{1,2})\.(\d{4})(?:[ T,]+(\d{1,2}:\d{2}(?::\d{2}(?:\.\d+)?)?))?")
+_DMY_DOTS = re.compile(r"(\d{1,2})\.(\d{1,2})\.(\d{4}|\d{2})(?:[ T,]+(\d{1,2}:\d{2}(?::\d{2}(?:\.\d+)?)?))?")
+_DMY_SLASH = re.compile(r"(\d{1,2})/(\d{1,2})/(\d{4})(?:[ T,]+(\d{1,2}:\d{2}(?::\d{2}(?:\.\d+)?)?))?")
 _YMD_SLASH = re.compile(r"(\d{4})/(\d{1,2})/(\d{1,2})(?:[ T,]+(\d{1,2}:\d{2}(?::\d{2}(?:\.\d+)?)?))?")
 
 
+class AmbiguousDate(ValueError):
+    """A slashed date whose day and month could be either way round (05/04/2026)."""
+
+
 def _start_value(text):
-    """An ISO 8601 text of a start written as ISO 8601, day.month.year (German) or year/month/day, with an optional
-    time; None for anything else (a day/month/year with slashes may be either way round: not guessed)."""
+    """An ISO 8601 text of a start written as ISO 8601, day.month.year (German; a two-digit year is 20yy),
+    year/month/day or a slashed date whose day is above 12, with an optional time; None for anything else.
+    Raises :class:`AmbiguousDate` for a slashed date that may be day/month or month/day (not guessed)."""
     s = str(text).strip()
     d = None
     try:
         d = datetime.fromisoformat(s.replace("Z", "+00:00"))
     except ValueError:
+        m = _DMY_SLASH.fullmatch(s)
+        if m:
+            a, b = int(m.group(1)), int(m.group(2))
+            if a <= 12 and b <= 12 and a != b:
+                raise AmbiguousDate(s) from None
+            if a <= 12 < b:  # month/day
+                s = f"{b}.{a}.{m.group(3)}" + (f" {m.group(4)}" if m.group(4) else "")
+            else:
+                s = f"{a}.{b}.{m.group(3)}" + (f" {m.group(4)}" if m.group(4) else "")
         for rx, order in ((_DMY_DOTS, (3, 2, 1)), (_YMD_SLASH, (1, 2, 3))):
             m = rx.fullmatch(s)
             if m:
                 y, mo, da = (int(m.group(i)) for i in order)
+                y = y + 2000 if y < 100 else y
                 try:
                     d = datetime.fromisoformat(f"{y:04d}-{mo:02d}-{da:02d}" + (f"T{m.group(4)}" if m.group(4) else ""))
                 except ValueError:
@@ -169,11 +185,17 @@ def _start_value(text):
 
 
 def start_from_meta(pairs):
-    """``(ISO 8601 start, line, key, value)`` from the first metadata line that names a start (``start``,
-    ``date``, ``Datum``, ``recorded`` ...; :data:`_START_KEY`) with a date it can read, else None."""
+    """``(ISO 8601 start or None, line, key, value)`` from the first metadata line that names a start
+    (``start``, ``date``, ``Datum``, ``recorded`` ...; :data:`_START_KEY`) with a date it can read, else None; the
+    start is None (and the line given) where the date may be day/month or month/day."""
+    ambiguous = None
     for lineno, key, value in pairs:
         if isinstance(value, str) and _START_KEY.fullmatch(key.strip()):
-            iso = _start_value(value)
+            try:
+                iso = _start_value(value)
+            except AmbiguousDate:
+                ambiguous = ambiguous or (None, lineno, key, value)
+                continue
             if iso is not None:
                 return iso, lineno, key, value
-    return None
+    return ambiguous
