@@ -88,7 +88,10 @@ def _shown(key, value, summary):
     if key in ("rms", "peak_to_peak") and summary.get("units"):
         return f"{value:.3g} {summary['units']}"  # of the channel, in its units
     sigma = summary.get(_SIGMA_OF.get(key, ""))
-    return fmt_value(value, sigma) if sigma else f"{value:.6g}"
+    if sigma:
+        return fmt_value(value, sigma)
+    # without a sigma (a speed whose uncertainty is not stated) as `pitch` prints them: 0.01 % and 0.01 mm
+    return {"elongation_percent": f"{value:+.2f}", "pitch_m": f"{value:.5f}"}.get(key, f"{value:.6g}")
 
 
 def _flag_text(f):
