@@ -182,3 +182,16 @@ def test_fleet_add_refuses_a_unit_its_profile_contradicts(tmp_path, capsys):
     args = ["fleet", "add", str(rec), "--escalator", str(prof), "--unit", "E99", "--db", str(tmp_path / "f.sqlite")]
     assert main(args) == 1
     assert "--unit E99 contradicts the escalator profile" in capsys.readouterr().err
+
+
+def test_fleet_add_takes_the_speed_the_file_states(tmp_path, capsys):
+    """A stranger's `fleet add` asked for --speed of files that state it (Leon's chain_speed_m_s), which `pitch`
+    and `report` take: it takes it too, and says so."""
+    db = tmp_path / "f.sqlite"
+    rec = ROOT / "data/field/leon-tensioner.csv"
+    args = ["fleet", "add", str(rec), "--unit", "LEON", "--nominal-pitch", "133.33mm", "--date", "2020-02-14"]
+    assert main(args + ["--db", str(db)]) == 0
+    assert "note: speed 0.49 m/s from the chain_speed_m_s of" in capsys.readouterr().err
+    with FleetDB(db, readonly=True) as fdb:
+        (m,) = fdb.measurements("LEON")
+    assert m.speed_m_s == 0.49

@@ -196,7 +196,18 @@ def run_add(a):
     if a.unit is None and profile is None:
         raise CLIError("fleet add: give --unit (or --escalator FILE, whose unit is used)")
     if a.speed is None and profile is None:
-        raise CLIError("fleet add: give --speed, the chain speed measured on the steps (or --escalator FILE)")
+        # the speed the file states (Leon's chain_speed_m_s, a tachometer's column), as `pitch` takes it
+        from vibkit.diagnose.channels import speed_from_recording
+
+        from .options import read_recording
+
+        a.speed, source = speed_from_recording(read_recording(a))
+        if a.speed is None:
+            raise CLIError(
+                "fleet add: give --speed, the chain speed measured on the steps (or --escalator FILE); the file "
+                "states none"
+            )
+        msg(f"note: speed {a.speed:g} m/s from the {source.removeprefix('file: ')} of {a.recording}")
     if a.unit and profile is not None and profile.unit and a.unit.strip() != str(profile.unit).strip():
         # a visit of one unit stored under another's name: a trend that is not the unit's
         raise CLIError(
