@@ -146,7 +146,7 @@ def run(a):
     except ValueError as exc:  # the analysis's words about the signal, with the file named
         raise in_file(a.recording, exc) from None
     if res.best is None:
-        return refused("pitch", a, res, {"file": a.recording})
+        return refused("pitch", a, res, {"file": a.recording}, speed_known=sp.value is not None)
     est = res.best
     if a.json:
         d = est.as_dict()
@@ -253,7 +253,7 @@ def print_channels(res):
     print()
 
 
-def refused(cmd, a, res, extra):
+def refused(cmd, a, res, extra, speed_known=False):
     """No usable link pass on any channel: say so (JSON with the status and reason, no number), exit 1."""
     ests = res.estimates
     if a.json:
@@ -275,7 +275,7 @@ def refused(cmd, a, res, extra):
         print_channels(res)
     band = ests[0].band_hz
     hint = ""
-    if not (getattr(a, "speed", None) or getattr(a, "escalator", None) or getattr(a, "band", None)):
+    if not (speed_known or getattr(a, "speed", None) or getattr(a, "escalator", None) or getattr(a, "band", None)):
         hint = (
             " (the band searched without a speed: it misses a 101.6 mm chain above 0.6 m/s; give --speed, "
             "--escalator or --band)"

@@ -98,7 +98,11 @@ def run(a):
     if res.best is None:
         e0 = res.estimates[0]
         return refused(
-            "spectrum", a, res, {"file": a.recording, "units": e0.extra.get("units", "1"), "band_hz": list(e0.band_hz)}
+            "spectrum",
+            a,
+            res,
+            {"file": a.recording, "units": e0.extra.get("units", "1"), "band_hz": list(e0.band_hz)},
+            speed_known=bool(speed),
         )
     est = res.best
     ch, units = est.channel, est.extra.get("units", "1")
