@@ -75,7 +75,7 @@ from ..model.slots import (
 )
 from ..model.table_check import checked_table
 from .integrate import IntegrationError, integrate
-from .results import make_dataset, output_times, run_speed
+from .results import counted_speed, make_dataset, output_times
 
 __all__ = ["forward_dynamics", "initial_state", "ForwardModel", "default_rtol"]
 
@@ -635,7 +635,7 @@ def _post_process(fm, t, y, outputs, stats, y_obs=None, table=None):
             if name in want:
                 data[name] = (("time", "roller", "axis"), arr)
     nominal = nominal_speed(fm.effects, scene.run)
-    speed, f_lp, counted_from = run_speed(model, t, y[:, 0], nominal, from_rest=abs(y[0, 1]) < 1e-9)
+    speed, f_lp, counted_from = counted_speed(model, t, y[:, 0], nominal, from_rest=abs(y[0, 1]) < 1e-9)
     attrs = {
         "chain_speed_m_s": speed,
         # a run from rest counts its speed after the start-up: what reads a link pass from it reads it there too

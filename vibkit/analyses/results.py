@@ -9,7 +9,7 @@ import xarray as xr
 
 from .. import __version__
 
-__all__ = ["VARIABLES", "make_dataset", "output_times", "run_speed"]
+__all__ = ["VARIABLES", "make_dataset", "output_times", "counted_speed"]
 
 # name -> (units, long_name)
 VARIABLES = {
@@ -41,18 +41,19 @@ VARIABLES = {
 }
 
 
-def run_speed(model, t, s0_1, nominal: float, *, from_rest: bool = False, speed_hint=None):
+def counted_speed(model, t, s0_1, nominal: float, *, from_rest: bool = False, speed_hint=None):
     """The chain speed [m/s] and link-pass frequency [Hz] a simulated record states: measured, not set.
 
     The links that passed a fixed point over the record (roller 1 at undeformed coordinates ``s0_1`` at the
     times ``t``; :meth:`vibkit.model.escalator.EscalatorModel.links_passed`; ``speed_hint`` [m/s], the chain's
-    speed to within half a loop over the record, default roller 1's), over its duration, and that times the chain's mean link pitch;
-    over the record's second half for a run that starts ``from_rest``. A drive whose speed controller droops
-    under load, an inverse run that holds roller 1's speed along the guide (the chain on the straight runs
-    slower while roller 1 rides a head), or a longer chain on its original sprocket runs at other than the
-    set ``nominal`` speed, and a pitch read from the record with the set speed would be off by as much. A
-    record of fewer than three samples, or one whose chain does not move, states the ``nominal`` speed and
-    its link pass. Returns (speed, link pass, the time the count starts [s])."""
+    speed to within half a loop over the record, default roller 1's), over its duration, and that times the
+    chain's mean link pitch; over the record's second half for a run that starts ``from_rest``. (Not
+    :func:`vibkit.cli.options.run_speed`, the speed a command resolves from its flags.) A drive whose speed
+    controller droops under load, or an inverse run that holds roller 1's speed along the guide (the chain on
+    the straight runs slower while roller 1 rides a head), runs at other than the set ``nominal`` speed, and a
+    pitch read from the record with the set speed would be off by as much. A record of fewer than three
+    samples, or one whose chain does not move, states the ``nominal`` speed and its link pass. Returns (speed,
+    link pass, the time the count starts [s])."""
     t = np.asarray(t, dtype=float)
     first = t.size // 2 if from_rest else 0
     if t.size >= 3 and t[-1] > t[first]:
