@@ -74,9 +74,19 @@ def test_command_reads_stdin_like_the_file(command, monkeypatch, capsys):
     _stdin(monkeypatch, LEON.read_bytes())
     assert main([command, "-", "--json"]) in (0, 3)
     piped = json.loads(capsys.readouterr().out)
-    assert piped.pop("file", "-") == "-"
+    assert piped.pop("file") == "<stdin>"  # named as the reader's messages name it, not "-"
     from_file.pop("file", None)
     assert piped == from_file
+
+
+@pytest.mark.parametrize("command", [["pitch"], ["spectrum"], ["links", "--links", "159"]])
+def test_text_output_names_stdin(command, monkeypatch, capsys):
+    _stdin(monkeypatch, LEON.read_bytes())
+    main([command[0], "-", *command[1:]])
+    out = capsys.readouterr()
+    text = out.out + out.err
+    assert "<stdin>" in text, text
+    assert "-: " not in text, text
 
 
 def test_simulate_to_stdout_writes_the_result_and_no_file(monkeypatch, tmp_path, capsys):

@@ -20,7 +20,7 @@ from .options import (
     read_recording,
     run_speed,
 )
-from .output import CLIError, msg, print_json, table
+from .output import CLIError, msg, print_json, shown, table
 
 EPILOG = "example:\n  vibkit compare data/field/leon-tensioner.csv sim/leon.toml --duration 10"
 
@@ -94,10 +94,10 @@ def run(a):
     del vibkit
     if a.json:
         d = comp.as_dict()
-        d.update(recording=a.recording, simulation=_name(target))
+        d.update(recording=shown(a.recording), simulation=_name(target))
         print_json("compare", d)
         return 0
-    print(f"recording {a.recording} [{comp.channel}] vs simulation {_name(target)} [{comp.variable}]")
+    print(f"recording {shown(a.recording)} [{comp.channel}] vs simulation {_name(target)} [{comp.variable}]")
     print(f"link-pass {comp.fundamental_meas_hz:.5f} Hz recorded, {comp.fundamental_sim_hz:.5f} Hz simulated")
     print(
         f"speed     {sp.text if sp.value is not None else f'{comp.speed_meas_m_s:.4g} m/s (the scene' + chr(39) + 's, assumed)'}"

@@ -25,7 +25,7 @@ from .options import (
     run_speed,
     workers,
 )
-from .output import CLIError, check_output, is_stdout, msg, output_path, print_json, table
+from .output import CLIError, check_output, is_stdout, msg, output_path, print_json, shown, table
 
 EPILOG = (
     "examples (on the shipped example fleet, data/fleet-example/):\n"
@@ -207,7 +207,7 @@ def run_add(a):
                 "fleet add: give --speed, the chain speed measured on the steps (or --escalator FILE); the file "
                 "states none"
             )
-        msg(f"note: speed {a.speed:g} m/s from the {source.removeprefix('file: ')} of {a.recording}")
+        msg(f"note: speed {a.speed:g} m/s from the {source.removeprefix('file: ')} of {shown(a.recording)}")
     if a.unit and profile is not None and profile.unit and a.unit.strip() != str(profile.unit).strip():
         # a visit of one unit stored under another's name: a trend that is not the unit's
         raise CLIError(

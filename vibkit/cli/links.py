@@ -23,7 +23,7 @@ from .options import (
     escalator_profile,
     read_recording,
 )
-from .output import CLIError, in_file, msg, print_json, table
+from .output import CLIError, in_file, msg, print_json, shown, table
 from .pitch import resolve_speed
 
 EPILOG = (
@@ -97,7 +97,7 @@ def run(a):
     n_links = chain_links(a, profile)
     if n_links is None:
         raise CLIError(
-            f"{a.recording}: give --links N, the chain's number of links (or --escalator FILE with chain.n_links)"
+            f"{shown(a.recording)}: give --links N, the chain's number of links (or --escalator FILE with chain.n_links)"
         )
     scene = a.scene
     if scene is None and profile is not None:
@@ -112,14 +112,14 @@ def run(a):
             marker_s=a.marker,
             false_alarm=a.false_alarm,
             band=a.band,
-            file=a.recording,
+            file=shown(a.recording),
             nominal_pitch=None if profile is None else profile.nominal_pitch,
             **({} if a.min_excess is None else {"min_excess": a.min_excess}),
         )
     except TooFewLoops as exc:
         if a.json:
-            print_json("links", {"file": a.recording, "status": "too short", "reason": str(exc), "flagged": []})
-        msg(f"vibkit links: {a.recording}: {exc}")
+            print_json("links", {"file": shown(a.recording), "status": "too short", "reason": str(exc), "flagged": []})
+        msg(f"vibkit links: {shown(a.recording)}: {exc}")
         return 1
     except ValueError as exc:
         if a.scene is None and profile is not None:  # the profile's scene is a temporary file: name the profile
@@ -130,10 +130,10 @@ def run(a):
         print_json("links", res.as_dict())
         return code
     if res.status == "inconclusive":
-        msg(f"vibkit links: {a.recording}: inconclusive: {res.reason}")
+        msg(f"vibkit links: {shown(a.recording)}: inconclusive: {res.reason}")
         return code
     print(
-        f"{a.recording}: channel {res.channel}, {res.loops} loops of {res.n_links} links at "
+        f"{shown(a.recording)}: channel {res.channel}, {res.loops} loops of {res.n_links} links at "
         f"{res.link_pass_hz:.4f} Hz link pass ({speed:g} m/s)"
     )
     print(f"method               {res.method}")

@@ -24,16 +24,20 @@ def color():
     return sys.stderr.isatty() and "NO_COLOR" not in os.environ and os.environ.get("TERM", "") != "dumb"
 
 
+def shown(path) -> str:
+    """The name a message gives a recording: ``<stdin>`` for ``-`` (as the reader's own messages name it)."""
+    path = os.fspath(path)
+    return "<stdin>" if path == STDIO else path
+
+
 def in_file(path, exc) -> Exception:
     """``exc`` if its message names ``path``, else a ValueError whose one line starts with it.
 
     A message that starts with the file's base name (the library names the file it read so) or with
     ``<stdin>`` (for ``-``) has that name replaced by ``path``, not repeated after it."""
     text = " ".join(str(exc).split()) or type(exc).__name__
-    path = os.fspath(path)
+    path = shown(path)
     if path in text:
-        return exc
-    if path == "-" and text.startswith("<stdin>: "):
         return exc
     name = os.path.basename(path)
     if name and text.startswith(f"{name}: "):

@@ -27,7 +27,7 @@ from .options import (
     run_speed,
     teeth,
 )
-from .output import CLIError, in_file, msg, print_json, table
+from .output import CLIError, in_file, msg, print_json, shown, table
 
 EPILOG = (
     "examples:\n  vibkit pitch data/field/leon-tensioner.csv --speed-uncertainty 0.1% \\\n"
@@ -78,7 +78,9 @@ def resolve_speed(a, rec, *, required=True, profile=None):
     sp = run_speed(a, rec=rec, profile=profile)
     if sp.value is not None or not required:
         return sp
-    raise CLIError(f"{a.recording}: the file states no chain speed; give --speed (e.g. --speed 0.5 or --speed 50cm/s)")
+    raise CLIError(
+        f"{shown(a.recording)}: the file states no chain speed; give --speed (e.g. --speed 0.5 or --speed 50cm/s)"
+    )
 
 
 def file_chain(rec):
@@ -146,16 +148,20 @@ def run(a):
     except ValueError as exc:  # the analysis's words about the signal, with the file named
         raise in_file(a.recording, exc) from None
     if res.best is None:
-        return refused("pitch", a, res, {"file": a.recording}, speed_known=sp.value is not None)
+        return refused("pitch", a, res, {"file": shown(a.recording)}, speed_known=sp.value is not None)
     est = res.best
     if a.json:
         d = est.as_dict()
         d.update(
-            file=a.recording, status=res.status, reason=res.reason, exit_code=res.exit_code, channels=res.per_channel()
+            file=shown(a.recording),
+            status=res.status,
+            reason=res.reason,
+            exit_code=res.exit_code,
+            channels=res.per_channel(),
         )
         print_json("pitch", d)
         return res.exit_code
-    print(f"{a.recording}: channel {est.channel}, speed {speed_text(est)}")
+    print(f"{shown(a.recording)}: channel {est.channel}, speed {speed_text(est)}")
     print(
         f"link-pass frequency  {fmt_pm(est.fundamental_hz, est.fundamental_sigma_hz, 'Hz')} "
         f"({len(est.per_burst)} burst(s))"
@@ -271,7 +277,7 @@ def refused(cmd, a, res, extra, speed_known=False):
         print_json(cmd, d)
     else:
         names = ", ".join(e.channel for e in ests)
-        print(f"{a.recording}: channel{'s' if len(ests) > 1 else ''} {names}: {res.status}")
+        print(f"{shown(a.recording)}: channel{'s' if len(ests) > 1 else ''} {names}: {res.status}")
         print_channels(res)
     band = ests[0].band_hz
     hint = ""

@@ -23,7 +23,7 @@ from .options import (
     on_step,
     read_recording,
 )
-from .output import in_file, msg, print_json, table
+from .output import in_file, msg, print_json, shown, table
 from .pitch import (
     add_speed_options,
     file_chain,
@@ -101,7 +101,7 @@ def run(a):
             "spectrum",
             a,
             res,
-            {"file": a.recording, "units": e0.extra.get("units", "1"), "band_hz": list(e0.band_hz)},
+            {"file": shown(a.recording), "units": e0.extra.get("units", "1"), "band_hz": list(e0.band_hz)},
             speed_known=bool(speed),
         )
     est = res.best
@@ -120,7 +120,7 @@ def run(a):
         "status": res.status,
         "reason": res.reason,
         "exit_code": res.exit_code,
-        "file": a.recording,
+        "file": shown(a.recording),
         "channel": ch,
         "units": units,
         "band_hz": list(est.band_hz),
@@ -141,7 +141,7 @@ def run(a):
     if a.json:
         print_json("spectrum", payload)
     else:
-        print(f"{a.recording}: channel {ch} [{units}]" + (f", speed {speed_text(est)}" if speed else ""))
+        print(f"{shown(a.recording)}: channel {ch} [{units}]" + (f", speed {speed_text(est)}" if speed else ""))
         print(
             f"link-pass fundamental {fmt_pm(est.fundamental_hz, est.fundamental_sigma_hz, 'Hz')} "
             f"(search band {est.band_hz[0]:.4g}-{est.band_hz[1]:.4g} Hz)"
