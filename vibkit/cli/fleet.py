@@ -36,7 +36,7 @@ EPILOG = (
     "  vibkit fleet migrate --from out/fleet.sqlite --to postgresql://tech@fleet-server/fleet\n"
     "database: --db PATH (or sqlite:///PATH) or postgresql://user@host/dbname,\n"
     "  else $VIBKIT_FLEET_DB, else ./vibkit-fleet.sqlite\n"
-    "exit codes: 0 done; 1 error; 3 scan: some files failed (others were stored)\n"
+    "exit codes: 0 done; 1 error; 3 scan: some files failed (others were stored or already were)\n"
     "catalogue columns: file (name or glob), unit, speed_m_s, date (ISO 8601; empty: an ISO date\n"
     "  in the file name, else the recording's start time), nominal_pitch_m (empty: the unit's),\n"
     "  optional speed_sigma_m_s, channel, escalator, n_links (the links are scanned), marker_s\n"
