@@ -191,15 +191,3 @@ def test_a_slashed_day_month_start_is_not_guessed(tmp_path):
     rec = vibkit.read_recording(p)
     assert rec.attrs.get("start_time") is None  # 4 May or April 5th: not guessed
     assert "may be day/month or month/day: not read as the start (give the date: --date)" in rec.attrs["history"]
-
-
-def test_a_date_column_taken_for_the_clock_says_which_option_mends_it(tmp_path):
-    """A stranger's logger wrote Date and Time in two columns: the error named the date column and not the option
-    that reads the file (--time-column Time)."""
-    import vibkit
-
-    p = tmp_path / "rec.csv"
-    rows = "".join(f"01/03/2026,10:00:{i * 0.01:05.2f},{0.001 * (i % 7):.4f}\n" for i in range(300))
-    p.write_text("Date,Time,acc\n" + rows)
-    with pytest.raises(vibkit.io.RecordingError, match=r"it holds dates.*--time-column NAME"):
-        vibkit.read_recording(p)

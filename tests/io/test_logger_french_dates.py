@@ -35,7 +35,7 @@ def stamped(path, first_date, n=50):
     return path
 
 
-@pytest.mark.parametrize("date, start", [("25/11/2025", "25/11/2025"), ("11/25/2025", "11/25/2025")])
+@pytest.mark.parametrize("date, start", [("25/11/2025", "2025-11-25T10:00:00"), ("11/25/2025", "2025-11-25T10:00:00")])
 def test_unambiguous_dates_read_in_their_order(tmp_path, date, start):
     ds = read_recording(stamped(tmp_path / "a.csv", date))
     order = "day/month/year" if date.startswith("25") else "month/day/year"

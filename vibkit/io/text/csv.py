@@ -40,7 +40,7 @@ from .fastpath import _HEAD_BYTES, _Fallback, _fast_rows
 from .layout import _decode, _decode_head, _read_layout
 from .loggers import app_units
 from .metadata import _meta_pair, _rate_from_meta, _scale_from_meta, start_from_meta
-from .timecolumn import _choose_time_column, _read_time
+from .timecolumn import _choose_time_column, _date_and_time, _joined_stamps, _read_time
 
 __all__ = ["read_csv", "DELIMITERS"]
 
@@ -163,6 +163,7 @@ def _read_csv(
     for j, u in app_units(path, colnames.names, [s[1] for s in colnames.split], lay.free, history).items():
         colnames.split[j] = (colnames.split[j][0], u, None)
     tcol, clocks = _choose_time_column(path, time_column, colnames, n, header_line, history, cols, dec)
+    tcol, clocks, date_col = _date_and_time(tcol, clocks, cols, colnames, history)
     chan_idx, explicit = _select_channels(path, channel, tcol, colnames, n, header_line, clocks)
     override = _unit_overrides(path, units, chan_idx, colnames)
 
@@ -174,7 +175,7 @@ def _read_csv(
         tname = colnames.shown[tcol]
         t = _read_time(
             path,
-            cols[tcol],
+            cols[tcol] if date_col is None else _joined_stamps(cols[date_col], cols[tcol]),
             tname,
             colnames.split[tcol][1],
             dec,

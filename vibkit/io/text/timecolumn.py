@@ -104,6 +104,61 @@ def _choose_time_column(path, time_column, colnames: _ColumnNames, n, header_lin
     return tcol, clocks
 
 
+#: a calendar date alone (no clock): 2026-05-04, 04.05.2026, 5/4/26
+_DATE_ONLY = re.compile(r"\s*(?:[0-9]{4}-[0-9]{1,2}-[0-9]{1,2}|[0-9]{1,2}[/.-][0-9]{1,2}[/.-][0-9]{2,4})\s*")
+
+
+def _is_date_only(cells):
+    return len(cells) > 0 and isinstance(cells[0], str) and bool(_DATE_ONLY.fullmatch(cells[0]))
+
+
+def _is_time_of_day(cells):
+    return len(cells) > 0 and isinstance(cells[0], str) and bool(_STAMP_TOD.fullmatch(cells[0].strip()))
+
+
+def _date_and_time(tcol, clocks, cols, colnames: _ColumnNames, history):
+    """(time column, other clocks, date column or None) where a date column and a time-of-day column together
+    are the clock (a logger's ``Date,Time,...``): the time-of-day column is the time column, the date column
+    gives its calendar date (and carries it over midnight). Otherwise as given, with no date column."""
+    if tcol is None or cols is None:
+        return tcol, clocks, None
+    others = [j for j in range(len(cols)) if j != tcol]
+    if _is_date_only(cols[tcol]):
+        pick = [j for j in others if _is_time_of_day(cols[j])]
+        if not pick:
+            return tcol, clocks, None
+        date_col, tcol = tcol, pick[0]
+    elif _is_time_of_day(cols[tcol]):
+        pick = [j for j in others if _is_date_only(cols[j])]
+        if not pick:
+            return tcol, clocks, None
+        date_col = pick[0]
+    else:
+        return tcol, clocks, None
+    stale = {f"column '{colnames.shown[j]}' is another clock, not a channel" for j in (tcol, date_col)}
+    history[:] = [h for h in history if h not in stale]
+    history.append(
+        f"time stamps from column '{colnames.shown[date_col]}' (dates) and column '{colnames.shown[tcol]}' "
+        "(times of day) together"
+    )
+    return tcol, [j for j in clocks if j not in (tcol, date_col)] + [date_col], date_col
+
+
+def _joined_stamps(date_cells, time_cells):
+    """Each row's date and time of day as one stamp (``2026-05-04 07:30:00.005``; ``04.05.2026 07:30:00``)."""
+    d = pd.Series(date_cells, dtype=object).str.strip()
+    # two-digit years: 20yy (a logger's dd.mm.yy)
+    d = d.str.replace(r"^([0-9]{1,2}[/.-][0-9]{1,2}[/.-])([0-9]{2})$", r"\g<1>20\2", regex=True)
+    # ISO dates of one-digit month or day padded, as ISO 8601 asks
+    d = d.str.replace(r"^([0-9]{4})-([0-9])-", r"\1-0\2-", regex=True).str.replace(
+        r"^([0-9]{4}-[0-9]{2})-([0-9])$", r"\1-0\2", regex=True
+    )
+    t = pd.Series(time_cells, dtype=object).str.strip()
+    t = t.str.replace(r"^([0-9]):", r"0\1:", regex=True)
+    t = t.str.replace(r"^([0-9]{2}:[0-9]{2}:[0-9]{2}):([0-9]+)$", r"\1.\2", regex=True)
+    return (d + " " + t).to_numpy(dtype=object)
+
+
 def _zone_note(start):
     """`` (no time zone in the file: taken as UTC)`` for a naive start stamp, else empty: a report's dates are UTC."""
     from datetime import datetime
@@ -257,9 +312,10 @@ def _counter_clock_unit(path, vals, step, tname, header_line, history):
 
 
 def _date_order(cells, path, rownums, tname, date_order):
-    """``"dmy"`` or ``"mdy"`` for numeric dates ``a/b/yyyy``: as given, else where a field above 12 says.
+    """``"dmy"`` or ``"mdy"`` for numeric dates ``a/b/yyyy``: as given, else where a field above 12 says, else
+    ``"dmy."`` for dotted dates (``04.05.2026``: day.month.year, as they are written).
 
-    Dates whose two first fields never exceed 12 could be either: refused, naming ``date_order=``.
+    Other dates whose two first fields never exceed 12 could be either: refused, naming ``date_order=``.
     """
     parts = cells.str.extract(r"^([0-9]{1,2})[/.-]([0-9]{1,2})[/.-]")
     a = pd.to_numeric(parts[0], errors="coerce").to_numpy()
@@ -279,6 +335,8 @@ def _date_order(cells, path, rownums, tname, date_order):
         return "dmy"
     if month_first.size:
         return "mdy"
+    if cells.str.match(r"^[0-9]{1,2}\.[0-9]{1,2}\.").all():
+        return "dmy."  # dotted dates are day.month.year (month.day.year is written nowhere)
     raise RecordingError(
         path,
         int(rownums[0]),
@@ -288,7 +346,8 @@ def _date_order(cells, path, rownums, tname, date_order):
 
 
 def _parse_stamps(cells, path=None, rownums=None, tname="time", date_order=None):
-    """Seconds since the first stamp, the first stamp as text, the format name; None if not stamps."""
+    """Seconds since the first stamp, the first stamp (as written; ISO 8601 for day/month/year stamps), the format
+    name, which rows parsed; None if not stamps."""
     s = pd.Series(cells, dtype=object)
     first = s.iloc[0]
     if _STAMP_ISO.fullmatch(first):
@@ -297,6 +356,8 @@ def _parse_stamps(cells, path=None, rownums=None, tname="time", date_order=None)
         ok = t.notna().to_numpy()
     elif _STAMP_DMY.fullmatch(first):
         order = _date_order(s, path, rownums if rownums is not None else np.arange(1, s.size + 1), tname, date_order)
+        dotted = order == "dmy."
+        order = order[:3]
         swap = r"\3-\2-\1 " if order == "dmy" else r"\3-\1-\2 "
         norm = s.str.replace(r"^([0-9]{1,2})[/.-]([0-9]{1,2})[/.-]([0-9]{4})[ T]", swap, regex=True)
         norm = norm.str.replace(",", ".", regex=False)
@@ -304,7 +365,13 @@ def _parse_stamps(cells, path=None, rownums=None, tname="time", date_order=None)
         kind = (
             ("day/month/year" if order == "dmy" else "month/day/year")
             + " timestamps"
-            + (" (date_order given)" if date_order else " (a field above 12 says the order)")
+            + (
+                " (date_order given)"
+                if date_order
+                else " (dotted: day.month.year)"
+                if dotted
+                else " (a field above 12 says the order)"
+            )
         )
         ok = t.notna().to_numpy()
     elif _STAMP_TOD.fullmatch(first):
@@ -319,7 +386,9 @@ def _parse_stamps(cells, path=None, rownums=None, tname="time", date_order=None)
     if not ok[0]:
         return None
     secs = (t - t.iloc[0]).dt.total_seconds().to_numpy(dtype=float, na_value=np.nan)
-    return secs, str(first), kind, ok
+    # the start as ISO 8601 where the stamps carry a date in another order (what reports and the fleet read)
+    start = t.iloc[0].isoformat() if _STAMP_DMY.fullmatch(first) else str(first)
+    return secs, start, kind, ok
 
 
 def _epoch_unit(path, vals, tname, line):
