@@ -128,6 +128,21 @@ def test_simulate_ride_runs_on_to_the_incline_when_the_scene_ends_before_it():
         simulate_ride(scene, duration=30.0)
 
 
+def test_a_down_escalator_rides_down_the_incline():
+    """A scene run at a negative speed (a profile's drive.direction = "down"): its step's ride is the descent of the
+    incline at v sin(alpha), not the return strand's rise under the steps, and the note says down."""
+    from vibkit.diagnose.ride_simulation import simulate_ride
+    from vibkit.model.scene import load_scene, parse_scene
+
+    shipped = load_scene(SIM / "thesis-forward.toml")
+    text = shipped.text.replace("speed = 0.5 }", "speed = -0.5 }").replace("duration = 44.0", "duration = 60.0")
+    assert text != shipped.text
+    rq = simulate_ride(parse_scene(text, shipped.source))
+    assert rq.segment.plateau == pytest.approx(-0.5 * math.sin(math.radians(30.0)), rel=0.01)
+    assert rq.segment.duration_s > 10.0
+    assert "(down the incline)" in rq.segment.note, rq.segment.note
+
+
 def _dataset_recording(t, ax, ay, az):
     channels = {"ax": ax, "ay": ay, "az": az}
     attrs = {"source_file": "synthetic"}

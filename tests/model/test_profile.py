@@ -72,6 +72,7 @@ def test_geometry_instead_of_links_and_sensor():
         (lambda t: t + '[sensor]\nkind = "phone"\n', r"'sensor.kind' must be one of tensioner, step"),
         (lambda t: t + '[sensor]\nkind = "step"\n', r"missing value 'sensor.step'"),
         (lambda t: t + "[drive\n", r"not valid TOML"),
+        (lambda t: t.replace("speed = 0.5", 'speed = 0.5\ndirection = "downwards"'), r"'drive.direction' must be"),
     ],
 )
 def test_bad_profile_is_a_one_line_error_naming_file_and_key(tmp_path, edit, pattern):
@@ -227,3 +228,17 @@ def test_profile_scene_description_is_the_users_line_said_once():
     assert described.scene("forward").description == "E07 (Leon): up, 3-link steps"
     plain = parse_profile(MINIMAL, "p.toml")
     assert plain.scene("forward").description == "E07 (Leon, Plaza Mayor): 0.5 m/s, 133.33 mm pitch, 3 links per step"
+
+
+def test_a_down_escalator_runs_its_scene_at_a_negative_speed():
+    """drive.direction = "down": the profile's scenes set the chain's speed negative (the steps go down the incline);
+    the rated speed and the link pass stay the magnitudes a tachometer and a spectrum read."""
+    up = parse_profile(MINIMAL)
+    down = parse_profile(MINIMAL.replace("speed = 0.5", 'speed = 0.5\ndirection = "down"'))
+    assert (up.direction, up.set_speed) == ("up", 0.5)
+    assert (down.direction, down.speed, down.set_speed) == ("down", 0.5, -0.5)
+    assert down.link_pass_frequency_hz == up.link_pass_frequency_hz
+    fwd, inv = down.scene("forward"), down.scene("inverse")
+    assert fwd.effects["motor"].speed == -0.5
+    assert "initial_speed = -0.5" in fwd.text
+    assert "speed = -0.5" in inv.text and "drive.direction = down" in inv.text

@@ -632,12 +632,13 @@ def ride_quality_from_simulation(ds, *, segment=None, weightings=None, source=No
             vel = ds["roller_velocity"].sel(roller=roller).values
             speed = np.hypot(vel[:, 0], vel[:, 1])
             cut = _start_up(speed, float(ds.attrs.get("chain_speed_m_s") or 0.0))
+            down = float(ds.attrs.get("speed_set_point_m_s") or 0.0) < 0.0  # the steps travel down the incline
 
             def detect(fs_):
                 if not cut:
-                    return incline_from_vertical_speed(vz, fs_)
+                    return incline_from_vertical_speed(vz, fs_, down=down)
                 # a run from rest: the drive's start-up is no ride; the incline is looked for after it
-                seg = incline_from_vertical_speed(vz[cut:], fs_)
+                seg = incline_from_vertical_speed(vz[cut:], fs_, down=down)
                 note = seg.note or ""
                 if seg.start_s == 0.0:  # on the incline when the start-up ends: a longer run does not help
                     note = note.replace(

@@ -1,5 +1,6 @@
 """A scene simulated for its ride: the step accelerometer's roller motion added to the scene's outputs,
-the ride assessed over the step's ride up the incline (:mod:`vibkit.diagnose.ride`)."""
+the ride assessed over the step's ride on the incline, up or (a negative speed) down
+(:mod:`vibkit.diagnose.ride`)."""
 
 from __future__ import annotations
 
@@ -27,7 +28,7 @@ def simulate_ride(scene, *, duration=None, segment=None, weightings=None, progre
     scene : str, os.PathLike or Scene
         An inverse or forward scene with ``outputs.step_accelerometer``.
     duration : float, optional
-        Simulated time [s]. Default: the scene's, and where the step does not ride up the incline in it, the
+        Simulated time [s]. Default: the scene's, and where the step does not ride the incline in it, the
         scene's plus one loop of the chain (said in the notes).
     segment, weightings
         As :func:`ride_quality`.
@@ -58,11 +59,12 @@ def simulate_ride(scene, *, duration=None, segment=None, weightings=None, progre
         if duration is not None or not speed:
             raise
     own = float(ds.time.values[-1] - ds.time.values[0])
-    longer = math.ceil(own + sc.chain.n_rollers * sc.chain.link_pitch / speed)  # plus one loop
+    longer = math.ceil(own + sc.chain.n_rollers * sc.chain.link_pitch / abs(speed))  # plus one loop
     ds = simulate(with_ride_outputs(sc), duration=longer, progress=progress)
     rq = ride_quality_from_simulation(ds, segment=segment, weightings=weightings, source=sc.source)
     step = sc.outputs["step_accelerometer"]
-    rq.notes.append(f"simulated {longer} s: in the scene's {own:g} s step {step} does not ride up the incline")
+    way = "down" if speed < 0 else "up"
+    rq.notes.append(f"simulated {longer} s: in the scene's {own:g} s step {step} does not ride {way} the incline")
     return rq
 
 

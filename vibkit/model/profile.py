@@ -38,6 +38,7 @@ __all__ = [
 STANDARD_SPEED_TOLERANCE = 0.05
 
 SENSOR_KINDS = ("tensioner", "step")
+DIRECTIONS = ("up", "down")
 
 
 @dataclass(frozen=True)
@@ -61,6 +62,7 @@ class DriveKeys(_Section):
         range=(0.0, 0.5, "m/s"),
     )
     teeth: int = key("", "teeth of the step-chain sprocket", 28, types=(int,), range=(8, 60, "teeth"))
+    direction: str = key("", '"up" or "down": the way the steps travel on the incline', "up", types=(str,))
 
 
 @dataclass(frozen=True)
@@ -155,6 +157,7 @@ class Profile:
     rise: float | None = None
     incline_deg: float | None = None
     teeth: int = 28
+    direction: str = "up"
     roller_radius: float | None = None
     tensioner_preload: float | None = None
     sensor: Sensor | None = None
@@ -198,6 +201,12 @@ class Profile:
         """Whether the recordings' sensor rides a step (``sensor.kind = "step"``); None when the profile does not
         say where it sat."""
         return None if self.sensor is None else self.sensor.kind == "step"
+
+    @property
+    def set_speed(self) -> float:
+        """The chain speed a simulation of this escalator sets, signed: the rated speed, negative when the steps
+        travel down (:attr:`direction`). [m/s]"""
+        return -self.speed if self.direction == "down" else self.speed
 
     @property
     def link_pass_frequency_hz(self) -> float:
@@ -262,6 +271,8 @@ def parse_profile(text: str, source: str = "<string>") -> Profile:
         )
     if not e["unit"].strip():
         raise SceneError(f"{src}: 'escalator.unit' must not be empty (the unit's identifier, e.g. E07)")
+    if d.get("direction", "up") not in DIRECTIONS:
+        raise SceneError(f"{src}: 'drive.direction' must be one of {', '.join(DIRECTIONS)}, got {d.get('direction')!r}")
     sensor = None
     if s:
         if s.get("kind") not in SENSOR_KINDS:
@@ -278,6 +289,7 @@ def parse_profile(text: str, source: str = "<string>") -> Profile:
         speed=d["speed"],
         speed_uncertainty=d.get("speed_uncertainty"),
         teeth=d.get("teeth", DriveKeys.teeth),
+        direction=d.get("direction", DriveKeys.direction),
         nominal_pitch=c["nominal_pitch"],
         links_per_step=c.get("links_per_step", ChainKeys.links_per_step),
         n_links=c.get("n_links"),

@@ -152,7 +152,10 @@ def scene_text(profile, analysis: str = "forward", duration: float | None = None
         raise ValueError(f"duration must be positive, got {duration!r}")
     name = "".join(c if c.isalnum() or c in "-_" else "-" for c in p.unit).strip("-") or "escalator"
     # the user's own line where the profile has one (the scene's keys say the rest), else the facts
-    facts = f"{p.speed:g} m/s, {1000 * p.nominal_pitch:g} mm pitch, {p.links_per_step} links per step"
+    facts = (
+        f"{p.speed:g} m/s{' down' if p.direction == 'down' else ''}, {1000 * p.nominal_pitch:g} mm pitch, "
+        f"{p.links_per_step} links per step"
+    )
     desc = f"{p.name}: {p.description or facts}"
     pre = p.tensioner_preload
     lines = [
@@ -209,12 +212,12 @@ def scene_text(profile, analysis: str = "forward", duration: float | None = None
             f"duration = {dur:g}  # [s]",
             f"output_step = {OUTPUT_STEP:g}  # [s]",
             "start = 0.0",
-            f"initial_speed = {_fmt(p.speed)}  # started at the rated speed: steady running from the start",
+            f"initial_speed = {_fmt(p.set_speed)}  # started at the rated speed{_down(p)}: steady running from the start",
             "",
             "[effects]",
             "gravity = true",
             "contact = { stiffness = 1.0e6, exponent = 1.5, damping = 0.3 }  # reference",
-            f"motor = {{ kp = 600.0, speed = {_fmt(p.speed)} }}  # drive.speed: the step speed on the straight",
+            f"motor = {{ kp = 600.0, speed = {_fmt(p.set_speed)} }}  # drive.speed{_down(p)}: the step speed on the straight",
             f"tensioner = {{ preload = {preload:.6g} }}  # {pre_src} [N]",
             "",
             "[solver]",
@@ -230,7 +233,7 @@ def scene_text(profile, analysis: str = "forward", duration: float | None = None
     else:
         lines += [
             "[motion]",
-            f"speed = {_fmt(p.speed)}  # drive.speed: the step speed on the straight",
+            f"speed = {_fmt(p.set_speed)}  # drive.speed{_down(p)}: the step speed on the straight",
             f"duration = {dur:g}  # [s]",
             f"step = {OUTPUT_STEP:g}  # [s]",
             "start = 0.0",
@@ -243,6 +246,11 @@ def scene_text(profile, analysis: str = "forward", duration: float | None = None
             'variables = ["delta", "link_tension", "drive_force", "closure_residual", "chain_speed", "energy"]',
         ]
     return "\n".join(lines) + "\n"
+
+
+def _down(p) -> str:
+    """The comment's note where the steps travel down (the speed negative)."""
+    return " (negative: drive.direction = down)" if p.direction == "down" else ""
 
 
 def _toml_str(s: str) -> str:

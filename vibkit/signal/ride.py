@@ -296,30 +296,33 @@ class NoIncline(ValueError):
     """A simulated record in which the step reaches no incline (it rises only round a head)."""
 
 
-def incline_from_vertical_speed(vz, fs, *, min_speed=0.05):
+def incline_from_vertical_speed(vz, fs, *, min_speed=0.05, down=False):
     """The incline of a ride from a step's vertical speed ``vz`` [m/s] (a simulation's, exact): the longest
     rise above ``min_speed`` where the speed holds (most of it within 10 % of its median, v sin(alpha)),
     not a turn round a head, where it peaks at the chain's speed for a moment and is an arch (about an
-    eighth of it within 10 %); the segment is where it exceeds half that median.
+    eighth of it within 10 %); the segment is where it exceeds half that median. ``down``: the steps travel
+    down, and the incline is the longest such descent (the rise is the return strand's, under the steps).
 
     Returns
     -------
     RideSegment
-        ``method = "speed channel"``, ``plateau`` the median rising speed [m/s].
+        ``method = "speed channel"``, ``plateau`` the median vertical speed on the incline [m/s] (negative down).
 
     Raises
     ------
     NoIncline
         No rise that holds its speed (the record reaches no incline).
     """
-    vz = np.asarray(vz, dtype=float)
+    way = "down" if down else "up"
+    vz = -np.asarray(vz, dtype=float) if down else np.asarray(vz, dtype=float)
     longest = _longest_run(vz > min_speed)
     part = vz[longest[0] : longest[1]] if longest else np.zeros(1)
     plateau = float(np.median(part))
     if longest is None or np.mean(np.abs(part - plateau) < 0.1 * plateau) < 0.5:
         raise NoIncline(
-            f"the simulated step does not ride up the incline in {vz.size / fs:.3g} s (it rises only round a head, "
-            "where its vertical speed does not hold): simulate longer (--duration) or give the segment (--segment)"
+            f"the simulated step does not ride {way} the incline in {vz.size / fs:.3g} s (it "
+            f"{'descends' if down else 'rises'} only round a head, where its vertical speed does not hold): simulate "
+            "longer (--duration) or give the segment (--segment)"
         )
     a, b = _longest_run(part > 0.5 * plateau)
     a, b = a + longest[0], b + longest[0]
@@ -329,10 +332,12 @@ def incline_from_vertical_speed(vz, fs, *, min_speed=0.05):
             f"{'start' if a == 0 else 'end'} of the {vz.size / fs:.3g} s simulated: simulate longer (--duration) or "
             "give the segment (--segment)"
         )
-    note = f"vertical speed {plateau:+.3g} m/s of the simulated roller (up the incline)"
+    note = f"vertical speed {(-plateau if down else plateau):+.3g} m/s of the simulated roller ({way} the incline)"
     if a == 0 or b == vz.size:
         note += "; the incline reaches an end of the simulated time (simulate longer: --duration)"
-    return RideSegment(start_s=a / fs, end_s=b / fs, method="speed channel", plateau=plateau, note=note)
+    return RideSegment(
+        start_s=a / fs, end_s=b / fs, method="speed channel", plateau=-plateau if down else plateau, note=note
+    )
 
 
 def detect_ride_segment(
