@@ -162,6 +162,27 @@ def test_a_drooping_drive_states_the_speed_it_ran_at():
     assert abs(f / (0.5 / PITCH) - 1) > 0.02
 
 
+def test_a_chain_that_coasts_is_said_to(tmp_path):
+    """The study's no-load scene: once up to speed, gravity on the closed loop does no net work, nothing brakes the
+    chain, and the P controller's torque falls to 0: the chain coasts and the teeth carry no load. The result says
+    from when, and the contact forces are 0 from then on; with a drag (rolling resistance) the drive works and
+    nothing is said."""
+    out = ["motor_torque", "contact_force"]
+    ds = vibkit.simulate(variant(outputs=out), duration=20.0, progress=False)
+    note = ds.attrs.get("notes", "")
+    assert note.startswith("the chain coasts from ") and "rolling_resistance or passengers" in note
+    since = float(note.split("from ")[1].split(" s on")[0])
+    assert 0.0 < since < 10.0
+    after = ds.time.values >= since + 0.01
+    assert float(abs(ds.motor_torque.values[after]).max()) < 1e-6
+    assert float(ds.contact_force.values[after].max()) == 0.0  # no tooth loaded: what the note says
+    assert float(ds.contact_force.values[~after].max()) > 0.0  # the start-up did load them
+    effects = {**load_scene(SIM / "thesis-forward.toml").effects, "rolling_resistance": {"coefficient": 0.002}}
+    dragged = vibkit.simulate(variant(effects=effects, outputs=out), duration=12.0, progress=False)
+    assert "notes" not in dragged.attrs
+    assert float(abs(dragged.motor_torque.values[-100:]).min()) > 1.0
+
+
 def test_result_does_not_depend_on_run_length_or_output_step(no_load):
     """The steps never depend on the run's length nor on the output times: a 30 s run is the 44 s
     run up to its last step, and so is a run with a coarser output step. The state is the same bit

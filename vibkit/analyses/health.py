@@ -15,12 +15,21 @@ import math
 
 import numpy as np
 
-__all__ = ["DROOP_FRACTION", "DROOP_WINDOW_S", "physics_warnings", "unchecked_physics"]
+__all__ = [
+    "COAST_TORQUE_N_M",
+    "DROOP_FRACTION",
+    "DROOP_WINDOW_S",
+    "physics_notes",
+    "physics_warnings",
+    "unchecked_physics",
+]
 
 #: a speed more than this fraction below the set speed, averaged over DROOP_WINDOW_S, is a droop
 DROOP_FRACTION = 0.02
 #: the averaging window of the droop check [s]
 DROOP_WINDOW_S = 1.0
+#: a motor torque below this [N m] over the second half of a run is none: the sprocket turns untouched
+COAST_TORQUE_N_M = 1e-6
 #: a link in compression by less than this [N] is rounding, not physics
 COMPRESSION_TOLERANCE_N = 1.0
 
@@ -37,6 +46,28 @@ def physics_warnings(ds, scene, model) -> list[str]:
         out += _motor(ds, effects["motor"], model)
     out += _unseen_flats(scene)
     return out
+
+
+def physics_notes(ds, scene) -> list[str]:
+    """One line per fact of the result ``ds`` worth knowing that is no fault: a forward run whose drive does no
+    work over its second half (motor torque under :data:`COAST_TORQUE_N_M`): the teeth carry no load, and the
+    chain coasts, as a chain without friction or passengers does at steady speed (gravity on a closed loop does
+    no net work), so its signals hold the chain's geometry alone, no tooth mesh."""
+    from ..model.schema import effect_options
+
+    if scene.analysis != "forward" or "motor" not in effect_options(scene.effects) or "motor_torque" not in ds:
+        return []
+    torque = np.abs(np.asarray(ds["motor_torque"].values, dtype=float))
+    half = torque.size // 2
+    if torque.size < 4 or torque[half:].max() >= COAST_TORQUE_N_M:
+        return []
+    busy = np.flatnonzero(torque >= COAST_TORQUE_N_M)
+    since = float(ds.time.values[busy[-1] + 1]) if busy.size else float(ds.time.values[0])
+    return [
+        f"the chain coasts from {since:.3g} s on: the motor does no work (torque 0) and the teeth carry no load, "
+        "as a chain without friction or passengers does at steady speed; its signals show the chain's geometry, "
+        "not the tooth mesh (add [effects] rolling_resistance or passengers for a loaded drive)"
+    ]
 
 
 def unchecked_physics(ds, scene) -> list[str]:

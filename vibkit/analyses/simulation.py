@@ -125,12 +125,16 @@ def simulate(
 
 def _warn(ds, scene, model):
     """Record in ``attrs["warnings"]`` (one per line) what the physics of the run says a user should not
-    miss: links in compression, a stalled motor, a drooping speed (:mod:`vibkit.analyses.health`)."""
-    from .health import physics_warnings, unchecked_physics
+    miss: links in compression, a stalled motor, a drooping speed; in ``attrs["notes"]`` what is no fault but
+    worth knowing: a chain that coasts (:mod:`vibkit.analyses.health`)."""
+    from .health import physics_notes, physics_warnings, unchecked_physics
 
     found = physics_warnings(ds, scene, model)
     if found:
         ds.attrs["warnings"] = "\n".join(found)
+    notes = physics_notes(ds, scene)
+    if notes:
+        ds.attrs["notes"] = "\n".join(notes)
     skipped = unchecked_physics(ds, scene)
     if skipped:
         ds.attrs["unchecked"] = "\n".join(skipped)

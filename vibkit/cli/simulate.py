@@ -94,9 +94,10 @@ def _run(a, vibkit, write_result, scene, target):
         summary["convergence"] = json.loads(ds.attrs["convergence"])
     summary["warnings"] = [w for w in ds.attrs.get("warnings", "").split("\n") if w]
     summary["unchecked"] = [w for w in ds.attrs.get("unchecked", "").split("\n") if w]
+    summary["notes"] = [w for w in ds.attrs.get("notes", "").split("\n") if w]
     for w in summary["warnings"]:
         msg(textwrap.fill(f"warning: {w}", 100, subsequent_indent="  "))
-    for w in summary["unchecked"]:
+    for w in summary["unchecked"] + summary["notes"]:
         msg(f"note: {w}")
     if a.json:
         print_json("simulate", summary)
