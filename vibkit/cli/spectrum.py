@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import textwrap
 
-from vibkit.diagnose.rounding import fmt_pm
+from vibkit.diagnose.rounding import fmt_band, fmt_pm
 
 from .options import (
     CHANNEL_EVERY,
@@ -144,7 +144,7 @@ def run(a):
         print(f"{shown(a.recording)}: channel {ch} [{units}]" + (f", speed {speed_text(est)}" if speed else ""))
         print(
             f"link-pass fundamental {fmt_pm(est.fundamental_hz, est.fundamental_sigma_hz, 'Hz')} "
-            f"(search band {est.band_hz[0]:.4g}-{est.band_hz[1]:.4g} Hz)"
+            f"(search band {fmt_band(est.band_hz)})"
         )
         if speed:
             print_pitch(est)
