@@ -106,3 +106,22 @@ def test_stated_link_pass_is_the_chains_not_roller_1s():
     theta, t = ds.sprocket_angle.values, ds.time.values
     turned = z * abs(theta[-1] - theta[0]) / (2 * np.pi * (t[-1] - t[0]))
     assert turned == pytest.approx(ds.attrs["link_pass_frequency_hz"], rel=1e-12)
+
+
+@pytest.mark.parametrize("duration", [20.0, 30.0])
+def test_a_down_running_inverse_counts_its_links(duration):
+    """An inverse run at a negative speed (a down escalator) states the link pass |v| / p less the heads' share,
+    as at the positive speed, whatever its length: the whole loops of the count took the speed's magnitude for its
+    travel and read 10.7 Hz at 10 s and 2.2 Hz at 20 s where 3.75 Hz is right (a stranger's find); its sprocket
+    turns at that rate."""
+    shipped = load_scene(SIM / "thesis-inverse.toml")
+    z, n, v, p = 28, 159, 0.5, 0.4 / 3
+    down = parse_scene(shipped.text.replace("speed = 0.5 ", "speed = -0.5 "), "down")
+    assert down.sections["motion"]["speed"] == -v
+    ds = vibkit.simulate(down, duration=duration, progress=False)
+    chordal = z * ((np.pi / z) / np.sin(np.pi / z) - 1) / n
+    assert ds.attrs["link_pass_frequency_hz"] / (v / p) - 1 == pytest.approx(-chordal, abs=5e-4)
+    theta, t = ds.sprocket_angle.values, ds.time.values
+    turned = z * abs(theta[-1] - theta[0]) / (2 * np.pi * (t[-1] - t[0]))
+    assert turned == pytest.approx(ds.attrs["link_pass_frequency_hz"], rel=1e-12)
+    assert theta[-1] > theta[0]  # down: the sprocket turns the other way (counterclockwise)

@@ -169,7 +169,7 @@ def inverse_dynamics(model, *, speed, duration, step, start=0.0, effects=None, o
     # roller 1 runs at the imposed speed along the guide, heads included: the chain on the straight, whose speed
     # the link pass counts, runs slower while roller 1 rides a head (0.037 % over a loop of the study's chain);
     # the sprocket turns at the links' counted rate, so that it stays in mesh with the chain on average
-    chain_speed, f_lp, _ = counted_speed(model, t, s0_1, speed, speed_hint=abs(speed))
+    chain_speed, f_lp, _ = counted_speed(model, t, s0_1, speed, speed_hint=speed)  # signed: the way it runs
     meshed = math.copysign(2.0 * math.pi * f_lp / model.sprocket.teeth, omega) if f_lp > 0 else omega
     out["kinetic_energy"] += 0.5 * model.sprocket.inertia * (meshed**2 - omega**2)  # a constant, as before
     omega = meshed
