@@ -207,3 +207,29 @@ def test_two_equal_peaks_of_the_sprocket_ripple_are_no_frequency_to_compare():
     assert compare(a, b, 1e-7, 0.005, 44.0) == {}
     a["sprocket_speed_peak_margin"] = b["sprocket_speed_peak_margin"] = 10.0
     assert "sprocket_speed_frequency_hz" in compare(a, b, 1e-7, 0.005, 44.0)
+
+
+def test_no_tighter_run_in_the_budget_compares_a_looser_one():
+    """A tolerance whose tighter run falls below check_min_rtol (a stiff contact's default, 1e-11 at k = 3e7,
+    against 1e-12): the check compared nothing and said "not converged ... (differs in )" (a stranger's find). It
+    compares a run 100 times looser instead: the no-load scene at 1e-9 with the budget at 1e-10 agrees with 1e-7,
+    where its contact history has converged (the shipped scenes' test), and says where the budget stopped; at 1e-6
+    with the budget at 1e-7 the looser run at 1e-4 differs, and the message names the key that would let it
+    test tighter."""
+    ok = vibkit.simulate(
+        scene("thesis-forward", solver={"rtol": 1e-9, "check_min_rtol": 1e-10}),
+        duration=8.0,
+        progress=False,
+        check=True,
+    )
+    v = convergence(ds=ok)
+    assert v["converged"] is True and v["rtol"] == pytest.approx(1e-9)
+    assert [r["rtol"] for r in v["runs"]] == pytest.approx([1e-7, 1e-9])
+    assert "a looser one at 1e-07 agree" in v["message"] and "check_min_rtol = 1e-10" in v["message"]
+    bad = vibkit.simulate(
+        scene("thesis-forward", solver={"rtol": 1e-6, "check_min_rtol": 1e-7}), duration=8.0, progress=False, check=True
+    )
+    w = convergence(ds=bad)
+    assert w["converged"] is False and w["differences"]
+    assert "lower [solver] check_min_rtol" in w["message"] and "differs in" in w["message"]
+    assert "differs in )" not in w["message"]

@@ -407,6 +407,18 @@ def test_links_in_compression_are_reported_and_a_preload_removes_them():
     held = vibkit.simulate(variant(effects=effects, outputs=["link_tension"]), duration=0.5, progress=False)
     assert float(held.link_tension.min()) > 0.0
     assert "compression" not in held.attrs.get("warnings", "")
+    # too small a preload: the advice is the scene's preload plus twice the compression left, never less than it
+    # has (a stranger's scene with 3000 N was told "about 700 N or more")
+    small = round(-0.2 * worst)
+    effects = {**variant().effects, "tensioner": {"preload": small}}
+    weak = vibkit.simulate(variant(effects=effects, outputs=["link_tension"]), duration=0.5, progress=False)
+    advice = weak.attrs["warnings"]
+    assert f"a larger preload ([effects.tensioner] preload, now {small} N, about " in advice
+    advised = float(advice.split(f"now {small} N, about ")[1].split(" N")[0])
+    assert advised >= small - 2.0 * float(weak.link_tension.min())
+    effects = {**variant().effects, "tensioner": {"preload": advised}}
+    mended = vibkit.simulate(variant(effects=effects, outputs=["link_tension"]), duration=0.5, progress=False)
+    assert float(mended.link_tension.min()) > 0.0
 
 
 def test_what_the_outputs_cannot_check_is_said(capsys):

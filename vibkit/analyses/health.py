@@ -41,7 +41,7 @@ def physics_warnings(ds, scene, model) -> list[str]:
     effects = effect_options(scene.effects)  # typed (tests and benchmarks pass plain tables)
     out = []
     if "link_tension" in ds:
-        out += _compression(ds)
+        out += _compression(ds, effects["tensioner"].preload if "tensioner" in effects else 0.0)
     if scene.analysis == "forward" and "motor" in effects:
         out += _motor(ds, effects["motor"], model)
     out += _unseen_flats(scene)
@@ -110,7 +110,9 @@ def _unseen_flats(scene) -> list[str]:
     ]
 
 
-def _compression(ds) -> list[str]:
+def _compression(ds, preload=0.0) -> list[str]:
+    """Links in compression, and the preload that would keep them in tension: the scene's ``preload`` [N] plus
+    twice the deepest compression, rounded up to one significant digit."""
     tension = np.asarray(ds["link_tension"].values, dtype=float)
     low = tension.min(axis=0)  # per link, over the run
     bad = np.flatnonzero(low < -COMPRESSION_TOLERANCE_N)
@@ -118,12 +120,14 @@ def _compression(ds) -> list[str]:
         return []
     worst = int(np.argmin(low))
     it = int(np.argmin(tension[:, worst]))
-    need = 2.0 * -float(low[worst])
+    need = float(preload) + 2.0 * -float(low[worst])
     need = math.ceil(need / 10 ** math.floor(math.log10(need))) * 10 ** math.floor(math.log10(need))
+    now = f"now {preload:.0f} N, " if preload > 0 else ""
     return [
         f"{bad.size} of {tension.shape[1]} links go into compression (down to {low[worst]:.0f} N, link "
         f"{worst + 1} at t = {float(ds.time.values[it]):.3g} s): a roller chain cannot push; give the "
-        f"tensioner a preload ([effects.tensioner] preload, about {need:.0f} N or more)"
+        f"tensioner a {'larger ' if preload > 0 else ''}preload ([effects.tensioner] preload, {now}about {need:.0f} N "
+        "or more)"
     ]
 
 
