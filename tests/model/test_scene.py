@@ -42,6 +42,15 @@ def test_shipped_scenes_load():
             r"unknown output 'deltaa'",
         ),
         (lambda b: b + "\n[effects]\ngravity = true\n", r"no meaning in a kinematics scene"),
+        # another analysis' run section, or solver keys where nothing is integrated, were read by nothing
+        (
+            lambda b: b + "\n[run]\nduration = 5.0\n",
+            r"\[run\] has no meaning in a kinematics scene, whose run is \[kinematics\] \(got run.duration\)",
+        ),
+        (
+            lambda b: b + '\n[solver]\nclosure = "exact"\nrtol = 1e-9\n',
+            r"solver.closure, solver.rtol have no meaning in a kinematics scene, which integrates nothing",
+        ),
         (lambda b: b.replace("[scene]", "[scene"), r"not valid TOML"),
         # a pitch in mm is named as such, not as a chain that cannot close (a stranger's 101.6)
         (
@@ -201,3 +210,35 @@ def test_a_worn_link_s_pitch_as_a_string_is_a_type_error(tmp_path):
     p.write_text(text)
     with pytest.raises(SceneError, match=r"pitch of link 40 must be a number \[m\], got str '0.1343'"):
         load_scene(p)
+
+
+def test_run_sections_and_solver_keys_belong_to_their_analysis(tmp_path):
+    """A stranger's inverse scene with [run] and [solver] (method, rtol, check) and a forward one with [motion]
+    ran with those keys read by nothing; they are refused naming the keys, and the solver key that does apply
+    everywhere (the result's size limit) is kept."""
+    inverse = (SIM / "thesis-inverse.toml").read_text()
+    forward = (SIM / "thesis-forward.toml").read_text()
+    cases = [
+        (inverse + "\n[run]\nduration = 5.0\n", r"\[run\] has no meaning in an inverse scene, whose run is \[motion\]"),
+        (inverse + '\n[solver]\nmethod = "radau"\n', r"solver.method has no meaning in an inverse scene"),
+        (forward + "\n[motion]\nspeed = 5.0\n", r"\[motion\] has no meaning in a forward scene, whose run is \[run\]"),
+    ]
+    for text, pattern in cases:
+        with pytest.raises(SceneError, match=pattern):
+            parse_scene(text, "s.toml")
+    kept = parse_scene(inverse + '\n[solver]\nmax_result_bytes = "2 GB"\n', "s.toml")
+    assert kept.analysis == "inverse"
+
+
+def test_a_flat_roller_in_a_kinematics_scene_is_said_to_be_left_out():
+    """A kinematics scene places the chain alone: a roller worn flat is not in it, and the result says so (the
+    message existed and was never given)."""
+    import vibkit
+
+    text = (
+        (SIM / "thesis-kinematics.toml")
+        .read_text()
+        .replace("roller_radius = 0.035", "roller_radius = 0.035\nroller_flat_by_roller = [[5, 0.005]]")
+    )
+    ds = vibkit.simulate(parse_scene(text, "flat.toml"), progress=False)
+    assert "worn flat: a kinematics scene places the chain alone, no flat" in ds.attrs["warnings"]

@@ -81,7 +81,7 @@ def simulate(
         k = scene.kinematics
         stop = k.stop if duration is None else k.start + duration
         ds = kinematic_sweep(model, k.start, stop, k.step, rollers=rollers, outputs=outputs, progress=progress)
-        return _stamp_defaults(ds, scene)
+        return _stamp_defaults(_warn(ds, scene, model), scene)
     if scene.analysis == "inverse":
         from .inverse import inverse_dynamics
 

@@ -514,7 +514,8 @@ def _validate_effects(src, eff):
                     raise SceneError(f"{src}: passenger {i} alights (t = {a}) before boarding (t = {b})")
 
 
-#: the sections a scene of each analysis uses (the others it may give are not read)
+#: the sections a scene of each analysis uses (another analysis' run section, or solver keys in a scene that
+#: integrates nothing, are refused by _analysis_sections)
 USED_SECTIONS = {
     "kinematics": ("scene", "guide", "chain", "sprocket", "kinematics", "outputs"),
     "inverse": ("scene", "guide", "chain", "sprocket", "motion", "outputs"),
@@ -564,6 +565,11 @@ def _outputs(src, o, analysis, chain):
     return {"variables": tuple(dict.fromkeys(variables)), "rollers": tuple(rollers), "step_accelerometer": step}
 
 
+def _a(analysis):
+    """``a kinematics`` / ``an inverse`` / ``a forward``."""
+    return f"an {analysis}" if analysis[0] in "aeiou" else f"a {analysis}"
+
+
 def _analysis_sections(src, sec, analysis):
     need = {
         "kinematics": ("kinematics", ("start", "stop", "step")),
@@ -571,6 +577,19 @@ def _analysis_sections(src, sec, analysis):
         "forward": ("run", ("duration", "output_step")),
     }[analysis]
     name, keys = need
+    for other in ("kinematics", "motion", "run"):
+        if other != name and sec[other]:
+            raise SceneError(
+                f"{src}: [{other}] has no meaning in {_a(analysis)} scene, whose run is [{name}] (got "
+                f"{', '.join(f'{other}.{k}' for k in sec[other])}): remove it, or set scene.analysis"
+            )
+    if analysis != "forward":
+        unused = [k for k in sec["solver"] if k != "max_result_bytes"]
+        if unused:
+            raise SceneError(
+                f"{src}: {', '.join(f'solver.{k}' for k in unused)} {'has' if len(unused) == 1 else 'have'} no "
+                f"meaning in {_a(analysis)} scene, which integrates nothing (only solver.max_result_bytes applies)"
+            )
     for key in keys:
         if key not in sec[name]:
             raise SceneError(f"{src}: missing value '{name}.{key}' (needed by a {analysis} scene)")
