@@ -127,3 +127,23 @@ def test_a_kinematics_scene_is_named_not_its_outputs():
     kin = vibkit.simulate("sim/thesis-kinematics.toml", progress=False)
     with pytest.raises(ValueError, match="no time axis: a kinematics scene"):
         compare(rec, kin)
+
+
+def test_a_coasting_simulation_compared_with_itself_reads_its_own_pitch():
+    """A stranger's escalator (0.65 m/s, 101.6 mm, 23 teeth, 35 deg, 4 m rise) from its profile: the chain coasts and
+    drifts within the teeth's backlash, its link pass wandering by a few hundredths of a per cent. Compared with
+    itself it read a pitch ratio 1.0004132 +- 0.0000058 (71 sigma): the recording's link pass was the spectrum's
+    fit, which weights the record unevenly, against the counted speed. It is now read as `vibkit pitch` reads it
+    (the mean phase where the frequency wanders), and the simulation's pitch is its chain's own."""
+    from vibkit.model.profile import parse_profile
+
+    prof = parse_profile(
+        '[escalator]\nunit = "B1"\n[drive]\nspeed = 0.65\nteeth = 23\n[chain]\nnominal_pitch = 0.1016\n'
+        "links_per_step = 4\n[geometry]\nrise = 4.0\nincline_deg = 35.0\n"
+    )
+    ds = vibkit.simulate(prof.scene("forward"), progress=False)
+    c = compare(ds, ds, channel="tensioner_displacement")
+    assert c.pitch_sim_m == pytest.approx(0.1016, rel=1e-12)  # the chain's own pitch
+    assert abs(c.pitch_ratio - 1) < 1e-5 and abs(c.pitch_ratio - 1) <= 3 * c.pitch_ratio_sigma
+    assert c.link_pass_meas_hz == pytest.approx(ds.attrs["link_pass_frequency_hz"], rel=1e-5)
+    assert c.pitch_consistent is True

@@ -98,7 +98,7 @@ def run(a):
         print_json("compare", d)
         return 0
     print(f"recording {shown(a.recording)} [{comp.channel}] vs simulation {_name(target)} [{comp.variable}]")
-    print(f"link-pass {comp.fundamental_meas_hz:.5f} Hz recorded, {comp.fundamental_sim_hz:.5f} Hz simulated")
+    print(f"link-pass {comp.link_pass_meas_hz:.5f} Hz recorded, {comp.link_pass_sim_hz:.5f} Hz simulated")
     print(
         f"speed     {sp.text if sp.value is not None else f'{comp.speed_meas_m_s:.4g} m/s (the scene' + chr(39) + 's, assumed)'}"
     )

@@ -119,8 +119,11 @@ class Comparison:
         nominal speed.
     speed_meas_sigma_m_s : float or None
         The recording's speed's standard deviation as stated (None: not stated).
+    link_pass_sim_hz, link_pass_meas_hz : float
+        The link passes the pitches are read from [Hz]: a simulation's counted one (else its spectrum's
+        fundamental) and the recording's as ``vibkit pitch`` reads it (the shared decision's estimate).
     pitch_sim_m, pitch_meas_m : float
-        Pitch implied by each signal, speed / fundamental. [m]
+        Pitch implied by each signal, speed / link pass. [m]
     pitch_ratio, pitch_ratio_sigma : float
         ``pitch_meas_m / pitch_sim_m`` and its standard deviation (the frequencies' and the stated
         speed uncertainty's).
@@ -160,6 +163,8 @@ class Comparison:
     signals: dict = field(repr=False, default_factory=dict)
     notes: list = field(default_factory=list)
     speed_meas_sigma_m_s: float | None = None
+    link_pass_sim_hz: float = float("nan")
+    link_pass_meas_hz: float = float("nan")
 
     def as_dict(self) -> dict:
         """JSON-ready summary (no arrays except none)."""
@@ -169,6 +174,8 @@ class Comparison:
             "units": self.units,
             "fundamental_sim_hz": self.fundamental_sim_hz,
             "fundamental_meas_hz": self.fundamental_meas_hz,
+            "link_pass_sim_hz": self.link_pass_sim_hz,
+            "link_pass_meas_hz": self.link_pass_meas_hz,
             "speed_sim_m_s": self.speed_sim_m_s,
             "speed_meas_m_s": self.speed_meas_m_s,
             "speed_meas_sigma_m_s": self.speed_meas_sigma_m_s,
@@ -497,15 +504,23 @@ def compare(
     p_sim = v_sim / f_sim if v_sim > 0 else float("nan")
     p_meas = v_meas / f_meas if v_meas > 0 else float("nan")
     p_ratio = (v_meas / v_sim) / fr if v_sim > 0 else float("nan")
+    rel_f = fr_sig / fr
+    lp_meas, lp_sim = f_meas, f_sim
     f_counted = float(result.attrs.get("link_pass_frequency_hz", 0.0) or 0.0)
     if set_point is not None and v_sim > 0 and f_counted > 0:
         # the simulation states its chain's pitch: its counted speed over its counted link pass. Its spectrum's
         # fundamental is the link pass over the whole run, start-up and heads included, which differs from the
         # count by a few hundredths of a per cent: read against it, a model's own chain read 0.05 % off
-        p_sim = v_sim / f_counted
+        p_sim, lp_sim = v_sim / f_counted, f_counted
+        # the recording's link pass as `vibkit pitch` reads it (the shared decision: the mean phase where the
+        # frequency wanders, which the spectrum's fit weights unevenly over the record; a coasting simulation
+        # compared with itself read 4e-4 off at 71 sigma), and its sigma; the simulation's pitch is exact
+        if math.isfinite(dec.fundamental_hz) and dec.fundamental_hz > 0 and math.isfinite(dec.fundamental_sigma_hz):
+            lp_meas, rel_f = dec.fundamental_hz, dec.fundamental_sigma_hz / dec.fundamental_hz
+        p_meas = v_meas / lp_meas if v_meas > 0 else float("nan")
         p_ratio = p_meas / p_sim
     rel_v = float(speed_sigma) / v_meas if (speed_sigma is not None and v_meas > 0) else 0.0
-    p_sig = p_ratio * math.hypot(fr_sig / fr, rel_v) if v_sim > 0 else float("nan")
+    p_sig = p_ratio * math.hypot(rel_f, rel_v) if v_sim > 0 else float("nan")
     if speed_sigma is None and speed is not None:
         notes.append("speed uncertainty not stated: the pitch ratio's sigma is the frequencies' part only")
     z1 = float(scipy.stats.norm.ppf(0.5 + float(confidence) / 2))
@@ -532,6 +547,8 @@ def compare(
         speed_meas_m_s=v_meas,
         pitch_sim_m=p_sim,
         pitch_meas_m=p_meas,
+        link_pass_sim_hz=float(lp_sim),
+        link_pass_meas_hz=float(lp_meas),
         pitch_ratio=float(p_ratio),
         pitch_ratio_sigma=float(p_sig),
         pitch_consistent=consistent,
