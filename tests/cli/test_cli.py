@@ -113,6 +113,29 @@ def test_compare_result_file(leon_nc, capsys):
     assert "NOT consistent" in out
 
 
+def test_compare_chooses_the_channel_as_pitch_does_and_takes_a_scene_by_name(leon_nc, monkeypatch, tmp_path, capsys):
+    """A stranger's three-axis logger file: `pitch` and `report` analysed az (the link pass at 3.896 Hz), `compare`
+    took the first channel, ax, found no link pass and blamed the scene file; and `compare` alone did not take a
+    shipped scene's name. Now: the same channel, a recording's refusal named after the recording, and scenes by
+    name."""
+    gcdc = "data/field/layouts/gcdc-x16.csv"
+    assert main(["pitch", gcdc, "--speed", "0.52", "--json"]) in (0, 3)
+    chosen = _json(capsys)["channel"]
+    assert main(["compare", gcdc, "sim/las-palmas.toml", "--duration", "6", "--json"]) == 0
+    d = _json(capsys)
+    assert d["channel"] == chosen == "az"
+    assert d["link_pass_meas_hz"] == pytest.approx(3.896, abs=0.002)
+    # a recording without a link pass: the message names the recording, not the scene
+    assert main(["compare", "data/thirdparty/obspy_gaps.mseed", "sim/las-palmas.toml", "--duration", "2"]) == 1
+    err = capsys.readouterr().err
+    assert "obspy_gaps.mseed: no link-pass found" in err and "las-palmas.toml:" not in err
+    # a shipped scene by name, from a folder that has no sim/
+    rec = os.path.abspath(str(leon_nc))
+    monkeypatch.chdir(tmp_path)
+    assert main(["compare", rec, "leon", "--duration", "4", "--json"]) == 0
+    assert _json(capsys)["score"] == pytest.approx(1.0)
+
+
 @pytest.mark.slow
 def test_report_json(leon_nc, tmp_path, capsys):
     out = tmp_path / "r.pdf"

@@ -62,7 +62,7 @@ def _name(target):
 
 def run(a):
     import vibkit
-    from vibkit.diagnose.comparison import compare
+    from vibkit.diagnose.comparison import NothingToCompare, compare
 
     rec = read_recording(a)
     target = a.scene_or_result
@@ -72,7 +72,12 @@ def run(a):
             raise CLIError("give SCENE_OR_RESULT (a scene .toml or a result file), or --escalator FILE")
         target = profile.scene("forward", a.duration)  # the unit's own scene, in memory
     elif not os.path.exists(target):
-        raise CLIError(f"{target}: file not found (expected a scene .toml or a result file)")
+        from vibkit.scenes import find
+
+        if find(target) is None:
+            raise CLIError(
+                f"{target}: file not found (expected a scene .toml, a shipped scene's name or a result file)"
+            )
     sp = run_speed(a, rec=rec, profile=profile)
     try:
         comp = compare(
@@ -86,6 +91,8 @@ def run(a):
             speed=sp.value,
             speed_sigma=sp.sigma,
         )
+    except NothingToCompare as exc:  # the recording's side
+        raise CLIError(f"{shown(a.recording)}: {' '.join(str(exc).split())}") from None
     except ValueError as exc:  # a message that names neither file is about the simulation side
         text = " ".join(str(exc).split())
         if _name(target) in text or os.fspath(a.recording) in text:

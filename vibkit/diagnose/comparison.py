@@ -23,7 +23,12 @@ import scipy.stats
 
 from .rounding import fmt_pm
 
-__all__ = ["Comparison", "compare", "matching_variable", "as_result"]
+__all__ = ["Comparison", "NothingToCompare", "compare", "matching_variable", "as_result"]
+
+
+class NothingToCompare(ValueError):
+    """The recording carries no link pass to compare (on the channel asked for, or on any vibration channel)."""
+
 
 # simulation variables that a sensor of each unit can be compared with, best first
 _BY_UNITS = {
@@ -34,7 +39,8 @@ _BY_UNITS = {
 
 
 def as_result(result, *, duration=None, progress=False):
-    """A simulation result from a Dataset, a :class:`vibkit.model.scene.Scene`, a scene ``.toml`` or a result file.
+    """A simulation result from a Dataset, a :class:`vibkit.model.scene.Scene`, a scene ``.toml`` (or a shipped
+    scene's name) or a result file.
 
     A scene is simulated (``duration`` [s] overrides its length); a result file is read with
     :func:`vibkit.read_recording`.
@@ -42,9 +48,12 @@ def as_result(result, *, duration=None, progress=False):
     import xarray as xr
 
     from ..model.scene import Scene
+    from ..scenes import find
 
     if isinstance(result, xr.Dataset):
         return result
+    if isinstance(result, (str, os.PathLike)) and find(result) is not None:
+        result = find(result)  # a shipped scene by its name ("leon", "sim/leon.toml" outside a clone)
     if isinstance(result, Scene) or (isinstance(result, (str, os.PathLike)) and str(result).endswith(".toml")):
         from ..analyses.simulation import simulate
 
@@ -302,7 +311,8 @@ def compare(
     result : xarray.Dataset, Scene or path
         A simulation result, a scene (simulated here) or a result file.
     channel : str, optional
-        Recording channel (default: the first).
+        Recording channel. Default: as ``vibkit pitch`` and the report choose (every vibration channel
+        estimated, the one with the smallest sigma; a simulation's tensioner sensor).
     variable : str, optional
         Simulation variable (default: see :func:`matching_variable`).
     n_harmonics : int
@@ -330,6 +340,8 @@ def compare(
 
     Raises
     ------
+    NothingToCompare
+        The recording carries no link pass (a ValueError).
     ValueError
         No matching variable, a signal too short for the band, bad options.
 
@@ -356,11 +368,8 @@ def compare(
     # a simulation from rest, on either side, read where it counted its speed: after its start-up
     recording, cut_rec = counted_part(recording)
     result, cut_sim = counted_part(result)
-    channel = pick_channel(recording, channel)
-    if variable is None:
-        variable = matching_variable(result, recording, channel)
-    elif variable not in result.data_vars or result[variable].dims != ("time",):
-        raise ValueError(f"variable {variable!r} is not a time variable of the simulation result")
+    if channel is not None:
+        channel = pick_channel(recording, channel)
     notes = [f"{side}: {cut}" for side, cut in (("recording", cut_rec), ("simulation", cut_sim)) if cut]
     v_nom = float(result.attrs.get("chain_speed_m_s", 0.0) or 0.0)
     v_sim = v_nom
@@ -398,19 +407,32 @@ def compare(
         lo = min(v_sim, v_meas) / DEFAULT_PITCH_RANGE_M[1]
         hi = max(v_sim, v_meas) / DEFAULT_PITCH_RANGE_M[0]
         band = (lo, hi)
-    # the shared decision first: no comparison of a link pass that the recording does not carry
-    from .pitch import estimate_pitch
+    # the shared decision first (that of `pitch` and `report`: every vibration channel, or the one asked for): no
+    # comparison of a link pass that the recording does not carry
+    from .channels import estimate_channels
 
-    dec = estimate_pitch(
+    decided = estimate_channels(
         recording,
-        speed=v_meas if v_meas > 0 else 1.0,
         channel=channel,
+        speed=v_meas if v_meas > 0 else 1.0,
         band=band,
         n_harmonics=n_harmonics,
         frequency_only=not v_meas > 0,
     )
-    if not dec.has_link_pass:
-        raise ValueError(f"channel {channel!r}: {dec.status}: {dec.reason}; nothing to compare")
+    if decided.best is None:
+        raise NothingToCompare(
+            f"{'channel ' + repr(channel) + ': ' if channel else ''}{decided.status}: {decided.reason}; "
+            "nothing to compare"
+        )
+    dec = decided.best
+    if channel is None:
+        channel = dec.channel
+        if len(decided.estimates) > 1:
+            notes.append(f"channel {channel}: {decided.reason}")
+    if variable is None:
+        variable = matching_variable(result, recording, channel)
+    elif variable not in result.data_vars or result[variable].dims != ("time",):
+        raise ValueError(f"variable {variable!r} is not a time variable of the simulation result")
     sim = uniform_bursts(result, variable)
     if len(sim) != 1:
         raise ValueError(f"the simulation's {variable!r} must be continuous (one segment)")
