@@ -120,10 +120,36 @@ def test_a_marker_renumbers_from_the_marked_link(recordings, capsys):
     assert (plain - marked) % N in (10, 11)
     # the report numbers from the same marker (`vibkit report --marker`)
     from vibkit.diagnose.report import write_report
+    from vibkit.diagnose.report.common import PageSink
+
+    texts = {}
+    orig = PageSink.emit
+
+    def emit(self, fig, title):
+        found = (t.get_text() for t in fig.findobj(lambda a: hasattr(a, "get_text")))
+        texts[title] = " ".join(x if isinstance(x, str) else x.get_text() for x in found)  # table cells hold Texts
+        return orig(self, fig, title)
 
     out = path.parent / "marked.pdf"
-    rep = write_report(path, out, scene=SCENE, speed=SPEED, duration=2.0, marker_s=10.5 / f_lp, overwrite=True)
+    mp = pytest.MonkeyPatch()
+    mp.setattr(PageSink, "emit", emit)
+    try:
+        rep = write_report(path, out, scene=SCENE, speed=SPEED, duration=2.0, marker_s=10.5 / f_lp, overwrite=True)
+    finally:
+        mp.undo()
     assert rep.summary["flagged_links"] == [marked]
+    # and says so wherever the numbers are read (the links page said "link 1: the link at the sensor at the
+    # start" with a marker, and no page named the marker: a stranger's technician counts from the wrong link)
+    mark = f"{10.5 / f_lp:g} s"
+    assert f"link 1: the link marked at {mark} (--marker)" in " ".join(texts["links"].split())
+    assert "the link at the sensor at the start" not in texts["links"]
+    assert f"from the link marked at {mark}" in texts["parameters"]
+    assert rep.summary["marker_s"] == pytest.approx(10.5 / f_lp)
+    assert rep.summary["link_numbers_from"] == f"the link marked at {mark}"
+    # a marker outside the recording is the user's to mend: an error naming it, no page saying "not scanned"
+    with pytest.raises(ValueError, match=r"marker_s=.* must lie within the recording"):
+        write_report(path, path.parent / "far.pdf", scene=SCENE, speed=SPEED, duration=2.0, marker_s=1e4)
+    assert not (path.parent / "far.pdf").exists()
 
 
 def test_a_link_pass_no_chain_of_the_nominal_pitch_has_is_refused(recordings):

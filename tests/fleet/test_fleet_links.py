@@ -444,3 +444,20 @@ def test_scan_of_simulated_visits_finds_the_marked_link_worse(tmp_path, capsys):
     assert (
         texts[i + 1] == "worse" and texts[i + 2] == f"{1e3 * got[1]:+.2f} +- {1e3 * link['visits'][1]['sigma_m']:.2f}"
     )
+
+
+def test_a_marker_outside_the_recording_stores_nothing(tmp_path, capsys):
+    """A stranger's `fleet add --marker 500` on a 92 s file was stored with a failed link scan ("Parameter
+    marker_s=500.0 ...") that no command could redo: the same file is refused as already stored. The add is refused
+    naming the flag, and nothing is stored, so the corrected marker can be given."""
+    leon = str(Path(__file__).resolve().parents[2] / "data" / "field" / "leon-tensioner.csv")
+    db = str(tmp_path / "f.sqlite")
+    common = ["fleet", "add", leon, "--unit", "L1", "--nominal-pitch", "0.13333", "--links", "159", "--db", db]
+    common += ["--date", "2026-11-20"]
+    assert main([*common, "--marker", "500"]) == 1
+    err = capsys.readouterr().err
+    assert "--marker 500 s must lie within the recording, 0 to 39.995 s" in err and "marker_s" not in err
+    assert main([*common, "--marker", "12.5"]) == 0  # the corrected marker: stored (not "already stored")
+    capsys.readouterr()
+    with FleetDB(db) as fleet:
+        assert len(fleet.measurements()) == 1

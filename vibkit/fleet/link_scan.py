@@ -11,6 +11,10 @@ other channel, or no scene, tests each link's own cycle.
 
 from __future__ import annotations
 
+import math
+
+import numpy as np
+
 from .links import LinkScan
 
 __all__ = ["link_scan_of", "measure_with_links", "profile_scene", "NO_LINK_COUNT", "NO_LINK_COUNT_ADD"]
@@ -128,6 +132,15 @@ def measure_with_links(path, *, n_links=None, marker_s=None, scene=None, no_coun
 
     channel = analysis.get("channel")
     rec = read_recording(path, **{**(analysis.get("read_options") or {}), "channel": channel})
+    if marker_s is not None:
+        # a marker outside the recording numbers the links from no link: the user's to mend before anything is
+        # stored (a stored measurement cannot be scanned again)
+        t = np.asarray(rec["time"].values, dtype=float)
+        if not (math.isfinite(float(marker_s)) and 0.0 <= float(marker_s) <= float(t[-1])):
+            raise ValueError(
+                f"{path}: marker_s={float(marker_s):g} must lie within the recording, 0 to {float(t[-1]):.6g} s (the "
+                "time the marked link passed the sensor); nothing stored"
+            )
     m = analyse_recording(path, recording=rec, n_links=n_links, **analysis)
     scan = link_scan_of(
         rec,

@@ -61,6 +61,16 @@ def parameters_page(doc, ctx) -> None:
         ["Hampel false-alarm rate", f"{ctx.hampel_false_alarm_rate:g} per sample"],
         ["simulated duration", "no simulation" if sc is None else _fmt(duration, "s") if duration else "the scene's"],
     ]
+    links = getattr(ctx, "links", None)
+    if links is not None:  # how the link numbers count: from a marked link, or from the one at the start
+        rows.append(
+            [
+                "link numbers",
+                f"from the link marked at {links.marker_s:g} s (--marker)"
+                if links.marker_s is not None
+                else "from the link at the sensor at the start",
+            ]
+        )
     res = getattr(ctx, "result", None)
     if res is not None and "solver_method" in res.attrs:
         # the simulation's numerics: its solver, and the convergence verdict ([solver] check = true)

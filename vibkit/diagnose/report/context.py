@@ -379,6 +379,12 @@ def analyse(
     links, links_note = _links(rec, ch, units, sc, speed, notes, profile, marker_s)
     if links is not None:
         summary["flagged_links"] = [f["link"] for f in links.flagged]
+        summary["link_numbers_from"] = (
+            f"the link marked at {links.marker_s:g} s"
+            if links.marker_s is not None
+            else "the link at the sensor at the start"
+        )
+        summary["marker_s"] = links.marker_s
         summary["flagged_links_detail"] = [
             {k: f.get(k) for k in ("link", "alternatives", "excess_pitch_mm", "sigma_mm", "loops")}
             for f in links.flagged
@@ -439,14 +445,24 @@ def _links(rec, ch, units, sc, speed, notes, profile=None, marker_s=None):
         return None, "not scanned: no chain speed"
     if units != "m":
         return None, f"not scanned: channel {ch} is not a tensioner displacement (the links are read from one)"
-    if sc.analysis != "forward":
-        article = "an" if sc.analysis[:1] in "aeiou" else "a"
-        return None, f"not scanned: the scene is {article} {sc.analysis} scene, the signature needs a forward one"
     scene_file = sc.source
-    if profile is not None and str(scene_file).endswith("(scene built from the profile)"):
+    if sc.analysis != "forward":
+        # the worn link's signature is simulated from a forward scene: without one, each link's own cycle is
+        # tested, as `vibkit links` does without --scene (the chain's links are still the scene's)
+        article = "an" if sc.analysis[:1] in "aeiou" else "a"
+        notes.append(
+            f"link map: without the worn link's signature (the scene is {article} {sc.analysis} scene, the "
+            "signature is simulated from a forward one): each link's own cycle tested"
+        )
+        scene_file = None
+    elif profile is not None and str(scene_file).endswith("(scene built from the profile)"):
         scene_file = profile_scene_file(profile)
     elif scene_file == "<string>" or not os.path.isfile(str(scene_file)):
-        return None, "not scanned: the scene is not a file (the signature is simulated from one)"
+        notes.append(
+            "link map: without the worn link's signature (the scene is not a file, the signature is simulated "
+            "from one): each link's own cycle tested"
+        )
+        scene_file = None
     try:
         res = find_worn_links(
             rec,
@@ -461,6 +477,8 @@ def _links(rec, ch, units, sc, speed, notes, profile=None, marker_s=None):
     except TooFewLoops as exc:  # under two loops: no page (vibkit links says how long to record)
         return None, f"not scanned: {' '.join(str(exc).split())}"
     except ValueError as exc:
+        if "marker_s" in str(exc):  # the marker given lies outside the recording: the user's to mend, not a note
+            raise
         notes.append(f"link map: {exc}")
         return None, f"not scanned: {' '.join(str(exc).split())}"
 

@@ -39,7 +39,12 @@ def links_page(doc, ctx) -> None:
         "Links",
         f"{res.loops} loops of {res.n_links} links, channel {res.channel}; {res.method}; a chain without a worn "
         f"link passes the threshold |t| = {res.threshold:.2f} in at most {100 * res.false_alarm:g} % of its "
-        "recordings; link 1: the link at the sensor at the start, numbers in passing order. "
+        "recordings; "
+        + (
+            f"link 1: the link marked at {res.marker_s:g} s (--marker), numbers in passing order. "
+            if res.marker_s is not None
+            else "link 1: the link at the sensor at the start, numbers in passing order. "
+        )
         + (
             "Above: each link's fit before any flagged link is taken out (a worn link's change fits its neighbours "
             "too, so many bars may pass the line); below: each link's fit once the flagged links' change is taken "
