@@ -83,13 +83,13 @@ def main(argv=None) -> int:
     try:
         t0 = time.perf_counter()
         ds = simulate(root / "sim/thesis-kinematics.toml", progress=progress)
-        written.append(write_result(ds, out / "thesis-kinematics.nc"))
+        written.append(write_result(ds, out / "thesis-kinematics.nc", overwrite=True))  # the demo's own
         _plot(ds, out / "thesis-kinematics.png", [("delta", None), ("closure_residual", None)], "advance")
         written.append(out / "thesis-kinematics.png")
         print(f"thesis-kinematics: {ds.sizes['advance']} configurations in {time.perf_counter() - t0:.1f} s")
         t0 = time.perf_counter()
         ds = simulate(root / "sim/thesis-inverse.toml", duration=a.inverse_duration, progress=progress)
-        written.append(write_result(ds, out / "thesis-inverse.nc"))
+        written.append(write_result(ds, out / "thesis-inverse.nc", overwrite=True))
         _plot(
             ds,
             out / "thesis-inverse.png",

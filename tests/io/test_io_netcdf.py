@@ -81,11 +81,11 @@ def test_overwrite_is_atomic_and_a_failed_write_leaves_the_old_file(tmp_path):
     bad = sim_like()
     bad.attrs["flag"] = True
     with pytest.raises(ValueError, match="attr 'flag' of the dataset"):
-        write_result(bad, p)
+        write_result(bad, p, overwrite=True)
     bad = sim_like()
     bad["delta"].attrs["meta"] = {"a": 1}
     with pytest.raises(ValueError, match="attr 'meta' of variable 'delta'"):
-        write_result(bad, p)
+        write_result(bad, p, overwrite=True)
     assert p.read_bytes() == before
     assert sorted(os.listdir(tmp_path)) == ["r.nc"]
 
@@ -143,3 +143,15 @@ def test_a_component_of_a_variable_is_a_channel(tmp_path, capsys):
     out = json.loads(capsys.readouterr().out)
     assert out["channel"] == "roller_acceleration[59, z]"
     assert out["fundamental_hz"] == pytest.approx(4.1, abs=0.01)
+
+
+def test_an_existing_file_is_not_replaced_unless_told(tmp_path):
+    """A stranger's `write_result(r, "precious.nc")` replaced their file silently (the default was to overwrite),
+    where the docs promise vibkit never replaces a file unless told, as `vibkit simulate` and `write_report` do."""
+    p = tmp_path / "precious.nc"
+    p.write_text("precious data")
+    with pytest.raises(ValueError, match="already exists"):
+        write_result(sim_like(), p)
+    assert p.read_text() == "precious data"
+    write_result(sim_like(), p, overwrite=True)
+    assert p.read_bytes()[:8] == b"\x89HDF\r\n\x1a\n"

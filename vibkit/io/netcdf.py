@@ -122,7 +122,7 @@ def _from_cf_time(ds: xr.Dataset, history: list) -> None:
         history.append(f"time in seconds since {epoch} (the start time)")
 
 
-def write_result(ds: xr.Dataset, path, *, overwrite: bool = True, inputs=()) -> str:
+def write_result(ds: xr.Dataset, path, *, overwrite: bool = False, inputs=()) -> str:
     """Write a Dataset to netCDF4/HDF5, atomically (see :mod:`vibkit.runtime.safe_output`).
 
     The file is built in memory and then written to a temporary file in the target's folder,
@@ -136,7 +136,8 @@ def write_result(ds: xr.Dataset, path, *, overwrite: bool = True, inputs=()) -> 
     path : str or os.PathLike
         Target file (conventionally ``*.nc``). Its folder must exist.
     overwrite : bool
-        Replace an existing regular file (default True; the CLI passes its ``--force``).
+        Replace an existing regular file (default False: an existing file is an error, as ``vibkit simulate``
+        refuses it without ``--force`` and :func:`vibkit.write_report` without ``overwrite=True``).
         Folders, devices, FIFOs and symbolic links are never written through or replaced.
     inputs : iterable of paths
         Files that must not be replaced (the command's inputs).
