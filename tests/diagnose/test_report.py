@@ -123,3 +123,15 @@ def test_a_worn_scene_s_nominal_pitch_is_its_sprocket_s(tmp_path, leon_report):
     rep = write_report(LEON, tmp_path / "r.pdf", scene=str(scene), duration=4.0)
     assert rep.summary["elongation_percent"] == pytest.approx(leon_report.summary["elongation_percent"], abs=1e-9)
     assert rep.summary["elongation_percent"] > 3.5 and rep.summary["verdict"] == "replace"
+
+
+def test_a_pitch_at_the_scenes_own_speed_is_not_judged(tmp_path):
+    """The Las Palmas recording states no speed: the report took the scene's nominal 0.52 m/s (itself read from
+    the recording's 3.9 Hz) and judged the pitch "consistent", where `vibkit compare` says "not judged" (a
+    stranger's find). Its pitch at that speed is the scene's by construction: not judged, said on page 1; with the
+    speed given, judged."""
+    lp, scene = "data/field/las-palmas-accelerometer.csv", "sim/las-palmas.toml"
+    assumed = write_report(lp, tmp_path / "a.pdf", scene=scene, duration=6.0)
+    assert assumed.summary["pitch_consistent"] is None
+    given = write_report(lp, tmp_path / "g.pdf", scene=scene, duration=6.0, speed=0.52)
+    assert given.summary["pitch_consistent"] is True

@@ -219,21 +219,22 @@ def _widen_by_order_scatter(rows, z, notes):
     in the simulation alike): where the orders' ratios scatter more than their sigmas say (Birge ratio
     B = sqrt(chi^2 / dof) > 1 over the orders detected in both), the frequency estimates carry errors the
     noise does not account for (leakage, a speed that drifts within a burst), and every ratio's sigma and
-    interval is widened by B (the Particle Data Group's scale factor)."""
+    interval is widened by B (the Particle Data Group's scale factor). Returns B (1 where nothing is widened)."""
     both = [r for r in rows if r["detected_sim"] and r["detected_meas"] and r["frequency_ratio_sigma"] > 0]
     if len(both) < 3:
-        return
+        return 1.0
     v = np.array([r["frequency_ratio"] for r in both])
     w = 1.0 / np.array([r["frequency_ratio_sigma"] for r in both]) ** 2
     mean = float(np.sum(w * v) / np.sum(w))
     birge = math.sqrt(float(np.sum(w * (v - mean) ** 2)) / (v.size - 1))
     if not birge > 1.0:
-        return
+        return 1.0
     _widen(rows, birge, z)
     notes.append(
         f"the orders' frequency ratios ({v.min():.6f}-{v.max():.6f}) scatter {birge:.2g} times their sigmas, where one "
         f"chain gives them one ratio: every ratio's sigma (and the pitch ratio's) widened {birge:.2g} times"
     )
+    return birge
 
 
 def _widen_by_parts(rows, dec, z, notes):
@@ -504,7 +505,7 @@ def compare(
                 else 0.0
             )
     _widen_by_parts(rows, dec, z, notes)
-    _widen_by_order_scatter(rows, z, notes)
+    scatter = _widen_by_order_scatter(rows, z, notes)
     score = float(np.mean(scores)) if scores else 0.0
     c0 = runs[0][1]
     # order spectra on a common axis; each fine spectrum is reduced by its maximum within every
@@ -537,8 +538,9 @@ def compare(
         # the recording's link pass as `vibkit pitch` reads it (the shared decision: the mean phase where the
         # frequency wanders, which the spectrum's fit weights unevenly over the record; a coasting simulation
         # compared with itself read 4e-4 off at 71 sigma), and its sigma; the simulation's pitch is exact
+        # (its parts' scatter is in that sigma already; the orders' scatter widens it as it widens every ratio)
         if math.isfinite(dec.fundamental_hz) and dec.fundamental_hz > 0 and math.isfinite(dec.fundamental_sigma_hz):
-            lp_meas, rel_f = dec.fundamental_hz, dec.fundamental_sigma_hz / dec.fundamental_hz
+            lp_meas, rel_f = dec.fundamental_hz, scatter * dec.fundamental_sigma_hz / dec.fundamental_hz
         p_meas = v_meas / lp_meas if v_meas > 0 else float("nan")
         p_ratio = p_meas / p_sim
     rel_v = float(speed_sigma) / v_meas if (speed_sigma is not None and v_meas > 0) else 0.0

@@ -311,7 +311,16 @@ def analyse(
         result = simulate(with_ride_outputs(sc), duration=duration, progress=progress)
         if found:  # no comparison of a link pass the recording does not carry
             try:
-                comp = compare(rec, result, channel=ch, speed=speed, speed_sigma=speed_sigma)
+                # the recording's speed only: at the scene's own speed assumed, its pitch is the scene's by
+                # construction and not judged (as `vibkit compare` says it)
+                assumed = speed is not None and str(run.source).startswith("the scene's nominal speed")
+                comp = compare(
+                    rec,
+                    result,
+                    channel=ch,
+                    speed=None if assumed else speed,
+                    speed_sigma=None if assumed else speed_sigma,
+                )
             except ValueError as exc:  # e.g. a channel in a unit the simulation has no variable in
                 notes.append(f"no comparison with the simulation: {' '.join(str(exc).split())}")
     ride = _ride(rec, result if scene_is_unit(sc, profile) else None, sc, notes, segment, speed)

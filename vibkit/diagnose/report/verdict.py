@@ -181,7 +181,9 @@ def evidence_rows(ctx):
         rows.append(
             (
                 "pitch against the scene",
-                {True: "consistent", False: "NOT consistent"}.get(comp.pitch_consistent, "not judged (no speed)")
+                {True: "consistent", False: "NOT consistent"}.get(
+                    comp.pitch_consistent, "not judged (the recording's speed is not known: give --speed)"
+                )
                 + f" ({PITCH_RATIO} {fmt_pm(comp.pitch_ratio, comp.pitch_ratio_sigma)}: {PITCH_RATIO_DEFINITION})",
             )
         )
