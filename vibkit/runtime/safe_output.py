@@ -130,7 +130,10 @@ def check_output_path(path, *, overwrite: bool = False, inputs=()) -> str:
                     f"output {p}: is an input of this command ({os.fspath(src)}); refusing to overwrite it"
                 )
         if not overwrite:
-            raise OutputError(f"output {p}: already exists; give --force to replace it (or choose a new name)")
+            raise OutputError(
+                f"output {p}: already exists; give --force (overwrite=True in Python) to replace it "
+                "(or choose a new name)"
+            )
         if not st.st_mode & 0o222:
             raise OutputError(
                 f"output {p}: is read-only (mode {stat.S_IMODE(st.st_mode):04o}); refusing to "
