@@ -15,8 +15,8 @@ EPILOG = (
     "  vibkit sweep sim/leon.toml --vary motion.speed=0.45:0.55 --samples 50 --seed 1 --keep delta \\\n"
     "      -o out/mc.zarr\n"
     "re-running the same command resumes an interrupted sweep;\n"
-    "xarray.open_zarr('out/sweep.zarr') reads it; vibkit.sweep.open_sweep('out/sweep.zarr')\n"
-    "also reads the runs of an interrupted one"
+    "xarray.open_zarr('out/sweep.zarr') reads it; open_sweep('out/sweep.zarr') (from vibkit.sweep\n"
+    "import open_sweep) also reads the runs of an interrupted one"
 )
 
 

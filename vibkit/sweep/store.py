@@ -34,7 +34,7 @@ KEY_UNITS = key_units()
 
 _RUNNING = (
     "a vibkit sweep in progress or interrupted: its finished runs are under runs/; "
-    "vibkit.sweep.open_sweep(path) reads them, the same sweep again resumes it"
+    "open_sweep(path) (from vibkit.sweep import open_sweep) reads them, the same sweep again resumes it"
 )
 
 
