@@ -191,3 +191,21 @@ def test_a_slashed_day_month_start_is_not_guessed(tmp_path):
     rec = vibkit.read_recording(p)
     assert rec.attrs.get("start_time") is None  # 4 May or April 5th: not guessed
     assert "may be day/month or month/day: not read as the start (give the date: --date)" in rec.attrs["history"]
+
+
+@pytest.mark.parametrize(
+    "names, row", [("t [s],disp [mm],acc [g]", "{t:.3f},{x:.5f}"), ("t [s],disp [mm]", "{t:.3f},{x:.5f},0.001")]
+)
+def test_a_header_of_more_or_fewer_names_than_fields_is_refused(tmp_path, names, row):
+    """A stranger's logger file named three columns and wrote two (or named two and wrote three): the names were
+    kept as a metadata line, the columns became channel_0 ..., and the time ramp a channel `links` analysed."""
+    import vibkit
+
+    rows = "".join(row.format(t=i * 0.005, x=31.76 + 0.001 * (i % 7)) + "\n" for i in range(400))
+    p = tmp_path / "rec.csv"
+    p.write_text(f"# Logger DL-7\nSample rate: 200 Hz\n{names}\n{rows}")
+    n_names = names.count(",") + 1
+    with pytest.raises(
+        vibkit.io.RecordingError, match=rf"line 4: expected {n_names} fields \(as in the header on line 3"
+    ):
+        vibkit.read_recording(p)

@@ -25,7 +25,7 @@ from .cells import (
 )
 from .fastpath import _HEAD_BYTES, _Fallback
 from .metadata import _header_from_meta, _metadata
-from .units import parse_time_unit, parse_unit
+from .units import is_time_name, parse_time_unit, parse_unit
 
 __all__ = ["utf16_without_bom"]
 
@@ -263,7 +263,7 @@ def _read_layout(path, text: str, delimiter, decimal, complete: bool, history: l
         elif dec == ",":
             dec = "."
 
-    header, header_line, unit_row, unit_line = _header_rows(path, nonblank, n, dec)
+    header, header_line, unit_row, unit_line = _header_rows(path, nonblank, n, dec, first)
     if header is None and delimiter is None and decimal is None:
         _split_decimals(path, lines, first, d, n, split)
     meta_lines = [i for i in range(first) if lines[i].strip() and i + 1 not in (header_line, unit_line)]
@@ -329,8 +329,16 @@ def _first_data_row(lines, d, dec, n, numcols, split):
     return None, nonblank
 
 
-def _header_rows(path, nonblank, n, dec):
-    """(header cells, its 1-based line, units row cells, its line) from the lines above the data; Nones if absent."""
+#: a column name with its unit: ``t [s]``, ``disp (mm)``
+_NAME_WITH_UNIT = re.compile(r".*\S\s*[\[(][^\])]+[\])]\s*")
+
+
+def _header_rows(path, nonblank, n, dec, first=None):
+    """(header cells, its 1-based line, units row cells, its line) from the lines above the data; Nones if absent.
+
+    A line of column names just above the data with one name more or fewer than the rows have fields (a name
+    with its unit among them, or a time column's) is refused: read as metadata it turned the time column into
+    a channel and named the columns channel_0 ... (a stranger's logger file)."""
     header, header_line = None, None
     unit_row, unit_line = None, None
     if (
@@ -361,4 +369,19 @@ def _header_rows(path, nonblank, n, dec):
             raise RecordingError(path, hi + 1, f"expected a number in column '{col}', found '{hcells[j]}'")
         elif len(hcells) != n and _mostly_numbers(kinds):  # a ragged first data row
             raise RecordingError(path, hi + 1, f"expected {n} fields, found {len(hcells)}")
+        elif (
+            first is not None
+            and hi == first - 1
+            and abs(len(hcells) - n) == 1
+            and len(hcells) >= 2
+            and all(k == "text" for k in kinds)
+            and any(_NAME_WITH_UNIT.fullmatch(c) or is_time_name(c) for c in hcells)
+        ):
+            names = ", ".join(repr(c) for c in hcells)
+            raise RecordingError(
+                path,
+                first + 1,
+                f"expected {len(hcells)} fields (as in the header on line {hi + 1}: {names}), found {n}: a column "
+                "named and not written, or written and not named",
+            )
     return header, header_line, unit_row, unit_line
