@@ -127,7 +127,7 @@ def test_ride_reads_stdin_and_takes_a_shipped_scene_name(monkeypatch, capsys):
     _stdin(monkeypatch, phyphox.read_bytes())
     assert main(["ride", "-", "--segment", "0.5:3", "--json"]) == 0
     piped = json.loads(capsys.readouterr().out)
-    assert piped.pop("source") == "-"
+    assert piped.pop("source") == "<stdin>"  # as the reader names it
     from_file.pop("source")
     assert piped == from_file
 
@@ -140,5 +140,12 @@ def test_report_from_stdin_to_stdout(monkeypatch, tmp_path, capsys):
     rc = main(["report", "-", "--scene", str(ROOT / "sim" / "leon.toml"), "--duration", "2", "-o", "-"])
     assert rc == 0, capsys.readouterr().err
     assert buf.getvalue().startswith(b"%PDF-") and buf.getvalue().rstrip().endswith(b"%%EOF")
-    assert "wrote - (" in capsys.readouterr().err
+    assert "wrote <stdout> (" in capsys.readouterr().err
     assert os.listdir(tmp_path) == []
+
+
+def test_a_report_from_stdin_names_it_so(monkeypatch, tmp_path, capsys):
+    """`vibkit report - -o FILE` printed "file -" and page 1 said "recording -", where the docs name it <stdin>."""
+    _stdin(monkeypatch, LEON.read_bytes())
+    assert main(["report", "-", "-o", str(tmp_path / "r.pdf"), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["summary"]["file"] == "<stdin>"

@@ -153,6 +153,6 @@ def _run(a, target):
             },
         )
     else:
-        msg(f"vibkit report: wrote {a.output if is_stdout(a.output) else rep.path} ({len(rep.pages)} pages)")
+        msg(f"vibkit report: wrote {'<stdout>' if is_stdout(a.output) else rep.path} ({len(rep.pages)} pages)")
         print(table([[k, _shown(k, v, rep.summary)] for k, v in rep.summary.items()]))
     return 0

@@ -280,7 +280,7 @@ def _naming(source_of):
 
 def _recording_source(recording, *args, **kwargs):
     if isinstance(recording, (str, os.PathLike)):
-        return os.fspath(recording)
+        return "<stdin>" if os.fspath(recording) == "-" else os.fspath(recording)  # as the reader names it
     return getattr(recording, "attrs", {}).get("source_file", "")
 
 
@@ -490,7 +490,9 @@ def ride_quality_from_recording(
     if sample_rate is not None:
         opts["sample_rate"] = sample_rate
     rec = recording if not isinstance(recording, (str, os.PathLike)) else read_recording(recording, **opts)
-    src = os.fspath(recording) if isinstance(recording, (str, os.PathLike)) else rec.attrs.get("source_file", "")
+    src = (
+        _recording_source(recording) if isinstance(recording, (str, os.PathLike)) else rec.attrs.get("source_file", "")
+    )
     if (
         channels is None
         and rec.attrs.get("analysis") in ("forward", "inverse")

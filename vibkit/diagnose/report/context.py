@@ -351,7 +351,7 @@ def analyse(
     clipped = clip_n > 4 and not _quantisation_explains_extremes(x_all, rec[ch].attrs.get("quantum"))
     date = report_date()
     summary = {
-        "file": os.path.basename(os.fspath(recording)),
+        "file": "<stdin>" if os.fspath(recording) == "-" else os.path.basename(os.fspath(recording)),
         "sha256": rec.attrs.get("sha256", ""),
         "channel": ch,
         "units": units,
