@@ -34,6 +34,25 @@ class _Parser(argparse.ArgumentParser):
         where = f"'{self.prog} --help'" if " " in self.prog else "'vibkit COMMAND --help'"
         self.exit(2, f"{self.prog}: error: {message} (run {where} for the options)\n")
 
+    def parse_known_args(self, args=None, namespace=None):
+        # the innermost (sub)command parser that left arguments unrecognised is kept with them: argparse reports
+        # them from the top parser ("vibkit: error: unrecognized arguments"), which does not name the command
+        ns, extras = super().parse_known_args(args, namespace)
+        if extras and not hasattr(ns, _LEFT_BY):
+            setattr(ns, _LEFT_BY, self)
+        return ns, extras
+
+    def parse_args(self, args=None, namespace=None):
+        ns, extras = self.parse_known_args(args, namespace)
+        parser = vars(ns).pop(_LEFT_BY, self)
+        if extras:
+            parser.error(f"unrecognized arguments: {' '.join(extras)}")
+        return ns
+
+
+#: the namespace attribute that names the parser which left arguments unrecognised (removed before the command runs)
+_LEFT_BY = "_vibkit_unrecognized_by"
+
 
 def _parser():
     import vibkit
