@@ -40,3 +40,42 @@ def test_unknown_option_leaves_nothing_in_the_namespace():
 
     args = _parser().parse_args(["pitch", LEON, "--speed", "0.5"])
     assert not [k for k in vars(args) if k.startswith("_")]
+
+
+PHYPHOX = str(ROOT / "data" / "field" / "layouts" / "phyphox.csv")
+
+
+@pytest.mark.parametrize(
+    "argv, text",
+    [
+        (["ride", PHYPHOX, "--segment", "3:1"], "vibkit ride: error: argument --segment: '3:1': expected 0 <= START"),
+        (["ride", PHYPHOX, "--segment", "a"], "vibkit ride: error: argument --segment: 'a': expected START:END"),
+        (["report", LEON, "-o", "x.pdf", "--segment", "3:1"], "vibkit report: error: argument --segment: '3:1'"),
+        (["ride", PHYPHOX, "--weighting", "Wd,Wk"], "argument --weighting: 'Wd,Wk': 2 weightings for the three axes"),
+        (["ride", PHYPHOX, "--weighting", "x=Wd,x=Wk"], "argument --weighting: 'x=Wd,x=Wk': axis x is given twice"),
+    ],
+)
+def test_bad_segment_and_weighting_are_usage_errors(argv, text, capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    err = _usage_error(argv, capsys)
+    assert err.startswith(f"vibkit {argv[0]}: error: ") and text in err, err
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize(
+    "argv, prog",
+    [
+        (["simulate", "leon", "-o", "-", "--json"], "vibkit simulate"),
+        (["report", LEON, "-o", "-", "--json"], "vibkit report"),
+        (["fleet", "report", "-o", "-", "--json", "--db", "fleet.sqlite"], "vibkit fleet report"),
+    ],
+)
+def test_stdout_output_and_json_are_a_usage_error(argv, prog, capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert main(argv) == 2
+    cap = capsys.readouterr()
+    assert cap.out == "" and cap.err == (
+        f"{prog}: error: -o - writes the output to stdout, and so does --json: give one of them "
+        f"(run '{prog} --help' for the options)\n"
+    )
+    assert list(tmp_path.iterdir()) == []

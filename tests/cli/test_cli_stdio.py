@@ -107,7 +107,7 @@ def test_stdout_output_with_json_is_refused(tmp_path, monkeypatch, capsys):
     monkeypatch.chdir(tmp_path)
     rc = main(["simulate", "thesis-kinematics", "--duration", "0.05", "-o", "-", "--json"])
     err = capsys.readouterr().err
-    assert rc == 1 and "-o -" in err and "--json" in err
+    assert rc == 2 and "-o -" in err and "--json" in err  # a usage error
     assert os.listdir(tmp_path) == []
 
 

@@ -2,8 +2,8 @@
 
 Data go to stdout (a readable table, or JSON with ``--json`` carrying ``"schema": "vibkit.<command>/1"``),
 messages to stderr.  Exit status: 0 success (also when the reader closes stdout early, as ``| head``
-does: quietly), 1 bad data or a failed run (one-line message, no
-traceback), 2 usage error (argparse).
+does: quietly), 1 bad data or a failed run (one-line message, no traceback), 2 usage error (argparse, or a
+:class:`~vibkit.cli.output.UsageError`: options that exclude each other).
 
 Each command is a module of this package with ``add_parser(subparsers)`` and ``run(args)``; the
 option types and the option groups they share are in :mod:`vibkit.cli.options`, the printing in
@@ -18,7 +18,7 @@ import errno
 import sys
 
 from . import bench, compare, fleet, links, pitch, report, ride, scene, simulate, spectrum, sweep
-from .output import color, msg
+from .output import UsageError, color, msg
 
 __all__ = ["main"]
 
@@ -104,6 +104,12 @@ def main(argv=None) -> int:
     except KeyboardInterrupt as exc:
         msg(f"vibkit {args.command}: interrupted; {getattr(exc, 'vibkit_note', 'nothing was written')}")
         return 130
+    except UsageError as exc:  # what argparse cannot check, as argparse says it
+        prog = " ".join(
+            ["vibkit", args.command] + ([args.fleet_command] if getattr(args, "fleet_command", None) else [])
+        )
+        msg(f"{prog}: error: {' '.join(str(exc).split())} (run '{prog} --help' for the options)")
+        return 2
     except Exception as exc:
         if not _is_user_error(exc):
             raise

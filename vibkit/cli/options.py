@@ -497,26 +497,30 @@ def _profile_of(a):
     return escalator_profile(a)
 
 
+def segment(text):
+    """--segment START:END [s] -> (start, end); a bad value is a usage error (exit 2), as the library words it."""
+    from vibkit.diagnose.ride import parse_segment
+
+    try:
+        return parse_segment(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(re.sub(r"^segment ", "", str(exc))) from None
+
+
 def add_segment(sp):
     """--segment START:END [s], the one definition shared by ``ride`` and ``report`` (read by :func:`segment_of`)."""
     sp.add_argument(
         "--segment",
+        type=segment,
         metavar="START:END",
         help="ride segment START:END [s] from the first sample: the recording's ride quality (default: detected)",
     )
 
 
 def segment_of(a):
-    """--segment as (start, end) [s], or None; a bad value is a one-line CLIError (exit 1)."""
-    text = getattr(a, "segment", None)
-    if text is None:
-        return None
-    from vibkit.diagnose.ride import parse_segment
-
-    try:
-        return parse_segment(text)
-    except ValueError as exc:
-        raise CLIError(re.sub(r"^segment\b", "--segment", str(exc))) from None
+    """--segment as (start, end) [s], or None (argparse checked it: :func:`segment`)."""
+    value = getattr(a, "segment", None)
+    return None if value is None else tuple(value)
 
 
 ESCALATOR_HELP = "the escalator's profile (TOML): unit, speed, pitch, links; see docs/guide/escalator.md"

@@ -1,5 +1,6 @@
 """What the command line tells the user: data on stdout (a table, or JSON with a schema version),
-messages on stderr, and :class:`CLIError` for a problem with the command's inputs (exit 1)."""
+messages on stderr, :class:`CLIError` for a problem with the command's inputs (exit 1) and
+:class:`UsageError` for options that exclude each other (exit 2)."""
 
 from __future__ import annotations
 
@@ -14,6 +15,10 @@ SCHEMA_VERSION = 1
 
 class CLIError(ValueError):
     """A problem with the command's inputs, reported in one line (exit 1)."""
+
+
+class UsageError(CLIError):
+    """A usage error that argparse cannot see (options that exclude each other): one line, exit 2 as argparse's."""
 
 
 def schema(cmd):
@@ -110,7 +115,7 @@ def check_output(out, inputs, force=False, *, json_flag=False):
 
     if is_stdout(out):
         if json_flag:
-            raise CLIError("-o - writes the output to stdout, and so does --json: give one of them")
+            raise UsageError("-o - writes the output to stdout, and so does --json: give one of them")
         return
     check_output_path(out, overwrite=force, inputs=[p for p in inputs if p and not is_stdout(p)])
 

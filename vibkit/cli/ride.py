@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import os
+import re
 import sys
 
 from .options import (
@@ -48,7 +49,9 @@ def add_parser(subparsers):
         help="chain speed measured on the steps [m/s] (default: the escalator profile's, else the file's)",
     )
     s.add_argument(
-        "--weighting", help="Wk, Wd ... for every axis, three for x,y,z (Wd,Wd,Wk), or x=Wd,y=Wd,z=Wk (the default)"
+        "--weighting",
+        type=_weightings,
+        help="Wk, Wd ... for every axis, three for x,y,z (Wd,Wd,Wk), or x=Wd,y=Wd,z=Wk (the default)",
     )
     s.add_argument("--scene", help="also simulate this scene's step and report it next to the recording")
     s.add_argument("--duration", type=positive, help="simulated time [s] (default: the scene's)")
@@ -60,10 +63,16 @@ def add_parser(subparsers):
 
 
 def _weightings(text):
-    """``Wk`` (every axis), ``Wd,Wd,Wk`` (x, y, z) or ``x=Wd,y=Wd,z=Wk`` -> {axis: name} (None: the defaults)."""
+    """``Wk`` (every axis), ``Wd,Wd,Wk`` (x, y, z) or ``x=Wd,y=Wd,z=Wk`` -> {axis: name} (None: the defaults);
+    a bad value is a usage error (exit 2)."""
+    import argparse
+
     from vibkit.diagnose.ride import parse_weightings
 
-    return parse_weightings(text)
+    try:
+        return parse_weightings(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(re.sub(r"^--weighting ", "", str(exc))) from None
 
 
 def _num(v):
@@ -139,7 +148,7 @@ def run(a):
     from vibkit.diagnose.ride_simulation import simulate_ride
 
     segment = segment_of(a)
-    weightings = _weightings(a.weighting)
+    weightings = a.weighting  # {axis: name}, or None: the defaults
     if a.input != STDIO and not os.path.exists(a.input):  # '-': a recording on stdin
         from vibkit.scenes import find
 
