@@ -79,3 +79,47 @@ def test_stdout_output_and_json_are_a_usage_error(argv, prog, capsys, tmp_path, 
         f"(run '{prog} --help' for the options)\n"
     )
     assert list(tmp_path.iterdir()) == []
+
+
+def _option_help(command, flag):
+    import argparse
+
+    from vibkit.cli.app import _parser
+
+    parser = _parser()
+    for name in command.split():
+        sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+        parser = sub.choices[name]
+    action = next(a for a in parser._actions if flag in a.option_strings)
+    return " ".join((action.help % {"default": action.default} if action.help else "").split())
+
+
+@pytest.mark.parametrize("command", ["pitch", "spectrum", "links", "report", "ride", "fleet add"])
+def test_speed_help_gives_the_units_it_takes(command):
+    text = _option_help(command, "--speed")
+    assert "m/s, or 0.49m/s, 49cm/s, 29.4m/min, 96.5ft/min" in text and "[m/s]" not in text, text
+    assert "(default: the --escalator profile's, else " in text, text
+
+
+def test_fleet_add_speed_help_says_the_file_speed_is_taken():
+    text = _option_help("fleet add", "--speed")
+    assert "else the speed the file states" in text and "else required" not in text, text
+
+
+@pytest.mark.parametrize("command", ["pitch", "spectrum", "report", "fleet add"])
+def test_nominal_pitch_help_gives_the_units_it_takes(command):
+    text = _option_help(command, "--nominal-pitch")
+    assert "m, or 133.33mm, 13.333cm, 5.25in" in text and "[m]" not in text, text
+
+
+@pytest.mark.parametrize("command", ["pitch", "spectrum", "report", "fleet status", "fleet report"])
+def test_limits_help_gives_the_format_and_default(command):
+    text = _option_help(command, "--limits")
+    assert "watch,plan,replace [%]: three increasing percentages, comma-separated (default 1.5,2,3)" in text, text
+
+
+@pytest.mark.parametrize("flag", ["--force", "--overwrite"])
+def test_fleet_report_takes_overwrite_as_force(flag):
+    from vibkit.cli.app import _parser
+
+    assert _parser().parse_args(["fleet", "report", "-o", "x.pdf", flag]).force is True

@@ -12,15 +12,16 @@ from .options import (
     _profile_of,
     add_command,
     add_escalator,
+    add_force_overwrite,
     add_json,
     add_limits,
     add_links,
     add_marker,
+    add_nominal_pitch,
     add_recording,
+    add_speed,
     chain_links,
-    chain_speed,
     cli_message,
-    pitch_length,
     reader_options,
     run_speed,
     workers,
@@ -63,18 +64,14 @@ def add_parser(subparsers):
     f = fleet_sub("add", "analyse one recording and store its pitch and elongation")
     add_recording(f, channel_default=CHANNEL_EVERY)
     f.add_argument("--unit", help="escalator identifier (default: the --escalator profile's unit; else required)")
-    f.add_argument(
-        "--speed",
-        type=chain_speed,
-        help="chain speed measured on the steps [m/s] (default: the --escalator profile's; else required)",
-    )
+    add_speed(f, "the --escalator profile's, else the speed the file states, e.g. chain_speed_m_s; neither: refused")
     f.add_argument(
         "--speed-uncertainty",
         help="speed standard deviation, in m/s or in %% (e.g. 0.1%%; default the --escalator profile's): without it "
         "the visit is stored with a warning, and its unit's trend is flagged (its intervals are too small)",
     )
     f.add_argument("--date", help="measurement date, ISO 8601 (default: the recording's start time)")
-    f.add_argument("--nominal-pitch", type=pitch_length, help="nominal link pitch [m] (required for a new unit)")
+    add_nominal_pitch(f, "the --escalator profile's, else the unit's; required for a new unit")
     f.add_argument(
         "--replaced",
         action="store_true",
@@ -117,8 +114,8 @@ def add_parser(subparsers):
         "report", "PDF: the work list (page 1), then elongation against date per unit, then the flagged links"
     )
     f.add_argument("-o", "--output", required=True, help="PDF to write")
-    f.add_argument("--force", action="store_true", help="replace an existing output file")
-    add_limits(f, "elongation limits [%%]")
+    add_force_overwrite(f, "PDF")
+    add_limits(f)
     f.set_defaults(func=run_report)
 
     f = add_command(

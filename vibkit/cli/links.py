@@ -17,9 +17,9 @@ from .options import (
     add_links,
     add_marker,
     add_recording,
+    add_speed,
     band,
     chain_links,
-    chain_speed,
     escalator_profile,
     read_recording,
 )
@@ -61,9 +61,7 @@ def add_parser(subparsers):
     )
     add_recording(s, channel_default=CHANNEL_LENGTH)
     add_json(s)
-    s.add_argument(
-        "--speed", type=chain_speed, help="chain speed: m/s, or 0.49m/s, 49cm/s (default: the speed the file states)"
-    )
+    add_speed(s, "the --escalator profile's, else the speed the file states")
     add_links(s)
     add_escalator(s)
     s.add_argument(

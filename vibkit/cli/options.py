@@ -459,8 +459,33 @@ def add_force_overwrite(sp, what):
     )
 
 
-def add_limits(sp, help_="elongation limits watch,plan,replace [%%] (default 1.5,2,3)"):
-    sp.add_argument("--limits", type=limits, default=DEFAULT_LIMITS, help=help_)
+LIMITS_HELP = (
+    "elongation limits watch,plan,replace [%%]: three increasing percentages, comma-separated "
+    f"(default {','.join(f'{v:g}' for v in DEFAULT_LIMITS)})"
+)
+
+
+def add_limits(sp, help_=LIMITS_HELP):
+    """--limits WATCH,PLAN,REPLACE [%], the one definition of every command that rates an elongation."""
+    sp.add_argument("--limits", type=limits, default=DEFAULT_LIMITS, metavar="WATCH,PLAN,REPLACE", help=help_)
+
+
+#: how a chain speed and a link pitch are written (:func:`chain_speed`, :func:`pitch_length`), in every help
+SPEED_FORMAT = "m/s, or 0.49m/s, 49cm/s, 29.4m/min, 96.5ft/min"
+PITCH_FORMAT = "m, or 133.33mm, 13.333cm, 5.25in"
+
+
+def add_speed(sp, default, what="chain speed measured on the steps"):
+    """--speed: the chain speed in any of :data:`SPEED_FORMAT`'s units; ``default`` says where the command takes
+    it from without the option (as :func:`run_speed`: the escalator profile's before the file's)."""
+    sp.add_argument("--speed", type=chain_speed, help=f"{what}: {SPEED_FORMAT} (default: {default})")
+
+
+def add_nominal_pitch(sp, default, use=""):
+    """--nominal-pitch: the chain's nominal link pitch in any of :data:`PITCH_FORMAT`'s units."""
+    sp.add_argument(
+        "--nominal-pitch", type=pitch_length, help=f"nominal link pitch: {PITCH_FORMAT} (default: {default}){use}"
+    )
 
 
 # ------------------------------------------------------------------------- one speed per run

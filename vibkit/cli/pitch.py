@@ -15,14 +15,14 @@ from .options import (
     add_json,
     add_limits,
     add_links,
+    add_nominal_pitch,
     add_recording,
+    add_speed,
     add_speed_uncertainty,
     band,
     chain_links,
-    chain_speed,
     escalator_profile,
     on_step,
-    pitch_length,
     read_recording,
     run_speed,
     teeth,
@@ -61,15 +61,10 @@ def add_parser(subparsers):
     return s
 
 
-def add_speed_options(
-    s,
-    speed_help="chain speed measured on the steps: m/s, or 0.49m/s, 49cm/s "
-    "(default: the speed the file states, e.g. chain_speed_m_s)",
-):
-    s.add_argument("--speed", type=chain_speed, help=speed_help)
-    s.add_argument(
-        "--nominal-pitch", type=pitch_length, help="nominal link pitch: m, or 133.33mm: gives elongation and verdict"
-    )
+def add_speed_options(s, what="chain speed measured on the steps"):
+    """--speed and --nominal-pitch of ``pitch`` and ``spectrum`` (:func:`run_speed`, :func:`from_profile`)."""
+    add_speed(s, "the --escalator profile's, else the speed the file states, e.g. chain_speed_m_s", what)
+    add_nominal_pitch(s, "the --escalator profile's", ": gives elongation and verdict")
 
 
 def resolve_speed(a, rec, *, required=True, profile=None):

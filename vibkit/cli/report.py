@@ -11,12 +11,12 @@ from .options import (
     add_json,
     add_limits,
     add_marker,
+    add_nominal_pitch,
     add_recording,
     add_segment,
+    add_speed,
     add_speed_uncertainty,
     band,
-    chain_speed,
-    pitch_length,
     positive,
     reader_options,
     segment_of,
@@ -42,17 +42,16 @@ def add_parser(subparsers):
     )
     s.add_argument("-o", "--output", required=True, help="PDF to write; a new path unless --force; '-': stdout")
     add_force_overwrite(s, "PDF")
-    s.add_argument(
-        "--speed",
-        type=chain_speed,
-        help="chain speed measured on the steps [m/s], the one speed of every page "
-        "(default: the escalator profile's, the recording's or the scene's)",
+    add_speed(
+        s,
+        "the --escalator profile's, else the recording's, else the scene's",
+        "chain speed measured on the steps, the one speed of every page",
     )
     add_speed_uncertainty(s)
     add_segment(s)
     add_marker(s)
-    s.add_argument("--nominal-pitch", type=pitch_length, help="nominal link pitch [m] (default: the scene's)")
-    add_limits(s, "elongation limits [%%]")
+    add_nominal_pitch(s, "the --escalator profile's, else the scene's")
+    add_limits(s)
     s.add_argument("--band", type=band, help="link-pass search band LOW:HIGH [Hz]")
     s.add_argument("--duration", type=positive, help="simulated time [s] (default: the scene's)")
     s.add_argument("--date", help="when the recording was made, ISO 8601 (default: the file's start time)")

@@ -14,7 +14,7 @@ from .options import (
     add_json,
     add_recording,
     add_segment,
-    chain_speed,
+    add_speed,
     positive,
     reader_options,
     run_speed,
@@ -43,11 +43,7 @@ def add_parser(subparsers):
         "or AXIS=NAME pairs (default: names ending in x, y, z); write --channels=-,-,az when x is skipped",
     )
     add_segment(s)
-    s.add_argument(
-        "--speed",
-        type=chain_speed,
-        help="chain speed measured on the steps [m/s] (default: the escalator profile's, else the file's)",
-    )
+    add_speed(s, "the --escalator profile's, else the speed the file states")
     s.add_argument(
         "--weighting",
         type=_weightings,

@@ -53,9 +53,7 @@ def add_parser(subparsers):
         help="search band of the link-pass LOW:HIGH [Hz] (default speed / 80-200 mm, or 2.5:6 without a speed)",
     )
     s.add_argument("--harmonics", type=harmonics, default=5, help="harmonics listed (default 5)")
-    add_speed_options(
-        s, "chain speed (optional): m/s, or 49cm/s; default the file's; gives the pitch as `vibkit pitch` does"
-    )
+    add_speed_options(s, "chain speed (optional; gives the pitch as `vibkit pitch` does)")
     add_speed_uncertainty(s)
     add_limits(s)
     add_escalator(s)
