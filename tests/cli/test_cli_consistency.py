@@ -123,3 +123,26 @@ def test_fleet_report_takes_overwrite_as_force(flag):
     from vibkit.cli.app import _parser
 
     assert _parser().parse_args(["fleet", "report", "-o", "x.pdf", flag]).force is True
+
+
+@pytest.mark.parametrize(
+    "value, read",
+    [
+        ("0.05", "'0.05' is 0.05 m = 50 mm"),
+        ("0.01", "'0.01' is 0.01 m = 10 mm"),
+        ("0.004", "'0.004' is 0.004 m = 4 mm"),
+    ],
+)
+def test_min_excess_bare_number_says_how_it_was_read(value, read, capsys):
+    err = _usage_error(["links", LEON, "--min-excess", value], capsys)
+    assert f"argument --min-excess: {read} (a bare number is metres" in err, err
+    assert f"give the unit, e.g. {value}mm" in err, err
+
+
+@pytest.mark.parametrize(
+    "value, metres", [("0.05mm", 5e-5), ("0.003", 3e-3), ("0.0002", 2e-4), ("4mm", 4e-3), ("0", 0.0)]
+)
+def test_min_excess_with_its_unit_or_a_plausible_bare_number(value, metres):
+    from vibkit.cli.links import excess_length
+
+    assert excess_length(value) == pytest.approx(metres)

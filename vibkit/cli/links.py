@@ -44,12 +44,25 @@ def probability(text):
     return v
 
 
+#: the longest worn link docs/guide/links.md measured (benchmarks/bench_links.py: 0.1 to 3 mm) [m]; a bare
+#: --min-excess above it is a number of mm given without its unit (0.05 is 50 mm), refused
+BARE_EXCESS_MAX_M = 3e-3
+
+
 def excess_length(text):
-    """--min-excess: metres, or with a unit (``0.2mm``); 0 or more."""
+    """--min-excess: metres, or with a unit (``0.2mm``); 0 or more, below 50 mm.
+
+    A bare number is metres: one above :data:`BARE_EXCESS_MAX_M` (``0.05``, the default typed as mm, is 50 mm;
+    ``0.01`` is 10 mm) is refused with how it was read."""
     if text.strip().rstrip("m").rstrip("m") in ("0", "0.0"):  # 0, 0m, 0mm: no minimum
         return 0.0
     v, factor, _unit = _quantity(text, _LENGTH_UNITS, "an excess pitch", "0.2mm")
     m = v * (factor or 1.0)
+    if factor is None and m > BARE_EXCESS_MAX_M:
+        raise argparse.ArgumentTypeError(
+            f"{text!r} is {m:g} m = {1e3 * m:.6g} mm (a bare number is metres; no worn link measured was longer "
+            f"than {1e3 * BARE_EXCESS_MAX_M:g} mm): give the unit, e.g. {text.strip()}mm"
+        )
     if not (math.isfinite(m) and 0 <= m < 0.05):
         raise argparse.ArgumentTypeError(f"expected an excess pitch from 0 to 50 mm (e.g. 0.2mm), got {text!r}")
     return m
@@ -79,7 +92,8 @@ def add_parser(subparsers):
     s.add_argument(
         "--min-excess",
         type=excess_length,
-        help="with --scene: flag a link only when its excess pitch is at least this: m, or 0.05mm (default 0.05 mm)",
+        help="with --scene: flag a link only when its excess pitch is at least this: 0.05mm, or m (a bare number, "
+        f"at most {BARE_EXCESS_MAX_M:g}) (default 0.05 mm)",
     )
     s.add_argument("--band", type=band, help="link-pass search band LOW:HIGH [Hz] (default speed / 200-80 mm)")
     s.set_defaults(func=run)
