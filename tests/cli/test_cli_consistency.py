@@ -146,3 +146,21 @@ def test_min_excess_with_its_unit_or_a_plausible_bare_number(value, metres):
     from vibkit.cli.links import excess_length
 
     assert excess_length(value) == pytest.approx(metres)
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [["links", LEON], ["report", LEON, "-o", "x.pdf"], ["fleet", "add", LEON]],
+    ids=lambda argv: " ".join(argv[:2]) if argv[0] == "fleet" else argv[0],
+)
+@pytest.mark.parametrize("value, s", [("12.4s", 12.4), ("12.4", 12.4), ("850ms", 0.85), ("2.5min", 150.0), ("0", 0.0)])
+def test_marker_takes_a_time_unit(argv, value, s):
+    from vibkit.cli.app import _parser
+
+    assert _parser().parse_args([*argv, "--marker", value]).marker == pytest.approx(s)
+
+
+@pytest.mark.parametrize("value", ["12.4h", "abc", "-1s"])
+def test_marker_refuses_an_unknown_unit_or_a_negative_time(value, capsys):
+    err = _usage_error(["links", LEON, f"--marker={value}"], capsys)
+    assert err.startswith("vibkit links: error: argument --marker: expected a time"), err

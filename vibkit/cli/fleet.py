@@ -9,6 +9,7 @@ import textwrap
 
 from .options import (
     CHANNEL_EVERY,
+    TIME_FORMAT,
     _profile_of,
     add_command,
     add_escalator,
@@ -85,7 +86,7 @@ def add_parser(subparsers):
     )
     add_marker(
         f,
-        "time [s from the recording's start] at which a marked link passed the sensor: it is link 1, and "
+        f"time from the recording's start ({TIME_FORMAT}) at which a marked link passed the sensor: it is link 1, and "
         "its numbers follow the same links across visits (the catalogue's marker_s)",
     )
     f.set_defaults(func=_guarded(run_add, lambda a: a.db))

@@ -561,13 +561,25 @@ def links_count(text):
     return _whole_number(text, "links", 2, "a chain has at least 2 links")
 
 
+_TIME_UNITS = {"s": 1.0, "ms": 1e-3, "min": 60.0}
+#: how --marker is written: seconds, or with a unit
+TIME_FORMAT = "s, or 12.4s, 850ms, 2.5min"
+
+
 def seconds(text):
-    """--marker: a time in seconds from the recording's start, 0 or more."""
+    """--marker: a time from the recording's start, 0 or more: seconds, or with a unit (``12.4s``, ``850ms``,
+    ``2.5min``), as --speed takes its unit."""
+    t = str(text).strip().replace(" ", "")
+    factor = 1.0
+    for unit in sorted(_TIME_UNITS, key=len, reverse=True):  # min and ms before s
+        if t.lower().endswith(unit):
+            t, factor = t[: -len(unit)], _TIME_UNITS[unit]
+            break
     try:
-        v = float(text)
+        v = float(t) * factor
     except ValueError:
         raise argparse.ArgumentTypeError(
-            f"expected a time in seconds from the recording's start, got {text!r}"
+            f"expected a time from the recording's start ({TIME_FORMAT}), got {text!r}"
         ) from None
     if not (math.isfinite(v) and v >= 0):
         raise argparse.ArgumentTypeError(f"expected a time >= 0 s from the recording's start, got {text!r}")
@@ -575,8 +587,8 @@ def seconds(text):
 
 
 MARKER_HELP = (
-    "time [s from the recording's start] at which a marked link (chalk, tape) passed the sensor: it becomes "
-    "link 1 (default: the link at the sensor when the recording starts)"
+    f"time from the recording's start ({TIME_FORMAT}) at which a marked link (chalk, tape) passed the sensor: it "
+    "becomes link 1 (default: the link at the sensor when the recording starts)"
 )
 
 
