@@ -12,9 +12,9 @@ from .options import (
     add_escalator,
     add_json,
     add_recording,
+    add_speed,
     add_speed_uncertainty,
     band,
-    chain_speed,
     harmonics,
     positive,
     read_recording,
@@ -44,11 +44,11 @@ def add_parser(subparsers):
     s.add_argument("--band", type=band, help="link-pass search band LOW:HIGH [Hz]")
     s.add_argument("--harmonics", type=harmonics, default=5, help="harmonics compared (default 5)")
     s.add_argument("--duration", type=positive, help="simulated time when given a scene [s]")
-    s.add_argument(
-        "--speed",
-        type=chain_speed,
-        help="the recording's chain speed, measured on the steps: m/s or 49cm/s (default: the file's, "
-        "else the scene's nominal speed)",
+    add_speed(
+        s,
+        "the --escalator profile's, else the speed the file states, else the scene's nominal speed (then the "
+        "pitch is not judged)",
+        "the recording's chain speed, measured on the steps",
     )
     add_speed_uncertainty(s)
     s.set_defaults(func=run)
