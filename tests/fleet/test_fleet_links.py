@@ -12,6 +12,7 @@ from pathlib import Path
 import pytest
 
 from vibkit.cli import main
+from vibkit.diagnose.rounding import fmt_pm
 from vibkit.fleet import FleetDB
 from vibkit.fleet.link_scan import NO_LINK_COUNT
 from vibkit.fleet.links import BEFORE_LINK_SCANS, NOT_SCANNED, FlaggedLink, LinkScan, links_history
@@ -250,7 +251,7 @@ def test_a_marked_link_that_grows_beyond_two_sigma_is_worse(tmp_path):
     by = {x.link: x for x in h.links}
     assert [x.link for x in h.links] == [12, 40, 70]  # worse first, then new
     assert by[12].verdict == "worse"  # 0.5 mm against 2 x 0.071 mm
-    assert "+0.50 +- 0.07 mm" in by[12].detail
+    assert "+0.500 +- 0.071 mm" in by[12].detail
     assert [v.excess_pitch_m for v in by[12].visits] == pytest.approx([0.4e-3, 0.9e-3])
     assert by[40].verdict == "new" and [v.flagged for v in by[40].visits] == [False, True]
     assert by[70].verdict == "not flagged now"
@@ -274,7 +275,7 @@ def test_without_markers_numbers_are_not_matched(tmp_path):
         h = db.links_history("E07")
     assert not h.comparable and "cannot be matched" in h.statement and "marker_s" in h.statement
     assert [(x.link, x.verdict) for x in h.links] == [(12, "unmatched")] and len(h.links[0].visits) == 1
-    assert h.links[0].detail.startswith("+0.90 +- 0.05 mm; counted from the link at the sensor")
+    assert h.links[0].detail.startswith("+0.900 +- 0.050 mm; counted from the link at the sensor")
     # a marker on the later visit only: still nothing to compare with
     q = _two_visits(tmp_path / "g.sqlite", [(12, 0.4, 0.05)], [(12, 0.9, 0.05)], markers=(None, 2.0))
     with FleetDB(q, readonly=True) as db:
@@ -441,8 +442,8 @@ def test_scan_of_simulated_visits_finds_the_marked_link_worse(tmp_path, capsys):
         )
     (texts,) = [t for title, t in rep.pages if title == "fleet links"]
     i = texts.index(" or ".join(str(n) for n in [number, *link["alternatives"]]))  # "55 or 10" where ambiguous
-    assert (
-        texts[i + 1] == "worse" and texts[i + 2] == f"{1e3 * got[1]:+.2f} +- {1e3 * link['visits'][1]['sigma_m']:.2f}"
+    assert texts[i + 1] == "worse" and texts[i + 2] == fmt_pm(
+        1e3 * got[1], 1e3 * link["visits"][1]["sigma_m"], sign=True
     )
 
 

@@ -36,17 +36,18 @@ def test_report_names_the_worse_and_the_new_link_and_why_others_are_not_scanned(
     (page,), rep = _report_texts(p, tmp_path / "fleet.pdf")
     assert [t for t, _ in rep.pages][-1] == "fleet links"
     rows = page.split(" | ")
-    # link 12 grew 0.4 -> 0.9 mm (+0.50 +- 0.07 mm): worse, with its excess now, its sigma and its loops
+    # link 12 grew 0.4 -> 0.9 mm (+0.500 +- 0.071 mm, to two digits of its sigma): worse, with its excess now, its
+    # sigma and its loops
     i = rows.index("12")
     assert rows[i : i + 5] == [
         "12",
         "worse",
-        "+0.90 +- 0.05",
+        "+0.900 +- 0.050",
         "1,2,3",
-        "+0.40 mm on 2023-01-15 -> +0.90 mm: +0.50 +- 0.07 mm",
+        "+0.400 mm on 2023-01-15 -> +0.900 mm: +0.500 +- 0.071 mm",
     ]
     j = rows.index("40")
-    assert rows[j : j + 3] == ["40", "new", "+0.30 +- 0.05"]
+    assert rows[j : j + 3] == ["40", "new", "+0.300 +- 0.050"]
     assert "not flagged now" in rows[rows.index("70") + 1]
     assert "E12: latest visit not run: channel accel: a step accelerometer gives no link number" in rows
 

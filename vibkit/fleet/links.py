@@ -386,15 +386,22 @@ def _visit(m, f):
     return LinkVisit(m.id, m.date_utc, True, f.excess_pitch_m, f.sigma_m, f.loops, f.link, tuple(f.alternatives))
 
 
-def _mm(v):
-    return "-" if v is None else f"{1e3 * v:+.2f} mm"
+def _mm(v, s=None, *, pm=False):
+    """An excess pitch [m] in mm, to two significant digits of its sigma (the one rule of every +-; 0.01 mm without
+    one), the sigma after it with ``pm``."""
+    from ..diagnose.rounding import fmt_pm, fmt_value
+
+    if v is None:
+        return "-"
+    if not s:
+        return f"{1e3 * v:+.2f} mm"
+    return fmt_pm(1e3 * v, 1e3 * s, "mm", sign=True) if pm else f"{fmt_value(1e3 * v, 1e3 * s, sign=True)} mm"
 
 
 def _flag_words(f):
     if f.excess_pitch_m is None:
         return f"a deviating {f.feature or 'cycle'} (no excess pitch)"
-    sigma = "" if f.sigma_m is None else f" +- {1e3 * f.sigma_m:.2f}"
-    return f"{1e3 * f.excess_pitch_m:+.2f}{sigma} mm"
+    return _mm(f.excess_pitch_m, f.sigma_m, pm=True)
 
 
 def _ambiguous(v):
@@ -414,14 +421,15 @@ def _compare(now, before, k):
     """Verdict and its words for a link flagged ``now`` against its visit ``before`` (LinkVisits)."""
     if not before.flagged:
         where = "not" if len(now.numbers) < 2 else "none of them"
-        return "new", f"flagged now ({_mm(now.excess_pitch_m)}), {where} on {before.date_utc[:10]}"
+        return "new", f"flagged now ({_mm(now.excess_pitch_m, now.sigma_m)}), {where} on {before.date_utc[:10]}"
     was = f"{before.date_utc[:10]}{_as(before, now)}"
     if None in (now.excess_pitch_m, before.excess_pitch_m, now.sigma_m, before.sigma_m):
         return "flagged again", f"flagged on {was} too; no excess pitch with a sigma to compare"
     diff = now.excess_pitch_m - before.excess_pitch_m
     comb = math.hypot(now.sigma_m, before.sigma_m)
     words = (
-        f"{_mm(before.excess_pitch_m)} on {was} -> {_mm(now.excess_pitch_m)}: {1e3 * diff:+.2f} +- {1e3 * comb:.2f} mm"
+        f"{_mm(before.excess_pitch_m, before.sigma_m)} on {was} -> {_mm(now.excess_pitch_m, now.sigma_m)}: "
+        f"{_mm(diff, comb, pm=True)}"
     )
     if diff > k * comb:
         return "worse", words

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import textwrap
 
+from ..rounding import fmt_pm
 from .common import _WIDE
 
 __all__ = ["fleet_links_pages", "LINKS_HEADER"]
@@ -32,9 +33,10 @@ _MEANING = (
 
 
 def _mm(v, s):
+    """An excess pitch [m] in mm: to two significant digits of its sigma (the one rule of every +-), else 0.01 mm."""
     if v is None:
         return "-"
-    return f"{1e3 * v:+.2f}" + ("" if s is None else f" +- {1e3 * s:.2f}")
+    return fmt_pm(1e3 * v, 1e3 * s, sign=True) if s else f"{1e3 * v:+.2f}"
 
 
 def _block(hist):
