@@ -132,7 +132,7 @@ def test_schema_table_has_a_row_per_key():
         "| [effects.contact] | exponent |  | 1.5 | [1, 3] | force-indentation exponent (1 linear, 1.5 Hertz) |" in rows
     )
     assert (
-        "| [effects.contact] | stiffness | N/m^exponent | required | [0, 1e+16] | roller-tooth contact stiffness |"
+        "| [effects.contact] | stiffness | N/m^exponent | required | (0, 1e+16] | roller-tooth contact stiffness |"
         in rows
     )
 
@@ -242,3 +242,19 @@ def test_a_flat_roller_in_a_kinematics_scene_is_said_to_be_left_out():
     )
     ds = vibkit.simulate(parse_scene(text, "flat.toml"), progress=False)
     assert "worn flat: a kinematics scene places the chain alone, no flat" in ds.attrs["warnings"]
+
+
+def test_the_schema_table_says_which_lower_ends_are_refused():
+    """A stranger read kp, g and torque_limit as [0, ...] in the table, and 0 was refused: the table shows the
+    ends the loader refuses as open, and an integral controller alone (kp = 0, ki > 0) is taken."""
+    from vibkit.model.schema import schema_table
+
+    table = schema_table()
+    assert "| [effects.gravity] | g | m/s^2 | 9.81 | (0, 1000] |" in table
+    assert "| torque_limit | N m | inf | (0, 1e+08] |" in table
+    forward = (SIM / "thesis-forward.toml").read_text()
+    assert "motor = { kp = 600.0, speed = 0.5 }" in forward
+    integral = parse_scene(forward.replace("kp = 600.0,", "kp = 0.0, ki = 500.0,"), "ki.toml")
+    assert integral.effects["motor"].kp == 0.0 and integral.effects["motor"].ki == 500.0
+    with pytest.raises(SceneError, match=r"'effects.motor.kp' must be positive, or 0 with effects.motor.ki > 0"):
+        parse_scene(forward.replace("kp = 600.0,", "kp = 0.0,"), "none.toml")

@@ -456,9 +456,15 @@ def _validate_effects(src, eff):
             raise SceneError(f"{src}: 'effects.contact.damping' must be >= 0 [s/m], got {o.damping!r}")
     if "motor" in eff:
         o = eff["motor"]
-        _positive(src, "effects.motor.kp", o.kp)
         if o.ki < 0:
             raise SceneError(f"{src}: 'effects.motor.ki' must be >= 0 [N m], got {o.ki!r}")
+        if not (o.kp == 0 and o.ki > 0):  # an integral controller alone may have kp = 0
+            try:
+                _positive(src, "effects.motor.kp", o.kp)
+            except SceneError:
+                raise SceneError(
+                    f"{src}: 'effects.motor.kp' must be positive, or 0 with effects.motor.ki > 0, got {o.kp!r}"
+                ) from None
         if o.torque_limit != math.inf:
             _positive(src, "effects.motor.torque_limit", o.torque_limit)
     if "tensioner" in eff:

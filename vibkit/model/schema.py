@@ -48,12 +48,21 @@ class SceneError(ValueError):
 ATOL_PER_RTOL = 1e-2
 
 
-def key(unit, doc, default=None, *, types=(float,), required=False, range=None, derived=False):
+def key(unit, doc, default=None, *, types=(float,), required=False, range=None, derived=False, positive=False):
     """A schema field: TOML type(s), unit, default, plausible ``range`` = (lo, hi, note) and doc.
 
     ``derived``: the default depends on other keys (its doc says how); the dataclass default is None.
+    ``positive``: the range's lower end is excluded (the loader refuses it: ``must be positive``).
     """
-    meta = {"unit": unit, "doc": doc, "types": types, "required": required, "range": range, "derived": derived}
+    meta = {
+        "unit": unit,
+        "doc": doc,
+        "types": types,
+        "required": required,
+        "range": range,
+        "derived": derived,
+        "positive": positive,
+    }
     if isinstance(default, (list, dict)):
         raise TypeError("a schema default must be immutable (use a tuple)")
     return dataclasses.field(default=default, metadata=meta)
@@ -257,7 +266,13 @@ class OutputsSection(_Section):
 @dataclasses.dataclass(frozen=True)
 class GravityOptions(_Section):
     enabled: bool = key("", "false switches the effect off", True, types=(bool,))
-    g: float = key("m/s^2", "acceleration of gravity (the study's value)", GRAVITY, range=(0.0, 1000.0, "m/s^2"))
+    g: float = key(
+        "m/s^2",
+        "acceleration of gravity (the study's value; for none, leave the effect out)",
+        GRAVITY,
+        range=(0.0, 1000.0, "m/s^2"),
+        positive=True,
+    )
 
 
 @dataclasses.dataclass(frozen=True)
@@ -267,6 +282,7 @@ class ContactOptions(_Section):
         "roller-tooth contact stiffness",
         required=True,
         range=(0.0, 1e16, "N/m^exponent (steel about 1e10)"),
+        positive=True,
     )
     exponent: float = key(
         "", "force-indentation exponent (1 linear, 1.5 Hertz)", 1.5, range=(1.0, 3.0, "(1 linear, 1.5 Hertz)")
@@ -277,13 +293,16 @@ class ContactOptions(_Section):
 @dataclasses.dataclass(frozen=True)
 class MotorOptions(_Section):
     kp: float = key(
-        "N m s", "proportional gain (per rad/s of speed error)", required=True, range=(0.0, 1e8, "N m s/rad")
+        "N m s",
+        "proportional gain (per rad/s of speed error); 0 only with ki > 0 (an integral controller)",
+        required=True,
+        range=(0.0, 1e8, "N m s/rad"),
     )
     ki: float = key(
         "N m", "integral gain of the speed controller (per rad of angle error)", 0.0, range=(0.0, 1e9, "N m/rad")
     )
     speed: float = key("m/s", "nominal chain speed", required=True, range=(-10.0, 10.0, "m/s"))
-    torque_limit: float = key("N m", "largest motor torque", math.inf, range=(0.0, 1e8, "N m"))
+    torque_limit: float = key("N m", "largest motor torque", math.inf, range=(0.0, 1e8, "N m"), positive=True)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -424,6 +443,6 @@ def schema_table() -> str:
         m = f.metadata
         default = "required" if m["required"] else "(see meaning)" if m["derived"] else _fmt(f.default)
         rg = m["range"]
-        rng = f"[{rg[0]:g}, {rg[1]:g}]" if rg else ""
+        rng = f"{'(' if m.get('positive') else '['}{rg[0]:g}, {rg[1]:g}]" if rg else ""
         rows.append(f"| [{sec}] | {f.name} | {m['unit']} | {default} | {rng} | {m['doc']} |")
     return "\n".join(rows) + "\n"
