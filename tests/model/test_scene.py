@@ -42,6 +42,8 @@ def test_shipped_scenes_load():
             r"unknown output 'deltaa'",
         ),
         (lambda b: b + "\n[effects]\ngravity = true\n", r"no meaning in a kinematics scene"),
+        # a step longer than the sweep gave one sample (the inverse analysis refused the same mistake)
+        (lambda b: b.replace("step = 0.0001", "step = 5.0"), r"'kinematics.step' = 5.0 m is longer than the sweep"),
         # another analysis' run section, or solver keys where nothing is integrated, were read by nothing
         (
             lambda b: b + "\n[run]\nduration = 5.0\n",

@@ -426,3 +426,13 @@ def test_cli_check_gives_a_converged_flag_per_run(scene_file, tmp_path, capsys):
             check=True,
             progress=False,
         )
+
+
+def test_a_sweep_whose_every_run_is_refused_exits_1(scene_file, tmp_path, capsys):
+    """A stranger's sweep of two chains that cannot close: both runs invalid, and the command exited 0."""
+    out = tmp_path / "bad.zarr"
+    argv = ["sweep", str(scene_file), "--vary", "effects.contact.stiffness=-1e6,-2e6", "--duration", "1"]
+    assert main([*argv, "-o", str(out), "--workers", "1", "--quiet"]) == 1
+    err = capsys.readouterr().err
+    assert "no run could be made (0 failed, 2 invalid)" in err
+    assert out.exists()  # the store keeps what each run said

@@ -644,6 +644,7 @@ def _post_process(fm, t, y, outputs, stats, y_obs=None, table=None):
         "link_pass_frequency_hz": f_lp,
         # from the table: the tabulated chain's own link-length error (the outputs were read from it)
         "closure_residual_max": float(tb[TB_HEAD][HEAD_LINK_ERROR]) if light_table else float(resid.max()),
+        "closure_residual_max_units": "m",
         "solver_method": stats["method"],
         "solver_steps": stats["steps"],
         "solver_rejected": stats["rejected"],

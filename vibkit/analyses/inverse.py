@@ -203,6 +203,7 @@ def inverse_dynamics(model, *, speed, duration, step, start=0.0, effects=None, o
         "chain_speed_m_s": chain_speed,
         "speed_set_point_m_s": float(speed),  # imposed on roller 1, along the guide
         "closure_residual_max": float(out["closure_residual"].max()),
+        "closure_residual_max_units": "m",
         "power_balance_max_W": float(np.abs(out["power_balance"]).max()) if need_forces else float("nan"),
         "link_pass_frequency_hz": f_lp,
     }

@@ -230,4 +230,8 @@ def run(a):
         for r in runs:
             if r["error"]:
                 msg(f"run {', '.join(f'{k}={v}' for k, v in r['values'].items())}: {r['status']}: {r['error']}")
+    if summary["runs"] and not summary["ok"] and not summary["pending"]:
+        # every run failed or was refused: nothing was computed, bad data (the store keeps what each run said)
+        msg(f"vibkit sweep: no run could be made ({summary['failed']} failed, {summary['invalid']} invalid)")
+        return 1
     return 0

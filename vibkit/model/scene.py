@@ -610,6 +610,11 @@ def _analysis_sections(src, sec, analysis):
         )
     if analysis == "kinematics" and not sec[name]["stop"] > sec[name]["start"]:
         raise SceneError(f"{src}: 'kinematics.stop' must be greater than 'kinematics.start'")
+    if analysis == "kinematics" and sec[name]["step"] > sec[name]["stop"] - sec[name]["start"]:
+        raise SceneError(
+            f"{src}: 'kinematics.step' = {sec[name]['step']!r} m is longer than the sweep, 'kinematics.stop' - "
+            f"'kinematics.start' = {sec[name]['stop'] - sec[name]['start']:.6g} m: the result would hold one sample"
+        )
     if analysis == "inverse" and sec["motion"]["speed"] == 0:
         raise SceneError(f"{src}: 'motion.speed' must be non-zero [m/s]")
     for key in ("rtol", "atol", "max_step", "first_step", "max_wall_time"):
