@@ -180,19 +180,24 @@ def test_cli_ride_options_and_table(ride_csv, capsys):
 
 
 @pytest.mark.parametrize(
-    "args,msg",
+    "args,msg,code",
     [
-        (["--weighting", "Wq"], "unknown weighting 'Wq'"),
-        (["--weighting", "Wb,Wc"], "2 weightings for the three axes"),
-        (["--channels", "nope,-,-"], "channel 'nope'"),
-        (["--segment", "9:3"], "segment"),
-        (["--segment", "900:1000"], "after the end"),
-        (["--channels", "speed,-,-"], "not an acceleration"),
+        (["--weighting", "Wq"], "unknown weighting 'Wq'", 2),  # usage errors: what the options say alone
+        (["--weighting", "Wb,Wc"], "2 weightings for the three axes", 2),
+        (["--channels", "nope,-,-"], "channel 'nope'", 1),  # the file's: bad data
+        (["--segment", "9:3"], "segment", 2),
+        (["--segment", "900:1000"], "after the end", 1),
+        (["--channels", "speed,-,-"], "not an acceleration", 1),
     ],
 )
-def test_cli_ride_bad_input_is_one_line(ride_csv, capsys, args, msg):
+def test_cli_ride_bad_input_is_one_line(ride_csv, capsys, args, msg, code):
     path, _, _ = ride_csv
-    assert main(["ride", str(path)] + args) == 1
+    if code == 2:  # argparse's usage error
+        with pytest.raises(SystemExit) as exc:
+            main(["ride", str(path)] + args)
+        assert exc.value.code == 2
+    else:
+        assert main(["ride", str(path)] + args) == code
     err = capsys.readouterr().err
     assert msg in err and "Traceback" not in err and err.count("\n") == 1
 

@@ -34,6 +34,7 @@ CASES = [
         RIDE + ["--weighting", "Wb,Wc"],
         files=STEP,
         expect_in=("--weighting", "2 weightings for the three axes"),
+        expect="usage",
     ),
     Case(
         "ride --weighting x=Wd,x=Wk",
@@ -41,6 +42,7 @@ CASES = [
         RIDE + ["--weighting", "x=Wd,x=Wk"],
         files=STEP,
         expect_in=("axis x is given twice",),
+        expect="usage",
     ),
     Case(
         "ride --weighting x=Wd,Wk",
@@ -48,9 +50,15 @@ CASES = [
         RIDE + ["--weighting", "x=Wd,Wk"],
         files=STEP,
         expect_in=("mix of AXIS=NAME",),
+        expect="usage",
     ),
     Case(
-        "ride --weighting Wq", "ride", RIDE + ["--weighting", "Wq"], files=STEP, expect_in=("unknown weighting 'Wq'",)
+        "ride --weighting Wq",
+        "ride",
+        RIDE + ["--weighting", "Wq"],
+        files=STEP,
+        expect_in=("unknown weighting 'Wq'",),
+        expect="usage",
     ),
     Case(
         "ride, record too short",
