@@ -135,3 +135,26 @@ def test_a_pitch_at_the_scenes_own_speed_is_not_judged(tmp_path):
     assert assumed.summary["pitch_consistent"] is None
     given = write_report(lp, tmp_path / "g.pdf", scene=scene, duration=6.0, speed=0.52)
     assert given.summary["pitch_consistent"] is True
+
+
+def test_an_inconclusive_record_gives_its_elongation_without_a_sigma(tmp_path, monkeypatch):
+    """Page 1 of an inconclusive record printed its elongation with a sigma ("-0.52 +- 0.13 %" of a new chain on a
+    stranger's step sensor) under "no verdict": the value is given to a tenth of a per cent and said to carry no
+    sigma that holds."""
+    from vibkit.diagnose.report.common import PageSink
+
+    texts = {}
+    orig = PageSink.emit
+
+    def emit(self, fig, title):
+        found = (t.get_text() for t in fig.findobj(lambda a: hasattr(a, "get_text")))
+        texts[title] = " ".join(x if isinstance(x, str) else x.get_text() for x in found)
+        return orig(self, fig, title)
+
+    monkeypatch.setattr(PageSink, "emit", emit)
+    rep = write_report(
+        "data/field/layouts/gcdc-x16.csv", tmp_path / "r.pdf", speed=0.52, speed_sigma=0.0005, nominal_pitch=0.13333
+    )
+    assert rep.summary["status"] == "inconclusive"
+    page = " ".join(texts["verdict"].split())
+    assert re.search(r"about [+-][0-9]+\.[0-9] % \(inconclusive: no verdict, no sigma that holds\)", page), page

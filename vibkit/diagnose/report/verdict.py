@@ -153,7 +153,13 @@ def evidence_rows(ctx):
         rows.append(("link pitch = speed / frequency", pitch_figure(pitch)))
         if pitch.nominal_pitch_m is not None:
             rows.append(("nominal pitch", fmt_length(pitch.nominal_pitch_m)))
-            if pitch.verdict is None or str(getattr(pitch, "status", "ok") or "ok").lower() != "ok":
+            status = str(getattr(pitch, "status", "ok") or "ok").lower()
+            el = getattr(pitch, "elongation_percent", None)
+            if status != "ok" and el is not None and math.isfinite(el):
+                # a record that gives no verdict gives no sigma to trust either: the value to a tenth of a per
+                # cent, said so (a stranger's step sensor read -0.52 +- 0.13 % of a new chain)
+                rows.append(("elongation", f"about {el:+.1f} % ({status}: no verdict, no sigma that holds)"))
+            elif pitch.verdict is None or status != "ok":
                 rows.append(("elongation", elongation_figure(pitch)))  # else it is under the verdict
         snr = getattr(pitch, "snr_db", None)
         if snr is not None and math.isfinite(snr):
