@@ -475,3 +475,28 @@ def test_set_point_is_the_chain_speed_of_the_mean_link(tmp_path):
     mean = (158 * PITCH + 0.1436) / 159
     assert worn.sprocket_speed(0.5) == pytest.approx(-2 * np.pi * 0.5 / (28 * mean), rel=1e-12)
     assert worn.link_pass_frequency(0.5) == pytest.approx(0.5 / mean, rel=1e-12)
+
+
+def test_passengers_ride_a_down_escalator_by_place():
+    """A down escalator's passengers board at the upper landing and alight at the lower: the scene was refused,
+    "passenger 0 alights (t = lower_landing) before boarding (t = upper_landing)" (the places compared as text:
+    a stranger's find). Both ride, and where the up drive pulls them up the incline (negative torque) the down
+    drive holds them back (positive)."""
+    import re
+
+    from vibkit.model.scene import parse_scene
+
+    up = load_scene(SIM / "thesis-passengers.toml")
+    text = up.text.replace("speed = 0.5 }", "speed = -0.5 }")
+    text = re.sub(r"board = \[[^\]]*\]", 'board = ["upper_landing", "upper_landing"]', text)
+    text = re.sub(r"alight = \[[^\]]*\]", 'alight = ["lower_landing", "lower_landing"]', text)
+    down = parse_scene(text, "down.toml")
+    assert down.effects["passengers"].board == ("upper_landing", "upper_landing")
+    torque = {}
+    for name, sc in (("up", up), ("down", down)):
+        ds = vibkit.simulate(
+            replace(sc, outputs=dict(sc.outputs, variables=("motor_torque",))), duration=15.0, progress=False
+        )
+        t = ds.time.values
+        torque[name] = float(ds.motor_torque.values[(t > 10.0) & (t < 15.0)].mean())
+    assert torque["up"] < -100.0 and torque["down"] > 100.0, torque

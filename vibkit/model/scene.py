@@ -343,6 +343,7 @@ def _parameters(src, sec):
     )
     guide = GuideParams(**guide_keys, head_radius=head)
     n = tc.n_rollers
+    filled = isinstance(n, str) and n == "fill"
     if isinstance(n, str):
         if n != "fill":
             raise SceneError(f"{src}: 'chain.n_rollers' must be an integer or \"fill\", got {n!r}")
@@ -387,10 +388,20 @@ def _parameters(src, sec):
     slack = (guide.perimeter - float(chain.pitches().sum())) / 2.0
     travel = TRAVEL * guide.tensioner_length
     if not -travel < slack < travel:
+        # name the key the user set: the links' count, or (with the count filled for the new chain) their pitch
+        elongation = c.get("elongation_percent")
+        if filled and elongation:
+            what = (
+                f"'chain.elongation_percent' = {elongation!r} (links of {pitch:.6g} m; 'chain.n_rollers' = \"fill\": "
+                f"the {n} links of the new chain)"
+            )
+        elif filled:
+            what = f"'chain.link_pitch' = {pitch:.6g} m ('chain.n_rollers' = \"fill\": {n} links)"
+        else:
+            what = f"'chain.n_rollers' = {n} links of {pitch:.6g} m"
         raise SceneError(
-            f"{src}: 'chain.n_rollers' = {n} links of {pitch:.6g} m cannot close on a guide of perimeter "
-            f"{guide.perimeter:.6g} m: the tensioner would need delta = {slack:.4g} m, outside its travel "
-            f"(-{travel:.4g}, {travel:.4g}) m"
+            f"{src}: {what} cannot close on a guide of perimeter {guide.perimeter:.6g} m: the tensioner would need "
+            f"delta = {slack:.4g} m, outside its travel (-{travel:.4g}, {travel:.4g}) m"
         )
     return guide, chain, sprocket
 
@@ -510,14 +521,20 @@ def _validate_effects(src, eff):
             raise SceneError(
                 f"{src}: 'effects.passengers.board' and 'alight' must all be places or all be times [s], not a mix"
             )
-        if kinds == {str}:
+        if kinds == {True}:  # places (the set holds isinstance's answers: it was compared with {str}, never equal)
             for i, (b, a) in enumerate(zip(o.board, o.alight)):
                 if b == a:
-                    raise SceneError(f"{src}: passenger {i} boards and alights at the same place {b!r}")
+                    raise SceneError(
+                        f"{src}: 'effects.passengers' [{i}] (step {o.step[i]}) boards and alights at the same place "
+                        f"{b!r}"
+                    )
         else:
             for i, (b, a) in enumerate(zip(o.board, o.alight)):
                 if not a > b:
-                    raise SceneError(f"{src}: passenger {i} alights (t = {a}) before boarding (t = {b})")
+                    raise SceneError(
+                        f"{src}: 'effects.passengers.alight[{i}]' = {a!r} s is not after 'board[{i}]' = {b!r} s "
+                        f"(step {o.step[i]})"
+                    )
 
 
 #: the sections a scene of each analysis uses (another analysis' run section, or solver keys in a scene that
