@@ -16,6 +16,10 @@ from .rounding import SPEED_SIGMA_NOT_STATED, fmt_pm
 __all__ = ["ResolvedSpeed", "resolve_speed", "speed_part_too_large"]
 
 
+#: the source of a speed taken from the scene, nothing else stating one
+SCENE_SOURCE = "the scene's nominal speed"
+
+
 @dataclass(frozen=True)
 class ResolvedSpeed:
     """The run's chain speed.
@@ -34,6 +38,12 @@ class ResolvedSpeed:
     sigma: float | None = None
     source: str = ""
     sigma_source: str = ""
+
+    @property
+    def from_scene(self) -> bool:
+        """Whether the speed is the scene's own, assumed because nothing else states one (a pitch read at it is
+        the scene's by construction: not judged)."""
+        return self.source.startswith(SCENE_SOURCE)
 
     @property
     def text(self) -> str:
@@ -112,7 +122,7 @@ def resolve_speed(speed=None, speed_sigma=None, *, profile=None, recording=None,
             return ResolvedSpeed(v, stated[0], source=source, sigma_source=stated[1])
     v = scene_speed(scene)
     if v:
-        return ResolvedSpeed(v, stated[0], source=f"the scene's nominal speed ({scene.name})", sigma_source=stated[1])
+        return ResolvedSpeed(v, stated[0], source=f"{SCENE_SOURCE} ({scene.name})", sigma_source=stated[1])
     return ResolvedSpeed(None)
 
 

@@ -313,7 +313,7 @@ def analyse(
             try:
                 # the recording's speed only: at the scene's own speed assumed, its pitch is the scene's by
                 # construction and not judged (as `vibkit compare` says it)
-                assumed = speed is not None and str(run.source).startswith("the scene's nominal speed")
+                assumed = speed is not None and run.from_scene
                 comp = compare(
                     rec,
                     result,
