@@ -462,3 +462,11 @@ def test_a_marker_outside_the_recording_stores_nothing(tmp_path, capsys):
     capsys.readouterr()
     with FleetDB(db) as fleet:
         assert len(fleet.measurements()) == 1
+
+
+def test_a_scan_line_names_the_flagged_links_in_add_and_scan_alike():
+    """`fleet add` printed "(links 59)" after its scan line, `fleet scan` the same line without the numbers."""
+    from vibkit.cli.fleet import _fmt_scan
+
+    assert _fmt_scan(_scan([(59, 1.39, 0.0075)])) == "3 loops, 1 flagged (link 1 marked) (links 59)"
+    assert _fmt_scan(_scan([])) == "3 loops, 0 flagged (link 1 marked)"

@@ -248,8 +248,7 @@ def run_add(a):
         print(f"stored {_fmt_measurement(m)}")
         if scan is not None:
             why = f": {scan.reason}" if scan.reason and not scan.scanned else ""
-            flagged = ", ".join(f.label for f in scan.flagged)
-            print(f"links: {_fmt_scan(scan)}{why}" + (f" (links {flagged})" if flagged else ""))
+            print(f"links: {_fmt_scan(scan)}{why}")
         msg(f"note: database {path}; date from {m.date_source}")
     if not m.speed_sigma_m_s:
         msg(
@@ -319,7 +318,9 @@ def _fmt_scan(scan):
     if not scan.scanned:
         return scan.status
     one = "link 1 marked" if scan.marker_s is not None else "link 1 at the start, no marker"
-    return f"{scan.loops} loops, {len(scan.flagged)} flagged ({one})"
+    flagged = ", ".join(f.label for f in scan.flagged)
+    # the numbers, as `fleet add` and `fleet scan` alike print them
+    return f"{scan.loops} loops, {len(scan.flagged)} flagged ({one})" + (f" (links {flagged})" if flagged else "")
 
 
 def _print_links(hist, always):
