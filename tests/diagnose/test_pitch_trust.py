@@ -268,3 +268,19 @@ def test_false_alarm_rate_of_short_records_is_at_most_the_stated_one():
     assert all(d.extra["test"].startswith("bonferroni") for d in dets)
     _, hi = scipy.stats.binom.interval(0.999, n_rec, 0.05)
     assert sum(d.detected for d in dets) <= hi
+
+
+def test_a_short_tone_is_no_gait_by_its_own_leakage():
+    """The shipped phyphox layout holds 3 s of a 3.9 Hz sine: two 1.5 s segments, 0.67 Hz bins. The search put the
+    family at 3.15 Hz, and the line at its 3f/2 (4.73 Hz) took its strength from the tone's own bin at 4.0 Hz: the
+    tone was refused as a 1.58 Hz gait (a stranger's find). A fractional line must be another line than the
+    family's own; a tone of a record this short is no gait, and a real gait (phyphox walking, y) still is one."""
+    import vibkit
+
+    rec = vibkit.read_recording("data/field/layouts/phyphox.csv")
+    z, fs = rec["linear_acceleration_z"].values, rec.attrs["sample_rate_hz"]
+    d = detect_link_pass(z, fs, band=(2.5, 6.0))
+    assert "subharmonic" not in d.extra and "(f/2)" not in d.reason, d.reason
+    walk = vibkit.read_recording("data/thirdparty/phyphox_walking_linear_accelerometer.csv")
+    w = detect_link_pass(walk["y"].values, walk.attrs["sample_rate_hz"], band=(2.5, 6.25))
+    assert not w.detected and w.extra.get("subharmonic") == 2, w.reason

@@ -657,11 +657,22 @@ def _subharmonic(sp, f_best, lim, base):
     r_all, df, fmin = sp.r_all, sp.df, sp.fmin
     k1 = int(round(f_best / df))
     p_one = float(np.max(r_all[max(k1 - 1, 0) : k1 + 2]))
+    # the family's own lines (f, 2f, ... within a bin): a fractional line must be another line, not the leakage
+    # of one of these into the next bin (a 3 s record's two 1.5 s segments, 0.67 Hz bins: a 3.9 Hz tone read at
+    # 3.15 Hz had its own bin at 4.0 Hz counted as the line at 3f/2, and was refused as a 1.58 Hz gait)
+    own = {
+        k + d for j in range(1, int(sp.f_top // f_best) + 1) for k in (int(round(j * f_best / df)),) for d in (-1, 0, 1)
+    }
+
+    def line(k):
+        bins = [b for b in (k - 1, k, k + 1) if 0 <= b < sp.f.size and b not in own]
+        return float(np.max(r_all[bins])) if bins else 0.0
+
     for m in SUBHARMONIC_DIVISORS:
         if f_best / m >= fmin or f_best / m < 2 * df:
             continue
         ks = [int(round(j * f_best / m / df)) for j in range(1, 3 * m) if j % m and j * f_best / m < sp.f_top]
-        p_sub = [float(np.max(r_all[k - 1 : k + 2])) if 1 <= k < sp.f.size - 1 else 0.0 for k in ks]
+        p_sub = [line(k) if 1 <= k < sp.f.size - 1 else 0.0 for k in ks]
         # a significant fractional line as strong as the line at f; for thirds the line at f/3 itself must be
         # there too (a structural mode near 4f/3 of a chain is not a subharmonic family; a carrier at exactly
         # 3f/2 between two sidebands at f and 2f is)
