@@ -29,6 +29,7 @@ from .scene_checks import (
     _reduce_start,
     _validate_passenger_numbers,
     check_chain_first,
+    check_sections_belong,
 )
 from .schema import (
     EFFECT_OPTIONS,
@@ -588,11 +589,6 @@ def _outputs(src, o, analysis, chain):
     return {"variables": tuple(dict.fromkeys(variables)), "rollers": tuple(rollers), "step_accelerometer": step}
 
 
-def _a(analysis):
-    """``a kinematics`` / ``an inverse`` / ``a forward``."""
-    return f"an {analysis}" if analysis[0] in "aeiou" else f"a {analysis}"
-
-
 def _analysis_sections(src, sec, analysis):
     need = {
         "kinematics": ("kinematics", ("start", "stop", "step")),
@@ -600,19 +596,7 @@ def _analysis_sections(src, sec, analysis):
         "forward": ("run", ("duration", "output_step")),
     }[analysis]
     name, keys = need
-    for other in ("kinematics", "motion", "run"):
-        if other != name and sec[other]:
-            raise SceneError(
-                f"{src}: [{other}] has no meaning in {_a(analysis)} scene, whose run is [{name}] (got "
-                f"{', '.join(f'{other}.{k}' for k in sec[other])}): remove it, or set scene.analysis"
-            )
-    if analysis != "forward":
-        unused = [k for k in sec["solver"] if k != "max_result_bytes"]
-        if unused:
-            raise SceneError(
-                f"{src}: {', '.join(f'solver.{k}' for k in unused)} {'has' if len(unused) == 1 else 'have'} no "
-                f"meaning in {_a(analysis)} scene, which integrates nothing (only solver.max_result_bytes applies)"
-            )
+    check_sections_belong(src, sec, analysis, name)
     for key in keys:
         if key not in sec[name]:
             raise SceneError(f"{src}: missing value '{name}.{key}' (needed by a {analysis} scene)")

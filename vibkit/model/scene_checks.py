@@ -102,3 +102,27 @@ def _reduce_start(src, sec, analysis, guide) -> None:
                     f"the guide ({bound:.6g} m): positions that far lose accuracy; give the advance "
                     f"within one loop (perimeter {perimeter:.6g} m)"
                 )
+
+
+def _a(analysis):
+    """``a kinematics`` / ``an inverse`` / ``a forward``."""
+    return f"an {analysis}" if analysis[0] in "aeiou" else f"a {analysis}"
+
+
+def check_sections_belong(src, sec, analysis, name) -> None:
+    """Another analysis' run section (``[run]`` in an inverse scene), or solver keys in a scene that integrates
+    nothing (all but ``solver.max_result_bytes``), is refused: read by nothing, it said what the run did not do.
+    ``name`` is the analysis' own run section."""
+    for other in ("kinematics", "motion", "run"):
+        if other != name and sec[other]:
+            raise SceneError(
+                f"{src}: [{other}] has no meaning in {_a(analysis)} scene, whose run is [{name}] (got "
+                f"{', '.join(f'{other}.{k}' for k in sec[other])}): remove it, or set scene.analysis"
+            )
+    if analysis != "forward":
+        unused = [k for k in sec["solver"] if k != "max_result_bytes"]
+        if unused:
+            raise SceneError(
+                f"{src}: {', '.join(f'solver.{k}' for k in unused)} {'has' if len(unused) == 1 else 'have'} no "
+                f"meaning in {_a(analysis)} scene, which integrates nothing (only solver.max_result_bytes applies)"
+            )
