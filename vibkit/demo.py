@@ -118,9 +118,10 @@ def main(argv=None) -> int:
             s = rep.summary
             extra = ""
             if "pitch_m" in s:
-                extra = f", pitch {1000 * s['pitch_m']:.2f} mm, pitch vs scene " + (
-                    "consistent" if s.get("pitch_consistent") else "NOT consistent"
-                )
+                extra = f", pitch {1000 * s['pitch_m']:.2f} mm, pitch vs scene " + {
+                    True: "consistent",
+                    False: "NOT consistent",
+                }.get(s.get("pitch_consistent"), "not judged (the recording states no speed)")
             print(
                 f"{name}: link-pass {s['link_pass_hz']:.4f} Hz{extra}; {len(rep.pages)} pages "
                 f"in {time.perf_counter() - t0:.1f} s"
