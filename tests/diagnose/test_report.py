@@ -133,6 +133,10 @@ def test_a_pitch_at_the_scenes_own_speed_is_not_judged(tmp_path):
     lp, scene = "data/field/las-palmas-accelerometer.csv", "sim/las-palmas.toml"
     assumed = write_report(lp, tmp_path / "a.pdf", scene=scene, duration=6.0)
     assert assumed.summary["pitch_consistent"] is None
+    # and the scene's set speed is a rated speed, known to EN 115-1's +-5 % (2.9 %): no elongation verdict at it
+    # (page 1 said "OK, +0.00 %" at a speed read from the recording's own frequency)
+    assert assumed.summary["speed_sigma_m_s"] == pytest.approx(0.05 / 3**0.5 * 0.52, rel=1e-9)
+    assert (assumed.summary["status"], assumed.summary["verdict"]) == ("inconclusive", "inconclusive")
     given = write_report(lp, tmp_path / "g.pdf", scene=scene, duration=6.0, speed=0.52)
     assert given.summary["pitch_consistent"] is True
 

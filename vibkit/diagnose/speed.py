@@ -122,6 +122,17 @@ def resolve_speed(speed=None, speed_sigma=None, *, profile=None, recording=None,
             return ResolvedSpeed(v, stated[0], source=source, sigma_source=stated[1])
     v = scene_speed(scene)
     if v:
+        if speed_sigma is None:
+            # a scene's set speed is a rated speed, not one measured on the steps: known to the escalator standard's
+            # tolerance, as a profile's rated speed is (its pitch read at it was called "ok" to 0.00 %)
+            from ..model.profile import STANDARD_SPEED_TOLERANCE
+
+            sig = STANDARD_SPEED_TOLERANCE / math.sqrt(3.0) * v
+            why = (
+                f"not stated: the scene's set speed taken as a rated speed, known to EN 115-1's +-"
+                f"{100 * STANDARD_SPEED_TOLERANCE:g} % (uniform, sigma {100 * STANDARD_SPEED_TOLERANCE / math.sqrt(3):.1f} %)"
+            )
+            return ResolvedSpeed(v, sig, source=f"{SCENE_SOURCE} ({scene.name})", sigma_source=why)
         return ResolvedSpeed(v, stated[0], source=f"{SCENE_SOURCE} ({scene.name})", sigma_source=stated[1])
     return ResolvedSpeed(None)
 
