@@ -162,3 +162,14 @@ def test_an_inconclusive_record_gives_its_elongation_without_a_sigma(tmp_path, m
     assert rep.summary["status"] == "inconclusive"
     page = " ".join(texts["verdict"].split())
     assert re.search(r"about [+-][0-9]+\.[0-9] % \(inconclusive: no verdict, no sigma that holds\)", page), page
+
+
+def test_an_elongation_whose_sigma_is_known_but_too_large_keeps_it(tmp_path):
+    """Inconclusive because the speed is a rated one (EN 115-1's 2.9 %): that sigma holds, only too large for a
+    verdict, and the evidence gives it (the "no sigma that holds" wording is for estimates not to be trusted)."""
+    from vibkit.diagnose.report.context import analyse
+    from vibkit.diagnose.report.verdict import evidence_rows
+
+    ctx = analyse("data/field/las-palmas-accelerometer.csv", scene="sim/las-palmas.toml", duration=4.0)
+    rows = dict(evidence_rows(ctx))
+    assert rows["elongation"] == "+0.0 +- 2.9 %"

@@ -62,6 +62,9 @@ STATUS_OK = "ok"
 STATUS_NOT_FOUND = "no link-pass found"
 STATUS_IMPLAUSIBLE = "implausible"
 STATUS_INCONCLUSIVE = "inconclusive"
+#: what an inconclusive reason says where the elongation's sigma holds but is too large for a verdict (the other
+#: inconclusive reasons say the estimate itself is not to be trusted)
+SIGMA_TOO_LARGE = "more than a third of the first limit"
 #: exit status of the CLI for each status (2 stays the usage error)
 EXIT_CODES = {STATUS_OK: 0, STATUS_NOT_FOUND: 1, STATUS_IMPLAUSIBLE: 1, STATUS_INCONCLUSIVE: 3}
 #: elongation limits [%]: watch, plan replacement, replace
@@ -527,10 +530,10 @@ def _verdict(ev, p, checks):
     stated = ev.speed_sigma_m_s is not None  # not stated: el_sigma is the frequency's part only, a lower bound
     if not resolved:
         why = (
-            f"elongation {fmt_pm(el, el_sigma, sign=True)} %: its sigma is more than a third of the first limit "
+            f"elongation {fmt_pm(el, el_sigma, sign=True)} %: its sigma is {SIGMA_TOO_LARGE} "
             if stated
             else f"elongation {el:+z.2f} % ({SPEED_SIGMA_NOT_STATED}): the frequency's part of its sigma alone, "
-            f"{el_sigma:.2g} %, is more than a third of the first limit "
+            f"{el_sigma:.2g} %, is {SIGMA_TOO_LARGE} "
         )
         return Decision(
             STATUS_INCONCLUSIVE,

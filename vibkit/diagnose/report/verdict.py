@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 import textwrap
 
+from ..decision import SIGMA_TOO_LARGE
 from .common import (
     _PAGE,
     HARMONIC_SNR,
@@ -155,10 +156,11 @@ def evidence_rows(ctx):
             rows.append(("nominal pitch", fmt_length(pitch.nominal_pitch_m)))
             status = str(getattr(pitch, "status", "ok") or "ok").lower()
             el = getattr(pitch, "elongation_percent", None)
-            if status != "ok" and el is not None and math.isfinite(el):
+            sigma_holds = SIGMA_TOO_LARGE in str(getattr(pitch, "reason", ""))  # known, only too large
+            if status != "ok" and not sigma_holds and el is not None and math.isfinite(el):
                 # a record that gives no verdict gives no sigma to trust either: the value to a tenth of a per
                 # cent, said so (a stranger's step sensor read -0.52 +- 0.13 % of a new chain)
-                rows.append(("elongation", f"about {el:+.1f} % ({status}: no verdict, no sigma that holds)"))
+                rows.append(("elongation", f"about {el:+z.1f} % ({status}: no verdict, no sigma that holds)"))
             elif pitch.verdict is None or status != "ok":
                 rows.append(("elongation", elongation_figure(pitch)))  # else it is under the verdict
         snr = getattr(pitch, "snr_db", None)
