@@ -122,8 +122,8 @@ def check_output(out, inputs, force=False, *, json_flag=False):
 
 def no_stdout(out, what):
     """Refuse ``-o -`` for an output that is not one stream of bytes (a folder, a store)."""
-    if is_stdout(out):
-        raise CLIError(f"-o -: the output is {what}, which cannot go to stdout; give its path")
+    if is_stdout(out):  # what the options say alone: a usage error (exit 2), as `-o -` with --json is
+        raise UsageError(f"-o -: the output is {what}, which cannot go to stdout; give its path")
 
 
 @contextlib.contextmanager
