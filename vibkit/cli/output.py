@@ -31,8 +31,9 @@ def color():
 
 def shown(path) -> str:
     """The name a message gives a recording: ``<stdin>`` for ``-`` (as the reader's own messages name it)."""
-    path = os.fspath(path)
-    return "<stdin>" if path == STDIO else path
+    from vibkit.io import source_name
+
+    return source_name(path)
 
 
 def in_file(path, exc) -> Exception:

@@ -279,8 +279,10 @@ def _naming(source_of):
 
 
 def _recording_source(recording, *args, **kwargs):
+    from ..io import source_name  # as the reader names it: <stdin> for -
+
     if isinstance(recording, (str, os.PathLike)):
-        return "<stdin>" if os.fspath(recording) == "-" else os.fspath(recording)  # as the reader names it
+        return source_name(recording)
     return getattr(recording, "attrs", {}).get("source_file", "")
 
 
@@ -490,9 +492,7 @@ def ride_quality_from_recording(
     if sample_rate is not None:
         opts["sample_rate"] = sample_rate
     rec = recording if not isinstance(recording, (str, os.PathLike)) else read_recording(recording, **opts)
-    src = (
-        _recording_source(recording) if isinstance(recording, (str, os.PathLike)) else rec.attrs.get("source_file", "")
-    )
+    src = _recording_source(recording)  # a path as named, else the dataset's source_file (rec is the dataset)
     if (
         channels is None
         and rec.attrs.get("analysis") in ("forward", "inverse")

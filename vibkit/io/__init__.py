@@ -32,6 +32,7 @@ from .netcdf import write_result
 from .registry import NETCDF_SUFFIXES, SEISMIC_SUFFIXES, detect_format, format_names, get_format
 
 __all__ = [
+    "source_name",
     "read_recording",
     "write_result",
     "resolve_channel",
@@ -189,6 +190,12 @@ def _check_options(sample_rate, resample, gap_factor, delimiter, decimal, date_o
 #: the path that names standard input (``vibkit pitch -``); its records name it :data:`STDIN_NAME`
 STDIN = "-"
 STDIN_NAME = "<stdin>"
+
+
+def source_name(path) -> str:
+    """The name messages and results give the recording at ``path``: :data:`STDIN_NAME` for ``-``."""
+    path = os.fspath(path)
+    return STDIN_NAME if path == STDIN else path
 
 
 _stdin_read: list = [None, b""]  # the stream read and its bytes

@@ -224,7 +224,7 @@ def analyse(
     from ..rounding import fmt_band
 
     limits = tuple(limits_percent) if limits_percent is not None else DEFAULT_LIMITS_PERCENT
-    from ...io import RecordingError
+    from ...io import RecordingError, source_name
     from ...io.channels import with_component
 
     opts = dict(read_options or {})
@@ -351,7 +351,7 @@ def analyse(
     clipped = clip_n > 4 and not _quantisation_explains_extremes(x_all, rec[ch].attrs.get("quantum"))
     date = report_date()
     summary = {
-        "file": "<stdin>" if os.fspath(recording) == "-" else os.path.basename(os.fspath(recording)),
+        "file": os.path.basename(source_name(recording)),
         "sha256": rec.attrs.get("sha256", ""),
         "channel": ch,
         "units": units,
