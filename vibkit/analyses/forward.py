@@ -74,6 +74,7 @@ from ..model.slots import (
     WS_INFO,
 )
 from ..model.table_check import checked_table
+from ..runtime.kernel import kernel
 from .integrate import IntegrationError, integrate
 from .results import counted_speed, make_dataset, output_times
 
@@ -339,7 +340,7 @@ def event_gap(rtol):
 NSCAL = 12  # delta, deltadot, motor, residual, speed, KE, PE, contact E, spring E, accel, drive/back flank
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel()
 def _teeth_row(ind, cf, j, ind_t, frc_t):
     for q in range(ind_t.size):
         ind[j, q] = ind_t[q]

@@ -33,6 +33,7 @@ import numba as nb
 import numpy as np
 
 from ..model.pitch_table import empty_table, rhs
+from ..runtime.kernel import kernel
 from ..runtime.progress import Progress
 
 __all__ = ["integrate", "IntegrationError", "METHODS"]
@@ -75,7 +76,7 @@ D1, D3, D4, D5, D6, D7 = (
 )
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel()
 def _next_crossing(s, direction, cross, p0, gap):
     """The first crossing value beyond s in ``direction`` (+1 or -1), farther than ``gap``. [m]
 
@@ -95,7 +96,7 @@ def _next_crossing(s, direction, cross, p0, gap):
     return (m - 1.0) * p0 + cross[cross.size - 1]
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel()
 def _time_to(dist, v, a):
     """Smallest positive h with v h + a h^2 / 2 = dist (inf if never). [s]"""
     disc = v * v + 2.0 * a * dist
@@ -114,7 +115,7 @@ def _time_to(dist, v, a):
     return math.inf
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel()
 def _dense_component(th, y0, y1, k1, k7, h, r5):
     r2 = y1 - y0
     r3 = h * k1 - r2
@@ -122,7 +123,7 @@ def _dense_component(th, y0, y1, k1, k7, h, r5):
     return y0 + th * (r2 + (1.0 - th) * (r3 + th * (r4 + (1.0 - th) * r5)))
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel()
 def _side(pos, has_lo, lo, has_hi, hi, direction, tiny):
     """A stage's y[0] kept on the smooth side of the breakpoints that bound the step."""
     if has_hi and (pos - hi) * direction > -tiny:
@@ -132,7 +133,7 @@ def _side(pos, has_lo, lo, has_hi, hi, direction, tiny):
     return pos
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel()
 def _start_past(t, y, yt, k1, s_b, direction, tiny, prm, ws, ctl, counters, tb):
     """The next step starts on breakpoint s_b: remember it (``ctl[3:6]``) and take k1, the
     right-hand side at (t, y), on its far side. Returns evaluate's status."""
@@ -146,7 +147,7 @@ def _start_past(t, y, yt, k1, s_b, direction, tiny, prm, ws, ctl, counters, tb):
     return rhs(t, yt, k1, prm, ws, False, tb)
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(inline="always")
 def _scale(i, a, b, rtol, atol):
     """The error scale of component ``i`` over a step from ``a`` to ``b``. Positions and angles (components 0
     and 2) grow without bound: their tolerance is taken against a fixed 1 m / 1 rad, so that the accuracy does
@@ -161,7 +162,7 @@ def _scale(i, a, b, rtol, atol):
 LAND = 0.01
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel()
 def _land(t, y, hl, k1, k2, yt, y1, has_lo, lo, sc, direction, tiny, rtol, atol, prm, ws, tb):
     """Heun's step of ``hl`` from (t, y) with k1 = f(t, y), its stages on the near side of breakpoint
     ``sc`` (which the quadratic of y[0], exactly what Heun's step integrates, reaches at t + hl):

@@ -57,6 +57,7 @@ from ..model.slots import (
     PRM_TEETH,
 )
 from ..model.sprocket import contact_kernel
+from ..runtime.kernel import kernel
 
 __all__ = ["kkt_pattern", "study_partials", "study_kinematics", "assemble", "study_closure_residual"]
 
@@ -90,7 +91,7 @@ def kkt_pattern(p):
     return rows, cols
 
 
-@nb.njit(cache=True)
+@kernel()
 def study_partials(tab, k, s0loc, delta, out):
     """r and its partials at s0loc = s0 - s0_k on segment k with the study's *linear* map.
 
@@ -121,7 +122,7 @@ def study_partials(tab, k, s0loc, delta, out):
     out[11] = kap * lam_d * lam_d * nz
 
 
-@nb.njit(cache=True)
+@kernel()
 def study_kinematics(tab, p0, q, qd, p, linear, part, vel, wq):
     """Roller positions and partials (part (p, 12)), velocities (vel (p, 2)) and the
     quadratic-velocity accelerations w_i (wq (p, 2)) at coordinates q and rates qd, with the
@@ -143,7 +144,7 @@ def study_kinematics(tab, p0, q, qd, p, linear, part, vel, wq):
         wq[i, 1] = part[i, 7] * sd * sd + 2.0 * part[i, 9] * sd * ddot + part[i, 11] * ddot * ddot
 
 
-@nb.njit(cache=True)
+@kernel()
 def assemble(t, y, prm, pitches, linear, alpha, beta, ws, data, rhs):
     """Fill the KKT values ``data`` (pattern of :func:`kkt_pattern`) and right-hand side ``rhs``.
 
@@ -264,7 +265,7 @@ def assemble(t, y, prm, pitches, linear, alpha, beta, ws, data, rhs):
     return motor, torque_c, derr
 
 
-@nb.njit(cache=True)
+@kernel()
 def study_closure_residual(part, p, pitches):
     """Largest | |r_{i+1} - r_i| - L_i | over the links (the last joins roller p to roller 1). [m]"""
     worst = 0.0

@@ -25,6 +25,7 @@ from dataclasses import dataclass
 import numba as nb
 import numpy as np
 
+from ..runtime.kernel import kernel
 from .crossings import crossing_values
 from .guide import (
     AX,
@@ -67,7 +68,7 @@ class ClosureError(ValueError):
 # compiled kernels
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel()
 def walk(tab, p0, s0_1, delta, pitches, n, s0, kk, lam, xs, zs):
     """Walk n links from roller 1 at s0_1 (n+1 points: rollers 1..n and the ghost of roller 1).
 
@@ -146,7 +147,7 @@ def walk(tab, p0, s0_1, delta, pitches, n, s0, kk, lam, xs, zs):
     return s0[n] - (s0_1 + p0)
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel()
 def fill_partials(tab, p0, s0, kk, lam, delta, m, part):
     """Partial derivatives of r at the first m points of a walk (see guide.point_partials)."""
     for i in range(m):
@@ -157,7 +158,7 @@ def fill_partials(tab, p0, s0, kk, lam, delta, m, part):
         point_partials(tab, k, lam[i], s0loc, delta, part[i])
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel()
 def sensitivity(part, xs, zs, m, alpha, beta):
     """alpha_i = d s0_i / d s0_1 at fixed delta and beta_i = d s0_i / d delta at fixed s0_1."""
     alpha[0] = 1.0
@@ -172,7 +173,7 @@ def sensitivity(part, xs, zs, m, alpha, beta):
         beta[i + 1] = (us_i * beta[i] + ud) / us_j
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel()
 def solve_closure(tab, p0, lt, s0_1, delta0, pitches, n, s0, kk, lam, xs, zs, part, alpha, beta, tol):
     """Newton's method on the ghost residual h(delta), safeguarded by bisection.
 
@@ -228,7 +229,7 @@ def solve_closure(tab, p0, lt, s0_1, delta0, pitches, n, s0, kk, lam, xs, zs, pa
 CHORD_WALKS = 3  # walks along chord steps before a full Newton solve takes over
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel()
 def close_with_slope(tab, p0, lt, s0_1, guess, slope, pitches, n, s0, kk, lam, xs, zs, part, alpha, beta, tol):
     """Close the chain from a predicted delta with a known dh/ddelta ``slope`` (a chord-Newton step,
     no partial derivatives), as many evaluations along a trajectory can; falls back to
@@ -252,7 +253,7 @@ def close_with_slope(tab, p0, lt, s0_1, guess, slope, pitches, n, s0, kk, lam, x
     return d, walks + it + 1, st
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel()
 def closure_residual(xs, zs, n, pitches):
     """max over the n links (the last one closing on roller 1) of | |r_{i+1} - r_i| - L_i |. [m]"""
     worst = 0.0
@@ -264,7 +265,7 @@ def closure_residual(xs, zs, n, pitches):
     return worst
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel()
 def velocity_coefficients(part, xs, zs, n, alpha, beta, jac, gam):
     """c = d delta/d s0_1, gamma_i = d s0_i/d s0_1 and J_i = d r_i/d s0_1 (fills jac (n,2), gam (n,)).
 
@@ -285,7 +286,7 @@ def velocity_coefficients(part, xs, zs, n, alpha, beta, jac, gam):
     return c
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel()
 def acceleration_terms(part, xs, zs, n, alpha, beta, gam, c, sdot1, hacc, eta, sd):
     """Velocity-dependent acceleration h_i (fills hacc (n,2)) and e, with
     a_i = J_i sddot_1 + h_i and deltaddot = c sddot_1 + e, at roller-1 speed sdot1 [m/s]."""

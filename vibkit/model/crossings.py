@@ -12,8 +12,7 @@ from __future__ import annotations
 
 import math
 
-import numba as nb
-
+from ..runtime.kernel import kernel
 from .guide import S0, local_map
 from .runs import (
     A_GHOST,
@@ -36,7 +35,7 @@ MAX_ITERATIONS = 30
 TOLERANCE = 1e-13  # [m] on s0_k - b, as the interpreted search it replaces
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel()
 def crossing_values(tab, p0, pitches, n, tol, rstep, rnext, runs, aux, rollers, places, starts, delta0, out):
     """For each i: the s0_1 in [0, p0) near ``starts[i]`` at which roller ``rollers[i]`` (from 0) sits at
     undeformed coordinate ``places[i]`` (fills ``out``). ``rstep`` ... ``aux``: the run-by-run

@@ -20,6 +20,8 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
+from ..runtime.kernel import kernel
+
 __all__ = ["link_multipliers", "reduced_equation"]
 
 
@@ -89,7 +91,7 @@ def link_multipliers(part, xs, zs, n, rs_res, rd_res, q_delta, drive_s, drive_d,
     return mu, residual
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel()
 def reduced_equation(jac, hacc, fx, fz, mass, c, e, m_c, f_c):
     """Generalised mass and force of the chain's coordinate s0_1 (see module docstring)."""
     m_eff = m_c * c * c

@@ -26,9 +26,9 @@ from __future__ import annotations
 
 import math
 
-import numba as nb
 import numpy as np
 
+from ..runtime.kernel import kernel
 from .chain import acceleration_terms, close_with_slope, fill_partials, sensitivity, velocity_coefficients
 from .dynamics import reduced_equation
 from .schema import effect_options, gravity_of
@@ -197,7 +197,7 @@ def reset_closure(info, delta):
     info[INFO_CURVATURE] = 0.0
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel()
 def motor_torque(err, integral, kp, ki, limit):
     """Speed controller: M = kp err + ki integral, limited to +-limit [N m], and the rate of the
     error integral, held at zero while the limit is pushed further (no wind-up).
@@ -217,7 +217,7 @@ def motor_torque(err, integral, kp, ki, limit):
     return motor, derr
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel()
 def rolling_force(vx, vz, f):
     """Rolling resistance of magnitude ``f`` [N] against a roller's velocity (vx, vz) [m/s],
     regularised below 1 mm/s so that it is smooth."""
@@ -225,7 +225,7 @@ def rolling_force(vx, vz, f):
     return -f * vx / sp, -f * vz / sp
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel()
 def clear_teeth(ind_t, frc_t):
     """Zero the per-tooth indentation and force of the next contact evaluation."""
     for j in range(ind_t.size):
@@ -233,7 +233,7 @@ def clear_teeth(ind_t, frc_t):
         frc_t[j] = 0.0
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(inline="always")
 def sprocket_contact(prm, y, xs, zs, vx, vz, cand, ncand, damping, fx, fz, ind_t, frc_t, want_teeth):
     """:func:`vibkit.model.sprocket.contact_kernel` on the ``ncand`` candidates ``cand`` (places xs, zs,
     velocities vx, vz) with the scene's sprocket (``prm``) at the state ``y`` (its angle and speed) and the
@@ -263,7 +263,7 @@ def sprocket_contact(prm, y, xs, zs, vx, vz, cand, ncand, damping, fx, fz, ind_t
     )
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(inline="always")
 def within_reach(x, z, cx, cz, reach2):
     """Whether a roller centre (x, z) is closer than sqrt(reach2) to the sprocket centre (cx, cz)."""
     dxc = x - cx
@@ -271,7 +271,7 @@ def within_reach(x, z, cx, cz, reach2):
     return dxc * dxc + dzc * dzc < reach2
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel()
 def contact_candidates(xs, zs, n, cx, cz, reach, cand):
     """The contact candidates among rollers 0 .. n-1: those whose centre is closer than ``reach`` [m]
     to the sprocket centre (cx, cz) (whose circle can reach a tooth). Their indices go to the front
@@ -285,26 +285,26 @@ def contact_candidates(xs, zs, n, cx, cz, reach, cand):
     return ncand
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(inline="always")
 def step_roller(ps, jp, r, n, k):
     """Index of roller ``r`` (0 .. k - 1; the middle one, for 3 or 4 rollers, is 1) of passenger ``jp``'s
     step (``ps`` 1-based) on a chain of ``k`` rollers per step."""
     return (k * (ps[jp] - 1) + r) % n
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(inline="always")
 def aboard(jp, where, pb, pa):
     """Whether passenger ``jp`` is aboard at ``where`` (a time, or its step's middle-roller place)."""
     return pb[jp] <= where < pa[jp]
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(inline="always")
 def step_load(jp, pm, g, k):
     """Weight [N] passenger ``jp`` puts on each of the ``k`` rollers of its step: m g / k."""
     return pm[jp] * g / k
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel()
 def passenger_loads(t, mode, s0, pm, ps, pb, pa, g, n, k, fz):
     """Subtract from ``fz`` [N] the weight of every passenger aboard, shared by its step's ``k`` rollers.
 
@@ -319,7 +319,7 @@ def passenger_loads(t, mode, s0, pm, ps, pb, pa, g, n, k, fz):
                 fz[step_roller(ps, jp, r, n, k)] -= w
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel()
 def finish(y, dy, info, fp, ip, sddot, torque_c, energy_c, worst, active, f_drive, f_back):
     """The state's rates from roller 1's acceleration ``sddot`` and the contact kernel's results
     (torque, energy, max indentation, active contacts, drive- and back-flank forces): fills ``dy``
@@ -342,7 +342,7 @@ def finish(y, dy, info, fp, ip, sddot, torque_c, energy_c, worst, active, f_driv
     info[INFO_F_BACK] = f_back
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel()
 def evaluate(t, y, dy, prm, ws, want_teeth):
     """Right-hand side of the forward dynamics; fills ``dy`` and returns a status code.
 
@@ -393,7 +393,7 @@ def evaluate(t, y, dy, prm, ws, want_teeth):
     return evaluate_forces(t, y, dy, prm, ws, want_teeth, delta, c, e, beta[n])
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel()
 def evaluate_forces(t, y, dy, prm, ws, want_teeth, delta, c, e, dh):
     """The forces and the reduced equation of :func:`evaluate` from a closed configuration: ``ws``
     holding every roller's s0, position, J and h, with delta, c = d delta/ds0_1, e (delta-ddot =
@@ -440,7 +440,7 @@ def evaluate_forces(t, y, dy, prm, ws, want_teeth, delta, c, e, dh):
     return 0
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(inline="always")
 def remember_closure(info, y, sddot, delta, c, e, dh):
     """The closure's results and memory in ``info`` after an evaluation at the state ``y``: delta and its
     rates (delta-dot = c s-dot, delta-ddot = c s-ddot + e), and what the next evaluation predicts delta

@@ -45,9 +45,9 @@ from __future__ import annotations
 
 import math
 
-import numba as nb
 import numpy as np
 
+from ..runtime.kernel import kernel
 from .guide import KAPPA, S0, local_frame, local_map, locate
 
 __all__ = ["HEADS", "add_flats", "flat_dip", "flat_motion", "flat_speed_limit"]
@@ -80,7 +80,7 @@ def flat_speed_limit(radius, incline_angle, transition_radius, g=9.81):
     return math.sqrt(g * math.cos(incline_angle) / (1.0 / radius + 1.0 / transition_radius))
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel()
 def _frames(tab, p0, s0, delta, out):
     """x, z, tx, tz, kappa and 1.0 on a track (0.0 on a head) of the guide point at each s0 (at its delta)."""
     for j in range(s0.size):

@@ -31,9 +31,9 @@ from __future__ import annotations
 
 import math
 
-import numba as nb
 import numpy as np
 
+from ..runtime.kernel import kernel
 from .params import GuideParams
 
 __all__ = ["Guide", "SEGMENT_NAMES"]
@@ -134,7 +134,7 @@ def build_table(p: GuideParams) -> np.ndarray:
 # compiled kernels (all take the segment table ``tab`` and the period ``p0``)
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel()
 def locate(tab, s0):
     """Segment index holding s0 (already reduced to [0, P0))."""
     n = tab.shape[0]
@@ -152,7 +152,7 @@ RAMP = 0.1  # width of the cosine ramps at the ends of a telescopic run, as a fr
 TRAVEL = 1.0 - RAMP  # |delta| / Lt must stay below this for the coordinate map to be monotonic
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel()
 def tele_ramp(u):
     """w(u), w'(u), w''(u) of the telescopic map (see module docstring), u in [0, 1]."""
     eps = RAMP
@@ -175,7 +175,7 @@ def tele_ramp(u):
     return a * (0.5 * eps + (u - eps)), a, 0.0
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel()
 def local_map(tab, k, s0loc, delta):
     """lam and its partials (lam_s, lam_d, lam_ss, lam_sd) at s0loc = s0 - s0_k on segment k."""
     if tab[k, SIGP] == 0.0:
@@ -185,7 +185,7 @@ def local_map(tab, k, s0loc, delta):
     return s0loc - delta * w, 1.0 - delta * w1 / lt, -w, -delta * w2 / (lt * lt), -w1 / lt
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel()
 def local_inverse(tab, k, lam, delta):
     """s0loc whose local arc length is lam on segment k.
 
@@ -221,7 +221,7 @@ def local_inverse(tab, k, lam, delta):
     return x
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel()
 def local_point(tab, k, lam, delta):
     """Position, unit tangent angle and left normal on segment k at local arc length lam."""
     kap = tab[k, KAPPA]
@@ -235,7 +235,7 @@ def local_point(tab, k, lam, delta):
     return (x0 + (math.sin(phi) - math.sin(phi0)) / kap, z0 + (math.cos(phi0) - math.cos(phi)) / kap, phi)
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel()
 def local_frame(tab, k, lam, delta):
     """Position and unit tangent (x, z, tx, tz) on segment k at local arc length lam.
 
@@ -252,7 +252,7 @@ def local_frame(tab, k, lam, delta):
     return x0 + (s - s0) / kap, z0 + (c0 - c) / kap, c, s
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel()
 def point_partials(tab, k, lam, s0loc, delta, out):
     """r and its partial derivatives with respect to s0 and delta on segment k.
 
@@ -277,12 +277,12 @@ def point_partials(tab, k, lam, s0loc, delta, out):
     out[11] = kap * ld * ld * nz
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel()
 def seg_length(tab, k, delta):
     return tab[k, LEN0] * (1.0 + tab[k, SIGP] * delta)
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel()
 def circle_hit(tab, k, delta, qx, qz, radius, lam_lo):
     """Smallest local arc length lam >= lam_lo on segment k whose point is at ``radius`` from q, and
     that point: (lam, x, z), lam = -1.0 when the segment holds no such point. Exact (closed form)
@@ -343,7 +343,7 @@ def circle_hit(tab, k, delta, qx, qz, radius, lam_lo):
     return (best, bx, bz) if found else (-1.0, 0.0, 0.0)
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(inline="always")
 def hit_next(tab, delta, k, qx, qz, radius, wraps):
     """The first point at ``radius`` from q on the segments after segment k (round the loop, counting
     ``wraps``): (segment, local arc length, wraps, x, z), segment -1 where the guide has none."""

@@ -37,6 +37,7 @@ import math
 import numba as nb
 import numpy as np
 
+from ..runtime.kernel import kernel
 from .chain import acceleration_terms, close_with_slope, fill_partials, sensitivity, velocity_coefficients, walk_arrays
 from .effects import (
     aboard,
@@ -141,7 +142,7 @@ def table_spacing(rtol: float) -> float:
 # building
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel()
 def _node(
     tab, p0, lt, u, guess, slope, pitches, n, tol, s0, kk, lam, xs, zs, part, alpha, beta, jac, gam, hacc, eta, sd, out
 ):
@@ -172,7 +173,7 @@ def _node(
     return d, 0
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel()
 def _mass_slope(out, mroll, m_c):
     """dM/du of the generalised mass from a node's data (see _node)."""
     n = out.shape[0] - 1
@@ -486,7 +487,7 @@ def empty_table():
 # evaluation
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(inline="always")
 def _p5(c, r, x):
     """Value, d/dx and d2/dx2 at x of the quintic with coefficients c[r] (indexed, not sliced:
     a slice costs more than the polynomial)."""
@@ -497,7 +498,7 @@ def _p5(c, r, x):
     return v, d, dd
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(inline="always")
 def _p5d(c, i, r, x, o=0):
     """Value and d/dx at x of the quintic with coefficients c[i, r, o:o + 6]."""
     c0, c1, c2, c3, c4, c5 = c[i, r, o], c[i, r, o + 1], c[i, r, o + 2], c[i, r, o + 3], c[i, r, o + 4], c[i, r, o + 5]
@@ -506,7 +507,7 @@ def _p5d(c, i, r, x, o=0):
     return v, d
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel()
 def locate(tb, s):
     """Where roller 1 at s sits in the table: (piece p, table roller k of roller 1, loops W,
     eta in [0, 1] along piece p, du/ds, d2u/ds2)."""
@@ -532,14 +533,14 @@ def locate(tb, s):
     return p, k, w, eta, d / hs, dd / (hs * hs)
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel()
 def table_delta(tb, s):
     """delta [m] with roller 1 at s, from the table."""
     p, _, _, eta, _, _ = locate(tb, s)
     return _p5(tb[TB_DC], p, eta)[0]
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(inline="always")
 def _p5dd(c, i, r, x):
     """d/dx and d2/dx2 at x of the quintic with coefficients c[i, r, :]."""
     c1, c2, c3, c4, c5 = c[i, r, 1], c[i, r, 2], c[i, r, 3], c[i, r, 4], c[i, r, 5]
@@ -548,7 +549,7 @@ def _p5dd(c, i, r, x):
     return d, dd
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel()
 def _mass_by_roller(xc, zc, p, eta, hu, k, n, mass, fp, ip, d_u, d_uu):
     """Generalised mass M(u), dM/du and gravity's generalised force -dV/du summed over the table's
     rollers, each with the mass of the chain's roller it is (chain roller i is table roller i + k);
@@ -571,7 +572,7 @@ def _mass_by_roller(xc, zc, p, eta, hu, k, n, mass, fp, ip, d_u, d_uu):
     return m_u, mp_u, -g * m_z / hu
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel()
 def table_evaluate(t, y, dy, prm, ws, want_teeth, tb):
     """Right-hand side of the forward dynamics from the table: the same equations and the same
     ``info`` slots as :func:`vibkit.model.effects.evaluate` (delta, its rates, motor and contact
@@ -664,7 +665,7 @@ def table_evaluate(t, y, dy, prm, ws, want_teeth, tb):
     return 0
 
 
-@nb.njit(cache=True, error_model="numpy", nogil=True)
+@kernel(nogil=True)
 def rhs(t, y, dy, prm, ws, want_teeth, tb):
     """The forward right-hand side: from the table ``tb`` where it has pieces, else from the exact
     closure (:func:`vibkit.model.effects.evaluate`), or walked run by run where the table's head says

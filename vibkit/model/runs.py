@@ -26,9 +26,9 @@ from __future__ import annotations
 
 import math
 
-import numba as nb
 import numpy as np
 
+from ..runtime.kernel import kernel
 from .guide import (
     AX,
     AZ,
@@ -131,7 +131,7 @@ def next_other(pitches, nominal):
     return out
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel()
 def _link(tab, delta, k, lo, qx, qz, pitch, wraps, within):
     """One link of ``pitch`` from the roller on segment k at local arc length lo, place (qx, qz):
     the next roller's (segment, lam, x, z, tx, tz, wraps), segment -1 where the guide has no point at
@@ -164,7 +164,7 @@ def _link(tab, delta, k, lo, qx, qz, pitch, wraps, within):
     return k, found, x, z, -(z - cz) * kap, (x - cx) * kap, wraps
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(inline="always")
 def _inverse(tab, k, lam, delta):
     """s0 - s0_k at local arc length lam on segment k: closed form on a telescopic run's straight
     middle (where the map is linear), else :func:`vibkit.model.guide.local_inverse`."""
@@ -177,19 +177,19 @@ def _inverse(tab, k, lam, delta):
     return local_inverse(tab, k, lam, delta)
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(inline="always")
 def roller_s0(tab, p0, k, lam, wraps, delta):
     """s0 of a roller on segment k at local arc length lam, ``wraps`` loops on. [m]"""
     return wraps * p0 + tab[k, S0] + _inverse(tab, k, lam, delta)
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(inline="always")
 def _moving(tab, k):
     """Whether segment k moves or stretches with delta."""
     return tab[k, BX] != 0.0 or tab[k, BZ] != 0.0 or tab[k, SIGP] != 0.0
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel()
 def run_walk(tab, p0, s, delta, pitches, n, rstep, rnext, runs, aux, resume):
     """Walk the chain from roller 1 at s0 = s at trial ``delta``, run by run (see the module
     docstring), recording each run in ``runs`` with its rate coefficients. Returns (h, dh/ddelta):
@@ -289,7 +289,7 @@ def run_walk(tab, p0, s, delta, pitches, n, rstep, rnext, runs, aux, resume):
     return h, (be - ldg) / lsg
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel()
 def run_close(tab, p0, s, guess, pitches, n, tol, rstep, rnext, runs, aux):
     """Newton's method on delta from ``guess`` with the walk's own dh/ddelta; after the first walk
     only the runs from the first segment that moves with delta are walked again. Returns (delta,
@@ -312,7 +312,7 @@ def run_close(tab, p0, s, guess, pitches, n, tol, rstep, rnext, runs, aux):
     return d, MAX_NEWTON, 1
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel()
 def run_rates(tab, sdot, runs, aux):
     """From the closed walk: c = ddelta/ds, e (delta-ddot = c s-ddot + e) and each run's q (its
     lam-ddot = alpha s-ddot + beta delta-ddot + q) at roller-1 speed ``sdot``. Returns (c, e, dh/ddelta)."""
@@ -348,7 +348,7 @@ def run_rates(tab, sdot, runs, aux):
     return c, e, (runs[g, R_BETA] - ldg) / lsg
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(inline="always")
 def run_roller(kap, x, z, tx, tz, j, step, cd, sg, ccx, ccz):
     """Roller j of a run (0: its first, at (x, z)) and its unit tangent: on a line j links of arc length
     ``step`` along the tangent (tx, tz); on an arc (curvature ``kap``, centre (ccx, ccz)) the previous
@@ -360,7 +360,7 @@ def run_roller(kap, x, z, tx, tz, j, step, cd, sg, ccx, ccz):
     return ccx + tz / kap, ccz - tx / kap, tx, tz
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel()
 def run_fill(tab, p0, n, delta, sdot, c, e, runs, aux, xs, zs, jac, hacc, s0, want_s0):
     """Every roller's place, J = dr/ds and h (a = J s-ddot + h) at roller-1 speed ``sdot`` from the
     closed walk and its rates (:func:`run_rates`); each roller's s0 as well where ``want_s0``."""

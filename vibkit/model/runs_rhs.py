@@ -17,6 +17,7 @@ import math
 import numba as nb
 import numpy as np
 
+from ..runtime.kernel import kernel
 from .chain import closure_residual
 from .effects import clear_teeth, evaluate, evaluate_forces, finish, remember_closure, sprocket_contact, within_reach
 from .guide import BX, BZ, KAPPA, local_frame, seg_length
@@ -97,7 +98,7 @@ from .slots import (
 __all__ = ["build_runs", "runs_evaluate", "runs_fast", "runs_observe"]
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(inline="always")
 def _close(y, prm, tb, info):
     """The closure from delta predicted along the last evaluation's slope and curvature."""
     tab, fp, ip, pitches = prm[PRM_TABLE], prm[PRM_FP], prm[PRM_IP], prm[PRM_PITCHES]
@@ -118,7 +119,7 @@ def _close(y, prm, tb, info):
     )
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(inline="always")
 def _contact(prm, y, xs, zs, vxs, vzs, cand, ncand, damping, fx, fz, ind_t, frc_t, want_teeth):
     """The sprocket's contact on the ``ncand`` candidates where the scene has it (what
     :func:`vibkit.model.effects.sprocket_contact` returns, zeros otherwise), the per-tooth arrays cleared
@@ -130,7 +131,7 @@ def _contact(prm, y, xs, zs, vxs, vzs, cand, ncand, damping, fx, fz, ind_t, frc_
     return sprocket_contact(prm, y, xs, zs, vxs, vzs, cand, ncand, damping, fx, fz, ind_t, frc_t, want_teeth)
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(inline="always")
 def runs_evaluate(t, y, dy, prm, ws, want_teeth, tb):
     """Right-hand side of the forward dynamics from the closure walked run by run: the same
     equations, work arrays and ``info`` slots as :func:`vibkit.model.effects.evaluate` (which it
@@ -152,7 +153,7 @@ def runs_evaluate(t, y, dy, prm, ws, want_teeth, tb):
     return evaluate_forces(t, y, dy, prm, ws, want_teeth, delta, c, e, dh)
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(inline="always")
 def runs_fast(t, y, dy, prm, ws, want_teeth, tb):
     """:func:`runs_evaluate` for rollers of one mass without passengers or rolling resistance: each
     run's share of the reduced equation in closed form, rollers placed one by one only on the
@@ -243,7 +244,7 @@ def runs_fast(t, y, dy, prm, ws, want_teeth, tb):
 LINEAR_SHIFT = 1e-7  # [m] the largest Newton step runs_observe takes by a first-order shift instead of a walk
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel()
 def runs_observe(t, y, dy, prm, ws, want_teeth, tb):
     """What an output needs of the positions alone (delta, the contact forces without damping, the
     motor torque) from one walk: where the walk from the predicted delta leaves a Newton step under

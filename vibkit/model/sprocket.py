@@ -15,9 +15,9 @@ from __future__ import annotations
 
 import math
 
-import numba as nb
 import numpy as np
 
+from ..runtime.kernel import kernel
 from .params import SprocketParams
 
 __all__ = ["tooth_geometry", "tooth_corners", "tooth_table", "mesh_phase", "contact_kernel"]
@@ -119,7 +119,7 @@ def tooth_table(loc: np.ndarray, root_r: float, psi: float, nteeth: int, r_d: fl
     return t
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(inline="always")
 def fast_atan2(y, x):
     """atan2(y, x) to 2e-4 rad (a polynomial on one octant, folded): good for choosing teeth (the
     tooth table allows 1e-3 rad for it), not for placing anything."""
@@ -139,7 +139,7 @@ def fast_atan2(y, x):
     return r
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel()
 def contact_kernel(
     xs,
     zs,
