@@ -182,14 +182,18 @@ def test_the_checks_can_fail(tmp_path, monkeypatch):
 SLOT_ARRAYS = frozenset({"prm", "fp", "ip", "ws", "info", "tb", "head"})
 
 
-def _is_compiled(fn: ast.AST) -> bool:
-    """Whether a function is decorated with numba's njit or jit (bare, called, or as nb.njit)."""
+def _decorators(fn: ast.AST) -> set[str]:
+    """The names of a function's decorators (bare, called, or as nb.njit)."""
+    names = set()
     for dec in fn.decorator_list:
         target = dec.func if isinstance(dec, ast.Call) else dec
-        name = target.attr if isinstance(target, ast.Attribute) else getattr(target, "id", None)
-        if name in ("njit", "jit"):
-            return True
-    return False
+        names.add(target.attr if isinstance(target, ast.Attribute) else getattr(target, "id", None))
+    return names
+
+
+def _is_compiled(fn: ast.AST) -> bool:
+    """Whether a function is compiled by numba: njit, jit, or vibkit.runtime.kernel's kernel."""
+    return bool(_decorators(fn) & {"njit", "jit", "kernel"})
 
 
 def _literal_int(node: ast.AST | None) -> bool:
@@ -251,6 +255,50 @@ def test_the_slot_check_can_fail():
     )
     found = sorted(f.split(": ", 1)[1] for f in bare_slots(source))
     assert found == ["j reads ws[18]", "k reads fp[3]", "k reads info[10:13]", "k reads prm[3]", "k reads prm[3][-1]"]
+
+
+# --- kernels without reference counts -------------------------------------------------------------
+
+#: the compiled functions of the model and the analyses that allocate arrays (or call one that does), so
+#: keep numba's reference counts (``numba.njit``); every other kernel there is ``vibkit.runtime.kernel.kernel``
+ALLOCATING = frozenset(
+    {
+        "walk_arrays",  # the walk's scratch
+        "sweep_kernel",  # calls walk_arrays
+        "link_multipliers",  # its recursion's coefficients
+        "_nodes",  # the pitch table's nodes, walk_arrays
+        "_near",  # the segments within the sprocket's reach
+        "_observe",  # the outputs' scratch
+        "_dopri5_chunk",  # the stages
+        "kkt_pattern",  # the study's sparse pattern
+    }
+)
+
+
+def plain_njit(source: str, filename: str = "<string>") -> list[str]:
+    """``file:line: name`` for each function of ``source`` compiled with numba's njit or jit (not ``kernel``)."""
+    return [
+        f"{filename}:{fn.lineno}: {fn.name}"
+        for fn in ast.walk(ast.parse(source, filename=filename))
+        if isinstance(fn, ast.FunctionDef) and _decorators(fn) & {"njit", "jit"}
+    ]
+
+
+def test_model_kernels_are_compiled_without_reference_counts():
+    """numba's atomic reference counts took 42-45 % of the forward run's CPU time (docs/developer.md): a
+    kernel of the model or the analyses is ``kernel()`` unless it allocates."""
+    found = []
+    for name, (path, _) in sorted(MODULES.items()):
+        if name.startswith(("vibkit.model", "vibkit.analyses")):
+            found += [f for f in plain_njit(path.read_text(), str(path)) if f.rsplit(": ", 1)[1] not in ALLOCATING]
+    assert not found, "use vibkit.runtime.kernel.kernel() (or add an allocating kernel to ALLOCATING):\n" + "\n".join(
+        found
+    )
+
+
+def test_the_reference_count_check_can_fail():
+    source = "import numba as nb\n@nb.njit(cache=True)\ndef a(x):\n    return x\n@kernel()\ndef b(x):\n    return x\n"
+    assert [f.split(": ", 1)[1] for f in plain_njit(source)] == ["a"]
 
 
 # --- scene keys are read through the schema -------------------------------------------------------
