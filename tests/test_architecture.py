@@ -265,7 +265,6 @@ ALLOCATING = frozenset(
     {
         "walk_arrays",  # the walk's scratch
         "sweep_kernel",  # calls walk_arrays
-        "link_multipliers",  # its recursion's coefficients
         "_nodes",  # the pitch table's nodes, walk_arrays
         "_near",  # the segments within the sprocket's reach
         "_observe",  # the outputs' scratch

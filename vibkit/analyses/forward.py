@@ -383,6 +383,7 @@ def _observe(
     n = mass.size
     dy = np.empty(5)
     lam_buf = np.empty(n)
+    lam_scratch = np.empty(n)
     rs_res = np.empty(n)
     d1 = d2 = d3 = info[INFO_DELTA]
     slope = 0.0
@@ -514,7 +515,7 @@ def _observe(
                 resz = mass[i] * (jac[i, 1] * sddot + hacc[i, 1]) - fz[i]
                 rs_res[i] = part[i, 2] * resx + part[i, 3] * resz
                 rd += part[i, 4] * resx + part[i, 5] * resz
-            link_multipliers(part, xs, zs, n, rs_res, rd, 0.0, 0.0, 0.0, lam_buf, False)
+            link_multipliers(part, xs, zs, n, rs_res, rd, 0.0, 0.0, 0.0, lam_buf, False, lam_scratch)
             for i in range(n):
                 tension[j, i] = 2.0 * lam_buf[i] * pitches[i]
     return 0, 0

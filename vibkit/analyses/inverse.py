@@ -101,6 +101,7 @@ def inverse_dynamics(model, *, speed, duration, step, start=0.0, effects=None, o
     s0 = float(model.guide.s_to_s0(start, 0.0))
     schedule = model.passenger_schedule(effects["passengers"], s0) if "passengers" in effects else None
     lam = np.empty(n)
+    scratch = np.empty(n)
     theta0 = None
     bar = Progress(nt, "inverse dynamics", enabled=progress)
     for j, tj in enumerate(t):
@@ -147,7 +148,7 @@ def inverse_dynamics(model, *, speed, duration, step, start=0.0, effects=None, o
         f_c = -(pre + k_s * conf.delta)
         rd_res = float(np.sum(part[:, 4] * resx + part[:, 5] * resz)) + m_c * dd - f_c
         xs, zs = conf.position[:, 0].copy(), conf.position[:, 1].copy()
-        mu, _ = link_multipliers(part, xs, zs, n, rs_res, rd_res, 0.0, sig, sd, lam, True)
+        mu, _ = link_multipliers(part, xs, zs, n, rs_res, rd_res, 0.0, sig, sd, lam, True, scratch)
         tension[j] = 2.0 * lam * model.chain.pitches
         out["drive_force"][j] = -mu
         out["kinetic_energy"][j] = (

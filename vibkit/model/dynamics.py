@@ -17,17 +17,14 @@ so the multipliers follow from a cyclic bidiagonal recursion (O(p)) closed by th
 
 from __future__ import annotations
 
-import numba as nb
-import numpy as np
-
 from ..runtime.kernel import kernel
 
 __all__ = ["link_multipliers", "reduced_equation"]
 
 
-@nb.njit(cache=True, error_model="numpy")
-def link_multipliers(part, xs, zs, n, rs_res, rd_res, q_delta, drive_s, drive_d, lam, with_drive):
-    """Multipliers lambda_j of the closure constraints (fills ``lam`` (n,)).
+@kernel()
+def link_multipliers(part, xs, zs, n, rs_res, rd_res, q_delta, drive_s, drive_d, lam, with_drive, scratch):
+    """Multipliers lambda_j of the closure constraints (fills ``lam`` (n,); ``scratch`` (n,) is work space).
 
     Parameters
     ----------
@@ -38,6 +35,7 @@ def link_multipliers(part, xs, zs, n, rs_res, rd_res, q_delta, drive_s, drive_d,
     q_delta : unused placeholder kept at 0.0 (carriage terms are folded into rd_res).
     drive_s, drive_d : derivatives of an imposed-motion constraint D(s0_1, delta) (inverse dynamics).
     with_drive : bool; when True also solve for the drive multiplier mu and return it.
+    scratch : (n,) work space (the recursion's second coefficients).
 
     Returns
     -------
@@ -46,8 +44,9 @@ def link_multipliers(part, xs, zs, n, rs_res, rd_res, q_delta, drive_s, drive_d,
     residual : float
         Without drive, the residual of roller 1's equation (a consistency check). [N]
     """
-    a = np.empty(n)
-    b = np.empty(n)
+    # lam_j = a_j + b_j lam_0: a_j kept in lam until lam_0 is known, b_j in scratch
+    a = lam
+    b = scratch
     a[0] = 0.0
     b[0] = 1.0
     for i in range(1, n):
@@ -87,7 +86,7 @@ def link_multipliers(part, xs, zs, n, rs_res, rd_res, q_delta, drive_s, drive_d,
         lam0 = -d_const / d_lam
         residual = e0_const + e0_lam * lam0
     for i in range(n):
-        lam[i] = a[i] + b[i] * lam0
+        lam[i] += b[i] * lam0
     return mu, residual
 
 
