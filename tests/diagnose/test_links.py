@@ -303,6 +303,7 @@ def test_two_worn_links_read_each_its_own_excess():
     assert {f["link"] for f in res.flagged} == expected
     for f in res.flagged:
         assert abs(f["excess_pitch_mm"] - 1.0) < min(3 * f["sigma_mm"], 0.03), f
+        assert f["alternatives"] == []  # the other worn link, flagged itself, is no alternative to it
 
 
 @pytest.fixture(scope="module")

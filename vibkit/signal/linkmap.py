@@ -46,6 +46,7 @@ The decision (:func:`scan_links`):
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -352,7 +353,8 @@ class LinkFlag:
         1-based loops whose own fit shows it (same sign, beyond twice the single-loop sigma).
     alternatives : tuple of int
         1-based links where the signature fits nearly as well (within what the noise and the signature's
-        error allow): the data do not tell them from ``link``. Empty when they do.
+        error allow): the data do not tell them from ``link``. Empty when they do; a link flagged itself is
+        never another flag's alternative.
     """
 
     link: int
@@ -593,6 +595,9 @@ def scan_links(
         shape = lmap.shape - np.einsum("k,kni->ni", amps, np.stack([np.roll(tmpl, j, axis=0) for j in ks]))[None]
         extra = sum((mismatch * a * np.roll(rho, j)) ** 2 + (mismatch_floor * a) ** 2 for j, a in zip(ks, amps))
     residual = tstat if len(flags) < max_flags else None  # the last pass fitted what the flags left
+    # a link flagged in its own right is no alternative to another flag: the joint fit gives each its amount
+    flagged = {f.link for f in flags}
+    flags = [dataclasses.replace(f, alternatives=tuple(a for a in f.alternatives if a not in flagged)) for f in flags]
     return LinkScan(
         tuple(flags), first[0], thr, alpha, dof, first[1], first[2], L, "signature", peaks=peaks, residual=residual
     )
