@@ -22,10 +22,7 @@ The decision (:func:`scan_links`):
   degrees of freedom), at the per-link level ``1 - (1 - alpha)^(1/N)`` (Sidak) so that a healthy
   recording raises a flag with probability at most ``alpha`` over all ``N`` links.  The largest
   passing link is flagged, its fitted signature removed, and the scan repeated (one flag per worn
-  link, not one per neighbour it overlaps); the flagged links' amplitudes are fitted together, by least
-  squares over their placements (two worn links whose signatures overlap: fitted alone, the first takes in
-  ``rho`` times the second's, ``rho`` the overlap at their distance), their sigmas from the same fit; after
-  a flag, the signature's own error (``mismatch``
+  link, not one per neighbour it overlaps); after a flag, the signature's own error (``mismatch``
   near it, ``mismatch_floor`` everywhere, times its amplitude) is added to the noise, so that what an
   imperfect signature leaves is not taken for a second link.  Drift common to neighbouring cycles
   (settling, wander) is not in the cycles' covariance: where the per-loop amplitudes scatter more,
@@ -46,7 +43,6 @@ The decision (:func:`scan_links`):
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -353,8 +349,7 @@ class LinkFlag:
         1-based loops whose own fit shows it (same sign, beyond twice the single-loop sigma).
     alternatives : tuple of int
         1-based links where the signature fits nearly as well (within what the noise and the signature's
-        error allow): the data do not tell them from ``link``. Empty when they do; a link flagged itself is
-        never another flag's alternative.
+        error allow): the data do not tell them from ``link``. Empty when they do.
     """
 
     link: int
@@ -563,7 +558,6 @@ def scan_links(
     shape = lmap.shape.copy()
     flags, first, peaks = [], None, ()
     extra = np.zeros(n)  # what a flagged link's imperfect signature leaves near it (variance)
-    fit0 = per_loop  # every placement's per-loop fit to the map itself, before any flag is taken out
     for _ in range(max(max_flags, 1)):
         per_loop = _fit_signature(shape, tmpl)
         amp = per_loop.mean(axis=0)
@@ -581,41 +575,12 @@ def scan_links(
                 peaks = tuple(j + 1 for j in best)
         alt = _alternatives(np.sign(amp[k]) * amp / sd, k, rho, r_noise, alone, alpha, err)
         flags.append(LinkFlag(k + 1, float(tstat[k]), float(amp[k] * scale), sig * scale, "signature", loops, alt))
-        # the flagged links' amplitudes fitted together (least squares over their placements): one flag's fit
-        # alone takes in the part of another worn link's change that its signature overlaps (rho at their
-        # distance), and taking that out of the map leaves the other link's change short by as much
-        ks = np.array([f.link - 1 for f in flags])
-        joint, sd_joint = _joint_fit(fit0[:, ks], ks, rho, r_noise)
-        amps = joint.mean(axis=0)
-        flags = [
-            LinkFlag(f.link, f.t, float(a * scale), float(sig * s * scale), f.feature,
-                     _loops_showing(joint, i, a, s1 * s), f.alternatives)
-            for i, (f, a, s) in enumerate(zip(flags, amps, sd_joint))
-        ]  # fmt: skip
-        shape = lmap.shape - np.einsum("k,kni->ni", amps, np.stack([np.roll(tmpl, j, axis=0) for j in ks]))[None]
-        extra = sum((mismatch * a * np.roll(rho, j)) ** 2 + (mismatch_floor * a) ** 2 for j, a in zip(ks, amps))
+        shape -= amp[k] * np.roll(tmpl, k, axis=0)[None]
+        extra += (mismatch * amp[k] * np.roll(rho, k)) ** 2 + (mismatch_floor * amp[k]) ** 2
     residual = tstat if len(flags) < max_flags else None  # the last pass fitted what the flags left
-    # a link flagged in its own right is no alternative to another flag: the joint fit gives each its amount
-    flagged = {f.link for f in flags}
-    flags = [dataclasses.replace(f, alternatives=tuple(a for a in f.alternatives if a not in flagged)) for f in flags]
     return LinkScan(
         tuple(flags), first[0], thr, alpha, dof, first[1], first[2], L, "signature", peaks=peaks, residual=residual
     )
-
-
-def _joint_fit(single, ks, rho, r_noise):
-    """The per-loop amplitudes of the signature placed at the 0-based links ``ks`` fitted together, from each
-    placement's own fit ``single`` ``(loops, len(ks))``, and each amplitude's standard deviation relative to one
-    placement fitted alone: the fits alone are ``G a``, ``G_ij = rho(k_j - k_i)`` (the placements' overlap), so
-    ``a = G^-1 single`` with covariance ``G^-1 R G^-1`` (``R_ij = r_noise(k_j - k_i)``, the fits' noise
-    correlation) in units of one fit's variance; one placement gives back its own fit."""
-    n = rho.size
-    d = (ks[None, :] - ks[:, None]) % n
-    g = rho[d]
-    ginv = np.linalg.pinv(g)
-    joint = single @ ginv.T
-    cov = ginv @ r_noise[d] @ ginv.T
-    return joint, np.sqrt(np.clip(np.diag(cov), 0.0, None))
 
 
 def _alternatives(t, k, rho, r_noise, floor, alpha, err):
