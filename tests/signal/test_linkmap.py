@@ -5,7 +5,8 @@ import numpy as np
 import pytest
 import scipy.stats
 
-from vibkit.signal.linkmap import TooFewLoops, link_map, scan_links, sidak_threshold, smooth_phase
+from vibkit.signal.linkmap import TooFewLoops, link_map, smooth_phase
+from vibkit.signal.linkscan import scan_links, sidak_threshold
 
 FS = 200.0
 F_LP = 3.75  # link passes per second

@@ -1,7 +1,7 @@
 """Which link is worn: the link map of a tensioner recording and its decision.
 
-The signal layer (:mod:`vibkit.signal.linkmap`) numbers every link-pass cycle by its link and tests
-the per-link map; this module gives it what only the model knows: the *signature* of one worn link
+The signal layer numbers every link-pass cycle by its link (:mod:`vibkit.signal.linkmap`) and tests
+the per-link map (:mod:`vibkit.signal.linkscan`); this module gives it what only the model knows: the *signature* of one worn link
 on the escalator, that is how one link of excess pitch changes the per-link map of the sensor.  On
 the tensioner it is not one odd cycle but a pattern over the links that follow the worn one (its
 wrap on the sprocket and on the lower head change the tensioner's mean by microns for ``Z / 2``
@@ -33,12 +33,11 @@ from ..signal.linkmap import (
     MIN_LOOPS,
     TooFewLoops,
     canonical_phase,
-    count_drift,
     link_map,
     link_pass_phase,
     record_time_for_loops,
-    scan_links,
 )
+from ..signal.linkscan import count_drift, scan_links
 from .decision import ELONGATION_WINDOW_PERCENT
 
 __all__ = [
