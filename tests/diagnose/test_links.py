@@ -27,11 +27,12 @@ FS = 200.0
 
 def _record(scene, worn, rng, excess=1e-3, loops=3, exact=False):
     """``loops`` loops after one loop and 5 s of settling, with noise; the links passed before it; and the
-    tensioner's displacement without noise."""
+    tensioner's displacement without noise.  ``worn``: a link, or a tuple of links, each ``excess`` long."""
     pitch, n = scene.chain.link_pitch, scene.chain.n_rollers
     settle = n * pitch / SPEED + 5.0
     duration = settle + (loops * n + 3) * pitch / SPEED
-    chain = scene.chain if worn is None else dataclasses.replace(scene.chain, worn_links=((worn, pitch + excess),))
+    worn_links = () if worn is None else tuple((w, pitch + excess) for w in np.atleast_1d(worn).tolist())
+    chain = scene.chain if worn is None else dataclasses.replace(scene.chain, worn_links=worn_links)
     sc = dataclasses.replace(
         scene,
         chain=chain,
@@ -288,6 +289,20 @@ def test_a_link_one_tenth_of_a_millimetre_long_is_flagged_by_its_number():
     assert abs(res.flagged[0]["excess_pitch_mm"] - 0.1) < 0.03
     # once its change is taken out no link passes the threshold (what the report's links page draws below)
     assert res.residual_statistic.max() < res.threshold < res.statistic.max()
+
+
+def test_two_worn_links_read_each_its_own_excess():
+    """Links 40 and 70 each 1 mm long (exact closure, three loops, 1 um of noise): both are flagged by their
+    numbers and each reads 1 mm within three of its sigmas and 0.03 mm.  The signature of one worn link overlaps
+    its placement 30 links on by rho = -0.24: with the flags fitted one after the other the first flagged read that
+    much low (0.75 +- 0.01 mm) and the second 0.93 mm; fitted together, as the scan does, 0.99 mm each."""
+    scene = load_scene(SCENE)
+    rec, passed, _, _ = _record(scene, (40, 70), np.random.default_rng(4070), exact=True)
+    res = find_worn_links(rec, speed=SPEED, n_links=N, scene=SCENE)
+    expected = {link_number_of(w, passed, N) for w in (40, 70)}
+    assert {f["link"] for f in res.flagged} == expected
+    for f in res.flagged:
+        assert abs(f["excess_pitch_mm"] - 1.0) < min(3 * f["sigma_mm"], 0.03), f
 
 
 @pytest.fixture(scope="module")

@@ -11,7 +11,13 @@ The decision (:func:`scan_links`):
   degrees of freedom), at the per-link level ``1 - (1 - alpha)^(1/N)`` (Sidak) so that a healthy
   recording raises a flag with probability at most ``alpha`` over all ``N`` links.  The largest
   passing link is flagged, its fitted signature removed, and the scan repeated (one flag per worn
-  link, not one per neighbour it overlaps); after a flag, the signature's own error (``mismatch``
+  link, not one per neighbour it overlaps).  The flagged links' amounts are fitted together where their
+  placements are apart (outside each other's lobe and overlapping by ``|rho| < RHO_APART``): fitted alone, a
+  flag takes in ``rho`` times the other's amount (two worn links 30 links apart on the study's chain,
+  ``rho = -0.24``: the first read 24 % low); a neighbour's amount (within the lobe, or at the twin half a loop
+  away) stays what is left once the earlier flag is taken out, since two placements that overlap nearly as much
+  as one would split one worn link's excess between them.  A flag's alternatives are sought in the map net of
+  the other flags.  After a flag, the signature's own error (``mismatch``
   near it, ``mismatch_floor`` everywhere, times its amplitude) is added to the noise, so that what an
   imperfect signature leaves is not taken for a second link.  Drift common to neighbouring cycles
   (settling, wander) is not in the cycles' covariance: where the per-loop amplitudes scatter more,
@@ -124,6 +130,9 @@ class LinkScan:
     peaks: tuple = ()
     residual: np.ndarray | None = None
 
+
+#: two flagged placements whose signatures overlap less than this (and outside each other's lobe) are fitted together
+RHO_APART = 0.5
 
 #: a loop's own fit must peak above this many of its sigmas for :attr:`LinkScan.peaks` to be recorded
 PEAK_SIGMA = 5.0
@@ -273,10 +282,12 @@ def scan_links(
     sig = s1 / math.sqrt(L)
     thr = sidak_threshold(alpha, n, dof)
     err = float(mismatch if signature_error is None else signature_error)
+    lobe = int(np.argmax(rho <= 0.0)) if np.any(rho <= 0.0) else n  # first lag where two fits stop overlapping
     alone = float(scipy.stats.t.isf(alpha / 2.0, dof))  # one link's own threshold: where an alternative starts
     shape = lmap.shape.copy()
-    flags, first, peaks = [], None, ()
+    flags, first, peaks, ks = [], None, (), []
     extra = np.zeros(n)  # what a flagged link's imperfect signature leaves near it (variance)
+    fit0 = per_loop  # every placement's per-loop fit to the map itself, before any flag is taken out
     for _ in range(max(max_flags, 1)):
         per_loop = _fit_signature(shape, tmpl)
         amp = per_loop.mean(axis=0)
@@ -284,22 +295,80 @@ def scan_links(
         tstat = np.abs(amp) / sd if sig > 0 else np.full(n, np.inf)
         if first is None:
             first = (tstat, amp * scale, np.full(n, sig * scale))
-        k = int(np.argmax(tstat))
+        k = int(np.argmax(np.where(np.isin(np.arange(n), ks), 0.0, tstat)))  # a flagged link is fitted already
         if not tstat[k] > thr or len(flags) >= max_flags:
             break
-        loops = _loops_showing(per_loop, k, amp[k], s1)
         if not flags:  # where each loop's own fit peaks, for the first (largest) flag, where every loop shows it
             best = [int(np.argmax(np.sign(amp[k]) * row)) for row in per_loop]
             if all(abs(row[j]) > PEAK_SIGMA * s1 for row, j in zip(per_loop, best)):
                 peaks = tuple(j + 1 for j in best)
-        alt = _alternatives(np.sign(amp[k]) * amp / sd, k, rho, r_noise, alone, alpha, err)
-        flags.append(LinkFlag(k + 1, float(tstat[k]), float(amp[k] * scale), sig * scale, "signature", loops, alt))
-        shape -= amp[k] * np.roll(tmpl, k, axis=0)[None]
-        extra += (mismatch * amp[k] * np.roll(rho, k)) ** 2 + (mismatch_floor * amp[k]) ** 2
+        flags.append(float(tstat[k]))
+        ks.append(k)
+        # the flagged links' amplitudes: a neighbour's (within the lobe, or at the twin) after the earlier flag
+        # is taken out, as scanned; links apart fitted together (fitted alone, each takes in rho times the other's)
+        a_mat, a_inv = _placement_solve(np.array(ks), rho, lobe)
+        joint = fit0[:, ks] @ a_inv.T
+        amps = joint.mean(axis=0)
+        shape = lmap.shape - _placed(tmpl, ks, amps)[None]
+        extra = _leftover(ks, amps, rho, (mismatch, mismatch_floor), range(len(ks)))
+    if ks:
+        ka = np.array(ks)
+        rel = np.sqrt(np.clip(np.diag(a_inv @ r_noise[(ka[None, :] - ka[:, None]) % n] @ a_inv.T), 0.0, None))
+        flags = [
+            _flag_of(i, ks, t, joint, amps, a_mat, rel[i], (sig, s1, scale), lmap.shape, tmpl, rho,
+                     (r_noise, alone, alpha, err), (mismatch, mismatch_floor))
+            for i, t in enumerate(flags)
+        ]  # fmt: skip
     residual = tstat if len(flags) < max_flags else None  # the last pass fitted what the flags left
     return LinkScan(
         tuple(flags), first[0], thr, alpha, dof, first[1], first[2], L, "signature", peaks=peaks, residual=residual
     )
+
+
+def _placement_solve(ks, rho, lobe):
+    """``A^-1`` for the flagged placements ``ks`` (0-based, in the order flagged): their fits to the map alone are
+    ``A a``, ``A_ij = rho(k_j - k_i)`` where the two are apart (outside each other's lobe, ``|rho| < RHO_APART``:
+    fitted together) or where ``j`` was flagged before ``i`` (a neighbour's amount is what is left after the
+    earlier flag is taken out, as the scan found it: fitted together, two placements that overlap nearly as much as
+    one split one link's excess between them); one placement, or neighbours only, give the scan's own amounts."""
+    n, m = rho.size, ks.size
+    d = (ks[None, :] - ks[:, None]) % n
+    r = rho[d]
+    apart = (np.minimum(d, n - d) >= lobe) & (np.abs(r) < RHO_APART)
+    a = np.where(apart | np.tri(m, k=-1, dtype=bool), r, 0.0)
+    np.fill_diagonal(a, 1.0)
+    if np.linalg.cond(a) > 1e6:  # many links apart that together overlap: the scan's own amounts
+        a = np.where(np.tri(m, dtype=bool), r, 0.0)
+    return a, np.linalg.inv(a)
+
+
+def _placed(tmpl, ks, amps):
+    """The signature placed at the 0-based links ``ks`` with amplitudes ``amps``, summed: ``(n_links, points)``."""
+    return sum(a * np.roll(tmpl, k, axis=0) for k, a in zip(ks, amps))
+
+
+def _leftover(ks, amps, rho, mismatch, which):
+    """The variance that the flags ``which`` (indices into ``ks``) leave at every link through their signature's
+    error (``mismatch``: near them and everywhere, relative)."""
+    near, floor = mismatch
+    return sum(
+        ((near * amps[i] * np.roll(rho, ks[i])) ** 2 + (floor * amps[i]) ** 2 for i in which), np.zeros(rho.size)
+    )
+
+
+def _flag_of(i, ks, t, joint, amps, a_mat, rel_sd, sigmas, shape, tmpl, rho, decide, mismatch):
+    """Flag ``i`` with its amount, sigma and loops from the placements' fit (``rel_sd`` its sigma over one placement
+    fitted alone), its alternatives from the map net of the flags its amount is net of (another flagged link's own
+    placement is then no alternative)."""
+    (sig, s1, scale), (r_noise, alone, alpha, err) = sigmas, decide
+    k, amp = ks[i], amps[i]
+    others = [j for j in range(len(ks)) if j != i and a_mat[i, j] != 0.0]
+    rest = shape - _placed(tmpl, [ks[j] for j in others], amps[others])[None] if others else shape
+    fit = _fit_signature(rest, tmpl).mean(axis=0)
+    sd = np.sqrt(sig * sig + _leftover(ks, amps, rho, mismatch, others))
+    alt = _alternatives(np.sign(amp) * fit / sd, k, rho, r_noise, alone, alpha, err)
+    return LinkFlag(k + 1, t, float(amp * scale), float(sig * rel_sd * scale), "signature",
+                    _loops_showing(joint, i, amp, s1 * rel_sd), alt)  # fmt: skip
 
 
 def _alternatives(t, k, rho, r_noise, floor, alpha, err):
