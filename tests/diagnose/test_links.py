@@ -316,7 +316,7 @@ def profile_90(tmp_path_factory):
 
 def test_a_link_half_a_loop_from_its_twin_is_given_with_both_numbers(profile_90, tmp_path, capsys):
     """On the 90-link profile scene a 0.5 mm link (link 20, 2.3 loops, 1 um noise) fits the 1 mm signature
-    better half a loop away than at itself, and that signature differs from the 0.5 mm one by 93 % of its norm:
+    better half a loop away than at itself, and that signature differs from the 0.5 mm one by most of its norm:
     the flag names both numbers, the true one among them, in --json and in the table."""
     path, scene = profile_90
     rec, passed, _, _ = _record(scene, 20, np.random.default_rng(5), excess=0.5e-3, loops=2.3, exact=True)
@@ -326,7 +326,7 @@ def test_a_link_half_a_loop_from_its_twin_is_given_with_both_numbers(profile_90,
     (f,) = d["flagged"]
     assert true in [f["link"], *f["alternatives"]]
     assert len(f["alternatives"]) >= 1 and f["link"] not in f["alternatives"]
-    assert "relative error 0.9" in d["method"]
+    assert float(d["method"].split("relative error ")[1].split(")")[0]) > 0.5  # 0.84 (0.93 before 0.5.2's tracker)
     _links_with(tmp_path / "e90.nc", capsys, "--escalator", str(path))
     out, err = capsys.readouterr()
     assert " or ".join(str(k) for k in [f["link"], *f["alternatives"]]) in out
@@ -334,8 +334,9 @@ def test_a_link_half_a_loop_from_its_twin_is_given_with_both_numbers(profile_90,
 
 
 def test_a_two_millimetre_link_is_fitted_again_with_a_longer_signature(profile_90):
-    """The 1 mm signature reads a 2 mm link of the 90-link scene as 1.69 mm; the fit repeated with the signature
-    of a 1.7 mm link reads 2.05 mm (noise 0.03 mm): within 0.15 mm of the truth, by the same number."""
+    """The 1 mm signature reads a 2 mm link of the 90-link scene low (1.69 mm, 1.8 mm with 0.5.2's tracker); the fit
+    repeated with the signature of a link that long reads it within 0.15 mm of the truth (noise 0.03 mm), by the
+    same number."""
     from vibkit.diagnose.links import profile_scene_file
     from vibkit.model.profile import parse_profile
 
@@ -345,7 +346,8 @@ def test_a_two_millimetre_link_is_fitted_again_with_a_longer_signature(profile_9
     f = max(res.flagged, key=lambda f: f["t"])
     assert f["link"] == link_number_of(20, passed, 90)
     assert abs(f["excess_pitch_mm"] - 2.0) < 0.15
-    assert "(1.7 mm, relative error" in res.method
+    refit = float(res.method.split("scene (")[1].split(" mm")[0])  # the signature the second fit used
+    assert 1.5 <= refit <= 2.0
 
 
 def test_a_wrong_number_of_links_gives_no_number_and_says_how_many(profile_90, tmp_path):

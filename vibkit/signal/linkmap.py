@@ -240,8 +240,10 @@ def link_pass_phase(x, fs, f0, *, bandwidth_hz, n_harmonics=4):
     -----
     Each harmonic ``h`` is demodulated by ``exp(-j h 2 pi f t)`` and low-passed; its unwrapped phase
     over ``h`` is the phase's slow departure ``psi``; harmonics are combined with weights
-    ``h^2 |a_h|^2``; three passes, each around the phase of the last.  Without a spectrogram ridge the phase follows the chain, not the frame grid:
-    on a chain at constant speed it stays within milliradians of the truth.
+    ``h^2 |a_h|^2``; three passes, each around the phase of the last.  The first is around the strongest
+    harmonic's own phase in a band of ``+-f / 4`` smoothed to ``bandwidth_hz``, so that speed steps faster than
+    the bandwidth (a passenger boarding) cost no whole cycles.  Without a spectrogram ridge the phase follows the
+    chain, not the frame grid: on a chain at constant speed it stays within milliradians of the truth.
     """
     fs = check_fs(fs)
     x = as_signal(x, min_samples=16)
@@ -254,7 +256,14 @@ def link_pass_phase(x, fs, f0, *, bandwidth_hz, n_harmonics=4):
     grid = f0 + np.linspace(-2.0, 2.0, 81) / (t[-1] * hs)
     e = np.exp(-2j * np.pi * hs * np.outer(grid, t[:: max(1, x.size // 20000)]))
     f = float(grid[int(np.argmax(np.abs(e @ x[:: max(1, x.size // 20000)])))])
-    phase = 2.0 * np.pi * f * t
+    # the start: the strongest harmonic demodulated at the mean frequency in a band of +-f / 4 (a chain slowed a
+    # twentieth by a passenger is a tenth of its own band off, and twice the tracking bandwidth: demodulated at
+    # the mean frequency and low-passed at that bandwidth, each harmonic's phase lost whole cycles there), its
+    # phase smoothed to the tracking bandwidth; the passes below refine it
+    z = x * np.exp(-2j * np.pi * hs * f * t)
+    wide = 0.25 * f
+    coarse = np.unwrap(np.arctan2(_lowpass(z.imag, fs, wide), _lowpass(z.real, fs, wide))) / hs
+    phase = smooth_phase(2.0 * np.pi * f * t + coarse, fs, bandwidth_hz)
     # harmonics weaker than a tenth of the strongest add noise and unwrapping slips, not information
     used = [h for h in range(1, kmax + 1) if amps[h - 1] >= 0.1 * max(amps)]
     for _ in range(3):  # each pass demodulates around the last: the filter's loss on a wander shrinks geometrically
