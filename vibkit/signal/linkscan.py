@@ -285,7 +285,7 @@ def scan_links(
     lobe = int(np.argmax(rho <= 0.0)) if np.any(rho <= 0.0) else n  # first lag where two fits stop overlapping
     alone = float(scipy.stats.t.isf(alpha / 2.0, dof))  # one link's own threshold: where an alternative starts
     shape = lmap.shape.copy()
-    flags, first, peaks, ks = [], None, (), []
+    ts, first, peaks, ks = [], None, (), []  # the flags' statistics and 0-based links, in the order flagged
     extra = np.zeros(n)  # what a flagged link's imperfect signature leaves near it (variance)
     fit0 = per_loop  # every placement's per-loop fit to the map itself, before any flag is taken out
     for _ in range(max(max_flags, 1)):
@@ -296,13 +296,13 @@ def scan_links(
         if first is None:
             first = (tstat, amp * scale, np.full(n, sig * scale))
         k = int(np.argmax(np.where(np.isin(np.arange(n), ks), 0.0, tstat)))  # a flagged link is fitted already
-        if not tstat[k] > thr or len(flags) >= max_flags:
+        if not tstat[k] > thr or len(ts) >= max_flags:
             break
-        if not flags:  # where each loop's own fit peaks, for the first (largest) flag, where every loop shows it
+        if not ts:  # where each loop's own fit peaks, for the first (largest) flag, where every loop shows it
             best = [int(np.argmax(np.sign(amp[k]) * row)) for row in per_loop]
             if all(abs(row[j]) > PEAK_SIGMA * s1 for row, j in zip(per_loop, best)):
                 peaks = tuple(j + 1 for j in best)
-        flags.append(float(tstat[k]))
+        ts.append(float(tstat[k]))
         ks.append(k)
         # the flagged links' amplitudes: a neighbour's (within the lobe, or at the twin) after the earlier flag
         # is taken out, as scanned; links apart fitted together (fitted alone, each takes in rho times the other's)
@@ -311,13 +311,14 @@ def scan_links(
         amps = joint.mean(axis=0)
         shape = lmap.shape - _placed(tmpl, ks, amps)[None]
         extra = _leftover(ks, amps, rho, (mismatch, mismatch_floor), range(len(ks)))
+    flags = []
     if ks:
         ka = np.array(ks)
         rel = np.sqrt(np.clip(np.diag(a_inv @ r_noise[(ka[None, :] - ka[:, None]) % n] @ a_inv.T), 0.0, None))
         flags = [
             _flag_of(i, ks, t, joint, amps, a_mat, rel[i], (sig, s1, scale), lmap.shape, tmpl, rho,
                      (r_noise, alone, alpha, err), (mismatch, mismatch_floor))
-            for i, t in enumerate(flags)
+            for i, t in enumerate(ts)
         ]  # fmt: skip
     residual = tstat if len(flags) < max_flags else None  # the last pass fitted what the flags left
     return LinkScan(
@@ -326,7 +327,7 @@ def scan_links(
 
 
 def _placement_solve(ks, rho, lobe):
-    """``A^-1`` for the flagged placements ``ks`` (0-based, in the order flagged): their fits to the map alone are
+    """``A`` and ``A^-1`` for the flagged placements ``ks`` (0-based, in the order flagged): their fits to the map alone are
     ``A a``, ``A_ij = rho(k_j - k_i)`` where the two are apart (outside each other's lobe, ``|rho| < RHO_APART``:
     fitted together) or where ``j`` was flagged before ``i`` (a neighbour's amount is what is left after the
     earlier flag is taken out, as the scan found it: fitted together, two placements that overlap nearly as much as
