@@ -282,7 +282,7 @@ def scan_links(
     sig = s1 / math.sqrt(L)
     thr = sidak_threshold(alpha, n, dof)
     err = float(mismatch if signature_error is None else signature_error)
-    lobe = int(np.argmax(rho <= 0.0)) if np.any(rho <= 0.0) else n  # first lag where two fits stop overlapping
+    lobe = _lobe(rho)
     alone = float(scipy.stats.t.isf(alpha / 2.0, dof))  # one link's own threshold: where an alternative starts
     shape = lmap.shape.copy()
     ts, first, peaks, ks = [], None, (), []  # the flags' statistics and 0-based links, in the order flagged
@@ -324,6 +324,11 @@ def scan_links(
     return LinkScan(
         tuple(flags), first[0], thr, alpha, dof, first[1], first[2], L, "signature", peaks=peaks, residual=residual
     )
+
+
+def _lobe(rho):
+    """The first lag (links) where two placements' fits stop overlapping, ``rho <= 0``; ``rho.size`` if never."""
+    return int(np.argmax(rho <= 0.0)) if np.any(rho <= 0.0) else rho.size
 
 
 def _placement_solve(ks, rho, lobe):
@@ -377,7 +382,7 @@ def _alternatives(t, k, rho, r_noise, floor, alpha, err):
     local maxima outside ``k``'s lobe, past ``floor``, with ``t[k] - t[j]`` under the noise's one-sided ``alpha``
     quantile of that difference plus what a signature error ``err`` (relative) can move it."""
     n = t.size
-    lobe = int(np.argmax(rho <= 0.0)) if np.any(rho <= 0.0) else n  # first lag where the fits stop overlapping
+    lobe = _lobe(rho)
     z = float(scipy.stats.norm.isf(alpha))
     out = []
     for j in np.argsort(-t):
