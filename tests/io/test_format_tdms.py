@@ -50,6 +50,13 @@ def test_channels_sampled_differently_need_a_choice(tmp_path):
     assert slow.attrs["sample_rate_hz"] == pytest.approx(FS / 2, rel=1e-12)
 
 
+def test_index_file_named(tmp_path):
+    p = tmp_path / "daq.tdms_index"
+    p.write_bytes(b"TDSh" + b"\x00" * 24)
+    with pytest.raises(RecordingError, match=r"daq\.tdms_index: a TDMS index file .*expected the \.tdms file"):
+        read_recording(p)
+
+
 def test_missing_extra_named(tmp_path, monkeypatch):
     import sys
 

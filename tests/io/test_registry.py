@@ -152,6 +152,7 @@ def test_order_is_fixed_and_the_last_entry_claims_everything():
         ("x.dat", b"TDSm" + b"\x00" * 24, None, "tdms"),
         ("x.csv", b"    -1\n    58\nid1\n", None, "uff"),  # UFF is never read as CSV
         ("x.mseed", b"    -1\n    58b     1     2    11\n", None, "uff"),
+        ("x.csv", b"-1\n7\n3\n", None, "text"),  # a column of integers starting with -1 is no UFF
         ("x.nc", b"time,a\n0,1\n", None, "netcdf"),  # a netCDF suffix whatever the content
         ("x.csv", b"CDF\x01" + b"\x00" * 32, None, "netcdf"),
         ("x.csv", b"\x00\x01\x02binary", None, "seismic"),  # NUL bytes, not UTF-16: binary

@@ -312,7 +312,8 @@ def read_recording(
         is opened.
     format : str, optional
         Read the file with this entry of the reader table (one of
-        :func:`format_names`: ``"netcdf"``, ``"seismic"``, ``"text"``) instead of
+        :func:`format_names`: ``"matlab"``, ``"hdf5"``, ``"netcdf"``, ``"wav"``, ``"uff"``,
+        ``"seismic"``, ``"text"`` ...) instead of
         the one its content and suffix choose (see :mod:`vibkit.io.registry`).
 
     date_order : {"dmy", "mdy"}, optional

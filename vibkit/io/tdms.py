@@ -21,11 +21,16 @@ __all__ = ["sniff_tdms", "read_tdms"]
 
 
 def sniff_tdms(probe) -> bool:
-    return probe.head[:4] == b"TDSm" or probe.suffix == ".tdms"
+    """A TDMS file (lead-in ``TDSm``), its index (``TDSh``, ``.tdms_index``) or the ``.tdms`` suffix."""
+    return probe.head[:4] in (b"TDSm", b"TDSh") or probe.suffix in (".tdms", ".tdms_index")
 
 
 def read_tdms(path, data, options):
     """A TDMS file (see the module docstring)."""
+    if data[:4] == b"TDSh":
+        raise RecordingError(
+            path, None, "a TDMS index file (.tdms_index) holds no samples; expected the .tdms file it indexes"
+        )
     try:
         from nptdms import TdmsFile
     except ImportError:

@@ -57,9 +57,16 @@ _FUNCTIONS = {
 }
 
 
+#: dataset numbers of the universal file format that open files (header 151, units 164, nodes 15/2411,
+#: elements 2412, functions 58, data at nodes 55/2414 ...): a column of integers that happens to start
+#: with -1 is not taken for UFF unless its second value is one of these
+DATASETS = frozenset(b"15 18 55 58 82 151 164 781 1858 2400 2411 2412 2414 2420 2429 2430 2435 2452 2467 2477".split())
+
+
 def sniff_uff(probe) -> bool:
-    """Content that opens with a ``-1`` delimiter line and a dataset number (any suffix)."""
-    return _DELIM.match(probe.head.lstrip(b"\xef\xbb\xbf\r\n")) is not None
+    """Content that opens with a ``-1`` delimiter line and a known dataset number (any suffix)."""
+    m = _DELIM.match(probe.head.lstrip(b"\xef\xbb\xbf\r\n"))
+    return m is not None and m.group(1).rstrip(b"b") in DATASETS
 
 
 def rate_from_increment(text: str) -> tuple[float, str | None]:
