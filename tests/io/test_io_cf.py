@@ -52,6 +52,7 @@ def _check_seconds(path, expected):
     with h5py.File(path, "r") as f:
         units = f["time"].attrs["units"]
         assert (units.decode() if isinstance(units, bytes) else units) == "s"
+        assert "_FillValue" not in f["time"].attrs  # a coordinate has no missing values
         np.testing.assert_array_equal(f["time"][()], expected)
     if shutil.which("ncdump"):
         head = subprocess.run(["ncdump", "-h", str(path)], capture_output=True, text=True, check=True).stdout

@@ -98,6 +98,7 @@ def cf_attrs(ds: xr.Dataset) -> xr.Dataset:
         attrs = out.variables["time"].attrs
         attrs.update(units="s", standard_name="time", axis="T")
         attrs.setdefault("comment", comment)
+        out["time"].encoding["_FillValue"] = None  # a coordinate has no missing values (CF 5): no fill value
     return out
 
 
