@@ -124,11 +124,35 @@ def _witmotion_packets(n):
 
 
 def test_order_is_fixed_and_the_last_entry_claims_everything():
-    assert format_names() == ("netcdf", "gzip", "zip", "witmotion", "seismic", "e4", "actigraph", "lvm", "text")
+    assert format_names() == (
+        "matlab",
+        "hdf5",
+        "netcdf",
+        "gzip",
+        "zip",
+        "witmotion",
+        "wav",
+        "tdms",
+        "uff",
+        "seismic",
+        "e4",
+        "actigraph",
+        "lvm",
+        "text",
+    )
     assert [f.name for f in FORMATS] == list(format_names())
     hdf5 = b"\x89HDF\r\n\x1a\n" + b"\x00" * 64
     cases = [  # (name, bytes, encoding, entry): each claimed by two sniffers goes to the first of them
-        ("x.mseed", hdf5, None, "netcdf"),  # HDF5 signature beats a seismic suffix
+        ("x.mseed", hdf5, None, "hdf5"),  # HDF5 signature beats a seismic suffix
+        ("x.h5", hdf5 + b"_NCProperties", None, "netcdf"),  # ... netCDF-4's attributes make it netCDF
+        ("x.nc", hdf5, None, "netcdf"),
+        ("x.csv", b"MATLAB 5.0 MAT-file, Platform: x" + b"\x00" * 90, None, "matlab"),
+        ("x.mat", b"time,a\n0,1\n", None, "matlab"),  # a .mat suffix whatever the content
+        ("x.csv", b"RIFF\x24\x00\x00\x00WAVEfmt ", None, "wav"),
+        ("x.dat", b"TDSm" + b"\x00" * 24, None, "tdms"),
+        ("x.csv", b"    -1\n    58\nid1\n", None, "uff"),  # UFF is never read as CSV
+        ("x.mseed", b"    -1\n    58b     1     2    11\n", None, "uff"),
+        ("x.csv", b"-1\n7\n3\n", None, "text"),  # a column of integers starting with -1 is no UFF
         ("x.nc", b"time,a\n0,1\n", None, "netcdf"),  # a netCDF suffix whatever the content
         ("x.csv", b"CDF\x01" + b"\x00" * 32, None, "netcdf"),
         ("x.csv", b"\x00\x01\x02binary", None, "seismic"),  # NUL bytes, not UTF-16: binary
@@ -157,8 +181,10 @@ def test_format_by_name(tmp_path):
     path = DATA / "field/layouts/phyphox.csv"
     auto, named = read_recording(path), read_recording(path, format="TEXT")
     assert auto.identical(named) and auto.attrs == named.attrs
-    assert get_format("seismic") is FORMATS[4]
-    with pytest.raises(ValueError, match=r"format must be one of 'netcdf', 'gzip', .*'lvm', 'text', got 'xlsx'"):
+    assert get_format("seismic") is FORMATS[format_names().index("seismic")]
+    with pytest.raises(
+        ValueError, match=r"format must be one of 'matlab', 'hdf5', 'netcdf', .*'lvm', 'text', got 'xlsx'"
+    ):
         read_recording(path, format="xlsx")
     with pytest.raises(ValueError, match="format must be one of"):
         read_recording(path, format=3)

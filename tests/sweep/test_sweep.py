@@ -132,6 +132,14 @@ def test_grid_equals_single_runs_bit_for_bit(grid):
     assert not (Path(out) / "runs").exists()
 
 
+def test_store_time_opens_in_seconds(grid):
+    """Plain xarray (default decoding) reads the kept series' time as float seconds, as vibkit wrote it."""
+    ds, out = grid
+    with xr.open_zarr(out) as plain:
+        assert plain["time"].dtype == np.float64 and plain["time"].attrs["units"] == "s"
+        np.testing.assert_array_equal(plain["time"].values, ds["time"].values)
+
+
 def test_rerun_of_a_complete_store_computes_nothing(grid, scene_file):
     ds, out = grid
     again = vibkit.sweep(scene_file, VARY, output=out, keep=["delta", "link_tension"], progress=False)

@@ -27,7 +27,7 @@ from .options import (
     run_speed,
     workers,
 )
-from .output import CLIError, check_output, is_stdout, msg, output_path, print_json, shown, table
+from .output import CLIError, UsageError, check_output, is_stdout, msg, output_path, print_json, shown, table
 
 EPILOG = (
     "examples (on the shipped example fleet, data/fleet-example/):\n"
@@ -38,7 +38,8 @@ EPILOG = (
     "  vibkit fleet migrate --from out/fleet.sqlite --to postgresql://tech@fleet-server/fleet\n"
     "database: --db PATH (or sqlite:///PATH) or postgresql://user@host/dbname,\n"
     "  else $VIBKIT_FLEET_DB, else ./vibkit-fleet.sqlite\n"
-    "exit codes: 0 done; 1 error; 3 scan: some files failed (others were stored or already were)\n"
+    "exit codes: 0 done; 1 error; 2 usage; 3 scan: some files failed (others were stored or\n"
+    "  already were); 4 status --alert LIMIT: a unit's latest elongation has reached that limit\n"
     "catalogue columns: file (name or glob), unit, speed_m_s, date (ISO 8601; empty: an ISO date\n"
     "  in the file name, else the recording's start time), nominal_pitch_m (empty: the unit's),\n"
     "  optional speed_sigma_m_s, channel, escalator, n_links (the links are scanned), marker_s\n"
@@ -109,6 +110,17 @@ def add_parser(subparsers):
     )
     f.add_argument("--unit", action="append", help="only this unit (repeatable)")
     add_limits(f)
+    f.add_argument(
+        "--format",
+        choices=FORMATS,
+        help="table (default), json (as --json) or csv (one row per unit, for a spreadsheet or a CMMS)",
+    )
+    f.add_argument(
+        "--alert",
+        choices=ALERT_LIMITS,
+        help=f"exit with status {STATUS_PAST_LIMIT} when a listed unit's latest elongation has reached this "
+        "limit of --limits (for a scheduled job; the output is written as without it)",
+    )
     f.set_defaults(func=run_status)
 
     f = fleet_sub(
@@ -135,6 +147,12 @@ def add_parser(subparsers):
 
 #: exit code of ``fleet scan`` when some files failed and others were stored (or already were)
 SCAN_SOME_FAILED = 3
+#: exit code of ``fleet status --alert LIMIT`` when a listed unit's latest elongation has reached LIMIT
+STATUS_PAST_LIMIT = 4
+#: ``fleet status --format``
+FORMATS = ("table", "json", "csv")
+#: ``fleet status --alert``: the limits of ``--limits WATCH,PLAN,REPLACE`` by name
+ALERT_LIMITS = ("watch", "plan", "replace")
 
 
 @contextlib.contextmanager
@@ -340,6 +358,9 @@ def _print_links(hist, always):
 
 
 def run_status(a):
+    fmt = a.format or ("json" if a.json else "table")
+    if a.json and fmt != "json":
+        raise UsageError(f"--json and --format {fmt} ask for two outputs; give one of them")
     with _fleet_db(a, create=False) as db:
         trends = db.status(limits_percent=a.limits, units=a.unit or None)
         links = {t.unit: db.links_history(t.unit) for t in trends}
@@ -349,7 +370,13 @@ def run_status(a):
     from vibkit.diagnose.report.common import report_date
 
     today = report_date()  # now, or SOURCE_DATE_EPOCH
-    if a.json:
+    code = _alert(a, trends)
+    if fmt == "csv":
+        from vibkit.fleet.export import work_list_records, write_csv
+
+        write_csv(work_list_records(trends, today.timestamp(), links), sys.stdout)
+        return code
+    if fmt == "json":
         print_json(
             "fleet.status",
             {
@@ -359,10 +386,10 @@ def run_status(a):
                 "units": [{**t.as_dict(today.timestamp()), **_links_json(links[t.unit])} for t in trends],
             },
         )
-        return 0
+        return code
     if not trends:
         print(f"{path}: no measurement stored yet")
-        return 0
+        return code
     from vibkit.diagnose.report.fleet import OVERDUE_MEANING, WORK_LIST_HEADER, work_list_rows
 
     rows = work_list_rows(trends, today_unix_s=today.timestamp())
@@ -386,7 +413,25 @@ def run_status(a):
         msg(textwrap.fill(f"note: {OVERDUE_MEANING}", 100))
     for t in trends:
         _print_links(links[t.unit], always=bool(a.unit))
-    return 0
+    return code
+
+
+def _alert(a, trends):
+    """The exit status of ``fleet status``: :data:`STATUS_PAST_LIMIT` when ``--alert`` names a limit a unit has
+    reached (said on stderr), else 0."""
+    if not a.alert:
+        return 0
+    from vibkit.fleet.export import units_past_limit
+
+    limit = a.limits[ALERT_LIMITS.index(a.alert)]
+    past = units_past_limit(trends, limit)
+    if not past:
+        return 0
+    msg(
+        f"vibkit fleet status: {len(past)} unit(s) at or past the {a.alert} limit ({limit:g} %): {', '.join(past)} "
+        f"(exit status {STATUS_PAST_LIMIT})"
+    )
+    return STATUS_PAST_LIMIT
 
 
 def _links_json(hist):

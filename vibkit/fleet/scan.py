@@ -353,9 +353,12 @@ def _scene_of(row, scenes, notes):
 def _scan_dask(jobs, take, bar, *, client, scheduler, n_workers):
     import contextlib
 
-    from distributed import as_completed
-
     from ..runtime.cluster import dask_client
+    from ..runtime.extras import require
+
+    as_completed = require(
+        "distributed", "parallel", "a fleet scan on worker processes (Dask; --workers 0 scans in this process)"
+    ).as_completed
 
     ctx = contextlib.nullcontext(client) if client is not None else dask_client(scheduler, n_workers=n_workers)
     try:

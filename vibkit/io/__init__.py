@@ -4,8 +4,10 @@
 following vibkit's data contract), choosing the reader by content and suffix from
 the table in :mod:`vibkit.io.registry`, in this order:
 
+* MATLAB MAT-files (v5 and v7.3) -> :mod:`vibkit.io.matlab`; plain HDF5 (not netCDF) -> :mod:`vibkit.io.hdf5`;
 * netCDF4/HDF5 (vibkit's own results; signature ``\\x89HDF``) and netCDF3
   (``CDF\\x01``) -> :mod:`vibkit.io.netcdf`;
+* WAV, NI TDMS, UFF/UNV dataset 58 -> :mod:`vibkit.io.wav`, :mod:`vibkit.io.tdms`, :mod:`vibkit.io.uff`;
 * waveform formats obspy reads (miniSEED, SAC, ...: by suffix, or binary content
   that is not HDF5) -> :mod:`vibkit.io.seismic`;
 * gzip and zip files holding one recording: unpacked, the recording read as below;
@@ -310,7 +312,8 @@ def read_recording(
         is opened.
     format : str, optional
         Read the file with this entry of the reader table (one of
-        :func:`format_names`: ``"netcdf"``, ``"seismic"``, ``"text"``) instead of
+        :func:`format_names`: ``"matlab"``, ``"hdf5"``, ``"netcdf"``, ``"wav"``, ``"uff"``,
+        ``"seismic"``, ``"text"`` ...) instead of
         the one its content and suffix choose (see :mod:`vibkit.io.registry`).
 
     date_order : {"dmy", "mdy"}, optional

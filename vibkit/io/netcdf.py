@@ -6,8 +6,11 @@ so a reader never sees half a file.  ``read_netcdf`` opens one back, loads it
 into memory and adds the provenance attrs of a recording.
 
 What is written follows the CF conventions (``Conventions = "CF-1.10"``, see :func:`cf_attrs`):
-``time`` counts ``seconds since`` a stated epoch, so that ``xarray.open_dataset`` (decoding
-times) gives the instants, and every variable has ``units`` and ``long_name``.
+``time`` is in seconds (``units = "s"``) from the start of the simulation or recording, so that
+``xarray.open_dataset`` and every other netCDF/HDF5 tool read float seconds, never dates from a
+stand-in epoch; a recording's start instant is the global attribute ``start_time`` (ISO 8601).  Every
+variable has ``units`` and ``long_name``.  Files written before (``time`` in ``seconds since`` an
+epoch) are read the same.
 """
 
 from __future__ import annotations
@@ -28,7 +31,8 @@ __all__ = ["read_netcdf", "write_result", "cf_attrs", "CONVENTIONS", "UNKNOWN_EP
 
 #: the CF version the written files follow
 CONVENTIONS = "CF-1.10"
-#: the epoch written when a recording states no start time, and as a simulation's t = 0 (which has no date)
+#: the epoch that earlier files wrote for a t = 0 without a date (a simulation, a recording that states no
+#: start time); read back as no start time
 UNKNOWN_EPOCH = "1970-01-01T00:00:00Z"
 _SINCE = re.compile(r"^\s*(?:s|sec|secs|second|seconds)\s+since\s+(\S.*?)\s*$", re.IGNORECASE)
 
@@ -72,10 +76,10 @@ def cf_attrs(ds: xr.Dataset) -> xr.Dataset:
     """A shallow copy of ``ds`` with the CF-1.10 attributes that :func:`write_result` writes.
 
     * ``Conventions = "CF-1.10"``;
-    * a ``time`` coordinate in seconds gets ``units = "seconds since EPOCH"``, ``standard_name =
-      "time"``, ``calendar`` and ``axis = "T"``; EPOCH is the recording's ``start_time`` (its time
-      counts seconds from it), else :data:`UNKNOWN_EPOCH`, named as such in the coordinate's
-      ``comment`` (a simulation's t = 0, a recording that states no start time);
+    * a ``time`` coordinate in seconds keeps ``units = "s"`` (a duration from t = 0, which every tool
+      reads as float seconds) and gets ``standard_name = "time"``, ``axis = "T"`` and a ``comment``
+      saying what t = 0 is: the recording's ``start_time`` (a global attribute, ISO 8601), else the
+      start of the simulation or recording, which states no date;
     * every variable gets ``long_name`` (its name where it has none) and ``units`` (``"1"``).
     """
     out = ds.copy(deep=False)
@@ -87,39 +91,47 @@ def cf_attrs(ds: xr.Dataset) -> xr.Dataset:
     if "time" in out.coords and out["time"].dtype.kind in "iuf" and out["time"].attrs.get("units", "s") == "s":
         epoch = _epoch(ds.attrs["start_time"]) if "start_time" in ds.attrs else None
         comment = (
-            f"seconds from the recording's start time {ds.attrs['start_time']}"
+            f"{_FROM_START} {ds.attrs['start_time']} (global attribute start_time)"
             if epoch
-            else f"t = 0 is the start of the simulation or recording, which states no date (or none in ISO 8601): "
-            f"the epoch {UNKNOWN_EPOCH} stands for it"
+            else f"{_NO_DATE}, which states no date (or none in ISO 8601)"
         )
         attrs = out.variables["time"].attrs
-        attrs.update(
-            units=f"seconds since {epoch or UNKNOWN_EPOCH}",
-            standard_name="time",
-            calendar="proleptic_gregorian",
-            axis="T",
-        )
+        attrs.update(units="s", standard_name="time", axis="T")
         attrs.setdefault("comment", comment)
+        out["time"].encoding["_FillValue"] = None  # a coordinate has no missing values (CF 5): no fill value
     return out
 
 
+_FROM_START = "seconds from the recording's start time"
+_NO_DATE = "seconds from the start of the simulation or recording"
+
+
 def _from_cf_time(ds: xr.Dataset, history: list) -> None:
-    """Undo :func:`cf_attrs` on ``time`` in place: ``units`` back to ``s``, the epoch kept as ``start_time``."""
+    """Undo :func:`cf_attrs` on ``time`` in place (``units`` ``s``), for files of both kinds.
+
+    Files written before this version count ``seconds since`` an epoch: ``units`` back to ``s``, the
+    epoch (unless it is :data:`UNKNOWN_EPOCH`) kept as ``start_time``.
+    """
     if "time" not in ds.coords:
         return
     attrs = ds["time"].attrs
     m = _SINCE.match(str(attrs.get("units", "")))
-    if not m:
+    if m:
+        epoch = m.group(1)
+        attrs["units"] = "s"
+        for key in ("standard_name", "calendar", "axis"):
+            attrs.pop(key, None)
+        if epoch != UNKNOWN_EPOCH and "start_time" not in ds.attrs:
+            ds.attrs["start_time"] = epoch
+            history.append(f"time in seconds since {epoch} (the start time)")
+    elif attrs.get("units") == "s" and attrs.get("axis") == "T":
+        for key in ("standard_name", "axis"):
+            attrs.pop(key, None)
+    else:
         return
-    epoch = m.group(1)
-    attrs["units"] = "s"
-    for key in ("standard_name", "calendar", "axis"):
-        attrs.pop(key, None)
-    if "stands for it" in str(attrs.get("comment", "")) or str(attrs.get("comment", "")).startswith("seconds from"):
+    comment = str(attrs.get("comment", ""))
+    if "stands for it" in comment or comment.startswith(("seconds from", _NO_DATE)):
         attrs.pop("comment")
-    if epoch != UNKNOWN_EPOCH and "start_time" not in ds.attrs:
-        ds.attrs["start_time"] = epoch
-        history.append(f"time in seconds since {epoch} (the start time)")
 
 
 def write_result(ds: xr.Dataset, path, *, overwrite: bool = False, inputs=()) -> str:

@@ -4,20 +4,27 @@
 hands them to the first entry of :data:`FORMATS` whose sniffer claims them, or to the entry the user
 names with ``format=``.  The order of :data:`FORMATS` is the priority, and it is fixed:
 
-1. ``netcdf``: netCDF4/HDF5 (signature ``\\x89HDF``) or netCDF3 (``CDF\\x01``, ``CDF\\x02``) by
+1. ``matlab`` and ``hdf5``: MATLAB MAT-files (a ``MATLAB 5.0``/``MATLAB 7.3 MAT-file`` header, or the
+   ``.mat`` suffix; :mod:`vibkit.io.matlab`), plain HDF5 (signature ``\\x89HDF`` without netCDF-4's
+   attributes in the first bytes, no netCDF suffix; :mod:`vibkit.io.hdf5`, which hands a netCDF-4
+   file it meets to the netCDF reader);
+2. ``netcdf``: netCDF4/HDF5 (signature ``\\x89HDF``) or netCDF3 (``CDF\\x01``, ``CDF\\x02``) by
    content, or a suffix of :data:`NETCDF_SUFFIXES` whatever the content (vibkit's own results,
    read by :mod:`vibkit.io.netcdf`);
-2. ``gzip`` and ``zip``: containers by signature (``\\x1f\\x8b``, ``PK\\x03\\x04``), unpacked, the one
+3. ``gzip`` and ``zip``: containers by signature (``\\x1f\\x8b``, ``PK\\x03\\x04``), unpacked, the one
    recording inside read by the entry that claims it (:mod:`vibkit.io.devices`);
-3. ``witmotion``: WitMotion WT901 SD-card logs (valid ``0x55`` packets): named and refused, saying
+4. ``witmotion``: WitMotion WT901 SD-card logs (valid ``0x55`` packets): named and refused, saying
    what reads them;
-4. ``seismic``: a suffix of :data:`SEISMIC_SUFFIXES` whatever the content, binary content (a NUL
+5. ``wav``, ``tdms``, ``uff``: WAV (``RIFF....WAVE``), NI TDMS (``TDSm`` or ``.tdms``, read by npTDMS,
+   the ``tdms`` extra), UFF/UNV (a ``-1`` delimiter line and a dataset number, any suffix: UFF is
+   never read as CSV) (:mod:`vibkit.io.wav`, :mod:`vibkit.io.tdms`, :mod:`vibkit.io.uff`);
+6. ``seismic``: a suffix of :data:`SEISMIC_SUFFIXES` whatever the content, binary content (a NUL
    byte in the first 64 KiB that is not UTF-16/32 text, unless ``encoding=`` is given), or obspy's
    ASCII layouts that start with a ``TIMESERIES`` line (read by :mod:`vibkit.io.seismic`);
-5. ``e4``, ``actigraph``, ``lvm``: text layouts whose header the generic text reader cannot read:
+7. ``e4``, ``actigraph``, ``lvm``: text layouts whose header the generic text reader cannot read:
    Empatica E4 (start time and rate rows), ActiGraph RAW CSV (``Data File Created By ActiGraph``
    banner), NI LabVIEW ``.lvm`` (``LabVIEW Measurement``) (:mod:`vibkit.io.devices`, :mod:`vibkit.io.lvm`);
-6. ``text``: everything else: CSV, TSV, logger and spreadsheet exports (read by
+8. ``text``: everything else: CSV, TSV, logger and spreadsheet exports (read by
    :mod:`vibkit.io.text.csv`, which refuses what is not text).
 
 A content signature beats a suffix only where the entry with the signature comes first; the last
@@ -208,8 +215,31 @@ def _read_text(path, data, options):
     return read_csv(path, data, **{k: options[k] for k in _TEXT_OPTIONS})
 
 
+def _module(module, name):
+    """The reader ``name`` of ``vibkit.io.<module>``, imported when called (``read(path, data, options)``)."""
+
+    def read(path, data, options):
+        import importlib
+
+        return getattr(importlib.import_module(f"vibkit.io.{module}"), name)(path, data, options)
+
+    return read
+
+
 #: the reader table, in priority order (see the module docstring)
 FORMATS: tuple[Format, ...] = (
+    Format(
+        "matlab",
+        "MATLAB MAT-files: v4/v5/v7 (scipy) and v7.3 (HDF5 with a 'MATLAB 7.3' header), by header or .mat suffix",
+        _sniff("matlab", "sniff_matlab"),
+        _module("matlab", "read_matlab"),
+    ),
+    Format(
+        "hdf5",
+        "plain HDF5 (not netCDF): datasets of samples with a sample_rate/fs attribute or a time dataset",
+        _sniff("hdf5", "sniff_hdf5"),
+        _module("hdf5", "read_hdf5"),
+    ),
     Format(
         "netcdf", "netCDF4/HDF5 and netCDF3 (vibkit's results), by signature or suffix", _sniff_netcdf, _read_netcdf
     ),
@@ -230,6 +260,24 @@ FORMATS: tuple[Format, ...] = (
         "WitMotion WT901 SD-card binary logs (0x55 packets): named and refused, with what reads them",
         _sniff("devices", "sniff_witmotion"),
         _device("read_witmotion"),
+    ),
+    Format(
+        "wav",
+        "WAV files: integer PCM (counts) and 32/64-bit float samples",
+        _sniff("wav", "sniff_wav"),
+        _module("wav", "read_wav"),
+    ),
+    Format(
+        "tdms",
+        "NI TDMS files (needs the tdms extra: npTDMS), by signature 'TDSm' or .tdms suffix",
+        _sniff("tdms", "sniff_tdms"),
+        _module("tdms", "read_tdms"),
+    ),
+    Format(
+        "uff",
+        "Universal File Format (UFF/UNV) dataset 58 time responses, ASCII and binary 58b, by the '-1' delimiter",
+        _sniff("uff", "sniff_uff"),
+        _module("uff", "read_uff"),
     ),
     Format(
         "seismic",

@@ -29,8 +29,13 @@ def _load(path):
         warnings.simplefilter("always")
         try:  # obspy's import warns about importlib.metadata on some Pythons; not our user's concern
             import obspy
-        except ImportError as exc:  # pragma: no cover - obspy is a declared dependency
-            raise RecordingError(path, None, f"reading waveform files needs obspy ({exc})") from None
+        except ImportError:
+            raise RecordingError(
+                path,
+                None,
+                "binary content read as a waveform file (miniSEED, SAC ...), which needs obspy, not installed: "
+                "pip install 'vibkit[seismic]'",
+            ) from None
         caught.clear()
         try:
             st = obspy.read(str(path))

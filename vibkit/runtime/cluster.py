@@ -36,11 +36,12 @@ def dask_client(scheduler: str | None = None, *, n_workers: int | None = None):
     n_workers : int, optional
         Processes of the local cluster (default: one per core). Ignored with a scheduler address.
     """
-    try:
-        import dask
-        from distributed import Client, LocalCluster
-    except ImportError as exc:  # pragma: no cover - a declared dependency
-        raise ImportError("vibkit needs dask.distributed for sweeps and fleet scans: pip install distributed") from exc
+    from .extras import require
+
+    distributed = require("distributed", "parallel", "sweeps and fleet scans on worker processes (Dask)")
+    import dask
+
+    Client, LocalCluster = distributed.Client, distributed.LocalCluster
     address = scheduler or dask.config.get("scheduler-address", None)
     if address:
         with Client(address) as client:

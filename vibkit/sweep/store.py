@@ -38,8 +38,15 @@ _RUNNING = (
 )
 
 
+def _zarr():
+    """The zarr module (the ``parallel`` extra), or a one-line error naming the extra."""
+    from ..runtime.extras import require
+
+    return require("zarr", "parallel", "sweep stores")
+
+
 def _zkw():
-    import zarr
+    zarr = _zarr()
 
     return {"zarr_format": 2} if int(zarr.__version__.split(".")[0]) >= 3 else {}
 
@@ -52,7 +59,7 @@ class _Store:
     """A sweep's Zarr directory: definition in the root attrs, one group per finished run."""
 
     def __init__(self, path, plan, *, force):
-        import zarr
+        zarr = _zarr()
 
         self.path = Path(path)
         self.plan = plan
@@ -124,7 +131,7 @@ class _Store:
         return len(self.done_runs(read_data=False))
 
     def _attrs(self):
-        import zarr
+        zarr = _zarr()
 
         try:
             return dict(zarr.open_group(str(self.path), mode="r", **_zkw()).attrs)
@@ -161,7 +168,8 @@ class _Store:
         """Run index -> record, for every run whose done flag is on disk (without the kept series if not
         ``read_data``)."""
         import numpy as np
-        import zarr
+
+        zarr = _zarr()
 
         out = {}
         runs = self.path / "runs"
@@ -201,7 +209,8 @@ class _Store:
         run's group is whole or absent.  A run another process stored first is left as it is (same sweep, same
         numbers)."""
         import numpy as np
-        import zarr
+
+        zarr = _zarr()
 
         final = self.path / _run_group(rec["index"])
         tmp = self.path / "runs" / f".r{rec['index']:06d}.{os.getpid()}.tmp"
@@ -258,7 +267,7 @@ class _Store:
             )
             self._clear_root()
             ds.to_zarr(str(self.path), mode="a", consolidated=False, **_zkw())
-            import zarr
+            zarr = _zarr()
 
             zarr.consolidate_metadata(str(self.path))
 
@@ -276,7 +285,7 @@ class _Store:
 
         Returns False (and writes nothing) when another process consolidated the same sweep first.
         """
-        import zarr
+        zarr = _zarr()
 
         with self.lock(exclusive=True):
             if self._state() == "complete":
@@ -300,7 +309,7 @@ class _Store:
             self._tidy()
 
     def _tidy(self):
-        import zarr
+        zarr = _zarr()
 
         if (self.path / "runs").exists():
             shutil.rmtree(self.path / "runs")
