@@ -114,7 +114,7 @@ def run(a):
     if rows:
         print(table(rows, header))
     msg(
-        f"{src}: {len(found.rides)} ride(s) in {len(found.still_spans)} still span(s) of >= 8 s; link pass searched in "
+        f"{src}: {len(found.rides)} ride(s) in {len(found.still_spans)} still span(s) of >= 6 s; link pass searched in "
         f"{found.band_hz[0]:.3g}-{found.band_hz[1]:.3g} Hz, false-alarm probability <= {found.p_fa:g} per span"
         + ("" if pitch is not None else "; no nominal pitch: no speed (give --nominal-pitch or --escalator)")
     )

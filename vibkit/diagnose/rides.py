@@ -145,7 +145,7 @@ def find_rides(
     rated_speed=None,
     band=None,
     p_fa=1e-3,
-    min_ride_s=8.0,
+    min_ride_s=6.0,
     trim_s=1.0,
     still_threshold=STILL_THRESHOLD,
 ) -> RideSearch:
@@ -166,7 +166,7 @@ def find_rides(
     p_fa : float
         Bound on the false-alarm probability of each still span's test (default 1e-3).
     min_ride_s : float
-        Shortest still span tested [s] (default 8).
+        Shortest still span tested [s] (default 6: an 8 s ride less the walking band's 2 s window).
     trim_s : float
         Left out at each end of a still span: stepping on and off [s] (default 1).
     still_threshold : float
