@@ -17,13 +17,13 @@ import argparse
 import errno
 import sys
 
-from . import bench, compare, fleet, links, pitch, report, ride, scene, simulate, spectrum, sweep
+from . import bench, compare, fleet, links, pitch, report, ride, rides, scene, simulate, spectrum, sweep
 from .output import UsageError, color, msg
 
 __all__ = ["main"]
 
 # in the order ``vibkit --help`` lists them
-COMMANDS = (simulate, scene, spectrum, pitch, links, compare, report, sweep, ride, fleet, bench)
+COMMANDS = (simulate, scene, spectrum, pitch, links, compare, report, sweep, ride, rides, fleet, bench)
 
 
 class _Parser(argparse.ArgumentParser):

@@ -248,7 +248,7 @@ def add_sample_rate(sp):
 
 #: what each command analyses without --channel (the end of --channel's help)
 CHANNEL_FIRST = "the first that is not a sample counter"
-CHANNEL_EVERY = "every vibration channel, the numbers from the one with the smallest sigma once the others agree"
+CHANNEL_EVERY = "every vibration channel, the numbers from the one with the most evidence once the others agree"
 CHANNEL_LENGTH = "the first in a length unit, a tensioner displacement; else the first vibration channel"
 
 

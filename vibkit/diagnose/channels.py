@@ -5,7 +5,7 @@
 combines them: the result comes from the channels where the link pass is
 found (status ``ok`` or ``inconclusive``); when several are, their fundamentals must agree within
 :data:`CONSISTENCY_SIGMAS` combined sigmas (else the recording is refused as ``implausible``: two
-periodicities, not one chain), and the channel with the smallest sigma gives the numbers. A vibkit
+periodicities, not one chain), and the channel with the most evidence (detection statistic over its threshold) gives the numbers. A vibkit
 simulation is one chain: its sensor decides alone (:func:`decision_channels`).
 
 :func:`speed_from_recording` finds a chain speed the file states (Leon's ``chain_speed_m_s``, a
@@ -231,7 +231,7 @@ def estimate_channels(recording, *, channel=None, **kwargs) -> ChannelsResult:
         else:
             reason = "no channel carries the link pass: " + "; ".join(f"{e.channel}: {e.reason}" for e in ests)
         return ChannelsResult(status, reason, None, ests, errors)
-    best = min(found, key=lambda e: e.fundamental_sigma_hz)
+    best = max(found, key=_evidence)
     bad = [
         e
         for e in found
@@ -257,9 +257,21 @@ def estimate_channels(recording, *, channel=None, **kwargs) -> ChannelsResult:
     if len(found) > 1:
         reason += (
             f"; channels {', '.join(e.channel for e in found)} see the same link pass "
-            f"(within {CONSISTENCY_SIGMAS:g} sigma), numbers from {best.channel} (smallest sigma)"
+            f"(within {CONSISTENCY_SIGMAS:g} sigma), numbers from {best.channel} (the most evidence: its detection "
+            "statistic furthest over its threshold)"
         )
     return ChannelsResult(best.status, reason, best, ests, errors)
+
+
+def _evidence(e):
+    """How strongly a channel's record shows its link pass: its detection statistic over the statistic's
+    threshold (the harmonic sum's, at the same false-alarm probability), then the smaller frequency sigma.  A
+    phone's lateral axis can carry a faint line whose formal sigma is the smallest of the three (its noise is
+    small too) while the travel and vertical axes carry the family: the numbers come from the evidence."""
+    det = e.detection or {}
+    stat, thr = det.get("statistic"), det.get("threshold")
+    ratio = float(stat) / float(thr) if stat is not None and thr and math.isfinite(float(thr)) else 0.0
+    return (ratio if math.isfinite(ratio) else 0.0, -float(e.fundamental_sigma_hz))
 
 
 def _agreement_sigma(e):

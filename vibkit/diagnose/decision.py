@@ -388,6 +388,11 @@ def _check_plausible(ev, p, checks, window_percent, catalogue):
     one, around every catalogue pitch); None when plausible."""
     f, v = float(ev.fundamental_hz), float(ev.speed_m_s)
     wlo, whi = (float(x) for x in window_percent)
+    # a speed known to 5 % cannot tell a pitch 3 % short from a nominal one: the window widens by two sigmas of the
+    # implied pitch (speed and frequency), so that "implausible" is said only where the data exclude the chain
+    sf = float(ev.fundamental_sigma_hz) if math.isfinite(float(ev.fundamental_sigma_hz)) else 0.0
+    widen = 200.0 * math.hypot(sf / f, float(ev.speed_sigma_m_s or 0.0) / v)
+    wlo, whi = wlo - widen, whi + widen
     if ev.nominal_pitch_m is not None:
         nom = float(ev.nominal_pitch_m)
         el = 100.0 * (p / nom - 1.0)
@@ -535,6 +540,17 @@ def _verdict(ev, p, checks):
             else f"elongation {el:+z.2f} % ({SPEED_SIGMA_NOT_STATED}): the frequency's part of its sigma alone, "
             f"{el_sigma:.2g} %, is {SIGMA_TOO_LARGE} "
         )
+        speed_part = float(ev.speed_sigma_m_s or 0.0) / v
+        if stated and speed_part > sf / f:
+            # what the record can tell instead: the chain's actual speed from the link pass and the nominal pitch
+            sv = f * nom * sf / f
+            why += (
+                f"({need:.2g} %): the speed's uncertainty ({100 * speed_part:.2g} %) covers the elongation; the link "
+                f"pass and the nominal pitch give the chain's actual speed {fmt_pm(f * nom, sv)} m/s, "
+                f"{fmt_pm(100 * (f * nom / v - 1), 100 * sv / v, sign=True)} % from the {v:g} m/s given; measure the "
+                "speed on a step (a tachometer) for an elongation verdict"
+            )
+            return Decision(STATUS_INCONCLUSIVE, why, verdict="inconclusive", implied_pitch_m=p, checks=checks)
         return Decision(
             STATUS_INCONCLUSIVE,
             f"{why}({need:.2g} %); record longer, or measure the speed better, for a verdict",

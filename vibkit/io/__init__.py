@@ -31,6 +31,7 @@ import stat
 from .channels import resolve_channel
 from .errors import RecordingError
 from .netcdf import write_result
+from .phone import is_phone_export, read_phone_export
 from .registry import NETCDF_SUFFIXES, SEISMIC_SUFFIXES, detect_format, format_names, get_format
 
 __all__ = [
@@ -367,6 +368,8 @@ def read_recording(
     spath = os.fspath(path)
     if spath == STDIN:
         return _read_stdin(fmt, max_recording_bytes(max_bytes), options)
+    if os.path.isdir(spath) and is_phone_export(os.listdir(spath)):
+        return read_phone_export(spath, options)
     data = _open_checked(spath, max_recording_bytes(max_bytes))
     if not data:
         raise RecordingError(spath, None, "file is empty (0 bytes); expected a recording")

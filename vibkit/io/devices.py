@@ -28,6 +28,7 @@ from datetime import datetime, timezone
 import numpy as np
 
 from .errors import RecordingError
+from .phone import is_phone_export, read_phone_export
 from .recording import Channel, build_recording
 from .text.units import parse_unit
 
@@ -303,6 +304,8 @@ def read_zip(path, data, options):
         ]
     except (zipfile.BadZipFile, OSError, ValueError) as exc:
         raise RecordingError(path, None, f"zip archive that cannot be read ({exc}); expected a whole .zip") from None
+    if len(infos) != 1 and is_phone_export([i.filename for i in infos]):
+        return read_phone_export(path, options)
     if len(infos) != 1:
         listed = ", ".join(i.filename for i in infos[:6]) + (" ..." if len(infos) > 6 else "")
         raise RecordingError(

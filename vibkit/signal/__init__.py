@@ -15,7 +15,8 @@ Peaks and frequency estimates
     interpolated_dft, FrequencyEstimate, crb_harmonic, crb_single_tone, mean_link_pass_frequency,
     MeanFrequency
 Detection and invalid samples
-    detect_link_pass, LinkPassDetection, flag_invalid, InvalidSamples, quantisation_step
+    detect_link_pass, LinkPassDetection, flag_invalid, InvalidSamples, quantisation_step,
+    steady_line, SteadyLine, line_level, walking_level, still_spans
 Order tracking
     track_phase, PhaseTrack, phase_from_tacho, phase_from_shaft_angle, AngleSignal,
     resample_to_angle, order_spectrum, order_map, vold_kalman, VoldKalmanResult
@@ -68,6 +69,8 @@ from .ride import (
     peak_to_peak_values,
 )
 from .spectral import WelchResult, amplitude_spectrum, spectrogram, study_power_spectrum, welch_psd
+from .steadyline import SteadyLine, line_level, steady_line
+from .stillness import still_spans, walking_level
 from .weighting import WEIGHTINGS, Weighting, frequency_weighting, frequency_weighting_response, frequency_weighting_sos
 from .xr import (
     CombinedEstimate,
@@ -117,6 +120,11 @@ __all__ = [
     "flag_invalid",
     "InvalidSamples",
     "quantisation_step",
+    "steady_line",
+    "SteadyLine",
+    "line_level",
+    "walking_level",
+    "still_spans",
     # Order tracking
     "track_phase",
     "PhaseTrack",

@@ -256,7 +256,7 @@ def analyse(
         nominal_pitch = sc.sprocket.pitch
     # the per-channel decision of `spectrum` and `pitch` (vibkit.diagnose.channels.estimate_channels): every
     # vibration channel (or the one asked for) estimated, channels that disagree refused, the numbers
-    # from the channel with the smallest sigma
+    # from the channel with the most evidence
     # the unit's own sprocket and band where a profile names the unit (a scene given beside it may be another's)
     teeth = int(profile.teeth) if profile is not None else sc.sprocket.teeth if sc else 28
     if band is None and profile is not None and speed is not None:

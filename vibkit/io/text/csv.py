@@ -162,7 +162,9 @@ def _read_csv(
     scale_meta = _scale_from_meta(lay.pairs)
     for j, u in app_units(path, colnames.names, [s[1] for s in colnames.split], lay.free, history).items():
         colnames.split[j] = (colnames.split[j][0], u, None)
-    tcol, clocks = _choose_time_column(path, time_column, colnames, n, header_line, history, cols, dec)
+    tcol, clocks = _choose_time_column(
+        path, time_column, colnames, n, header_line, history, cols, dec, headerless=lay.header is None
+    )
     tcol, clocks, date_col = _date_and_time(tcol, clocks, cols, colnames, history)
     chan_idx, explicit = _select_channels(path, channel, tcol, colnames, n, header_line, clocks)
     override = _unit_overrides(path, units, chan_idx, colnames)

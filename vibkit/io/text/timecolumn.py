@@ -48,12 +48,15 @@ def _first_cell(cells):
     return cells[0] if len(cells) else ""
 
 
-def _choose_time_column(path, time_column, colnames: _ColumnNames, n, header_line, history, cols=None, dec="."):
+def _choose_time_column(
+    path, time_column, colnames: _ColumnNames, n, header_line, history, cols=None, dec=".", headerless=False
+):
     """(index of the time column or None, indices of other clock columns).
 
     As given (``time_column=``), else the first column named like time or a clock (``time``,
     ``elapsed (s)``, ``epoc (ms)``, ``seconds_elapsed``) that holds numbers, else the first
-    that holds time stamps.  The other clock columns are no channels.
+    that holds time stamps, else (a file with no header row) a first column that reads as seconds
+    (:func:`_seconds_column`).  The other clock columns are no channels.
     """
     tcol = None
     clocks = []
@@ -76,6 +79,11 @@ def _choose_time_column(path, time_column, colnames: _ColumnNames, n, header_lin
             clocks = [j for j in cand if j != tcol]
             for j in clocks:
                 history.append(f"column '{colnames.shown[j]}' is another clock, not a channel")
+        elif headerless and n >= 2:
+            why = _seconds_column(cols[0])
+            if why is not None:
+                tcol = 0
+                history.append(f"no header row; column 1 read as time in seconds ({why}; --time-column none if not)")
         return tcol, clocks
     if time_column is False:
         history.append("no time column (time_column=False given)")
@@ -102,6 +110,26 @@ def _choose_time_column(path, time_column, colnames: _ColumnNames, n, header_lin
                 tcol = j
                 break
     return tcol, clocks
+
+
+def _seconds_column(cells):
+    """Why a headerless file's first column is a clock in seconds (phone exports such as ADVIO's: ``0.0079,
+    -0.73, 8.04, 6.03``), or None: finite numbers, strictly increasing, not all whole numbers (a sample
+    counter is no clock), a median step of 10 us to 60 s whose steps stay within a factor of 5 of it in
+    99 % of the rows (a clock that jitters, not a measured quantity that grows)."""
+    try:
+        t = np.asarray(cells, dtype=float) if isinstance(cells, np.ndarray) else np.array([float(c) for c in cells])
+    except (TypeError, ValueError):
+        return None
+    if t.size < 3 or not np.all(np.isfinite(t)):
+        return None
+    dt = np.diff(t)
+    if not np.all(dt > 0) or np.all(t == np.round(t)):
+        return None
+    step = float(np.median(dt))
+    if not 1e-5 <= step <= 60.0 or np.mean((dt > 5 * step) | (dt < step / 5)) > 0.01:
+        return None
+    return f"strictly increasing, median step {step * 1e3:.4g} ms"
 
 
 #: a calendar date alone (no clock): 2026-05-04, 04.05.2026, 5/4/26

@@ -1,0 +1,160 @@
+"""Escalator rides in real phone walks (ADVIO, ../shared/realworld, CC BY-NC 4.0: read in place, never copied)
+and in synthetic records whose truth is known."""
+
+from __future__ import annotations
+
+import json
+import zipfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import vibkit
+from vibkit.cli import main
+from vibkit.diagnose.rides import find_rides
+from vibkit.io import RecordingError
+from vibkit.signal.steadyline import steady_line
+
+REAL = Path(__file__).resolve().parents[2] / ".." / "shared" / "realworld"
+needs_real = pytest.mark.skipif(
+    not REAL.is_dir(), reason="../shared/realworld (the ADVIO walks) is not beside the clone"
+)
+
+#: the rides as SOURCES.md gives them (good to about 1 s)
+RIDES = {
+    "advio-01": [(25, 44), (84, 101), (141, 158), (199, 214)],
+    "advio-04": [(13, 28), (36, 52), (62, 78), (89, 110)],
+}
+DIRECTION = {"advio-01": "up", "advio-04": "down"}
+CONTROLS = ("advio-02", "advio-05", "advio-07", "advio-11", "advio-13")
+
+
+def _independent_line(seq, t0, t1):
+    """An estimate of the ride's line made another way than vibkit's: Welch (8 s Hann segments, 7/8 overlap) of
+    each accelerometer axis, summed normalised by each axis' median over 1.5-10 Hz, the peak in 3-5 Hz refined by a
+    parabola through the log levels, on the ride trimmed by 3 s at each end (stepping on and off, the landings)."""
+    from scipy import signal
+
+    d = np.loadtxt(REAL / seq / "iphone" / "accelerometer.csv", delimiter=",")
+    fs = 1 / np.median(np.diff(d[:, 0]))
+    tt = np.arange(t0 + 3, t1 - 3, 1 / fs)
+    total = 0
+    for k in (1, 2, 3):
+        x = np.interp(tt, d[:, 0], d[:, k])
+        f, p = signal.welch(x - x.mean(), fs, nperseg=int(8 * fs), noverlap=int(7 * fs))
+        total = total + p / np.median(p[(f > 1.5) & (f < 10)])
+    sel = np.flatnonzero((f > 3) & (f < 5))
+    j = sel[np.argmax(total[sel])]
+    y0, y1, y2 = np.log(total[j - 1 : j + 2])
+    return f[j] + 0.5 * (y0 - y2) / (y0 - 2 * y1 + y2) * (f[1] - f[0])
+
+
+@needs_real
+def test_headerless_phone_file_reads_its_first_column_as_seconds():
+    ds = vibkit.read_recording(REAL / "advio-01" / "iphone" / "accelerometer.csv")
+    t = ds["time"].values
+    raw = np.loadtxt(REAL / "advio-01" / "iphone" / "accelerometer.csv", delimiter=",", max_rows=5)
+    np.testing.assert_array_equal(t[:5], raw[:, 0])
+    assert list(ds.data_vars) == ["channel_1", "channel_2", "channel_3"]
+    assert "column 1 read as time in seconds" in ds.attrs["history"]
+
+
+def test_a_sample_counter_is_not_read_as_seconds(tmp_path):
+    p = tmp_path / "counter.csv"
+    p.write_text("".join(f"{i},{np.sin(i / 3):.6f}\n" for i in range(200)))
+    with pytest.raises(RecordingError, match="no time column"):
+        vibkit.read_recording(p)
+
+
+@needs_real
+def test_phone_folder_and_zip_read_as_one_recording(tmp_path):
+    folder = REAL / "advio-04" / "iphone"
+    ds = vibkit.read_recording(folder)
+    assert {"acc_x", "acc_y", "acc_z", "gyro_x", "gyro_y", "gyro_z", "pressure", "altitude"} <= set(ds.data_vars)
+    assert ds["acc_x"].attrs["quantity"] == "acceleration" and ds["acc_x"].attrs["units"] == "m/s^2"
+    assert ds["pressure"].attrs["units"] == "Pa"
+    # ADVIO's barometer writes kPa: 99.8 kPa is near sea level
+    assert 9.0e4 < float(ds["pressure"].median()) < 1.1e5
+    z = tmp_path / "phone.zip"
+    with zipfile.ZipFile(z, "w") as zf:
+        for name in ("accelerometer.csv", "gyro.csv", "barometer.csv"):
+            zf.write(folder / name, f"iphone/{name}")
+    dz = vibkit.read_recording(z)
+    np.testing.assert_array_equal(dz["gyro_y"].values, ds["gyro_y"].values)
+
+
+@needs_real
+@pytest.mark.parametrize("seq", sorted(RIDES))
+def test_every_ride_found_in_the_phone_folder(seq):
+    found = find_rides(vibkit.read_recording(REAL / seq / "iphone"), nominal_pitch=0.13333)
+    assert len(found.rides) == 4, found.still_spans
+    for ride, (t0, t1) in zip(found.rides, RIDES[seq]):
+        assert abs(ride.start_s - t0) <= 3.5 and abs(ride.end_s - t1) <= 3.5
+        assert ride.direction == DIRECTION[seq]
+        truth = _independent_line(seq, t0, t1)
+        assert abs(ride.link_pass_hz / truth - 1) < 0.005
+        # the stated sigma covers the difference (with the independent estimate's own error, about 0.01 Hz)
+        assert abs(ride.link_pass_hz - truth) < 3 * np.hypot(ride.link_pass_sigma_hz, 0.01)
+        # 0.5 m/s escalators (EN 115-1: within 5 %) at 133.33 mm
+        assert 0.47 < ride.speed_m_s < 0.54
+        assert 0.15 < abs(ride.vertical_speed_m_s) < 0.35
+
+
+@needs_real
+def test_rides_from_the_accelerometer_file_alone():
+    found = find_rides(vibkit.read_recording(REAL / "advio-01" / "iphone" / "accelerometer.csv"))
+    assert len(found.rides) == 4
+    assert all(r.direction == "unknown" and r.speed_m_s is None for r in found.rides)
+
+
+@needs_real
+@pytest.mark.parametrize("seq", CONTROLS)
+def test_no_ride_where_there_is_none(seq):
+    found = find_rides(vibkit.read_recording(REAL / seq / "iphone"))
+    assert found.rides == ()
+
+
+@needs_real
+def test_cli_rides_json(capsys):
+    assert (
+        main(["rides", str(REAL / "advio-01" / "iphone"), "--nominal-pitch", "133.33mm", "--speed", "0.5", "--json"])
+        == 0
+    )
+    out = json.loads(capsys.readouterr().out)
+    assert out["schema"] == "vibkit.rides/1"
+    assert len(out["rides"]) == 4
+    r = out["rides"][0]
+    for key in ("start_s", "end_s", "direction", "link_pass_hz", "link_pass_sigma_hz", "speed_m_s", "speed_sigma_m_s"):
+        assert key in r
+
+
+def test_steady_line_frequency_and_sigma_of_a_known_tone():
+    """A 3.85 Hz tone 0.02 m/s^2 in white noise of 0.05 m/s^2 on two of three axes, 15 s at 100 Hz: the
+    frequency within 3 stated sigmas in 50 draws, in at least 90 % within 2."""
+    rng = np.random.default_rng(7)
+    fs, n, f0 = 100.0, 1500, 3.85
+    t = np.arange(n) / fs
+    z = []
+    for _ in range(50):
+        x = rng.normal(0, 0.05, (3, n))
+        x[0] += 0.02 * np.sin(2 * np.pi * f0 * t + rng.uniform(0, 6))
+        x[2] += 0.015 * np.sin(2 * np.pi * f0 * t + rng.uniform(0, 6))
+        line = steady_line(x, fs, band=(2.9, 9.0))
+        assert line.detected
+        z.append((line.frequency_hz - f0) / line.sigma_hz)
+    z = np.abs(np.asarray(z))
+    assert np.all(z < 3.5)
+    assert np.mean(z < 2) >= 0.9
+
+
+def test_steady_line_false_alarms_in_noise_stay_under_the_bound():
+    """White and correlated (one noise seen by all axes) Gaussian noise, 300 records: detections stay within the
+    binomial allowance of p_fa = 0.01."""
+    rng = np.random.default_rng(11)
+    hits = 0
+    for k in range(300):
+        common = rng.normal(size=1500)
+        x = rng.normal(size=(3, 1500)) + (common if k % 2 else 0)
+        hits += steady_line(x, 100.0, band=(2.9, 9.0), p_fa=0.01).detected
+    assert hits <= 8  # expected at most 3; P(Binomial(300, 0.01) > 8) < 0.005

@@ -1,0 +1,290 @@
+"""Escalator rides in a phone recording of a walk: where the person stood on a moving chain, and what the
+ride says of it.
+
+A ride leaves three marks in a phone's record: the walking band of ``|a|`` falls to the standing level
+(:mod:`vibkit.signal.stillness`); a steady narrow line, the chain's link pass, appears on the
+accelerometer's and gyroscope's axes (:func:`vibkit.signal.steadyline.steady_line`); the barometer climbs
+or falls steadily (0.2-0.4 m/s of vertical speed on an escalator).  :func:`find_rides` looks for still
+spans of at least ``min_ride_s``, trims ``trim_s`` at each end (stepping on and off), and calls a span a
+ride only where the line stands over the noise with false-alarm probability under ``p_fa``: standing in
+a lift, on a train, at a counter is still without that line, and says "no ride".  Walking up a moving
+escalator is not found (the gait hides the line).
+
+What a ride can say without a tachometer: the link-pass frequency with its sigma and, given the chain's
+nominal pitch, the chain's *actual* speed (pitch times frequency) and its deviation from the rated speed
+(EN 115-1 allows +-5 %).  It cannot tell the chain's elongation: that needs a speed measured to better
+than the elongation, which a phone does not give.  The barometer gives the direction and the vertical
+speed, and with the speed the incline.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+
+from ..signal.steadyline import line_level, steady_line
+from ..signal.stillness import STILL_THRESHOLD, still_spans, walking_level
+
+__all__ = ["DEFAULT_BAND_HZ", "Ride", "RideSearch", "find_rides"]
+
+#: where a chain's link pass may be without a profile [Hz]: 0.4-0.9 m/s over 101.6-135 mm pitches
+DEFAULT_BAND_HZ = (2.9, 9.0)
+#: air density times gravity near sea level [Pa/m]: the barometric pressure gradient
+_RHO_G = 1.2 * 9.81
+#: |vertical speed| under which a ride is called level [m/s]
+_LEVEL_VZ = 0.05
+
+
+@dataclass(frozen=True)
+class Ride:
+    """One escalator ride found in a recording (times in the file's own seconds).
+
+    ``start_s``/``end_s`` bound the still span (walking stopped and started again); ``line_start_s`` and
+    ``line_end_s`` the part analysed, where the link pass stands clear of stepping on and off."""
+
+    start_s: float
+    end_s: float
+    direction: str  # "up", "down", "level" or "unknown"
+    link_pass_hz: float
+    link_pass_sigma_hz: float
+    level_db: float
+    p_value: float
+    channel: str  # the channel with the most evidence
+    speed_m_s: float | None = None
+    speed_sigma_m_s: float | None = None
+    speed_deviation_percent: float | None = None
+    speed_deviation_sigma_percent: float | None = None
+    vertical_speed_m_s: float | None = None
+    vertical_speed_sigma_m_s: float | None = None
+    rise_m: float | None = None
+    rise_source: str | None = None
+    incline_deg: float | None = None
+    channels_db: dict = field(default_factory=dict)
+    line_start_s: float | None = None  # the part of the ride analysed: the line clear of stepping on and off
+    line_end_s: float | None = None
+
+    @property
+    def duration_s(self) -> float:
+        return self.end_s - self.start_s
+
+    def to_dict(self) -> dict:
+        out = asdict(self)
+        out["duration_s"] = self.duration_s
+        return out
+
+
+@dataclass(frozen=True)
+class RideSearch:
+    """What :func:`find_rides` found: the rides, and the still spans it tested and why each is not a ride."""
+
+    rides: tuple
+    band_hz: tuple
+    p_fa: float
+    still_spans: tuple  # (start_s, end_s, verdict)
+    channels: tuple
+    notes: tuple = ()
+
+
+def _uniform(ds, names, fs):
+    t = np.asarray(ds["time"].values, dtype=float)
+    tu = np.arange(t[0], t[-1], 1.0 / fs)
+    x = np.stack([np.interp(tu, t, np.asarray(ds[n].values, dtype=float)) for n in names])
+    # samples farther than five periods from a stamp are a gap: never still, never analysed
+    k = np.clip(np.searchsorted(t, tu), 1, t.size - 1)
+    near = np.minimum(np.abs(tu - t[k - 1]), np.abs(t[k] - tu)) <= 5.0 / fs
+    return tu, x, near
+
+
+def _acc_channels(ds):
+    acc = [v for v in ds.data_vars if ds[v].attrs.get("quantity") == "acceleration"]
+    if len(acc) >= 3:
+        return acc[:3], 1.0
+    cand = [v for v in ds.data_vars if v != "segment" and ds[v].dims == ("time",)]
+    if len(cand) >= 3:
+        mag = float(np.nanmedian(np.sqrt(sum(np.asarray(ds[v].values, dtype=float) ** 2 for v in cand[:3]))))
+        if 7.0 <= mag <= 12.5:
+            return cand[:3], 1.0
+        if 0.7 <= mag <= 1.3:
+            return cand[:3], 9.80665
+    raise ValueError(
+        f"{ds.attrs.get('source_file', 'the recording')}: no accelerometer's three axes (channels: "
+        f"{', '.join(cand) or 'none'}); expected x, y, z of a phone's accelerometer in m/s^2 or g"
+    )
+
+
+def _vertical(ds, t0, t1):
+    """(vertical speed [m/s], its sigma, rise [m], source) over t0..t1 from the barometer, or Nones."""
+    t = np.asarray(ds["time"].values, dtype=float)
+    sel = (t >= t0) & (t <= t1)
+    if "altitude" in ds.data_vars:
+        z, source = np.asarray(ds["altitude"].values, dtype=float)[sel], "barometer (phone's relative altitude)"
+    elif "pressure" in ds.data_vars:
+        z, source = -np.asarray(ds["pressure"].values, dtype=float)[sel] / _RHO_G, "barometer (pressure)"
+    else:
+        return None, None, None, None
+    rate = float(ds["altitude" if "altitude" in ds.data_vars else "pressure"].attrs.get("native_rate_hz", 1.0))
+    tt = t[sel]
+    if tt.size < 3 or tt[-1] - tt[0] < 3:
+        return None, None, None, None
+    a = np.vstack([tt - tt.mean(), np.ones_like(tt)]).T
+    coef, *_ = np.linalg.lstsq(a, z, rcond=None)
+    resid = z - a @ coef
+    n_eff = max((tt[-1] - tt[0]) * min(rate, 1.0 / np.median(np.diff(tt))), 3.0)  # independent readings
+    s = float(np.std(resid, ddof=2)) if tt.size > 2 else 0.0
+    sigma = s / math.sqrt(np.sum((tt - tt.mean()) ** 2) * n_eff / tt.size) if s > 0 else 0.0
+    return float(coef[0]), float(max(sigma, 0.005)), float(coef[0] * (t1 - t0)), source
+
+
+def find_rides(
+    recording,
+    *,
+    nominal_pitch=None,
+    rated_speed=None,
+    band=None,
+    p_fa=1e-3,
+    min_ride_s=6.0,
+    trim_s=1.0,
+    still_threshold=STILL_THRESHOLD,
+) -> RideSearch:
+    """Find the escalator rides in a phone recording of a walk (see the module's notes).
+
+    Parameters
+    ----------
+    recording : xarray.Dataset
+        A recording with an accelerometer's three axes (:func:`vibkit.read_recording` of a phone file or
+        folder); a gyroscope's axes and a barometer are used where present.
+    nominal_pitch : float, optional
+        The chain's nominal link pitch [m]: gives each ride's speed.
+    rated_speed : float, optional
+        The rated step speed [m/s]: narrows the band to +-10 % around rated speed / pitch (with a
+        pitch) and gives each ride's deviation from it.
+    band : (float, float), optional
+        Where the link pass may be [Hz] (default: from pitch and rated speed, else 2.9-9 Hz).
+    p_fa : float
+        Bound on the false-alarm probability of each still span's test (default 1e-3).
+    min_ride_s : float
+        Shortest still span tested [s] (default 6: an 8 s ride less the walking band's 2 s window).
+    trim_s : float
+        Left out at each end of a still span: stepping on and off [s] (default 1).
+    still_threshold : float
+        Walking-band r.m.s. under which the person stands still [m/s^2].
+
+    Returns
+    -------
+    RideSearch
+    """
+    if band is None:
+        if nominal_pitch is not None and rated_speed is not None:
+            f = abs(float(rated_speed)) / float(nominal_pitch)
+            band = (0.9 * f, 1.1 * f)
+        else:
+            band = DEFAULT_BAND_HZ
+    band = (float(band[0]), float(band[1]))
+    acc, scale = _acc_channels(recording)
+    gyro = [v for v in ("gyro_x", "gyro_y", "gyro_z") if v in recording.data_vars]
+    names = acc + gyro
+    fs = float(recording.attrs.get("sample_rate_hz") or 0.0)
+    t_raw = np.asarray(recording["time"].values, dtype=float)
+    if not fs > 0:
+        fs = 1.0 / float(np.median(np.diff(t_raw)))
+    if band[1] >= 0.45 * fs:
+        raise ValueError(f"band {band[0]:g}-{band[1]:g} Hz reaches past 0.45 x the sample rate {fs:.4g} Hz")
+    tu, x, near = _uniform(recording, names, fs)
+    x[:3] *= scale
+    level = walking_level(x[:3], fs)
+    level[~near] = np.inf
+    spans = still_spans(level, fs, threshold=still_threshold, min_s=min_ride_s)
+    rides, verdicts, notes = [], [], []
+    for a, b in spans:
+        t0, t1 = float(tu[a]), float(tu[b - 1])
+        i0, i1 = a + int(round(trim_s * fs)), b - int(round(trim_s * fs))
+        if (i1 - i0) / fs * band[0] < 6:
+            verdicts.append((t0, t1, "too short to resolve the band's lowest frequency"))
+            continue
+        seg = x[:, i0:i1] - x[:, i0:i1].mean(axis=1, keepdims=True)
+        line = steady_line(seg, fs, band=band, p_fa=p_fa, parts=1)
+        if not line.detected:
+            verdicts.append((t0, t1, f"no ride: {line.reason}"))
+            continue
+        # the ride is where the line is: a still span may hold standing before stepping on or after stepping off
+        j0, j1 = _where_the_line_is(seg, fs, line.frequency_hz, band)
+        if j1 - j0 < seg.shape[1] - int(1.5 * fs):
+            notes.append(
+                f"still {t0:.1f}-{t1:.1f} s: the line only {tu[i0 + j0]:.1f}-{tu[i0 + j1 - 1]:.1f} s (standing off the "
+                "escalator before or after)"
+            )
+            i0, i1 = i0 + j0, i0 + j1
+            seg = x[:, i0:i1] - x[:, i0:i1].mean(axis=1, keepdims=True)
+        if (i1 - i0) / fs * band[0] < 6:
+            verdicts.append((t0, t1, "no ride: the line lasts too short to resolve the band's lowest frequency"))
+            continue
+        line = steady_line(seg, fs, band=band, p_fa=p_fa)
+        if not line.detected:
+            verdicts.append((t0, t1, f"no ride: {line.reason}"))
+            continue
+        ride = _ride(recording, line, names, t0, t1, nominal_pitch, rated_speed)
+        rides.append(dataclasses.replace(ride, line_start_s=float(tu[i0]), line_end_s=float(tu[i1 - 1])))
+        verdicts.append((t0, t1, "ride"))
+    return RideSearch(tuple(rides), band, p_fa, tuple(verdicts), tuple(names), tuple(notes))
+
+
+def _where_the_line_is(seg, fs, freq, band, on_db=3.0):
+    """(first, stop) sample of the longest run of sliding windows in which the line near ``freq`` stands at least
+    ``on_db`` over the floor (the whole segment when it never falls under)."""
+    n = seg.shape[1]
+    window = max(min(4.0, n / fs / 3), 6.0 / band[0])
+    c, lv = line_level(seg, fs, freq, window_s=window)
+    if lv.size == 0 or np.all(lv >= on_db):
+        return 0, n
+    on = np.concatenate(([0], (lv >= on_db).astype(np.int8), [0]))
+    d = np.diff(on)
+    starts, stops = np.flatnonzero(d == 1), np.flatnonzero(d == -1)
+    if starts.size == 0:
+        return 0, n
+    k = int(np.argmax(stops - starts))
+    half = window / 2
+    a = max(int((c[starts[k]] - half) * fs), 0)
+    b = min(int((c[stops[k] - 1] + half) * fs), n)
+    return a, b
+
+
+def _ride(ds, line, names, t0, t1, pitch, rated):
+    vz, vz_s, rise, source = _vertical(ds, t0, t1)
+    if vz is None:
+        direction = "unknown"
+    elif abs(vz) < max(_LEVEL_VZ, 2 * vz_s):
+        direction = "level"
+    else:
+        direction = "up" if vz > 0 else "down"
+    speed = speed_s = dev = dev_s = incline = None
+    if pitch is not None:
+        speed = float(pitch) * line.frequency_hz
+        speed_s = float(pitch) * line.sigma_hz
+        if rated is not None:
+            dev = 100.0 * (speed / abs(float(rated)) - 1.0)
+            dev_s = 100.0 * speed_s / abs(float(rated))
+        if vz is not None and abs(vz) < speed:
+            incline = math.degrees(math.asin(abs(vz) / speed))
+    return Ride(
+        start_s=t0,
+        end_s=t1,
+        direction=direction,
+        link_pass_hz=line.frequency_hz,
+        link_pass_sigma_hz=line.sigma_hz,
+        level_db=line.level_db,
+        p_value=line.p_value,
+        channel=names[line.strongest_channel],
+        speed_m_s=speed,
+        speed_sigma_m_s=speed_s,
+        speed_deviation_percent=dev,
+        speed_deviation_sigma_percent=dev_s,
+        vertical_speed_m_s=vz,
+        vertical_speed_sigma_m_s=vz_s,
+        rise_m=rise,
+        rise_source=source,
+        incline_deg=incline,
+        channels_db=dict(zip(names, line.channel_levels_db)),
+    )

@@ -1,0 +1,242 @@
+"""Phone exports of several sensors, one file each: a folder (ADVIO's ``iphone/``, an unpacked phyphox or
+Sensor Logger export) or a zip archive of such files, read as one recording.
+
+Each sensor file is read by the text reader as it comes (headerless with a first column in seconds, as
+ADVIO writes; or with a header row, as phyphox and Sensor Logger write).  The sensors keep their own
+clocks in the files; the recording is laid on the accelerometer's time stamps, and every other sensor is
+joined onto them by linear interpolation where a computation needs them together (held at its first and
+last value outside its own span, said in ``history``).  Each channel's native rate is in its attrs
+(``native_rate_hz``).
+
+=================  ====================================================  ==============================
+sensor             file names (case and separators ignored)               channels, quantity, SI unit
+=================  ====================================================  ==============================
+accelerometer      accelerometer, accel, acc, acceleration, totalacc...   ``acc_x/y/z``, acceleration,
+                                                                          m/s^2 (g when the magnitude
+                                                                          reads about 1)
+gyroscope          gyro, gyroscope, rotationrate                          ``gyro_x/y/z``, angular
+                                                                          velocity, rad/s
+barometer          barometer, pressure                                    ``pressure`` [Pa] and
+                                                                          ``altitude`` [m] where given
+=================  ====================================================  ==============================
+
+Other files (magnetometer, location, ground truth) are listed in ``history`` and left out.
+"""
+
+from __future__ import annotations
+
+import io
+import os
+import re
+import zipfile
+
+import numpy as np
+
+from .errors import RecordingError
+from .recording import Channel, build_recording
+from .text.csv import read_csv
+
+__all__ = ["PHONE_SENSORS", "phone_sensor_files", "is_phone_export", "read_phone_export"]
+
+#: sensor -> the file-name stems that hold it (lower case, letters and digits only)
+PHONE_SENSORS = {
+    "accelerometer": (
+        "accelerometer",
+        "accel",
+        "acc",
+        "acceleration",
+        "totalacceleration",
+        "accelerometeruncalibrated",
+    ),
+    "gyroscope": ("gyro", "gyroscope", "rotationrate", "gyroscopeuncalibrated"),
+    "barometer": ("barometer", "pressure"),
+}
+_SUFFIXES = (".csv", ".txt", ".tsv")
+_G = 9.80665
+
+
+def _stem(name: str) -> str:
+    base = os.path.basename(name.rstrip("/"))
+    for s in _SUFFIXES:
+        if base.lower().endswith(s):
+            base = base[: -len(s)]
+    return re.sub(r"[^a-z0-9]", "", base.lower())
+
+
+def phone_sensor_files(names):
+    """{sensor: name} for the names (paths or zip members) that hold a phone sensor; others left out."""
+    found = {}
+    for name in sorted(names):
+        if not name.lower().endswith(_SUFFIXES) or "__macosx" in name.lower():
+            continue
+        stem = _stem(name)
+        for sensor, stems in PHONE_SENSORS.items():
+            if stem in stems and sensor not in found:
+                found[sensor] = name
+    return found
+
+
+def is_phone_export(names) -> bool:
+    """Whether these file names make a multi-sensor phone export (an accelerometer file and at least one
+    other sensor's)."""
+    found = phone_sensor_files(names)
+    return "accelerometer" in found and len(found) >= 2
+
+
+def _read_one(label, data, options):
+    """One sensor file's bytes, read by the text reader (each phone app writes text)."""
+    kw = {k: v for k, v in options.items() if k in ("encoding", "delimiter", "decimal")}
+    return read_csv(label, data, **kw)
+
+
+def _axes(ds, label, what):
+    names = [v for v in ds.data_vars if v != "segment" and ds[v].dims == ("time",)]
+    if len(names) < 3:
+        raise RecordingError(label, None, f"{len(names)} channel(s); expected the {what}'s three axes x, y, z")
+    by_axis = {}
+    for v in names:
+        m = re.search(r"(?:^|[^a-z])([xyz])(?:[^a-z]|$)", v.lower())
+        if m and m.group(1) not in by_axis:
+            by_axis[m.group(1)] = v
+    if len(by_axis) == 3:
+        return [by_axis[a] for a in "xyz"]
+    return names[:3]
+
+
+def _si(ds, names, label, quantity, history):
+    """The three axes in SI: their units as the file states them, else guessed from gravity (accelerometer)."""
+    vals = [np.asarray(ds[v].values, dtype=float) for v in names]
+    units = [ds[v].attrs.get("units", "unknown") for v in names]
+    if quantity == "acceleration":
+        if all(ds[v].attrs.get("quantity") == "acceleration" for v in names):
+            return vals, "m/s^2"
+        mag = float(np.nanmedian(np.sqrt(sum(x**2 for x in vals))))
+        if 7.0 <= mag <= 12.5:
+            history.append(f"{label}: no units; |a| reads {mag:.3g}, so m/s^2")
+            return vals, "m/s^2"
+        if 0.7 <= mag <= 1.3:
+            history.append(f"{label}: no units; |a| reads {mag:.3g}, so g (scaled to m/s^2)")
+            return [x * _G for x in vals], "m/s^2"
+        if mag < 0.5 and all(u in ("unknown", "m/s^2") for u in units):
+            history.append(f"{label}: |a| reads {mag:.3g}: acceleration without gravity, taken as m/s^2")
+            return vals, "m/s^2"
+        raise RecordingError(
+            label, None, f"|a| reads {mag:.3g} in units {units[0]!r}; expected an accelerometer in m/s^2 or g"
+        )
+    if all(u in ("rad/s", "unknown") for u in units):
+        if "unknown" in units:
+            history.append(f"{label}: no units; read as rad/s")
+        return vals, "rad/s"
+    raise RecordingError(label, None, f"units {units[0]!r}; expected a gyroscope in rad/s")
+
+
+def _barometer(ds, label, history):
+    """(pressure [Pa] or None, altitude [m] or None)."""
+    pressure = altitude = None
+    for v in [v for v in ds.data_vars if v != "segment"]:
+        x = np.asarray(ds[v].values, dtype=float)
+        low, unit = v.lower(), ds[v].attrs.get("units", "unknown")
+        med = float(np.nanmedian(x))
+        if "alt" in low:
+            altitude = x
+        elif pressure is None and ("press" in low or unit in ("Pa", "hPa", "kPa") or 50 <= med <= 1.2e5):
+            scale = {"Pa": 1.0, "hPa": 100.0, "kPa": 1000.0}.get(unit)
+            if scale is None:  # no unit: the range tells kPa (ADVIO), hPa (phyphox, Sensor Logger) or Pa
+                scale = 1000.0 if 50 <= med <= 120 else 100.0 if 500 <= med <= 1200 else 1.0
+            pressure = x * scale
+        elif altitude is None and pressure is not None and np.nanmax(np.abs(x)) < 1e4:
+            altitude = x  # ADVIO: pressure [kPa], relative altitude [m]
+    if altitude is not None:
+        history.append(f"{label}: relative altitude [m] from the phone")
+    return pressure, altitude
+
+
+def read_phone_export(path, options=None):
+    """Read a folder or zip archive of phone sensor files as one recording (see the module's notes)."""
+    options = dict(options or {})
+    path = os.fspath(path)
+    history = []
+    if os.path.isdir(path):
+        names = [os.path.join(path, n) for n in os.listdir(path) if os.path.isfile(os.path.join(path, n))]
+        members = {n: None for n in names}
+        kind = "folder"
+    else:
+        with open(path, "rb") as f:
+            blob = f.read()
+        try:
+            zf = zipfile.ZipFile(io.BytesIO(blob))
+        except zipfile.BadZipFile as exc:
+            raise RecordingError(path, None, f"zip archive that cannot be read ({exc})") from None
+        members = {i.filename: zf for i in zf.infolist() if not i.is_dir()}
+        kind = "zip archive"
+    found = phone_sensor_files(members)
+    if "accelerometer" not in found:
+        listed = ", ".join(os.path.basename(n) for n in sorted(members)[:8]) or "none"
+        raise RecordingError(
+            path, None, f"{kind} with no accelerometer file ({listed}); expected accelerometer.csv (and gyro.csv ...)"
+        )
+    skipped = sorted(os.path.basename(n) for n in members if n not in found.values())
+    if skipped:
+        history.append(f"{kind}: not read: " + ", ".join(skipped))
+
+    def load(sensor):
+        name = found[sensor]
+        label = name if kind == "folder" else f"{path}:{name}"
+        if kind == "folder":
+            with open(name, "rb") as f:
+                data = f.read()
+        else:
+            data = members[name].read(name)
+        return _read_one(label, data, options), label
+
+    acc, acc_label = load("accelerometer")
+    t = np.asarray(acc["time"].values, dtype=float)
+    channels = []
+    vals, unit = _si(acc, _axes(acc, acc_label, "accelerometer"), acc_label, "acceleration", history)
+    rate_acc = float(acc.attrs.get("sample_rate_hz", np.nan))
+    for ax, x in zip("xyz", vals):
+        channels.append(Channel(f"acc_{ax}", x, unit, f"accelerometer {ax}", "acceleration"))
+    natives = {f"acc_{ax}": rate_acc for ax in "xyz"}
+
+    def joined(ds, label, x):
+        ts = np.asarray(ds["time"].values, dtype=float)
+        if ts[0] > t[0] or ts[-1] < t[-1]:
+            history.append(
+                f"{label}: spans {ts[0]:.3f}-{ts[-1]:.3f} s, the accelerometer {t[0]:.3f}-{t[-1]:.3f} s: held at its "
+                "ends outside its span"
+            )
+        return np.interp(t, ts, x)
+
+    if "gyroscope" in found:
+        gyr, label = load("gyroscope")
+        gvals, gunit = _si(gyr, _axes(gyr, label, "gyroscope"), label, "angular_velocity", history)
+        for ax, x in zip("xyz", gvals):
+            channels.append(Channel(f"gyro_{ax}", joined(gyr, label, x), gunit, f"gyroscope {ax}", "other"))
+            natives[f"gyro_{ax}"] = float(gyr.attrs.get("sample_rate_hz", np.nan))
+        history.append(f"{label}: joined onto the accelerometer's time stamps by linear interpolation")
+    if "barometer" in found:
+        bar, label = load("barometer")
+        pressure, altitude = _barometer(bar, label, history)
+        rate = float(bar.attrs.get("sample_rate_hz", np.nan))
+        if pressure is not None:
+            channels.append(Channel("pressure", joined(bar, label, pressure), "Pa", "air pressure", "other"))
+            natives["pressure"] = rate
+        if altitude is not None:
+            channels.append(Channel("altitude", joined(bar, label, altitude), "m", "relative altitude", "other"))
+            natives["altitude"] = rate
+    ds = build_recording(
+        time=t,
+        channels=channels,
+        segment=None,
+        path=path,
+        data_bytes=b"".join(sorted(os.path.basename(n).encode() for n in found.values())),
+        reader="vibkit.io.phone",
+        sample_rate_hz=rate_acc,
+        history=[f"{kind} of phone sensor files: " + ", ".join(f"{k} {os.path.basename(v)}" for k, v in found.items())]
+        + history,
+        metadata={"phone_sensors": ", ".join(found)},
+    )
+    for name, rate in natives.items():
+        ds[name].attrs["native_rate_hz"] = rate
+    ds.attrs["source_file"] = path
+    return ds
