@@ -405,7 +405,7 @@ def _check_plausible(ev, p, checks, window_percent, catalogue):
             STATUS_IMPLAUSIBLE,
             (
                 f"the family at {f:.4g} Hz implies a pitch of {_mm(p)} at {v:g} m/s ({ev.speed_source}), an elongation "
-                f"of {el:+.1f} % of the nominal {_nominal_mm(nom)}, outside the physical window {wlo:+g} to {whi:+g} %: "
+                f"of {el:+.1f} % of the nominal {_nominal_mm(nom)}, outside the physical window {wlo:+.1f} to {whi:+.1f} %: "
                 f"not a verdict. Check the speed (the nominal pitch needs {v_nom:.3g} m/s), the channel (--channel), "
                 "the nominal pitch, or whether the sensor was on this machine's step chain"
             ),
@@ -422,7 +422,7 @@ def _check_plausible(ev, p, checks, window_percent, catalogue):
         (
             f"the family at {f:.4g} Hz implies a pitch of {_mm(p)} at {v:g} m/s ({ev.speed_source}), {dev:+.1f} % "
             f"from the nearest standard step-chain pitch {_nominal_mm(c)} (standard: "
-            f"{', '.join(f'{1000 * q:.2f}' for q in catalogue)} mm; window {wlo:+g} to {whi:+g} %): not a step "
+            f"{', '.join(f'{1000 * q:.2f}' for q in catalogue)} mm; window {wlo:+.1f} to {whi:+.1f} %): not a step "
             "chain's link pass. Check the speed, the channel (--channel), give --nominal-pitch, or check "
             "that the recording is of an escalator"
         ),
