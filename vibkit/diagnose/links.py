@@ -47,6 +47,7 @@ __all__ = [
     "link_number_of",
     "link_offset",
     "links_channel",
+    "scene_direction",
     "profile_scene_file",
     "signature_error",
     "worn_link_signature",
@@ -54,6 +55,8 @@ __all__ = [
 ]
 
 DEFAULT_FALSE_ALARM = 1e-2
+#: the ways a chain runs: the steps travel up or down the incline
+DIRECTIONS = ("up", "down")
 #: tracking bandwidth of the link-pass phase, as a fraction of the link-pass frequency
 BANDWIDTH_FRACTION = 1.0 / 40.0
 SAMPLES_PER_CYCLE = 16
@@ -117,6 +120,8 @@ class LinksResult:
     method : str
     marker_s : float or None
     notes : list of str
+    direction : str or None
+        With a scene: "up" or "down", the way the chain ran as the signature was simulated.
     """
 
     file: str
@@ -139,6 +144,8 @@ class LinksResult:
     status: str = "ok"
     reason: str = ""
     residual_statistic: np.ndarray | None = None
+    #: with a scene: the way the chain ran ("up" or "down"), as the signature was simulated; None without one
+    direction: str | None = None
 
     def as_dict(self):
         return {
@@ -154,6 +161,7 @@ class LinksResult:
             "dof": self.dof,
             "method": self.method,
             "marker_s": self.marker_s,
+            "direction": self.direction,
             "status": self.status,
             "reason": self.reason,
             "flagged": self.flagged,
@@ -166,16 +174,44 @@ def link_phase(x, fs, f_lp):
     return link_pass_phase(x, fs, f_lp, bandwidth_hz=f_lp * BANDWIDTH_FRACTION)
 
 
-def link_number_of(model_link, links_passed, n_links):
+def link_number_of(model_link, links_passed, n_links, direction="up"):
     """Number (1-based, in passing order from the link at the sensor) of the scene's link
     ``model_link`` after ``links_passed`` links have passed since the scene's start.
 
     A link is at the sensor while it goes over the top of the lower head, from the arrival there of one of
-    its rollers to the other's.  At the scene's start roller 1 is at the top and rollers arrive in
-    decreasing number (2, 1, n, n - 1 ...): while ``j`` to ``j + 1`` links have passed, the link from roller
-    ``(-j - 1) mod n + 1`` to the next is at the sensor (link n, from roller n to roller 1, at first)."""
-    at_sensor = (-1 - int(math.floor(links_passed))) % n_links  # 0-based model link at the sensor
+    its rollers to the other's.  At the scene's start roller 1 is at the top.  Running up (``direction``
+    "up"), rollers arrive in decreasing number (2, 1, n, n - 1 ...): while ``j`` to ``j + 1`` links have
+    passed, the link from roller ``(-j - 1) mod n + 1`` to the next is at the sensor (link n, from roller n to
+    roller 1, at first) and links pass in decreasing number.  Running down they arrive in increasing number
+    (n, 1, 2 ...): the link from roller ``j mod n + 1`` to the next is at the sensor (link 1 at first) and links
+    pass in increasing number."""
+    j = int(math.floor(links_passed))
+    if direction == "down":
+        return (model_link - 1 - j) % n_links + 1
+    at_sensor = (-1 - j) % n_links  # 0-based model link at the sensor
     return (at_sensor - (model_link - 1)) % n_links + 1
+
+
+def scene_direction(scene):
+    """The way a forward scene's chain runs, "up" or "down": the sign of its motor's set speed, else of its
+    initial speed (a scene that sets neither runs up)."""
+    speed = scene.effects["motor"].speed if "motor" in scene.effects else scene.run.initial_speed
+    return "down" if speed < 0 else "up"
+
+
+def _load(scene_path):
+    from ..model.scene import load_scene
+
+    return load_scene(scene_path)
+
+
+def _signed(scene_path, speed, direction):
+    """The chain speed [m/s] signed by ``direction`` (None: the scene's own, :func:`scene_direction`)."""
+    if direction is None:
+        direction = scene_direction(_load(scene_path))
+    if direction not in DIRECTIONS:
+        raise ValueError(f"direction {direction!r}: expected one of {', '.join(DIRECTIONS)}")
+    return -abs(float(speed)) if direction == "down" else abs(float(speed))
 
 
 def _scene_with(scene, *, speed, worn=None):
@@ -183,15 +219,24 @@ def _scene_with(scene, *, speed, worn=None):
     effects = dict(scene.effects)
     if "motor" in effects:
         effects["motor"] = dataclasses.replace(effects["motor"], speed=float(speed))
+    sections = dict(scene.sections)
+    run = dict(scene.section("run"))
+    if run.get("initial_speed", 0.0) * speed < 0:
+        # started the way the signed speed runs (a scene of the other direction would reverse during the settling)
+        run["initial_speed"] = -run["initial_speed"]
+        sections["run"] = run
     outputs = dict(scene.outputs, variables=tuple(sorted(set(SENSORS.values()) | {"sprocket_angle"})))
     # both runs on the closure walked run by run (exact, and what a worn chain takes): the difference is the
     # worn link's, not the closures'
-    return dataclasses.replace(scene, chain=chain, effects=effects, outputs=outputs).with_solver(closure="runs")
+    return dataclasses.replace(scene, chain=chain, effects=effects, outputs=outputs, sections=sections).with_solver(
+        closure="runs"
+    )
 
 
 @functools.lru_cache(maxsize=32)
 def _run_map_cached(scene_path, sensor, speed, fs, samples_per_cycle, excess, loops):
-    """One run's mean per-link shape (link 1 ``excess`` [m] longer; 0: healthy) and the row of its link 1."""
+    """One run's mean per-link shape (link 1 ``excess`` [m] longer; 0: healthy) and the row of its link 1;
+    ``speed`` signed (negative: the chain runs down)."""
     from ..analyses.simulation import simulate
     from ..model.scene import load_scene
 
@@ -203,7 +248,7 @@ def _run_map_cached(scene_path, sensor, speed, fs, samples_per_cycle, excess, lo
         )
     n = scene.chain.n_rollers
     pitch = scene.chain.link_pitch
-    f_lp = speed / pitch
+    f_lp = abs(speed) / pitch
     settle = n / f_lp + 5.0  # one loop and the start-up
     duration = settle + (loops * n + 3) / f_lp
     worn = None if excess == 0.0 else (1, pitch + excess)
@@ -227,12 +272,13 @@ def _run_map_cached(scene_path, sensor, speed, fs, samples_per_cycle, excess, lo
     # (5 s at 4.8 Hz is 24 links: every number of a 120-link scene came out one too high)
     whole = round(float(np.mean(cyc - offset - passed)))  # the phase's whole cycles before the sprocket's count
     first = math.floor(cyc[0] - offset) - whole + 0.5
-    return lmap.mean_shape, link_number_of(1, first, n) - 1, n, offset
+    return lmap.mean_shape, link_number_of(1, first, n, "down" if speed < 0 else "up") - 1, n, offset
 
 
-def _cache_key(scene_path, sensor, speed, fs, samples_per_cycle):
-    """The cached runs' key: the same scene, speed and rate (rounded) are one run, whoever asks."""
-    return (str(scene_path), sensor, round(float(speed), 9), round(float(fs), 6), int(samples_per_cycle))
+def _cache_key(scene_path, sensor, speed, fs, samples_per_cycle, direction=None):
+    """The cached runs' key: the same scene, signed speed and rate (rounded) are one run, whoever asks."""
+    signed = _signed(scene_path, speed, direction)
+    return (str(scene_path), sensor, round(signed, 9), round(float(fs), 6), int(samples_per_cycle))
 
 
 def _signature_cached(scene_path, sensor, speed, fs, samples_per_cycle, excess, loops):
@@ -241,15 +287,18 @@ def _signature_cached(scene_path, sensor, speed, fs, samples_per_cycle, excess, 
     return np.roll(worn - healthy, -row, axis=0), n
 
 
-def link_offset(scene_path, *, sensor="tensioner", speed, fs, samples_per_cycle=SAMPLES_PER_CYCLE):
+def link_offset(scene_path, *, sensor="tensioner", speed, fs, samples_per_cycle=SAMPLES_PER_CYCLE, direction=None):
     """Where a roller reaches the sensor in the signal's link-pass cycle of the scene's healthy chain, as a fraction of
     a cycle after the fundamental's peak (:func:`vibkit.signal.linkmap.link_map`'s ``link_offset``): with it a
     recording of this escalator numbers its links from the link at the sensor when it starts (or the marked link),
     as the signature numbers them, wherever the recording starts within a link's passage."""
-    return _run_map_cached(*_cache_key(scene_path, sensor, speed, fs, samples_per_cycle), 0.0, SIGNATURE_LOOPS)[3]
+    key = _cache_key(scene_path, sensor, speed, fs, samples_per_cycle, direction)
+    return _run_map_cached(*key, 0.0, SIGNATURE_LOOPS)[3]
 
 
-def worn_link_signature(scene_path, *, sensor="tensioner", speed, fs, samples_per_cycle=SAMPLES_PER_CYCLE, excess=1e-3):
+def worn_link_signature(
+    scene_path, *, sensor="tensioner", speed, fs, samples_per_cycle=SAMPLES_PER_CYCLE, excess=1e-3, direction=None
+):
     """The change of the per-link map that one link ``excess`` [m] longer makes, row 0 that link.
 
     Parameters
@@ -258,12 +307,15 @@ def worn_link_signature(scene_path, *, sensor="tensioner", speed, fs, samples_pe
         A forward scene of the escalator (its chain, sprocket, guide and motor).
     sensor : {"tensioner"}
     speed : float
-        Chain speed of the recording (the scene's motor runs at it). [m/s]
+        Chain speed of the recording (the scene's motor runs at it, in ``direction``). [m/s]
     fs : float
         The recording's sample rate (the runs are sampled at it). [Hz]
     samples_per_cycle : int, optional
     excess : float, optional
         Excess pitch of the simulated worn link. [m]
+    direction : {"up", "down"}, optional
+        The way the recording's chain ran (default: the scene's own, :func:`scene_direction`): the runs run that
+        way, since the tensioner sees a worn link's wrap in the other order when the chain runs down.
 
     Returns
     -------
@@ -273,15 +325,17 @@ def worn_link_signature(scene_path, *, sensor="tensioner", speed, fs, samples_pe
     if sensor not in SENSORS:
         raise ValueError(f"sensor {sensor!r}: the model gives a worn link's signature for {', '.join(SENSORS)} only")
     return _signature_cached(
-        *_cache_key(scene_path, sensor, speed, fs, samples_per_cycle), float(excess), SIGNATURE_LOOPS
+        *_cache_key(scene_path, sensor, speed, fs, samples_per_cycle, direction), float(excess), SIGNATURE_LOOPS
     )
 
 
-def signature_error(scene_path, *, sensor="tensioner", speed, fs, samples_per_cycle=SAMPLES_PER_CYCLE, excess=1e-3):
+def signature_error(
+    scene_path, *, sensor="tensioner", speed, fs, samples_per_cycle=SAMPLES_PER_CYCLE, excess=1e-3, direction=None
+):
     """The signature's relative error, as the model shows it: ``|S(e / 2) / (e / 2) - S(e) / e| / |S(e) / e|``,
     ``S(e)`` the signature of a link ``e`` longer (each without the mean over its links, as the scan fits it).
     A linear, reproducible signature gives 0; the study's 159-link scene at 0.5 m/s gives 0.15 at 1 mm."""
-    key = _cache_key(scene_path, sensor, speed, fs, samples_per_cycle)
+    key = _cache_key(scene_path, sensor, speed, fs, samples_per_cycle, direction)
     full, _ = _signature_cached(*key, float(excess), SIGNATURE_LOOPS)
     half, _ = _signature_cached(*key, float(excess) / 2.0, SIGNATURE_LOOPS)
     full = (full - full.mean(axis=0)) / float(excess)
@@ -349,6 +403,7 @@ def find_worn_links(
     min_excess=MIN_EXCESS_M,
     file="<recording>",
     nominal_pitch=None,
+    direction=None,
 ):
     """The links of a chain whose pitch departs from the others', from a tensioner recording.
 
@@ -381,6 +436,10 @@ def find_worn_links(
         The chain's nominal pitch [m]: the link pass found must then give a pitch within the elongations a
         chain can have, widened by the escalator standard's 5 % speed tolerance (``PITCH_WINDOW_PERCENT``),
         or the map is refused (a speed in km/h, a harmonic taken for the link pass).
+    direction : {"up", "down"}, optional
+        With a scene: the way the chain ran while recorded (default: the scene's own, :func:`scene_direction`).
+        The signature is simulated running that way; a down-running chain numbered with an up-running signature
+        gets a wrong number.
 
     Returns
     -------
@@ -450,16 +509,20 @@ def find_worn_links(
         )
     # with a scene the links are counted between the instants a roller reaches the sensor, not between the
     # signal's cycle boundaries: numbers as the signature gives them wherever the recording starts
-    offset = 0.0 if scene is None else link_offset(scene, sensor="tensioner", speed=speed, fs=fs)
+    if scene is not None:
+        direction = scene_direction(_load(scene)) if direction is None else direction
+        if direction not in DIRECTIONS:
+            raise ValueError(f"direction {direction!r}: expected one of {', '.join(DIRECTIONS)}")
+    offset = 0.0 if scene is None else link_offset(scene, sensor="tensioner", speed=speed, fs=fs, direction=direction)
     lmap = link_map(
         x, fs, link_phase(x, fs, f_lp), n, samples_per_cycle=SAMPLES_PER_CYCLE, marker_s=marker_s, link_offset=offset
     )
     if scene is not None:
         _check_healthy(scene)
-        sig, n_scene = worn_link_signature(scene, sensor="tensioner", speed=speed, fs=fs)
+        sig, n_scene = worn_link_signature(scene, sensor="tensioner", speed=speed, fs=fs, direction=direction)
         if n_scene != n:
             raise ValueError(f"--links {n}: the scene {scene} has {n_scene} links")
-        fit = functools.partial(_signature_scan, lmap, scene, speed, fs, units_scale(da), false_alarm)
+        fit = functools.partial(_signature_scan, lmap, scene, speed, fs, units_scale(da), false_alarm, direction)
         scan, err = fit(SIGNATURE_EXCESS_M)
         used = SIGNATURE_EXCESS_M
         top = max(scan.flagged, key=lambda f: f.t, default=None)
@@ -518,7 +581,7 @@ def find_worn_links(
                 "number"
             )
             return _result(file, ch, sensor, speed, lmap, n, [], scan, excess, method, marker_s, notes,
-                           status="inconclusive", reason=reason)  # fmt: skip
+                           status="inconclusive", reason=reason, direction=direction)  # fmt: skip
     else:
         scan = scan_links(lmap, false_alarm=false_alarm)
         flagged = [
@@ -551,8 +614,9 @@ def find_worn_links(
                 "scene (--scene or --escalator) so that the worn link's signature is fitted"
             )
             return _result(file, ch, sensor, speed, lmap, n, [], scan, excess, method, marker_s, notes,
-                           status="inconclusive", reason=reason)  # fmt: skip
-    return _result(file, ch, sensor, speed, lmap, n, flagged, scan, excess, method, marker_s, notes)
+                           status="inconclusive", reason=reason, direction=direction)  # fmt: skip
+    return _result(file, ch, sensor, speed, lmap, n, flagged, scan, excess, method, marker_s, notes,
+                   direction=direction)  # fmt: skip
 
 
 def _check_rate(file, fs, speed, band):
@@ -574,10 +638,10 @@ def _check_rate(file, fs, speed, band):
     )
 
 
-def _signature_scan(lmap, scene, speed, fs, metres_per_unit, false_alarm, excess):
+def _signature_scan(lmap, scene, speed, fs, metres_per_unit, false_alarm, direction, excess):
     """The scan of ``lmap`` with the signature of a link ``excess`` [m] longer, and the signature's relative error."""
-    sig, _ = worn_link_signature(scene, sensor="tensioner", speed=speed, fs=fs, excess=excess)
-    err = signature_error(scene, sensor="tensioner", speed=speed, fs=fs, excess=excess)
+    sig, _ = worn_link_signature(scene, sensor="tensioner", speed=speed, fs=fs, excess=excess, direction=direction)
+    err = signature_error(scene, sensor="tensioner", speed=speed, fs=fs, excess=excess, direction=direction)
     scan = scan_links(lmap, signature=sig / metres_per_unit, scale=excess, false_alarm=false_alarm, signature_error=err)
     return scan, err
 
