@@ -74,6 +74,7 @@ def _cpu(args, cache):
 def main():
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
+        os.environ["XDG_CACHE_HOME"] = str(folder / "recordings-cache")  # the recordings' own scene: not the user's
         profile_text = PROFILE_90.replace("teeth = 28", 'teeth = 28\ndirection = "down"')
         profile = folder / "E90-down.toml"
         profile.write_text(profile_text)
