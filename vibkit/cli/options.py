@@ -648,7 +648,7 @@ def escalator_profile(a):
         return None
     if not str(path).strip():
         raise CLIError(
-            f"--escalator {path!r}: expected the escalator profile's file (TOML: see vibkit profile --help); give its "
+            f"--escalator {path!r}: expected the escalator profile's file (TOML: docs/guide/escalator.md); give its "
             "path, or leave --escalator out"
         )
     from vibkit.model.profile import load_profile
