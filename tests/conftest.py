@@ -1,4 +1,7 @@
+import atexit
 import os
+import shutil
+import tempfile
 from pathlib import Path
 
 import pytest
@@ -9,6 +12,11 @@ ROOT = Path(__file__).resolve().parents[1]
 SIM = ROOT / "sim"
 
 os.environ.setdefault("MPLBACKEND", "Agg")
+
+# the files vibkit keeps between runs (vibkit.runtime.user_cache: profile scenes, worn-link signatures) go to a
+# folder of this test session, not the user's cache: every session derives them afresh
+os.environ["XDG_CACHE_HOME"] = tempfile.mkdtemp(prefix="vibkit-tests-cache-")
+atexit.register(shutil.rmtree, os.environ["XDG_CACHE_HOME"], ignore_errors=True)
 
 
 @pytest.fixture(scope="session")

@@ -156,3 +156,81 @@ def test_links_says_when_too_few_samples_a_cycle_read_the_excess_low(tmp_path, r
     assert "8.0 samples per link-pass cycle" in err and "record at 50 Hz or more" in err
     rc, out, err = run("links", _recording(tmp_path / "fast.nc", 40, 2.2), "--speed", SPEED, "--links", 40)
     assert "samples per link-pass cycle" not in err
+
+
+def _cut(src, path, start, end):
+    """``src`` without its samples from ``start`` to ``end`` [s] (a gap in the time stamps)."""
+    ds = xr.open_dataset(src).load()
+    t = ds.time.values
+    ds.isel(time=(t < start) | (t >= end)).to_netcdf(path)
+    return path
+
+
+def test_a_gap_in_the_recording_is_refused_naming_it_and_the_part_to_analyse(tmp_path, run):
+    """5 loops of 40 links with link 12 raised, then the same with 6 s cut out at 10 s: the links that passed in
+    the gap are unknown, so no link is numbered across it (it used to be resampled across the gap, exit 0, no flag);
+    the refusal names the gap's span and the longest part, which covers over two loops; cut out, that part flags
+    the raised link again (numbered from its own start)."""
+    whole = _recording(tmp_path / "whole.nc", 40, 5, bump_link=12, bump=2e-7)
+    rc, out, err = run("links", whole, "--speed", SPEED, "--links", 40, "--json")
+    assert rc == 0 and [f["link"] for f in json.loads(out)["flagged"]] == [12]
+    gapped = _cut(whole, tmp_path / "gapped.nc", 10.0, 16.0)
+    rc, out, err = run("links", gapped, "--speed", SPEED, "--links", 40)
+    assert rc == 1 and out == "" and len(err.strip().splitlines()) == 1, err
+    assert str(gapped) in err and "1 gap(s)" in err and "9.99-16.00 s" in err
+    assert "longest part without a gap is 16.00-" in err and "analyse it alone" in err
+    t_end = float(xr.open_dataset(whole).time.values[-1])
+    # links pass at 3.75 Hz: 16 s is 60 links, so the link raised is 12 - 60 mod 40 = 32 from the part's start
+    part = _cut(whole, tmp_path / "part.nc", 0.0, 16.0)
+    rc, out, err = run("links", part, "--speed", SPEED, "--links", 40, "--json")
+    assert rc == 0, err
+    assert [f["link"] for f in json.loads(out)["flagged"]] == [(12 - 1 - 60) % 40 + 1] and t_end > 50
+
+
+@pytest.mark.parametrize(
+    "seconds, words",
+    [
+        (2.0, ["2.0 s", "covers 0.05 loops of the chain's 159 links", "record at least 86 s"]),
+        (5 / FS, ["has 5 samples", "record at least 86 s"]),
+    ],
+)
+def test_a_recording_too_short_says_how_long_to_record(tmp_path, run, seconds, words):
+    """A 2 s recording was refused as a wrong speed or nominal pitch; five samples as "Parameter x has 3 samples
+    along axis -1": each is one line naming the file, how little it holds and how long to record."""
+    src = _recording(tmp_path / "src.nc", 159, 1.2)
+    ds = xr.open_dataset(src).load()
+    short = tmp_path / "short.nc"
+    ds.isel(time=slice(0, int(round(seconds * FS)))).to_netcdf(short)
+    rc, out, err = run("links", short, "--escalator", "data/fleet-example/escalators/E07.toml")
+    assert rc == 1 and out == "" and len(err.strip().splitlines()) == 1, err
+    assert str(short) in err
+    for w in words:
+        assert w in err, (w, err)
+    assert "Parameter" not in err and "nominal" not in err.split("record at least")[0]
+
+
+@pytest.mark.parametrize("flag", ["--escalator", "--scene"])
+def test_an_empty_profile_or_scene_is_refused_by_its_flag(tmp_path, run, flag):
+    """`--escalator ''` was ignored silently (the chain then came from --links, no scene)."""
+    path = _recording(tmp_path / "e.nc", 40, 2.2)
+    rc, out, err = run("links", path, "--speed", SPEED, "--links", 40, flag, "")
+    assert rc == 1 and out == "" and len(err.strip().splitlines()) == 1, err
+    assert f"{flag} ''" in err and "leave" in err
+
+
+def test_a_direction_the_profile_contradicts_is_refused(tmp_path, run):
+    path = _recording(tmp_path / "e07.nc", 159, 2.2)
+    profile = "data/fleet-example/escalators/E07.toml"
+    rc, out, err = run("links", path, "--escalator", profile, "--direction", "down")
+    assert rc == 1 and out == "" and len(err.strip().splitlines()) == 1, err
+    assert "--direction down" in err and "drive.direction = up" in err
+
+
+def test_a_constant_channel_is_named_with_what_to_check(tmp_path, run):
+    """A constant signal was refused as "no vibration channel", without naming it."""
+    t = np.arange(0.0, 60.0, 1 / FS)
+    path = tmp_path / "flat.nc"
+    xr.Dataset({"delta": ("time", np.full(t.size, 0.002), {"units": "m"})}, coords={"time": t}).to_netcdf(path)
+    rc, out, err = run("links", path, "--speed", SPEED, "--links", 40)
+    assert rc == 1 and out == "" and len(err.strip().splitlines()) == 1, err
+    assert str(path) in err and "channel delta is constant (0.002 in every sample)" in err

@@ -4,6 +4,7 @@ with link 40, then link 70, 1 mm long, and the healthy chain."""
 
 import dataclasses
 import json
+import math
 from pathlib import Path
 
 import numpy as np
@@ -495,3 +496,66 @@ def test_a_channel_without_a_unit_is_told_how_to_give_one():
     with pytest.raises(ValueError) as err:
         find_worn_links(rec, speed=SPEED, n_links=N, channel="tensioner", scene=SCENE)
     assert "--units" not in str(err.value)
+
+
+def _arrivals(ds, roller, after):
+    """The times after ``after`` at which the roller's centre passes over the lower head's centre (x = delta, z > 0),
+    whichever way the chain runs."""
+    t, d = ds.time.values, ds.delta.values
+    xz = ds.roller_position.sel(roller=roller).values
+    rel = xz[:, 0] - d
+    out = []
+    for i in range(t.size - 1):
+        if t[i] > after and xz[i, 1] > 0 and (rel[i] < 0 <= rel[i + 1] or rel[i] > 0 >= rel[i + 1]):
+            out.append(t[i] + (t[i + 1] - t[i]) * rel[i] / (rel[i] - rel[i + 1]))
+    return out
+
+
+@pytest.mark.parametrize("direction", ["up", "down"])
+def test_a_worn_link_is_numbered_alike_whichever_way_the_chain_runs(direction, tmp_path, capsys):
+    """The 90-link profile's chain with link 40 1 mm long, running up or down (drive.direction): a link marked by its
+    rollers' arrivals at the top of the lower head numbers the worn link by how many links pass from it.  Running
+    down the links pass in increasing number, so marking link 30 (rollers 30 then 31) makes link 40 the 11th;
+    running up they pass in decreasing number, so marking link 50 (rollers 51 then 50) makes it the 11th too.  The
+    unmarked number is the link at the sensor when the recording starts, counted the same way.  (The signature used to
+    be simulated running up whatever the profile said: the down-running chain's link read 36 or 81 for 22.)"""
+    from vibkit.diagnose.links import profile_scene_file
+    from vibkit.model.profile import parse_profile
+
+    text = PROFILE_90.replace("teeth = 28", f'teeth = 28\ndirection = "{direction}"')
+    profile = tmp_path / f"E90-{direction}.toml"
+    profile.write_text(text)
+    scene = load_scene(profile_scene_file(parse_profile(text, "E90.toml")))
+    pitch, n = scene.chain.link_pitch, scene.chain.n_rollers
+    first, second = (51, 50) if direction == "up" else (30, 31)  # the marked link's rollers, in arrival order
+    sc = dataclasses.replace(
+        scene,
+        chain=dataclasses.replace(scene.chain, worn_links=((40, pitch + 1e-3),)),
+        outputs=dict(scene.outputs, variables=("delta", "sprocket_angle", "roller_position"), rollers=(first, second)),
+    ).with_solver(closure="exact")
+    settle = n * pitch / SPEED + 5.0
+    ds = vibkit.simulate(sc, duration=settle + (3.2 * n + 3) * pitch / SPEED, progress=False)
+    t = ds.time.values
+    keep = t >= settle
+    rng = np.random.default_rng(90)
+    rec = xr.Dataset(
+        {"delta": ("time", ds.delta.values[keep] + rng.normal(0, 1e-6, keep.sum()), {"units": "m"})},
+        coords={"time": ("time", t[keep] - settle, {"units": "s"})},
+    )
+    rec.to_netcdf(tmp_path / "rec.nc")
+    a = _arrivals(ds, first, settle + 5.0)[0]
+    b = _arrivals(ds, second, a)[0]
+    marker = 0.5 * (a + b) - settle
+    marked = _links_with(
+        tmp_path / "rec.nc", capsys, "--escalator", str(profile), "--marker", f"{marker:.6f}", "--json"
+    )
+    assert marked["direction"] == direction
+    assert [f["link"] for f in marked["flagged"]] == [11]
+    # unmarked: link 1 is the link at the sensor at the start; the rollers' positions give which one that is
+    theta = ds.sprocket_angle.values
+    passed = scene.sprocket.teeth * abs(float(np.interp(settle, t, theta) - theta[0])) / (2 * np.pi)
+    at_start = link_number_of(40, passed, n, direction)
+    # the same count from the marked link: it passed the sensor (marker - 0) * f_lp links after the start
+    assert (at_start - 11 - math.floor(marker * SPEED / pitch)) % n in (0, n - 1, 1)
+    plain = _links_with(tmp_path / "rec.nc", capsys, "--escalator", str(profile), "--json")
+    assert [f["link"] for f in plain["flagged"]] == [at_start]

@@ -82,6 +82,12 @@ def add_parser(subparsers):
         help="forward scene of the escalator: gives the worn link's signature on the tensioner (one number per "
         "worn link, its excess pitch in mm); without it each link's own cycle is tested",
     )
+    s.add_argument(
+        "--direction",
+        choices=("up", "down"),
+        help="the way the steps travelled while recorded (the worn link's signature is simulated running that way; "
+        "default: the --escalator profile's drive.direction, else the --scene's motor speed sign)",
+    )
     add_marker(s)
     s.add_argument(
         "--false-alarm",
@@ -112,6 +118,15 @@ def run(a):
             f"{shown(a.recording)}: give --links N, the chain's number of links (or --escalator FILE with chain.n_links)"
         )
     scene = a.scene
+    if scene is not None and not scene.strip():
+        raise CLIError(
+            f"--scene {scene!r}: expected the escalator's forward scene file (TOML); give its path, or leave --scene out"
+        )
+    if a.direction is not None and profile is not None and a.scene is None and a.direction != profile.direction:
+        raise CLIError(
+            f"--direction {a.direction}: the profile {profile.source} says drive.direction = {profile.direction}; "
+            "correct the profile, or leave --direction out"
+        )
     if scene is None and profile is not None:
         scene = profile_scene_file(profile)
     try:
@@ -126,6 +141,7 @@ def run(a):
             band=a.band,
             file=shown(a.recording),
             nominal_pitch=None if profile is None else profile.nominal_pitch,
+            direction=a.direction,
             **({} if a.min_excess is None else {"min_excess": a.min_excess}),
         )
     except TooFewLoops as exc:
@@ -149,6 +165,8 @@ def run(a):
         f"{res.link_pass_hz:.4f} Hz link pass ({speed:g} m/s)"
     )
     print(f"method               {res.method}")
+    if res.direction is not None:
+        print(f"direction            {res.direction} (the signature simulated running {res.direction})")
     print(
         f"threshold            |t| > {res.threshold:.2f} (false alarm {res.false_alarm:g} per recording over "
         f"{res.n_links} links, {res.dof:.0f} degrees of freedom)"

@@ -644,8 +644,13 @@ def on_step(profile):
 def escalator_profile(a):
     """The profile named by ``--escalator`` (a Profile), None without one; a bad file is a CLIError."""
     path = getattr(a, "escalator", None)
-    if not path:
+    if path is None:
         return None
+    if not str(path).strip():
+        raise CLIError(
+            f"--escalator {path!r}: expected the escalator profile's file (TOML: docs/guide/escalator.md); give its "
+            "path, or leave --escalator out"
+        )
     from vibkit.model.profile import load_profile
     from vibkit.model.scene import SceneError
 

@@ -9,7 +9,7 @@ link passes each), so the scan fits that pattern at every link and flags the lin
 
 :func:`worn_link_signature` simulates the scene twice at the recording's speed (healthy, and with
 link 1 ``excess`` longer, exact closure), one loop of settling cut off, and processes both runs
-exactly as a recording; :func:`find_worn_links` reads the recording's channel, tracks its link-pass
+exactly as a recording (:mod:`vibkit.diagnose.link_signature`); :func:`find_worn_links` reads the recording's channel, tracks its link-pass
 phase, builds the map and scans it.
 
 Link numbers count, in the order the links pass, from the link at the sensor when the recording
@@ -21,7 +21,6 @@ numbering is known and its worn link is row 0 of the signature.
 
 from __future__ import annotations
 
-import dataclasses
 import functools
 import math
 from dataclasses import dataclass, field
@@ -32,13 +31,22 @@ from ..signal import find_fundamental
 from ..signal.linkmap import (
     MIN_LOOPS,
     TooFewLoops,
-    canonical_phase,
     link_map,
-    link_pass_phase,
     record_time_for_loops,
 )
 from ..signal.linkscan import count_drift, scan_links
 from .decision import ELONGATION_WINDOW_PERCENT
+from .link_signature import (
+    DIRECTIONS,
+    SAMPLES_PER_CYCLE,
+    link_number_of,
+    link_offset,
+    link_phase,
+    profile_scene_file,
+    scene_direction,
+    signature_error,
+    worn_link_signature,
+)
 
 __all__ = [
     "DEFAULT_FALSE_ALARM",
@@ -47,6 +55,7 @@ __all__ = [
     "link_number_of",
     "link_offset",
     "links_channel",
+    "scene_direction",
     "profile_scene_file",
     "signature_error",
     "worn_link_signature",
@@ -54,9 +63,6 @@ __all__ = [
 ]
 
 DEFAULT_FALSE_ALARM = 1e-2
-#: tracking bandwidth of the link-pass phase, as a fraction of the link-pass frequency
-BANDWIDTH_FRACTION = 1.0 / 40.0
-SAMPLES_PER_CYCLE = 16
 #: a recording with fewer samples a link-pass cycle reads a worn link's excess low: a note says so
 FEW_SAMPLES_PER_CYCLE = 10
 #: excess pitch below which a link fitted by the signature is not flagged [m]: the simulated healthy chain of
@@ -64,8 +70,6 @@ FEW_SAMPLES_PER_CYCLE = 10
 #: wander (the tracked phase's error at the record's ends); with 1 um of noise over three loops the links that
 #: pass the statistical threshold by chance read about 0.03 mm
 MIN_EXCESS_M = 0.05e-3
-#: loops (after one of settling) that the signature's runs average over
-SIGNATURE_LOOPS = 2
 #: excess pitch of the simulated worn link whose signature is fitted first [m]
 SIGNATURE_EXCESS_M = 1e-3
 #: a first fit above this many times ``SIGNATURE_EXCESS_M`` is fitted again with the signature of a link that long:
@@ -75,8 +79,6 @@ REFIT_ABOVE = 1.25
 #: over about half the sprocket's teeth of link passes, twice a loop (on the sprocket and on the lower head),
 #: so each link's own cycle test flags dozens of neighbours; no number is then given
 MAX_OWN_CYCLE_FLAGS = 3
-#: the sensors the model gives a signature for: sensor -> the simulation's output
-SENSORS = {"tensioner": "delta"}
 #: units of a step accelerometer's channel (refused: see ``STEP_REFUSAL``)
 ACCELERATION_UNITS = ("m/s^2", "m/s2", "m s-2", "mm/s^2", "g")
 #: why a step accelerometer gives no link number (measured on the no-load scene, 0.5 m/s, exact closure:
@@ -117,6 +119,8 @@ class LinksResult:
     method : str
     marker_s : float or None
     notes : list of str
+    direction : str or None
+        With a scene: "up" or "down", the way the chain ran as the signature was simulated.
     """
 
     file: str
@@ -139,6 +143,8 @@ class LinksResult:
     status: str = "ok"
     reason: str = ""
     residual_statistic: np.ndarray | None = None
+    #: with a scene: the way the chain ran ("up" or "down"), as the signature was simulated; None without one
+    direction: str | None = None
 
     def as_dict(self):
         return {
@@ -154,139 +160,12 @@ class LinksResult:
             "dof": self.dof,
             "method": self.method,
             "marker_s": self.marker_s,
+            "direction": self.direction,
             "status": self.status,
             "reason": self.reason,
             "flagged": self.flagged,
             "notes": self.notes,
         }
-
-
-def link_phase(x, fs, f_lp):
-    """The link-pass phase of ``x`` near ``f_lp`` [Hz], by demodulation. [rad]"""
-    return link_pass_phase(x, fs, f_lp, bandwidth_hz=f_lp * BANDWIDTH_FRACTION)
-
-
-def link_number_of(model_link, links_passed, n_links):
-    """Number (1-based, in passing order from the link at the sensor) of the scene's link
-    ``model_link`` after ``links_passed`` links have passed since the scene's start.
-
-    A link is at the sensor while it goes over the top of the lower head, from the arrival there of one of
-    its rollers to the other's.  At the scene's start roller 1 is at the top and rollers arrive in
-    decreasing number (2, 1, n, n - 1 ...): while ``j`` to ``j + 1`` links have passed, the link from roller
-    ``(-j - 1) mod n + 1`` to the next is at the sensor (link n, from roller n to roller 1, at first)."""
-    at_sensor = (-1 - int(math.floor(links_passed))) % n_links  # 0-based model link at the sensor
-    return (at_sensor - (model_link - 1)) % n_links + 1
-
-
-def _scene_with(scene, *, speed, worn=None):
-    chain = scene.chain if worn is None else dataclasses.replace(scene.chain, worn_links=(worn,))
-    effects = dict(scene.effects)
-    if "motor" in effects:
-        effects["motor"] = dataclasses.replace(effects["motor"], speed=float(speed))
-    outputs = dict(scene.outputs, variables=tuple(sorted(set(SENSORS.values()) | {"sprocket_angle"})))
-    # both runs on the closure walked run by run (exact, and what a worn chain takes): the difference is the
-    # worn link's, not the closures'
-    return dataclasses.replace(scene, chain=chain, effects=effects, outputs=outputs).with_solver(closure="runs")
-
-
-@functools.lru_cache(maxsize=32)
-def _run_map_cached(scene_path, sensor, speed, fs, samples_per_cycle, excess, loops):
-    """One run's mean per-link shape (link 1 ``excess`` [m] longer; 0: healthy) and the row of its link 1."""
-    from ..analyses.simulation import simulate
-    from ..model.scene import load_scene
-
-    scene = load_scene(scene_path)
-    if scene.analysis != "forward" or scene.run.start != 0.0:
-        raise ValueError(
-            f"{scene_path}: the worn link's signature needs a forward scene that starts with roller 1 at the top "
-            "of the lower head ([run] start = 0), so that its links can be numbered"
-        )
-    n = scene.chain.n_rollers
-    pitch = scene.chain.link_pitch
-    f_lp = speed / pitch
-    settle = n / f_lp + 5.0  # one loop and the start-up
-    duration = settle + (loops * n + 3) / f_lp
-    worn = None if excess == 0.0 else (1, pitch + excess)
-    ds = simulate(_scene_with(scene, speed=speed, worn=worn), duration=duration, progress=False)
-    t = ds.time.values
-    keep = t >= settle
-    tx = np.arange(t[keep][0], t[-1], 1.0 / fs)
-    x = np.interp(tx, t, ds[SENSORS[sensor]].values)
-    ph = link_phase(x, fs, f_lp)
-    # links passed since the start, on the sprocket; a roller is at the sensor where it is a whole number: where
-    # that falls in the signal's cycle (its fundamental's peak is 0) is the offset that numbers the links of the
-    # map, and of a recording of this escalator, by the link at the sensor rather than by the signal's cycle
-    passed = scene.sprocket.teeth * np.abs(np.interp(tx, t, ds.sprocket_angle.values) - ds.sprocket_angle.values[0])
-    passed /= 2 * np.pi
-    cyc = canonical_phase(x, ph) / (2 * np.pi)
-    lag = 2 * np.pi * (cyc - passed)
-    offset = float(np.angle(np.mean(np.exp(1j * lag))) / (2 * np.pi)) % 1.0
-    lmap = link_map(x, fs, ph, n, samples_per_cycle=samples_per_cycle, link_offset=offset)
-    # the map's first link as the map counts it (between the link boundaries the offset places in the signal),
-    # in links passed on the sprocket: at a start on a boundary the sprocket's count alone may differ by one
-    # (5 s at 4.8 Hz is 24 links: every number of a 120-link scene came out one too high)
-    whole = round(float(np.mean(cyc - offset - passed)))  # the phase's whole cycles before the sprocket's count
-    first = math.floor(cyc[0] - offset) - whole + 0.5
-    return lmap.mean_shape, link_number_of(1, first, n) - 1, n, offset
-
-
-def _cache_key(scene_path, sensor, speed, fs, samples_per_cycle):
-    """The cached runs' key: the same scene, speed and rate (rounded) are one run, whoever asks."""
-    return (str(scene_path), sensor, round(float(speed), 9), round(float(fs), 6), int(samples_per_cycle))
-
-
-def _signature_cached(scene_path, sensor, speed, fs, samples_per_cycle, excess, loops):
-    healthy, _, n, _ = _run_map_cached(scene_path, sensor, speed, fs, samples_per_cycle, 0.0, loops)
-    worn, row, _, _ = _run_map_cached(scene_path, sensor, speed, fs, samples_per_cycle, excess, loops)
-    return np.roll(worn - healthy, -row, axis=0), n
-
-
-def link_offset(scene_path, *, sensor="tensioner", speed, fs, samples_per_cycle=SAMPLES_PER_CYCLE):
-    """Where a roller reaches the sensor in the signal's link-pass cycle of the scene's healthy chain, as a fraction of
-    a cycle after the fundamental's peak (:func:`vibkit.signal.linkmap.link_map`'s ``link_offset``): with it a
-    recording of this escalator numbers its links from the link at the sensor when it starts (or the marked link),
-    as the signature numbers them, wherever the recording starts within a link's passage."""
-    return _run_map_cached(*_cache_key(scene_path, sensor, speed, fs, samples_per_cycle), 0.0, SIGNATURE_LOOPS)[3]
-
-
-def worn_link_signature(scene_path, *, sensor="tensioner", speed, fs, samples_per_cycle=SAMPLES_PER_CYCLE, excess=1e-3):
-    """The change of the per-link map that one link ``excess`` [m] longer makes, row 0 that link.
-
-    Parameters
-    ----------
-    scene_path : str or Path
-        A forward scene of the escalator (its chain, sprocket, guide and motor).
-    sensor : {"tensioner"}
-    speed : float
-        Chain speed of the recording (the scene's motor runs at it). [m/s]
-    fs : float
-        The recording's sample rate (the runs are sampled at it). [Hz]
-    samples_per_cycle : int, optional
-    excess : float, optional
-        Excess pitch of the simulated worn link. [m]
-
-    Returns
-    -------
-    signature : ndarray (n_links, samples_per_cycle)
-    n_links : int
-    """
-    if sensor not in SENSORS:
-        raise ValueError(f"sensor {sensor!r}: the model gives a worn link's signature for {', '.join(SENSORS)} only")
-    return _signature_cached(
-        *_cache_key(scene_path, sensor, speed, fs, samples_per_cycle), float(excess), SIGNATURE_LOOPS
-    )
-
-
-def signature_error(scene_path, *, sensor="tensioner", speed, fs, samples_per_cycle=SAMPLES_PER_CYCLE, excess=1e-3):
-    """The signature's relative error, as the model shows it: ``|S(e / 2) / (e / 2) - S(e) / e| / |S(e) / e|``,
-    ``S(e)`` the signature of a link ``e`` longer (each without the mean over its links, as the scan fits it).
-    A linear, reproducible signature gives 0; the study's 159-link scene at 0.5 m/s gives 0.15 at 1 mm."""
-    key = _cache_key(scene_path, sensor, speed, fs, samples_per_cycle)
-    full, _ = _signature_cached(*key, float(excess), SIGNATURE_LOOPS)
-    half, _ = _signature_cached(*key, float(excess) / 2.0, SIGNATURE_LOOPS)
-    full = (full - full.mean(axis=0)) / float(excess)
-    half = (half - half.mean(axis=0)) / (float(excess) / 2.0)
-    return float(np.sqrt(np.sum((half - full) ** 2) / np.sum(full * full)))
 
 
 def links_channel(recording, channel=None):
@@ -301,7 +180,18 @@ def links_channel(recording, channel=None):
         if str(recording[c].attrs.get("units", "")) in ("m", "mm", "um"):
             return c
     if not chans:
-        raise ValueError("the recording has no vibration channel")
+        along = [str(v) for v in recording.data_vars if recording[v].dims == ("time",) and v != "segment"]
+        for v in along:
+            vals = np.asarray(recording[v].values, dtype=float) if recording[v].dtype.kind in "biuf" else None
+            if vals is not None and vals.size and np.nanmin(vals) == np.nanmax(vals):
+                raise ValueError(
+                    f"channel {v} is constant ({float(np.nanmin(vals)):g} in every sample): no vibration to map; "
+                    "check that the sensor was connected and recording, or give another channel (--channel)"
+                )
+        names = f" (its columns: {', '.join(along)})" if along else ""
+        raise ValueError(
+            f"the recording has no vibration channel{names}: give the tensioner's displacement channel (--channel)"
+        )
     return chans[0]
 
 
@@ -324,10 +214,15 @@ def _check_healthy(scene):
         )
 
 
-def _check_pitch(ch, f_lp, speed, nominal):
-    """Refuse a link pass whose pitch (speed / frequency) no chain of this nominal pitch has."""
+def _check_pitch(ch, f_lp, speed, nominal, resolution_hz=0.0):
+    """Refuse a link pass whose pitch (speed / frequency) no chain of this nominal pitch has, within the frequency's
+    resolution (``1 / span``: a 2 s recording's link pass is known to 0.5 Hz, too coarse to blame the speed)."""
     el = 100.0 * (speed / f_lp / nominal - 1.0)
     lo, hi = PITCH_WINDOW_PERCENT
+    el_short = 100.0 * (speed / (f_lp + resolution_hz) / nominal - 1.0)
+    el_long = 100.0 * (speed / max(f_lp - resolution_hz, 1e-12) / nominal - 1.0)
+    if el_long >= lo and el_short <= hi:
+        return
     if not lo <= el <= hi:
         raise ValueError(
             f"channel {ch}: the link pass found, {f_lp:.4g} Hz, gives a link pitch of {1e3 * speed / f_lp:.1f} mm at "
@@ -349,6 +244,7 @@ def find_worn_links(
     min_excess=MIN_EXCESS_M,
     file="<recording>",
     nominal_pitch=None,
+    direction=None,
 ):
     """The links of a chain whose pitch departs from the others', from a tensioner recording.
 
@@ -381,6 +277,10 @@ def find_worn_links(
         The chain's nominal pitch [m]: the link pass found must then give a pitch within the elongations a
         chain can have, widened by the escalator standard's 5 % speed tolerance (``PITCH_WINDOW_PERCENT``),
         or the map is refused (a speed in km/h, a harmonic taken for the link pass).
+    direction : {"up", "down"}, optional
+        With a scene: the way the chain ran while recorded (default: the scene's own, :func:`scene_direction`).
+        The signature is simulated running that way; a down-running chain numbered with an up-running signature
+        gets a wrong number.
 
     Returns
     -------
@@ -407,6 +307,8 @@ def find_worn_links(
     t = np.asarray(recording.time.values, dtype=float)
     if np.issubdtype(recording.time.dtype, np.datetime64):
         t = (recording.time.values - recording.time.values[0]) / np.timedelta64(1, "s")
+    _check_span(ch, t, n, speed, band, nominal_pitch)
+    _check_gaps(file, recording, t, n, speed, band, nominal_pitch)
     fs = (t.size - 1) / (t[-1] - t[0])
     x = np.asarray(da.values, dtype=float)
     x = np.interp(np.arange(t[0], t[-1], 1.0 / fs), t, x)  # uniform samples
@@ -417,16 +319,15 @@ def find_worn_links(
     band = band or (speed / 0.2, speed / 0.08)
     fund = find_fundamental(x, fs, band=band)
     f_lp = fund.frequency_hz
-    if nominal_pitch is not None:
-        _check_pitch(ch, f_lp, speed, float(nominal_pitch))
     span = (x.size - 1) / fs
+    if span * f_lp < min(MIN_PITCH_CYCLES, MIN_LOOPS * n):
+        # the link pass of a few cycles is too coarse to judge the pitch by (2 s: 2.5 Hz found for 3.75): too short,
+        # not a wrong speed; the time to record from the nominal pitch when the profile gives it
+        _too_few_loops(ch, span, n, f_lp if nominal_pitch is None else speed / float(nominal_pitch))
+    if nominal_pitch is not None:
+        _check_pitch(ch, f_lp, speed, float(nominal_pitch), resolution_hz=1.0 / span)
     if span * f_lp < MIN_LOOPS * n:
-        need = record_time_for_loops(n, f_lp)
-        raise TooFewLoops(
-            f"channel {ch}: {span:.1f} s at about {f_lp:.3g} Hz link pass covers {span * f_lp / n:.2f} loops of "
-            f"the chain's {n} links; a link map needs {MIN_LOOPS} loops: record at least {math.ceil(need):.0f} s "
-            f"({MIN_LOOPS} x {n} / {f_lp:.3g} Hz plus one link)"
-        )
+        _too_few_loops(ch, span, n, f_lp)
     notes = []
     sensor = "tensioner" if str(da.attrs.get("units", "")) in ("m", "mm", "um") else "other"
     if scene is not None:
@@ -450,16 +351,22 @@ def find_worn_links(
         )
     # with a scene the links are counted between the instants a roller reaches the sensor, not between the
     # signal's cycle boundaries: numbers as the signature gives them wherever the recording starts
-    offset = 0.0 if scene is None else link_offset(scene, sensor="tensioner", speed=speed, fs=fs)
+    if scene is not None:
+        from ..model.scene import load_scene
+
+        direction = scene_direction(load_scene(scene)) if direction is None else direction
+        if direction not in DIRECTIONS:
+            raise ValueError(f"direction {direction!r}: expected one of {', '.join(DIRECTIONS)}")
+    offset = 0.0 if scene is None else link_offset(scene, sensor="tensioner", speed=speed, fs=fs, direction=direction)
     lmap = link_map(
         x, fs, link_phase(x, fs, f_lp), n, samples_per_cycle=SAMPLES_PER_CYCLE, marker_s=marker_s, link_offset=offset
     )
     if scene is not None:
         _check_healthy(scene)
-        sig, n_scene = worn_link_signature(scene, sensor="tensioner", speed=speed, fs=fs)
+        sig, n_scene = worn_link_signature(scene, sensor="tensioner", speed=speed, fs=fs, direction=direction)
         if n_scene != n:
             raise ValueError(f"--links {n}: the scene {scene} has {n_scene} links")
-        fit = functools.partial(_signature_scan, lmap, scene, speed, fs, units_scale(da), false_alarm)
+        fit = functools.partial(_signature_scan, lmap, scene, speed, fs, units_scale(da), false_alarm, direction)
         scan, err = fit(SIGNATURE_EXCESS_M)
         used = SIGNATURE_EXCESS_M
         top = max(scan.flagged, key=lambda f: f.t, default=None)
@@ -518,7 +425,7 @@ def find_worn_links(
                 "number"
             )
             return _result(file, ch, sensor, speed, lmap, n, [], scan, excess, method, marker_s, notes,
-                           status="inconclusive", reason=reason)  # fmt: skip
+                           status="inconclusive", reason=reason, direction=direction)  # fmt: skip
     else:
         scan = scan_links(lmap, false_alarm=false_alarm)
         flagged = [
@@ -551,8 +458,87 @@ def find_worn_links(
                 "scene (--scene or --escalator) so that the worn link's signature is fitted"
             )
             return _result(file, ch, sensor, speed, lmap, n, [], scan, excess, method, marker_s, notes,
-                           status="inconclusive", reason=reason)  # fmt: skip
-    return _result(file, ch, sensor, speed, lmap, n, flagged, scan, excess, method, marker_s, notes)
+                           status="inconclusive", reason=reason, direction=direction)  # fmt: skip
+    return _result(file, ch, sensor, speed, lmap, n, flagged, scan, excess, method, marker_s, notes,
+                   direction=direction)  # fmt: skip
+
+
+#: link-pass cycles under which the link pass found is too coarse to refuse a pitch by (its resolution, 1 / span,
+#: is then over 5 % of it: a third of the pitch window)
+MIN_PITCH_CYCLES = 20
+#: fewer samples than this are refused before any analysis (a phase needs a few cycles of a few samples each)
+MIN_SAMPLES = 16
+#: a step between time stamps longer than this many median steps is a gap (as the readers split records at)
+GAP_FACTOR = 5.0
+
+
+def _loop_time(n, speed, band, nominal_pitch):
+    """(shortest time one loop can take [s], what it is from): the nominal pitch's link pass, else the top of the
+    search band."""
+    if nominal_pitch is not None:
+        return n * float(
+            nominal_pitch
+        ) / speed, f"{speed:g} m/s over the nominal {1e3 * float(nominal_pitch):g} mm pitch"
+    hi = band[1] if band else speed / 0.08
+    return n / hi, f"the link pass at most {hi:.4g} Hz" + ("" if band else f" at {speed:g} m/s (a pitch of 80 mm)")
+
+
+def _check_span(ch, t, n, speed, band, nominal_pitch):
+    """TooFewLoops, before any analysis, for a recording of too few samples to analyse (five samples were refused as
+    an unnamed parameter's)."""
+    if t.size >= MIN_SAMPLES:
+        return
+    span = float(t[-1] - t[0]) if t.size > 1 else 0.0
+    loop, basis = _loop_time(n, speed, band, nominal_pitch)
+    if nominal_pitch is None:
+        lo = band[0] if band else speed / 0.2
+        need = f"{math.ceil(MIN_LOOPS * loop + loop / n):.0f} to {math.ceil((MIN_LOOPS * n + 1) / lo):.0f} s"
+        need += (
+            " (the band's link pass)"
+            if band
+            else ", as the pitch is 80 to 200 mm (the profile's nominal pitch says which)"
+        )
+    else:
+        need = f"{math.ceil(MIN_LOOPS * loop + loop / n):.0f} s ({basis})"
+    raise TooFewLoops(
+        f"channel {ch} has {t.size} samples over {span:.3g} s: a link map needs {MIN_LOOPS} loops of the chain's "
+        f"{n} links; record at least {need}"
+    )
+
+
+def _too_few_loops(ch, span, n, f_lp):
+    need = record_time_for_loops(n, f_lp)
+    raise TooFewLoops(
+        f"channel {ch}: {span:.1f} s at about {f_lp:.3g} Hz link pass covers {span * f_lp / n:.2f} loops of "
+        f"the chain's {n} links; a link map needs {MIN_LOOPS} loops: record at least {math.ceil(need):.0f} s "
+        f"({MIN_LOOPS} x {n} / {f_lp:.3g} Hz plus one link)"
+    )
+
+
+def _check_gaps(file, recording, t, n, speed, band, nominal_pitch):
+    """ValueError naming the gaps (their time spans) in a recording's time stamps: a link map counts every link pass,
+    and the links that passed in a gap are not known to one link (the speed there is not recorded), so the record is
+    not resampled across it; the message says which segment could be analysed alone."""
+    dt = np.diff(t)
+    gap = dt > GAP_FACTOR * float(np.median(dt))
+    if not gap.any():
+        return
+    where = np.flatnonzero(gap)
+    spans = ", ".join(f"{t[i]:.2f}-{t[i + 1]:.2f} s" for i in where[:3]) + (" ..." if where.size > 3 else "")
+    bounds = np.concatenate([[0], where + 1, [t.size]])
+    longest = max(range(bounds.size - 1), key=lambda k: t[bounds[k + 1] - 1] - t[bounds[k]])
+    a, b = t[bounds[longest]], t[bounds[longest + 1] - 1]
+    loop, _ = _loop_time(n, speed, band, nominal_pitch)
+    enough = (
+        f"it covers at most {(b - a) / loop:.2f} loops, so cut it out and analyse it alone"
+        if b - a >= MIN_LOOPS * loop
+        else f"it covers at most {(b - a) / loop:.2f} loops, under the {MIN_LOOPS} a link map needs: record again without a break"
+    )
+    raise ValueError(
+        f"{file}: the time stamps have {where.size} gap(s) (no samples {spans}): the links that passed in a gap cannot "
+        f"be counted, so no link can be numbered across it; the longest part without a gap is {a:.2f}-{b:.2f} s, "
+        f"{enough}"
+    )
 
 
 def _check_rate(file, fs, speed, band):
@@ -574,10 +560,10 @@ def _check_rate(file, fs, speed, band):
     )
 
 
-def _signature_scan(lmap, scene, speed, fs, metres_per_unit, false_alarm, excess):
+def _signature_scan(lmap, scene, speed, fs, metres_per_unit, false_alarm, direction, excess):
     """The scan of ``lmap`` with the signature of a link ``excess`` [m] longer, and the signature's relative error."""
-    sig, _ = worn_link_signature(scene, sensor="tensioner", speed=speed, fs=fs, excess=excess)
-    err = signature_error(scene, sensor="tensioner", speed=speed, fs=fs, excess=excess)
+    sig, _ = worn_link_signature(scene, sensor="tensioner", speed=speed, fs=fs, excess=excess, direction=direction)
+    err = signature_error(scene, sensor="tensioner", speed=speed, fs=fs, excess=excess, direction=direction)
     scan = scan_links(lmap, signature=sig / metres_per_unit, scale=excess, false_alarm=false_alarm, signature_error=err)
     return scan, err
 
@@ -613,24 +599,6 @@ def is_step_channel(recording, channel):
 def is_tensioner_channel(recording, channel):
     """Whether ``channel`` is a displacement (a length unit): the sensor the worn link's signature is known for."""
     return str(recording[channel].attrs.get("units", "")) in ("m", "mm", "um")
-
-
-def profile_scene_file(profile):
-    """An escalator profile's forward scene as a file (the signature is simulated from a scene file and cached by
-    its path, speed and rate): written once per profile text into the user's temporary folder."""
-    import hashlib
-    import os
-    import tempfile
-    from pathlib import Path
-
-    text = profile.scene_text("forward")
-    digest = hashlib.sha256(text.encode()).hexdigest()[:16]
-    path = Path(tempfile.gettempdir()) / f"vibkit-links-{digest}.toml"
-    if not path.exists():
-        tmp = path.with_suffix(f".{os.getpid()}.tmp")
-        tmp.write_text(text, encoding="utf-8")
-        os.replace(tmp, path)
-    return str(path)
 
 
 def units_scale(da):
