@@ -149,3 +149,8 @@ def test_every_page_is_headed_and_numbered(tmp_path):
     assert "simulation against recording" not in titles
     assert "no simulation against recording page: no scene given" in page1
     assert "no ride quality page: recording:" in page1
+
+
+def test_teeth_assumed_without_a_profile_or_scene_are_said(tensioner_ctx):
+    assert any(n.startswith("sprocket teeth not known: 28 assumed") for n in tensioner_ctx.notes)
+    assert not any("Z = 28" in n for n in tensioner_ctx.pitch.notes)

@@ -7,6 +7,7 @@ import os
 from vibkit.diagnose.rounding import fmt_interval, fmt_pm
 
 from .options import (
+    CHANNEL_EVERY,
     _profile_of,
     add_command,
     add_escalator,
@@ -32,7 +33,7 @@ def add_parser(subparsers):
         "compare a recording with a scene (simulated) or a result file, harmonic by harmonic",
         EPILOG,
     )
-    add_recording(s)
+    add_recording(s, channel_default=CHANNEL_EVERY)  # the decision of pitch and report (estimate_channels)
     add_json(s)
     add_escalator(s)
     s.add_argument(

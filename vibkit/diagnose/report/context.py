@@ -262,6 +262,11 @@ def analyse(
     # from the channel with the smallest sigma
     # the unit's own sprocket and band where a profile names the unit (a scene given beside it may be another's)
     teeth = int(profile.teeth) if profile is not None else sc.sprocket.teeth if sc else 28
+    if profile is None and sc is None:
+        notes.append(
+            "sprocket teeth not known: 28 assumed (the study's sprocket) for the shaft-frequency reading; "
+            "give --escalator PROFILE (drive.teeth)"
+        )
     if band is None and profile is not None and speed is not None:
         band = profile.search_band(speed)
         notes.append(f"search band {fmt_band(band)} from the profile (0.8-1.25 x speed / nominal pitch)")
