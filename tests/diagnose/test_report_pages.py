@@ -154,3 +154,19 @@ def test_every_page_is_headed_and_numbered(tmp_path):
 def test_teeth_assumed_without_a_profile_or_scene_are_said(tensioner_ctx):
     assert any(n.startswith("sprocket teeth not known: 28 assumed") for n in tensioner_ctx.notes)
     assert not any("Z = 28" in n for n in tensioner_ctx.pitch.notes)
+
+
+def test_a_derived_link_count_is_said_on_page_one_and_in_the_summary(tmp_path):
+    from vibkit.diagnose.report.verdict import evidence_rows
+    from vibkit.model.profile import parse_profile
+
+    text = (
+        '[escalator]\nunit = "M14"\n[drive]\nspeed = 0.65\nspeed_uncertainty = 0.0013\nteeth = 25\n'
+        "[chain]\nnominal_pitch = 0.1016\nlinks_per_step = 4\n[geometry]\nrise = 8.46\nincline_deg = 30.0\n"
+    )
+    profile = parse_profile(text, "m14.toml")
+    ctx = analyse(_tensioner_csv(tmp_path / "m14.csv", seconds=20.0), profile=profile)
+    n, src = ctx.summary["n_links"], ctx.summary["n_links_from"]
+    assert n == 412 and src.startswith("derived: whole steps of 4 links")  # the loop of 41.92 m
+    assert any(note.startswith("the chain's 412 links are vibkit's count") for note in ctx.notes)
+    assert ("links in the chain", f"412 ({src})") in evidence_rows(ctx)

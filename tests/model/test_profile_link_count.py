@@ -77,3 +77,18 @@ def test_a_chain_that_cannot_close_says_what_to_change_not_the_solvers_state():
     text = str(exc.value)
     assert "converge" not in text and "s0_1" not in text
     assert "chain.n_links" in text and "\n" not in text
+
+
+def test_a_closure_the_solver_loses_says_what_to_change(monkeypatch):
+    """Where the bracket is found but the solve fails (the chain near the end of the tensioner's travel), the
+    error names the chain's length against the loop and the keys, never the solver's state."""
+    import vibkit.model.chain as chain_module
+
+    scene = _metro(432).scene("forward")
+    chain = Chain(Guide(scene.guide), scene.chain)
+    monkeypatch.setattr(chain_module, "solve_closure", lambda *args: (0.0, 0.0, 3))
+    with pytest.raises(ClosureError) as exc:
+        chain.configure(0.234040595)
+    text = str(exc.value)
+    assert "converge" not in text and "s0_1" not in text and "status" not in text and "\n" not in text
+    assert "432 links" in text and "chain.n_links" in text and "geometry.rise" in text

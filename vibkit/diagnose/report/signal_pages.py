@@ -105,7 +105,8 @@ def averaged_spectrum(ctx):
         if b.x.size < 16:
             continue
         frames = np.lib.stride_tricks.sliding_window_view(b.x, n)[:: max(1, n // 2)]
-        f, a = amplitude_spectrum(frames, b.fs, window="flattop", axis=-1)
+        # zero-padded four times: a short burst's lobes drawn smooth, not as a few straight segments
+        f, a = amplitude_spectrum(frames, b.fs, window="flattop", axis=-1, nfft=1 << int(np.ceil(np.log2(4 * n))))
         a = a.mean(axis=0)
         if f_ref is None:
             f_ref, total = f, a * len(frames)
