@@ -8,8 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from vibkit.diagnose.comparison import amplitude_diff_text
 from vibkit.diagnose.report import write_report
-from vibkit.diagnose.report.comparison_pages import amplitude_diff_text
 from vibkit.diagnose.report.context import analyse
 from vibkit.diagnose.report.signal_pages import ZOOM_CYCLES, spectrum_page, time_signal_page
 from vibkit.diagnose.report.verdict import scene_pitch_text, spikes_text

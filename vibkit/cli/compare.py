@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import os
 
-from vibkit.diagnose.rounding import fmt_interval, fmt_pm
+from vibkit.diagnose.comparison import amplitude_diff_text
+from vibkit.diagnose.rounding import fmt_pm
 
 from .options import (
     CHANNEL_EVERY,
@@ -135,7 +136,7 @@ def run(a):
                     f"{h['frequency_sim_hz']:.4f}",
                     f"{h['frequency_meas_hz']:.4f}",
                     fmt_pm(h["frequency_ratio"], h["frequency_ratio_sigma"]),
-                    fmt_interval(h["amplitude_diff_db"], *h["amplitude_diff_db_ci"]),
+                    amplitude_diff_text(h),
                     ("sim " if h["detected_sim"] else "") + ("rec" if h["detected_meas"] else ""),
                 ]
                 for h in comp.harmonics

@@ -21,9 +21,17 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.stats
 
-from .rounding import fmt_pm
+from .rounding import fmt_interval, fmt_pm
 
-__all__ = ["Comparison", "NothingToCompare", "compare", "matching_variable", "as_result"]
+__all__ = [
+    "Comparison",
+    "NothingToCompare",
+    "compare",
+    "matching_variable",
+    "as_result",
+    "amplitude_diff_text",
+    "counted_speed_note",
+]
 
 
 class NothingToCompare(ValueError):
@@ -284,6 +292,18 @@ def _max_in_bins(o, a, grid, step):
     ok = (idx >= 0) & (idx < grid.size)
     np.maximum.at(out, idx[ok], a[ok])
     return out
+
+
+def amplitude_diff_text(h) -> str:
+    """A harmonic's amplitude difference (recording over simulation) with its interval; an order that one side
+    does not carry has no interval: what is read at its frequency is the noise, and the line is under it."""
+    if h["detected_meas"] and h["detected_sim"]:
+        return fmt_interval(h["amplitude_diff_db"], *h["amplitude_diff_db_ci"])
+    if not h["detected_meas"] and h["detected_sim"]:
+        return f"not detected (< {h['amplitude_diff_db']:.0f} dB)"
+    if h["detected_meas"]:
+        return "not in the simulation"
+    return "not detected in either"
 
 
 def counted_speed_note(v_sim, set_point) -> str:

@@ -7,13 +7,13 @@ import textwrap
 
 import numpy as np
 
+from ..comparison import amplitude_diff_text
 from .common import (
     _PAGE,
     _WIDE,
     FREQUENCY_RATIO,
     PITCH_RATIO,
     _page_title,
-    fmt_interval,
     fmt_pm,
     fmt_value,
     length_scale,
@@ -98,18 +98,6 @@ def plot_comparison(comp, fig=None, *, top=0.88):
         cb = fig.colorbar(im, ax=a2, pad=0.01)
         cb.set_label(f"dB re 1 {u}", fontsize=8)
     return fig
-
-
-def amplitude_diff_text(h) -> str:
-    """A harmonic's amplitude difference (recording over simulation) with its interval; an order that one side
-    does not carry has no interval: what is read at its frequency is the noise, and the line is under it."""
-    if h["detected_meas"] and h["detected_sim"]:
-        return fmt_interval(h["amplitude_diff_db"], *h["amplitude_diff_db_ci"])
-    if not h["detected_meas"] and h["detected_sim"]:
-        return f"not detected (< {h['amplitude_diff_db']:.0f} dB)"
-    if h["detected_meas"]:
-        return "not in the simulation"
-    return "not detected in either"
 
 
 def simulation_page(doc, ctx) -> None:
