@@ -92,3 +92,23 @@ def test_a_closure_the_solver_loses_says_what_to_change(monkeypatch):
     text = str(exc.value)
     assert "converge" not in text and "s0_1" not in text and "status" not in text and "\n" not in text
     assert "432 links" in text and "chain.n_links" in text and "geometry.rise" in text
+
+
+def test_commands_refuse_a_count_that_cannot_close_in_one_line(tmp_path, capsys):
+    import numpy as np
+
+    from vibkit.cli import main
+
+    profile = tmp_path / "m14.toml"
+    profile.write_text(METRO.format(n=408))
+    t = np.arange(1000) / 100.0
+    rec = tmp_path / "m14.csv"
+    rec.write_text(
+        "time (s),tensioner_displacement (mm)\n" + "".join(f"{a:.2f},{0.02 * np.cos(40.2 * a):.6f}\n" for a in t)
+    )
+    for argv in (["links", str(rec)], ["report", str(rec), "-o", str(tmp_path / "r.pdf")]):
+        assert main([*argv, "--escalator", str(profile)]) == 1
+        err = capsys.readouterr().err.strip()
+        assert "\n" not in err and "Traceback" not in err and "converge" not in err
+        assert "chain.n_links" in err and "the link counts that close on this rise are" in err
+    assert not (tmp_path / "r.pdf").exists()
