@@ -65,7 +65,7 @@ def _channel_help(command):
         (("spectrum",), "every vibration channel"),
         (("report",), "every vibration channel"),
         (("links",), "the first in a length unit"),
-        (("compare",), "the first that is not a sample counter"),
+        (("compare",), "every vibration channel"),  # compare decides as pitch and report do
         (("fleet", "add"), "every vibration channel"),
     ],
     ids=lambda v: " ".join(v) if isinstance(v, tuple) else None,

@@ -35,6 +35,7 @@ def test_pages_and_text(leon_report):
         "harmonics",
         "data quality",
         "parameters",
+        "glossary",
     ]
     assert _page_count(rep.path) == len(titles)
     text = {t: "\n".join(x) for t, x in rep.pages}
@@ -48,11 +49,11 @@ def test_pages_and_text(leon_report):
     # the file's speed states no uncertainty: the pitch to 0.01 mm and no +-
     assert re.search(r"138\.4\d mm \(speed uncertainty not stated\)", text["verdict"])
     assert "+- 0 " not in text["verdict"] and not re.search(r"\+- 0\.00\d\d mm", text["verdict"])
-    assert "REPLACE" in text["verdict"] and "NOT consistent" in text["verdict"]
+    assert "REPLACE" in text["verdict"] and "pitch differs from the recording" in text["verdict"]
     # lengths plotted in um, as the tables give them (the tensioner's ripple is tens of um)
     assert "frequency [Hz]" in text["spectrum"] and "amplitude [\u00b5m]" in text["spectrum"]
     assert "tensioner_displacement [\u00b5m]" in text["time signal"]
-    assert "time [s]" in text["time signal"] and "6 spike(s)" in text["time signal"]  # the six spikes
+    assert "time [s]" in text["time signal"] and "6 spike(s) circled" in text["time signal"]  # the six spikes
     assert "order [cycles per link]" in text["order spectrum"]
     assert "simulation (delta)" in text["simulation against recording"]
     assert "6 metadata line(s) above the data kept as attrs" in text["data quality"]

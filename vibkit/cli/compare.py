@@ -4,9 +4,11 @@ from __future__ import annotations
 
 import os
 
-from vibkit.diagnose.rounding import fmt_interval, fmt_pm
+from vibkit.diagnose.comparison import amplitude_diff_text
+from vibkit.diagnose.rounding import fmt_pm
 
 from .options import (
+    CHANNEL_EVERY,
     _profile_of,
     add_command,
     add_escalator,
@@ -32,7 +34,7 @@ def add_parser(subparsers):
         "compare a recording with a scene (simulated) or a result file, harmonic by harmonic",
         EPILOG,
     )
-    add_recording(s)
+    add_recording(s, channel_default=CHANNEL_EVERY)  # the decision of pitch and report (estimate_channels)
     add_json(s)
     add_escalator(s)
     s.add_argument(
@@ -134,7 +136,7 @@ def run(a):
                     f"{h['frequency_sim_hz']:.4f}",
                     f"{h['frequency_meas_hz']:.4f}",
                     fmt_pm(h["frequency_ratio"], h["frequency_ratio_sigma"]),
-                    fmt_interval(h["amplitude_diff_db"], *h["amplitude_diff_db_ci"]),
+                    amplitude_diff_text(h),
                     ("sim " if h["detected_sim"] else "") + ("rec" if h["detected_meas"] else ""),
                 ]
                 for h in comp.harmonics

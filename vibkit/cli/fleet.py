@@ -265,8 +265,11 @@ def run_add(a):
     else:
         print(f"stored {_fmt_measurement(m)}")
         if scan is not None:
+            from vibkit.diagnose.report.fleet_links import scan_advice
+
             why = f": {scan.reason}" if scan.reason and not scan.scanned else ""
-            print(f"links: {_fmt_scan(scan)}{why}")
+            advice = scan_advice(scan)
+            print(f"links: {_fmt_scan(scan)}{why}" + (f"; {advice}" if advice else ""))
         msg(f"note: database {path}; date from {m.date_source}")
     if not m.speed_sigma_m_s:
         msg(

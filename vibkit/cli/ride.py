@@ -139,6 +139,16 @@ def _knocks(a, is_scene, rq, sim):
     return out
 
 
+def _speed_words(r, sp, rq):
+    """A ride's speed as every command prints it: the run's speed with its sigma (``0.74850 +- 0.00075 m/s``), or
+    to five digits where it states none (a simulation's counted speed)."""
+    from vibkit.diagnose.rounding import fmt_pm
+
+    if r is rq and sp is not None and sp.value is not None and sp.sigma:
+        return fmt_pm(sp.value, sp.sigma, "m/s")
+    return f"{r.speed_m_s:.5g} m/s"
+
+
 def run(a):
     from vibkit.diagnose.ride import parse_channels, ride_quality_from_recording
     from vibkit.diagnose.ride_simulation import simulate_ride
@@ -153,6 +163,7 @@ def run(a):
             raise CLIError(f"{a.input}: file not found (expected a recording or a scene .toml)")
         a.input = str(shipped)
     is_scene = a.input.lower().endswith(".toml")
+    sp = None
     if is_scene and a.channels:
         raise CLIError("--channels applies to a recording, not to a scene")
     if is_scene and a.scene:
@@ -191,7 +202,8 @@ def run(a):
             seg = r.segment
             print(
                 f"{r.source} ({r.kind}, {r.fs:.6g} Hz): ride {seg.start_s:.2f}-{seg.end_s:.2f} s "
-                f"({seg.duration_s:.2f} s, {seg.method})" + (f", speed {r.speed_m_s:.3g} m/s" if r.speed_m_s else "")
+                f"({seg.duration_s:.2f} s, {seg.method})"
+                + (f", speed {_speed_words(r, sp, rq)}" if r.speed_m_s else "")
             )
             print("step vibration [m/s^2]: weighted (ISO 2631-1) and 0.4-10 Hz unweighted")
             print(table(_ride_rows(r), head))

@@ -21,9 +21,17 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.stats
 
-from .rounding import fmt_pm
+from .rounding import fmt_interval, fmt_pm
 
-__all__ = ["Comparison", "NothingToCompare", "compare", "matching_variable", "as_result"]
+__all__ = [
+    "Comparison",
+    "NothingToCompare",
+    "compare",
+    "matching_variable",
+    "as_result",
+    "amplitude_diff_text",
+    "counted_speed_note",
+]
 
 
 class NothingToCompare(ValueError):
@@ -286,6 +294,29 @@ def _max_in_bins(o, a, grid, step):
     return out
 
 
+def amplitude_diff_text(h) -> str:
+    """A harmonic's amplitude difference (recording over simulation) with its interval; an order that one side
+    does not carry has no interval: what is read at its frequency is the noise, and the line is under it."""
+    if h["detected_meas"] and h["detected_sim"]:
+        return fmt_interval(h["amplitude_diff_db"], *h["amplitude_diff_db_ci"])
+    if not h["detected_meas"] and h["detected_sim"]:
+        return f"not detected (< {h['amplitude_diff_db']:.0f} dB)"
+    if h["detected_meas"]:
+        return "not in the simulation"
+    return "not detected in either"
+
+
+def counted_speed_note(v_sim, set_point) -> str:
+    """The note on a simulation whose counted chain speed ``v_sim`` [m/s] is not its set speed (a drive that
+    droops), "" where they agree; a down escalator's set speed is negative (the steps travel down): its
+    magnitude is the speed, and both are printed to the same five digits."""
+    sp = abs(float(set_point))
+    if not sp or abs(v_sim - sp) <= 1e-6 * sp:
+        return ""
+    down = ", the steps travelling down" if float(set_point) < 0 else ""
+    return f"simulated chain speed {v_sim:.5g} m/s (its links counted; set {sp:.5g} m/s{down})"
+
+
 def compare(
     recording,
     result,
@@ -377,8 +408,9 @@ def compare(
     set_point = result.attrs.get("speed_set_point_m_s")
     if set_point is not None:
         # the result states the speed its chain ran at (its links counted), and the set speed beside it
-        if set_point and abs(v_sim - float(set_point)) > 1e-6 * abs(float(set_point)):
-            notes.append(f"simulated chain speed {v_sim:.5g} m/s (its links counted; set {float(set_point):g} m/s)")
+        note = counted_speed_note(v_sim, float(set_point))
+        if note:
+            notes.append(note)
     elif "chain_speed" in result.data_vars and result["chain_speed"].dims == ("time",):
         # a result of vibkit 0.4.8 or older states the set speed: a controlled drive droops below it
         v_sim = float(np.abs(result["chain_speed"].values[result.sizes["time"] // 4 :]).mean())

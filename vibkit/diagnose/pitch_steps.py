@@ -357,7 +357,7 @@ def pitch_from(comb, req):
     """``(pitch, sigma, warnings, notes)``: ``L = v / f`` with ``sigma_L = L hypot(sigma_f / f, sigma_v / v)``,
     a warning when ``f`` sits at an edge of the band or the speed's uncertainty dominates."""
     f0, sf = comb.f0, comb.sigma
-    speed, speed_sigma, band, teeth = req.speed, req.speed_sigma, req.band, req.teeth
+    speed, speed_sigma, band = req.speed, req.speed_sigma, req.band
     warnings, notes = [], []
     if f0 < band[0] * BAND_EDGE_LOW or f0 > band[1] * BAND_EDGE_HIGH:
         warnings.append(
@@ -390,7 +390,7 @@ def pitch_from(comb, req):
         # uncertain for a verdict, may be the motor's
         notes.append(
             "a speed derived from the motor's rpm and the nominal sprocket returns the nominal pitch by "
-            f"construction: one sprocket turn always moves Z = {teeth} links, whatever their length; "
+            "construction: one sprocket turn always moves as many links as it has teeth, whatever their length; "
             "measure the speed on the steps (not the handrail: it may run up to 2 % faster)"
         )
     other = _other_catalogue_pitch(pitch, elongation, req)

@@ -172,8 +172,12 @@ class LimitForecast:
 
     def overdue(self, today_unix_s) -> bool:
         """Whether the forecast date has passed on ``today_unix_s``: the limit was probably reached since the
-        last measurement (re-measure)."""
-        return self.status == "forecast" and self.date_utc is not None and self.urgency_unix_s() <= today_unix_s
+        last measurement (``"forecast"``), or may have been (``"not before"`` a date now past): re-measure."""
+        if self.status == "forecast":
+            return self.date_utc is not None and self.urgency_unix_s() <= today_unix_s
+        if self.status == "not before":
+            return self.earliest_utc is not None and self.urgency_unix_s() <= today_unix_s
+        return False
 
     def urgency_unix_s(self):
         """Date used to rank units: the forecast, else the earliest date; +inf without one."""

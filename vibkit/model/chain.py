@@ -477,10 +477,23 @@ class Chain:
             raise ClosureError(
                 f"a chain of {self.n} links of pitch {self.pitch:.6g} m ({length:.6g} m) cannot close on this guide: "
                 f"its perimeter is {self.guide.p0:.6g} m less 2*delta, with delta within the tensioner travel "
-                f"(-{lt:.6g}, {lt:.6g}) m; change chain.n_rollers or the guide"
+                f"(-{lt:.6g}, {lt:.6g}) m; check the number of links (a profile's chain.n_links, a scene's "
+                "chain.n_rollers) and the guide's length (geometry.rise, guide.incline_length)"
             )
         i = sign_change[0]
         return float(0.5 * (grid[i] + grid[i + 1]))
+
+    def _no_closure(self, s0_1: float) -> str:
+        """What to change when the chain could not be closed with roller 1 at ``s0_1`` [m] (not the solver's
+        state: the chain's length against the loop and the tensioner's travel)."""
+        length = float(self.pitches.sum())
+        slack = (self.guide.p0 - length) / 2.0
+        return (
+            f"the chain of {self.n} links ({length:.4g} m) does not close on its guide ({self.guide.p0:.4g} m round) "
+            f"with roller 1 {s0_1:.3g} m round the loop: the tensioner would have to move about {1000 * slack:.0f} mm "
+            f"of its +-{1000 * self._lt * TRAVEL:.0f} mm travel; check the number of links (a profile's "
+            "chain.n_links, a scene's chain.n_rollers) and the guide's length (geometry.rise, guide.incline_length)"
+        )
 
     def configure(self, s0_1: float, delta_guess: float | None = None) -> Configuration:
         """Close the chain with roller 1 at undeformed-guide coordinate s0_1 [m]."""
@@ -527,7 +540,7 @@ class Chain:
                 self.tol,
             )
             if st != 0:
-                raise ClosureError(f"chain closure did not converge at s0_1 = {s0_1:.9g} m (status {st})")
+                raise ClosureError(self._no_closure(s0_1))
         self._delta_guess = d
         n = self.n
         fill_partials(g.table, g.p0, self._s0, self._kk, self._lam, d, n, self._part)
@@ -639,7 +652,7 @@ class Chain:
             out,
         )
         if bad >= 0:
-            raise ClosureError(f"chain closure did not converge at s0_1 = {starts[bad]:.9g} m")
+            raise ClosureError(self._no_closure(starts[bad]))
         return out
 
     # -- sweep ------------------------------------------------------------------------------

@@ -25,10 +25,12 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from .params import reference_chain, reference_guide, reference_sprocket
 from .scene import Scene, SceneError, parse_scene
 
-__all__ = ["profile_scene", "scene_text", "roller_radius_of", "MASS_PER_METRE"]
+__all__ = ["profile_scene", "scene_text", "roller_radius_of", "link_count", "MASS_PER_METRE"]
 
 _RC, _RG, _RS = reference_chain(), reference_guide(), reference_sprocket()
 REFERENCE_PITCH = _RC.link_pitch
@@ -128,16 +130,47 @@ class _Filled:
         self.rise = 2.0 * rt * (1.0 - math.cos(a)) + self.incline_length * math.sin(a)
         perimeter = 2.0 * (self.incline_length + fixed)
         slack = (perimeter - self.n_links * self.pitch) / 2.0
-        travel = 0.9 * lt  # vibkit.model.guide.TRAVEL of the tensioner's run
+        travel = closing_travel(lt)
         if not -travel < slack < travel:
+            lo, hi = closing_links(perimeter, self.pitch, lt)
+            k = p.links_per_step
+            whole = [n for n in range(lo, hi + 1) if n % k == 0]
+            steps = f" ({whole[0]} to {whole[-1]} in whole steps of {k})" if whole else ""
+            # the rise over which this count closes: the loop's length moves 2 / sin(a) m a metre of rise
+            r_lo = self.rise - (slack + travel) * math.sin(a)
+            r_hi = self.rise - (slack - travel) * math.sin(a)
             raise SceneError(
                 f"{p.source}: 'chain.n_links' = {self.n_links} links of {1000 * self.pitch:g} mm "
-                f"({self.n_links * self.pitch:.3f} m) cannot close on the loop of the rise "
-                f"{p.rise:g} m at {a_deg:g} deg ({perimeter:.3f} m): the tensioner would move "
-                f"{1000 * slack:.0f} mm, beyond its travel of +-{1000 * travel:.0f} mm; change chain.n_links "
-                f"(about {round((perimeter - 2 * REFERENCE_SLACK) / self.pitch)}) or geometry.rise"
+                f"({self.n_links * self.pitch:.3f} m) cannot close on the loop of 'geometry.rise' = {p.rise:g} m at "
+                f"'geometry.incline_deg' = {a_deg:g} ({perimeter:.3f} m): the tensioner would have to move "
+                f"{1000 * slack:.0f} mm, beyond its travel of +-{1000 * travel:.0f} mm; the link counts that close "
+                f"on this rise are {lo} to {hi}{steps}, and {self.n_links} links close on a rise of "
+                f"{max(r_lo, 0):.2f} to {r_hi:.2f} m: check chain.n_links and geometry.rise against the drawings"
             )
         self.slack = slack
+
+
+def link_count(profile) -> tuple[int, str]:
+    """``(links, where the count came from)`` of the profile's scene: ``chain.n_links`` as given, else the
+    whole steps vibkit derives from ``geometry.rise`` and ``geometry.incline_deg``; a SceneError where the
+    count cannot close."""
+    f = _Filled(profile)
+    return int(f.n_links), f.links_src
+
+
+def closing_travel(tensioner_length: float) -> float:
+    """How far the tensioner carriage can move either way for the chain to close [m]: the guide's
+    monotonic travel (:data:`vibkit.model.guide.TRAVEL`) less the closure scan's end cells."""
+    from .guide import TRAVEL
+
+    return TRAVEL * tensioner_length * (1.0 - 2.0 / 80.0)
+
+
+def closing_links(perimeter: float, pitch: float, tensioner_length: float) -> tuple[int, int]:
+    """The fewest and most links of ``pitch`` that close on a loop of ``perimeter`` [m] within the tensioner's
+    travel (the carriage moves half the difference)."""
+    travel = closing_travel(tensioner_length)
+    return math.floor((perimeter - 2.0 * travel) / pitch) + 1, math.ceil((perimeter + 2.0 * travel) / pitch) - 1
 
 
 def scene_text(profile, analysis: str = "forward", duration: float | None = None) -> str:
@@ -282,6 +315,25 @@ def profile_scene(profile, analysis: str = "forward", duration: float | None = N
     return scene
 
 
+def check_closes(model, scene, profile) -> None:
+    """Refuse a scene whose chain does not close on its guide at every place round the loop (the closure is
+    solved with roller 1 at eight places), naming the profile's keys and the link counts that close."""
+    from .chain import ClosureError
+
+    p0 = model.chain.guide.p0
+    try:
+        for s0 in np.linspace(0.0, p0, 8, endpoint=False):
+            model.chain.configure(float(s0))
+    except ClosureError:
+        lo, hi = closing_links(p0, scene.chain.link_pitch, scene.guide.tensioner_length)
+        keys = "chain.n_links" + (" and geometry.rise" if profile.rise is not None else "")
+        raise SceneError(
+            f"{profile.source}: the chain of {scene.chain.n_rollers} links of {1000 * scene.chain.link_pitch:g} mm "
+            f"does not close on the unit's guide ({p0:.3f} m round) within the tensioner's travel: the link counts "
+            f"that close on it are {lo} to {hi}; check {keys} against the drawings"
+        ) from None
+
+
 def check_fits(scene, profile) -> None:
     """Refuse a scene whose rollers sit inside the teeth at t = 0, or whose heads are not the sprocket's."""
     from .escalator import EscalatorModel
@@ -294,7 +346,9 @@ def check_fits(scene, profile) -> None:
             "(drive.teeth and chain.nominal_pitch set it)"
         )
     start = scene.run.start if scene.analysis == "forward" else scene.motion.start
-    worst = EscalatorModel(scene).initial_indentation(start)
+    model = EscalatorModel(scene)
+    check_closes(model, scene, profile)
+    worst = model.initial_indentation(start)
     if worst > 1e-6 * scene.chain.link_pitch:
         key = "chain.roller_radius" if profile.roller_radius is not None else "chain.nominal_pitch"
         raise SceneError(

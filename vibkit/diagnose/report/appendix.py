@@ -11,7 +11,75 @@ import numpy as np
 from ..rounding import fmt_band
 from .common import _PAGE, _fmt, _page_title, _table, fmt_length, speed_sigma_source, speed_source, speed_value
 
-__all__ = ["data_quality_page", "parameters_page"]
+__all__ = ["data_quality_page", "parameters_page", "glossary_page", "GLOSSARY"]
+
+#: the words of the report a field engineer may not know, each said once (the glossary page)
+GLOSSARY = (
+    (
+        "link pass",
+        "one chain link passing a fixed point (the sensor, a sprocket tooth). Its frequency is chain speed / link "
+        "pitch: at 0.5 m/s and 133.33 mm, 3.75 times a second. Every chain-made vibration repeats at it or at its "
+        "multiples (harmonics: 2x, 3x ...).",
+    ),
+    (
+        "link pitch, elongation",
+        "the distance between two link pins. A worn chain's pins and bushes wear, so its pitch grows: the "
+        "elongation is the measured pitch over the nominal (new) pitch, less one, in per cent.",
+    ),
+    (
+        "step pass",
+        "one step passing the sensor: the link pass divided by the links per step (1/3 of it on a 3-link step).",
+    ),
+    (
+        "delta",
+        "the tensioner carriage's displacement towards the upper head [m]: the lower head slides so that the "
+        "chain closes round its loop; it moves once per link pass as each link wraps onto the sprocket's polygon. "
+        "A tensioner displacement sensor records it.",
+    ),
+    (
+        "harmonic SNR",
+        "power of the fitted link-pass harmonics over the power of what is left, per sample of the recording. It "
+        "compares the whole family with all the broadband noise, so it reads far lower than a peak's height over "
+        "the spectrum's floor (a line 60 dB over the floor can have a harmonic SNR of 5 dB).",
+    ),
+    (
+        "+- (sigma)",
+        "one standard deviation of a figure: about two times in three the truth lies within it. Every figure is "
+        "rounded to its sigma.",
+    ),
+    (
+        "Cramer-Rao",
+        "the smallest sigma any unbiased estimator can reach on the given noise; vibkit's frequency sigma starts "
+        "from it and is widened when the recording's parts disagree more than it allows.",
+    ),
+    (
+        "Birge ratio",
+        "how much the parts of a recording (its time slices) scatter compared with their own sigmas: about 1 "
+        "when they agree; well over 1 means the frequency wanders (the speed changed), and the sigma is widened "
+        "by it.",
+    ),
+    (
+        "Hampel events (spikes)",
+        "samples far outside the local median (a robust local scatter, judged in a sliding window) once the "
+        "link-pass family is taken out: a knock, a blow, a loose part. On pure noise a few still pass by chance: "
+        "page 1 gives how many chance alone gives at the detector's false-alarm rate.",
+    ),
+    (
+        "order spectrum",
+        "the spectrum after the signal is resampled at constant link-pass phase: order 1 is the link pass, "
+        "order 2 its second harmonic, 1/3 the step pass of a 3-link step. A wandering speed no longer smears the "
+        "lines.",
+    ),
+    (
+        "not detected (< X)",
+        "a harmonic whose peak does not stand out of the noise: its level is under X, and no interval is given.",
+    ),
+    (
+        "scene",
+        "vibkit's model of an escalator (chain, sprocket, tensioner, guide, sensor) that it simulates; a profile's "
+        "scene is built from the unit's drawings (vibkit scene PROFILE).",
+    ),
+)
 
 
 def data_quality_page(doc, ctx) -> None:
@@ -160,3 +228,19 @@ def _jitter(percent):
     if not percent > 1e-3:
         return "under 0.001 % of the period"
     return f"{percent:.2g} % of the period"
+
+
+def glossary_page(doc, ctx) -> None:
+    """The words of the report explained (:data:`GLOSSARY`)."""
+    import matplotlib.pyplot as plt
+
+    from .common import TextColumn
+
+    fig = plt.figure(figsize=_PAGE)
+    _page_title(fig, "Glossary", "the words of this report, as a field engineer needs them")
+    col = TextColumn(fig, x=0.07, y=0.9, width=0.86)
+    for word, meaning in GLOSSARY:
+        col.text(word, 10, weight="bold")
+        col.text(meaning, 9)
+        col.gap(0.008)
+    doc.emit(fig, "glossary")

@@ -249,19 +249,48 @@ def _page_title(fig, title, subtitle=""):
 
 
 class PageSink:
-    """Where the page functions put their figures: each :meth:`emit` records the page's title and every
-    text drawn on it, saves the figure into the open PDF and closes it."""
+    """Where the page functions put their figures.
 
-    def __init__(self, pdf):
+    Without ``header`` each :meth:`emit` records the page's title and every text drawn on it, saves the
+    figure into the open PDF and closes it.  With ``header`` (the line that heads every page: unit,
+    recording, date, speed) each page gets that line and "page n of N" at its top; the pages are held
+    until :meth:`close`, which knows N, numbers them, records their texts and saves them in order.
+    """
+
+    def __init__(self, pdf, header=None):
         self.pdf = pdf
+        self.header = header
         self.pages = []
+        self._held = []  # (figure, its "page n of N" text artist)
+        #: (page, why it is not in this report), set before the first page is drawn (page 1 lists them)
+        self.absent = []
 
     def emit(self, fig, title):
         import matplotlib.pyplot as plt
 
-        self.pages.append((title, _texts(fig)))
-        self.pdf.savefig(fig)
-        plt.close(fig)
+        if self.header is None:
+            self.pages.append((title, _texts(fig)))
+            self.pdf.savefig(fig)
+            plt.close(fig)
+            return
+        w_in, h_in = fig.get_size_inches()
+        y = 1 - 0.1 / h_in
+        fig.text(0.06, y, self.header, fontsize=7, color="0.35", va="top")
+        number = fig.text(0.96, y, "page 99 of 99", fontsize=7, color="0.35", va="top", ha="right")
+        self.pages.append((title, []))
+        self._held.append((fig, number))
+
+    def close(self):
+        """Number the held pages ("page n of N"), record their texts and save them in order."""
+        import matplotlib.pyplot as plt
+
+        n = len(self._held)
+        for i, (fig, number) in enumerate(self._held):
+            number.set_text(f"page {i + 1} of {n}")
+            self.pages[i] = (self.pages[i][0], _texts(fig))
+            self.pdf.savefig(fig)
+            plt.close(fig)
+        self._held = []
 
 
 def length_scale(units, peak):

@@ -7,13 +7,13 @@ import textwrap
 
 import numpy as np
 
+from ..comparison import amplitude_diff_text
 from .common import (
     _PAGE,
     _WIDE,
     FREQUENCY_RATIO,
     PITCH_RATIO,
     _page_title,
-    fmt_interval,
     fmt_pm,
     fmt_value,
     length_scale,
@@ -109,7 +109,10 @@ def simulation_page(doc, ctx) -> None:
         return
     fig = plt.figure(figsize=_WIDE)
     pitch = f"; pitch {pitch_figure(ctx.pitch)} (page 1)" if ctx.pitch is not None else ""
-    judged = {True: "consistent", False: "NOT consistent"}.get(comp.pitch_consistent, "not judged (no speed)")
+    judged = {
+        True: "the scene's chain has the recording's pitch",
+        False: "the scene's chain pitch differs from the recording's (the scene is not this chain as worn today)",
+    }.get(comp.pitch_consistent, "not judged (no speed)")
     _page_title(
         fig,
         "Simulation against recording",
@@ -142,7 +145,7 @@ def harmonics_page(doc, ctx) -> None:
             # 0.1 mHz), the simulation's to 0.1 mHz
             fmt_value(h["frequency_meas_hz"], h["frequency_ratio_sigma"] * h["frequency_sim_hz"], default_decimals=4),
             fmt_pm(h["frequency_ratio"], h["frequency_ratio_sigma"]),
-            fmt_interval(h["amplitude_diff_db"], *h["amplitude_diff_db_ci"]),
+            amplitude_diff_text(h),
             ("sim " if h["detected_sim"] else "") + ("rec" if h["detected_meas"] else ""),
         ]
         for h in comp.harmonics
@@ -167,6 +170,8 @@ def harmonics_page(doc, ctx) -> None:
                 f"{FREQUENCY_RATIO}: each harmonic's frequency, recorded over simulated",
                 "f rec: each harmonic's own peak, to the digits its ratio's sigma allows; the link pass on page 1"
                 " is fitted to all harmonics at once, so order 1 here may differ from it within its sigma",
+                "not detected (< X dB): the recording carries no line of that order above its noise; X is the level"
+                " read at its frequency (the noise's) against the simulation's line, and the line is under it",
             ]
             + [n for n in comp.notes if not n.startswith("pitch implied")]  # page 1 states the pitch
         ),

@@ -109,6 +109,9 @@ class ReportContext:
     links: object = None  # LinksResult: the link map, when a tensioner recording covers two loops of the scene's chain
     links_note: str = ""  # why the links were not scanned (page 1 says it), empty when they were
     links_per_step: int = 3  # the step pass is the link pass over it (order spectrum, hypotheses)
+    ride_absent: list = field(default_factory=list)  # why a ride page (recording, simulation) is not drawn
+    comparison_absent: str = ""  # why there is no comparison with a simulation (page 1 says it)
+    spikes_expected: float = float("nan")  # Hampel events that chance alone gives on these samples
 
     @property
     def unit_text(self) -> str:
@@ -259,6 +262,11 @@ def analyse(
     # from the channel with the most evidence
     # the unit's own sprocket and band where a profile names the unit (a scene given beside it may be another's)
     teeth = int(profile.teeth) if profile is not None else sc.sprocket.teeth if sc else 28
+    if profile is None and sc is None:
+        notes.append(
+            "sprocket teeth not known: 28 assumed (the study's sprocket) for the shaft-frequency reading; "
+            "give --escalator PROFILE (drive.teeth)"
+        )
     if band is None and profile is not None and speed is not None:
         band = profile.search_band(speed)
         notes.append(f"search band {fmt_band(band)} from the profile (0.8-1.25 x speed / nominal pitch)")
@@ -302,6 +310,7 @@ def analyse(
         pitch = None
     comp = None
     result = None
+    comparison_absent = "no scene given (--scene SCENE, or a scene of the unit: vibkit scene PROFILE)"
     if sc is not None:
         from ...analyses.simulation import simulate
         from ..comparison import compare
@@ -309,6 +318,7 @@ def analyse(
 
         # with the step's roller motion: the ride figure is then the one `vibkit ride SCENE` gives
         result = simulate(with_ride_outputs(sc), duration=duration, progress=progress)
+        comparison_absent = "" if found else "no link pass found in the recording to compare with the simulation's"
         if found:  # no comparison of a link pass the recording does not carry
             try:
                 # the recording's speed only: at the scene's own speed assumed, its pitch is the scene's by
@@ -323,13 +333,18 @@ def analyse(
                 )
             except ValueError as exc:  # e.g. a channel in a unit the simulation has no variable in
                 notes.append(f"no comparison with the simulation: {' '.join(str(exc).split())}")
-    ride = _ride(rec, result if scene_is_unit(sc, profile) else None, sc, notes, segment, speed)
+                comparison_absent = f"the simulation could not be compared: {' '.join(str(exc).split())}"
+    ride_absent = []
+    ride = _ride(rec, result if scene_is_unit(sc, profile) else None, sc, notes, segment, speed, ride_absent)
     ride = [(kind, _with_knock(rq, sc if kind == "simulation" else None, profile)) for kind, rq in ride]
     if result is not None and not scene_is_unit(sc, profile):
-        notes.append(
-            f"no ride page of the simulation: scene {sc.name!r} is not "
-            + (f"unit {profile.unit}'s" if profile is not None else "a named unit's (--escalator FILE)")
+        why = f"scene {sc.name!r} is not " + (
+            f"unit {profile.unit}'s" if profile is not None else "a named unit's (--escalator FILE)"
         )
+        notes.append(f"no ride page of the simulation: {why}")
+        ride_absent.append(f"simulation: {why}")
+    elif result is None:
+        ride_absent.append("simulation: no scene simulated")
     # statistics
     x_all = np.concatenate([b.x for b in bursts])
     rms = float(np.sqrt(np.mean((x_all - x_all.mean()) ** 2)))
@@ -337,16 +352,20 @@ def analyse(
     # spikes: Hampel events on the residual after the fitted link-pass family is removed (a strong
     # periodic signal would otherwise inflate the local scatter and hide them)
     events = []
+    tested = 0  # samples the spike detector judged
     search = pitch.band_hz if pitch is not None else (band or (0.9 * f0, 1.1 * f0))
     for b in bursts:
         hw = max(3, int(round(hampel_half_window_s * b.fs)))
         if b.x.size <= 2 * hw + 1:
             continue
         resid = b.x - _family_fit(b.x, b.fs, search)
+        tested += b.x.size
         for e in hampel_events(
             resid, b.fs, half_window=hw, false_alarm_rate=hampel_false_alarm_rate, t0=b.t0, max_gap=hw // 4
         ):
             events.append((e.time_s, float(b.x[e.index]), e))
+    # what chance alone gives: the detector's false-alarm rate is per sample on Gaussian noise
+    spikes_expected = hampel_false_alarm_rate * tested
     clip_n = held_extremes(x_all)
     clipped = clip_n > 4 and not _quantisation_explains_extremes(x_all, rec[ch].attrs.get("quantum"))
     date = report_date()
@@ -363,6 +382,7 @@ def analyse(
         "rms": rms,
         "peak_to_peak": p2p,
         "spikes": len(events),
+        "spikes_expected_by_chance": spikes_expected,
         "clipped": clipped,
     }
     if pitch is not None:
@@ -386,6 +406,15 @@ def analyse(
     if comp is not None:
         summary.update(score=comp.score, pitch_consistent=comp.pitch_consistent)
     links, links_note = _links(rec, ch, units, sc, speed, notes, profile, marker_s)
+    chain_links = _chain_links(profile, sc)
+    if chain_links is not None:
+        summary["n_links"], summary["n_links_from"] = chain_links
+        if profile is not None and profile.n_links is None:
+            notes.insert(
+                0,
+                f"the chain's {chain_links[0]} links are vibkit's count, not the drawings' ({chain_links[1]}): "
+                "give chain.n_links from the drawings (every link number depends on it)",
+            )
     if links is not None:
         summary["flagged_links"] = [f["link"] for f in links.flagged]
         summary["link_numbers_from"] = (
@@ -401,6 +430,9 @@ def analyse(
     return ReportContext(
         links=links,
         links_note=links_note,
+        ride_absent=ride_absent,
+        comparison_absent=comparison_absent,
+        spikes_expected=spikes_expected,
         links_per_step=links_per_step,
         recording=recording,
         rec=rec,
@@ -492,6 +524,23 @@ def _links(rec, ch, units, sc, speed, notes, profile=None, marker_s=None):
         return None, f"not scanned: {' '.join(str(exc).split())}"
 
 
+def _chain_links(profile, sc):
+    """``(links, where the count came from)`` of the unit's chain: the profile's (given or derived from its
+    rise), else the scene's; None where neither says."""
+    if profile is not None:
+        from ...model.profile_scene import link_count
+        from ...model.scene import SceneError
+
+        try:
+            n, src = link_count(profile)
+        except SceneError:
+            return None
+        return n, ("chain.n_links of the profile" if src == "chain.n_links" else "derived: " + src.split(": ", 1)[-1])
+    if sc is not None:
+        return int(sc.chain.n_rollers), f"chain.n_rollers of scene {sc.name}"
+    return None
+
+
 def held_extremes(x):
     """Samples held at the record's extreme values: those equal to its maximum or minimum (to 1e-9 of it) in runs
     of two or more consecutive samples, as a clipped sensor's flat tops are.  A simulation can reach the same
@@ -550,10 +599,11 @@ def _with_knock(rq, scene, profile):
     return dataclasses.replace(rq, notes=[*rq.notes, f"roller knock: {note}"])
 
 
-def _ride(rec, result, sc, notes, segment=None, speed=None):
+def _ride(rec, result, sc, notes, segment=None, speed=None, absent=None):
     """Ride qualities of the recording (over ``segment`` [s] when given) and the simulation; a one-line note
     where one that could be expected (a recording with x, y, z channels, a scene that names its step) cannot
-    be assessed."""
+    be assessed; ``absent`` collects why a page (recording, simulation) is not drawn."""
+    absent = [] if absent is None else absent
     from ..ride import _AXIS_RE, ride_quality_from_recording, ride_quality_from_simulation
 
     out = []
@@ -567,10 +617,14 @@ def _ride(rec, result, sc, notes, segment=None, speed=None):
                 f"no ride-quality page for the recording ({', '.join(sorted(axes))} axes): "
                 f"{' '.join(str(exc).split())} (--segment START:END)"
             )
+            absent.append(f"recording: {' '.join(str(exc).split())} (--segment START:END)")
+        else:
+            absent.append("recording: it has no x, y, z acceleration channels of a step")
     if result is not None:  # only the unit's own scene (scene_is_unit)
         try:
             out.append(("simulation", ride_quality_from_simulation(result)))
         except ValueError as exc:
             if sc.outputs.get("step_accelerometer") is not None:
                 notes.append(f"no ride-quality page for the simulation: {' '.join(str(exc).split())}")
+            absent.append(f"simulation: {' '.join(str(exc).split())}")
     return out

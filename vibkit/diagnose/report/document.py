@@ -1,45 +1,93 @@
 """The PDF diagnostic report of a recording: :func:`write_report` analyses it once
 (:func:`~vibkit.diagnose.report.context.analyse`) and calls one page function per page kind, in the
-order of :data:`PAGES`.
+order of :data:`PAGES` (a list of :class:`PageBuilder`).
 
 The pages: the verdict (page 1), the recording and escalator, time signal with events, spectrum with harmonic markers, spectrogram,
 order spectrum, ride quality (when it can be assessed), simulation against recording and harmonics (given a
-scene), data quality, parameters.  The report is dated now; with ``SOURCE_DATE_EPOCH`` set the same
+scene), data quality, parameters, glossary.  Every page is headed by the unit, the recording, its date, the
+chain speed and "page n of N"; page 1 says why any page is absent.  The report is dated now; with ``SOURCE_DATE_EPOCH`` set the same
 inputs give the same bytes (nothing random is drawn).
 """
 
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
+from dataclasses import dataclass, field
 
-from .appendix import data_quality_page, parameters_page
-from .common import PageSink, Report, _pdf_in_memory
+from .appendix import data_quality_page, glossary_page, parameters_page
+from .common import PageSink, Report, _pdf_in_memory, speed_value
 from .comparison_pages import harmonics_page, simulation_page
 from .context import analyse
 from .links_page import links_page
-from .ride_pages import ride_quality_pages
+from .ride_pages import ride_pages_absent, ride_quality_pages
 from .signal_pages import order_spectrum_page, spectrogram_page, spectrum_page, time_signal_page
 from .verdict import recording_page, verdict_page
 
-__all__ = ["PAGES", "write_report"]
+__all__ = ["PAGES", "PageBuilder", "write_report", "page_header"]
 
-#: the page functions, in page order; each is ``page(doc, ctx)`` with ``doc`` a
-#: :class:`~vibkit.diagnose.report.common.PageSink` and ``ctx`` a
-#: :class:`~vibkit.diagnose.report.context.ReportContext`, and emits zero or more pages
-PAGES = (
-    verdict_page,
-    recording_page,
-    time_signal_page,
-    spectrum_page,
-    spectrogram_page,
-    order_spectrum_page,
-    links_page,
-    ride_quality_pages,
-    simulation_page,
-    harmonics_page,
-    data_quality_page,
-    parameters_page,
-)
+
+@dataclass(frozen=True)
+class PageBuilder:
+    """One kind of page of the report.
+
+    Attributes
+    ----------
+    name : str
+        The page's name as page 1 lists it when absent.
+    draw : callable
+        ``draw(doc, ctx)`` with ``doc`` a :class:`~vibkit.diagnose.report.common.PageSink` and ``ctx`` a
+        :class:`~vibkit.diagnose.report.context.ReportContext`; emits zero or more pages (one per ride, say).
+    absent : callable
+        ``absent(ctx)``: why this report has none of these pages (one line for page 1), or "" when it has.
+    """
+
+    name: str
+    draw: Callable
+    absent: Callable = field(default=lambda ctx: "")
+
+
+def _no_order_spectrum(ctx):
+    return "" if ctx.found else "no link pass found, so nothing to resample to constant link-pass phase"
+
+
+def _no_links(ctx):
+    if ctx.links is not None:
+        return ""
+    return "the links were not scanned (why: 'worn links' under Evidence)" if ctx.links_note else "not scanned"
+
+
+def _no_comparison(ctx):
+    return "" if ctx.comparison is not None else ctx.comparison_absent or "no simulation compared"
+
+
+#: the report's pages, in page order (a new kind of page: one more :class:`PageBuilder`)
+PAGES = [
+    PageBuilder("verdict", verdict_page),
+    PageBuilder("recording and escalator", recording_page),
+    PageBuilder("time signal", time_signal_page),
+    PageBuilder("spectrum", spectrum_page),
+    PageBuilder("spectrogram", spectrogram_page),
+    PageBuilder("order spectrum", order_spectrum_page, _no_order_spectrum),
+    PageBuilder("links", links_page, _no_links),
+    PageBuilder("ride quality", ride_quality_pages, ride_pages_absent),
+    PageBuilder("simulation against recording", simulation_page, _no_comparison),
+    PageBuilder("harmonics", harmonics_page, _no_comparison),
+    PageBuilder("data quality", data_quality_page),
+    PageBuilder("parameters", parameters_page),
+    PageBuilder("glossary", glossary_page),
+]
+
+
+def page_header(ctx) -> str:
+    """The line that heads every page: unit, recording, measurement date, chain speed."""
+    p = ctx.profile
+    unit = f"unit {p.unit}" if p is not None and getattr(p, "unit", "") else "unit not named"
+    measured = ctx.measurement_date.strftime("%Y-%m-%d") if ctx.measurement_date is not None else "date not stated"
+    name = ctx.summary["file"]
+    if len(name) > 48:
+        name = name[:22] + "..." + name[-23:]
+    return f"{unit}  |  {name}  |  measured {measured}  |  chain speed {speed_value(ctx).split(',')[0]}"
 
 
 def write_report(
@@ -173,7 +221,9 @@ def write_report(
         {"pdf.compression": 6, "font.size": 9, "axes.titlesize": 10, "svg.hashsalt": "vibkit", "path.simplify": True}
     ):
         with _pdf_in_memory(out, overwrite=overwrite, inputs=inputs) as buf, PdfPages(buf, metadata=meta) as pdf:
-            doc = PageSink(pdf)
-            for page in PAGES:
-                page(doc, ctx)
+            doc = PageSink(pdf, header=page_header(ctx))
+            doc.absent = [(b.name, why) for b in PAGES if (why := b.absent(ctx))]
+            for builder in PAGES:
+                builder.draw(doc, ctx)
+            doc.close()
     return Report(out, doc.pages, ctx.pitch, ctx.comparison, summary)

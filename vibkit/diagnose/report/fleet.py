@@ -47,7 +47,10 @@ WORK_LIST_HEADER = [
 
 
 #: what an overdue forecast means (the work list's note, ``fleet status``)
-OVERDUE_MEANING = "OVERDUE: the forecast date has passed: re-measure, the chain is probably over that limit now"
+OVERDUE_MEANING = (
+    "OVERDUE: the forecast date has passed: re-measure, the chain is probably over that limit now (a 'not before' "
+    "date that has passed: it may be)"
+)
 #: row colours of the work list: a unit over watch, plan, replace; flags only
 _ROW_COLORS = ("#fff3cd", "#fcd9b6", "#f4c2c2")
 _FLAG_COLOR = "#e4ecf7"
@@ -72,7 +75,10 @@ def fmt_forecast(f, today_unix_s=None):
         overdue = "OVERDUE " if today_unix_s is not None and f.overdue(today_unix_s) else ""
         return f"{overdue}{f.date_utc[:7]}{interval}"
     if f.status == "not before":
-        return f"not before {f.earliest_utc[:7]}" if f.earliest_utc else "-"
+        if not f.earliest_utc:
+            return "-"
+        overdue = "OVERDUE " if today_unix_s is not None and f.overdue(today_unix_s) else ""
+        return f"{overdue}not before {f.earliest_utc[:7]}"
     if f.status == "implausible":
         return "none (implausible rate)"
     return "-"
@@ -90,7 +96,7 @@ def fmt_elongation(t) -> str:
     return f"{text} ({', '.join(said)})" if said else text
 
 
-WORK_LIST_FLAGS_WIDTH = 54  # characters of a unit's flags in the PDF's work list (the whole text: fleet status)
+WORK_LIST_FLAGS_WIDTH = 45  # characters of a unit's flags in the PDF's work list (the whole text: fleet status)
 
 
 def work_list_rows(trends, *, flags_width=None, today_unix_s=None):
@@ -170,7 +176,7 @@ def work_list_page(doc, ctx, rows, part, parts):
     _title(fig, "Fleet work list: most urgent first" + (f" ({part}/{parts})" if parts > 1 else ""), _subtitle(ctx))
     ax = fig.add_axes([0.04, 0.10, 0.92, 0.80])
     ax.axis("off")
-    widths = [0.03, 0.055, 0.16, 0.07, 0.095, 0.10, 0.045, 0.14, 0.305]
+    widths = [0.03, 0.055, 0.16, 0.07, 0.095, 0.10, 0.045, 0.19, 0.255]  # "OVERDUE 2024-02 (01..05)" whole
     tab = ax.table(cellText=rows, colLabels=WORK_LIST_HEADER, colWidths=widths, loc="upper left", cellLoc="left")
     tab.auto_set_font_size(False)
     tab.set_fontsize(7)
@@ -236,8 +242,12 @@ def _draw_unit(ax, tr, ms, limits, ctx):
     t_end = max(m.date_unix_s for m in ms)
     fit, nxt = tr.fit, tr.next_limit()
     has_interval = nxt is not None and nxt.status == "forecast" and nxt.earliest_utc and nxt.latest_utc
+    not_before = nxt is not None and nxt.status == "not before" and nxt.earliest_utc
+    horizon = t_end + 6 * 365.25 * 86400  # a forecast further off is drawn at the panel's edge
     if has_interval:
-        t_end = max(t_end, min(_utc(nxt.latest_utc).timestamp(), t_end + 6 * 365.25 * 86400))
+        t_end = max(t_end, min(_utc(nxt.latest_utc).timestamp(), horizon))
+    elif not_before:
+        t_end = max(t_end, min(_utc(nxt.earliest_utc).timestamp(), horizon) + 0.5 * 365.25 * 86400)
     if fit is not None:
         used = [m for m in ms if labels.get(m.id, "ok") == "ok"]
         tt = np.linspace(min(m.date_unix_s for m in used), t_end, 60)
@@ -263,6 +273,26 @@ def _draw_unit(ax, tr, ms, limits, ctx):
             f"{nxt.latest_utc[:7]})",
         )
         ax.plot([_utc(nxt.date_utc)], [nxt.limit_percent], "|", color="tab:blue", ms=9)
+    elif not_before:  # only the earliest date is known: drawn from it on, open to the right
+        lo = min(_utc(nxt.earliest_utc).timestamp(), horizon)
+        ax.plot(
+            [_dt_of(lo), _dt_of(t_end)],
+            [nxt.limit_percent] * 2,
+            color="tab:blue",
+            lw=4.0,
+            alpha=0.25,
+            solid_capstyle="butt",
+            label=f"{nxt.limit_percent:g} % reached not before {nxt.earliest_utc[:7]} (2-sigma; no latest date)",
+        )
+        ax.plot([_dt_of(lo)], [nxt.limit_percent], ">", color="tab:blue", ms=5)
+    elif fit is not None and nxt is not None and nxt.status in ("none", "implausible"):
+        ax.plot(
+            [],
+            [],
+            " ",
+            label=f"no forecast of {nxt.limit_percent:g} %: "
+            + ("the rate is implausible" if nxt.status == "implausible" else "no growth within the uncertainty"),
+        )
     today = ctx.date.timestamp()
     t_end = max(t_end, today)
     ax.axvline(_dt_of(today), color="0.25", lw=0.9, ls=":", label=f"today {ctx.date:%Y-%m-%d}")
@@ -306,7 +336,11 @@ def unit_pages(doc, ctx):
             if over:
                 head += f" - OVER {tr.over_limit_percent:g} %"
             elif tr.overdue(ctx.date.timestamp()):
-                head += f" - OVERDUE: {tr.next_limit().limit_percent:g} % forecast {tr.next_limit().date_utc[:7]}"
+                nxt = tr.next_limit()
+                when = (
+                    f"forecast {nxt.date_utc[:7]}" if nxt.status == "forecast" else f"not before {nxt.earliest_utc[:7]}"
+                )
+                head += f" - OVERDUE: {nxt.limit_percent:g} % {when}"
             if tr.rate_verdict == "implausible":
                 head += " - rate implausible: re-measure"
             colour = _limit_colour(tr, ctx.limits) if over else "k"

@@ -14,7 +14,7 @@ import textwrap
 from ..rounding import fmt_pm
 from .common import _WIDE
 
-__all__ = ["fleet_links_pages", "LINKS_HEADER"]
+__all__ = ["fleet_links_pages", "scan_advice", "LINKS_HEADER"]
 
 #: the columns of a unit's links (the fleet report's links pages)
 LINKS_HEADER = ("link", "verdict", "excess pitch [mm]", "loops", "since the previous visit")
@@ -87,6 +87,19 @@ def _draw(fig, y, kind, payload):
             fig.text(x, y, cell, fontsize=7, fontweight="bold" if bold else "normal", color=colour, va="top")
 
 
+def scan_advice(scan) -> str:
+    """What to do about a visit whose link scan did not give a map ("" where it did, or nothing is to be done):
+    the elongation of the visit is stored whatever the scan gave."""
+    if scan.status == "failed":
+        return (
+            "the visit's elongation is stored; mend what the reason names (the profile's chain.n_links, its "
+            "rise, the recording) and scan the recording alone with vibkit links RECORDING --escalator PROFILE"
+        )
+    if scan.status == "too few loops":
+        return "record at least two loops of the chain at the next visit (vibkit links says how long)"
+    return ""
+
+
 def fleet_links_pages(doc, ctx, title, subtitle) -> None:
     """The links pages of the fleet report (none when ``ctx.links`` is empty).
 
@@ -104,7 +117,8 @@ def fleet_links_pages(doc, ctx, title, subtitle) -> None:
             blocks.append(_block(hist))
         else:
             _, s = hist.visits[-1]
-            unscanned.setdefault(f"{s.status}: {s.reason}", []).append(t.unit)
+            advice = scan_advice(s)
+            unscanned.setdefault(f"{s.status}: {s.reason}" + (f"; {advice}" if advice else ""), []).append(t.unit)
     if unscanned:
         lines = [("head", f"{sum(map(len, unscanned.values()))} unit(s) without a link scan on any visit")]
         for why, units in unscanned.items():

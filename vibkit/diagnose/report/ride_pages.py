@@ -9,7 +9,7 @@ import textwrap
 
 from .common import _PAGE, _page_title
 
-__all__ = ["plot_ride", "ride_quality_pages"]
+__all__ = ["plot_ride", "ride_quality_pages", "ride_pages_absent"]
 
 
 #: the table's columns as fractions of its width: the axis column holds "tangential" (a simulation's
@@ -142,3 +142,9 @@ def ride_quality_pages(doc, ctx) -> list:
         doc.emit(fig, f"ride quality ({what})")
         done.append(rq)
     return done
+
+
+def ride_pages_absent(ctx) -> str:
+    """Why a ride-quality page (of the recording, of the simulation) is not in the report ("" when both are)."""
+    drawn = {kind for kind, _ in ctx.ride}
+    return "; ".join(w for w in ctx.ride_absent if w.split(":")[0] not in drawn)

@@ -121,6 +121,12 @@ def verdict_page(doc, ctx) -> None:
     col.gap(0.012)
     col.text("Evidence", 12, weight="bold")
     col.pairs(evidence_rows(ctx), 9, key_width=0.3)
+    absent = absent_pages_text(getattr(doc, "absent", []))
+    if absent:
+        col.gap(0.006)
+        col.text("Pages not in this report", 10, weight="bold")
+        for line in absent:
+            col.text(line, 8, color="0.2")
     notes = list(getattr(pitch, "notes", []) or []) if pitch is not None else []
     notes += [n for n in ctx.notes if not n.startswith("NO LINK-PASS")]
     if notes:
@@ -168,7 +174,7 @@ def evidence_rows(ctx):
             rows.append((HARMONIC_SNR, f"{snr:.0f} dB ({HARMONIC_SNR_DEFINITION})"))
     scale, shown = (1000.0, "mm") if units == "m" else (1.0, units)
     rows.append(("RMS / peak to peak", f"{ctx.rms * scale:.3g} / {ctx.p2p * scale:.3g} {shown}"))
-    rows.append(("spikes", f"{len(ctx.events)} (Hampel events; page 'time signal')"))
+    rows.append(("spikes", spikes_text(ctx)))
     rows.append(
         (
             "clipping",
@@ -180,21 +186,15 @@ def evidence_rows(ctx):
             ),
         )
     )
+    if ctx.summary.get("n_links") is not None:
+        rows.append(("links in the chain", f"{ctx.summary['n_links']} ({ctx.summary['n_links_from']})"))
     links = getattr(ctx, "links", None)
     if links is not None and not links.flagged:  # a flagged link is in large letters above
         rows.append(("worn links", f"none flagged in {links.loops} loops of {links.n_links} links (page 'links')"))
     elif links is None and getattr(ctx, "links_note", ""):
         rows.append(("worn links", ctx.links_note))
     if comp is not None:
-        rows.append(
-            (
-                "pitch against the scene",
-                {True: "consistent", False: "NOT consistent"}.get(
-                    comp.pitch_consistent, "not judged (the recording's speed is not known: give --speed)"
-                )
-                + f" ({PITCH_RATIO} {fmt_pm(comp.pitch_ratio, comp.pitch_ratio_sigma)}: {PITCH_RATIO_DEFINITION})",
-            )
-        )
+        rows.append(("pitch against the scene", scene_pitch_text(comp)))
         rows.append(
             (
                 "spectra against the simulation",
@@ -203,6 +203,44 @@ def evidence_rows(ctx):
             )
         )
     return rows
+
+
+def spikes_text(ctx) -> str:
+    """The spike count with what chance alone gives on as many samples of pure noise."""
+    from scipy.stats import poisson
+
+    n, mu = len(ctx.events), ctx.spikes_expected
+    if not mu >= 0:  # nothing tested (bursts shorter than the detector's window)
+        return f"{n} (Hampel events; page 'time signal')"
+    most = int(poisson.ppf(0.99, mu))  # 99 % of noise-only records of this length give at most this many
+    judged = (
+        "more than chance gives: see page 'time signal'"
+        if n > most
+        else "no more than chance alone gives: no sign of a knock"
+    )
+    return (
+        f"{n} Hampel events; chance alone gives about {mu:.2g} on these samples (at most {most} in 99 % of "
+        f"records of pure noise): {judged}"
+    )
+
+
+def scene_pitch_text(comp) -> str:
+    """The recording's pitch against the scene's, worded as a check of the scene: a scene that does not match
+    is not a second fault of the chain."""
+    ratio = f"{PITCH_RATIO} {fmt_pm(comp.pitch_ratio, comp.pitch_ratio_sigma)} ({PITCH_RATIO_DEFINITION})"
+    if comp.pitch_consistent is None:
+        return f"{ratio}: not judged, the recording's speed is not known (give --speed)"
+    if comp.pitch_consistent:
+        return f"{ratio}: the scene's chain has the recording's pitch"
+    return (
+        f"{ratio}: the scene's chain pitch differs from the recording's; the scene is not this chain as worn "
+        "today. This judges the scene, not the chain (the verdict above is the recording's)"
+    )
+
+
+def absent_pages_text(absent) -> list:
+    """Page 1's lines on the pages this report does not have, and why."""
+    return [f"no {name} page: {why}" for name, why in absent]
 
 
 def recording_page(doc, ctx) -> None:
