@@ -158,3 +158,18 @@ def test_steady_line_false_alarms_in_noise_stay_under_the_bound():
         x = rng.normal(size=(3, 1500)) + (common if k % 2 else 0)
         hits += steady_line(x, 100.0, band=(2.9, 9.0), p_fa=0.01).detected
     assert hits <= 8  # expected at most 3; P(Binomial(300, 0.01) > 8) < 0.005
+
+
+@needs_real
+def test_ride_quality_of_a_walk_assesses_a_ride_found_in_it():
+    """`vibkit ride` on a phone's walk took walking between rides for the incline (the gravity component of a
+    phone in the hand moves as it turns); it now assesses the longest ride the rides finder gives."""
+    from vibkit.diagnose.ride import ride_quality_from_recording
+
+    rq = ride_quality_from_recording(REAL / "advio-01" / "iphone")
+    t0 = float(vibkit.read_recording(REAL / "advio-01" / "iphone")["time"][0])
+    start, end = rq.segment.start_s + t0, rq.segment.end_s + t0
+    assert any(a - 3.5 <= start and end <= b + 3.5 for a, b in RIDES["advio-01"])
+    assert rq.segment.method == "a ride in a walk"
+    with pytest.raises(ValueError, match="no escalator ride found"):
+        ride_quality_from_recording(REAL / "advio-02" / "iphone")

@@ -38,7 +38,9 @@ from ..signal.ride import (
     lowpass_10hz,
     peak_to_peak,
 )
+from ..signal.stillness import STILL_THRESHOLD, walking_level
 from ..signal.weighting import frequency_weighting, get_weighting
+from .rides import find_rides
 
 __all__ = [
     "AxisRide",
@@ -442,6 +444,10 @@ def _auto_channels(rec, names):
             found.setdefault(m.group(1), []).append(nm)
     if found and all(len(v) == 1 for v in found.values()):
         return {k: v[0] for k, v in sorted(found.items())}
+    # a phone's folder: acc_x and gyro_x both end in x; ride quality is the accelerometer's
+    acc = {k: [nm for nm in v if rec[nm].attrs.get("quantity") == "acceleration"] for k, v in found.items()}
+    if acc and all(len(v) == 1 for v in acc.values()):
+        return {k: v[0] for k, v in sorted(acc.items())}
     raise ValueError(
         f"cannot tell the x, y, z channels of {rec.attrs.get('source_file', 'the recording')!r} from "
         f"their names ({', '.join(names)}); say which with --channels x,y,z "
@@ -547,6 +553,8 @@ def ride_quality_from_recording(
         speed = sb[k].x if len(sb) > k and sb[k].x.size == sig[next(iter(sig))].size else None
     if speed is None and float(rec.attrs.get("chain_speed_m_s", 0) or 0) > 0:
         speed = float(rec.attrs["chain_speed_m_s"])
+    if segment is None:
+        segment = _ride_in_walk(rec, chans, first[k], notes, src)
     return ride_quality(
         sig,
         fs,
@@ -557,6 +565,41 @@ def ride_quality_from_recording(
         channel_names=chans,
         speed=speed,
         notes=notes,
+    )
+
+
+def _ride_in_walk(rec, chans, burst, notes, src):
+    """The ride segment of a phone's walk (times from the burst's start), or None for a record that is no walk.
+
+    A record in which the person walks (the walking band over the still level for a fifth of it or more) is a
+    walk with rides, not a step's ride: its incline cannot be read from the gravity component (a phone in the
+    hand turns) nor from the integrated vertical acceleration (walking drifts it by metres a second).  The ride
+    is then the longest that :func:`vibkit.diagnose.rides.find_rides` finds; a walk without one is refused."""
+    axes = [chans.get(a) for a in "xyz"]
+    if None in axes or burst.x.size < 10 * burst.fs:
+        return None
+    acc = np.stack([np.asarray(rec[c].values, dtype=float) for c in axes])
+    fs = float(rec.attrs.get("sample_rate_hz") or burst.fs)
+    level = walking_level(acc, fs)
+    if not np.mean(level > STILL_THRESHOLD) >= 0.2:
+        return None
+    found = find_rides(rec)
+    if not found.rides:
+        raise ValueError(
+            f"{src}: a walk ({100 * np.mean(level > STILL_THRESHOLD):.0f} % of it walking) with no escalator ride "
+            "found in it (`vibkit rides` says why for each still span): give the ride as --segment START:END"
+        )
+    ride = max(found.rides, key=lambda r: r.line_end_s - r.line_start_s)
+    t0 = float(burst.t0)
+    notes.append(
+        f"a walk with {len(found.rides)} escalator ride(s) (`vibkit rides`); the longest assessed, "
+        f"{ride.line_start_s:.1f}-{ride.line_end_s:.1f} s of the recording (--segment to choose another)"
+    )
+    return RideSegment(
+        start_s=max(ride.line_start_s - t0, 0.0),
+        end_s=ride.line_end_s - t0,
+        method="a ride in a walk",
+        note=f"link pass {ride.link_pass_hz:.3f} Hz, {ride.direction}",
     )
 
 

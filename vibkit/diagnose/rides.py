@@ -25,10 +25,10 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from ..signal.steadyline import line_level, steady_line
+from ..signal.steadyline import line_level, normalised_spectrum, steady_line
 from ..signal.stillness import STILL_THRESHOLD, still_spans, walking_level
 
-__all__ = ["DEFAULT_BAND_HZ", "Ride", "RideSearch", "find_rides"]
+__all__ = ["DEFAULT_BAND_HZ", "Ride", "RideSearch", "find_rides", "ride_evidence"]
 
 #: where a chain's link pass may be without a profile [Hz]: 0.4-0.9 m/s over 101.6-135 mm pitches
 DEFAULT_BAND_HZ = (2.9, 9.0)
@@ -288,3 +288,32 @@ def _ride(ds, line, names, t0, t1, pitch, rated):
         incline_deg=incline,
         channels_db=dict(zip(names, line.channel_levels_db)),
     )
+
+
+def ride_evidence(recording, ride, search):
+    """What a ride's page draws: the axes' mean normalised periodogram over the part analysed, and the line's level
+    in sliding windows over the still span.
+
+    Returns
+    -------
+    dict
+        ``f`` [Hz] and ``level_db`` (the spectrum), ``track_s`` [s, the file's time] and ``track_db`` (the line's
+        level in 4 s windows), ``threshold_db``.
+    """
+    names = list(search.channels)
+    fs = float(recording.attrs.get("sample_rate_hz") or 0.0)
+    if not fs > 0:
+        fs = 1.0 / float(np.median(np.diff(np.asarray(recording["time"].values, dtype=float))))
+    tu, x, _ = _uniform(recording, names, fs)
+    a, b = np.searchsorted(tu, [ride.line_start_s, ride.line_end_s])
+    seg = x[:, a:b] - x[:, a:b].mean(axis=1, keepdims=True)
+    f, t = normalised_spectrum(seg, fs)
+    a2, b2 = np.searchsorted(tu, [ride.start_s, ride.end_s])
+    span = x[:, a2:b2] - x[:, a2:b2].mean(axis=1, keepdims=True)
+    c, lv = line_level(span, fs, ride.link_pass_hz, window_s=4.0)
+    return {
+        "f": f,
+        "level_db": 10 * np.log10(np.maximum(t, 1e-300)),
+        "track_s": c + float(tu[a2]),
+        "track_db": lv,
+    }

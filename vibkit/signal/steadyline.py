@@ -59,7 +59,7 @@ from scipy import ndimage, signal
 
 from ._checks import check_fs
 
-__all__ = ["SteadyLine", "steady_line", "line_level"]
+__all__ = ["SteadyLine", "steady_line", "line_level", "normalised_spectrum"]
 
 #: Hann window: peak-to-floor ratio of a tone relative to a rectangular window (coherent gain**2 / ENBW
 #: factor, 0.25 / 0.375)
@@ -395,6 +395,14 @@ def _weak(common):
         f"the best axis), under the {common['threshold_db']:.1f} dB that the false-alarm bound requires (p <= "
         f"{common['p_value']:.2g})"
     )
+
+
+def normalised_spectrum(x, fs, *, pad=4, floor_halfwidth_hz=1.0):
+    """(frequencies [Hz], the channels' mean periodogram over its running-median floor): the statistic ``T`` of
+    :func:`steady_line`, for a plot."""
+    fs = check_fs(fs)
+    f, _, _, r = _spectra(np.atleast_2d(np.asarray(x, dtype=float)), fs, pad, floor_halfwidth_hz)
+    return f, r.mean(axis=0)
 
 
 def line_level(x, fs, freq, *, window_s=6.0, hop_s=1.0, tolerance=0.01, pad=4, floor_halfwidth_hz=1.0):
