@@ -90,7 +90,8 @@ def main(argv=None) -> int:
     try:
         with handle_termination():  # SIGTERM runs the same clean-up as Ctrl-C
             status = int(args.func(args))
-            sys.stdout.flush()  # a closed pipe is found here, not at the interpreter's exit
+            if sys.stdout is not None:  # None: started with stdout closed (>&-)
+                sys.stdout.flush()  # a closed pipe is found here, not at the interpreter's exit
             return status
     except BrokenPipeError:
         # the reader closed stdout (``vibkit spectrum ... | head -1``): it has what it wanted; end quietly

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import contextlib
-import os
 import sys
 import textwrap
 
@@ -89,7 +87,7 @@ def add_parser(subparsers):
         f"time from the recording's start ({TIME_FORMAT}) at which a marked link passed the sensor: it is link 1, and "
         "its numbers follow the same links across visits (the catalogue's marker_s)",
     )
-    f.set_defaults(func=_guarded(run_add, lambda a: a.db))
+    f.set_defaults(func=run_add)
 
     f = fleet_sub("scan", "add every recording of a folder that a catalogue describes, in parallel (Dask)")
     f.add_argument("directory", metavar="DIR", help="folder of recordings (searched recursively)")
@@ -101,7 +99,7 @@ def add_parser(subparsers):
         help="worker processes of the local cluster (default: one per core; 0: analyse in this process)",
     )
     add_recording(f, positional=False, channel=False)  # for every file; the catalogue's channel column per file
-    f.set_defaults(func=_guarded(run_scan, lambda a: a.db))
+    f.set_defaults(func=run_scan)
 
     f = fleet_sub(
         "status",
@@ -129,35 +127,12 @@ def add_parser(subparsers):
     f.add_argument("--from", dest="source", required=True, help="the existing database (path or URL)")
     f.add_argument("--to", dest="target", required=True, help="the receiving database (created if missing)")
     add_json(f)
-    f.set_defaults(func=_guarded(run_migrate, lambda a: a.target))
+    f.set_defaults(func=run_migrate)
     return s
 
 
 #: exit code of ``fleet scan`` when some files failed and others were stored (or already were)
 SCAN_SOME_FAILED = 3
-
-
-@contextlib.contextmanager
-def _no_new_files_on_failure(db):
-    """A command that fails leaves no new file: a SQLite database it created (and its journal files) is
-    removed again when the command raises; an existing one is left as it is."""
-    from vibkit.fleet.storage import is_server_url, resolve_db_path
-
-    spec = resolve_db_path(db)
-    path = None if is_server_url(spec) else os.path.abspath(spec)
-    new = (
-        []
-        if path is None
-        else [f for f in (path, path + "-wal", path + "-shm", path + "-journal") if not os.path.lexists(f)]
-    )
-    try:
-        yield
-    except BaseException:
-        for f in new:
-            with contextlib.suppress(OSError):
-                if os.path.isfile(f) and not os.path.islink(f):
-                    os.unlink(f)
-        raise
 
 
 def _fleet_db(a, *, create=True):
@@ -191,6 +166,8 @@ def run_add(a):
     from vibkit.fleet.inputs import check_inputs
 
     profile = _profile_of(a)
+    if a.unit is not None and not a.unit.strip():
+        raise CLIError("fleet add: --unit is empty; give the escalator's identifier, e.g. --unit E07")
     if a.unit is None and profile is None:
         raise CLIError("fleet add: give --unit (or --escalator FILE, whose unit is used)")
     if a.speed is None and profile is None:
@@ -462,11 +439,3 @@ _RUN = {"add": run_add, "scan": run_scan, "status": run_status, "report": run_re
 def run(a):
     """Run the fleet subcommand ``a.fleet_command`` (each subparser also sets its own ``func``)."""
     return _RUN[a.fleet_command](a)
-
-
-def _guarded(func, db_of):
-    def run_guarded(a):
-        with _no_new_files_on_failure(db_of(a)):
-            return func(a)
-
-    return run_guarded

@@ -96,8 +96,13 @@ class SQLiteStore(Store):
         parent = os.path.dirname(os.path.abspath(p))
         if not os.path.isdir(parent):
             raise FleetError(f"{p}: folder {parent} does not exist")
+        #: no file at the path yet: the store answers from an empty in-memory database, and the file is made
+        #: (atomically, O_EXCL) only at the first write; a command that fails before it leaves no file, and
+        #: nothing is ever removed on the way out (another process may have made and filled it meanwhile)
+        self._pending = not os.path.lexists(p)
+        self._timeout_ms = 60000
         try:
-            self._con = self._connect(p)
+            self._con = self._connect(":memory:" if self._pending else p)
         except sqlite3.Error as exc:
             raise sqlite_error(p, exc) from None
         try:
@@ -110,6 +115,8 @@ class SQLiteStore(Store):
             raise
 
     def _connect(self, p):
+        if p == ":memory:":
+            return sqlite3.connect(p, isolation_level=None)
         if not self.readonly:
             return sqlite3.connect(p, timeout=60.0, isolation_level=None)
         # read-only use (status, report) never writes, not even a journal: SQLite's read-only mode; a WAL
@@ -127,7 +134,38 @@ class SQLiteStore(Store):
 
     def set_timeout(self, seconds):
         """How long a write waits for another process's transaction before it is an error. [s]"""
-        self._con.execute(f"PRAGMA busy_timeout = {int(float(seconds) * 1000)}")
+        self._timeout_ms = int(float(seconds) * 1000)
+        self._con.execute(f"PRAGMA busy_timeout = {self._timeout_ms}")
+
+    def _materialise(self):
+        """The first write of a store whose file did not exist: make the file, unless another process made it
+        meanwhile (``O_CREAT | O_EXCL``: one of them creates it, none replaces it), and open it as an existing one.
+        An empty file is a new SQLite database; its tables are created inside the write lock (:meth:`_prepare`), so
+        two processes creating the same store at the same moment both store their rows in it."""
+        p = self.path
+        try:
+            fd = os.open(p, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
+        except FileExistsError:
+            pass  # made by another process since this store was opened: used as it is
+        except OSError as exc:
+            raise FleetError(
+                f"{p}: cannot create the database: {exc.strerror or exc}; check that its folder is writable "
+                "(or give another --db)"
+            ) from None
+        else:
+            os.close(fd)
+        mem = self._con
+        try:
+            con = self._connect(p)
+        except sqlite3.Error as exc:
+            raise sqlite_error(p, exc) from None
+        self._con, self._pending = con, False
+        mem.close()
+        con.execute(f"PRAGMA busy_timeout = {self._timeout_ms}")
+        try:
+            self._prepare()
+        except sqlite3.Error as exc:
+            raise sqlite_error(p, exc) from None
 
     @property
     def local_files(self):
@@ -161,6 +199,9 @@ class SQLiteStore(Store):
             self.has_link_alternatives = self.has_link_tables and "alternatives" in self._flag_columns()
             if ver < SCHEMA_VERSION:
                 self._read_older_schema(ver)
+            return
+        if self._pending:  # nothing at the path yet: an empty fleet database in memory answers until the first write
+            self._create_or_upgrade()
             return
         mode = con.execute("PRAGMA journal_mode=WAL").fetchone()[0]
         if str(mode).lower() != "wal":  # pragma: no cover - file systems without shared memory
@@ -259,6 +300,8 @@ class SQLiteStore(Store):
     def write_transaction(self, unit):
         if self.readonly:  # before any statement: an older file's rows are a view here, not the file's table
             raise sqlite_error(self.path, "opened read-only (mode=ro): attempt to write a readonly database")
+        if self._pending:
+            self._materialise()
         con = self._con
         con.execute("BEGIN IMMEDIATE")
         try:

@@ -15,11 +15,10 @@ reads; nothing else.
 from __future__ import annotations
 
 import math
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
-from .scene import SceneError, _check_scene_file, _section
+from .scene import SceneError, _check_scene_file, _section, toml_loads
 from .schema import _fmt, _Section, key
 
 __all__ = [
@@ -239,10 +238,7 @@ def parse_profile(text: str, source: str = "<string>") -> Profile:
     src = source
     if text.startswith("\ufeff"):
         text = text[1:]
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise SceneError(f"{src}: not valid TOML: {exc}") from None
+    data = toml_loads(text, src, "profile")
     for name in data:
         if name not in PROFILE_SECTIONS:
             raise SceneError(f"{src}: unknown section [{name}] (known: {', '.join(PROFILE_SECTIONS)})")
@@ -312,10 +308,7 @@ def load_profile(path) -> Profile:
         number; the one-line message names the file and the key.
     """
     p = Path(path)
-    try:
-        _check_scene_file(p)
-    except SceneError as exc:
-        raise SceneError(str(exc).replace("scene file", "profile file")) from None
+    _check_scene_file(p, "profile")
     try:
         text = p.read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as exc:

@@ -214,10 +214,7 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
     src = source
     if text.startswith("\ufeff"):  # a UTF-8 byte-order mark (Windows editors write one)
         text = text[1:]
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise SceneError(f"{src}: not valid TOML: {exc}") from None
+    data = toml_loads(text, src)
     allowed = set(SECTIONS) | {"effects"}
     for key in data:
         if key not in allowed:
@@ -668,19 +665,71 @@ def load_scene(path) -> Scene:
     return parse_scene(text, str(p))
 
 
-def _check_scene_file(p: Path) -> None:
-    """A scene must be a regular file of reasonable size: a FIFO or a device would block or never end."""
+def _check_scene_file(p: Path, what: str = "scene") -> None:
+    """A scene (or profile: ``what``) must be a regular file of reasonable size: a FIFO or a device would block
+    or never end, a huge file fill the memory."""
     import stat
 
     try:
         st = p.stat()
     except FileNotFoundError:
-        raise SceneError(f"{p}: no such scene file") from None
+        raise SceneError(f"{p}: no such {what} file") from None
     except OSError as exc:
-        raise SceneError(f"{p}: cannot read scene file ({exc.strerror or exc})") from None
+        raise SceneError(f"{p}: cannot read {what} file ({exc.strerror or exc})") from None
     if stat.S_ISDIR(st.st_mode):
-        raise SceneError(f"{p}: is a folder, expected a scene file (.toml)")
+        raise SceneError(f"{p}: is a folder, expected a {what} file (.toml)")
     if not stat.S_ISREG(st.st_mode):
-        raise SceneError(f"{p}: is not a regular file (a FIFO, device or socket); expected a scene file (.toml)")
+        raise SceneError(f"{p}: is not a regular file (a FIFO, device or socket); expected a {what} file (.toml)")
     if st.st_size > MAX_SCENE_BYTES:
-        raise SceneError(f"{p}: is {st.st_size} bytes; a scene is a small TOML file (at most {MAX_SCENE_BYTES} bytes)")
+        raise SceneError(
+            f"{p}: is {st.st_size} bytes; a {what} is a small TOML file (at most {MAX_SCENE_BYTES} bytes, 1 MiB)"
+        )
+
+
+def _toml_depth(text: str) -> int:
+    """The deepest nesting of arrays and inline tables in TOML ``text``, outside strings and comments (a
+    linear scan: what the parser, which recurses per level, is spared)."""
+    depth = deepest = 0
+    i, n = 0, len(text)
+    while i < n:
+        c = text[i]
+        if c == "#":
+            j = text.find("\n", i)
+            i = n if j < 0 else j
+        elif c in "\"'":
+            q3 = c * 3
+            if text.startswith(q3, i):
+                j = text.find(q3, i + 3)
+                i = n if j < 0 else j + 3
+                continue
+            j = i + 1
+            while j < n and text[j] != c and text[j] != "\n":
+                j += 2 if (c == '"' and text[j] == "\\") else 1
+            i = j
+        elif c in "[{":
+            depth += 1
+            deepest = max(deepest, depth)
+        elif c in "]}":
+            depth = max(depth - 1, 0)
+        i += 1
+    return deepest
+
+
+#: arrays and inline tables nested deeper than this are refused before parsing (a scene nests 3 at most)
+MAX_TOML_DEPTH = 32
+
+
+def toml_loads(text: str, src, what: str = "scene") -> dict:
+    """``tomllib.loads`` bounded: nesting deeper than :data:`MAX_TOML_DEPTH` is refused before the parser
+    recurses into it; every parse error is one :class:`SceneError` line naming ``src``."""
+    if _toml_depth(text) > MAX_TOML_DEPTH:
+        raise SceneError(
+            f"{src}: arrays or tables nested more than {MAX_TOML_DEPTH} deep; a {what} nests 3 at most "
+            "(check the brackets)"
+        )
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise SceneError(f"{src}: not valid TOML: {exc}") from None
+    except RecursionError:
+        raise SceneError(f"{src}: nested too deep to parse; a {what} nests 3 at most (check the brackets)") from None
