@@ -227,7 +227,12 @@ def run_add(a):
             why = f": {scan.reason}" if scan.reason and not scan.scanned else ""
             print(f"links: {_fmt_scan(scan)}{why}")
         msg(f"note: database {path}; date from {m.date_source}")
-    if not m.speed_sigma_m_s:
+    if sp.sigma is not None and not sp.sigma > 0:
+        msg(
+            f"note: speed uncertainty stated as 0 m/s ({sp.sigma_source}): the elongation's +- is the frequency's "
+            "alone; the history stores it as 0, which its trend reads as not stated"
+        )
+    elif not m.speed_sigma_m_s:
         msg(
             "warning: stored without a speed uncertainty (not stated): its elongation has no +-, and the unit's "
             "rate and forecast intervals are too small; give --speed-uncertainty"
