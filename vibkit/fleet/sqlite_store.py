@@ -42,7 +42,7 @@ def sqlite_error(path, exc) -> FleetError:
     low = text.lower()
     if "malformed" in low or "not a database" in low or "corrupt" in low:
         why = (
-            f"the database file is damaged ({text}); restore it from a backup, or recover what is readable "
+            f"the database file is damaged ({text}); left as it is, nothing stored; restore it from a backup, or recover what is readable "
             f"with: sqlite3 {path} .recover | sqlite3 recovered.sqlite"
         )
     elif "readonly" in low or "read-only" in low:
@@ -173,8 +173,19 @@ class SQLiteStore(Store):
         a = os.path.abspath(self.path)
         return (a, a + "-wal", a + "-shm", a + "-journal")
 
+    def _check_sound(self):
+        """SQLite's ``quick_check`` of an existing file before anything is read from or written to it: a damaged
+        file (bytes overwritten in its middle) is refused whole, left as it is, rather than read in part or
+        written into."""
+        if self._pending or os.path.getsize(self.path) == 0:
+            return
+        res = [str(r[0]) for r in self._con.execute("PRAGMA quick_check(3)").fetchall()]
+        if res != ["ok"]:
+            raise sqlite_error(self.path, f"database disk image is malformed: {'; '.join(res)[:200]}")
+
     def _prepare(self):
         con = self._con
+        self._check_sound()
         app = con.execute("PRAGMA application_id").fetchone()[0]
         ver = self.file_schema_version = con.execute("PRAGMA user_version").fetchone()[0]
         tables = [r[0] for r in con.execute("SELECT name FROM sqlite_master WHERE type = 'table'")]

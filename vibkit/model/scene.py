@@ -46,6 +46,7 @@ from .schema import (
     SceneError,
     SolverSection,
     SprocketSection,
+    check_geometry_range,
 )
 
 __all__ = ["Scene", "SceneError", "load_scene", "parse_scene", "EFFECTS", "OUTPUTS", "RANGES", "SECTIONS"]
@@ -289,6 +290,7 @@ def _parameters(src, sec):
     for key in ("base_width", "tip_width", "tooth_height", "mass", "inertia"):
         if key in s:
             _positive(src, f"sprocket.{key}", s[key])
+            check_geometry_range(src, f"sprocket.{key}", s[key])
     if "teeth" in s and s["teeth"] < 3:
         raise SceneError(f"{src}: 'sprocket.teeth' must be an integer >= 3, got {s['teeth']!r}")
     ts = SprocketSection.from_mapping(s)
@@ -297,10 +299,12 @@ def _parameters(src, sec):
     for key in ("link_pitch", "roller_radius", "roller_mass"):
         if key in c:
             _positive(src, f"chain.{key}", c[key])
+            check_geometry_range(src, f"chain.{key}", c[key])
     tc = ChainSection.from_mapping(c)
     nominal = tc.link_pitch
     if "pitch" in s:
         _positive(src, "sprocket.pitch", s["pitch"])
+        check_geometry_range(src, "sprocket.pitch", s["pitch"])
     sprocket = SprocketParams(
         **{k: getattr(ts, k) for k in ("teeth", "base_width", "tip_width", "tooth_height", "mass", "inertia")},
         pitch=ts.pitch if ts.pitch is not None else nominal,
@@ -317,6 +321,7 @@ def _parameters(src, sec):
     for key in ("tensioner_length", "lower_landing", "upper_landing", "transition_radius", "incline_length"):
         if key in g:
             _positive(src, f"guide.{key}", g[key])
+            check_geometry_range(src, f"guide.{key}", g[key])
     tg = GuideSection.from_mapping(g)
     head = tg.head_radius
     if isinstance(head, str):
@@ -327,6 +332,7 @@ def _parameters(src, sec):
         fitted = sprocket.pitch_radius(nominal)  # the head radius of the chain when it was new
     else:
         _positive(src, "guide.head_radius", head)
+        check_geometry_range(src, "guide.head_radius", head)
         fitted = head
     angle = tg.incline_angle_deg
     if not 0 < angle < 90:
