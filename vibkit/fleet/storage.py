@@ -325,6 +325,10 @@ class FleetDB:
         if not os.path.exists(spath):
             raise FleetError(f"{spath}: file not found; expected a recording")
         if os.path.isfile(spath):
+            from ..io import HEAD_BYTES, check_head
+
+            with open(spath, "rb") as fh:  # a file no reader takes is refused before all of it is hashed
+                check_head(spath, fh.read(HEAD_BYTES))
             old = self.find(_file_sha256(spath))
             if old is not None:
                 raise DuplicateRecordingError(self._store.duplicate_message(spath, old), old)

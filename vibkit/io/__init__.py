@@ -112,7 +112,7 @@ def read_bounded(f, size_hint: int, limit: int) -> bytes:
 HEAD_BYTES = 1 << 16
 
 
-def _check_head(spath: str, head: bytes) -> None:
+def check_head(spath: str, head: bytes) -> None:
     """Refuse, from its head alone, a file no reader can make a recording of before the whole file is read and
     scanned (obspy would look for every waveform format through a 2 GB file of zero bytes for minutes)."""
     if len(head) >= 512 and not head.strip(b"\x00"):
@@ -168,7 +168,7 @@ def _open_checked(spath: str, limit: int):
         if not stat.S_ISREG(st2.st_mode):
             raise RecordingError(spath, None, "is not a regular file; expected a recording file on disk")
         with os.fdopen(fd, "rb", closefd=False) as f:
-            _check_head(spath, f.read(HEAD_BYTES))
+            check_head(spath, f.read(HEAD_BYTES))
             f.seek(0)
             data = read_bounded(f, st2.st_size, limit)
     except OSError as exc:

@@ -414,7 +414,7 @@ def check_geometry_range(src, key, value) -> None:
     if math.isfinite(v) and lo <= v <= hi:
         return
     hint = (
-        f"; did you mean {v / 1000:.5g} m (millimetres typed as metres)?"
+        f"; did you mean {v / 1000:.5g} m? (millimetres typed as metres)"
         if unit == "m" and lo <= v / 1000 <= hi
         else ""
     )
