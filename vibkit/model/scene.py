@@ -17,19 +17,20 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from .chain_keys import by_roller, check_flat_speed, check_seat, worn_links
 from .params import ChainParams, GuideParams, SprocketParams
 from .scene_checks import (
+    MAX_TOML_DEPTH,  # noqa: F401 - public through the scene loader
     _check_ranges,
     _check_sprocket_geometry,
     _reduce_start,
     _validate_passenger_numbers,
     check_chain_first,
     check_sections_belong,
+    toml_loads,
 )
 from .schema import (
     EFFECT_OPTIONS,
@@ -690,52 +691,3 @@ def _check_scene_file(p: Path, what: str = "scene") -> None:
         raise SceneError(
             f"{p}: is {st.st_size} bytes; a {what} is a small TOML file (at most {MAX_SCENE_BYTES} bytes, 1 MiB)"
         )
-
-
-def _toml_depth(text: str) -> int:
-    """The deepest nesting of arrays and inline tables in TOML ``text``, outside strings and comments (a
-    linear scan: what the parser, which recurses per level, is spared)."""
-    depth = deepest = 0
-    i, n = 0, len(text)
-    while i < n:
-        c = text[i]
-        if c == "#":
-            j = text.find("\n", i)
-            i = n if j < 0 else j
-        elif c in "\"'":
-            q3 = c * 3
-            if text.startswith(q3, i):
-                j = text.find(q3, i + 3)
-                i = n if j < 0 else j + 3
-                continue
-            j = i + 1
-            while j < n and text[j] != c and text[j] != "\n":
-                j += 2 if (c == '"' and text[j] == "\\") else 1
-            i = j
-        elif c in "[{":
-            depth += 1
-            deepest = max(deepest, depth)
-        elif c in "]}":
-            depth = max(depth - 1, 0)
-        i += 1
-    return deepest
-
-
-#: arrays and inline tables nested deeper than this are refused before parsing (a scene nests 3 at most)
-MAX_TOML_DEPTH = 32
-
-
-def toml_loads(text: str, src, what: str = "scene") -> dict:
-    """``tomllib.loads`` bounded: nesting deeper than :data:`MAX_TOML_DEPTH` is refused before the parser
-    recurses into it; every parse error is one :class:`SceneError` line naming ``src``."""
-    if _toml_depth(text) > MAX_TOML_DEPTH:
-        raise SceneError(
-            f"{src}: arrays or tables nested more than {MAX_TOML_DEPTH} deep; a {what} nests 3 at most "
-            "(check the brackets)"
-        )
-    try:
-        return tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise SceneError(f"{src}: not valid TOML: {exc}") from None
-    except RecursionError:
-        raise SceneError(f"{src}: nested too deep to parse; a {what} nests 3 at most (check the brackets)") from None
