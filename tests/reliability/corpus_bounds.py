@@ -15,6 +15,12 @@ PROFILE = (FLEET / "escalators" / "E07.toml").read_text(encoding="utf-8")
 GOOD = {"rec.csv": VISIT}
 PITCH = ["pitch", "{w}/rec.csv", "--speed", "0.5", "--nominal-pitch", "0.13333"]
 CATALOGUE = "file,unit,speed_m_s,date,nominal_pitch_m\n"
+ADD_NEW = ["fleet", "add", "{w}/rec.csv", "--unit", "E07", "--speed", "0.5", "--nominal-pitch", "0.13333"] + [
+    "--date",
+    "2026-01-01",
+    "--db",
+    "{w}/f.sqlite",
+]
 SCAN = ["fleet", "scan", "{w}/visits", "--catalogue", "{w}/units.csv", "--db", "{w}/f.sqlite", "--workers", "0"]
 
 
@@ -43,7 +49,7 @@ def _visits(w: Path):
     (w / "visits" / "rec.csv").write_text(VISIT)
 
 
-def _damaged_db(name="f.sqlite"):
+def _damaged_db(name="f.sqlite", *, damage=True):
     """A fleet database of 300 rows with 4 KiB of random bytes written over a page in its middle."""
 
     def setup(w: Path):
@@ -77,6 +83,8 @@ def _damaged_db(name="f.sqlite"):
                 )
                 for i in range(300)
             )
+        if not damage:
+            return
         size = os.path.getsize(w / name)
         assert size >= 8 * 4096, size
         with open(w / name, "r+b") as fh:
@@ -91,6 +99,41 @@ def _nested(depth):
 
 
 CLOSED_STDOUT = "import sys\nsys.stdout = None  # as Python leaves it when started with stdout closed (>&-)\n"
+
+# a file-size limit (ulimit -f) of 2000 bytes, SIGXFSZ ignored as a shell does not: each write past it fails EFBIG
+FSIZE_LIMIT = """
+import resource, signal
+signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+resource.setrlimit(resource.RLIMIT_FSIZE, (2000, 2000))
+"""
+
+# the PDF writer's disk fills after 4 kB (matplotlib writes the PDF itself, not through vibkit's safe output)
+PDF_DISK_FULL = """
+import errno, os
+import matplotlib.backends.backend_pdf as _bp
+_orig, _n = _bp.PdfFile.write, [0]
+def _write(self, data):
+    _n[0] += len(data)
+    if _n[0] > 4096:
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+    return _orig(self, data)
+_bp.PdfFile.write = _write
+"""
+
+# the PDF's compressor closed after a failed write raises zlib.error, which hid the full disk
+PDF_ZLIB = """
+import zlib
+import vibkit.diagnose.report as _r
+def _fail(*a, **k):
+    raise zlib.error("Error -2 while flushing: inconsistent stream state")
+_r.write_fleet_report = _fail
+"""
+
+
+def _stored_db(name="f.sqlite"):
+    """A sound fleet database of 300 measurements (no analysis: the rows written directly)."""
+    return _damaged_db(name, damage=False)
+
 
 CASES = [
     # ------------------------------------------------------------------ bounded before parsing
@@ -287,5 +330,34 @@ CASES = [
         setup=lambda w: (_visits(w), _damaged_db()(w)),
         expect_in=("{w}/f.sqlite", "damaged"),
         protect=("{w}/f.sqlite",),
+    ),
+    # ------------------------------------------------------------------ full disks and file-size limits
+    Case(
+        "fleet add under ulimit -f 2000",
+        "output",
+        ADD_NEW,
+        files=GOOD,
+        prelude=FSIZE_LIMIT,
+        expect_in=("{w}/f.sqlite", "ulimit -f"),
+    ),
+    Case(
+        "fleet report -o onto a full disk",
+        "output",
+        ["fleet", "report", "--db", "{w}/f.sqlite", "-o", "{w}/r.pdf"],
+        setup=_stored_db(),
+        prelude=PDF_DISK_FULL,
+        expect_in=("{w}/r.pdf: No space left", "disk is full"),
+        protect=("{w}/f.sqlite",),
+        absent=("{w}/r.pdf",),
+    ),
+    Case(
+        "fleet report -o, the PDF compressor fails",
+        "output",
+        ["fleet", "report", "--db", "{w}/f.sqlite", "-o", "{w}/r.pdf"],
+        setup=_stored_db(),
+        prelude=PDF_ZLIB,
+        expect_in=("{w}/r.pdf", "could not be written", "disk full?"),
+        protect=("{w}/f.sqlite",),
+        absent=("{w}/r.pdf",),
     ),
 ]

@@ -398,7 +398,15 @@ def _run_report(a, target):
         path = db.path
     if not trends:
         raise CLIError(f"{path}: no measurement stored yet; nothing to report")
-    rep = write_fleet_report(trends, meas, target, limits_percent=a.limits, database=path, links=links)
+    import zlib
+
+    try:
+        rep = write_fleet_report(trends, meas, target, limits_percent=a.limits, database=path, links=links)
+    except zlib.error as exc:  # the PDF's compressor, closed after a write failed (a full disk): the file named
+        raise CLIError(
+            f"{a.output}: the PDF could not be written ({exc}); nothing was written: is the disk full? free space "
+            "or write elsewhere with -o"
+        ) from None
     shown = a.output if is_stdout(a.output) else rep.path
     if a.json:
         print_json(

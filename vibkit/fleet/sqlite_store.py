@@ -36,6 +36,25 @@ __all__ = ["SQLiteStore", "sqlite_error"]
 _SQLITE_MAGIC = b"SQLite format 3\x00"
 
 
+def _no_room(path) -> str:
+    """Why the folder of ``path`` takes no more bytes (a full disk, a file-size limit), or "" when it does."""
+    import shutil
+
+    try:
+        import resource
+
+        soft = resource.getrlimit(resource.RLIMIT_FSIZE)[0]
+        if soft != resource.RLIM_INFINITY:
+            return f"a file-size limit of {soft} bytes is set (ulimit -f); raise it"
+    except (ImportError, OSError, ValueError):
+        pass
+    try:
+        free = shutil.disk_usage(os.path.dirname(os.path.abspath(os.fspath(path)))).free
+    except OSError:
+        return ""
+    return f"the disk is full ({free} bytes free); free space, or give a --db elsewhere" if free < 1 << 20 else ""
+
+
 def sqlite_error(path, exc) -> FleetError:
     """One line naming the database, what went wrong and what to do, for a ``sqlite3.Error``."""
     text = " ".join(str(exc).split())
@@ -49,6 +68,10 @@ def sqlite_error(path, exc) -> FleetError:
         why = f"cannot write: the file or its folder is read-only ({text}); make both writable, or give a writable --db"
     elif "locked" in low or "busy" in low:
         why = f"locked by another process ({text}); try again when it has finished"
+    elif ("unable to open" in low or "disk i/o" in low or "cannot open" in low or "full" in low) and (
+        space := _no_room(path)
+    ):
+        why = f"cannot write the database's files ({text}): {space}; nothing was stored"
     elif "unable to open" in low or "disk i/o" in low or "cannot open" in low:
         why = (
             f"cannot open the database ({text}); check that the file and its folder exist and can be read "
