@@ -301,6 +301,17 @@ CASES = [
         expect_in=("0.5 +- 0 m/s", "stated as exact"),
         note="a stated zero is kept as zero: the elongation's +- is the frequency's alone",
     ),
+    Case(
+        "fleet add, profile speed_uncertainty = 0",
+        "messages",
+        ["fleet", "add", "{w}/rec.csv", "--escalator", "{w}/zero.toml", "--date", "2026-01-01", "--db", "{w}/f.sqlite"],
+        files={**GOOD, "zero.toml": PROFILE.replace("speed_uncertainty = 0.0005", "speed_uncertainty = 0")},
+        expect="ok",
+        expect_in=("speed uncertainty stated as 0 m/s",),
+        stdout_in=("stored #1 unit E07", "% (harmonic SNR"),
+        outputs=("{w}/f.sqlite",),
+        note="stored with the frequency's +-, not warned about as missing (the history still reads a 0 as not stated)",
+    ),
     # ------------------------------------------------------------------ a database damaged in its middle
     Case(
         "fleet add, 4 KiB of random bytes mid-database",

@@ -144,10 +144,11 @@ def _fleet_db(a, *, create=True):
     return db
 
 
-def _fmt_measurement(m):
+def _fmt_measurement(m, stated=False):
+    """One line of a stored measurement; ``stated``: its speed uncertainty was stated (as 0: exact) this run."""
     from vibkit.diagnose.rounding import SPEED_SIGMA_NOT_STATED, fmt_length, fmt_pm
 
-    if m.speed_sigma_m_s:  # rounded to the sigma
+    if m.speed_sigma_m_s or stated:  # rounded to the sigma
         numbers = (
             f"pitch {fmt_length(m.pitch_m, m.pitch_sigma_m)}, "
             f"elongation {fmt_pm(m.elongation_percent, m.elongation_sigma_percent, '%', sign=True)}"
@@ -222,7 +223,7 @@ def run_add(a):
             {"database": path, "measurement": m.as_reported(), "link_scan": None if scan is None else scan.as_dict()},
         )
     else:
-        print(f"stored {_fmt_measurement(m)}")
+        print(f"stored {_fmt_measurement(m, stated=sp.sigma is not None)}")
         if scan is not None:
             why = f": {scan.reason}" if scan.reason and not scan.scanned else ""
             print(f"links: {_fmt_scan(scan)}{why}")
