@@ -285,6 +285,13 @@ CASES = [
         absent=("{w}/x.nc",),
     ),
     Case(
+        "profile nominal_pitch = 133.33",
+        "scene",
+        ["pitch", "{w}/rec.csv", "--escalator", "{w}/mm.toml"],
+        files={**GOOD, "mm.toml": PROFILE.replace("nominal_pitch = 0.13333", "nominal_pitch = 133.33")},
+        expect_in=("{w}/mm.toml", "'chain.nominal_pitch'", "did you mean 0.13333 m?"),
+    ),
+    Case(
         "roller_mass = 1e9",
         "scene",
         ["simulate", "{w}/s.toml", "-o", "{w}/x.nc"],

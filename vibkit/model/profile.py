@@ -256,8 +256,10 @@ def parse_profile(text: str, source: str = "<string>") -> Profile:
             v = sec[name].get(f.name)
             rg = f.metadata["range"]
             if rg and isinstance(v, (int, float)) and not rg[0] <= v <= rg[1]:
+                metres = f.metadata["unit"] == "m" and rg[0] <= v / 1000 <= rg[1] and rg[0] > 0
+                hint = f"; did you mean {v / 1000:.5g} m? (millimetres typed as metres)" if metres else ""
                 raise SceneError(
-                    f"{src}: '{where}' = {v!r} is outside the plausible range [{rg[0]:g}, {rg[1]:g}] {rg[2]}"
+                    f"{src}: '{where}' = {v!r} is outside the plausible range [{rg[0]:g}, {rg[1]:g}] {rg[2]}{hint}"
                 )
     e, d, c, g, t, s = (sec[n] for n in PROFILE_SECTIONS)
     if "n_links" not in c and not ("rise" in g and "incline_deg" in g):
