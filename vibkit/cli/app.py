@@ -90,7 +90,8 @@ def main(argv=None) -> int:
     try:
         with handle_termination():  # SIGTERM runs the same clean-up as Ctrl-C
             status = int(args.func(args))
-            sys.stdout.flush()  # a closed pipe is found here, not at the interpreter's exit
+            if sys.stdout is not None:  # None: started with stdout closed (>&-)
+                sys.stdout.flush()  # a closed pipe is found here, not at the interpreter's exit
             return status
     except BrokenPipeError:
         # the reader closed stdout (``vibkit spectrum ... | head -1``): it has what it wanted; end quietly
@@ -115,10 +116,15 @@ def main(argv=None) -> int:
             raise
         text = " ".join(str(exc).split()) or type(exc).__name__
         if isinstance(exc, OSError) and getattr(exc, "strerror", None):
-            where = f"{exc.filename}: " if getattr(exc, "filename", None) else ""
-            text = f"{where}{exc.strerror}" + (
-                " (the disk is full; nothing was written)" if exc.errno == errno.ENOSPC else ""
-            )
+            # the file: the error's own, else the output the command was writing (a PDF written by a library)
+            name = getattr(exc, "filename", None) or getattr(args, "output", None)
+            where = f"{name}: " if name and name != "-" else ""
+            why = {
+                errno.ENOSPC: " (the disk is full; nothing was written: free space, or write elsewhere with -o)",
+                errno.EFBIG: " (a file-size limit, ulimit -f, stops the write; nothing was written: raise the limit)",
+                errno.EDQUOT: " (your disk quota is used up; nothing was written: free space, or write elsewhere)",
+            }.get(exc.errno, "")
+            text = f"{where}{exc.strerror}{why}"
         from .options import cli_message, plain_message
 
         text = cli_message(text)  # the reader's Python arguments named as their flags

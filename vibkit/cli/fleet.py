@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import contextlib
-import os
 import sys
 import textwrap
 
@@ -90,7 +88,7 @@ def add_parser(subparsers):
         f"time from the recording's start ({TIME_FORMAT}) at which a marked link passed the sensor: it is link 1, and "
         "its numbers follow the same links across visits (the catalogue's marker_s)",
     )
-    f.set_defaults(func=_guarded(run_add, lambda a: a.db))
+    f.set_defaults(func=run_add)
 
     f = fleet_sub("scan", "add every recording of a folder that a catalogue describes, in parallel (Dask)")
     f.add_argument("directory", metavar="DIR", help="folder of recordings (searched recursively)")
@@ -102,7 +100,7 @@ def add_parser(subparsers):
         help="worker processes of the local cluster (default: one per core; 0: analyse in this process)",
     )
     add_recording(f, positional=False, channel=False)  # for every file; the catalogue's channel column per file
-    f.set_defaults(func=_guarded(run_scan, lambda a: a.db))
+    f.set_defaults(func=run_scan)
 
     f = fleet_sub(
         "status",
@@ -141,7 +139,7 @@ def add_parser(subparsers):
     f.add_argument("--from", dest="source", required=True, help="the existing database (path or URL)")
     f.add_argument("--to", dest="target", required=True, help="the receiving database (created if missing)")
     add_json(f)
-    f.set_defaults(func=_guarded(run_migrate, lambda a: a.target))
+    f.set_defaults(func=run_migrate)
     return s
 
 
@@ -155,29 +153,6 @@ FORMATS = ("table", "json", "csv")
 ALERT_LIMITS = ("watch", "plan", "replace")
 
 
-@contextlib.contextmanager
-def _no_new_files_on_failure(db):
-    """A command that fails leaves no new file: a SQLite database it created (and its journal files) is
-    removed again when the command raises; an existing one is left as it is."""
-    from vibkit.fleet.storage import is_server_url, resolve_db_path
-
-    spec = resolve_db_path(db)
-    path = None if is_server_url(spec) else os.path.abspath(spec)
-    new = (
-        []
-        if path is None
-        else [f for f in (path, path + "-wal", path + "-shm", path + "-journal") if not os.path.lexists(f)]
-    )
-    try:
-        yield
-    except BaseException:
-        for f in new:
-            with contextlib.suppress(OSError):
-                if os.path.isfile(f) and not os.path.islink(f):
-                    os.unlink(f)
-        raise
-
-
 def _fleet_db(a, *, create=True):
     from vibkit.fleet.history import FleetDB
 
@@ -187,10 +162,11 @@ def _fleet_db(a, *, create=True):
     return db
 
 
-def _fmt_measurement(m):
+def _fmt_measurement(m, stated=False):
+    """One line of a stored measurement; ``stated``: its speed uncertainty was stated (as 0: exact) this run."""
     from vibkit.diagnose.rounding import SPEED_SIGMA_NOT_STATED, fmt_length, fmt_pm
 
-    if m.speed_sigma_m_s:  # rounded to the sigma
+    if m.speed_sigma_m_s or stated:  # rounded to the sigma
         numbers = (
             f"pitch {fmt_length(m.pitch_m, m.pitch_sigma_m)}, "
             f"elongation {fmt_pm(m.elongation_percent, m.elongation_sigma_percent, '%', sign=True)}"
@@ -209,6 +185,8 @@ def run_add(a):
     from vibkit.fleet.inputs import check_inputs
 
     profile = _profile_of(a)
+    if a.unit is not None and not a.unit.strip():
+        raise CLIError("fleet add: --unit is empty; give the escalator's identifier, e.g. --unit E07")
     if a.unit is None and profile is None:
         raise CLIError("fleet add: give --unit (or --escalator FILE, whose unit is used)")
     if a.speed is None and profile is None:
@@ -263,7 +241,7 @@ def run_add(a):
             {"database": path, "measurement": m.as_reported(), "link_scan": None if scan is None else scan.as_dict()},
         )
     else:
-        print(f"stored {_fmt_measurement(m)}")
+        print(f"stored {_fmt_measurement(m, stated=sp.sigma is not None)}")
         if scan is not None:
             from vibkit.diagnose.report.fleet_links import scan_advice
 
@@ -271,7 +249,12 @@ def run_add(a):
             advice = scan_advice(scan)
             print(f"links: {_fmt_scan(scan)}{why}" + (f"; {advice}" if advice else ""))
         msg(f"note: database {path}; date from {m.date_source}")
-    if not m.speed_sigma_m_s:
+    if sp.sigma is not None and not sp.sigma > 0:
+        msg(
+            f"note: speed uncertainty stated as 0 m/s ({sp.sigma_source}): the elongation's +- is the frequency's "
+            "alone; the history stores it as 0, which its trend reads as not stated"
+        )
+    elif not m.speed_sigma_m_s:
         msg(
             "warning: stored without a speed uncertainty (not stated): its elongation has no +-, and the unit's "
             "rate and forecast intervals are too small; give --speed-uncertainty"
@@ -464,7 +447,15 @@ def _run_report(a, target):
         path = db.path
     if not trends:
         raise CLIError(f"{path}: no measurement stored yet; nothing to report")
-    rep = write_fleet_report(trends, meas, target, limits_percent=a.limits, database=path, links=links)
+    import zlib
+
+    try:
+        rep = write_fleet_report(trends, meas, target, limits_percent=a.limits, database=path, links=links)
+    except zlib.error as exc:  # the PDF's compressor, closed after a write failed (a full disk): the file named
+        raise CLIError(
+            f"{a.output}: the PDF could not be written ({exc}); nothing was written: is the disk full? free space "
+            "or write elsewhere with -o"
+        ) from None
     shown = a.output if is_stdout(a.output) else rep.path
     if a.json:
         print_json(
@@ -510,11 +501,3 @@ _RUN = {"add": run_add, "scan": run_scan, "status": run_status, "report": run_re
 def run(a):
     """Run the fleet subcommand ``a.fleet_command`` (each subparser also sets its own ``func``)."""
     return _RUN[a.fleet_command](a)
-
-
-def _guarded(func, db_of):
-    def run_guarded(a):
-        with _no_new_files_on_failure(db_of(a)):
-            return func(a)
-
-    return run_guarded

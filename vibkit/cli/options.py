@@ -159,6 +159,10 @@ def teeth(text):
     return _whole_number(text, "sprocket teeth", 3, "a sprocket has at least 3 teeth")
 
 
+#: the largest speed uncertainty taken, as a fraction of the speed (the fleet's stated range)
+SPEED_SIGMA_MAX_FRACTION = 0.2
+
+
 def speed_sigma(text, speed):
     """--speed-uncertainty (m/s, or a percentage of ``speed``) -> m/s; a bad value is a CLIError (exit 1)."""
     t = text.strip()
@@ -171,6 +175,12 @@ def speed_sigma(text, speed):
         raise CLIError(f"--speed-uncertainty: expected m/s or a percentage like 0.1%, got {text!r}") from None
     if not (math.isfinite(v) and v >= 0):
         raise CLIError(f"--speed-uncertainty must be >= 0, got {text!r}")
+    if t.endswith("%") and v > SPEED_SIGMA_MAX_FRACTION * speed:
+        # a speed known to worse than a fifth gives no pitch worth the name (and 1e308% no number at all)
+        raise CLIError(
+            f"--speed-uncertainty {text} is more than {100 * SPEED_SIGMA_MAX_FRACTION:g} % of the speed; expected "
+            f"0-{100 * SPEED_SIGMA_MAX_FRACTION:g} % (a step timing is good to a few %), e.g. 0.5%"
+        )
     if not t.endswith("%") and v >= 0.1 * speed:
         # a bare number is m/s: 5 is 5 m/s, ten times an escalator's speed; no tachometer is that bad
         raise CLIError(

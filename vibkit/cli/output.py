@@ -117,8 +117,15 @@ def check_output(out, inputs, force=False, *, json_flag=False):
     if is_stdout(out):
         if json_flag:
             raise UsageError("-o - writes the output to stdout, and so does --json: give one of them")
+        check_stdout_open()
         return
     check_output_path(out, overwrite=force, inputs=[p for p in inputs if p and not is_stdout(p)])
+
+
+def check_stdout_open():
+    """``-o -`` with standard output closed (``>&-``: Python's ``sys.stdout`` is None) is refused before any work."""
+    if sys.stdout is None:
+        raise CLIError("-o -: standard output is closed; give a file to write to (-o FILE), or open stdout")
 
 
 def no_stdout(out, what):

@@ -32,8 +32,7 @@ def run(a):
     from vibkit.model.profile import load_profile
     from vibkit.model.scene import SceneError
 
-    if a.output != "-":
-        check_output(a.output, [a.profile], a.force)
+    check_output(a.output, [a.profile], a.force)
     try:
         profile = load_profile(a.profile)
         profile.scene(a.analysis, a.duration)  # refuses a geometry that cannot run, naming the key

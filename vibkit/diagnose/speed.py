@@ -50,8 +50,11 @@ class ResolvedSpeed:
         """``0.5000 +- 0.0003 m/s (given)`` or ``0.5 m/s (given; speed uncertainty not stated)``."""
         if self.value is None:
             return "not known (give --speed)"
-        if self.sigma is None or not self.sigma > 0:
+        if self.sigma is None:
             return f"{self.value:g} m/s ({self.source}; {SPEED_SIGMA_NOT_STATED})"
+        if not self.sigma > 0:  # stated as exact: kept as zero, not read as "not stated"
+            why = "" if self.sigma_source in ("", "given") else f"; sigma: {self.sigma_source}"
+            return f"{self.value:g} +- 0 m/s ({self.source}{why}; stated as exact)"
         why = "" if self.sigma_source in ("", "given") else f"; sigma: {self.sigma_source}"
         return f"{fmt_pm(self.value, self.sigma, 'm/s')} ({self.source}{why})"
 

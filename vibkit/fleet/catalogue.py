@@ -42,6 +42,7 @@ import io
 import math
 import os
 import posixpath
+import stat
 from dataclasses import dataclass
 
 from .dates import _iso, parse_date
@@ -53,6 +54,9 @@ __all__ = ["CATALOGUE_COLUMNS", "CatalogueRow", "read_catalogue"]
 #: required and optional catalogue columns
 CATALOGUE_COLUMNS = ("file", "unit", "speed_m_s", "date", "nominal_pitch_m")
 CATALOGUE_OPTIONAL = ("speed_sigma_m_s", "channel", "escalator", "n_links", "marker_s")
+#: the largest catalogue read [bytes] and its longest line [characters]: bounded before it is parsed
+MAX_CATALOGUE_BYTES = 16 * 2**20
+MAX_CATALOGUE_LINE = 4096
 #: columns a profile (the escalator column) can stand in for
 FROM_PROFILE = ("unit", "speed_m_s", "nominal_pitch_m")
 
@@ -127,16 +131,31 @@ def read_catalogue(path):
     spath = os.fspath(path)
     try:
         with open(spath, "rb") as fh:
-            raw = fh.read()
+            if not stat.S_ISREG(os.fstat(fh.fileno()).st_mode):
+                raise FleetError(
+                    f"{spath}: catalogue is not a regular file (a folder, FIFO or device); give a CSV file"
+                )
+            raw = fh.read(MAX_CATALOGUE_BYTES + 1)
     except FileNotFoundError:
         raise FleetError(f"{spath}: catalogue not found") from None
     except OSError as exc:
         raise FleetError(f"{spath}: catalogue cannot be read: {exc.strerror or exc}") from None
+    if len(raw) > MAX_CATALOGUE_BYTES:
+        raise FleetError(
+            f"{spath}: catalogue is larger than {MAX_CATALOGUE_BYTES // 2**20} MiB, the limit (a line per recording "
+            "is some 100 bytes); split it, one catalogue per folder"
+        )
     try:
         text = raw.decode("utf-8-sig")
     except UnicodeDecodeError:
         text = raw.decode("cp1252", errors="replace")
     lines = [(i, ln) for i, ln in enumerate(text.splitlines(), 1) if ln.strip() and not ln.lstrip().startswith("#")]
+    long = next(((i, len(ln)) for i, ln in lines if len(ln) > MAX_CATALOGUE_LINE), None)
+    if long is not None:
+        raise FleetError(
+            f"{spath}, line {long[0]}: {long[1]} characters, more than the {MAX_CATALOGUE_LINE} a catalogue line "
+            "may have (one line per recording: file, unit, speed_m_s, date, nominal_pitch_m)"
+        )
     if not lines:
         raise FleetError(
             f"{spath}: catalogue is empty; expected a header line with columns {', '.join(CATALOGUE_COLUMNS)}"

@@ -36,19 +36,42 @@ __all__ = ["SQLiteStore", "sqlite_error"]
 _SQLITE_MAGIC = b"SQLite format 3\x00"
 
 
+def _no_room(path) -> str:
+    """Why the folder of ``path`` takes no more bytes (a full disk, a file-size limit), or "" when it does."""
+    import shutil
+
+    try:
+        import resource
+
+        soft = resource.getrlimit(resource.RLIMIT_FSIZE)[0]
+        if soft != resource.RLIM_INFINITY:
+            return f"a file-size limit of {soft} bytes is set (ulimit -f); raise it"
+    except (ImportError, OSError, ValueError):
+        pass
+    try:
+        free = shutil.disk_usage(os.path.dirname(os.path.abspath(os.fspath(path)))).free
+    except OSError:
+        return ""
+    return f"the disk is full ({free} bytes free); free space, or give a --db elsewhere" if free < 1 << 20 else ""
+
+
 def sqlite_error(path, exc) -> FleetError:
     """One line naming the database, what went wrong and what to do, for a ``sqlite3.Error``."""
     text = " ".join(str(exc).split())
     low = text.lower()
     if "malformed" in low or "not a database" in low or "corrupt" in low:
         why = (
-            f"the database file is damaged ({text}); restore it from a backup, or recover what is readable "
+            f"the database file is damaged ({text}); left as it is, nothing stored; restore it from a backup, or recover what is readable "
             f"with: sqlite3 {path} .recover | sqlite3 recovered.sqlite"
         )
     elif "readonly" in low or "read-only" in low:
         why = f"cannot write: the file or its folder is read-only ({text}); make both writable, or give a writable --db"
     elif "locked" in low or "busy" in low:
         why = f"locked by another process ({text}); try again when it has finished"
+    elif ("unable to open" in low or "disk i/o" in low or "cannot open" in low or "full" in low) and (
+        space := _no_room(path)
+    ):
+        why = f"cannot write the database's files ({text}): {space}; nothing was stored"
     elif "unable to open" in low or "disk i/o" in low or "cannot open" in low:
         why = (
             f"cannot open the database ({text}); check that the file and its folder exist and can be read "
@@ -96,8 +119,13 @@ class SQLiteStore(Store):
         parent = os.path.dirname(os.path.abspath(p))
         if not os.path.isdir(parent):
             raise FleetError(f"{p}: folder {parent} does not exist")
+        #: no file at the path yet: the store answers from an empty in-memory database, and the file is made
+        #: (atomically, O_EXCL) only at the first write; a command that fails before it leaves no file, and
+        #: nothing is ever removed on the way out (another process may have made and filled it meanwhile)
+        self._pending = not os.path.lexists(p)
+        self._timeout_ms = 60000
         try:
-            self._con = self._connect(p)
+            self._con = self._connect(":memory:" if self._pending else p)
         except sqlite3.Error as exc:
             raise sqlite_error(p, exc) from None
         try:
@@ -110,6 +138,8 @@ class SQLiteStore(Store):
             raise
 
     def _connect(self, p):
+        if p == ":memory:":
+            return sqlite3.connect(p, isolation_level=None)
         if not self.readonly:
             return sqlite3.connect(p, timeout=60.0, isolation_level=None)
         # read-only use (status, report) never writes, not even a journal: SQLite's read-only mode; a WAL
@@ -127,7 +157,38 @@ class SQLiteStore(Store):
 
     def set_timeout(self, seconds):
         """How long a write waits for another process's transaction before it is an error. [s]"""
-        self._con.execute(f"PRAGMA busy_timeout = {int(float(seconds) * 1000)}")
+        self._timeout_ms = int(float(seconds) * 1000)
+        self._con.execute(f"PRAGMA busy_timeout = {self._timeout_ms}")
+
+    def _materialise(self):
+        """The first write of a store whose file did not exist: make the file, unless another process made it
+        meanwhile (``O_CREAT | O_EXCL``: one of them creates it, none replaces it), and open it as an existing one.
+        An empty file is a new SQLite database; its tables are created inside the write lock (:meth:`_prepare`), so
+        two processes creating the same store at the same moment both store their rows in it."""
+        p = self.path
+        try:
+            fd = os.open(p, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
+        except FileExistsError:
+            pass  # made by another process since this store was opened: used as it is
+        except OSError as exc:
+            raise FleetError(
+                f"{p}: cannot create the database: {exc.strerror or exc}; check that its folder is writable "
+                "(or give another --db)"
+            ) from None
+        else:
+            os.close(fd)
+        mem = self._con
+        try:
+            con = self._connect(p)
+        except sqlite3.Error as exc:
+            raise sqlite_error(p, exc) from None
+        self._con, self._pending = con, False
+        mem.close()
+        con.execute(f"PRAGMA busy_timeout = {self._timeout_ms}")
+        try:
+            self._prepare()
+        except sqlite3.Error as exc:
+            raise sqlite_error(p, exc) from None
 
     @property
     def local_files(self):
@@ -135,8 +196,19 @@ class SQLiteStore(Store):
         a = os.path.abspath(self.path)
         return (a, a + "-wal", a + "-shm", a + "-journal")
 
+    def _check_sound(self):
+        """SQLite's ``quick_check`` of an existing file before anything is read from or written to it: a damaged
+        file (bytes overwritten in its middle) is refused whole, left as it is, rather than read in part or
+        written into."""
+        if self._pending or os.path.getsize(self.path) == 0:
+            return
+        res = [str(r[0]) for r in self._con.execute("PRAGMA quick_check(3)").fetchall()]
+        if res != ["ok"]:
+            raise sqlite_error(self.path, f"database disk image is malformed: {'; '.join(res)[:200]}")
+
     def _prepare(self):
         con = self._con
+        self._check_sound()
         app = con.execute("PRAGMA application_id").fetchone()[0]
         ver = self.file_schema_version = con.execute("PRAGMA user_version").fetchone()[0]
         tables = [r[0] for r in con.execute("SELECT name FROM sqlite_master WHERE type = 'table'")]
@@ -161,6 +233,9 @@ class SQLiteStore(Store):
             self.has_link_alternatives = self.has_link_tables and "alternatives" in self._flag_columns()
             if ver < SCHEMA_VERSION:
                 self._read_older_schema(ver)
+            return
+        if self._pending:  # nothing at the path yet: an empty fleet database in memory answers until the first write
+            self._create_or_upgrade()
             return
         mode = con.execute("PRAGMA journal_mode=WAL").fetchone()[0]
         if str(mode).lower() != "wal":  # pragma: no cover - file systems without shared memory
@@ -259,6 +334,8 @@ class SQLiteStore(Store):
     def write_transaction(self, unit):
         if self.readonly:  # before any statement: an older file's rows are a view here, not the file's table
             raise sqlite_error(self.path, "opened read-only (mode=ro): attempt to write a readonly database")
+        if self._pending:
+            self._materialise()
         con = self._con
         con.execute("BEGIN IMMEDIATE")
         try:

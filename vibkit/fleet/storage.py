@@ -56,13 +56,20 @@ def resolve_db_path(db=None) -> str:
             "--db / database is empty; expected a database file such as fleet.sqlite, sqlite:///PATH or "
             "postgresql://user@host/dbname (leave --db out for $VIBKIT_FLEET_DB, else ./vibkit-fleet.sqlite)"
         )
-    spec = db if db is not None else (os.environ.get(DB_ENV) or DEFAULT_DB_NAME)
+    env = os.environ.get(DB_ENV)
+    if db is None and env is not None and env and not env.strip():
+        raise FleetError(
+            f"${DB_ENV} is blank; set it to a database (a file such as fleet.sqlite, or "
+            "postgresql://user@host/dbname), or unset it for ./vibkit-fleet.sqlite"
+        )
+    spec = db if db is not None else (env or DEFAULT_DB_NAME)
     spec = os.fspath(spec)
     m = re.match(r"^([A-Za-z][A-Za-z0-9+.-]*)://", spec)
     if not m:
         return spec
     scheme = m.group(1).lower()
     if scheme in _SERVER_SCHEMES:
+        _check_server_url(spec)
         return spec
     if scheme != "sqlite":
         raise FleetError(
@@ -76,6 +83,24 @@ def resolve_db_path(db=None) -> str:
         )
     path = spec[len("sqlite:///") :]
     return path.split("?", 1)[0]
+
+
+def _check_server_url(spec):
+    """A ``postgresql://`` URL that names a server or a database, with a port in range: refused before any
+    connection is tried (a socket failure would hide that the URL is what is wrong)."""
+    import urllib.parse
+
+    from .postgres_store import redact_url
+
+    shown = redact_url(spec)
+    fix = "expected postgresql://user@host/dbname (postgresql:///dbname: the local server's socket)"
+    try:
+        u = urllib.parse.urlsplit(spec)
+        u.port  # noqa: B018 - raises ValueError on a port that is not a number in 0-65535
+    except ValueError as exc:
+        raise FleetError(f"database URL {shown!r}: {exc}; {fix}") from None
+    if not u.hostname and u.path in ("", "/") and not u.query:
+        raise FleetError(f"database URL {shown!r} names no server and no database; {fix}")
 
 
 def _open_store(spec, create, readonly):
@@ -300,6 +325,10 @@ class FleetDB:
         if not os.path.exists(spath):
             raise FleetError(f"{spath}: file not found; expected a recording")
         if os.path.isfile(spath):
+            from ..io import HEAD_BYTES, check_head
+
+            with open(spath, "rb") as fh:  # a file no reader takes is refused before all of it is hashed
+                check_head(spath, fh.read(HEAD_BYTES))
             old = self.find(_file_sha256(spath))
             if old is not None:
                 raise DuplicateRecordingError(self._store.duplicate_message(spath, old), old)

@@ -111,6 +111,26 @@ def read_bounded(f, size_hint: int, limit: int) -> bytes:
     return b"".join(chunks)
 
 
+#: bytes of a file's head looked at before the rest is read (the registry's sniffers see as many)
+HEAD_BYTES = 1 << 16
+
+
+def check_head(spath: str, head: bytes) -> None:
+    """Refuse, from its head alone, a file no reader can make a recording of before the whole file is read and
+    scanned (obspy would look for every waveform format through a 2 GB file of zero bytes for minutes)."""
+    if len(head) >= 512 and not head.strip(b"\x00"):
+        raise RecordingError(
+            spath,
+            None,
+            f"its first {_gib_or_kib(len(head))} are zero bytes: not a recording (a file never written, or a "
+            "disk image); nothing read past them",
+        )
+
+
+def _gib_or_kib(n: int) -> str:
+    return f"{n // 1024} KiB" if n % 1024 == 0 else f"{n} bytes"
+
+
 def _open_checked(spath: str, limit: int):
     """Open a regular file for reading, refusing anything else before it is opened."""
     if not os.path.lexists(spath):
@@ -151,6 +171,8 @@ def _open_checked(spath: str, limit: int):
         if not stat.S_ISREG(st2.st_mode):
             raise RecordingError(spath, None, "is not a regular file; expected a recording file on disk")
         with os.fdopen(fd, "rb", closefd=False) as f:
+            check_head(spath, f.read(HEAD_BYTES))
+            f.seek(0)
             data = read_bounded(f, st2.st_size, limit)
     except OSError as exc:
         raise RecordingError(spath, None, f"cannot be read: {exc.strerror or exc}") from None

@@ -15,11 +15,10 @@ reads; nothing else.
 from __future__ import annotations
 
 import math
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
-from .scene import SceneError, _check_scene_file, _section
+from .scene import SceneError, _check_scene_file, _section, toml_loads
 from .schema import _fmt, _Section, key
 
 __all__ = [
@@ -239,10 +238,7 @@ def parse_profile(text: str, source: str = "<string>") -> Profile:
     src = source
     if text.startswith("\ufeff"):
         text = text[1:]
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise SceneError(f"{src}: not valid TOML: {exc}") from None
+    data = toml_loads(text, src, "profile")
     for name in data:
         if name not in PROFILE_SECTIONS:
             raise SceneError(f"{src}: unknown section [{name}] (known: {', '.join(PROFILE_SECTIONS)})")
@@ -260,8 +256,10 @@ def parse_profile(text: str, source: str = "<string>") -> Profile:
             v = sec[name].get(f.name)
             rg = f.metadata["range"]
             if rg and isinstance(v, (int, float)) and not rg[0] <= v <= rg[1]:
+                metres = f.metadata["unit"] == "m" and rg[0] <= v / 1000 <= rg[1] and rg[0] > 0
+                hint = f"; did you mean {v / 1000:.5g} m? (millimetres typed as metres)" if metres else ""
                 raise SceneError(
-                    f"{src}: '{where}' = {v!r} is outside the plausible range [{rg[0]:g}, {rg[1]:g}] {rg[2]}"
+                    f"{src}: '{where}' = {v!r} is outside the plausible range [{rg[0]:g}, {rg[1]:g}] {rg[2]}{hint}"
                 )
     e, d, c, g, t, s = (sec[n] for n in PROFILE_SECTIONS)
     if "n_links" not in c and not ("rise" in g and "incline_deg" in g):
@@ -312,10 +310,7 @@ def load_profile(path) -> Profile:
         number; the one-line message names the file and the key.
     """
     p = Path(path)
-    try:
-        _check_scene_file(p)
-    except SceneError as exc:
-        raise SceneError(str(exc).replace("scene file", "profile file")) from None
+    _check_scene_file(p, "profile")
     try:
         text = p.read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as exc:

@@ -17,19 +17,20 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from .chain_keys import by_roller, check_flat_speed, check_seat, worn_links
 from .params import ChainParams, GuideParams, SprocketParams
 from .scene_checks import (
+    MAX_TOML_DEPTH,  # noqa: F401 - public through the scene loader
     _check_ranges,
     _check_sprocket_geometry,
     _reduce_start,
     _validate_passenger_numbers,
     check_chain_first,
     check_sections_belong,
+    toml_loads,
 )
 from .schema import (
     EFFECT_OPTIONS,
@@ -46,6 +47,7 @@ from .schema import (
     SceneError,
     SolverSection,
     SprocketSection,
+    check_geometry_range,
 )
 
 __all__ = ["Scene", "SceneError", "load_scene", "parse_scene", "EFFECTS", "OUTPUTS", "RANGES", "SECTIONS"]
@@ -214,10 +216,7 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
     src = source
     if text.startswith("\ufeff"):  # a UTF-8 byte-order mark (Windows editors write one)
         text = text[1:]
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise SceneError(f"{src}: not valid TOML: {exc}") from None
+    data = toml_loads(text, src)
     allowed = set(SECTIONS) | {"effects"}
     for key in data:
         if key not in allowed:
@@ -292,6 +291,7 @@ def _parameters(src, sec):
     for key in ("base_width", "tip_width", "tooth_height", "mass", "inertia"):
         if key in s:
             _positive(src, f"sprocket.{key}", s[key])
+            check_geometry_range(src, f"sprocket.{key}", s[key])
     if "teeth" in s and s["teeth"] < 3:
         raise SceneError(f"{src}: 'sprocket.teeth' must be an integer >= 3, got {s['teeth']!r}")
     ts = SprocketSection.from_mapping(s)
@@ -300,10 +300,12 @@ def _parameters(src, sec):
     for key in ("link_pitch", "roller_radius", "roller_mass"):
         if key in c:
             _positive(src, f"chain.{key}", c[key])
+            check_geometry_range(src, f"chain.{key}", c[key])
     tc = ChainSection.from_mapping(c)
     nominal = tc.link_pitch
     if "pitch" in s:
         _positive(src, "sprocket.pitch", s["pitch"])
+        check_geometry_range(src, "sprocket.pitch", s["pitch"])
     sprocket = SprocketParams(
         **{k: getattr(ts, k) for k in ("teeth", "base_width", "tip_width", "tooth_height", "mass", "inertia")},
         pitch=ts.pitch if ts.pitch is not None else nominal,
@@ -320,6 +322,7 @@ def _parameters(src, sec):
     for key in ("tensioner_length", "lower_landing", "upper_landing", "transition_radius", "incline_length"):
         if key in g:
             _positive(src, f"guide.{key}", g[key])
+            check_geometry_range(src, f"guide.{key}", g[key])
     tg = GuideSection.from_mapping(g)
     head = tg.head_radius
     if isinstance(head, str):
@@ -330,6 +333,7 @@ def _parameters(src, sec):
         fitted = sprocket.pitch_radius(nominal)  # the head radius of the chain when it was new
     else:
         _positive(src, "guide.head_radius", head)
+        check_geometry_range(src, "guide.head_radius", head)
         fitted = head
     angle = tg.incline_angle_deg
     if not 0 < angle < 90:
@@ -668,19 +672,22 @@ def load_scene(path) -> Scene:
     return parse_scene(text, str(p))
 
 
-def _check_scene_file(p: Path) -> None:
-    """A scene must be a regular file of reasonable size: a FIFO or a device would block or never end."""
+def _check_scene_file(p: Path, what: str = "scene") -> None:
+    """A scene (or profile: ``what``) must be a regular file of reasonable size: a FIFO or a device would block
+    or never end, a huge file fill the memory."""
     import stat
 
     try:
         st = p.stat()
     except FileNotFoundError:
-        raise SceneError(f"{p}: no such scene file") from None
+        raise SceneError(f"{p}: no such {what} file") from None
     except OSError as exc:
-        raise SceneError(f"{p}: cannot read scene file ({exc.strerror or exc})") from None
+        raise SceneError(f"{p}: cannot read {what} file ({exc.strerror or exc})") from None
     if stat.S_ISDIR(st.st_mode):
-        raise SceneError(f"{p}: is a folder, expected a scene file (.toml)")
+        raise SceneError(f"{p}: is a folder, expected a {what} file (.toml)")
     if not stat.S_ISREG(st.st_mode):
-        raise SceneError(f"{p}: is not a regular file (a FIFO, device or socket); expected a scene file (.toml)")
+        raise SceneError(f"{p}: is not a regular file (a FIFO, device or socket); expected a {what} file (.toml)")
     if st.st_size > MAX_SCENE_BYTES:
-        raise SceneError(f"{p}: is {st.st_size} bytes; a scene is a small TOML file (at most {MAX_SCENE_BYTES} bytes)")
+        raise SceneError(
+            f"{p}: is {st.st_size} bytes; a {what} is a small TOML file (at most {MAX_SCENE_BYTES} bytes, 1 MiB)"
+        )

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import tomllib
 
 from .schema import RANGES, SceneError
 
@@ -126,3 +127,52 @@ def check_sections_belong(src, sec, analysis, name) -> None:
                 f"{src}: {', '.join(f'solver.{k}' for k in unused)} {'has' if len(unused) == 1 else 'have'} no "
                 f"meaning in {_a(analysis)} scene, which integrates nothing (only solver.max_result_bytes applies)"
             )
+
+
+def _toml_depth(text: str) -> int:
+    """The deepest nesting of arrays and inline tables in TOML ``text``, outside strings and comments (a
+    linear scan: what the parser, which recurses per level, is spared)."""
+    depth = deepest = 0
+    i, n = 0, len(text)
+    while i < n:
+        c = text[i]
+        if c == "#":
+            j = text.find("\n", i)
+            i = n if j < 0 else j
+        elif c in "\"'":
+            q3 = c * 3
+            if text.startswith(q3, i):
+                j = text.find(q3, i + 3)
+                i = n if j < 0 else j + 3
+                continue
+            j = i + 1
+            while j < n and text[j] != c and text[j] != "\n":
+                j += 2 if (c == '"' and text[j] == "\\") else 1
+            i = j
+        elif c in "[{":
+            depth += 1
+            deepest = max(deepest, depth)
+        elif c in "]}":
+            depth = max(depth - 1, 0)
+        i += 1
+    return deepest
+
+
+#: arrays and inline tables nested deeper than this are refused before parsing (a scene nests 3 at most)
+MAX_TOML_DEPTH = 32
+
+
+def toml_loads(text: str, src, what: str = "scene") -> dict:
+    """``tomllib.loads`` bounded: nesting deeper than :data:`MAX_TOML_DEPTH` is refused before the parser
+    recurses into it; every parse error is one :class:`SceneError` line naming ``src``."""
+    if _toml_depth(text) > MAX_TOML_DEPTH:
+        raise SceneError(
+            f"{src}: arrays or tables nested more than {MAX_TOML_DEPTH} deep; a {what} nests 3 at most "
+            "(check the brackets)"
+        )
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise SceneError(f"{src}: not valid TOML: {exc}") from None
+    except RecursionError:
+        raise SceneError(f"{src}: nested too deep to parse; a {what} nests 3 at most (check the brackets)") from None

@@ -27,10 +27,12 @@ __all__ = [
     "ATOL_PER_RTOL",
     "EFFECT_OPTIONS",
     "EFFECTS",
+    "GEOMETRY_RANGES",
     "RANGES",
     "SceneError",
     "SECTION_CLASSES",
     "SECTIONS",
+    "check_geometry_range",
     "effect_options",
     "gravity_of",
     "key_units",
@@ -383,6 +385,41 @@ def schema_fields():
 #: dotted key -> (lo, hi, note): the plausible ranges the loader enforces (derived from the schema)
 RANGES = {f"{sec}.{f.name}": f.metadata["range"] for sec, f in schema_fields() if f.metadata["range"]}
 
+#: the escalator's physical keys: plausible ranges checked after each is found positive (a length in millimetres
+#: typed as metres is refused with the metres it meant); dotted key -> (lo, hi, unit)
+GEOMETRY_RANGES = {
+    "guide.tensioner_length": (0.01, 10.0, "m"),
+    "guide.lower_landing": (0.0, 50.0, "m"),
+    "guide.upper_landing": (0.0, 50.0, "m"),
+    "guide.transition_radius": (0.05, 50.0, "m"),
+    "guide.incline_length": (0.1, 500.0, "m"),
+    "guide.head_radius": (0.02, 5.0, "m"),
+    "chain.roller_mass": (0.01, 200.0, "kg"),
+    "sprocket.base_width": (0.001, 0.5, "m"),
+    "sprocket.tip_width": (0.0005, 0.5, "m"),
+    "sprocket.tooth_height": (0.001, 0.5, "m"),
+    "sprocket.mass": (1.0, 20000.0, "kg"),
+    "sprocket.inertia": (0.01, 20000.0, "kg m^2"),
+    "sprocket.pitch": (0.02, 0.5, "m"),
+}
+
+
+def check_geometry_range(src, key, value) -> None:
+    """``key`` = ``value`` within :data:`GEOMETRY_RANGES` (a SceneError naming the file, the key and, for a length
+    a thousand times too large, the metres it meant)."""
+    if key not in GEOMETRY_RANGES or isinstance(value, bool) or not isinstance(value, (int, float)):
+        return
+    lo, hi, unit = GEOMETRY_RANGES[key]
+    v = float(value)
+    if math.isfinite(v) and lo <= v <= hi:
+        return
+    hint = (
+        f"; did you mean {v / 1000:.5g} m? (millimetres typed as metres)"
+        if unit == "m" and lo <= v / 1000 <= hi
+        else ""
+    )
+    raise SceneError(f"{src}: '{key}' = {v:g} {unit} is not plausible: expected {lo:g}-{hi:g} {unit}{hint}")
+
 
 def effect_options(effects: Mapping | None) -> dict:
     """Effect name -> typed options, from a scene's effects or a mapping of plain option tables.
@@ -442,7 +479,7 @@ def schema_table() -> str:
     for sec, f in schema_fields():
         m = f.metadata
         default = "required" if m["required"] else "(see meaning)" if m["derived"] else _fmt(f.default)
-        rg = m["range"]
+        rg = m["range"] or GEOMETRY_RANGES.get(f"{sec}.{f.name}")
         rng = f"{'(' if m.get('positive') else '['}{rg[0]:g}, {rg[1]:g}]" if rg else ""
         rows.append(f"| [{sec}] | {f.name} | {m['unit']} | {default} | {rng} | {m['doc']} |")
     return "\n".join(rows) + "\n"

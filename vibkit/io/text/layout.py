@@ -27,7 +27,31 @@ from .fastpath import _HEAD_BYTES, _Fallback
 from .metadata import _header_from_meta, _metadata
 from .units import is_time_name, parse_time_unit, parse_unit
 
-__all__ = ["utf16_without_bom"]
+__all__ = ["MAX_COLUMNS", "utf16_without_bom"]
+
+#: columns a text recording may have (a row per sample, a column per channel); a wider line is refused before
+#: the layout is worked out, which looks at every cell of the last 200 lines
+MAX_COLUMNS = 4096
+
+
+def _check_width(path, lines) -> None:
+    """Refuse a line of more than :data:`MAX_COLUMNS` fields (by any delimiter) among the first and the last
+    200 lines: counted in C, before any cell is classified."""
+    seen = list(enumerate(lines[:200])) + list(enumerate(lines[-200:], start=max(len(lines) - 200, 0)))
+    for i, ln in seen:
+        if len(ln) <= MAX_COLUMNS:  # fewer characters than the limit: fewer fields too
+            continue
+        n = max(ln.count(d) for d in DELIMITERS if d != " ") + 1
+        if n <= MAX_COLUMNS and len(ln) > 64 * MAX_COLUMNS:
+            n = len(ln.split())
+        if n > MAX_COLUMNS:
+            raise RecordingError(
+                path,
+                i + 1,
+                f"{n} columns, more than the {MAX_COLUMNS} a recording may have (one row per sample, one column "
+                "per channel); a file with one row per channel must be transposed",
+            )
+
 
 _CONTROL = re.compile("[\x00-\x08\x0b\x0e-\x1f\x7f-\x9f]")
 _BOMS = (
@@ -231,6 +255,7 @@ def _read_layout(path, text: str, delimiter, decimal, complete: bool, history: l
         lines.pop()
     if not any(ln.strip() for ln in lines):
         raise RecordingError(path, None, "file holds only blank lines; expected a header and rows of numbers")
+    _check_width(path, lines)
 
     sniff = _sniff(lines, delimiter, decimal)
     if sniff is None and not complete:
