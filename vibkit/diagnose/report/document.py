@@ -3,7 +3,7 @@
 order of :data:`PAGES` (a list of :class:`PageBuilder`).
 
 The pages: the verdict (page 1), the recording and escalator, time signal with events, spectrum with harmonic markers, spectrogram,
-order spectrum, ride quality (when it can be assessed), simulation against recording and harmonics (given a
+order spectrum, ride quality (when it can be assessed), one page per escalator ride found in a phone's walk, simulation against recording and harmonics (given a
 scene), data quality, parameters, glossary.  Every page is headed by the unit, the recording, its date, the
 chain speed and "page n of N"; page 1 says why any page is absent.  The report is dated now; with ``SOURCE_DATE_EPOCH`` set the same
 inputs give the same bytes (nothing random is drawn).
@@ -21,6 +21,7 @@ from .comparison_pages import harmonics_page, simulation_page
 from .context import analyse
 from .links_page import links_page
 from .ride_pages import ride_pages_absent, ride_quality_pages
+from .rides_pages import phone_ride_pages, phone_rides_absent
 from .signal_pages import order_spectrum_page, spectrogram_page, spectrum_page, time_signal_page
 from .verdict import recording_page, verdict_page
 
@@ -71,6 +72,7 @@ PAGES = [
     PageBuilder("order spectrum", order_spectrum_page, _no_order_spectrum),
     PageBuilder("links", links_page, _no_links),
     PageBuilder("ride quality", ride_quality_pages, ride_pages_absent),
+    PageBuilder("escalator rides (phone)", phone_ride_pages, phone_rides_absent),
     PageBuilder("simulation against recording", simulation_page, _no_comparison),
     PageBuilder("harmonics", harmonics_page, _no_comparison),
     PageBuilder("data quality", data_quality_page),
