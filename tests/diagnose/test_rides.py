@@ -173,3 +173,17 @@ def test_ride_quality_of_a_walk_assesses_a_ride_found_in_it():
     assert rq.segment.method == "a ride in a walk"
     with pytest.raises(ValueError, match="no escalator ride found"):
         ride_quality_from_recording(REAL / "advio-02" / "iphone")
+
+
+@needs_real
+@pytest.mark.slow
+def test_report_of_a_walk_has_a_page_per_ride(tmp_path):
+    from vibkit.diagnose.report import write_report
+
+    rep = write_report(REAL / "advio-01" / "iphone", tmp_path / "walk.pdf", nominal_pitch=0.13333)
+    titles = [title for title, _ in rep.pages]
+    assert [t for t in titles if t.startswith("Escalator ride")] == [f"Escalator ride {k} of 4" for k in (1, 2, 3, 4)]
+    first = " ".join(" ".join(rep.pages[0][1]).split())
+    assert "4 ESCALATOR RIDES IN THIS WALK" in first
+    # the barometer is no vibration channel of the whole walk's analysis
+    assert "pressure:" not in first and "altitude:" not in first

@@ -125,7 +125,7 @@ def decision_channels(recording) -> list:
 
 def vibration_channels(recording) -> list:
     """Channels that may carry a vibration: along time, not the burst number, not a sample counter, not
-    a clock or a speed (a chain's or a sprocket's: :data:`_SPEED_UNITS`), not a status column (an accuracy
+    a clock or a speed (a chain's or a sprocket's: :data:`_SPEED_UNITS`), not a barometer's, not a status column (an accuracy
     code, a column that never changes), not a simulation's numerical diagnostic (:data:`SOLVER_DIAGNOSTICS`)."""
     from ..io.channels import COUNTER_ATTR, STATUS_ATTR, is_status
 
@@ -140,6 +140,8 @@ def vibration_channels(recording) -> list:
         if int(da.attrs.get(STATUS_ATTR, 0)) or is_status("", da.values):
             continue
         units = str(da.attrs.get("units", ""))
+        if da.attrs.get("sensor") == "barometer":  # a phone's air pressure and altitude: its rides' rise, no vibration
+            continue
         if (
             units in ("s", "ms", "us", "ns")
             or _TIME_NAME.search(str(v))

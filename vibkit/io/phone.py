@@ -179,6 +179,8 @@ def read_phone_export(path, options=None):
     if skipped:
         history.append(f"{kind}: not read: " + ", ".join(skipped))
 
+    blobs = []  # the sensor files' bytes, hashed together into the recording's sha256
+
     def load(sensor):
         name = found[sensor]
         label = name if kind == "folder" else f"{path}:{name}"
@@ -187,6 +189,7 @@ def read_phone_export(path, options=None):
                 data = f.read()
         else:
             data = members[name].read(name)
+        blobs.append(data)
         return _read_one(label, data, options), label
 
     acc, acc_label = load("accelerometer")
@@ -198,9 +201,12 @@ def read_phone_export(path, options=None):
         channels.append(Channel(f"acc_{ax}", x, unit, f"accelerometer {ax}", "acceleration"))
     natives = {f"acc_{ax}": rate_acc for ax in "xyz"}
 
+    held = set()
+
     def joined(ds, label, x):
         ts = np.asarray(ds["time"].values, dtype=float)
-        if ts[0] > t[0] or ts[-1] < t[-1]:
+        if (ts[0] > t[0] or ts[-1] < t[-1]) and label not in held:
+            held.add(label)
             history.append(
                 f"{label}: spans {ts[0]:.3f}-{ts[-1]:.3f} s, the accelerometer {t[0]:.3f}-{t[-1]:.3f} s: held at its "
                 "ends outside its span"
@@ -229,7 +235,7 @@ def read_phone_export(path, options=None):
         channels=channels,
         segment=None,
         path=path,
-        data_bytes=b"".join(sorted(os.path.basename(n).encode() for n in found.values())),
+        data_bytes=b"".join(blobs),
         reader="vibkit.io.phone",
         sample_rate_hz=rate_acc,
         history=[f"{kind} of phone sensor files: " + ", ".join(f"{k} {os.path.basename(v)}" for k, v in found.items())]
@@ -238,5 +244,9 @@ def read_phone_export(path, options=None):
     )
     for name, rate in natives.items():
         ds[name].attrs["native_rate_hz"] = rate
+        ds[name].attrs["sensor"] = name.split("_")[0].replace("acc", "accelerometer").replace("gyro", "gyroscope")
+    for name in ("pressure", "altitude"):
+        if name in ds.data_vars:
+            ds[name].attrs["sensor"] = "barometer"
     ds.attrs["source_file"] = path
     return ds

@@ -9,7 +9,7 @@ from ..rides import find_rides, ride_evidence
 from ..rounding import fmt_pm
 from .common import _PAGE, _page_title
 
-__all__ = ["phone_ride_pages", "phone_rides_absent"]
+__all__ = ["phone_ride_pages", "phone_rides_absent", "phone_rides_summary"]
 
 #: the last search, by the report it was made for: page 1 asks why pages are absent before they are drawn
 _LAST = {}
@@ -49,6 +49,21 @@ def phone_rides_absent(ctx) -> str:
         if spans
         else "no escalator ride in the recording: the person never stood still for 6 s"
     )
+
+
+def phone_rides_summary(ctx) -> list:
+    """Page 1's lines on the rides found in a phone's walk (none when the recording is no walk with rides)."""
+    search, _ = _search(ctx)
+    if search is None or not search.rides:
+        return []
+    out = []
+    for k, r in enumerate(search.rides, 1):
+        speed = "" if r.speed_m_s is None else f", chain speed {fmt_pm(r.speed_m_s, r.speed_sigma_m_s)} m/s"
+        out.append(
+            f"ride {k}: {r.start_s:.1f}-{r.end_s:.1f} s, {r.direction}: link pass "
+            f"{fmt_pm(r.link_pass_hz, r.link_pass_sigma_hz)} Hz{speed}"
+        )
+    return out
 
 
 def phone_ride_pages(doc, ctx) -> list:

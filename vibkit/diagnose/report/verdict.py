@@ -27,6 +27,7 @@ from .common import (
     speed_figure,
 )
 from .links_page import flag_label
+from .rides_pages import phone_rides_summary
 
 __all__ = ["verdict_page", "recording_page", "VERDICT_COLOURS"]
 
@@ -117,6 +118,18 @@ def verdict_page(doc, ctx) -> None:
             "that share of it",
             8,
             color="#b35900",
+        )
+    rides = phone_rides_summary(ctx)
+    if rides:  # a phone's walk: the rides are what it says of the chain (the whole walk is no one record of it)
+        col.gap(0.006)
+        col.text(f"{len(rides)} ESCALATOR RIDE{'S' if len(rides) > 1 else ''} IN THIS WALK", _BIG, weight="bold")
+        for line in rides:
+            col.text(line, 10, weight="bold")
+        col.text(
+            "one page each ('escalator ride k of n'); the verdict above is the whole walk's, walking included: "
+            "the rides are the chain's evidence",
+            8,
+            color=_GREY,
         )
     col.gap(0.012)
     col.text("Evidence", 12, weight="bold")
