@@ -187,3 +187,51 @@ def test_report_of_a_walk_has_a_page_per_ride(tmp_path):
     assert "4 ESCALATOR RIDES IN THIS WALK" in first
     # the barometer is no vibration channel of the whole walk's analysis
     assert "pressure:" not in first and "altitude:" not in first
+
+
+def _csv(header, arr, fmt):
+    import io
+
+    b = io.StringIO()
+    b.write(",".join(header) + "\n")
+    np.savetxt(b, arr, delimiter=",", fmt=fmt)
+    return b.getvalue()
+
+
+@needs_real
+@pytest.mark.parametrize("app", ["phyphox", "sensorlogger"])
+def test_phone_app_exports_as_they_come(tmp_path, app):
+    """The real walks in the layouts phone apps write: a phyphox zip (a header row, pressure in hPa) and a Sensor
+    Logger zip (nanosecond epoch and seconds_elapsed, axes z, y, x, relative altitude): every ride, in its
+    direction."""
+    seq = "advio-01" if app == "phyphox" else "advio-04"
+    folder = REAL / seq / "iphone"
+    a, g, p = (np.loadtxt(folder / f"{n}.csv", delimiter=",") for n in ("accelerometer", "gyro", "barometer"))
+    z = tmp_path / f"{app}.zip"
+    with zipfile.ZipFile(z, "w") as zf:
+        if app == "phyphox":
+            zf.writestr(
+                "Accelerometer.csv", _csv(['"Time (s)"', '"X (m/s^2)"', '"Y (m/s^2)"', '"Z (m/s^2)"'], a, "%.6f")
+            )
+            zf.writestr("Gyroscope.csv", _csv(['"Time (s)"', '"X (rad/s)"', '"Y (rad/s)"', '"Z (rad/s)"'], g, "%.6f"))
+            zf.writestr("Pressure.csv", _csv(['"Time (s)"', '"X (hPa)"'], np.c_[p[:, 0], 10 * p[:, 1]], "%.6f"))
+            zf.writestr("meta/device.csv", '"property","value"\n"deviceModel","iPhone"\n')
+        else:
+            t0 = 1.7e18
+
+            def sl(d):
+                return np.c_[t0 + d[:, 0] * 1e9, d[:, 0], d[:, 3], d[:, 2], d[:, 1]]
+
+            fmt = ["%d", "%.6f", "%.6f", "%.6f", "%.6f"]
+            zf.writestr("TotalAcceleration.csv", _csv(["time", "seconds_elapsed", "z", "y", "x"], sl(a), fmt))
+            zf.writestr("Gyroscope.csv", _csv(["time", "seconds_elapsed", "z", "y", "x"], sl(g), fmt))
+            baro = np.c_[t0 + p[:, 0] * 1e9, p[:, 0], p[:, 2], 10 * p[:, 1]]
+            zf.writestr(
+                "Barometer.csv",
+                _csv(["time", "seconds_elapsed", "relativeAltitude", "pressure"], baro, ["%d", "%.6f", "%.6f", "%.4f"]),
+            )
+    found = find_rides(vibkit.read_recording(z))
+    assert len(found.rides) == 4
+    assert {r.direction for r in found.rides} == {DIRECTION[seq]}
+    for ride, (start, end) in zip(found.rides, RIDES[seq]):
+        assert abs(ride.start_s - start) <= 3.5 and abs(ride.end_s - end) <= 3.5
