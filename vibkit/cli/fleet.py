@@ -7,6 +7,8 @@ import os
 import sys
 import textwrap
 
+from vibkit.diagnose.rounding import SPEED_SIGMA_NOT_STATED, fmt_length, fmt_pm
+
 from .options import (
     CHANNEL_EVERY,
     TIME_FORMAT,
@@ -23,6 +25,7 @@ from .options import (
     add_speed,
     chain_links,
     cli_message,
+    read_recording,
     reader_options,
     run_speed,
     workers,
@@ -170,8 +173,6 @@ def _fleet_db(a, *, create=True):
 
 
 def _fmt_measurement(m):
-    from vibkit.diagnose.rounding import SPEED_SIGMA_NOT_STATED, fmt_length, fmt_pm
-
     if m.speed_sigma_m_s:  # rounded to the sigma
         numbers = (
             f"pitch {fmt_length(m.pitch_m, m.pitch_sigma_m)}, "
@@ -196,8 +197,6 @@ def run_add(a):
     if a.speed is None and profile is None:
         # the speed the file states (Leon's chain_speed_m_s, a tachometer's column), as `pitch` takes it
         from vibkit.diagnose.channels import speed_from_recording
-
-        from .options import read_recording
 
         a.speed, source = speed_from_recording(read_recording(a))
         if a.speed is None:

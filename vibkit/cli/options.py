@@ -10,7 +10,9 @@ import argparse
 import math
 import re
 
-from .output import CLIError
+from vibkit.runtime.budget import parse_bytes
+
+from .output import CLIError, msg
 
 JSON_HELP = "JSON on stdout (with a schema version)"
 DEFAULT_LIMITS = (1.5, 2.0, 3.0)
@@ -190,8 +192,6 @@ def speed_uncertainty(text):
 
 
 def byte_size(text):
-    from vibkit.runtime.budget import parse_bytes
-
     try:
         return parse_bytes(text)
     except ValueError as exc:
@@ -409,8 +409,6 @@ def read_recording(a):
 
 def _note_held_samples(rec):
     """Say on stderr which channels hold their values between updates, and the Nyquist frequency that follows."""
-    from .output import msg
-
     held = {str(v): float(rec[v].attrs["update_rate_hz"]) for v in rec.data_vars if "update_rate_hz" in rec[v].attrs}
     if held:
         lo = min(held.values())
@@ -627,8 +625,6 @@ def chain_links(a, profile):
         n = profile.scene("forward").chain.n_rollers
     except ValueError:
         return None
-    from .output import msg
-
     msg(
         f"note: {profile.source}: {n} links, filled in from its geometry (whole steps that close the loop); give "
         "chain.n_links or --links N when you know the chain's count"

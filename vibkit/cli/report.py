@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from vibkit.diagnose.rounding import fmt_pm, fmt_value
+
 from .options import (
     CHANNEL_EVERY,
     _profile_of,
@@ -70,8 +72,6 @@ _SIGMA_OF = {
 
 def _shown(key, value, summary):
     """A summary value as the table prints it: to its sigma when it has one, else 6 significant digits."""
-    from vibkit.diagnose.rounding import fmt_value
-
     if value is None:
         return "not stated"
     if key == "flagged_links_detail":
@@ -95,8 +95,6 @@ def _shown(key, value, summary):
 
 def _flag_text(f):
     """One flagged link as the table prints it: ``210 (or 28): +0.7907 +- 0.0084 mm, loops 1,2,3``."""
-    from vibkit.diagnose.rounding import fmt_pm
-
     link = str(f["link"]) + (f" (or {', '.join(map(str, f['alternatives']))})" if f.get("alternatives") else "")
     excess = (
         ""

@@ -15,6 +15,7 @@ from .options import (
     add_recording,
     add_segment,
     add_speed,
+    escalator_profile,
     positive,
     reader_options,
     run_speed,
@@ -36,13 +37,13 @@ def add_parser(subparsers):
         "ride quality of a step-riding accelerometer: ISO 2631-1 weighted max pk-pk, A95, r.m.s.",
         EPILOG,
     )
+    add_segment(s)
     s.add_argument("input", metavar="RECORDING_OR_SCENE", help="recording file, or a scene .toml (simulated)")
     s.add_argument(
         "--channels",
         help="recording channels for x,y,z (travel, lateral, vertical; - skips one), "
         "or AXIS=NAME pairs (default: names ending in x, y, z); write --channels=-,-,az when x is skipped",
     )
-    add_segment(s)
     add_speed(s, "the --escalator profile's, else the speed the file states")
     s.add_argument(
         "--weighting",
@@ -116,8 +117,6 @@ def _knocks(a, is_scene, rq, sim):
     """The knock test of each ride (recording or scene, then --scene's simulation): a dict each (JSON)."""
     from vibkit.diagnose.knock import ride_knock, step_rollers_of
     from vibkit.model.scene import load_scene
-
-    from .options import escalator_profile
 
     out = []
     profile = escalator_profile(a)

@@ -28,6 +28,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..analyses.simulation import simulate
+from ..model.scene import load_scene
 from ..signal import find_fundamental
 from ..signal.linkmap import (
     MIN_LOOPS,
@@ -38,7 +40,9 @@ from ..signal.linkmap import (
     record_time_for_loops,
 )
 from ..signal.linkscan import count_drift, scan_links
+from .channels import vibration_channels
 from .decision import ELONGATION_WINDOW_PERCENT
+from .sensors import is_tensioner_channel  # noqa: F401 (re-exported: its home is vibkit.diagnose.sensors)
 
 __all__ = [
     "DEFAULT_FALSE_ALARM",
@@ -192,9 +196,6 @@ def _scene_with(scene, *, speed, worn=None):
 @functools.lru_cache(maxsize=32)
 def _run_map_cached(scene_path, sensor, speed, fs, samples_per_cycle, excess, loops):
     """One run's mean per-link shape (link 1 ``excess`` [m] longer; 0: healthy) and the row of its link 1."""
-    from ..analyses.simulation import simulate
-    from ..model.scene import load_scene
-
     scene = load_scene(scene_path)
     if scene.analysis != "forward" or scene.run.start != 0.0:
         raise ValueError(
@@ -292,8 +293,6 @@ def signature_error(scene_path, *, sensor="tensioner", speed, fs, samples_per_cy
 def links_channel(recording, channel=None):
     """The channel :func:`find_worn_links` reads: ``channel``, else the first in a length unit (a tensioner
     displacement), else the first vibration channel."""
-    from .channels import vibration_channels
-
     chans = vibration_channels(recording)
     if channel is not None:
         return str(channel)
@@ -313,8 +312,6 @@ PITCH_WINDOW_PERCENT = (ELONGATION_WINDOW_PERCENT[0] - 5.0, ELONGATION_WINDOW_PE
 
 def _check_healthy(scene):
     """Refuse a scene with worn links: the signature is one worn link's change of the escalator's chain without it."""
-    from ..model.scene import load_scene
-
     worn = load_scene(scene).chain.worn_links
     if worn:
         raise ValueError(
@@ -608,11 +605,6 @@ def _result(file, ch, sensor, speed, lmap, n, flagged, scan, excess, method, mar
 def is_step_channel(recording, channel):
     """Whether ``channel`` is an acceleration (a step accelerometer): refused, see ``STEP_REFUSAL``."""
     return str(recording[channel].attrs.get("units", "")) in ACCELERATION_UNITS
-
-
-def is_tensioner_channel(recording, channel):
-    """Whether ``channel`` is a displacement (a length unit): the sensor the worn link's signature is known for."""
-    return str(recording[channel].attrs.get("units", "")) in ("m", "mm", "um")
 
 
 def profile_scene_file(profile):

@@ -15,7 +15,20 @@ import math
 
 import numpy as np
 
+from ..diagnose.links import (
+    STEP_REFUSAL,
+    TooFewLoops,
+    find_worn_links,
+    is_step_channel,
+    is_tensioner_channel,
+    links_channel,
+    profile_scene_file,
+)
+from ..io import read_recording
+from ..model.profile import load_profile
+from ..model.schema import SceneError
 from .links import LinkScan
+from .measurement import analyse_recording
 
 __all__ = ["link_scan_of", "measure_with_links", "profile_scene", "NO_LINK_COUNT", "NO_LINK_COUNT_ADD"]
 
@@ -65,15 +78,6 @@ def link_scan_of(
     nominal_pitch : float, optional
         The unit's nominal pitch [m]: a link pass that gives no chain's pitch is a failed scan.
     """
-    from ..diagnose.links import (
-        STEP_REFUSAL,
-        TooFewLoops,
-        find_worn_links,
-        is_step_channel,
-        is_tensioner_channel,
-        links_channel,
-    )
-
     if n_links is None:
         # a step's sensor is refused whatever the count: that, not the count, is what the reason says
         try:
@@ -127,9 +131,6 @@ def measure_with_links(path, *, n_links=None, marker_s=None, scene=None, no_coun
     (Measurement, LinkScan)
         The link scan never raises (a failure is its status); the analysis raises as ``analyse_recording`` does.
     """
-    from ..io import read_recording
-    from .measurement import analyse_recording
-
     channel = analysis.get("channel")
     rec = read_recording(path, **{**(analysis.get("read_options") or {}), "channel": channel})
     if marker_s is not None:
@@ -159,10 +160,6 @@ def measure_with_links(path, *, n_links=None, marker_s=None, scene=None, no_coun
 def profile_scene(escalator, notes):
     """The forward scene file of an escalator profile (a path), for a tensioner's worn-link signature; None, with
     a line appended to ``notes``, when the profile's geometry gives no scene (its links are scanned without it)."""
-    from ..diagnose.links import profile_scene_file
-    from ..model.profile import load_profile
-    from ..model.schema import SceneError
-
     try:
         return profile_scene_file(load_profile(escalator))
     except (SceneError, OSError, ValueError) as exc:

@@ -8,8 +8,13 @@ import math
 import os
 from dataclasses import asdict, dataclass
 
+import vibkit
+from vibkit.diagnose.channels import estimate_channels
+from vibkit.io import read_recording
+
 from .dates import _iso, parse_date
 from .errors import FleetError
+from .inputs import check_inputs
 from .quality import measurement_quality
 
 __all__ = ["Measurement", "analyse_recording"]
@@ -146,12 +151,6 @@ def analyse_recording(
     RecordingError, ValueError
         The file cannot be read, or an option is invalid.
     """
-    import vibkit
-    from vibkit.diagnose.channels import estimate_channels
-    from vibkit.io import read_recording
-
-    from .inputs import check_inputs
-
     # every input checked before the recording is read
     given = check_inputs(unit=unit, speed=speed, speed_sigma=speed_sigma, nominal_pitch=nominal_pitch, date=date)
     unit = str(unit).strip()

@@ -18,11 +18,18 @@ import os
 import re
 import sqlite3
 
+from ..diagnose.decision import check_limits
 from ..diagnose.pitch import DEFAULT_LIMITS_PERCENT
+from ..model.profile import load_profile
 from .errors import DuplicateRecordingError, FleetError
+from .inputs import check_inputs, check_pitch
+from .link_scan import NO_LINK_COUNT_ADD, measure_with_links, profile_scene
+from .links import BEFORE_LINK_SCANS, LinkScan, links_history
 from .measurement import Measurement, _file_sha256
+from .postgres_store import PostgresStore
 from .scan import scan_folder
 from .schema import APPLICATION_ID, SCHEMA_VERSION  # noqa: F401 - public through vibkit.fleet.history
+from .sqlite_store import SQLiteStore, sqlite_error
 from .trends import rank_units, unit_trend
 
 __all__ = ["DB_ENV", "DEFAULT_DB_NAME", "FleetDB", "is_server_url", "migrate", "resolve_db_path"]
@@ -80,11 +87,7 @@ def resolve_db_path(db=None) -> str:
 
 def _open_store(spec, create, readonly):
     if is_server_url(spec):
-        from .postgres_store import PostgresStore
-
         return PostgresStore(spec, create=create and not readonly, readonly=readonly, db_env=DB_ENV)
-    from .sqlite_store import SQLiteStore
-
     return SQLiteStore(spec, create=create, readonly=readonly, db_env=DB_ENV)
 
 
@@ -96,8 +99,6 @@ def _translated(method):
         try:
             return method(self, *args, **kwargs)
         except sqlite3.Error as exc:
-            from .sqlite_store import sqlite_error
-
             raise sqlite_error(self.path, exc) from None
 
     return wrapper
@@ -197,8 +198,6 @@ class FleetDB:
     @_translated
     def links_history(self, unit, *, coverage_sigma=2.0):
         """The link scans of a unit's visits and which links came back worse (:func:`vibkit.fleet.links.links_history`)."""
-        from .links import links_history
-
         return links_history(self, unit, coverage_sigma=coverage_sigma)
 
     @_translated
@@ -293,8 +292,6 @@ class FleetDB:
             No date, no link-pass, no nominal pitch for a new unit, another nominal pitch than the
             unit's.
         """
-        from .inputs import check_inputs, check_pitch
-
         check_inputs(unit=unit, speed=speed, speed_sigma=speed_sigma, nominal_pitch=nominal_pitch, date=date)
         spath = os.fspath(recording)
         if not os.path.exists(spath):
@@ -307,13 +304,9 @@ class FleetDB:
         if nom is None:
             raise FleetError(f"unit {str(unit)!r} is new: give its nominal link pitch (--nominal-pitch, in m)")
         check_pitch(nom, f"the nominal pitch stored for unit {str(unit)!r} in {self.path}")
-        from .link_scan import NO_LINK_COUNT_ADD, measure_with_links, profile_scene
-
         scene = None
         if escalator is not None:
             if n_links is None:
-                from ..model.profile import load_profile
-
                 n_links = load_profile(escalator).n_links
             if n_links is not None:
                 scene = profile_scene(os.fspath(escalator), self.notes)
@@ -417,8 +410,6 @@ class FleetDB:
         -------
         list of UnitTrend
         """
-        from ..diagnose.decision import check_limits
-
         limits = check_limits(limits_percent)
         by_unit = {}
         for m in self.measurements():
@@ -469,8 +460,6 @@ def migrate(source, target):
     with FleetDB(src_spec, create=False, readonly=True) as src:  # the source is read, never upgraded
         rows = sorted(src.measurements(), key=lambda m: m.id)
         scans = src.link_scans()
-        from .links import BEFORE_LINK_SCANS, LinkScan
-
         scans = {m.sha256: scans.get(m.id) or LinkScan.not_run(BEFORE_LINK_SCANS) for m in rows}
         with FleetDB(dst_spec) as dst:
             if src.path == dst.path and src.kind == dst.kind:

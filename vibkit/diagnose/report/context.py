@@ -15,6 +15,22 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ...analyses.simulation import simulate
+from ...io import RecordingError, read_recording, source_name
+from ...io.channels import own_samples, with_component
+from ...model.scene import Scene, load_scene
+from ...runtime.dates import check_date, parse_iso_date
+from ...signal import hampel_events, link_pass_estimate
+from ...signal.bursts import uniform_bursts
+from ..channels import estimate_channels
+from ..comparison import compare
+from ..knock import ride_knock, step_rollers_of
+from ..links import TooFewLoops, find_worn_links, profile_scene_file
+from ..pitch import DEFAULT_LIMITS_PERCENT, pick_channel
+from ..ride import _AXIS_RE, ride_quality_from_recording, ride_quality_from_simulation
+from ..ride_simulation import with_ride_outputs
+from ..rounding import fmt_band
+from ..speed import resolve_speed
 from .common import report_date
 
 __all__ = ["ReportContext", "analyse"]
@@ -152,8 +168,6 @@ class ReportContext:
 
 def _family_fit(x, fs, band):
     """The fitted link-pass harmonic family (with offset) at every sample of ``x`` [x]."""
-    from ...signal import link_pass_estimate
-
     try:
         e = link_pass_estimate(x, fs, band=band)
     except ValueError:
@@ -176,8 +190,6 @@ def measurement_date(rec, date=None):
         if not d:
             return None, ""
     if source == "given":  # the validator every command shares (ISO 8601, 1970-2100, not in the future)
-        from ...runtime.dates import check_date, parse_iso_date
-
         d = check_date(d, "--date") if isinstance(d, _dt.datetime) else parse_iso_date(d, "--date")
     if not isinstance(d, _dt.datetime):
         text = str(d).strip().replace("Z", "+00:00")
@@ -214,19 +226,7 @@ def analyse(
     marker_s=None,
 ) -> ReportContext:
     """Everything :func:`vibkit.diagnose.report.write_report` draws (same parameters, no output)."""
-    from ...io import read_recording
-    from ...io.channels import own_samples
-    from ...model.scene import Scene, load_scene
-    from ...signal import hampel_events
-    from ...signal.bursts import uniform_bursts
-    from ..channels import estimate_channels
-    from ..pitch import DEFAULT_LIMITS_PERCENT, pick_channel
-    from ..rounding import fmt_band
-
     limits = tuple(limits_percent) if limits_percent is not None else DEFAULT_LIMITS_PERCENT
-    from ...io import RecordingError, source_name
-    from ...io.channels import with_component
-
     opts = dict(read_options or {})
     if sample_rate is not None:
         opts["sample_rate"] = sample_rate
@@ -243,8 +243,6 @@ def analyse(
     if scene is not None:
         sc = scene if isinstance(scene, Scene) else load_scene(scene)
     notes = []
-    from ..speed import resolve_speed
-
     run = resolve_speed(speed, speed_sigma, profile=profile, recording=rec, scene=sc)
     speed, speed_sigma = run.value, run.sigma
     if speed is not None and run.source != "given":
@@ -303,10 +301,6 @@ def analyse(
     comp = None
     result = None
     if sc is not None:
-        from ...analyses.simulation import simulate
-        from ..comparison import compare
-        from ..ride_simulation import with_ride_outputs
-
         # with the step's roller motion: the ride figure is then the one `vibkit ride SCENE` gives
         result = simulate(with_ride_outputs(sc), duration=duration, progress=progress)
         if found:  # no comparison of a link pass the recording does not carry
@@ -441,8 +435,6 @@ def _links(rec, ch, units, sc, speed, notes, profile=None, marker_s=None):
     """The link map of a tensioner recording over two loops of the scene's chain: ``(LinksResult, "")``, else
     ``(None, why not)`` for page 1.  A scene built from the escalator profile (in memory) is scanned with the
     profile's scene file, as ``vibkit links --escalator`` does."""
-    from ..links import TooFewLoops, find_worn_links, profile_scene_file
-
     if sc is None and profile is not None:
         try:  # the profile's own scene: its chain and the worn link's signature
             sc = profile.scene("forward")
@@ -543,8 +535,6 @@ def scene_is_unit(scene, profile) -> bool:
 def _with_knock(rq, scene, profile):
     """``rq`` with the knock test of its step's rollers (:func:`vibkit.diagnose.knock.ride_knock`) among its
     notes: the rollers of the scene (a simulation) or of the profile (a recording)."""
-    from ..knock import ride_knock, step_rollers_of
-
     rollers = step_rollers_of(scene=scene) if scene is not None else step_rollers_of(profile=profile)
     _, note = ride_knock(rq, rollers)
     return dataclasses.replace(rq, notes=[*rq.notes, f"roller knock: {note}"])
@@ -554,8 +544,6 @@ def _ride(rec, result, sc, notes, segment=None, speed=None):
     """Ride qualities of the recording (over ``segment`` [s] when given) and the simulation; a one-line note
     where one that could be expected (a recording with x, y, z channels, a scene that names its step) cannot
     be assessed."""
-    from ..ride import _AXIS_RE, ride_quality_from_recording, ride_quality_from_simulation
-
     out = []
     axes = {m.group(1) for nm in rec.data_vars if (m := _AXIS_RE.search(str(nm).lower()))}
     try:

@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import os
 
+from ... import __version__
+from ...runtime.safe_output import check_output_path
 from .appendix import data_quality_page, parameters_page
 from .common import PageSink, Report, _pdf_in_memory
 from .comparison_pages import harmonics_page, simulation_page
@@ -128,8 +130,6 @@ def write_report(
     matplotlib.use("Agg")
     from matplotlib.backends.backend_pdf import PdfPages
 
-    from ... import __version__
-
     out = os.fspath(out_path)
     if not out.lower().endswith(".pdf"):
         raise ValueError(f"output {out!r} must be a .pdf file")
@@ -137,8 +137,6 @@ def write_report(
     for p in inputs:
         if os.path.exists(out) and os.path.samefile(out, p):
             raise ValueError(f"output {out!r} is an input file; refusing to overwrite it")
-    from ...runtime.safe_output import check_output_path
-
     check_output_path(out, overwrite=overwrite, inputs=inputs)  # before any work
     ctx = analyse(
         recording,

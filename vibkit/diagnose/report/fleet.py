@@ -11,6 +11,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ... import __version__
 from .common import _WIDE, PageSink, Report, atomic_path, fmt_pm
 from .fleet_links import fleet_links_pages
 
@@ -154,8 +155,6 @@ def _title(fig, title, subtitle):
 
 
 def _subtitle(ctx):
-    from ... import __version__
-
     return (
         f"{len(ctx.trends)} unit(s), {len(ctx.measurements)} measurement(s); limits "
         f"{' / '.join(f'{v:g}' for v in ctx.limits)} % ({' / '.join(_LIMIT_NAMES)}); database "
@@ -396,8 +395,6 @@ def write_fleet_report(
 
     matplotlib.use("Agg")
     from matplotlib.backends.backend_pdf import PdfPages
-
-    from ... import __version__
 
     limits = tuple(limits_percent) if limits_percent is not None else (1.5, 2.0, 3.0)
     out = os.fspath(out_path)

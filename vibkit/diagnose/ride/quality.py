@@ -8,7 +8,7 @@ One result type, :class:`RideQuality`, from three entry points that share one pa
 * :func:`ride_quality_from_simulation`: a simulation Dataset with the acceleration of a step
   roller (``roller_acceleration``: x horizontal, z vertical, as a sensor on the step tread sees them,
   gravity added) or only ``accel_step`` (along the guide tangent);
-* :func:`vibkit.diagnose.ride_simulation.simulate_ride`: a scene (TOML) simulated with the step roller's
+* :func:`vibkit.diagnose.ride.simulation.simulate_ride`: a scene (TOML) simulated with the step roller's
   motion added to its outputs.
 
 For each axis: the ISO 2631-1 weighted signal (Wd for x and y, Wk for z, as ISO 18738 takes them) and
@@ -28,8 +28,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..runtime.constants import STANDARD_GRAVITY
-from ..signal.ride import (
+from ...io import read_recording, source_name
+from ...runtime.constants import STANDARD_GRAVITY
+from ...signal.bursts import uniform_bursts
+from ...signal.ride import (
     LOWPASS_HZ,
     PeakToPeak,
     RideSegment,
@@ -38,7 +40,7 @@ from ..signal.ride import (
     lowpass_10hz,
     peak_to_peak,
 )
-from ..signal.weighting import frequency_weighting, get_weighting
+from ...signal.weighting import WEIGHTINGS, frequency_weighting, get_weighting
 
 __all__ = [
     "AxisRide",
@@ -203,8 +205,6 @@ def parse_weightings(text) -> dict | None:
     Any other count, a repeated axis, a mix of the forms or an unknown name is a ValueError naming
     the text.
     """
-    from ..signal.weighting import WEIGHTINGS, get_weighting
-
     if text is None or not str(text).strip():
         return None
     items = [s.strip() for s in str(text).split(",")]
@@ -279,8 +279,6 @@ def _naming(source_of):
 
 
 def _recording_source(recording, *args, **kwargs):
-    from ..io import source_name  # as the reader names it: <stdin> for -
-
     if isinstance(recording, (str, os.PathLike)):
         return source_name(recording)
     return getattr(recording, "attrs", {}).get("source_file", "")
@@ -485,9 +483,6 @@ def ride_quality_from_recording(
         A channel that is not in the recording or not an acceleration in m/s^2; a recording in bursts
         whose longest burst is too short; the errors of :func:`ride_quality`.
     """
-    from ..io import read_recording
-    from ..signal.bursts import uniform_bursts
-
     opts = dict(read_options or {})
     if sample_rate is not None:
         opts["sample_rate"] = sample_rate
@@ -687,13 +682,3 @@ def ride_quality_from_simulation(ds, *, segment=None, weightings=None, source=No
         detect=detect,
         notes=notes,
     )
-
-
-def __getattr__(name):
-    """``simulate_ride`` and ``with_ride_outputs``, now in :mod:`vibkit.diagnose.ride_simulation`, importable from
-    here as they were first published."""
-    if name in ("simulate_ride", "with_ride_outputs"):
-        from . import ride_simulation
-
-        return getattr(ride_simulation, name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
