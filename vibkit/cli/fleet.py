@@ -28,6 +28,7 @@ from .options import (
     read_recording,
     reader_options,
     run_speed,
+    segment_of,
     workers,
 )
 from .output import CLIError, check_output, is_stdout, msg, output_path, print_json, shown, table
@@ -103,7 +104,9 @@ def add_parser(subparsers):
         type=workers,
         help="worker processes of the local cluster (default: one per core; 0: analyse in this process)",
     )
-    add_recording(f, positional=False, channel=False)  # for every file; the catalogue's channel column per file
+    add_recording(
+        f, positional=False, channel=False, with_segment=False
+    )  # for every file; the catalogue's channel column per file
     f.set_defaults(func=_guarded(run_scan, lambda a: a.db))
 
     f = fleet_sub(
@@ -233,6 +236,7 @@ def run_add(a):
             n_links=chain_links(a, profile),
             marker_s=a.marker,
             escalator=a.escalator,
+            segment=segment_of(a),
         )
         scan = db.link_scans(m.unit).get(m.id)
         for n in db.notes[n_notes:]:  # e.g. a profile whose geometry gives no scene for the signature

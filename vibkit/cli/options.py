@@ -309,19 +309,25 @@ def delimiter_option(text):
     return d
 
 
-def add_recording(sp, *, positional=True, channel=True, channel_default=CHANNEL_FIRST):
+def add_recording(
+    sp, *, positional=True, channel=True, channel_default=CHANNEL_FIRST, with_segment=True, segment_help=None
+):
     """The RECORDING argument and the recording reader's options, the same for every command that reads one.
 
     ``positional=False``: the command names its input itself (``ride``'s RECORDING_OR_SCENE);
     ``channel=False``: the command picks channels its own way (``ride --channels``);
-    ``channel_default``: what the command analyses without ``--channel`` (:data:`CHANNEL_EVERY` ...).
-    :func:`reader_options` turns the parsed options into :func:`vibkit.read_recording` arguments.
+    ``channel_default``: what the command analyses without ``--channel`` (:data:`CHANNEL_EVERY` ...);
+    ``with_segment=False``: no ``--segment`` (a folder's scan); ``segment_help``: what it does for the command.
+    :func:`reader_options` turns the parsed options into :func:`vibkit.read_recording` arguments, and
+    :func:`read_recording` keeps the ``--segment`` asked for (:func:`segment_of`).
     """
     if positional:
         sp.add_argument("recording", help="recording file (CSV/text, miniSEED ..., netCDF); '-': read stdin")
     g = sp.add_argument_group("reading the recording (all optional: the file says it)")
     if channel:
         add_channel(g, channel_default)
+    if with_segment:
+        g.add_argument("--segment", type=segment, metavar="START:END", help=segment_help or SEGMENT_HELP)
     add_sample_rate(g)
     g.add_argument(
         "--time-column",
@@ -393,6 +399,7 @@ def read_recording(a):
     (a waveform file whose traces start at different times) is read again with ``--channel`` only.
     """
     import vibkit
+    from vibkit.diagnose.segment import cut_recording
     from vibkit.io import RecordingError
     from vibkit.io.channels import with_component
 
@@ -402,6 +409,7 @@ def read_recording(a):
         if not getattr(a, "channel", None):
             raise
         rec = vibkit.read_recording(a.recording, **reader_options(a, channel=True))
+    rec = cut_recording(rec, segment_of(a))  # --segment, in the file's own time; outside it: an error
     rec = with_component(rec, getattr(a, "channel", None))
     _note_held_samples(rec)
     return rec
@@ -522,7 +530,7 @@ def _profile_of(a):
 
 def segment(text):
     """--segment START:END [s] -> (start, end); a bad value is a usage error (exit 2), as the library words it."""
-    from vibkit.diagnose.ride import parse_segment
+    from vibkit.diagnose.segment import parse_segment
 
     try:
         return parse_segment(text)
@@ -530,14 +538,11 @@ def segment(text):
         raise argparse.ArgumentTypeError(re.sub(r"^segment ", "", str(exc))) from None
 
 
-def add_segment(sp):
-    """--segment START:END [s], the one definition shared by ``ride`` and ``report`` (read by :func:`segment_of`)."""
-    sp.add_argument(
-        "--segment",
-        type=segment,
-        metavar="START:END",
-        help="ride segment START:END [s] from the first sample: the recording's ride quality (default: detected)",
-    )
+#: what --segment does, for every command that analyses a recording (``ride`` says what it does there)
+SEGMENT_HELP = (
+    "analyse only START:END [s] of the recording, in its own time (as its time column reads); a segment "
+    "outside the recording is an error"
+)
 
 
 def segment_of(a):

@@ -15,7 +15,6 @@ from .options import (
     add_marker,
     add_nominal_pitch,
     add_recording,
-    add_segment,
     add_speed,
     add_speed_uncertainty,
     band,
@@ -50,7 +49,6 @@ def add_parser(subparsers):
         "chain speed measured on the steps, the one speed of every page",
     )
     add_speed_uncertainty(s)
-    add_segment(s)
     add_marker(s)
     add_nominal_pitch(s, "the --escalator profile's, else the scene's")
     add_limits(s)

@@ -13,7 +13,6 @@ from .options import (
     add_escalator,
     add_json,
     add_recording,
-    add_segment,
     add_speed,
     escalator_profile,
     positive,
@@ -37,7 +36,6 @@ def add_parser(subparsers):
         "ride quality of a step-riding accelerometer: ISO 2631-1 weighted max pk-pk, A95, r.m.s.",
         EPILOG,
     )
-    add_segment(s)
     s.add_argument("input", metavar="RECORDING_OR_SCENE", help="recording file, or a scene .toml (simulated)")
     s.add_argument(
         "--channels",
@@ -52,7 +50,13 @@ def add_parser(subparsers):
     )
     s.add_argument("--scene", help="also simulate this scene's step and report it next to the recording")
     s.add_argument("--duration", type=positive, help="simulated time [s] (default: the scene's)")
-    add_recording(s, positional=False, channel=False)
+    add_recording(
+        s,
+        positional=False,
+        channel=False,
+        segment_help="ride segment START:END [s] of the recording, in its own time (as its time column reads): the "
+        "ride quality over it (default: detected); outside the recording: an error",
+    )
     add_json(s)
     add_escalator(s)
     s.set_defaults(func=run)

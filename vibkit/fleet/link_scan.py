@@ -24,6 +24,7 @@ from ..diagnose.links import (
     links_channel,
     profile_scene_file,
 )
+from ..diagnose.segment import cut_recording
 from ..io import read_recording
 from ..model.profile import load_profile
 from ..model.schema import SceneError
@@ -113,7 +114,9 @@ def link_scan_of(
     return LinkScan.from_result(res)
 
 
-def measure_with_links(path, *, n_links=None, marker_s=None, scene=None, no_count=NO_LINK_COUNT, **analysis):
+def measure_with_links(
+    path, *, n_links=None, marker_s=None, scene=None, no_count=NO_LINK_COUNT, segment=None, **analysis
+):
     """Read a recording once; its :class:`~vibkit.fleet.measurement.Measurement` and its link scan.
 
     Parameters
@@ -122,6 +125,9 @@ def measure_with_links(path, *, n_links=None, marker_s=None, scene=None, no_coun
         The recording.
     n_links, marker_s, scene, no_count
         As :func:`link_scan_of` takes them.
+    segment : (float, float), optional
+        Only this part of the recording [s, in its own time] is analysed and scanned
+        (:func:`vibkit.diagnose.segment.cut_recording`: outside the recording, a ValueError naming its span).
     **analysis
         :func:`vibkit.fleet.measurement.analyse_recording`'s keywords (``unit``, ``speed``, ``speed_sigma``,
         ``nominal_pitch``, ``date``, ``channel``, ``read_options`` ...).
@@ -133,6 +139,7 @@ def measure_with_links(path, *, n_links=None, marker_s=None, scene=None, no_coun
     """
     channel = analysis.get("channel")
     rec = read_recording(path, **{**(analysis.get("read_options") or {}), "channel": channel})
+    rec = cut_recording(rec, segment)
     if marker_s is not None:
         # a marker outside the recording numbers the links from no link: the user's to mend before anything is
         # stored (a stored measurement cannot be scanned again)

@@ -249,6 +249,7 @@ class FleetDB:
         n_links=None,
         marker_s=None,
         escalator=None,
+        segment=None,
     ):
         """Analyse a recording and store its measurement with its link scan.
 
@@ -277,6 +278,9 @@ class FleetDB:
         escalator : str or os.PathLike, optional
             The unit's escalator profile: its number of links, and its forward scene for a tensioner's worn-link
             signature (a profile whose geometry gives no scene: a line in :attr:`notes`).
+        segment : (float, float), optional
+            Only this part of the recording [s, in its own time] is analysed (outside it: a ValueError naming the
+            recording's span); the file's SHA-256 still names the measurement.
 
         Returns
         -------
@@ -316,6 +320,7 @@ class FleetDB:
             marker_s=marker_s,
             scene=scene,
             no_count=NO_LINK_COUNT_ADD,
+            segment=segment,
             unit=unit,
             speed=speed,
             speed_sigma=speed_sigma,

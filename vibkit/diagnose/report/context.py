@@ -30,6 +30,7 @@ from ..pitch import DEFAULT_LIMITS_PERCENT, pick_channel
 from ..ride import _AXIS_RE, ride_quality_from_recording, ride_quality_from_simulation
 from ..ride_simulation import with_ride_outputs
 from ..rounding import fmt_band
+from ..segment import cut_recording
 from ..speed import resolve_speed
 from .common import report_date
 
@@ -237,6 +238,8 @@ def analyse(
             raise
         rec = read_recording(recording, channel=channel, **opts)  # e.g. traces on different time bases
     rec = with_component(rec, channel)
+    whole = rec  # the ride's weighting filters run over the whole record, its segment the one asked for
+    rec = cut_recording(rec, segment)  # every other page: the segment asked for, in the file's own time
     measured, measured_source = measurement_date(rec, date)
     ch = pick_channel(rec, channel)
     sc = None
@@ -317,7 +320,7 @@ def analyse(
                 )
             except ValueError as exc:  # e.g. a channel in a unit the simulation has no variable in
                 notes.append(f"no comparison with the simulation: {' '.join(str(exc).split())}")
-    ride = _ride(rec, result if scene_is_unit(sc, profile) else None, sc, notes, segment, speed)
+    ride = _ride(whole, result if scene_is_unit(sc, profile) else None, sc, notes, segment, speed)
     ride = [(kind, _with_knock(rq, sc if kind == "simulation" else None, profile)) for kind, rq in ride]
     if result is not None and not scene_is_unit(sc, profile):
         notes.append(

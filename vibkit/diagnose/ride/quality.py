@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-import math
 import os
 import re
 from dataclasses import dataclass, field
@@ -41,6 +40,7 @@ from ...signal.ride import (
     peak_to_peak,
 )
 from ...signal.weighting import WEIGHTINGS, frequency_weighting, get_weighting
+from ..segment import parse_segment, segment_of_recording
 
 __all__ = [
     "AxisRide",
@@ -161,17 +161,6 @@ class RideQuality:
             },
             "notes": list(self.notes),
         }
-
-
-def parse_segment(text) -> tuple[float, float]:
-    """``"START:END"`` [s] -> ``(start, end)``; raises ValueError naming the text."""
-    try:
-        a, b = (float(v) for v in str(text).split(":"))
-    except ValueError:
-        raise ValueError(f"segment {text!r}: expected START:END in seconds, e.g. 2.5:14") from None
-    if not (math.isfinite(a) and math.isfinite(b) and 0 <= a < b):
-        raise ValueError(f"segment {text!r}: expected 0 <= START < END [s]")
-    return a, b
 
 
 def parse_channels(text) -> dict:
@@ -463,7 +452,7 @@ def ride_quality_from_recording(
         Axis -> channel (``{"x": "ax", "z": "az"}``) or the ``--channels`` text (:func:`parse_channels`);
         default: channels whose names end in x, y, z.
     segment : (float, float), optional
-        Ride segment [s] from the first sample; default: detected.
+        Ride segment [s] in the file's own time (its time column's), inside the recording; default: detected.
     weightings : dict, optional
         Axis -> weighting (default x, y: Wd; z: Wk).
     sample_rate : float, optional
@@ -495,6 +484,8 @@ def ride_quality_from_recording(
     ):
         # a vibkit result file: the simulation path (its step roller, or accel_step)
         return ride_quality_from_simulation(rec, segment=segment, weightings=weightings, source=src)
+    # a segment given in the file's own time lies inside the recording (never cut to fit), checked first
+    given = None if segment is None or isinstance(segment, RideSegment) else segment_of_recording(rec, segment)
     names = [str(v) for v in rec.data_vars if v != "segment" and rec[v].dims == ("time",)]
     if not names:
         raise ValueError(f"{src}: the recording has no channel along time")
@@ -526,6 +517,8 @@ def ride_quality_from_recording(
             f"from t = {first[k].t0:.4g} s) is assessed, times from its start"
         )
     fs = first[k].fs
+    if given is not None:  # in the file's own time: from the assessed burst's start
+        segment = (given[0] - float(first[k].t0), given[1] - float(first[k].t0))
     sig = {ax: b[k].x for ax, b in bursts.items()}
     if any(b[k].resampled for b in bursts.values()):
         notes.append("irregular time stamps: resampled linearly to a uniform grid (weighting above ~fs/4 is softened)")
