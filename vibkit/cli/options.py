@@ -10,12 +10,13 @@ import argparse
 import math
 import re
 
+from vibkit.diagnose.decision import DEFAULT_LIMITS_PERCENT
 from vibkit.runtime.budget import parse_bytes
 
 from .output import CLIError, msg
 
 JSON_HELP = "JSON on stdout (with a schema version)"
-DEFAULT_LIMITS = (1.5, 2.0, 3.0)
+DEFAULT_LIMITS = DEFAULT_LIMITS_PERCENT  # the one default (vibkit.diagnose.decision)
 
 # ------------------------------------------------------------------------------------------ types
 

@@ -47,6 +47,7 @@ from .pitch_parts import check_parts
 from .pitch_steps import Hypothesis
 from .rounding import SPEED_SIGMA_NOT_STATED
 from .sensors import is_tensioner_channel
+from .settings import DEFAULT_LINKS_PER_STEP, DEFAULT_TEETH
 
 __all__ = [
     "CATALOGUE_PITCHES_M",
@@ -243,12 +244,12 @@ def estimate_pitch(
     limits_percent=DEFAULT_LIMITS_PERCENT,
     pitch_range=DEFAULT_PITCH_RANGE_M,
     n_harmonics=5,
-    teeth=28,
+    teeth=DEFAULT_TEETH,
     p_fa=DEFAULT_P_FA,
     speed_source="given",
     frequency_only=False,
     n_links=None,
-    links_per_step=3,
+    links_per_step=DEFAULT_LINKS_PER_STEP,
     on_step=None,
 ):
     """Link pitch from a recording's link-pass frequency and an independently measured speed.

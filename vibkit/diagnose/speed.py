@@ -16,6 +16,7 @@ import numpy as np
 
 from ..model.profile import STANDARD_SPEED_TOLERANCE
 from ..model.schema import nominal_speed
+from .decision import DEFAULT_LIMITS_PERCENT
 from .rounding import SPEED_SIGMA_NOT_STATED, fmt_pm
 
 __all__ = ["ResolvedSpeed", "resolve_speed", "speed_from_recording", "speed_part_too_large"]
@@ -186,7 +187,7 @@ def speed_part_too_large(rel_speed_sigma, elongation_percent=None, limits_percen
     if rel_speed_sigma is None or not rel_speed_sigma > 0:
         return False
     part = 100.0 * float(rel_speed_sigma)
-    limits = tuple(limits_percent) if limits_percent is not None else (1.5, 2.0, 3.0)
+    limits = tuple(limits_percent) if limits_percent is not None else DEFAULT_LIMITS_PERCENT
     if part > fraction * limits[0]:
         return True
     if elongation_percent is None or not math.isfinite(float(elongation_percent)):

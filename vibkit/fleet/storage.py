@@ -276,8 +276,9 @@ class FleetDB:
         marker_s : float, optional
             When a marked link passed the sensor [s from the recording's start]: it is link 1.
         escalator : str or os.PathLike, optional
-            The unit's escalator profile: its number of links, and its forward scene for a tensioner's worn-link
-            signature (a profile whose geometry gives no scene: a line in :attr:`notes`).
+            The unit's escalator profile: its number of links, its sprocket's teeth and links per step (the
+            analysis's, as ``vibkit pitch --escalator`` takes them), and its forward scene for a tensioner's
+            worn-link signature (a profile whose geometry gives no scene: a line in :attr:`notes`).
         segment : (float, float), optional
             Only this part of the recording [s, in its own time] is analysed (outside it: a ValueError naming the
             recording's span); the file's SHA-256 still names the measurement.
@@ -309,9 +310,10 @@ class FleetDB:
             raise FleetError(f"unit {str(unit)!r} is new: give its nominal link pitch (--nominal-pitch, in m)")
         check_pitch(nom, f"the nominal pitch stored for unit {str(unit)!r} in {self.path}")
         scene = None
-        if escalator is not None:
+        profile = load_profile(escalator) if escalator is not None else None
+        if profile is not None:
             if n_links is None:
-                n_links = load_profile(escalator).n_links
+                n_links = profile.n_links
             if n_links is not None:
                 scene = profile_scene(os.fspath(escalator), self.notes)
         m, link_scan = measure_with_links(
@@ -321,6 +323,7 @@ class FleetDB:
             scene=scene,
             no_count=NO_LINK_COUNT_ADD,
             segment=segment,
+            profile=profile,
             unit=unit,
             speed=speed,
             speed_sigma=speed_sigma,

@@ -31,6 +31,7 @@ from ..ride import _AXIS_RE, ride_quality_from_recording, ride_quality_from_simu
 from ..ride_simulation import with_ride_outputs
 from ..rounding import fmt_band
 from ..segment import cut_recording
+from ..settings import chain_numbers
 from ..speed import resolve_speed
 from .common import report_date
 
@@ -259,7 +260,7 @@ def analyse(
     # vibration channel (or the one asked for) estimated, channels that disagree refused, the numbers
     # from the channel with the smallest sigma
     # the unit's own sprocket and band where a profile names the unit (a scene given beside it may be another's)
-    teeth = int(profile.teeth) if profile is not None else sc.sprocket.teeth if sc else 28
+    teeth, links_per_step = chain_numbers(profile=profile, scene=sc, recording=rec)  # as every command resolves them
     if band is None and profile is not None and speed is not None:
         band = profile.search_band(speed)
         notes.append(f"search band {fmt_band(band)} from the profile (0.8-1.25 x speed / nominal pitch)")
@@ -281,7 +282,6 @@ def analyse(
     else:  # frequency only: the same burst-combined estimator, with a unit "speed"
         kw = dict(speed=1.0, band=band or (2.5, 6.0), frequency_only=True)
         notes.append("no speed known: link-pass frequency only, no pitch (give --speed)")
-    links_per_step = profile.links_per_step if profile is not None else sc.chain.links_per_step if sc else 3
     on_step = None if profile is None else profile.on_step
     decided = estimate_channels(
         rec, channel=channel, n_links=n_links, links_per_step=links_per_step, on_step=on_step, **kw

@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ... import __version__
+from ..decision import DEFAULT_LIMITS_PERCENT
 from .common import _WIDE, PageSink, Report, atomic_path, fmt_pm
 from .fleet_links import fleet_links_pages
 
@@ -396,7 +397,7 @@ def write_fleet_report(
     matplotlib.use("Agg")
     from matplotlib.backends.backend_pdf import PdfPages
 
-    limits = tuple(limits_percent) if limits_percent is not None else (1.5, 2.0, 3.0)
+    limits = tuple(limits_percent) if limits_percent is not None else DEFAULT_LIMITS_PERCENT
     out = os.fspath(out_path)
     shown = list(trends)[: int(max_units)]
     by_unit = {}
