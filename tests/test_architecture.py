@@ -253,20 +253,20 @@ def test_the_light_start_ups_load_nothing_heavy():
     assert not heavy, heavy
 
 
-def _planted(monkeypatch, **files):
-    """MODULES with fake modules (name -> source text) added or replaced, written under a temporary folder."""
-    fake = dict(MODULES)
-    for name, text in files.items():
-        path = monkeypatch.tmp / (name.replace(".", "_") + ".py")
-        path.write_text(text)
-        fake[name] = (path, False)
-    monkeypatch.setitem(globals(), "MODULES", fake)
-
-
 @pytest.fixture
 def plant(tmp_path, monkeypatch):
-    monkeypatch.tmp = tmp_path
-    return lambda **files: _planted(monkeypatch, **{k.replace("__", "."): v for k, v in files.items()})
+    """``plant(vibkit__pkg__name="source")``: module ``vibkit.pkg.name`` added to (or replaced in) MODULES, its
+    source written under a temporary folder; the checks then read it as one of the package's."""
+
+    def _plant(**files):
+        fake = dict(MODULES)
+        for key, text in files.items():
+            path = tmp_path / f"{key}.py"
+            path.write_text(text)
+            fake[key.replace("__", ".")] = (path, False)
+        monkeypatch.setitem(globals(), "MODULES", fake)
+
+    return _plant
 
 
 def test_the_checks_can_fail(plant):
