@@ -9,6 +9,7 @@ may import its own layer and the layers below it, never one above. The checks pa
 from __future__ import annotations
 
 import ast
+import functools
 from pathlib import Path
 
 import pytest
@@ -47,10 +48,20 @@ def _modules():
 MODULES = {name: (path, is_pkg) for name, path, is_pkg in _modules()}
 
 
+def _parsed(path: Path) -> ast.Module:
+    return _parse(path.read_text(), str(path))
+
+
+@functools.lru_cache(maxsize=None)
+def _parse(text: str, filename: str) -> ast.Module:
+    """A source's tree, parsed once (the checks below walk every module several times)."""
+    return ast.parse(text, filename=filename)
+
+
 def _imports(name: str) -> list[tuple[str, int, bool]]:
     """(imported module, line, at load time) for every vibkit import in module ``name``."""
     path, is_pkg = MODULES[name]
-    tree = ast.parse(path.read_text(), filename=str(path))
+    tree = _parsed(path)
     package = name if is_pkg else name.rsplit(".", 1)[0]
     top_level = {id(node) for node in tree.body}
     # statements under `if TYPE_CHECKING:` or in functions are not run at load time
@@ -126,14 +137,20 @@ def test_signal_and_io_never_import_the_model():
                 )
 
 
-def test_no_import_cycles_at_load_time():
+def _graph(at_load_only=False):
+    """Module -> the vibkit modules it imports (at load time only, or anywhere: also inside functions), each
+    import also reaching the packages above its target (their ``__init__`` runs first)."""
     graph = {name: set() for name in MODULES}
     for name in MODULES:
         for target, _, at_load in _imports(name):
             # a module's own packages are always loaded before it runs: never a cycle
-            if at_load and target in MODULES and target != name and not name.startswith(target + "."):
+            if (
+                (at_load or not at_load_only)
+                and target in MODULES
+                and target != name
+                and not name.startswith(target + ".")
+            ):
                 graph[name].add(target)
-    # importing a module also runs its packages' __init__
     for name in MODULES:
         for target in list(graph[name]):
             parts = target.split(".")
@@ -141,6 +158,11 @@ def test_no_import_cycles_at_load_time():
                 parent = ".".join(parts[:k])
                 if parent != name and parent in MODULES and not name.startswith(parent + "."):
                     graph[name].add(parent)
+    return graph
+
+
+def import_cycles(graph) -> list[list[str]]:
+    """Every cycle a depth-first walk of ``graph`` closes, each as the modules round it."""
     state, stack, cycles = {}, [], []
 
     def visit(n):
@@ -157,24 +179,145 @@ def test_no_import_cycles_at_load_time():
     for n in sorted(graph):
         if n not in state:
             visit(n)
+    return cycles
+
+
+def test_no_import_cycles():
+    """No cycle among vibkit's modules, counting the imports inside functions too: a function-level import does
+    not make a cycle harmless, it only hides it until the function runs."""
+    cycles = import_cycles(_graph())
     assert not cycles, "import cycles:\n" + "\n".join(" -> ".join(c) for c in cycles)
 
 
-def test_the_checks_can_fail(tmp_path, monkeypatch):
+#: the start-ups that must stay light, and why: ``import vibkit`` (its names load on first use), ``vibkit --help``
+#: (a command imports the library when it runs) and reading or checking a scene or an escalator profile (``vibkit
+#: scene``, a sweep's plan: no compiled kernel needed). The only function-level import of vibkit's own code allowed
+#: is one that keeps a module out of such a start-up: from a module that start-up loads, of one it does not
+LIGHT_ROOTS = ("vibkit", "vibkit.cli", "vibkit.model.scene", "vibkit.model.profile")
+#: third-party packages too heavy for a light start-up (compilers, plotting, readers, clusters, databases)
+HEAVY = frozenset({"numba", "scipy", "matplotlib", "obspy", "dask", "distributed", "zarr", "psycopg", "xarray"})
+
+
+def loaded_by(root, graph) -> set[str]:
+    """The modules that importing ``root`` loads (``graph``: the load-time imports), its packages included."""
+    seen, todo = set(), [root]
+    while todo:
+        n = todo.pop()
+        if n in seen or n not in graph:
+            continue
+        seen.add(n)
+        parts = n.split(".")
+        todo += [".".join(parts[:k]) for k in range(1, len(parts))]
+        todo += sorted(graph[n])
+    return seen
+
+
+def deferred_own_imports() -> list[str]:
+    """Function-level imports of vibkit's own modules that keep no light start-up light (:data:`LIGHT_ROOTS`)."""
+    load = _graph(at_load_only=True)
+    starts = [loaded_by(root, load) for root in LIGHT_ROOTS]
+    bad = []
+    for name in MODULES:
+        for target, line, at_load in _imports(name):
+            if at_load or target not in MODULES or target == name or name.startswith(target + "."):
+                continue
+            if any(name in s and target not in s for s in starts):
+                continue  # deferred so that a light start-up stays light
+            bad.append(f"{name}:{line} imports {target} inside a function (import it at the top of the module)")
+    return bad
+
+
+def test_own_modules_imported_at_the_top():
+    bad = deferred_own_imports()
+    assert not bad, "\n".join(bad)
+
+
+def heavy_at_load(name) -> set[str]:
+    """The :data:`HEAVY` packages module ``name`` imports at load time."""
+    path, _ = MODULES[name]
+    found = set()
+    for node in ast.parse(path.read_text()).body:
+        if isinstance(node, ast.Import):
+            found |= {a.name.split(".")[0] for a in node.names}
+        elif isinstance(node, ast.ImportFrom) and not node.level and node.module:
+            found.add(node.module.split(".")[0])
+    return found & HEAVY
+
+
+def test_the_light_start_ups_load_nothing_heavy():
+    """No module a light start-up loads imports a heavy package at load time: what the deferral above allows is
+    what keeps these start-ups light, and no loophole."""
+    load = _graph(at_load_only=True)
+    light = set().union(*(loaded_by(root, load) for root in LIGHT_ROOTS))
+    heavy = {n: sorted(heavy_at_load(n)) for n in sorted(light) if heavy_at_load(n)}
+    assert not heavy, heavy
+
+
+@pytest.fixture
+def plant(tmp_path, monkeypatch):
+    """``plant(vibkit__pkg__name="source")``: module ``vibkit.pkg.name`` added to (or replaced in) MODULES, its
+    source written under a temporary folder; the checks then read it as one of the package's."""
+
+    def _plant(**files):
+        fake = dict(MODULES)
+        for key, text in files.items():
+            path = tmp_path / f"{key}.py"
+            path.write_text(text)
+            fake[key.replace("__", ".")] = (path, False)
+        monkeypatch.setitem(globals(), "MODULES", fake)
+
+    return _plant
+
+
+def test_the_checks_can_fail(plant):
     """A lazy upward import and a load-time cycle, planted in fake modules, are caught."""
-    upward = tmp_path / "fake_signal.py"
-    upward.write_text("def f():\n    from ..model.scene import load_scene\n")
-    a, b = tmp_path / "a.py", tmp_path / "b.py"
-    a.write_text("from . import b\n")
-    b.write_text("from .a import x\n")
-    fake = dict(MODULES)
-    fake["vibkit.signal.fake_signal"] = (upward, False)
-    fake["vibkit.runtime.a"], fake["vibkit.runtime.b"] = (a, False), (b, False)
-    monkeypatch.setitem(globals(), "MODULES", fake)
+    plant(
+        vibkit__signal__fake_signal="def f():\n    from ..model.scene import load_scene\n",
+        vibkit__runtime__a="from . import b\n",
+        vibkit__runtime__b="from .a import x\n",
+    )
     with pytest.raises(AssertionError, match="fake_signal:2"):
         test_imports_run_one_way()
     with pytest.raises(AssertionError, match="vibkit.runtime.a -> vibkit.runtime.b -> vibkit.runtime.a"):
-        test_no_import_cycles_at_load_time()
+        test_no_import_cycles()
+
+
+def test_a_cycle_through_a_function_level_import_is_caught(plant):
+    """One module importing the other at the top, the other importing it back inside a function: a cycle."""
+    plant(
+        vibkit__diagnose__fake_a="from .fake_b import y\n",
+        vibkit__diagnose__fake_b="def y():\n    from .fake_a import x\n    return x\n",
+    )
+    assert import_cycles(_graph(at_load_only=True)) == []  # invisible at load time
+    with pytest.raises(AssertionError, match=r"diagnose.fake_a -> vibkit.diagnose.fake_b -> vibkit.diagnose.fake_a"):
+        test_no_import_cycles()
+
+
+def test_a_function_level_import_of_own_code_is_caught(plant):
+    """A planted function-level import of vibkit's own code is reported with its line."""
+    plant(vibkit__fleet__fake_lazy="import math\n\n\ndef f():\n    from ..analyses.simulation import simulate\n")
+    with pytest.raises(AssertionError, match="fleet.fake_lazy:5 imports vibkit.analyses.simulation inside a function"):
+        test_own_modules_imported_at_the_top()
+
+
+def test_a_command_defers_the_library_only(plant):
+    """A command (loaded by ``vibkit --help``) may defer the library, not a module ``--help`` loads anyway."""
+    app = MODULES["vibkit.cli.app"][0].read_text() + "\nfrom . import fake_cmd\n"
+    plant(
+        vibkit__cli__app=app,
+        vibkit__cli__fake_cmd="def run(a):\n    from vibkit.analyses.simulation import simulate\n",
+    )
+    assert not [b for b in deferred_own_imports() if "fake_cmd" in b]
+    plant(vibkit__cli__fake_cmd="def run(a):\n    from .output import msg\n")
+    with pytest.raises(AssertionError, match="cli.fake_cmd:2 imports vibkit.cli.output inside a function"):
+        test_own_modules_imported_at_the_top()
+
+
+def test_the_heavy_check_can_fail(plant):
+    """A module ``vibkit --help`` loads that imports numba at load time is caught."""
+    plant(vibkit__cli__app=MODULES["vibkit.cli.app"][0].read_text() + "\nimport numba\n")
+    with pytest.raises(AssertionError, match="vibkit.cli.app.*numba"):
+        test_the_light_start_ups_load_nothing_heavy()
 
 
 #: the names the compiled kernels give their parameter and work arrays and tuples (vibkit.model.slots):

@@ -18,6 +18,10 @@ import sys
 import time
 from pathlib import Path
 
+from . import simulate
+from .diagnose.report import atomic_path, write_report
+from .io import write_result
+
 __all__ = ["main"]
 
 
@@ -28,8 +32,6 @@ def _plot(ds, path, variables, xdim, zoom=None):
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-
-    from .diagnose.report import atomic_path
 
     ncol = 2 if zoom else 1
     fig, axes = plt.subplots(
@@ -55,10 +57,6 @@ def _plot(ds, path, variables, xdim, zoom=None):
 
 def main(argv=None) -> int:
     """Run the demo; returns 0, or 1 with a one-line message on failure."""
-    from . import simulate
-    from .diagnose.report import write_report
-    from .io import write_result
-
     p = argparse.ArgumentParser(prog="python -m vibkit.demo", description=__doc__.splitlines()[0])
     p.add_argument("--root", default=str(Path(__file__).resolve().parent.parent), help="repository root")
     p.add_argument("--out", default=None, help="output folder (default ROOT/reports)")

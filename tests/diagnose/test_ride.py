@@ -186,7 +186,7 @@ def test_cli_ride_options_and_table(ride_csv, capsys):
         (["--weighting", "Wb,Wc"], "2 weightings for the three axes", 2),
         (["--channels", "nope,-,-"], "channel 'nope'", 1),  # the file's: bad data
         (["--segment", "9:3"], "segment", 2),
-        (["--segment", "900:1000"], "after the end", 1),
+        (["--segment", "900:1000"], "spans 0-", 1),  # outside the recording: its span named, never cut
         (["--channels", "speed,-,-"], "not an acceleration", 1),
     ],
 )

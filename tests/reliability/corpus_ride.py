@@ -72,7 +72,7 @@ CASES = [
         "ride",
         ["ride", "{w}/short.csv", "--segment", "2:15"],
         files={"short.csv": _csv(200.0, 0.3)},
-        expect_in=("{w}/short.csv", "after the end"),
+        expect_in=("{w}/short.csv", "not inside short.csv, which spans 0-"),
     ),
     Case(
         "ride, 10 Hz sample rate",

@@ -27,7 +27,9 @@ import time
 
 import numpy as np
 
+from ..model.escalator import EscalatorModel
 from ..model.schema import ContactOptions, SolverSection
+from .forward import default_rtol, forward_dynamics
 
 __all__ = ["checked_forward", "contact_floor", "summary", "compare", "verdict", "CHECK_FACTOR", "DEFAULT_MIN_RTOL"]
 
@@ -238,8 +240,6 @@ def checked_forward(model, *, duration=None, progress=True, min_rtol=None, paral
     With ``parallel`` and more than one core, the run and the first tighter one run at once (two
     threads; the same numbers as one after the other).
     """
-    from .forward import default_rtol, forward_dynamics
-
     scene = model.scene
     solver = scene.solver
     outputs = tuple(scene.outputs["variables"])
@@ -249,8 +249,6 @@ def checked_forward(model, *, duration=None, progress=True, min_rtol=None, paral
     want = tuple(dict.fromkeys(outputs + NEEDED))
     duration = duration or scene.run.duration
     dt = scene.run.output_step
-
-    from ..model.escalator import EscalatorModel
 
     def run(r, outs, mdl=None, show=False):
         """One run; the check's runs each on a fresh model, so that every run is the same whether it

@@ -15,6 +15,8 @@ import math
 
 import numpy as np
 
+from ..model.schema import effect_options
+
 __all__ = [
     "COAST_TORQUE_N_M",
     "DROOP_FRACTION",
@@ -36,8 +38,6 @@ COMPRESSION_TOLERANCE_N = 1.0
 
 def physics_warnings(ds, scene, model) -> list[str]:
     """One line per finding of the result ``ds`` of ``scene`` (links in compression, motor stall or droop)."""
-    from ..model.schema import effect_options
-
     effects = effect_options(scene.effects)  # typed (tests and benchmarks pass plain tables)
     out = []
     if "link_tension" in ds:
@@ -53,8 +53,6 @@ def physics_notes(ds, scene) -> list[str]:
     work over its second half (motor torque under :data:`COAST_TORQUE_N_M`): the teeth carry no load, and the
     chain coasts, as a chain without friction or passengers does at steady speed (gravity on a closed loop does
     no net work), so its signals hold the chain's geometry alone, no tooth mesh."""
-    from ..model.schema import effect_options
-
     if scene.analysis != "forward" or "motor" not in effect_options(scene.effects) or "motor_torque" not in ds:
         return []
     torque = np.abs(np.asarray(ds["motor_torque"].values, dtype=float))
@@ -73,8 +71,6 @@ def physics_notes(ds, scene) -> list[str]:
 def unchecked_physics(ds, scene) -> list[str]:
     """One line per check of :func:`physics_warnings` that the result ``ds`` of ``scene`` could not make: the
     output it needs was not asked for (asking for it costs the outputs' time)."""
-    from ..model.schema import effect_options
-
     if scene.analysis not in ("inverse", "forward"):
         return []
     out = []

@@ -32,8 +32,10 @@ import time
 import numba as nb
 import numpy as np
 
+from ..model import pitch_table
 from ..model.pitch_table import empty_table, rhs
 from ..runtime.kernel import kernel
+from ..runtime.kernel_cache import COMPILING_NOTE, kernel_cached
 from ..runtime.progress import Progress
 
 __all__ = ["integrate", "IntegrationError", "METHODS"]
@@ -416,9 +418,6 @@ def _dopri5_chunk(
 
 def _compile_note(method):
     """What the progress bar says first when the right-hand side (and the dopri5 loop) is not compiled yet."""
-    from ..model import pitch_table
-    from ..runtime.kernel_cache import COMPILING_NOTE, kernel_cached
-
     cold = not kernel_cached(pitch_table.__file__, "rhs")
     if method == "dopri5":
         cold = cold or not kernel_cached(__file__, "_dopri5_chunk")

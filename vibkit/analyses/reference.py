@@ -46,8 +46,11 @@ import scipy.sparse as sp
 from scipy.sparse.linalg import splu
 
 from ..model.effects import pack_parameters
+from ..model.escalator import EscalatorModel
 from ..model.guide import S0, SIGP, local_inverse
+from ..model.scene import Scene, load_scene
 from ..model.schema import effect_options, nominal_speed
+from .forward import initial_state
 from .integrate import IntegrationError
 from .results import make_dataset
 from .study_kernels import assemble, kkt_pattern, study_closure_residual, study_kinematics
@@ -281,8 +284,6 @@ class StudyFormulation:
         The same initial condition as :func:`vibkit.analyses.forward.initial_state` (the sprocket meshes the
         rollers on the head midway between teeth and turns with the chain), in the study's coordinates.
         """
-        from .forward import initial_state
-
         y_ind, _ = initial_state(self.model, start=float(start), speed=float(speed))
         return self.state_from_independent(y_ind)
 
@@ -394,9 +395,6 @@ def run_study(
     sistema multicuerpo, Proyecto Fin de Carrera, Universidad de Sevilla, 2020 (the study), chapters 5-7, eqs. 6-8 to 6-14 and 7-14;
     J. Baumgarte, Comput. Methods Appl. Mech. Eng. 1 (1972) 1-16.
     """
-    from ..model.escalator import EscalatorModel
-    from ..model.scene import Scene, load_scene
-
     if not isinstance(scene, Scene):
         scene = load_scene(scene)
     if scene.analysis != "forward":

@@ -4,6 +4,13 @@ from __future__ import annotations
 
 from ..model.escalator import EscalatorModel
 from ..model.scene import Scene, load_scene
+from ..runtime import budget
+from .convergence import checked_forward
+from .forward import forward_dynamics
+from .health import physics_notes, physics_warnings, unchecked_physics
+from .integrate import IntegrationError
+from .inverse import inverse_dynamics
+from .kinematics import kinematic_sweep
 
 __all__ = ["simulate"]
 
@@ -60,8 +67,6 @@ def simulate(
         scene = load_scene(scene)
     if duration is not None and not duration > 0:
         raise ValueError(f"duration must be positive, got {duration!r}")
-    from ..runtime import budget
-
     budget.check_run(scene, duration=duration, limit_bytes=max_result_bytes)
     if scene.analysis == "forward":
         wall = budget.max_wall_time(scene, max_wall_time)
@@ -76,15 +81,11 @@ def simulate(
     outputs = scene.outputs["variables"]
     rollers = scene.outputs["rollers"]
     if scene.analysis == "kinematics":
-        from .kinematics import kinematic_sweep
-
         k = scene.kinematics
         stop = k.stop if duration is None else k.start + duration
         ds = kinematic_sweep(model, k.start, stop, k.step, rollers=rollers, outputs=outputs, progress=progress)
         return _stamp_defaults(_warn(ds, scene, model), scene)
     if scene.analysis == "inverse":
-        from .inverse import inverse_dynamics
-
         m = scene.motion
         ds = inverse_dynamics(
             model,
@@ -98,15 +99,10 @@ def simulate(
             progress=progress,
         )
         return _stamp_defaults(_warn(ds, scene, model), scene)
-    from .forward import forward_dynamics
-    from .integrate import IntegrationError
-
     if check is None:
         check = bool(scene.solver.check)
     try:
         if check:
-            from .convergence import checked_forward
-
             ds = checked_forward(model, duration=duration, progress=progress)
         else:
             ds = forward_dynamics(model, duration=duration, progress=progress)
@@ -127,8 +123,6 @@ def _warn(ds, scene, model):
     """Record in ``attrs["warnings"]`` (one per line) what the physics of the run says a user should not
     miss: links in compression, a stalled motor, a drooping speed; in ``attrs["notes"]`` what is no fault but
     worth knowing: a chain that coasts (:mod:`vibkit.analyses.health`)."""
-    from .health import physics_notes, physics_warnings, unchecked_physics
-
     found = physics_warnings(ds, scene, model)
     if found:
         ds.attrs["warnings"] = "\n".join(found)

@@ -18,6 +18,7 @@ import errno
 import sys
 
 from . import bench, compare, fleet, links, pitch, report, ride, rides, scene, simulate, spectrum, sweep
+from .options import cli_message, plain_message
 from .output import UsageError, color, msg
 
 __all__ = ["main"]
@@ -125,8 +126,6 @@ def main(argv=None) -> int:
                 errno.EDQUOT: " (your disk quota is used up; nothing was written: free space, or write elsewhere)",
             }.get(exc.errno, "")
             text = f"{where}{exc.strerror}{why}"
-        from .options import cli_message, plain_message
-
         text = cli_message(text)  # the reader's Python arguments named as their flags
         text = plain_message(text, args)
         prefix = "\033[31merror\033[0m" if color() else "error"

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import os
 
-from vibkit.diagnose.comparison import amplitude_diff_text
 from vibkit.diagnose.rounding import fmt_pm
 
 from .options import (
@@ -64,7 +63,7 @@ def _name(target):
 
 def run(a):
     import vibkit
-    from vibkit.diagnose.comparison import NothingToCompare, compare
+    from vibkit.diagnose.comparison import NothingToCompare, amplitude_diff_text, compare
 
     rec = read_recording(a)
     target = a.scene_or_result

@@ -5,6 +5,8 @@ from __future__ import annotations
 import sys
 import textwrap
 
+from vibkit.diagnose.rounding import SPEED_SIGMA_NOT_STATED, fmt_length, fmt_pm
+
 from .options import (
     CHANNEL_EVERY,
     TIME_FORMAT,
@@ -21,8 +23,10 @@ from .options import (
     add_speed,
     chain_links,
     cli_message,
+    read_recording,
     reader_options,
     run_speed,
+    segment_of,
     workers,
 )
 from .output import CLIError, UsageError, check_output, is_stdout, msg, output_path, print_json, shown, table
@@ -99,7 +103,9 @@ def add_parser(subparsers):
         type=workers,
         help="worker processes of the local cluster (default: one per core; 0: analyse in this process)",
     )
-    add_recording(f, positional=False, channel=False)  # for every file; the catalogue's channel column per file
+    add_recording(
+        f, positional=False, channel=False, with_segment=False
+    )  # for every file; the catalogue's channel column per file
     f.set_defaults(func=run_scan)
 
     f = fleet_sub(
@@ -164,8 +170,6 @@ def _fleet_db(a, *, create=True):
 
 def _fmt_measurement(m, stated=False):
     """One line of a stored measurement; ``stated``: its speed uncertainty was stated (as 0: exact) this run."""
-    from vibkit.diagnose.rounding import SPEED_SIGMA_NOT_STATED, fmt_length, fmt_pm
-
     if m.speed_sigma_m_s or stated:  # rounded to the sigma
         numbers = (
             f"pitch {fmt_length(m.pitch_m, m.pitch_sigma_m)}, "
@@ -192,8 +196,6 @@ def run_add(a):
     if a.speed is None and profile is None:
         # the speed the file states (Leon's chain_speed_m_s, a tachometer's column), as `pitch` takes it
         from vibkit.diagnose.channels import speed_from_recording
-
-        from .options import read_recording
 
         a.speed, source = speed_from_recording(read_recording(a))
         if a.speed is None:
@@ -230,6 +232,7 @@ def run_add(a):
             n_links=chain_links(a, profile),
             marker_s=a.marker,
             escalator=a.escalator,
+            segment=segment_of(a),
         )
         scan = db.link_scans(m.unit).get(m.id)
         for n in db.notes[n_notes:]:  # e.g. a profile whose geometry gives no scene for the signature

@@ -10,10 +10,13 @@ import argparse
 import math
 import re
 
-from .output import CLIError
+from vibkit.diagnose.decision import DEFAULT_LIMITS_PERCENT
+from vibkit.runtime.budget import parse_bytes
+
+from .output import CLIError, msg
 
 JSON_HELP = "JSON on stdout (with a schema version)"
-DEFAULT_LIMITS = (1.5, 2.0, 3.0)
+DEFAULT_LIMITS = DEFAULT_LIMITS_PERCENT  # the one default (vibkit.diagnose.decision)
 
 # ------------------------------------------------------------------------------------------ types
 
@@ -200,8 +203,6 @@ def speed_uncertainty(text):
 
 
 def byte_size(text):
-    from vibkit.runtime.budget import parse_bytes
-
     try:
         return parse_bytes(text)
     except ValueError as exc:
@@ -319,19 +320,25 @@ def delimiter_option(text):
     return d
 
 
-def add_recording(sp, *, positional=True, channel=True, channel_default=CHANNEL_FIRST):
+def add_recording(
+    sp, *, positional=True, channel=True, channel_default=CHANNEL_FIRST, with_segment=True, segment_help=None
+):
     """The RECORDING argument and the recording reader's options, the same for every command that reads one.
 
     ``positional=False``: the command names its input itself (``ride``'s RECORDING_OR_SCENE);
     ``channel=False``: the command picks channels its own way (``ride --channels``);
-    ``channel_default``: what the command analyses without ``--channel`` (:data:`CHANNEL_EVERY` ...).
-    :func:`reader_options` turns the parsed options into :func:`vibkit.read_recording` arguments.
+    ``channel_default``: what the command analyses without ``--channel`` (:data:`CHANNEL_EVERY` ...);
+    ``with_segment=False``: no ``--segment`` (a folder's scan); ``segment_help``: what it does for the command.
+    :func:`reader_options` turns the parsed options into :func:`vibkit.read_recording` arguments, and
+    :func:`read_recording` keeps the ``--segment`` asked for (:func:`segment_of`).
     """
     if positional:
         sp.add_argument("recording", help="recording file (CSV/text, miniSEED ..., netCDF); '-': read stdin")
     g = sp.add_argument_group("reading the recording (all optional: the file says it)")
     if channel:
         add_channel(g, channel_default)
+    if with_segment:
+        g.add_argument("--segment", type=segment, metavar="START:END", help=segment_help or SEGMENT_HELP)
     add_sample_rate(g)
     g.add_argument(
         "--time-column",
@@ -403,6 +410,7 @@ def read_recording(a):
     (a waveform file whose traces start at different times) is read again with ``--channel`` only.
     """
     import vibkit
+    from vibkit.diagnose.segment import cut_recording
     from vibkit.io import RecordingError
     from vibkit.io.channels import with_component
 
@@ -412,6 +420,7 @@ def read_recording(a):
         if not getattr(a, "channel", None):
             raise
         rec = vibkit.read_recording(a.recording, **reader_options(a, channel=True))
+    rec = cut_recording(rec, segment_of(a))  # --segment, in the file's own time; outside it: an error
     rec = with_component(rec, getattr(a, "channel", None))
     _note_held_samples(rec)
     return rec
@@ -419,8 +428,6 @@ def read_recording(a):
 
 def _note_held_samples(rec):
     """Say on stderr which channels hold their values between updates, and the Nyquist frequency that follows."""
-    from .output import msg
-
     held = {str(v): float(rec[v].attrs["update_rate_hz"]) for v in rec.data_vars if "update_rate_hz" in rec[v].attrs}
     if held:
         lo = min(held.values())
@@ -534,7 +541,7 @@ def _profile_of(a):
 
 def segment(text):
     """--segment START:END [s] -> (start, end); a bad value is a usage error (exit 2), as the library words it."""
-    from vibkit.diagnose.ride import parse_segment
+    from vibkit.diagnose.segment import parse_segment
 
     try:
         return parse_segment(text)
@@ -542,14 +549,11 @@ def segment(text):
         raise argparse.ArgumentTypeError(re.sub(r"^segment ", "", str(exc))) from None
 
 
-def add_segment(sp):
-    """--segment START:END [s], the one definition shared by ``ride`` and ``report`` (read by :func:`segment_of`)."""
-    sp.add_argument(
-        "--segment",
-        type=segment,
-        metavar="START:END",
-        help="ride segment START:END [s] from the first sample: the recording's ride quality (default: detected)",
-    )
+#: what --segment does, for every command that analyses a recording (``ride`` says what it does there)
+SEGMENT_HELP = (
+    "analyse only START:END [s] of the recording, in its own time (as its time column reads); a segment "
+    "outside the recording is an error"
+)
 
 
 def segment_of(a):
@@ -637,8 +641,6 @@ def chain_links(a, profile):
         n = profile.scene("forward").chain.n_rollers
     except ValueError:
         return None
-    from .output import msg
-
     msg(
         f"note: {profile.source}: {n} links, filled in from its geometry (whole steps that close the loop); give "
         "chain.n_links or --links N when you know the chain's count"
@@ -657,10 +659,8 @@ def escalator_profile(a):
     if path is None:
         return None
     if not str(path).strip():
-        raise CLIError(
-            f"--escalator {path!r}: expected the escalator profile's file (TOML: docs/guide/escalator.md); give its "
-            "path, or leave --escalator out"
-        )
+        why = "expected the escalator profile's file (TOML: docs/guide/escalator.md); give its path, or leave it out"
+        raise CLIError(f"--escalator {path!r}: {why}")
     from vibkit.model.profile import load_profile
     from vibkit.model.scene import SceneError
 

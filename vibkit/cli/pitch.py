@@ -6,6 +6,7 @@ import math
 import textwrap
 
 from vibkit.diagnose.rounding import SPEED_SIGMA_NOT_STATED, fmt_band, fmt_length, fmt_pm
+from vibkit.diagnose.settings import chain_numbers
 
 from .options import (
     CHANNEL_EVERY,
@@ -80,15 +81,8 @@ def resolve_speed(a, rec, *, required=True, profile=None):
 
 def file_chain(rec):
     """(sprocket teeth, links per step) a recording states (a vibkit simulation's ``sprocket_teeth`` and
-    ``links_per_step``), else (28, 3), the study's."""
-    out = []
-    for key, default in (("sprocket_teeth", 28), ("links_per_step", 3)):
-        try:
-            v = int(rec.attrs.get(key, default))
-        except (TypeError, ValueError):
-            v = default
-        out.append(v if v >= 1 else default)
-    return tuple(out)
+    ``links_per_step``), else the defaults (:func:`vibkit.diagnose.settings.chain_numbers`)."""
+    return chain_numbers(recording=rec)
 
 
 def from_profile(a, profile, sp, rec=None):
@@ -97,7 +91,7 @@ def from_profile(a, profile, sp, rec=None):
     (:func:`vibkit.cli.options.run_speed`), which takes the profile's speed and sigma itself."""
     nominal, search, teeth_ = a.nominal_pitch, a.band, getattr(a, "teeth", None)
     if profile is None:
-        return nominal, search, teeth_ or (file_chain(rec)[0] if rec is not None else 28)
+        return nominal, search, chain_numbers(teeth=teeth_, recording=rec)[0]
     taken = []
     if sp.value is not None and sp.source != "given":
         taken.append(f"speed {sp.text}")
@@ -136,7 +130,7 @@ def run(a):
             limits_percent=a.limits,
             teeth=teeth_,
             n_links=n_links,
-            links_per_step=profile.links_per_step if profile is not None else file_chain(rec)[1],
+            links_per_step=chain_numbers(profile=profile, recording=rec)[1],
             on_step=on_step(profile),
             speed_source=source,
         )

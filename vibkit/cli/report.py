@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from vibkit.diagnose.rounding import fmt_pm, fmt_value
+
 from .options import (
     CHANNEL_EVERY,
     _profile_of,
@@ -13,7 +15,6 @@ from .options import (
     add_marker,
     add_nominal_pitch,
     add_recording,
-    add_segment,
     add_speed,
     add_speed_uncertainty,
     band,
@@ -48,7 +49,6 @@ def add_parser(subparsers):
         "chain speed measured on the steps, the one speed of every page",
     )
     add_speed_uncertainty(s)
-    add_segment(s)
     add_marker(s)
     add_nominal_pitch(s, "the --escalator profile's, else the scene's")
     add_limits(s)
@@ -70,8 +70,6 @@ _SIGMA_OF = {
 
 def _shown(key, value, summary):
     """A summary value as the table prints it: to its sigma when it has one, else 6 significant digits."""
-    from vibkit.diagnose.rounding import fmt_value
-
     if value is None:
         return "not stated"
     if key == "flagged_links_detail":
@@ -95,8 +93,6 @@ def _shown(key, value, summary):
 
 def _flag_text(f):
     """One flagged link as the table prints it: ``210 (or 28): +0.7907 +- 0.0084 mm, loops 1,2,3``."""
-    from vibkit.diagnose.rounding import fmt_pm
-
     link = str(f["link"]) + (f" (or {', '.join(map(str, f['alternatives']))})" if f.get("alternatives") else "")
     excess = (
         ""

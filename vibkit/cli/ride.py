@@ -8,13 +8,15 @@ import os
 import re
 import sys
 
+from vibkit.diagnose.rounding import fmt_pm
+
 from .options import (
     add_command,
     add_escalator,
     add_json,
     add_recording,
-    add_segment,
     add_speed,
+    escalator_profile,
     positive,
     reader_options,
     run_speed,
@@ -42,7 +44,6 @@ def add_parser(subparsers):
         help="recording channels for x,y,z (travel, lateral, vertical; - skips one), "
         "or AXIS=NAME pairs (default: names ending in x, y, z); write --channels=-,-,az when x is skipped",
     )
-    add_segment(s)
     add_speed(s, "the --escalator profile's, else the speed the file states")
     s.add_argument(
         "--weighting",
@@ -51,7 +52,13 @@ def add_parser(subparsers):
     )
     s.add_argument("--scene", help="also simulate this scene's step and report it next to the recording")
     s.add_argument("--duration", type=positive, help="simulated time [s] (default: the scene's)")
-    add_recording(s, positional=False, channel=False)
+    add_recording(
+        s,
+        positional=False,
+        channel=False,
+        segment_help="ride segment START:END [s] of the recording, in its own time (as its time column reads): the "
+        "ride quality over it (default: detected); outside the recording: an error",
+    )
     add_json(s)
     add_escalator(s)
     s.set_defaults(func=run)
@@ -117,8 +124,6 @@ def _knocks(a, is_scene, rq, sim):
     from vibkit.diagnose.knock import ride_knock, step_rollers_of
     from vibkit.model.scene import load_scene
 
-    from .options import escalator_profile
-
     out = []
     profile = escalator_profile(a)
     for r, scene in ((rq, a.input if is_scene else None), (sim, a.scene)):
@@ -142,7 +147,6 @@ def _knocks(a, is_scene, rq, sim):
 def _speed_words(r, sp, rq):
     """A ride's speed as every command prints it: the run's speed with its sigma (``0.74850 +- 0.00075 m/s``), or
     to five digits where it states none (a simulation's counted speed)."""
-    from vibkit.diagnose.rounding import fmt_pm
 
     if r is rq and sp is not None and sp.value is not None and sp.sigma:
         return fmt_pm(sp.value, sp.sigma, "m/s")

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from vibkit.diagnose.rounding import fmt_pm
+
 from .options import (
     add_command,
     add_escalator,
@@ -56,7 +58,6 @@ def _fmt(v, spec, unit=""):
 
 def run(a):
     from vibkit.diagnose.rides import find_rides
-    from vibkit.diagnose.rounding import fmt_pm
 
     if not 0 < a.false_alarm < 1:
         raise UsageError(f"--false-alarm {a.false_alarm:g}: expected a probability between 0 and 1")

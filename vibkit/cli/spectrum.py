@@ -5,6 +5,7 @@ from __future__ import annotations
 import textwrap
 
 from vibkit.diagnose.rounding import fmt_band, fmt_pm
+from vibkit.diagnose.settings import chain_numbers
 
 from .options import (
     CHANNEL_EVERY,
@@ -86,7 +87,7 @@ def run(a):
             limits_percent=a.limits,
             teeth=teeth_,
             n_links=n_links,
-            links_per_step=profile.links_per_step if profile is not None else file_chain(rec)[1],
+            links_per_step=chain_numbers(profile=profile, recording=rec)[1],
             on_step=on_step(profile),
             speed_source=source or "none",
             frequency_only=speed is None,

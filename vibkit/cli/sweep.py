@@ -6,6 +6,8 @@ import argparse
 import os
 import time
 
+from vibkit.sweep.plan import _number, parse_vary
+
 from .options import add_command, add_json, byte_size, positive
 from .output import CLIError, msg, no_stdout, print_json, table
 
@@ -22,8 +24,6 @@ EPILOG = (
 
 def vary(text):
     """argparse type of --vary KEY=SPEC (see :func:`vibkit.sweep.plan.parse_vary`)."""
-    from vibkit.sweep.plan import parse_vary
-
     try:
         return parse_vary(text)
     except ValueError as exc:
@@ -39,8 +39,6 @@ def _whole(text):
 
 def _settle(text):
     """Seconds >= 0, a plain decimal number (``0_5`` is refused)."""
-    from vibkit.sweep.plan import _number
-
     try:
         return _number(text)
     except ValueError:

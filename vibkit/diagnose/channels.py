@@ -8,7 +8,7 @@ found (status ``ok`` or ``inconclusive``); when several are, their fundamentals 
 periodicities, not one chain), and the channel with the most evidence (detection statistic over its threshold) gives the numbers. A vibkit
 simulation is one chain: its sensor decides alone (:func:`decision_channels`).
 
-:func:`speed_from_recording` finds a chain speed the file states (Leon's ``chain_speed_m_s``, a
+:func:`~vibkit.diagnose.speed.speed_from_recording` (re-exported here) finds a chain speed the file states (Leon's ``chain_speed_m_s``, a
 Spanish sheet's ``Velocidad (m/s)``).
 """
 
@@ -20,7 +20,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..io.channels import COUNTER_ATTR, STATUS_ATTR, is_status, own_samples
 from .decision import EXIT_CODES, STATUS_IMPLAUSIBLE, STATUS_NOT_FOUND
+from .pitch import estimate_pitch, pick_channel
+from .speed import _SPEED_KEY, speed_from_recording  # noqa: F401 (speed_from_recording: re-exported)
 
 __all__ = [
     "CONSISTENCY_SIGMAS",
@@ -33,48 +36,10 @@ __all__ = [
 
 #: channels whose fundamentals differ by more than this many combined sigmas are not one chain
 CONSISTENCY_SIGMAS = 5.0
-_SPEED_KEY = re.compile(r"(speed|velocidad|velocity|geschwindigkeit|vitesse|velocita)", re.IGNORECASE)
 #: units of a channel named as a speed that is a speed channel, not a vibration: a chain's (m/s) or a sprocket's
 #: or motor's angular speed (a gyroscope's rad/s is not named a speed and stays a vibration channel)
 _SPEED_UNITS = ("m/s", "rad/s", "rpm", "1/min", "deg/s")
 _TIME_NAME = re.compile(r"(^|_)(time|timestamp|elapsed|seconds|epoch|date)(_|$)", re.IGNORECASE)
-
-
-def speed_from_recording(recording):
-    """``(speed [m/s], source)`` that the recording states in its metadata, or ``(None, None)``.
-
-    Keys ending in ``_m_s`` that name a speed (``chain_speed_m_s``, ``velocidad_m_s``, ``speed_m_s``)
-    count; the source names the key, e.g. ``"file: chain_speed_m_s"``. Else a channel along time named as a speed,
-    in m/s as read (a tachometer's, written in km/h or m/min too): its mean, ``"file: mean of channel speed"``.
-    """
-    for key in sorted(recording.attrs, key=lambda k: (k != "chain_speed_m_s", k)):
-        if not (str(key).endswith("_m_s") and _SPEED_KEY.search(str(key))):
-            continue
-        try:
-            v = float(recording.attrs[key])
-        except (TypeError, ValueError):
-            continue
-        if math.isfinite(v) and v > 0:
-            return v, f"file: {key}"
-    # a speed channel (a tachometer's, in m/s as read): its mean over the record, where it reads a chain's speed
-    # steadily (a vibration velocity swings about zero: not a speed)
-    for name in recording.data_vars:
-        da = recording[name]
-        if da.dims == ("time",) and str(da.attrs.get("units", "")) == "m/s" and _SPEED_KEY.search(str(name)):
-            vals = np.asarray(da.values, dtype=float)
-            vals = vals[np.isfinite(vals)]
-            if vals.size < 2:
-                continue
-            mean = abs(float(vals.mean()))
-            if not (SPEED_CHANNEL_RANGE[0] <= mean <= SPEED_CHANNEL_RANGE[1] and float(vals.std()) < 0.1 * mean):
-                continue
-            # to four digits: a tachometer's calibration, not the mean's noise, bounds what it states
-            return float(f"{mean:.4g}"), f"file: mean of channel {name}"
-    return None, None
-
-
-#: a speed channel's mean is the chain's speed only within this range [m/s] (steps and moving walks)
-SPEED_CHANNEL_RANGE = (0.05, 3.0)
 
 
 #: a simulation's numerical diagnostics, not signals of the machine: the closure residual is rounding
@@ -127,8 +92,6 @@ def vibration_channels(recording) -> list:
     """Channels that may carry a vibration: along time, not the burst number, not a sample counter, not
     a clock or a speed (a chain's or a sprocket's: :data:`_SPEED_UNITS`), not a barometer's, not a status column (an accuracy
     code, a column that never changes), not a simulation's numerical diagnostic (:data:`SOLVER_DIAGNOSTICS`)."""
-    from ..io.channels import COUNTER_ATTR, STATUS_ATTR, is_status
-
     simulated = _simulated(recording)
     out = []
     for v in recording.data_vars:
@@ -205,9 +168,6 @@ def estimate_channels(recording, *, channel=None, **kwargs) -> ChannelsResult:
     ValueError
         ``channel`` is given and cannot be analysed, or no channel can be analysed at all.
     """
-    from ..io.channels import own_samples
-    from .pitch import estimate_pitch, pick_channel
-
     recording, cut = counted_part(recording)
     names = [pick_channel(recording, channel)] if channel is not None else decision_channels(recording)
     if not names:

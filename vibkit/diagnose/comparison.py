@@ -21,7 +21,16 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.stats
 
+from ..analyses.simulation import simulate
+from ..io import read_recording
+from ..model.scene import Scene
+from ..scenes import find
+from ..signal import compare_spectra, order_spectrum, resample_to_angle
+from ..signal.bursts import uniform_bursts
+from .channels import counted_part, estimate_channels
+from .pitch import DEFAULT_PITCH_RANGE_M, pick_channel
 from .rounding import fmt_interval, fmt_pm
+from .speed import speed_from_recording
 
 __all__ = [
     "Comparison",
@@ -55,20 +64,13 @@ def as_result(result, *, duration=None, progress=False):
     """
     import xarray as xr
 
-    from ..model.scene import Scene
-    from ..scenes import find
-
     if isinstance(result, xr.Dataset):
         return result
     if isinstance(result, (str, os.PathLike)) and find(result) is not None:
         result = find(result)  # a shipped scene by its name ("leon", "sim/leon.toml" outside a clone)
     if isinstance(result, Scene) or (isinstance(result, (str, os.PathLike)) and str(result).endswith(".toml")):
-        from ..analyses.simulation import simulate
-
         return simulate(result, duration=duration, progress=progress)
     if isinstance(result, (str, os.PathLike)):
-        from ..io import read_recording
-
         return read_recording(result)
     raise ValueError(
         f"result must be a Dataset, a Scene or a path (.toml scene or result file), got {type(result).__name__}"
@@ -280,8 +282,6 @@ def _widen(rows, factor, z):
 
 
 def _order_amplitude(x, fs, f0, spc):
-    from ..signal import order_spectrum, resample_to_angle
-
     phase = 2.0 * np.pi * f0 * np.arange(x.size) / fs
     return order_spectrum(resample_to_angle(x, fs, phase, samples_per_cycle=spc))
 
@@ -383,11 +383,6 @@ def compare(
     >>> vibkit.compare(res, res).score                            # doctest: +SKIP
     1.0
     """
-    from ..io import read_recording
-    from ..signal import compare_spectra
-    from ..signal.bursts import uniform_bursts
-    from .pitch import DEFAULT_PITCH_RANGE_M, pick_channel
-
     if not 0 < float(confidence) < 1:
         raise ValueError(f"confidence must lie in (0, 1), got {confidence!r}")
     if not float(pitch_tolerance) >= 0:
@@ -395,8 +390,6 @@ def compare(
     if isinstance(recording, (str, os.PathLike)):
         recording = read_recording(recording)
     result = as_result(result, duration=duration, progress=progress)
-    from .channels import counted_part
-
     # a simulation from rest, on either side, read where it counted its speed: after its start-up
     recording, cut_rec = counted_part(recording)
     result, cut_sim = counted_part(result)
@@ -420,8 +413,6 @@ def compare(
         if not (math.isfinite(v_meas) and v_meas > 0):
             raise ValueError(f"speed must be a positive number of m/s, got {speed!r}")
     else:
-        from .channels import speed_from_recording
-
         v_meas = float(speed_from_recording(recording)[0] or 0.0)
     speed_known = v_meas > 0
     if speed_sigma is not None and not (math.isfinite(float(speed_sigma)) and float(speed_sigma) >= 0):
@@ -442,8 +433,6 @@ def compare(
         band = (lo, hi)
     # the shared decision first (that of `pitch` and `report`: every vibration channel, or the one asked for): no
     # comparison of a link pass that the recording does not carry
-    from .channels import estimate_channels
-
     decided = estimate_channels(
         recording,
         channel=channel,

@@ -28,6 +28,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..model.escalator import EscalatorModel
+from ..model.profile_scene import roller_radius_of
 from ..signal.detect import detect_link_pass
 from ..signal.estimate import harmonic_ls
 
@@ -230,8 +232,6 @@ def step_rollers_of(scene=None, profile=None):
     ``roller_radius``, else the reference 35 mm scaled with the pitch, as its scene is built); None
     without either."""
     if scene is not None:
-        from ..model.escalator import EscalatorModel
-
         model = EscalatorModel(scene)
         step = scene.outputs.get("step_accelerometer") or 1
         roller = int(model.step_rollers(step)[1])
@@ -243,8 +243,6 @@ def step_rollers_of(scene=None, profile=None):
             f"roller {roller + 1} of the scene",
         )
     if profile is not None:
-        from ..model.profile_scene import roller_radius_of
-
         radius, where = roller_radius_of(profile)
         return radius, float(profile.nominal_pitch), int(profile.links_per_step), f"the profile ({where})"
     return None

@@ -20,6 +20,9 @@ import math
 
 import numpy as np
 
+from ..analyses.simulation import simulate
+from ..model.scene import load_scene
+from ..runtime.user_cache import load_blob, private_folder, private_temp_folder, read_checked, store_blob, write_atomic
 from ..signal.linkmap import canonical_phase, link_map, link_pass_phase
 
 __all__ = [
@@ -75,7 +78,6 @@ def scene_direction(scene):
 
 
 def _load(scene_path):
-    from ..model.scene import load_scene
 
     return load_scene(scene_path)
 
@@ -105,7 +107,6 @@ def _run_map_cached(scene_path, sensor, speed, fs, samples_per_cycle, excess, lo
     """One run's mean per-link shape (link 1 ``excess`` [m] longer; 0: healthy), the row of its link 1, its links
     and its link offset; ``speed`` signed (negative: the chain runs down).  Kept on disk by the scene's text
     (:func:`_run_key`), so that the next ``vibkit links`` on the same escalator does not simulate it again."""
-    from ..model.scene import load_scene
 
     scene = load_scene(scene_path)
     if scene.analysis != "forward" or scene.run.start != 0.0:
@@ -123,7 +124,6 @@ def _run_map_cached(scene_path, sensor, speed, fs, samples_per_cycle, excess, lo
 
 
 def _simulate_run_map(scene, sensor, speed, fs, samples_per_cycle, excess, loops):
-    from ..analyses.simulation import simulate
 
     n = scene.chain.n_rollers
     pitch = scene.chain.link_pitch
@@ -195,8 +195,6 @@ def _load_run(key, n, samples_per_cycle):
     key, its payload's hash), when its arrays have the scene's shape; else None."""
     import io
 
-    from ..runtime.user_cache import load_blob, private_folder
-
     folder = private_folder("signatures")
     payload = None if folder is None else load_blob(folder, key, ".npz")
     if payload is None:
@@ -216,8 +214,6 @@ def _load_run(key, n, samples_per_cycle):
 
 def _store_run(key, run):
     import io
-
-    from ..runtime.user_cache import private_folder, store_blob
 
     folder = private_folder("signatures")
     if folder is None:
@@ -303,8 +299,6 @@ def profile_scene_file(profile):
     text (anything else is replaced); where the cache folder cannot be used, in a private temporary folder of this
     process (:mod:`vibkit.runtime.user_cache`)."""
     import hashlib
-
-    from ..runtime.user_cache import private_folder, private_temp_folder, read_checked, write_atomic
 
     data = profile.scene_text("forward").encode("utf-8")
     name = f"profile-{hashlib.sha256(data).hexdigest()[:40]}.toml"

@@ -27,6 +27,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..model.scene import load_scene
 from ..signal import find_fundamental
 from ..signal.linkmap import (
     MIN_LOOPS,
@@ -35,6 +36,7 @@ from ..signal.linkmap import (
     record_time_for_loops,
 )
 from ..signal.linkscan import count_drift, scan_links
+from .channels import vibration_channels
 from .decision import ELONGATION_WINDOW_PERCENT
 from .link_signature import (
     DIRECTIONS,
@@ -47,6 +49,7 @@ from .link_signature import (
     signature_error,
     worn_link_signature,
 )
+from .sensors import is_tensioner_channel  # noqa: F401 (re-exported: its home is vibkit.diagnose.sensors)
 
 __all__ = [
     "DEFAULT_FALSE_ALARM",
@@ -171,8 +174,6 @@ class LinksResult:
 def links_channel(recording, channel=None):
     """The channel :func:`find_worn_links` reads: ``channel``, else the first in a length unit (a tensioner
     displacement), else the first vibration channel."""
-    from .channels import vibration_channels
-
     chans = vibration_channels(recording)
     if channel is not None:
         return str(channel)
@@ -203,8 +204,6 @@ PITCH_WINDOW_PERCENT = (ELONGATION_WINDOW_PERCENT[0] - 5.0, ELONGATION_WINDOW_PE
 
 def _check_healthy(scene):
     """Refuse a scene with worn links: the signature is one worn link's change of the escalator's chain without it."""
-    from ..model.scene import load_scene
-
     worn = load_scene(scene).chain.worn_links
     if worn:
         raise ValueError(
@@ -352,8 +351,6 @@ def find_worn_links(
     # with a scene the links are counted between the instants a roller reaches the sensor, not between the
     # signal's cycle boundaries: numbers as the signature gives them wherever the recording starts
     if scene is not None:
-        from ..model.scene import load_scene
-
         direction = scene_direction(load_scene(scene)) if direction is None else direction
         if direction not in DIRECTIONS:
             raise ValueError(f"direction {direction!r}: expected one of {', '.join(DIRECTIONS)}")
@@ -594,11 +591,6 @@ def _result(file, ch, sensor, speed, lmap, n, flagged, scan, excess, method, mar
 def is_step_channel(recording, channel):
     """Whether ``channel`` is an acceleration (a step accelerometer): refused, see ``STEP_REFUSAL``."""
     return str(recording[channel].attrs.get("units", "")) in ACCELERATION_UNITS
-
-
-def is_tensioner_channel(recording, channel):
-    """Whether ``channel`` is a displacement (a length unit): the sensor the worn link's signature is known for."""
-    return str(recording[channel].attrs.get("units", "")) in ("m", "mm", "um")
 
 
 def units_scale(da):

@@ -27,6 +27,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from ..io.channels import resolve_channel
 from ..signal.bursts import Burst, uniform_bursts
 from . import pitch_steps as steps
 from .decision import (
@@ -45,6 +46,8 @@ from .decision import (
 from .pitch_parts import check_parts
 from .pitch_steps import Hypothesis
 from .rounding import SPEED_SIGMA_NOT_STATED
+from .sensors import is_tensioner_channel
+from .settings import DEFAULT_LINKS_PER_STEP, DEFAULT_TEETH
 
 __all__ = [
     "CATALOGUE_PITCHES_M",
@@ -80,8 +83,6 @@ def pick_channel(recording, channel=None) -> str:
     ValueError
         ``channel`` is not a channel of the recording, or the recording has no channel.
     """
-    from ..io.channels import resolve_channel
-
     return resolve_channel(recording, channel)
 
 
@@ -243,12 +244,12 @@ def estimate_pitch(
     limits_percent=DEFAULT_LIMITS_PERCENT,
     pitch_range=DEFAULT_PITCH_RANGE_M,
     n_harmonics=5,
-    teeth=28,
+    teeth=DEFAULT_TEETH,
     p_fa=DEFAULT_P_FA,
     speed_source="given",
     frequency_only=False,
     n_links=None,
-    links_per_step=3,
+    links_per_step=DEFAULT_LINKS_PER_STEP,
     on_step=None,
 ):
     """Link pitch from a recording's link-pass frequency and an independently measured speed.
@@ -398,8 +399,6 @@ def _loop_links(recording, name, n_links):
     a fixed sensor) only.  A sensor riding a step reads the link pass low where it goes round the heads, the same
     way every loop (0.5 % on the shipped scene, every place of the loop low): parts aligned with the loops would
     take that for the chain's own pattern, and give a verdict on it."""
-    from .links import is_tensioner_channel
-
     return n_links if n_links and is_tensioner_channel(recording, name) else None
 
 

@@ -41,6 +41,10 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from ..signal.estimate import harmonic_ls
+from ..signal.meanfreq import mean_link_pass_frequency
+from .pitch_steps import TRACK_HARMONICS
+
 #: fewest parts the check runs on (three degrees of freedom for the scatter)
 MIN_PARTS = 4
 #: most parts: more, shorter parts add degrees of freedom but each estimate gets noisier, and a slow drift
@@ -121,14 +125,9 @@ class PartsCheck:
 def _part_estimate(x, fs, be, f0):
     """``(frequency, sigma)`` of one part with the estimator its burst used, seeded at the record's ``f0``;
     None when the part cannot be estimated."""
-    from ..signal.estimate import harmonic_ls
-    from ..signal.meanfreq import mean_link_pass_frequency
-
     amps = [h.amplitude for h in be.spectral.harmonics]
     try:
         if be.method == "mean-phase":
-            from .pitch_steps import TRACK_HARMONICS
-
             r = mean_link_pass_frequency(x, fs, f0=f0, amplitudes=amps, n_harmonics=min(TRACK_HARMONICS, len(amps)))
             f, s = r.frequency_hz, r.sigma_hz
         else:

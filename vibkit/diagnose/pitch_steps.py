@@ -15,8 +15,19 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..signal.bursts import FILL_THRESHOLD, MAX_GAP_S, Burst, dropped_samples, flag_invalid, uniform_bursts
-from ..signal.detect import HARMONIC_SPAN
+from ..signal import link_pass_estimate
+from ..signal._checks import decimate_for_band
+from ..signal.bursts import (
+    FILL_THRESHOLD,
+    MAX_GAP_S,
+    Burst,
+    dropped_samples,
+    flag_invalid,
+    segment_numbers,
+    uniform_bursts,
+)
+from ..signal.detect import HARMONIC_SPAN, detect_link_pass
+from ..signal.meanfreq import mean_link_pass_frequency
 from ..signal.quantisation import quantisation_step
 from .decision import DISAGREE_SIGMAS, LinkPassEvidence, nearest_catalogue
 from .speed import speed_part_too_large
@@ -151,8 +162,6 @@ def prepare_bursts(recording, name, band):
 def _scaled(bursts, band):
     """Bursts scaled to unit size (no overflow or underflow in squares) and decimated to what the
     harmonics need (``HARMONIC_SPAN band[1]`` kept, the span the detection searches); returns ``(bursts, scale)`` with ``x_original = scale x``."""
-    from ..signal._checks import decimate_for_band
-
     scale = max(float(np.max(np.abs(b.x - np.median(b.x)))) for b in bursts)
     if not (scale > 0 and math.isfinite(scale)):
         scale = 1.0
@@ -167,8 +176,6 @@ def _scaled(bursts, band):
 def detect(prep, *, band, n_harmonics, p_fa, name="x"):
     """Is there a link-pass family at all? :func:`vibkit.signal.detect.detect_link_pass` on the bursts at
     the median sampling frequency.  ValueError naming channel ``name`` when no burst is at that rate."""
-    from ..signal.detect import detect_link_pass
-
     fs_det = float(np.median([b.fs for b in prep.bursts]))
     decimation = max(1.0, float(np.median([b.fs for b in prep.raw])) / fs_det)
     pieces = [b.x for b in prep.bursts if abs(b.fs / fs_det - 1) < SAME_FS_TOLERANCE]
@@ -192,8 +199,6 @@ def estimate_bursts(prep, *, name, band, n_harmonics):
     ValueError
         No burst is long enough for an estimate.
     """
-    from ..signal import link_pass_estimate
-
     ests, skipped = [], []
     for b, b_raw in zip(prep.bursts, prep.raw):
         try:
@@ -214,8 +219,6 @@ def estimate_bursts(prep, *, name, band, n_harmonics):
 
 def _burst_mean_phase(b, e):
     """Mean-phase estimate of one burst (None when too short or when tracking fails)."""
-    from ..signal.meanfreq import mean_link_pass_frequency
-
     f0 = e.fundamental_hz
     if b.x.size / b.fs * f0 < MIN_TRACK_PERIODS:
         return None
@@ -319,9 +322,6 @@ def jitter_effect(recording, name, ests, band, n_harmonics):
     frequencies differ by more than the burst's sigma (the handling of the stamps then changes the estimate),
     else a note."""
     from scipy.interpolate import CubicSpline
-
-    from ..signal import link_pass_estimate
-    from ..signal.bursts import segment_numbers
 
     warnings, notes = [], []
     t_all = np.asarray(recording["time"].values, dtype=float)

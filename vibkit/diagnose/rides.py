@@ -25,10 +25,11 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+from ..signal.ride import RideSegment
 from ..signal.steadyline import line_level, normalised_spectrum, steady_line
 from ..signal.stillness import STILL_THRESHOLD, still_spans, walking_level
 
-__all__ = ["DEFAULT_BAND_HZ", "Ride", "RideSearch", "find_rides", "ride_evidence"]
+__all__ = ["DEFAULT_BAND_HZ", "Ride", "RideSearch", "find_rides", "ride_evidence", "ride_in_walk"]
 
 #: where a chain's link pass may be without a profile [Hz]: 0.4-0.9 m/s over 101.6-135 mm pitches
 DEFAULT_BAND_HZ = (2.9, 9.0)
@@ -317,3 +318,53 @@ def ride_evidence(recording, ride, search):
         "track_s": c + float(tu[a2]),
         "track_db": lv,
     }
+
+
+def ride_in_walk(recording, axes, t0, notes, source):
+    """The ride segment of a phone's walk for its ride quality (times from ``t0`` [s], the assessed burst's
+    start), or None for a record that is no walk (a step's own ride).
+
+    A record in which the person walks (the walking band over the still level for a fifth of it or more) is a
+    walk with rides, not a step's ride: its incline cannot be read from the gravity component (a phone in the
+    hand turns) nor from the integrated vertical acceleration (walking drifts it by metres a second).  The ride
+    is then the longest :func:`find_rides` finds (said in ``notes``); a walk without one is refused.
+
+    Parameters
+    ----------
+    recording : xarray.Dataset
+    axes : list of str or None
+        The accelerometer's x, y, z channels (None where the ride-quality axes lack one).
+    t0 : float
+        Where the assessed burst starts [s].
+    notes : list of str
+        Appended to.
+    source : str
+        The recording as the messages name it.
+    """
+    if None in axes:
+        return None
+    t = np.asarray(recording["time"].values, dtype=float)
+    fs = float(recording.attrs.get("sample_rate_hz") or 0.0) or 1.0 / float(np.median(np.diff(t)))
+    if t[-1] - t[0] < 10.0:
+        return None
+    acc = np.stack([np.asarray(recording[c].values, dtype=float) for c in axes])
+    walking = float(np.mean(walking_level(acc, fs) > STILL_THRESHOLD))
+    if not walking >= 0.2:
+        return None
+    found = find_rides(recording)
+    if not found.rides:
+        raise ValueError(
+            f"{source}: a walk ({100 * walking:.0f} % of it walking) with no escalator ride found in it (`vibkit "
+            "rides` says why for each still span): give the ride as --segment START:END"
+        )
+    ride = max(found.rides, key=lambda r: r.line_end_s - r.line_start_s)
+    notes.append(
+        f"a walk with {len(found.rides)} escalator ride(s) (`vibkit rides`); the longest assessed, "
+        f"{ride.line_start_s:.1f}-{ride.line_end_s:.1f} s of the recording (--segment to choose another)"
+    )
+    return RideSegment(
+        start_s=max(ride.line_start_s - float(t0), 0.0),
+        end_s=ride.line_end_s - float(t0),
+        method="a ride in a walk",
+        note=f"link pass {ride.link_pass_hz:.3f} Hz, {ride.direction}",
+    )

@@ -9,15 +9,60 @@ from it says so instead of printing ``+- 0``.
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass
 
+import numpy as np
+
+from ..model.profile import STANDARD_SPEED_TOLERANCE
+from ..model.schema import nominal_speed
+from .decision import DEFAULT_LIMITS_PERCENT
 from .rounding import SPEED_SIGMA_NOT_STATED, fmt_pm
 
-__all__ = ["ResolvedSpeed", "resolve_speed", "speed_part_too_large"]
+__all__ = ["ResolvedSpeed", "resolve_speed", "speed_from_recording", "speed_part_too_large"]
 
 
 #: the source of a speed taken from the scene, nothing else stating one
 SCENE_SOURCE = "the scene's nominal speed"
+#: a metadata key or a channel named as a speed
+_SPEED_KEY = re.compile(r"(speed|velocidad|velocity|geschwindigkeit|vitesse|velocita)", re.IGNORECASE)
+
+
+def speed_from_recording(recording):
+    """``(speed [m/s], source)`` that the recording states in its metadata, or ``(None, None)``.
+
+    Keys ending in ``_m_s`` that name a speed (``chain_speed_m_s``, ``velocidad_m_s``, ``speed_m_s``)
+    count; the source names the key, e.g. ``"file: chain_speed_m_s"``. Else a channel along time named as a speed,
+    in m/s as read (a tachometer's, written in km/h or m/min too): its mean, ``"file: mean of channel speed"``.
+    """
+    for key in sorted(recording.attrs, key=lambda k: (k != "chain_speed_m_s", k)):
+        if not (str(key).endswith("_m_s") and _SPEED_KEY.search(str(key))):
+            continue
+        try:
+            v = float(recording.attrs[key])
+        except (TypeError, ValueError):
+            continue
+        if math.isfinite(v) and v > 0:
+            return v, f"file: {key}"
+    # a speed channel (a tachometer's, in m/s as read): its mean over the record, where it reads a chain's speed
+    # steadily (a vibration velocity swings about zero: not a speed)
+    for name in recording.data_vars:
+        da = recording[name]
+        if da.dims == ("time",) and str(da.attrs.get("units", "")) == "m/s" and _SPEED_KEY.search(str(name)):
+            vals = np.asarray(da.values, dtype=float)
+            vals = vals[np.isfinite(vals)]
+            if vals.size < 2:
+                continue
+            mean = abs(float(vals.mean()))
+            if not (SPEED_CHANNEL_RANGE[0] <= mean <= SPEED_CHANNEL_RANGE[1] and float(vals.std()) < 0.1 * mean):
+                continue
+            # to four digits: a tachometer's calibration, not the mean's noise, bounds what it states
+            return float(f"{mean:.4g}"), f"file: mean of channel {name}"
+    return None, None
+
+
+#: a speed channel's mean is the chain's speed only within this range [m/s] (steps and moving walks)
+SPEED_CHANNEL_RANGE = (0.05, 3.0)
 
 
 @dataclass(frozen=True)
@@ -74,8 +119,6 @@ def scene_speed(scene):
     if scene.analysis == "inverse":
         return float(scene.motion.speed)
     if scene.analysis == "forward":
-        from ..model.schema import nominal_speed
-
         return float(nominal_speed(scene.effects, scene.run)) or None
     return None
 
@@ -118,8 +161,6 @@ def resolve_speed(speed=None, speed_sigma=None, *, profile=None, recording=None,
             return ResolvedSpeed(float(profile.speed), sig, source=name, sigma_source=why)
         return ResolvedSpeed(float(profile.speed), speed_sigma, source=name, sigma_source="given")
     if recording is not None:
-        from .channels import speed_from_recording
-
         v, source = speed_from_recording(recording)
         if v is not None:
             return ResolvedSpeed(v, stated[0], source=source, sigma_source=stated[1])
@@ -128,8 +169,6 @@ def resolve_speed(speed=None, speed_sigma=None, *, profile=None, recording=None,
         if speed_sigma is None:
             # a scene's set speed is a rated speed, not one measured on the steps: known to the escalator standard's
             # tolerance, as a profile's rated speed is (its pitch read at it was called "ok" to 0.00 %)
-            from ..model.profile import STANDARD_SPEED_TOLERANCE
-
             sig = STANDARD_SPEED_TOLERANCE / math.sqrt(3.0) * v
             why = (
                 f"not stated: the scene's set speed taken as a rated speed, known to EN 115-1's +-"
@@ -151,7 +190,7 @@ def speed_part_too_large(rel_speed_sigma, elongation_percent=None, limits_percen
     if rel_speed_sigma is None or not rel_speed_sigma > 0:
         return False
     part = 100.0 * float(rel_speed_sigma)
-    limits = tuple(limits_percent) if limits_percent is not None else (1.5, 2.0, 3.0)
+    limits = tuple(limits_percent) if limits_percent is not None else DEFAULT_LIMITS_PERCENT
     if part > fraction * limits[0]:
         return True
     if elongation_percent is None or not math.isfinite(float(elongation_percent)):

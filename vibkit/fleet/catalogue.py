@@ -45,6 +45,8 @@ import posixpath
 import stat
 from dataclasses import dataclass
 
+from ..model.profile import load_profile
+from ..model.schema import SceneError
 from .dates import _iso, parse_date
 from .errors import FleetError
 from .inputs import check_pitch, check_speed, check_speed_sigma
@@ -95,9 +97,6 @@ def _number(text, path, line, col, *, lo, hi, unit, hint=""):
 
 def _with_profile(v, spath, line):
     """The row's cells, the empty ones (unit, speed, its sigma, nominal pitch) filled from its profile."""
-    from ..model.profile import load_profile
-    from ..model.schema import SceneError
-
     where = os.path.join(os.path.dirname(os.path.abspath(spath)), v["escalator"])
     try:
         prof = load_profile(where)

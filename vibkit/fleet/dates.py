@@ -9,10 +9,19 @@ import datetime as _dt
 import math
 import re
 
+from ..runtime import dates as runtime_dates
 from .errors import FleetError
-from .inputs import check_date
 
-__all__ = ["parse_date"]
+__all__ = ["check_date", "parse_date"]
+
+
+def check_date(d: _dt.datetime, what="date", text=None) -> _dt.datetime:
+    """A timezone-aware UTC datetime within 1970-2100 and not more than a day in the future (the validator
+    every command shares: :func:`vibkit.runtime.dates.check_date`)."""
+    try:
+        return runtime_dates.check_date(d, what, text)
+    except ValueError as exc:
+        raise FleetError(str(exc)) from None
 
 
 _DMY = re.compile(r"([0-9]{1,2})[/.-]([0-9]{1,2})[/.-]([0-9]{4})(?:[ T](.*))?")
@@ -22,7 +31,7 @@ def parse_date(text, *, what="date", ambiguous_ok=False) -> _dt.datetime:
     """A timezone-aware UTC datetime from ISO 8601 text (or day/month/year as loggers write it).
 
     A date without time is midnight; a time without zone is UTC.  Dates outside 1970-2100 or more
-    than a day in the future are refused (:func:`vibkit.fleet.inputs.check_date`).
+    than a day in the future are refused (:func:`check_date`).
 
     A day/month/year date whose day and month could be swapped (``05/11/2025``) is refused unless
     ``ambiguous_ok`` (a logger's start time, whose convention is day/month): write ISO 8601.

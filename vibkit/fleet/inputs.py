@@ -21,6 +21,7 @@ import datetime as _dt
 import math
 
 from ..runtime.dates import DATE_YEARS
+from .dates import check_date, parse_date  # noqa: F401 (check_date: re-exported, its home is vibkit.fleet.dates)
 from .errors import FleetError
 
 __all__ = ["RANGES", "check_pitch", "check_speed", "check_speed_sigma", "check_date", "check_inputs"]
@@ -75,24 +76,11 @@ def check_speed_sigma(value, speed, what="speed uncertainty") -> float:
     return v
 
 
-def check_date(d: _dt.datetime, what="date", text=None) -> _dt.datetime:
-    """A timezone-aware UTC datetime within 1970-2100 and not more than a day in the future (the validator
-    every command shares: :func:`vibkit.runtime.dates.check_date`)."""
-    from ..runtime import dates
-
-    try:
-        return dates.check_date(d, what, text)
-    except ValueError as exc:
-        raise FleetError(str(exc)) from None
-
-
 def check_inputs(*, unit, speed, speed_sigma=0.0, nominal_pitch=None, date=None):
     """Check what ``fleet add`` was given, before the recording is read; returns the parsed date (or None).
 
     ``nominal_pitch`` None means the unit's stored value (checked by the caller when it is read).
     """
-    from .dates import parse_date
-
     if not str(unit).strip():
         raise FleetError("unit must be a non-empty identifier (--unit)")
     speed = check_speed(speed, "--speed / speed")

@@ -15,7 +15,21 @@ import math
 
 import numpy as np
 
+from ..diagnose.links import (
+    STEP_REFUSAL,
+    TooFewLoops,
+    find_worn_links,
+    is_step_channel,
+    is_tensioner_channel,
+    links_channel,
+    profile_scene_file,
+)
+from ..diagnose.segment import cut_recording
+from ..io import read_recording
+from ..model.profile import load_profile
+from ..model.schema import SceneError
 from .links import LinkScan
+from .measurement import analyse_recording
 
 __all__ = ["link_scan_of", "measure_with_links", "profile_scene", "NO_LINK_COUNT", "NO_LINK_COUNT_ADD"]
 
@@ -65,15 +79,6 @@ def link_scan_of(
     nominal_pitch : float, optional
         The unit's nominal pitch [m]: a link pass that gives no chain's pitch is a failed scan.
     """
-    from ..diagnose.links import (
-        STEP_REFUSAL,
-        TooFewLoops,
-        find_worn_links,
-        is_step_channel,
-        is_tensioner_channel,
-        links_channel,
-    )
-
     if n_links is None:
         # a step's sensor is refused whatever the count: that, not the count, is what the reason says
         try:
@@ -109,7 +114,9 @@ def link_scan_of(
     return LinkScan.from_result(res)
 
 
-def measure_with_links(path, *, n_links=None, marker_s=None, scene=None, no_count=NO_LINK_COUNT, **analysis):
+def measure_with_links(
+    path, *, n_links=None, marker_s=None, scene=None, no_count=NO_LINK_COUNT, segment=None, **analysis
+):
     """Read a recording once; its :class:`~vibkit.fleet.measurement.Measurement` and its link scan.
 
     Parameters
@@ -118,6 +125,9 @@ def measure_with_links(path, *, n_links=None, marker_s=None, scene=None, no_coun
         The recording.
     n_links, marker_s, scene, no_count
         As :func:`link_scan_of` takes them.
+    segment : (float, float), optional
+        Only this part of the recording [s, in its own time] is analysed and scanned
+        (:func:`vibkit.diagnose.segment.cut_recording`: outside the recording, a ValueError naming its span).
     **analysis
         :func:`vibkit.fleet.measurement.analyse_recording`'s keywords (``unit``, ``speed``, ``speed_sigma``,
         ``nominal_pitch``, ``date``, ``channel``, ``read_options`` ...).
@@ -127,11 +137,9 @@ def measure_with_links(path, *, n_links=None, marker_s=None, scene=None, no_coun
     (Measurement, LinkScan)
         The link scan never raises (a failure is its status); the analysis raises as ``analyse_recording`` does.
     """
-    from ..io import read_recording
-    from .measurement import analyse_recording
-
     channel = analysis.get("channel")
     rec = read_recording(path, **{**(analysis.get("read_options") or {}), "channel": channel})
+    rec = cut_recording(rec, segment)
     if marker_s is not None:
         # a marker outside the recording numbers the links from no link: the user's to mend before anything is
         # stored (a stored measurement cannot be scanned again)
@@ -159,10 +167,6 @@ def measure_with_links(path, *, n_links=None, marker_s=None, scene=None, no_coun
 def profile_scene(escalator, notes):
     """The forward scene file of an escalator profile (a path), for a tensioner's worn-link signature; None, with
     a line appended to ``notes``, when the profile's geometry gives no scene (its links are scanned without it)."""
-    from ..diagnose.links import profile_scene_file
-    from ..model.profile import load_profile
-    from ..model.schema import SceneError
-
     try:
         return profile_scene_file(load_profile(escalator))
     except (SceneError, OSError, ValueError) as exc:

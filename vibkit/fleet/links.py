@@ -20,6 +20,7 @@ import math
 import re
 from dataclasses import dataclass, field, replace
 
+from ..diagnose.rounding import fmt_pm, fmt_value
 from .schema import LINK_STATUSES
 
 __all__ = [
@@ -389,8 +390,6 @@ def _visit(m, f):
 def _mm(v, s=None, *, pm=False):
     """An excess pitch [m] in mm, to two significant digits of its sigma (the one rule of every +-; 0.01 mm without
     one), the sigma after it with ``pm``."""
-    from ..diagnose.rounding import fmt_pm, fmt_value
-
     if v is None:
         return "-"
     if not s:

@@ -8,8 +8,14 @@ import math
 import os
 from dataclasses import asdict, dataclass
 
+import vibkit
+from vibkit.diagnose.channels import estimate_channels
+from vibkit.diagnose.settings import chain_numbers
+from vibkit.io import read_recording
+
 from .dates import _iso, parse_date
 from .errors import FleetError
+from .inputs import check_inputs
 from .quality import measurement_quality
 
 __all__ = ["Measurement", "analyse_recording"]
@@ -104,6 +110,7 @@ def analyse_recording(
     read_options=None,
     recording=None,
     n_links=None,
+    profile=None,
 ):
     """Read and analyse one recording; the :class:`Measurement` it gives (not stored, ``id`` None).
 
@@ -127,6 +134,10 @@ def analyse_recording(
     n_links : int, optional
         Links in the chain: a worn link's once-per-loop pattern is then not read as a wander
         (:func:`vibkit.diagnose.pitch.estimate_pitch`).
+    profile : vibkit.model.profile.Profile, optional
+        The unit's escalator profile: its sprocket's teeth and links per step are the analysis's, as ``vibkit
+        pitch --escalator`` takes them (:func:`vibkit.diagnose.settings.chain_numbers`; without one, those the
+        recording states, else 28 and 3).
     replaced : bool
         The chain was replaced since the unit's previous measurement (a new trend segment starts).
     date_source : str
@@ -146,12 +157,6 @@ def analyse_recording(
     RecordingError, ValueError
         The file cannot be read, or an option is invalid.
     """
-    import vibkit
-    from vibkit.diagnose.channels import estimate_channels
-    from vibkit.io import read_recording
-
-    from .inputs import check_inputs
-
     # every input checked before the recording is read
     given = check_inputs(unit=unit, speed=speed, speed_sigma=speed_sigma, nominal_pitch=nominal_pitch, date=date)
     unit = str(unit).strip()
@@ -175,6 +180,8 @@ def analyse_recording(
                 f"{spath}: {exc}; give the measurement date (--date, or the catalogue's date column)"
             ) from None
         source = "recording start time"
+    # the sprocket's teeth and the links per step as every command resolves them: the profile's, else the file's
+    teeth, links_per_step = chain_numbers(profile=profile, recording=rec)
     try:  # every vibration channel (or the one asked for), as `vibkit pitch` decides; a sigma of 0 is "not stated"
         res = estimate_channels(
             rec,
@@ -183,6 +190,8 @@ def analyse_recording(
             channel=channel,
             nominal_pitch=nominal_pitch,
             n_links=n_links,
+            teeth=teeth,
+            links_per_step=links_per_step,
         )
     except ValueError as exc:
         raise FleetError(f"{spath}: {' '.join(str(exc).split())}") from None

@@ -17,6 +17,7 @@ import contextlib
 import re
 
 from .errors import FleetError
+from .links import BEFORE_LINK_SCANS
 from .schema import (
     APPLICATION_ID,
     COLUMNS,
@@ -154,8 +155,6 @@ class PostgresStore(Store):
                 f"add or scan upgrades it to schema {SCHEMA_VERSION}"
             )
             return
-        from .links import BEFORE_LINK_SCANS
-
         con = self._con
         with con.transaction():
             con.execute("SELECT pg_advisory_xact_lock(%s)", (APPLICATION_ID,))  # one upgrader at a time

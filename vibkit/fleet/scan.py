@@ -17,9 +17,13 @@ import os
 import re
 from dataclasses import dataclass, field
 
+from ..runtime.cluster import dask_client
+from ..runtime.extras import require
+from ..runtime.progress import Progress
 from .catalogue import read_catalogue
 from .dates import _iso, parse_date
 from .errors import DuplicateRecordingError, FleetError
+from .link_scan import measure_with_links, profile_scene
 from .measurement import _file_sha256
 
 __all__ = ["RECORDING_SUFFIXES", "ScanResult", "scan_folder"]
@@ -62,8 +66,6 @@ class _Job:
 
 def _analyse_job(job):
     """Worker side of a scan: analyse one recording and scan its links; never raises (a failure is a message)."""
-    from .link_scan import measure_with_links
-
     try:
         m, scan = measure_with_links(
             job.path,
@@ -209,8 +211,6 @@ def scan_folder(
     this process only, and the files of ``db.local_files`` (a SQLite file and its ``-wal``/``-shm``
     companions) are not scanned.
     """
-    from ..runtime.progress import Progress
-
     d = os.fspath(directory)
     if not os.path.isdir(d):
         raise FleetError(f"{d}: not a folder; expected the folder of recordings to scan")
@@ -344,17 +344,12 @@ def _scene_of(row, scenes, notes):
     if row.escalator is None:
         return None
     if row.escalator not in scenes:
-        from .link_scan import profile_scene
-
         scenes[row.escalator] = profile_scene(row.escalator, notes)
     return scenes[row.escalator]
 
 
 def _scan_dask(jobs, take, bar, *, client, scheduler, n_workers):
     import contextlib
-
-    from ..runtime.cluster import dask_client
-    from ..runtime.extras import require
 
     as_completed = require(
         "distributed", "parallel", "a fleet scan on worker processes (Dask; --workers 0 scans in this process)"

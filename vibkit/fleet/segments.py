@@ -22,7 +22,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from .trends import SECONDS_PER_YEAR, fit_trend
+from .trend_fit import SECONDS_PER_YEAR, fit_trend
 
 __all__ = ["Screening", "screen_unit"]
 

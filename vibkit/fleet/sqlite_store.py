@@ -14,6 +14,7 @@ import sqlite3
 import urllib.parse
 
 from .errors import FleetError
+from .links import BEFORE_LINK_SCANS
 from .quality import measurement_quality
 from .schema import (
     APPLICATION_ID,
@@ -319,8 +320,6 @@ class SQLiteStore(Store):
             con.execute(stmt)
         if "alternatives" not in self._flag_columns():  # a version-3 file: its flags are one number each
             con.execute(f"ALTER TABLE flagged_link ADD COLUMN {FLAG_ALTERNATIVES_DDL}")
-        from .links import BEFORE_LINK_SCANS
-
         # every measurement stored before the link scans: "not run", so that none reads as scanned without a flag
         con.execute(
             "INSERT INTO link_scan (measurement_id, status, reason) SELECT id, 'not run', ? FROM measurement "

@@ -18,11 +18,19 @@ import os
 import re
 import sqlite3
 
+from ..diagnose.decision import check_limits
 from ..diagnose.pitch import DEFAULT_LIMITS_PERCENT
+from ..io import HEAD_BYTES, check_head
+from ..model.profile import load_profile
 from .errors import DuplicateRecordingError, FleetError
+from .inputs import check_inputs, check_pitch
+from .link_scan import NO_LINK_COUNT_ADD, measure_with_links, profile_scene
+from .links import BEFORE_LINK_SCANS, LinkScan, links_history
 from .measurement import Measurement, _file_sha256
+from .postgres_store import PostgresStore, redact_url
 from .scan import scan_folder
 from .schema import APPLICATION_ID, SCHEMA_VERSION  # noqa: F401 - public through vibkit.fleet.history
+from .sqlite_store import SQLiteStore, sqlite_error
 from .trends import rank_units, unit_trend
 
 __all__ = ["DB_ENV", "DEFAULT_DB_NAME", "FleetDB", "is_server_url", "migrate", "resolve_db_path"]
@@ -90,8 +98,6 @@ def _check_server_url(spec):
     connection is tried (a socket failure would hide that the URL is what is wrong)."""
     import urllib.parse
 
-    from .postgres_store import redact_url
-
     shown = redact_url(spec)
     fix = "expected postgresql://user@host/dbname (postgresql:///dbname: the local server's socket)"
     try:
@@ -105,11 +111,7 @@ def _check_server_url(spec):
 
 def _open_store(spec, create, readonly):
     if is_server_url(spec):
-        from .postgres_store import PostgresStore
-
         return PostgresStore(spec, create=create and not readonly, readonly=readonly, db_env=DB_ENV)
-    from .sqlite_store import SQLiteStore
-
     return SQLiteStore(spec, create=create, readonly=readonly, db_env=DB_ENV)
 
 
@@ -121,8 +123,6 @@ def _translated(method):
         try:
             return method(self, *args, **kwargs)
         except sqlite3.Error as exc:
-            from .sqlite_store import sqlite_error
-
             raise sqlite_error(self.path, exc) from None
 
     return wrapper
@@ -222,8 +222,6 @@ class FleetDB:
     @_translated
     def links_history(self, unit, *, coverage_sigma=2.0):
         """The link scans of a unit's visits and which links came back worse (:func:`vibkit.fleet.links.links_history`)."""
-        from .links import links_history
-
         return links_history(self, unit, coverage_sigma=coverage_sigma)
 
     @_translated
@@ -275,6 +273,7 @@ class FleetDB:
         n_links=None,
         marker_s=None,
         escalator=None,
+        segment=None,
     ):
         """Analyse a recording and store its measurement with its link scan.
 
@@ -301,8 +300,12 @@ class FleetDB:
         marker_s : float, optional
             When a marked link passed the sensor [s from the recording's start]: it is link 1.
         escalator : str or os.PathLike, optional
-            The unit's escalator profile: its number of links, and its forward scene for a tensioner's worn-link
-            signature (a profile whose geometry gives no scene: a line in :attr:`notes`).
+            The unit's escalator profile: its number of links, its sprocket's teeth and links per step (the
+            analysis's, as ``vibkit pitch --escalator`` takes them), and its forward scene for a tensioner's
+            worn-link signature (a profile whose geometry gives no scene: a line in :attr:`notes`).
+        segment : (float, float), optional
+            Only this part of the recording [s, in its own time] is analysed (outside it: a ValueError naming the
+            recording's span); the file's SHA-256 still names the measurement.
 
         Returns
         -------
@@ -318,15 +321,11 @@ class FleetDB:
             No date, no link-pass, no nominal pitch for a new unit, another nominal pitch than the
             unit's.
         """
-        from .inputs import check_inputs, check_pitch
-
         check_inputs(unit=unit, speed=speed, speed_sigma=speed_sigma, nominal_pitch=nominal_pitch, date=date)
         spath = os.fspath(recording)
         if not os.path.exists(spath):
             raise FleetError(f"{spath}: file not found; expected a recording")
         if os.path.isfile(spath):
-            from ..io import HEAD_BYTES, check_head
-
             with open(spath, "rb") as fh:  # a file no reader takes is refused before all of it is hashed
                 check_head(spath, fh.read(HEAD_BYTES))
             old = self.find(_file_sha256(spath))
@@ -336,14 +335,11 @@ class FleetDB:
         if nom is None:
             raise FleetError(f"unit {str(unit)!r} is new: give its nominal link pitch (--nominal-pitch, in m)")
         check_pitch(nom, f"the nominal pitch stored for unit {str(unit)!r} in {self.path}")
-        from .link_scan import NO_LINK_COUNT_ADD, measure_with_links, profile_scene
-
         scene = None
-        if escalator is not None:
+        profile = load_profile(escalator) if escalator is not None else None
+        if profile is not None:
             if n_links is None:
-                from ..model.profile import load_profile
-
-                n_links = load_profile(escalator).n_links
+                n_links = profile.n_links
             if n_links is not None:
                 scene = profile_scene(os.fspath(escalator), self.notes)
         m, link_scan = measure_with_links(
@@ -352,6 +348,8 @@ class FleetDB:
             marker_s=marker_s,
             scene=scene,
             no_count=NO_LINK_COUNT_ADD,
+            segment=segment,
+            profile=profile,
             unit=unit,
             speed=speed,
             speed_sigma=speed_sigma,
@@ -446,8 +444,6 @@ class FleetDB:
         -------
         list of UnitTrend
         """
-        from ..diagnose.decision import check_limits
-
         limits = check_limits(limits_percent)
         by_unit = {}
         for m in self.measurements():
@@ -498,8 +494,6 @@ def migrate(source, target):
     with FleetDB(src_spec, create=False, readonly=True) as src:  # the source is read, never upgraded
         rows = sorted(src.measurements(), key=lambda m: m.id)
         scans = src.link_scans()
-        from .links import BEFORE_LINK_SCANS, LinkScan
-
         scans = {m.sha256: scans.get(m.id) or LinkScan.not_run(BEFORE_LINK_SCANS) for m in rows}
         with FleetDB(dst_spec) as dst:
             if src.path == dst.path and src.kind == dst.kind:

@@ -16,6 +16,7 @@ import math
 from dataclasses import replace
 
 from .errors import DuplicateRecordingError, FleetError
+from .links import NOT_SCANNED, LinkScan, read_link_scans, write_link_scan
 from .measurement import Measurement
 from .schema import COLUMNS, measurement_values, row_to_measurement
 
@@ -96,8 +97,6 @@ class Store(abc.ABC):
         )
 
     def link_scans(self, unit=None):
-        from .links import read_link_scans
-
         return read_link_scans(self, unit)
 
     def _check_and_insert(self, m, link_scan=None):
@@ -111,8 +110,6 @@ class Store(abc.ABC):
                 f"{m.nominal_pitch_m:g} m; one unit has one nominal pitch"
             )
         rid = self._insert_row(measurement_values(m))
-        from .links import NOT_SCANNED, LinkScan, write_link_scan
-
         write_link_scan(self, rid, link_scan if link_scan is not None else LinkScan.not_run(NOT_SCANNED))
         return rid
 

@@ -28,8 +28,9 @@ from datetime import datetime, timezone
 import numpy as np
 
 from .errors import RecordingError
+from .limits import max_recording_bytes
 from .phone import is_phone_export, read_phone_export
-from .recording import Channel, build_recording
+from .recording import Channel, build_recording, safe_name, sha256_of
 from .text.units import parse_unit
 
 __all__ = [
@@ -261,15 +262,10 @@ def sniff_zip(probe) -> bool:
     return probe.head[:4] in (b"PK\x03\x04", b"PK\x05\x06")
 
 
-def _limit():
-    from . import max_recording_bytes
-
-    return max_recording_bytes()
-
-
-def read_gzip(path, data, options):
-    """A gzip file: its one member is read as the recording it holds."""
-    limit = _limit()
+def read_gzip(path, data, options, detect_format):
+    """A gzip file: its one member is read as the recording it holds (by the entry ``detect_format`` finds, the
+    registry's :func:`~vibkit.io.registry.detect_format`)."""
+    limit = max_recording_bytes()
     d = zlib.decompressobj(16 + zlib.MAX_WBITS)
     try:
         inner = d.decompress(data, limit + 1)
@@ -288,11 +284,12 @@ def read_gzip(path, data, options):
     member = base[:-3] if base.lower().endswith(".gz") else os.path.splitext(base)[0] or base
     if member.lower().endswith(".tar") or inner[257:262] == b"ustar":
         raise RecordingError(path, None, "a tar archive (.tar.gz); expected one gzipped recording: unpack it first")
-    return _read_member(path, data, member, inner, options, "gzip")
+    return _read_member(path, data, member, inner, options, "gzip", detect_format)
 
 
-def read_zip(path, data, options):
-    """A zip archive holding exactly one recording (folders, ``__MACOSX`` and dot files aside)."""
+def read_zip(path, data, options, detect_format):
+    """A zip archive holding exactly one recording (folders, ``__MACOSX`` and dot files aside), read by the entry
+    ``detect_format`` finds (the registry's :func:`~vibkit.io.registry.detect_format`)."""
     try:
         zf = zipfile.ZipFile(io.BytesIO(data))
         infos = [
@@ -315,23 +312,21 @@ def read_zip(path, data, options):
             "unpack it and name the file to read",
         )
     info = infos[0]
-    if info.file_size > _limit():
+    if info.file_size > max_recording_bytes():
         raise RecordingError(
             path,
             None,
-            f"{info.filename} unpacks to more than the {_limit()} byte limit for a recording "
+            f"{info.filename} unpacks to more than the {max_recording_bytes()} byte limit for a recording "
             "(raise it with the environment variable VIBKIT_MAX_RECORDING_BYTES)",
         )
     try:
         inner = zf.read(info)
     except (zipfile.BadZipFile, RuntimeError, NotImplementedError, OSError, zlib.error) as exc:
         raise RecordingError(path, None, f"cannot unpack {info.filename} ({exc}); expected a plain zip") from None
-    return _read_member(path, data, info.filename, inner, options, "zip")
+    return _read_member(path, data, info.filename, inner, options, "zip", detect_format)
 
 
-def _read_member(path, data, member, inner, options, kind):
-    from .registry import detect_format
-
+def _read_member(path, data, member, inner, options, kind, detect_format):
     if not inner:
         raise RecordingError(path, None, f"{member} inside the {kind} file is empty; expected a recording")
     inner_path = f"{path}/{member}"
@@ -340,8 +335,6 @@ def _read_member(path, data, member, inner, options, kind):
     ds.attrs["container_member"] = member
     ds.attrs["container_sha256"] = ds.attrs["sha256"]
     ds.attrs["source_file"] = os.path.basename(str(path))
-    from .recording import sha256_of
-
     ds.attrs["sha256"] = sha256_of(data)
     ds.attrs["history"] = f"{kind} file unpacked: {member} ({len(inner)} bytes) read by '{entry.name}'\n" + str(
         ds.attrs.get("history", "")
@@ -395,8 +388,6 @@ def _decode_text(path, data) -> str:
 
 
 def _channel(name, values, unit_text, quantity, source, history):
-    from .recording import safe_name
-
     u = parse_unit(unit_text) if unit_text else None
     if u is not None and u.factor is not None:
         vals, si, q = values * u.factor, u.si, u.quantity

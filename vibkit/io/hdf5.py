@@ -21,6 +21,7 @@ import io
 import numpy as np
 
 from .errors import RecordingError
+from .netcdf import read_netcdf
 from .sampled import RATE_NAMES, Named, assemble, pick_arrays
 
 __all__ = ["sniff_hdf5", "read_hdf5", "NETCDF_MARKERS"]
@@ -83,8 +84,6 @@ def read_hdf5(path, data, options):
     try:
         with h5py.File(io.BytesIO(data), "r") as f:
             if _is_netcdf(f):
-                from .netcdf import read_netcdf
-
                 return read_netcdf(path, data, channel=options.get("channel"), repair_time=options.get("repair_time"))
             file_rate = _rate_attr(f.attrs)
 

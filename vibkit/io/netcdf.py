@@ -23,6 +23,7 @@ from datetime import datetime, timezone
 import numpy as np
 import xarray as xr
 
+from ..runtime.safe_output import check_output_path, write_bytes
 from .errors import RecordingError
 from .recording import sha256_of
 from .timebase import check_order
@@ -167,8 +168,6 @@ def write_result(ds: xr.Dataset, path, *, overwrite: bool = False, inputs=()) ->
     OSError
         The write failed (disk full ...); nothing is left behind.
     """
-    from ..runtime.safe_output import check_output_path, write_bytes
-
     if not isinstance(ds, xr.Dataset):
         raise ValueError(f"ds must be an xarray.Dataset, got {type(ds).__name__}")
     path = os.fspath(path)

@@ -40,8 +40,7 @@ read), with
 
 * ``sniff(probe)``: a cheap check of :class:`Probe` (the suffix, the first 64 KiB, the options);
   it must not parse the whole file and must not raise;
-* ``read(path, data, options)``: the reader, importing its module inside the function so that
-  ``import vibkit`` stays light; ``options`` holds every reading option of ``read_recording``
+* ``read(path, data, options)``: the reader (its module imported here, at the top); ``options`` holds every reading option of ``read_recording``
   (all its keywords but ``max_bytes`` and ``format``), and the reader passes on those it understands;
 * one test file ``tests/io/test_format_<name>.py`` reading a real file (or one written in the
   documented layout) and asserting that :func:`detect_format` names the entry; a file shipped in
@@ -64,6 +63,13 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass
 from typing import Callable
+
+from . import devices
+from .lvm import read_lvm, sniff_lvm
+from .netcdf import read_netcdf
+from .seismic import read_seismic
+from .text.csv import read_csv
+from .text.layout import utf16_without_bom
 
 __all__ = [
     "Format",
@@ -153,8 +159,6 @@ def _sniff_netcdf(p: Probe) -> bool:
 
 def _text_with_nul(p: Probe) -> bool:
     """Whether content with NUL bytes is UTF-16/32 text (a byte-order mark, or UTF-16 without one)."""
-    from .text.layout import utf16_without_bom
-
     return p.head.startswith(_BOMS) or utf16_without_bom(p.head) is not None
 
 
@@ -168,8 +172,6 @@ def _sniff_seismic(p: Probe) -> bool:
 
 
 def _read_netcdf(path, data, options):
-    from .netcdf import read_netcdf
-
     return read_netcdf(path, data, channel=options["channel"], repair_time=options["repair_time"])
 
 
@@ -178,40 +180,16 @@ _TEXT_OPTIONS = (*_COMMON, "time_column", "time_unit", "units", "delimiter", "de
 
 
 def _read_seismic(path, data, options):
-    from .seismic import read_seismic
-
     return read_seismic(path, data, units=options["units"], **{k: options[k] for k in _COMMON})
 
 
-def _device(name):
-    """The reader ``name`` of :mod:`vibkit.io.devices`, imported when called."""
-
-    def read(path, data, options):
-        from . import devices
-
-        return getattr(devices, name)(path, data, options)
-
-    return read
-
-
-def _sniff(module, name):
-    def sniff(p):
-        import importlib
-
-        return getattr(importlib.import_module(f"vibkit.io.{module}"), name)(p)
-
-    return sniff
-
-
-def _read_lvm(path, data, options):
-    from .lvm import read_lvm
-
-    return read_lvm(path, data, options)
+def _container(read):
+    """A container's reader (:mod:`vibkit.io.devices`), the entry that reads its one member found by
+    :func:`detect_format`."""
+    return lambda path, data, options: read(path, data, options, detect_format)
 
 
 def _read_text(path, data, options):
-    from .text.csv import read_csv
-
     return read_csv(path, data, **{k: options[k] for k in _TEXT_OPTIONS})
 
 
@@ -224,6 +202,17 @@ def _module(module, name):
         return getattr(importlib.import_module(f"vibkit.io.{module}"), name)(path, data, options)
 
     return read
+
+
+def _sniff(module, name):
+    """The sniffer ``name`` of ``vibkit.io.<module>``, imported when called (``sniff(probe)``)."""
+
+    def sniff(p):
+        import importlib
+
+        return getattr(importlib.import_module(f"vibkit.io.{module}"), name)(p)
+
+    return sniff
 
 
 #: the reader table, in priority order (see the module docstring)
@@ -246,20 +235,20 @@ FORMATS: tuple[Format, ...] = (
     Format(
         "gzip",
         "gzip files (.gz) holding one recording, unpacked and read",
-        _sniff("devices", "sniff_gzip"),
-        _device("read_gzip"),
+        devices.sniff_gzip,
+        _container(devices.read_gzip),
     ),
     Format(
         "zip",
         "zip archives holding exactly one recording, unpacked and read",
-        _sniff("devices", "sniff_zip"),
-        _device("read_zip"),
+        devices.sniff_zip,
+        _container(devices.read_zip),
     ),
     Format(
         "witmotion",
         "WitMotion WT901 SD-card binary logs (0x55 packets): named and refused, with what reads them",
-        _sniff("devices", "sniff_witmotion"),
-        _device("read_witmotion"),
+        devices.sniff_witmotion,
+        devices.read_witmotion,
     ),
     Format(
         "wav",
@@ -288,16 +277,16 @@ FORMATS: tuple[Format, ...] = (
     Format(
         "e4",
         "Empatica E4 exports (row 1 start time, row 2 sample rate, then samples; ACC.csv in 1/64 g)",
-        _sniff("devices", "sniff_e4"),
-        _device("read_e4"),
+        devices.sniff_e4,
+        devices.read_e4,
     ),
     Format(
         "actigraph",
         "ActiGraph ActiLife RAW CSV ('Data File Created By ActiGraph ... at 30 Hz' banner, values in g)",
-        _sniff("devices", "sniff_actigraph"),
-        _device("read_actigraph"),
+        devices.sniff_actigraph,
+        devices.read_actigraph,
     ),
-    Format("lvm", "NI LabVIEW Measurement files (.lvm)", _sniff("lvm", "sniff_lvm"), _read_lvm),
+    Format("lvm", "NI LabVIEW Measurement files (.lvm)", sniff_lvm, read_lvm),
     Format(
         "text",
         "CSV, TSV, logger and spreadsheet exports (every file no entry above claims)",

@@ -8,7 +8,7 @@ import numpy as np
 
 from .chain import Chain
 from .guide import LEN0, S0, SEGMENT_NAMES, Guide
-from .sprocket import local_corners, mesh_phase, tooth_geometry, tooth_table
+from .sprocket import contact_kernel, local_corners, mesh_phase, tooth_geometry, tooth_table
 
 __all__ = ["EscalatorModel"]
 
@@ -97,8 +97,6 @@ class EscalatorModel:
     def initial_indentation(self, start: float) -> float:
         """Deepest roller-tooth overlap [m] with roller 1 at ``start`` [m of undeformed guide] and the
         sprocket meshed (:meth:`meshed_angle`): 0 when every roller clears the teeth, as a run must start."""
-        from .sprocket import contact_kernel
-
         conf = self.chain.configure(float(start))
         theta = self.meshed_angle(conf)
         n, z = self.n, self.sprocket.teeth

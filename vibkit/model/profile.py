@@ -18,6 +18,7 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
+from .profile_scene import profile_scene, scene_text
 from .scene import SceneError, _check_scene_file, _section, toml_loads
 from .schema import _fmt, _Section, key
 
@@ -216,14 +217,10 @@ class Profile:
         """The scene of this escalator (a :class:`~vibkit.model.scene.Scene`, in memory): what the profile
         says, the rest from standard step-chain proportions (:mod:`vibkit.model.profile_scene`); a
         geometry that cannot run is a SceneError naming the profile key to change."""
-        from .profile_scene import profile_scene
-
         return profile_scene(self, analysis, duration)
 
     def scene_text(self, analysis: str = "forward", duration: float | None = None) -> str:
         """The TOML text of :meth:`scene`, with comments saying where each value came from."""
-        from .profile_scene import scene_text
-
         return scene_text(self, analysis, duration)
 
     def band(self, low=0.8, high=1.25) -> tuple[float, float]:

@@ -20,6 +20,8 @@ import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from ..runtime.budget import parse_bytes
+from ..scenes import find
 from .chain_keys import by_roller, check_flat_speed, check_seat, worn_links
 from .params import ChainParams, GuideParams, SprocketParams
 from .scene_checks import (
@@ -632,8 +634,6 @@ def _analysis_sections(src, sec, analysis):
     if method is not None and method.lower() not in SOLVER_METHODS:
         raise SceneError(f"{src}: 'solver.method' must be one of {', '.join(SOLVER_METHODS)}, got {method!r}")
     if "max_result_bytes" in sec["solver"]:
-        from ..runtime.budget import parse_bytes
-
         try:
             parse_bytes(sec["solver"]["max_result_bytes"])
         except ValueError as exc:
@@ -659,8 +659,6 @@ def load_scene(path) -> Scene:
         The file is missing, not TOML, or has an unknown key, a missing value or a non-physical
         number; the message names the file and the key.
     """
-    from ..scenes import find
-
     p = find(path) or Path(path)  # a shipped scene's name ("las-palmas") where no such file exists
     _check_scene_file(p)
     try:

@@ -21,7 +21,7 @@ import scipy.sparse.linalg
 
 from ._checks import as_signal, check_fs, check_positive_int, decimate_for_band, fill_nan
 from .peaks import find_fundamental
-from .spectral import amplitude_spectrum
+from .spectral import amplitude_spectrum, spectrogram
 
 __all__ = [
     "phase_from_tacho",
@@ -367,8 +367,6 @@ def order_map(x, fs, phase, *, samples_per_cycle=32, cycles_per_frame=16, overla
             f"Parameter cycles_per_frame={cpf} is longer than the record ({ang.x.size // ang.samples_per_cycle} cycles)."
         )
     nover = int(round(float(overlap) * nper))
-    from .spectral import spectrogram
-
     o, cc, s = spectrogram(ang.x, ang.samples_per_cycle, nperseg=nper, noverlap=nover)
     centre_cycles = ang.cycles[0] + cc
     return o, np.interp(centre_cycles, ang.cycles, ang.time_s), s

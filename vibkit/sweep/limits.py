@@ -19,6 +19,10 @@ from __future__ import annotations
 
 import math
 
+from ..runtime.budget import BudgetError, _fmt_bytes, check_run, max_result_bytes
+from .errors import SweepError
+from .records import SUMMARIES
+
 __all__ = ["check_key_used", "check_settle", "estimate_sweep", "check_size", "BYTES_PER_RUN"]
 
 #: what the driver keeps per run besides the numbers (its record in memory, its group in the store) [bytes]
@@ -66,8 +70,6 @@ _COLUMNS = {
 
 def check_key_used(key: str, analysis: str, source: str, *, duration=None):
     """Raise :class:`~vibkit.sweep.plan.SweepError` if varying ``key`` cannot change an ``analysis`` run."""
-    from .plan import SweepError
-
     parts = key.split(".")
     hint = "vary a key the analysis reads"
     if parts[0] == "effects":
@@ -111,8 +113,6 @@ def _span_and_step(scene, duration):
 
 def check_settle(scene, settle, duration, source):
     """``settle`` [s] must leave at least two output samples of the run (and needs a time axis)."""
-    from .plan import SweepError
-
     if settle is None:
         return
     if scene.analysis == "kinematics":
@@ -137,8 +137,6 @@ def estimate_sweep(scene, runs: int, keep=(), duration=None) -> dict:
         ``runs``, ``samples`` (per run), ``values_per_run`` (summaries + status + wall time + the kept
         series' samples x columns), ``bytes`` (= runs x (values x 8 + :data:`BYTES_PER_RUN`)).
     """
-    from .records import SUMMARIES
-
     span, step, _ = _span_and_step(scene, duration)
     samples = span / step + 1 if step > 0 else math.inf
     cols = {"n": scene.chain.n_rollers, "t": scene.sprocket.teeth, "r": len(scene.outputs["rollers"])}
@@ -157,8 +155,6 @@ def estimate_sweep(scene, runs: int, keep=(), duration=None) -> dict:
 
 def check_size(scene, runs: int, *, keep=(), duration=None, limit_bytes=None, source=""):
     """Refuse a sweep whose result would exceed the result budget, in one line naming size and option."""
-    from ..runtime.budget import BudgetError, _fmt_bytes, check_run, max_result_bytes
-
     if duration is not None:  # each run as simulate would refuse it (--duration 1e308: every run would fail)
         check_run(scene, duration=duration)
     est = estimate_sweep(scene, runs, keep, duration)

@@ -14,6 +14,9 @@ import json
 import math
 import re
 
+from .errors import SweepError
+from .limits import check_key_used, check_settle, check_size
+
 __all__ = ["parse_vary", "plan_sweep", "SweepPlan", "SweepError", "to_toml", "varied_text"]
 
 SCHEMA = 1
@@ -23,10 +26,6 @@ _PRODUCES = {
     "flank_force": ("drive_flank_force", "back_flank_force"),
     "energy": ("kinetic_energy", "potential_energy", "contact_energy", "spring_energy"),
 }
-
-
-class SweepError(ValueError):
-    """A sweep that cannot be planned or stored; the message names the key, value or path."""
 
 
 # numbers as a person writes them: no digit separators (float("0_5") is 5.0), no hex, no "nan"/"inf"
@@ -476,7 +475,6 @@ def plan_sweep(
     import tomllib
 
     from ..model.scene import OUTPUTS, Scene, load_scene
-    from .limits import check_key_used, check_settle, check_size
 
     base = scene if isinstance(scene, Scene) else load_scene(scene)
     text, source = base.text, base.source

@@ -40,6 +40,8 @@ import sys
 import time
 import traceback
 
+from ..runtime.cluster import dask_client
+from ..runtime.progress import Progress
 from .plan import _PRODUCES, SweepError, _source_of, plan_sweep, varied_text
 from .records import STATUS, SUMMARIES, _failed_record
 from .store import _assemble, _Store
@@ -203,8 +205,6 @@ class _Report:
     """A bar on a terminal; a line every ``every`` seconds otherwise; nothing when disabled."""
 
     def __init__(self, total, done0, *, enabled, stream=None, every=5.0):
-        from ..runtime.progress import Progress
-
         self.stream = stream or sys.stderr
         self.total, self.done0, self.done, self.failed = total, done0, done0, 0
         self.enabled = bool(enabled)
@@ -377,8 +377,6 @@ def sweep(
         if first is not None:
             import contextlib
 
-            from ..runtime.cluster import dask_client
-
             ctx = contextlib.nullcontext(client) if client is not None else dask_client(scheduler, n_workers=n_workers)
             with ctx as cl:
                 computed = _submit(cl, itertools.chain([first], tasks), records, store, report)
@@ -444,7 +442,6 @@ def _tasks(plan, records, store, report):
 def _checked(scene):
     """The base scene with ``[solver] check = true`` (forward scenes only)."""
     from ..model.scene import Scene, load_scene, parse_scene
-    from .plan import varied_text
 
     base = scene if isinstance(scene, Scene) else load_scene(scene)
     if base.analysis != "forward":

@@ -21,8 +21,9 @@ import os
 import shutil
 from pathlib import Path
 
+from .. import __version__
 from ..model.schema import key_units
-from .plan import SweepError, _jsonval
+from .plan import SweepError, _jsonval, plan_sweep
 from .records import PENDING, STATUS, SUMMARIES, _failed_record
 
 # units of the scene keys a sweep can vary (the coordinates' ``units``), from the scene schema
@@ -333,7 +334,6 @@ def open_sweep(path):
     import math
 
     from ..model.scene import parse_scene
-    from .plan import plan_sweep
 
     path = Path(path)
     if not path.is_dir():
@@ -452,8 +452,6 @@ def _assemble(plan, records, *, complete):
     """One Dataset: dims are the varied keys (or ``sample``); summaries, status, error, kept series."""
     import numpy as np
     import xarray as xr
-
-    from .. import __version__
 
     n = len(plan.points)
     dims = plan.dims

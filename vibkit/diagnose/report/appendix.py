@@ -9,7 +9,17 @@ import textwrap
 import numpy as np
 
 from ..rounding import fmt_band
-from .common import _PAGE, _fmt, _page_title, _table, fmt_length, speed_sigma_source, speed_source, speed_value
+from .common import (
+    _PAGE,
+    TextColumn,
+    _fmt,
+    _page_title,
+    _table,
+    fmt_length,
+    speed_sigma_source,
+    speed_source,
+    speed_value,
+)
 
 __all__ = ["data_quality_page", "parameters_page", "glossary_page", "GLOSSARY"]
 
@@ -233,8 +243,6 @@ def _jitter(percent):
 def glossary_page(doc, ctx) -> None:
     """The words of the report explained (:data:`GLOSSARY`)."""
     import matplotlib.pyplot as plt
-
-    from .common import TextColumn
 
     fig = plt.figure(figsize=_PAGE)
     _page_title(fig, "Glossary", "the words of this report, as a field engineer needs them")

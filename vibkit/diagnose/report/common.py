@@ -12,6 +12,7 @@ import os
 import textwrap
 from dataclasses import dataclass, field
 
+from ...runtime.safe_output import atomic_output, write_bytes
 from ..rounding import SPEED_SIGMA_NOT_STATED, fmt_interval, fmt_length, fmt_pm, fmt_value  # noqa: F401 (the one rounding rule)
 
 __all__ = ["Report", "report_date", "atomic_path", "PageSink", "TextColumn", "fmt_pm", "fmt_length", "length_scale"]
@@ -84,8 +85,6 @@ class atomic_path:
         self._kw = {"overwrite": overwrite, "inputs": inputs}
 
     def __enter__(self):
-        from ...runtime.safe_output import atomic_output
-
         self._cm = atomic_output(self.path, **self._kw)
         self.tmp = self._cm.__enter__()
         return self.tmp
@@ -108,8 +107,6 @@ class _pdf_in_memory:
 
     def __exit__(self, exc_type, exc, tb):
         if exc_type is None:
-            from ...runtime.safe_output import write_bytes
-
             write_bytes(self.buf.getbuffer(), self.path, overwrite=self.overwrite, inputs=self.inputs)
         return False
 

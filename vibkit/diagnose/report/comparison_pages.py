@@ -7,6 +7,7 @@ import textwrap
 
 import numpy as np
 
+from ...signal import amplitude_spectrum, spectrogram
 from ..comparison import amplitude_diff_text
 from .common import (
     _PAGE,
@@ -33,8 +34,6 @@ def plot_comparison(comp, fig=None, *, top=0.88):
     matplotlib.figure.Figure
     """
     import matplotlib.pyplot as plt
-
-    from ...signal import amplitude_spectrum, spectrogram
 
     if fig is None:
         fig = plt.figure(figsize=_WIDE)

@@ -15,6 +15,25 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ...analyses.simulation import simulate
+from ...io import RecordingError, read_recording, source_name
+from ...io.channels import own_samples, with_component
+from ...model.profile_scene import link_count
+from ...model.scene import Scene, SceneError, load_scene
+from ...runtime.dates import check_date, parse_iso_date
+from ...signal import hampel_events, link_pass_estimate
+from ...signal.bursts import uniform_bursts
+from ..channels import estimate_channels
+from ..comparison import compare
+from ..knock import ride_knock, step_rollers_of
+from ..links import TooFewLoops, find_worn_links, profile_scene_file
+from ..pitch import DEFAULT_LIMITS_PERCENT, pick_channel
+from ..ride import _AXIS_RE, ride_quality_from_recording, ride_quality_from_simulation
+from ..ride_simulation import with_ride_outputs
+from ..rounding import fmt_band
+from ..segment import cut_recording
+from ..settings import chain_numbers
+from ..speed import resolve_speed
 from .common import report_date
 
 __all__ = ["ReportContext", "analyse"]
@@ -155,8 +174,6 @@ class ReportContext:
 
 def _family_fit(x, fs, band):
     """The fitted link-pass harmonic family (with offset) at every sample of ``x`` [x]."""
-    from ...signal import link_pass_estimate
-
     try:
         e = link_pass_estimate(x, fs, band=band)
     except ValueError:
@@ -179,8 +196,6 @@ def measurement_date(rec, date=None):
         if not d:
             return None, ""
     if source == "given":  # the validator every command shares (ISO 8601, 1970-2100, not in the future)
-        from ...runtime.dates import check_date, parse_iso_date
-
         d = check_date(d, "--date") if isinstance(d, _dt.datetime) else parse_iso_date(d, "--date")
     if not isinstance(d, _dt.datetime):
         text = str(d).strip().replace("Z", "+00:00")
@@ -217,19 +232,7 @@ def analyse(
     marker_s=None,
 ) -> ReportContext:
     """Everything :func:`vibkit.diagnose.report.write_report` draws (same parameters, no output)."""
-    from ...io import read_recording
-    from ...io.channels import own_samples
-    from ...model.scene import Scene, load_scene
-    from ...signal import hampel_events
-    from ...signal.bursts import uniform_bursts
-    from ..channels import estimate_channels
-    from ..pitch import DEFAULT_LIMITS_PERCENT, pick_channel
-    from ..rounding import fmt_band
-
     limits = tuple(limits_percent) if limits_percent is not None else DEFAULT_LIMITS_PERCENT
-    from ...io import RecordingError, source_name
-    from ...io.channels import with_component
-
     opts = dict(read_options or {})
     if sample_rate is not None:
         opts["sample_rate"] = sample_rate
@@ -240,14 +243,14 @@ def analyse(
             raise
         rec = read_recording(recording, channel=channel, **opts)  # e.g. traces on different time bases
     rec = with_component(rec, channel)
+    whole = rec  # the ride's weighting filters run over the whole record, its segment the one asked for
+    rec = cut_recording(rec, segment)  # every other page: the segment asked for, in the file's own time
     measured, measured_source = measurement_date(rec, date)
     ch = pick_channel(rec, channel)
     sc = None
     if scene is not None:
         sc = scene if isinstance(scene, Scene) else load_scene(scene)
     notes = []
-    from ..speed import resolve_speed
-
     run = resolve_speed(speed, speed_sigma, profile=profile, recording=rec, scene=sc)
     speed, speed_sigma = run.value, run.sigma
     if speed is not None and run.source != "given":
@@ -261,10 +264,10 @@ def analyse(
     # vibration channel (or the one asked for) estimated, channels that disagree refused, the numbers
     # from the channel with the most evidence
     # the unit's own sprocket and band where a profile names the unit (a scene given beside it may be another's)
-    teeth = int(profile.teeth) if profile is not None else sc.sprocket.teeth if sc else 28
+    teeth, links_per_step = chain_numbers(profile=profile, scene=sc, recording=rec)  # as every command resolves them
     if profile is None and sc is None:
         notes.append(
-            "sprocket teeth not known: 28 assumed (the study's sprocket) for the shaft-frequency reading; "
+            f"sprocket teeth not known: {teeth} assumed (the study's sprocket) for the shaft-frequency reading; "
             "give --escalator PROFILE (drive.teeth)"
         )
     if band is None and profile is not None and speed is not None:
@@ -288,7 +291,6 @@ def analyse(
     else:  # frequency only: the same burst-combined estimator, with a unit "speed"
         kw = dict(speed=1.0, band=band or (2.5, 6.0), frequency_only=True)
         notes.append("no speed known: link-pass frequency only, no pitch (give --speed)")
-    links_per_step = profile.links_per_step if profile is not None else sc.chain.links_per_step if sc else 3
     on_step = None if profile is None else profile.on_step
     decided = estimate_channels(
         rec, channel=channel, n_links=n_links, links_per_step=links_per_step, on_step=on_step, **kw
@@ -312,10 +314,6 @@ def analyse(
     result = None
     comparison_absent = "no scene given (--scene SCENE, or a scene of the unit: vibkit scene PROFILE)"
     if sc is not None:
-        from ...analyses.simulation import simulate
-        from ..comparison import compare
-        from ..ride_simulation import with_ride_outputs
-
         # with the step's roller motion: the ride figure is then the one `vibkit ride SCENE` gives
         result = simulate(with_ride_outputs(sc), duration=duration, progress=progress)
         comparison_absent = "" if found else "no link pass found in the recording to compare with the simulation's"
@@ -335,7 +333,7 @@ def analyse(
                 notes.append(f"no comparison with the simulation: {' '.join(str(exc).split())}")
                 comparison_absent = f"the simulation could not be compared: {' '.join(str(exc).split())}"
     ride_absent = []
-    ride = _ride(rec, result if scene_is_unit(sc, profile) else None, sc, notes, segment, speed, ride_absent)
+    ride = _ride(whole, result if scene_is_unit(sc, profile) else None, sc, notes, segment, speed, ride_absent)
     ride = [(kind, _with_knock(rq, sc if kind == "simulation" else None, profile)) for kind, rq in ride]
     if result is not None and not scene_is_unit(sc, profile):
         why = f"scene {sc.name!r} is not " + (
@@ -473,8 +471,6 @@ def _links(rec, ch, units, sc, speed, notes, profile=None, marker_s=None):
     """The link map of a tensioner recording over two loops of the scene's chain: ``(LinksResult, "")``, else
     ``(None, why not)`` for page 1.  A scene built from the escalator profile (in memory) is scanned with the
     profile's scene file, as ``vibkit links --escalator`` does."""
-    from ..links import TooFewLoops, find_worn_links, profile_scene_file
-
     if sc is None and profile is not None:
         try:  # the profile's own scene: its chain and the worn link's signature
             sc = profile.scene("forward")
@@ -528,9 +524,6 @@ def _chain_links(profile, sc):
     """``(links, where the count came from)`` of the unit's chain: the profile's (given or derived from its
     rise), else the scene's; None where neither says."""
     if profile is not None:
-        from ...model.profile_scene import link_count
-        from ...model.scene import SceneError
-
         try:
             n, src = link_count(profile)
         except SceneError:
@@ -592,8 +585,6 @@ def scene_is_unit(scene, profile) -> bool:
 def _with_knock(rq, scene, profile):
     """``rq`` with the knock test of its step's rollers (:func:`vibkit.diagnose.knock.ride_knock`) among its
     notes: the rollers of the scene (a simulation) or of the profile (a recording)."""
-    from ..knock import ride_knock, step_rollers_of
-
     rollers = step_rollers_of(scene=scene) if scene is not None else step_rollers_of(profile=profile)
     _, note = ride_knock(rq, rollers)
     return dataclasses.replace(rq, notes=[*rq.notes, f"roller knock: {note}"])
@@ -604,8 +595,6 @@ def _ride(rec, result, sc, notes, segment=None, speed=None, absent=None):
     where one that could be expected (a recording with x, y, z channels, a scene that names its step) cannot
     be assessed; ``absent`` collects why a page (recording, simulation) is not drawn."""
     absent = [] if absent is None else absent
-    from ..ride import _AXIS_RE, ride_quality_from_recording, ride_quality_from_simulation
-
     out = []
     axes = {m.group(1) for nm in rec.data_vars if (m := _AXIS_RE.search(str(nm).lower()))}
     try:

@@ -15,6 +15,8 @@ import os
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
+from ... import __version__
+from ...runtime.safe_output import check_output_path
 from .appendix import data_quality_page, glossary_page, parameters_page
 from .common import PageSink, Report, _pdf_in_memory, speed_value
 from .comparison_pages import harmonics_page, simulation_page
@@ -178,8 +180,6 @@ def write_report(
     matplotlib.use("Agg")
     from matplotlib.backends.backend_pdf import PdfPages
 
-    from ... import __version__
-
     out = os.fspath(out_path)
     if not out.lower().endswith(".pdf"):
         raise ValueError(f"output {out!r} must be a .pdf file")
@@ -187,8 +187,6 @@ def write_report(
     for p in inputs:
         if os.path.exists(out) and os.path.samefile(out, p):
             raise ValueError(f"output {out!r} is an input file; refusing to overwrite it")
-    from ...runtime.safe_output import check_output_path
-
     check_output_path(out, overwrite=overwrite, inputs=inputs)  # before any work
     ctx = analyse(
         recording,

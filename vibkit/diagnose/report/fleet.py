@@ -11,6 +11,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ... import __version__
+from ..decision import DEFAULT_LIMITS_PERCENT
 from .common import _WIDE, PageSink, Report, atomic_path, fmt_pm
 from .fleet_links import fleet_links_pages
 
@@ -160,8 +162,6 @@ def _title(fig, title, subtitle):
 
 
 def _subtitle(ctx):
-    from ... import __version__
-
     return (
         f"{len(ctx.trends)} unit(s), {len(ctx.measurements)} measurement(s); limits "
         f"{' / '.join(f'{v:g}' for v in ctx.limits)} % ({' / '.join(_LIMIT_NAMES)}); database "
@@ -431,9 +431,7 @@ def write_fleet_report(
     matplotlib.use("Agg")
     from matplotlib.backends.backend_pdf import PdfPages
 
-    from ... import __version__
-
-    limits = tuple(limits_percent) if limits_percent is not None else (1.5, 2.0, 3.0)
+    limits = tuple(limits_percent) if limits_percent is not None else DEFAULT_LIMITS_PERCENT
     out = os.fspath(out_path)
     shown = list(trends)[: int(max_units)]
     by_unit = {}

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ...signal import amplitude_spectrum, order_spectrum, resample_to_angle, spectrogram
 from .common import _WIDE, _page_title, length_scale
 
 __all__ = ["time_signal_page", "spectrum_page", "spectrogram_page", "order_spectrum_page"]
@@ -96,8 +97,6 @@ def averaged_spectrum(ctx):
     as the harmonics' table gives it (a Hann spectrum of a whole long record read the line many times lower,
     spread over bins the speed's wander had smeared it across).
     """
-    from ...signal import amplitude_spectrum
-
     f_ref, total, weight = None, None, 0
     for b in ctx.bursts:
         cycles = FRAME_CYCLES / ctx.f0 if ctx.f0 > 0 else b.x.size / b.fs
@@ -189,8 +188,6 @@ def spectrogram_page(doc, ctx) -> None:
     """Spectrogram of every burst at its own time, one colour scale (60 dB)."""
     import matplotlib.pyplot as plt
 
-    from ...signal import spectrogram
-
     bursts, fmax = ctx.bursts, ctx.fmax_hz
     fig, ax = plt.subplots(figsize=_WIDE)
     fig.subplots_adjust(left=0.08, right=0.95, top=0.88, bottom=0.1)
@@ -218,8 +215,6 @@ def spectrogram_page(doc, ctx) -> None:
 def order_spectrum_page(doc, ctx) -> None:
     """Bursts resampled to constant link-pass phase; order 1 = link pass, 1/k = step pass (k links a step)."""
     import matplotlib.pyplot as plt
-
-    from ...signal import order_spectrum, resample_to_angle
 
     if not ctx.found:  # no link pass: nothing to resample to (the band's centre would be drawn as if it were one)
         return

@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 import textwrap
 
+from ... import __version__
 from ..decision import SIGMA_TOO_LARGE
 from .common import (
     _PAGE,
@@ -259,8 +260,6 @@ def absent_pages_text(absent) -> list:
 def recording_page(doc, ctx) -> None:
     """Page 2: recording, checksum, reader, vibkit version, escalator, scene, sensor, provenance."""
     import matplotlib.pyplot as plt
-
-    from ... import __version__
 
     rec, sc, ch, summary = ctx.rec, ctx.scene, ctx.channel, ctx.summary
     fig = plt.figure(figsize=_PAGE)

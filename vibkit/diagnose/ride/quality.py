@@ -8,7 +8,7 @@ One result type, :class:`RideQuality`, from three entry points that share one pa
 * :func:`ride_quality_from_simulation`: a simulation Dataset with the acceleration of a step
   roller (``roller_acceleration``: x horizontal, z vertical, as a sensor on the step tread sees them,
   gravity added) or only ``accel_step`` (along the guide tangent);
-* :func:`vibkit.diagnose.ride_simulation.simulate_ride`: a scene (TOML) simulated with the step roller's
+* :func:`vibkit.diagnose.ride.simulation.simulate_ride`: a scene (TOML) simulated with the step roller's
   motion added to its outputs.
 
 For each axis: the ISO 2631-1 weighted signal (Wd for x and y, Wk for z, as ISO 18738 takes them) and
@@ -21,15 +21,16 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-import math
 import os
 import re
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..runtime.constants import STANDARD_GRAVITY
-from ..signal.ride import (
+from ...io import read_recording, source_name
+from ...runtime.constants import STANDARD_GRAVITY
+from ...signal.bursts import uniform_bursts
+from ...signal.ride import (
     LOWPASS_HZ,
     PeakToPeak,
     RideSegment,
@@ -38,9 +39,9 @@ from ..signal.ride import (
     lowpass_10hz,
     peak_to_peak,
 )
-from ..signal.stillness import STILL_THRESHOLD, walking_level
-from ..signal.weighting import frequency_weighting, get_weighting
-from .rides import find_rides
+from ...signal.weighting import WEIGHTINGS, frequency_weighting, get_weighting
+from ..rides import ride_in_walk
+from ..segment import parse_segment, segment_of_recording
 
 __all__ = [
     "AxisRide",
@@ -163,17 +164,6 @@ class RideQuality:
         }
 
 
-def parse_segment(text) -> tuple[float, float]:
-    """``"START:END"`` [s] -> ``(start, end)``; raises ValueError naming the text."""
-    try:
-        a, b = (float(v) for v in str(text).split(":"))
-    except ValueError:
-        raise ValueError(f"segment {text!r}: expected START:END in seconds, e.g. 2.5:14") from None
-    if not (math.isfinite(a) and math.isfinite(b) and 0 <= a < b):
-        raise ValueError(f"segment {text!r}: expected 0 <= START < END [s]")
-    return a, b
-
-
 def parse_channels(text) -> dict:
     """``"ax,ay,az"`` (x, y, z in order; ``-`` skips one) or ``"z=acc,x=ax"`` -> {axis: channel}."""
     out = {}
@@ -205,8 +195,6 @@ def parse_weightings(text) -> dict | None:
     Any other count, a repeated axis, a mix of the forms or an unknown name is a ValueError naming
     the text.
     """
-    from ..signal.weighting import WEIGHTINGS, get_weighting
-
     if text is None or not str(text).strip():
         return None
     items = [s.strip() for s in str(text).split(",")]
@@ -281,8 +269,6 @@ def _naming(source_of):
 
 
 def _recording_source(recording, *args, **kwargs):
-    from ..io import source_name  # as the reader names it: <stdin> for -
-
     if isinstance(recording, (str, os.PathLike)):
         return source_name(recording)
     return getattr(recording, "attrs", {}).get("source_file", "")
@@ -471,7 +457,7 @@ def ride_quality_from_recording(
         Axis -> channel (``{"x": "ax", "z": "az"}``) or the ``--channels`` text (:func:`parse_channels`);
         default: channels whose names end in x, y, z.
     segment : (float, float), optional
-        Ride segment [s] from the first sample; default: detected.
+        Ride segment [s] in the file's own time (its time column's), inside the recording; default: detected.
     weightings : dict, optional
         Axis -> weighting (default x, y: Wd; z: Wk).
     sample_rate : float, optional
@@ -491,9 +477,6 @@ def ride_quality_from_recording(
         A channel that is not in the recording or not an acceleration in m/s^2; a recording in bursts
         whose longest burst is too short; the errors of :func:`ride_quality`.
     """
-    from ..io import read_recording
-    from ..signal.bursts import uniform_bursts
-
     opts = dict(read_options or {})
     if sample_rate is not None:
         opts["sample_rate"] = sample_rate
@@ -506,6 +489,8 @@ def ride_quality_from_recording(
     ):
         # a vibkit result file: the simulation path (its step roller, or accel_step)
         return ride_quality_from_simulation(rec, segment=segment, weightings=weightings, source=src)
+    # a segment given in the file's own time lies inside the recording (never cut to fit), checked first
+    given = None if segment is None or isinstance(segment, RideSegment) else segment_of_recording(rec, segment)
     names = [str(v) for v in rec.data_vars if v != "segment" and rec[v].dims == ("time",)]
     if not names:
         raise ValueError(f"{src}: the recording has no channel along time")
@@ -537,6 +522,8 @@ def ride_quality_from_recording(
             f"from t = {first[k].t0:.4g} s) is assessed, times from its start"
         )
     fs = first[k].fs
+    if given is not None:  # in the file's own time: from the assessed burst's start
+        segment = (given[0] - float(first[k].t0), given[1] - float(first[k].t0))
     sig = {ax: b[k].x for ax, b in bursts.items()}
     if any(b[k].resampled for b in bursts.values()):
         notes.append("irregular time stamps: resampled linearly to a uniform grid (weighting above ~fs/4 is softened)")
@@ -554,7 +541,7 @@ def ride_quality_from_recording(
     if speed is None and float(rec.attrs.get("chain_speed_m_s", 0) or 0) > 0:
         speed = float(rec.attrs["chain_speed_m_s"])
     if segment is None:
-        segment = _ride_in_walk(rec, chans, first[k], notes, src)
+        segment = ride_in_walk(rec, [chans.get(a) for a in "xyz"], first[k].t0, notes, src)
     return ride_quality(
         sig,
         fs,
@@ -565,41 +552,6 @@ def ride_quality_from_recording(
         channel_names=chans,
         speed=speed,
         notes=notes,
-    )
-
-
-def _ride_in_walk(rec, chans, burst, notes, src):
-    """The ride segment of a phone's walk (times from the burst's start), or None for a record that is no walk.
-
-    A record in which the person walks (the walking band over the still level for a fifth of it or more) is a
-    walk with rides, not a step's ride: its incline cannot be read from the gravity component (a phone in the
-    hand turns) nor from the integrated vertical acceleration (walking drifts it by metres a second).  The ride
-    is then the longest that :func:`vibkit.diagnose.rides.find_rides` finds; a walk without one is refused."""
-    axes = [chans.get(a) for a in "xyz"]
-    if None in axes or burst.x.size < 10 * burst.fs:
-        return None
-    acc = np.stack([np.asarray(rec[c].values, dtype=float) for c in axes])
-    fs = float(rec.attrs.get("sample_rate_hz") or burst.fs)
-    level = walking_level(acc, fs)
-    if not np.mean(level > STILL_THRESHOLD) >= 0.2:
-        return None
-    found = find_rides(rec)
-    if not found.rides:
-        raise ValueError(
-            f"{src}: a walk ({100 * np.mean(level > STILL_THRESHOLD):.0f} % of it walking) with no escalator ride "
-            "found in it (`vibkit rides` says why for each still span): give the ride as --segment START:END"
-        )
-    ride = max(found.rides, key=lambda r: r.line_end_s - r.line_start_s)
-    t0 = float(burst.t0)
-    notes.append(
-        f"a walk with {len(found.rides)} escalator ride(s) (`vibkit rides`); the longest assessed, "
-        f"{ride.line_start_s:.1f}-{ride.line_end_s:.1f} s of the recording (--segment to choose another)"
-    )
-    return RideSegment(
-        start_s=max(ride.line_start_s - t0, 0.0),
-        end_s=ride.line_end_s - t0,
-        method="a ride in a walk",
-        note=f"link pass {ride.link_pass_hz:.3f} Hz, {ride.direction}",
     )
 
 
@@ -730,13 +682,3 @@ def ride_quality_from_simulation(ds, *, segment=None, weightings=None, source=No
         detect=detect,
         notes=notes,
     )
-
-
-def __getattr__(name):
-    """``simulate_ride`` and ``with_ride_outputs``, now in :mod:`vibkit.diagnose.ride_simulation`, importable from
-    here as they were first published."""
-    if name in ("simulate_ride", "with_ride_outputs"):
-        from . import ride_simulation
-
-        return getattr(ride_simulation, name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
