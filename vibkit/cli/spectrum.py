@@ -63,8 +63,54 @@ def add_parser(subparsers):
     return s
 
 
+def _common_line(a, res, line, rec):
+    """A phone's one steady line, found on its axes together, a second clear of each end (stepping on and off): the
+    frequency only (no speed was given); the channels' own harmonic families listed beside it."""
+    from vibkit.diagnose.rides import common_line_names
+
+    names = common_line_names(rec)
+    best = names[line.strongest_channel]
+    reason = (
+        f"one steady line common to the axes {', '.join(names)} at {fmt_pm(line.frequency_hz, line.sigma_hz)} Hz, "
+        f"{line.level_db:.1f} dB over the floor (p <= {line.p_value:.1g}), a second clear of each end: a ride's link "
+        "pass (`vibkit rides`), or a tone"
+    )
+    if a.json:
+        print_json(
+            "spectrum",
+            {
+                "status": "ok",
+                "reason": reason,
+                "exit_code": 0,
+                "file": shown(a.recording),
+                "channel": best,
+                "band_hz": list(line.band),
+                "speed_m_s": None,
+                "method": "steady line common to the axes",
+                "fundamental_hz": line.frequency_hz,
+                "fundamental_sigma_hz": line.sigma_hz,
+                "common_line": {
+                    "level_db": line.level_db,
+                    "p_value": line.p_value,
+                    "channels": dict(zip(names, line.channel_levels_db)),
+                    "parts_hz": list(line.parts_hz),
+                },
+                "channels": res.per_channel(),
+            },
+        )
+    else:
+        print(f"{shown(a.recording)}: axes {', '.join(names)} together")
+        print(
+            f"link-pass fundamental {fmt_pm(line.frequency_hz, line.sigma_hz, 'Hz')} (search band {fmt_band(line.band)})"
+        )
+        print_channels(res)
+        msg(textwrap.fill(f"note: {reason}", 100, subsequent_indent="  "))
+    return 0
+
+
 def run(a):
     from vibkit.diagnose.channels import estimate_channels
+    from vibkit.diagnose.rides import common_line
 
     rec = read_recording(a)
     profile = escalator_profile(a)
@@ -94,6 +140,10 @@ def run(a):
         )
     except ValueError as exc:  # the analysis's words about the signal, with the file named
         raise in_file(a.recording, exc) from None
+    if not speed:  # a phone's axes together: the ride's one line, clear of stepping on and off (`vibkit rides`)
+        line = common_line(rec, tuple(res.estimates[0].band_hz))
+        if line is not None and line.detected:
+            return _common_line(a, res, line, rec)
     if res.best is None:
         e0 = res.estimates[0]
         return refused(

@@ -29,7 +29,16 @@ from ..signal.ride import RideSegment
 from ..signal.steadyline import line_level, normalised_spectrum, steady_line
 from ..signal.stillness import STILL_THRESHOLD, still_spans, walking_level
 
-__all__ = ["DEFAULT_BAND_HZ", "Ride", "RideSearch", "find_rides", "ride_evidence", "ride_in_walk"]
+__all__ = [
+    "DEFAULT_BAND_HZ",
+    "Ride",
+    "RideSearch",
+    "common_line",
+    "common_line_names",
+    "find_rides",
+    "ride_evidence",
+    "ride_in_walk",
+]
 
 #: where a chain's link pass may be without a profile [Hz]: 0.4-0.9 m/s over 101.6-135 mm pitches
 DEFAULT_BAND_HZ = (2.9, 9.0)
@@ -205,31 +214,47 @@ def find_rides(
         if (i1 - i0) / fs * band[0] < 6:
             verdicts.append((t0, t1, "too short to resolve the band's lowest frequency"))
             continue
-        seg = x[:, i0:i1] - x[:, i0:i1].mean(axis=1, keepdims=True)
-        line = steady_line(seg, fs, band=band, p_fa=p_fa, parts=1)
-        if not line.detected:
-            verdicts.append((t0, t1, f"no ride: {line.reason}"))
+        line, j0, j1, why = _line_in(x[:, i0:i1], fs, band, p_fa)
+        if line is None:
+            verdicts.append((t0, t1, f"no ride: {why}"))
             continue
-        # the ride is where the line is: a still span may hold standing before stepping on or after stepping off
-        j0, j1 = _where_the_line_is(seg, fs, line.frequency_hz, band)
-        if j1 - j0 < seg.shape[1] - int(1.5 * fs):
+        if j1 - j0 < i1 - i0:
             notes.append(
                 f"still {t0:.1f}-{t1:.1f} s: the line only {tu[i0 + j0]:.1f}-{tu[i0 + j1 - 1]:.1f} s (standing off the "
                 "escalator before or after)"
             )
-            i0, i1 = i0 + j0, i0 + j1
-            seg = x[:, i0:i1] - x[:, i0:i1].mean(axis=1, keepdims=True)
-        if (i1 - i0) / fs * band[0] < 6:
-            verdicts.append((t0, t1, "no ride: the line lasts too short to resolve the band's lowest frequency"))
-            continue
-        line = steady_line(seg, fs, band=band, p_fa=p_fa)
-        if not line.detected:
-            verdicts.append((t0, t1, f"no ride: {line.reason}"))
-            continue
+        i0, i1 = i0 + j0, i0 + j1
         ride = _ride(recording, line, names, t0, t1, nominal_pitch, rated_speed)
         rides.append(dataclasses.replace(ride, line_start_s=float(tu[i0]), line_end_s=float(tu[i1 - 1])))
         verdicts.append((t0, t1, "ride"))
     return RideSearch(tuple(rides), band, p_fa, tuple(verdicts), tuple(names), tuple(notes))
+
+
+def _line_in(x, fs, band, p_fa):
+    """(the steady line, first and stop sample of the part analysed, why not) of a still span's channels ``x``: a
+    line over the whole span first (no steadiness asked), then the part where that line stands (a still span may
+    hold standing before stepping on or after stepping off: the ride is where the line is), tested for a steady
+    line.  The line is None where either test fails."""
+    n = x.shape[1]
+    seg = x - x.mean(axis=1, keepdims=True)
+    line = steady_line(seg, fs, band=band, p_fa=p_fa, parts=1)
+    if not line.detected:
+        return None, 0, n, line.reason
+    j0, j1 = _where_the_line_is(seg, fs, line.frequency_hz, band)
+    if j1 - j0 >= n - int(1.5 * fs):
+        j0, j1 = 0, n
+    if (j1 - j0) / fs * band[0] < 6:
+        return None, j0, j1, "the line lasts too short to resolve the band's lowest frequency"
+    part = x[:, j0:j1] - x[:, j0:j1].mean(axis=1, keepdims=True)
+    line = steady_line(part, fs, band=band, p_fa=p_fa)
+    third = (j1 - j0) // 3
+    if not line.detected and line.failed_part in (0, 2) and 2 * third / fs * band[0] >= 6:
+        # the first or last third without the line: stepping on or off the escalator (or standing at a landing), too
+        # short for the windows above to cut; the two thirds that show it are tested once more
+        j0, j1 = (j0 + third, j1) if line.failed_part == 0 else (j0, j1 - third)
+        part = x[:, j0:j1] - x[:, j0:j1].mean(axis=1, keepdims=True)
+        line = steady_line(part, fs, band=band, p_fa=p_fa)
+    return (line, j0, j1, "") if line.detected else (None, j0, j1, line.reason)
 
 
 def _where_the_line_is(seg, fs, freq, band, on_db=3.0):
@@ -368,3 +393,38 @@ def ride_in_walk(recording, axes, t0, notes, source):
         method="a ride in a walk",
         note=f"link pass {ride.link_pass_hz:.3f} Hz, {ride.direction}",
     )
+
+
+def common_line(recording, band, *, p_fa=1e-3, trim_s=1.0):
+    """One steady line common to a phone's axes in ``band`` [Hz] (:func:`~vibkit.signal.steadyline.steady_line` over
+    its accelerometer's and gyroscope's channels, ``trim_s`` left out at each end: stepping on and off), or None
+    where the recording has no three accelerometer axes (a tensioner, one channel) or is too short for the band.
+
+    A ride's link pass is often one line without harmonics, which the harmonic-family test of ``vibkit spectrum``
+    needs; the axes together show it."""
+    names = common_line_names(recording)
+    if not names:
+        return None
+    _, scale = _acc_channels(recording)
+    t = np.asarray(recording["time"].values, dtype=float)
+    fs = float(recording.attrs.get("sample_rate_hz") or 0.0) or 1.0 / float(np.median(np.diff(t)))
+    if band[1] >= 0.45 * fs:
+        return None
+    tu, x, _ = _uniform(recording, names, fs)
+    k = int(round(trim_s * fs))
+    x = x[:, k : x.shape[1] - k]
+    if x.shape[1] / fs * band[0] < 6:
+        return None
+    x[:3] *= scale
+    line, _, _, _ = _line_in(x, fs, band, p_fa)
+    return line if line is not None else steady_line(x - x.mean(axis=1, keepdims=True), fs, band=band, p_fa=p_fa)
+
+
+def common_line_names(recording) -> list:
+    """The channels :func:`common_line` combines: the accelerometer's three axes and the gyroscope's (none without
+    three accelerometer axes)."""
+    try:
+        acc, _ = _acc_channels(recording)
+    except ValueError:
+        return []
+    return acc + [v for v in ("gyro_x", "gyro_y", "gyro_z") if v in recording.data_vars]

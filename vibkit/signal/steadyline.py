@@ -96,6 +96,8 @@ class SteadyLine:
         The band searched [Hz].
     reason : str
         Why the line is not detected ("" when it is).
+    failed_part : int
+        The part (0-based) that does not show the line, -1 where none failed.
     """
 
     detected: bool
@@ -112,6 +114,7 @@ class SteadyLine:
     duration_s: float = float("nan")
     band: tuple = (float("nan"), float("nan"))
     reason: str = ""
+    failed_part: int = -1  # the part (0-based) that does not show the line, -1 where none failed
 
     @property
     def strongest_channel(self) -> int:
@@ -332,7 +335,7 @@ def steady_line(
                 f"{len(fk) + 1} of {parts} ({a / fs:.1f}-{b / fs:.1f} s) shows it only {10 * math.log10(tp):.1f} dB "
                 f"(under {part_min_db:g} dB): not steady (a transient or a sweep, not a chain)"
             )
-            return SteadyLine(False, fr, float("nan"), parts_hz=tuple(fk), reason=why, **common)
+            return SteadyLine(False, fr, float("nan"), parts_hz=tuple(fk), reason=why, failed_part=len(fk), **common)
         fk.append(fp)
         sk.append(sp)
     fk_a, sk_a = np.asarray(fk), np.asarray(sk)
