@@ -12,7 +12,8 @@ from vibkit.signal import (
     track_phase,
     vold_kalman,
 )
-from vibkit.signal.orders import _vk_banded, _vk_solve, _vk_sparse
+from vibkit.signal.kernels import _vk_solve
+from vibkit.signal.orders import _vk_banded, _vk_sparse
 
 from support.chain import family_of_phase
 

@@ -11,7 +11,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import numba
 import numpy as np
 import scipy.interpolate
 import scipy.linalg
@@ -410,53 +409,6 @@ def _vk_banded(n, r2):
     return ab
 
 
-@numba.njit(cache=True, nogil=True)
-def _vk_solve(y, r2):
-    """Solve ``(I + r2 D^T D) a = y`` (D: second difference) by LDL^T of the pentadiagonal matrix.
-
-    O(n), complex right-hand side; the same system as :func:`_vk_banded` and :func:`_vk_sparse`.
-    """
-    n = y.shape[0]
-    dd = np.empty(n)
-    p = np.zeros(n)
-    q = np.zeros(n)
-    z = np.empty(n, dtype=np.complex128)
-    for i in range(n):
-        # A[i, i], A[i, i-1], A[i, i-2] of I + r2 D^T D
-        if i == 0 or i == n - 1:
-            a_ii = 1.0 + r2
-        elif i == 1 or i == n - 2:
-            a_ii = 1.0 + 5.0 * r2
-        else:
-            a_ii = 1.0 + 6.0 * r2
-        if i >= 2:
-            q[i] = r2 / dd[i - 2]
-        if i >= 1:
-            e = -2.0 * r2 if (i == 1 or i == n - 1) else -4.0 * r2
-            p[i] = (e - q[i] * p[i - 1] * dd[i - 2] if i >= 2 else e) / dd[i - 1]
-        di = a_ii
-        if i >= 1:
-            di -= p[i] * p[i] * dd[i - 1]
-        if i >= 2:
-            di -= q[i] * q[i] * dd[i - 2]
-        dd[i] = di
-        zi = y[i]
-        if i >= 1:
-            zi -= p[i] * z[i - 1]
-        if i >= 2:
-            zi -= q[i] * z[i - 2]
-        z[i] = zi
-    out = np.empty(n, dtype=np.complex128)
-    for i in range(n - 1, -1, -1):
-        xi = z[i] / dd[i]
-        if i + 1 < n:
-            xi -= p[i + 1] * out[i + 1]
-        if i + 2 < n:
-            xi -= q[i + 2] * out[i + 2]
-        out[i] = xi
-    return out
-
-
 def _vk_sparse(n, r2):
     d = scipy.sparse.diags([np.ones(n - 2), -2.0 * np.ones(n - 2), np.ones(n - 2)], [0, 1, 2], shape=(n - 2, n))
     return (scipy.sparse.identity(n) + r2 * (d.T @ d)).tocsc()
@@ -556,6 +508,8 @@ def vold_kalman(x, fs, phase, *, order=1.0, bandwidth_hz, solver="pentadiagonal"
     y = x * np.exp(-1j * theta)
     n = x.size
     if solver == "pentadiagonal":
+        from .kernels import _vk_solve  # numba on the first use, not with the package
+
         a = _vk_solve(y, r2)
     else:
         rhs = np.column_stack([y.real, y.imag])
