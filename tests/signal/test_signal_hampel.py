@@ -123,3 +123,21 @@ def test_rate_of_a_wide_window_at_a_small_false_alarm_rate():
     x = rng.standard_normal(2_000_000)
     observed = np.mean(hampel(x, 50, false_alarm_rate=1e-3).is_outlier[50:-50])
     assert observed == pytest.approx(1e-3, rel=0.08)
+
+
+def test_the_calibration_is_computed_once_per_window_and_rate():
+    """A report filters every burst at the same window and rate: the threshold is found once, and a cached
+    threshold is the one the bisection gives afresh (bit for bit), for every spelling of the arguments."""
+    from vibkit.signal.hampel import _n_sigma_for_rate
+
+    _n_sigma_for_rate.cache_clear()
+    first = hampel_n_sigma_for_rate(4, 0.002)
+    assert _n_sigma_for_rate.cache_info().misses == 1
+    assert hampel_n_sigma_for_rate(np.int64(4), "0.002") == first  # the same window and rate, spelt otherwise
+    assert hampel(np.arange(21.0), 4, false_alarm_rate=0.002).filtered.size == 21
+    info = _n_sigma_for_rate.cache_info()
+    assert (info.hits, info.misses) == (2, 1)
+    _n_sigma_for_rate.cache_clear()
+    assert hampel_n_sigma_for_rate(4, 0.002) == first
+    assert hampel_false_alarm_rate(4, first) == pytest.approx(0.002, rel=0.02)
+    assert hampel_n_sigma_for_rate(5, 0.002) != first  # another window: another threshold
