@@ -255,6 +255,11 @@ def interpolated_dft(x, fs, *, band=None, f_guess=None, iterations=3, nan_policy
     )
 
 
+#: rows of the harmonic basis :func:`harmonic_ls` builds at a time (its sums accumulate over blocks of this many
+#: samples: 64 k rows of 12 columns are 6 MB, whatever the record's length)
+LS_BLOCK_ROWS = 1 << 16
+
+
 def _harmonic_basis(t, omega, n_harmonics, extra=0):
     """Columns ``1, cos(k w t), sin(k w t)`` (k = 1..K) in a Fortran array, plus ``extra`` spare."""
     m = np.empty((t.size, 2 * n_harmonics + 1 + extra), order="F")
@@ -336,51 +341,81 @@ def harmonic_ls(x, fs, *, f_guess, n_harmonics=5, max_iter=20, nan_policy="raise
         raise ValueError(
             f"Parameter x is {duration:.4g} s long, under two periods of {f0:g} Hz; expected >= {2 / f0:.4g} s."
         )
-    t = (np.arange(n) - (n - 1) / 2.0) / fs
     h = np.arange(1, kmax + 1)
+    # the sums the least squares need (normal equations, cost) accumulated over blocks of rows: the basis is
+    # never held whole (it was 12 columns of the record's length: 1.3 GB for 8 h at 200 Hz); a record of one
+    # block does exactly what the whole-matrix form did (adding to zeros is exact)
+    blocks = [(i, min(n, i + LS_BLOCK_ROWS)) for i in range(0, n, LS_BLOCK_ROWS)]
+    n_col = 2 * kmax + 1
+
+    def basis(i, j, omega):
+        t = (np.arange(i, j) - (n - 1) / 2.0) / fs  # elementwise as np.arange(n)[i:j] would give
+        return t, _harmonic_basis(t, omega, kmax, extra=1)
 
     def fit_at(omega):
-        full = _harmonic_basis(t, omega, kmax, extra=1)
-        m = full[:, :-1]
-        coef = _ls(m, x)
-        r = x - m @ coef
-        return coef, float(r @ r), full
+        g, rhs = np.zeros((n_col, n_col)), np.zeros(n_col)
+        for i, j in blocks:
+            m = basis(i, j, omega)[1][:, :-1]
+            g += m.T @ m
+            rhs += m.T @ x[i:j]
+        try:
+            coef = np.linalg.solve(g, rhs)
+        except np.linalg.LinAlgError:
+            coef = (
+                np.linalg.lstsq(basis(0, n, omega)[1][:, :-1], x, rcond=None)[0]
+                if len(blocks) == 1
+                else np.linalg.lstsq(g, rhs, rcond=None)[0]
+            )
+        cost = 0.0
+        for i, j in blocks:
+            r = x[i:j] - basis(i, j, omega)[1][:, :-1] @ coef
+            cost += float(r @ r)
+        return coef, cost
+
+    def gauss_newton(omega, coef):
+        """J^T J and J^T r of the model at (coef, omega): the columns of the basis and d model / d omega."""
+        a, b = coef[1 : kmax + 1], coef[kmax + 1 :]
+        g, jtr = np.zeros((n_col + 1, n_col + 1)), np.zeros(n_col + 1)
+        for i, j in blocks:
+            t, jac = basis(i, j, omega)
+            m = jac[:, :-1]
+            jac[:, -1] = t * (m[:, kmax + 1 :] @ (-(a * h)) + m[:, 1 : kmax + 1] @ (b * h))
+            r = x[i:j] - m @ coef
+            g += jac.T @ jac
+            jtr += jac.T @ r
+            if len(blocks) == 1:
+                return g, jtr, jac, r
+        return g, jtr, None, None
 
     omega = 2.0 * np.pi * f0
-    coef, cost, full = fit_at(omega)
+    coef, cost = fit_at(omega)
     iterations = 0
     for iterations in range(1, max_iter + 1):  # noqa: B007 (the count is read after the loop)
-        a = coef[1 : kmax + 1]
-        b = coef[kmax + 1 :]
-        m = full[:, :-1]
-        s = m[:, kmax + 1 :]
-        c = m[:, 1 : kmax + 1]
-        full[:, -1] = t * (s @ (-(a * h)) + c @ (b * h))  # d model / d omega
-        jac = full
-        r = x - m @ coef
-        g = jac.T @ jac
+        g, jtr, jac, r = gauss_newton(omega, coef)
         try:
-            delta = np.linalg.solve(g, jac.T @ r)
-            var_omega = float(np.linalg.inv(g)[-1, -1]) * cost / max(n - jac.shape[1], 1)
+            delta = np.linalg.solve(g, jtr)
+            var_omega = float(np.linalg.inv(g)[-1, -1]) * cost / max(n - (n_col + 1), 1)
         except np.linalg.LinAlgError:
-            delta = np.linalg.lstsq(jac, r, rcond=None)[0]
+            delta = (
+                np.linalg.lstsq(jac, r, rcond=None)[0] if jac is not None else np.linalg.lstsq(g, jtr, rcond=None)[0]
+            )
             var_omega = 0.0
         step = float(delta[-1])
         if abs(step) <= 1e-3 * np.sqrt(var_omega) or abs(step) < 1e-13 * omega:
             omega += step
-            coef, cost, full = fit_at(omega)
+            coef, cost = fit_at(omega)
             break
         accepted = False
         for _ in range(30):
             cand = omega + step
-            coef_c, cost_c, full_c = fit_at(cand)
+            coef_c, cost_c = fit_at(cand)
             if cost_c <= cost:
                 accepted = True
                 break
             step /= 2.0
         if not accepted:
             break
-        omega, coef, cost, full = cand, coef_c, cost_c, full_c
+        omega, coef, cost = cand, coef_c, cost_c
     a = coef[1 : kmax + 1]
     b = coef[kmax + 1 :]
     amps = np.hypot(a, b)
