@@ -121,6 +121,25 @@ def row(what, case, baseline, cpu, base_cpu, ratio, target, note=""):
     }
 
 
+def flush(rows, quick, repeat, load0):
+    """Write the table of the rows measured so far (atomically): a row that fails later leaves the others."""
+    if not rows:
+        return ""
+    load1 = os.getloadavg()[0]
+    suffix = "_quick" if quick else ""
+    text = (
+        "# What a user waits for (`benchmarks/bench_user_costs.py`)\n\n"
+        f"{today()}, {machine()}; 1-minute load average {load0:.1f} at the start, {load1:.1f} after the last row (the "
+        "machine is shared with other jobs: times are CPU seconds of the whole child process, user + system, "
+        f"which move far less with the load than wall time). Median of {repeat} interleaved runs per case"
+        + (" (quick: smoke sizes)" if quick else "")
+        + "; every case a fresh `python` process. Ratio: case / baseline (for the simulation: simulated over "
+        "CPU seconds).\n\n" + markdown_table(rows) + "\n"
+    )
+    write_text(RESULTS / f"user_costs{suffix}.md", text)
+    return text
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="a smoke run: small inputs, one repeat")
@@ -155,6 +174,8 @@ def main(argv=None):
                     f"wall {cold[1]:.0f} s cold, {warm['wall']:.1f} s warm",
                 )
             )
+
+        flush(rows, a.quick, repeat, load0)
 
         if "import" in wanted or "spectrum" in wanted:
             ten = tmp / "ten-seconds.csv"
@@ -196,6 +217,8 @@ def main(argv=None):
                     )
                 )
 
+        flush(rows, a.quick, repeat, load0)
+
         if "pitch8h" in wanted:
             hours = 1 / 3 if a.quick else 8.0
             path = tmp / "day.csv"
@@ -226,6 +249,8 @@ def main(argv=None):
                 )
             )
 
+        flush(rows, a.quick, repeat, load0)
+
         if "report" in wanted:
             code = cli(
                 [
@@ -251,6 +276,8 @@ def main(argv=None):
                     "<= 1",
                 )
             )
+
+        flush(rows, a.quick, repeat, load0)
 
         if "fleet" in wanted:
             from bench_fleet import make_fleet
@@ -287,6 +314,8 @@ def main(argv=None):
                 )
             )
 
+        flush(rows, a.quick, repeat, load0)
+
         if "simulate" in wanted:
             duration = 10.0 if a.quick else 44.0
             code = textwrap.dedent(
@@ -315,19 +344,7 @@ def main(argv=None):
                 )
             )
 
-    load1 = os.getloadavg()[0]
-    suffix = "_quick" if a.quick else ""
-    text = (
-        "# What a user waits for (`benchmarks/bench_user_costs.py`)\n\n"
-        f"{today()}, {machine()}; 1-minute load average {load0:.1f} at the start, {load1:.1f} at the end (the "
-        "machine is shared with other jobs: times are CPU seconds of the whole child process, user + system, "
-        f"which move far less with the load than wall time). Median of {repeat} interleaved runs per case"
-        + (" (quick: smoke sizes)" if a.quick else "")
-        + "; every case a fresh `python` process. Ratio: case / baseline (for the simulation: simulated over "
-        "CPU seconds).\n\n" + markdown_table(rows) + "\n"
-    )
-    write_text(RESULTS / f"user_costs{suffix}.md", text)
-    print(text)
+    print(flush(rows, a.quick, repeat, load0))
     return 0
 
 
