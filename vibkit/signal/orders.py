@@ -12,6 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.fft
 import scipy.interpolate
 import scipy.linalg
 import scipy.signal
@@ -99,6 +100,11 @@ class PhaseTrack:
     harmonics_used: tuple
 
 
+#: values (frequency rows x frames, or samples) :func:`track_phase` computes at a time in its block loops: 2 M
+#: values are 16 MB as floats, 32 MB complex, whatever the record's length
+SPECTROGRAM_BLOCK_VALUES = 1 << 21
+
+
 def _lowpass(y, fs, cutoff, order=4, padtype="even"):
     sos = scipy.signal.butter(order, cutoff, btype="low", fs=fs, output="sos")
     # Even (mirror) extension over three time constants: no start-up transient, and unlike the
@@ -179,14 +185,31 @@ def track_phase(x, fs, *, band, n_harmonics=3, frame_s=None, bandwidth_hz=None, 
     # 1. coarse ridge of harmonic h*
     hop = max(1, nper // 4)
     nfft = 1 << int(np.ceil(np.log2(8 * nper)))
-    f, tf, s = scipy.signal.spectrogram(
-        x - x.mean(), fs, window="hann", nperseg=nper, noverlap=nper - hop, nfft=nfft, mode="magnitude"
-    )
+    # scipy.signal.spectrogram's frames, a block of frames at a time, keeping only the band's rows: the whole
+    # spectrogram of a day-long record (all nfft / 2 + 1 rows, complex on the way) took gigabytes; a frame's
+    # values do not depend on its neighbours, and the frequencies and times are scipy's formulas
+    f = scipy.fft.rfftfreq(nfft, 1 / fs)
+    tf = np.arange(nper / 2, n - nper / 2 + 1, hop) / float(fs)
     lo, hi = h_star * f0 * (1 - max_deviation), h_star * f0 * (1 + max_deviation)
     sel = np.flatnonzero((f >= lo) & (f <= hi))
     if sel.size < 3:
         raise ValueError(f"Parameter frame_s={frame_s!r} is too short to resolve the band {lo:.4g}-{hi:.4g} Hz.")
-    sub = s[sel]
+    xc = x - x.mean()
+    n_frames = (n - (nper - hop)) // hop
+    per_block = max(1, SPECTROGRAM_BLOCK_VALUES // nfft)
+    sub = np.empty((sel.size, n_frames))
+    for j0 in range(0, n_frames, per_block):
+        j1 = min(n_frames, j0 + per_block)
+        _f, _t, s = scipy.signal.spectrogram(
+            xc[j0 * hop : (j1 - 1) * hop + nper],
+            fs,
+            window="hann",
+            nperseg=nper,
+            noverlap=nper - hop,
+            nfft=nfft,
+            mode="magnitude",
+        )
+        sub[:, j0:j1] = s[sel]
     i = np.argmax(sub, axis=0)
     i = np.clip(i, 1, sel.size - 2)
     cols = np.arange(sub.shape[1])
@@ -223,10 +246,14 @@ def track_phase(x, fs, *, band, n_harmonics=3, frame_s=None, bandwidth_hz=None, 
     # 3. frequency from the phase derivative
     freq = np.gradient(phase, 1.0 / fs) / (2.0 * np.pi)
     freq = _lowpass(freq, fs, bw, padtype="odd")  # the phase is smooth: odd extension keeps the end slope
-    if q > 1:
-        t_full = np.arange(n_full) / fs_full
-        phase = scipy.interpolate.CubicSpline(t, phase)(t_full)
-        freq = np.interp(t_full, t, freq)
+    if q > 1:  # back at the record's rate, a block of samples at a time (each value depends on its time alone)
+        spline = scipy.interpolate.CubicSpline(t, phase)
+        phase, freq_d = np.empty(n_full), freq
+        freq = np.empty(n_full)
+        for i0 in range(0, n_full, SPECTROGRAM_BLOCK_VALUES):
+            t_full = np.arange(i0, min(n_full, i0 + SPECTROGRAM_BLOCK_VALUES)) / fs_full
+            phase[i0 : i0 + t_full.size] = spline(t_full)
+            freq[i0 : i0 + t_full.size] = np.interp(t_full, t, freq_d)
     return PhaseTrack(phase, freq, tf, ridge, tuple(used))
 
 
