@@ -143,3 +143,21 @@ def test_harmonic_ls_in_blocks_is_the_whole_matrix_fit(monkeypatch):
     assert blocked.offset == pytest.approx(whole.offset, rel=1e-12)
     assert abs(blocked.frequency_hz - f) < 5 * blocked.sigma_hz  # and both are right
     np.testing.assert_allclose(blocked.amplitudes[:2], [1.0, 0.4], atol=0.03)
+
+
+def test_mean_link_pass_frequency_fit_in_blocks_is_the_whole_matrix_fit(monkeypatch):
+    """The record-wide harmonic fit behind the mean link-pass frequency sums its normal equations over blocks:
+    blocks of 1,000 rows give the one-block fit to rounding (1e-12), and the truth within its sigma."""
+    import importlib
+
+    meanfreq = importlib.import_module("vibkit.signal.meanfreq")
+    rng = np.random.default_rng(21)
+    fs, f, n = 100.0, 3.54, 12_000
+    t = np.arange(n) / fs
+    x = np.sin(2 * np.pi * f * t) + 0.4 * np.sin(4 * np.pi * f * t + 1.0) + 0.5 * rng.standard_normal(n)
+    whole = meanfreq.mean_link_pass_frequency(x, fs, f0=f)
+    monkeypatch.setattr(meanfreq, "FIT_BLOCK_ROWS", 1000)
+    blocked = meanfreq.mean_link_pass_frequency(x, fs, f0=f)
+    assert blocked.frequency_hz == pytest.approx(whole.frequency_hz, rel=1e-12)
+    assert blocked.sigma_hz == pytest.approx(whole.sigma_hz, rel=1e-12)
+    assert abs(blocked.frequency_hz - f) < 4 * blocked.sigma_hz
