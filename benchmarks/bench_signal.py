@@ -31,7 +31,8 @@ import scipy.sparse.linalg
 from numpy.lib.stride_tricks import sliding_window_view
 
 import vibkit.signal as vs
-from vibkit.signal.orders import _vk_banded, _vk_solve, _vk_sparse
+from vibkit.signal.kernels import _vk_solve
+from vibkit.signal.orders import _vk_banded, _vk_sparse
 
 from _common import support
 

@@ -122,3 +122,42 @@ def test_noise_free_simulated_signal(f0):
     r = link_pass_estimate(x, 2000.0, band=(2.0, 6.0), n_harmonics=3)
     assert r.fundamental_hz == pytest.approx(f0, rel=1e-6)
     assert [h.amplitude for h in r.harmonics] == pytest.approx([0.3, 1.0, 0.1], rel=1e-3)
+
+
+def test_harmonic_ls_in_blocks_is_the_whole_matrix_fit(monkeypatch):
+    """The least squares accumulate their sums over blocks of rows (bounded memory on a day-long record): with
+    blocks of 777 rows the fit is the one-block (whole-matrix) fit to rounding, and both find the true tone."""
+    import vibkit.signal.estimate as est
+
+    rng = np.random.default_rng(8)
+    fs, f, n = 100.0, 3.54, 5000
+    t = np.arange(n) / fs
+    x = 0.2 + np.sin(2 * np.pi * f * t) + 0.4 * np.cos(2 * np.pi * 2 * f * t + 0.3) + 0.3 * rng.standard_normal(n)
+    whole = harmonic_ls(x, fs, f_guess=f * (1 + 3e-5), n_harmonics=4)
+    monkeypatch.setattr(est, "LS_BLOCK_ROWS", 777)
+    blocked = harmonic_ls(x, fs, f_guess=f * (1 + 3e-5), n_harmonics=4)
+    assert blocked.frequency_hz == pytest.approx(whole.frequency_hz, rel=1e-12)
+    np.testing.assert_allclose(blocked.amplitudes, whole.amplitudes, rtol=1e-12)
+    np.testing.assert_allclose(blocked.phases, whole.phases, rtol=0, atol=1e-12)
+    assert blocked.noise_std == pytest.approx(whole.noise_std, rel=1e-12)
+    assert blocked.offset == pytest.approx(whole.offset, rel=1e-12)
+    assert abs(blocked.frequency_hz - f) < 5 * blocked.sigma_hz  # and both are right
+    np.testing.assert_allclose(blocked.amplitudes[:2], [1.0, 0.4], atol=0.03)
+
+
+def test_mean_link_pass_frequency_fit_in_blocks_is_the_whole_matrix_fit(monkeypatch):
+    """The record-wide harmonic fit behind the mean link-pass frequency sums its normal equations over blocks:
+    blocks of 1,000 rows give the one-block fit to rounding (1e-12), and the truth within its sigma."""
+    import importlib
+
+    meanfreq = importlib.import_module("vibkit.signal.meanfreq")
+    rng = np.random.default_rng(21)
+    fs, f, n = 100.0, 3.54, 12_000
+    t = np.arange(n) / fs
+    x = np.sin(2 * np.pi * f * t) + 0.4 * np.sin(4 * np.pi * f * t + 1.0) + 0.5 * rng.standard_normal(n)
+    whole = meanfreq.mean_link_pass_frequency(x, fs, f0=f)
+    monkeypatch.setattr(meanfreq, "FIT_BLOCK_ROWS", 1000)
+    blocked = meanfreq.mean_link_pass_frequency(x, fs, f0=f)
+    assert blocked.frequency_hz == pytest.approx(whole.frequency_hz, rel=1e-12)
+    assert blocked.sigma_hz == pytest.approx(whole.sigma_hz, rel=1e-12)
+    assert abs(blocked.frequency_hz - f) < 4 * blocked.sigma_hz

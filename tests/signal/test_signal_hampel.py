@@ -123,3 +123,63 @@ def test_rate_of_a_wide_window_at_a_small_false_alarm_rate():
     x = rng.standard_normal(2_000_000)
     observed = np.mean(hampel(x, 50, false_alarm_rate=1e-3).is_outlier[50:-50])
     assert observed == pytest.approx(1e-3, rel=0.08)
+
+
+def test_the_calibration_is_computed_once_per_window_and_rate(tmp_path, monkeypatch):
+    """A report filters every burst at the same window and rate: the threshold is found once, and a cached
+    threshold is the one the bisection gives afresh (bit for bit), for every spelling of the arguments."""
+    from vibkit.signal.hampel import _n_sigma_for_rate
+
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))  # its file of thresholds: this test's own
+    _n_sigma_for_rate.cache_clear()
+    first = hampel_n_sigma_for_rate(4, 0.002)
+    assert _n_sigma_for_rate.cache_info().misses == 1
+    assert hampel_n_sigma_for_rate(np.int64(4), "0.002") == first  # the same window and rate, spelt otherwise
+    assert hampel(np.arange(21.0), 4, false_alarm_rate=0.002).filtered.size == 21
+    info = _n_sigma_for_rate.cache_info()
+    assert (info.hits, info.misses) == (2, 1)
+    _n_sigma_for_rate.cache_clear()
+    assert hampel_n_sigma_for_rate(4, 0.002) == first
+    assert hampel_false_alarm_rate(4, first) == pytest.approx(0.002, rel=0.02)
+    assert hampel_n_sigma_for_rate(5, 0.002) != first  # another window: another threshold
+
+
+def test_a_threshold_found_once_is_kept_beside_the_kernels_and_read_back_exactly(tmp_path, monkeypatch):
+    """The calibration is kept in the kernel cache's folder: the next process reads the very number (no draws),
+    a file from other draws or a damaged file is not trusted, and an unwritable folder only costs the search."""
+    import importlib
+
+    hp = importlib.import_module("vibkit.signal.hampel")  # the module (vibkit.signal.hampel is the function)
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
+    hp._n_sigma_for_rate.cache_clear()
+    found = hampel_n_sigma_for_rate(6, 0.003)
+    stored = tmp_path / hp.THRESHOLD_CACHE
+    assert stored.is_file()
+
+    def no_search(*_a):
+        raise AssertionError("searched again")
+
+    hp._n_sigma_for_rate.cache_clear()
+    with monkeypatch.context() as m:
+        m.setattr(hp, "_find_n_sigma", no_search)
+        assert hampel_n_sigma_for_rate(6, 0.003) == found  # read back, bit for bit
+    assert hampel_false_alarm_rate(6, found) == pytest.approx(0.003, rel=0.02)
+    # other draws (a changed seed) are another key: searched afresh, not read
+    hp._n_sigma_for_rate.cache_clear()
+    with monkeypatch.context() as m:
+        m.setattr(hp, "_MC_SEED", hp._MC_SEED + 1)
+        calls = []
+        m.setattr(hp, "_find_n_sigma", lambda k, r: calls.append((k, r)) or 5.0)
+        assert hampel_n_sigma_for_rate(6, 0.003) == 5.0 and calls == [(6, 0.003)]
+    # a damaged file: searched afresh, the same number, the file rewritten whole
+    stored.write_text('{"k=6 rate=0.003": ')
+    hp._n_sigma_for_rate.cache_clear()
+    assert hampel_n_sigma_for_rate(6, 0.003) == found
+    assert stored.read_text().startswith("{")
+    # a folder that cannot be made (a file in its way): nothing kept, the search still answers
+    blocker = tmp_path / "not-a-folder"
+    blocker.write_text("")
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(blocker / "cache"))
+    hp._n_sigma_for_rate.cache_clear()
+    assert hampel_n_sigma_for_rate(6, 0.003) == found
+    hp._n_sigma_for_rate.cache_clear()

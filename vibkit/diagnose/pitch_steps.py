@@ -532,21 +532,39 @@ class Hypothesis:
     reason: str
 
 
-def _snr_at(bursts, f):
-    """Mean (over bursts) power near f over the median spectral floor (:data:`SNR_FLOOR_BAND_HZ`) [dB]."""
+def _burst_power(b):
+    """One burst's zero-padded Hann power spectrum, its bin spacing [Hz] and its median floor (what :func:`_snr_at`
+    looks up): a function of the burst alone, so computed once for every frequency asked about."""
+    n = b.x.size
+    nfft = 1 << int(np.ceil(np.log2(SNR_ZERO_PAD * n)))
+    p = np.abs(np.fft.rfft((b.x - b.x.mean()) * np.hanning(n), nfft)) ** 2
+    fr = np.fft.rfftfreq(nfft, 1.0 / b.fs)
+    lo, hi = SNR_FLOOR_BAND_HZ
+    floor = np.median(p[(fr > lo) & (fr < min(b.fs / 2, hi))]) / np.log(2.0)
+    return p, 1.0 / (nfft * (1.0 / b.fs)), floor  # rfftfreq's spacing, as it computes it
+
+
+def _snr_at(bursts, f, spectra=None):
+    """Mean (over bursts) power near f over the median spectral floor (:data:`SNR_FLOOR_BAND_HZ`) [dB].
+
+    ``spectra``: a dict (burst index -> :func:`_burst_power`) filled and reused across calls on the same bursts, so
+    that asking about several frequencies transforms each burst once (the same numbers as without it).
+    """
+    spectra = {} if spectra is None else spectra
     vals = []
-    for b in bursts:
+    for i, b in enumerate(bursts):
         n = b.x.size
         if f >= b.fs / 2 or n / b.fs * f < 1.0:
             continue
-        nfft = 1 << int(np.ceil(np.log2(SNR_ZERO_PAD * n)))
-        p = np.abs(np.fft.rfft((b.x - b.x.mean()) * np.hanning(n), nfft)) ** 2
-        fr = np.fft.rfftfreq(nfft, 1.0 / b.fs)
+        if i not in spectra:
+            spectra[i] = _burst_power(b)
+        p, step, floor = spectra[i]
         df = b.fs / n
-        near = np.abs(fr - f) <= df
-        lo, hi = SNR_FLOOR_BAND_HZ
-        floor = np.median(p[(fr > lo) & (fr < min(b.fs / 2, hi))]) / np.log(2.0)
-        vals.append(10 * np.log10(max(p[near].max(), TINY_POWER) / max(floor, TINY_POWER)))
+        # the bins within df of f (rfftfreq's k * step for the few k near f, the same values it gives)
+        k0 = max(0, int(np.floor((f - df) / step)) - 2)
+        k1 = min(p.size, int(np.ceil((f + df) / step)) + 3)
+        near = np.abs(np.arange(k0, k1) * step - f) <= df
+        vals.append(10 * np.log10(max(p[k0:k1][near].max(), TINY_POWER) / max(floor, TINY_POWER)))
     return float(np.mean(vals)) if vals else float("nan")
 
 
@@ -554,13 +572,16 @@ def hypotheses(bursts, f0, speed, teeth, pitch_range, links_per_step=3):
     """Readings of the chosen peak f and of the periodicities it implies, with the pitch each gives (the step
     pass is the link pass over ``links_per_step``)."""
     lo, hi = pitch_range
-    snr_f = _snr_at(bursts, f0)
+    spectra = {}  # each burst's spectrum, transformed once for every frequency looked up below
+    snr_f = _snr_at(bursts, f0, spectra)
     rows = []
 
     def row(name, f_link, chosen, reason):
         p = speed / f_link
         c, dev = nearest_catalogue(p)
-        return Hypothesis(name, float(f_link), _snr_at(bursts, f_link), float(p), c, float(dev), chosen, reason)
+        return Hypothesis(
+            name, float(f_link), _snr_at(bursts, f_link, spectra), float(p), c, float(dev), chosen, reason
+        )
 
     rows.append(
         row(
@@ -588,7 +609,7 @@ def hypotheses(bursts, f0, speed, teeth, pitch_range, links_per_step=3):
     # what the chosen reading predicts elsewhere in the spectrum
     k = links_per_step
     for name, fe in ((f"step pass expected at f/{k}", f0 / k), (f"sprocket shaft expected at f/{teeth}", f0 / teeth)):
-        snr = _snr_at(bursts, fe)
+        snr = _snr_at(bursts, fe, spectra)
         seen = (
             "not resolved"
             if math.isnan(snr)

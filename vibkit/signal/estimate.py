@@ -255,6 +255,12 @@ def interpolated_dft(x, fs, *, band=None, f_guess=None, iterations=3, nan_policy
     )
 
 
+#: rows of the harmonic basis :func:`harmonic_ls` builds at a time (its sums accumulate over blocks of this many
+#: samples: 16 k rows of 12 columns are 1.5 MB, whatever the record's length; 64 k-row blocks woke BLAS's threads,
+#: which cost 3 times the products' own time on a busy 2-core machine)
+LS_BLOCK_ROWS = 1 << 14
+
+
 def _harmonic_basis(t, omega, n_harmonics, extra=0):
     """Columns ``1, cos(k w t), sin(k w t)`` (k = 1..K) in a Fortran array, plus ``extra`` spare."""
     m = np.empty((t.size, 2 * n_harmonics + 1 + extra), order="F")
@@ -336,51 +342,82 @@ def harmonic_ls(x, fs, *, f_guess, n_harmonics=5, max_iter=20, nan_policy="raise
         raise ValueError(
             f"Parameter x is {duration:.4g} s long, under two periods of {f0:g} Hz; expected >= {2 / f0:.4g} s."
         )
-    t = (np.arange(n) - (n - 1) / 2.0) / fs
     h = np.arange(1, kmax + 1)
+    # the sums the least squares need (normal equations, cost) accumulated over blocks of rows: the basis is
+    # never held whole (it was 12 columns of the record's length: 1.3 GB for 8 h at 200 Hz); a record of one
+    # block does exactly what the whole-matrix form did (adding to zeros is exact)
+    blocks = [(i, min(n, i + LS_BLOCK_ROWS)) for i in range(0, n, LS_BLOCK_ROWS)]
+    n_col = 2 * kmax + 1
+
+    def basis(i, j, omega):
+        t = (np.arange(i, j) - (n - 1) / 2.0) / fs  # elementwise as np.arange(n)[i:j] would give
+        return t, _harmonic_basis(t, omega, kmax, extra=1)
 
     def fit_at(omega):
-        full = _harmonic_basis(t, omega, kmax, extra=1)
-        m = full[:, :-1]
-        coef = _ls(m, x)
-        r = x - m @ coef
-        return coef, float(r @ r), full
+        """Linear fit at omega: its coefficients and cost, and the Gauss-Newton sums J^T J and J^T r there (the
+        columns of the basis and d model / d omega), from a second pass over the blocks once the fit is known."""
+        g, rhs, kept = np.zeros((n_col, n_col)), np.zeros(n_col), None
+        for i, j in blocks:
+            t, full = basis(i, j, omega)
+            m = full[:, :-1]
+            g += m.T @ m
+            rhs += m.T @ x[i:j]
+            if len(blocks) == 1:
+                kept = t, full  # one block: the basis is reused below, as the whole-matrix form did
+        try:
+            coef = np.linalg.solve(g, rhs)
+        except np.linalg.LinAlgError:
+            coef = (
+                np.linalg.lstsq(kept[1][:, :-1], x, rcond=None)[0]
+                if kept is not None
+                else np.linalg.lstsq(g, rhs, rcond=None)[0]
+            )
+        a, b = coef[1 : kmax + 1], coef[kmax + 1 :]
+        cost, gj, jtr, last = 0.0, np.zeros((n_col + 1, n_col + 1)), np.zeros(n_col + 1), None
+        for i, j in blocks:
+            t, jac = kept if kept is not None else basis(i, j, omega)
+            m = jac[:, :-1]
+            r = x[i:j] - m @ coef
+            # one block: r @ r as the whole-matrix form; several: numpy's pairwise sum (BLAS's threaded dot costs
+            # milliseconds a call on a busy machine, hundreds of calls per fit)
+            cost += float(r @ r) if kept is not None else float(np.sum(r * r))
+            jac[:, -1] = t * (m[:, kmax + 1 :] @ (-(a * h)) + m[:, 1 : kmax + 1] @ (b * h))
+            gj += jac.T @ jac
+            jtr += jac.T @ r
+            last = (jac, r) if kept is not None else None
+        return coef, cost, (gj, jtr, last)
 
     omega = 2.0 * np.pi * f0
-    coef, cost, full = fit_at(omega)
+    coef, cost, sums = fit_at(omega)
     iterations = 0
     for iterations in range(1, max_iter + 1):  # noqa: B007 (the count is read after the loop)
-        a = coef[1 : kmax + 1]
-        b = coef[kmax + 1 :]
-        m = full[:, :-1]
-        s = m[:, kmax + 1 :]
-        c = m[:, 1 : kmax + 1]
-        full[:, -1] = t * (s @ (-(a * h)) + c @ (b * h))  # d model / d omega
-        jac = full
-        r = x - m @ coef
-        g = jac.T @ jac
+        g, jtr, last = sums
         try:
-            delta = np.linalg.solve(g, jac.T @ r)
-            var_omega = float(np.linalg.inv(g)[-1, -1]) * cost / max(n - jac.shape[1], 1)
+            delta = np.linalg.solve(g, jtr)
+            var_omega = float(np.linalg.inv(g)[-1, -1]) * cost / max(n - (n_col + 1), 1)
         except np.linalg.LinAlgError:
-            delta = np.linalg.lstsq(jac, r, rcond=None)[0]
+            delta = (
+                np.linalg.lstsq(last[0], last[1], rcond=None)[0]
+                if last is not None
+                else np.linalg.lstsq(g, jtr, rcond=None)[0]
+            )
             var_omega = 0.0
         step = float(delta[-1])
         if abs(step) <= 1e-3 * np.sqrt(var_omega) or abs(step) < 1e-13 * omega:
             omega += step
-            coef, cost, full = fit_at(omega)
+            coef, cost, sums = fit_at(omega)
             break
         accepted = False
         for _ in range(30):
             cand = omega + step
-            coef_c, cost_c, full_c = fit_at(cand)
+            coef_c, cost_c, sums_c = fit_at(cand)
             if cost_c <= cost:
                 accepted = True
                 break
             step /= 2.0
         if not accepted:
             break
-        omega, coef, cost, full = cand, coef_c, cost_c, full_c
+        omega, coef, cost, sums = cand, coef_c, cost_c, sums_c
     a = coef[1 : kmax + 1]
     b = coef[kmax + 1 :]
     amps = np.hypot(a, b)

@@ -12,12 +12,14 @@ it by its window median.  A window without finite samples gives NaN median and s
 
 from __future__ import annotations
 
+import json
 import math
+import os
+import tempfile
 from dataclasses import dataclass
 from functools import lru_cache
 from typing import NamedTuple
 
-import numba
 import numpy as np
 
 from ._checks import as_signal, check_fs, check_positive_int
@@ -34,135 +36,6 @@ __all__ = [
 
 MAD_SCALE = 1.4826
 """Scale making the MAD a consistent estimator of a Gaussian standard deviation (MATLAB's value)."""
-
-
-@numba.njit(cache=True, nogil=True)
-def _insert(buf, count, value):
-    j = count
-    while j > 0 and buf[j - 1] > value:
-        buf[j] = buf[j - 1]
-        j -= 1
-    buf[j] = value
-    return count + 1
-
-
-@numba.njit(cache=True, nogil=True)
-def _remove(buf, count, value):
-    # value is present (not NaN); find its position by binary search, shift left.
-    lo = 0
-    hi = count
-    while lo < hi:
-        mid = (lo + hi) // 2
-        if buf[mid] < value:
-            lo = mid + 1
-        else:
-            hi = mid
-    for j in range(lo, count - 1):
-        buf[j] = buf[j + 1]
-    return count - 1
-
-
-@numba.njit(cache=True, nogil=True)
-def _replace(buf, count, old, new):
-    # Remove ``old`` (present) and insert ``new`` in one pass over the sorted buffer.
-    lo = 0
-    hi = count
-    while lo < hi:
-        mid = (lo + hi) // 2
-        if buf[mid] < old:
-            lo = mid + 1
-        else:
-            hi = mid
-    j = lo
-    if new > old:
-        while j + 1 < count and buf[j + 1] < new:
-            buf[j] = buf[j + 1]
-            j += 1
-    else:
-        while j > 0 and buf[j - 1] > new:
-            buf[j] = buf[j - 1]
-            j -= 1
-    buf[j] = new
-
-
-@numba.njit(cache=True, nogil=True)
-def _hampel_range(x, k, n_sigma, scale, fill_nan, y, outlier, med_out, sig_out, start, stop):
-    n = x.shape[0]
-    buf = np.empty(2 * k + 1)
-    count = 0
-    # Prime the window of sample ``start``: x[start-k .. start+k], truncated.
-    for j in range(max(0, start - k), min(start + k + 1, n)):
-        v = x[j]
-        if v == v:
-            count = _insert(buf, count, v)
-    for i in range(start, stop):
-        if i > start:
-            add = i + k
-            rem = i - k - 1
-            va = x[add] if add < n else np.nan
-            vr = x[rem] if rem >= 0 else np.nan
-            if va == va and vr == vr:
-                _replace(buf, count, vr, va)
-            else:
-                if vr == vr:
-                    count = _remove(buf, count, vr)
-                if va == va:
-                    count = _insert(buf, count, va)
-        xi = x[i]
-        if count == 0:
-            med_out[i] = np.nan
-            sig_out[i] = np.nan
-            y[i] = xi
-            outlier[i] = False
-            continue
-        half = count // 2
-        odd = count % 2 == 1
-        if odd:
-            m = buf[half]
-        else:
-            m = (buf[half - 1] + buf[half]) / 2.0
-        # Deviations |buf - m| form two ascending runs: walking down from p-1 and up from p,
-        # where p is the first index with buf[p] >= m (p <= half).  Merge them to rank ``half``.
-        p = half
-        while p > 0 and buf[p - 1] >= m:
-            p -= 1
-        left = p - 1
-        right = p
-        prev = 0.0
-        cur = 0.0
-        for _r in range(half + 1):
-            if left >= 0 and (right >= count or m - buf[left] <= buf[right] - m):
-                d = m - buf[left]
-                left -= 1
-            else:
-                d = buf[right] - m
-                right += 1
-            prev = cur
-            cur = d
-        mad = cur if odd else (prev + cur) / 2.0
-        s = scale * mad
-        med_out[i] = m
-        sig_out[i] = s
-        if xi != xi:
-            outlier[i] = False
-            y[i] = m if fill_nan else xi
-        elif abs(xi - m) > n_sigma * s:
-            outlier[i] = True
-            y[i] = m
-        else:
-            outlier[i] = False
-            y[i] = xi
-
-
-@numba.njit(cache=True, nogil=True, parallel=True)
-def _hampel_core(x, k, n_sigma, scale, fill_nan, y, outlier, med_out, sig_out, n_chunks):
-    n = x.shape[0]
-    size = (n + n_chunks - 1) // n_chunks
-    for c in numba.prange(n_chunks):
-        start = c * size
-        stop = min(n, start + size)
-        if start < stop:
-            _hampel_range(x, k, n_sigma, scale, fill_nan, y, outlier, med_out, sig_out, start, stop)
 
 
 class HampelResult(NamedTuple):
@@ -267,7 +140,12 @@ def hampel(x, half_window=3, n_sigma=None, *, false_alarm_rate=None, fill_nan=Fa
     mask = np.empty(flat.shape, dtype=np.bool_)
     med = np.empty_like(flat)
     sig = np.empty_like(flat)
-    # Independent chunks (each primes its own window) run on numba's threads for long records.
+    # Independent chunks (each primes its own window) run on numba's threads for long records; numba is
+    # imported here, on the first filter, not with the package (a command that never filters never loads it)
+    import numba
+
+    from .kernels import _hampel_core
+
     n_chunks = 1 if n < 200_000 else 4 * numba.get_num_threads()
     for r in range(flat.shape[0]):
         _hampel_core(flat[r], k, ns, MAD_SCALE, bool(fill_nan), y[r], mask[r], med[r], sig[r], n_chunks)
@@ -478,6 +356,69 @@ def hampel_n_sigma_for_rate(half_window, false_alarm_rate):
         raise ValueError(f"Parameter false_alarm_rate={false_alarm_rate!r} must be a number in [1e-4, 0.5].") from None
     if not 1e-4 <= rate <= 0.5:
         raise ValueError(f"Parameter false_alarm_rate={false_alarm_rate!r} must lie in [1e-4, 0.5].")
+    return _n_sigma_for_rate(k, rate)
+
+
+#: the file, in the kernel cache's folder, that keeps the thresholds found (by window, rate and what they depend on)
+THRESHOLD_CACHE = "hampel-thresholds.json"
+
+
+def _threshold_cache_path():
+    """Where found thresholds are kept: the folder numba caches vibkit's kernels in (``$NUMBA_CACHE_DIR``, which
+    :mod:`vibkit.runtime.kernel_cache` sets when it chooses one), else this package's ``__pycache__``, where numba
+    keeps them by default."""
+    folder = os.environ.get("NUMBA_CACHE_DIR") or os.path.join(
+        os.path.dirname(os.path.abspath(__file__)), "__pycache__"
+    )
+    return os.path.join(folder, THRESHOLD_CACHE)
+
+
+def _threshold_key(k, rate):
+    # everything the threshold depends on: the window, the rate, the draws (seed, count) and numpy's generator
+    return f"k={k} rate={rate!r} seed={_MC_SEED} draws={_RB_DRAWS} windows={_n_windows(rate)} numpy={np.__version__}"
+
+
+def _stored_thresholds(path):
+    try:
+        with open(path, encoding="utf-8") as fh:
+            stored = json.load(fh)
+    except (OSError, ValueError):
+        return {}
+    return stored if isinstance(stored, dict) else {}
+
+
+def _store_threshold(path, key, value):
+    """Add one threshold to the file, written whole to a temporary file and renamed (a reader never sees half a
+    file); a folder that cannot be written keeps nothing, and the next run finds the threshold again."""
+    stored = _stored_thresholds(path)
+    stored[key] = value
+    try:
+        os.makedirs(os.path.dirname(path), exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=os.path.dirname(path), prefix=THRESHOLD_CACHE, suffix=".tmp")
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            json.dump(stored, fh, indent=0, sort_keys=True)
+        os.replace(tmp, path)
+    except OSError:
+        return
+
+
+@lru_cache(maxsize=256)
+def _n_sigma_for_rate(k: int, rate: float) -> float:
+    """:func:`hampel_n_sigma_for_rate` once per (half window, rate): the calibration depends on nothing else (a
+    report filters every burst at the same window and rate). Kept in memory and in a file beside the compiled
+    kernels: at 0.1 s and 2,050 Hz (k = 205) it costs about 4 CPU seconds, every run, for one number."""
+    path = _threshold_cache_path()
+    key = _threshold_key(k, rate)
+    found = _stored_thresholds(path).get(key)
+    if isinstance(found, float) and math.isfinite(found) and found > 0:
+        return found  # JSON keeps a float's repr: the very number found before
+    value = _find_n_sigma(k, rate)
+    _store_threshold(path, key, value)
+    return value
+
+
+def _find_n_sigma(k: int, rate: float) -> float:
+    """The threshold at which the interior statistic's tail probability is ``rate`` (bisection, 61 evaluations)."""
     if _tail_probability(k, 1.0001 / MAD_SCALE) > rate:
         # the usual case: the threshold lies in the range where the tail probability is exact given
         # the other samples; bisect the monotone tail probability (in log n_sigma)

@@ -86,18 +86,48 @@ def _least_squares(mat, xs):
     return coef, ginv, xs - mat @ coef
 
 
+#: rows of the record-wide fit :func:`_harmonic_phases` builds at a time (its sums accumulate over blocks: the
+#: whole matrix was 2k + 1 columns of the record's length)
+FIT_BLOCK_ROWS = 1 << 14
+
+
 def _harmonic_phases(xs, ph, k):
     """Least squares ``c + sum_h a_h cos(h ph) + b_h sin(h ph)``: per-harmonic phase of the signal
-    relative to ``h ph`` [rad], its variance [rad^2] and the amplitude."""
-    cols = [np.ones(xs.size)]
-    for h in range(1, k + 1):
-        cols += [np.cos(h * ph), np.sin(h * ph)]
-    mat = np.column_stack(cols)
-    fit = _least_squares(mat, xs)
-    if fit is None:
-        return None
-    coef, ginv, r = fit
-    s2 = float(r @ r) / max(xs.size - mat.shape[1], 1)
+    relative to ``h ph`` [rad], its variance [rad^2] and the amplitude.
+
+    The normal equations are summed over blocks of :data:`FIT_BLOCK_ROWS` rows (memory independent of the
+    record's length); a record of one block does exactly what the whole-matrix fit did.
+    """
+    n = xs.size
+    blocks = [(i, min(n, i + FIT_BLOCK_ROWS)) for i in range(0, n, FIT_BLOCK_ROWS)]
+
+    def design(i, j):
+        cols = [np.ones(j - i)]
+        for h in range(1, k + 1):
+            cols += [np.cos(h * ph[i:j]), np.sin(h * ph[i:j])]
+        return np.column_stack(cols)
+
+    if len(blocks) == 1:
+        mat = design(0, n)
+        fit = _least_squares(mat, xs)
+        if fit is None:
+            return None
+        coef, ginv, r = fit
+        rr = float(r @ r)
+    else:
+        g, rhs = np.zeros((2 * k + 1, 2 * k + 1)), np.zeros(2 * k + 1)
+        for i, j in blocks:
+            mat = design(i, j)
+            g += mat.T @ mat
+            rhs += mat.T @ xs[i:j]
+        try:
+            coef = np.linalg.solve(g, rhs)
+            ginv = np.linalg.inv(g)
+        except np.linalg.LinAlgError:
+            return None
+        # numpy's pairwise sum per block (BLAS's threaded dot costs milliseconds a call on a busy machine)
+        rr = sum(float(np.sum((xs[i:j] - design(i, j) @ coef) ** 2)) for i, j in blocks)
+    s2 = rr / max(n - (2 * k + 1), 1)
     a, b = coef[1::2], coef[2::2]
     r2 = a * a + b * b
     var = 0.5 * (np.diag(ginv)[1::2] + np.diag(ginv)[2::2]) * s2 / np.maximum(r2, 1e-300)

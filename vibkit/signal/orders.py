@@ -11,8 +11,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import numba
 import numpy as np
+import scipy.fft
 import scipy.interpolate
 import scipy.linalg
 import scipy.signal
@@ -100,6 +100,11 @@ class PhaseTrack:
     harmonics_used: tuple
 
 
+#: values (frequency rows x frames, or samples) :func:`track_phase` computes at a time in its block loops: 2 M
+#: values are 16 MB as floats, 32 MB complex, whatever the record's length
+SPECTROGRAM_BLOCK_VALUES = 1 << 21
+
+
 def _lowpass(y, fs, cutoff, order=4, padtype="even"):
     sos = scipy.signal.butter(order, cutoff, btype="low", fs=fs, output="sos")
     # Even (mirror) extension over three time constants: no start-up transient, and unlike the
@@ -180,14 +185,31 @@ def track_phase(x, fs, *, band, n_harmonics=3, frame_s=None, bandwidth_hz=None, 
     # 1. coarse ridge of harmonic h*
     hop = max(1, nper // 4)
     nfft = 1 << int(np.ceil(np.log2(8 * nper)))
-    f, tf, s = scipy.signal.spectrogram(
-        x - x.mean(), fs, window="hann", nperseg=nper, noverlap=nper - hop, nfft=nfft, mode="magnitude"
-    )
+    # scipy.signal.spectrogram's frames, a block of frames at a time, keeping only the band's rows: the whole
+    # spectrogram of a day-long record (all nfft / 2 + 1 rows, complex on the way) took gigabytes; a frame's
+    # values do not depend on its neighbours, and the frequencies and times are scipy's formulas
+    f = scipy.fft.rfftfreq(nfft, 1 / fs)
+    tf = np.arange(nper / 2, n - nper / 2 + 1, hop) / float(fs)
     lo, hi = h_star * f0 * (1 - max_deviation), h_star * f0 * (1 + max_deviation)
     sel = np.flatnonzero((f >= lo) & (f <= hi))
     if sel.size < 3:
         raise ValueError(f"Parameter frame_s={frame_s!r} is too short to resolve the band {lo:.4g}-{hi:.4g} Hz.")
-    sub = s[sel]
+    xc = x - x.mean()
+    n_frames = (n - (nper - hop)) // hop
+    per_block = max(1, SPECTROGRAM_BLOCK_VALUES // nfft)
+    sub = np.empty((sel.size, n_frames))
+    for j0 in range(0, n_frames, per_block):
+        j1 = min(n_frames, j0 + per_block)
+        _f, _t, s = scipy.signal.spectrogram(
+            xc[j0 * hop : (j1 - 1) * hop + nper],
+            fs,
+            window="hann",
+            nperseg=nper,
+            noverlap=nper - hop,
+            nfft=nfft,
+            mode="magnitude",
+        )
+        sub[:, j0:j1] = s[sel]
     i = np.argmax(sub, axis=0)
     i = np.clip(i, 1, sel.size - 2)
     cols = np.arange(sub.shape[1])
@@ -224,10 +246,14 @@ def track_phase(x, fs, *, band, n_harmonics=3, frame_s=None, bandwidth_hz=None, 
     # 3. frequency from the phase derivative
     freq = np.gradient(phase, 1.0 / fs) / (2.0 * np.pi)
     freq = _lowpass(freq, fs, bw, padtype="odd")  # the phase is smooth: odd extension keeps the end slope
-    if q > 1:
-        t_full = np.arange(n_full) / fs_full
-        phase = scipy.interpolate.CubicSpline(t, phase)(t_full)
-        freq = np.interp(t_full, t, freq)
+    if q > 1:  # back at the record's rate, a block of samples at a time (each value depends on its time alone)
+        spline = scipy.interpolate.CubicSpline(t, phase)
+        phase, freq_d = np.empty(n_full), freq
+        freq = np.empty(n_full)
+        for i0 in range(0, n_full, SPECTROGRAM_BLOCK_VALUES):
+            t_full = np.arange(i0, min(n_full, i0 + SPECTROGRAM_BLOCK_VALUES)) / fs_full
+            phase[i0 : i0 + t_full.size] = spline(t_full)
+            freq[i0 : i0 + t_full.size] = np.interp(t_full, t, freq_d)
     return PhaseTrack(phase, freq, tf, ridge, tuple(used))
 
 
@@ -408,53 +434,6 @@ def _vk_banded(n, r2):
     return ab
 
 
-@numba.njit(cache=True, nogil=True)
-def _vk_solve(y, r2):
-    """Solve ``(I + r2 D^T D) a = y`` (D: second difference) by LDL^T of the pentadiagonal matrix.
-
-    O(n), complex right-hand side; the same system as :func:`_vk_banded` and :func:`_vk_sparse`.
-    """
-    n = y.shape[0]
-    dd = np.empty(n)
-    p = np.zeros(n)
-    q = np.zeros(n)
-    z = np.empty(n, dtype=np.complex128)
-    for i in range(n):
-        # A[i, i], A[i, i-1], A[i, i-2] of I + r2 D^T D
-        if i == 0 or i == n - 1:
-            a_ii = 1.0 + r2
-        elif i == 1 or i == n - 2:
-            a_ii = 1.0 + 5.0 * r2
-        else:
-            a_ii = 1.0 + 6.0 * r2
-        if i >= 2:
-            q[i] = r2 / dd[i - 2]
-        if i >= 1:
-            e = -2.0 * r2 if (i == 1 or i == n - 1) else -4.0 * r2
-            p[i] = (e - q[i] * p[i - 1] * dd[i - 2] if i >= 2 else e) / dd[i - 1]
-        di = a_ii
-        if i >= 1:
-            di -= p[i] * p[i] * dd[i - 1]
-        if i >= 2:
-            di -= q[i] * q[i] * dd[i - 2]
-        dd[i] = di
-        zi = y[i]
-        if i >= 1:
-            zi -= p[i] * z[i - 1]
-        if i >= 2:
-            zi -= q[i] * z[i - 2]
-        z[i] = zi
-    out = np.empty(n, dtype=np.complex128)
-    for i in range(n - 1, -1, -1):
-        xi = z[i] / dd[i]
-        if i + 1 < n:
-            xi -= p[i + 1] * out[i + 1]
-        if i + 2 < n:
-            xi -= q[i + 2] * out[i + 2]
-        out[i] = xi
-    return out
-
-
 def _vk_sparse(n, r2):
     d = scipy.sparse.diags([np.ones(n - 2), -2.0 * np.ones(n - 2), np.ones(n - 2)], [0, 1, 2], shape=(n - 2, n))
     return (scipy.sparse.identity(n) + r2 * (d.T @ d)).tocsc()
@@ -554,6 +533,8 @@ def vold_kalman(x, fs, phase, *, order=1.0, bandwidth_hz, solver="pentadiagonal"
     y = x * np.exp(-1j * theta)
     n = x.size
     if solver == "pentadiagonal":
+        from .kernels import _vk_solve  # numba on the first use, not with the package
+
         a = _vk_solve(y, r2)
     else:
         rhs = np.column_stack([y.real, y.imag])

@@ -26,7 +26,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import numba as nb
 import numpy as np
 import scipy.signal
 
@@ -55,33 +54,6 @@ LOWPASS_HZ = 10.0
 MAX_TILT = 9.80665 * 0.5736 * 1.15
 
 
-@nb.njit(cache=True)
-def _half_cycle_peak_index(x):  # pragma: no cover - compiled
-    """Index of the largest |x| (first if tied) of every complete run of one sign, in one pass."""
-    n = x.size
-    out = np.empty(n, dtype=np.int64)  # up to one run per sample
-    k = 0
-    cur = 0.0  # sign of the current run (0 before the first non-zero sample)
-    best = -1.0
-    best_i = -1
-    complete = False  # the current run started at a sign change (not at the record's start)
-    for i in range(n):
-        v = x[i]
-        s = 1.0 if v > 0 else (-1.0 if v < 0 else 0.0)
-        if s != 0.0 and s != cur:
-            if cur != 0.0 and complete:
-                out[k] = best_i
-                k += 1
-            complete = cur != 0.0
-            cur = s
-            best = -1.0
-        a = abs(v)
-        if a > best:
-            best = a
-            best_i = i
-    return out[:k]
-
-
 def half_cycle_peaks(x) -> tuple[np.ndarray, np.ndarray]:
     """Signed peak and its index of every complete half-cycle of ``x`` (see module docstring).
 
@@ -101,6 +73,8 @@ def half_cycle_peaks(x) -> tuple[np.ndarray, np.ndarray]:
     if x.ndim != 1:
         raise ValueError(f"Parameter x must be 1-D, got shape {x.shape}.")
     x = fill_nan(x)
+    from .kernels import _half_cycle_peak_index  # numba on the first use, not with the package
+
     first = _half_cycle_peak_index(x)
     return x[first], first
 

@@ -1,0 +1,352 @@
+"""What a user waits for, each as a ratio to the baseline named beside it, measured side by side in one run.
+
+Run:  python benchmarks/bench_user_costs.py [--quick] [--rows NAME,...]
+
+Every case runs in a fresh Python process (``sys.executable``, the vibkit beside this script) and is timed in
+CPU seconds (user + system of the child, ``resource.getrusage(RUSAGE_CHILDREN)``): the project's machines
+are shared with other jobs, and CPU time moves far less with their load than wall time does (the wall
+time and the 1-minute load average are recorded too). Cases and their baselines alternate, the median of
+``--repeat`` runs is kept. Peak memory is the child's own ``ru_maxrss``.
+
+Rows (``--rows`` picks some):
+
+* ``first``: the first command after install (``vibkit simulate leon`` of 2 s, every kernel it needs compiled
+  into an empty ``NUMBA_CACHE_DIR``) against the same command warm (the cache it filled);
+* ``import``: ``import vibkit.cli.app, vibkit.io, vibkit.signal`` against
+  ``import numpy, scipy.signal, pandas, xarray``;
+* ``spectrum``: ``vibkit spectrum`` of a 10 s recording (whole command) against the same import baseline,
+  and against that baseline plus one ``xarray.Dataset`` with a time index (xarray then imports dask, when
+  installed: what reading any file into a Dataset costs);
+* ``pitch8h``: ``vibkit pitch`` of 8 h at 200 Hz (5.76 million rows; ``--quick``: 20 min) against
+  ``pandas.read_csv`` of the same file (its process: import and read); peak memory against the samples' bytes;
+* ``report``: ``vibkit report`` of the Las Palmas recording with its scene, warm (kernels cached), against
+  the 5 CPU-s a user should wait at most;
+* ``fleet``: ``vibkit fleet scan`` of 200 recordings of 30 s (``--quick``: 8), in process, files per CPU
+  second, against ``pandas.read_csv`` of the same files in one process;
+* ``simulate``: ``vibkit.simulate`` of the shipped ``leon`` scene with its shipped outputs, in one process after a
+  warm-up: simulated seconds per CPU second (x real time).
+
+Writes benchmarks/results/user_costs.md (``--quick``: user_costs_quick.md).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import resource
+import statistics
+import subprocess
+import sys
+import tempfile
+import textwrap
+import time
+from pathlib import Path
+
+from _common import RESULTS, machine, markdown_table, today, write_text
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parent
+SPEED = 0.5  # [m/s]
+PITCH = 0.1333  # [m]
+ROWS = ("first", "import", "spectrum", "pitch8h", "report", "fleet", "simulate")
+BASE_IMPORT = "import numpy, scipy.signal, pandas, xarray"
+
+
+def child(code, env=None, cwd=None):
+    """Run ``code`` in a fresh interpreter: (CPU seconds, wall seconds, peak RSS [MB], its last stdout line)."""
+    probe = (
+        textwrap.dedent(code)
+        + "\nimport resource as _r, sys as _s\n"
+        + "print('maxrss_kb', _r.getrusage(_r.RUSAGE_SELF).ru_maxrss, file=_s.stderr)\n"
+    )
+    penv = dict(os.environ, **(env or {}))
+    penv["PYTHONPATH"] = str(ROOT) + os.pathsep + penv.get("PYTHONPATH", "")  # this checkout's vibkit
+    r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t0 = time.perf_counter()
+    proc = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, env=penv, cwd=cwd or ROOT)
+    wall = time.perf_counter() - t0
+    r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    if proc.returncode != 0:
+        raise RuntimeError(f"child failed ({proc.returncode}):\n{code}\n{proc.stderr[-2000:]}")
+    rss = [ln for ln in proc.stderr.splitlines() if ln.startswith("maxrss_kb")][-1]
+    cpu = (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime)
+    return cpu, wall, int(rss.split()[1]) / 1024.0, (proc.stdout.strip().splitlines() or [""])[-1]
+
+
+def cli(args):
+    """Code running ``vibkit ARGS`` through ``vibkit.cli.main`` (what the ``vibkit`` script does)."""
+    return f"from vibkit.cli import main\nrc = main({list(map(str, args))!r})\nassert rc in (0, 1, 3), rc\n"
+
+
+def side_by_side(cases, repeat):
+    """Run each (name, code, env) ``repeat`` times, interleaved; medians of CPU, wall and peak RSS per name."""
+    runs = {name: [] for name, _c, _e in cases}
+    for _ in range(repeat):
+        for name, code, env in cases:
+            runs[name].append(child(code, env))
+    return {
+        name: {
+            "cpu": statistics.median(r[0] for r in rs),
+            "wall": statistics.median(r[1] for r in rs),
+            "rss": max(r[2] for r in rs),
+            "out": rs[-1][3],
+        }
+        for name, rs in runs.items()
+    }
+
+
+def write_recording(path, duration, fs, seed=1):
+    """A link-pass family with noise, ``time_s,accel_m_s2`` (pandas writes it: millions of rows in seconds)."""
+    import numpy as np
+    import pandas as pd
+
+    from _common import support
+
+    t = np.arange(int(round(duration * fs))) / fs
+    x = support.chain.random_phase_family(t, SPEED / PITCH, np.random.default_rng(seed))
+    pd.DataFrame({"time_s": t, "accel_m_s2": x}).to_csv(path, index=False, float_format="%.6f")
+    return t.size
+
+
+def row(what, case, baseline, cpu, base_cpu, ratio, target, note=""):
+    return {
+        "what a user does": what,
+        "case": case,
+        "baseline": baseline,
+        "CPU-s": cpu,
+        "baseline CPU-s": base_cpu,
+        "ratio": ratio,
+        "target": target,
+        "note": note,
+    }
+
+
+def flush(rows, quick, repeat, load0):
+    """Write the table of the rows measured so far (atomically): a row that fails later leaves the others."""
+    if not rows:
+        return ""
+    load1 = os.getloadavg()[0]
+    suffix = "_quick" if quick else ""
+    text = (
+        "# What a user waits for (`benchmarks/bench_user_costs.py`)\n\n"
+        f"{today()}, {machine()}; 1-minute load average {load0:.1f} at the start, {load1:.1f} after the last row (the "
+        "machine is shared with other jobs: times are CPU seconds of the whole child process, user + system, "
+        f"which move far less with the load than wall time). Median of {repeat} interleaved runs per case"
+        + (" (quick: smoke sizes)" if quick else "")
+        + "; every case a fresh `python` process. Ratio: case / baseline (for the simulation: simulated over "
+        "CPU seconds).\n\n" + markdown_table(rows) + "\n"
+    )
+    write_text(RESULTS / f"user_costs{suffix}.md", text)
+    return text
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help="a smoke run: small inputs, one repeat")
+    ap.add_argument("--repeat", type=int, help="runs per case (median kept; default 3, quick 1)")
+    ap.add_argument("--rows", default=",".join(ROWS), help=f"rows to measure (default all: {','.join(ROWS)})")
+    a = ap.parse_args(argv)
+    repeat = a.repeat or (1 if a.quick else 3)
+    wanted = [r.strip() for r in a.rows.split(",") if r.strip()]
+    unknown = set(wanted) - set(ROWS)
+    if unknown:
+        ap.error(f"--rows: unknown {sorted(unknown)}; expected some of {','.join(ROWS)}")
+    load0 = os.getloadavg()[0]
+    rows = []
+    with tempfile.TemporaryDirectory(prefix="bench-user-costs-") as tmp:
+        tmp = Path(tmp)
+
+        if "first" in wanted:
+            cache = tmp / "numba-cache"
+            env = {"NUMBA_CACHE_DIR": str(cache)}
+            code = cli(["simulate", "leon", "--duration", "2", "-o", str(tmp / "first.nc"), "--force"])
+            cold = child(code, env)  # an empty kernel cache: what the first command after install pays
+            warm = side_by_side([("warm", code, env)], repeat)["warm"]
+            rows.append(
+                row(
+                    "first command after install (simulate leon, 2 s)",
+                    "cold: empty NUMBA_CACHE_DIR",
+                    "the same command warm",
+                    cold[0],
+                    warm["cpu"],
+                    cold[0] / warm["cpu"],
+                    "<= 10",
+                    f"wall {cold[1]:.0f} s cold, {warm['wall']:.1f} s warm",
+                )
+            )
+
+        flush(rows, a.quick, repeat, load0)
+
+        if "import" in wanted or "spectrum" in wanted:
+            ten = tmp / "ten-seconds.csv"
+            write_recording(ten, 10.0, 200.0)
+            cases = [
+                ("base", BASE_IMPORT + "\n", None),
+                (
+                    "base+dataset",
+                    BASE_IMPORT
+                    + "\nxarray.Dataset({'x': ('time', numpy.zeros(3))}, coords={'time': numpy.arange(3.0)})\n",
+                    None,
+                ),
+            ]
+            if "import" in wanted:
+                cases.append(("import", "import vibkit.cli.app, vibkit.io, vibkit.signal\n", None))
+            if "spectrum" in wanted:
+                cases.append(("spectrum", cli(["spectrum", ten, "--band", "2.5:6"]), None))
+            got = side_by_side(cases, repeat)
+            base, based = got["base"]["cpu"], got["base+dataset"]["cpu"]
+            if "import" in wanted:
+                c = got["import"]["cpu"]
+                rows.append(
+                    row("import the CLI, readers, signal", "import vibkit...", BASE_IMPORT, c, base, c / base, "-")
+                )
+            if "spectrum" in wanted:
+                c = got["spectrum"]["cpu"]
+                rows.append(
+                    row("vibkit spectrum of 10 s at 200 Hz", "whole command", BASE_IMPORT, c, base, c / base, "<= 1.1")
+                )
+                rows.append(
+                    row(
+                        "vibkit spectrum of 10 s at 200 Hz",
+                        "whole command",
+                        "the same imports + one xarray.Dataset (xarray imports dask)",
+                        c,
+                        based,
+                        c / based,
+                        "-",
+                    )
+                )
+
+        flush(rows, a.quick, repeat, load0)
+
+        if "pitch8h" in wanted:
+            hours = 1 / 3 if a.quick else 8.0
+            path = tmp / "day.csv"
+            t0 = time.perf_counter()
+            n = write_recording(path, hours * 3600.0, 200.0)
+            print(f"{n} rows written in {time.perf_counter() - t0:.0f} s", file=sys.stderr)
+            got = side_by_side(
+                [
+                    ("pandas", f"import pandas\npandas.read_csv({str(path)!r})\n", None),
+                    ("pitch", cli(["pitch", path, "--speed", SPEED, "--json"]), None),
+                ],
+                max(1, repeat - 1),
+            )
+            c, b = got["pitch"]["cpu"], got["pandas"]["cpu"]
+            samples_mb = n * 8 / 2**20
+            rows.append(
+                row(
+                    f"vibkit pitch of {hours:g} h at 200 Hz ({n:,} rows)",
+                    "whole command",
+                    "pandas.read_csv of the file (its process)",
+                    c,
+                    b,
+                    c / b,
+                    "<= 3 x baseline + 1 s",
+                    f"target {3 * b + 1:.1f} CPU-s; peak RSS {got['pitch']['rss']:.0f} MB = "
+                    f"{got['pitch']['rss'] / samples_mb:.1f} x the samples' {samples_mb:.0f} MB (pandas "
+                    f"{got['pandas']['rss']:.0f} MB)",
+                )
+            )
+
+        flush(rows, a.quick, repeat, load0)
+
+        if "report" in wanted:
+            code = cli(
+                [
+                    "report",
+                    ROOT / "data/field/las-palmas-accelerometer.csv",
+                    "--scene",
+                    ROOT / "sim/las-palmas.toml",
+                    "-o",
+                    tmp / "lp.pdf",
+                    "--force",
+                ]
+            )
+            child(code)  # warm: the kernels it needs in the cache
+            got = side_by_side([("report", code, None)], repeat)["report"]
+            rows.append(
+                row(
+                    "vibkit report of Las Palmas (with its scene), warm",
+                    "whole command",
+                    "5 CPU-s",
+                    got["cpu"],
+                    5.0,
+                    got["cpu"] / 5.0,
+                    "<= 1",
+                )
+            )
+
+        flush(rows, a.quick, repeat, load0)
+
+        if "fleet" in wanted:
+            from bench_fleet import make_fleet
+
+            n = 8 if a.quick else 200
+            rec = tmp / "visits"
+            cat = make_fleet(rec, n, 30.0)
+            files = sorted(str(p) for p in rec.iterdir())
+            scan = (
+                "from vibkit.fleet import FleetDB\n"
+                "import tempfile, os\n"
+                "with FleetDB(os.path.join(tempfile.mkdtemp(), 'f.sqlite')) as db:\n"
+                f"    res = db.scan({str(rec)!r}, {str(cat)!r}, parallel=False)\n"
+                f"assert len(res.added) == {n}, res.failed[:3]\n"
+            )
+            got = side_by_side(
+                [
+                    ("pandas", f"import pandas\nfor p in {files!r}:\n    pandas.read_csv(p)\n", None),
+                    ("scan", scan, None),
+                ],
+                repeat,
+            )
+            c, b = got["scan"]["cpu"], got["pandas"]["cpu"]
+            rows.append(
+                row(
+                    f"vibkit fleet scan of {n} files of 30 s, in process",
+                    "FleetDB.scan(parallel=False)",
+                    "pandas.read_csv of the same files",
+                    c,
+                    b,
+                    c / b,
+                    ">= 100 files per CPU-s",
+                    f"{n / c:.1f} files per CPU-s (pandas {n / b:.0f})",
+                )
+            )
+
+        flush(rows, a.quick, repeat, load0)
+
+        if "simulate" in wanted:
+            duration = 10.0 if a.quick else 44.0
+            code = textwrap.dedent(
+                f"""
+                import resource, vibkit
+                scene = vibkit.load_scene("leon")
+                vibkit.simulate(scene, duration=1.0)  # warm: kernels loaded
+                r0 = resource.getrusage(resource.RUSAGE_SELF)
+                vibkit.simulate(scene, duration={duration})
+                r1 = resource.getrusage(resource.RUSAGE_SELF)
+                print((r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime))
+                """
+            )
+            got = [float(child(code)[3]) for _ in range(repeat)]
+            c = statistics.median(got)
+            rows.append(
+                row(
+                    f"vibkit.simulate of leon, {duration:g} s, shipped outputs",
+                    "the call (in process, warm)",
+                    "real time",
+                    c,
+                    duration,
+                    duration / c,
+                    ">= 500 x real time",
+                    "ratio: simulated seconds per CPU second",
+                )
+            )
+
+    print(flush(rows, a.quick, repeat, load0))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
