@@ -14,6 +14,7 @@ Writes ``links_cache.md``.
 from __future__ import annotations
 
 import dataclasses
+import importlib
 import os
 import subprocess
 import sys
@@ -22,12 +23,11 @@ from pathlib import Path
 
 import numpy as np
 
-from _common import RESULTS, machine, markdown_table, today, write_text
+from _common import RESULTS, machine, markdown_table, support, today, write_text
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "tests"))
-
-from support.profiles import PROFILE_90  # noqa: E402
+# tests/support, loaded by _common without touching sys.path
+PROFILE_90 = importlib.import_module(f"{support.__name__}.profiles").PROFILE_90
 
 SPEED = 0.5
 WORN = 40

@@ -62,7 +62,7 @@ def test_stdin_errors_name_stdin(monkeypatch):
     with pytest.raises(vibkit.io.RecordingError, match=r"^<stdin>: is empty"):
         vibkit.read_recording("-")
     _stdin(monkeypatch, b"\x89HDF\r\n\x1a\nnot really")
-    with pytest.raises(vibkit.io.RecordingError, match=r"^<stdin>: cannot read as netCDF4/HDF5") as err:
+    with pytest.raises(vibkit.io.RecordingError, match=r"^<stdin>: cannot read as (netCDF4/)?HDF5") as err:
         vibkit.read_recording("-")
     assert "vibkit-stdin-" not in str(err.value)  # the temporary file is not named
 

@@ -250,3 +250,15 @@ def test_spectrum_of_a_ride_segment_reads_its_line(seq, k, capsys):
     f, s = out["fundamental_hz"], out["fundamental_sigma_hz"]
     assert abs(f / truth - 1) < max(0.005, s / f)
     assert abs(f - truth) < 3 * np.hypot(s, 0.01)
+
+
+def test_steady_line_takes_a_constant_channel():
+    """An axis that holds nothing (an accelerometer at rest on two axes) is a channel without signal, not an error."""
+    fs, n = 30.0, 1800
+    t = np.arange(n) / fs
+    x = np.vstack(
+        [np.zeros(n), np.zeros(n), 0.05 * np.sin(2 * np.pi * 4.0 * t) + np.random.default_rng(1).normal(0, 0.01, n)]
+    )
+    line = steady_line(x, fs, band=(2.5, 6.0))
+    assert line.detected and abs(line.frequency_hz - 4.0) < 3 * line.sigma_hz
+    assert line.strongest_channel == 2

@@ -29,7 +29,7 @@ sys.exit(main(json.loads(sys.argv[1])))
 # stored a row in it, then fails as a bad recording would
 FAIL_AFTER_OTHER_STORED = """
 import sqlite3
-import vibkit.fleet.link_scan as _ls
+import vibkit.fleet.storage as _st
 from vibkit.fleet.errors import FleetError
 def _fail(*a, **k):
     print("READY", flush=True)
@@ -45,7 +45,7 @@ def _fail(*a, **k):
             pass
         time.sleep(0.05)
     raise FleetError("a recording that cannot be analysed (planted failure)")
-_ls.measure_with_links = _fail
+_st.measure_with_links = _fail  # where fleet add calls it (imported at the top of storage)
 """
 
 # a good add held at its first write (the database not yet made) until the parent says go

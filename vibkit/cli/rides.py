@@ -34,7 +34,7 @@ def add_parser(subparsers):
     add_recording(s, channel=False)
     add_json(s)
     add_nominal_pitch(s, "the --escalator profile's; none: no speed", use="")
-    add_speed(s, "the --escalator profile's rated speed", what="rated step speed (for the deviation, EN 115-1 +-5 %)")
+    add_speed(s, "the --escalator profile's rated speed", what="rated step speed (for the deviation, EN 115-1 +-5 %%)")
     s.add_argument(
         "--band",
         type=band,

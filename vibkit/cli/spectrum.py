@@ -110,7 +110,7 @@ def _common_line(a, res, line, rec):
 
 def run(a):
     from vibkit.diagnose.channels import estimate_channels
-    from vibkit.diagnose.rides import common_line
+    from vibkit.diagnose.rides import common_line, is_phone_recording
 
     rec = read_recording(a)
     profile = escalator_profile(a)
@@ -140,7 +140,9 @@ def run(a):
         )
     except ValueError as exc:  # the analysis's words about the signal, with the file named
         raise in_file(a.recording, exc) from None
-    if not speed:  # a phone's axes together: the ride's one line, clear of stepping on and off (`vibkit rides`)
+    # a phone's axes together (a phone export, or three axes none of which shows a family alone): the ride's one
+    # line, clear of stepping on and off, as `vibkit rides` reads it; never over channels that disagree
+    if not speed and (is_phone_recording(rec) or (res.best is None and res.status == "no link-pass found")):
         line = common_line(rec, tuple(res.estimates[0].band_hz))
         if line is not None and line.detected:
             return _common_line(a, res, line, rec)

@@ -428,3 +428,8 @@ def common_line_names(recording) -> list:
     except ValueError:
         return []
     return acc + [v for v in ("gyro_x", "gyro_y", "gyro_z") if v in recording.data_vars]
+
+
+def is_phone_recording(recording) -> bool:
+    """Whether the recording is a phone's export (its channels carry the phone reader's ``sensor``)."""
+    return any(recording[v].attrs.get("sensor") in ("accelerometer", "gyroscope") for v in recording.data_vars)

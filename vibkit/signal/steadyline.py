@@ -313,10 +313,10 @@ def steady_line(
     formal = _formal_sigma(levels - 1.0, n, fs)
     common = dict(
         formal_sigma_hz=formal,
-        level_db=10 * math.log10(level),
-        threshold_db=10 * math.log10(threshold),
+        level_db=_db(level),
+        threshold_db=_db(threshold),
         p_value=p_value,
-        channel_levels_db=tuple(float(10 * math.log10(v)) for v in levels),
+        channel_levels_db=tuple(_db(v) for v in levels),
         duration_s=duration,
         band=(lo, hi),
     )
@@ -332,7 +332,7 @@ def steady_line(
         if 10 * math.log10(max(tp, 1e-300)) < part_min_db:
             why = (
                 f"a line at {fr:.3f} Hz stands {common['level_db']:.1f} dB over the floor, but part "
-                f"{len(fk) + 1} of {parts} ({a / fs:.1f}-{b / fs:.1f} s) shows it only {10 * math.log10(tp):.1f} dB "
+                f"{len(fk) + 1} of {parts} ({a / fs:.1f}-{b / fs:.1f} s) shows it only {_db(tp):.1f} dB "
                 f"(under {part_min_db:g} dB): not steady (a transient or a sweep, not a chain)"
             )
             return SteadyLine(False, fr, float("nan"), parts_hz=tuple(fk), reason=why, failed_part=len(fk), **common)
@@ -389,6 +389,11 @@ def _level_for(p, eig, floor_sd=0.0):
         mid = 0.5 * (lo + hi)
         lo, hi = (mid, hi) if _tail_floored(mid, eig, floor_sd) > p else (lo, mid)
     return hi
+
+
+def _db(ratio):
+    """A power ratio in dB; a channel that holds no signal at all (a constant) reads -300 dB, not an error."""
+    return 10.0 * math.log10(max(float(ratio), 1e-30))
 
 
 def _weak(common):
