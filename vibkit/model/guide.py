@@ -1,6 +1,9 @@
 """The guide: the closed path of lines and arcs followed by the roller centres (model.md section 1).
 
-The guide is data: a table of 14 segments (line or arc) joined with a continuous tangent. The
+The guide is data: a table of 14 segments (line or arc) joined with a continuous tangent. A moving
+walk's guide is the same path: two heads and straight runs, its transitions the arcs between the
+landings and an incline of 12 degrees at most; where the walk is level (incline 0) the transitions
+turn nothing and are kept as empty segments, so that every segment keeps its index and name. The
 tensioner displacement ``delta`` shortens the two telescopic runs (segments 1 and 13) and moves the
 lower head (segment 14) by ``delta`` along x; everything else is fixed.
 
@@ -91,8 +94,9 @@ def build_table(p: GuideParams) -> np.ndarray:
     tab = np.zeros((len(segs), NCOL))
     x, z, phi, s0, cumd = 0.0, rr, 0.0, 0.0, 0.0
     for k, (kind, size, turn, tele) in enumerate(segs):
-        if kind == "line":
-            length, kappa = size, 0.0
+        if kind == "line" or turn == 0.0:
+            # (a moving walk's level guide, incline 0: its transitions turn nothing and are empty lines)
+            length, kappa = (size, 0.0) if kind == "line" else (0.0, 0.0)
         else:
             length, kappa = size * abs(turn), math.copysign(1.0 / size, turn)
         tab[k] = (

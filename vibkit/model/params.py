@@ -46,7 +46,7 @@ class GuideParams:
     transition_radius : float
         Radius r_t of the four transition arcs. [m]
     incline_angle : float
-        Incline alpha. [rad]
+        Incline alpha, in [0, pi/2): 0 is a level moving walk, whose transitions turn nothing. [rad]
     incline_length : float
         Length L of the straight incline. [m]
     head_radius : float
@@ -71,8 +71,8 @@ class GuideParams:
             "incline_length",
             "head_radius",
         )
-        if not (0.0 < self.incline_angle < math.pi / 2):
-            raise ValueError(f"GuideParams.incline_angle must be in (0, pi/2) rad, got {self.incline_angle!r}")
+        if not (0.0 <= self.incline_angle < math.pi / 2):
+            raise ValueError(f"GuideParams.incline_angle must be in [0, pi/2) rad, got {self.incline_angle!r}")
 
     @property
     def perimeter(self) -> float:

@@ -85,9 +85,76 @@ class ChainKeys(_Section):
 @dataclass(frozen=True)
 class GeometryKeys(_Section):
     rise: float = key(
-        "m", "height between the landings; with incline_deg gives the loop if n_links is not set", range=(0.5, 30, "m")
+        "m",
+        "an escalator's height between the landings; with incline_deg gives the loop if n_links is not set",
+        range=(0.5, 30, "m"),
     )
-    incline_deg: float = key("deg", "angle of the incline (27.3, 30 or 35 for escalators)", range=(5.0, 45.0, "deg"))
+    length: float = key(
+        "m",
+        "a moving walk's length between the heads' axles, in plan; with incline_deg gives the loop",
+        range=(2.0, 400.0, "m"),
+    )
+    incline_deg: float = key(
+        "deg",
+        "angle of the incline: 27.3 to 35 for an escalator (with rise), 0 to 12 for a moving walk (with length)",
+        range=(0.0, 45.0, "deg"),
+    )
+
+
+#: the escalator's plausible incline [deg] (EN 115-1: 30 deg, 35 deg up to a 6 m rise; 27.3 deg is common)
+ESCALATOR_INCLINE = (5.0, 45.0)
+#: a moving walk's incline [deg]: EN 115-1 allows 12 deg at most
+WALK_INCLINE = (0.0, 12.0)
+_GEOMETRY_RANGE = {f.name: f.metadata["range"] for f in GeometryKeys.fields()}
+#: what each kind of unit is described by, for the one-line refusal of a profile that describes neither
+KINDS_TEXT = (
+    f"an escalator is described by 'geometry.rise' ({_GEOMETRY_RANGE['rise'][0]:g} to "
+    f"{_GEOMETRY_RANGE['rise'][1]:g} m) and 'geometry.incline_deg' ({ESCALATOR_INCLINE[0]:g} to "
+    f"{ESCALATOR_INCLINE[1]:g} deg), a moving walk by 'geometry.length' (m, between the heads) and "
+    f"'geometry.incline_deg' ({WALK_INCLINE[0]:g} to {WALK_INCLINE[1]:g} deg, EN 115-1)"
+)
+
+
+def _check_geometry(src, g: dict, c: dict) -> None:
+    """The geometry keys together: an escalator (rise and incline) or a moving walk (length and incline), or
+    neither when the chain's ``n_links`` is given alone; anything else is refused in one line naming the keys."""
+    rise, length, incline = g.get("rise"), g.get("length"), g.get("incline_deg")
+    if not g:
+        if "n_links" not in c:
+            raise SceneError(
+                f"{src}: missing value 'chain.n_links' or the geometry, from which the loop follows: {KINDS_TEXT}"
+            )
+        return
+    given = ", ".join(f"'geometry.{k}' = {v!r}" for k, v in g.items())
+    if rise is not None and length is not None:
+        raise SceneError(
+            f"{src}: {given}: a unit has a rise (escalator) or a length (moving walk), not both: {KINDS_TEXT}"
+        )
+    if incline is None:
+        which = "rise" if rise is not None else "length"
+        raise SceneError(
+            f"{src}: missing value 'geometry.incline_deg' (the incline, with 'geometry.{which}'): {KINDS_TEXT}"
+        )
+    if length is not None:
+        lo, hi, unit = _GEOMETRY_RANGE["length"]
+        if WALK_INCLINE[0] <= incline <= WALK_INCLINE[1] and lo <= length <= hi:
+            return
+        if not lo <= length <= hi:
+            raise SceneError(
+                f"{src}: 'geometry.length' = {length!r} is outside the plausible range [{lo:g}, {hi:g}] {unit} "
+                "(a moving walk's length between the heads)"
+            )
+        raise SceneError(
+            f"{src}: {given}: a moving walk inclines {WALK_INCLINE[1]:g} deg at most (EN 115-1); a steeper unit is an "
+            f"escalator: {KINDS_TEXT}"
+        )
+    if rise is not None:
+        lo, hi, _ = _GEOMETRY_RANGE["rise"]
+        if lo <= rise <= hi and ESCALATOR_INCLINE[0] <= incline <= ESCALATOR_INCLINE[1]:
+            return
+        mm = " (millimetres typed as metres?)" if lo <= rise / 1000 <= hi else ""
+        raise SceneError(f"{src}: {given} describes neither an escalator nor a moving walk{mm}: {KINDS_TEXT}")
+    raise SceneError(f"{src}: {given} alone describes neither an escalator nor a moving walk: {KINDS_TEXT}")
 
 
 @dataclass(frozen=True)
@@ -143,7 +210,8 @@ class Sensor:
 class Profile:
     """A validated escalator profile (SI units; see the module doc and :func:`profile_table`).
 
-    ``n_links`` is None when the profile gives the geometry instead (``rise`` and ``incline_deg``).
+    ``n_links`` is None when the profile gives the geometry instead: ``rise`` and ``incline_deg`` (an
+    escalator) or ``length`` and ``incline_deg`` (a moving walk, :attr:`is_walk`).
     """
 
     unit: str
@@ -155,6 +223,7 @@ class Profile:
     links_per_step: int = 3
     n_links: int | None = None
     rise: float | None = None
+    length: float | None = None
     incline_deg: float | None = None
     teeth: int = 28
     direction: str = "up"
@@ -190,6 +259,22 @@ class Profile:
     def speed_sigma_from_standard(self) -> bool:
         """True when :attr:`speed_sigma` is the standard's tolerance, not a measurement the profile states."""
         return self.speed_uncertainty is None
+
+    @property
+    def is_walk(self) -> bool:
+        """Whether the unit is a moving walk (the profile gives ``geometry.length``), not an escalator."""
+        return self.length is not None
+
+    @property
+    def kind(self) -> str:
+        """``"moving walk"`` or ``"escalator"``, as a page names the unit."""
+        return "moving walk" if self.is_walk else "escalator"
+
+    @property
+    def geometry_given(self) -> bool:
+        """Whether the profile states the unit's geometry (rise or length, with the incline); without it the
+        scene is an escalator of the common 30 deg incline whose rise follows from ``chain.n_links``."""
+        return self.rise is not None or self.length is not None
 
     @property
     def name(self) -> str:
@@ -252,18 +337,14 @@ def parse_profile(text: str, source: str = "<string>") -> Profile:
                 raise SceneError(f"{src}: missing value '{where}' ({f.metadata['doc']})")
             v = sec[name].get(f.name)
             rg = f.metadata["range"]
-            if rg and isinstance(v, (int, float)) and not rg[0] <= v <= rg[1]:
+            if rg and name != "geometry" and isinstance(v, (int, float)) and not rg[0] <= v <= rg[1]:
                 metres = f.metadata["unit"] == "m" and rg[0] <= v / 1000 <= rg[1] and rg[0] > 0
                 hint = f"; did you mean {v / 1000:.5g} m? (millimetres typed as metres)" if metres else ""
                 raise SceneError(
                     f"{src}: '{where}' = {v!r} is outside the plausible range [{rg[0]:g}, {rg[1]:g}] {rg[2]}{hint}"
                 )
     e, d, c, g, t, s = (sec[n] for n in PROFILE_SECTIONS)
-    if "n_links" not in c and not ("rise" in g and "incline_deg" in g):
-        raise SceneError(
-            f"{src}: missing value 'chain.n_links' (or both 'geometry.rise' and 'geometry.incline_deg', "
-            "from which the loop follows)"
-        )
+    _check_geometry(src, g, c)
     if not e["unit"].strip():
         raise SceneError(f"{src}: 'escalator.unit' must not be empty (the unit's identifier, e.g. E07)")
     if d.get("direction", "up") not in DIRECTIONS:
@@ -290,6 +371,7 @@ def parse_profile(text: str, source: str = "<string>") -> Profile:
         n_links=c.get("n_links"),
         roller_radius=c.get("roller_radius"),
         rise=g.get("rise"),
+        length=g.get("length"),
         incline_deg=g.get("incline_deg"),
         tensioner_preload=t.get("preload"),
         sensor=sensor,

@@ -30,7 +30,7 @@ import numpy as np
 from .params import reference_chain, reference_guide, reference_sprocket
 from .scene import Scene, SceneError, parse_scene
 
-__all__ = ["profile_scene", "scene_text", "roller_radius_of", "link_count", "MASS_PER_METRE"]
+__all__ = ["profile_scene", "scene_text", "roller_radius_of", "link_count", "geometry_note", "MASS_PER_METRE"]
 
 _RC, _RG, _RS = reference_chain(), reference_guide(), reference_sprocket()
 REFERENCE_PITCH = _RC.link_pitch
@@ -88,6 +88,7 @@ class _Filled:
         self.incline_deg = a_deg
         rt, l1, l2, lt = _RG.transition_radius, _RG.lower_landing, _RG.upper_landing, _RG.tensioner_length
         fixed = l1 + l2 + lt + math.pi * self.pitch_radius + 2.0 * a * rt  # half the perimeter less L
+        # the loop from the geometry: an escalator's rise, or a moving walk's length between the heads
         if p.rise is not None:
             length = (p.rise - 2.0 * rt * (1.0 - math.cos(a))) / math.sin(a)
             if length <= 0:
@@ -95,11 +96,24 @@ class _Filled:
                     f"{p.source}: 'geometry.rise' = {p.rise:g} m is lower than the transitions alone climb "
                     f"({2 * rt * (1 - math.cos(a)):.3g} m at {a_deg:g} deg with the standard 1.5 m transition arcs)"
                 )
-            self.incline_length = length
             self.length_src = (
                 f"from geometry.rise {p.rise:g} m and incline {a_deg:g} deg, less the transitions' "
                 f"{2 * rt * (1 - math.cos(a)):.3f} m"
             )
+        elif p.length is not None:
+            # the heads' axles are lt + l1 + 2 rt sin(a) + L cos(a) + l2 apart in plan (tensioner at rest)
+            ends = lt + l1 + l2 + 2.0 * rt * math.sin(a)
+            length = (p.length - ends) / math.cos(a)
+            if length <= 0:
+                raise SceneError(
+                    f"{p.source}: 'geometry.length' = {p.length:g} m is shorter than a moving walk's heads, landings "
+                    f"and tensioner alone ({ends:.3g} m at {a_deg:g} deg): give the length between the heads' axles"
+                )
+            self.length_src = (
+                f"from geometry.length {p.length:g} m between the heads at {a_deg:g} deg, less the landings', "
+                f"tensioner's{' and transitions' if a > 0 else ''} {ends:.3f} m"
+            )
+        if p.geometry_given:
             perimeter = 2.0 * (length + fixed)
             if p.n_links is None:
                 k = p.links_per_step
@@ -107,13 +121,15 @@ class _Filled:
                 self.n_links, self.links_src = (
                     steps * k,
                     (
-                        f"filled: whole steps of {k} links that close the loop of {perimeter:.4f} m with "
-                        f"the tensioner near the reference's {1000 * REFERENCE_SLACK:.0f} mm"
+                        f"filled: whole {'pallets' if p.is_walk else 'steps'} of {k} links that close the loop of "
+                        f"{perimeter:.4f} m with the tensioner near the reference's {1000 * REFERENCE_SLACK:.0f} mm"
                     ),
                 )
             else:
                 self.n_links, self.links_src = p.n_links, "chain.n_links"
         else:
+            # no geometry: an escalator of the common incline whose rise follows from the count (said in the
+            # scene's comments and notes: :func:`geometry_note`)
             self.n_links, self.links_src = p.n_links, "chain.n_links"
             length = (self.n_links * self.pitch) / 2.0 + REFERENCE_SLACK - fixed
             if length <= 0:
@@ -122,11 +138,11 @@ class _Filled:
                     f"for an escalator's landings and heads (at least "
                     f"{math.ceil(2 * (fixed - REFERENCE_SLACK) / self.pitch) + 1}); give the rise (geometry.rise)"
                 )
-            self.incline_length = length
             self.length_src = (
                 f"from chain.n_links {self.n_links} x {1000 * self.pitch:g} mm plus the reference's "
                 f"tensioner slack {1000 * REFERENCE_SLACK:.0f} mm"
             )
+        self.incline_length = length
         self.rise = 2.0 * rt * (1.0 - math.cos(a)) + self.incline_length * math.sin(a)
         perimeter = 2.0 * (self.incline_length + fixed)
         slack = (perimeter - self.n_links * self.pitch) / 2.0
@@ -135,19 +151,43 @@ class _Filled:
             lo, hi = closing_links(perimeter, self.pitch, lt)
             k = p.links_per_step
             whole = [n for n in range(lo, hi + 1) if n % k == 0]
-            steps = f" ({whole[0]} to {whole[-1]} in whole steps of {k})" if whole else ""
-            # the rise over which this count closes: the loop's length moves 2 / sin(a) m a metre of rise
-            r_lo = self.rise - (slack + travel) * math.sin(a)
-            r_hi = self.rise - (slack - travel) * math.sin(a)
+            steps = (
+                f" ({whole[0]} to {whole[-1]} in whole {'pallets' if p.is_walk else 'steps'} of {k})" if whole else ""
+            )
+            if p.is_walk:
+                # the loop's length moves 2 / cos(a) m a metre of the walk's length in plan
+                g_lo = p.length - (slack + travel) * math.cos(a)
+                g_hi = p.length - (slack - travel) * math.cos(a)
+                where, span = f"'geometry.length' = {p.length:g} m", f"a length of {max(g_lo, 0):.2f} to {g_hi:.2f} m"
+                check = "chain.n_links and geometry.length"
+            else:
+                # the loop's length moves 2 / sin(a) m a metre of rise
+                g_lo = self.rise - (slack + travel) * math.sin(a)
+                g_hi = self.rise - (slack - travel) * math.sin(a)
+                where, span = f"'geometry.rise' = {p.rise:g} m", f"a rise of {max(g_lo, 0):.2f} to {g_hi:.2f} m"
+                check = "chain.n_links and geometry.rise"
             raise SceneError(
                 f"{p.source}: 'chain.n_links' = {self.n_links} links of {1000 * self.pitch:g} mm "
-                f"({self.n_links * self.pitch:.3f} m) cannot close on the loop of 'geometry.rise' = {p.rise:g} m at "
+                f"({self.n_links * self.pitch:.3f} m) cannot close on the loop of {where} at "
                 f"'geometry.incline_deg' = {a_deg:g} ({perimeter:.3f} m): the tensioner would have to move "
                 f"{1000 * slack:.0f} mm, beyond its travel of +-{1000 * travel:.0f} mm; the link counts that close "
-                f"on this rise are {lo} to {hi}{steps}, and {self.n_links} links close on a rise of "
-                f"{max(r_lo, 0):.2f} to {r_hi:.2f} m: check chain.n_links and geometry.rise against the drawings"
+                f"on this {'length' if p.is_walk else 'rise'} are {lo} to {hi}{steps}, and {self.n_links} links "
+                f"close on {span}: check {check} against the drawings"
             )
         self.slack = slack
+
+
+def geometry_note(profile) -> str | None:
+    """What the scene assumed of a profile that states no geometry (``chain.n_links`` alone): an escalator of
+    the common 30 deg incline, whose rise follows from the count; None where the profile states it."""
+    if profile.geometry_given:
+        return None
+    f = _Filled(profile)
+    return (
+        f"{profile.source} states no geometry: built as an escalator of the common {DEFAULT_INCLINE_DEG:g} deg "
+        f"incline whose rise ({f.rise:.2f} m) follows from chain.n_links = {f.n_links}; give geometry.rise and "
+        "geometry.incline_deg (an escalator) or geometry.length and geometry.incline_deg (a moving walk)"
+    )
 
 
 def link_count(profile) -> tuple[int, str]:
@@ -187,15 +227,16 @@ def scene_text(profile, analysis: str = "forward", duration: float | None = None
     # the user's own line where the profile has one (the scene's keys say the rest), else the facts
     facts = (
         f"{p.speed:g} m/s{' down' if p.direction == 'down' else ''}, {1000 * p.nominal_pitch:g} mm pitch, "
-        f"{p.links_per_step} links per step"
+        f"{p.links_per_step} links per {'pallet' if p.is_walk else 'step'}"
     )
     desc = f"{p.name}: {p.description or facts}"
     pre = p.tensioner_preload
     lines = [
-        f"# The scene of escalator {p.unit}, built by vibkit from the profile {p.source}.",
+        f"# The scene of {p.kind} {p.unit}, built by vibkit from the profile {p.source}.",
         "# From the profile: unit, speed, nominal pitch, links per step, sprocket teeth"
         + (", number of links" if p.n_links is not None else "")
         + (", rise" if p.rise is not None else "")
+        + (", length between the heads" if p.length is not None else "")
         + (", incline" if p.incline_deg is not None else "")
         + (", roller radius" if p.roller_radius is not None else "")
         + (", tensioner preload" if pre is not None else "")
@@ -206,6 +247,7 @@ def scene_text(profile, analysis: str = "forward", duration: float | None = None
         "# sprocket mass and inertia scaled with its pitch radius, landings, transitions and tensioner runs,",
         "# contact stiffness and speed controller"
         + (", tensioner preload (so that no link goes into compression)." if pre is None else "."),
+        *([f"# NOTE: {note}."] if (note := geometry_note(p)) else []),
         "[scene]",
         f'name = "{name}"',
         f'analysis = "{analysis}"',
@@ -217,7 +259,8 @@ def scene_text(profile, analysis: str = "forward", duration: float | None = None
         f"upper_landing = {_fmt(_RG.upper_landing)}      # reference",
         f"transition_radius = {_fmt(_RG.transition_radius)}  # reference",
         f"incline_angle_deg = {_fmt(f.incline_deg)}  # "
-        + ("geometry.incline_deg" if p.incline_deg is not None else "filled: 30 deg, the common incline"),
+        + ("geometry.incline_deg" if p.incline_deg is not None else "filled: 30 deg, the common incline")
+        + (" (a level walk: the transitions turn nothing)" if p.is_walk and f.incline_deg == 0 else ""),
         f"incline_length = {f.incline_length:.6f}  # {f.length_src} (rise {f.rise:.3f} m)",
         'head_radius = "sprocket"  # the heads turn on the sprocket\'s pitch circle',
         "",
@@ -238,7 +281,11 @@ def scene_text(profile, analysis: str = "forward", duration: float | None = None
         "",
     ]
     preload = pre if pre is not None else default_preload(f)
-    pre_src = "tensioner.preload" if pre is not None else "filled: twice the weight of the steepest strand's chain"
+    pre_src = (
+        "tensioner.preload"
+        if pre is not None
+        else f"filled: twice the weight of the steepest strand's chain, at least {MIN_PRELOAD:g} N"
+    )
     if analysis == "forward":
         lines += [
             "[run]",
@@ -290,17 +337,24 @@ def _toml_str(s: str) -> str:
     return '"' + s.replace("\\", "\\\\").replace('"', '\\"') + '"'
 
 
+#: the least preload a profile's scene gets [N]: the reference escalator's (twice the weight of its 3 m rise's
+#: strand along the slope, 3.06 kN); a level moving walk's strands weigh nothing along the guide, and its
+#: tensioner's spring still holds the chain taut (a real one gives several kN)
+MIN_PRELOAD = 3060.0
+
+
 def default_preload(f) -> float:
     """A tensioner preload that keeps every link in tension [N].
 
     The return strand hangs from the sprocket: without a preload its links below the incline's top
     carry the weight of the chain below them as compression where the guide pushes them down hill.
     Twice the weight of one strand's incline (steps and chain, along the slope) keeps every link in
-    tension with a margin; a real tensioner's spring gives several kN.
+    tension with a margin; a real tensioner's spring gives several kN. Never less than
+    :data:`MIN_PRELOAD` (a level or gently inclined moving walk).
     """
     a = math.radians(f.incline_deg)
     strand = MASS_PER_METRE * f.incline_length * 9.81 * math.sin(a)
-    return round(2.0 * strand, -1)
+    return max(round(2.0 * strand, -1), MIN_PRELOAD)
 
 
 def profile_scene(profile, analysis: str = "forward", duration: float | None = None) -> Scene:

@@ -338,8 +338,10 @@ def _parameters(src, sec):
         check_geometry_range(src, "guide.head_radius", head)
         fitted = head
     angle = tg.incline_angle_deg
-    if not 0 < angle < 90:
-        raise SceneError(f"{src}: 'guide.incline_angle_deg' must be in (0, 90) deg, got {angle!r}")
+    if not 0 <= angle < 90:
+        raise SceneError(
+            f"{src}: 'guide.incline_angle_deg' must be in [0, 90) deg (0: a level moving walk), got {angle!r}"
+        )
     guide_keys = dict(
         tensioner_length=tg.tensioner_length,
         lower_landing=tg.lower_landing,

@@ -98,7 +98,7 @@ class GuideSection(_Section):
     lower_landing: float = key("m", "length L1 of the horizontal lower landing", required=True)
     upper_landing: float = key("m", "length L2 of the horizontal upper landing", required=True)
     transition_radius: float = key("m", "radius r_t of the four transition arcs", required=True)
-    incline_angle_deg: float = key("deg", "angle of the incline, in (0, 90)", required=True)
+    incline_angle_deg: float = key("deg", "angle of the incline, in [0, 90) (0: a level moving walk)", required=True)
     incline_length: float = key("m", "length L of the straight incline", required=True)
     head_radius: float | str = key(
         "m",
