@@ -62,7 +62,7 @@ def test_geometry_instead_of_links_and_sensor():
         (lambda t: t.replace('unit = "E07"', ""), r"missing value 'escalator.unit'"),
         (lambda t: t.replace("speed = 0.5", ""), r"missing value 'drive.speed'"),
         (lambda t: t.replace("nominal_pitch = 0.13333", ""), r"missing value 'chain.nominal_pitch'"),
-        (lambda t: t.replace("n_links = 160", ""), r"missing value 'chain.n_links' \(or both 'geometry.rise'"),
+        (lambda t: t.replace("n_links = 160", ""), r"missing value 'chain.n_links' or the geometry"),
         (lambda t: t.replace("speed = 0.5", "speed = 50"), r"'drive.speed' = 50.0 is outside"),
         (lambda t: t.replace("speed = 0.5", "speed = 2.34"), r"'drive.speed' = 2.34 is outside .* km/h\?"),
         (lambda t: t.replace("speed = 0.5", 'speed = "fast"'), r"'drive.speed' expected float"),

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import datetime as _dt
+import math
 
 import numpy as np
 import xarray as xr
@@ -93,6 +94,8 @@ def make_dataset(coords: dict, data: dict, attrs: dict, scene) -> xr.Dataset:
         "n_rollers": scene.chain.n_rollers,
         "sprocket_teeth": scene.sprocket.teeth,
         "links_per_step": int(scene.chain.links_per_step),
+        # the guide's incline [deg]: 0 is a level moving walk (its ride is the top run: no climb to find)
+        "incline_deg": math.degrees(scene.guide.incline_angle),
         "history": f"simulated by vibkit {__version__}",
     }
     base.update(attrs)

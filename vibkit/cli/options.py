@@ -642,7 +642,8 @@ def chain_links(a, profile):
     except ValueError:
         return None
     msg(
-        f"note: {profile.source}: {n} links, filled in from its geometry (whole steps that close the loop); give "
+        f"note: {profile.source}: {n} links, filled in from its geometry (whole "
+        f"{'pallets' if getattr(profile, 'is_walk', False) else 'steps'} that close the loop); give "
         "chain.n_links or --links N when you know the chain's count"
     )
     return n

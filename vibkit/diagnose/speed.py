@@ -155,7 +155,7 @@ def resolve_speed(speed=None, speed_sigma=None, *, profile=None, recording=None,
         return ResolvedSpeed(v, *stated[:1], source="given", sigma_source=stated[1])
     if profile is not None and getattr(profile, "speed", None):
         rated = ", rated" if getattr(profile, "speed_sigma_from_standard", False) else ""
-        name = f"escalator profile {getattr(profile, 'unit', '')}{rated}"
+        name = f"{getattr(profile, 'kind', 'escalator')} profile {getattr(profile, 'unit', '')}{rated}"
         if speed_sigma is None:
             sig, why = profile.speed_sigma
             return ResolvedSpeed(float(profile.speed), sig, source=name, sigma_source=why)

@@ -39,6 +39,7 @@ __all__ = [
     "a95",
     "detect_ride_segment",
     "incline_from_vertical_speed",
+    "level_run_from_velocity",
     "half_cycle_peaks",
     "lowpass_10hz",
     "peak_to_peak",
@@ -312,6 +313,45 @@ def incline_from_vertical_speed(vz, fs, *, min_speed=0.05, down=False):
     return RideSegment(
         start_s=a / fs, end_s=b / fs, method="speed channel", plateau=-plateau if down else plateau, note=note
     )
+
+
+def level_run_from_velocity(vx, vz, fs, *, backward=False):
+    """The ride of a level moving walk from a pallet's horizontal and vertical speeds ``vx``, ``vz`` [m/s] (a
+    simulation's, exact): the longest span in which the pallet runs forward (``backward``: the walk set to run
+    the other way, towards -x) at more than half its median forward speed there while its vertical speed stays
+    under a tenth of it: the top run between the heads, where the passengers stand (no incline to find).
+
+    Returns
+    -------
+    RideSegment
+        ``method = "speed channel"``, ``plateau`` the median forward speed on the run [m/s].
+
+    Raises
+    ------
+    NoIncline
+        The pallet never runs forward on the level (it is on the return run, or round a head, all the time).
+    """
+    fwd = -np.asarray(vx, dtype=float) if backward else np.asarray(vx, dtype=float)
+    vz = np.abs(np.asarray(vz, dtype=float))
+    on = (fwd > 0.0) & (vz < 0.1 * np.abs(fwd))
+    longest = _longest_run(on)
+    if longest is None:
+        raise NoIncline(
+            f"the simulated pallet does not ride the walk's top run in {fwd.size / fs:.3g} s: simulate longer "
+            "(--duration) or give the segment (--segment)"
+        )
+    plateau = float(np.median(fwd[longest[0] : longest[1]]))
+    a, b = _longest_run(on & (fwd > 0.5 * plateau))
+    if (a == 0 or b == fwd.size) and (b - a) / fs < MIN_INCLINE_AT_AN_END_S:
+        raise NoIncline(
+            f"the simulated pallet rides the walk's top run for {(b - a) / fs:.2g} s only, at the "
+            f"{'start' if a == 0 else 'end'} of the {fwd.size / fs:.3g} s simulated: simulate longer (--duration) "
+            "or give the segment (--segment)"
+        )
+    note = f"a level walk: the simulated pallet on the top run at {plateau:.3g} m/s, no climb"
+    if a == 0 or b == fwd.size:
+        note += "; the top run reaches an end of the simulated time (simulate longer: --duration)"
+    return RideSegment(start_s=a / fs, end_s=b / fs, method="speed channel", plateau=plateau, note=note)
 
 
 def detect_ride_segment(

@@ -133,6 +133,11 @@ class ReportContext:
     spikes_expected: float = float("nan")  # Hampel events that chance alone gives on these samples
 
     @property
+    def unit_kind(self) -> str:
+        """``"moving walk"`` where the profile describes one (``geometry.length``), else ``"escalator"``."""
+        return getattr(self.profile, "kind", None) or "escalator"
+
+    @property
     def unit_text(self) -> str:
         """The unit measured, as page 1 names it: the profile's identity, else how to name it."""
         p = self.profile

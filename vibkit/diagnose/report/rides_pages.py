@@ -44,10 +44,10 @@ def phone_rides_absent(ctx) -> str:
         return ""
     spans = len(search.still_spans)
     return (
-        f"no escalator ride in the recording: {spans} still span(s) of 6 s or more, none with a steady line in "
+        f"no {ctx.unit_kind} ride in the recording: {spans} still span(s) of 6 s or more, none with a steady line in "
         f"{search.band_hz[0]:.3g}-{search.band_hz[1]:.3g} Hz"
         if spans
-        else "no escalator ride in the recording: the person never stood still for 6 s"
+        else f"no {ctx.unit_kind} ride in the recording: the person never stood still for 6 s"
     )
 
 
@@ -77,7 +77,7 @@ def phone_ride_pages(doc, ctx) -> list:
     for k, ride in enumerate(search.rides, 1):
         ev = ride_evidence(ctx.rec, ride, search)
         fig = plt.figure(figsize=_PAGE)
-        heading = f"Escalator ride {k} of {n}"
+        heading = f"{ctx.unit_kind.capitalize()} ride {k} of {n}"
         _page_title(
             fig,
             heading,

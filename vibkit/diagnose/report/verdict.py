@@ -76,10 +76,10 @@ def verdict_page(doc, ctx) -> None:
     pitch, summary = ctx.pitch, ctx.summary
     fig = plt.figure(figsize=_PAGE)
     col = TextColumn(fig, x=0.07, y=0.965, width=0.86)
-    col.text("Escalator drive-chain diagnostic", 16, weight="bold")
+    col.text(f"{ctx.unit_kind.capitalize()} drive-chain diagnostic", 16, weight="bold")
     col.pairs(
         [
-            ("escalator", ctx.unit_text),
+            (ctx.unit_kind, ctx.unit_text),
             ("measured", ctx.measurement_date_text),
             ("recording", f"{summary['file']}, channel {ctx.channel} [{ctx.units}]"),
             (
@@ -123,11 +123,19 @@ def verdict_page(doc, ctx) -> None:
     rides = phone_rides_summary(ctx)
     if rides:  # a phone's walk: the rides are what it says of the chain (the whole walk is no one record of it)
         col.gap(0.006)
-        col.text(f"{len(rides)} ESCALATOR RIDE{'S' if len(rides) > 1 else ''} IN THIS WALK", _BIG, weight="bold")
+        kind = ctx.unit_kind
+        col.text(
+            # (a person's walk, of the phone: "recording" where the unit is itself a walk)
+            f"{len(rides)} {kind.upper()} RIDE{'S' if len(rides) > 1 else ''} IN THIS "
+            f"{'WALK' if kind == 'escalator' else 'RECORDING'}",
+            _BIG,
+            weight="bold",
+        )
         for line in rides:
             col.text(line, 10, weight="bold")
         col.text(
-            "one page each ('escalator ride k of n'); the verdict above is the whole walk's, walking included: "
+            f"one page each ('{kind} ride k of n'); the verdict above is the whole "
+            f"{'walk' if kind == 'escalator' else 'recording'}'s, walking included: "
             "the rides are the chain's evidence",
             8,
             color=_GREY,
@@ -263,7 +271,8 @@ def recording_page(doc, ctx) -> None:
 
     rec, sc, ch, summary = ctx.rec, ctx.scene, ctx.channel, ctx.summary
     fig = plt.figure(figsize=_PAGE)
-    _page_title(fig, "Recording and escalator", "what was measured, by what, and what describes the escalator")
+    kind = ctx.unit_kind
+    _page_title(fig, f"Recording and {kind}", f"what was measured, by what, and what describes the {kind}")
     col = TextColumn(fig, x=0.07, y=0.9, width=0.86)
     sha = str(rec.attrs.get("sha256", ""))
     col.pairs(
@@ -274,7 +283,7 @@ def recording_page(doc, ctx) -> None:
             ("measured", ctx.measurement_date_text),
             ("report date (UTC)", ctx.date.strftime("%Y-%m-%d %H:%M")),
             ("vibkit version", __version__),
-            ("escalator", ctx.unit_text),
+            (kind, ctx.unit_text),
             ("chain speed", speed_figure(ctx)),
             (
                 "scene",

@@ -36,6 +36,7 @@ from ...signal.ride import (
     RideSegment,
     detect_ride_segment,
     incline_from_vertical_speed,
+    level_run_from_velocity,
     lowpass_10hz,
     peak_to_peak,
 )
@@ -630,8 +631,13 @@ def ride_quality_from_simulation(ds, *, segment=None, weightings=None, source=No
             speed = np.hypot(vel[:, 0], vel[:, 1])
             cut = _start_up(speed, float(ds.attrs.get("chain_speed_m_s") or 0.0))
             down = float(ds.attrs.get("speed_set_point_m_s") or 0.0) < 0.0  # the steps travel down the incline
+            level = ds.attrs.get("incline_deg") == 0.0  # a level moving walk: the ride is its top run, no climb
+            vx = ds["roller_velocity"].sel(roller=roller, axis="x").values
 
             def detect(fs_):
+                if level:
+                    seg = level_run_from_velocity(vx[cut:], vz[cut:], fs_, backward=down)
+                    return dataclasses.replace(seg, start_s=seg.start_s + cut / fs_, end_s=seg.end_s + cut / fs_)
                 if not cut:
                     return incline_from_vertical_speed(vz, fs_, down=down)
                 # a run from rest: the drive's start-up is no ride; the incline is looked for after it
