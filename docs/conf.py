@@ -114,8 +114,9 @@ def write_profile_keys_page() -> None:
         "Every key an escalator profile (`--escalator FILE`, `vibkit scene FILE`) may hold, with its unit, "
         "default and plausible range, rendered from `vibkit/model/profile.py` at each build with the scene "
         "schema's machinery. *required*: the profile must give it; *not set*: optional, its meaning says "
-        "what happens without it. A profile gives `chain.n_links` or both `geometry.rise` and "
-        "`geometry.incline_deg`.\n\n" + profile_table() + "\n"
+        "what happens without it. A profile gives `chain.n_links`, or an escalator's `geometry.rise` and "
+        "`geometry.incline_deg`, or a moving walk's `geometry.length` and `geometry.incline_deg` (0 to 12 deg); "
+        "the geometry's keys are checked together (see the guide's section on moving walks).\n\n" + profile_table() + "\n"
     )
     _write_if_changed(DOCS / "api" / "generated" / "profile-keys.md", text)
 

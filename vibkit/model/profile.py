@@ -18,7 +18,7 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
-from .profile_scene import profile_scene, scene_text
+from .profile_scene import DEFAULT_INCLINE_DEG, profile_scene, scene_text
 from .scene import SceneError, _check_scene_file, _section, toml_loads
 from .schema import _fmt, _Section, key
 
@@ -130,6 +130,8 @@ def _check_geometry(src, g: dict, c: dict) -> None:
         raise SceneError(
             f"{src}: {given}: a unit has a rise (escalator) or a length (moving walk), not both: {KINDS_TEXT}"
         )
+    if incline is None and rise is not None and "n_links" in c:
+        incline = DEFAULT_INCLINE_DEG  # (as the scene fills it in, said in its comments)
     if incline is None:
         which = "rise" if rise is not None else "length"
         raise SceneError(
