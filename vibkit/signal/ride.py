@@ -319,7 +319,7 @@ def level_run_from_velocity(vx, vz, fs, *, backward=False):
     """The ride of a level moving walk from a pallet's horizontal and vertical speeds ``vx``, ``vz`` [m/s] (a
     simulation's, exact): the longest span in which the pallet runs forward (``backward``: the walk set to run
     the other way, towards -x) at more than half its median forward speed there while its vertical speed stays
-    under a tenth of it: the top run between the heads, where the passengers stand (no incline to find).
+    under 2 % of it: the top run between the heads, where the passengers stand (no incline to find).
 
     Returns
     -------
@@ -333,7 +333,7 @@ def level_run_from_velocity(vx, vz, fs, *, backward=False):
     """
     fwd = -np.asarray(vx, dtype=float) if backward else np.asarray(vx, dtype=float)
     vz = np.abs(np.asarray(vz, dtype=float))
-    on = (fwd > 0.0) & (vz < 0.1 * np.abs(fwd))
+    on = (fwd > 0.0) & (vz < 0.02 * np.abs(fwd))  # within 1.1 deg of the level: a head's arc ends R/50 from it
     longest = _longest_run(on)
     if longest is None:
         raise NoIncline(
