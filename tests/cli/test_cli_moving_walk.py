@@ -150,3 +150,31 @@ def test_the_report_of_a_walk_says_walk_and_shows_no_climb(walks, tmp_path):
     for word in ("climb", "escalator W40", "Escalator drive-chain"):
         assert word not in everything, word
     assert not re.search(r"\brises?\b", everything)
+
+
+def test_ride_on_a_level_walk_is_the_whole_record_with_no_climb(run, tmp_path):
+    """A phone on a pallet of the level walk: no incline to find (the escalator's rule refuses such a record);
+    the walk's ride is the whole record, said so, and nothing speaks of a climb."""
+    fs, f = 200.0, 0.75 / 0.13333
+    t = np.arange(int(40 * fs)) / fs
+    rng = np.random.default_rng(4)
+    acc = {
+        "acc_x": 0.02 * np.sin(2 * np.pi * f * t) + 0.005 * rng.standard_normal(t.size),
+        "acc_y": 0.005 * rng.standard_normal(t.size),
+        "acc_z": 9.81 + 0.03 * np.sin(2 * np.pi * f * t) + 0.005 * rng.standard_normal(t.size),
+    }
+    rec = tmp_path / "pallet.csv"
+    rows = ["time (s),acc_x (m/s^2),acc_y (m/s^2),acc_z (m/s^2)"]
+    rows += [f"{a:.3f},{x:.5f},{y:.5f},{z:.5f}" for a, x, y, z in zip(t, *acc.values())]
+    rec.write_text("\n".join(rows) + "\n")
+    prof = tmp_path / "w40.toml"
+    prof.write_text(LEVEL.replace('kind = "tensioner"', 'kind = "step"\nstep = 3'))
+    rc, out, err = run("ride", rec, "--escalator", prof, "--json")
+    assert rc == 0, err
+    d = json.loads(out)
+    assert d["segment"]["method"] == "whole record" and d["segment"]["end_s"] == pytest.approx(40.0, abs=0.01)
+    assert "level moving walk" in d["segment"]["note"]
+    assert "climb" not in out.replace("no climb", "") and "incline" not in out
+    # the escalator's rule on the same record: no incline found, refused naming --segment
+    rc, _, err = run("ride", rec)
+    assert rc == 1 and "no incline found" in err and "--segment" in err

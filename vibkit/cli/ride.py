@@ -153,6 +153,11 @@ def _speed_words(r, sp, rq):
     return f"{r.speed_m_s:.5g} m/s"
 
 
+def _level_walk(profile) -> bool:
+    """Whether the --escalator profile is a level moving walk (no incline: the whole record is the ride)."""
+    return bool(getattr(profile, "is_walk", False)) and not profile.incline_deg
+
+
 def run(a):
     from vibkit.diagnose.ride import parse_channels, ride_quality_from_recording
     from vibkit.diagnose.ride_simulation import simulate_ride
@@ -183,6 +188,7 @@ def run(a):
             segment=segment,
             weightings=weightings,
             read_options=reader_options(a),
+            level_walk=_level_walk(escalator_profile(a)),
         )
         sp = run_speed(a)  # --speed, else the escalator profile's: the run's one speed replaces the file's
         if sp.value is not None:

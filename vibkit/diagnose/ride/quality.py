@@ -444,7 +444,15 @@ def _auto_channels(rec, names):
 
 @_naming(_recording_source)
 def ride_quality_from_recording(
-    recording, *, channels=None, segment=None, weightings=None, sample_rate=None, speed_channel=None, read_options=None
+    recording,
+    *,
+    channels=None,
+    segment=None,
+    weightings=None,
+    sample_rate=None,
+    speed_channel=None,
+    read_options=None,
+    level_walk=False,
 ) -> RideQuality:
     """Ride quality of a recording of a step-riding accelerometer.
 
@@ -467,6 +475,9 @@ def ride_quality_from_recording(
         A speed channel [m/s] (default: a channel in m/s named like ``speed``).
     read_options : dict, optional
         More :func:`vibkit.read_recording` arguments (``time_unit``, ``units``, ``repair_time`` ...).
+    level_walk : bool
+        The sensor rode a level moving walk (a profile's ``geometry.length`` with ``incline_deg = 0``): there
+        is no incline to find, and the whole record is the ride unless ``segment`` is given.
 
     Returns
     -------
@@ -541,6 +552,14 @@ def ride_quality_from_recording(
         speed = sb[k].x if len(sb) > k and sb[k].x.size == sig[next(iter(sig))].size else None
     if speed is None and float(rec.attrs.get("chain_speed_m_s", 0) or 0) > 0:
         speed = float(rec.attrs["chain_speed_m_s"])
+    if segment is None and level_walk:
+        n = sig[next(iter(sig))].size
+        segment = RideSegment(
+            start_s=0.0,
+            end_s=n / fs,
+            method="whole record",
+            note="a level moving walk: no climb to find, the whole record is the ride (--segment: the part on it)",
+        )
     if segment is None:
         segment = ride_in_walk(rec, [chans.get(a) for a in "xyz"], first[k].t0, notes, src)
     return ride_quality(
