@@ -222,7 +222,8 @@ def write_report(
     ):
         with _pdf_in_memory(out, overwrite=overwrite, inputs=inputs) as buf, PdfPages(buf, metadata=meta) as pdf:
             doc = PageSink(pdf, header=page_header(ctx))
-            doc.absent = [(b.name, why) for b in PAGES if (why := b.absent(ctx))]
+            # (a moving walk's rides are named as its pages name it)
+            doc.absent = [(b.name.replace("escalator", ctx.unit_kind), why) for b in PAGES if (why := b.absent(ctx))]
             for builder in PAGES:
                 builder.draw(doc, ctx)
             doc.close()

@@ -62,8 +62,11 @@ def simulate_ride(scene, *, duration=None, segment=None, weightings=None, progre
     ds = simulate(with_ride_outputs(sc), duration=longer, progress=progress)
     rq = ride_quality_from_simulation(ds, segment=segment, weightings=weightings, source=sc.source)
     step = sc.outputs["step_accelerometer"]
-    way = "down" if speed < 0 else "up"
-    rq.notes.append(f"simulated {longer} s: in the scene's {own:g} s step {step} does not ride {way} the incline")
+    if sc.guide.incline_angle == 0.0:  # a level moving walk: its ride is the top run
+        rq.notes.append(f"simulated {longer} s: in the scene's {own:g} s pallet {step} does not ride the top run")
+    else:
+        way = "down" if speed < 0 else "up"
+        rq.notes.append(f"simulated {longer} s: in the scene's {own:g} s step {step} does not ride {way} the incline")
     return rq
 
 
