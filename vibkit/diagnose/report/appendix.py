@@ -186,7 +186,7 @@ def parameters_page(doc, ctx) -> None:
     built = " (scene built from the profile)"
     if name.endswith(built):  # the profile's scene, in memory: the command that writes it to a file
         name = name[: -len(built)]
-        heading = f"Scene built from the escalator profile {name} (vibkit scene PROFILE -o FILE writes it):"
+        heading = f"Scene built from the {ctx.unit_kind} profile {name} (vibkit scene PROFILE -o FILE writes it):"
     else:
         heading = f"Scene {name}:"
     fig.text(0.06, 0.58, heading, fontsize=10, fontweight="bold")
