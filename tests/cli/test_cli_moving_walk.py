@@ -178,3 +178,29 @@ def test_ride_on_a_level_walk_is_the_whole_record_with_no_climb(run, tmp_path):
     # the escalator's rule on the same record: no incline found, refused naming --segment
     rc, _, err = run("ride", rec)
     assert rc == 1 and "no incline found" in err and "--segment" in err
+
+
+def test_a_profile_with_links_alone_is_built_as_an_escalator_and_scene_says_so(run, tmp_path):
+    """`chain.n_links` without geometry: a 30 deg escalator whose rise follows from the count, said on stderr (it
+    was silent: a walk described so became an 18.7 m escalator)."""
+    prof = tmp_path / "links-only.toml"
+    prof.write_text(LEVEL.split("[geometry]")[0].replace("links_per_step = 3", "links_per_step = 3\nn_links = 624"))
+    rc, out, err = run("scene", prof, "-o", "-")
+    assert rc == 0, err
+    note = next(line for line in err.splitlines() if "states no geometry" in line)
+    rise = float(re.search(r"whose rise \(([\d.]+) m\)", note).group(1))
+    assert rise > 15 and "geometry.length" in note and "30 deg" in note
+    assert "# The scene of escalator W40" in out
+
+
+@pytest.mark.parametrize(
+    "geometry, key",
+    [("rise = 0\nincline_deg = 0", "geometry.length"), ("length = 40.0\nincline_deg = 30", "12 deg at most")],
+)
+def test_scene_refuses_a_profile_that_is_neither_in_one_line(run, tmp_path, geometry, key):
+    prof = tmp_path / "neither.toml"
+    prof.write_text(LEVEL.split("[geometry]")[0] + "[geometry]\n" + geometry + "\n")
+    rc, out, err = run("scene", prof, "-o", "-")
+    lines = err.strip().splitlines()
+    assert rc == 1 and out == "" and len(lines) == 1
+    assert str(prof) in lines[0] and key in lines[0] and "geometry.incline_deg" in lines[0]

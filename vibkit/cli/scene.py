@@ -39,6 +39,10 @@ def run(a):
         text = profile.scene_text(a.analysis, a.duration)
     except SceneError as exc:
         raise CLIError(str(exc)) from None
+    from vibkit.model.profile_scene import geometry_note
+
+    if note := geometry_note(profile):  # chain.n_links alone: built as a 30 deg escalator, said
+        msg(f"note: {note}")
     if a.output == "-":
         sys.stdout.write(text)
         return 0

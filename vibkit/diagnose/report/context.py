@@ -18,7 +18,7 @@ import numpy as np
 from ...analyses.simulation import simulate
 from ...io import RecordingError, read_recording, source_name
 from ...io.channels import own_samples, with_component
-from ...model.profile_scene import link_count
+from ...model.profile_scene import geometry_note, link_count
 from ...model.scene import Scene, SceneError, load_scene
 from ...runtime.dates import check_date, parse_iso_date
 from ...signal import hampel_events, link_pass_estimate
@@ -410,6 +410,8 @@ def analyse(
         summary.update(score=comp.score, pitch_consistent=comp.pitch_consistent)
     links, links_note = _links(rec, ch, units, sc, speed, notes, profile, marker_s)
     chain_links = _chain_links(profile, sc)
+    if profile is not None and (assumed := geometry_note(profile)):  # n_links alone: an escalator of 30 deg
+        notes.insert(0, assumed)
     if chain_links is not None:
         summary["n_links"], summary["n_links_from"] = chain_links
         if profile is not None and profile.n_links is None:
