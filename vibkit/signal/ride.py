@@ -40,6 +40,7 @@ __all__ = [
     "detect_ride_segment",
     "incline_from_vertical_speed",
     "level_run_from_velocity",
+    "level_walk_segment",
     "half_cycle_peaks",
     "lowpass_10hz",
     "peak_to_peak",
@@ -315,11 +316,12 @@ def incline_from_vertical_speed(vz, fs, *, min_speed=0.05, down=False):
     )
 
 
-def level_run_from_velocity(vx, vz, fs, *, backward=False):
+def level_run_from_velocity(vx, vz, fs, *, backward=False, t0=0.0):
     """The ride of a level moving walk from a pallet's horizontal and vertical speeds ``vx``, ``vz`` [m/s] (a
     simulation's, exact): the longest span in which the pallet runs forward (``backward``: the walk set to run
     the other way, towards -x) at more than half its median forward speed there while its vertical speed stays
-    under 2 % of it: the top run between the heads, where the passengers stand (no incline to find).
+    under 2 % of it: the top run between the heads, where the passengers stand (no incline to find). ``t0`` [s]:
+    the time of the first sample, added to the segment's times.
 
     Returns
     -------
@@ -351,7 +353,17 @@ def level_run_from_velocity(vx, vz, fs, *, backward=False):
     note = f"a level walk: the simulated pallet on the top run at {plateau:.3g} m/s, no climb"
     if a == 0 or b == fwd.size:
         note += "; the top run reaches an end of the simulated time (simulate longer: --duration)"
-    return RideSegment(start_s=a / fs, end_s=b / fs, method="speed channel", plateau=plateau, note=note)
+    return RideSegment(start_s=t0 + a / fs, end_s=t0 + b / fs, method="speed channel", plateau=plateau, note=note)
+
+
+def level_walk_segment(duration_s):
+    """The ride of a recording on a level moving walk: the whole record of ``duration_s`` [s] (no climb to find)."""
+    return RideSegment(
+        start_s=0.0,
+        end_s=float(duration_s),
+        method="whole record",
+        note="a level moving walk: no climb to find, the whole record is the ride (--segment: the part on it)",
+    )
 
 
 def detect_ride_segment(

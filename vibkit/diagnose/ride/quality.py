@@ -37,6 +37,7 @@ from ...signal.ride import (
     detect_ride_segment,
     incline_from_vertical_speed,
     level_run_from_velocity,
+    level_walk_segment,
     lowpass_10hz,
     peak_to_peak,
 )
@@ -476,8 +477,7 @@ def ride_quality_from_recording(
     read_options : dict, optional
         More :func:`vibkit.read_recording` arguments (``time_unit``, ``units``, ``repair_time`` ...).
     level_walk : bool
-        The sensor rode a level moving walk (a profile's ``geometry.length`` with ``incline_deg = 0``): there
-        is no incline to find, and the whole record is the ride unless ``segment`` is given.
+        The sensor rode a level moving walk (no incline to find): the whole record is the ride, unless ``segment``.
 
     Returns
     -------
@@ -553,13 +553,7 @@ def ride_quality_from_recording(
     if speed is None and float(rec.attrs.get("chain_speed_m_s", 0) or 0) > 0:
         speed = float(rec.attrs["chain_speed_m_s"])
     if segment is None and level_walk:
-        n = sig[next(iter(sig))].size
-        segment = RideSegment(
-            start_s=0.0,
-            end_s=n / fs,
-            method="whole record",
-            note="a level moving walk: no climb to find, the whole record is the ride (--segment: the part on it)",
-        )
+        segment = level_walk_segment(sig[next(iter(sig))].size / fs)
     if segment is None:
         segment = ride_in_walk(rec, [chans.get(a) for a in "xyz"], first[k].t0, notes, src)
     return ride_quality(
@@ -650,13 +644,10 @@ def ride_quality_from_simulation(ds, *, segment=None, weightings=None, source=No
             speed = np.hypot(vel[:, 0], vel[:, 1])
             cut = _start_up(speed, float(ds.attrs.get("chain_speed_m_s") or 0.0))
             down = float(ds.attrs.get("speed_set_point_m_s") or 0.0) < 0.0  # the steps travel down the incline
-            level = ds.attrs.get("incline_deg") == 0.0  # a level moving walk: the ride is its top run, no climb
-            vx = ds["roller_velocity"].sel(roller=roller, axis="x").values
 
             def detect(fs_):
-                if level:
-                    seg = level_run_from_velocity(vx[cut:], vz[cut:], fs_, backward=down)
-                    return dataclasses.replace(seg, start_s=seg.start_s + cut / fs_, end_s=seg.end_s + cut / fs_)
+                if ds.attrs.get("incline_deg") == 0.0:  # a level moving walk: the ride is its top run, no climb
+                    return level_run_from_velocity(vel[cut:, 0], vz[cut:], fs_, backward=down, t0=cut / fs_)
                 if not cut:
                     return incline_from_vertical_speed(vz, fs_, down=down)
                 # a run from rest: the drive's start-up is no ride; the incline is looked for after it
