@@ -1,7 +1,7 @@
 """Sphinx configuration of vibkit's documentation (``make docs``; every warning is an error).
 
-Pages are Markdown (MyST); the API reference is generated from the numpydoc docstrings by autodoc and
-autosummary. Two kinds of page are written at build time, never by hand (both ignored by git):
+Pages are Markdown (MyST); the API reference (the public API only, never a recursive walk of the package) is
+generated from the numpydoc docstrings by autodoc and autosummary. Two kinds of page are written at build time, never by hand (both ignored by git):
 
 * ``api/generated/``: autosummary's stub page for each documented object;
 * ``benchmarks/results/``: one page per ``benchmarks/results/*.md`` that includes it, so that what

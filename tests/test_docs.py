@@ -45,3 +45,21 @@ def test_the_signal_package_docstring_lists_every_export_under_a_topic():
     listed = set(re.findall(r"\b(\w+)\b", doc.split("Spectral analysis", 1)[1].split("Everything else", 1)[0]))
     missing = sorted(set(vibkit.signal.__all__) - listed)
     assert missing == [], f"vibkit.signal's docstring does not list {missing} under a topic"
+
+
+def test_the_api_reference_documents_the_public_api_only():
+    # no package is walked recursively (that generated a page for every internal module); each object a page
+    # names by its full path exists and is public (no leading underscore in any part of its name)
+    import importlib
+
+    for page in (DOCS / "api").glob("*.rst"):
+        text = page.read_text(encoding="utf-8")
+        assert ":recursive:" not in text, f"docs/api/{page.name} walks a package recursively"
+        for name in re.findall(r"^   (vibkit\.[\w.]+)$", text, re.M):
+            assert not any(part.startswith("_") for part in name.split(".")), f"{page.name}: {name} is private"
+            module, _, attr = name.rpartition(".")
+            try:
+                obj = importlib.import_module(name)
+            except ImportError:
+                obj = getattr(importlib.import_module(module), attr, None)
+            assert obj is not None, f"docs/api/{page.name} names {name}, which does not exist"
