@@ -63,3 +63,15 @@ def test_the_api_reference_documents_the_public_api_only():
             except ImportError:
                 obj = getattr(importlib.import_module(module), attr, None)
             assert obj is not None, f"docs/api/{page.name} names {name}, which does not exist"
+
+
+def test_guide_pages_cite_no_test_paths_and_no_measurement_dates():
+    # the guides say what a command does and how well; the tests behind it and each run's date and machine
+    # are on docs/explanation/validation.md and the benchmark results pages
+    for page in sorted((DOCS / "guide").glob("*.md")):
+        text = re.sub(r"```.*?```", "", page.read_text(encoding="utf-8"), flags=re.S)
+        assert not re.search(r"`tests/", text), f"docs/guide/{page.name} cites a test path"
+        for para in text.split("\n\n"):
+            dated = re.search(r"\b20\d\d-\d\d-\d\d\b", para)
+            measured = re.search(r"load average|sandbox|Intel|AMD|EPYC|\bUTC\b", para)
+            assert not (dated and measured), f"docs/guide/{page.name} dates a measurement: {para[:80]!r}"
