@@ -30,10 +30,12 @@ test: $(STAMP)
 test-fast: $(STAMP)
 	$(BIN)/python -m pytest -q -m "not slow"
 
-# ruff's lint and format check (the configuration is in pyproject.toml); `make format` rewrites
+# ruff's lint and format check, and mypy on the public API (the configurations are in pyproject.toml);
+# `make format` rewrites
 lint: $(STAMP)
 	$(BIN)/ruff check vibkit tests benchmarks
 	$(BIN)/ruff format --check vibkit tests benchmarks
+	$(BIN)/mypy
 
 format: $(STAMP)
 	$(BIN)/ruff format vibkit tests benchmarks

@@ -26,7 +26,8 @@ def test_every_page_is_in_a_toctree():
     pages = {
         p.relative_to(DOCS).with_suffix("").as_posix()
         for p in DOCS.rglob("*")
-        if p.suffix in (".md", ".rst") and not {"_build", "_templates", "generated", "results", "examples", "auto_examples"} & set(p.parts)
+        if p.suffix in (".md", ".rst")
+        and not {"_build", "_templates", "generated", "results", "examples", "auto_examples"} & set(p.parts)
     }
     linked = {"index"}
     for page in pages:

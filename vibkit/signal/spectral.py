@@ -11,6 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.signal
 import scipy.stats
+from numpy.typing import ArrayLike
 
 from ._checks import as_signal, check_fs, check_positive_int, check_window_length, fill_nan
 
@@ -31,7 +32,16 @@ def _window(window, n: int) -> np.ndarray:
         raise ValueError(f"Parameter window={window!r} is not a window scipy.signal.get_window knows: {exc}") from None
 
 
-def amplitude_spectrum(x, fs, *, window="hann", nfft=None, detrend="constant", axis=-1, nan_policy="raise"):
+def amplitude_spectrum(
+    x: ArrayLike,
+    fs: float,
+    *,
+    window: str | tuple = "hann",
+    nfft: int | None = None,
+    detrend: str | bool = "constant",
+    axis: int = -1,
+    nan_policy: str = "raise",
+) -> tuple[np.ndarray, np.ndarray]:
     """One-sided amplitude spectrum with window (coherent-gain) correction.
 
     A sine ``A sin(2 pi f t)`` whose frequency falls on a bin reads ``A`` at that bin.
@@ -208,17 +218,17 @@ class WelchResult:
 
 
 def welch_psd(
-    x,
-    fs,
+    x: ArrayLike,
+    fs: float,
     *,
-    nperseg=None,
-    noverlap=None,
-    window="hann",
-    detrend="constant",
-    confidence=0.95,
-    axis=-1,
-    nan_policy="raise",
-):
+    nperseg: int | None = None,
+    noverlap: int | None = None,
+    window: str | tuple = "hann",
+    detrend: str | bool = "constant",
+    confidence: float = 0.95,
+    axis: int = -1,
+    nan_policy: str = "raise",
+) -> WelchResult:
     """Welch power spectral density with a chi-square confidence interval.
 
     Parameters
