@@ -29,6 +29,7 @@ from ..scenes import find
 from ..signal import compare_spectra, order_spectrum, resample_to_angle
 from ..signal.bursts import uniform_bursts
 from .channels import counted_part, estimate_channels
+from .html import result_table_html
 from .pitch import DEFAULT_PITCH_RANGE_M, pick_channel
 from .rounding import fmt_interval, fmt_pm
 from .speed import speed_from_recording
@@ -188,6 +189,18 @@ class Comparison:
     speed_meas_sigma_m_s: float | None = None
     link_pass_sim_hz: float = float("nan")
     link_pass_meas_hz: float = float("nan")
+
+    def _repr_html_(self) -> str:
+        """The notebook's view: the score, the link pass and the pitch on both sides."""
+        rows: list[tuple[str, object]] = [
+            ("channel / variable", f"{self.channel} / {self.variable}"),
+            ("fundamental, recording", f"{self.fundamental_meas_hz:.5g} Hz"),
+            ("fundamental, simulation", f"{self.fundamental_sim_hz:.5g} Hz"),
+            ("log-spectral distance", f"{self.log_spectral_distance_db:.3g} dB"),
+            ("pitch ratio", fmt_pm(self.pitch_ratio, self.pitch_ratio_sigma)),
+            ("score", f"{self.score:.3g} ({self.rule})"),
+        ]
+        return result_table_html(f"Simulation against recording: score {self.score:.3g}", rows)
 
     def as_dict(self) -> dict:
         """JSON-ready summary (no arrays except none)."""

@@ -44,9 +44,10 @@ from .decision import (
     decide,
     elongation_verdict,
 )
+from .html import result_table_html
 from .pitch_parts import check_parts
 from .pitch_steps import Hypothesis
-from .rounding import SPEED_SIGMA_NOT_STATED
+from .rounding import SPEED_SIGMA_NOT_STATED, fmt_pm
 from .sensors import is_tensioner_channel
 from .settings import DEFAULT_LINKS_PER_STEP, DEFAULT_TEETH
 
@@ -155,6 +156,20 @@ class PitchEstimate:
     def reason(self) -> str:
         """Why the status is what it is (the decision's reason)."""
         return self.decision.reason if self.decision is not None else self.detection.get("reason", "")
+
+    def _repr_html_(self) -> str:
+        """The notebook's view: status, link pass, speed, pitch and elongation, each with its sigma."""
+        rows: list[tuple[str, object]] = [("channel", self.channel), ("status", self.status)]
+        if self.has_link_pass:
+            rows += [
+                ("link-pass frequency", fmt_pm(self.fundamental_hz, self.fundamental_sigma_hz, "Hz")),
+                ("chain speed", fmt_pm(self.speed_m_s, self.speed_sigma_m_s, "m/s")),
+                ("link pitch", fmt_pm(self.pitch_m * 1e3, self.pitch_sigma_m * 1e3, "mm")),
+            ]
+            if self.elongation_percent is not None:
+                rows.append(("elongation", fmt_pm(self.elongation_percent, self.elongation_sigma_percent, "%")))
+        rows += [("verdict", self.verdict or "none"), ("reason", self.reason)]
+        return result_table_html(f"Link pitch of {self.channel}: {self.verdict or self.status}", rows)
 
     def as_dict(self) -> dict:
         """Plain JSON-ready dict (keys carry units).

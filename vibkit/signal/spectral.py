@@ -216,6 +216,27 @@ class WelchResult:
     noverlap: int
     nsegments: int
 
+    def plot(self, ax=None, *, units: str = "x"):
+        """The PSD on a log scale with its confidence band; ``units`` the signal's (the PSD's are units^2/Hz).
+
+        Draws on ``ax`` (default a new figure's) and returns it. A 1-D result only (one PSD).
+        """
+        import matplotlib.pyplot as plt  # matplotlib only when a figure is asked for
+
+        if np.ndim(self.psd) != 1:
+            raise ValueError(f"plot draws one PSD; this result holds {np.shape(self.psd)[:-1]} of them")
+        if ax is None:
+            _, ax = plt.subplots(figsize=(8, 3.5), layout="constrained")
+        f = self.frequency_hz
+        ax.semilogy(f, self.psd, lw=0.8, color="C0", label=f"Welch PSD ({self.nsegments} segments)")
+        ax.fill_between(
+            f, self.lower, self.upper, color="C0", alpha=0.25, lw=0, label=f"{self.confidence:.0%} interval"
+        )
+        ax.set_xlabel("frequency [Hz]")
+        ax.set_ylabel(f"PSD [{units}^2/Hz]")
+        ax.legend(loc="upper right", fontsize=8)
+        return ax
+
 
 def welch_psd(
     x: ArrayLike,
