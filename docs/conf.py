@@ -149,6 +149,22 @@ def write_profile_keys_page() -> None:
 write_profile_keys_page()
 
 
+def write_glossary_page() -> None:
+    """The glossary: the report's glossary page (vibkit.diagnose.report.appendix.GLOSSARY), one place for both."""
+    from vibkit.diagnose.report.appendix import GLOSSARY
+
+    terms = "\n".join(f"{term}\n: {text}\n" for term, text in GLOSSARY)
+    text = (
+        "# Glossary\n\n"
+        "The words of vibkit's reports and guides, as a field engineer needs them: the same text as the last "
+        "page of every report (`vibkit/diagnose/report/appendix.py`, rendered at each build).\n\n" + terms
+    )
+    _write_if_changed(DOCS / "api" / "generated" / "glossary.md", text)
+
+
+write_glossary_page()
+
+
 def _changelog_guard(app, docname, source):
     """The changelog page includes ``CHANGELOG.md`` from the repository root, given a title if its first
     heading is not one; without the file the page says so instead of failing the build."""

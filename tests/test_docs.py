@@ -76,3 +76,15 @@ def test_guide_pages_cite_no_test_paths_and_no_measurement_dates():
             dated = re.search(r"\b20\d\d-\d\d-\d\d\b", para)
             measured = re.search(r"load average|sandbox|Intel|AMD|EPYC|\bUTC\b", para)
             assert not (dated and measured), f"docs/guide/{page.name} dates a measurement: {para[:80]!r}"
+
+
+def test_every_guide_page_has_a_figure_the_build_draws_or_a_benchmark_wrote():
+    # a figure of the examples gallery (docs/examples/plot_*.py, run by every build) or a benchmark's own plot
+    examples = {p.stem for p in (DOCS / "examples").glob("plot_*.py")}
+    for page in sorted((DOCS / "guide").glob("*.md")):
+        if page.name == "index.md":
+            continue
+        text = page.read_text(encoding="utf-8")
+        drawn = set(re.findall(r"auto_examples/images/sphx_glr_(plot_\w+?)_\d{3}\.png", text))
+        assert drawn or re.search(r"!\[[^\]]*\]\([^)]*\.png\)", text), f"docs/guide/{page.name} has no figure"
+        assert drawn <= examples, f"docs/guide/{page.name} shows figures of no example: {sorted(drawn - examples)}"
