@@ -60,4 +60,4 @@ docs: $(VENV)/.docs
 	$(BIN)/sphinx-build -W --keep-going -q -b html docs docs/_build/html
 
 clean:
-	rm -rf $(VENV) build *.egg-info docs/_build docs/api/generated docs/benchmarks/results
+	rm -rf $(VENV) build *.egg-info docs/_build docs/api/generated docs/benchmarks/results docs/auto_examples docs/sg_execution_times.rst
