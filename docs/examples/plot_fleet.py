@@ -9,13 +9,12 @@ list and each unit's elongation against date. The shipped example fleet: three e
 a year.
 """
 
-import shutil
-import subprocess
 import tempfile
 from pathlib import Path
 
-import matplotlib.image as mpimg
 import matplotlib.pyplot as plt
+import numpy as np
+import pypdfium2 as pdfium
 
 from vibkit.diagnose.report import write_fleet_report
 from vibkit.fleet import FleetDB
@@ -40,11 +39,8 @@ for t in trends:
 
 out = work / "fleet.pdf"
 write_fleet_report(trends, measurements, out, database="fleet.sqlite", links=links)
-if shutil.which("pdftoppm") is None:
-    raise SystemExit("pdftoppm (poppler-utils) is needed to draw a PDF's pages as pictures")
-subprocess.run(["pdftoppm", "-png", "-r", "90", "-f", "1", "-l", "2", str(out), str(work / "page")], check=True)
-pngs = sorted(work.glob("page-*.png"))
-images = [mpimg.imread(png) for png in pngs]
+pdf = pdfium.PdfDocument(out)  # PDFium renders the pages (the PDF itself is vector)
+images = [np.asarray(pdf[k].render(scale=90 / 72).to_pil()) for k in range(2)]
 landscape = images[0].shape[1] > images[0].shape[0]  # landscape pages one above the other, portrait side by side
 rows, cols = (len(images), 1) if landscape else (1, len(images))
 fig, axes = plt.subplots(rows, cols, figsize=(9, 6.2 * rows) if landscape else (11, 7.5), layout="constrained")
