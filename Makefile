@@ -30,10 +30,12 @@ test: $(STAMP)
 test-fast: $(STAMP)
 	$(BIN)/python -m pytest -q -m "not slow"
 
-# ruff's lint and format check (the configuration is in pyproject.toml); `make format` rewrites
+# ruff's lint and format check, and mypy on the public API (the configurations are in pyproject.toml);
+# `make format` rewrites
 lint: $(STAMP)
 	$(BIN)/ruff check vibkit tests benchmarks
 	$(BIN)/ruff format --check vibkit tests benchmarks
+	$(BIN)/mypy
 
 format: $(STAMP)
 	$(BIN)/ruff format vibkit tests benchmarks
@@ -58,4 +60,4 @@ docs: $(VENV)/.docs
 	$(BIN)/sphinx-build -W --keep-going -q -b html docs docs/_build/html
 
 clean:
-	rm -rf $(VENV) build *.egg-info docs/_build docs/api/generated docs/benchmarks/results
+	rm -rf $(VENV) build *.egg-info docs/_build docs/api/generated docs/benchmarks/results docs/auto_examples docs/sg_execution_times.rst

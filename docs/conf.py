@@ -1,11 +1,17 @@
 """Sphinx configuration of vibkit's documentation (``make docs``; every warning is an error).
 
-Pages are Markdown (MyST); the API reference is generated from the numpydoc docstrings by autodoc and
-autosummary. Two kinds of page are written at build time, never by hand (both ignored by git):
+Pages are Markdown (MyST); the API reference (the public API only, never a recursive walk of the package) is
+generated from the numpydoc docstrings by autodoc and autosummary. Two kinds of page are written at build time, never by hand (both ignored by git):
 
 * ``api/generated/``: autosummary's stub page for each documented object;
 * ``benchmarks/results/``: one page per ``benchmarks/results/*.md`` that includes it, so that what
   ``make bench`` writes is what the documentation shows.
+* ``auto_examples/``: the examples gallery, each ``examples/plot_*.py`` run by sphinx-gallery and its
+  figures saved; the guide pages show those figures, so every build redraws them with this version. Two
+  examples draw a PDF's pages with ``pdftoppm`` (poppler-utils), which the build therefore needs.
+
+Maths is rendered by MathJax 3 copied into the built site by ``sphinx-mathjax-offline`` (no CDN: the pages
+read offline, and MathJax keeps the maths selectable text, which images would not).
 """
 
 from __future__ import annotations
@@ -30,10 +36,15 @@ extensions = [
     "sphinx.ext.autodoc",
     "sphinx.ext.autosummary",
     "sphinx.ext.mathjax",
+    # MathJax 3 served from the built site (_static/mathjax), not from a CDN: the maths renders offline
+    "sphinx-mathjax-offline",
+    # the examples gallery: docs/examples/plot_*.py run at every build, their figures shown on the gallery
+    # pages and on the guide pages (docs/auto_examples/ is written by the build, ignored by git)
+    "sphinx_gallery.gen_gallery",
 ]
 source_suffix = {".md": "markdown", ".rst": "restructuredtext"}
 templates_path = ["_templates"]
-exclude_patterns = ["_build", "_templates", "**/.ipynb_checkpoints"]
+exclude_patterns = ["_build", "_templates", "**/.ipynb_checkpoints", "examples", "sg_execution_times.rst"]
 myst_enable_extensions = ["dollarmath", "colon_fence", "deflist"]
 myst_heading_anchors = 3
 
@@ -51,7 +62,22 @@ numpydoc_xref_param_type = False
 html_theme = "pydata_sphinx_theme"
 html_title = f"vibkit {release}"
 html_theme_options = {"navigation_with_keys": False, "show_toc_level": 2}
-html_static_path: list[str] = []
+html_static_path = ["_static"]
+html_css_files = ["vibkit.css"]  # wide code blocks and tables: the content column uses the window's width
+
+sphinx_gallery_conf = {
+    "examples_dirs": "examples",
+    "gallery_dirs": "auto_examples",
+    "filename_pattern": r"/plot_",
+    "within_subsection_order": "FileNameSortKey",
+    "download_all_examples": False,
+    "remove_config_comments": True,
+    "matplotlib_animations": False,
+    "image_scrapers": ("matplotlib",),
+    "reset_modules": ("matplotlib",),
+    "show_memory": False,
+    "write_computation_times": False,
+}
 
 # -- pages generated at build time -------------------------------------------------------------------
 
@@ -122,6 +148,22 @@ def write_profile_keys_page() -> None:
 
 
 write_profile_keys_page()
+
+
+def write_glossary_page() -> None:
+    """The glossary: the report's glossary page (vibkit.diagnose.report.appendix.GLOSSARY), one place for both."""
+    from vibkit.diagnose.report.appendix import GLOSSARY
+
+    terms = "\n".join(f"{term}\n: {text}\n" for term, text in GLOSSARY)
+    text = (
+        "# Glossary\n\n"
+        "The words of vibkit's reports and guides, as a field engineer needs them: the same text as the last "
+        "page of every report (`vibkit/diagnose/report/appendix.py`, rendered at each build).\n\n" + terms
+    )
+    _write_if_changed(DOCS / "api" / "generated" / "glossary.md", text)
+
+
+write_glossary_page()
 
 
 def _changelog_guard(app, docname, source):

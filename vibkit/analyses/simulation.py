@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import os
+from typing import TYPE_CHECKING
+
 from ..model.escalator import EscalatorModel
 from ..model.scene import Scene, load_scene
 from ..runtime import budget
@@ -12,18 +15,21 @@ from .integrate import IntegrationError
 from .inverse import inverse_dynamics
 from .kinematics import kinematic_sweep
 
+if TYPE_CHECKING:  # for the annotations only
+    import xarray as xr
+
 __all__ = ["simulate"]
 
 
 def simulate(
-    scene,
+    scene: Scene | str | os.PathLike[str],
     *,
     duration: float | None = None,
     progress: bool = True,
-    max_result_bytes=None,
-    max_wall_time=None,
+    max_result_bytes: float | str | None = None,
+    max_wall_time: float | None = None,
     check: bool | None = None,
-):
+) -> xr.Dataset:
     """Run a scene.
 
     Parameters

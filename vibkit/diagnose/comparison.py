@@ -17,6 +17,7 @@ from __future__ import annotations
 import math
 import os
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 import scipy.stats
@@ -28,9 +29,13 @@ from ..scenes import find
 from ..signal import compare_spectra, order_spectrum, resample_to_angle
 from ..signal.bursts import uniform_bursts
 from .channels import counted_part, estimate_channels
+from .html import result_table_html
 from .pitch import DEFAULT_PITCH_RANGE_M, pick_channel
 from .rounding import fmt_interval, fmt_pm
 from .speed import speed_from_recording
+
+if TYPE_CHECKING:  # for the annotations only
+    import xarray as xr
 
 __all__ = [
     "Comparison",
@@ -185,6 +190,18 @@ class Comparison:
     link_pass_sim_hz: float = float("nan")
     link_pass_meas_hz: float = float("nan")
 
+    def _repr_html_(self) -> str:
+        """The notebook's view: the score, the link pass and the pitch on both sides."""
+        rows: list[tuple[str, object]] = [
+            ("channel / variable", f"{self.channel} / {self.variable}"),
+            ("fundamental, recording", f"{self.fundamental_meas_hz:.5g} Hz"),
+            ("fundamental, simulation", f"{self.fundamental_sim_hz:.5g} Hz"),
+            ("log-spectral distance", f"{self.log_spectral_distance_db:.3g} dB"),
+            ("pitch ratio", fmt_pm(self.pitch_ratio, self.pitch_ratio_sigma)),
+            ("score", f"{self.score:.3g} ({self.rule})"),
+        ]
+        return result_table_html(f"Simulation against recording: score {self.score:.3g}", rows)
+
     def as_dict(self) -> dict:
         """JSON-ready summary (no arrays except none)."""
         return {
@@ -318,22 +335,22 @@ def counted_speed_note(v_sim, set_point) -> str:
 
 
 def compare(
-    recording,
-    result,
+    recording: xr.Dataset | str | os.PathLike[str],
+    result: xr.Dataset | Scene | str | os.PathLike[str],
     *,
-    channel=None,
-    variable=None,
-    n_harmonics=5,
-    band=None,
-    confidence=0.95,
-    freq_tol=0.01,
-    amp_tol_db=3.0,
-    pitch_tolerance=0.005,
-    duration=None,
-    progress=False,
-    speed=None,
-    speed_sigma=None,
-):
+    channel: str | None = None,
+    variable: str | None = None,
+    n_harmonics: int = 5,
+    band: tuple[float, float] | None = None,
+    confidence: float = 0.95,
+    freq_tol: float = 0.01,
+    amp_tol_db: float = 3.0,
+    pitch_tolerance: float = 0.005,
+    duration: float | None = None,
+    progress: bool = False,
+    speed: float | None = None,
+    speed_sigma: float | None = None,
+) -> Comparison:
     """Compare a recording with a simulation in the order domain.
 
     Parameters
@@ -383,6 +400,43 @@ def compare(
     >>> vibkit.compare(res, res).score                            # doctest: +SKIP
     1.0
     """
+    return _compare(
+        recording,
+        result,
+        channel=channel,
+        variable=variable,
+        n_harmonics=n_harmonics,
+        band=band,
+        confidence=confidence,
+        freq_tol=freq_tol,
+        amp_tol_db=amp_tol_db,
+        pitch_tolerance=pitch_tolerance,
+        duration=duration,
+        progress=progress,
+        speed=speed,
+        speed_sigma=speed_sigma,
+    )
+
+
+def _compare(
+    recording,
+    result,
+    *,
+    channel,
+    variable,
+    n_harmonics,
+    band,
+    confidence,
+    freq_tol,
+    amp_tol_db,
+    pitch_tolerance,
+    duration,
+    progress,
+    speed,
+    speed_sigma,
+):
+    # the body of compare(): its parameters are rebound (a path becomes a Dataset), which the public
+    # signature's annotations would not allow
     if not 0 < float(confidence) < 1:
         raise ValueError(f"confidence must lie in (0, 1), got {confidence!r}")
     if not float(pitch_tolerance) >= 0:

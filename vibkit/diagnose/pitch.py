@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -43,11 +44,15 @@ from .decision import (
     decide,
     elongation_verdict,
 )
+from .html import result_table_html
 from .pitch_parts import check_parts
 from .pitch_steps import Hypothesis
-from .rounding import SPEED_SIGMA_NOT_STATED
+from .rounding import SPEED_SIGMA_NOT_STATED, fmt_pm
 from .sensors import is_tensioner_channel
 from .settings import DEFAULT_LINKS_PER_STEP, DEFAULT_TEETH
+
+if TYPE_CHECKING:  # for the annotations only
+    import xarray as xr
 
 __all__ = [
     "CATALOGUE_PITCHES_M",
@@ -152,6 +157,20 @@ class PitchEstimate:
         """Why the status is what it is (the decision's reason)."""
         return self.decision.reason if self.decision is not None else self.detection.get("reason", "")
 
+    def _repr_html_(self) -> str:
+        """The notebook's view: status, link pass, speed, pitch and elongation, each with its sigma."""
+        rows: list[tuple[str, object]] = [("channel", self.channel), ("status", self.status)]
+        if self.has_link_pass:
+            rows += [
+                ("link-pass frequency", fmt_pm(self.fundamental_hz, self.fundamental_sigma_hz, "Hz")),
+                ("chain speed", fmt_pm(self.speed_m_s, self.speed_sigma_m_s, "m/s")),
+                ("link pitch", fmt_pm(self.pitch_m * 1e3, self.pitch_sigma_m * 1e3, "mm")),
+            ]
+            if self.elongation_percent is not None:
+                rows.append(("elongation", fmt_pm(self.elongation_percent, self.elongation_sigma_percent, "%")))
+        rows += [("verdict", self.verdict or "none"), ("reason", self.reason)]
+        return result_table_html(f"Link pitch of {self.channel}: {self.verdict or self.status}", rows)
+
     def as_dict(self) -> dict:
         """Plain JSON-ready dict (keys carry units).
 
@@ -209,7 +228,7 @@ class PitchEstimate:
         if not self.has_link_pass or self.extra.get("frequency_only"):
             return {}
         stated = self.speed_sigma_stated
-        d = {
+        d: dict[str, object] = {
             "speed_sigma_m_s": self.speed_sigma_m_s,
             "pitch_m": self.pitch_m,
             "pitch_sigma_m": self.pitch_sigma_m if stated else None,
@@ -234,24 +253,24 @@ class PitchEstimate:
 
 
 def estimate_pitch(
-    recording,
+    recording: xr.Dataset,
     *,
-    speed,
-    speed_sigma=None,
-    channel=None,
-    band=None,
-    nominal_pitch=None,
-    limits_percent=DEFAULT_LIMITS_PERCENT,
-    pitch_range=DEFAULT_PITCH_RANGE_M,
-    n_harmonics=5,
-    teeth=DEFAULT_TEETH,
-    p_fa=DEFAULT_P_FA,
-    speed_source="given",
-    frequency_only=False,
-    n_links=None,
-    links_per_step=DEFAULT_LINKS_PER_STEP,
-    on_step=None,
-):
+    speed: float,
+    speed_sigma: float | None = None,
+    channel: str | None = None,
+    band: tuple[float, float] | None = None,
+    nominal_pitch: float | None = None,
+    limits_percent: tuple[float, float, float] = DEFAULT_LIMITS_PERCENT,
+    pitch_range: tuple[float, float] = DEFAULT_PITCH_RANGE_M,
+    n_harmonics: int = 5,
+    teeth: int = DEFAULT_TEETH,
+    p_fa: float = DEFAULT_P_FA,
+    speed_source: str = "given",
+    frequency_only: bool = False,
+    n_links: int | None = None,
+    links_per_step: int = DEFAULT_LINKS_PER_STEP,
+    on_step: bool | None = None,
+) -> PitchEstimate:
     """Link pitch from a recording's link-pass frequency and an independently measured speed.
 
     Parameters

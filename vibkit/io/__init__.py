@@ -26,6 +26,7 @@ from __future__ import annotations
 import math
 import os
 import stat
+from typing import TYPE_CHECKING
 
 from .channels import resolve_channel
 from .errors import RecordingError
@@ -33,6 +34,9 @@ from .limits import _MAX_ENV, DEFAULT_MAX_RECORDING_BYTES, _gib, max_recording_b
 from .netcdf import write_result
 from .phone import is_phone_export, read_phone_export
 from .registry import NETCDF_SUFFIXES, SEISMIC_SUFFIXES, detect_format, format_names, get_format
+
+if TYPE_CHECKING:  # for the annotations only: importing vibkit.io stays cheap
+    import xarray
 
 __all__ = [
     "source_name",
@@ -229,23 +233,23 @@ def _read_stdin(fmt, limit, options):
 
 
 def read_recording(
-    path,
+    path: str | os.PathLike[str],
     *,
-    channel=None,
-    sample_rate=None,
-    time_column=None,
-    time_unit=None,
-    units=None,
-    resample=None,
-    gap_factor=5.0,
-    repair_time=False,
-    delimiter=None,
-    decimal=None,
-    encoding=None,
-    max_bytes=None,
-    format=None,
-    date_order=None,
-):
+    channel: str | list[str] | None = None,
+    sample_rate: float | None = None,
+    time_column: str | int | bool | None = None,
+    time_unit: str | None = None,
+    units: str | dict[str, str] | None = None,
+    resample: str | None = None,
+    gap_factor: float = 5.0,
+    repair_time: bool = False,
+    delimiter: str | None = None,
+    decimal: str | None = None,
+    encoding: str | None = None,
+    max_bytes: int | None = None,
+    format: str | None = None,
+    date_order: str | None = None,
+) -> xarray.Dataset:
     """Read a field recording (or a vibkit result) into an xarray Dataset.
 
     Parameters

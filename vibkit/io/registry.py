@@ -62,7 +62,7 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass
-from typing import Callable
+from typing import Any, Callable
 
 from . import devices
 from .lvm import read_lvm, sniff_lvm
@@ -150,7 +150,7 @@ class Format:
     name: str
     description: str
     sniff: Callable[[Probe], bool]
-    read: Callable[..., object]
+    read: Callable[..., Any]
 
 
 def _sniff_netcdf(p: Probe) -> bool:

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -642,7 +643,7 @@ def _analysis_sections(src, sec, analysis):
             raise SceneError(f"{src}: 'solver.max_result_bytes': {exc}") from None
 
 
-def load_scene(path) -> Scene:
+def load_scene(path: str | os.PathLike[str]) -> Scene:
     """Read and validate a TOML scene file.
 
     Parameters

@@ -21,6 +21,7 @@ from functools import lru_cache
 from typing import NamedTuple
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ._checks import as_signal, check_fs, check_positive_int
 
@@ -75,7 +76,15 @@ def _resolve_n_sigma(half_window, n_sigma, false_alarm_rate):
     return n_sigma
 
 
-def hampel(x, half_window=3, n_sigma=None, *, false_alarm_rate=None, fill_nan=False, axis=-1):
+def hampel(
+    x: ArrayLike,
+    half_window: int = 3,
+    n_sigma: float | None = None,
+    *,
+    false_alarm_rate: float | None = None,
+    fill_nan: bool = False,
+    axis: int = -1,
+) -> HampelResult:
     """Hampel filter exactly as MATLAB's ``hampel(x, k, nsigma)``.
 
     Parameters

@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.ndimage
+from numpy.typing import ArrayLike
 
 from ._checks import as_signal, check_band, check_fs, check_positive_int, decimate_for_band, fill_nan
 from .estimate import FrequencyEstimate, harmonic_ls, interpolated_dft
@@ -252,8 +253,16 @@ class LinkPassEstimate:
 
 
 def link_pass_estimate(
-    x, fs, *, band=(2.0, 6.0), n_harmonics=5, method="harmonic-ls", nan_policy="raise", quantum=None, decimation=1
-):
+    x: ArrayLike,
+    fs: float,
+    *,
+    band: tuple[float, float] = (2.0, 6.0),
+    n_harmonics: int = 5,
+    method: str = "harmonic-ls",
+    nan_policy: str = "raise",
+    quantum: float | None = None,
+    decimation: int = 1,
+) -> LinkPassEstimate:
     """Find the link-pass fundamental in a band (octave-safe), estimate it with sigma, list harmonics.
 
     Parameters
@@ -325,7 +334,7 @@ def link_pass_estimate(
         fit = harmonic_ls(x, fs, f_guess=f0, n_harmonics=k_fit, max_iter=1)
         amps, phases = fit.amplitudes, fit.phases
     warnings += list(est.warnings)
-    n = x.size
+    n = np.size(x)
     amp_sd = est.noise_std * np.sqrt(2.0 / n)
     harmonics = [
         Harmonic(k + 1, (k + 1) * f0, float(amps[k]), float(phases[k]), bool(amps[k] > 3.0 * amp_sd))

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.signal
 import scipy.stats
+from numpy.typing import ArrayLike
 
 from ._checks import as_signal, check_fs, check_positive_int, check_window_length, fill_nan
 
@@ -31,7 +32,16 @@ def _window(window, n: int) -> np.ndarray:
         raise ValueError(f"Parameter window={window!r} is not a window scipy.signal.get_window knows: {exc}") from None
 
 
-def amplitude_spectrum(x, fs, *, window="hann", nfft=None, detrend="constant", axis=-1, nan_policy="raise"):
+def amplitude_spectrum(
+    x: ArrayLike,
+    fs: float,
+    *,
+    window: str | tuple = "hann",
+    nfft: int | None = None,
+    detrend: str | bool = "constant",
+    axis: int = -1,
+    nan_policy: str = "raise",
+) -> tuple[np.ndarray, np.ndarray]:
     """One-sided amplitude spectrum with window (coherent-gain) correction.
 
     A sine ``A sin(2 pi f t)`` whose frequency falls on a bin reads ``A`` at that bin.
@@ -206,19 +216,40 @@ class WelchResult:
     noverlap: int
     nsegments: int
 
+    def plot(self, ax=None, *, units: str = "x"):
+        """The PSD on a log scale with its confidence band; ``units`` the signal's (the PSD's are units^2/Hz).
+
+        Draws on ``ax`` (default a new figure's) and returns it. A 1-D result only (one PSD).
+        """
+        import matplotlib.pyplot as plt  # matplotlib only when a figure is asked for
+
+        if np.ndim(self.psd) != 1:
+            raise ValueError(f"plot draws one PSD; this result holds {np.shape(self.psd)[:-1]} of them")
+        if ax is None:
+            _, ax = plt.subplots(figsize=(8, 3.5), layout="constrained")
+        f = self.frequency_hz
+        ax.semilogy(f, self.psd, lw=0.8, color="C0", label=f"Welch PSD ({self.nsegments} segments)")
+        ax.fill_between(
+            f, self.lower, self.upper, color="C0", alpha=0.25, lw=0, label=f"{self.confidence:.0%} interval"
+        )
+        ax.set_xlabel("frequency [Hz]")
+        ax.set_ylabel(f"PSD [{units}^2/Hz]")
+        ax.legend(loc="upper right", fontsize=8)
+        return ax
+
 
 def welch_psd(
-    x,
-    fs,
+    x: ArrayLike,
+    fs: float,
     *,
-    nperseg=None,
-    noverlap=None,
-    window="hann",
-    detrend="constant",
-    confidence=0.95,
-    axis=-1,
-    nan_policy="raise",
-):
+    nperseg: int | None = None,
+    noverlap: int | None = None,
+    window: str | tuple = "hann",
+    detrend: str | bool = "constant",
+    confidence: float = 0.95,
+    axis: int = -1,
+    nan_policy: str = "raise",
+) -> WelchResult:
     """Welch power spectral density with a chi-square confidence interval.
 
     Parameters

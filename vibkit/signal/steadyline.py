@@ -323,7 +323,8 @@ def steady_line(
     if p_value >= p_fa:
         return SteadyLine(False, float("nan"), float("nan"), reason=_weak(common), **common)
     edges = np.linspace(0, n, parts + 1).astype(int)
-    fk, sk = [], []
+    fk: list[float] = []
+    sk: list[float] = []
     for a, b in zip(edges[:-1], edges[1:]):
         seg = x[:, a:b]
         if (b - a) / fs * fr < 3:

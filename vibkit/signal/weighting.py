@@ -318,7 +318,7 @@ def frequency_weighting_sos(weighting, fs) -> np.ndarray:
 
 @functools.lru_cache(maxsize=64)
 def _sos(w: Weighting, fs: float) -> np.ndarray:
-    sos = []
+    sections = []
     for b, a, fp in w.analog_sections():
         if fp < 0.45 * fs:
             wp = 2.0 * math.pi * fp
@@ -326,8 +326,8 @@ def _sos(w: Weighting, fs: float) -> np.ndarray:
         else:
             c = 2.0 * fs
         bz, az = _biquad_bilinear(b, c), _biquad_bilinear(a, c)
-        sos.append(np.concatenate([bz / az[0], az / az[0]]))
-    sos = np.array(sos)
+        sections.append(np.concatenate([bz / az[0], az / az[0]]))
+    sos = np.array(sections)
     sos[0, :3] *= w.k
     return sos
 

@@ -12,6 +12,7 @@ import os
 import textwrap
 from dataclasses import dataclass, field
 
+from ...runtime.constants import A4_PORTRAIT_IN
 from ...runtime.safe_output import atomic_output, write_bytes
 from ..rounding import SPEED_SIGMA_NOT_STATED, fmt_interval, fmt_length, fmt_pm, fmt_value  # noqa: F401 (the one rounding rule)
 
@@ -26,7 +27,7 @@ FREQUENCY_RATIO = "f rec / f sim"
 
 #: an example SOURCE_DATE_EPOCH (2000-01-01T00:00:00Z), kept for callers that pinned it
 FIXED_EPOCH = 946684800
-_PAGE = (8.27, 11.69)  # A4 portrait [in]
+_PAGE = A4_PORTRAIT_IN
 _WIDE = (11.69, 8.27)  # A4 landscape [in]
 
 

@@ -42,8 +42,10 @@ from ...signal.ride import (
     peak_to_peak,
 )
 from ...signal.weighting import WEIGHTINGS, frequency_weighting, get_weighting
+from ..html import result_table_html
 from ..rides import ride_in_walk
 from ..segment import parse_segment, segment_of_recording
+from .figure import plot_ride
 
 __all__ = [
     "AxisRide",
@@ -140,6 +142,19 @@ class RideQuality:
             if a.axis == name:
                 return a
         raise KeyError(f"no axis {name!r} (axes: {', '.join(a.axis for a in self.axes)})")
+
+    def plot(self, fig=None):
+        """The per-axis table and each axis's weighted acceleration (:func:`~.figure.plot_ride`); a Figure."""
+        return plot_ride(self, fig)
+
+    def _repr_html_(self) -> str:
+        seg = self.segment
+        cells = [
+            (a.axis, [a.channel, a.weighting] + [f"{v:.3g}" for v in (a.weighted.max, a.weighted.a95, a.weighted.rms)])
+            for a in self.axes
+        ]
+        title = f"Ride quality of {self.source} over {seg.start_s:.2f}-{seg.end_s:.2f} s ({seg.method}), m/s^2"
+        return result_table_html(title, cells, columns=["channel", "weighting", "max pk-pk", "A95", "r.m.s."])
 
     def as_dict(self) -> dict:
         return {
