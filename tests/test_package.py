@@ -50,6 +50,9 @@ def _copy_sources(dst: Path) -> Path:
     src = dst / "src"
     shutil.copytree(ROOT / "vibkit", src / "vibkit", ignore=shutil.ignore_patterns("__pycache__", "*.nb*"))
     shutil.copytree(SIM, src / "sim")
+    for folder in ("field", "fleet-example"):  # the example files of vibkit.datasets
+        shutil.copytree(ROOT / "data" / folder, src / "data" / folder)
+    shutil.copy(ROOT / "data" / "README.md", src / "data" / "README.md")
     for name in ("pyproject.toml", "setup.py", "MANIFEST.in", "README.md", "LICENSE"):
         if (ROOT / name).exists():
             shutil.copy(ROOT / name, src / name)

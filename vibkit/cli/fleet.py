@@ -32,7 +32,7 @@ from .options import (
 from .output import CLIError, UsageError, check_output, is_stdout, msg, output_path, print_json, shown, table
 
 EPILOG = (
-    "examples (on the shipped example fleet, data/fleet-example/):\n"
+    "examples (on the example fleet that vibkit datasets copy data writes into data/fleet-example/):\n"
     "  vibkit fleet add data/fleet-example/E07/2026-11-23.csv --unit E07 --speed 0.5 \\\n"
     "      --nominal-pitch 0.13333\n"
     "  vibkit fleet scan data/fleet-example --catalogue data/fleet-example/units.csv --workers 0\n"
