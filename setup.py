@@ -1,7 +1,10 @@
-"""Build step that pyproject.toml cannot state: the scenes of ``sim/`` shipped in the wheel as ``vibkit/scenes/*.toml``.
+"""Build step that pyproject.toml cannot state: the scenes of ``sim/`` shipped in the wheel as ``vibkit/scenes/*.toml``,
+and the example files of ``data/field/`` and ``data/fleet-example/`` (with their provenance, ``data/README.md``) as
+``vibkit/datasets/files/``.
 
-``sim/`` stays the one copy in the repository; ``build_py`` copies its TOML files into the built package,
-so ``vibkit.scenes`` finds them once installed.  Everything else is in pyproject.toml.
+``sim/`` and ``data/`` stay the one copy in the repository; ``build_py`` copies them into the built package,
+so ``vibkit.scenes`` and ``vibkit.datasets`` find them once installed.  Nothing else of ``data/`` ships (the
+third-party and device files keep their own licences).  Everything else is in pyproject.toml.
 """
 
 import shutil
@@ -13,7 +16,7 @@ from setuptools.command.build_py import build_py
 HERE = Path(__file__).resolve().parent
 
 
-class BuildWithScenes(build_py):
+class BuildWithScenesAndData(build_py):
     def run(self):
         super().run()
         target = Path(self.build_lib) / "vibkit" / "scenes"
@@ -23,6 +26,13 @@ class BuildWithScenes(build_py):
             raise RuntimeError(f"{HERE / 'sim'}: no scene (*.toml) to ship in vibkit/scenes/")
         for scene in scenes:
             shutil.copyfile(scene, target / scene.name)
+        files = Path(self.build_lib) / "vibkit" / "datasets" / "files"
+        for folder in ("field", "fleet-example"):
+            src = HERE / "data" / folder
+            if not src.is_dir():
+                raise RuntimeError(f"{src}: missing (the example files shipped in vibkit/datasets/files/)")
+            shutil.copytree(src, files / folder, dirs_exist_ok=True, ignore=shutil.ignore_patterns("__pycache__"))
+        shutil.copyfile(HERE / "data" / "README.md", files / "README.md")
 
 
-setup(cmdclass={"build_py": BuildWithScenes})
+setup(cmdclass={"build_py": BuildWithScenesAndData})

@@ -1,6 +1,6 @@
 """The package's shape: few top-level modules, small modules, imports that run one way, no cycles.
 
-The layers, from the bottom: ``runtime`` (guards every layer shares) and ``scenes`` (the shipped scene files) <- ``signal`` and ``io`` (never the
+The layers, from the bottom: ``runtime`` (guards every layer shares), ``scenes`` and ``datasets`` (the shipped scene and example files) <- ``signal`` and ``io`` (never the
 model) <- ``model`` <- ``analyses`` <- ``diagnose`` <- ``fleet`` and ``sweep`` <- ``cli``. A module
 may import its own layer and the layers below it, never one above. The checks parse the sources
 (every import statement, also those inside functions), so a lazy import cannot hide an upward edge.
@@ -20,6 +20,7 @@ PKG = Path(__file__).resolve().parents[1] / "vibkit"
 LAYER = {
     "runtime": 0,
     "scenes": 0,
+    "datasets": 0,
     "signal": 1,
     "io": 1,
     "model": 2,

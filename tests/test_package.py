@@ -1,5 +1,6 @@
-"""The package as an installed user gets it: the shipped scenes, ``py.typed``, and the built wheel at work
-outside the clone (``vibkit simulate`` of a shipped scene by name, ``vibkit pitch -`` reading stdin)."""
+"""The package as an installed user gets it: the shipped scenes and example files, ``py.typed``, and the built
+wheel at work outside the clone (``vibkit simulate`` of a shipped scene by name, ``vibkit pitch -`` reading stdin,
+every command of the README and of the getting-started page as written)."""
 
 from __future__ import annotations
 
@@ -15,6 +16,7 @@ from pathlib import Path
 import pytest
 
 import vibkit
+import vibkit.datasets
 import vibkit.scenes
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -50,6 +52,9 @@ def _copy_sources(dst: Path) -> Path:
     src = dst / "src"
     shutil.copytree(ROOT / "vibkit", src / "vibkit", ignore=shutil.ignore_patterns("__pycache__", "*.nb*"))
     shutil.copytree(SIM, src / "sim")
+    for folder in ("field", "fleet-example"):  # the example files of vibkit.datasets
+        shutil.copytree(ROOT / "data" / folder, src / "data" / folder)
+    shutil.copy(ROOT / "data" / "README.md", src / "data" / "README.md")
     for name in ("pyproject.toml", "setup.py", "MANIFEST.in", "README.md", "LICENSE"):
         if (ROOT / name).exists():
             shutil.copy(ROOT / name, src / name)
@@ -77,6 +82,9 @@ def installed(tmp_path_factory):
         listed = set(z.namelist())
     assert "vibkit/py.typed" in listed
     assert {f"vibkit/scenes/{p.name}" for p in SIM.glob("*.toml")} <= listed
+    shipped = {f"vibkit/datasets/files/{name}" for name in vibkit.datasets.names()}
+    assert shipped | {"vibkit/datasets/files/README.md"} <= listed
+    assert not any("thirdparty" in n or "devices/" in n or "realworld" in n for n in listed)  # other licences
     venv = top / "venv"
     subprocess.run([sys.executable, "-m", "venv", "--without-pip", str(venv)], check=True, timeout=120)
     py = venv / "bin" / "python"
@@ -127,3 +135,78 @@ def test_wheel_simulates_a_shipped_scene_and_reads_stdin_outside_the_clone(insta
     result.pop("file", None), from_file.pop("file", None)
     assert result == from_file  # stdin read as the file with the same bytes
     assert sorted(os.listdir(installed["work"])) == ["out.nc", "rec.csv"]  # no file named '-'
+
+
+#: the pages whose every command must run from the wheel, outside the clone, as written
+WHEEL_PAGES = (ROOT / "README.md", ROOT / "docs" / "getting-started.md")
+#: what the default run changes (the expensive commands made short, as tests/test_readme.py does; a sweep is only
+#: parsed); ``VIBKIT_README_FULL=1`` runs every command and Python block exactly as written
+WHEEL_CHEAP = {
+    "vibkit simulate": ["--duration", "1"],
+    "vibkit compare": ["--duration", "2"],
+    "vibkit report": ["--duration", "2"],
+    "vibkit ride sim/": ["--duration", "3"],
+    "vibkit fleet scan": ["--workers", "0"],
+    "vibkit sweep": None,
+}
+
+
+def _page_examples(page):
+    from test_readme import examples
+
+    return examples(page)
+
+
+@pytest.mark.slow  # builds and installs the wheel, then every command of two pages in a process of its own
+@pytest.mark.parametrize("page", WHEEL_PAGES, ids=lambda p: p.name)
+def test_every_command_of_the_readme_and_getting_started_runs_from_the_wheel(installed, page, tmp_path):
+    """From an empty folder outside the clone, with only the installed wheel: the page's shell commands in
+    order, as written (the clone's setup, ``make`` and ``. .venv/bin/activate``, left out; ``vibkit bench``
+    refused in one line, as the pages say); the data files come from ``vibkit datasets copy data``."""
+    full = os.environ.get("VIBKIT_README_FULL") == "1"
+    work = tmp_path / "work"
+    work.mkdir()
+    env = dict(installed["env"], VIBKIT_PROGRESS_INTERVAL="1e9")
+    env.pop("VIBKIT_FLEET_DB", None)
+    bindir = installed["venv"] / "bin"
+    ran = []
+    for kind, ex in _page_examples(page):
+        if kind == "py":
+            if full:
+                proc = subprocess.run(
+                    [bindir / "python", "-c", ex], cwd=work, env=env, capture_output=True, text=True, timeout=1800
+                )
+                assert proc.returncode == 0, f"a Python block of {page.name} failed:\n{proc.stderr[-3000:]}"
+            else:
+                compile(ex, page.name, "exec")
+            continue
+        argv = list(ex)
+        if argv[0] == "make" or argv[0] in (".", "source"):
+            continue  # the clone's setup
+        if argv[0] == "export":
+            name, _, value = argv[1].partition("=")
+            env[name] = value
+            continue
+        line = " ".join(argv)
+        if argv[0] in ("python", "vibkit"):
+            argv[0] = str(bindir / argv[0])
+        key = next((k for k in WHEEL_CHEAP if line.startswith(k)), None)
+        if key is not None and not full:
+            argv = argv[:2] + ["--help"] if WHEEL_CHEAP[key] is None else argv + WHEEL_CHEAP[key]
+        proc = subprocess.run(argv, cwd=work, env=env, capture_output=True, text=True, timeout=1800)
+        ran.append(line)
+        assert "Traceback" not in proc.stderr, f"{page.name}: {line}:\n{proc.stderr[-3000:]}"
+        if line.startswith("vibkit bench"):  # the benchmark scripts are a clone's: refused in one line
+            assert proc.returncode == 1 and proc.stderr.count("\n") == 1, proc.stderr
+            assert "part of a clone of the repository" in proc.stderr and "--root" in proc.stderr
+            continue
+        assert proc.returncode == 0, f"{page.name}: {line}: exit {proc.returncode}\n{proc.stderr[-3000:]}"
+    assert "vibkit datasets copy data" in ran
+    assert sum(line.startswith("vibkit ") for line in ran) >= 9
+    assert sorted(p.name for p in work.iterdir()) == ["data", "out"]  # nothing written beside out/ (and data/)
+    assert (work / "data" / "field" / "leon-tensioner.csv").read_bytes() == (
+        ROOT / "data" / "field" / "leon-tensioner.csv"
+    ).read_bytes()
+    if page.name == "README.md":
+        assert (work / "out" / "fleet.pdf").read_bytes()[:5] == b"%PDF-"
+        assert (work / "out" / "las-palmas.pdf").read_bytes()[:5] == b"%PDF-"

@@ -134,6 +134,7 @@ def test_order_is_fixed_and_the_last_entry_claims_everything():
         "wav",
         "tdms",
         "uff",
+        "ide",
         "seismic",
         "e4",
         "actigraph",

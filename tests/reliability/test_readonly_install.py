@@ -84,6 +84,9 @@ def _install(target: Path) -> str:
     src = target.parent / "src"
     shutil.copytree(ROOT / "vibkit", src / "vibkit", ignore=shutil.ignore_patterns("__pycache__"))
     shutil.copytree(ROOT / "sim", src / "sim")  # the shipped scenes, which setup.py copies into the package
+    for folder in ("field", "fleet-example"):  # the example files of vibkit.datasets, which it copies too
+        shutil.copytree(ROOT / "data" / folder, src / "data" / folder)
+    shutil.copy(ROOT / "data" / "README.md", src / "data" / "README.md")
     for name in ("pyproject.toml", "setup.py", "MANIFEST.in", "README.md", "LICENSE"):
         if (ROOT / name).exists():
             shutil.copy(ROOT / name, src / name)

@@ -17,14 +17,14 @@ import argparse
 import errno
 import sys
 
-from . import bench, compare, fleet, links, pitch, report, ride, rides, scene, simulate, spectrum, sweep
+from . import bench, compare, datasets, fleet, links, pitch, report, ride, rides, scene, simulate, spectrum, sweep
 from .options import cli_message, plain_message
 from .output import UsageError, color, msg
 
 __all__ = ["main"]
 
 # in the order ``vibkit --help`` lists them
-COMMANDS = (simulate, scene, spectrum, pitch, links, compare, report, sweep, ride, rides, fleet, bench)
+COMMANDS = (simulate, scene, spectrum, pitch, links, compare, report, sweep, ride, rides, fleet, datasets, bench)
 
 
 class _Parser(argparse.ArgumentParser):
@@ -62,7 +62,9 @@ def _parser():
         prog="vibkit",
         description="Escalator drive-chain vibration: simulate, analyse, compare, report.",
         formatter_class=argparse.RawDescriptionHelpFormatter,
-        epilog="run 'vibkit COMMAND --help' for each command's options and an example",
+        epilog="run 'vibkit COMMAND --help' for each command's options and an example; \n"
+        "the examples' data/... files are vibkit's example recordings and fleet ('vibkit datasets copy data'\n"
+        "writes them into ./data), their sim/NAME.toml the scenes shipped with vibkit (found by name)",
     )
     p.add_argument("--version", action="version", version=f"vibkit {vibkit.__version__}")
     sub = p.add_subparsers(dest="command", metavar="COMMAND", required=True)

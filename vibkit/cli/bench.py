@@ -1,5 +1,8 @@
 """``vibkit bench``: run the repository's benchmark scripts (benchmarks/bench_*.py).
 
+The scripts are part of a clone of the repository, not of the installed package (the wheel): an installed
+vibkit without ``--root`` says so in one line and exits 1.
+
 The scripts write their tables where ``-o`` says (passed to them as ``VIBKIT_BENCH_RESULTS``); by
 default into a new temporary folder, so that a run never rewrites the tables the docs quote:
 ``make bench`` (``vibkit bench -o benchmarks/results``) is what regenerates those.
@@ -25,7 +28,12 @@ EPILOG = (
 
 
 def add_parser(subparsers):
-    s = add_command(subparsers, "bench", "run the repository's benchmark scripts (benchmarks/bench_*.py)", EPILOG)
+    s = add_command(
+        subparsers,
+        "bench",
+        "run the benchmark scripts of a clone of the repository (benchmarks/bench_*.py; not in an installed wheel)",
+        EPILOG,
+    )
     s.add_argument(
         "--quick",
         action="store_true",
@@ -43,7 +51,9 @@ def add_parser(subparsers):
         action="store_true",
         help="write into a -o folder that already holds files (the scripts replace theirs, e.g. read_quick.md)",
     )
-    s.add_argument("--root", help="repository root holding benchmarks/ (default: next to the vibkit package)")
+    s.add_argument(
+        "--root", help="the clone holding benchmarks/ (default: the clone vibkit runs from, if it runs from one)"
+    )
     add_json(s, "JSON on stdout")
     s.set_defaults(func=run)
     return s
@@ -56,6 +66,11 @@ def _repo_root():
 def run(a):
     root = Path(a.root) if a.root else _repo_root()
     bdir = root / "benchmarks"
+    if not bdir.is_dir() and not a.root:
+        raise CLIError(
+            "the benchmark scripts (benchmarks/) are part of a clone of the repository, not of the installed "
+            f"package ({Path(__file__).resolve().parents[1]}): run vibkit bench in a clone, or give --root CLONE"
+        )
     if not bdir.is_dir():
         raise CLIError(f"{bdir}: no benchmarks folder (give --root, the repository holding benchmarks/)")
     scripts = sorted(bdir.glob("bench_*.py"))

@@ -32,7 +32,7 @@ from .options import (
 from .output import CLIError, UsageError, check_output, is_stdout, msg, output_path, print_json, shown, table
 
 EPILOG = (
-    "examples (on the shipped example fleet, data/fleet-example/):\n"
+    "examples (on the example fleet that vibkit datasets copy data writes into data/fleet-example/):\n"
     "  vibkit fleet add data/fleet-example/E07/2026-11-23.csv --unit E07 --speed 0.5 \\\n"
     "      --nominal-pitch 0.13333\n"
     "  vibkit fleet scan data/fleet-example --catalogue data/fleet-example/units.csv --workers 0\n"
@@ -51,7 +51,10 @@ EPILOG = (
 
 def add_parser(subparsers):
     s = add_command(
-        subparsers, "fleet", "measurement history of a fleet of escalators: add, scan, status, report, migrate", EPILOG
+        subparsers,
+        "fleet",
+        "measurement history of a fleet of escalators: add, scan, status, report, migrate, roles",
+        EPILOG,
     )
     fsub = s.add_subparsers(dest="fleet_command", metavar="SUBCOMMAND", required=True)
 
@@ -146,6 +149,15 @@ def add_parser(subparsers):
     f.add_argument("--to", dest="target", required=True, help="the receiving database (created if missing)")
     add_json(f)
     f.set_defaults(func=run_migrate)
+
+    f = fleet_sub(
+        "roles",
+        "print the SQL that gives a PostgreSQL fleet history a technician's role (may add visits) and a "
+        "reader's (may only read), for its owner to run once (psql -f)",
+    )
+    f.add_argument("--database", help="the database's name (default: --db's, else fleet)")
+    f.add_argument("--schema", default="public", help="the schema holding the history (default public)")
+    f.set_defaults(func=run_roles)
     return s
 
 
@@ -498,7 +510,33 @@ def run_migrate(a):
     return 0
 
 
-_RUN = {"add": run_add, "scan": run_scan, "status": run_status, "report": run_report, "migrate": run_migrate}
+def run_roles(a):
+    import urllib.parse
+
+    from vibkit.fleet.postgres_store import READER_ROLE, TECHNICIAN_ROLE, roles_sql
+
+    database = a.database
+    if database is None and a.db and str(a.db).startswith(("postgresql:", "postgres:")):
+        database = urllib.parse.urlsplit(str(a.db)).path.lstrip("/") or None
+    sql = roles_sql(database or "fleet", a.schema)
+    if a.json:
+        print_json(
+            "fleet.roles",
+            {"database": database or "fleet", "technician": TECHNICIAN_ROLE, "reader": READER_ROLE, "sql": sql},
+        )
+    else:
+        sys.stdout.write(sql)
+    return 0
+
+
+_RUN = {
+    "add": run_add,
+    "scan": run_scan,
+    "status": run_status,
+    "report": run_report,
+    "migrate": run_migrate,
+    "roles": run_roles,
+}
 
 
 def run(a):

@@ -562,7 +562,7 @@ def segment_of(a):
     return None if value is None else tuple(value)
 
 
-ESCALATOR_HELP = "the escalator's profile (TOML): unit, speed, pitch, links; see docs/guide/escalator.md"
+ESCALATOR_HELP = "the escalator's profile (TOML): unit, speed, pitch, links (an example: vibkit datasets path E07.toml)"
 
 
 def add_escalator(sp, help_=ESCALATOR_HELP):
@@ -660,7 +660,7 @@ def escalator_profile(a):
     if path is None:
         return None
     if not str(path).strip():
-        why = "expected the escalator profile's file (TOML: docs/guide/escalator.md); give its path, or leave it out"
+        why = "expected the escalator profile's file (TOML, as vibkit datasets path E07.toml); give its path, or leave it out"
         raise CLIError(f"--escalator {path!r}: {why}")
     from vibkit.model.profile import load_profile
     from vibkit.model.scene import SceneError

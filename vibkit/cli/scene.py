@@ -17,7 +17,10 @@ EPILOG = (
 
 def add_parser(subparsers):
     s = add_command(subparsers, "scene", "write the scene (TOML) of an escalator profile", EPILOG)
-    s.add_argument("profile", help="the escalator's profile (TOML); see docs/guide/escalator.md")
+    s.add_argument(
+        "profile",
+        help="the escalator's profile (TOML); see the guide 'Your escalator' (an example: vibkit datasets path E07.toml)",
+    )
     s.add_argument(
         "--analysis", choices=("forward", "inverse"), default="forward", help="the scene's analysis (default forward)"
     )

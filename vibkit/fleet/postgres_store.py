@@ -9,6 +9,11 @@ constraint on ``sha256`` refuses the same file stored under two units at once.  
 
 The URL is libpq's (``postgresql://user@host:5432/dbname``, ``?host=/socket/dir``, ``sslmode=...``);
 a password is best left to ``PGPASSWORD`` or ``~/.pgpass`` rather than the URL.
+
+Who may do what is the server's business: :func:`roles_sql` gives the statements of two group roles, a
+technician's (:data:`TECHNICIAN_ROLE`: may add visits, and read) and a reader's (:data:`READER_ROLE`: may
+only read), for the database's owner to run once; a role refused a write gets one line naming the role and
+what it lacks.
 """
 
 from __future__ import annotations
@@ -29,10 +34,58 @@ from .schema import (
 )
 from .store import Store
 
-__all__ = ["PostgresStore", "redact_url"]
+__all__ = ["PostgresStore", "redact_url", "roles_sql", "TECHNICIAN_ROLE", "READER_ROLE"]
 
 _META = "vibkit_fleet_meta"
 _APPLICATION = "vibkit-fleet"
+#: the group role of those who add visits (fleet add, scan, migrate into the history): INSERT, and all a reader has
+TECHNICIAN_ROLE = "vibkit_technician"
+#: the group role of those who only read (fleet status, report): SELECT
+READER_ROLE = "vibkit_reader"
+
+
+def _ident(name) -> str:
+    """``name`` as a quoted SQL identifier."""
+    return '"' + str(name).replace('"', '""') + '"'
+
+
+def roles_sql(database="fleet", schema="public") -> str:
+    """The SQL that gives a fleet history on PostgreSQL its two group roles, for the database's owner (or a
+    superuser) to run once, e.g. with ``psql -d fleet -f roles.sql``; running it again changes nothing.
+
+    :data:`READER_ROLE` may connect and read every table of ``schema`` (``fleet status``, ``fleet report``);
+    :data:`TECHNICIAN_ROLE` may also insert (``fleet add``, ``fleet scan``, ``fleet migrate`` into it), but
+    neither update nor delete: a visit once stored stays as it was.  Neither may create tables, so the owner
+    creates the history (a first ``vibkit fleet add`` or ``migrate`` as the owner) and upgrades it after a
+    vibkit that changes the schema; the default privileges cover the tables an upgrade adds.  A person gets a
+    login role of their own that is a member of one of the two (the SQL's last lines, commented out).  The
+    grants are on every table of ``schema``: keep the fleet in a database or schema of its own.
+    """
+    db, sch, tech, reader = _ident(database), _ident(schema), TECHNICIAN_ROLE, READER_ROLE
+    return "\n".join(
+        [
+            f"-- vibkit fleet history {database}: a reader ({reader}) may only read, a technician ({tech}) may also",
+            "-- add visits; run as the database's owner, after the history exists (a first vibkit fleet add as the owner)",
+            "DO $$ BEGIN",
+            f"  IF NOT EXISTS (SELECT FROM pg_roles WHERE rolname = '{reader}') THEN CREATE ROLE {reader} NOLOGIN; END IF;",
+            f"  IF NOT EXISTS (SELECT FROM pg_roles WHERE rolname = '{tech}') THEN CREATE ROLE {tech} NOLOGIN; END IF;",
+            "END $$;",
+            f"GRANT {reader} TO {tech};",
+            f"REVOKE ALL ON DATABASE {db} FROM PUBLIC;",
+            f"GRANT CONNECT ON DATABASE {db} TO {reader};",
+            f"GRANT USAGE ON SCHEMA {sch} TO {reader};",
+            f"GRANT SELECT ON ALL TABLES IN SCHEMA {sch} TO {reader};",
+            f"GRANT INSERT ON ALL TABLES IN SCHEMA {sch} TO {tech};",
+            f"GRANT USAGE ON ALL SEQUENCES IN SCHEMA {sch} TO {tech};",
+            f"ALTER DEFAULT PRIVILEGES IN SCHEMA {sch} GRANT SELECT ON TABLES TO {reader};",
+            f"ALTER DEFAULT PRIVILEGES IN SCHEMA {sch} GRANT INSERT ON TABLES TO {tech};",
+            f"ALTER DEFAULT PRIVILEGES IN SCHEMA {sch} GRANT USAGE ON SEQUENCES TO {tech};",
+            "-- one login role a person, e.g.:",
+            f"-- CREATE ROLE alice LOGIN PASSWORD '...' IN ROLE {tech};   -- a technician",
+            f"-- CREATE ROLE bob LOGIN PASSWORD '...' IN ROLE {reader};   -- a manager who reads",
+            "",
+        ]
+    )
 
 
 def redact_url(url) -> str:
@@ -43,6 +96,18 @@ def redact_url(url) -> str:
 
 def _one_line(exc):
     return " ".join(str(exc).split()) or type(exc).__name__
+
+
+def _refused(location, con, exc, doing):
+    """One line for a privilege the server refused (``doing``: what was tried), naming the role and the fix."""
+    try:
+        user = con.info.user
+    except Exception:  # noqa: BLE001 - a closed connection: the message without the name
+        user = "?"
+    return FleetError(
+        f"{location}: role {user!r} may not {doing}: {_one_line(exc)} (a {READER_ROLE} may only read; adding "
+        f"visits needs {TECHNICIAN_ROLE}, creating or upgrading the history its owner: see vibkit fleet roles)"
+    )
 
 
 class PostgresStore(Store):
@@ -75,6 +140,10 @@ class PostgresStore(Store):
             ) from None
         try:
             self._prepare(create, db_env)
+        except psycopg.errors.InsufficientPrivilege as exc:
+            err = _refused(self.location, self._con, exc, "open this fleet history as asked")
+            self._con.close()
+            raise err from None
         except psycopg.Error as exc:
             self._con.close()
             raise FleetError(f"{self.location}: not a usable fleet database: {_one_line(exc)}") from None
@@ -183,6 +252,8 @@ class PostgresStore(Store):
     def execute(self, sql, args=()):
         try:
             return self._con.execute(sql, args)
+        except self._psycopg.errors.InsufficientPrivilege as exc:
+            raise _refused(self.location, self._con, exc, "do this on the fleet history") from None
         except self._psycopg.Error as exc:
             raise FleetError(f"{self.location}: query failed on the PostgreSQL server: {_one_line(exc)}") from None
 
@@ -197,6 +268,8 @@ class PostgresStore(Store):
         return isinstance(exc, self._psycopg.errors.UniqueViolation)
 
     def _as_fleet_error(self, exc):
+        if isinstance(exc, self._psycopg.errors.InsufficientPrivilege):
+            return _refused(self.location, self._con, exc, "add visits to this fleet history (nothing was stored)")
         if isinstance(exc, self._psycopg.Error):
             return FleetError(
                 f"{self.location}: the PostgreSQL server refused the measurement or the connection was "

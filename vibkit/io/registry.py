@@ -17,7 +17,8 @@ names with ``format=``.  The order of :data:`FORMATS` is the priority, and it is
    what reads them;
 5. ``wav``, ``tdms``, ``uff``: WAV (``RIFF....WAVE``), NI TDMS (``TDSm`` or ``.tdms``, read by npTDMS,
    the ``tdms`` extra), UFF/UNV (a ``-1`` delimiter line and a dataset number, any suffix: UFF is
-   never read as CSV) (:mod:`vibkit.io.wav`, :mod:`vibkit.io.tdms`, :mod:`vibkit.io.uff`);
+   never read as CSV) (:mod:`vibkit.io.wav`, :mod:`vibkit.io.tdms`, :mod:`vibkit.io.uff`); ``ide``: enDAQ
+   ``.ide`` (EBML with DocType ``mide``, or the suffix; read by idelib, the ``ide`` extra; :mod:`vibkit.io.ide`);
 6. ``seismic``: a suffix of :data:`SEISMIC_SUFFIXES` whatever the content, binary content (a NUL
    byte in the first 64 KiB that is not UTF-16/32 text, unless ``encoding=`` is given), or obspy's
    ASCII layouts that start with a ``TIMESERIES`` line (read by :mod:`vibkit.io.seismic`);
@@ -267,6 +268,12 @@ FORMATS: tuple[Format, ...] = (
         "Universal File Format (UFF/UNV) dataset 58 time responses, ASCII and binary 58b, by the '-1' delimiter",
         _sniff("uff", "sniff_uff"),
         _module("uff", "read_uff"),
+    ),
+    Format(
+        "ide",
+        "enDAQ / Slam Stick .ide recordings (needs the ide extra: idelib), by EBML DocType 'mide' or .ide suffix",
+        _sniff("ide", "sniff_ide"),
+        _module("ide", "read_ide"),
     ),
     Format(
         "seismic",
