@@ -9,19 +9,18 @@ description of the escalator: here the guides the step chain runs on for the exa
 (``sim/thesis-forward.toml``) the model was built on.
 """
 
-from pathlib import Path
-
 import matplotlib.pyplot as plt
 import numpy as np
 
 import vibkit
+import vibkit.datasets
+import vibkit.scenes
 from vibkit.model.guide import Guide
 from vibkit.model.profile import load_profile
 from vibkit.model.profile_scene import profile_scene
 
-ROOT = Path.cwd().resolve().parents[1]
-PROFILES = ROOT / "data" / "fleet-example" / "escalators"
-scenes = {"study's escalator (sim/thesis-forward.toml)": vibkit.load_scene(ROOT / "sim" / "thesis-forward.toml")}
+PROFILES = vibkit.datasets.path("fleet-example/escalators")
+scenes = {"study's escalator (sim/thesis-forward.toml)": vibkit.load_scene(vibkit.scenes.path("thesis-forward"))}
 for unit in ("E07", "E12", "E21"):
     profile = load_profile(PROFILES / f"{unit}.toml")
     scenes[f"{unit}: {profile.description or 'profile'}"] = profile_scene(profile)

@@ -16,10 +16,11 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pypdfium2 as pdfium
 
+import vibkit.datasets
 from vibkit.diagnose.report import write_fleet_report
 from vibkit.fleet import FleetDB
 
-FLEET = Path.cwd().resolve().parents[1] / "data" / "fleet-example"
+FLEET = vibkit.datasets.path("fleet-example")
 work = Path(tempfile.mkdtemp())
 
 with FleetDB(work / "fleet.sqlite") as db:

@@ -8,13 +8,12 @@ attributes. Here a tensioner displacement from a field logger's CSV, and a step'
 a phone app (phyphox), an enDAQ and a GCDC X16 logger, each in its own layout.
 """
 
-from pathlib import Path
-
 import matplotlib.pyplot as plt
 
 import vibkit
+import vibkit.datasets
 
-LAYOUTS = Path.cwd().resolve().parents[1] / "data" / "field"
+LAYOUTS = vibkit.datasets.path("field")
 files = [
     LAYOUTS / "leon-tensioner.csv",
     LAYOUTS / "layouts" / "phyphox.csv",

@@ -16,12 +16,12 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pypdfium2 as pdfium
 
+import vibkit.datasets
 from vibkit.diagnose.report import write_report
 
-DATA = Path.cwd().resolve().parents[1] / "data"
 out = Path(tempfile.mkdtemp()) / "leon.pdf"
 report = write_report(
-    DATA / "field" / "leon-tensioner.csv", out, speed=0.49, speed_sigma=0.49e-3, nominal_pitch=0.13333
+    vibkit.datasets.path("field/leon-tensioner.csv"), out, speed=0.49, speed_sigma=0.49e-3, nominal_pitch=0.13333
 )
 print(out.name, "pages:", ", ".join(title for title, _ in report.pages))
 

@@ -9,15 +9,13 @@ over the ride; :func:`vibkit.diagnose.report.plot_ride` draws the table and the 
 largest peak-to-peak pair marked. ``--segment 0.5:3`` picks the seconds of the ride.
 """
 
-from pathlib import Path
-
 import matplotlib.pyplot as plt
 
+import vibkit.datasets
 from vibkit.diagnose.report import plot_ride
 from vibkit.diagnose.ride.quality import ride_quality_from_recording
 
-DATA = Path.cwd().resolve().parents[1] / "data"
-rq = ride_quality_from_recording(DATA / "field" / "layouts" / "phyphox.csv", segment=(0.5, 3.0))
+rq = ride_quality_from_recording(vibkit.datasets.path("field/layouts/phyphox.csv"), segment=(0.5, 3.0))
 for axis in rq.axes:
     w = axis.weighted
     print(f"{axis.axis} ({axis.weighting}): max pk-pk {w.max:.3f}, A95 {w.a95:.3f}, r.m.s. {w.rms:.3f} m/s^2")

@@ -8,18 +8,14 @@ the recording's spectrum has a line at the link-pass frequency :math:`f = v / p`
 uncertainty; ``vibkit pitch`` is this call from the command line.
 """
 
-from pathlib import Path
-
 import matplotlib.pyplot as plt
 
 import vibkit
+import vibkit.datasets
 from vibkit.diagnose.pitch import estimate_pitch
 from vibkit.signal import amplitude_spectrum, sample_rate
 
-# the repository's data/ folder (the examples are run from docs/examples/)
-DATA = Path.cwd().resolve().parents[1] / "data"
-
-rec = vibkit.read_recording(DATA / "field" / "leon-tensioner.csv")
+rec = vibkit.read_recording(vibkit.datasets.path("field/leon-tensioner.csv"))
 est = estimate_pitch(rec, speed=0.49, speed_sigma=0.49e-3, nominal_pitch=0.13333)
 print(f"link pass {est.fundamental_hz:.4f} +- {est.fundamental_sigma_hz:.4f} Hz")
 print(f"pitch {est.pitch_m * 1e3:.3f} +- {est.pitch_sigma_m * 1e3:.3f} mm, {est.verdict}")

@@ -9,13 +9,12 @@ of the result against the budget. Here the guide's sweep of link pitch and conta
 a grid of 27 runs and as 27 random draws over the same ranges; each point is one simulation.
 """
 
-from pathlib import Path
-
 import matplotlib.pyplot as plt
 
+import vibkit.scenes
 from vibkit.sweep import plan_sweep
 
-SCENE = Path.cwd().resolve().parents[1] / "sim" / "thesis-forward.toml"
+SCENE = vibkit.scenes.path("thesis-forward")
 grid = plan_sweep(
     SCENE, {"chain.link_pitch": "0.1333:0.1373:9", "effects.contact.stiffness": [1e5, 1e6, 1e7]}, duration=10
 )
