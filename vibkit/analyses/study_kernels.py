@@ -43,6 +43,18 @@ from ..model.slots import (
     IP_PASSENGERS,
     IP_ROLLING,
     IP_TENSIONER,
+    PART_X,
+    PART_XD,
+    PART_XDD,
+    PART_XS,
+    PART_XSD,
+    PART_XSS,
+    PART_Z,
+    PART_ZD,
+    PART_ZDD,
+    PART_ZS,
+    PART_ZSD,
+    PART_ZSS,
     PASSENGERS_BY_TIME,
     PRM_CORNERS,
     PRM_FP,
@@ -108,18 +120,18 @@ def study_partials(tab, k, s0loc, delta, out):
     tx, tz = math.cos(phi), math.sin(phi)
     nx, nz = -tz, tx
     lam_d = sigp * s0loc
-    out[0] = x
-    out[1] = z
-    out[2] = sig * tx
-    out[3] = sig * tz
-    out[4] = tab[k, BX] + lam_d * tx
-    out[5] = tab[k, BZ] + lam_d * tz
-    out[6] = sig * sig * kap * nx
-    out[7] = sig * sig * kap * nz
-    out[8] = sigp * tx + sig * kap * lam_d * nx
-    out[9] = sigp * tz + sig * kap * lam_d * nz
-    out[10] = kap * lam_d * lam_d * nx
-    out[11] = kap * lam_d * lam_d * nz
+    out[PART_X] = x
+    out[PART_Z] = z
+    out[PART_XS] = sig * tx
+    out[PART_ZS] = sig * tz
+    out[PART_XD] = tab[k, BX] + lam_d * tx
+    out[PART_ZD] = tab[k, BZ] + lam_d * tz
+    out[PART_XSS] = sig * sig * kap * nx
+    out[PART_ZSS] = sig * sig * kap * nz
+    out[PART_XSD] = sigp * tx + sig * kap * lam_d * nx
+    out[PART_ZSD] = sigp * tz + sig * kap * lam_d * nz
+    out[PART_XDD] = kap * lam_d * lam_d * nx
+    out[PART_ZDD] = kap * lam_d * lam_d * nz
 
 
 @kernel()
@@ -138,10 +150,10 @@ def study_kinematics(tab, p0, q, qd, p, linear, part, vel, wq):
         else:
             point_partials(tab, k, local_map(tab, k, s0loc, delta)[0], s0loc, delta, part[i])
         sd = qd[i]
-        vel[i, 0] = part[i, 2] * sd + part[i, 4] * ddot
-        vel[i, 1] = part[i, 3] * sd + part[i, 5] * ddot
-        wq[i, 0] = part[i, 6] * sd * sd + 2.0 * part[i, 8] * sd * ddot + part[i, 10] * ddot * ddot
-        wq[i, 1] = part[i, 7] * sd * sd + 2.0 * part[i, 9] * sd * ddot + part[i, 11] * ddot * ddot
+        vel[i, 0] = part[i, PART_XS] * sd + part[i, PART_XD] * ddot
+        vel[i, 1] = part[i, PART_ZS] * sd + part[i, PART_ZD] * ddot
+        wq[i, 0] = part[i, PART_XSS] * sd * sd + 2.0 * part[i, PART_XSD] * sd * ddot + part[i, PART_XDD] * ddot * ddot
+        wq[i, 1] = part[i, PART_ZSS] * sd * sd + 2.0 * part[i, PART_ZSD] * sd * ddot + part[i, PART_ZDD] * ddot * ddot
 
 
 @kernel()
@@ -163,8 +175,8 @@ def assemble(t, y, prm, pitches, linear, alpha, beta, ws, data, rhs):
     qd = y[n : 2 * n]
     study_kinematics(tab, p0, q, qd, p, linear, part, vel, wq)
     for i in range(p):
-        xs[i] = part[i, 0]
-        zs[i] = part[i, 1]
+        xs[i] = part[i, PART_X]
+        zs[i] = part[i, PART_Z]
     # applied forces on the rollers
     g = fp[FP_G]
     for i in range(p):
@@ -224,7 +236,7 @@ def assemble(t, y, prm, pitches, linear, alpha, beta, ws, data, rhs):
     mdd = m_c
     qdel = f_c
     for i in range(p):
-        rsx, rsz, rdx, rdz = part[i, 2], part[i, 3], part[i, 4], part[i, 5]
+        rsx, rsz, rdx, rdz = part[i, PART_XS], part[i, PART_ZS], part[i, PART_XD], part[i, PART_ZD]
         gx = fx[i] - mass[i] * wq[i, 0]
         gz = fz[i] - mass[i] * wq[i, 1]
         data[k] = mass[i] * (rsx * rsx + rsz * rsz)
@@ -244,16 +256,16 @@ def assemble(t, y, prm, pitches, linear, alpha, beta, ws, data, rhs):
     b2 = beta * beta
     for j in range(p):
         jn = j + 1 if j + 1 < p else 0
-        ux = part[jn, 0] - part[j, 0]
-        uz = part[jn, 1] - part[j, 1]
+        ux = part[jn, PART_X] - part[j, PART_X]
+        uz = part[jn, PART_Z] - part[j, PART_Z]
         dvx = vel[jn, 0] - vel[j, 0]
         dvz = vel[jn, 1] - vel[j, 1]
         c_j = ux * ux + uz * uz - pitches[j] * pitches[j]
         cdot = 2.0 * (ux * dvx + uz * dvz)
         gam = -2.0 * (dvx * dvx + dvz * dvz) - 2.0 * (ux * (wq[jn, 0] - wq[j, 0]) + uz * (wq[jn, 1] - wq[j, 1]))
-        a0 = -2.0 * (ux * part[j, 2] + uz * part[j, 3])
-        a1 = 2.0 * (ux * part[jn, 2] + uz * part[jn, 3])
-        ad = 2.0 * (ux * (part[jn, 4] - part[j, 4]) + uz * (part[jn, 5] - part[j, 5]))
+        a0 = -2.0 * (ux * part[j, PART_XS] + uz * part[j, PART_ZS])
+        a1 = 2.0 * (ux * part[jn, PART_XS] + uz * part[jn, PART_ZS])
+        ad = 2.0 * (ux * (part[jn, PART_XD] - part[j, PART_XD]) + uz * (part[jn, PART_ZD] - part[j, PART_ZD]))
         data[k] = a0
         data[k + 1] = a0
         data[k + 2] = a1
@@ -271,7 +283,7 @@ def study_closure_residual(part, p, pitches):
     worst = 0.0
     for i in range(p):
         j = i + 1 if i + 1 < p else 0
-        d = abs(math.hypot(part[j, 0] - part[i, 0], part[j, 1] - part[i, 1]) - pitches[i])
+        d = abs(math.hypot(part[j, PART_X] - part[i, PART_X], part[j, PART_Z] - part[i, PART_Z]) - pitches[i])
         if d > worst:
             worst = d
     return worst
