@@ -1,7 +1,8 @@
 """Compiled kernels of the study's formulation (:mod:`vibkit.analyses.reference`): the sparse KKT
 system's pattern and values, the roller kinematics in the study's coordinates, and the closure residual.
 
-The applied forces are the forward model's own: gravity, the passengers' weight by time and the
+The applied forces are the forward model's own: the forces on the rollers (gravity, the passengers'
+weight by time, rolling resistance: :func:`vibkit.model.effects.roller_forces`), the motor and the
 contact candidates come from the shared kernels of :mod:`vibkit.model.effects`, and the contact
 forces from :func:`vibkit.model.sprocket.contact_kernel`; parameters are read by named slot
 (:mod:`vibkit.model.slots`).
@@ -14,7 +15,7 @@ import math
 import numba as nb
 import numpy as np
 
-from ..model.effects import contact_candidates, motor_torque, passenger_loads
+from ..model.effects import contact_candidates, motor_torque, roller_forces
 from ..model.guide import BX, BZ, KAPPA, S0, SIGP, local_map, local_point, locate, point_partials
 from ..model.slots import (
     FP_CARRIAGE_MASS,
@@ -22,26 +23,20 @@ from ..model.slots import (
     FP_CZ,
     FP_DAMPING,
     FP_EXPONENT,
-    FP_G,
     FP_INERTIA,
     FP_KI,
     FP_KP,
     FP_P0,
     FP_PRELOAD,
     FP_ROLLER_RADIUS,
-    FP_ROLLING,
     FP_ROOT_RADIUS,
     FP_SPEED_REF,
     FP_STIFFNESS,
     FP_TENSIONER_STIFFNESS,
     FP_TORQUE_LIMIT,
     IP_CONTACT,
-    IP_GRAVITY,
-    IP_LINKS_PER_STEP,
     IP_MOTOR,
     IP_N,
-    IP_PASSENGERS,
-    IP_ROLLING,
     IP_TENSIONER,
     PART_X,
     PART_XD,
@@ -55,7 +50,6 @@ from ..model.slots import (
     PART_ZS,
     PART_ZSD,
     PART_ZSS,
-    PASSENGERS_BY_TIME,
     PRM_CORNERS,
     PRM_FP,
     PRM_IP,
@@ -178,18 +172,8 @@ def assemble(t, y, prm, pitches, linear, alpha, beta, ws, data, rhs):
         xs[i] = part[i, PART_X]
         zs[i] = part[i, PART_Z]
     # applied forces on the rollers
-    g = fp[FP_G]
-    for i in range(p):
-        fx[i] = 0.0
-        fz[i] = -mass[i] * g if ip[IP_GRAVITY] == 1 else 0.0
-    if ip[IP_PASSENGERS] == PASSENGERS_BY_TIME:  # StudyFormulation refuses passengers by place
-        passenger_loads(t, PASSENGERS_BY_TIME, q, pm, ps, pb, pa, g, p, ip[IP_LINKS_PER_STEP], fz)
-    if ip[IP_ROLLING] == 1:
-        mu = fp[FP_ROLLING]
-        for i in range(p):
-            sp_ = math.sqrt(vel[i, 0] * vel[i, 0] + vel[i, 1] * vel[i, 1] + 1e-6)
-            fx[i] -= mu * mass[i] * g * vel[i, 0] / sp_
-            fz[i] -= mu * mass[i] * g * vel[i, 1] / sp_
+    # StudyFormulation refuses passengers by place: q holds the rollers' s0 all the same
+    roller_forces(t, fp, ip, mass, pm, ps, pb, pa, q, vel, 1.0, p, fx, fz)
     torque_c = 0.0
     if ip[IP_CONTACT] == 1:
         # candidates: the rollers whose circle can reach a tooth (centre within root + height + r_d;
