@@ -364,6 +364,86 @@ EFFECT_OPTIONS = {
 }
 
 
+#: the outputs each analysis may produce (``outputs.variables``)
+OUTPUTS = {
+    "kinematics": {"delta", "s1", "roller_position", "closure_residual"},
+    "inverse": {
+        "delta",
+        "delta_dot",
+        "delta_ddot",
+        "link_tension",
+        "drive_force",
+        "closure_residual",
+        "chain_speed",
+        "sprocket_angle",
+        "sprocket_speed",
+        "roller_position",
+        "roller_velocity",
+        "roller_acceleration",
+        "energy",
+    },
+    "forward": {
+        "delta",
+        "delta_dot",
+        "sprocket_angle",
+        "sprocket_speed",
+        "motor_torque",
+        "chain_speed",
+        "link_tension",
+        "indentation",
+        "contact_force",
+        "flank_force",
+        "roller_position",
+        "roller_velocity",
+        "roller_acceleration",
+        "closure_residual",
+        "tensioner_displacement",
+        "accel_step",
+        "energy",
+        "s0",
+    },
+}
+
+#: values per sample of each output, for the size of a sweep's kept series (vibkit.sweep.limits): n the
+#: chain's rollers, t the sprocket's teeth, r the rollers asked for (outputs.rollers), a number that many
+#: (an output that gives several variables, as energy does, counts them all; each of those is one)
+OUTPUT_COLUMNS = {
+    "delta": "1",
+    "delta_dot": "1",
+    "delta_ddot": "1",
+    "s0": "1",
+    "s1": "1",
+    "closure_residual": "1",
+    "chain_speed": "1",
+    "drive_force": "1",
+    "sprocket_angle": "1",
+    "sprocket_speed": "1",
+    "motor_torque": "1",
+    "tensioner_displacement": "1",
+    "link_tension": "n",
+    "contact_force": "t",
+    "indentation": "t",
+    "flank_force": "2t",
+    "roller_position": "2r",
+    "roller_velocity": "2r",
+    "roller_acceleration": "2r",
+    "energy": "4",
+    "accel_step": "3",
+}
+if set(OUTPUT_COLUMNS) != set().union(*OUTPUTS.values()):
+    raise RuntimeError(
+        "vibkit.model.scene: OUTPUT_COLUMNS and OUTPUTS disagree on "
+        + ", ".join(sorted(set(OUTPUT_COLUMNS) ^ set().union(*OUTPUTS.values())))
+    )
+
+#: the effects each analysis applies (a scene of the analysis refuses the others)
+ANALYSIS_EFFECTS = {
+    "kinematics": frozenset(),
+    "inverse": frozenset({"gravity", "passengers", "tensioner"}),
+    "forward": frozenset(EFFECT_OPTIONS),
+}
+
+
 def _types(f):
     t = f.metadata["types"]
     return t[0] if len(t) == 1 else t
