@@ -304,7 +304,7 @@ def _dopri5_chunk(
                     h = hnat
                     # the controller's memory as the six-evaluation step it replaces left it (an error near
                     # zero): that memory holds the steps in the backlash as short as before, and the backlash's
-                    # accuracy with them (docs/developer.md, "Open work")
+                    # accuracy with them (docs/explanation/performance.md, "Landed: Heun's step")
                     ctl[CTL_LAST_ERROR] = 0.0
                     ctl[CTL_WANTED_STEP] = 0.0
                     ctl[CTL_REJECTED] = 0.0
