@@ -7,7 +7,10 @@ classes: :data:`SECTIONS` and :data:`EFFECTS` (key -> type, used by the loader a
 :data:`RANGES` (the plausible ranges the loader enforces), :func:`schema_table` (the Markdown table of
 the documentation) and the defaults of a loaded scene. :mod:`vibkit.model.scene` reads the TOML text,
 checks it against this schema and builds these objects; the analyses read typed attributes
-(``scene.run.start``, ``effects["contact"].exponent``) and never restate a default.
+(``scene.run.start``, ``effects["contact"].exponent``) and never restate a default. The outputs an
+analysis may produce (:data:`OUTPUTS`, with their columns :data:`OUTPUT_COLUMNS`) and the effects it applies
+(:data:`ANALYSIS_EFFECTS`) are declared here too; the compiled kernels name one switch per effect of
+:data:`EFFECT_OPTIONS` (:mod:`vibkit.model.slots`).
 
 A field is *required* when the scene must give it (``required=True`` in its metadata; its dataclass
 default is ``None``). A field whose default is ``None`` and is not required means "not set": its doc
@@ -24,7 +27,10 @@ from ..runtime.budget import DEFAULT_MAX_RESULT_BYTES, DEFAULT_MAX_WALL_TIME
 from .params import GRAVITY, reference_chain
 
 __all__ = [
+    "ANALYSIS_EFFECTS",
     "ATOL_PER_RTOL",
+    "OUTPUTS",
+    "OUTPUT_COLUMNS",
     "EFFECT_OPTIONS",
     "EFFECTS",
     "GEOMETRY_RANGES",
@@ -432,7 +438,7 @@ OUTPUT_COLUMNS = {
 }
 if set(OUTPUT_COLUMNS) != set().union(*OUTPUTS.values()):
     raise RuntimeError(
-        "vibkit.model.scene: OUTPUT_COLUMNS and OUTPUTS disagree on "
+        "vibkit.model.schema: OUTPUT_COLUMNS and OUTPUTS disagree on "
         + ", ".join(sorted(set(OUTPUT_COLUMNS) ^ set().union(*OUTPUTS.values())))
     )
 
