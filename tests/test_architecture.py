@@ -329,9 +329,13 @@ def test_the_heavy_check_can_fail(plant):
         test_the_light_start_ups_load_nothing_heavy()
 
 
-#: the names the compiled kernels give their parameter and work arrays and tuples (vibkit.model.slots):
-#: a compiled kernel reads them by named slot, never by a bare number
-SLOT_ARRAYS = frozenset({"prm", "fp", "ip", "ws", "info", "tb", "head"})
+#: the names the compiled kernels give their parameter and work arrays and tuples (vibkit.model.slots),
+#: the integrator's step control and counters: a compiled kernel reads them by named slot, never by a
+#: bare number
+SLOT_ARRAYS = frozenset({"prm", "fp", "ip", "ws", "info", "tb", "head", "ctl", "counters"})
+#: arrays of one row per roller whose columns are named slots (the closure's partials, PART_* of
+#: vibkit.model.slots): the row may be a number (roller 1 is part[0, ...]), the column may not
+COLUMN_ARRAYS = frozenset({"part"})
 
 
 def _decorators(fn: ast.AST) -> set[str]:
@@ -365,15 +369,29 @@ def _bare_slot(index: ast.AST) -> bool:
     return False
 
 
+def _bare_column(node: ast.Subscript) -> bool:
+    """``part[i, 2]``: a bare number as the column of a :data:`COLUMN_ARRAYS` array."""
+    index = node.slice
+    if not (isinstance(node.value, ast.Name) and node.value.id in COLUMN_ARRAYS):
+        return False
+    return isinstance(index, ast.Tuple) and _bare_slot(index.elts[-1])
+
+
 def bare_slots(source: str, filename: str = "<string>") -> list[str]:
     """``file:line: kernel reads array[...]`` for each bare-number subscript of a slot array
-    (:data:`SLOT_ARRAYS`, also ``prm[2][5]``) inside a compiled kernel of ``source``."""
+    (:data:`SLOT_ARRAYS`, also ``prm[2][5]``) and each bare-number column of a :data:`COLUMN_ARRAYS`
+    array inside a compiled kernel of ``source``."""
     found = []
     for fn in ast.walk(ast.parse(source, filename=filename)):
         if not (isinstance(fn, (ast.FunctionDef, ast.AsyncFunctionDef)) and _is_compiled(fn)):
             continue
         for node in ast.walk(fn):
-            if not isinstance(node, ast.Subscript) or not _bare_slot(node.slice):
+            if not isinstance(node, ast.Subscript):
+                continue
+            if _bare_column(node):
+                found.append(f"{filename}:{node.lineno}: {fn.name} reads {ast.unparse(node)}")
+                continue
+            if not _bare_slot(node.slice):
                 continue
             base = node.value
             while isinstance(base, ast.Subscript):  # prm[PRM_IP][3]: the array is prm's slot
@@ -400,13 +418,23 @@ def test_the_slot_check_can_fail():
         "    info[10:13] = 0.0\n"
         "    return prm[3][-1] + ip[IP_N]\n"
         "@njit\n"
-        "def j(ws):\n"
-        "    return ws[18]\n"
-        "def python_side(fp):\n"
-        "    return fp[3]\n"
+        "def j(ws, ctl, counters, part):\n"
+        "    counters[2] += 1\n"
+        "    return ws[18] + ctl[3] + part[0, PART_XS] + part[i, 2]\n"
+        "def python_side(fp, ctl):\n"
+        "    return fp[3] + ctl[3]\n"
     )
     found = sorted(f.split(": ", 1)[1] for f in bare_slots(source))
-    assert found == ["j reads ws[18]", "k reads fp[3]", "k reads info[10:13]", "k reads prm[3]", "k reads prm[3][-1]"]
+    assert found == [
+        "j reads counters[2]",
+        "j reads ctl[3]",
+        "j reads part[i, 2]",
+        "j reads ws[18]",
+        "k reads fp[3]",
+        "k reads info[10:13]",
+        "k reads prm[3]",
+        "k reads prm[3][-1]",
+    ]
 
 
 # --- kernels without reference counts -------------------------------------------------------------

@@ -14,6 +14,7 @@ from vibkit.model.effects import Work, pack_parameters, reset_closure
 from vibkit.model.escalator import EscalatorModel
 from vibkit.model.pitch_table import empty_table
 from vibkit.model.scene import load_scene
+from vibkit.model.schema import EFFECT_OPTIONS
 from vibkit.model.slots import (
     FP,
     FP_NAMES,
@@ -26,10 +27,12 @@ from vibkit.model.slots import (
     WS_NAMES,
 )
 
+from support.effects import every_effect
+
 SIM = Path(__file__).resolve().parents[2] / "sim"
 
 # every effect on, every option away from its default (so that a slot read from the wrong place shows)
-EVERY = {
+AWAY_FROM_DEFAULTS = {
     "gravity": {"g": 9.80665},
     "contact": {"stiffness": 2.5e6, "exponent": 1.4, "damping": 0.3},
     "motor": {"kp": 600.0, "ki": 25.0, "speed": 0.55, "torque_limit": 1.0e5},
@@ -42,6 +45,7 @@ EVERY = {
     },
     "rolling_resistance": {"coefficient": 0.01},
 }
+EVERY = every_effect(AWAY_FROM_DEFAULTS, "tests/model/test_kernel_slots.py AWAY_FROM_DEFAULTS")
 BY_TIME = dict(EVERY, passengers={"mass": [70.0], "step": [3], "board": [0.5], "alight": [5.0]})
 
 
@@ -185,3 +189,14 @@ def test_the_arrays_have_the_tuples_lengths(every):
     assert len(tb) == len(TB_NAMES) and tb[slots.TB_HEAD].size == len(slots.HEAD_NAMES)
     # the closure's memory is a slice of consecutive slots
     assert (slots.INFO_MEMORY, slots.INFO_MEMORY_END) == (slots.INFO_AT, slots.INFO_DH_DDELTA + 1)
+
+
+def test_every_option_of_every_effect_is_away_from_its_default():
+    """EVERY sets each option the schema declares for an effect (a switch or a derived key aside) to a
+    value other than its default, so that a slot packed from the wrong option shows above."""
+    for name, cls in EFFECT_OPTIONS.items():
+        for f in cls.fields():
+            if f.metadata["types"] == (bool,) or f.metadata["derived"]:
+                continue
+            assert f.name in EVERY[name], f"EVERY lacks effects.{name}.{f.name}"
+            assert EVERY[name][f.name] != f.default, f"EVERY leaves effects.{name}.{f.name} at its default"

@@ -2,8 +2,10 @@
 
 import numpy as np
 
+from vibkit.model.schema import EFFECT_OPTIONS
+
 # damped contact, the carriage, passengers by place, rolling resistance
-ALL_EFFECTS = {
+EXAMPLES = {
     "gravity": {"g": 9.81},
     "contact": {"stiffness": 1.0e6, "exponent": 1.5, "damping": 0.3},
     "motor": {"kp": 600.0, "speed": 0.5},
@@ -16,6 +18,19 @@ ALL_EFFECTS = {
     },
     "rolling_resistance": {"coefficient": 0.01},
 }
+
+
+def every_effect(examples: dict, where: str) -> dict:
+    """One entry of ``examples`` for each effect of the scene schema, in the schema's order; an effect the
+    schema declares without one stops the tests that use them, naming it (add it to ``where``)."""
+    missing = [name for name in EFFECT_OPTIONS if name not in examples]
+    if missing:
+        raise LookupError(f"{where}: no options for the schema's effects {', '.join(missing)}; add them")
+    return {name: examples[name] for name in EFFECT_OPTIONS}
+
+
+#: every effect of the schema (vibkit.model.schema.EFFECT_OPTIONS) with options
+ALL_EFFECTS = every_effect(EXAMPLES, "tests/support/effects.py EXAMPLES")
 
 
 def random_state(rng, p0):

@@ -60,6 +60,10 @@ from ..model.slots import (
     IP_GRAVITY,
     IP_MOTOR,
     IP_PASSENGERS,
+    PART_XD,
+    PART_XS,
+    PART_ZD,
+    PART_ZS,
     PASSENGERS_BY_PLACE,
     PRM_FP,
     PRM_IP,
@@ -495,7 +499,7 @@ def _observe(
         if need_accel:
             ax = jac[mid, 0] * sddot + hacc[mid, 0]
             az = jac[mid, 1] * sddot + hacc[mid, 1]
-            tx, tz = part[mid, 2], part[mid, 3]
+            tx, tz = part[mid, PART_XS], part[mid, PART_ZS]
             scal[j, 9] = (ax * tx + az * tz) / math.hypot(tx, tz)
         else:
             scal[j, 9] = 0.0
@@ -513,8 +517,8 @@ def _observe(
             for i in range(n):
                 resx = mass[i] * (jac[i, 0] * sddot + hacc[i, 0]) - fx[i]
                 resz = mass[i] * (jac[i, 1] * sddot + hacc[i, 1]) - fz[i]
-                rs_res[i] = part[i, 2] * resx + part[i, 3] * resz
-                rd += part[i, 4] * resx + part[i, 5] * resz
+                rs_res[i] = part[i, PART_XS] * resx + part[i, PART_ZS] * resz
+                rd += part[i, PART_XD] * resx + part[i, PART_ZD] * resz
             link_multipliers(part, xs, zs, n, rs_res, rd, 0.0, 0.0, 0.0, lam_buf, False, lam_scratch)
             for i in range(n):
                 tension[j, i] = 2.0 * lam_buf[i] * pitches[i]

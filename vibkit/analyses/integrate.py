@@ -34,6 +34,22 @@ import numpy as np
 
 from ..model import pitch_table
 from ..model.pitch_table import empty_table, rhs
+from ..model.slots import (
+    COUNT_EVALUATIONS,
+    COUNT_EVENT_RETRIES,
+    COUNT_EVENT_STEPS,
+    COUNT_LANDINGS,
+    COUNT_REJECTED,
+    COUNT_STEPS,
+    COUNTER_NAMES,
+    CTL_BREAKPOINT,
+    CTL_DIRECTION,
+    CTL_HAS_BREAKPOINT,
+    CTL_LAST_ERROR,
+    CTL_NAMES,
+    CTL_REJECTED,
+    CTL_WANTED_STEP,
+)
 from ..runtime.kernel import kernel
 from ..runtime.kernel_cache import COMPILING_NOTE, kernel_cached
 from ..runtime.progress import Progress
@@ -137,15 +153,15 @@ def _side(pos, has_lo, lo, has_hi, hi, direction, tiny):
 
 @kernel()
 def _start_past(t, y, yt, k1, s_b, direction, tiny, prm, ws, ctl, counters, tb):
-    """The next step starts on breakpoint s_b: remember it (``ctl[3:6]``) and take k1, the
+    """The next step starts on breakpoint s_b: remember it (``ctl[CTL_HAS_BREAKPOINT]``, ``ctl[CTL_BREAKPOINT]``, ``ctl[CTL_DIRECTION]``) and take k1, the
     right-hand side at (t, y), on its far side. Returns evaluate's status."""
-    ctl[3] = 1.0
-    ctl[4] = s_b
-    ctl[5] = direction
+    ctl[CTL_HAS_BREAKPOINT] = 1.0
+    ctl[CTL_BREAKPOINT] = s_b
+    ctl[CTL_DIRECTION] = direction
     for i in range(y.size):
         yt[i] = y[i]
     yt[0] = _side(yt[0], True, s_b, False, 0.0, direction, tiny)
-    counters[2] += 1
+    counters[COUNT_EVALUATIONS] += 1
     return rhs(t, yt, k1, prm, ws, False, tb)
 
 
@@ -224,7 +240,7 @@ def _dopri5_chunk(
     tiny = 1e-11  # [m] how far on its side of a breakpoint a stage is evaluated
     while t < t_stop:
         hmin = 1e-12 * max(1.0, abs(t))
-        hnat = max(h, ctl[2])  # the step the error controller wants, before a breakpoint cut it
+        hnat = max(h, ctl[CTL_WANTED_STEP])  # the step the error controller wants, before a breakpoint cut it
         if h > max_step:
             h = max_step
         has_hi = False
@@ -233,9 +249,9 @@ def _dopri5_chunk(
         if nev > 0:
             v = k1[0]
             direction = 1.0 if (v > 0.0 or (v == 0.0 and k1[1] >= 0.0)) else -1.0
-            if ctl[3] > 0.0 and ctl[5] != direction:
-                ctl[3] = 0.0  # the motion reversed: the breakpoint behind no longer bounds the step
-            if ctl[3] == 0.0:
+            if ctl[CTL_HAS_BREAKPOINT] > 0.0 and ctl[CTL_DIRECTION] != direction:
+                ctl[CTL_HAS_BREAKPOINT] = 0.0  # the motion reversed: the breakpoint behind no longer bounds the step
+            if ctl[CTL_HAS_BREAKPOINT] == 0.0:
                 # starting on a breakpoint (at t = 0, after a time event or a reversal): take the
                 # right-hand side on the far side
                 s_on = _next_crossing(y[0] - 2.0 * gap * direction, direction, cross, p0, 0.0)
@@ -247,8 +263,26 @@ def _dopri5_chunk(
             if hc <= LAND * hnat and t + hc < t_stop:
                 # a breakpoint just ahead (the last step ended short of it): land on it with one
                 # evaluation (Heun's step, its error estimated by Euler's) instead of a step of six
-                st = _land(t, y, hc, k1, k2, yt, y1, ctl[3] > 0.0, ctl[4], sc, direction, tiny, rtol, atol, prm, ws, tb)
-                counters[2] += 1
+                st = _land(
+                    t,
+                    y,
+                    hc,
+                    k1,
+                    k2,
+                    yt,
+                    y1,
+                    ctl[CTL_HAS_BREAKPOINT] > 0.0,
+                    ctl[CTL_BREAKPOINT],
+                    sc,
+                    direction,
+                    tiny,
+                    rtol,
+                    atol,
+                    prm,
+                    ws,
+                    tb,
+                )
+                counters[COUNT_EVALUATIONS] += 1
                 if st < 0:
                     return 1, t, h, idx
                 if st == 0:
@@ -261,32 +295,32 @@ def _dopri5_chunk(
                     t = tn
                     for i in range(m):
                         y[i] = y1[i]
-                    counters[0] += 1
-                    counters[3] += 1
-                    counters[5] += 1
+                    counters[COUNT_STEPS] += 1
+                    counters[COUNT_EVENT_STEPS] += 1
+                    counters[COUNT_LANDINGS] += 1
                     taken += 1
                     if _start_past(t, y, yt, k1, sc, direction, tiny, prm, ws, ctl, counters, tb) != 0:
                         return 1, t, h, idx
                     h = hnat
                     # the controller's memory as the six-evaluation step it replaces left it (an error near
                     # zero): that memory holds the steps in the backlash as short as before, and the backlash's
-                    # accuracy with them (docs/developer.md, "Open work")
-                    ctl[0] = 0.0
-                    ctl[2] = 0.0
-                    ctl[1] = 0.0
+                    # accuracy with them (docs/explanation/performance.md, "Landed: Heun's step")
+                    ctl[CTL_LAST_ERROR] = 0.0
+                    ctl[CTL_WANTED_STEP] = 0.0
+                    ctl[CTL_REJECTED] = 0.0
                     if taken >= pause:
                         return 5, t, h, idx
                     continue
-                counters[1] += 1
+                counters[COUNT_REJECTED] += 1
             if hc <= h:
                 h = hc
-                ctl[2] = hnat
+                ctl[CTL_WANTED_STEP] = hnat
             # a step that ends on (or within a micrometre of) the breakpoint keeps its stages on
             # the near side of it
             if (y[0] + h * (v + 0.5 * h * k1[1]) - sc) * direction > -1e-6:
                 has_hi = True
-        has_lo = ctl[3] > 0.0
-        lo = ctl[4]
+        has_lo = ctl[CTL_HAS_BREAKPOINT] > 0.0
+        lo = ctl[CTL_BREAKPOINT]
         last = False
         if t + h >= t_stop:
             h = t_stop - t
@@ -322,7 +356,7 @@ def _dopri5_chunk(
         yt[0] = _side(yt[0], has_lo, lo, has_hi, sc, direction, tiny)
         if rhs(t + h, yt, k7, prm, ws, False, tb) != 0:
             return 1, t, h, idx
-        counters[2] += 6
+        counters[COUNT_EVALUATIONS] += 6
         err = 0.0
         for i in range(m):
             sc_i = _scale(i, y[i], y1[i], rtol, atol)
@@ -333,7 +367,7 @@ def _dopri5_chunk(
             if h <= hmin:
                 return 3, t, h, idx
             h *= 0.25
-            counters[1] += 1
+            counters[COUNT_REJECTED] += 1
             continue
         if err <= 1.0 and nev > 0:
             # did the step pass a breakpoint by more than the gap? then end it there and redo it
@@ -357,9 +391,9 @@ def _dopri5_chunk(
                         hi_t = mid
                     if (hi_t - lo_t) * h <= 1e-15 * max(1.0, abs(t)):
                         break
-                counters[1] += 1
-                counters[4] += 1
-                ctl[2] = hnat
+                counters[COUNT_REJECTED] += 1
+                counters[COUNT_EVENT_RETRIES] += 1
+                ctl[CTL_WANTED_STEP] = hnat
                 h = max(lo_t * h, hmin)
                 continue
         if err <= 1.0:
@@ -378,38 +412,38 @@ def _dopri5_chunk(
             for i in range(m):
                 y[i] = y1[i]
                 k1[i] = k7[i]
-            counters[0] += 1
+            counters[COUNT_STEPS] += 1
             taken += 1
-            ctl[3] = 0.0
+            ctl[CTL_HAS_BREAKPOINT] = 0.0
             if has_hi and abs(y[0] - sc) <= gap:
                 # on the breakpoint: the next step starts from the right-hand side on its far side
-                counters[3] += 1
+                counters[COUNT_EVENT_STEPS] += 1
                 if _start_past(t, y, yt, k1, sc, direction, tiny, prm, ws, ctl, counters, tb) != 0:
                     return 1, t, h, idx
             if not last:
                 e = max(err, 1e-10)
-                fac = 0.9 * e ** (-0.2 + 0.75 * 0.04) * max(ctl[0], 1e-4) ** 0.04
+                fac = 0.9 * e ** (-0.2 + 0.75 * 0.04) * max(ctl[CTL_LAST_ERROR], 1e-4) ** 0.04
                 fac = min(10.0, max(0.2, fac))
-                if ctl[1] > 0.0:  # no growth right after a rejection
+                if ctl[CTL_REJECTED] > 0.0:  # no growth right after a rejection
                     fac = min(fac, 1.0)
                 h = h * fac
-                if ctl[2] > 0.0:
+                if ctl[CTL_WANTED_STEP] > 0.0:
                     # the step was cut by a breakpoint, not by the error: go on with the step the
                     # controller had before the cut
-                    h = max(h, ctl[2])
-                ctl[0] = err
+                    h = max(h, ctl[CTL_WANTED_STEP])
+                ctl[CTL_LAST_ERROR] = err
             else:
                 h = hnat  # cut to end on t_stop: the next call goes on with the step it had
-            ctl[2] = 0.0
-            ctl[1] = 0.0
+            ctl[CTL_WANTED_STEP] = 0.0
+            ctl[CTL_REJECTED] = 0.0
         else:
-            counters[1] += 1
+            counters[COUNT_REJECTED] += 1
             h = h * max(0.2, 0.9 * err ** (-0.2 + 0.75 * 0.04))
-            ctl[1] = 1.0
-            ctl[2] = 0.0
+            ctl[CTL_REJECTED] = 1.0
+            ctl[CTL_WANTED_STEP] = 0.0
             if h < hmin:
                 return 2, t, h, idx
-        if counters[0] + counters[1] > 50_000_000:
+        if counters[COUNT_STEPS] + counters[COUNT_REJECTED] > 50_000_000:
             return 4, t, h, idx
         if taken >= pause:
             return 5, t, h, idx  # pause: lets the caller check its wall-time budget and draw progress
@@ -485,8 +519,10 @@ def integrate(
     t0 = time.perf_counter()
     bar = Progress(t_out[-1], label, enabled=progress, note=_compile_note(method) if progress else "")
     if method == "dopri5":
-        counters = np.zeros(6, dtype=np.int64)
-        ctl = np.array([1e-4, 0.0, 0.0, 0.0, 0.0, 1.0])
+        counters = np.zeros(len(COUNTER_NAMES), dtype=np.int64)
+        ctl = np.zeros(len(CTL_NAMES))
+        ctl[CTL_LAST_ERROR] = 1e-4
+        ctl[CTL_DIRECTION] = 1.0
         cross = np.ascontiguousarray(events[0], dtype=float) if events is not None else np.zeros(0)
         period = float(events[1]) if events is not None else 1.0
         # times at which the right-hand side jumps (passengers by time): steps end on them, the
@@ -534,7 +570,7 @@ def integrate(
                     # a time event: the right-hand side changes here; start again from its new value
                     if rhs(t, y, k1, prm, ws, False, tb) != 0:
                         raise IntegrationError(_closure_message(1), t, y)
-                    counters[2] += 1
+                    counters[COUNT_EVALUATIONS] += 1
             except (ZeroDivisionError, FloatingPointError, ValueError) as exc:  # a degenerate state
                 bar.close()
                 raise IntegrationError(f"dopri5: the state became degenerate ({exc})", t, y) from None
@@ -547,12 +583,12 @@ def integrate(
                 raise IntegrationError(f"dopri5: wall-time budget of {max_wall_time:g} s exceeded", t, y)
         bar.close()
         stats = {
-            "steps": int(counters[0]),
-            "rejected": int(counters[1]),
-            "evaluations": int(counters[2] + 1),
-            "event_steps": int(counters[3]),
-            "event_retries": int(counters[4]),
-            "landings": int(counters[5]),
+            "steps": int(counters[COUNT_STEPS]),
+            "rejected": int(counters[COUNT_REJECTED]),
+            "evaluations": int(counters[COUNT_EVALUATIONS] + 1),
+            "event_steps": int(counters[COUNT_EVENT_STEPS]),
+            "event_retries": int(counters[COUNT_EVENT_RETRIES]),
+            "landings": int(counters[COUNT_LANDINGS]),
         }
     elif method.startswith("cvode"):
         try:

@@ -1,7 +1,8 @@
 """Compiled kernels of the study's formulation (:mod:`vibkit.analyses.reference`): the sparse KKT
 system's pattern and values, the roller kinematics in the study's coordinates, and the closure residual.
 
-The applied forces are the forward model's own: gravity, the passengers' weight by time and the
+The applied forces are the forward model's own: the forces on the rollers (gravity, the passengers'
+weight by time, rolling resistance: :func:`vibkit.model.effects.roller_forces`), the motor and the
 contact candidates come from the shared kernels of :mod:`vibkit.model.effects`, and the contact
 forces from :func:`vibkit.model.sprocket.contact_kernel`; parameters are read by named slot
 (:mod:`vibkit.model.slots`).
@@ -14,7 +15,7 @@ import math
 import numba as nb
 import numpy as np
 
-from ..model.effects import contact_candidates, motor_torque, passenger_loads
+from ..model.effects import contact_candidates, motor_torque, roller_forces
 from ..model.guide import BX, BZ, KAPPA, S0, SIGP, local_map, local_point, locate, point_partials
 from ..model.slots import (
     FP_CARRIAGE_MASS,
@@ -22,28 +23,33 @@ from ..model.slots import (
     FP_CZ,
     FP_DAMPING,
     FP_EXPONENT,
-    FP_G,
     FP_INERTIA,
     FP_KI,
     FP_KP,
     FP_P0,
     FP_PRELOAD,
     FP_ROLLER_RADIUS,
-    FP_ROLLING,
     FP_ROOT_RADIUS,
     FP_SPEED_REF,
     FP_STIFFNESS,
     FP_TENSIONER_STIFFNESS,
     FP_TORQUE_LIMIT,
     IP_CONTACT,
-    IP_GRAVITY,
-    IP_LINKS_PER_STEP,
     IP_MOTOR,
     IP_N,
-    IP_PASSENGERS,
-    IP_ROLLING,
     IP_TENSIONER,
-    PASSENGERS_BY_TIME,
+    PART_X,
+    PART_XD,
+    PART_XDD,
+    PART_XS,
+    PART_XSD,
+    PART_XSS,
+    PART_Z,
+    PART_ZD,
+    PART_ZDD,
+    PART_ZS,
+    PART_ZSD,
+    PART_ZSS,
     PRM_CORNERS,
     PRM_FP,
     PRM_IP,
@@ -108,18 +114,18 @@ def study_partials(tab, k, s0loc, delta, out):
     tx, tz = math.cos(phi), math.sin(phi)
     nx, nz = -tz, tx
     lam_d = sigp * s0loc
-    out[0] = x
-    out[1] = z
-    out[2] = sig * tx
-    out[3] = sig * tz
-    out[4] = tab[k, BX] + lam_d * tx
-    out[5] = tab[k, BZ] + lam_d * tz
-    out[6] = sig * sig * kap * nx
-    out[7] = sig * sig * kap * nz
-    out[8] = sigp * tx + sig * kap * lam_d * nx
-    out[9] = sigp * tz + sig * kap * lam_d * nz
-    out[10] = kap * lam_d * lam_d * nx
-    out[11] = kap * lam_d * lam_d * nz
+    out[PART_X] = x
+    out[PART_Z] = z
+    out[PART_XS] = sig * tx
+    out[PART_ZS] = sig * tz
+    out[PART_XD] = tab[k, BX] + lam_d * tx
+    out[PART_ZD] = tab[k, BZ] + lam_d * tz
+    out[PART_XSS] = sig * sig * kap * nx
+    out[PART_ZSS] = sig * sig * kap * nz
+    out[PART_XSD] = sigp * tx + sig * kap * lam_d * nx
+    out[PART_ZSD] = sigp * tz + sig * kap * lam_d * nz
+    out[PART_XDD] = kap * lam_d * lam_d * nx
+    out[PART_ZDD] = kap * lam_d * lam_d * nz
 
 
 @kernel()
@@ -138,10 +144,10 @@ def study_kinematics(tab, p0, q, qd, p, linear, part, vel, wq):
         else:
             point_partials(tab, k, local_map(tab, k, s0loc, delta)[0], s0loc, delta, part[i])
         sd = qd[i]
-        vel[i, 0] = part[i, 2] * sd + part[i, 4] * ddot
-        vel[i, 1] = part[i, 3] * sd + part[i, 5] * ddot
-        wq[i, 0] = part[i, 6] * sd * sd + 2.0 * part[i, 8] * sd * ddot + part[i, 10] * ddot * ddot
-        wq[i, 1] = part[i, 7] * sd * sd + 2.0 * part[i, 9] * sd * ddot + part[i, 11] * ddot * ddot
+        vel[i, 0] = part[i, PART_XS] * sd + part[i, PART_XD] * ddot
+        vel[i, 1] = part[i, PART_ZS] * sd + part[i, PART_ZD] * ddot
+        wq[i, 0] = part[i, PART_XSS] * sd * sd + 2.0 * part[i, PART_XSD] * sd * ddot + part[i, PART_XDD] * ddot * ddot
+        wq[i, 1] = part[i, PART_ZSS] * sd * sd + 2.0 * part[i, PART_ZSD] * sd * ddot + part[i, PART_ZDD] * ddot * ddot
 
 
 @kernel()
@@ -163,21 +169,11 @@ def assemble(t, y, prm, pitches, linear, alpha, beta, ws, data, rhs):
     qd = y[n : 2 * n]
     study_kinematics(tab, p0, q, qd, p, linear, part, vel, wq)
     for i in range(p):
-        xs[i] = part[i, 0]
-        zs[i] = part[i, 1]
+        xs[i] = part[i, PART_X]
+        zs[i] = part[i, PART_Z]
     # applied forces on the rollers
-    g = fp[FP_G]
-    for i in range(p):
-        fx[i] = 0.0
-        fz[i] = -mass[i] * g if ip[IP_GRAVITY] == 1 else 0.0
-    if ip[IP_PASSENGERS] == PASSENGERS_BY_TIME:  # StudyFormulation refuses passengers by place
-        passenger_loads(t, PASSENGERS_BY_TIME, q, pm, ps, pb, pa, g, p, ip[IP_LINKS_PER_STEP], fz)
-    if ip[IP_ROLLING] == 1:
-        mu = fp[FP_ROLLING]
-        for i in range(p):
-            sp_ = math.sqrt(vel[i, 0] * vel[i, 0] + vel[i, 1] * vel[i, 1] + 1e-6)
-            fx[i] -= mu * mass[i] * g * vel[i, 0] / sp_
-            fz[i] -= mu * mass[i] * g * vel[i, 1] / sp_
+    # StudyFormulation refuses passengers by place: q holds the rollers' s0 all the same
+    roller_forces(t, fp, ip, mass, pm, ps, pb, pa, q, vel, 1.0, p, fx, fz)
     torque_c = 0.0
     if ip[IP_CONTACT] == 1:
         # candidates: the rollers whose circle can reach a tooth (centre within root + height + r_d;
@@ -224,7 +220,7 @@ def assemble(t, y, prm, pitches, linear, alpha, beta, ws, data, rhs):
     mdd = m_c
     qdel = f_c
     for i in range(p):
-        rsx, rsz, rdx, rdz = part[i, 2], part[i, 3], part[i, 4], part[i, 5]
+        rsx, rsz, rdx, rdz = part[i, PART_XS], part[i, PART_ZS], part[i, PART_XD], part[i, PART_ZD]
         gx = fx[i] - mass[i] * wq[i, 0]
         gz = fz[i] - mass[i] * wq[i, 1]
         data[k] = mass[i] * (rsx * rsx + rsz * rsz)
@@ -244,16 +240,16 @@ def assemble(t, y, prm, pitches, linear, alpha, beta, ws, data, rhs):
     b2 = beta * beta
     for j in range(p):
         jn = j + 1 if j + 1 < p else 0
-        ux = part[jn, 0] - part[j, 0]
-        uz = part[jn, 1] - part[j, 1]
+        ux = part[jn, PART_X] - part[j, PART_X]
+        uz = part[jn, PART_Z] - part[j, PART_Z]
         dvx = vel[jn, 0] - vel[j, 0]
         dvz = vel[jn, 1] - vel[j, 1]
         c_j = ux * ux + uz * uz - pitches[j] * pitches[j]
         cdot = 2.0 * (ux * dvx + uz * dvz)
         gam = -2.0 * (dvx * dvx + dvz * dvz) - 2.0 * (ux * (wq[jn, 0] - wq[j, 0]) + uz * (wq[jn, 1] - wq[j, 1]))
-        a0 = -2.0 * (ux * part[j, 2] + uz * part[j, 3])
-        a1 = 2.0 * (ux * part[jn, 2] + uz * part[jn, 3])
-        ad = 2.0 * (ux * (part[jn, 4] - part[j, 4]) + uz * (part[jn, 5] - part[j, 5]))
+        a0 = -2.0 * (ux * part[j, PART_XS] + uz * part[j, PART_ZS])
+        a1 = 2.0 * (ux * part[jn, PART_XS] + uz * part[jn, PART_ZS])
+        ad = 2.0 * (ux * (part[jn, PART_XD] - part[j, PART_XD]) + uz * (part[jn, PART_ZD] - part[j, PART_ZD]))
         data[k] = a0
         data[k + 1] = a0
         data[k + 2] = a1
@@ -271,7 +267,7 @@ def study_closure_residual(part, p, pitches):
     worst = 0.0
     for i in range(p):
         j = i + 1 if i + 1 < p else 0
-        d = abs(math.hypot(part[j, 0] - part[i, 0], part[j, 1] - part[i, 1]) - pitches[i])
+        d = abs(math.hypot(part[j, PART_X] - part[i, PART_X], part[j, PART_Z] - part[i, PART_Z]) - pitches[i])
         if d > worst:
             worst = d
     return worst

@@ -51,6 +51,7 @@ from .guide import (
 )
 from .params import ChainParams
 from .runs import A_COLS, R_COLS, next_other, nominal_pitch, run_steps
+from .slots import PART_XD, PART_XDD, PART_XS, PART_XSD, PART_XSS, PART_ZD, PART_ZDD, PART_ZS, PART_ZSD, PART_ZSS
 
 __all__ = ["Chain", "Configuration", "ClosureError"]
 
@@ -166,9 +167,9 @@ def sensitivity(part, xs, zs, m, alpha, beta):
     for i in range(m - 1):
         ux = xs[i + 1] - xs[i]
         uz = zs[i + 1] - zs[i]
-        us_i = ux * part[i, 2] + uz * part[i, 3]
-        us_j = ux * part[i + 1, 2] + uz * part[i + 1, 3]
-        ud = ux * (part[i, 4] - part[i + 1, 4]) + uz * (part[i, 5] - part[i + 1, 5])
+        us_i = ux * part[i, PART_XS] + uz * part[i, PART_ZS]
+        us_j = ux * part[i + 1, PART_XS] + uz * part[i + 1, PART_ZS]
+        ud = ux * (part[i, PART_XD] - part[i + 1, PART_XD]) + uz * (part[i, PART_ZD] - part[i + 1, PART_ZD])
         alpha[i + 1] = us_i * alpha[i] / us_j
         beta[i + 1] = (us_i * beta[i] + ud) / us_j
 
@@ -273,16 +274,16 @@ def velocity_coefficients(part, xs, zs, n, alpha, beta, jac, gam):
     """
     ux = xs[0] - xs[n - 1]
     uz = zs[0] - zs[n - 1]
-    ur1 = ux * part[0, 2] + uz * part[0, 3]
-    urp = ux * part[n - 1, 2] + uz * part[n - 1, 3]
-    ud = ux * (part[0, 4] - part[n - 1, 4]) + uz * (part[0, 5] - part[n - 1, 5])
+    ur1 = ux * part[0, PART_XS] + uz * part[0, PART_ZS]
+    urp = ux * part[n - 1, PART_XS] + uz * part[n - 1, PART_ZS]
+    ud = ux * (part[0, PART_XD] - part[n - 1, PART_XD]) + uz * (part[0, PART_ZD] - part[n - 1, PART_ZD])
     den = ud - urp * beta[n - 1]
     c = (urp * alpha[n - 1] - ur1) / den
     for i in range(n):
         g = alpha[i] + beta[i] * c
         gam[i] = g
-        jac[i, 0] = part[i, 2] * g + part[i, 4] * c
-        jac[i, 1] = part[i, 3] * g + part[i, 5] * c
+        jac[i, 0] = part[i, PART_XS] * g + part[i, PART_XD] * c
+        jac[i, 1] = part[i, PART_ZS] * g + part[i, PART_ZD] * c
     return c
 
 
@@ -295,32 +296,36 @@ def acceleration_terms(part, xs, zs, n, alpha, beta, gam, c, sdot1, hacc, eta, s
     for i in range(n):
         s = gam[i] * sdot1
         sd[i] = s
-        hacc[i, 0] = part[i, 6] * s * s + 2.0 * part[i, 8] * s * ddot + part[i, 10] * ddot * ddot
-        hacc[i, 1] = part[i, 7] * s * s + 2.0 * part[i, 9] * s * ddot + part[i, 11] * ddot * ddot
+        hacc[i, 0] = part[i, PART_XSS] * s * s + 2.0 * part[i, PART_XSD] * s * ddot + part[i, PART_XDD] * ddot * ddot
+        hacc[i, 1] = part[i, PART_ZSS] * s * s + 2.0 * part[i, PART_ZSD] * s * ddot + part[i, PART_ZDD] * ddot * ddot
     eta[0] = 0.0
     for i in range(n - 1):
         ux = xs[i + 1] - xs[i]
         uz = zs[i + 1] - zs[i]
-        dvx = (part[i + 1, 2] * sd[i + 1] + part[i + 1, 4] * ddot) - (part[i, 2] * sd[i] + part[i, 4] * ddot)
-        dvz = (part[i + 1, 3] * sd[i + 1] + part[i + 1, 5] * ddot) - (part[i, 3] * sd[i] + part[i, 5] * ddot)
-        us_i = ux * part[i, 2] + uz * part[i, 3]
-        us_j = ux * part[i + 1, 2] + uz * part[i + 1, 3]
+        dvx = (part[i + 1, PART_XS] * sd[i + 1] + part[i + 1, PART_XD] * ddot) - (
+            part[i, PART_XS] * sd[i] + part[i, PART_XD] * ddot
+        )
+        dvz = (part[i + 1, PART_ZS] * sd[i + 1] + part[i + 1, PART_ZD] * ddot) - (
+            part[i, PART_ZS] * sd[i] + part[i, PART_ZD] * ddot
+        )
+        us_i = ux * part[i, PART_XS] + uz * part[i, PART_ZS]
+        us_j = ux * part[i + 1, PART_XS] + uz * part[i + 1, PART_ZS]
         uw = ux * (hacc[i, 0] - hacc[i + 1, 0]) + uz * (hacc[i, 1] - hacc[i + 1, 1])
         eta[i + 1] = (us_i * eta[i] + uw - (dvx * dvx + dvz * dvz)) / us_j
     p = n - 1
     ux = xs[0] - xs[p]
     uz = zs[0] - zs[p]
-    dvx = (part[0, 2] * sd[0] + part[0, 4] * ddot) - (part[p, 2] * sd[p] + part[p, 4] * ddot)
-    dvz = (part[0, 3] * sd[0] + part[0, 5] * ddot) - (part[p, 3] * sd[p] + part[p, 5] * ddot)
-    urp = ux * part[p, 2] + uz * part[p, 3]
-    ud = ux * (part[0, 4] - part[p, 4]) + uz * (part[0, 5] - part[p, 5])
+    dvx = (part[0, PART_XS] * sd[0] + part[0, PART_XD] * ddot) - (part[p, PART_XS] * sd[p] + part[p, PART_XD] * ddot)
+    dvz = (part[0, PART_ZS] * sd[0] + part[0, PART_ZD] * ddot) - (part[p, PART_ZS] * sd[p] + part[p, PART_ZD] * ddot)
+    urp = ux * part[p, PART_XS] + uz * part[p, PART_ZS]
+    ud = ux * (part[0, PART_XD] - part[p, PART_XD]) + uz * (part[0, PART_ZD] - part[p, PART_ZD])
     den = ud - urp * beta[p]
     kk = ux * (hacc[0, 0] - hacc[p, 0]) + uz * (hacc[0, 1] - hacc[p, 1]) - urp * eta[p] + dvx * dvx + dvz * dvz
     e = -kk / den
     for i in range(n):
         t = beta[i] * e + eta[i]
-        hacc[i, 0] += part[i, 2] * t + part[i, 4] * e
-        hacc[i, 1] += part[i, 3] * t + part[i, 5] * e
+        hacc[i, 0] += part[i, PART_XS] * t + part[i, PART_XD] * e
+        hacc[i, 1] += part[i, PART_ZS] * t + part[i, PART_ZD] * e
     return e
 
 

@@ -18,6 +18,7 @@ so the multipliers follow from a cyclic bidiagonal recursion (O(p)) closed by th
 from __future__ import annotations
 
 from ..runtime.kernel import kernel
+from .slots import PART_XD, PART_XS, PART_ZD, PART_ZS
 
 __all__ = ["link_multipliers", "reduced_equation"]
 
@@ -55,15 +56,15 @@ def link_multipliers(part, xs, zs, n, rs_res, rd_res, q_delta, drive_s, drive_d,
         j = i + 1 if i + 1 < n else 0
         ux1 = xs[j] - xs[i]
         uz1 = zs[j] - zs[i]
-        cin = 2.0 * (ux0 * part[i, 2] + uz0 * part[i, 3])
-        cout = 2.0 * (ux1 * part[i, 2] + uz1 * part[i, 3])
+        cin = 2.0 * (ux0 * part[i, PART_XS] + uz0 * part[i, PART_ZS])
+        cout = 2.0 * (ux1 * part[i, PART_XS] + uz1 * part[i, PART_ZS])
         a[i] = (rs_res[i] + a[i - 1] * cin) / cout
         b[i] = b[i - 1] * cin / cout
     # roller 1's equation: rs_res[0] + lam_{n-1} 2 u_{n-1}.r_s,0 - lam_0 2 u_0.r_s,0 + mu drive_s = 0
     ux = xs[0] - xs[n - 1]
     uz = zs[0] - zs[n - 1]
-    cin0 = 2.0 * (ux * part[0, 2] + uz * part[0, 3])
-    cout0 = 2.0 * ((xs[1] - xs[0]) * part[0, 2] + (zs[1] - zs[0]) * part[0, 3])
+    cin0 = 2.0 * (ux * part[0, PART_XS] + uz * part[0, PART_ZS])
+    cout0 = 2.0 * ((xs[1] - xs[0]) * part[0, PART_XS] + (zs[1] - zs[0]) * part[0, PART_ZS])
     e0_const = rs_res[0] + a[n - 1] * cin0
     e0_lam = b[n - 1] * cin0 - cout0
     # carriage equation: rd_res + sum_j lam_j 2 u_j.(r_d,j+1 - r_d,j) + mu drive_d = 0
@@ -73,7 +74,7 @@ def link_multipliers(part, xs, zs, n, rs_res, rd_res, q_delta, drive_s, drive_d,
         k = jj + 1 if jj + 1 < n else 0
         ux = xs[k] - xs[jj]
         uz = zs[k] - zs[jj]
-        w = 2.0 * (ux * (part[k, 4] - part[jj, 4]) + uz * (part[k, 5] - part[jj, 5]))
+        w = 2.0 * (ux * (part[k, PART_XD] - part[jj, PART_XD]) + uz * (part[k, PART_ZD] - part[jj, PART_ZD]))
         d_const += a[jj] * w
         d_lam += b[jj] * w
     mu = 0.0

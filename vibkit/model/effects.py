@@ -1,7 +1,8 @@
 """Force elements a scene can switch on, and the compiled right-hand side of the forward dynamics.
 
 Only the effects a scene lists are evaluated: each is guarded by a flag, so a scene without contact
-never visits the sprocket's teeth, one without passengers never looks at the clock, and so on.
+never visits the sprocket's teeth, one without passengers never looks at the clock, and so on. The
+forces on the rollers are written once, in :func:`roller_forces`.
 
 Effects (``[effects.*]`` in a scene):
 
@@ -31,7 +32,7 @@ import numpy as np
 from ..runtime.kernel import kernel
 from .chain import acceleration_terms, close_with_slope, fill_partials, sensitivity, velocity_coefficients
 from .dynamics import reduced_equation
-from .schema import effect_options, gravity_of
+from .schema import EFFECT_OPTIONS, effect_options, gravity_of
 from .slots import (
     FP,
     FP_CARRIAGE_MASS,
@@ -94,6 +95,9 @@ __all__ = [
     "motor_torque",
     "passenger_loads",
     "contact_candidates",
+    "roller_forces",
+    "left_out",
+    "carries_all",
     "FP",
     "IP",
 ]
@@ -152,15 +156,14 @@ def pack_parameters(model, effects: dict, *, start: float = 0.0):
     ip[IP["n"]] = n
     ip[IP["nteeth"]] = model.sprocket.teeth
     ip[IP["links_per_step"]] = model.scene.chain.links_per_step
+    for name in effects:  # every effect's switch (IP_NAMES names them as the schema does)
+        ip[IP[name]] = 1
     if "gravity" in effects:
-        ip[IP["gravity"]] = 1
         fp[FP["g"]] = effects["gravity"].g
     if "contact" in effects:
-        ip[IP["contact"]] = 1
         o = effects["contact"]
         fp[FP["k"]], fp[FP["expo"]], fp[FP["damp"]] = o.stiffness, o.exponent, o.damping
     if "motor" in effects:
-        ip[IP["motor"]] = 1
         o = effects["motor"]
         fp[FP["kp"]], fp[FP["ki"]] = o.kp, o.ki
         fp[FP["wref"]] = model.sprocket_speed(o.speed)  # motor.speed is the chain speed on the straight
@@ -178,11 +181,9 @@ def pack_parameters(model, effects: dict, *, start: float = 0.0):
         if "gravity" not in effects:
             fp[FP["g"]] = gravity_of(effects)
     if "tensioner" in effects:
-        ip[IP["tensioner"]] = 1
         o = effects["tensioner"]
         fp[FP["k_s"]], fp[FP["preload"]], fp[FP["m_c"]] = o.stiffness, o.preload, o.mass
     if "rolling_resistance" in effects:
-        ip[IP["rolling"]] = 1
         fp[FP["mu_rr"]] = effects["rolling_resistance"].coefficient
         if "gravity" not in effects:
             fp[FP["g"]] = gravity_of(effects)
@@ -320,6 +321,54 @@ def passenger_loads(t, mode, s0, pm, ps, pb, pa, g, n, k, fz):
 
 
 @kernel()
+def roller_forces(t, fp, ip, mass, pm, ps, pb, pa, s0, vel, scale, n, fx, fz):
+    """The applied forces [N] on rollers 0 .. n-1 into ``fx``, ``fz`` (overwritten): every effect the
+    scene switches on (``ip``) that acts on the rollers themselves: gravity (m g along -z), the
+    passengers' weight (:func:`passenger_loads`; ``s0`` the rollers' unwrapped coordinates for those
+    aboard by place) and rolling resistance against each roller's velocity ``vel[i] * scale``
+    (:func:`rolling_force`; ``vel`` (n, 2), with ``scale`` 1, or J with ``scale`` = s0_1-dot).
+
+    The one place such a force is written: the exact closure (:func:`evaluate_forces`, which the run-by-run
+    closure hands its configuration to) and the study's formulation
+    (:func:`vibkit.analyses.study_kernels.assemble`) call it. The closed-form right-hand sides (the pitch
+    table, the runs' fast path) declare the effects they carry (``TABLE_CARRIES``, ``FAST_CARRIES``) and
+    hand a scene with any other to it (:func:`left_out`, :func:`carries_all`).
+    """
+    g = fp[FP_G]
+    for i in range(n):
+        fx[i] = 0.0
+        fz[i] = -mass[i] * g if ip[IP_GRAVITY] == 1 else 0.0
+    if ip[IP_PASSENGERS] != 0:
+        passenger_loads(t, ip[IP_PASSENGERS], s0, pm, ps, pb, pa, g, n, ip[IP_LINKS_PER_STEP], fz)
+    if ip[IP_ROLLING] == 1:
+        mu = fp[FP_ROLLING]
+        for i in range(n):
+            rx, rz = rolling_force(vel[i, 0] * scale, vel[i, 1] * scale, mu * mass[i] * g)
+            fx[i] += rx
+            fz[i] += rz
+
+
+def left_out(carries) -> np.ndarray:
+    """The switches (``ip`` slots) of the schema's effects that a closed-form right-hand side does not
+    carry (``carries``: effect names): a scene with any of them on must take the general path. Derived
+    from :data:`vibkit.model.schema.EFFECT_OPTIONS` at import, so an effect added to the schema is left
+    out of every closed form until that form says it carries it."""
+    unknown = set(carries) - set(EFFECT_OPTIONS)
+    if unknown:
+        raise RuntimeError(f"a right-hand side carries effects the schema does not declare: {sorted(unknown)}")
+    return np.array([IP[name] for name in EFFECT_OPTIONS if name not in carries], dtype=np.int64)
+
+
+@kernel(inline="always")
+def carries_all(ip, left):
+    """Whether the scene (``ip``) switches on none of the effects ``left`` (from :func:`left_out`)."""
+    for j in left:
+        if ip[j] != 0:
+            return False
+    return True
+
+
+@kernel()
 def finish(y, dy, info, fp, ip, sddot, torque_c, energy_c, worst, active, f_drive, f_back):
     """The state's rates from roller 1's acceleration ``sddot`` and the contact kernel's results
     (torque, energy, max indentation, active contacts, drive- and back-flank forces): fills ``dy``
@@ -403,18 +452,7 @@ def evaluate_forces(t, y, dy, prm, ws, want_teeth, delta, c, e, dh):
     (s0, kk, lam, xs, zs, part, alpha, beta, jac, gam, hacc, eta, sd, fx, fz, cand, ind_t, frc_t, info) = ws
     n = ip[IP_N]
     sdot = y[1]
-    g = fp[FP_G]
-    for i in range(n):
-        fx[i] = 0.0
-        fz[i] = -mass[i] * g if ip[IP_GRAVITY] == 1 else 0.0
-    if ip[IP_PASSENGERS] != 0:
-        passenger_loads(t, ip[IP_PASSENGERS], s0, pm, ps, pb, pa, g, n, ip[IP_LINKS_PER_STEP], fz)
-    if ip[IP_ROLLING] == 1:
-        mu = fp[FP_ROLLING]
-        for i in range(n):
-            rx, rz = rolling_force(jac[i, 0] * sdot, jac[i, 1] * sdot, mu * mass[i] * g)
-            fx[i] += rx
-            fz[i] += rz
+    roller_forces(t, fp, ip, mass, pm, ps, pb, pa, s0, jac, sdot, n, fx, fz)
     torque_c, energy_c, worst, active, f_drive, f_back = 0.0, 0.0, 0.0, 0, 0.0, 0.0
     if want_teeth:
         clear_teeth(ind_t, frc_t)

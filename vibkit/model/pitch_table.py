@@ -41,9 +41,11 @@ from ..runtime.kernel import kernel
 from .chain import acceleration_terms, close_with_slope, fill_partials, sensitivity, velocity_coefficients, walk_arrays
 from .effects import (
     aboard,
+    carries_all,
     clear_teeth,
     evaluate,
     finish,
+    left_out,
     rolling_force,
     sprocket_contact,
     step_load,
@@ -84,6 +86,7 @@ from .slots import (
     IP_ROLLING,
     IP_TENSIONER,
     PASSENGERS_BY_TIME,
+    PRM_IP,
     TB_CAND,
     TB_CC,
     TB_DC,
@@ -99,7 +102,21 @@ from .slots import (
     TB_ZC,
 )
 
-__all__ = ["build_table", "empty_table", "table_evaluate", "table_delta", "rhs", "table_spacing", "table_applies"]
+__all__ = [
+    "build_table",
+    "empty_table",
+    "table_evaluate",
+    "table_delta",
+    "rhs",
+    "table_spacing",
+    "table_applies",
+    "TABLE_CARRIES",
+]
+
+#: the effects :func:`table_evaluate` carries (gravity in the tabulated potential or roller by roller,
+#: the others as generalised forces); a scene with any other effect of the schema takes the exact closure
+TABLE_CARRIES = frozenset({"gravity", "contact", "motor", "passengers", "tensioner", "rolling_resistance"})
+TABLE_LEAVES = left_out(TABLE_CARRIES)
 
 SIDE = 1e-9  # [m] a breakpoint node is evaluated this far inside its piece, then moved onto it by Taylor
 FD = 1e-6  # [m] step of the differences that give d2M/du2 from the exact dM/du
@@ -669,9 +686,10 @@ def table_evaluate(t, y, dy, prm, ws, want_teeth, tb):
 def rhs(t, y, dy, prm, ws, want_teeth, tb):
     """The forward right-hand side: from the table ``tb`` where it has pieces, else from the exact
     closure (:func:`vibkit.model.effects.evaluate`), or walked run by run where the table's head says
-    so (:func:`vibkit.model.runs.runs_evaluate`). Returns the status (0 ok)."""
+    so (:func:`vibkit.model.runs.runs_evaluate`). A scene with an effect the table does not carry
+    (:data:`TABLE_CARRIES`) takes the exact closure. Returns the status (0 ok)."""
     if tb[TB_HEAD][HEAD_RUNS] != 0.0:
         return runs_evaluate(t, y, dy, prm, ws, want_teeth, tb)
-    if tb[TB_SB].size > 0:
+    if tb[TB_SB].size > 0 and carries_all(prm[PRM_IP], TABLE_LEAVES):
         return table_evaluate(t, y, dy, prm, ws, want_teeth, tb)
     return evaluate(t, y, dy, prm, ws, want_teeth)

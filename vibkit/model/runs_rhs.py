@@ -2,7 +2,7 @@
 
 :func:`runs_evaluate` closes the chain run by run and hands every roller's place, J and h to the
 exact closure's forces (:func:`vibkit.model.effects.evaluate_forces`). For rollers of one mass,
-without passengers or rolling resistance, :func:`runs_fast` takes each run's share of the reduced
+with only the effects it carries (:data:`FAST_CARRIES`), :func:`runs_fast` takes each run's share of the reduced
 equation in closed form instead (a run moves as one body: J_j = B c + T_j g, h_j = B e + T_j w +
 kappa N_j lam-dot^2, so its sums need only the sum of its tangents, which on an arc is a geometric
 sum), and places one by one only the rollers of the runs that can reach the sprocket. Both are the
@@ -19,7 +19,17 @@ import numpy as np
 
 from ..runtime.kernel import kernel
 from .chain import closure_residual
-from .effects import clear_teeth, evaluate, evaluate_forces, finish, remember_closure, sprocket_contact, within_reach
+from .effects import (
+    carries_all,
+    clear_teeth,
+    evaluate,
+    evaluate_forces,
+    finish,
+    left_out,
+    remember_closure,
+    sprocket_contact,
+    within_reach,
+)
 from .guide import BX, BZ, KAPPA, local_frame, seg_length
 from .runs import (
     A_COLS,
@@ -75,7 +85,6 @@ from .slots import (
     IP_GRAVITY,
     IP_N,
     IP_PASSENGERS,
-    IP_ROLLING,
     IP_TENSIONER,
     PASSENGERS_BY_PLACE,
     PRM_FP,
@@ -95,7 +104,12 @@ from .slots import (
     WS_Z,
 )
 
-__all__ = ["build_runs", "runs_evaluate", "runs_fast", "runs_observe"]
+__all__ = ["build_runs", "runs_evaluate", "runs_fast", "runs_observe", "FAST_CARRIES"]
+
+#: the effects :func:`runs_fast` carries in closed form; a scene with any other effect of the schema
+#: (passengers, rolling resistance, or one added later) takes the exact closure's forces instead
+FAST_CARRIES = frozenset({"gravity", "contact", "motor", "tensioner"})
+FAST_LEAVES = left_out(FAST_CARRIES)
 
 
 @kernel(inline="always")
@@ -139,7 +153,7 @@ def runs_evaluate(t, y, dy, prm, ws, want_teeth, tb):
     where the chain cannot close."""
     tab, fp, ip = prm[PRM_TABLE], prm[PRM_FP], prm[PRM_IP]
     info = ws[WS_INFO]
-    if tb[TB_HEAD][HEAD_BY_ROLLER] == 0.0 and ip[IP_PASSENGERS] == 0 and ip[IP_ROLLING] == 0:
+    if tb[TB_HEAD][HEAD_BY_ROLLER] == 0.0 and carries_all(ip, FAST_LEAVES):
         return runs_fast(t, y, dy, prm, ws, want_teeth, tb)
     delta, walks, st = _close(y, prm, tb, info)
     if st != 0:
@@ -155,7 +169,7 @@ def runs_evaluate(t, y, dy, prm, ws, want_teeth, tb):
 
 @kernel(inline="always")
 def runs_fast(t, y, dy, prm, ws, want_teeth, tb):
-    """:func:`runs_evaluate` for rollers of one mass without passengers or rolling resistance: each
+    """:func:`runs_evaluate` for rollers of one mass with only the effects of :data:`FAST_CARRIES`: each
     run's share of the reduced equation in closed form, rollers placed one by one only on the
     segments within the sprocket's reach. Returns 0, or 1 where the chain cannot close."""
     tab, loc, fp, ip, mass, pm, ps, pb, pa, pitches, radii, _ = prm

@@ -36,8 +36,10 @@ from .scene_checks import (
     toml_loads,
 )
 from .schema import (
+    ANALYSIS_EFFECTS,
     EFFECT_OPTIONS,
     EFFECTS,
+    OUTPUTS,
     RANGES,
     SECTION_CLASSES,
     SECTIONS,
@@ -63,45 +65,6 @@ SOLVER_METHODS = ("dopri5", "rk45", "dop853", "bdf", "radau", "lsoda", "cvode-bd
 
 #: a scene is a small text file; anything larger is not one
 MAX_SCENE_BYTES = 1 << 20
-
-OUTPUTS = {
-    "kinematics": {"delta", "s1", "roller_position", "closure_residual"},
-    "inverse": {
-        "delta",
-        "delta_dot",
-        "delta_ddot",
-        "link_tension",
-        "drive_force",
-        "closure_residual",
-        "chain_speed",
-        "sprocket_angle",
-        "sprocket_speed",
-        "roller_position",
-        "roller_velocity",
-        "roller_acceleration",
-        "energy",
-    },
-    "forward": {
-        "delta",
-        "delta_dot",
-        "sprocket_angle",
-        "sprocket_speed",
-        "motor_torque",
-        "chain_speed",
-        "link_tension",
-        "indentation",
-        "contact_force",
-        "flank_force",
-        "roller_position",
-        "roller_velocity",
-        "roller_acceleration",
-        "closure_residual",
-        "tensioner_displacement",
-        "accel_step",
-        "energy",
-        "s0",
-    },
-}
 
 # how the forward dynamics gets the chain's configuration: read from the table over one pitch, or
 # solved at every evaluation (vibkit.model.pitch_table)
@@ -439,8 +402,8 @@ def _effects(src, raw, analysis):
         effects[name] = checked
     if analysis == "kinematics" and effects:
         raise SceneError(f"{src}: [effects] have no meaning in a kinematics scene (got {', '.join(effects)})")
-    allowed = {"inverse": {"gravity", "passengers", "tensioner"}}.get(analysis)
-    if allowed is not None:
+    allowed = ANALYSIS_EFFECTS[analysis]
+    if analysis != "kinematics":
         extra = set(effects) - allowed
         if extra:
             raise SceneError(

@@ -7,7 +7,10 @@ classes: :data:`SECTIONS` and :data:`EFFECTS` (key -> type, used by the loader a
 :data:`RANGES` (the plausible ranges the loader enforces), :func:`schema_table` (the Markdown table of
 the documentation) and the defaults of a loaded scene. :mod:`vibkit.model.scene` reads the TOML text,
 checks it against this schema and builds these objects; the analyses read typed attributes
-(``scene.run.start``, ``effects["contact"].exponent``) and never restate a default.
+(``scene.run.start``, ``effects["contact"].exponent``) and never restate a default. The outputs an
+analysis may produce (:data:`OUTPUTS`, with their columns :data:`OUTPUT_COLUMNS`) and the effects it applies
+(:data:`ANALYSIS_EFFECTS`) are declared here too; the compiled kernels name one switch per effect of
+:data:`EFFECT_OPTIONS` (:mod:`vibkit.model.slots`).
 
 A field is *required* when the scene must give it (``required=True`` in its metadata; its dataclass
 default is ``None``). A field whose default is ``None`` and is not required means "not set": its doc
@@ -24,7 +27,10 @@ from ..runtime.budget import DEFAULT_MAX_RESULT_BYTES, DEFAULT_MAX_WALL_TIME
 from .params import GRAVITY, reference_chain
 
 __all__ = [
+    "ANALYSIS_EFFECTS",
     "ATOL_PER_RTOL",
+    "OUTPUTS",
+    "OUTPUT_COLUMNS",
     "EFFECT_OPTIONS",
     "EFFECTS",
     "GEOMETRY_RANGES",
@@ -361,6 +367,86 @@ EFFECT_OPTIONS = {
     "passengers": PassengersOptions,
     "tensioner": TensionerOptions,
     "rolling_resistance": RollingResistanceOptions,
+}
+
+
+#: the outputs each analysis may produce (``outputs.variables``)
+OUTPUTS = {
+    "kinematics": {"delta", "s1", "roller_position", "closure_residual"},
+    "inverse": {
+        "delta",
+        "delta_dot",
+        "delta_ddot",
+        "link_tension",
+        "drive_force",
+        "closure_residual",
+        "chain_speed",
+        "sprocket_angle",
+        "sprocket_speed",
+        "roller_position",
+        "roller_velocity",
+        "roller_acceleration",
+        "energy",
+    },
+    "forward": {
+        "delta",
+        "delta_dot",
+        "sprocket_angle",
+        "sprocket_speed",
+        "motor_torque",
+        "chain_speed",
+        "link_tension",
+        "indentation",
+        "contact_force",
+        "flank_force",
+        "roller_position",
+        "roller_velocity",
+        "roller_acceleration",
+        "closure_residual",
+        "tensioner_displacement",
+        "accel_step",
+        "energy",
+        "s0",
+    },
+}
+
+#: values per sample of each output, for the size of a sweep's kept series (vibkit.sweep.limits): n the
+#: chain's rollers, t the sprocket's teeth, r the rollers asked for (outputs.rollers), a number that many
+#: (an output that gives several variables, as energy does, counts them all; each of those is one)
+OUTPUT_COLUMNS = {
+    "delta": "1",
+    "delta_dot": "1",
+    "delta_ddot": "1",
+    "s0": "1",
+    "s1": "1",
+    "closure_residual": "1",
+    "chain_speed": "1",
+    "drive_force": "1",
+    "sprocket_angle": "1",
+    "sprocket_speed": "1",
+    "motor_torque": "1",
+    "tensioner_displacement": "1",
+    "link_tension": "n",
+    "contact_force": "t",
+    "indentation": "t",
+    "flank_force": "2t",
+    "roller_position": "2r",
+    "roller_velocity": "2r",
+    "roller_acceleration": "2r",
+    "energy": "4",
+    "accel_step": "3",
+}
+if set(OUTPUT_COLUMNS) != set().union(*OUTPUTS.values()):
+    raise RuntimeError(
+        "vibkit.model.schema: OUTPUT_COLUMNS and OUTPUTS disagree on "
+        + ", ".join(sorted(set(OUTPUT_COLUMNS) ^ set().union(*OUTPUTS.values())))
+    )
+
+#: the effects each analysis applies (a scene of the analysis refuses the others)
+ANALYSIS_EFFECTS = {
+    "kinematics": frozenset(),
+    "inverse": frozenset({"gravity", "passengers", "tensioner"}),
+    "forward": frozenset(EFFECT_OPTIONS),
 }
 
 

@@ -28,7 +28,9 @@ and :func:`vibkit.model.pitch_table.build_table`):
 
 from __future__ import annotations
 
-__all__ = ["FP", "IP", "INFO", "PRM", "WS", "TB", "HEAD"]
+from .schema import EFFECT_OPTIONS
+
+__all__ = ["FP", "IP", "INFO", "PRM", "WS", "TB", "HEAD", "PART", "CTL", "COUNTERS"]
 
 
 def _slots(names: tuple[str, ...]) -> dict[str, int]:
@@ -118,7 +120,9 @@ FP_CLOSURE_TOL = FP["tol"]  # closure tolerance [m]
 FP_REACH = FP["reach"]  # farthest a roller centre touching a tooth sits from the sprocket centre [m]
 
 # --- integer parameters -------------------------------------------------------------------------
-IP_NAMES = ("n", "nteeth", "gravity", "contact", "motor", "passengers", "tensioner", "rolling", "links_per_step")
+# one switch per effect of the scene's schema, named as the effect (vibkit.model.schema.EFFECT_OPTIONS):
+# a new effect gets its switch here by being declared there
+IP_NAMES = ("n", "nteeth", *EFFECT_OPTIONS, "links_per_step")
 IP = _slots(IP_NAMES)
 IP_N = IP["n"]  # number of rollers
 IP_TEETH = IP["nteeth"]  # number of teeth
@@ -127,7 +131,7 @@ IP_CONTACT = IP["contact"]
 IP_MOTOR = IP["motor"]
 IP_PASSENGERS = IP["passengers"]  # 0 none, 1 by time, 2 by place
 IP_TENSIONER = IP["tensioner"]
-IP_ROLLING = IP["rolling"]
+IP_ROLLING = IP["rolling_resistance"]
 IP_LINKS_PER_STEP = IP["links_per_step"]  # rollers per step (3, or 4 on 101.6 mm chains)
 
 PASSENGERS_BY_TIME = 1
@@ -158,6 +162,17 @@ WS_NAMES = (
 WS = _slots(WS_NAMES)
 WS_INFO = WS["info"]
 WS_S0, WS_X, WS_Z, WS_JAC, WS_HACC = WS["s0"], WS["x"], WS["z"], WS["jac"], WS["hacc"]
+
+# --- a roller's place and partials (ws[WS["part"]] rows, vibkit.model.guide.point_partials) ------
+# r = (x, z) and its partials in s0 (the roller's coordinate, "s") and delta ("d")
+PART_NAMES = ("x", "z", "x_s", "z_s", "x_d", "z_d", "x_ss", "z_ss", "x_sd", "z_sd", "x_dd", "z_dd")
+PART = _slots(PART_NAMES)
+PART_X, PART_Z = PART["x"], PART["z"]  # [m]
+PART_XS, PART_ZS = PART["x_s"], PART["z_s"]  # dr/ds0
+PART_XD, PART_ZD = PART["x_d"], PART["z_d"]  # dr/ddelta
+PART_XSS, PART_ZSS = PART["x_ss"], PART["z_ss"]  # d2r/ds0^2 [1/m]
+PART_XSD, PART_ZSD = PART["x_sd"], PART["z_sd"]  # d2r/ds0 ddelta [1/m]
+PART_XDD, PART_ZDD = PART["x_dd"], PART["z_dd"]  # d2r/ddelta^2 [1/m]
 
 # --- what an evaluation leaves (ws[WS_INFO]) ----------------------------------------------------
 INFO_NAMES = (
@@ -198,6 +213,25 @@ INFO_MEMORY = INFO_AT
 INFO_MEMORY_END = INFO_DH_DDELTA + 1
 if (INFO_SLOPE, INFO_DH_DDELTA) != (INFO_AT + 1, INFO_AT + 2):
     raise ValueError("the closure's memory slots must be consecutive")
+
+# --- the forward integrator's step control and counters (vibkit.analyses.integrate) ---------------
+CTL_NAMES = ("last_error", "rejected", "wanted_step", "has_breakpoint", "breakpoint", "direction")
+CTL = _slots(CTL_NAMES)
+CTL_LAST_ERROR = CTL["last_error"]  # the last accepted step's error norm (the controller's memory)
+CTL_REJECTED = CTL["rejected"]  # 1.0 right after a rejected step (no growth then)
+CTL_WANTED_STEP = CTL["wanted_step"]  # the step the error controller wanted before a breakpoint cut it [s]
+CTL_HAS_BREAKPOINT = CTL["has_breakpoint"]  # 1.0: the step starts on a breakpoint (remembered below)
+CTL_BREAKPOINT = CTL["breakpoint"]  # that breakpoint, along roller 1's coordinate [m]
+CTL_DIRECTION = CTL["direction"]  # the direction of motion when it was remembered (+1 or -1)
+
+COUNTER_NAMES = ("steps", "rejected", "evaluations", "event_steps", "event_retries", "landings")
+COUNTERS = _slots(COUNTER_NAMES)
+COUNT_STEPS = COUNTERS["steps"]  # accepted steps
+COUNT_REJECTED = COUNTERS["rejected"]  # rejected steps
+COUNT_EVALUATIONS = COUNTERS["evaluations"]  # right-hand-side evaluations
+COUNT_EVENT_STEPS = COUNTERS["event_steps"]  # steps that ended on a breakpoint
+COUNT_EVENT_RETRIES = COUNTERS["event_retries"]  # steps retried to land on one
+COUNT_LANDINGS = COUNTERS["landings"]  # landings on a breakpoint
 
 # --- the pitch table ----------------------------------------------------------------------------
 TB_NAMES = (

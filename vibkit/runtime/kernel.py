@@ -15,7 +15,7 @@ arrays it touches are its callers', alive for the whole call. Kernels that alloc
 integrator's stages) keep ``numba.njit``. ``_nrt`` is numba's switch for its runtime (an option of
 ``numba.jit`` since the runtime came in, kept for numba's developers); it is not in numba's user
 documentation, so :func:`kernel` is the one place that names it, and ``tests/runtime/test_kernel.py`` fails
-if it stops doing what this module relies on. ``docs/developer.md`` has the
+if it stops doing what this module relies on. ``docs/explanation/performance.md`` has the
 measurement.
 """
 

@@ -12,13 +12,15 @@ that leaves samples, and the size of its result.
   allocation), refused past the result budget of :mod:`vibkit.runtime.budget` (2 GiB by default;
   ``max_result_bytes=`` / ``--max-result-bytes``, ``VIBKIT_MAX_RESULT_BYTES``).
 
-Standard library only at load time.
+The scene's declarations only at load time (:mod:`vibkit.model.schema`: the effects each analysis
+applies, the columns of each output).
 """
 
 from __future__ import annotations
 
 import math
 
+from ..model.schema import ANALYSIS_EFFECTS, OUTPUT_COLUMNS
 from ..runtime.budget import BudgetError, _fmt_bytes, check_run, max_result_bytes
 from .errors import SweepError
 from .records import SUMMARIES
@@ -45,27 +47,10 @@ _READS = {
         "solver": None,
     },
 }
-# the effects an analysis applies
-_EFFECTS = {
-    "kinematics": set(),
-    "inverse": {"gravity", "tensioner", "passengers"},
-    "forward": {"gravity", "contact", "motor", "passengers", "tensioner", "rolling_resistance"},
-}
+# the effects an analysis applies (every effect of the schema, for the forward dynamics)
+_EFFECTS = ANALYSIS_EFFECTS
 # keys that the duration override replaces
 _OVERRIDDEN = {"kinematics": "kinematics.stop", "inverse": "motion.duration", "forward": "run.duration"}
-
-# values per sample of a kept output (n: rollers of the chain, t: teeth, r: rollers asked for)
-_COLUMNS = {
-    "link_tension": "n",
-    "contact_force": "t",
-    "indentation": "t",
-    "flank_force": "2t",
-    "roller_position": "2r",
-    "roller_velocity": "2r",
-    "roller_acceleration": "2r",
-    "energy": "4",
-    "accel_step": "3",
-}
 
 
 def check_key_used(key: str, analysis: str, source: str, *, duration=None):
@@ -142,7 +127,8 @@ def estimate_sweep(scene, runs: int, keep=(), duration=None) -> dict:
     cols = {"n": scene.chain.n_rollers, "t": scene.sprocket.teeth, "r": len(scene.outputs["rollers"])}
     kept = 0.0
     for name in keep:
-        c = _COLUMNS.get(name, "1")
+        # an output's own columns; one variable of an output that gives several (kinetic_energy) is one
+        c = OUTPUT_COLUMNS.get(name, "1")
         kept += samples * (int(c[:-1] or 1) * cols[c[-1]] if c[-1] in cols else int(c))
     values = len(SUMMARIES) + 2 + kept
     return {
