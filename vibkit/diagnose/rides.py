@@ -223,8 +223,12 @@ def find_rides(
                 f"still {t0:.1f}-{t1:.1f} s: the line only {tu[i0 + j0]:.1f}-{tu[i0 + j1 - 1]:.1f} s (standing off the "
                 "escalator before or after)"
             )
+        # a ride starts where its line does when that is later than the still span (a person standing at the landing
+        # before stepping on: the line's first window less the second trimmed), and ends where walking resumes (people
+        # walk off an escalator; the line of a step flattening into the landing fades before they do)
+        start = t0 if j0 == 0 else max(t0, float(tu[i0 + j0]) - trim_s)
         i0, i1 = i0 + j0, i0 + j1
-        ride = _ride(recording, line, names, t0, t1, nominal_pitch, rated_speed)
+        ride = _ride(recording, line, names, start, t1, nominal_pitch, rated_speed)
         rides.append(dataclasses.replace(ride, line_start_s=float(tu[i0]), line_end_s=float(tu[i1 - 1])))
         verdicts.append((t0, t1, "ride"))
     return RideSearch(tuple(rides), band, p_fa, tuple(verdicts), tuple(names), tuple(notes))
