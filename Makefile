@@ -22,13 +22,16 @@ $(STAMP): pyproject.toml | $(BIN)/python
 
 install: $(STAMP)
 
+# the suite in as many processes as the machine has cores, at most 4 (pytest-xdist), each test file whole on one
+# (its module fixtures built once); TEST_WORKERS=0 runs it in this process
+TEST_WORKERS ?= auto
 test: $(STAMP)
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q -n $(TEST_WORKERS) --maxprocesses=4 --dist loadfile
 
 # every test but those marked @pytest.mark.slow (the longest physics runs, the install test, the corpus cases
 # that need a process of their own): the inner loop while editing; `make test` runs them all
 test-fast: $(STAMP)
-	$(BIN)/python -m pytest -q -m "not slow"
+	$(BIN)/python -m pytest -q -m "not slow" -n $(TEST_WORKERS) --maxprocesses=4 --dist loadfile
 
 # ruff's lint and format check, and mypy on the public API (the configurations are in pyproject.toml);
 # `make format` rewrites

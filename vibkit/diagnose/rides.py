@@ -223,8 +223,12 @@ def find_rides(
                 f"still {t0:.1f}-{t1:.1f} s: the line only {tu[i0 + j0]:.1f}-{tu[i0 + j1 - 1]:.1f} s (standing off the "
                 "escalator before or after)"
             )
+        # a ride starts where its line does when that is later than the still span (a person standing at the landing
+        # before stepping on: the line's first window less the second trimmed), and ends where walking resumes (people
+        # walk off an escalator; the line of a step flattening into the landing fades before they do)
+        start = t0 if j0 == 0 else max(t0, float(tu[i0 + j0]) - trim_s)
         i0, i1 = i0 + j0, i0 + j1
-        ride = _ride(recording, line, names, t0, t1, nominal_pitch, rated_speed)
+        ride = _ride(recording, line, names, start, t1, nominal_pitch, rated_speed)
         rides.append(dataclasses.replace(ride, line_start_s=float(tu[i0]), line_end_s=float(tu[i1 - 1])))
         verdicts.append((t0, t1, "ride"))
     return RideSearch(tuple(rides), band, p_fa, tuple(verdicts), tuple(names), tuple(notes))
@@ -346,13 +350,19 @@ def ride_evidence(recording, ride, search):
 
 
 def ride_in_walk(recording, axes, t0, notes, source):
-    """The ride segment of a phone's walk for its ride quality (times from ``t0`` [s], the assessed burst's
-    start), or None for a record that is no walk (a step's own ride).
+    """The ride segment of a phone's recording for its ride quality (times from ``t0`` [s], the assessed burst's
+    start), or None where the ride is left to the step's own signals (:func:`~vibkit.signal.detect_ride_segment`).
 
     A record in which the person walks (the walking band over the still level for a fifth of it or more) is a
     walk with rides, not a step's ride: its incline cannot be read from the gravity component (a phone in the
     hand turns) nor from the integrated vertical acceleration (walking drifts it by metres a second).  The ride
     is then the longest :func:`find_rides` finds (said in ``notes``); a walk without one is refused.
+
+    A phone's export in which nobody walks (a phone laid on a step, or held by someone standing) is a ride where
+    its link-pass line is (:func:`find_rides`, the longest): the line says where the chain carried the phone,
+    where a phone's integrated vertical acceleration says its own noise and turns (cut out of the eight ADVIO
+    walks, the rides' integrated vertical speed read -0.87 to +0.59 m/s where the barometer read 0.22 to 0.26
+    m/s).  A phone's recording without a line is refused, naming each still span's verdict.
 
     Parameters
     ----------
@@ -374,24 +384,37 @@ def ride_in_walk(recording, axes, t0, notes, source):
         return None
     acc = np.stack([np.asarray(recording[c].values, dtype=float) for c in axes])
     walking = float(np.mean(walking_level(acc, fs) > STILL_THRESHOLD))
-    if not walking >= 0.2:
+    if walking >= 0.2:
+        found = find_rides(recording)
+        if not found.rides:
+            raise ValueError(
+                f"{source}: a walk ({100 * walking:.0f} % of it walking) with no escalator ride found in it (`vibkit "
+                "rides` says why for each still span): give the ride as --segment START:END"
+            )
+        what = f"a walk with {len(found.rides)} escalator ride(s) (`vibkit rides`); the longest assessed"
+        method = "a ride in a walk"
+    elif is_phone_recording(recording):
+        found = find_rides(recording)
+        if not found.rides:
+            why = "; ".join(f"{a:.1f}-{b:.1f} s: {v}" for a, b, v in found.still_spans) or "no still span of 6 s"
+            raise ValueError(
+                f"{source}: a phone's recording with no escalator ride found in it ({why}); a phone's integrated "
+                "acceleration cannot place the incline (the phone turns in the hand, its noise adds up): give the ride "
+                "as --segment START:END"
+            )
+        what = "a phone's ride found by its link-pass line (`vibkit rides`)"
+        method = "the link-pass line"
+    else:
         return None
-    found = find_rides(recording)
-    if not found.rides:
-        raise ValueError(
-            f"{source}: a walk ({100 * walking:.0f} % of it walking) with no escalator ride found in it (`vibkit "
-            "rides` says why for each still span): give the ride as --segment START:END"
-        )
     ride = max(found.rides, key=lambda r: r.line_end_s - r.line_start_s)
     notes.append(
-        f"a walk with {len(found.rides)} escalator ride(s) (`vibkit rides`); the longest assessed, "
-        f"{ride.line_start_s:.1f}-{ride.line_end_s:.1f} s of the recording (--segment to choose another)"
+        f"{what}, {ride.line_start_s:.1f}-{ride.line_end_s:.1f} s of the recording (--segment to choose another)"
     )
     return RideSegment(
         start_s=max(ride.line_start_s - float(t0), 0.0),
         end_s=ride.line_end_s - float(t0),
-        method="a ride in a walk",
-        note=f"link pass {ride.link_pass_hz:.3f} Hz, {ride.direction}",
+        method=method,
+        note=f"link pass {ride.link_pass_hz:.3f} Hz, direction {ride.direction}",
     )
 
 

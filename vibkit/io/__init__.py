@@ -232,6 +232,15 @@ def _read_stdin(fmt, limit, options):
     return ds
 
 
+def _head(folder, name, size=512):
+    """The first ``size`` bytes of a file in a folder (empty for a folder or a file that cannot be read)."""
+    try:
+        with open(os.path.join(folder, name), "rb") as f:
+            return f.read(size)
+    except OSError:
+        return b""
+
+
 def read_recording(
     path: str | os.PathLike[str],
     *,
@@ -353,7 +362,7 @@ def read_recording(
     spath = os.fspath(path)
     if spath == STDIN:
         return _read_stdin(fmt, max_recording_bytes(max_bytes), options)
-    if os.path.isdir(spath) and is_phone_export(os.listdir(spath)):
+    if os.path.isdir(spath) and is_phone_export(os.listdir(spath), head=lambda name: _head(spath, name)):
         return read_phone_export(spath, options)
     data = _open_checked(spath, max_recording_bytes(max_bytes))
     if not data:

@@ -287,6 +287,15 @@ def read_gzip(path, data, options, detect_format):
     return _read_member(path, data, member, inner, options, "gzip", detect_format)
 
 
+def _member_head(zf, name, size=512):
+    """The first ``size`` bytes of a zip member (empty where it cannot be unpacked)."""
+    try:
+        with zf.open(name) as f:
+            return f.read(size)
+    except (zipfile.BadZipFile, RuntimeError, NotImplementedError, OSError, zlib.error):
+        return b""
+
+
 def read_zip(path, data, options, detect_format):
     """A zip archive holding exactly one recording (folders, ``__MACOSX`` and dot files aside), read by the entry
     ``detect_format`` finds (the registry's :func:`~vibkit.io.registry.detect_format`)."""
@@ -301,7 +310,7 @@ def read_zip(path, data, options, detect_format):
         ]
     except (zipfile.BadZipFile, OSError, ValueError) as exc:
         raise RecordingError(path, None, f"zip archive that cannot be read ({exc}); expected a whole .zip") from None
-    if len(infos) != 1 and is_phone_export([i.filename for i in infos]):
+    if is_phone_export([i.filename for i in infos], head=lambda name: _member_head(zf, name)):
         return read_phone_export(path, options)
     if len(infos) != 1:
         listed = ", ".join(i.filename for i in infos[:6]) + (" ..." if len(infos) > 6 else "")

@@ -63,24 +63,43 @@ def _stem(name: str) -> str:
     return re.sub(r"[^a-z0-9]", "", base.lower())
 
 
-def phone_sensor_files(names):
-    """{sensor: name} for the names (paths or zip members) that hold a phone sensor; others left out."""
+#: phyphox names the one file of a single-sensor experiment "Raw Data.csv"; its header says which sensor
+_RAW_DATA = "rawdata"
+_RAW_HEADERS = (("acceleration", "accelerometer"), ("gyroscope", "gyroscope"), ("pressure", "barometer"))
+
+
+def _is_phyphox(names) -> bool:
+    """Whether the names hold phyphox's ``meta/`` folder (``meta/device.csv``, ``meta/time.csv``; a folder's
+    listing names the folder ``meta`` itself)."""
+    return any("meta" in re.split(r"[\\/]", name.rstrip("/").lower()) for name in names)
+
+
+def phone_sensor_files(names, head=None, phyphox=None):
+    """{sensor: name} for the names (paths or zip members) that hold a phone sensor; others left out.
+
+    ``head(name) -> bytes`` (the file's first bytes) sorts phyphox's ``Raw Data.csv`` by its header (acceleration,
+    gyroscope, pressure) where the export carries phyphox's ``meta/`` folder (``phyphox``: whether it does; default:
+    read from the names)."""
     found = {}
+    phyphox = head is not None and (_is_phyphox(names) if phyphox is None else phyphox)
     for name in sorted(names):
         if not name.lower().endswith(_SUFFIXES) or "__macosx" in name.lower():
             continue
         stem = _stem(name)
+        if stem == _RAW_DATA and phyphox:
+            first = head(name)[:512].decode("utf-8", "replace").lower()
+            stem = next((s for word, s in _RAW_HEADERS if word in first), stem)
         for sensor, stems in PHONE_SENSORS.items():
             if stem in stems and sensor not in found:
                 found[sensor] = name
     return found
 
 
-def is_phone_export(names) -> bool:
-    """Whether these file names make a multi-sensor phone export (an accelerometer file and at least one
-    other sensor's)."""
-    found = phone_sensor_files(names)
-    return "accelerometer" in found and len(found) >= 2
+def is_phone_export(names, head=None) -> bool:
+    """Whether these file names make a phone export: an accelerometer file and at least one other sensor's, or an
+    accelerometer file alone beside phyphox's ``meta/`` folder (``head`` as for :func:`phone_sensor_files`)."""
+    found = phone_sensor_files(names, head)
+    return "accelerometer" in found and (len(found) >= 2 or _is_phyphox(names))
 
 
 def _read_one(label, data, options):
@@ -160,6 +179,12 @@ def read_phone_export(path, options=None):
         names = [os.path.join(path, n) for n in os.listdir(path) if os.path.isfile(os.path.join(path, n))]
         members = {n: None for n in names}
         kind = "folder"
+        listing = os.listdir(path)
+
+        def head(name):
+            with open(name, "rb") as f:
+                return f.read(512)
+
     else:
         with open(path, "rb") as f:
             blob = f.read()
@@ -169,7 +194,13 @@ def read_phone_export(path, options=None):
             raise RecordingError(path, None, f"zip archive that cannot be read ({exc})") from None
         members = {i.filename: zf for i in zf.infolist() if not i.is_dir()}
         kind = "zip archive"
-    found = phone_sensor_files(members)
+        listing = list(members)
+
+        def head(name):
+            with zf.open(name) as f:
+                return f.read(512)
+
+    found = phone_sensor_files(members, head, phyphox=_is_phyphox(listing))
     if "accelerometer" not in found:
         listed = ", ".join(os.path.basename(n) for n in sorted(members)[:8]) or "none"
         raise RecordingError(

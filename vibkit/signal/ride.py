@@ -266,6 +266,31 @@ def _longest_run(mask):
 #: a scene that starts with its step at the top of the incline rides it for a tenth of a second (its ride is one
 #: loop later)
 MIN_INCLINE_AT_AN_END_S = 0.5
+#: the Kolmogorov distribution's 1 % point: a Brownian bridge's largest excursion exceeds 1.628 of its scale in
+#: one record of a hundred
+BRIDGE_1PCT = 1.628
+#: where the vertical channel's own noise is read for the integrated speed's wander [Hz]: above the transition
+#: curves' content (seconds long), below a chain's link pass and a person's gait
+NOISE_BAND_HZ = (0.5, 2.0)
+
+
+def integrated_noise(x, fs, band=NOISE_BAND_HZ) -> float:
+    """Scale of the wander [m/s] of the integral of an acceleration's noise over its record: the random walk's
+    sigma at the record's end, ``sqrt(S(0) T)``, with ``S`` the noise's two-sided spectral density
+    [(m/s^2)^2/Hz] read as flat from ``band`` (the median of a Welch spectrum there, corrected to its mean for
+    chi-square scatter) and ``T`` the record's length [s].  After the end-to-end drift is removed the integral is
+    a Brownian bridge of this scale, whose largest excursion exceeds :data:`BRIDGE_1PCT` of it in 1 % of
+    records."""
+    x = np.asarray(x, dtype=float)
+    nper = int(min(x.size, round(8.0 * fs)))
+    f, p = scipy.signal.welch(x - x.mean(), fs, nperseg=nper)
+    sel = (f >= band[0]) & (f <= band[1])
+    if not sel.any():
+        return 0.0
+    k = max(1.0, 2.0 * x.size / nper - 1.0)  # Welch averages (half-overlapping): each bin ~ chi-square of 2k dof
+    median_to_mean = (1.0 - 2.0 / (9.0 * k)) ** 3
+    s_two = 0.5 * float(np.median(p[sel])) / median_to_mean
+    return float(np.sqrt(s_two * x.size / fs))
 
 
 class NoIncline(ValueError):
@@ -480,6 +505,14 @@ def detect_ride_segment(
             f"no incline found: the vertical speed integrated from the vertical channel stays within "
             f"{abs(peak):.3g} m/s (< {min_vertical_speed:g} m/s) -- is that channel vertical, and does "
             "the record start and end on the landings? Give the segment as --segment START:END."
+        )
+    wander = BRIDGE_1PCT * integrated_noise(z, fs)
+    if abs(peak) < wander:
+        raise ValueError(
+            f"no incline found: the vertical speed integrated from the vertical channel reaches {abs(peak):.3g} m/s, "
+            f"which the channel's own noise gives by chance (its integral wanders up to {wander:.2g} m/s over "
+            f"{z.size / fs:.0f} s in one record of a hundred): no incline stands out of the noise. Give the segment "
+            "as --segment START:END."
         )
     i0, i1 = _longest_run(np.sign(peak) * v > 0.5 * abs(peak))
     if i0 == 0 or i1 == z.size:

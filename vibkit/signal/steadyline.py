@@ -401,8 +401,13 @@ def _weak(common):
     return (
         f"no steady line in {common['band'][0]:.3g}-{common['band'][1]:.3g} Hz: the strongest stands "
         f"{common['level_db']:.1f} dB over the floor on the axes together ({max(common['channel_levels_db']):.1f} dB on "
-        f"the best axis), under the {common['threshold_db']:.1f} dB that the false-alarm bound requires (p <= "
-        f"{common['p_value']:.2g})"
+        f"the best axis), under the {common['threshold_db']:.1f} dB that the false-alarm bound requires ("
+        + (
+            f"p <= {common['p_value']:.2g}"
+            if common["p_value"] < 0.5
+            else "noise alone gives a line this strong as often as not"
+        )
+        + ")"
     )
 
 
