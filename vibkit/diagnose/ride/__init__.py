@@ -1,6 +1,8 @@
 """Ride quality of a step-riding accelerometer, as escalator ride-quality meters report it.
 
-* :mod:`~vibkit.diagnose.ride.quality`: one result type, :class:`RideQuality`, from arrays
+* :mod:`~vibkit.diagnose.ride.result`: the result, :class:`RideQuality` (each axis an :class:`AxisRide`), its
+  dictionary, figure and notebook view;
+* :mod:`~vibkit.diagnose.ride.quality`: the result from arrays
   (:func:`ride_quality`), a recording (:func:`ride_quality_from_recording`) or a simulation Dataset
   (:func:`ride_quality_from_simulation`);
 * :mod:`~vibkit.diagnose.ride.simulation`: a scene simulated for its ride (:func:`simulate_ride`), the step
@@ -15,9 +17,7 @@ from .quality import (  # noqa: F401 (the names of the module this package was)
     MIN_PK_PK_VALUES,
     SETTLE_S,
     START_UP_SHARE,
-    AxisRide,
     G,
-    RideQuality,
     _naming,
     _start_up,
     parse_channels,
@@ -27,6 +27,7 @@ from .quality import (  # noqa: F401 (the names of the module this package was)
     ride_quality_from_recording,
     ride_quality_from_simulation,
 )
+from .result import AxisRide, RideQuality
 from .simulation import simulate_ride, with_ride_outputs
 
 __all__ = [
