@@ -21,15 +21,14 @@ from .options import (
     add_nominal_pitch,
     add_recording,
     add_speed,
-    chain_links,
     cli_message,
     read_recording,
     reader_options,
-    run_speed,
     segment_of,
     workers,
 )
 from .output import CLIError, UsageError, check_output, is_stdout, msg, output_path, print_json, shown, table
+from .settings import chain_links, run_speed
 
 EPILOG = (
     "examples (on the shipped example fleet, data/fleet-example/):\n"
@@ -264,11 +263,7 @@ def run_add(a):
         )
     if m.quality != "ok":
         msg(f"warning: stored flagged {m.quality}, left out of the trend: {m.quality_reason}")
-    if profile is not None and profile.on_step:  # as `vibkit pitch --escalator` says it
-        from vibkit.diagnose.pitch import STEP_WARNING
-
-        msg(f"warning: {STEP_WARNING}")
-    for w in m.warnings:
+    for w in m.warnings:  # a sensor on a step among them, for the channel measured (as `vibkit pitch` says it)
         msg(f"warning: {w}")
     return 0
 

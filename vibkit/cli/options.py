@@ -494,7 +494,7 @@ PITCH_FORMAT = "m, or 133.33mm, 13.333cm, 5.25in"
 
 def add_speed(sp, default, what="chain speed measured on the steps"):
     """--speed: the chain speed in any of :data:`SPEED_FORMAT`'s units; ``default`` says where the command takes
-    it from without the option (as :func:`run_speed`: the escalator profile's before the file's)."""
+    it from without the option (as :func:`vibkit.cli.settings.run_speed`: the escalator profile's before the file's)."""
     sp.add_argument("--speed", type=chain_speed, help=f"{what}: {SPEED_FORMAT} (default: {default})")
 
 
@@ -515,21 +515,6 @@ def add_speed_uncertainty(sp):
         help="standard deviation of the speed, in m/s or in %% (e.g. 0.1%%); without it the speed's "
         "uncertainty is 'not stated' (an escalator profile's rated speed: the standard's tolerance)",
     )
-
-
-def run_speed(a, *, rec=None, scene=None, profile=None):
-    """The run's one speed (:class:`vibkit.diagnose.speed.ResolvedSpeed`): --speed, else the escalator
-    profile's, else the recording's, else the scene's; --speed-uncertainty (m/s or % of that speed) its sigma."""
-    from vibkit.diagnose.speed import resolve_speed
-
-    if profile is None:
-        profile = _profile_of(a)
-    speed = getattr(a, "speed", None)
-    text = getattr(a, "speed_uncertainty", None)
-    base = resolve_speed(speed, None, profile=profile, recording=rec, scene=scene)
-    if text is None or base.value is None:
-        return base
-    return resolve_speed(speed, speed_sigma(text, base.value), profile=profile, recording=rec, scene=scene)
 
 
 def _profile_of(a):
@@ -620,37 +605,8 @@ LINKS_WANDER_HELP = (
 
 
 def add_links(sp, help_=LINKS_HELP):
-    """--links N: the chain's number of links (else the escalator profile's, :func:`chain_links`)."""
+    """--links N: the chain's number of links (else the escalator profile's, :func:`vibkit.cli.settings.chain_links`)."""
     sp.add_argument("--links", type=links_count, help=help_)
-
-
-def chain_links(a, profile):
-    """The chain's number of links: --links, else the profile's ``chain.n_links``, else the number its scene fills
-    in from its geometry, else None; a --links that the profile's own ``chain.n_links`` contradicts is a CLIError
-    (a wrong count scans a chain that is not there and flags nothing)."""
-    given = getattr(a, "links", None)
-    own = profile.n_links if profile is not None else None
-    if given and own and given != own:
-        raise CLIError(
-            f"--links {given} contradicts the escalator profile {profile.source} (chain.n_links = {own}): give "
-            "one of them, or mend the profile"
-        )
-    if given or own or profile is None:
-        return given or own
-    try:  # a profile with its geometry instead: the number of links its scene fills in (as the report uses)
-        n = profile.scene("forward").chain.n_rollers
-    except ValueError:
-        return None
-    msg(
-        f"note: {profile.source}: {n} links, filled in from its geometry (whole steps that close the loop); give "
-        "chain.n_links or --links N when you know the chain's count"
-    )
-    return n
-
-
-def on_step(profile):
-    """True when the escalator profile says its sensor rides a step, None (the channel's name decides) without one."""
-    return None if profile is None else profile.on_step
 
 
 def escalator_profile(a):

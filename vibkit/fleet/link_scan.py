@@ -149,7 +149,7 @@ def measure_with_links(
                 f"{path}: marker_s={float(marker_s):g} must lie within the recording, 0 to {float(t[-1]):.6g} s (the "
                 "time the marked link passed the sensor); nothing stored"
             )
-    m = analyse_recording(path, recording=rec, n_links=n_links, **analysis)
+    m = analyse_recording(path, recording=rec, n_links=n_links, segment=segment, **analysis)
     scan = link_scan_of(
         rec,
         path=path,
