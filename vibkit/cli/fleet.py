@@ -21,7 +21,6 @@ from .options import (
     add_nominal_pitch,
     add_recording,
     add_speed,
-    cli_message,
     read_recording,
     reader_options,
     segment_of,
@@ -270,7 +269,6 @@ def run_add(a):
 
 def run_scan(a):
     def failed(name, why):
-        why = cli_message(why)
         msg(f"vibkit fleet scan: failed: {why if why.startswith(name) else f'{name}: {why}'}")
 
     from vibkit.fleet.catalogue import read_catalogue
