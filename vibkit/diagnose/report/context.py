@@ -515,6 +515,7 @@ def _links(rec, ch, units, sc, speed, notes, profile=None, marker_s=None):
             scene=scene_file,
             marker_s=marker_s,
             nominal_pitch=None if profile is None else profile.nominal_pitch,
+            profile=profile,
         )
         return res, ""
     except TooFewLoops as exc:  # under two loops: no page (vibkit links says how long to record)
