@@ -117,3 +117,24 @@ def test_the_worn_link_map_reads_the_channel_the_profile_names_the_tensioner():
     on_step = parse_profile(BASE + '[sensors.raw]\nkind = "step"\nstep = 1\n')
     with pytest.raises(ValueError, match="step accelerometer gives no link number"):
         find_worn_links(rec, speed=0.5, n_links=160, channel="raw", profile=on_step)
+
+
+def test_no_diagnosis_guesses_a_sensor_from_the_spelling_of_a_unit():
+    """The sensor of a channel is :mod:`vibkit.diagnose.sensors`' to say: no other module of the diagnoses tests a
+    unit against a list of length spellings (the guess that made a displacement the tensioner's whatever the profile
+    said).  (A ride's check that its axes are in m/s^2 is a unit's check, not a sensor's.)"""
+    import re
+    from pathlib import Path
+
+    import vibkit.diagnose
+
+    guess = re.compile(r"""in \(\s*["'](?:m|mm|um|cm)["']\s*,\s*["'](?:mm|um|cm)["']""")
+    root = Path(vibkit.diagnose.__file__).parent
+    found = [
+        f"{p.relative_to(root)}:{k}"
+        for p in sorted(root.rglob("*.py"))
+        for k, line in enumerate(p.read_text().splitlines(), 1)
+        if guess.search(line) and p.name != "sensors.py"
+    ]
+    assert not found, found
+    assert guess.search('if units in ("m", "mm", "um"):')  # the check sees the guess it forbids

@@ -288,7 +288,8 @@ def resolve_settings(
         nominal, nominal_source = float(scene.sprocket.pitch), "the scene's sprocket"
     search, band_source = (tuple(band), "given") if band is not None else (None, "")
     if search is None and profile is not None and sp.value is not None:
-        search = profile.search_band(sp.value)
+        f = float(sp.value) / profile.nominal_pitch  # the profile's link pass (Profile.search_band's numbers)
+        search = (PROFILE_BAND_FACTORS[0] * f, PROFILE_BAND_FACTORS[1] * f)
         band_source = f"{profile.source}: {PROFILE_BAND_FACTORS[0]:g}-{PROFILE_BAND_FACTORS[1]:g} x speed / pitch"
         taken.append(f"search band {fmt_band(search)} (0.8-1.25 x speed / nominal pitch)")
     if search is None and frequency_only_band and sp.value is None:
