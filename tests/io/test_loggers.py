@@ -18,6 +18,7 @@ import pytest
 
 from vibkit.io import RecordingError, read_recording
 from vibkit.io.text.units import STANDARD_GRAVITY
+from vibkit.runtime.reader_options import READER_OPTIONS
 
 F0 = 3.5  # test signal [Hz]
 
@@ -270,16 +271,8 @@ def test_two_channel_miniseed_with_different_starts_read_with_channel(tmp_path, 
 # ------------------------------------------------------------------------------------------ the CLI
 
 
-READER_FLAGS = {
-    "--sample-rate",
-    "--time-column",
-    "--time-unit",
-    "--units",
-    "--repair-time",
-    "--delimiter",
-    "--decimal",
-    "--encoding",
-}
+#: the reader's flags as vibkit.runtime.reader_options declares them (--channel: checked per command below)
+READER_FLAGS = {o.flag for o in READER_OPTIONS if o.flag and o.name != "channel"}
 
 
 def _options(argv):
@@ -317,17 +310,37 @@ def test_units_option_on_the_command_line(tmp_path, run):
     assert rc == 1 and "not a unit vibkit knows" in err
 
 
-def test_cli_message_names_flags_not_python_arguments():
-    from vibkit.cli.options import cli_message
+def test_reader_messages_name_flags_on_the_command_line_and_arguments_in_python():
+    """The reader writes an option as the caller gives it: ``time_unit=`` in Python, ``--time-unit`` within the
+    command line's :func:`flag_spelling`; nothing rewrites the text afterwards."""
+    from vibkit.runtime.reader_options import either, flag_spelling, spell
 
-    assert cli_message("pass time_unit= (s, ms, us)") == "pass --time-unit (s, ms, us)"
-    assert cli_message("(time_column=) or (sample_rate=)") == "(--time-column) or (--sample-rate)"
-    assert (
-        cli_message("pass repair_time=True, --repair-time on the command line, to repair")
-        == "pass --repair-time to repair"
-    )
-    assert cli_message("kept (pass units={'ax': 'g/<counts per g>'})") == "kept (pass --units ax=g/<counts per g>)"
-    assert cli_message("no time column (time_column=False given)") == "no time column (--time-column none given)"
+    said = lambda: [  # noqa: E731
+        f"pass {spell('time_unit')} (s, ms, us)",
+        f"({spell('time_column')}) or ({spell('sample_rate')})",
+        f"pass {spell('repair_time', True)} to repair",
+        f"kept (pass {spell('units', {'ax': 'g/<counts per g>'})})",
+        f"no time column ({spell('time_column', False)} given)",
+        f"raise it with {either('max_bytes', 'the environment variable V')}",
+    ]
+    assert said() == [
+        "pass time_unit= (s, ms, us)",
+        "(time_column=) or (sample_rate=)",
+        "pass repair_time=True to repair",
+        "kept (pass units={'ax': 'g/<counts per g>'})",
+        "no time column (time_column=False given)",
+        "raise it with max_bytes= or the environment variable V",
+    ]
+    with flag_spelling():
+        assert said() == [
+            "pass --time-unit (s, ms, us)",
+            "(--time-column) or (--sample-rate)",
+            "pass --repair-time to repair",
+            "kept (pass --units ax=g/<counts per g>)",
+            "no time column (--time-column none given)",
+            "raise it with the environment variable V",
+        ]
+    assert spell("time_unit") == "time_unit="  # the spelling is the command line's only while it runs
 
 
 def test_fleet_scan_applies_the_reader_options_to_every_file(tmp_path, run):

@@ -54,6 +54,18 @@ def test_geometry_instead_of_links_and_sensor():
     prof = parse_profile(text)
     assert (prof.n_links, prof.rise, prof.incline_deg, prof.links_per_step) == (None, 4.5, 30.0, 4)
     assert (prof.sensor.kind, prof.sensor.step) == ("step", 12)
+    assert prof.sensors == {} and prof.on_step
+
+
+def test_sensors_per_channel():
+    """[sensors.NAME] gives one channel its sensor; [sensor] stays the default of the others."""
+    text = (
+        MINIMAL
+        + '[sensor]\nkind = "phone"\n[sensors.lvdt]\nkind = "tensioner"\n[sensors.acc]\nkind = "step"\nstep = 4\n'
+    )
+    prof = parse_profile(text)
+    assert prof.sensor.kind == "phone" and prof.on_step
+    assert {k: (v.kind, v.step) for k, v in prof.sensors.items()} == {"lvdt": ("tensioner", None), "acc": ("step", 4)}
 
 
 @pytest.mark.parametrize(
@@ -69,7 +81,11 @@ def test_geometry_instead_of_links_and_sensor():
         (lambda t: t.replace("n_links = 160", "n_links = 160\nlinks_per_step = 5"), r"'chain.links_per_step' = 5"),
         (lambda t: t.replace("n_links = 160", "n_links = 160\ncolour = 1"), r"unknown key 'chain.colour'"),
         (lambda t: t + "[motor]\nkp = 1\n", r"unknown section \[motor\]"),
-        (lambda t: t + '[sensor]\nkind = "phone"\n', r"'sensor.kind' must be one of tensioner, step"),
+        (lambda t: t + '[sensor]\nkind = "wall"\n', r"'sensor.kind' must be one of tensioner, step, phone"),
+        (lambda t: t + '[sensors.az]\nkind = "wall"\n', r"'sensors.az.kind' must be one of tensioner, step, phone"),
+        (lambda t: t + '[sensors.az]\nkind = "step"\n', r"missing value 'sensors.az.step'"),
+        (lambda t: t + '[sensors.az]\nkind = "phone"\nangle = 1\n', r"unknown key 'sensors.az.angle'"),
+        (lambda t: t + '[sensors]\naz = "phone"\n', r"'sensors.az' must be a table"),
         (lambda t: t + '[sensor]\nkind = "step"\n', r"missing value 'sensor.step'"),
         (lambda t: t + "[drive\n", r"not valid TOML"),
         (lambda t: t.replace("speed = 0.5", 'speed = 0.5\ndirection = "downwards"'), r"'drive.direction' must be"),

@@ -17,8 +17,10 @@ import argparse
 import errno
 import sys
 
+from vibkit.runtime.reader_options import flag_spelling
+
 from . import bench, compare, datasets, fleet, links, pitch, report, ride, rides, scene, simulate, spectrum, sweep
-from .options import cli_message, plain_message
+from .options import plain_message
 from .output import UsageError, color, msg
 
 __all__ = ["main"]
@@ -91,7 +93,8 @@ def main(argv=None) -> int:
         return 1
 
     try:
-        with handle_termination():  # SIGTERM runs the same clean-up as Ctrl-C
+        # SIGTERM runs the same clean-up as Ctrl-C; the reader names its options as their flags
+        with handle_termination(), flag_spelling():
             status = int(args.func(args))
             if sys.stdout is not None:  # None: started with stdout closed (>&-)
                 sys.stdout.flush()  # a closed pipe is found here, not at the interpreter's exit
@@ -128,7 +131,6 @@ def main(argv=None) -> int:
                 errno.EDQUOT: " (your disk quota is used up; nothing was written: free space, or write elsewhere)",
             }.get(exc.errno, "")
             text = f"{where}{exc.strerror}{why}"
-        text = cli_message(text)  # the reader's Python arguments named as their flags
         text = plain_message(text, args)
         prefix = "\033[31merror\033[0m" if color() else "error"
         msg(f"vibkit {args.command}: {prefix}: {text}")

@@ -19,9 +19,9 @@ from .options import (
     harmonics,
     positive,
     read_recording,
-    run_speed,
 )
 from .output import CLIError, msg, print_json, shown, table
+from .settings import run_settings
 
 EPILOG = "example:\n  vibkit compare data/field/leon-tensioner.csv sim/leon.toml --duration 10"
 
@@ -79,7 +79,7 @@ def run(a):
             raise CLIError(
                 f"{target}: file not found (expected a scene .toml, a shipped scene's name or a result file)"
             )
-    sp = run_speed(a, rec=rec, profile=profile)
+    sp = run_settings(a, rec, profile, notes=False).speed  # the compare's band is its own (both sides' speeds)
     try:
         comp = compare(
             rec,
@@ -91,6 +91,7 @@ def run(a):
             progress=True,
             speed=sp.value,
             speed_sigma=sp.sigma,
+            profile=profile,
         )
     except NothingToCompare as exc:  # the recording's side
         raise CLIError(f"{shown(a.recording)}: {' '.join(str(exc).split())}") from None

@@ -21,15 +21,13 @@ from .options import (
     add_nominal_pitch,
     add_recording,
     add_speed,
-    chain_links,
-    cli_message,
     read_recording,
     reader_options,
-    run_speed,
     segment_of,
     workers,
 )
 from .output import CLIError, UsageError, check_output, is_stdout, msg, output_path, print_json, shown, table
+from .settings import chain_links, run_speed
 
 EPILOG = (
     "examples (on the example fleet that vibkit datasets copy data writes into data/fleet-example/):\n"
@@ -276,18 +274,13 @@ def run_add(a):
         )
     if m.quality != "ok":
         msg(f"warning: stored flagged {m.quality}, left out of the trend: {m.quality_reason}")
-    if profile is not None and profile.on_step:  # as `vibkit pitch --escalator` says it
-        from vibkit.diagnose.pitch import STEP_WARNING
-
-        msg(f"warning: {STEP_WARNING}")
-    for w in m.warnings:
+    for w in m.warnings:  # a sensor on a step among them, for the channel measured (as `vibkit pitch` says it)
         msg(f"warning: {w}")
     return 0
 
 
 def run_scan(a):
     def failed(name, why):
-        why = cli_message(why)
         msg(f"vibkit fleet scan: failed: {why if why.startswith(name) else f'{name}: {why}'}")
 
     from vibkit.fleet.catalogue import read_catalogue

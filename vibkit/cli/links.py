@@ -19,12 +19,12 @@ from .options import (
     add_recording,
     add_speed,
     band,
-    chain_links,
     escalator_profile,
     read_recording,
 )
 from .output import CLIError, in_file, msg, print_json, shown, table
-from .pitch import resolve_speed
+from .pitch import require_speed
+from .settings import run_settings
 
 EPILOG = (
     "example:\n  vibkit links tensioner.nc --speed 0.5 --links 159 --scene sim/thesis-forward.toml\n"
@@ -111,8 +111,9 @@ def run(a):
 
     rec = read_recording(a)
     profile = escalator_profile(a)
-    speed = resolve_speed(a, rec, profile=profile).value
-    n_links = chain_links(a, profile)
+    settings = run_settings(a, rec, profile)  # as `pitch` resolves them: a --links the profile contradicts
+    speed = require_speed(a, settings).value
+    n_links = settings.n_links
     if n_links is None:
         raise CLIError(
             f"{shown(a.recording)}: give --links N, the chain's number of links (or --escalator FILE with chain.n_links)"
@@ -138,10 +139,11 @@ def run(a):
             scene=scene,
             marker_s=a.marker,
             false_alarm=a.false_alarm,
-            band=a.band,
+            band=a.band,  # not the settings' profile band: the map's own, speed / 200-80 mm, unless given
             file=shown(a.recording),
-            nominal_pitch=None if profile is None else profile.nominal_pitch,
+            nominal_pitch=settings.nominal_pitch,
             direction=a.direction,
+            profile=profile,
             **({} if a.min_excess is None else {"min_excess": a.min_excess}),
         )
     except TooFewLoops as exc:

@@ -12,6 +12,7 @@ import re
 
 from vibkit.diagnose.decision import DEFAULT_LIMITS_PERCENT
 from vibkit.runtime.budget import parse_bytes
+from vibkit.runtime.reader_options import READER_OPTIONS, option
 
 from .output import CLIError, msg
 
@@ -254,7 +255,7 @@ def add_json(sp, help_=JSON_HELP):
 
 
 def add_sample_rate(sp):
-    sp.add_argument("--sample-rate", type=sample_rate, help="sample rate for files without time [Hz]")
+    sp.add_argument("--sample-rate", type=sample_rate, help=option("sample_rate").help)
 
 
 #: what each command analyses without --channel (the end of --channel's help)
@@ -265,24 +266,12 @@ CHANNEL_LENGTH = "the first in a length unit, a tensioner displacement; else the
 
 def add_channel(sp, default=CHANNEL_FIRST):
     """--channel; ``default`` says what the command analyses without it."""
-    sp.add_argument(
-        "--channel", help=f"channel to analyse, named as the file writes it or as vibkit does (default: {default})"
-    )
+    sp.add_argument("--channel", help=f"{option('channel').help} (default: {default})")
 
 
-#: the reader's options: Python argument of :func:`vibkit.read_recording` -> command-line flag
-READER_FLAGS = {
-    "channel": "--channel",
-    "sample_rate": "--sample-rate",
-    "time_column": "--time-column",
-    "time_unit": "--time-unit",
-    "units": "--units",
-    "repair_time": "--repair-time",
-    "delimiter": "--delimiter",
-    "decimal": "--decimal",
-    "encoding": "--encoding",
-    "date_order": "--date-order",
-}
+#: the reader's options: Python argument of :func:`vibkit.read_recording` -> command-line flag (declared once, in
+#: :data:`vibkit.io.reader_options.READER_OPTIONS`)
+READER_FLAGS = {o.name: o.flag for o in READER_OPTIONS if o.flag}
 _DELIMS = {
     "comma": ",",
     ",": ",",
@@ -339,44 +328,22 @@ def add_recording(
         add_channel(g, channel_default)
     if with_segment:
         g.add_argument("--segment", type=segment, metavar="START:END", help=segment_help or SEGMENT_HELP)
-    add_sample_rate(g)
-    g.add_argument(
-        "--time-column",
-        metavar="NAME|INDEX|none",
-        help="time column by name or 0-based index; 'none': the file has no time column",
-    )
-    g.add_argument(
-        "--time-unit",
-        choices=("s", "ms", "us", "ns", "min", "h"),
-        help="unit of a numeric time column (overrides the header and the epoch guess)",
-    )
-    g.add_argument(
-        "--units",
-        type=units_option,
-        metavar="UNIT|NAME=UNIT,...",
-        help="unit of every channel (m/s^2, g, mm, counts, or scaled counts like g/2048: one count "
-        "is 1/2048 g), or per channel az=g,ax=g/2048; overrides the file's header",
-    )
-    g.add_argument(
-        "--repair-time",
-        action="store_true",
-        help="undo a clock set back at midnight or by a DST change, sort other backward "
-        "rows and drop repeated stamps instead of refusing the file (in the history)",
-    )
-    g.add_argument(
-        "--delimiter",
-        type=delimiter_option,
-        metavar="comma|semicolon|tab|pipe|whitespace",
-        help="text files: the delimiter (default: detected)",
-    )
-    g.add_argument("--decimal", choices=(".", ","), help="text files: the decimal mark (default: detected)")
-    g.add_argument("--encoding", help="text files: the encoding, e.g. cp1252 (default: UTF-8, else cp1252)")
-    g.add_argument(
-        "--date-order",
-        choices=("dmy", "mdy"),
-        help="text files: numeric dates are day/month/year (dmy) or month/day/year (mdy) (default: "
-        "the order a day above 12 shows; dates that could be either are refused)",
-    )
+    for o in READER_OPTIONS:  # the reader's own options, each as vibkit.io.reader_options declares it
+        if o.flag and o.name != "channel":
+            g.add_argument(o.flag, help=o.help, **_READER_ARGS.get(o.name, {}), **_choices(o))
+
+
+#: how the command line parses a reader option beyond its declaration (a type that checks it, a switch)
+_READER_ARGS = {
+    "sample_rate": {"type": sample_rate},
+    "units": {"type": units_option},
+    "repair_time": {"action": "store_true"},
+    "delimiter": {"type": delimiter_option},
+}
+
+
+def _choices(o):
+    return {k: v for k, v in (("choices", o.choices), ("metavar", o.metavar)) if v is not None}
 
 
 def reader_options(a, *, channel=False):
@@ -384,20 +351,11 @@ def reader_options(a, *, channel=False):
 
     ``channel=True`` adds ``--channel`` (the reader then keeps that channel only).
     """
-    tc = getattr(a, "time_column", None)
+    opts = {name: getattr(a, name, None) for name in READER_FLAGS if name != "channel"}
+    opts["repair_time"] = bool(opts["repair_time"])
+    tc = opts["time_column"]
     if tc is not None:  # a 0-based index, 'none' (the file has no time column) or a name as the file writes it
-        tc = int(tc) if tc.strip().isdigit() else False if tc.strip().lower() == "none" else tc
-    opts = dict(
-        sample_rate=getattr(a, "sample_rate", None),
-        time_column=tc,
-        time_unit=getattr(a, "time_unit", None),
-        units=getattr(a, "units", None),
-        repair_time=bool(getattr(a, "repair_time", False)),
-        delimiter=getattr(a, "delimiter", None),
-        decimal=getattr(a, "decimal", None),
-        encoding=getattr(a, "encoding", None),
-        date_order=getattr(a, "date_order", None),
-    )
+        opts["time_column"] = int(tc) if tc.strip().isdigit() else False if tc.strip().lower() == "none" else tc
     if channel and getattr(a, "channel", None):
         opts["channel"] = a.channel
     return opts
@@ -409,17 +367,17 @@ def read_recording(a):
     Every channel is read (the command picks ``--channel`` among them); a file that cannot be read whole
     (a waveform file whose traces start at different times) is read again with ``--channel`` only.
     """
-    import vibkit
     from vibkit.diagnose.segment import cut_recording
     from vibkit.io import RecordingError
+    from vibkit.io import read_recording as read_file
     from vibkit.io.channels import with_component
 
     try:
-        rec = vibkit.read_recording(a.recording, **reader_options(a))
+        rec = read_file(a.recording, **reader_options(a))
     except RecordingError:
         if not getattr(a, "channel", None):
             raise
-        rec = vibkit.read_recording(a.recording, **reader_options(a, channel=True))
+        rec = read_file(a.recording, **reader_options(a, channel=True))
     rec = cut_recording(rec, segment_of(a))  # --segment, in the file's own time; outside it: an error
     rec = with_component(rec, getattr(a, "channel", None))
     _note_held_samples(rec)
@@ -435,34 +393,6 @@ def _note_held_samples(rec):
             f"note: {', '.join(held)}: values held between updates (rows at {rec.attrs['sample_rate_hz']:.4g} Hz, "
             f"updates at {lo:.3g} Hz): nothing above {lo / 2:.3g} Hz (their Nyquist frequency) is in the data"
         )
-
-
-_PY_ARG = re.compile(r"\b(" + "|".join(READER_FLAGS) + r")=(\{[^}]*\}|True\b|False\b)?( ?)")
-
-
-def cli_message(text: str) -> str:
-    """A library message for the command line: the reader's Python arguments become their flags.
-
-    ``pass time_unit= (s, ms ...)`` -> ``pass --time-unit (s, ms ...)``; ``repair_time=True`` ->
-    ``--repair-time``; ``time_column=False`` -> ``--time-column none``; ``units={'ax': 'g'}`` ->
-    ``--units ax=g``; ``max_bytes=`` -> the environment variable.
-    """
-
-    def sub(m):
-        flag, value, space = READER_FLAGS[m.group(1)], m.group(2), m.group(3)
-        if value == "True":
-            return flag + space
-        if value == "False":
-            return f"{flag} none" + space
-        if value:
-            pairs = re.findall(r"['\"]([^'\"]*)['\"]\s*:\s*['\"]?([^,'\"}]*)['\"]?", value)
-            return flag + " " + ",".join(f"{k}={v.strip()}" for k, v in pairs) + space
-        return flag + " "
-
-    text = text.replace("max_bytes= or ", "")
-    text = _PY_ARG.sub(sub, text)
-    text = re.sub(r"(--[a-z-]+) +(?=[),.;]|$)", r"\1", text)
-    return re.sub(r"(--[a-z-]+)( [^,;)]*)?, \1 on the command line,", r"\1\2", text)
 
 
 def add_force_overwrite(sp, what):
@@ -494,7 +424,7 @@ PITCH_FORMAT = "m, or 133.33mm, 13.333cm, 5.25in"
 
 def add_speed(sp, default, what="chain speed measured on the steps"):
     """--speed: the chain speed in any of :data:`SPEED_FORMAT`'s units; ``default`` says where the command takes
-    it from without the option (as :func:`run_speed`: the escalator profile's before the file's)."""
+    it from without the option (as :func:`vibkit.cli.settings.run_speed`: the escalator profile's before the file's)."""
     sp.add_argument("--speed", type=chain_speed, help=f"{what}: {SPEED_FORMAT} (default: {default})")
 
 
@@ -515,21 +445,6 @@ def add_speed_uncertainty(sp):
         help="standard deviation of the speed, in m/s or in %% (e.g. 0.1%%); without it the speed's "
         "uncertainty is 'not stated' (an escalator profile's rated speed: the standard's tolerance)",
     )
-
-
-def run_speed(a, *, rec=None, scene=None, profile=None):
-    """The run's one speed (:class:`vibkit.diagnose.speed.ResolvedSpeed`): --speed, else the escalator
-    profile's, else the recording's, else the scene's; --speed-uncertainty (m/s or % of that speed) its sigma."""
-    from vibkit.diagnose.speed import resolve_speed
-
-    if profile is None:
-        profile = _profile_of(a)
-    speed = getattr(a, "speed", None)
-    text = getattr(a, "speed_uncertainty", None)
-    base = resolve_speed(speed, None, profile=profile, recording=rec, scene=scene)
-    if text is None or base.value is None:
-        return base
-    return resolve_speed(speed, speed_sigma(text, base.value), profile=profile, recording=rec, scene=scene)
 
 
 def _profile_of(a):
@@ -620,38 +535,8 @@ LINKS_WANDER_HELP = (
 
 
 def add_links(sp, help_=LINKS_HELP):
-    """--links N: the chain's number of links (else the escalator profile's, :func:`chain_links`)."""
+    """--links N: the chain's number of links (else the escalator profile's, :func:`vibkit.cli.settings.chain_links`)."""
     sp.add_argument("--links", type=links_count, help=help_)
-
-
-def chain_links(a, profile):
-    """The chain's number of links: --links, else the profile's ``chain.n_links``, else the number its scene fills
-    in from its geometry, else None; a --links that the profile's own ``chain.n_links`` contradicts is a CLIError
-    (a wrong count scans a chain that is not there and flags nothing)."""
-    given = getattr(a, "links", None)
-    own = profile.n_links if profile is not None else None
-    if given and own and given != own:
-        raise CLIError(
-            f"--links {given} contradicts the escalator profile {profile.source} (chain.n_links = {own}): give "
-            "one of them, or mend the profile"
-        )
-    if given or own or profile is None:
-        return given or own
-    try:  # a profile with its geometry instead: the number of links its scene fills in (as the report uses)
-        n = profile.scene("forward").chain.n_rollers
-    except ValueError:
-        return None
-    msg(
-        f"note: {profile.source}: {n} links, filled in from its geometry (whole "
-        f"{'pallets' if getattr(profile, 'is_walk', False) else 'steps'} that close the loop); give "
-        "chain.n_links or --links N when you know the chain's count"
-    )
-    return n
-
-
-def on_step(profile):
-    """True when the escalator profile says its sensor rides a step, None (the channel's name decides) without one."""
-    return None if profile is None else profile.on_step
 
 
 def escalator_profile(a):
@@ -678,21 +563,17 @@ _EXC_NAME = re.compile(r"\b(?:[A-Z][A-Za-z]*(?:Error|Exception)|Error): ")
 def plain_message(text: str, args) -> str:
     """A message without Python's exception names, naming the flag the user gave that it is about.
 
-    The library says ``band 60-80 Hz``, ``units['ax']=...``, ``cannot decode as X``: when the user
-    gave that option, the message names its flag (``--band``, ``--units``, ``--encoding``, ``--channels``,
-    ``--sample-rate``).
+    The library says ``band 60-80 Hz``: when the user gave that option, the message names its flag (``--band``,
+    ``--channels``, ``--sample-rate``).  The reader's options need no such rewriting: the reader names them as their
+    flags itself when the command line calls it (:func:`vibkit.io.reader_options.flag_spelling`).
     """
     text = _EXC_NAME.sub("", text)
     text = text.replace("give band=(low, high) [Hz]", "give --band LOW:HIGH [Hz]")
     given = {k: v for k, v in vars(args).items() if v not in (None, False)}
     if "band" in given and "--band" not in text:
         text = re.sub(r"\bband (?=[0-9])", "--band ", text, count=1)
-    if "units" in given and "--units" not in text:
-        text = re.sub(r"\bunits(?=[\[:])", "--units", text, count=1)
     if "marker" in given:  # the link map's "Parameter marker_s=999.0 must lie within the recording"
         text = re.sub(r"\b(?:Parameter )?marker_s=([^ ]+)", r"--marker \1 s", text)
-    if "encoding" in given and "--encoding" not in text:
-        text = text.replace("cannot decode as ", "cannot decode as --encoding ", 1)
     if "channels" in given and "--channels" not in text and "channel" in text:
         text += f" (from --channels {given['channels']})"
     if "sample_rate" in given and "--sample-rate" not in text and ("Nyquist" in text or "matrix" in text):

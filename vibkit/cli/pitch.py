@@ -6,7 +6,6 @@ import math
 import textwrap
 
 from vibkit.diagnose.rounding import SPEED_SIGMA_NOT_STATED, fmt_band, fmt_length, fmt_pm
-from vibkit.diagnose.settings import chain_numbers
 
 from .options import (
     CHANNEL_EVERY,
@@ -21,14 +20,12 @@ from .options import (
     add_speed,
     add_speed_uncertainty,
     band,
-    chain_links,
     escalator_profile,
-    on_step,
     read_recording,
-    run_speed,
     teeth,
 )
 from .output import CLIError, in_file, msg, print_json, shown, table
+from .settings import profile_note, run_settings
 
 EPILOG = (
     "examples:\n  vibkit pitch data/field/leon-tensioner.csv --speed-uncertainty 0.1% \\\n"
@@ -63,51 +60,24 @@ def add_parser(subparsers):
 
 
 def add_speed_options(s, what="chain speed measured on the steps"):
-    """--speed and --nominal-pitch of ``pitch`` and ``spectrum`` (:func:`run_speed`, :func:`from_profile`)."""
+    """--speed and --nominal-pitch of ``pitch`` and ``spectrum`` (resolved with the rest of the run's settings,
+    :func:`vibkit.cli.settings.run_settings`)."""
     add_speed(s, "the --escalator profile's, else the speed the file states, e.g. chain_speed_m_s", what)
     add_nominal_pitch(s, "the --escalator profile's", ": gives elongation and verdict")
 
 
-def resolve_speed(a, rec, *, required=True, profile=None):
-    """The run's speed (:func:`vibkit.cli.options.run_speed`: --speed, else the escalator profile's rated speed,
-    else the file's), else a CLIError (or a speed of None when not ``required``)."""
-    sp = run_speed(a, rec=rec, profile=profile)
-    if sp.value is not None or not required:
-        return sp
+def require_speed(a, settings):
+    """The run's speed (``settings.speed``), else a CLIError: ``pitch`` needs one."""
+    if settings.speed.value is not None:
+        return settings.speed
     raise CLIError(
         f"{shown(a.recording)}: the file states no chain speed; give --speed (e.g. --speed 0.5 or --speed 50cm/s)"
     )
 
 
-def file_chain(rec):
-    """(sprocket teeth, links per step) a recording states (a vibkit simulation's ``sprocket_teeth`` and
-    ``links_per_step``), else the defaults (:func:`vibkit.diagnose.settings.chain_numbers`)."""
-    return chain_numbers(recording=rec)
-
-
-def from_profile(a, profile, sp, rec=None):
-    """(nominal pitch, band, teeth) of a run: the flags, else the profile's (the note says which came from the
-    profile), else the recording's (:func:`file_chain`), else the defaults; ``sp`` is the run's speed
-    (:func:`vibkit.cli.options.run_speed`), which takes the profile's speed and sigma itself."""
-    nominal, search, teeth_ = a.nominal_pitch, a.band, getattr(a, "teeth", None)
-    if profile is None:
-        return nominal, search, chain_numbers(teeth=teeth_, recording=rec)[0]
-    taken = []
-    if sp.value is not None and sp.source != "given":
-        taken.append(f"speed {sp.text}")
-    if nominal is None:
-        nominal = profile.nominal_pitch
-        taken.append(f"nominal pitch {1000 * nominal:g} mm")
-    if search is None and sp.value is not None:
-        search = profile.search_band(sp.value)
-        taken.append(f"search band {fmt_band(search)} (0.8-1.25 x speed / nominal pitch)")
-    if teeth_ is None:
-        teeth_ = profile.teeth
-        taken.append(f"{teeth_} sprocket teeth")
-    if taken:
-        note = f"note: from the profile {profile.source}: {'; '.join(taken)}"
-        msg(textwrap.fill(note, 100, subsequent_indent="  ", break_on_hyphens=False))
-    return nominal, search, teeth_
+def speed_source(sp):
+    """Where the speed came from, as the result names it: ``--speed`` for the flag."""
+    return "--speed" if sp.source == "given" else sp.source
 
 
 def run(a):
@@ -115,24 +85,23 @@ def run(a):
 
     rec = read_recording(a)
     profile = escalator_profile(a)
-    n_links = chain_links(a, profile)  # before the profile's note: a contradiction is the one line
-    sp = resolve_speed(a, rec, profile=profile)
-    source = "--speed" if sp.source == "given" else sp.source
-    nominal, search, teeth_ = from_profile(a, profile, sp, rec)
+    settings = run_settings(a, rec, profile)  # a --links the profile contradicts: the one line said
+    sp = require_speed(a, settings)
+    profile_note(settings, profile)
     try:
         res = estimate_channels(
             rec,
             channel=a.channel,
             speed=sp.value,
             speed_sigma=sp.sigma,
-            band=search,
-            nominal_pitch=nominal,
-            limits_percent=a.limits,
-            teeth=teeth_,
-            n_links=n_links,
-            links_per_step=chain_numbers(profile=profile, recording=rec)[1],
-            on_step=on_step(profile),
-            speed_source=source,
+            band=settings.band,
+            nominal_pitch=settings.nominal_pitch,
+            limits_percent=settings.limits,
+            teeth=settings.teeth,
+            n_links=settings.n_links,
+            links_per_step=settings.links_per_step,
+            sensors=settings.sensors_by_channel,
+            speed_source=speed_source(sp),
         )
     except ValueError as exc:  # the analysis's words about the signal, with the file named
         raise in_file(a.recording, exc) from None

@@ -19,10 +19,10 @@ from .options import (
     escalator_profile,
     positive,
     reader_options,
-    run_speed,
     segment_of,
 )
 from .output import STDIO, CLIError, msg, print_json, table
+from .settings import run_settings
 
 EPILOG = (
     "examples:\n  vibkit ride data/field/layouts/phyphox.csv --segment 0.5:3 --json\n"
@@ -190,7 +190,8 @@ def run(a):
             read_options=reader_options(a),
             level_walk=_level_walk(escalator_profile(a)),
         )
-        sp = run_speed(a)  # --speed, else the escalator profile's: the run's one speed replaces the file's
+        # --speed, else the escalator profile's: the run's one speed replaces the file's
+        sp = run_settings(a, None, escalator_profile(a), notes=False).speed
         if sp.value is not None:
             rq = dataclasses.replace(rq, speed_m_s=sp.value)
     sim = None

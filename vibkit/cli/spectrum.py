@@ -5,7 +5,6 @@ from __future__ import annotations
 import textwrap
 
 from vibkit.diagnose.rounding import fmt_band, fmt_pm
-from vibkit.diagnose.settings import chain_numbers
 
 from .options import (
     CHANNEL_EVERY,
@@ -18,23 +17,20 @@ from .options import (
     add_recording,
     add_speed_uncertainty,
     band,
-    chain_links,
     escalator_profile,
     harmonics,
-    on_step,
     read_recording,
 )
 from .output import in_file, msg, print_json, shown, table
 from .pitch import (
     add_speed_options,
-    file_chain,
-    from_profile,
     print_channels,
     print_pitch,
     refused,
-    resolve_speed,
+    speed_source,
     speed_text,
 )
+from .settings import profile_note, run_settings
 
 EPILOG = (
     "example:\n  vibkit spectrum data/field/leon-tensioner.csv --band 2.5:6 --json\n"
@@ -114,27 +110,27 @@ def run(a):
 
     rec = read_recording(a)
     profile = escalator_profile(a)
-    n_links = chain_links(a, profile)  # before the profile's note: a contradiction is the one line
-    sp = resolve_speed(a, rec, required=False, profile=profile)
-    speed, source = sp.value, ("--speed" if sp.source == "given" else sp.source or None)
-    # with a speed the same analysis as `vibkit pitch` (its speed and sigma, nominal pitch, band, teeth)
-    nominal, search, teeth_ = (
-        from_profile(a, profile, sp, rec) if speed else (None, a.band or (2.5, 6.0), file_chain(rec)[0])
-    )
+    # with a speed the same settings as `vibkit pitch` (its speed and sigma, nominal pitch, band, teeth); without
+    # one the band of a step chain's link pass
+    settings = run_settings(a, rec, profile, frequency_only_band=True)  # a contradiction: the one line said
+    sp = settings.speed
+    speed, source = sp.value, (speed_source(sp) if sp.value is not None else None)
+    if speed:
+        profile_note(settings, profile)
     try:
         res = estimate_channels(
             rec,
             channel=a.channel,
             speed=speed or 1.0,
             speed_sigma=sp.sigma if speed else None,
-            band=search,
+            band=settings.band,
             n_harmonics=a.harmonics,
-            nominal_pitch=nominal if speed else None,
-            limits_percent=a.limits,
-            teeth=teeth_,
-            n_links=n_links,
-            links_per_step=chain_numbers(profile=profile, recording=rec)[1],
-            on_step=on_step(profile),
+            nominal_pitch=settings.nominal_pitch if speed else None,
+            limits_percent=settings.limits,
+            teeth=settings.teeth,
+            n_links=settings.n_links,
+            links_per_step=settings.links_per_step,
+            sensors=settings.sensors_by_channel,
             speed_source=source or "none",
             frequency_only=speed is None,
         )

@@ -160,8 +160,11 @@ class ChannelsResult:
         return rows
 
 
-def estimate_channels(recording, *, channel=None, **kwargs) -> ChannelsResult:
+def estimate_channels(recording, *, channel=None, sensors=None, **kwargs) -> ChannelsResult:
     """:func:`estimate_pitch` on ``channel``, or on every :func:`decision_channels` one, combined.
+
+    ``sensors`` (channel -> :class:`vibkit.diagnose.sensors.ChannelSensor`, as a run's settings resolve them) gives
+    each channel its own sensor; a channel not in it has the one its quantity says.
 
     Raises
     ------
@@ -175,7 +178,8 @@ def estimate_channels(recording, *, channel=None, **kwargs) -> ChannelsResult:
     ests, errors = [], {}
     for name in names:
         try:
-            ests.append(estimate_pitch(own_samples(recording, name), channel=name, **kwargs))
+            sensor = (sensors or {}).get(name)
+            ests.append(estimate_pitch(own_samples(recording, name), channel=name, sensor=sensor, **kwargs))
         except ValueError as exc:
             if channel is not None or len(names) == 1:
                 raise

@@ -32,10 +32,13 @@ from .channels import counted_part, estimate_channels
 from .html import result_table_html
 from .pitch import DEFAULT_PITCH_RANGE_M, pick_channel
 from .rounding import fmt_interval, fmt_pm
+from .settings import resolve_settings
 from .speed import speed_from_recording
 
 if TYPE_CHECKING:  # for the annotations only
     import xarray as xr
+
+    from ..model.profile import Profile
 
 __all__ = [
     "Comparison",
@@ -350,6 +353,7 @@ def compare(
     progress: bool = False,
     speed: float | None = None,
     speed_sigma: float | None = None,
+    profile: Profile | None = None,
 ) -> Comparison:
     """Compare a recording with a simulation in the order domain.
 
@@ -382,6 +386,9 @@ def compare(
     speed_sigma : float, optional
         Its standard deviation [m/s]; it widens ``pitch_ratio_sigma``. None: not stated (the ratio's
         sigma is then the frequencies' part only, and a note says so).
+    profile : vibkit.model.profile.Profile, optional
+        The unit's escalator profile: the recording's link pass is decided with its sprocket's teeth, links per
+        step, number of links and sensors, as ``vibkit pitch`` decides it (:func:`vibkit.diagnose.settings.resolve_settings`).
 
     Returns
     -------
@@ -415,6 +422,7 @@ def compare(
         progress=progress,
         speed=speed,
         speed_sigma=speed_sigma,
+        profile=profile,
     )
 
 
@@ -434,6 +442,7 @@ def _compare(
     progress,
     speed,
     speed_sigma,
+    profile,
 ):
     # the body of compare(): its parameters are rebound (a path becomes a Dataset), which the public
     # signature's annotations would not allow
@@ -443,6 +452,9 @@ def _compare(
         raise ValueError(f"pitch_tolerance must be >= 0 (relative), got {pitch_tolerance!r}")
     if isinstance(recording, (str, os.PathLike)):
         recording = read_recording(recording)
+    # the chain's numbers and each channel's sensor as every command resolves them (vibkit.diagnose.settings); the
+    # band and the speed of the comparison are its own (both sides' speeds), decided below
+    settings = resolve_settings(recording, speed=speed, speed_sigma=speed_sigma, profile=profile)
     result = as_result(result, duration=duration, progress=progress)
     # a simulation from rest, on either side, read where it counted its speed: after its start-up
     recording, cut_rec = counted_part(recording)
@@ -494,6 +506,10 @@ def _compare(
         band=band,
         n_harmonics=n_harmonics,
         frequency_only=not v_meas > 0,
+        teeth=settings.teeth,
+        links_per_step=settings.links_per_step,
+        n_links=settings.n_links,
+        sensors=settings.sensors_by_channel,
     )
     if decided.best is None:
         raise NothingToCompare(

@@ -24,6 +24,7 @@ from ..analyses.simulation import simulate
 from ..model.scene import load_scene
 from ..runtime.user_cache import load_blob, private_folder, private_temp_folder, read_checked, store_blob, write_atomic
 from ..signal.linkmap import canonical_phase, link_map, link_pass_phase
+from .sensors import SIGNATURES
 
 __all__ = [
     "DIRECTIONS",
@@ -44,7 +45,7 @@ SAMPLES_PER_CYCLE = 16
 #: loops (after one of settling) that the signature's runs average over
 SIGNATURE_LOOPS = 2
 #: the sensors the model gives a signature for: sensor -> the simulation's output
-SENSORS = {"tensioner": "delta"}
+SENSORS = SIGNATURES  # sensor kind -> the model output its signature is (vibkit.diagnose.sensors)
 
 
 def link_phase(x, fs, f_lp):

@@ -27,6 +27,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..io.text.units import parse_unit
 from ..model.scene import load_scene
 from ..signal import find_fundamental
 from ..signal.linkmap import (
@@ -49,7 +50,7 @@ from .link_signature import (
     signature_error,
     worn_link_signature,
 )
-from .sensors import is_tensioner_channel  # noqa: F401 (re-exported: its home is vibkit.diagnose.sensors)
+from .sensors import channel_sensor, is_acceleration_channel, is_tensioner_channel
 
 __all__ = [
     "DEFAULT_FALSE_ALARM",
@@ -82,8 +83,6 @@ REFIT_ABOVE = 1.25
 #: over about half the sprocket's teeth of link passes, twice a loop (on the sprocket and on the lower head),
 #: so each link's own cycle test flags dozens of neighbours; no number is then given
 MAX_OWN_CYCLE_FLAGS = 3
-#: units of a step accelerometer's channel (refused: see ``STEP_REFUSAL``)
-ACCELERATION_UNITS = ("m/s^2", "m/s2", "m s-2", "mm/s^2", "g")
 #: why a step accelerometer gives no link number (measured on the no-load scene, 0.5 m/s, exact closure:
 #: benchmarks/bench_links_step.py)
 STEP_REFUSAL = (
@@ -171,14 +170,14 @@ class LinksResult:
         }
 
 
-def links_channel(recording, channel=None):
-    """The channel :func:`find_worn_links` reads: ``channel``, else the first in a length unit (a tensioner
-    displacement), else the first vibration channel."""
+def links_channel(recording, channel=None, profile=None):
+    """The channel :func:`find_worn_links` reads: ``channel``, else the first that is the tensioner's displacement
+    (:func:`vibkit.diagnose.sensors.channel_sensor`, with the profile's sensors), else the first vibration channel."""
     chans = vibration_channels(recording)
     if channel is not None:
         return str(channel)
     for c in chans:
-        if str(recording[c].attrs.get("units", "")) in ("m", "mm", "um"):
+        if is_tensioner_channel(recording, c, profile):
             return c
     if not chans:
         along = [str(v) for v in recording.data_vars if recording[v].dims == ("time",) and v != "segment"]
@@ -244,6 +243,7 @@ def find_worn_links(
     file="<recording>",
     nominal_pitch=None,
     direction=None,
+    profile=None,
 ):
     """The links of a chain whose pitch departs from the others', from a tensioner recording.
 
@@ -280,6 +280,9 @@ def find_worn_links(
         With a scene: the way the chain ran while recorded (default: the scene's own, :func:`scene_direction`).
         The signature is simulated running that way; a down-running chain numbered with an up-running signature
         gets a wrong number.
+    profile : vibkit.model.profile.Profile, optional
+        The escalator's profile: its sensors say which channel is the tensioner's
+        (:func:`vibkit.diagnose.sensors.channel_sensor`; without it the channel's quantity says).
 
     Returns
     -------
@@ -293,10 +296,12 @@ def find_worn_links(
         A bad channel, no link pass found; an acceleration channel (a step accelerometer: its signal is its own trip
         round the loop, which only a model could subtract, ``STEP_REFUSAL``).
     """
-    ch = links_channel(recording, channel)
+    ch = links_channel(recording, channel, profile)
     if ch not in recording.data_vars:
         raise ValueError(f"no channel {ch!r} (channels: {', '.join(map(str, recording.data_vars))})")
-    if is_step_channel(recording, ch):
+    sensor = channel_sensor(recording, ch, profile)
+    sensor_name = "tensioner" if sensor.is_tensioner else "other"  # the result's word for it
+    if is_step_channel(recording, ch, profile):
         raise ValueError(f"channel {ch} (units {recording[ch].attrs['units']}): {STEP_REFUSAL}")
     n = int(n_links)
     if n < 2:
@@ -328,9 +333,8 @@ def find_worn_links(
     if span * f_lp < MIN_LOOPS * n:
         _too_few_loops(ch, span, n, f_lp)
     notes = []
-    sensor = "tensioner" if str(da.attrs.get("units", "")) in ("m", "mm", "um") else "other"
     if scene is not None:
-        if sensor != "tensioner":
+        if sensor.signature is None:
             units = str(da.attrs.get("units", "") or "unknown")
             hint = (
                 "; if it is one, give its unit (--units mm)"
@@ -354,16 +358,18 @@ def find_worn_links(
         direction = scene_direction(load_scene(scene)) if direction is None else direction
         if direction not in DIRECTIONS:
             raise ValueError(f"direction {direction!r}: expected one of {', '.join(DIRECTIONS)}")
-    offset = 0.0 if scene is None else link_offset(scene, sensor="tensioner", speed=speed, fs=fs, direction=direction)
+    offset = 0.0 if scene is None else link_offset(scene, sensor=sensor.kind, speed=speed, fs=fs, direction=direction)
     lmap = link_map(
         x, fs, link_phase(x, fs, f_lp), n, samples_per_cycle=SAMPLES_PER_CYCLE, marker_s=marker_s, link_offset=offset
     )
     if scene is not None:
         _check_healthy(scene)
-        sig, n_scene = worn_link_signature(scene, sensor="tensioner", speed=speed, fs=fs, direction=direction)
+        sig, n_scene = worn_link_signature(scene, sensor=sensor.kind, speed=speed, fs=fs, direction=direction)
         if n_scene != n:
             raise ValueError(f"--links {n}: the scene {scene} has {n_scene} links")
-        fit = functools.partial(_signature_scan, lmap, scene, speed, fs, units_scale(da), false_alarm, direction)
+        fit = functools.partial(
+            _signature_scan, lmap, scene, sensor.kind, speed, fs, units_scale(da), false_alarm, direction
+        )
         scan, err = fit(SIGNATURE_EXCESS_M)
         used = SIGNATURE_EXCESS_M
         top = max(scan.flagged, key=lambda f: f.t, default=None)
@@ -421,7 +427,7 @@ def find_worn_links(
                 f"this chain has about {n + drift} links: check --links (or the profile's chain.n_links); no link "
                 "number"
             )
-            return _result(file, ch, sensor, speed, lmap, n, [], scan, excess, method, marker_s, notes,
+            return _result(file, ch, sensor_name, speed, lmap, n, [], scan, excess, method, marker_s, notes,
                            status="inconclusive", reason=reason, direction=direction)  # fmt: skip
     else:
         scan = scan_links(lmap, false_alarm=false_alarm)
@@ -454,9 +460,9 @@ def find_worn_links(
                 "moves the tensioner over the links that follow it), not a link number; give the escalator's "
                 "scene (--scene or --escalator) so that the worn link's signature is fitted"
             )
-            return _result(file, ch, sensor, speed, lmap, n, [], scan, excess, method, marker_s, notes,
+            return _result(file, ch, sensor_name, speed, lmap, n, [], scan, excess, method, marker_s, notes,
                            status="inconclusive", reason=reason, direction=direction)  # fmt: skip
-    return _result(file, ch, sensor, speed, lmap, n, flagged, scan, excess, method, marker_s, notes,
+    return _result(file, ch, sensor_name, speed, lmap, n, flagged, scan, excess, method, marker_s, notes,
                    direction=direction)  # fmt: skip
 
 
@@ -557,10 +563,10 @@ def _check_rate(file, fs, speed, band):
     )
 
 
-def _signature_scan(lmap, scene, speed, fs, metres_per_unit, false_alarm, direction, excess):
+def _signature_scan(lmap, scene, kind, speed, fs, metres_per_unit, false_alarm, direction, excess):
     """The scan of ``lmap`` with the signature of a link ``excess`` [m] longer, and the signature's relative error."""
-    sig, _ = worn_link_signature(scene, sensor="tensioner", speed=speed, fs=fs, excess=excess, direction=direction)
-    err = signature_error(scene, sensor="tensioner", speed=speed, fs=fs, excess=excess, direction=direction)
+    sig, _ = worn_link_signature(scene, sensor=kind, speed=speed, fs=fs, excess=excess, direction=direction)
+    err = signature_error(scene, sensor=kind, speed=speed, fs=fs, excess=excess, direction=direction)
     scan = scan_links(lmap, signature=sig / metres_per_unit, scale=excess, false_alarm=false_alarm, signature_error=err)
     return scan, err
 
@@ -588,11 +594,13 @@ def _result(file, ch, sensor, speed, lmap, n, flagged, scan, excess, method, mar
     )
 
 
-def is_step_channel(recording, channel):
-    """Whether ``channel`` is an acceleration (a step accelerometer): refused, see ``STEP_REFUSAL``."""
-    return str(recording[channel].attrs.get("units", "")) in ACCELERATION_UNITS
+def is_step_channel(recording, channel, profile=None):
+    """Whether ``channel`` is an acceleration (a step accelerometer) or a sensor the profile puts on a step:
+    refused, see ``STEP_REFUSAL``."""
+    return is_acceleration_channel(recording, channel) or channel_sensor(recording, channel, profile).rides_step
 
 
 def units_scale(da):
-    """Metres per unit of a length channel (the signature is in metres)."""
-    return {"m": 1.0, "mm": 1e-3, "um": 1e-6}.get(str(da.attrs.get("units", "m")), 1.0)
+    """Metres per unit of a length channel (the signature is in metres): its unit's factor to SI, 1 for any other."""
+    unit = parse_unit(str(da.attrs.get("units", "m")))
+    return unit.factor if unit is not None and unit.quantity == "displacement" else 1.0

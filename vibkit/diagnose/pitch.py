@@ -48,7 +48,7 @@ from .html import result_table_html
 from .pitch_parts import check_parts
 from .pitch_steps import Hypothesis
 from .rounding import SPEED_SIGMA_NOT_STATED, fmt_pm
-from .sensors import is_tensioner_channel
+from .sensors import ChannelSensor, channel_sensor
 from .settings import DEFAULT_LINKS_PER_STEP, DEFAULT_TEETH
 
 if TYPE_CHECKING:  # for the annotations only
@@ -270,6 +270,7 @@ def estimate_pitch(
     n_links: int | None = None,
     links_per_step: int = DEFAULT_LINKS_PER_STEP,
     on_step: bool | None = None,
+    sensor: ChannelSensor | None = None,
 ) -> PitchEstimate:
     """Link pitch from a recording's link-pass frequency and an independently measured speed.
 
@@ -312,7 +313,11 @@ def estimate_pitch(
     on_step : bool, optional
         The sensor rides a step (an escalator profile's ``sensor.kind = "step"``); default: a channel named
         ``accel_step`` (vibkit's simulated step).  Its link pass can read up to about 1 % off the chain's,
-        more than its sigma says (:data:`STEP_WARNING`): the result warns.
+        more than its sigma says (:data:`STEP_WARNING`): the result warns.  Given, it overrides ``sensor``'s.
+    sensor : vibkit.diagnose.sensors.ChannelSensor, optional
+        The channel's sensor (:func:`vibkit.diagnose.sensors.channel_sensor`, with the escalator profile's sensors);
+        default: the channel's own (its quantity; vibkit's simulated ``accel_step`` rides a step).  Whether it rides
+        a step gives the warning above; whether it is the tensioner's displacement, the parts check with ``n_links``.
     p_fa : float
         False-alarm probability of the detection test run first
         (:func:`vibkit.signal.detect.detect_link_pass`): without a harmonic family in the band the
@@ -356,6 +361,8 @@ def estimate_pitch(
     if isinstance(links_per_step, bool) or not isinstance(links_per_step, (int, np.integer)) or links_per_step < 1:
         raise ValueError(f"links_per_step must be a positive integer, got {links_per_step!r}")
     name = pick_channel(recording, channel)
+    if sensor is None or sensor.channel != name:
+        sensor = channel_sensor(recording, name)
     prep = steps.prepare_bursts(recording, name, req.band)
     common = _common(recording, name, req, prep, speed_source)
     det = steps.detect(prep, band=req.band, n_harmonics=n_harmonics, p_fa=p_fa, name=name)
@@ -365,7 +372,7 @@ def estimate_pitch(
     ests, skipped = steps.estimate_bursts(prep, name=name, band=req.band, n_harmonics=n_harmonics)
     ests = steps.choose_methods(ests)
     comb = steps.combine(ests, name=name)
-    parts, sigma = check_parts(ests, comb, n_links=_loop_links(recording, name, n_links))
+    parts, sigma = check_parts(ests, comb, n_links=_loop_links(sensor, n_links))
     comb = replace(comb, sigma=sigma)
     jitter_warnings, jitter_notes = steps.jitter_effect(recording, name, ests, req.band, n_harmonics)
     # a widened sigma is a note: the uncertainty stated is then the honest one; a wander too large for a
@@ -376,7 +383,7 @@ def estimate_pitch(
             warnings.append(w)
     pitch, psig, caveats, notes = steps.pitch_from(comb, req)
     warnings += caveats
-    if on_step if on_step is not None else name == "accel_step":
+    if on_step if on_step is not None else sensor.rides_step:
         warnings.append(STEP_WARNING)
     notes.append(f"parts check: {parts.reason}")
     notes = jitter_notes + parts.warnings + notes
@@ -388,7 +395,7 @@ def estimate_pitch(
         return _refusal(common, det, dec, [dec.reason, *warnings], notes, comb.method, comb.method_reason)
     if dec.status == STATUS_INCONCLUSIVE:
         warnings.insert(0, f"inconclusive: {dec.reason}")
-        if not dec.checks.get("steady between parts", True) and not n_links and _loop_links(recording, name, 2):
+        if not dec.checks.get("steady between parts", True) and not n_links and _loop_links(sensor, 2):
             notes.append(
                 "a worn link's once-a-loop pattern moves the parts' frequency as a wander does: with the chain's "
                 "number of links (--links N, or a profile with chain.n_links) a tensioner record over two loops "
@@ -413,12 +420,12 @@ def estimate_pitch(
     return PitchEstimate(**res, **_numbers(ests, comb, req, pitch, psig, dec))
 
 
-def _loop_links(recording, name, n_links):
+def _loop_links(sensor: ChannelSensor, n_links):
     """The number of links the parts check aligns its parts with: ``n_links`` on a displacement (the tensioner,
     a fixed sensor) only.  A sensor riding a step reads the link pass low where it goes round the heads, the same
     way every loop (0.5 % on the shipped scene, every place of the loop low): parts aligned with the loops would
     take that for the chain's own pattern, and give a verdict on it."""
-    return n_links if n_links and is_tensioner_channel(recording, name) else None
+    return n_links if n_links and sensor.is_tensioner else None
 
 
 def _part_summary(parts):

@@ -56,6 +56,7 @@ def link_scan_of(
     marker_s=None,
     no_count=NO_LINK_COUNT,
     nominal_pitch=None,
+    profile=None,
 ) -> LinkScan:
     """The :class:`~vibkit.fleet.links.LinkScan` of one recording (never raises).
 
@@ -78,12 +79,14 @@ def link_scan_of(
         The reason stored when ``n_links`` is None (which options would give it).
     nominal_pitch : float, optional
         The unit's nominal pitch [m]: a link pass that gives no chain's pitch is a failed scan.
+    profile : vibkit.model.profile.Profile, optional
+        The unit's profile: its sensors say which channel is the tensioner's (:mod:`vibkit.diagnose.sensors`).
     """
     if n_links is None:
         # a step's sensor is refused whatever the count: that, not the count, is what the reason says
         try:
-            ch = links_channel(recording, channel)
-            if ch in recording and is_step_channel(recording, ch):
+            ch = links_channel(recording, channel, profile)
+            if ch in recording and is_step_channel(recording, ch, profile):
                 return LinkScan.not_run(f"channel {ch}: {STEP_REFUSAL}", marker_s=marker_s)
         except ValueError:
             pass
@@ -91,10 +94,12 @@ def link_scan_of(
 
     keep = {"n_links": int(n_links), "marker_s": marker_s}
     try:
-        ch = links_channel(recording, channel)
-        if ch in recording and is_step_channel(recording, ch):
+        ch = links_channel(recording, channel, profile)
+        if ch in recording and is_step_channel(recording, ch, profile):
             return LinkScan.not_run(f"channel {ch}: {STEP_REFUSAL}", **keep)
-        use_scene = scene if scene is not None and ch in recording and is_tensioner_channel(recording, ch) else None
+        use_scene = (
+            scene if scene is not None and ch in recording and is_tensioner_channel(recording, ch, profile) else None
+        )
         res = find_worn_links(
             recording,
             speed=speed,
@@ -104,6 +109,7 @@ def link_scan_of(
             marker_s=marker_s,
             file=path,
             nominal_pitch=nominal_pitch,
+            profile=profile,
         )
     except TooFewLoops as exc:
         return LinkScan("too few loops", reason=_one_line(exc), **keep)
@@ -149,7 +155,7 @@ def measure_with_links(
                 f"{path}: marker_s={float(marker_s):g} must lie within the recording, 0 to {float(t[-1]):.6g} s (the "
                 "time the marked link passed the sensor); nothing stored"
             )
-    m = analyse_recording(path, recording=rec, n_links=n_links, **analysis)
+    m = analyse_recording(path, recording=rec, n_links=n_links, segment=segment, **analysis)
     scan = link_scan_of(
         rec,
         path=path,
@@ -160,6 +166,7 @@ def measure_with_links(
         marker_s=marker_s,
         no_count=no_count,
         nominal_pitch=analysis.get("nominal_pitch"),
+        profile=analysis.get("profile"),
     )
     return m, scan
 

@@ -10,7 +10,7 @@ from dataclasses import asdict, dataclass
 
 import vibkit
 from vibkit.diagnose.channels import estimate_channels
-from vibkit.diagnose.settings import chain_numbers
+from vibkit.diagnose.settings import resolve_settings
 from vibkit.io import read_recording
 
 from .dates import _iso, parse_date
@@ -111,6 +111,7 @@ def analyse_recording(
     recording=None,
     n_links=None,
     profile=None,
+    segment=None,
 ):
     """Read and analyse one recording; the :class:`Measurement` it gives (not stored, ``id`` None).
 
@@ -135,9 +136,9 @@ def analyse_recording(
         Links in the chain: a worn link's once-per-loop pattern is then not read as a wander
         (:func:`vibkit.diagnose.pitch.estimate_pitch`).
     profile : vibkit.model.profile.Profile, optional
-        The unit's escalator profile: its sprocket's teeth and links per step are the analysis's, as ``vibkit
-        pitch --escalator`` takes them (:func:`vibkit.diagnose.settings.chain_numbers`; without one, those the
-        recording states, else 28 and 3).
+        The unit's escalator profile: its sprocket's teeth, links per step, search band around its link pass and
+        sensors are the analysis's, as ``vibkit pitch --escalator`` takes them
+        (:func:`vibkit.diagnose.settings.resolve_settings`; without one, those the recording states, else 28 and 3).
     replaced : bool
         The chain was replaced since the unit's previous measurement (a new trend segment starts).
     date_source : str
@@ -145,6 +146,9 @@ def analyse_recording(
     recording : xarray.Dataset, optional
         The file already read by :func:`vibkit.read_recording` (with ``read_options`` and ``channel``): it is not
         read again.
+    segment : (float, float), optional
+        The part of the file ``recording`` is [s] (:func:`vibkit.fleet.link_scan.measure_with_links` cuts it): the
+        run's settings record it.
 
     The measurement carries its quality flag (:func:`vibkit.fleet.quality.measurement_quality`):
     implausible and inconclusive ones are stored flagged and left out of trends.
@@ -180,18 +184,29 @@ def analyse_recording(
                 f"{spath}: {exc}; give the measurement date (--date, or the catalogue's date column)"
             ) from None
         source = "recording start time"
-    # the sprocket's teeth and the links per step as every command resolves them: the profile's, else the file's
-    teeth, links_per_step = chain_numbers(profile=profile, recording=rec)
     try:  # every vibration channel (or the one asked for), as `vibkit pitch` decides; a sigma of 0 is "not stated"
-        res = estimate_channels(
+        # the run's settings as every command resolves them (the profile's teeth, links per step, band, sensors)
+        settings = resolve_settings(
             rec,
             speed=speed,
             speed_sigma=speed_sigma or None,
-            channel=channel,
             nominal_pitch=nominal_pitch,
             n_links=n_links,
-            teeth=teeth,
-            links_per_step=links_per_step,
+            profile=profile,
+            segment=segment,
+        )
+        res = estimate_channels(
+            rec,
+            speed=settings.speed.value,
+            speed_sigma=settings.speed.sigma,
+            channel=channel,
+            band=settings.band,
+            nominal_pitch=settings.nominal_pitch,
+            limits_percent=settings.limits,
+            n_links=settings.n_links,
+            teeth=settings.teeth,
+            links_per_step=settings.links_per_step,
+            sensors=settings.sensors_by_channel,
         )
     except ValueError as exc:
         raise FleetError(f"{spath}: {' '.join(str(exc).split())}") from None

@@ -28,6 +28,7 @@ import os
 import stat
 from typing import TYPE_CHECKING
 
+from ..runtime.reader_options import READER_OPTIONS, ReaderOptionError, either
 from .channels import resolve_channel
 from .errors import RecordingError
 from .limits import _MAX_ENV, DEFAULT_MAX_RECORDING_BYTES, _gib, max_recording_bytes
@@ -123,7 +124,7 @@ def _open_checked(spath: str, limit: int):
             spath,
             None,
             f"is {_gib(st.st_size)}, larger than the {_gib(limit)} limit for a "
-            f"recording (raise it with max_bytes= or the environment variable {_MAX_ENV})",
+            f"recording (raise it with {either('max_bytes', f'the environment variable {_MAX_ENV}')})",
         )
     try:
         fd = os.open(spath, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_NOCTTY", 0))
@@ -146,7 +147,7 @@ def _open_checked(spath: str, limit: int):
             spath,
             None,
             f"holds more than the {_gib(limit)} limit for a recording "
-            f"(raise it with max_bytes= or the environment variable {_MAX_ENV})",
+            f"(raise it with {either('max_bytes', f'the environment variable {_MAX_ENV}')})",
         )
     return data
 
@@ -158,21 +159,27 @@ def _check_options(sample_rate, resample, gap_factor, delimiter, decimal, date_o
         except (TypeError, ValueError):
             fs = math.nan
         if not (math.isfinite(fs) and fs > 0):
-            raise ValueError(f"sample_rate must be a positive number of Hz, got {sample_rate!r}")
+            raise ReaderOptionError("sample_rate", f"sample_rate must be a positive number of Hz, got {sample_rate!r}")
     if resample not in (None, "linear"):
-        raise ValueError(f"resample must be None (keep the samples as they are) or 'linear', got {resample!r}")
+        raise ReaderOptionError(
+            "resample", f"resample must be None (keep the samples as they are) or 'linear', got {resample!r}"
+        )
     try:
         gf = float(gap_factor)
     except (TypeError, ValueError):
         gf = math.nan
     if not (math.isfinite(gf) and gf > 1):
-        raise ValueError(f"gap_factor must be a number of sample periods > 1, got {gap_factor!r}")
+        raise ReaderOptionError("gap_factor", f"gap_factor must be a number of sample periods > 1, got {gap_factor!r}")
     if delimiter is not None and delimiter not in (",", ";", "\t", "|", " "):
-        raise ValueError(f"delimiter must be one of ',', ';', '\\t', '|', ' ' (whitespace), got {delimiter!r}")
+        raise ReaderOptionError(
+            "delimiter", f"delimiter must be one of ',', ';', '\\t', '|', ' ' (whitespace), got {delimiter!r}"
+        )
     if decimal is not None and decimal not in (".", ","):
-        raise ValueError(f"decimal must be '.' or ',', got {decimal!r}")
+        raise ReaderOptionError("decimal", f"decimal must be '.' or ',', got {decimal!r}")
     if date_order is not None and date_order not in ("dmy", "mdy"):
-        raise ValueError(f"date_order must be 'dmy' (day/month/year) or 'mdy' (month/day/year), got {date_order!r}")
+        raise ReaderOptionError(
+            "date_order", f"date_order must be 'dmy' (day/month/year) or 'mdy' (month/day/year), got {date_order!r}"
+        )
 
 
 #: the path that names standard input (``vibkit pitch -``); its records name it :data:`STDIN_NAME`
@@ -213,7 +220,7 @@ def _read_stdin(fmt, limit, options):
             STDIN_NAME,
             None,
             f"holds more than the {_gib(limit)} limit for a recording "
-            f"(raise it with max_bytes= or the environment variable {_MAX_ENV})",
+            f"(raise it with {either('max_bytes', f'the environment variable {_MAX_ENV}')})",
         )
     if not data:
         raise RecordingError(STDIN_NAME, None, "is empty (0 bytes); expected a recording")
@@ -345,20 +352,9 @@ def read_recording(
     fmt = None if format is None else get_format(format)
     if not isinstance(path, (str, os.PathLike)):
         raise ValueError(f"path must be a file path (str or os.PathLike), got {type(path).__name__}")
-    options = dict(
-        channel=channel,
-        sample_rate=sample_rate,
-        time_column=time_column,
-        time_unit=time_unit,
-        units=units,
-        resample=resample,
-        gap_factor=gap_factor,
-        repair_time=repair_time,
-        delimiter=delimiter,
-        decimal=decimal,
-        encoding=encoding,
-        date_order=date_order,
-    )
+    given = locals()
+    # the readers' options, as vibkit.io.reader_options declares them (max_bytes and format are this function's)
+    options = {o.name: given[o.name] for o in READER_OPTIONS if o.scope != "open"}
     spath = os.fspath(path)
     if spath == STDIN:
         return _read_stdin(fmt, max_recording_bytes(max_bytes), options)

@@ -18,6 +18,8 @@ import re
 
 import numpy as np
 
+from ..runtime.reader_options import spell
+
 __all__ = [
     "resolve_channel",
     "with_component",
@@ -177,7 +179,7 @@ def resolve_channel(recording, channel=None) -> str:
                 return n
         raise ValueError(
             f"{where}the only channel(s) {', '.join(repr(n) for n in names)} count samples "
-            "(index, sample number); name one with channel= to analyse it anyway"
+            f"(index, sample number); name one with {spell('channel')} to analyse it anyway"
         )
     want = _norm(channel)
     for keys in (("__name__",), ("source_name", "column", "trace_id"), ("channel_code",), ("long_name",)):

@@ -27,6 +27,7 @@ from datetime import datetime, timezone
 
 import numpy as np
 
+from ..runtime.reader_options import spell
 from .errors import RecordingError
 from .limits import max_recording_bytes
 from .phone import is_phone_export, read_phone_export
@@ -418,7 +419,7 @@ def _keep_channels(path, channels, channel):
             raise RecordingError(
                 path,
                 None,
-                f"no channel {w!r} (channel=); channels: " + ", ".join(c.long_name for c in channels),
+                f"no channel {w!r} ({spell('channel')}); channels: " + ", ".join(c.long_name for c in channels),
             )
         keep += hit
     return keep

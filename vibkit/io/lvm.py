@@ -26,6 +26,7 @@ from datetime import datetime
 
 import numpy as np
 
+from ..runtime.reader_options import spell
 from .errors import RecordingError
 from .recording import Channel, build_recording, safe_name, unique_names
 from .text.units import parse_unit
@@ -159,7 +160,7 @@ def _assemble(path, data, head, dec, xcols, multi, segments, history, options):
         sel = [k for k in keep if k[1].lower() in wl or safe_name(k[1], "").lower() in wl]
         if len(sel) < len(wl):
             raise RecordingError(
-                path, None, f"no channel {want!r} (channel=); channels: " + ", ".join(k[1] for k in keep)
+                path, None, f"no channel {want!r} ({spell('channel')}); channels: " + ", ".join(k[1] for k in keep)
             )
         keep = sel
     fs = _rate(keep[0][3].get("Delta_X", ""), ref, history)

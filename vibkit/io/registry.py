@@ -65,6 +65,7 @@ import os
 from dataclasses import dataclass
 from typing import Any, Callable
 
+from ..runtime.reader_options import options_of
 from . import devices
 from .lvm import read_lvm, sniff_lvm
 from .netcdf import read_netcdf
@@ -176,8 +177,9 @@ def _read_netcdf(path, data, options):
     return read_netcdf(path, data, channel=options["channel"], repair_time=options["repair_time"])
 
 
-_COMMON = ("channel", "sample_rate", "resample", "gap_factor", "repair_time")
-_TEXT_OPTIONS = (*_COMMON, "time_column", "time_unit", "units", "delimiter", "decimal", "encoding", "date_order")
+#: the options every reader takes, and the text reader's (declared once: vibkit.io.reader_options)
+_COMMON = options_of("all")
+_TEXT_OPTIONS = options_of("text")
 
 
 def _read_seismic(path, data, options):

@@ -23,6 +23,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..runtime.reader_options import spell
 from .errors import RecordingError
 from .recording import Channel, build_recording, metadata_attrs, safe_name, unique_names
 from .text.units import parse_unit
@@ -162,7 +163,9 @@ def pick_arrays(path, arrays, *, what, rate=None, rate_source="", given_rate=Non
         data = [a for a in data if any(_names_array(a.name, w) for w in wanted)] or data
     if len(times) > 1:
         raise RecordingError(
-            path, None, f"several time vectors ({', '.join(n for n, _ in times)}); expected one, or read with channel="
+            path,
+            None,
+            f"several time vectors ({', '.join(n for n, _ in times)}); expected one, or read with {spell('channel')}",
         )
     time = times[0][1] if times else None
     fs = None
@@ -177,13 +180,15 @@ def pick_arrays(path, arrays, *, what, rate=None, rate_source="", given_rate=Non
                 None,
                 f"no time base: expected a time vector ({'/'.join(TIME_NAMES[:2])}, seconds), a sample rate "
                 f"({'/'.join(RATE_NAMES[:3])}, Hz) or a sample period (dt, seconds) among the {what} "
-                f"({', '.join(a.name for a in arrays) or 'none'}); or give sample_rate=",
+                f"({', '.join(a.name for a in arrays) or 'none'}); or give {spell('sample_rate')}",
             )
         if len(values) > 1:
             raise RecordingError(
                 path,
                 None,
-                "sample rates that disagree: " + ", ".join(f"{n} = {v:g} Hz" for n, v in cands) + "; give sample_rate=",
+                "sample rates that disagree: "
+                + ", ".join(f"{n} = {v:g} Hz" for n, v in cands)
+                + f"; give {spell('sample_rate')}",
             )
         name, fs = cands[0]
         if not (np.isfinite(fs) and fs > 0):
@@ -200,7 +205,7 @@ def pick_arrays(path, arrays, *, what, rate=None, rate_source="", given_rate=Non
                 None,
                 f"{what} of different lengths ("
                 + ", ".join(f"{a.name}: {max(np.shape(a.values))}" for a in data)
-                + "); expected channels of one length: read those you want with channel=",
+                + f"); expected channels of one length: read those you want with {spell('channel')}",
             )
         n = lengths.pop() if lengths else 0
     columns = []
@@ -256,7 +261,7 @@ def select_columns(path, columns, want):
         hit = [c for c in columns if wl in (c.name.lower(), (c.var_name or "").lower(), safe_name(c.name, "").lower())]
         if not hit:
             raise RecordingError(
-                path, None, f"no channel {w!r} (channel=); channels: " + ", ".join(c.name for c in columns)
+                path, None, f"no channel {w!r} ({spell('channel')}); channels: " + ", ".join(c.name for c in columns)
             )
         out += [c for c in hit if c not in out]
     return out
@@ -268,7 +273,7 @@ def _convert(path, col, given, history):
     text = given if given is not None else col.unit
     origin = "given" if given is not None else "in the file"
     if text is None or not str(text).strip() or str(text).strip().upper() == "NONE":
-        history.append(f"channel '{col.name}': no unit in the file; kept as found (pass units= to state it)")
+        history.append(f"channel '{col.name}': no unit in the file; kept as found (pass {spell('units')} to state it)")
         return col.values, "unknown", "other", attrs
     u = parse_unit(str(text))
     if u is None:
@@ -299,7 +304,9 @@ def assemble(path, data, *, reader, columns, options, history, time=None, rate=N
     history = list(history)
     given_rate = options.get("sample_rate")
     if time is None and rate is None and given_rate is None:
-        raise RecordingError(path, None, "no time base in the file; expected a sample rate, or give sample_rate=")
+        raise RecordingError(
+            path, None, f"no time base in the file; expected a sample rate, or give {spell('sample_rate')}"
+        )
     columns = select_columns(path, columns, options.get("channel"))
     units = options.get("units")
     if isinstance(units, dict):
@@ -316,7 +323,7 @@ def assemble(path, data, *, reader, columns, options, history, time=None, rate=N
             None,
             "channels of different lengths ("
             + ", ".join(f"{c.name}: {c.values.size}" for c in columns)
-            + "); read them one at a time with channel=",
+            + f"); read them one at a time with {spell('channel')}",
         )
     if n < 2:
         raise RecordingError(path, None, f"holds {n} sample(s); expected at least 2")

@@ -16,6 +16,7 @@ import warnings
 
 import numpy as np
 
+from ..runtime.reader_options import spell
 from .errors import RecordingError
 from .recording import Channel, build_recording, metadata_attrs, safe_name
 from .text.units import parse_unit
@@ -127,7 +128,7 @@ def read_seismic(
             None,
             "traces have different sampling rates ("
             + ", ".join(f"{i}: {r:g} Hz" for i, r in rates.items())
-            + "); read one with channel=",
+            + f"); read one with {spell('channel')}",
         )
     if isinstance(units, dict):
         unknown = [k for k in units if not any(k in (i, names[i], i.split(".")[-1]) for i in ids)]
@@ -144,7 +145,7 @@ def read_seismic(
                 path,
                 None,
                 f"trace {i} does not share the time stamps of {ids[0]}; "
-                f"read one trace at a time with channel= (e.g. channel={i.split('.')[-1]})",
+                f"read one trace at a time with {spell('channel')} (e.g. {spell('channel', i.split('.')[-1])})",
             )
         u_text = units if isinstance(units, str) else None
         if isinstance(units, dict):
@@ -156,7 +157,7 @@ def read_seismic(
         if u_text is None and cal is not None:
             f, si, q, what = cal
             history.append(
-                f"trace {i} calibrated by the format: {what}; pass units= to read the raw counts "
+                f"trace {i} calibrated by the format: {what}; pass {spell('units')} to read the raw counts "
                 "with a scale of your own"
             )
             attrs["calibration"] = what
@@ -166,7 +167,7 @@ def read_seismic(
             extra = "" if calib == 1.0 else f" (the header's calib {calib:.9g} has no stated unit; not applied)"
             history.append(
                 f"trace {i}: a waveform file has no physical units; values kept in counts{extra}; "
-                "pass units= to scale them (e.g. 'g/2048')"
+                f"pass {spell('units')} to scale them (e.g. 'g/2048')"
             )
             ch = Channel(names[i], v, "counts", f"trace {i}", "other", attrs)
         else:

@@ -14,6 +14,7 @@ import io
 
 import numpy as np
 
+from ..runtime.reader_options import spell
 from .errors import RecordingError
 from .sampled import Column, assemble, select_columns
 
@@ -68,7 +69,7 @@ def read_tdms(path, data, options):
                 None,
                 f"channel {c.name!r} ({c.values.size} samples, increment {b[0]} s) is not sampled like "
                 f"{chosen[0].name!r} ({chosen[0].values.size} samples, increment {b0[0]} s); "
-                "read them one at a time with channel=",
+                f"read them one at a time with {spell('channel')}",
             )
     history = [f"TDMS file read with npTDMS: {len(cols)} numeric channel(s), {len(chosen)} read"]
     rate = None
@@ -79,7 +80,7 @@ def read_tdms(path, data, options):
         raise RecordingError(
             path,
             None,
-            f"channel {chosen[0].name!r} has no wf_increment; expected a waveform channel, or give sample_rate=",
+            f"channel {chosen[0].name!r} has no wf_increment; expected a waveform channel, or give {spell('sample_rate')}",
         )
     meta = [("format", "TDMS")]
     if b0[2] is not None:

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..runtime.reader_options import spell
 from .errors import RecordingError
 
 __all__ = ["TimeDiagnosis", "check_order", "diagnose", "resample_linear", "held_update_rate", "quantum"]
@@ -119,8 +120,7 @@ def check_order(t, lines, *, path, column, repair):
                 path,
                 line_of(i),
                 f"time goes backwards in column '{column}': {t[i]:.9g} s after {t[i - 1]:.9g} s "
-                f"(expected increasing time{hint}; pass repair_time=True, --repair-time on the command line, "
-                "to repair)",
+                f"(expected increasing time{hint}; pass {spell('repair_time', True)} to repair)",
             )
         if dup.size:
             i = dup[0] + 1
@@ -128,8 +128,7 @@ def check_order(t, lines, *, path, column, repair):
                 path,
                 line_of(i),
                 f"time stamp {t[i]:.9g} s in column '{column}' repeats the previous row "
-                "(expected increasing time; pass repair_time=True, --repair-time on the command line, to drop "
-                "repeats)",
+                f"(expected increasing time; pass {spell('repair_time', True)} to drop repeats)",
             )
         return np.arange(n), [], t
     notes = []

@@ -34,6 +34,7 @@ import re
 
 import numpy as np
 
+from ..runtime.reader_options import spell
 from .errors import RecordingError
 from .sampled import Column, assemble, select_columns
 
@@ -274,7 +275,7 @@ def read_uff(path, data, options):
                 path,
                 k + 1,
                 f"dataset 58 '{c.name}' does not share the time base of '{c0.name}' (line {k0 + 1}); "
-                "read one at a time with channel=",
+                f"read one at a time with {spell('channel')}",
             )
     history.append(f"UFF file: {len(found)} dataset(s) 58 (time responses), {len(chosen)} read")
     if note0:

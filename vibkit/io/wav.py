@@ -13,6 +13,7 @@ import warnings
 
 import numpy as np
 
+from ..runtime.reader_options import spell
 from .errors import RecordingError
 from .sampled import Column, assemble
 
@@ -46,7 +47,7 @@ def read_wav(path, data, options):
         unit = "counts"
         history.append(
             f"WAV file: {samples.shape[1]} channel(s) of {bits}-bit integers at {fs} Hz; values in counts "
-            f"(full scale {2 ** (bits - 1)}); pass units= to scale them (e.g. 'g/{2 ** (bits - 1)}')"
+            f"(full scale {2 ** (bits - 1)}); pass {spell('units')} to scale them (e.g. 'g/{2 ** (bits - 1)}')"
         )
         if kind.kind == "u":  # 8-bit WAV is unsigned, centred on 128
             samples = samples.astype(np.float64) - 2 ** (bits - 1)

@@ -3,7 +3,8 @@
 A profile names the unit (``[escalator]``), states its rated step speed (``[drive]``), its chain
 (``[chain]``: the nominal pitch, links per step, the number of links) and, where the firm knows them,
 its geometry (``[geometry]``: rise and incline, from which the loop follows), the tensioner's preload
-(``[tensioner]``) and where the sensor sat (``[sensor]``). ``load_profile(path) -> Profile`` reads and
+(``[tensioner]``) and where the sensor sat (``[sensor]``, the default of every channel, and ``[sensors.NAME]``, the
+sensor of the channel NAME where the unit's recordings have several). ``load_profile(path) -> Profile`` reads and
 checks it; a wrong or missing key is a :class:`~vibkit.model.scene.SceneError` naming the file and the
 key. Every key, with its unit, default, plausible range and meaning, is declared once below with the
 scene schema's :func:`~vibkit.model.schema.key` (:func:`profile_table` renders them as a table).
@@ -15,7 +16,7 @@ reads; nothing else.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from .profile_scene import DEFAULT_INCLINE_DEG, profile_scene, scene_text
@@ -37,7 +38,10 @@ __all__ = [
 #: may deviate from the nominal speed by at most +-5 %. A rated speed is known to no better than this.
 STANDARD_SPEED_TOLERANCE = 0.05
 
-SENSOR_KINDS = ("tensioner", "step")
+#: where a sensor sits: the tension carriage (a displacement), a step, or a phone carried on a step
+SENSOR_KINDS = ("tensioner", "step", "phone")
+#: the kinds that ride a step (the link pass a step reads, not the chain's: ``vibkit pitch`` warns)
+STEP_KINDS = ("step", "phone")
 DIRECTIONS = ("up", "down")
 
 
@@ -168,7 +172,11 @@ class TensionerKeys(_Section):
 
 @dataclass(frozen=True)
 class SensorKeys(_Section):
-    kind: str = key("", '"tensioner" (displacement of the tension carriage) or "step" (on a step)', types=(str,))
+    kind: str = key(
+        "",
+        '"tensioner" (displacement of the tension carriage), "step" (on a step) or "phone" (a phone on a step)',
+        types=(str,),
+    )
     step: int = key("", "1-based step carrying the sensor (kind = step)", types=(int,), range=(1, 2000, ""))
 
 
@@ -202,7 +210,7 @@ def profile_table() -> str:
 
 @dataclass(frozen=True)
 class Sensor:
-    """Where the sensor of the recordings sat: ``kind`` "tensioner" or "step"; ``step`` (1-based) on a step."""
+    """Where a sensor of the recordings sat: ``kind`` "tensioner", "step" or "phone"; ``step`` (1-based) on a step."""
 
     kind: str
     step: int | None = None
@@ -232,6 +240,8 @@ class Profile:
     roller_radius: float | None = None
     tensioner_preload: float | None = None
     sensor: Sensor | None = None
+    #: channel name -> its sensor (``[sensors.NAME]``); a channel not named here has :attr:`sensor`
+    sensors: dict[str, Sensor] = field(default_factory=dict)
     source: str = "<string>"
 
     def search_band(self, speed) -> tuple[float, float]:
@@ -287,7 +297,7 @@ class Profile:
     def on_step(self) -> bool | None:
         """Whether the recordings' sensor rides a step (``sensor.kind = "step"``); None when the profile does not
         say where it sat."""
-        return None if self.sensor is None else self.sensor.kind == "step"
+        return None if self.sensor is None else self.sensor.kind in STEP_KINDS
 
     @property
     def set_speed(self) -> float:
@@ -324,8 +334,8 @@ def parse_profile(text: str, source: str = "<string>") -> Profile:
         text = text[1:]
     data = toml_loads(text, src, "profile")
     for name in data:
-        if name not in PROFILE_SECTIONS:
-            raise SceneError(f"{src}: unknown section [{name}] (known: {', '.join(PROFILE_SECTIONS)})")
+        if name not in PROFILE_SECTIONS and name != "sensors":
+            raise SceneError(f"{src}: unknown section [{name}] (known: {', '.join(PROFILE_SECTIONS)}, sensors.NAME)")
     sec = {}
     for name, cls in PROFILE_SECTIONS.items():
         schema = {
@@ -351,15 +361,43 @@ def parse_profile(text: str, source: str = "<string>") -> Profile:
         raise SceneError(f"{src}: 'escalator.unit' must not be empty (the unit's identifier, e.g. E07)")
     if d.get("direction", "up") not in DIRECTIONS:
         raise SceneError(f"{src}: 'drive.direction' must be one of {', '.join(DIRECTIONS)}, got {d.get('direction')!r}")
-    sensor = None
-    if s:
-        if s.get("kind") not in SENSOR_KINDS:
-            raise SceneError(f"{src}: 'sensor.kind' must be one of {', '.join(SENSOR_KINDS)}, got {s.get('kind')!r}")
-        if s["kind"] == "step" and "step" not in s:
-            raise SceneError(f"{src}: missing value 'sensor.step' (the 1-based step carrying the sensor)")
-        if s["kind"] == "tensioner" and "step" in s:
-            raise SceneError(f"{src}: 'sensor.step' has no meaning with sensor.kind = \"tensioner\"")
-        sensor = Sensor(kind=s["kind"], step=s.get("step"))
+    sensor = _sensor(src, "sensor", s) if s else None
+    return _profile(src, source, e, d, c, g, t, sensor, _channel_sensors(src, data.get("sensors", {})))
+
+
+def _sensor(src, where, s) -> Sensor:
+    """One sensor's keys (``[sensor]`` or ``[sensors.NAME]``, named ``where``) checked."""
+    if s.get("kind") not in SENSOR_KINDS:
+        raise SceneError(f"{src}: '{where}.kind' must be one of {', '.join(SENSOR_KINDS)}, got {s.get('kind')!r}")
+    if s["kind"] == "step" and "step" not in s:
+        raise SceneError(f"{src}: missing value '{where}.step' (the 1-based step carrying the sensor)")
+    if s["kind"] == "tensioner" and "step" in s:
+        raise SceneError(f"{src}: '{where}.step' has no meaning with {where}.kind = \"tensioner\"")
+    return Sensor(kind=s["kind"], step=s.get("step"))
+
+
+def _channel_sensors(src, raw) -> dict[str, Sensor]:
+    """``[sensors.NAME]`` tables: channel NAME -> its sensor, each checked as ``[sensor]`` is."""
+    if not isinstance(raw, dict):
+        raise SceneError(f'{src}: [sensors] must hold one table per channel, e.g. [sensors.acc_z] kind = "phone"')
+    schema = {
+        f.name: (f.metadata["types"][0] if len(f.metadata["types"]) == 1 else f.metadata["types"])
+        for f in SensorKeys.fields()
+    }
+    out = {}
+    for name, table in raw.items():
+        where = f"sensors.{name}"
+        if not isinstance(table, dict):
+            raise SceneError(f"{src}: '{where}' must be a table naming the channel's sensor (kind = ...)")
+        checked = _section(src, {where: table}, where, schema)
+        rg = SensorKeys.fields()[1].metadata["range"]
+        if "step" in checked and not rg[0] <= checked["step"] <= rg[1]:
+            raise SceneError(f"{src}: '{where}.step' = {checked['step']!r} is outside [{rg[0]:g}, {rg[1]:g}]")
+        out[str(name)] = _sensor(src, where, checked)
+    return out
+
+
+def _profile(src, source, e, d, c, g, t, sensor, sensors) -> Profile:
     return Profile(
         unit=e["unit"],
         site=e.get("site", ""),
@@ -377,6 +415,7 @@ def parse_profile(text: str, source: str = "<string>") -> Profile:
         incline_deg=g.get("incline_deg"),
         tensioner_preload=t.get("preload"),
         sensor=sensor,
+        sensors=sensors,
         source=source,
     )
 

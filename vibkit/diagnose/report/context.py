@@ -27,13 +27,12 @@ from ..channels import estimate_channels
 from ..comparison import compare
 from ..knock import ride_knock, step_rollers_of
 from ..links import TooFewLoops, find_worn_links, profile_scene_file
-from ..pitch import DEFAULT_LIMITS_PERCENT, pick_channel
+from ..pitch import pick_channel
 from ..ride import _AXIS_RE, ride_quality_from_recording, ride_quality_from_simulation
 from ..ride_simulation import with_ride_outputs
 from ..rounding import fmt_band
 from ..segment import cut_recording
-from ..settings import chain_numbers
-from ..speed import resolve_speed
+from ..settings import resolve_settings, scene_is_unit
 from .common import report_date
 
 __all__ = ["ReportContext", "analyse"]
@@ -237,7 +236,6 @@ def analyse(
     marker_s=None,
 ) -> ReportContext:
     """Everything :func:`vibkit.diagnose.report.write_report` draws (same parameters, no output)."""
-    limits = tuple(limits_percent) if limits_percent is not None else DEFAULT_LIMITS_PERCENT
     opts = dict(read_options or {})
     if sample_rate is not None:
         opts["sample_rate"] = sample_rate
@@ -256,34 +254,37 @@ def analyse(
     if scene is not None:
         sc = scene if isinstance(scene, Scene) else load_scene(scene)
     notes = []
-    run = resolve_speed(speed, speed_sigma, profile=profile, recording=rec, scene=sc)
+    # the run's settings as every command resolves them (vibkit.diagnose.settings): the speed, nominal pitch, the
+    # unit's own sprocket, band and links where a profile names the unit (a scene given beside it may be another's),
+    # the sensor of each channel
+    settings = resolve_settings(
+        rec,
+        speed=speed,
+        speed_sigma=speed_sigma,
+        nominal_pitch=nominal_pitch,
+        band=band,
+        limits=limits_percent,
+        segment=segment,
+        profile=profile,
+        scene=sc,
+        frequency_only_band=True,
+    )
+    run = settings.speed  # (a link count filled in from the profile's geometry: the summary says so)
     speed, speed_sigma = run.value, run.sigma
     if speed is not None and run.source != "given":
         notes.append(f"speed {speed:g} m/s from {run.source}; every page uses it")
-    if nominal_pitch is None and profile is not None and getattr(profile, "nominal_pitch", None):
-        nominal_pitch = float(profile.nominal_pitch)
-    if nominal_pitch is None and sc is not None:
-        # the pitch the sprocket's teeth are cut for: a worn scene's chain pitch is the worn one
-        nominal_pitch = sc.sprocket.pitch
-    # the per-channel decision of `spectrum` and `pitch` (vibkit.diagnose.channels.estimate_channels): every
-    # vibration channel (or the one asked for) estimated, channels that disagree refused, the numbers
-    # from the channel with the most evidence
-    # the unit's own sprocket and band where a profile names the unit (a scene given beside it may be another's)
-    teeth, links_per_step = chain_numbers(profile=profile, scene=sc, recording=rec)  # as every command resolves them
+    nominal_pitch, band, limits = settings.nominal_pitch, settings.band, settings.limits
     if profile is None and sc is None:
         notes.append(
-            f"sprocket teeth not known: {teeth} assumed (the study's sprocket) for the shaft-frequency reading; "
-            "give --escalator PROFILE (drive.teeth)"
+            f"sprocket teeth not known: {settings.teeth} assumed (the study's sprocket) for the shaft-frequency "
+            "reading; give --escalator PROFILE (drive.teeth)"
         )
-    if band is None and profile is not None and speed is not None:
-        band = profile.search_band(speed)
+    if profile is not None and speed is not None and settings.band_source not in ("given", ""):
         notes.append(f"search band {fmt_band(band)} from the profile (0.8-1.25 x speed / nominal pitch)")
-    # the chain's links (the profile's, else the scene's where it is the escalator): a worn link's once-a-loop
-    # pattern is then not read as a wander by the parts check
-    if profile is not None:
-        n_links = profile.n_links or (sc.chain.n_rollers if scene_is_unit(sc, profile) else None)
-    else:
-        n_links = sc.chain.n_rollers if sc is not None else None
+    # the per-channel decision of `spectrum` and `pitch` (vibkit.diagnose.channels.estimate_channels): every
+    # vibration channel (or the one asked for) estimated, channels that disagree refused, the numbers
+    # from the channel with the most evidence; a worn link's once-a-loop pattern is not read as a wander by the
+    # parts check where the chain's links are known
     if speed is not None:
         kw = dict(
             speed=speed,
@@ -291,14 +292,18 @@ def analyse(
             band=band,
             nominal_pitch=nominal_pitch,
             limits_percent=limits,
-            teeth=teeth,
+            teeth=settings.teeth,
         )
     else:  # frequency only: the same burst-combined estimator, with a unit "speed"
-        kw = dict(speed=1.0, band=band or (2.5, 6.0), frequency_only=True)
+        kw = dict(speed=1.0, band=band, frequency_only=True)
         notes.append("no speed known: link-pass frequency only, no pitch (give --speed)")
-    on_step = None if profile is None else profile.on_step
     decided = estimate_channels(
-        rec, channel=channel, n_links=n_links, links_per_step=links_per_step, on_step=on_step, **kw
+        rec,
+        channel=channel,
+        n_links=settings.n_links,
+        links_per_step=settings.links_per_step,
+        sensors=settings.sensors_by_channel,
+        **kw,
     )
     found = decided.best is not None
     est = decided.best if found else next((e for e in decided.estimates if e.channel == ch), decided.estimates[0])
@@ -333,6 +338,7 @@ def analyse(
                     channel=ch,
                     speed=None if assumed else speed,
                     speed_sigma=None if assumed else speed_sigma,
+                    profile=profile,
                 )
             except ValueError as exc:  # e.g. a channel in a unit the simulation has no variable in
                 notes.append(f"no comparison with the simulation: {' '.join(str(exc).split())}")
@@ -438,7 +444,7 @@ def analyse(
         ride_absent=ride_absent,
         comparison_absent=comparison_absent,
         spikes_expected=spikes_expected,
-        links_per_step=links_per_step,
+        links_per_step=settings.links_per_step,
         recording=recording,
         rec=rec,
         channel=ch,
@@ -516,6 +522,7 @@ def _links(rec, ch, units, sc, speed, notes, profile=None, marker_s=None):
             scene=scene_file,
             marker_s=marker_s,
             nominal_pitch=None if profile is None else profile.nominal_pitch,
+            profile=profile,
         )
         return res, ""
     except TooFewLoops as exc:  # under two loops: no page (vibkit links says how long to record)
@@ -571,22 +578,6 @@ def _quantisation_explains_extremes(x, q):
         return int(np.sum(np.abs(x - v) < tol))
 
     return count(hi) <= 3 * max(count(hi - q), 1) and count(lo) <= 3 * max(count(lo + q), 1)
-
-
-def scene_is_unit(scene, profile) -> bool:
-    """Whether ``scene`` simulates the profile's unit: the scene is the profile's (built from it), or its
-    name or file name is the unit's identifier.  Without a profile no scene is a named unit's."""
-    if scene is None or profile is None:
-        return False
-    unit = str(getattr(profile, "unit", "") or "").strip().lower()
-    if not unit:
-        return False
-    if getattr(scene, "source", None) and str(scene.source) == str(getattr(profile, "source", "")):
-        return True  # built from the profile
-    names = {str(scene.name or "").strip().lower()}
-    if getattr(scene, "source", None):
-        names.add(os.path.splitext(os.path.basename(str(scene.source)))[0].lower())
-    return unit in names
 
 
 def _with_knock(rq, scene, profile):

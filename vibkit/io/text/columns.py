@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ...runtime.reader_options import ReaderOptionError, as_flags, spell
 from ..channels import COUNTER_ATTR, is_counter_name, is_counter_ramp
 from ..errors import RecordingError
 from ..recording import Channel, safe_name, unique_names
@@ -91,8 +92,10 @@ def _unit_overrides(path, units, chan_idx, colnames: _ColumnNames):
         for key, u in units.items():
             j = colnames.match(key)
             if j is None:
-                raise ValueError(
-                    f"units: no column {key!r} in {path}; columns: " + ", ".join(repr(h) for h in header_disp)
+                given = spell("units", {key: u}) if as_flags() else "units"  # --units NAME=UNIT
+                raise ReaderOptionError(
+                    "units",
+                    f"{given}: no column {key!r} in {path}; columns: " + ", ".join(repr(h) for h in header_disp),
                 )
             override[j] = u
     elif isinstance(units, str):
@@ -148,9 +151,11 @@ def _build_channels(
             u_text = override[j]
             unit = parse_unit(u_text) if isinstance(u_text, str) else None
             if unit is None:
-                raise ValueError(
-                    f"units[{head!r}]={u_text!r} (for {path}) is not a unit vibkit knows; expected e.g. "
-                    "'m/s^2', 'g', 'mm', 'm', 'mm/s', 'counts' or a scaled one like 'g/2048'"
+                raise ReaderOptionError(
+                    "units",
+                    f"{spell('units', {head: u_text}) if as_flags() else f'units[{head!r}]={u_text!r}'} (for {path}) "
+                    "is not a unit vibkit knows; expected e.g. "
+                    "'m/s^2', 'g', 'mm', 'm', 'mm/s', 'counts' or a scaled one like 'g/2048'",
                 )
             source = f"{u_text} (given)"
         elif unit_text is not None:
@@ -172,7 +177,7 @@ def _build_channels(
             if unit_text is None:
                 history.append(
                     f"column '{head}' has no unit; values kept as found (units 'unknown'; "
-                    f"pass units={{'{vars_[j]}': ...}})"
+                    f"pass {spell('units', {vars_[j]: '...'})})"
                 )
                 ch_units = "unknown"
             else:
@@ -182,7 +187,7 @@ def _build_channels(
         elif unit.factor is None:
             history.append(
                 f"column '{head}' in counts with no scale; kept in counts "
-                f"(pass units={{'{vars_[j]}': 'g/<counts per g>'}})"
+                f"(pass {spell('units', {vars_[j]: 'g/<counts per g>'})})"
             )
             ch_units, quantity = "counts", "other"
             attrs["original_units"] = source

@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ...runtime.reader_options import spell
 from ..channels import mark_status
 from ..errors import RecordingError
 from ..recording import build_recording, metadata_attrs
@@ -356,7 +357,7 @@ def _time_base(
                 path,
                 header_line,
                 "no time column and no sample rate in the header; "
-                "expected a time column (time_column=) or a sample rate (sample_rate=)",
+                f"expected a time column ({spell('time_column')}) or a sample rate ({spell('sample_rate')})",
             )
         t = np.arange(nrows) / fs
         jitter = 0.0

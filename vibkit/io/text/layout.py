@@ -11,6 +11,7 @@ import re
 from collections import Counter
 from dataclasses import dataclass
 
+from ...runtime.reader_options import spell
 from ..errors import RecordingError
 from .cells import (
     _COMMENT,
@@ -96,7 +97,7 @@ def _decode(path, data: bytes, encoding):
         try:
             return data.decode(encoding), [f"encoding {encoding} (given)"]
         except (UnicodeDecodeError, LookupError) as exc:
-            raise RecordingError(path, None, f"cannot decode as {encoding}: {exc}") from None
+            raise RecordingError(path, None, f"cannot decode as {spell('encoding', encoding)}: {exc}") from None
     for bom, codec in _BOMS:
         if data.startswith(bom):
             try:
@@ -118,7 +119,7 @@ def _decode(path, data: bytes, encoding):
                 None,
                 f"looks like {codec.upper()} text without a byte-order mark but "
                 f"cannot be decoded as such ({exc.reason} at byte {exc.start}); "
-                "pass encoding=",
+                f"pass {spell('encoding')}",
             ) from None
     head = data[:65536]
     nul = head.find(b"\x00")

@@ -33,6 +33,8 @@ import re
 from dataclasses import dataclass, field
 from typing import Callable
 
+from ...runtime.reader_options import spell
+
 __all__ = ["LoggerProfile", "PROFILES", "app_units", "header_unit", "rate_key_patterns", "header_keys", "clock_units"]
 
 
@@ -116,24 +118,24 @@ def _sensor_logger_units(path, names, low, units, history):
         if unit is None:
             history.append(
                 "Sensor Logger AccelerometerUncalibrated.csv: x, y, z are in g on iOS and m/s^2 on Android, and "
-                "no Metadata.csv beside the file says the platform; x, y, z keep no unit (pass units=)"
+                f"no Metadata.csv beside the file says the platform; x, y, z keep no unit (pass {spell('units')})"
             )
             return {}
         history.append(
             f"Sensor Logger AccelerometerUncalibrated.csv on {platform} (Metadata.csv beside it): x, y, z in "
-            f"{unit}; pass units= to override"
+            f"{unit}; pass {spell('units')} to override"
         )
         return {j: unit for j, n in enumerate(low) if n in ("x", "y", "z") and units[j] is None}
     for key, unit, app_name in _SENSOR_LOGGER_FILES:
         if key in base:
             history.append(
                 f"Sensor Logger export ('time,seconds_elapsed,...'): x, y, z in {unit}, as the app "
-                f"documents for {app_name} (file name); pass units= to override"
+                f"documents for {app_name} (file name); pass {spell('units')} to override"
             )
             return {j: unit for j, n in enumerate(low) if n in ("x", "y", "z") and units[j] is None}
     history.append(
         "Sensor Logger export ('time,seconds_elapsed,...'): the file name does not say the "
-        "sensor, so x, y, z keep no unit; pass units= (e.g. m/s^2 for the accelerometer)"
+        f"sensor, so x, y, z keep no unit; pass {spell('units')} (e.g. m/s^2 for the accelerometer)"
     )
     return {}
 
@@ -151,7 +153,7 @@ def _physics_toolbox_units(path, names, low, units, history):
         history.append(
             "Physics Toolbox Sensor Suite export (gFx, gFy, gFz): "
             + ", ".join(f"{names[j]} in {u}" for j, u in out.items())
-            + " as the app documents; pass units= to override"
+            + f" as the app documents; pass {spell('units')} to override"
         )
     return out
 
@@ -168,7 +170,7 @@ def _picoquake_units(path, names, low, units, history):
     if out:
         history.append(
             "PicoQuake export ('# PLab PicoQuake Data'): a_x, a_y, a_z in g and g_x, g_y, g_z in "
-            "deg/s, as PLab documents; pass units= to override"
+            f"deg/s, as PLab documents; pass {spell('units')} to override"
         )
     return out
 
@@ -212,10 +214,12 @@ def _android_units(path, names, low, units, history):
         if key in base:
             history.append(
                 f"Android SensorEvent log ('timestamp' in ns since boot, 'accuracy' a status): x, y, z in {unit} "
-                f"as Android documents for the {what} (file name); pass units= to override"
+                f"as Android documents for the {what} (file name); pass {spell('units')} to override"
             )
             return {j: unit for j, n in enumerate(low) if n in ("x", "y", "z") and units[j] is None}
-    history.append("Android SensorEvent log: the file name does not say the sensor, x, y, z keep no unit (units=)")
+    history.append(
+        f"Android SensorEvent log: the file name does not say the sensor, x, y, z keep no unit ({spell('units')})"
+    )
     return {}
 
 

@@ -15,6 +15,7 @@ from datetime import datetime, timezone
 import numpy as np
 import pandas as pd
 
+from ...runtime.reader_options import ReaderOptionError, spell
 from ..errors import RecordingError
 from .cells import _NUM, _STAMP_DMY, _STAMP_ISO, _STAMP_TOD, _parse_numbers
 from .columns import _ColumnNames
@@ -86,14 +87,14 @@ def _choose_time_column(
                 history.append(f"no header row; column 1 read as time in seconds ({why}; --time-column none if not)")
         return tcol, clocks
     if time_column is False:
-        history.append("no time column (time_column=False given)")
+        history.append(f"no time column ({spell('time_column', False)} given)")
     elif time_column is not None:
         if isinstance(time_column, (int, np.integer)) and not isinstance(time_column, bool):
             if not 0 <= int(time_column) < n:
                 raise RecordingError(
                     path,
                     header_line,
-                    f"time_column={time_column} is out of range: the file has {n} column(s), numbered from 0",
+                    f"{spell('time_column', int(time_column))} is out of range: the file has {n} column(s), numbered from 0",
                 )
             tcol = int(time_column)
         else:
@@ -244,8 +245,9 @@ def _read_time(
         if time_unit is not None:
             f = parse_time_unit(time_unit)
             if f is None:
-                raise ValueError(
-                    f"time_unit={time_unit!r} is not a time unit (expected s, ms, us, ns, min, h) for {path}"
+                raise ReaderOptionError(
+                    "time_unit",
+                    f"{spell('time_unit', time_unit)} is not a time unit (expected s, ms, us, ns, min, h) for {path}",
                 )
             history.append(f"time column '{tname}' in {time_unit} (given)" + ("" if f == 1 else f" -> s (x {f:g})"))
         elif unit_text is not None and parse_time_unit(unit_text) is not None:
@@ -255,7 +257,7 @@ def _read_time(
             raise RecordingError(
                 path,
                 header_line,
-                f"time column '{tname}' has unit '{unit_text}'; expected s, ms, us or time stamps (pass time_unit=)",
+                f"time column '{tname}' has unit '{unit_text}'; expected s, ms, us or time stamps (pass {spell('time_unit')})",
             )
         else:
             f = 1.0
@@ -278,7 +280,7 @@ def _read_time(
                     history.append(
                         f"time column '{tname}' has no unit; its values ({vals[0]:.17g} ...) are "
                         f"Unix epoch times in {eunit} by their size and steps; read as {eunit} "
-                        f"(start {start.isoformat()}; pass time_unit= to override)"
+                        f"(start {start.isoformat()}; pass {spell('time_unit')} to override)"
                     )
                     extra_attrs.setdefault("start_time", start.isoformat())
         if vals.size and "start_time" not in extra_attrs and _EPOCH_RANGE_S[0] <= vals[0] * f <= _EPOCH_RANGE_S[1]:
@@ -322,7 +324,7 @@ def _counter_clock_unit(path, vals, step, tname, header_line, history):
             path,
             header_line,
             f"time column '{tname}' has no unit and whole-number steps of "
-            f"{step:.6g} ({rates}): cannot tell its unit; pass time_unit= ({', '.join(u for u, _ in units)})",
+            f"{step:.6g} ({rates}): cannot tell its unit; pass {spell('time_unit')} ({', '.join(u for u, _ in units)})",
         )
     u, f = fits[0]
     what = (
@@ -334,7 +336,7 @@ def _counter_clock_unit(path, vals, step, tname, header_line, history):
     )
     history.append(
         f"time column '{tname}' has no unit and whole-number steps of {step:.6g}: {what}; read as {u}, "
-        f"giving {1 / (step * f):.6g} Hz (in seconds it would be {1 / step:.3g} Hz); pass time_unit= to override"
+        f"giving {1 / (step * f):.6g} Hz (in seconds it would be {1 / step:.3g} Hz); pass {spell('time_unit')} to override"
     )
     return f
 
@@ -369,7 +371,7 @@ def _date_order(cells, path, rownums, tname, date_order):
         path,
         int(rownums[0]),
         f"dates in column '{tname}' ('{cells.iloc[0]}' ...) could be day/month/year or month/day/year "
-        "(no field above 12 says which); pass date_order= (dmy or mdy)",
+        f"(no field above 12 says which); pass {spell('date_order')} (dmy or mdy)",
     )
 
 
@@ -436,6 +438,6 @@ def _epoch_unit(path, vals, tname, line):
             line,
             f"time column '{tname}' has no unit and holds {v0:.17g}, a Unix epoch "
             f"time in {unit} by its size, but its steps ({step / f:.6g} {unit}) do not give a "
-            "sample rate between 1e-4 Hz and 10 MHz; pass time_unit= (s, ms, us, ns)",
+            f"sample rate between 1e-4 Hz and 10 MHz; pass {spell('time_unit')} (s, ms, us, ns)",
         )
     return f, unit
