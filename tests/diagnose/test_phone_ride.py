@@ -19,7 +19,10 @@ from ..signal.test_signal_ride import synthetic_ride
 
 G = 9.80665
 PHYPHOX_ACC = '"Time (s)","Acceleration x (m/s^2)","Acceleration y (m/s^2)","Acceleration z (m/s^2)"'
-META = {"meta/device.csv": '"property","value"\n"deviceModel","Pixel 7"\n', "meta/time.csv": '"event","experiment time"\n'}
+META = {
+    "meta/device.csv": '"property","value"\n"deviceModel","Pixel 7"\n',
+    "meta/time.csv": '"event","experiment time"\n',
+}
 
 
 def _phone_on_a_step(seed, *, f=3.75, duration=120.0, fs=100.0, noise=0.05):
