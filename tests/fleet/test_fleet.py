@@ -804,8 +804,16 @@ def test_killed_scan_leaves_complete_rows(tmp_path):
         ms = fdb.measurements()
         assert 3 <= len(ms) < n
         for m in ms:  # every row complete and true to its file
-            assert all(getattr(m, c) is not None for c in m.__dataclass_fields__ if c != "snr_db")
-            assert len(m.sha256) == 64 and m.elongation_sigma_percent > 0 and m.unit.startswith("U")
+            # the catalogue states no speed uncertainty: stored as not stated (None), every other column written
+            assert all(
+                getattr(m, c) is not None for c in m.__dataclass_fields__ if c not in ("snr_db", "speed_sigma_m_s")
+            )
+            assert (
+                m.speed_sigma_m_s is None
+                and len(m.sha256) == 64
+                and m.elongation_sigma_percent > 0
+                and m.unit.startswith("U")
+            )
             import hashlib
 
             assert hashlib.sha256(Path(m.path).read_bytes()).hexdigest() == m.sha256

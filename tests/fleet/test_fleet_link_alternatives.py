@@ -131,13 +131,13 @@ def test_schema_3_sqlite_read_only_then_upgraded_with_its_rows_and_flags(tmp_pat
     assert p.read_bytes() == before and _user_version(p) == 3
 
     with FleetDB(p) as db:
-        assert any("upgraded in place from schema 3 to schema 4" in n for n in db.notes)
+        assert any("upgraded in place from schema 3 to schema 5" in n for n in db.notes)
         assert [m.as_dict() for m in db.measurements()] == [m.as_dict() for m in old]
         scans = db.link_scans()
         assert _flags_of_12_and_40(scans) == OLD_FLAGS
         assert sorted(s.status for s in scans.values()) == ["not run", "not run", "ok"]
         new = db.insert(fake(9, "E07", 3.0, 1.5), _scan([(55, 1.0, 0.1, (10,))]))
-    assert _user_version(p) == 4
+    assert _user_version(p) == 5
     with FleetDB(p, readonly=True) as db:
         assert db.notes == [] and db.link_scans()[new.id].flagged[0].alternatives == (10,)
 
@@ -171,14 +171,14 @@ def test_schema_3_postgresql_read_only_then_upgraded_with_its_rows_and_flags(new
         cols = con.execute("SELECT column_name FROM information_schema.columns WHERE table_name = 'flagged_link'")
         assert "alternatives" not in {r[0] for r in cols.fetchall()}  # nothing written
     with FleetDB(url) as db:
-        assert any("upgraded in place from schema 3 to schema 4" in n for n in db.notes)
+        assert any("upgraded in place from schema 3 to schema 5" in n for n in db.notes)
         assert [m.as_dict() for m in db.measurements()] == [m.as_dict() for m in old]
         assert _flags_of_12_and_40(db.link_scans()) == OLD_FLAGS
         new = db.insert(fake(9, "E07", 3.0, 1.5), _scan([(55, 1.0, 0.1, (10,))]))
     with FleetDB(url, readonly=True) as db:
         assert db.notes == [] and db.link_scans()[new.id].flagged[0].alternatives == (10,)
     with psycopg.connect(url) as con:
-        assert con.execute("SELECT value FROM vibkit_fleet_meta WHERE key = 'schema_version'").fetchone()[0] == "4"
+        assert con.execute("SELECT value FROM vibkit_fleet_meta WHERE key = 'schema_version'").fetchone()[0] == "5"
 
 
 # ------------------------------------------------------------------------------------------ history

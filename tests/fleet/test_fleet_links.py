@@ -179,15 +179,15 @@ def test_schema_2_sqlite_read_only_then_upgraded_in_place(tmp_path):
     assert p.read_bytes() == before and _user_version(p) == 2
 
     with FleetDB(p) as db:
-        assert any("upgraded in place from schema 2 to schema 4" in n for n in db.notes)
+        assert any("upgraded in place from schema 2 to schema 5" in n for n in db.notes)
         new = db.measurements()
         scans = db.link_scans()
-    assert _user_version(p) == 4
+    assert _user_version(p) == 5
     assert [m.as_dict() for m in new] == [m.as_dict() for m in old] and len(new) == 3  # every row as it was
     assert sorted(scans) == sorted(m.id for m in new)
     assert {(s.status, s.reason, s.flagged) for s in scans.values()} == {("not run", BEFORE_LINK_SCANS, ())}
     with FleetDB(p) as db:
-        assert db.notes == []  # schema 4 now: nothing to say
+        assert db.notes == []  # schema 5 now: nothing to say
 
 
 def test_schema_1_sqlite_is_upgraded_with_empty_scans(tmp_path):
@@ -195,7 +195,7 @@ def test_schema_1_sqlite_is_upgraded_with_empty_scans(tmp_path):
 
     schema1_db("v1.sqlite")(tmp_path)
     with FleetDB(tmp_path / "v1.sqlite") as db:
-        assert any("from schema 1 to schema 4" in n for n in db.notes)
+        assert any("from schema 1 to schema 5" in n for n in db.notes)
         ids = [m.id for m in db.measurements()]
         assert len(ids) == len(SCHEMA_1_ROWS)
         assert {s.status for s in db.link_scans().values()} == {"not run"} and sorted(db.link_scans()) == sorted(ids)
@@ -222,12 +222,12 @@ def test_schema_2_postgresql_read_only_then_upgraded_in_place(new_pg_url):
     with psycopg.connect(url) as con:
         assert con.execute("SELECT to_regclass('link_scan')").fetchone()[0] is None  # nothing written
     with FleetDB(url) as db:
-        assert any("upgraded in place from schema 2 to schema 4" in n for n in db.notes)
+        assert any("upgraded in place from schema 2 to schema 5" in n for n in db.notes)
         new = db.measurements()
         scans = db.link_scans()
         db.insert(fake(9, "E07", 3.0, 1.5), _scan([(12, 0.9, 0.05)]))
     with psycopg.connect(url) as con:
-        assert con.execute("SELECT value FROM vibkit_fleet_meta WHERE key = 'schema_version'").fetchone()[0] == "4"
+        assert con.execute("SELECT value FROM vibkit_fleet_meta WHERE key = 'schema_version'").fetchone()[0] == "5"
     assert [m.as_dict() for m in new] == [m.as_dict() for m in old]
     assert sorted(scans) == sorted(m.id for m in new) and {s.status for s in scans.values()} == {"not run"}
     with FleetDB(url) as db:

@@ -72,9 +72,9 @@ def test_library_reads_schema_1_read_only_as_upgraded(archive):
     assert _fingerprint(ro) == before and _user_version(ro) == 1
 
     with FleetDB(up) as db:  # the same history upgraded in place, as a write command does
-        assert any("upgraded in place from schema 1 to schema 4" in n for n in db.notes)
+        assert any("upgraded in place from schema 1 to schema 5" in n for n in db.notes)
         ms_up, st_up = db.measurements(), db.status()
-    assert _user_version(up) == 4
+    assert _user_version(up) == 5
     assert ms_ro == ms_up and len(ms_ro) == len(SCHEMA_1_ROWS)
     assert [t.as_dict() for t in st_ro] == [t.as_dict() for t in st_up]
     # the flags by today's rules: E22's two impossible points, E23's 0.9 % sigma; nothing 'replaced'
@@ -95,7 +95,7 @@ def test_cli_status_and_report_on_a_read_only_schema_1_file(archive, tmp_path, c
     ro, up = archive
     before = _fingerprint(ro)
     FleetDB(up).close()  # upgraded in place, as a write command does
-    assert _user_version(up) == 4
+    assert _user_version(up) == 5
     out = tmp_path / "out"
     out.mkdir()
     answers = {}
@@ -151,10 +151,10 @@ def test_write_command_upgrades_schema_1_in_place(tmp_path, capsys):
     )
     cap = capsys.readouterr()
     assert json.loads(cap.out)["measurement"]["unit"] == "E07"
-    assert "upgraded in place from schema 1 to schema 4" in cap.err
-    assert _user_version(db) == 4
+    assert "upgraded in place from schema 1 to schema 5" in cap.err
+    assert _user_version(db) == 5
     with FleetDB(db, create=False, readonly=True) as fdb:
-        assert fdb.notes == []  # schema 4 now: nothing to say
+        assert fdb.notes == []  # schema 5 now: nothing to say
         ms = fdb.measurements()
     assert [m for m in ms if m.unit != "E07"] == seen and [m.unit for m in ms].count("E07") == 1
 

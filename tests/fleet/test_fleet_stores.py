@@ -250,7 +250,11 @@ def test_killed_scan_on_postgres_leaves_complete_rows(tmp_path, pg_server):
         ms = db.measurements()
         assert 3 <= len(ms) < n
         for m in ms:
-            assert all(getattr(m, c) is not None for c in m.__dataclass_fields__ if c != "snr_db")
+            # every column written (the catalogue states no speed uncertainty: stored as not stated, None)
+            assert all(
+                getattr(m, c) is not None for c in m.__dataclass_fields__ if c not in ("snr_db", "speed_sigma_m_s")
+            )
+            assert m.speed_sigma_m_s is None
             assert hashlib.sha256(Path(m.path).read_bytes()).hexdigest() == m.sha256 and m.quality == "ok"
         res = db.scan(d, cat, parallel=False)
         assert len(res.skipped) == len(ms) and len(res.added) == n - len(ms) and not res.failed
@@ -284,7 +288,7 @@ def test_version_1_sqlite_file_is_upgraded_and_flagged(tmp_path):
     # the unit: no -112 %/year trend, the two impossible points flagged
     assert tr.slope_percent_per_year is None and tr.latest_elongation_percent == 3.8 and len(tr.flagged) == 2
     con = sqlite3.connect(p)
-    assert con.execute("PRAGMA user_version").fetchone()[0] == 4
+    assert con.execute("PRAGMA user_version").fetchone()[0] == 5
     con.close()
 
 

@@ -315,9 +315,9 @@ CASES = [
         files={**GOOD, "zero.toml": PROFILE.replace("speed_uncertainty = 0.0005", "speed_uncertainty = 0")},
         expect="ok",
         expect_in=("speed uncertainty stated as 0 m/s",),
-        stdout_in=("stored #1 unit E07", "% (harmonic SNR"),
+        stdout_in=("stored #1 unit E07", "elongation +", "+-", "% (harmonic SNR"),
         outputs=("{w}/f.sqlite",),
-        note="stored with the frequency's +-, not warned about as missing (the history still reads a 0 as not stated)",
+        note="stored as a stated 0 (schema 5: not stated is NULL), with the frequency's +-, not warned about as missing",
     ),
     # ------------------------------------------------------------------ a database damaged in its middle
     Case(

@@ -26,6 +26,22 @@ def _slow(self, rec):
 _st._Store.write_run = _slow
 """
 
+
+def _full_disk_after(n_ok):
+    """The child's store writer stores ``n_ok`` runs, then finds the disk full (ENOSPC, as zarr's writer raises it)."""
+    return f"""
+import errno, importlib, os
+_st = importlib.import_module("vibkit.sweep.store")
+_orig, _n = _st._Store.write_run, [0]
+def _write(self, rec):
+    _n[0] += 1
+    if _n[0] > {n_ok}:
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(self.path / "runs" / "r000000" / "0"))
+    _orig(self, rec)
+_st._Store.write_run = _write
+"""
+
+
 CASES = [
     # ------------------------------------------------------------------ size, before anything is allocated
     Case(
@@ -200,6 +216,28 @@ CASES = [
         expect_in=("of 4 runs are stored in", "run the same sweep again"),
         heavy=True,
         note="starts a Dask cluster (10-30 s here); the store is resumable (test_sweep_limits.py)",
+    ),
+    # ------------------------------------------------------------------ a full disk during the runs
+    Case(
+        "sweep onto a disk full before the first run",
+        "sweep",
+        ["sweep", "{w}/tiny.toml", "--vary", "chain.link_pitch=0.1333:0.1337:4", "--workers", "1", "--quiet"] + OUT,
+        files={"tiny.toml": tiny()},
+        prelude=_full_disk_after(0),
+        expect_in=("{w}/o.zarr: No space left on device", "held no finished run and was removed"),
+        absent=("{w}/o.zarr",),
+        heavy=True,
+        note="no partial store left: this run made it and stored nothing in it (tests/sweep/test_sweep.py)",
+    ),
+    Case(
+        "sweep onto a disk full after 2 runs",
+        "sweep",
+        ["sweep", "{w}/tiny.toml", "--vary", "chain.link_pitch=0.1333:0.1337:4", "--workers", "1", "--quiet"] + OUT,
+        files={"tiny.toml": tiny()},
+        prelude=_full_disk_after(2),
+        expect_in=("{w}/o.zarr: No space left on device", "2 of 4 runs are stored there", "to resume: vibkit sweep"),
+        heavy=True,
+        note="the store with its 2 runs stays, the resume point; the message gives the command that continues",
     ),
     Case(
         "Ctrl-C during a sweep",

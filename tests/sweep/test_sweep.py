@@ -444,3 +444,89 @@ def test_a_sweep_whose_every_run_is_refused_exits_1(scene_file, tmp_path, capsys
     err = capsys.readouterr().err
     assert "no run could be made (0 failed, 2 invalid)" in err
     assert out.exists()  # the store keeps what each run said
+
+
+# ------------------------------------------------------------------------------------------ a full disk
+def _full_disk_after(monkeypatch, n_ok):
+    """The store's writer stores ``n_ok`` runs, then finds the disk full (ENOSPC, as a real writer raises it)."""
+    import errno
+
+    real = ST._Store.write_run
+    calls = [0]
+
+    def write_run(self, rec):
+        calls[0] += 1
+        if calls[0] > n_ok:
+            raise OSError(errno.ENOSPC, "No space left on device", str(self.path / "runs" / "r000000" / "0"))
+        return real(self, rec)
+
+    monkeypatch.setattr(ST._Store, "write_run", write_run)
+
+
+def _on(client, monkeypatch):
+    import contextlib
+
+    monkeypatch.setattr(SW, "dask_client", lambda scheduler=None, n_workers=None: contextlib.nullcontext(client))
+
+
+def test_full_disk_before_any_run_removes_the_store_this_run_created(
+    scene_file, tmp_path, threaded_client, monkeypatch, capsys
+):
+    _on(threaded_client, monkeypatch)
+    _full_disk_after(monkeypatch, 0)
+    out = tmp_path / "full.zarr"
+    assert main(["sweep", str(scene_file), "--vary", VARY_CLI, "--duration", "0.5", "-o", str(out), "--quiet"]) == 1
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1, err
+    assert f"{out}: No space left on device (the disk is full;" in err
+    assert "held no finished run and was removed" in err
+    assert not out.exists() and not list(tmp_path.iterdir())  # no partial store, no temporary folder
+
+
+def test_full_disk_after_some_runs_keeps_the_store_and_says_how_to_resume(
+    scene_file, tmp_path, threaded_client, monkeypatch, capsys
+):
+    _on(threaded_client, monkeypatch)
+    _full_disk_after(monkeypatch, 2)
+    out = tmp_path / "full.zarr"
+    argv = ["sweep", str(scene_file), "--vary", VARY_CLI, "--duration", "0.5", "-o", str(out), "--quiet", "--json"]
+    assert main(argv) == 1
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1, err
+    assert f"{out}: No space left on device (the disk is full; 2 of 4 runs are stored there" in err
+    assert err.strip().endswith(f"to resume: vibkit {' '.join(argv)})")
+    assert len(list((out / "runs").glob("r0*"))) == 2
+    monkeypatch.undo()  # space freed: the command it names resumes from the two stored runs
+    _on(threaded_client, monkeypatch)
+    assert main(argv) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["complete"] and d["reused"] == 2 and d["computed"] == 2
+
+
+def test_full_disk_never_removes_a_store_this_run_did_not_create(scene_file, tmp_path, threaded_client, monkeypatch):
+    out = tmp_path / "earlier.zarr"
+    vary = {"chain.link_pitch": "0.1333,0.1335"}
+    vibkit.sweep(scene_file, vary, output=out, duration=0.5, client=threaded_client, progress=False, max_runs=0)
+    assert (out / "runs").is_dir()  # made by an earlier run, no run in it
+    _full_disk_after(monkeypatch, 0)
+    with pytest.raises(OSError, match="No space left") as e:
+        vibkit.sweep(scene_file, vary, output=out, duration=0.5, client=threaded_client, progress=False)
+    assert e.value.filename == str(out) and e.value.vibkit_resume and "0 of 2 runs are stored" in e.value.vibkit_note
+    assert (out / "runs").is_dir()
+    # created by this run, then replaced by another process's store of the same name: not this run's to remove
+    other = tmp_path / "raced.zarr"
+    real_init = ST._Store.__init__
+
+    def init_then_replaced(self, path, plan, *, force):
+        real_init(self, path, plan, force=force)
+        shutil.copytree(self.path, tmp_path / "copy.zarr")
+        shutil.rmtree(self.path)
+        (tmp_path / "copy.zarr").rename(self.path)
+
+    monkeypatch.setattr(ST._Store, "__init__", init_then_replaced)
+    with pytest.raises(OSError, match="No space left"):
+        vibkit.sweep(scene_file, vary, output=other, duration=0.5, client=threaded_client, progress=False)
+    assert (other / "runs").is_dir()
+
+
+VARY_CLI = "chain.link_pitch=0.1333,0.1335,0.1337,0.1339"

@@ -641,7 +641,10 @@ def _post_process(fm, t, y, outputs, stats, y_obs=None, table=None):
             if name in want:
                 data[name] = (("time", "roller", "axis"), arr)
     nominal = nominal_speed(fm.effects, scene.run)
-    speed, f_lp, counted_from = counted_speed(model, t, y[:, 0], nominal, from_rest=abs(y[0, 1]) < 1e-9)
+    # a run from rest, or one whose drive takes up a running resistance at its start (a start-up either way), counts
+    # its speed over its second half, after the start-up
+    start_up = abs(y[0, 1]) < 1e-9 or "rolling_resistance" in fm.effects
+    speed, f_lp, counted_from = counted_speed(model, t, y[:, 0], nominal, from_rest=start_up)
     attrs = {
         "chain_speed_m_s": speed,
         # a run from rest counts its speed after the start-up: what reads a link pass from it reads it there too

@@ -85,6 +85,7 @@ def main(argv=None) -> int:
     """
     # parse first: --help and --version import nothing heavy and compile nothing
     args = _parser().parse_args(argv)
+    args.argv = list(sys.argv[1:] if argv is None else argv)  # the command as typed (e.g. a sweep's to resume it)
     from vibkit.runtime.safe_output import Interrupted, handle_termination
 
     bad_epoch = _source_date_epoch()
@@ -125,12 +126,14 @@ def main(argv=None) -> int:
             # the file: the error's own, else the output the command was writing (a PDF written by a library)
             name = getattr(exc, "filename", None) or getattr(args, "output", None)
             where = f"{name}: " if name and name != "-" else ""
-            why = {
-                errno.ENOSPC: " (the disk is full; nothing was written: free space, or write elsewhere with -o)",
-                errno.EFBIG: " (a file-size limit, ulimit -f, stops the write; nothing was written: raise the limit)",
-                errno.EDQUOT: " (your disk quota is used up; nothing was written: free space, or write elsewhere)",
-            }.get(exc.errno, "")
-            text = f"{where}{exc.strerror}{why}"
+            cause = {
+                errno.ENOSPC: ("the disk is full", "free space, or write elsewhere with -o"),
+                errno.EFBIG: ("a file-size limit, ulimit -f, stops the write", "raise the limit"),
+                errno.EDQUOT: ("your disk quota is used up", "free space, or write elsewhere"),
+            }.get(exc.errno)
+            # what was kept: the command's own note (a sweep's runs stored so far, and how to resume), else nothing
+            kept = getattr(exc, "vibkit_note", None) or (cause and f"nothing was written: {cause[1]}")
+            text = f"{where}{exc.strerror}" + (f" ({cause[0]}; {kept})" if cause else "")
         text = plain_message(text, args)
         prefix = "\033[31merror\033[0m" if color() else "error"
         msg(f"vibkit {args.command}: {prefix}: {text}")

@@ -178,14 +178,14 @@ def _fleet_db(a, *, create=True):
     return db
 
 
-def _fmt_measurement(m, stated=False):
-    """One line of a stored measurement; ``stated``: its speed uncertainty was stated (as 0: exact) this run."""
-    if m.speed_sigma_m_s or stated:  # rounded to the sigma
+def _fmt_measurement(m):
+    """One line of a stored measurement."""
+    if m.speed_sigma_stated:  # rounded to the sigma
         numbers = (
             f"pitch {fmt_length(m.pitch_m, m.pitch_sigma_m)}, "
             f"elongation {fmt_pm(m.elongation_percent, m.elongation_sigma_percent, '%', sign=True)}"
         )
-    else:  # stored before the speed's uncertainty was required: no +-
+    else:  # the speed's uncertainty not stated: no +-
         numbers = (
             f"pitch {1000 * m.pitch_m:.2f} mm, elongation {m.elongation_percent:+z.2f} % ({SPEED_SIGMA_NOT_STATED})"
         )
@@ -223,9 +223,9 @@ def run_add(a):
     unit = a.unit or profile.unit
     sp = run_speed(a, profile=profile)  # --speed, else the profile's; --speed-uncertainty, else the profile's
     nominal = a.nominal_pitch if a.nominal_pitch is not None else (profile.nominal_pitch if profile else None)
-    # without a stated speed uncertainty the speed's sigma is stored as 0, which the fleet reads as "not stated":
+    # without a stated speed uncertainty the speed's sigma is stored as "not stated" (NULL; a stated 0 is kept as 0):
     # no +- is printed for it, and the trend of its unit is flagged (its intervals are too small)
-    sigma = sp.sigma or 0.0
+    sigma = sp.sigma
     check_inputs(unit=unit, speed=sp.value, speed_sigma=sigma, nominal_pitch=nominal, date=a.date)
     with _fleet_db(a) as db:
         n_notes = len(db.notes)
@@ -254,7 +254,7 @@ def run_add(a):
             {"database": path, "measurement": m.as_reported(), "link_scan": None if scan is None else scan.as_dict()},
         )
     else:
-        print(f"stored {_fmt_measurement(m, stated=sp.sigma is not None)}")
+        print(f"stored {_fmt_measurement(m)}")
         if scan is not None:
             from vibkit.diagnose.report.fleet_links import scan_advice
 
@@ -262,12 +262,12 @@ def run_add(a):
             advice = scan_advice(scan)
             print(f"links: {_fmt_scan(scan)}{why}" + (f"; {advice}" if advice else ""))
         msg(f"note: database {path}; date from {m.date_source}")
-    if sp.sigma is not None and not sp.sigma > 0:
+    if m.speed_sigma_stated and not m.speed_sigma_m_s > 0:
         msg(
             f"note: speed uncertainty stated as 0 m/s ({sp.sigma_source}): the elongation's +- is the frequency's "
-            "alone; the history stores it as 0, which its trend reads as not stated"
+            "alone (stored as a stated exact speed)"
         )
-    elif not m.speed_sigma_m_s:
+    elif not m.speed_sigma_stated:
         msg(
             "warning: stored without a speed uncertainty (not stated): its elongation has no +-, and the unit's "
             "rate and forecast intervals are too small; give --speed-uncertainty"

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import shlex
 import time
 
 from vibkit.sweep.plan import _number, parse_vary
@@ -95,10 +96,6 @@ def add_parser(subparsers):
 
 
 def run(a):
-    import numpy as np
-
-    import vibkit
-
     no_stdout(a.output, "a Zarr store (a folder)")
     # a Zarr store is a folder, re-used to resume: only refuse one that is the scene itself (the
     # library refuses a folder that is not this sweep's store unless --force)
@@ -110,7 +107,20 @@ def run(a):
             raise CLIError(f"--vary {key} given twice")
         varied[key] = spec
     t0 = time.perf_counter()
-    ds = vibkit.sweep(
+    try:
+        ds = _sweep(a, varied)
+    except OSError as exc:
+        if getattr(exc, "vibkit_resume", False):  # a full disk with runs stored: the command that resumes
+            exc.vibkit_note += f": {shlex.join(['vibkit', *a.argv])}"
+        raise
+    wall = time.perf_counter() - t0
+    return _print(a, ds, wall)
+
+
+def _sweep(a, varied):
+    import vibkit
+
+    return vibkit.sweep(
         a.scene,
         varied,
         output=a.output,
@@ -127,7 +137,11 @@ def run(a):
         check=a.check,
         max_result_bytes=a.max_result_bytes,
     )
-    wall = time.perf_counter() - t0
+
+
+def _print(a, ds, wall):
+    import numpy as np
+
     st = ds["status"]
     keys = [k.strip() for k in ds.attrs["varied_keys"].split(",")]
     meaning = dict(zip((int(v) for v in st.attrs["flag_values"]), st.attrs["flag_meanings"].split()))

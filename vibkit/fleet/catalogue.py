@@ -17,7 +17,8 @@ column                    required  meaning
                                     start time; dates without a time zone are UTC
 ``nominal_pitch_m``       yes       nominal link pitch [m]; empty: the unit's value from another
                                     line of the catalogue or from the database
-``speed_sigma_m_s``       no        standard deviation of the speed [m/s] (default 0)
+``speed_sigma_m_s``       no        standard deviation of the speed [m/s] (empty: not stated;
+                                    0: an exact speed)
 ``channel``               no        channel to analyse (default: the first)
 ``escalator``             no        the unit's escalator profile (TOML, path relative to the
                                     catalogue): an empty ``unit``, ``speed_m_s``,
@@ -71,7 +72,7 @@ class CatalogueRow:
     file: str
     unit: str
     speed_m_s: float
-    speed_sigma_m_s: float = 0.0
+    speed_sigma_m_s: float | None = None
     date: str | None = None
     nominal_pitch_m: float | None = None
     channel: str | None = None
@@ -197,11 +198,12 @@ def read_catalogue(path):
         ssig = (
             _number(v["speed_sigma_m_s"], spath, n, "speed_sigma_m_s", lo=0.0, hi=speed, unit="m/s")
             if v.get("speed_sigma_m_s")
-            else 0.0
+            else None
         )
         try:  # the stated ranges (vibkit.fleet.inputs), as for fleet add
             check_speed(speed, "column speed_m_s")
-            check_speed_sigma(ssig, speed, "column speed_sigma_m_s")
+            if ssig is not None:
+                check_speed_sigma(ssig, speed, "column speed_sigma_m_s")
         except FleetError as exc:
             raise FleetError(f"{spath}, line {n}: {exc}") from None
         date = None

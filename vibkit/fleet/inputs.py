@@ -76,15 +76,17 @@ def check_speed_sigma(value, speed, what="speed uncertainty") -> float:
     return v
 
 
-def check_inputs(*, unit, speed, speed_sigma=0.0, nominal_pitch=None, date=None):
+def check_inputs(*, unit, speed, speed_sigma=None, nominal_pitch=None, date=None):
     """Check what ``fleet add`` was given, before the recording is read; returns the parsed date (or None).
 
+    ``speed_sigma`` None means not stated.
     ``nominal_pitch`` None means the unit's stored value (checked by the caller when it is read).
     """
     if not str(unit).strip():
         raise FleetError("unit must be a non-empty identifier (--unit)")
     speed = check_speed(speed, "--speed / speed")
-    check_speed_sigma(speed_sigma, speed, "--speed-uncertainty / speed_sigma")
+    if speed_sigma is not None:
+        check_speed_sigma(speed_sigma, speed, "--speed-uncertainty / speed_sigma")
     if nominal_pitch is not None:
         check_pitch(nominal_pitch, "--nominal-pitch / nominal_pitch")
     if isinstance(date, _dt.datetime):

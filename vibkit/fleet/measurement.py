@@ -27,10 +27,10 @@ class Measurement:
 
     ``quality`` is ``"ok"``, ``"inconclusive"`` or ``"implausible"`` (:mod:`vibkit.fleet.quality`;
     ``quality_reason`` says why); only ``"ok"`` measurements enter a trend.  ``replaced``: the chain was
-    replaced before this measurement, which starts a new trend segment.  ``speed_sigma_m_s`` 0 means
+    replaced before this measurement, which starts a new trend segment.  ``speed_sigma_m_s`` None means
     the speed's uncertainty was not stated (``fleet add`` without ``--speed-uncertainty``, a catalogue
     without ``speed_sigma_m_s``): ``pitch_sigma_m`` and ``elongation_sigma_percent`` then hold the
-    frequency's part only, and :meth:`as_dict` gives them as null.
+    frequency's part only, and :meth:`as_reported` gives them as null.  0 is a stated sigma: an exact speed.
     """
 
     id: int | None
@@ -39,7 +39,7 @@ class Measurement:
     date_unix_s: float
     date_source: str
     speed_m_s: float
-    speed_sigma_m_s: float
+    speed_sigma_m_s: float | None
     nominal_pitch_m: float
     channel: str
     fundamental_hz: float
@@ -61,8 +61,8 @@ class Measurement:
 
     @property
     def speed_sigma_stated(self) -> bool:
-        """Whether the speed's uncertainty was stated (a stored 0 means not stated)."""
-        return bool(self.speed_sigma_m_s)
+        """Whether the speed's uncertainty was stated (None: not stated; 0: stated, an exact speed)."""
+        return self.speed_sigma_m_s is not None
 
     def as_dict(self) -> dict:
         """Every field as stored (``Measurement(**m.as_dict())`` is ``m``)."""
@@ -101,7 +101,7 @@ def analyse_recording(
     *,
     unit,
     speed,
-    speed_sigma=0.0,
+    speed_sigma=None,
     nominal_pitch,
     date=None,
     channel=None,
@@ -122,7 +122,8 @@ def analyse_recording(
     unit : str
         Escalator identifier.
     speed, speed_sigma : float
-        Chain speed and its standard deviation. [m/s]
+        Chain speed and its standard deviation [m/s]; ``speed_sigma`` None: not stated (stored as such), 0: an
+        exact speed.
     nominal_pitch : float
         Nominal link pitch. [m]
     date : str or datetime, optional
@@ -184,12 +185,12 @@ def analyse_recording(
                 f"{spath}: {exc}; give the measurement date (--date, or the catalogue's date column)"
             ) from None
         source = "recording start time"
-    try:  # every vibration channel (or the one asked for), as `vibkit pitch` decides; a sigma of 0 is "not stated"
+    try:  # every vibration channel (or the one asked for), as `vibkit pitch` decides; a sigma of None is "not stated"
         # the run's settings as every command resolves them (the profile's teeth, links per step, band, sensors)
         settings = resolve_settings(
             rec,
             speed=speed,
-            speed_sigma=speed_sigma or None,
+            speed_sigma=speed_sigma,
             nominal_pitch=nominal_pitch,
             n_links=n_links,
             profile=profile,
@@ -230,7 +231,7 @@ def analyse_recording(
         date_unix_s=d.timestamp(),
         date_source=source,
         speed_m_s=float(est.speed_m_s),
-        speed_sigma_m_s=float(est.speed_sigma_m_s or 0.0),
+        speed_sigma_m_s=None if est.speed_sigma_m_s is None else float(est.speed_sigma_m_s),
         nominal_pitch_m=float(est.nominal_pitch_m),
         channel=str(est.channel),
         fundamental_hz=float(est.fundamental_hz),

@@ -28,6 +28,8 @@ from .schema import (
     COLUMNS,
     FLAG_ALTERNATIVES_DDL,
     SCHEMA_VERSION,
+    SIGMA_UNSTATED_SQL,
+    SIGMA_ZERO_UNSTATED_BEFORE,
     link_ddl,
     measurement_ddl,
     signature_problem,
@@ -212,13 +214,21 @@ class PostgresStore(Store):
             self._upgrade(ver)
 
     def _upgrade(self, ver):
-        """Schema 2 -> 3 (the link scans) and 3 -> 4 (a flagged link's alternatives): in place, in one transaction
-        under the creators' lock; read only, the history is read as it is (schema 2: every measurement's link scan
-        "not run"; schema 3: its flagged links without alternatives)."""
+        """Schema 2 -> 3 (the link scans), 3 -> 4 (a flagged link's alternatives) and 4 -> 5 (a speed uncertainty not
+        stated stored as NULL, not 0): in place, in one transaction under the creators' lock; read only, the history
+        is read as it is (schema 2: every measurement's link scan "not run"; schema 3: its flagged links without
+        alternatives; before 5: a sigma of 0 read as not stated)."""
         if self.readonly:
             self.has_link_tables = ver >= 3
-            self.has_link_alternatives = False
-            lacks = "no alternative link numbers" if self.has_link_tables else "no link scans"
+            self.has_link_alternatives = ver >= 4
+            self.zero_sigma_unstated = ver < SIGMA_ZERO_UNSTATED_BEFORE
+            lacks = (
+                "a speed uncertainty of 0 read as not stated"
+                if self.has_link_alternatives
+                else "no alternative link numbers"
+                if self.has_link_tables
+                else "no link scans"
+            )
             self.notes.append(
                 f"{self.location}: read a schema-{ver} history without upgrading it ({lacks}); vibkit fleet "
                 f"add or scan upgrades it to schema {SCHEMA_VERSION}"
@@ -233,6 +243,9 @@ class PostgresStore(Store):
             for stmt in link_ddl("postgresql"):
                 con.execute(stmt)
             con.execute(f"ALTER TABLE flagged_link ADD COLUMN IF NOT EXISTS {FLAG_ALTERNATIVES_DDL}")
+            if now < SIGMA_ZERO_UNSTATED_BEFORE:  # its 0s meant "not stated"
+                con.execute("ALTER TABLE measurement ALTER COLUMN speed_sigma_m_s DROP NOT NULL")
+                con.execute(SIGMA_UNSTATED_SQL)
             con.execute(
                 "INSERT INTO link_scan (measurement_id, status, reason) SELECT id, 'not run', %s FROM measurement "
                 "WHERE id NOT IN (SELECT measurement_id FROM link_scan)",

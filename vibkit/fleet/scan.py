@@ -52,7 +52,7 @@ class _Job:
     path: str
     unit: str
     speed_m_s: float
-    speed_sigma_m_s: float
+    speed_sigma_m_s: float | None
     nominal_pitch_m: float
     date: str | None
     channel: str | None

@@ -23,6 +23,8 @@ from .schema import (
     QUALITY_FLAG_SQL,
     QUALITY_REASON_SQL,
     SCHEMA_VERSION,
+    SIGMA_UNSTATED_SQL,
+    SIGMA_ZERO_UNSTATED_BEFORE,
     V2_COLUMNS,
     column_def,
     link_ddl,
@@ -224,6 +226,8 @@ class SQLiteStore(Store):
                 raise FleetError(f"{self.path}: {problem}")
         if ver > SCHEMA_VERSION:
             raise FleetError(f"{self.path}: written by a newer vibkit (schema {ver}, this one reads {SCHEMA_VERSION})")
+        #: an older file read as it is: its speed_sigma_m_s 0 means "not stated" (schema 5 stores NULL)
+        self.zero_sigma_unstated = self.readonly and ver < SIGMA_ZERO_UNSTATED_BEFORE
         if self.readonly:
             if "measurement" not in tables:
                 raise FleetError(
@@ -242,8 +246,10 @@ class SQLiteStore(Store):
         if str(mode).lower() != "wal":  # pragma: no cover - file systems without shared memory
             raise FleetError(f"{self.path}: SQLite cannot use its WAL journal here (mode {mode!r})")
         con.execute("PRAGMA synchronous=FULL")
-        con.execute("PRAGMA foreign_keys=ON")
         if "measurement" not in tables or ver < SCHEMA_VERSION:
+            # the upgrade to schema 5 rebuilds the measurement table: without foreign keys while it does (the link
+            # scans would cascade away with the old table), checked before it commits
+            con.execute("PRAGMA foreign_keys=OFF")
             try:
                 with self.write_transaction(()):
                     self._create_or_upgrade()
@@ -257,6 +263,7 @@ class SQLiteStore(Store):
                 ) from None
             if "measurement" in tables:
                 self.notes.append(f"{self.path}: upgraded in place from schema {ver} to schema {SCHEMA_VERSION}")
+        con.execute("PRAGMA foreign_keys=ON")
 
     def _flag_columns(self):
         return {r[1] for r in self._con.execute("PRAGMA main.table_info(flagged_link)")}
@@ -289,15 +296,22 @@ class SQLiteStore(Store):
         self.notes.append(self._older_note(ver))
 
     def _older_note(self, ver):
-        lacks = "no alternative link numbers" if self.has_link_tables else "no link scans"
+        lacks = (
+            "a speed uncertainty of 0 read as not stated"
+            if self.has_link_alternatives
+            else "no alternative link numbers"
+            if self.has_link_tables
+            else "no link scans"
+        )
         return (
             f"{self.path}: read a schema-{ver} history without upgrading it (left as it is; {lacks}); run "
             f"vibkit fleet add or scan on it with write access to upgrade it to schema {SCHEMA_VERSION}"
         )
 
     def _create_or_upgrade(self):
-        """Inside the write lock: create the tables, or bring a version-1, -2 or -3 file to the current schema."""
+        """Inside the write lock: create the tables, or bring a version-1 to -4 file to the current schema."""
         con = self._con
+        ver = con.execute("PRAGMA user_version").fetchone()[0]  # again: another process may have upgraded it
         tables = [r[0] for r in con.execute("SELECT name FROM sqlite_master WHERE type = 'table'")]
         if "measurement" not in tables:
             for stmt in measurement_ddl("sqlite"):
@@ -316,6 +330,8 @@ class SQLiteStore(Store):
                 flag, why = measurement_quality(e, s)
                 if flag != "ok":
                     con.execute("UPDATE measurement SET quality = ?, quality_reason = ? WHERE id = ?", (flag, why, rid))
+            if ver < SIGMA_ZERO_UNSTATED_BEFORE:
+                self._rebuild_nullable_sigma()
         for stmt in link_ddl("sqlite"):
             con.execute(stmt)
         if "alternatives" not in self._flag_columns():  # a version-3 file: its flags are one number each
@@ -328,6 +344,30 @@ class SQLiteStore(Store):
         )
         con.execute(f"PRAGMA application_id={APPLICATION_ID}")
         con.execute(f"PRAGMA user_version={SCHEMA_VERSION}")
+
+    def _rebuild_nullable_sigma(self):
+        """Schema 4 -> 5, inside the write lock with foreign keys off: the measurement table rebuilt without
+        ``speed_sigma_m_s NOT NULL`` (SQLite cannot drop a constraint in place; its documented procedure: a new
+        table, the rows copied with their ids, the old one dropped, the new one renamed), the stored 0s, which meant
+        "not stated", as NULL.  The link scans keep their rows (they name the same ids); a dangling reference
+        stops the upgrade before it commits."""
+        con = self._con
+        new = "measurement_v5"
+        create, index = measurement_ddl("sqlite", table=new)
+        cols = ", ".join(("id",) + COLUMNS)
+        con.execute(f"DROP TABLE IF EXISTS {new}")
+        con.execute(create)
+        con.execute(f"INSERT INTO {new} ({cols}) SELECT {cols} FROM measurement")
+        con.execute("DROP TABLE measurement")
+        con.execute(f"ALTER TABLE {new} RENAME TO measurement")
+        con.execute(index)
+        con.execute(SIGMA_UNSTATED_SQL)
+        bad = con.execute("PRAGMA foreign_key_check").fetchall()
+        if bad:  # pragma: no cover - every link scan names a stored measurement
+            raise FleetError(
+                f"{self.path}: the upgrade to schema {SCHEMA_VERSION} found {len(bad)} link scan row(s) "
+                "naming no measurement; left as it was"
+            )
 
     @contextlib.contextmanager
     def write_transaction(self, unit):

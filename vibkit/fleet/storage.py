@@ -264,7 +264,7 @@ class FleetDB:
         *,
         unit,
         speed,
-        speed_sigma=0.0,
+        speed_sigma=None,
         date=None,
         nominal_pitch=None,
         channel=None,
@@ -283,7 +283,7 @@ class FleetDB:
         unit : str
             Escalator identifier.
         speed, speed_sigma : float
-            Chain speed and its standard deviation. [m/s]
+            Chain speed and its standard deviation [m/s]; ``speed_sigma`` None: not stated (stored as NULL).
         date : str, optional
             Measurement date, ISO 8601 (default: the recording's start time; refused without one).
         nominal_pitch : float, optional

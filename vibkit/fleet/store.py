@@ -34,6 +34,8 @@ class Store(abc.ABC):
     has_link_tables = True
     #: whether ``flagged_link`` keeps each flag's alternative numbers (False: schema 3 read without upgrading it)
     has_link_alternatives = True
+    #: an older history read as it is (schema < 5), whose ``speed_sigma_m_s`` 0 means "not stated"
+    zero_sigma_unstated = False
 
     # ----------------------------------------------------------------- to be supplied by a store
     @abc.abstractmethod
@@ -68,7 +70,7 @@ class Store(abc.ABC):
     def rows(self, where="", args=()):
         cur = self.execute(self.q(f"SELECT id, {', '.join(COLUMNS)} FROM measurement {where}"), args)
         try:
-            return [row_to_measurement(r) for r in cur.fetchall()]
+            return [row_to_measurement(r, zero_sigma_unstated=self.zero_sigma_unstated) for r in cur.fetchall()]
         except ValueError as exc:
             raise FleetError(f"{self.location}: {exc}") from None
 

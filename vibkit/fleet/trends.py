@@ -323,10 +323,10 @@ def unit_trend(unit, measurements, *, limits_percent=DEFAULT_LIMITS_PERCENT, cov
     flags += [f"{lo} measurement(s) left out" for lo in left_out if used]
     if repl:
         flags.append(f"chain replaced {repl[-1]['date_utc'][:10]} (new segment)")
-    unstated = sum(1 for m in used if not m.speed_sigma_m_s)
+    unstated = sum(1 for m in used if not m.speed_sigma_stated)
     if unstated:
         flags.append(
-            f"speed uncertainty not stated in {unstated} measurement(s) (stored as a sigma of 0): their sigmas, the rate's and "
+            f"speed uncertainty not stated in {unstated} measurement(s): their sigmas, the rate's and "
             "the forecast intervals are too small"
         )
     if used and ms[-1] is not last:
@@ -355,7 +355,7 @@ def unit_trend(unit, measurements, *, limits_percent=DEFAULT_LIMITS_PERCENT, cov
         replacements=repl,
         point_labels=tuple((m.id, scr.labels.get(m.id if m.id is not None else id(m), "ok")) for m in ms),
         flags=tuple(flags),
-        speed_sigma_stated=bool(last.speed_sigma_m_s),
+        speed_sigma_stated=last.speed_sigma_stated,
     )
 
 

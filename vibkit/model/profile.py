@@ -67,6 +67,14 @@ class DriveKeys(_Section):
     )
     teeth: int = key("", "teeth of the step-chain sprocket", 28, types=(int,), range=(8, 60, "teeth"))
     direction: str = key("", '"up" or "down": the way the steps travel on the incline', "up", types=(str,))
+    no_load_power: float = key(
+        "W",
+        "power the drive gives the step chain at the rated speed with no passengers (the motor's no-load input less "
+        "its and the gearbox's losses): the scene then drives its chain against that running resistance; not set: none, "
+        "the chain coasts at speed (a typical figure: 88.9 N per metre of loop x loop x speed, "
+        "vibkit.model.profile_scene)",
+        range=(0.0, 1e5, "W (a no-load drive power in kW?)"),
+    )
 
 
 @dataclass(frozen=True)
@@ -237,6 +245,7 @@ class Profile:
     incline_deg: float | None = None
     teeth: int = 28
     direction: str = "up"
+    no_load_power: float | None = None
     roller_radius: float | None = None
     tensioner_preload: float | None = None
     sensor: Sensor | None = None
@@ -406,6 +415,7 @@ def _profile(src, source, e, d, c, g, t, sensor, sensors) -> Profile:
         speed_uncertainty=d.get("speed_uncertainty"),
         teeth=d.get("teeth", DriveKeys.teeth),
         direction=d.get("direction", DriveKeys.direction),
+        no_load_power=d.get("no_load_power"),
         nominal_pitch=c["nominal_pitch"],
         links_per_step=c.get("links_per_step", ChainKeys.links_per_step),
         n_links=c.get("n_links"),

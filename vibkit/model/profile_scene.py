@@ -16,9 +16,18 @@ roller mass; the sprocket's mass and inertia with its pitch radius (a disc of th
 thickness: R^2 and R^4). Landings (0.8 m), transitions (1.5 m radius) and the tensioner's runs
 (0.4 m) are the reference's; the incline follows the rise (its length from the rise less the
 transitions' height) or the number of links (the loop n L plus the reference's tensioner slack).
-The speed controller (P, kp = 600 N m s) and the contact (k = 1e6 N/m^1.5, damping 0.3 s/m) are
-the reference's; the tensioner's preload, where the profile gives none, keeps every link in
-tension (:func:`default_preload`).
+The contact (k = 1e6 N/m^1.5, damping 0.3 s/m) is the reference's; the tensioner's preload, where the
+profile gives none, keeps every link in tension (:func:`default_preload`).
+
+A driven chain (forward scenes): a real unit's drive works all the time against the steps' rolling resistance,
+the chain's articulation and the handrails, so its teeth always carry load; a chain without friction coasts at
+steady speed in the teeth's backlash.  The scene carries that running resistance as ``[effects]
+rolling_resistance`` (mu m g on every roller, the no-load drive power mu g M v for a chain and steps of mass M
+at speed v; :func:`running_resistance`) where the profile states ``drive.no_load_power``; its speed controller is
+then a PI controller tuned to the unit's inertia (:func:`drive_gains`), which holds the rated speed against the
+resistance with no steady error.  Without the key the scene is as before (no running resistance, the reference's
+P controller, kp = 600 N m s: the chain coasts at speed); :data:`TYPICAL_RESISTANCE_N_PER_M` is a typical figure
+to state where the firm has none of its own.  The study's own scenes (``sim/``) keep their published settings.
 """
 
 from __future__ import annotations
@@ -30,7 +39,17 @@ import numpy as np
 from .params import reference_chain, reference_guide, reference_sprocket
 from .scene import Scene, SceneError, parse_scene
 
-__all__ = ["profile_scene", "scene_text", "roller_radius_of", "link_count", "geometry_note", "MASS_PER_METRE"]
+__all__ = [
+    "profile_scene",
+    "scene_text",
+    "roller_radius_of",
+    "link_count",
+    "geometry_note",
+    "running_resistance",
+    "drive_gains",
+    "MASS_PER_METRE",
+    "TYPICAL_RESISTANCE_N_PER_M",
+]
 
 _RC, _RG, _RS = reference_chain(), reference_guide(), reference_sprocket()
 REFERENCE_PITCH = _RC.link_pitch
@@ -42,6 +61,15 @@ DEFAULT_INCLINE_DEG = 30.0
 #: forward runs: settle after the start at speed, then enough link passes to read a frequency [s]
 DEFAULT_DURATION = {"forward": 20.0, "inverse": 10.0}
 OUTPUT_STEP = 0.005
+#: typical running resistance of an escalator's chain and steps with its handrails, per metre of the chain's
+#: loop [N/m]: Transport for London's figure for a 15 m, 30 degree Underground escalator at 0.75 m/s, "allowing
+#: 2 kW more for friction" (The Mathematics of Escalators on the London Underground, TfL Mechanical Engineering),
+#: spread over the incline's two strands (2 x 15 m; the landings and heads left out, so rather high than low):
+#: 2000 W / 0.75 m/s / 30 m.  About 0.9 kW of no-load drive power for the reference escalator at 0.5 m/s.
+TYPICAL_RESISTANCE_N_PER_M = 2000.0 / 0.75 / 30.0
+#: the speed controller's closed loop: natural frequency [rad/s] and damping ratio (:func:`drive_gains`)
+DRIVE_BANDWIDTH, DRIVE_DAMPING = 100.0, 0.7
+G = 9.81
 
 
 def roller_radius_of(profile) -> tuple[float, str]:
@@ -190,6 +218,43 @@ def geometry_note(profile) -> str | None:
     )
 
 
+def running_resistance(f) -> tuple[float, float, str]:
+    """``(coefficient, no-load drive power [W], where it came from)`` of the scene's running resistance for the
+    filled numbers ``f`` of a profile: mu = P / (g M v) for the chain and steps' mass M = n_links x roller_mass at
+    the rated speed v, P the profile's ``drive.no_load_power``, else :data:`TYPICAL_RESISTANCE_N_PER_M` times the
+    loop's length times v.  A power the chain's weight cannot carry (mu >= 1) is a SceneError naming the key."""
+    p = f.profile
+    mass = f.n_links * f.roller_mass
+    v = abs(float(p.speed))
+    if p.no_load_power is not None:
+        power = float(p.no_load_power)
+        src = f"drive.no_load_power {power:g} W at {v:g} m/s"
+    else:  # what a firm without a figure of its own may state
+        power = TYPICAL_RESISTANCE_N_PER_M * f.n_links * f.pitch * v
+        src = (
+            f"filled: typical {TYPICAL_RESISTANCE_N_PER_M:.1f} N per metre of loop (TfL: 2 kW of friction on a 15 m "
+            f"escalator at 0.75 m/s), {power:.0f} W at {v:g} m/s; drive.no_load_power states the unit's"
+        )
+    mu = power / (G * mass * v)
+    if not mu < 1.0:
+        raise SceneError(
+            f"{p.source}: 'drive.no_load_power' = {power:g} W at {v:g} m/s is more than the weight of the chain and "
+            f"steps ({mass:.0f} kg: {MASS_PER_METRE:g} kg per metre of chain) can resist ({G * mass * v:.0f} W); give "
+            "the power the drive gives the chain (the motor's no-load input less its and the gearbox's losses), in W"
+        )
+    return mu, power, src
+
+
+def drive_gains(f) -> tuple[float, float]:
+    """``(kp [N m s], ki [N m])`` of the scene's PI speed controller: the closed loop of the sprocket and the chain
+    (inertia J = M R^2 + J_sprocket at the pitch radius R) at :data:`DRIVE_BANDWIDTH` with :data:`DRIVE_DAMPING`:
+    kp = 2 zeta w J, ki = w^2 J.  Stiff enough to hold the rated speed against the running resistance (no steady
+    error: the integral carries it), soft enough for the solver's usual steps."""
+    inertia = f.n_links * f.roller_mass * f.pitch_radius**2 + f.inertia
+    w, zeta = DRIVE_BANDWIDTH, DRIVE_DAMPING
+    return float(f"{2.0 * zeta * w * inertia:.4g}"), float(f"{w * w * inertia:.4g}")
+
+
 def link_count(profile) -> tuple[int, str]:
     """``(links, where the count came from)`` of the profile's scene: ``chain.n_links`` as given, else the
     whole steps vibkit derives from ``geometry.rise`` and ``geometry.incline_deg``; a SceneError where the
@@ -287,6 +352,20 @@ def scene_text(profile, analysis: str = "forward", duration: float | None = None
         else f"filled: twice the weight of the steepest strand's chain, at least {MIN_PRELOAD:g} N"
     )
     if analysis == "forward":
+        if p.no_load_power is not None:  # a driven chain: the stated running resistance, a PI drive that holds speed
+            mu, _, mu_src = running_resistance(f)
+            kp, ki = drive_gains(f)
+            drive = [
+                f"motor = {{ kp = {kp!r}, ki = {ki!r}, speed = {_fmt(p.set_speed)} }}  # drive.speed{_down(p)}: the "
+                "step speed on the straight; PI gains from the unit's inertia",
+                f"rolling_resistance = {{ coefficient = {mu:.6g} }}  # {mu_src}",
+            ]
+        else:
+            drive = [
+                f"motor = {{ kp = 600.0, speed = {_fmt(p.set_speed)} }}  # drive.speed{_down(p)}: the step speed on "
+                "the straight",
+                "# no running resistance (drive.no_load_power not stated): the chain coasts at speed",
+            ]
         lines += [
             "[run]",
             f"duration = {dur:g}  # [s]",
@@ -297,7 +376,7 @@ def scene_text(profile, analysis: str = "forward", duration: float | None = None
             "[effects]",
             "gravity = true",
             "contact = { stiffness = 1.0e6, exponent = 1.5, damping = 0.3 }  # reference",
-            f"motor = {{ kp = 600.0, speed = {_fmt(p.set_speed)} }}  # drive.speed{_down(p)}: the step speed on the straight",
+            *drive,
             f"tensioner = {{ preload = {preload:.6g} }}  # {pre_src} [N]",
             "",
             "[solver]",

@@ -33,6 +33,7 @@ works as usual).
 from __future__ import annotations
 
 import dataclasses
+import errno
 import itertools
 import math
 import os
@@ -45,6 +46,9 @@ from ..runtime.progress import Progress
 from .plan import _PRODUCES, SweepError, _source_of, plan_sweep, varied_text
 from .records import STATUS, SUMMARIES, _failed_record
 from .store import _assemble, _Store
+
+#: the errors of a store that takes no more bytes: a full disk, a file-size limit (ulimit -f), a used-up quota
+_NO_ROOM = (errno.ENOSPC, errno.EFBIG, errno.EDQUOT)
 
 __all__ = ["sweep", "summarize"]
 
@@ -390,6 +394,10 @@ def sweep(
                 ds = store.open()
             else:
                 store.snapshot(ds)  # xarray.open_zarr reads what the store holds so far
+    except OSError as exc:
+        if store is None or exc.errno not in _NO_ROOM:
+            raise
+        raise _no_room(exc, store, n) from None
     except KeyboardInterrupt as exc:
         if store is not None:
             done = store.count_done()
@@ -400,6 +408,25 @@ def sweep(
         raise
     ds.attrs.update(runs_computed=computed, runs_reused=reused)
     return ds
+
+
+def _no_room(exc, store, n):
+    """The error of a sweep whose store took no more bytes (a full disk, a file-size limit, a quota), naming the
+    store: one that this run created and in which no run was stored is removed (:meth:`_Store.discard_if_unused`);
+    one with finished runs stays, the point the same sweep resumes from (``vibkit_resume`` True)."""
+    err = OSError(exc.errno, exc.strerror, str(store.path))
+    err.vibkit_resume = False
+    if store.discard_if_unused():
+        err.vibkit_note = "nothing was kept: the store this sweep created held no finished run and was removed"
+        return err
+    try:
+        done = store.count_done()
+    except Exception:  # noqa: BLE001 - a store that cannot be read back on a full disk: say what is certain
+        done = None
+    stored = "its finished runs are" if done is None else f"{done} of {n} runs are"
+    err.vibkit_note = f"{stored} stored there; free space, then run the same sweep again to resume"
+    err.vibkit_resume = True
+    return err
 
 
 def _reopen(store, n, *, computed=0, reused=None):

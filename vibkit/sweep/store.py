@@ -66,6 +66,9 @@ class _Store:
         self.plan = plan
         definition = plan.definition()
         self.complete = False
+        #: ``(st_dev, st_ino)`` of the store's folder when this process created it (None: it was there before, or
+        #: another process made it): :meth:`discard_if_unused` removes only that folder, and only while it is unused
+        self.created = None
         if self.path.exists():
             existing = self._definition()
             if existing is None:
@@ -94,6 +97,8 @@ class _Store:
                 zarr.open_group(str(tmp), path="runs", mode="w", **_zkw())
                 zarr.consolidate_metadata(str(tmp))  # xarray.open_zarr reads the (empty) root without a warning
                 os.rename(tmp, self.path)  # the store appears whole, with its definition
+                st = os.stat(self.path)
+                self.created = (st.st_dev, st.st_ino)
             except OSError as exc:
                 if not self.path.is_dir():
                     raise
@@ -123,6 +128,27 @@ class _Store:
             yield
         finally:
             os.close(fd)  # releases the lock
+
+    def discard_if_unused(self) -> bool:
+        """Remove the store if this process created it, it is still that folder (checked by identity, not by name)
+        and no run is stored or being written in it (under the exclusive lock, which writers of runs share): a sweep
+        that failed before its first run leaves nothing behind.  True when removed; a store with finished runs is
+        kept (it is where the sweep resumes), as is one that another process made, replaced or writes into."""
+        if self.created is None:
+            return False
+        try:
+            with self.lock(exclusive=True):
+                st = os.stat(self.path)
+                if (st.st_dev, st.st_ino) != self.created or self._state() == "complete":
+                    return False
+                runs = self.path / "runs"
+                # a run stored (by this process or another: the point the sweep resumes from), or one being written
+                if runs.is_dir() and any(c.name not in (".zgroup", ".zattrs", ".zmetadata") for c in runs.iterdir()):
+                    return False
+                shutil.rmtree(self.path)
+        except OSError:
+            return False
+        return True
 
     def count_done(self) -> int:
         """Runs stored (every run once the store is complete)."""
