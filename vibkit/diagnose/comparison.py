@@ -24,6 +24,7 @@ import scipy.stats
 
 from ..analyses.simulation import simulate
 from ..io import read_recording
+from ..model.profile import Profile
 from ..model.scene import Scene
 from ..scenes import find
 from ..signal import compare_spectra, order_spectrum, resample_to_angle
@@ -37,8 +38,6 @@ from .speed import speed_from_recording
 
 if TYPE_CHECKING:  # for the annotations only
     import xarray as xr
-
-    from ..model.profile import Profile
 
 __all__ = [
     "Comparison",
