@@ -125,3 +125,76 @@ def test_a_down_running_inverse_counts_its_links(duration):
     turned = z * abs(theta[-1] - theta[0]) / (2 * np.pi * (t[-1] - t[0]))
     assert turned == pytest.approx(ds.attrs["link_pass_frequency_hz"], rel=1e-12)
     assert theta[-1] > theta[0]  # down: the sprocket turns the other way (counterclockwise)
+
+
+def _positions_run(scene, duration, compiled, rollers=(1, 80, 159)):
+    from vibkit.analyses.inverse import inverse_dynamics
+    from vibkit.model.escalator import EscalatorModel
+
+    m = scene.motion
+    return inverse_dynamics(
+        EscalatorModel(scene),
+        speed=m.speed,
+        duration=duration,
+        step=m.step,
+        start=m.start,
+        effects=scene.effects,
+        outputs=["delta", "closure_residual", "roller_position"],
+        rollers=rollers,
+        progress=False,
+        compiled=compiled,
+    )
+
+
+def _check_same_positions(a, b):
+    """Two position-only runs of one scene agree to their tolerances: delta and every roller to 1e-12 m (the
+    closure's tolerance is 1e-13 m on the ghost residual, roller 1's place 1e-13 m along the guide)."""
+    assert a.time.size == b.time.size
+    np.testing.assert_allclose(a.delta.values, b.delta.values, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(a.roller_position.values, b.roller_position.values, rtol=0, atol=1e-12)
+    assert float(a.closure_residual.max()) <= 1e-12 and float(b.closure_residual.max()) <= 1e-12
+    assert a.attrs["link_pass_frequency_hz"] == pytest.approx(b.attrs["link_pass_frequency_hz"], rel=1e-12)
+
+
+@pytest.mark.parametrize("speed", [0.49, -0.49])
+def test_compiled_positions_equal_the_python_loop(speed):
+    """The position-only inverse run (the shipped leon scene: delta only) in its compiled loop, which solves the
+    two conditions of a sample the other way round from predicted starts, gives the Python loop's positions to
+    the tolerances both solve to, up and down; and roller 1 sits at its imposed arc length on the deformed guide
+    (an independent check: the guide's own map, not the loop's)."""
+    shipped = load_scene(SIM / "leon.toml")
+    scene = parse_scene(shipped.text.replace("speed = 0.49 ", f"speed = {speed} "), "leon")
+    fast = _positions_run(scene, 3.0, True)
+    slow = _positions_run(scene, 3.0, False)
+    _check_same_positions(fast, slow)
+    from vibkit.model.escalator import EscalatorModel
+
+    guide = EscalatorModel(scene).guide
+    start = scene.motion.start
+    for j in (0, 1, 2, 3, 250, 599):
+        # the guide's point at that arc length, through its inverse map (local_inverse, not the loop's Newton)
+        want = guide.position(start + speed * float(fast.time[j]), float(fast.delta[j]))
+        np.testing.assert_allclose(fast.roller_position.sel(roller=1).values[j], want, rtol=0, atol=1e-10)
+
+
+def test_compiled_positions_hand_samples_to_the_python_loop(monkeypatch):
+    """A sample the compiled loop leaves (a closure it could not make) goes to the Python loop, which takes it up
+    where the compiled loop stood and hands the next back: made to stop every fifth sample, the run is the same."""
+    import vibkit.analyses.inverse as inverse
+
+    real = inverse.inverse_positions
+    calls = []
+
+    def stopping(*args):
+        args = list(args)
+        t, j0 = args[8], args[9]
+        calls.append(j0)
+        args[8] = t[: min(t.size, j0 + 5)]
+        return real(*args)
+
+    monkeypatch.setattr(inverse, "inverse_positions", stopping)
+    scene = load_scene(SIM / "leon.toml")
+    handed = _positions_run(scene, 1.0, True)
+    assert len(calls) > 20  # the Python loop did every sixth sample
+    monkeypatch.undo()
+    _check_same_positions(handed, _positions_run(scene, 1.0, False))

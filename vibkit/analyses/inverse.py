@@ -16,9 +16,12 @@ import math
 
 import numpy as np
 
+from ..model.chain import fill_partials, sensitivity, walk
 from ..model.dynamics import link_multipliers
 from ..model.flat_roller import add_flats
+from ..model.guide import CUMD, S0, local_map, locate
 from ..model.schema import TensionerOptions, effect_options, gravity_of
+from ..runtime.kernel import kernel
 from ..runtime.progress import Progress
 from .results import counted_speed, make_dataset, output_times
 
@@ -42,7 +45,190 @@ def _solve_s0(model, s_target, s0_guess):
     raise RuntimeError(f"inverse dynamics: could not place roller 1 at s = {s_target:.9g} m")
 
 
-def inverse_dynamics(model, *, speed, duration, step, start=0.0, effects=None, outputs=(), rollers=(), progress=True):
+@kernel()
+def _ieee_remainder(x, y):
+    """``math.remainder(x, y)`` for y > 0 (exact, as IEEE 754's: fmod is exact, and so is taking y off a
+    remainder in [y / 2, y]); ties go to the even quotient."""
+    r = np.fmod(x, y)
+    half = 0.5 * y
+    if r > half or (r == half and np.fmod(x - r, 2.0 * y) != 0.0):
+        r -= y
+    elif r < -half or (r == -half and np.fmod(x - r, 2.0 * y) != 0.0):
+        r += y
+    return r
+
+
+@kernel()
+def _closure_residual(xs, zs, n, pitches):
+    """:func:`vibkit.model.chain.closure_residual` (max over the n links of | |r_{i+1} - r_i| - L_i |) with the
+    square root of the squares where that takes ``math.hypot`` (a third of the time, the same to rounding of
+    the link's length: the chain's scale is metres, far from hypot's overflow). [m]"""
+    worst = 0.0
+    for i in range(n):
+        j = i + 1 if i + 1 < n else 0
+        dx = xs[j] - xs[i]
+        dz = zs[j] - zs[i]
+        d = abs(math.sqrt(dx * dx + dz * dz) - pitches[i])
+        if d > worst:
+            worst = d
+    return worst
+
+
+@kernel()
+def _place(tab, p0, s_target, s0, delta):
+    """Roller 1's s0 at which its arc length on the guide deformed by ``delta`` is ``s_target`` (mod the loop),
+    to |f| < 1e-13 m as :func:`_solve_s0` takes it: Newton's method on the guide's local map, no walk of the
+    chain. Returns (s0, converged)."""
+    for _ in range(20):
+        s0w = s0 - p0 * math.floor(s0 / p0)
+        k = locate(tab, s0w)
+        lm, sig, _, _, _ = local_map(tab, k, s0w - tab[k, S0], delta)
+        f = _ieee_remainder(tab[k, S0] + tab[k, CUMD] * delta + lm - s_target, p0 - 2.0 * delta)
+        if abs(f) < 1e-13:
+            return s0, True
+        s0 -= f / sig
+    return s0, False
+
+
+@kernel()
+def inverse_positions(
+    tab,
+    p0,
+    lt,
+    pitches,
+    n,
+    tol,
+    start,
+    speed,
+    t,
+    j0,
+    s0,
+    delta,
+    ridx,
+    s0_1,
+    deltas,
+    resid,
+    rpos,
+    rs0,
+    scratch,
+    kk,
+    part,
+):
+    """The position-only inverse run in one compiled loop: samples ``j0``, ``j0 + 1``, ... of the times ``t``,
+    from roller 1 at ``s0`` and the closure's guess ``delta``.
+
+    The two conditions of a sample are those of the Python loop (:func:`_solve_s0` and
+    :meth:`vibkit.model.chain.Chain.configure`), to the same tolerances: roller 1 at its arc length
+    ``start + speed t`` on the deformed guide (|f| < 1e-13 m), and the chain closed (the ghost residual
+    |h| <= tol, or a step below delta's rounding with |h| < 1e3 tol, as solve_closure takes it). They are
+    solved the other way round: for a trial delta roller 1 is placed on the guide that delta deforms (the guide's
+    local map only: :func:`_place`), and one walk of the chain from there gives h; delta steps along the
+    secant of h (its first slope dh/ddelta from the sensitivities). Each sample starts on the parabola
+    through the last three, so that a sample takes two or three walks where the Python loop's Newton steps
+    take six walks and three sets of partial derivatives. The numbers differ from the Python loop's within
+    those tolerances (the iterations end elsewhere inside them).
+
+    Fills ``s0_1``, ``deltas``, ``resid`` and, for the rollers ``ridx`` (from 0), ``rpos`` and ``rs0``;
+    ``scratch`` (6, n + 1), ``kk`` (n + 1,), ``part`` (n + 1, 12) are work arrays. Returns (the first sample
+    not done, roller 1's s0 and the closure's guess there): a sample whose placement or closure fails here
+    is left to the Python loop, which takes it up from there and says why."""
+    sw, lam, xs, zs, alpha, beta = scratch[0], scratch[1], scratch[2], scratch[3], scratch[4], scratch[5]
+    slope = 0.0  # dh/ddelta along the placed roller 1: unknown
+    eps8 = 8.0 * 2.220446049250313e-16
+    for j in range(j0, t.size):
+        s_target = start + speed * t[j]
+        s0_j, delta_j = s0, delta  # where the Python loop takes the sample up again, should it fail here
+        if j >= j0 + 3:  # on the parabola through the last three
+            s0 = 3.0 * (s0_1[j - 1] - s0_1[j - 2]) + s0_1[j - 3]
+            delta = 3.0 * (deltas[j - 1] - deltas[j - 2]) + deltas[j - 3]
+        ok = False
+        g_prev = h_prev = 0.0
+        for it in range(30):
+            s0, placed = _place(tab, p0, s_target, s0, delta)
+            if not placed:
+                return j, s0_j, delta_j
+            h = walk(tab, p0, s0, delta, pitches, n, sw, kk, lam, xs, zs)
+            if math.isnan(h):
+                return j, s0_j, delta_j
+            if abs(h) <= tol:
+                ok = True
+                break
+            if it > 0 and abs(h - h_prev) > 1e3 * tol:
+                sec = (h - h_prev) / (delta - g_prev)  # where h changed by well over its rounding
+                if 0.25 * slope < sec < 4.0 * slope:
+                    slope = sec
+            if slope <= 0.0 or it == 10:
+                fill_partials(tab, p0, sw, kk, lam, delta, n + 1, part)
+                sensitivity(part, xs, zs, n + 1, alpha, beta)
+                slope = beta[n]
+                if not slope > 0.0:
+                    return j, s0_j, delta_j
+            step = -h / slope
+            if abs(step) <= eps8 * max(abs(delta), 1e-3) and abs(h) < 1e3 * tol:
+                ok = True  # stalled at the resolution of delta: rounding keeps |h| just above tol
+                break
+            g_prev, h_prev = delta, h
+            delta += step
+        if not ok:
+            return j, s0_j, delta_j
+        s0_1[j] = s0
+        deltas[j] = delta
+        resid[j] = _closure_residual(xs, zs, n, pitches)
+        for i in range(ridx.size):
+            r = ridx[i]
+            rpos[j, i, 0] = xs[r]
+            rpos[j, i, 1] = zs[r]
+            rs0[j, i] = sw[r]
+    return t.size, s0, delta
+
+
+class _Positions:
+    """The compiled loop of a position-only inverse run (:func:`inverse_positions`) with its work arrays."""
+
+    def __init__(self, model, start, speed, t, ridx, s0_1, out, rpos, rs0):
+        chain = model.chain
+        n = chain.n
+        self.chain, self.start, self.speed, self.t = chain, float(start), float(speed), t
+        self.ridx = np.ascontiguousarray(ridx, dtype=np.int64)
+        self.s0_1, self.delta, self.resid, self.rpos, self.rs0 = s0_1, out["delta"], out["closure_residual"], rpos, rs0
+        self.scratch = np.empty((6, n + 1))
+        self.kk = np.empty(n + 1, dtype=np.int64)
+        self.part = np.empty((n + 1, 12))
+
+    def run(self, j, s0):
+        """Samples from ``j`` on, roller 1 at ``s0`` to start from; returns (the first not done, roller 1's s0)."""
+        chain, g = self.chain, self.chain.guide
+        model_lt = g.params.tensioner_length
+        done, s0, delta = inverse_positions(
+            g.table,
+            g.p0,
+            model_lt,
+            chain.pitches,
+            chain.n,
+            chain.tol,
+            self.start,
+            self.speed,
+            self.t,
+            j,
+            float(s0),
+            float(chain._delta_guess),
+            self.ridx,
+            self.s0_1,
+            self.delta,
+            self.resid,
+            self.rpos,
+            self.rs0,
+            self.scratch,
+            self.kk,
+            self.part,
+        )
+        chain._delta_guess = float(delta)  # the closure's guess where the Python loop goes on
+        return int(done), float(s0)
+
+
+def inverse_dynamics(
+    model, *, speed, duration, step, start=0.0, effects=None, outputs=(), rollers=(), progress=True, compiled=True
+):
     """Run the inverse dynamics; see module docstring.
 
     Parameters
@@ -58,6 +244,10 @@ def inverse_dynamics(model, *, speed, duration, step, start=0.0, effects=None, o
         ``gravity`` and ``passengers`` as in the scene (others are rejected at scene load).
     outputs : sequence of str
         Names from :data:`vibkit.model.scene.OUTPUTS` ``["inverse"]``.
+    compiled : bool
+        Outputs of the chain's positions only (no rates or forces): solve the samples in one compiled loop
+        (:func:`inverse_positions`: the same tolerances as the Python loop, its numbers within them, many times
+        faster); False: the Python loop.
 
     Returns
     -------
@@ -104,7 +294,17 @@ def inverse_dynamics(model, *, speed, duration, step, start=0.0, effects=None, o
     scratch = np.empty(n)
     theta0 = None
     bar = Progress(nt, "inverse dynamics", enabled=progress)
+    compiled = None if need_motion or not compiled else _Positions(model, start, speed, t, ridx, s0_1, out, rpos, rs0)
+    done = 0  # samples the compiled loop has done
     for j, tj in enumerate(t):
+        if j < done:
+            continue
+        if compiled is not None and theta0 is not None:
+            # positions only: the samples from here in one compiled loop, to the end or to one it leaves to this loop
+            done, s0 = compiled.run(j, s0)
+            bar.update(done)
+            if j < done:
+                continue
         s_target = start + speed * tj
         s0, conf, (sig, sd, c, dsd, lss, lsd) = _solve_s0(model, s_target, s0)
         s0_1[j] = s0

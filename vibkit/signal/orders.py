@@ -9,6 +9,7 @@ link-pass frequency; with the sprocket shaft angle, pass ``order_of_reference=1`
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -105,8 +106,18 @@ class PhaseTrack:
 SPECTROGRAM_BLOCK_VALUES = 1 << 21
 
 
-def _lowpass(y, fs, cutoff, order=4, padtype="even"):
+@functools.lru_cache(maxsize=64)
+def _butter_low(order, cutoff, fs):
+    """The Butterworth low-pass's second-order sections (read-only): designed once per order, cutoff and rate,
+    where a record's harmonics and every record of a fleet ask for the same few (the design cost as much as
+    the filtering of a 30 s record)."""
     sos = scipy.signal.butter(order, cutoff, btype="low", fs=fs, output="sos")
+    sos.flags.writeable = False
+    return sos
+
+
+def _lowpass(y, fs, cutoff, order=4, padtype="even"):
+    sos = _butter_low(int(order), float(cutoff), float(fs)).copy()  # scipy's filter takes a writable one
     # Even (mirror) extension over three time constants: no start-up transient, and unlike the
     # default odd extension it does not hinge on the (noisy) end samples.
     padlen = min(y.size - 1, int(3.0 * fs / cutoff))

@@ -36,11 +36,12 @@ _COMMENT = ("#", "%", "//", "!")
 
 def _kind(cell: str, dec: str) -> str:
     """'num', 'missing', 'stamp' or 'text'."""
-    if cell.lower() in _MISSING:
-        return "missing"
-    if cell.lower() in _INFINITE:
+    if _NUM[dec].fullmatch(cell):  # the common case first: a number is none of the missing or infinite words
         return "num"
-    if _NUM[dec].fullmatch(cell):
+    low = cell.lower()
+    if low in _MISSING:
+        return "missing"
+    if low in _INFINITE:
         return "num"
     if _STAMP_ISO.fullmatch(cell) or _STAMP_DMY.fullmatch(cell) or _STAMP_TOD.fullmatch(cell):
         return "stamp"
