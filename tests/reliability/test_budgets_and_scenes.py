@@ -84,6 +84,46 @@ def test_wall_time_budget_stops_with_a_clear_error():
         vibkit.simulate(scene, max_wall_time=0.2, progress=False)
 
 
+def test_a_short_budget_on_a_machine_without_the_kernels_stops_before_compiling(monkeypatch):
+    """A budget of seconds where the kernels still have to be compiled (a minute after an install) is exceeded by the
+    compile alone: said before it starts, not found after it (the reliability corpus's 0.5 s case ran 389 s of
+    compile on a loaded machine first)."""
+    from vibkit.analyses import integrate
+    from vibkit.analyses.integrate import IntegrationError
+
+    scene = load_scene(SIM / "thesis-forward.toml")
+    monkeypatch.setattr(integrate, "_cold", lambda method: True)
+    with pytest.raises(
+        IntegrationError, match=r"wall-time budget of 0.5 s exceeded before the first step, by compiling"
+    ):
+        vibkit.simulate(scene, max_wall_time=0.5, progress=False)
+
+
+def test_a_kernel_index_counts_only_for_the_source_it_was_written_for(tmp_path, monkeypatch):
+    """numba drops an index whose stamp (the source's modification time and size) is not the source's: such an index
+    is no cache, and the compile note and the budget's check must not take it for one."""
+    import os
+    import pickle
+
+    from vibkit.runtime import kernel_cache
+    from vibkit.runtime.kernel_cache import kernel_cached
+
+    monkeypatch.delenv("NUMBA_CACHE_DIR", raising=False)  # the index beside the source, as numba keeps it by default
+    monkeypatch.setitem(kernel_cache._STATE, "dir", None)
+    src = tmp_path / "mod.py"
+    src.write_text("x = 1\n")
+    cache = tmp_path / "__pycache__"
+    cache.mkdir()
+    st = os.stat(src)
+    with open(cache / "mod.kern-3.py311.nbi", "wb") as f:
+        pickle.dump("0.59.1", f)
+        f.write(pickle.dumps(((st.st_mtime, st.st_size), {})))
+    assert kernel_cached(str(src), "kern")
+    assert not kernel_cached(str(src), "other")
+    src.write_text("x = 22\n")  # edited: the index is stale
+    assert not kernel_cached(str(src), "kern")
+
+
 def test_tiny_max_step_refused_before_work():
     scene = parse_scene(
         _text("thesis-forward", **{'method = "dopri5"': 'method = "dopri5"\nmax_step = 1e-12'}), "s.toml"

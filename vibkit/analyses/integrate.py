@@ -450,11 +450,21 @@ def _dopri5_chunk(
     return 0, t, h, idx
 
 
-def _compile_note(method):
-    """What the progress bar says first when the right-hand side (and the dopri5 loop) is not compiled yet."""
+#: a wall-time budget under this cannot cover compiling the kernels after an install (64-70 CPU-s on two cores);
+#: such a budget on a machine without them compiled is exceeded before the first step [s]
+MIN_COLD_BUDGET_S = 10.0
+
+
+def _cold(method) -> bool:
+    """Whether the right-hand side (and the dopri5 loop) is not compiled and cached on this machine yet."""
     cold = not kernel_cached(pitch_table.__file__, "rhs")
     if method == "dopri5":
         cold = cold or not kernel_cached(__file__, "_dopri5_chunk")
+    return cold
+
+
+def _compile_note(cold):
+    """What the progress bar says first when the kernels are not compiled yet."""
     return COMPILING_NOTE if cold else ""
 
 
@@ -517,7 +527,16 @@ def integrate(
     y = np.array(y0, dtype=float)
     y_out = np.full((t_out.size, y.size), np.nan)
     t0 = time.perf_counter()
-    bar = Progress(t_out[-1], label, enabled=progress, note=_compile_note(method) if progress else "")
+    cold = _cold(method)
+    if cold and max_wall_time < MIN_COLD_BUDGET_S:
+        # the budget counts from here, the compile included: a short one would only be found exceeded after a minute
+        raise IntegrationError(
+            f"{method}: wall-time budget of {max_wall_time:g} s exceeded before the first step, by compiling the "
+            "model's kernels for this machine (about a minute, once, then cached: run once without the budget)",
+            0.0,
+            y,
+        )
+    bar = Progress(t_out[-1], label, enabled=progress, note=_compile_note(cold) if progress else "")
     if method == "dopri5":
         counters = np.zeros(len(COUNTER_NAMES), dtype=np.int64)
         ctl = np.zeros(len(CTL_NAMES))

@@ -20,6 +20,7 @@ case needs it, so ``vibkit --version`` stays cheap.
 from __future__ import annotations
 
 import os
+import pickle
 import stat
 import sys
 import tempfile
@@ -188,16 +189,35 @@ def cache_dir() -> str | None:
     return _STATE["dir"]
 
 
+def _index_current(index_path: str, source: str) -> bool:
+    """Whether numba's index file was written for the source as it is now: numba keeps an index whose stamp (the
+    source's modification time and size) differs from the file's as no cache at all, and compiles again."""
+    try:
+        with open(index_path, "rb") as f:
+            pickle.load(f)  # numba's version
+            stamp, _overloads = pickle.loads(f.read())
+        st = os.stat(source)
+    except Exception:  # an index numba itself could not read is no cache either
+        return False
+    return tuple(stamp) == (st.st_mtime, st.st_size)
+
+
 def kernel_cached(module_file: str, qualname: str) -> bool:
-    """Whether numba's cache holds an index for the kernel ``qualname`` of the module at ``module_file`` (in the
-    module's ``__pycache__``, or under the cache folder :func:`configure` chose); False before the first run
-    after an install, when the kernels compile."""
+    """Whether numba's cache holds a current index for the kernel ``qualname`` of the module at ``module_file``
+    (under the cache folder :func:`configure` chose or ``NUMBA_CACHE_DIR``, else in the module's ``__pycache__``;
+    an index written for an earlier state of the source does not count); False before the first run after an
+    install or an edit, when the kernels compile."""
     import glob
 
     stem = os.path.splitext(os.path.basename(module_file))[0]
     pattern = f"{stem}.{qualname}-*.nbi"
-    folders = [os.path.join(os.path.dirname(os.path.abspath(module_file)), "__pycache__")]
     root = _STATE["dir"] or os.environ.get("NUMBA_CACHE_DIR")
     if root:
-        folders += [d for d, _sub, files in os.walk(root) if any(f.endswith(".nbi") for f in files)]
-    return any(glob.glob(os.path.join(glob.escape(f), pattern)) for f in folders)
+        folders = [d for d, _sub, files in os.walk(root) if any(f.endswith(".nbi") for f in files)]
+    else:
+        folders = [os.path.join(os.path.dirname(os.path.abspath(module_file)), "__pycache__")]
+    return any(
+        _index_current(index, module_file)
+        for f in folders
+        for index in glob.glob(os.path.join(glob.escape(f), pattern))
+    )
