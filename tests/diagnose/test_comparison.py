@@ -147,3 +147,26 @@ def test_a_coasting_simulation_compared_with_itself_reads_its_own_pitch():
     assert abs(c.pitch_ratio - 1) < 1e-5 and abs(c.pitch_ratio - 1) <= 3 * c.pitch_ratio_sigma
     assert c.link_pass_meas_hz == pytest.approx(ds.attrs["link_pass_frequency_hz"], rel=1e-5)
     assert c.pitch_consistent is True
+
+
+def test_a_comparison_plots_the_order_spectra_it_holds(leon_short):
+    """`Comparison.plot()` draws the two order spectra at the amplitudes the result holds (in the unit the axis names,
+    um or mm as the report's tables give a tensioner's lengths), the amplitude spectra and the spectrograms."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    res, path = leon_short
+    c = compare(vibkit.read_recording(path), res)
+    fig = c.plot()
+    try:
+        ax = fig.axes[0]
+        sim, meas = ax.get_lines()[:2]
+        np.testing.assert_allclose(sim.get_xdata(), c.orders)
+        scale = {"amplitude [\u00b5m]": 1e6, "amplitude [mm]": 1e3, "amplitude [m]": 1.0}[ax.get_ylabel()]
+        np.testing.assert_allclose(meas.get_ydata(), np.maximum(scale * c.order_amplitude_meas, 1e-30), rtol=1e-12)
+        np.testing.assert_allclose(sim.get_ydata(), np.maximum(scale * c.order_amplitude_sim, 1e-30), rtol=1e-12)
+        assert len([a for a in fig.axes if a.get_label() != "<colorbar>"]) == 5
+    finally:
+        plt.close(fig)

@@ -30,6 +30,7 @@ from ..scenes import find
 from ..signal import compare_spectra, order_spectrum, resample_to_angle
 from ..signal.bursts import uniform_bursts
 from .channels import counted_part, estimate_channels
+from .comparison_figure import plot_comparison
 from .html import result_table_html
 from .pitch import DEFAULT_PITCH_RANGE_M, pick_channel
 from .rounding import fmt_interval, fmt_pm
@@ -191,6 +192,11 @@ class Comparison:
     speed_meas_sigma_m_s: float | None = None
     link_pass_sim_hz: float = float("nan")
     link_pass_meas_hz: float = float("nan")
+
+    def plot(self, fig=None):
+        """The comparison drawn (:func:`~vibkit.diagnose.comparison_figure.plot_comparison`): order spectra overlaid,
+        amplitude spectra and spectrograms side by side; a Figure."""
+        return plot_comparison(self, fig)
 
     def _repr_html_(self) -> str:
         """The notebook's view: the score, the link pass and the pitch on both sides."""

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 
-__all__ = ["fmt_pm", "fmt_length", "decimals_for", "fmt_value", "SPEED_SIGMA_NOT_STATED"]
+__all__ = ["length_scale", "fmt_pm", "fmt_length", "decimals_for", "fmt_value", "SPEED_SIGMA_NOT_STATED"]
 
 #: what a value whose uncertainty includes an unstated speed uncertainty says instead of ``+- 0``
 SPEED_SIGMA_NOT_STATED = "speed uncertainty not stated"
@@ -79,3 +79,20 @@ def fmt_interval(value, lo, hi, *, sign=True) -> str:
     :func:`fmt_value` does for a sigma): ``+19.62 [-82.07, +121.30]`` reads ``+20 [-80, +120]``."""
     half = (float(hi) - float(lo)) / 2.0
     return f"{fmt_value(value, half, sign=sign)} [{fmt_value(lo, half, sign=sign)}, {fmt_value(hi, half, sign=sign)}]"
+
+
+def length_scale(units, peak):
+    """A readable unit for a plot of ``units`` whose values reach ``peak``: (factor, unit).
+
+    Lengths in metres are plotted in micrometres below 1 mm and in millimetres below 1 m, as the
+    report's tables give them (a tensioner's 27 um ripple reads as 27 um, not 2.7e-5 m); every other
+    unit is left as it is.
+    """
+    peak = float(peak) if peak is not None else float("nan")
+    if units != "m" or not math.isfinite(peak) or peak <= 0.0:
+        return 1.0, units
+    if peak < 1e-3:
+        return 1e6, "\u00b5m"
+    if peak < 1.0:
+        return 1e3, "mm"
+    return 1.0, "m"

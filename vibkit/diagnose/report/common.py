@@ -12,9 +12,16 @@ import os
 import textwrap
 from dataclasses import dataclass, field
 
-from ...runtime.constants import A4_PORTRAIT_IN
+from ...runtime.constants import A4_LANDSCAPE_IN, A4_PORTRAIT_IN
 from ...runtime.safe_output import atomic_output, write_bytes
-from ..rounding import SPEED_SIGMA_NOT_STATED, fmt_interval, fmt_length, fmt_pm, fmt_value  # noqa: F401 (the one rounding rule)
+from ..rounding import (  # noqa: F401 (the one rounding rule, and the plots' length unit)
+    SPEED_SIGMA_NOT_STATED,
+    fmt_interval,
+    fmt_length,
+    fmt_pm,
+    fmt_value,
+    length_scale,
+)
 
 __all__ = ["Report", "report_date", "atomic_path", "PageSink", "TextColumn", "fmt_pm", "fmt_length", "length_scale"]
 
@@ -28,7 +35,7 @@ FREQUENCY_RATIO = "f rec / f sim"
 #: an example SOURCE_DATE_EPOCH (2000-01-01T00:00:00Z), kept for callers that pinned it
 FIXED_EPOCH = 946684800
 _PAGE = A4_PORTRAIT_IN
-_WIDE = (11.69, 8.27)  # A4 landscape [in]
+_WIDE = A4_LANDSCAPE_IN  # [in]
 
 
 @dataclass(frozen=True)
@@ -289,20 +296,3 @@ class PageSink:
             self.pdf.savefig(fig)
             plt.close(fig)
         self._held = []
-
-
-def length_scale(units, peak):
-    """A readable unit for a plot of ``units`` whose values reach ``peak``: (factor, unit).
-
-    Lengths in metres are plotted in micrometres below 1 mm and in millimetres below 1 m, as the
-    report's tables give them (a tensioner's 27 um ripple reads as 27 um, not 2.7e-5 m); every other
-    unit is left as it is.
-    """
-    peak = float(peak) if peak is not None else float("nan")
-    if units != "m" or not math.isfinite(peak) or peak <= 0.0:
-        return 1.0, units
-    if peak < 1e-3:
-        return 1e6, "\u00b5m"
-    if peak < 1.0:
-        return 1e3, "mm"
-    return 1.0, "m"
