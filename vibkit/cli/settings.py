@@ -54,11 +54,17 @@ def run_settings(a, rec, profile, *, scene=None, frequency_only_band=False, note
 
 def profile_note(settings, profile):
     """Say on stderr what the run took from the escalator profile (speed, nominal pitch, band, teeth)."""
-    import textwrap
-
     if profile is not None and settings.from_profile:
-        note = f"note: from the profile {profile.source}: {'; '.join(settings.from_profile)}"
-        msg(textwrap.fill(note, 100, subsequent_indent="  ", break_on_hyphens=False))
+        # lines broken between the items only, never inside a value ("0.5 +- 0 m/s" stays one piece, whatever the
+        # length of the profile's path before it)
+        lines, line = [], f"note: from the profile {profile.source}:"
+        for k, item in enumerate(settings.from_profile):
+            piece = item + (";" if k < len(settings.from_profile) - 1 else "")
+            if len(line) + 1 + len(piece) > 100 and line.strip():
+                lines.append(line)
+                line = " "
+            line += " " + piece
+        msg("\n".join([*lines, line]))
 
 
 def chain_links(a, profile):
