@@ -52,7 +52,8 @@ _LEVEL_VZ = 0.05
 class Ride:
     """One escalator ride found in a recording (times in the file's own seconds).
 
-    ``start_s``/``end_s`` bound the still span (walking stopped and started again); ``line_start_s`` and
+    ``start_s``/``end_s`` bound the ride: stepping on (walking stopped, or where the line starts when the person
+    stood at the landing first) to stepping off (walking started again); ``line_start_s`` and
     ``line_end_s`` the part analysed, where the link pass stands clear of stepping on and off."""
 
     start_s: float

@@ -81,7 +81,8 @@ def phone_ride_pages(doc, ctx) -> list:
         _page_title(
             fig,
             heading,
-            f"{ride.start_s:.1f}-{ride.end_s:.1f} s of the recording (still: walking stopped and started again); "
+            f"{ride.start_s:.1f}-{ride.end_s:.1f} s of the recording (stepping on to stepping off: still, or the line "
+            "where the person stood at the landing first); "
             f"analysed {ride.line_start_s:.1f}-{ride.line_end_s:.1f} s, where the link-pass line stands clear of "
             "stepping on and off",
         )

@@ -91,9 +91,17 @@ def verdict_page(doc, ctx) -> None:
         key_width=0.16,
     )
     col.gap(0.012)
+    rides = phone_rides_summary(ctx)
     big, colour, under = _headline(ctx)
-    col.text(big, _BIG, weight="bold", color=colour)
-    col.text(under, 11, color=colour)
+    if rides and not ctx.found:
+        # a phone's walk whose rides carry the link pass: they are the headline; the whole walk's refusal (walking
+        # included, no one record of the chain) is said under them, not as the verdict
+        col.gap(0.002)
+        _rides_block(col, ctx, rides, f"the whole walk, walking included: {big.lower()} (page 'spectrum')")
+        rides = []
+    else:
+        col.text(big, _BIG, weight="bold", color=colour)
+        col.text(under, 11, color=colour)
     warnings = list(getattr(pitch, "warnings", []) or []) if pitch is not None else []
     if not ctx.found:
         warnings = []  # the headline says it, with the reason
@@ -120,26 +128,10 @@ def verdict_page(doc, ctx) -> None:
             8,
             color="#b35900",
         )
-    rides = phone_rides_summary(ctx)
     if rides:  # a phone's walk: the rides are what it says of the chain (the whole walk is no one record of it)
         col.gap(0.006)
-        kind = ctx.unit_kind
-        col.text(
-            # (a person's walk, of the phone: "recording" where the unit is itself a walk)
-            f"{len(rides)} {kind.upper()} RIDE{'S' if len(rides) > 1 else ''} IN THIS "
-            f"{'WALK' if kind == 'escalator' else 'RECORDING'}",
-            _BIG,
-            weight="bold",
-        )
-        for line in rides:
-            col.text(line, 10, weight="bold")
-        col.text(
-            f"one page each ('{kind} ride k of n'); the verdict above is the whole "
-            f"{'walk' if kind == 'escalator' else 'recording'}'s, walking included: "
-            "the rides are the chain's evidence",
-            8,
-            color=_GREY,
-        )
+        whole = "walk" if ctx.unit_kind == "escalator" else "recording"
+        _rides_block(col, ctx, rides, f"the verdict above is the whole {whole}'s, walking included")
     col.gap(0.012)
     col.text("Evidence", 12, weight="bold")
     col.pairs(evidence_rows(ctx), 9, key_width=0.3)
@@ -156,6 +148,21 @@ def verdict_page(doc, ctx) -> None:
         for n in notes[:5]:
             col.text("note: " + n, 8, color="0.3")
     doc.emit(fig, "verdict")
+
+
+def _rides_block(col, ctx, rides, whole):
+    """The rides of a phone's walk on page 1: how many, one line each, and what ``whole`` says of the walk."""
+    kind = ctx.unit_kind
+    col.text(
+        # (a person's walk, of the phone: "recording" where the unit is itself a walk)
+        f"{len(rides)} {kind.upper()} RIDE{'S' if len(rides) > 1 else ''} IN THIS "
+        f"{'WALK' if kind == 'escalator' else 'RECORDING'}",
+        _BIG,
+        weight="bold",
+    )
+    for line in rides:
+        col.text(line, 10, weight="bold")
+    col.text(f"one page each ('{kind} ride k of n'); {whole}: the rides are the chain's evidence", 8, color=_GREY)
 
 
 def _signature_error(links):
