@@ -117,12 +117,24 @@ def test_a_note_on_compiling_is_said_at_once_on_a_terminal_and_with_the_first_li
     assert lines[0] == "work: 50.0 % after 0 s (compiling)" and "compiling" not in lines[1]
 
 
-def test_a_kernel_is_cached_when_its_index_is_in_the_modules_pycache(tmp_path):
+def test_a_kernel_is_cached_when_its_index_is_in_the_modules_pycache(tmp_path, monkeypatch):
+    """An index numba wrote for the source as it is (its stamp: the source's modification time and size) beside
+    it; an empty or unreadable index file is none (numba would compile again)."""
+    import os
+    import pickle
+
+    from vibkit.runtime import kernel_cache
     from vibkit.runtime.kernel_cache import kernel_cached
 
+    monkeypatch.delenv("NUMBA_CACHE_DIR", raising=False)
+    monkeypatch.setitem(kernel_cache._STATE, "dir", None)
     module = tmp_path / "pitch_table.py"
     module.write_text("")
     (tmp_path / "__pycache__").mkdir()
     assert not kernel_cached(str(module), "rhs")
-    (tmp_path / "__pycache__" / "pitch_table.rhs-667.py311.nbi").write_bytes(b"")
+    index = tmp_path / "__pycache__" / "pitch_table.rhs-667.py311.nbi"
+    index.write_bytes(b"")
+    assert not kernel_cached(str(module), "rhs")
+    st = os.stat(module)
+    index.write_bytes(pickle.dumps("0.59.1") + pickle.dumps(((st.st_mtime, st.st_size), {})))
     assert kernel_cached(str(module), "rhs") and not kernel_cached(str(module), "table_delta")
