@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import dataclasses
-import math
 import os
 import re
 import sys
@@ -76,26 +75,6 @@ def _weightings(text):
         return parse_weightings(text)
     except ValueError as exc:
         raise argparse.ArgumentTypeError(re.sub(r"^--weighting ", "", str(exc))) from None
-
-
-def _num(v):
-    return f"{v:.4g}" if v is not None and math.isfinite(float(v)) else "n/a"
-
-
-def _ride_rows(rq):
-    return [
-        [
-            a.axis,
-            a.channel,
-            a.weighting,
-            _num(a.weighted.max),
-            _num(a.weighted.a95),
-            _num(a.weighted.rms),
-            _num(a.lowpass.max),
-            _num(a.lowpass.a95),
-        ]
-        for a in rq.axes
-    ]
 
 
 def _carried_scene(path):
@@ -217,7 +196,7 @@ def run(a):
                 + (f", speed {_speed_words(r, sp, rq)}" if r.speed_m_s else "")
             )
             print("step vibration [m/s^2]: weighted (ISO 2631-1) and 0.4-10 Hz unweighted")
-            print(table(_ride_rows(r), head))
+            print(table(r.table_rows(), head))
             k = knocks[0 if r is rq else 1]
             print(f"roller knock: {k['reason']}")
             print()

@@ -44,19 +44,7 @@ def plot_ride(rq, fig=None, *, bottom=0.07):
     tab_ax = fig.add_axes((0.06, 0.76, 0.88, 0.14))
     tab_ax.axis("off")
     head = ["axis", "channel", "weighting", "max pk-pk", "A95", "r.m.s.", "10 Hz max pk-pk", "10 Hz A95"]
-    cells = [
-        [
-            a.axis,
-            a.channel[:32],
-            a.weighting,
-            _num(a.weighted.max),
-            _num(a.weighted.a95),
-            _num(a.weighted.rms),
-            _num(a.lowpass.max),
-            _num(a.lowpass.a95),
-        ]
-        for a in rq.axes
-    ]
+    cells = rq.table_rows(channel_width=32)
     tab = tab_ax.table(
         cellText=cells,
         colLabels=head,

@@ -4,6 +4,7 @@ weighted signals for the plots), its dictionary for ``--json``, its figure and i
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -13,6 +14,10 @@ from ..html import result_table_html
 from .figure import plot_ride
 
 __all__ = ["AxisRide", "RideQuality"]
+
+
+def _three_digits(v) -> str:
+    return f"{v:.3g}" if v is not None and math.isfinite(float(v)) else "n/a"
 
 
 @dataclass(frozen=True)
@@ -89,6 +94,24 @@ class RideQuality:
             if a.axis == name:
                 return a
         raise KeyError(f"no axis {name!r} (axes: {', '.join(a.axis for a in self.axes)})")
+
+    def table_rows(self, channel_width=None) -> list:
+        """One row a axis: axis, channel (cut to ``channel_width`` characters), weighting, weighted max pk-pk, A95,
+        r.m.s., 10 Hz max pk-pk and A95, each to three digits (a ride statistic over a few hundred half-cycles is not
+        known to four), ``n/a`` where the ride has none: the one printed form of the command's table and the
+        report's."""
+        return [
+            [
+                a.axis,
+                a.channel[:channel_width] if channel_width else a.channel,
+                a.weighting,
+                *(
+                    _three_digits(v)
+                    for v in (a.weighted.max, a.weighted.a95, a.weighted.rms, a.lowpass.max, a.lowpass.a95)
+                ),
+            ]
+            for a in self.axes
+        ]
 
     def plot(self, fig=None):
         """The per-axis table and each axis's weighted acceleration (:func:`~.figure.plot_ride`); a Figure."""
