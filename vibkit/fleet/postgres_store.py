@@ -222,13 +222,7 @@ class PostgresStore(Store):
             self.has_link_tables = ver >= 3
             self.has_link_alternatives = ver >= 4
             self.zero_sigma_unstated = ver < SIGMA_ZERO_UNSTATED_BEFORE
-            lacks = (
-                "a speed uncertainty of 0 read as not stated"
-                if self.has_link_alternatives
-                else "no alternative link numbers"
-                if self.has_link_tables
-                else "no link scans"
-            )
+            lacks = self.older_schema_lacks()
             self.notes.append(
                 f"{self.location}: read a schema-{ver} history without upgrading it ({lacks}); vibkit fleet "
                 f"add or scan upgrades it to schema {SCHEMA_VERSION}"

@@ -296,13 +296,7 @@ class SQLiteStore(Store):
         self.notes.append(self._older_note(ver))
 
     def _older_note(self, ver):
-        lacks = (
-            "a speed uncertainty of 0 read as not stated"
-            if self.has_link_alternatives
-            else "no alternative link numbers"
-            if self.has_link_tables
-            else "no link scans"
-        )
+        lacks = self.older_schema_lacks()
         return (
             f"{self.path}: read a schema-{ver} history without upgrading it (left as it is; {lacks}); run "
             f"vibkit fleet add or scan on it with write access to upgrade it to schema {SCHEMA_VERSION}"

@@ -37,6 +37,12 @@ class Store(abc.ABC):
     #: an older history read as it is (schema < 5), whose ``speed_sigma_m_s`` 0 means "not stated"
     zero_sigma_unstated = False
 
+    def older_schema_lacks(self) -> str:
+        """What a history read at an older schema without upgrading it lacks (the oldest lack named)."""
+        if self.has_link_alternatives:
+            return "a speed uncertainty of 0 read as not stated"
+        return "no alternative link numbers" if self.has_link_tables else "no link scans"
+
     # ----------------------------------------------------------------- to be supplied by a store
     @abc.abstractmethod
     def execute(self, sql, args=()): ...
