@@ -9,9 +9,11 @@ one-line refusal naming the key (no traceback, no solver message).
 The worn link's signature is written from the geometry, not taken from the model: a link longer by ``e`` spans
 an arc ``e / cos(pi / Z)`` on a head of ``Z`` teeth' pitch radius instead of ``e`` on a straight, so while it is
 wrapped on the sprocket or on the lower head (``Z / 2`` link passes each, half a loop apart) the chain holds
-``e (sec(pi / Z) - 1)`` more of its guide and the tension carriage moves in by half of that. (The model's own
-signature of a 1 mm link has the same two plateaus, 11-12 links long, at two thirds of this estimate: `links`
-reads the synthesised 1 mm link as about 1.4 mm, within the 0.5 to 2 mm asserted below.)"""
+``e (sec(pi / Z) - 1)`` more of its guide and the tension carriage moves in by half of that. (The model's
+signature of a 1 mm link has the same two plateaus, 11-12 links long, at two thirds of this first estimate, its
+kinematics alone too: the worn link also shifts the links straddling the heads' tangent points, whose share of the
+guide follows the polygon's phase. So `links` reads the synthesised 1 mm link as about 1.4 mm, within the 0.5 to
+2 mm asserted below; the number is what is checked.)"""
 
 import json
 import math
