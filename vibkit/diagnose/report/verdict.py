@@ -145,6 +145,9 @@ def _draw_verdict(fig, doc, ctx, scale):
     warnings = list(getattr(pitch, "warnings", []) or []) if pitch is not None else []
     if not ctx.found:
         warnings = []  # the headline says it, with the reason
+    elif pitch is not None:  # an inconclusive status and its reason are the headline: not a warning again under it
+        status, reason = str(getattr(pitch, "status", "") or ""), str(getattr(pitch, "reason", "") or "")
+        warnings = [w for w in warnings if w != f"{status}: {reason}"]
     col.gap(0.008)
     if warnings:
         col.text(f"{len(warnings)} WARNING{'S' if len(warnings) > 1 else ''}", _BIG, weight="bold", color="#b35900")
