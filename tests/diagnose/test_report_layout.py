@@ -315,3 +315,42 @@ def test_a_start_without_its_zone_is_not_called_utc(tmp_path):
     page1 = " ".join(rep.pages[0][1])
     assert "2026-05-04 07:30 (the file's start time, its time zone not stated)" in page1
     assert "07:30 UTC" not in page1
+
+
+def test_page_one_with_an_inconclusive_verdict_and_its_warnings_stays_on_the_page(tmp_path, monkeypatch):
+    """An inconclusive verdict with its warnings (a step's accelerometer on an inclined walk whose profile states
+    no speed uncertainty: the speed's +-5 % and the step's own 1 %), the pages left out and the notes ran off page
+    1's bottom. Page 1 now shrinks its type to fit: every text on the page, none overlapping."""
+    import numpy as np
+
+    from vibkit.model.profile import parse_profile
+
+    profile = parse_profile(
+        '[escalator]\nunit = "W12"\nsite = "Hypermarket, car park ramp"\n'
+        'description = "inclined pallet walk, 12 degrees"\n[drive]\nspeed = 0.5\nteeth = 23\n'
+        "[chain]\nnominal_pitch = 0.13333\nlinks_per_step = 3\n[geometry]\nlength = 16.0\nincline_deg = 12\n"
+        '[sensor]\nkind = "step"\nstep = 3\n',
+        "w12.toml",
+    )
+    fs, f = 100.0, 0.5 / (0.13333 * 1.01)
+    t = np.arange(int(60 * fs)) / fs
+    z = 9.81 + 0.03 * np.sin(2 * np.pi * f * t) + 0.01 * np.sin(4 * np.pi * f * t)
+    z += 0.003 * np.random.default_rng(3).standard_normal(t.size)
+    rec = tmp_path / "pallet.csv"
+    rec.write_text("time (s),acc_z (m/s^2)\n" + "".join(f"{a:.3f},{b:.5f}\n" for a, b in zip(t, z)))
+    problems = {}
+    orig = PageSink.emit
+
+    def emit(self, fig, title):
+        if title == "verdict":
+            problems[title] = layout_problems(fig)
+        return orig(self, fig, title)
+
+    monkeypatch.setattr(PageSink, "emit", emit)
+    rep = write_report(rec, tmp_path / "r.pdf", profile=profile)
+    text = "\n".join(rep.pages[0][1])
+    assert "INCONCLUSIVE" in text and "the sensor rides a step" in text
+    # the two warnings; the inconclusive reason is the headline's line, not a third warning repeating it
+    assert "2 WARNINGS" in text and "inconclusive: " not in text
+    assert "Pages not in this report" in text and "note: " in text
+    assert problems == {"verdict": []}

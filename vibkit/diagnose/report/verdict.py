@@ -69,13 +69,53 @@ def _headline(ctx):
     return str(pitch.verdict).upper(), colour, under
 
 
+#: where page 1's column starts and the lowest it may reach (figure fraction: under the page's header, above its
+#: bottom edge), and the smallest scale of its type that it shrinks to when its text would run past the bottom
+_TOP, _BOTTOM, _MIN_SCALE = 0.965, 0.025, 0.5
+
+
+class _ScaledColumn(TextColumn):
+    """A :class:`TextColumn` whose type sizes and gaps are all ``scale`` times those asked for."""
+
+    def __init__(self, fig, *, scale, **kw):
+        super().__init__(fig, **kw)
+        self.scale = scale
+
+    def gap(self, dy):
+        super().gap(dy * self.scale)
+
+    def text(self, text, size, **kw):
+        super().text(text, size * self.scale, **kw)
+
+    def pairs(self, rows, size, **kw):
+        super().pairs(rows, size * self.scale, **kw)
+
+
 def verdict_page(doc, ctx) -> None:
-    """Page 1: who, when, what; the verdict; what makes it unreliable; the evidence."""
+    """Page 1: who, when, what; the verdict; what makes it unreliable; the evidence.
+
+    Drawn at full size, and again smaller where its text would run past the page's bottom (a verdict with its
+    warnings, a worn link, the pages left out and the notes can be more than a page): every type size and gap
+    shrinks by the share that fits, down to half size, so the page shows all of it and nothing is drawn off it."""
     import matplotlib.pyplot as plt
 
-    pitch, summary = ctx.pitch, ctx.summary
     fig = plt.figure(figsize=_PAGE)
-    col = TextColumn(fig, x=0.07, y=0.965, width=0.86)
+    scale = 1.0
+    for _ in range(6):
+        col = _draw_verdict(fig, doc, ctx, scale)
+        if col.y >= _BOTTOM or scale <= _MIN_SCALE:
+            break
+        # the height used scales about as the type (a smaller type wraps to fewer lines): shrink by what fits
+        scale = max(_MIN_SCALE, scale * (_TOP - _BOTTOM) / (_TOP - col.y) * 0.97)
+        fig.clf()
+    doc.emit(fig, "verdict")
+
+
+def _draw_verdict(fig, doc, ctx, scale):
+    """Page 1's column drawn on ``fig`` at ``scale`` times its type sizes; returns the column (its ``y``: how far
+    down it reached)."""
+    pitch, summary = ctx.pitch, ctx.summary
+    col = _ScaledColumn(fig, x=0.07, y=_TOP, width=0.86, scale=scale)
     col.text(f"{ctx.unit_kind.capitalize()} drive-chain diagnostic", 16, weight="bold")
     col.pairs(
         [
@@ -105,6 +145,9 @@ def verdict_page(doc, ctx) -> None:
     warnings = list(getattr(pitch, "warnings", []) or []) if pitch is not None else []
     if not ctx.found:
         warnings = []  # the headline says it, with the reason
+    elif pitch is not None:  # an inconclusive status and its reason are the headline: not a warning again under it
+        status, reason = str(getattr(pitch, "status", "") or ""), str(getattr(pitch, "reason", "") or "")
+        warnings = [w for w in warnings if w != f"{status}: {reason}"]
     col.gap(0.008)
     if warnings:
         col.text(f"{len(warnings)} WARNING{'S' if len(warnings) > 1 else ''}", _BIG, weight="bold", color="#b35900")
@@ -147,7 +190,7 @@ def verdict_page(doc, ctx) -> None:
         col.gap(0.006)
         for n in notes[:5]:
             col.text("note: " + n, 8, color="0.3")
-    doc.emit(fig, "verdict")
+    return col
 
 
 def _rides_block(col, ctx, rides, whole):
