@@ -709,7 +709,10 @@ def test_cli_add_replaced_starts_a_segment(tmp_path, capsys):
             db,
         ]
         assert main(args + (["--replaced"] if k == 2 else [])) == 0
-    capsys.readouterr()
+        cap = capsys.readouterr()
+        # the stored line's SNR is the harmonics' over the residual's, said once under it (not a peak over the floor)
+        assert "(harmonic SNR " in cap.out
+        assert "harmonic SNR: the fitted link-pass harmonics' power over the rest" in cap.err
     assert main(["fleet", "status", "--db", db, "--json"]) == 0
     (u,) = json.loads(capsys.readouterr().out)["units"]
     assert len(u["replacements"]) == 1 and "given" in u["replacements"][0]["reason"]

@@ -178,6 +178,13 @@ def _fleet_db(a, *, create=True):
     return db
 
 
+# said under a stored line: the fleet's SNR is not the peak's height over the floor that `vibkit pitch` tabulates
+HARMONIC_SNR_NOTE = (
+    "note: harmonic SNR: the fitted link-pass harmonics' power over the rest of the recording's (noise and all other "
+    "vibration); it reads far lower than a line's height over the spectrum's floor, which `vibkit pitch` tabulates"
+)
+
+
 def _fmt_measurement(m):
     """One line of a stored measurement."""
     if m.speed_sigma_stated:  # rounded to the sigma
@@ -255,6 +262,7 @@ def run_add(a):
         )
     else:
         print(f"stored {_fmt_measurement(m)}")
+        msg(HARMONIC_SNR_NOTE)
         if scan is not None:
             from vibkit.diagnose.report.fleet_links import scan_advice
 
@@ -311,6 +319,8 @@ def run_scan(a):
             scan = res.link_scans.get(m.sha256)
             links = "" if scan is None else f"; links: {_fmt_scan(scan)}"
             print(f"  added {_fmt_measurement(m)}{links}")
+        if res.added:
+            msg(HARMONIC_SNR_NOTE)
     flagged = sum(1 for m in res.added if m.quality != "ok")
     msg(
         f"vibkit fleet scan: {len(res.added)} added ({flagged} flagged), {len(res.skipped)} already stored, "

@@ -389,8 +389,8 @@ def pitch_from(comb, req):
         # a speed measured to what the verdict needs does not get it; one without its uncertainty, or one too
         # uncertain for a verdict, may be the motor's
         notes.append(
-            "a speed derived from the motor's rpm and the nominal sprocket returns the nominal pitch by "
-            "construction: one sprocket turn always moves as many links as it has teeth, whatever their length; "
+            "if this speed was derived from the motor's rpm and the nominal sprocket, it returns the nominal pitch "
+            "by construction: one sprocket turn always moves as many links as it has teeth, whatever their length; "
             "measure the speed on the steps (not the handrail: it may run up to 2 % faster)"
         )
     other = _other_catalogue_pitch(pitch, elongation, req)
