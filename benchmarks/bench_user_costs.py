@@ -21,6 +21,9 @@ Rows (``--rows`` picks some):
   ``pandas.read_csv`` of the same file (its process: import and read); peak memory against the samples' bytes;
 * ``report``: ``vibkit report`` of the Las Palmas recording with its scene, warm (kernels cached), against
   the 5 CPU-s a user should wait at most;
+* ``links``: ``vibkit links --escalator`` of 10 loops of the tests' 90-link profile (``--quick``: 3 loops), after
+  the first call (the worn link's signature runs kept on disk), against the import baseline above (reading the
+  netCDF recording into a Dataset needs those anyway) and ``python -c "import numpy"``;
 * ``fleet``: ``vibkit fleet scan`` of 200 recordings of 30 s (``--quick``: 8), in process, files per CPU
   second, against ``pandas.read_csv`` of the same files in one process;
 * ``simulate``: ``vibkit.simulate`` of the shipped ``leon`` scene with its shipped outputs, in one process after a
@@ -48,7 +51,7 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 SPEED = 0.5  # [m/s]
 PITCH = 0.1333  # [m]
-ROWS = ("first", "import", "spectrum", "pitch8h", "report", "fleet", "simulate")
+ROWS = ("first", "import", "spectrum", "pitch8h", "report", "links", "fleet", "simulate")
 BASE_IMPORT = "import numpy, scipy.signal, pandas, xarray"
 
 
@@ -138,6 +141,39 @@ def flush(rows, quick, repeat, load0):
     )
     write_text(RESULTS / f"user_costs{suffix}.md", text)
     return text
+
+
+def links_rows(tmp, loops, repeat):
+    """``vibkit links`` of ``loops`` loops, first call and the calls after it, against the imports baselines."""
+    from bench_links_cache import PROFILE_90, _recording
+
+    folder = tmp / "links"
+    folder.mkdir()
+    text = PROFILE_90.replace("teeth = 28", 'teeth = 28\ndirection = "down"')
+    profile = folder / "E90-down.toml"
+    profile.write_text(text)
+    saved = os.environ.get("XDG_CACHE_HOME")
+    os.environ["XDG_CACHE_HOME"] = str(folder / "recording-cache")  # the recording's own scene: not the user's
+    try:
+        rec = _recording(folder, text, loops)
+    finally:
+        if saved is None:
+            os.environ.pop("XDG_CACHE_HOME")
+        else:
+            os.environ["XDG_CACHE_HOME"] = saved
+    env = {"XDG_CACHE_HOME": str(folder / "cache")}  # the signature's runs kept here by the first call
+    code = cli(["links", rec, "--escalator", profile, "--json"])
+    first = child(code, env)
+    got = side_by_side(
+        [("base", BASE_IMPORT + "\n", None), ("numpy", "import numpy\n", None), ("links", code, env)], repeat
+    )
+    c, b, n = got["links"]["cpu"], got["base"]["cpu"], got["numpy"]["cpu"]
+    what = f"vibkit links --escalator of {loops} loops (90 links), after the first call"
+    note = f"first call {first[0]:.2f} CPU-s (the signature's runs simulated and kept); target 1.5 CPU-s"
+    return [
+        row(what, "whole command", BASE_IMPORT, c, b, c / b, "<= 1.5 CPU-s", note),
+        row(what, "whole command", 'python -c "import numpy"', c, n, c / n, "-"),
+    ]
 
 
 def main(argv=None):
@@ -276,6 +312,11 @@ def main(argv=None):
                     "<= 1",
                 )
             )
+
+        flush(rows, a.quick, repeat, load0)
+
+        if "links" in wanted:
+            rows += links_rows(tmp, 3 if a.quick else 10, repeat)
 
         flush(rows, a.quick, repeat, load0)
 

@@ -216,7 +216,12 @@ def loaded_by(root, graph) -> set[str]:
 #: own modules that may be imported inside a function from anywhere, and why: the signal layer's compiled kernels
 #: (numba) load only where a kernel runs, so that reading a recording and its spectrum compile and import nothing
 #: of numba (tests/cli/test_startup_imports.py)
-DEFERRED_ALLOWED = {"vibkit.signal.kernels": "numba's kernels, loaded where they run"}
+#: and the worn link's signature's runs (the model's kernels), loaded only where no run kept on disk serves, so that a
+#: warm ``vibkit links`` reads its kept signature without loading the model or numba
+DEFERRED_ALLOWED = {
+    "vibkit.signal.kernels": "numba's kernels, loaded where they run",
+    "vibkit.diagnose.link_signature_runs": "the model's kernels, loaded where a kept signature run misses",
+}
 
 
 def deferred_own_imports() -> list[str]:

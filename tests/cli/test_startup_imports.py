@@ -61,3 +61,8 @@ def test_the_spectrum_command_compiles_nothing_it_does_not_run(tmp_path):
         """
     )
     assert loaded - {"dask", "scipy.stats"} == set()
+
+
+def test_loading_a_scene_loads_no_compiler():
+    """A scene's checks (its chain closing within the tensioner's travel) need the guide's constants, not its kernels."""
+    assert _loaded_after("import vibkit\nvibkit.load_scene('leon')") == set()

@@ -145,3 +145,21 @@ def test_a_second_call_reads_the_kept_runs_instead_of_simulating(recording, tmp_
     monkeypatch.setattr(link_signature, "_simulate_run_map", lambda *a: calls.append(a))
     second = _links(rec, profile, tmp_path, capsys, monkeypatch)
     assert calls == [] and second == first
+
+
+def test_a_warm_call_loads_neither_the_model_nor_numba(recording, tmp_path, capsys, monkeypatch):
+    """With the runs kept, a fresh `vibkit links` reads them without importing the model's kernels (numba)."""
+    import subprocess
+    import sys
+
+    rec, profile = recording
+    _links(rec, profile, tmp_path, capsys, monkeypatch)  # keeps the runs in tmp_path
+    code = (
+        "import sys\nfrom vibkit.cli import main\n"
+        f"assert main(['links', {str(rec)!r}, '--escalator', {str(profile)!r}, '--json']) == 0\n"
+        "print('numba' in sys.modules, 'vibkit.analyses.simulation' in sys.modules, file=sys.stderr)\n"
+    )
+    env = dict(os.environ, XDG_CACHE_HOME=str(tmp_path), PYTHONPATH=os.path.dirname(os.path.dirname(vibkit.__file__)))
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stderr.strip().splitlines()[-1] == "False False", proc.stderr

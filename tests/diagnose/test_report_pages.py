@@ -11,7 +11,7 @@ import pytest
 from vibkit.diagnose.comparison import amplitude_diff_text
 from vibkit.diagnose.report import write_report
 from vibkit.diagnose.report.context import analyse
-from vibkit.diagnose.report.signal_pages import ZOOM_CYCLES, spectrum_page, time_signal_page
+from vibkit.diagnose.report.signal_pages import ZOOM_CYCLES, envelope, spectrum_page, time_signal_page
 from vibkit.diagnose.report.verdict import scene_pitch_text, spikes_text
 from vibkit.model.profile import load_profile
 
@@ -91,6 +91,28 @@ def test_the_time_signal_zooms_on_a_few_link_passes(tensioner_ctx):
     ticks = zoom.get_xticks()
     assert np.allclose(np.diff(ticks), PITCH / SPEED, rtol=1e-3)
     plt.close(fig)
+
+
+def test_a_long_signal_is_drawn_as_its_envelope_with_every_extreme_where_it_is():
+    """The overview draws, in each of its columns, the column's least and largest sample at their own times: the
+    line covers what every sample drawn covers (a one-sample spike included) in a few points a column."""
+    rng = np.random.default_rng(5)
+    t = np.arange(100_003) / 200.0
+    x = rng.standard_normal(t.size)
+    x[31_337] = 40.0  # a knock
+    te, xe = envelope(t, x, 1000)
+    assert te.size <= 2 * 1001 and np.all(np.diff(te) >= 0)  # a pair a column, in time order
+    m = -(-t.size // 1000)
+    for lo in range(0, t.size, m):  # each column's extremes, at their times
+        col = slice(lo, lo + m)
+        inside = (te >= t[col][0]) & (te <= t[col][-1])
+        assert xe[inside].min() == x[col].min() and xe[inside].max() == x[col].max()
+        assert set(te[inside]) == {t[col][np.argmin(x[col])], t[col][np.argmax(x[col])]}
+    assert 40.0 in xe and te[np.argmax(xe)] == t[31_337]
+    # a signal of at most two samples a column, or with a gap, is drawn whole
+    for short in (x[:2000], np.where(t < 1.0, np.nan, x)):
+        ts, xs = envelope(t[: short.size], short, 1000)
+        assert ts.size == short.size
 
 
 def test_spikes_are_counted_with_what_chance_gives(tensioner_ctx):

@@ -20,7 +20,6 @@ import math
 
 import numpy as np
 
-from ..analyses.simulation import simulate
 from ..model.scene import load_scene
 from ..runtime.user_cache import load_blob, private_folder, private_temp_folder, read_checked, store_blob, write_atomic
 from ..signal.linkmap import canonical_phase, link_map, link_pass_phase
@@ -125,6 +124,8 @@ def _run_map_cached(scene_path, sensor, speed, fs, samples_per_cycle, excess, lo
 
 
 def _simulate_run_map(scene, sensor, speed, fs, samples_per_cycle, excess, loops):
+    # the model (numba and its kernels) loaded only here, where no kept run serves: a warm `vibkit links` runs without
+    from .link_signature_runs import simulate_run
 
     n = scene.chain.n_rollers
     pitch = scene.chain.link_pitch
@@ -132,16 +133,15 @@ def _simulate_run_map(scene, sensor, speed, fs, samples_per_cycle, excess, loops
     settle = n / f_lp + 5.0  # one loop and the start-up
     duration = settle + (loops * n + 3) / f_lp
     worn = None if excess == 0.0 else (1, pitch + excess)
-    ds = simulate(_scene_with(scene, speed=speed, worn=worn), duration=duration, progress=False)
-    t = ds.time.values
+    t, signal, angle = simulate_run(_scene_with(scene, speed=speed, worn=worn), duration, SENSORS[sensor])
     keep = t >= settle
     tx = np.arange(t[keep][0], t[-1], 1.0 / fs)
-    x = np.interp(tx, t, ds[SENSORS[sensor]].values)
+    x = np.interp(tx, t, signal)
     ph = link_phase(x, fs, f_lp)
     # links passed since the start, on the sprocket; a roller is at the sensor where it is a whole number: where
     # that falls in the signal's cycle (its fundamental's peak is 0) is the offset that numbers the links of the
     # map, and of a recording of this escalator, by the link at the sensor rather than by the signal's cycle
-    passed = scene.sprocket.teeth * np.abs(np.interp(tx, t, ds.sprocket_angle.values) - ds.sprocket_angle.values[0])
+    passed = scene.sprocket.teeth * np.abs(np.interp(tx, t, angle) - angle[0])
     passed /= 2 * np.pi
     cyc = canonical_phase(x, ph) / (2 * np.pi)
     lag = 2 * np.pi * (cyc - passed)

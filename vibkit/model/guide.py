@@ -37,7 +37,7 @@ import math
 import numpy as np
 
 from ..runtime.kernel import kernel
-from .params import GuideParams
+from .params import RAMP, TRAVEL, GuideParams  # noqa: F401 (TRAVEL: the guide's, as its users import it)
 
 __all__ = ["Guide", "SEGMENT_NAMES"]
 
@@ -150,10 +150,6 @@ def locate(tab, s0):
         else:
             hi = mid - 1
     return lo
-
-
-RAMP = 0.1  # width of the cosine ramps at the ends of a telescopic run, as a fraction of Lt
-TRAVEL = 1.0 - RAMP  # |delta| / Lt must stay below this for the coordinate map to be monotonic
 
 
 @kernel()

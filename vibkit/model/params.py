@@ -18,12 +18,18 @@ __all__ = [
     "reference_chain",
     "reference_sprocket",
     "GRAVITY",
+    "RAMP",
+    "TRAVEL",
 ]
 
 GRAVITY = 9.81
 """Acceleration of gravity used by the study and ``model.md`` (the default of ``effects.gravity.g``); not
 the standard gravity 9.80665 that defines the unit g (:data:`vibkit.runtime.constants.STANDARD_GRAVITY`).
 [m/s^2]"""
+
+# here, not in vibkit.model.guide (whose kernels load numba), so that checking a scene's closure loads no compiler
+RAMP = 0.1  # width of the cosine ramps at the ends of a telescopic run, as a fraction of Lt
+TRAVEL = 1.0 - RAMP  # |delta| / Lt must stay below this for the coordinate map to be monotonic
 
 
 def _positive(obj, *names):

@@ -36,7 +36,7 @@ import math
 
 import numpy as np
 
-from .params import reference_chain, reference_guide, reference_sprocket
+from .params import TRAVEL, reference_chain, reference_guide, reference_sprocket
 from .scene import Scene, SceneError, parse_scene
 
 __all__ = [
@@ -265,9 +265,7 @@ def link_count(profile) -> tuple[int, str]:
 
 def closing_travel(tensioner_length: float) -> float:
     """How far the tensioner carriage can move either way for the chain to close [m]: the guide's
-    monotonic travel (:data:`vibkit.model.guide.TRAVEL`) less the closure scan's end cells."""
-    from .guide import TRAVEL
-
+    monotonic travel (:data:`vibkit.model.params.TRAVEL`) less the closure scan's end cells."""
     return TRAVEL * tensioner_length * (1.0 - 2.0 / 80.0)
 
 

@@ -24,7 +24,7 @@ from pathlib import Path
 from ..runtime.budget import parse_bytes
 from ..scenes import find
 from .chain_keys import by_roller, check_flat_speed, check_seat, worn_links
-from .params import ChainParams, GuideParams, SprocketParams
+from .params import TRAVEL, ChainParams, GuideParams, SprocketParams
 from .scene_checks import (
     MAX_TOML_DEPTH,  # noqa: F401 - public through the scene loader
     _check_ranges,
@@ -356,8 +356,6 @@ def _parameters(src, sec):
     )
     check_seat(src, guide, sprocket, chain)
     # the chain must close within the tensioner travel: P0 - 2 delta ~ sum of pitches, |delta| < travel
-    from .guide import TRAVEL
-
     slack = (guide.perimeter - float(chain.pitches().sum())) / 2.0
     travel = TRAVEL * guide.tensioner_length
     if not -travel < slack < travel:

@@ -8,7 +8,7 @@ import numpy as np
 from ...signal import amplitude_spectrum, order_spectrum, resample_to_angle, spectrogram
 from .common import _WIDE, _page_title, length_scale
 
-__all__ = ["time_signal_page", "spectrum_page", "spectrogram_page", "order_spectrum_page"]
+__all__ = ["time_signal_page", "spectrum_page", "spectrogram_page", "order_spectrum_page", "envelope"]
 
 
 def _scale(ctx):
@@ -32,6 +32,29 @@ def zoom_span(ctx):
     return mid - span / 2, mid + span / 2
 
 
+#: columns per inch of the time signal's overview in which a long signal is drawn as its envelope (print resolution)
+ENVELOPE_COLUMNS_PER_INCH = 300
+
+
+def envelope(t, x, columns):
+    """``(t, x)`` cut to the least and the largest sample of each of ``columns`` spans, each pair at its own
+    times and in time order: drawn as a line, what every sample drawn would show at ``columns`` across the
+    axes (every extreme, a spike included, where it is), in a fraction of the points.  A signal of at most two
+    samples a column, or with a gap (NaN), is returned whole."""
+    x = np.asarray(x)
+    m = -(-x.size // max(1, int(columns)))  # samples a column (the last column may have fewer)
+    if m <= 2 or not np.isfinite(x).all():
+        return t, x
+    k = x.size // m
+    lo = np.argmin(x[: k * m].reshape(k, m), axis=1) + m * np.arange(k)
+    hi = np.argmax(x[: k * m].reshape(k, m), axis=1) + m * np.arange(k)
+    if x.size > k * m:  # the last, shorter column
+        lo = np.append(lo, k * m + np.argmin(x[k * m :]))
+        hi = np.append(hi, k * m + np.argmax(x[k * m :]))
+    idx = np.sort(np.stack([lo, hi], axis=1), axis=1).ravel()
+    return t[idx], x[idx]
+
+
 def time_signal_page(doc, ctx) -> None:
     """Every burst at its own time, the spikes circled (above); a few link passes of it (below)."""
     import matplotlib.pyplot as plt
@@ -50,9 +73,12 @@ def time_signal_page(doc, ctx) -> None:
     k, unit = _scale(ctx)
     t0z, t1z = zoom_span(ctx)
     label = f"{rec[ch].attrs.get('long_name', ch)} [{unit}]"
+    # the overview's columns at print resolution over the time from the first burst's start to the last's end
+    span = max(b.t0 + b.x.size / b.fs for b in ctx.bursts) - min(b.t0 for b in ctx.bursts)
+    columns = ENVELOPE_COLUMNS_PER_INCH * ax.get_position().width * fig.get_size_inches()[0]
     for b in ctx.bursts:
         t = b.t0 + np.arange(b.x.size) / b.fs
-        ax.plot(t, k * b.x, lw=0.5, color="C0")
+        ax.plot(*envelope(t, k * b.x, columns * (b.x.size / b.fs) / span), lw=0.5, color="C0")
         sel = (t >= t0z) & (t <= t1z)
         if sel.any():
             zx.plot(t[sel], k * b.x[sel], lw=0.9, color="C0", marker=".", ms=2)
