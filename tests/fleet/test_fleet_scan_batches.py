@@ -146,3 +146,30 @@ def test_batch_failing_as_a_whole_is_stored_row_by_row(tmp_path, synthetic, monk
         assert sorted(m.sha256 for m in stored) == sorted([ms[0].sha256, ms[2].sha256])
         assert set(db.link_scans()) == {m.id for m in stored}
         assert db.integrity_check() == "ok"
+
+
+def test_a_scan_hands_the_files_left_to_a_cluster_where_that_pays(tmp_path, synthetic, monkeypatch):
+    """With a start-up of no cost the rule sends the files left after the first two to the cluster's workers, which
+    warm up first; the stored rows are those of the scan in this process."""
+    import contextlib
+
+    from distributed import Client
+
+    import vibkit.runtime.cluster as cluster
+
+    folder, cat = synthetic
+    _res, (rows0, links0) = _scan(tmp_path, "here.sqlite", folder, cat)
+    monkeypatch.setattr(cluster, "LOCAL_CLUSTER_START_S", 0.0)
+    sent = []
+    with Client(processes=False, n_workers=2, threads_per_worker=1, dashboard_address=":0") as c:
+        monkeypatch.setattr(scan_mod, "dask_client", lambda scheduler=None, n_workers=None: contextlib.nullcontext(c))
+        real = scan_mod._scan_dask
+        monkeypatch.setattr(scan_mod, "_scan_dask", lambda jobs, *a, **k: sent.extend(jobs) or real(jobs, *a, **k))
+        with FleetDB(tmp_path / "there.sqlite") as db:
+            res = db.scan(folder, cat, n_workers=2)
+            rows, links = _rows(db)
+        # every worker holds the warm-up plugin (it ran as the plugin was registered)
+        warm = c.run(lambda dask_worker: [n for n in dask_worker.plugins if n.startswith("vibkit-warm-")])
+    assert len(sent) == len(res.added) - 2 > 0  # all but the first two files (the copy is no job: skipped)
+    assert len(warm) == 2 and all(len(v) == 1 for v in warm.values())
+    assert rows == rows0 and links == links0

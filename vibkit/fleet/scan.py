@@ -14,12 +14,13 @@ measurement, which a failed link scan never costs.
 from __future__ import annotations
 
 import fnmatch
+import math
 import os
 import re
 import time
 from dataclasses import dataclass, field
 
-from ..runtime.cluster import dask_client
+from ..runtime.cluster import dask_client, dask_pays, default_workers, scheduler_address, warm_workers
 from ..runtime.extras import require
 from ..runtime.progress import Progress
 from .catalogue import read_catalogue
@@ -35,6 +36,10 @@ __all__ = ["RECORDING_SUFFIXES", "ScanResult", "scan_folder"]
 #: small recording, and a killed scan loses at most the last second's analyses (its stored rows are whole)
 BATCH_ROWS = 64
 BATCH_S = 1.0
+
+#: files a scan analyses in this process before it judges whether the rest pay for a local cluster
+#: (:func:`vibkit.runtime.cluster.dask_pays`; the first loads the analysis: the least of their times is the estimate)
+FILES_BEFORE_CHOOSING = 2
 
 #: file suffixes a scan treats as recordings
 RECORDING_SUFFIXES = (
@@ -208,7 +213,7 @@ def scan_folder(
     scheduler=None,
     n_workers=None,
     client=None,
-    parallel=True,
+    parallel=None,
     on_failure=None,
     progress=False,
     read_options=None,
@@ -347,14 +352,23 @@ def scan_folder(
             store()
 
     try:
-        if not jobs:
-            pass
-        elif not parallel:
+        rest = jobs
+        here = parallel is False or (parallel is None and client is None and not scheduler_address(scheduler))
+        if jobs and here:
+            w = n_workers or default_workers()
+            fastest = math.inf
             for i, job in enumerate(jobs, 1):
+                t0 = time.perf_counter()
                 take(job, _analyse_job(job))
+                fastest = min(fastest, time.perf_counter() - t0)
                 bar.update(i)
-        else:
-            _scan_dask(jobs, take, bar, client=client, scheduler=scheduler, n_workers=n_workers)
+                rest = jobs[i:]
+                if parallel is None and i >= FILES_BEFORE_CHOOSING and dask_pays(fastest * len(rest), w):
+                    break  # the files left end sooner on a local cluster
+        if rest:
+            _scan_dask(
+                rest, take, bar, client=client, scheduler=scheduler, n_workers=n_workers, done=len(jobs) - len(rest)
+            )
     finally:
         try:
             store()  # what was analysed is kept, also when the scan is interrupted (Ctrl-C, a lost cluster)
@@ -373,7 +387,15 @@ def _scene_of(row, scenes, notes):
     return scenes[row.escalator]
 
 
-def _scan_dask(jobs, take, bar, *, client, scheduler, n_workers):
+def _warm():
+    """Worker side, once per worker (:func:`vibkit.runtime.cluster.warm_workers`): the analysis' imports, which
+    unpickling this function began (this module's), finished with those its functions import as they run."""
+    import scipy.interpolate  # noqa: F401 - the pitch analysis's, imported where they run
+    import scipy.ndimage  # noqa: F401
+    import scipy.signal  # noqa: F401
+
+
+def _scan_dask(jobs, take, bar, *, client, scheduler, n_workers, done=0):
     import contextlib
 
     as_completed = require(
@@ -391,6 +413,7 @@ def _scan_dask(jobs, take, bar, *, client, scheduler, n_workers):
         ) from None
     with contextlib.ExitStack() as stack:
         stack.push(ctx)
+        warm_workers(cl, _warm)
         futs = {}
         for i, job in enumerate(jobs):
             f = cl.submit(_analyse_job, job, key=f"vibkit-fleet-{job.sha256}-{i}", pure=False)
@@ -406,4 +429,4 @@ def _scan_dask(jobs, take, bar, *, client, scheduler, n_workers):
                 }
             f.release()
             take(job, outcome)
-            bar.update(n)
+            bar.update(done + n)

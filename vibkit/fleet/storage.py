@@ -391,12 +391,12 @@ class FleetDB:
         scheduler=None,
         n_workers=None,
         client=None,
-        parallel=True,
+        parallel=None,
         on_failure=None,
         progress=False,
         read_options=None,
     ):
-        """Add every recording of a folder that a catalogue describes; analyses run on Dask workers.
+        """Add every recording of a folder that a catalogue describes; analyses run on Dask workers where that pays.
 
         Parameters
         ----------
@@ -411,8 +411,13 @@ class FleetDB:
             Worker processes of the local cluster.
         client : distributed.Client, optional
             Use this client (its cluster stays up).
-        parallel : bool
-            False: analyse in this process, one file after another (no Dask).
+        parallel : bool, optional
+            None (default): on ``client`` or a running scheduler (``scheduler``, Dask's configuration) when there
+            is one; else the files are analysed in this process, and once two are, the rest go to a fresh local
+            cluster only when they would end sooner there (:func:`vibkit.runtime.cluster.dask_pays`: the files
+            left times one file's analysis here, less their share on ``n_workers`` workers, beyond the cluster's
+            start-up; on two cores a few hundred small files).  True: always on Dask.  False: in this process, one
+            file after another (no Dask).  The stored numbers are the same wherever the analyses run.
         on_failure : callable, optional
             Called as ``on_failure(file, reason)`` for each failed file as it happens.
         progress : bool
