@@ -15,9 +15,10 @@ import os
 
 __all__ = ["dask_client", "dask_pays", "default_workers", "scheduler_address", "warm_workers", "LOCAL_CLUSTER_START_S"]
 
-#: wall seconds before a fresh local cluster computes anything: the cluster started and each worker warm (vibkit
+#: seconds before a fresh local cluster computes anything: the cluster started and each worker warm (vibkit
 #: imported, the kernels loaded from their cache, :func:`warm_workers`), the workers warming at once on their own
-#: cores. Measured on the project's 2-core machine (benchmarks/results/user_costs.md, row "sweep": 4 to 6 s)
+#: cores. Measured on the project's 2-core machine: a sweep on a fresh cluster of one worker costs 6 CPU-s more than
+#: the same runs in the process (benchmarks/results/user_costs.md, rows "sweep")
 LOCAL_CLUSTER_START_S = 6.0
 
 
