@@ -758,7 +758,7 @@ def test_killed_scan_leaves_complete_rows(tmp_path):
     rows = ["file,unit,speed_m_s,date,nominal_pitch_m"]
     for i in range(n):
         synth(d / f"r{i:02d}.csv", NOMINAL * (1 + 0.0002 * i), 1000 + i, duration=10.0)
-        rows.append(f"r{i:02d}.csv,U{i % 4},{SPEED},{(T0 + dt.timedelta(days=30 * i)).date()},{NOMINAL}")
+        rows.append(f"r{i:02d}.csv,U{i % 4},{SPEED},{(T0 + dt.timedelta(days=15 * i)).date()},{NOMINAL}")  # all past
     cat = tmp_path / "units.csv"
     cat.write_text("\n".join(rows) + "\n")
     db = tmp_path / "f.sqlite"
