@@ -86,7 +86,7 @@ def main(argv=None):
         for workers in (1,) if args.quick else (1, 2):
             out = tmp / f"e2e{workers}.zarr"
             t0 = time.perf_counter()
-            ds = vibkit.sweep(scene_path, vary, output=out, n_workers=workers, progress=False)
+            ds = vibkit.sweep(scene_path, vary, output=out, n_workers=workers, parallel=True, progress=False)
             wall = time.perf_counter() - t0
             assert int(ds.attrs["runs_ok"]) == n_runs, ds.attrs
             rows.append(

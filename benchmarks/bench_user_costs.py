@@ -28,6 +28,10 @@ Rows (``--rows`` picks some):
   second, against ``pandas.read_csv`` of the same files in one process;
 * ``simulate``: ``vibkit.simulate`` of the shipped ``leon`` scene with its shipped outputs, in one process after a
   warm-up: simulated seconds per CPU second (x real time).
+* ``sweep``: ``vibkit.sweep`` of 16 runs of 10 s (the no-load forward scene from 0.5 m/s, delta only;
+  ``--quick``: 4 runs of 1 s) on a fresh local cluster of 2 workers against 1 (wall time: the target), and the
+  default sweep (runs in the process unless a cluster pays) against a plain Python loop of ``vibkit.simulate`` over
+  the same varied scenes (CPU time).
 
 Writes benchmarks/results/user_costs.md (``--quick``: user_costs_quick.md).
 """
@@ -51,7 +55,7 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 SPEED = 0.5  # [m/s]
 PITCH = 0.1333  # [m]
-ROWS = ("first", "import", "spectrum", "pitch8h", "report", "links", "fleet", "simulate")
+ROWS = ("first", "import", "spectrum", "pitch8h", "report", "links", "fleet", "simulate", "sweep")
 BASE_IMPORT = "import numpy, scipy.signal, pandas, xarray"
 
 
@@ -385,8 +389,81 @@ def main(argv=None):
                 )
             )
 
+        if "sweep" in wanted:
+            rows += sweep_rows(tmp, a.quick, repeat)
+
     print(flush(rows, a.quick, repeat, load0))
     return 0
+
+
+def sweep_rows(tmp, quick, repeat):
+    """Row ``sweep``: 2 workers against 1 on fresh local clusters (wall), the default sweep against a plain loop
+    of ``vibkit.simulate`` (CPU); every case a fresh process, interleaved."""
+    import tomllib
+
+    from vibkit.sweep.plan import to_toml
+
+    n, duration = (4, 1.0) if quick else (16, 10.0)
+    data = tomllib.loads((ROOT / "sim" / "thesis-forward.toml").read_text())
+    data["run"].update(duration=duration, initial_speed=0.5)
+    data["outputs"] = {"variables": ["delta"]}
+    scene = tmp / "sweep-scene.toml"
+    scene.write_text(to_toml(data))
+    vary = {"effects.contact.stiffness": f"5e5:2e6:{n}"}
+    head = f"import vibkit\nscene, vary = {str(scene)!r}, {vary!r}\n"
+    guard = "if __name__ == '__main__':\n"  # the local cluster's workers import the main module again
+    cases = [
+        (
+            "loop",
+            head
+            + "from vibkit.model.scene import parse_scene\nfrom vibkit.sweep.plan import plan_sweep, varied_text\n"
+            + "plan = plan_sweep(scene, vary)\n"
+            + "for p in plan.points:\n    vibkit.simulate(parse_scene(varied_text(plan.text, p)), progress=False)\n",
+            None,
+        ),
+        (
+            "default",
+            head + f"ds = vibkit.sweep(scene, vary, progress=False)\nassert int(ds.attrs['runs_ok']) == {n}\n",
+            None,
+        ),
+    ]
+    for w in (1, 2):
+        cases.append(
+            (
+                f"dask{w}",
+                head
+                + guard
+                + f"    ds = vibkit.sweep(scene, vary, n_workers={w}, parallel=True, progress=False)\n"
+                + f"    assert int(ds.attrs['runs_ok']) == {n}\n",
+                None,
+            )
+        )
+    got = side_by_side(cases, repeat)
+    what = f"vibkit sweep of {n} runs of {duration:g} s"
+    d1, d2 = got["dask1"], got["dask2"]
+    loop, auto = got["loop"], got["default"]
+    return [
+        row(
+            what + ", fresh local cluster",
+            "2 workers (wall)",
+            "1 worker (wall)",
+            d2["cpu"],
+            d1["cpu"],
+            d2["wall"] / d1["wall"],
+            "< 1 (wall)",
+            f"ratio of wall times: {d2['wall']:.1f} s against {d1['wall']:.1f} s; CPU in the CPU columns",
+        ),
+        row(
+            what + ", as it chooses (here: in process)",
+            "vibkit.sweep default",
+            "a plain Python loop of vibkit.simulate",
+            auto["cpu"],
+            loop["cpu"],
+            auto["cpu"] / loop["cpu"],
+            "-",
+            f"wall {auto['wall']:.1f} s against {loop['wall']:.1f} s",
+        ),
+    ]
 
 
 if __name__ == "__main__":

@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import vibkit.runtime.cluster as cluster
 from vibkit.cli import main
 from vibkit.fleet import (
     DuplicateRecordingError,
@@ -731,12 +732,14 @@ def test_cli_add_replaced_starts_a_segment(tmp_path, capsys):
 @pytest.mark.filterwarnings("ignore:Port 8787 is already in use:UserWarning")
 @pytest.mark.filterwarnings("ignore::ResourceWarning")
 @pytest.mark.filterwarnings("ignore::pytest.PytestUnraisableExceptionWarning")
-def test_scan_on_dask_gives_the_plain_loop_numbers(fleet, tmp_path, capsys):
+def test_scan_on_dask_gives_the_plain_loop_numbers(fleet, tmp_path, capsys, monkeypatch):
     cat = tmp_path / "units.csv"
     cat.write_text(f"file,unit,speed_m_s,date,nominal_pitch_m\nE-fast_[0-2].csv,E-fast,{SPEED},2024-01-01,{NOMINAL}\n")
     db = tmp_path / "dask.sqlite"
+    # a cluster's start-up that costs nothing: the scan hands the files left after the first two to 2 workers
+    monkeypatch.setattr(cluster, "LOCAL_CLUSTER_START_S", 0.0)
     assert (
-        main(["fleet", "scan", str(fleet["dir"]), "--catalogue", str(cat), "--db", str(db), "--workers", "1", "--json"])
+        main(["fleet", "scan", str(fleet["dir"]), "--catalogue", str(cat), "--db", str(db), "--workers", "2", "--json"])
         == 3
     )  # the other units' files failed
     out, err = capsys.readouterr()
@@ -754,11 +757,11 @@ def test_scan_on_dask_gives_the_plain_loop_numbers(fleet, tmp_path, capsys):
 def test_killed_scan_leaves_complete_rows(tmp_path):
     d = tmp_path / "visits"
     d.mkdir()
-    n = 40
+    n = 80  # a scan in the process stores its first batch after a second of analyses: many more are left then
     rows = ["file,unit,speed_m_s,date,nominal_pitch_m"]
     for i in range(n):
         synth(d / f"r{i:02d}.csv", NOMINAL * (1 + 0.0002 * i), 1000 + i, duration=10.0)
-        rows.append(f"r{i:02d}.csv,U{i % 4},{SPEED},{(T0 + dt.timedelta(days=30 * i)).date()},{NOMINAL}")
+        rows.append(f"r{i:02d}.csv,U{i % 4},{SPEED},{(T0 + dt.timedelta(days=15 * i)).date()},{NOMINAL}")  # all past
     cat = tmp_path / "units.csv"
     cat.write_text("\n".join(rows) + "\n")
     db = tmp_path / "f.sqlite"

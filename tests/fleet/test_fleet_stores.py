@@ -198,11 +198,11 @@ def test_killed_scan_on_postgres_leaves_complete_rows(tmp_path, pg_server):
     url = _fresh_pg_url(pg_server)
     d = tmp_path / "visits"
     d.mkdir()
-    n = 30
+    n = 80  # the scan stores its first batch after a second of analyses: many more are left then
     rows = ["file,unit,speed_m_s,date,nominal_pitch_m"]
     for i in range(n):
         _synth(d / f"r{i:02d}.csv", NOMINAL * (1 + 0.0002 * i), 2000 + i)
-        rows.append(f"r{i:02d}.csv,U{i % 3},0.5,{(T0 + dt.timedelta(days=30 * i)).date()},{NOMINAL}")
+        rows.append(f"r{i:02d}.csv,U{i % 3},0.5,{(T0 + dt.timedelta(days=15 * i)).date()},{NOMINAL}")  # all past
     cat = tmp_path / "units.csv"
     cat.write_text("\n".join(rows) + "\n")
     env = dict(os.environ, PYTHONPATH=str(ROOT))

@@ -67,9 +67,17 @@ def test_sweep_store_and_dask_without_them(monkeypatch, tmp_path, capsys):
             pass
     fleet = ROOT / "data" / "fleet-example"
     db = tmp_path / "f.sqlite"
+    # a scan given a scheduler needs Dask
     code = main(
-        ["fleet", "scan", str(fleet), "--catalogue", str(fleet / "units.csv"), "--db", str(db), "--workers", "2"]
+        ["fleet", "scan", str(fleet), "--catalogue", str(fleet / "units.csv"), "--db", str(db)]
+        + ["--scheduler", "tcp://127.0.0.1:9"]
     )
     err = capsys.readouterr().err
     assert code == 1 and "needs distributed" in err and "--workers 0" in err and "vibkit[parallel]" in err
     assert "Traceback" not in err and not db.exists()
+    # nine files never pay for a local cluster: the scan runs in the process, without Dask
+    code = main(
+        ["fleet", "scan", str(fleet), "--catalogue", str(fleet / "units.csv"), "--db", str(db), "--workers", "2"]
+    )
+    err = capsys.readouterr().err
+    assert code == 0 and "9 added" in err and "Traceback" not in err

@@ -96,7 +96,9 @@ def threaded_client():
 def grid(scene_file, tmp_path_factory):
     """The 3x3 sweep on a 2-process local cluster, streamed to a store."""
     out = tmp_path_factory.mktemp("sweep") / "grid.zarr"
-    ds = vibkit.sweep(scene_file, VARY, output=out, keep=["delta", "link_tension"], n_workers=2, progress=False)
+    ds = vibkit.sweep(
+        scene_file, VARY, output=out, keep=["delta", "link_tension"], n_workers=2, progress=False, parallel=True
+    )
     return ds, out
 
 

@@ -95,14 +95,17 @@ def add_parser(subparsers):
     )
     f.set_defaults(func=run_add)
 
-    f = fleet_sub("scan", "add every recording of a folder that a catalogue describes, in parallel (Dask)")
+    f = fleet_sub(
+        "scan", "add every recording of a folder that a catalogue describes, in parallel (Dask) where that pays"
+    )
     f.add_argument("directory", metavar="DIR", help="folder of recordings (searched recursively)")
     f.add_argument("--catalogue", required=True, help="CSV: file, unit, speed_m_s, date, nominal_pitch_m")
     f.add_argument("--scheduler", help="address of a running Dask scheduler (default: a local cluster)")
     f.add_argument(
         "--workers",
         type=workers,
-        help="worker processes of the local cluster (default: one per core; 0: analyse in this process)",
+        help="worker processes of a local cluster, started where it pays (default: one per core; 0: analyse in "
+        "this process)",
     )
     add_recording(
         f, positional=False, channel=False, with_segment=False
@@ -300,7 +303,7 @@ def run_scan(a):
             a.catalogue,
             scheduler=a.scheduler,
             n_workers=a.workers or None,
-            parallel=a.workers != 0,
+            parallel=False if a.workers == 0 else None,  # None: on Dask where that pays
             on_failure=failed,
             progress=sys.stderr.isatty(),
             read_options=reader_options(a),

@@ -73,7 +73,12 @@ def add_parser(subparsers):
     s.add_argument(
         "--scheduler", help="address of a running Dask scheduler (default: Dask's configuration, else a local cluster)"
     )
-    s.add_argument("--workers", type=_whole, help="worker processes of the local cluster (default: one per core)")
+    s.add_argument(
+        "--workers",
+        type=_whole,
+        help="worker processes of a local cluster, started where it pays (default: one per core; 0: every run in "
+        "this process)",
+    )
     s.add_argument("--max-runs", type=_whole, help="compute at most this many runs now (resume later)")
     s.add_argument(
         "--max-result-bytes",
@@ -130,7 +135,8 @@ def _sweep(a, varied):
         settle=a.settle,
         duration=a.duration,
         scheduler=a.scheduler,
-        n_workers=a.workers,
+        n_workers=a.workers or None,
+        parallel=False if a.workers == 0 else None,  # None: on Dask where that pays
         force=a.force,
         progress=not a.quiet,
         max_runs=a.max_runs,

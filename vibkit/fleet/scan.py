@@ -4,7 +4,8 @@ A recording's date is the catalogue's; where the catalogue has none, an ISO date
 (``E22-2026-01-01.csv``: ``date_source`` "file name"); else the recording's start time.
 
 The workers only analyse (:func:`_analyse_job`); the calling process alone writes, one committed
-transaction per recording, so a killed scan leaves complete rows only.  Where the number of links is known (the
+transaction per :data:`BATCH_ROWS` recordings or :data:`BATCH_S` seconds (:meth:`FleetDB.insert_batch`), so a
+killed scan leaves complete rows only and loses at most the last second's analyses.  Where the number of links is known (the
 catalogue's ``n_links`` or the escalator profile's), a worker also scans the recording's links
 (:mod:`vibkit.fleet.link_scan`), with the catalogue's ``marker_s``; the scan's status is stored with the
 measurement, which a failed link scan never costs.
@@ -13,11 +14,13 @@ measurement, which a failed link scan never costs.
 from __future__ import annotations
 
 import fnmatch
+import math
 import os
 import re
+import time
 from dataclasses import dataclass, field
 
-from ..runtime.cluster import dask_client
+from ..runtime.cluster import dask_client, dask_pays, default_workers, scheduler_address, warm_workers
 from ..runtime.extras import require
 from ..runtime.progress import Progress
 from .catalogue import read_catalogue
@@ -27,6 +30,16 @@ from .link_scan import measure_with_links, profile_scene
 from .measurement import _file_sha256
 
 __all__ = ["RECORDING_SUFFIXES", "ScanResult", "scan_folder"]
+
+#: a scan stores its analyses in one transaction per this many recordings, or per this many seconds since the oldest
+#: one waiting, whichever comes first: a commit (an fsync of the SQLite file) cost as much as the analysis of a
+#: small recording, and a killed scan loses at most the last second's analyses (its stored rows are whole)
+BATCH_ROWS = 64
+BATCH_S = 1.0
+
+#: files a scan analyses in this process before it judges whether the rest pay for a local cluster
+#: (:func:`vibkit.runtime.cluster.dask_pays`; the first loads the analysis: the least of their times is the estimate)
+FILES_BEFORE_CHOOSING = 2
 
 #: file suffixes a scan treats as recordings
 RECORDING_SUFFIXES = (
@@ -200,7 +213,7 @@ def scan_folder(
     scheduler=None,
     n_workers=None,
     client=None,
-    parallel=True,
+    parallel=None,
     on_failure=None,
     progress=False,
     read_options=None,
@@ -309,32 +322,58 @@ def scan_folder(
             else:
                 fail(os.path.join(d, r.file), f"file not found (catalogue line {r.line})")
     bar = Progress(len(jobs), "fleet scan", enabled=progress)
+    pending = []  # (job, measurement, link scan) analysed, not yet stored
+    since = [0.0]
+
+    def store():
+        """One transaction for the analyses waiting (:meth:`FleetDB.insert_batch`)."""
+        batch = list(pending)
+        pending.clear()
+        if not batch:
+            return
+        for (job, m, scan), got in zip(batch, db.insert_batch([(m, scan) for _j, m, scan in batch])):
+            if isinstance(got, DuplicateRecordingError):
+                res.skipped.append((job.path, str(got)))
+            elif isinstance(got, FleetError):
+                fail(job.path, str(got))
+            else:
+                res.added.append(got)
+                if scan is not None:
+                    res.link_scans[m.sha256] = scan
 
     def take(job, outcome):
         if not outcome["ok"]:
             fail(job.path, outcome["error"])
             return
-        scan = outcome.get("link_scan")
-        try:
-            res.added.append(db.insert(outcome["measurement"], scan))
-            if scan is not None:
-                res.link_scans[outcome["measurement"].sha256] = scan
-        except DuplicateRecordingError as exc:
-            res.skipped.append((job.path, str(exc)))
-        except FleetError as exc:
-            fail(job.path, str(exc))
+        if not pending:
+            since[0] = time.monotonic()
+        pending.append((job, outcome["measurement"], outcome.get("link_scan")))
+        if len(pending) >= BATCH_ROWS or time.monotonic() - since[0] >= BATCH_S:
+            store()
 
     try:
-        if not jobs:
-            pass
-        elif not parallel:
+        rest = jobs
+        here = parallel is False or (parallel is None and client is None and not scheduler_address(scheduler))
+        if jobs and here:
+            w = n_workers or default_workers()
+            fastest = math.inf
             for i, job in enumerate(jobs, 1):
+                t0 = time.perf_counter()
                 take(job, _analyse_job(job))
+                fastest = min(fastest, time.perf_counter() - t0)
                 bar.update(i)
-        else:
-            _scan_dask(jobs, take, bar, client=client, scheduler=scheduler, n_workers=n_workers)
+                rest = jobs[i:]
+                if parallel is None and i >= FILES_BEFORE_CHOOSING and dask_pays(fastest * len(rest), w):
+                    break  # the files left end sooner on a local cluster
+        if rest:
+            _scan_dask(
+                rest, take, bar, client=client, scheduler=scheduler, n_workers=n_workers, done=len(jobs) - len(rest)
+            )
     finally:
-        bar.close()
+        try:
+            store()  # what was analysed is kept, also when the scan is interrupted (Ctrl-C, a lost cluster)
+        finally:
+            bar.close()
     return res
 
 
@@ -348,7 +387,15 @@ def _scene_of(row, scenes, notes):
     return scenes[row.escalator]
 
 
-def _scan_dask(jobs, take, bar, *, client, scheduler, n_workers):
+def _warm():
+    """Worker side, once per worker (:func:`vibkit.runtime.cluster.warm_workers`): the analysis' imports, which
+    unpickling this function began (this module's), finished with those its functions import as they run."""
+    import scipy.interpolate  # noqa: F401 - the pitch analysis's, imported where they run
+    import scipy.ndimage  # noqa: F401
+    import scipy.signal  # noqa: F401
+
+
+def _scan_dask(jobs, take, bar, *, client, scheduler, n_workers, done=0):
     import contextlib
 
     as_completed = require(
@@ -366,6 +413,7 @@ def _scan_dask(jobs, take, bar, *, client, scheduler, n_workers):
         ) from None
     with contextlib.ExitStack() as stack:
         stack.push(ctx)
+        warm_workers(cl, _warm)
         futs = {}
         for i, job in enumerate(jobs):
             f = cl.submit(_analyse_job, job, key=f"vibkit-fleet-{job.sha256}-{i}", pure=False)
@@ -381,4 +429,4 @@ def _scan_dask(jobs, take, bar, *, client, scheduler, n_workers):
                 }
             f.release()
             take(job, outcome)
-            bar.update(n)
+            bar.update(done + n)

@@ -251,6 +251,27 @@ class FleetDB:
         """
         return self._store.insert(m, link_scan)
 
+    def insert_batch(self, items):
+        """Store ``[(Measurement, LinkScan or None)]`` in one transaction: what a scan stores of its last analyses.
+
+        Returns, per item in order, the stored row (with its id) or the :class:`DuplicateRecordingError` /
+        :class:`FleetError` that refused it, as :meth:`insert` would have raised it.  Where the batch as a whole
+        fails (a database error, another process storing one of the files at the same moment), nothing of it is
+        stored and each item is stored again in its own transaction (:meth:`insert`), so that one bad row costs
+        only itself.  Every row is whole or absent, whenever the process is killed.
+        """
+        items = list(items)
+        try:
+            return self._store.insert_batch(items)
+        except Exception:  # noqa: BLE001 - rolled back: each row on its own says what refuses it
+            out = []
+            for m, link_scan in items:
+                try:
+                    out.append(self.insert(m, link_scan))
+                except (DuplicateRecordingError, FleetError) as exc:
+                    out.append(exc)
+            return out
+
     @_translated
     def insert_many(self, measurements, link_scans=None):
         """Store measurements in one transaction, leaving out those already stored; ``(added, skipped)``.
@@ -370,12 +391,12 @@ class FleetDB:
         scheduler=None,
         n_workers=None,
         client=None,
-        parallel=True,
+        parallel=None,
         on_failure=None,
         progress=False,
         read_options=None,
     ):
-        """Add every recording of a folder that a catalogue describes; analyses run on Dask workers.
+        """Add every recording of a folder that a catalogue describes; analyses run on Dask workers where that pays.
 
         Parameters
         ----------
@@ -390,8 +411,13 @@ class FleetDB:
             Worker processes of the local cluster.
         client : distributed.Client, optional
             Use this client (its cluster stays up).
-        parallel : bool
-            False: analyse in this process, one file after another (no Dask).
+        parallel : bool, optional
+            None (default): on ``client`` or a running scheduler (``scheduler``, Dask's configuration) when there
+            is one; else the files are analysed in this process, and once two are, the rest go to a fresh local
+            cluster only when they would end sooner there (:func:`vibkit.runtime.cluster.dask_pays`: the files
+            left times one file's analysis here, less their share on ``n_workers`` workers, beyond the cluster's
+            start-up; on two cores a few hundred small files).  True: always on Dask.  False: in this process, one
+            file after another (no Dask).  The stored numbers are the same wherever the analyses run.
         on_failure : callable, optional
             Called as ``on_failure(file, reason)`` for each failed file as it happens.
         progress : bool
@@ -406,8 +432,10 @@ class FleetDB:
 
         Notes
         -----
-        Only this process writes the database, one transaction per recording (SQLite: WAL journal,
-        ``synchronous=FULL``): a killed scan leaves complete rows, and the next scan skips them.
+        Only this process writes the database, one transaction per batch of recordings analysed (at most
+        :data:`vibkit.fleet.scan.BATCH_ROWS` of them, or those of :data:`~vibkit.fleet.scan.BATCH_S` seconds;
+        SQLite: WAL journal, ``synchronous=FULL``): a killed scan leaves complete rows, loses at most the last
+        second's analyses, and the next scan skips what it stored.
         Several scans (and adds) may run at once, on one machine for SQLite, on many for PostgreSQL:
         each file is stored once, the others are skipped as duplicates.
         A local cluster spawns its worker processes: a script that calls ``scan`` needs the

@@ -107,7 +107,8 @@ class Store(abc.ABC):
     def link_scans(self, unit=None):
         return read_link_scans(self, unit)
 
-    def _check_and_insert(self, m, link_scan=None):
+    def _check(self, m):
+        """Raise what refuses ``m`` before anything of it is written: a stored duplicate, another nominal pitch."""
         old = self.find(m.sha256)
         if old is not None:
             raise DuplicateRecordingError(self.duplicate_message(m.path, old), old)
@@ -117,6 +118,9 @@ class Store(abc.ABC):
                 f"unit {m.unit!r} is stored with nominal pitch {nom:g} m, not "
                 f"{m.nominal_pitch_m:g} m; one unit has one nominal pitch"
             )
+
+    def _check_and_insert(self, m, link_scan=None):
+        self._check(m)
         rid = self._insert_row(measurement_values(m))
         write_link_scan(self, rid, link_scan if link_scan is not None else LinkScan.not_run(NOT_SCANNED))
         return rid
@@ -151,6 +155,30 @@ class Store(abc.ABC):
                 ) from None
             raise DuplicateRecordingError(self.duplicate_message(m.path, old), old) from None
         return replace(m, id=rid)
+
+    def insert_batch(self, items):
+        """Store ``[(Measurement, LinkScan or None)]`` in one transaction; per item, in order, the stored row (with
+        its id) or the :class:`DuplicateRecordingError` / :class:`FleetError` that refused it (nothing of that item
+        written: the checks run before its statements).
+
+        Any other error (a database error, another process's row colliding on ``sha256``) rolls the whole batch
+        back and is raised: nothing of it is stored, every row is whole or absent.
+        """
+        items = list(items)
+        out = []
+        if not items:
+            return out
+        with self.write_transaction(sorted({m.unit for m, _s in items})):
+            for m, link_scan in items:
+                try:
+                    self._check(m)
+                except (DuplicateRecordingError, FleetError) as exc:
+                    out.append(exc)
+                    continue
+                rid = self._insert_row(measurement_values(m))
+                write_link_scan(self, rid, link_scan if link_scan is not None else LinkScan.not_run(NOT_SCANNED))
+                out.append(replace(m, id=rid))
+        return out
 
     def insert_many(self, measurements, link_scans=None):
         """Store measurements in one transaction, leaving out those already stored (same SHA-256); their link

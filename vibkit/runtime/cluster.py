@@ -9,10 +9,17 @@ Sweeps (:mod:`vibkit.sweep.run`) and fleet scans (:mod:`vibkit.fleet.history`) b
 from __future__ import annotations
 
 import contextlib
+import hashlib
 import logging
 import os
 
-__all__ = ["dask_client", "default_workers"]
+__all__ = ["dask_client", "dask_pays", "default_workers", "scheduler_address", "warm_workers", "LOCAL_CLUSTER_START_S"]
+
+#: seconds before a fresh local cluster computes anything: the cluster started and each worker warm (vibkit
+#: imported, the kernels loaded from their cache, :func:`warm_workers`), the workers warming at once on their own
+#: cores. Measured on the project's 2-core machine: a sweep on a fresh cluster of one worker costs 6 CPU-s more than
+#: the same runs in the process (benchmarks/results/user_costs.md, rows "sweep")
+LOCAL_CLUSTER_START_S = 6.0
 
 
 def default_workers() -> int:
@@ -21,6 +28,37 @@ def default_workers() -> int:
         return max(1, len(os.sched_getaffinity(0)))
     except AttributeError:  # pragma: no cover - not Linux
         return max(1, os.cpu_count() or 1)
+
+
+def dask_pays(seconds_left: float, workers: int) -> bool:
+    """Whether work that would take ``seconds_left`` more in this process ends sooner on a fresh local cluster of
+    ``workers`` processes: ``seconds_left * (1 - 1 / workers) > LOCAL_CLUSTER_START_S`` (the work shared evenly,
+    after the cluster's start-up).  One worker never pays: it does the same work after the start-up."""
+    w = max(1, int(workers))
+    return float(seconds_left) * (1.0 - 1.0 / w) > LOCAL_CLUSTER_START_S
+
+
+def scheduler_address(scheduler: str | None = None) -> str | None:
+    """The running Dask scheduler work goes to: ``scheduler``, else Dask's configuration (``scheduler-address``,
+    ``DASK_SCHEDULER_ADDRESS``) where Dask is installed; None: none (a local cluster would be started)."""
+    if scheduler:
+        return scheduler
+    try:
+        import dask.config
+    except ImportError:
+        return None
+    return dask.config.get("scheduler-address", None) or None
+
+
+def warm_workers(client, fn, *args) -> None:
+    """Have every worker of ``client``'s cluster call ``fn(*args)`` once, now and as it joins later (a worker
+    plugin, :class:`vibkit.runtime.worker_warmup.WarmUp`): a sweep's or a scan's imports and compiled kernels
+    loaded once per worker, not by each worker's first task.  Returns when the workers present have warmed up
+    (together, each on its own core).  ``fn`` must be a module-level function (sent by its name)."""
+    from .worker_warmup import WarmUp  # imports distributed: only where Dask runs
+
+    key = f"{fn.__module__}.{fn.__qualname__}{args!r}".encode()
+    client.register_plugin(WarmUp(fn, args), name=f"vibkit-warm-{hashlib.sha1(key).hexdigest()[:16]}")
 
 
 @contextlib.contextmanager

@@ -13,6 +13,8 @@ An all-NaN or empty input is always an error; NaN never reaches an FFT.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 NAN_POLICIES = ("raise", "interpolate")
@@ -118,6 +120,18 @@ def check_resolution(n: int, fs: float, resolution_hz: float, name: str = "x") -
         )
 
 
+@functools.lru_cache(maxsize=32)
+def _decimation_sos(fs: float, q: int):
+    """The anti-alias low-pass of :func:`decimate_for_band` (read-only second-order sections), designed once per
+    rate and factor: its cutoff depends on nothing else, and every record of a fleet at one rate asks for the same
+    one (the design cost as much as filtering a 30 s record)."""
+    import scipy.signal
+
+    sos = scipy.signal.butter(8, 0.8 * fs / (2.0 * q), btype="low", fs=fs, output="sos")
+    sos.flags.writeable = False
+    return sos
+
+
 def decimate_for_band(x, fs: float, f_keep: float, *, oversample: float = 5.0):
     """Low-pass and decimate ``x`` so that ``fs / q >= oversample * f_keep``.
 
@@ -132,7 +146,7 @@ def decimate_for_band(x, fs: float, f_keep: float, *, oversample: float = 5.0):
     if q < 2:
         return x, fs, 1
     cutoff = 0.8 * fs / (2.0 * q)
-    sos = scipy.signal.butter(8, cutoff, btype="low", fs=fs, output="sos")
+    sos = _decimation_sos(float(fs), q).copy()  # scipy's filter takes a writable one
     padlen = min(x.size - 1, int(6.0 * fs / cutoff))
     y = scipy.signal.sosfiltfilt(sos, x, padtype="even", padlen=padlen)[::q]
     return np.ascontiguousarray(y), fs / q, q

@@ -41,7 +41,7 @@ import sys
 import time
 import traceback
 
-from ..runtime.cluster import dask_client
+from ..runtime.cluster import dask_client, dask_pays, default_workers, scheduler_address, warm_workers
 from ..runtime.progress import Progress
 from .plan import _PRODUCES, SweepError, _source_of, plan_sweep, varied_text
 from .records import STATUS, SUMMARIES, _failed_record
@@ -150,6 +150,22 @@ def _simulate(scene, duration):
     from ..analyses.simulation import simulate
 
     return simulate(scene, duration=duration, progress=False)
+
+
+#: the moment of its base scene a worker simulates as it starts (:func:`_warm`): enough to load every kernel the
+#: scene's runs call [s]
+WARM_DURATION_S = 0.01
+
+
+def _warm(text, source):
+    """Worker side, once per worker (:func:`vibkit.runtime.cluster.warm_workers`): the base scene simulated for
+    :data:`WARM_DURATION_S`, which imports the simulation and loads its compiled kernels before the first run."""
+    from ..analyses.simulation import simulate
+    from ..model.scene import parse_scene
+
+    scene = parse_scene(text, source)
+    if scene.analysis in ("forward", "inverse"):  # a kinematic sweep's runs call no compiled integrator
+        simulate(scene, duration=min(WARM_DURATION_S, float(scene.run.duration or WARM_DURATION_S)), progress=False)
 
 
 def _run_one(task: dict) -> dict:
@@ -271,8 +287,9 @@ def sweep(
     max_runs: int | None = None,
     check: bool = False,
     max_result_bytes=None,
+    parallel: bool | None = None,
 ):
-    """Run a scene over a grid (or Monte Carlo draws) of its keys on Dask.
+    """Run a scene over a grid (or Monte Carlo draws) of its keys, on Dask where that pays.
 
     Parameters
     ----------
@@ -312,6 +329,14 @@ def sweep(
         Limit of the sweep's result (runs x values x 8 bytes + bookkeeping; default the scene's
         ``[solver] max_result_bytes``, ``VIBKIT_MAX_RESULT_BYTES``, else 2 GiB), checked from the plan
         before anything is allocated.
+    parallel : bool, optional
+        Where the runs go.  None (default): to ``client`` or to a running scheduler (``scheduler``, Dask's
+        configuration) when there is one; else the runs start in this process, and once two have run, the rest go
+        to a fresh local cluster only when they would end sooner there
+        (:func:`vibkit.runtime.cluster.dask_pays`: the runs left times their time here, less their share on
+        ``n_workers`` workers, beyond the cluster's start-up); a sweep of a few short runs never waits for a
+        cluster.  True: always on Dask.  False: every run in this process, one after another.  The results are
+        the same wherever the runs go.
 
     Returns
     -------
@@ -335,8 +360,8 @@ def sweep(
     The local cluster's workers are separate processes that import the calling script again: a
     script that calls ``sweep`` needs the usual ``if __name__ == "__main__":`` guard. A remote
     cluster's workers need vibkit installed; they only receive scene texts and return numbers (the
-    driver writes the store). Each worker loads the compiled kernels on its first run (a few
-    seconds; that run's ``wall_time`` includes it).
+    driver writes the store). Each worker imports the simulation and loads the compiled kernels once, as it
+    joins, before its first run (:func:`vibkit.runtime.cluster.warm_workers`, with the base scene).
 
     Examples
     --------
@@ -381,9 +406,25 @@ def sweep(
         if first is not None:
             import contextlib
 
-            ctx = contextlib.nullcontext(client) if client is not None else dask_client(scheduler, n_workers=n_workers)
-            with ctx as cl:
-                computed = _submit(cl, itertools.chain([first], tasks), records, store, report)
+            tasks = itertools.chain([first], tasks)
+            on_dask = parallel is True or (parallel is None and (client is not None or scheduler_address(scheduler)))
+            if not on_dask:
+                w = n_workers or default_workers()
+                left = n - len(records) if max_runs is None else min(int(max_runs), n - len(records))
+                pays = None if parallel is False else (lambda run_s, done: dask_pays(run_s * (left - done), w))
+                computed, handed = _run_here(tasks, records, store, report, pays)
+                nxt = next(tasks, None) if handed else None  # runs left that the loader took: no cluster for none
+                on_dask = nxt is not None
+                tasks = itertools.chain([nxt], tasks) if on_dask else tasks
+            if on_dask:
+                ctx = (
+                    contextlib.nullcontext(client)
+                    if client is not None
+                    else dask_client(scheduler, n_workers=n_workers)
+                )
+                with ctx as cl:
+                    warm_workers(cl, _warm, plan.text, plan.source)
+                    computed += _submit(cl, tasks, records, store, report)
         report.close()
         complete = len(records) == n
         ds = _assemble(plan, records, complete=complete)
@@ -476,6 +517,31 @@ def _checked(scene):
             f"{base.source}: check applies to forward scenes; this one is '{base.analysis}' (drop --check)"
         )
     return parse_scene(varied_text(base.text, {"solver.check": True}), base.source)
+
+
+#: runs a sweep computes in this process before it judges whether the rest pay for a cluster (the first loads the
+#: kernels: the least of their times is the estimate)
+RUNS_BEFORE_CHOOSING = 2
+
+
+def _run_here(tasks, records, store, report, pays=None):
+    """Runs in this process, one after another, each written as it finishes; ``(computed, handed_over)``.
+
+    ``pays(seconds_per_run, computed)``: after :data:`RUNS_BEFORE_CHOOSING` runs and after each later one, whether
+    the rest should go to Dask (True: stop here, ``handed_over`` True, the remaining ``tasks`` not consumed)."""
+    computed, fastest = 0, math.inf
+    for t in tasks:
+        t0 = time.perf_counter()
+        rec = _run_one(t)
+        fastest = min(fastest, time.perf_counter() - t0)
+        records[t["index"]] = rec
+        if store is not None:
+            store.write_run(rec)
+        computed += 1
+        report.update(rec)
+        if pays is not None and computed >= RUNS_BEFORE_CHOOSING and pays(fastest, computed):
+            return computed, True
+    return computed, False
 
 
 def _submit(client, tasks, records, store, report):
