@@ -245,7 +245,7 @@ def _line_in(x, fs, band, p_fa):
     line = steady_line(seg, fs, band=band, p_fa=p_fa, parts=1)
     if not line.detected:
         return None, 0, n, line.reason
-    j0, j1 = _where_the_line_is(seg, fs, line.frequency_hz, band)
+    j0, j1 = _where_the_line_is(seg, fs, line.frequency_hz, band, line.level_db)
     if j1 - j0 >= n - int(1.5 * fs):
         j0, j1 = 0, n
     if (j1 - j0) / fs * band[0] < 6:
@@ -262,23 +262,37 @@ def _line_in(x, fs, band, p_fa):
     return (line, j0, j1, "") if line.detected else (None, j0, j1, line.reason)
 
 
-def _where_the_line_is(seg, fs, freq, band, on_db=3.0):
-    """(first, stop) sample of the longest run of sliding windows in which the line near ``freq`` stands at least
-    ``on_db`` over the floor (the whole segment when it never falls under)."""
+def _where_the_line_is(seg, fs, freq, band, level_db, on_db=3.0):
+    """(first, stop) sample of the stretch of sliding windows that holds the most evidence of the line near ``freq``:
+    the run that maximises the sum of ``level - on`` over its windows (levels as power ratios; the whole segment when
+    every window stands over ``on``).
+
+    A steady line that stands ``R`` (``level_db``) over the floor in the whole segment of ``T`` seconds stands about
+    ``1 + (R - 1) w / T`` in a window of ``w`` seconds, and noise alone about 1.  ``on`` is halfway between the two,
+    never over ``on_db`` nor under 1.5 (1.8 dB), so that a window of noise scores negative and one with the line
+    positive: the stretch ends where the line is gone for good (standing at a landing, stepping off), while a window
+    in which a weak line dips inside the ride is outweighed by its neighbours and does not cut the ride in two."""
     n = seg.shape[1]
     window = max(min(4.0, n / fs / 3), 6.0 / band[0])
     c, lv = line_level(seg, fs, freq, window_s=window, tolerance=0.02)  # a passenger moves the line 1-2 %
-    if lv.size == 0 or np.all(lv >= on_db):
+    expected = 1.0 + (10.0 ** (level_db / 10.0) - 1.0) * window / (n / fs)
+    on = min(max(0.5 * (1.0 + expected), 1.5), 10.0 ** (on_db / 10.0))
+    if lv.size == 0 or np.all(10.0 ** (lv / 10.0) >= on):
         return 0, n
-    on = np.concatenate(([0], (lv >= on_db).astype(np.int8), [0]))
-    d = np.diff(on)
-    starts, stops = np.flatnonzero(d == 1), np.flatnonzero(d == -1)
-    if starts.size == 0:
+    gain = 10.0 ** (lv / 10.0) - on
+    best, first, stop = 0.0, 0, 0
+    run, run_first = 0.0, 0
+    for k, g in enumerate(gain):  # the largest sum over a run of consecutive windows (Kadane)
+        if run <= 0.0:
+            run, run_first = 0.0, k
+        run += g
+        if run > best:
+            best, first, stop = run, run_first, k + 1
+    if best <= 0.0:
         return 0, n
-    k = int(np.argmax(stops - starts))
     half = window / 2
-    a = max(int((c[starts[k]] - half) * fs), 0)
-    b = min(int((c[stops[k] - 1] + half) * fs), n)
+    a = max(int((c[first] - half) * fs), 0)
+    b = min(int((c[stop - 1] + half) * fs), n)
     return a, b
 
 
