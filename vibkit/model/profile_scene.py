@@ -352,7 +352,7 @@ def scene_text(profile, analysis: str = "forward", duration: float | None = None
         else f"filled: twice the weight of the steepest strand's chain, at least {MIN_PRELOAD:g} N"
     )
     if analysis == "forward":
-        if p.no_load_power is not None:  # a driven chain: the stated running resistance, a PI drive that holds speed
+        if p.no_load_power != 0:  # a driven chain: the stated (else a typical) running resistance, a PI drive
             mu, _, mu_src = running_resistance(f)
             kp, ki = drive_gains(f)
             drive = [
@@ -364,7 +364,7 @@ def scene_text(profile, analysis: str = "forward", duration: float | None = None
             drive = [
                 f"motor = {{ kp = 600.0, speed = {_fmt(p.set_speed)} }}  # drive.speed{_down(p)}: the step speed on "
                 "the straight",
-                "# no running resistance (drive.no_load_power not stated): the chain coasts at speed",
+                "# no running resistance (drive.no_load_power = 0): the chain coasts at speed",
             ]
         lines += [
             "[run]",
