@@ -115,8 +115,8 @@ def initial_state(model, *, start=0.0, speed=0.0, theta=None, torque=0.0, ki=0.0
     A start in steady running against a load (``torque`` [N m] in the sprocket's sense, the motor's
     ``effects.motor.initial_torque``; ``ki`` its integral gain; ``contact`` the scene's contact options): the
     controller's integral starts at torque / ki, and the sprocket turns from the meshed angle towards that
-    torque until its teeth, pressed into the rollers, carry it (:func:`loaded_angle`), so that the drive holds
-    the chain at once instead of its teeth striking the chain after it has slowed in the backlash.
+    torque until its teeth, pressed into the rollers, carry it (:meth:`EscalatorModel.loaded_angle`), so that
+    the drive holds the chain at once instead of its teeth striking the chain after it has slowed in the backlash.
     """
     conf = model.chain.configure(start)
     th = model.meshed_angle(conf) if theta is None else theta
@@ -124,36 +124,11 @@ def initial_state(model, *, start=0.0, speed=0.0, theta=None, torque=0.0, ki=0.0
     if torque != 0.0 and ki > 0.0:
         integral = torque / ki
         if contact is not None:
-            th = loaded_angle(model, conf, th, torque, contact.stiffness, contact.exponent)
+            th = model.loaded_angle(conf, th, torque, contact.stiffness, contact.exponent)
     jac, gam, c, _, _ = model.chain.jacobian(conf)
     # the chain speed is roller 1's speed |J_1| s0dot
     s0dot = speed / math.hypot(*jac[0]) if speed else 0.0
     return np.array([start, s0dot, th, model.sprocket_speed(speed), integral]), conf.delta
-
-
-def loaded_angle(model, conf, theta, torque, stiffness, exponent):
-    """The sprocket angle [rad] reached from the meshed ``theta`` turning in the sense of ``torque`` [N m] until
-    the teeth pressed into the rollers of ``conf`` (at rest, contact of ``stiffness`` and ``exponent``) carry it
-    (the first angle that does, in steps of a 64th of half a tooth pitch, then bisection to 1e-12 rad); ``theta``
-    where they cannot within half a tooth pitch."""
-    sense = math.copysign(1.0, torque)
-    half = math.pi / model.sprocket.teeth
-
-    def carried(x):  # the teeth's torque against the motor's
-        return -sense * model.static_contact(conf, theta + sense * x, stiffness, exponent)[0]
-
-    steps = np.linspace(0.0, half, 65)
-    over = [x for x in steps[1:] if carried(x) >= abs(torque)]
-    if not over:
-        return theta
-    lo, hi = over[0] - steps[1], over[0]
-    while hi - lo > 1e-12:
-        mid = 0.5 * (lo + hi)
-        if carried(mid) < abs(torque):
-            lo = mid
-        else:
-            hi = mid
-    return theta + sense * lo
 
 
 SEAT_TOLERANCE = 1e-9  # [m] a roller this far inside a tooth at t = 0 is refused (the meshed start has none)

@@ -113,6 +113,26 @@ class EscalatorModel:
         )  # fmt: skip
         return float(out[0]), float(out[2])
 
+    def loaded_angle(self, conf, theta: float, torque: float, stiffness: float, exponent: float) -> float:
+        """The sprocket angle [rad] reached from the meshed ``theta`` turning in the sense of ``torque`` [N m]
+        until the teeth pressed into the rollers of ``conf`` (at rest, :meth:`static_contact`) carry it: the first
+        angle that does, in steps of a 64th of half a tooth pitch, then bisection to 1e-12 rad; ``theta`` where
+        they cannot within half a tooth pitch. A run started in steady running starts there."""
+        sense = math.copysign(1.0, torque)
+
+        def carried(x):  # the teeth's torque against the motor's
+            return -sense * self.static_contact(conf, theta + sense * x, stiffness, exponent)[0]
+
+        steps = np.linspace(0.0, math.pi / self.sprocket.teeth, 65)
+        over = [x for x in steps[1:] if carried(x) >= abs(torque)]
+        if not over:
+            return theta
+        lo, hi = over[0] - steps[1], over[0]
+        while hi - lo > 1e-12:
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if carried(mid) < abs(torque) else (lo, mid)
+        return theta + sense * lo
+
     def step_rollers(self, step: int) -> np.ndarray:
         """0-based indices of the rollers (``links_per_step``: 3, or 4) of 1-based step ``step``; the
         middle one (index 1 of 3 or 4) is where a step is placed."""

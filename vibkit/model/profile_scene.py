@@ -23,11 +23,13 @@ A driven chain (forward scenes): a real unit's drive works all the time against 
 the chain's articulation and the handrails, so its teeth always carry load; a chain without friction coasts at
 steady speed in the teeth's backlash.  The scene carries that running resistance as ``[effects]
 rolling_resistance`` (mu m g on every roller, the no-load drive power mu g M v for a chain and steps of mass M
-at speed v; :func:`running_resistance`) where the profile states ``drive.no_load_power``; its speed controller is
-then a PI controller tuned to the unit's inertia (:func:`drive_gains`), which holds the rated speed against the
-resistance with no steady error.  Without the key the scene is as before (no running resistance, the reference's
-P controller, kp = 600 N m s: the chain coasts at speed); :data:`TYPICAL_RESISTANCE_N_PER_M` is a typical figure
-to state where the firm has none of its own.  The study's own scenes (``sim/``) keep their published settings.
+at speed v; :func:`running_resistance`): the profile's ``drive.no_load_power``, else
+:data:`TYPICAL_RESISTANCE_N_PER_M` over the loop.  Its speed controller is a PI controller tuned to the unit's
+inertia (:func:`drive_gains`), which holds the rated speed against the resistance with no steady error, started
+in steady running (``initial_torque``, :func:`steady_torque`: the teeth carry the drive from the first sample);
+the default preload adds what the resistance takes from the slack strand (:func:`default_preload`).
+``no_load_power = 0`` gives the coasting scene (no running resistance, the reference's P controller, kp = 600
+N m s).  The study's own scenes (``sim/``) keep their published settings.
 """
 
 from __future__ import annotations
