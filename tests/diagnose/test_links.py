@@ -315,11 +315,24 @@ def profile_90(tmp_path_factory):
     return path, parse_profile(PROFILE_90, "E90.toml").scene("forward")
 
 
-def test_a_link_half_a_loop_from_its_twin_is_given_with_both_numbers(profile_90, tmp_path, capsys):
-    """On the 90-link profile scene a 0.5 mm link (link 20, 2.3 loops, 1 um noise) fits the 1 mm signature
-    better half a loop away than at itself, and that signature differs from the 0.5 mm one by most of its norm:
-    the flag names both numbers, the true one among them, in --json and in the table."""
-    path, scene = profile_90
+@pytest.fixture(scope="module")
+def coasting_90(tmp_path_factory):
+    """The 90-link profile with no running resistance (``drive.no_load_power = 0``): its chain coasts, the teeth
+    carry no load, and a worn link's signature on the sprocket is the one it has round the lower head."""
+    from vibkit.model.profile import parse_profile
+
+    text = PROFILE_90.replace("teeth = 28", "teeth = 28\nno_load_power = 0", 1)
+    path = tmp_path_factory.mktemp("e90c") / "E90.toml"
+    path.write_text(text)
+    return path, parse_profile(text, "E90.toml").scene("forward")
+
+
+def test_a_link_half_a_loop_from_its_twin_is_given_with_both_numbers(coasting_90, tmp_path, capsys):
+    """On the 90-link profile's coasting scene a 0.5 mm link (link 20, 2.3 loops, 1 um noise) fits the 1 mm
+    signature better half a loop away than at itself (the sprocket and the lower head, both unloaded, move the
+    tensioner alike), and that signature differs from the 0.5 mm one by most of its norm: the flag names both
+    numbers, the true one among them, in --json and in the table."""
+    path, scene = coasting_90
     rec, passed, _, _ = _record(scene, 20, np.random.default_rng(5), excess=0.5e-3, loops=2.3, exact=True)
     rec.to_netcdf(tmp_path / "e90.nc")
     true = link_number_of(20, passed, 90)
@@ -332,6 +345,18 @@ def test_a_link_half_a_loop_from_its_twin_is_given_with_both_numbers(profile_90,
     out, err = capsys.readouterr()
     assert " or ".join(str(k) for k in [f["link"], *f["alternatives"]]) in out
     assert "cannot tell them apart" in err
+
+
+def test_on_a_driven_chain_the_worn_link_has_no_twin(profile_90, tmp_path, capsys):
+    """The same 0.5 mm link on the 90-link profile's scene as built (a driven chain): on the sprocket the link is
+    in the loaded strand on the teeth, round the lower head in the slack one, so its signature is not repeated half
+    a loop later, and the flag names the true link alone."""
+    path, scene = profile_90
+    rec, passed, _, _ = _record(scene, 20, np.random.default_rng(5), excess=0.5e-3, loops=2.3, exact=True)
+    rec.to_netcdf(tmp_path / "e90.nc")
+    d = _links_with(tmp_path / "e90.nc", capsys, "--escalator", str(path), "--json")
+    (f,) = d["flagged"]
+    assert f["link"] == link_number_of(20, passed, 90) and not f["alternatives"]
 
 
 def test_a_two_millimetre_link_is_fitted_again_with_a_longer_signature(profile_90):

@@ -4,6 +4,7 @@ chain's result is what it was without the check."""
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -18,6 +19,7 @@ from support.evidence import chain_evidence
 from support.recording import recording
 
 NOMINAL = 0.4 / 3.0
+ROOT = Path(__file__).resolve().parents[2]
 FS = 25.0
 
 
@@ -187,13 +189,23 @@ def test_decide_on_the_methods_disagreement():
     assert decide(LinkPassEvidence(**base, mean_phase_hz=apart, methods_sigmas=0.5 * DISAGREE_SIGMAS)).verdict == "ok"
 
 
+def _coasting_e07(tmp_path):
+    """E07's profile with no running resistance (``drive.no_load_power = 0``): the chain coasts in the teeth's
+    backlash, and a step's accelerometer reads the step's own path alone."""
+    text = (ROOT / "data/fleet-example/escalators/E07.toml").read_text()
+    path = tmp_path / "E07-coasting.toml"
+    path.write_text(text.replace("teeth = 28", "teeth = 28\nno_load_power = 0", 1))
+    return path
+
+
 def test_a_step_sensor_going_round_a_curve_gets_no_verdict(run, tmp_path):
-    # a new chain (E07's profile, steady at 0.5 m/s from the start): step 3's accelerometer goes round the
-    # sprocket at about 15-20 s, where its own link-pass phase shifts by half a cycle; the total tracked phase
-    # then counts 74.5 link passes in 20 s (3.72 Hz, +0.7 % "elongation" at 0.0004 Hz) where the spectrum and
-    # the tensioner give 3.750 Hz: the two estimates disagree, and no verdict is given
+    # a new chain coasting (E07's profile without running resistance, steady at 0.5 m/s from the start): step 3's
+    # accelerometer reads its own path, and goes round the sprocket at about 15-20 s, where its own link-pass phase
+    # shifts by half a cycle; the total tracked phase then counts 74.5 link passes in 20 s (3.72 Hz, +0.7 %
+    # "elongation" at 0.0004 Hz) where the spectrum and the tensioner give 3.750 Hz: the two estimates disagree,
+    # and no verdict is given
     scene, nc = tmp_path / "E07.toml", tmp_path / "E07.nc"
-    assert run("scene", "data/fleet-example/escalators/E07.toml", "--analysis", "forward", "-o", scene)[0] == 0
+    assert run("scene", _coasting_e07(tmp_path), "--analysis", "forward", "-o", scene)[0] == 0
     assert run("simulate", scene, "--duration", "20", "-o", nc)[0] == 0
     rc, out, _ = run("pitch", nc, "--escalator", "data/fleet-example/escalators/E07.toml", "--channel", "accel_step",
                      "--json")  # fmt: skip
@@ -210,3 +222,18 @@ def test_a_step_sensor_going_round_a_curve_gets_no_verdict(run, tmp_path):
     both = json.loads(out)
     assert rc == 0 and both["status"] == "ok" and both["channel"] in ("delta", "tensioner_displacement")
     assert both["fundamental_hz"] == tensioner["fundamental_hz"]
+
+
+def test_a_step_sensor_on_a_driven_chain_reads_the_chain(run, tmp_path):
+    """E07's scene as built (a driven chain: the running resistance carried by the teeth): the drive's speed
+    pulsation at the link pass (the sprocket's polygon under load) moves the whole chain at once, so step 3's
+    accelerometer reads it in the chain's phase, which does not turn where the step goes round the sprocket, and
+    its estimates agree; its verdict is the truth, the scene's new chain (elongation 0 within two sigmas)."""
+    scene, nc = tmp_path / "E07.toml", tmp_path / "E07.nc"
+    assert run("scene", "data/fleet-example/escalators/E07.toml", "--analysis", "forward", "-o", scene)[0] == 0
+    assert run("simulate", scene, "--duration", "20", "-o", nc)[0] == 0
+    rc, out, _ = run("pitch", nc, "--escalator", "data/fleet-example/escalators/E07.toml", "--channel", "accel_step",
+                     "--json")  # fmt: skip
+    d = json.loads(out)
+    assert rc == 0 and d["status"] == STATUS_OK and d["verdict"] == "ok"
+    assert abs(d["elongation_percent"]) < 2 * d["elongation_sigma_percent"]

@@ -35,7 +35,7 @@ SIM = Path(__file__).resolve().parents[2] / "sim"
 AWAY_FROM_DEFAULTS = {
     "gravity": {"g": 9.80665},
     "contact": {"stiffness": 2.5e6, "exponent": 1.4, "damping": 0.3},
-    "motor": {"kp": 600.0, "ki": 25.0, "speed": 0.55, "torque_limit": 1.0e5},
+    "motor": {"kp": 600.0, "ki": 25.0, "speed": 0.55, "torque_limit": 1.0e5, "initial_torque": 50.0},
     "tensioner": {"stiffness": 2.0e4, "preload": 3000.0, "mass": 40.0},
     "passengers": {
         "mass": [70.0, 90.0],

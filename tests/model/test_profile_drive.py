@@ -1,9 +1,9 @@
-"""A profile that states its no-load drive power (``drive.no_load_power``) gets a scene that drives its chain as a
-real unit's drive does (issue 49, item 3): a running resistance and a PI drive, so that once at speed the sprocket's
-teeth always carry the chain; the drive power the simulation gives (torque x angular speed) is the stated one; the
-solver's defaults converge (``--check``) on the shipped profiles with a power stated (TfL's typical figure: 2 kW of
-friction on a 15 m escalator at 0.75 m/s, 88.9 N per metre of loop), a down-running one and a 3 % worn chain.
-Without the key the scene is as it was (no resistance, the reference's P drive)."""
+"""A profile's scene drives its chain as a real unit's drive does (issue 49, item 3): a running resistance, the
+profile's ``drive.no_load_power`` where it states one, else TfL's typical figure (2 kW of friction on a 15 m escalator
+at 0.75 m/s: 88.9 N per metre of loop), and a PI drive, so that once at speed the sprocket's teeth always carry the
+chain; the drive power the simulation gives (torque x angular speed) is the stated or typical one; the solver's
+defaults converge (``--check``) on the shipped profiles as they are, a down-running one and a 3 % worn chain.
+``no_load_power = 0`` gives the coasting scene of before (no resistance, the reference's P drive)."""
 
 import dataclasses
 import math
@@ -14,7 +14,7 @@ import pytest
 
 import vibkit
 from vibkit.model.profile import load_profile, parse_profile
-from vibkit.model.profile_scene import link_count, profile_scene, scene_text
+from vibkit.model.profile_scene import profile_scene, scene_text
 from vibkit.model.scene import SceneError, parse_scene
 
 from support.profiles import PROFILE_90
@@ -41,22 +41,21 @@ kind = "tensioner"
 TFL_N_PER_M = 2000.0 / 0.75 / 30.0
 
 
-def _typical(profile):
-    """The profile with TfL's typical running resistance stated as its no-load power (its loop x speed)."""
-    n_links = profile.n_links or link_count(profile)[0]
-    return dataclasses.replace(profile, no_load_power=TFL_N_PER_M * n_links * profile.nominal_pitch * profile.speed)
-
-
 def _profiles():
-    out = [(p.stem, _typical(load_profile(p))) for p in SHIPPED]
-    out.append(("E90", _typical(parse_profile(PROFILE_90, "E90.toml"))))
+    """The shipped profiles and a 90-link one as they are (no power stated: the typical figure), and a down-running
+    unit whose firm states its power."""
+    out = [(p.stem, load_profile(p)) for p in SHIPPED]
+    out.append(("E90", parse_profile(PROFILE_90, "E90.toml")))
     out.append(("M4 down, stated", parse_profile(DOWN_STATED, "M4.toml")))
     return out
 
 
 def _expected_power(profile, n_links):
-    """The no-load drive power [W] the profile states."""
-    return profile.no_load_power
+    """The no-load drive power [W]: the profile's, else TfL's figure over the loop (n_links x pitch) at the speed,
+    computed from TfL's own numbers."""
+    if profile.no_load_power is not None:
+        return profile.no_load_power
+    return TFL_N_PER_M * n_links * profile.nominal_pitch * abs(profile.speed)
 
 
 def _run(profile, *, elongation=None, check=False, duration=12.0):
@@ -107,10 +106,17 @@ def test_a_power_the_chain_cannot_resist_names_the_key(tmp_path):
         profile_scene(p)
 
 
-def test_without_a_stated_power_the_scene_is_as_before():
+def test_without_a_stated_power_the_scene_says_it_took_the_typical_one():
     text = scene_text(load_profile(SHIPPED[0]))
+    line = next(s for s in text.splitlines() if s.startswith("rolling_resistance"))
+    assert "filled: typical 88.9 N per metre of loop" in line and "drive.no_load_power states the unit's" in line
+
+
+def test_a_stated_zero_power_gives_the_coasting_scene():
+    profile = dataclasses.replace(load_profile(SHIPPED[0]), no_load_power=0.0)
+    text = scene_text(profile)
     assert "motor = { kp = 600.0, speed = 0.5 }" in text and "rolling_resistance" not in text
-    assert "# no running resistance (drive.no_load_power not stated): the chain coasts at speed" in text
+    assert "# no running resistance (drive.no_load_power = 0): the chain coasts at speed" in text
 
 
 def test_the_scene_says_where_its_resistance_came_from():

@@ -160,7 +160,8 @@ def test_sections_and_ranges_are_derived_from_the_schema():
     assert EFFECTS["passengers"] == {"mass": list, "step": list, "board": list, "alight": list}
     assert RANGES["effects.contact.exponent"] == (1.0, 3.0, "(1 linear, 1.5 Hertz)")
     assert RANGES["solver.rtol"] == (1e-14, 0.1, "")
-    assert len(RANGES) == 19
+    assert RANGES["effects.motor.initial_torque"] == (-1e8, 1e8, "N m")  # negative: a torque that brakes
+    assert len(RANGES) == 20
     assert RANGES["chain.link_pitch"] == (0.02, 0.5, "m (101.6 mm is 0.1016 m)")
 
 

@@ -1,7 +1,8 @@
 """Escalator profiles the tests share."""
 
-#: a 90-link escalator (28-tooth sprocket, 0.5 m/s, tensioner): its worn link's signature repeats half a loop
-#: later (the link on the sprocket, then on the lower head, 45 links apart) and changes with the excess
+#: a 90-link escalator (28-tooth sprocket, 0.5 m/s, tensioner): its worn link's signature changes with the excess,
+#: and where the chain coasts (no_load_power = 0) repeats half a loop later (the link on the sprocket, then on the
+#: lower head, 45 links apart)
 PROFILE_90 = """[escalator]
 unit = "E90"
 [drive]

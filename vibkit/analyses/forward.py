@@ -106,18 +106,29 @@ class ForwardModel:
         return self.work.arrays[WS_INFO]
 
 
-def initial_state(model, *, start=0.0, speed=0.0, theta=None):
+def initial_state(model, *, start=0.0, speed=0.0, theta=None, torque=0.0, ki=0.0, contact=None):
     """Closed, meshed initial state: roller 1 at ``start`` [m of undeformed guide], chain speed [m/s].
 
     The sprocket angle meshes the rollers on the head midway between teeth (no contact), and turns
     with the chain (thetadot = -2 pi speed / (Z L), :meth:`EscalatorModel.sprocket_speed`).
+
+    A start in steady running against a load (``torque`` [N m] in the sprocket's sense, the motor's
+    ``effects.motor.initial_torque``; ``ki`` its integral gain; ``contact`` the scene's contact options): the
+    controller's integral starts at torque / ki, and the sprocket turns from the meshed angle towards that
+    torque until its teeth, pressed into the rollers, carry it (:meth:`EscalatorModel.loaded_angle`), so that
+    the drive holds the chain at once instead of its teeth striking the chain after it has slowed in the backlash.
     """
     conf = model.chain.configure(start)
     th = model.meshed_angle(conf) if theta is None else theta
+    integral = 0.0
+    if torque != 0.0 and ki > 0.0:
+        integral = torque / ki
+        if contact is not None:
+            th = model.loaded_angle(conf, th, torque, contact.stiffness, contact.exponent)
     jac, gam, c, _, _ = model.chain.jacobian(conf)
     # the chain speed is roller 1's speed |J_1| s0dot
     s0dot = speed / math.hypot(*jac[0]) if speed else 0.0
-    return np.array([start, s0dot, th, model.sprocket_speed(speed), 0.0]), conf.delta
+    return np.array([start, s0dot, th, model.sprocket_speed(speed), integral]), conf.delta
 
 
 SEAT_TOLERANCE = 1e-9  # [m] a roller this far inside a tooth at t = 0 is refused (the meshed start has none)
@@ -183,8 +194,17 @@ def forward_dynamics(
     if t_out is None:
         t_out = output_times(duration, dt)
     fm = ForwardModel(model, effects, start=run.start)
+    torque, ki = 0.0, 0.0
+    if "motor" in effects:  # the motor's torque at t = 0 along the motion, in the sprocket's sense
+        motor = effects["motor"]
+        torque = motor.initial_torque * math.copysign(1.0, model.sprocket_speed(motor.speed)) if motor.speed else 0.0
+        ki = motor.ki
     y0, d0 = initial_state(model, start=run.start, speed=run.initial_speed)
-    check_seated(fm, y0, d0)
+    check_seated(fm, y0, d0)  # the meshed start: the rollers seat between the teeth
+    if torque != 0.0:  # then the teeth pressed into the rollers so as to carry the drive's torque
+        y0, d0 = initial_state(
+            model, start=run.start, speed=run.initial_speed, torque=torque, ki=ki, contact=effects.get("contact")
+        )
     reset_closure(fm.info, d0)
     method = method or solver.method
     rtol = rtol or solver.rtol or default_rtol(effects)
@@ -642,8 +662,10 @@ def _post_process(fm, t, y, outputs, stats, y_obs=None, table=None):
                 data[name] = (("time", "roller", "axis"), arr)
     nominal = nominal_speed(fm.effects, scene.run)
     # a run from rest, or one whose drive takes up a running resistance at its start (a start-up either way), counts
-    # its speed over its second half, after the start-up
-    start_up = abs(y[0, 1]) < 1e-9 or "rolling_resistance" in fm.effects
+    # its speed over its second half, after the start-up; one whose drive starts carrying it (the motor's
+    # initial_torque: steady running from t = 0) has none
+    carried = "motor" in fm.effects and fm.effects["motor"].initial_torque != 0.0
+    start_up = abs(y[0, 1]) < 1e-9 or ("rolling_resistance" in fm.effects and not carried)
     speed, f_lp, counted_from = counted_speed(model, t, y[:, 0], nominal, from_rest=start_up)
     attrs = {
         "chain_speed_m_s": speed,

@@ -98,17 +98,40 @@ class EscalatorModel:
         """Deepest roller-tooth overlap [m] with roller 1 at ``start`` [m of undeformed guide] and the
         sprocket meshed (:meth:`meshed_angle`): 0 when every roller clears the teeth, as a run must start."""
         conf = self.chain.configure(float(start))
-        theta = self.meshed_angle(conf)
+        return self.static_contact(conf, self.meshed_angle(conf))[1]
+
+    def static_contact(self, conf, theta: float, stiffness: float = 1.0, exponent: float = 1.0) -> tuple[float, float]:
+        """``(torque on the sprocket [N m], deepest roller-tooth overlap [m])`` of configuration ``conf`` at rest
+        with the sprocket at angle ``theta``, the contact of ``stiffness`` and ``exponent`` without damping."""
         n, z = self.n, self.sprocket.teeth
         pos = np.ascontiguousarray(conf.position, dtype=float)
         zeros = np.zeros(n)
-        return float(
-            contact_kernel(
-                pos[:, 0].copy(), pos[:, 1].copy(), zeros, zeros, np.arange(n, dtype=np.int64), n, theta, 0.0,
-                self.centre[0], self.centre[1], self.teeth, self.radii, 1.0, 1.0, 0.0, np.zeros(n), np.zeros(n), np.zeros(z), np.zeros(z),
-                False,
-            )[2]
+        out = contact_kernel(
+            pos[:, 0].copy(), pos[:, 1].copy(), zeros, zeros, np.arange(n, dtype=np.int64), n, theta, 0.0,
+            self.centre[0], self.centre[1], self.teeth, self.radii, stiffness, exponent, 0.0, np.zeros(n), np.zeros(n),
+            np.zeros(z), np.zeros(z), False,
         )  # fmt: skip
+        return float(out[0]), float(out[2])
+
+    def loaded_angle(self, conf, theta: float, torque: float, stiffness: float, exponent: float) -> float:
+        """The sprocket angle [rad] reached from the meshed ``theta`` turning in the sense of ``torque`` [N m]
+        until the teeth pressed into the rollers of ``conf`` (at rest, :meth:`static_contact`) carry it: the first
+        angle that does, in steps of a 64th of half a tooth pitch, then bisection to 1e-12 rad; ``theta`` where
+        they cannot within half a tooth pitch. A run started in steady running starts there."""
+        sense = math.copysign(1.0, torque)
+
+        def carried(x):  # the teeth's torque against the motor's
+            return -sense * self.static_contact(conf, theta + sense * x, stiffness, exponent)[0]
+
+        steps = np.linspace(0.0, math.pi / self.sprocket.teeth, 65)
+        over = [x for x in steps[1:] if carried(x) >= abs(torque)]
+        if not over:
+            return theta
+        lo, hi = over[0] - steps[1], over[0]
+        while hi - lo > 1e-12:
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if carried(mid) < abs(torque) else (lo, mid)
+        return theta + sense * lo
 
     def step_rollers(self, step: int) -> np.ndarray:
         """0-based indices of the rollers (``links_per_step``: 3, or 4) of 1-based step ``step``; the

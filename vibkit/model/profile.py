@@ -70,9 +70,8 @@ class DriveKeys(_Section):
     no_load_power: float = key(
         "W",
         "power the drive gives the step chain at the rated speed with no passengers (the motor's no-load input less "
-        "its and the gearbox's losses): the scene then drives its chain against that running resistance; not set: none, "
-        "the chain coasts at speed (a typical figure: 88.9 N per metre of loop x loop x speed, "
-        "vibkit.model.profile_scene)",
+        "its and the gearbox's losses): the scene drives its chain against that running resistance; not set: a typical "
+        "figure, 88.9 N per metre of loop x loop x speed (vibkit.model.profile_scene); 0: none, the chain coasts",
         range=(0.0, 1e5, "W (a no-load drive power in kW?)"),
     )
 

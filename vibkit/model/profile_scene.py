@@ -23,11 +23,13 @@ A driven chain (forward scenes): a real unit's drive works all the time against 
 the chain's articulation and the handrails, so its teeth always carry load; a chain without friction coasts at
 steady speed in the teeth's backlash.  The scene carries that running resistance as ``[effects]
 rolling_resistance`` (mu m g on every roller, the no-load drive power mu g M v for a chain and steps of mass M
-at speed v; :func:`running_resistance`) where the profile states ``drive.no_load_power``; its speed controller is
-then a PI controller tuned to the unit's inertia (:func:`drive_gains`), which holds the rated speed against the
-resistance with no steady error.  Without the key the scene is as before (no running resistance, the reference's
-P controller, kp = 600 N m s: the chain coasts at speed); :data:`TYPICAL_RESISTANCE_N_PER_M` is a typical figure
-to state where the firm has none of its own.  The study's own scenes (``sim/``) keep their published settings.
+at speed v; :func:`running_resistance`): the profile's ``drive.no_load_power``, else
+:data:`TYPICAL_RESISTANCE_N_PER_M` over the loop.  Its speed controller is a PI controller tuned to the unit's
+inertia (:func:`drive_gains`), which holds the rated speed against the resistance with no steady error, started
+in steady running (``initial_torque``, :func:`steady_torque`: the teeth carry the drive from the first sample);
+the default preload adds what the resistance takes from the slack strand (:func:`default_preload`).
+``no_load_power = 0`` gives the coasting scene (no running resistance, the reference's P controller, kp = 600
+N m s).  The study's own scenes (``sim/``) keep their published settings.
 """
 
 from __future__ import annotations
@@ -47,6 +49,8 @@ __all__ = [
     "geometry_note",
     "running_resistance",
     "drive_gains",
+    "default_preload",
+    "steady_torque",
     "MASS_PER_METRE",
     "TYPICAL_RESISTANCE_N_PER_M",
 ]
@@ -343,26 +347,30 @@ def scene_text(profile, analysis: str = "forward", duration: float | None = None
         f"inertia = {f.inertia:.6g}  # filled: reference 43.78 kg m^2 x (R / 0.5954 m)^4",
         "",
     ]
-    preload = pre if pre is not None else default_preload(f)
+    driven = analysis == "forward" and p.no_load_power != 0
+    mu, power, mu_src = running_resistance(f) if driven else (0.0, 0.0, "")
+    preload = pre if pre is not None else default_preload(f, mu)
     pre_src = (
         "tensioner.preload"
         if pre is not None
         else f"filled: twice the weight of the steepest strand's chain, at least {MIN_PRELOAD:g} N"
+        + (", plus what the running resistance takes from the slack strand" if driven else "")
     )
     if analysis == "forward":
-        if p.no_load_power is not None:  # a driven chain: the stated running resistance, a PI drive that holds speed
-            mu, _, mu_src = running_resistance(f)
+        if driven:  # the stated (else a typical) running resistance, a PI drive started in steady running
             kp, ki = drive_gains(f)
+            torque = steady_torque(f, power)
             drive = [
-                f"motor = {{ kp = {kp!r}, ki = {ki!r}, speed = {_fmt(p.set_speed)} }}  # drive.speed{_down(p)}: the "
-                "step speed on the straight; PI gains from the unit's inertia",
+                f"motor = {{ kp = {kp!r}, ki = {ki!r}, speed = {_fmt(p.set_speed)}, initial_torque = {torque:.6g} }}"
+                f"  # drive.speed{_down(p)}: the step speed on the straight; PI gains from the unit's inertia; "
+                "started carrying the running resistance (no-load power / sprocket speed)",
                 f"rolling_resistance = {{ coefficient = {mu:.6g} }}  # {mu_src}",
             ]
         else:
             drive = [
                 f"motor = {{ kp = 600.0, speed = {_fmt(p.set_speed)} }}  # drive.speed{_down(p)}: the step speed on "
                 "the straight",
-                "# no running resistance (drive.no_load_power not stated): the chain coasts at speed",
+                "# no running resistance (drive.no_load_power = 0): the chain coasts at speed",
             ]
         lines += [
             "[run]",
@@ -420,18 +428,64 @@ def _toml_str(s: str) -> str:
 MIN_PRELOAD = 3060.0
 
 
-def default_preload(f) -> float:
-    """A tensioner preload that keeps every link in tension [N].
+def default_preload(f, mu: float = 0.0) -> float:
+    """A tensioner preload that keeps every link in tension [N], for a running resistance ``mu`` (0: none).
 
     The return strand hangs from the sprocket: without a preload its links below the incline's top
     carry the weight of the chain below them as compression where the guide pushes them down hill.
     Twice the weight of one strand's incline (steps and chain, along the slope) keeps every link in
     tension with a margin; a real tensioner's spring gives several kN. Never less than
     :data:`MIN_PRELOAD` (a level or gently inclined moving walk).
+
+    A driven chain (``mu`` > 0) keeps that margin where its tension is least.  The carriage holds the two
+    strands at the lower head, T_in + T_out = preload, and the head's rollers' resistance makes T_out = T_in +
+    R_head; walking the slack strand (the one that leaves the sprocket, whichever way the unit runs: it always
+    runs down hill to the tensioner) back up from the lower head, its tension falls by mu m g per metre and rises
+    by m g per metre climbed, so it is least where mu m g s less m g z(s) is largest
+    (:func:`slack_deficit`).  The preload adds twice that and R_head: on an escalator a few hundred N (its
+    landings and tensioner run, where nothing climbs), on a level walk the whole strand's resistance.
     """
     a = math.radians(f.incline_deg)
     strand = MASS_PER_METRE * f.incline_length * 9.81 * math.sin(a)
-    return max(round(2.0 * strand, -1), MIN_PRELOAD)
+    base = max(round(2.0 * strand, -1), MIN_PRELOAD)
+    if not mu > 0:
+        return base
+    head = mu * MASS_PER_METRE * G * math.pi * f.pitch_radius
+    return base + 10.0 * math.ceil((2.0 * slack_deficit(f, mu) + head) / 10.0)
+
+
+def slack_deficit(f, mu: float) -> float:
+    """The most tension [N] the running resistance ``mu`` takes from the slack strand, walked from the lower
+    head's entry (the tensioner run, lower landing, transition, incline, transition and upper landing, to the
+    sprocket) less what its climb gives back: max over s of m g (mu s - z(s)), m the chain and steps per metre,
+    s the length walked and z the height climbed (0 where the strand does not climb at all)."""
+    a = math.radians(f.incline_deg)
+    rt = _RG.transition_radius
+    # the slack strand as pieces (length, angle at its start, angle at its end), climbing at the angle
+    pieces = [
+        (_RG.tensioner_length + _RG.lower_landing, 0.0, 0.0),
+        (rt * a, 0.0, a),
+        (f.incline_length, a, a),
+        (rt * a, a, 0.0),
+        (_RG.upper_landing, 0.0, 0.0),
+    ]
+    s_end, z_end, worst = 0.0, 0.0, 0.0
+    for length, a0, a1 in pieces:
+        u = np.linspace(0.0, 1.0, 401)
+        ang = a0 + (a1 - a0) * u
+        ds = length / (u.size - 1)
+        z = z_end + np.concatenate(([0.0], np.cumsum(0.5 * (np.sin(ang[1:]) + np.sin(ang[:-1])) * ds)))
+        s = s_end + length * u
+        worst = max(worst, float(np.max(mu * s - z)))
+        s_end, z_end = s[-1], z[-1]
+    return MASS_PER_METRE * G * worst
+
+
+def steady_torque(f, power: float) -> float:
+    """The drive's torque [N m] in steady running at the no-load ``power`` [W]: power / sprocket speed, the
+    sprocket turning 2 pi v / (Z L) at the chain speed v (:meth:`vibkit.model.escalator.EscalatorModel.sprocket_speed`)."""
+    v = abs(float(f.profile.speed))
+    return power * f.teeth * f.pitch / (2.0 * math.pi * v)
 
 
 def profile_scene(profile, analysis: str = "forward", duration: float | None = None) -> Scene:

@@ -449,6 +449,16 @@ def _validate_effects(src, eff):
                 ) from None
         if o.torque_limit != math.inf:
             _positive(src, "effects.motor.torque_limit", o.torque_limit)
+        if o.initial_torque != 0 and not (o.ki > 0 and o.speed != 0):
+            raise SceneError(
+                f"{src}: 'effects.motor.initial_torque' = {o.initial_torque!r} N m needs an integral controller "
+                "(effects.motor.ki > 0) that holds it and a speed other than 0 (effects.motor.speed)"
+            )
+        if abs(o.initial_torque) > o.torque_limit:
+            raise SceneError(
+                f"{src}: 'effects.motor.initial_torque' = {o.initial_torque!r} N m is beyond "
+                f"effects.motor.torque_limit = {o.torque_limit!r} N m"
+            )
     if "tensioner" in eff:
         o = eff["tensioner"]
         for key in ("stiffness", "preload", "mass"):

@@ -311,6 +311,14 @@ class MotorOptions(_Section):
     )
     speed: float = key("m/s", "nominal chain speed", required=True, range=(-10.0, 10.0, "m/s"))
     torque_limit: float = key("N m", "largest motor torque", math.inf, range=(0.0, 1e8, "N m"), positive=True)
+    initial_torque: float = key(
+        "N m",
+        "torque that drives the chain at t = 0, along its motion (negative: brakes it): a run started in steady "
+        "running against a known load; the controller's integral starts there (ki > 0) and the sprocket with its "
+        "driving flanks touching the rollers; 0: the meshed start, teeth clear",
+        0.0,
+        range=(-1e8, 1e8, "N m"),
+    )
 
 
 @dataclasses.dataclass(frozen=True)
