@@ -1,6 +1,6 @@
 """What a user waits for, each as a ratio to the baseline named beside it, measured side by side in one run.
 
-Run:  python benchmarks/bench_user_costs.py [--quick] [--rows NAME,...]
+Run:  python benchmarks/bench_user_costs.py [--quick] [--rows NAME,...] [--merge]
 
 Every case runs in a fresh Python process (``sys.executable``, the vibkit beside this script) and is timed in
 CPU seconds (user + system of the child, ``resource.getrusage(RUSAGE_CHILDREN)``): the project's machines
@@ -18,7 +18,9 @@ Rows (``--rows`` picks some):
   and against that baseline plus one ``xarray.Dataset`` with a time index (xarray then imports dask, when
   installed: what reading any file into a Dataset costs);
 * ``pitch8h``: ``vibkit pitch`` of 8 h at 200 Hz (5.76 million rows; ``--quick``: 20 min) against
-  ``pandas.read_csv`` of the same file (its process: import and read); peak memory against the samples' bytes;
+  ``pandas.read_csv`` of the same file (its process: import and read); peak memory against the samples' bytes,
+  whole (the process's peak RSS) and over the interpreter with the command's imports (peak RSS minus that of a
+  process that only imports them and builds one small Dataset);
 * ``report``: ``vibkit report`` of the Las Palmas recording with its scene, warm (kernels cached), against
   the 5 CPU-s a user should wait at most;
 * ``fleet``: ``vibkit fleet scan`` of 200 recordings of 30 s (``--quick``: 8), in process, files per CPU
@@ -26,7 +28,8 @@ Rows (``--rows`` picks some):
 * ``simulate``: ``vibkit.simulate`` of the shipped ``leon`` scene with its shipped outputs, in one process after a
   warm-up: simulated seconds per CPU second (x real time).
 
-Writes benchmarks/results/user_costs.md (``--quick``: user_costs_quick.md).
+Writes benchmarks/results/user_costs.md (``--quick``: user_costs_quick.md); ``--merge`` keeps the rows of the table
+already there that this run does not measure (several people regenerate different rows).
 """
 
 from __future__ import annotations
@@ -50,6 +53,12 @@ SPEED = 0.5  # [m/s]
 PITCH = 0.1333  # [m]
 ROWS = ("first", "import", "spectrum", "pitch8h", "report", "fleet", "simulate")
 BASE_IMPORT = "import numpy, scipy.signal, pandas, xarray"
+#: the interpreter with what ``vibkit pitch`` imports before it reads (xarray's dask included, which its first
+#: Dataset imports): the baseline of the command's peak memory
+PITCH_IMPORTS = (
+    "import numpy, xarray, vibkit.cli.app, vibkit.io, vibkit.diagnose.channels\n"
+    "xarray.Dataset({'x': ('time', numpy.zeros(3))}, coords={'time': numpy.arange(3.0)})\n"
+)
 
 
 def child(code, env=None, cwd=None):
@@ -121,12 +130,63 @@ def row(what, case, baseline, cpu, base_cpu, ratio, target, note=""):
     }
 
 
-def flush(rows, quick, repeat, load0):
-    """Write the table of the rows measured so far (atomically): a row that fails later leaves the others."""
+#: the first cell of each row's table line begins with one of these (the row names of --rows)
+ROW_PREFIXES = {
+    "first": "first command after install",
+    "import": "import the CLI",
+    "spectrum": "vibkit spectrum of",
+    "pitch8h": "vibkit pitch of",
+    "report": "vibkit report of",
+    "fleet": "vibkit fleet scan",
+    "simulate": "vibkit.simulate of",
+}
+
+
+def row_name(first_cell):
+    """The --rows name of a table line's first cell (None for a line of no known row)."""
+    return next((name for name, prefix in ROW_PREFIXES.items() if first_cell.startswith(prefix)), None)
+
+
+def kept_rows(path, measured):
+    """The table lines of ``path`` (as written: ``| ... |``) of the rows not measured in this run, by row name."""
+    if not path.exists():
+        return {}
+    kept = {}
+    for line in path.read_text().splitlines():
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        name = row_name(cells[0]) if line.startswith("| ") else None
+        if name is not None and name not in measured:
+            kept.setdefault(name, []).append(line)
+    return kept
+
+
+def flush(rows, quick, repeat, load0, merge=False):
+    """Write the table of the rows measured so far (atomically): a row that fails later leaves the others.
+
+    ``merge``: the rows of the table already there that this run does not measure are kept, in the order of
+    :data:`ROWS` (each as its own run wrote it: the header says which rows this run measured)."""
     if not rows:
         return ""
     load1 = os.getloadavg()[0]
     suffix = "_quick" if quick else ""
+    path = RESULTS / f"user_costs{suffix}.md"
+    table = markdown_table(rows)
+    measured = {row_name(r["what a user does"]) for r in rows}
+    note = ""
+    if merge:
+        kept = kept_rows(path, measured)
+        if kept:
+            lines = table.splitlines()
+            mine = {}
+            for line in lines[2:]:
+                mine.setdefault(row_name(line[2:]), []).append(line)
+            body = [ln for name in ROWS for ln in (mine.get(name) or kept.get(name) or [])]
+            table = "\n".join(lines[:2] + body)
+            note = (
+                f" Rows measured in this run: {', '.join(n for n in ROWS if n in measured)}; the others ("
+                f"{', '.join(n for n in ROWS if n in kept)}) are kept from the table as an earlier run wrote them "
+                "(`--merge`)."
+            )
     text = (
         "# What a user waits for (`benchmarks/bench_user_costs.py`)\n\n"
         f"{today()}, {machine()}; 1-minute load average {load0:.1f} at the start, {load1:.1f} after the last row (the "
@@ -134,9 +194,9 @@ def flush(rows, quick, repeat, load0):
         f"which move far less with the load than wall time). Median of {repeat} interleaved runs per case"
         + (" (quick: smoke sizes)" if quick else "")
         + "; every case a fresh `python` process. Ratio: case / baseline (for the simulation: simulated over "
-        "CPU seconds).\n\n" + markdown_table(rows) + "\n"
+        "CPU seconds)." + note + "\n\n" + table + "\n"
     )
-    write_text(RESULTS / f"user_costs{suffix}.md", text)
+    write_text(path, text)
     return text
 
 
@@ -145,6 +205,11 @@ def main(argv=None):
     ap.add_argument("--quick", action="store_true", help="a smoke run: small inputs, one repeat")
     ap.add_argument("--repeat", type=int, help="runs per case (median kept; default 3, quick 1)")
     ap.add_argument("--rows", default=",".join(ROWS), help=f"rows to measure (default all: {','.join(ROWS)})")
+    ap.add_argument(
+        "--merge",
+        action="store_true",
+        help="keep the rows of the table already written that this run does not measure (default: a new table)",
+    )
     a = ap.parse_args(argv)
     repeat = a.repeat or (1 if a.quick else 3)
     wanted = [r.strip() for r in a.rows.split(",") if r.strip()]
@@ -175,7 +240,7 @@ def main(argv=None):
                 )
             )
 
-        flush(rows, a.quick, repeat, load0)
+        flush(rows, a.quick, repeat, load0, a.merge)
 
         if "import" in wanted or "spectrum" in wanted:
             ten = tmp / "ten-seconds.csv"
@@ -217,7 +282,7 @@ def main(argv=None):
                     )
                 )
 
-        flush(rows, a.quick, repeat, load0)
+        flush(rows, a.quick, repeat, load0, a.merge)
 
         if "pitch8h" in wanted:
             hours = 1 / 3 if a.quick else 8.0
@@ -229,11 +294,13 @@ def main(argv=None):
                 [
                     ("pandas", f"import pandas\npandas.read_csv({str(path)!r})\n", None),
                     ("pitch", cli(["pitch", path, "--speed", SPEED, "--json"]), None),
+                    ("imports", PITCH_IMPORTS, None),
                 ],
                 max(1, repeat - 1),
             )
             c, b = got["pitch"]["cpu"], got["pandas"]["cpu"]
             samples_mb = n * 8 / 2**20
+            above = got["pitch"]["rss"] - got["imports"]["rss"]
             rows.append(
                 row(
                     f"vibkit pitch of {hours:g} h at 200 Hz ({n:,} rows)",
@@ -245,11 +312,12 @@ def main(argv=None):
                     "<= 3 x baseline + 1 s",
                     f"target {3 * b + 1:.1f} CPU-s; peak RSS {got['pitch']['rss']:.0f} MB = "
                     f"{got['pitch']['rss'] / samples_mb:.1f} x the samples' {samples_mb:.0f} MB (pandas "
-                    f"{got['pandas']['rss']:.0f} MB)",
+                    f"{got['pandas']['rss']:.0f} MB); over the interpreter with the command's imports "
+                    f"({got['imports']['rss']:.0f} MB): {above:.0f} MB = {above / samples_mb:.1f} x, target <= 4 x",
                 )
             )
 
-        flush(rows, a.quick, repeat, load0)
+        flush(rows, a.quick, repeat, load0, a.merge)
 
         if "report" in wanted:
             code = cli(
@@ -277,7 +345,7 @@ def main(argv=None):
                 )
             )
 
-        flush(rows, a.quick, repeat, load0)
+        flush(rows, a.quick, repeat, load0, a.merge)
 
         if "fleet" in wanted:
             from bench_fleet import make_fleet
@@ -314,7 +382,7 @@ def main(argv=None):
                 )
             )
 
-        flush(rows, a.quick, repeat, load0)
+        flush(rows, a.quick, repeat, load0, a.merge)
 
         if "simulate" in wanted:
             duration = 10.0 if a.quick else 44.0
@@ -344,7 +412,7 @@ def main(argv=None):
                 )
             )
 
-    print(flush(rows, a.quick, repeat, load0))
+    print(flush(rows, a.quick, repeat, load0, a.merge))
     return 0
 
 
