@@ -241,9 +241,13 @@ def track_phase(x, fs, *, band, n_harmonics=3, frame_s=None, bandwidth_hz=None, 
     offset1 = 0.0
     used = []
     for h in range(1, kmax + 1):
-        z = x * np.exp(-1j * h * phi_r)
+        # x exp(-j h phi_r) in place (the same products): one complex array of the record's length, not three
+        z = np.multiply(-1j * h, phi_r)
+        np.exp(z, out=z)
+        z *= x
         zr = _lowpass(z.real, fs, bw)
         zi = _lowpass(z.imag, fs, bw)
+        del z
         psi = np.unwrap(np.arctan2(zi, zr))
         amp2 = float(np.mean(zr * zr + zi * zi))
         w = h * h * amp2
