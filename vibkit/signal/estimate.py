@@ -148,11 +148,20 @@ def _prepare(x, fs, nan_policy):
     return fill_nan(x, nan_policy=nan_policy), fs
 
 
+def expj(theta):
+    """``exp(1j * theta)`` for real ``theta`` [rad], as ``cos(theta) + 1j sin(theta)`` written into one complex
+    array: numpy's complex exponential of a purely imaginary argument gives these values (where its cosine and
+    sine are the C library's, bit for bit) at twice the cost."""
+    z = np.empty(np.shape(theta), dtype=complex)
+    np.cos(theta, out=z.real)
+    np.sin(theta, out=z.imag)
+    return z
+
+
 def _dtft(x, nu):
     """DTFT of ``x`` at normalised frequency ``nu`` [cycles/sample]."""
-    z = np.multiply(-2j * np.pi * nu, np.arange(x.size))  # the products of ``-2j pi nu n``, in order
-    np.exp(z, out=z)  # in place: one complex array of the record's length fewer
-    return np.dot(x, z)
+    # exp(-2j pi nu n): the imaginary products of ``-2j pi nu n`` (its real ones are zeros)
+    return np.dot(x, expj((-2j * np.pi * nu).imag * np.arange(x.size)))
 
 
 def _peak_bin(x, fs, band):
@@ -281,7 +290,7 @@ def _harmonic_basis(t, omega, n_harmonics, extra=0):
     """Columns ``1, cos(k w t), sin(k w t)`` (k = 1..K) in a Fortran array, plus ``extra`` spare."""
     m = np.empty((t.size, 2 * n_harmonics + 1 + extra), order="F")
     m[:, 0] = 1.0
-    z1 = np.exp(1j * omega * t)
+    z1 = expj((1j * omega).imag * t)  # exp(1j omega t)
     z = z1.copy()
     for k in range(n_harmonics):
         if k:
