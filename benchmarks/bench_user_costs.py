@@ -6,7 +6,8 @@ Every case runs in a fresh Python process (``sys.executable``, the vibkit beside
 CPU seconds (user + system of the child, ``resource.getrusage(RUSAGE_CHILDREN)``): the project's machines
 are shared with other jobs, and CPU time moves far less with their load than wall time does (the wall
 time and the 1-minute load average are recorded too). Cases and their baselines alternate, the median of
-``--repeat`` runs is kept. Peak memory is the child's own ``ru_maxrss``.
+``--repeat`` runs is kept. Peak memory is the child's own peak resident set (``VmHWM``: ``ru_maxrss`` keeps
+the parent's peak across fork and exec; it is the fallback where there is no ``/proc``).
 
 Rows (``--rows`` picks some):
 
@@ -66,7 +67,11 @@ def child(code, env=None, cwd=None):
     probe = (
         textwrap.dedent(code)
         + "\nimport resource as _r, sys as _s\n"
-        + "print('maxrss_kb', _r.getrusage(_r.RUSAGE_SELF).ru_maxrss, file=_s.stderr)\n"
+        # the peak of this process's own memory (VmHWM, reset by exec): ru_maxrss keeps the parent's peak across
+        # fork and exec, so every child of a parent that has held a large recording would show at least that much
+        + "try:\n    _kb = [int(_l.split()[1]) for _l in open('/proc/self/status') if _l.startswith('VmHWM:')][0]\n"
+        + "except (OSError, IndexError):\n    _kb = _r.getrusage(_r.RUSAGE_SELF).ru_maxrss\n"
+        + "print('maxrss_kb', _kb, file=_s.stderr)\n"
     )
     penv = dict(os.environ, **(env or {}))
     penv["PYTHONPATH"] = str(ROOT) + os.pathsep + penv.get("PYTHONPATH", "")  # this checkout's vibkit
