@@ -1,12 +1,13 @@
 """What a user waits for, each as a ratio to the baseline named beside it, measured side by side in one run.
 
-Run:  python benchmarks/bench_user_costs.py [--quick] [--rows NAME,...]
+Run:  python benchmarks/bench_user_costs.py [--quick] [--rows NAME,...] [--merge]
 
 Every case runs in a fresh Python process (``sys.executable``, the vibkit beside this script) and is timed in
 CPU seconds (user + system of the child, ``resource.getrusage(RUSAGE_CHILDREN)``): the project's machines
 are shared with other jobs, and CPU time moves far less with their load than wall time does (the wall
 time and the 1-minute load average are recorded too). Cases and their baselines alternate, the median of
-``--repeat`` runs is kept. Peak memory is the child's own ``ru_maxrss``.
+``--repeat`` runs is kept. Peak memory is the child's own peak resident set (``VmHWM``: ``ru_maxrss`` keeps
+the parent's peak across fork and exec; it is the fallback where there is no ``/proc``).
 
 Rows (``--rows`` picks some):
 
@@ -18,7 +19,9 @@ Rows (``--rows`` picks some):
   and against that baseline plus one ``xarray.Dataset`` with a time index (xarray then imports dask, when
   installed: what reading any file into a Dataset costs);
 * ``pitch8h``: ``vibkit pitch`` of 8 h at 200 Hz (5.76 million rows; ``--quick``: 20 min) against
-  ``pandas.read_csv`` of the same file (its process: import and read); peak memory against the samples' bytes;
+  ``pandas.read_csv`` of the same file (its process: import and read); peak memory against the samples' bytes,
+  whole (the process's peak RSS) and over the interpreter with the command's imports (peak RSS minus that of a
+  process that only imports them and builds one small Dataset);
 * ``report``: ``vibkit report`` of the Las Palmas recording with its scene, warm (kernels cached), against
   the 5 CPU-s a user should wait at most;
 * ``links``: ``vibkit links --escalator`` of 10 loops of the tests' 90-link profile (``--quick``: 3 loops), after
@@ -33,7 +36,8 @@ Rows (``--rows`` picks some):
   default sweep (runs in the process unless a cluster pays) against a plain Python loop of ``vibkit.simulate`` over
   the same varied scenes (CPU time).
 
-Writes benchmarks/results/user_costs.md (``--quick``: user_costs_quick.md).
+Writes benchmarks/results/user_costs.md (``--quick``: user_costs_quick.md); ``--merge`` keeps the rows of the table
+already there that this run does not measure (several people regenerate different rows).
 """
 
 from __future__ import annotations
@@ -57,6 +61,12 @@ SPEED = 0.5  # [m/s]
 PITCH = 0.1333  # [m]
 ROWS = ("first", "import", "spectrum", "pitch8h", "report", "links", "fleet", "simulate", "sweep")
 BASE_IMPORT = "import numpy, scipy.signal, pandas, xarray"
+#: the interpreter with what ``vibkit pitch`` imports before it reads (xarray's dask included, which its first
+#: Dataset imports): the baseline of the command's peak memory
+PITCH_IMPORTS = (
+    "import numpy, xarray, vibkit.cli.app, vibkit.io, vibkit.diagnose.channels\n"
+    "xarray.Dataset({'x': ('time', numpy.zeros(3))}, coords={'time': numpy.arange(3.0)})\n"
+)
 
 
 def child(code, env=None, cwd=None):
@@ -64,7 +74,11 @@ def child(code, env=None, cwd=None):
     probe = (
         textwrap.dedent(code)
         + "\nimport resource as _r, sys as _s\n"
-        + "print('maxrss_kb', _r.getrusage(_r.RUSAGE_SELF).ru_maxrss, file=_s.stderr)\n"
+        # the peak of this process's own memory (VmHWM, reset by exec): ru_maxrss keeps the parent's peak across
+        # fork and exec, so every child of a parent that has held a large recording would show at least that much
+        + "try:\n    _kb = [int(_l.split()[1]) for _l in open('/proc/self/status') if _l.startswith('VmHWM:')][0]\n"
+        + "except (OSError, IndexError):\n    _kb = _r.getrusage(_r.RUSAGE_SELF).ru_maxrss\n"
+        + "print('maxrss_kb', _kb, file=_s.stderr)\n"
     )
     penv = dict(os.environ, **(env or {}))
     penv["PYTHONPATH"] = str(ROOT) + os.pathsep + penv.get("PYTHONPATH", "")  # this checkout's vibkit
@@ -128,12 +142,63 @@ def row(what, case, baseline, cpu, base_cpu, ratio, target, note=""):
     }
 
 
-def flush(rows, quick, repeat, load0):
-    """Write the table of the rows measured so far (atomically): a row that fails later leaves the others."""
+#: the first cell of each row's table line begins with one of these (the row names of --rows)
+ROW_PREFIXES = {
+    "first": "first command after install",
+    "import": "import the CLI",
+    "spectrum": "vibkit spectrum of",
+    "pitch8h": "vibkit pitch of",
+    "report": "vibkit report of",
+    "fleet": "vibkit fleet scan",
+    "simulate": "vibkit.simulate of",
+}
+
+
+def row_name(first_cell):
+    """The --rows name of a table line's first cell (None for a line of no known row)."""
+    return next((name for name, prefix in ROW_PREFIXES.items() if first_cell.startswith(prefix)), None)
+
+
+def kept_rows(path, measured):
+    """The table lines of ``path`` (as written: ``| ... |``) of the rows not measured in this run, by row name."""
+    if not path.exists():
+        return {}
+    kept = {}
+    for line in path.read_text().splitlines():
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        name = row_name(cells[0]) if line.startswith("| ") else None
+        if name is not None and name not in measured:
+            kept.setdefault(name, []).append(line)
+    return kept
+
+
+def flush(rows, quick, repeat, load0, merge=False):
+    """Write the table of the rows measured so far (atomically): a row that fails later leaves the others.
+
+    ``merge``: the rows of the table already there that this run does not measure are kept, in the order of
+    :data:`ROWS` (each as its own run wrote it: the header says which rows this run measured)."""
     if not rows:
         return ""
     load1 = os.getloadavg()[0]
     suffix = "_quick" if quick else ""
+    path = RESULTS / f"user_costs{suffix}.md"
+    table = markdown_table(rows)
+    measured = {row_name(r["what a user does"]) for r in rows}
+    note = ""
+    if merge:
+        kept = kept_rows(path, measured)
+        if kept:
+            lines = table.splitlines()
+            mine = {}
+            for line in lines[2:]:
+                mine.setdefault(row_name(line[2:]), []).append(line)
+            body = [ln for name in ROWS for ln in (mine.get(name) or kept.get(name) or [])]
+            table = "\n".join(lines[:2] + body)
+            note = (
+                f" Rows measured in this run: {', '.join(n for n in ROWS if n in measured)}; the others ("
+                f"{', '.join(n for n in ROWS if n in kept)}) are kept from the table as an earlier run wrote them "
+                "(`--merge`)."
+            )
     text = (
         "# What a user waits for (`benchmarks/bench_user_costs.py`)\n\n"
         f"{today()}, {machine()}; 1-minute load average {load0:.1f} at the start, {load1:.1f} after the last row (the "
@@ -141,9 +206,9 @@ def flush(rows, quick, repeat, load0):
         f"which move far less with the load than wall time). Median of {repeat} interleaved runs per case"
         + (" (quick: smoke sizes)" if quick else "")
         + "; every case a fresh `python` process. Ratio: case / baseline (for the simulation: simulated over "
-        "CPU seconds).\n\n" + markdown_table(rows) + "\n"
+        "CPU seconds)." + note + "\n\n" + table + "\n"
     )
-    write_text(RESULTS / f"user_costs{suffix}.md", text)
+    write_text(path, text)
     return text
 
 
@@ -185,6 +250,11 @@ def main(argv=None):
     ap.add_argument("--quick", action="store_true", help="a smoke run: small inputs, one repeat")
     ap.add_argument("--repeat", type=int, help="runs per case (median kept; default 3, quick 1)")
     ap.add_argument("--rows", default=",".join(ROWS), help=f"rows to measure (default all: {','.join(ROWS)})")
+    ap.add_argument(
+        "--merge",
+        action="store_true",
+        help="keep the rows of the table already written that this run does not measure (default: a new table)",
+    )
     a = ap.parse_args(argv)
     repeat = a.repeat or (1 if a.quick else 3)
     wanted = [r.strip() for r in a.rows.split(",") if r.strip()]
@@ -215,7 +285,7 @@ def main(argv=None):
                 )
             )
 
-        flush(rows, a.quick, repeat, load0)
+        flush(rows, a.quick, repeat, load0, a.merge)
 
         if "import" in wanted or "spectrum" in wanted:
             ten = tmp / "ten-seconds.csv"
@@ -257,7 +327,7 @@ def main(argv=None):
                     )
                 )
 
-        flush(rows, a.quick, repeat, load0)
+        flush(rows, a.quick, repeat, load0, a.merge)
 
         if "pitch8h" in wanted:
             hours = 1 / 3 if a.quick else 8.0
@@ -269,11 +339,13 @@ def main(argv=None):
                 [
                     ("pandas", f"import pandas\npandas.read_csv({str(path)!r})\n", None),
                     ("pitch", cli(["pitch", path, "--speed", SPEED, "--json"]), None),
+                    ("imports", PITCH_IMPORTS, None),
                 ],
                 max(1, repeat - 1),
             )
             c, b = got["pitch"]["cpu"], got["pandas"]["cpu"]
             samples_mb = n * 8 / 2**20
+            above = got["pitch"]["rss"] - got["imports"]["rss"]
             rows.append(
                 row(
                     f"vibkit pitch of {hours:g} h at 200 Hz ({n:,} rows)",
@@ -285,11 +357,12 @@ def main(argv=None):
                     "<= 3 x baseline + 1 s",
                     f"target {3 * b + 1:.1f} CPU-s; peak RSS {got['pitch']['rss']:.0f} MB = "
                     f"{got['pitch']['rss'] / samples_mb:.1f} x the samples' {samples_mb:.0f} MB (pandas "
-                    f"{got['pandas']['rss']:.0f} MB)",
+                    f"{got['pandas']['rss']:.0f} MB); over the interpreter with the command's imports "
+                    f"({got['imports']['rss']:.0f} MB): {above:.0f} MB = {above / samples_mb:.1f} x, target <= 4 x",
                 )
             )
 
-        flush(rows, a.quick, repeat, load0)
+        flush(rows, a.quick, repeat, load0, a.merge)
 
         if "report" in wanted:
             code = cli(
@@ -317,12 +390,12 @@ def main(argv=None):
                 )
             )
 
-        flush(rows, a.quick, repeat, load0)
+        flush(rows, a.quick, repeat, load0, a.merge)
 
         if "links" in wanted:
             rows += links_rows(tmp, 3 if a.quick else 10, repeat)
 
-        flush(rows, a.quick, repeat, load0)
+        flush(rows, a.quick, repeat, load0, a.merge)
 
         if "fleet" in wanted:
             from bench_fleet import make_fleet
@@ -359,7 +432,7 @@ def main(argv=None):
                 )
             )
 
-        flush(rows, a.quick, repeat, load0)
+        flush(rows, a.quick, repeat, load0, a.merge)
 
         if "simulate" in wanted:
             duration = 10.0 if a.quick else 44.0
@@ -392,7 +465,7 @@ def main(argv=None):
         if "sweep" in wanted:
             rows += sweep_rows(tmp, a.quick, repeat)
 
-    print(flush(rows, a.quick, repeat, load0))
+    print(flush(rows, a.quick, repeat, load0, a.merge))
     return 0
 
 

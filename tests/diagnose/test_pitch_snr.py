@@ -50,3 +50,12 @@ def test_the_chosen_peak_is_over_the_floor_and_a_frequency_without_a_line_is_not
     bursts = _bursts()[:3]
     assert steps._snr_at(bursts, 3.54) > 20.0  # a unit sine in 0.5 noise: far over the median floor
     assert abs(steps._snr_at(bursts, 17.3)) < 10.0  # noise alone: near the floor
+
+
+def test_the_floor_band_as_a_slice_holds_the_bins_rfftfreq_puts_strictly_inside_it():
+    for nfft, fs in ((1 << 25, 200.0), (4096, 100.0), (1024, 2000.0), (1 << 20, 1.0 / 0.37), (256, 20.0)):
+        fr = np.fft.rfftfreq(nfft, 1.0 / fs)
+        step = 1.0 / (nfft * (1.0 / fs))
+        for lo, hi in ((0.2, min(fs / 2, 50.0)), (0.2, fs / 2), (fr[3], fr[9]), (0.0, 1e9), (fs, 2 * fs)):
+            k0, k1 = steps._bins_between(step, fr.size, lo, hi)
+            assert np.array_equal(np.arange(k0, k1), np.flatnonzero((fr > lo) & (fr < hi))), (nfft, fs, lo, hi)

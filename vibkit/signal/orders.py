@@ -21,6 +21,7 @@ import scipy.sparse
 import scipy.sparse.linalg
 
 from ._checks import as_signal, check_fs, check_positive_int, decimate_for_band, fill_nan
+from .estimate import expj
 from .peaks import find_fundamental
 from .spectral import amplitude_spectrum, spectrogram
 
@@ -241,9 +242,12 @@ def track_phase(x, fs, *, band, n_harmonics=3, frame_s=None, bandwidth_hz=None, 
     offset1 = 0.0
     used = []
     for h in range(1, kmax + 1):
-        z = x * np.exp(-1j * h * phi_r)
+        # x exp(-j h phi_r), in place: one complex array of the record's length, not three
+        z = expj((-1j * h).imag * phi_r)
+        z *= x
         zr = _lowpass(z.real, fs, bw)
         zi = _lowpass(z.imag, fs, bw)
+        del z
         psi = np.unwrap(np.arctan2(zi, zr))
         amp2 = float(np.mean(zr * zr + zi * zi))
         w = h * h * amp2

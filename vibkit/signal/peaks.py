@@ -20,7 +20,7 @@ import scipy.ndimage
 from numpy.typing import ArrayLike
 
 from ._checks import as_signal, check_band, check_fs, check_positive_int, decimate_for_band, fill_nan
-from .estimate import FrequencyEstimate, harmonic_ls, interpolated_dft
+from .estimate import FrequencyEstimate, harmonic_ls, interpolated_dft, interpolated_frequency
 from .quantisation import quantisation_floor, quantisation_step
 
 __all__ = ["find_fundamental", "Fundamental", "link_pass_estimate", "LinkPassEstimate", "Harmonic"]
@@ -53,6 +53,29 @@ _TIE = 1.0
 _DYNAMIC_RANGE_DB = 80.0
 
 
+#: values (segments x FFT length) :func:`_welch_sum` transforms in one call: 2 M values are 16 MB as floats
+WELCH_BLOCK_VALUES = 1 << 21
+
+
+def _welch_sum(x, nseg, step, count, w, nfft):
+    """Sum over the ``count`` segments ``x[a : a + nseg]`` (``a = 0, step, ...``) of
+    ``|rfft((seg - mean(seg)) * w, nfft)|^2``, the segments transformed a block of rows at a time (one FFT call per
+    segment cost more in calls than in transforms: 7,200 segments for 8 h); the rows are added in the segments'
+    order, so the sum is the one a loop over the segments gives, bit for bit."""
+    p = np.zeros(nfft // 2 + 1)
+    segs = np.lib.stride_tricks.sliding_window_view(x, nseg)[::step][:count]  # a view: no copy of the record
+    rows = max(1, WELCH_BLOCK_VALUES // nfft)
+    for i in range(0, count, rows):
+        s = segs[i : i + rows]
+        y = s - s.mean(axis=1, keepdims=True)
+        y *= w
+        q = np.abs(np.fft.rfft(y, nfft, axis=1))
+        np.square(q, out=q)
+        for r in q:
+            p += r
+    return p
+
+
 def _score_table(x, fs, band, f_top, threshold_db, quantum=0.0, decimation=1.0):
     n = x.size
     # Long records: Welch-average segments of max(20 periods of band[0], 8 s); the search needs
@@ -62,10 +85,7 @@ def _score_table(x, fs, band, f_top, threshold_db, quantum=0.0, decimation=1.0):
     w = np.hanning(nseg)
     step = max(1, nseg // 2)
     starts = range(0, n - nseg + 1, step)
-    p = np.zeros(nfft // 2 + 1)
-    for a in starts:
-        seg = x[a : a + nseg]
-        p += np.abs(np.fft.rfft((seg - seg.mean()) * w, nfft)) ** 2
+    p = _welch_sum(x, nseg, step, len(starts), w, nfft)
     p /= len(starts)
     f = np.fft.rfftfreq(nfft, 1.0 / fs)
     df = fs / nseg
@@ -317,18 +337,23 @@ def link_pass_estimate(
         warnings.append(f"strongest harmonic only {np.max(snr):.1f} dB above the noise floor")
     fh = h_star * fund.frequency_hz
     half = min(fund.bin_hz, fh / 2.0)
-    ide = interpolated_dft(x, fs, band=(fh - half, min(fh + half, fs / 2.0)))
-    if abs(ide.frequency_hz - fh) > fund.bin_hz:
+    ide_band = (fh - half, min(fh + half, fs / 2.0))
+    # harmonic least squares needs the interpolated DFT's frequency alone (its tone fit is a least squares of the
+    # record's length: a second of CPU and 300 MB for 8 h at 200 Hz)
+    ide = interpolated_dft(x, fs, band=ide_band) if method == "interpolated-dft" else None
+    ide_hz = ide.frequency_hz if ide is not None else interpolated_frequency(x, fs, band=ide_band)
+    if abs(ide_hz - fh) > fund.bin_hz:
         ide_f = fh
         warnings.append("interpolated DFT left the harmonic's bin; kept the harmonic-sum value")
     else:
-        ide_f = ide.frequency_hz
+        ide_f = ide_hz
     f_start = ide_f / h_star
     if method == "harmonic-ls":
         est = harmonic_ls(x, fs, f_guess=f_start, n_harmonics=k_fit)
         f0, sig = est.frequency_hz, est.sigma_hz
         amps, phases = est.amplitudes, est.phases
     else:
+        assert ide is not None  # the method asked for it above
         est = ide
         f0, sig = ide_f / h_star, ide.sigma_hz / h_star
         fit = harmonic_ls(x, fs, f_guess=f0, n_harmonics=k_fit, max_iter=1)
