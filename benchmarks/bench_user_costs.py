@@ -149,8 +149,10 @@ ROW_PREFIXES = {
     "spectrum": "vibkit spectrum of",
     "pitch8h": "vibkit pitch of",
     "report": "vibkit report of",
+    "links": "vibkit links ",
     "fleet": "vibkit fleet scan",
     "simulate": "vibkit.simulate of",
+    "sweep": "vibkit sweep of",
 }
 
 
