@@ -127,6 +127,9 @@ def test_cli_rides_json(capsys):
     r = out["rides"][0]
     for key in ("start_s", "end_s", "direction", "link_pass_hz", "link_pass_sigma_hz", "speed_m_s", "speed_sigma_m_s"):
         assert key in r
+    for key in ("vertical_speed_m_s", "vertical_speed_sigma_m_s", "rise_m", "rise_sigma_m", "incline_sigma_deg"):
+        assert r[key] is not None
+    assert out["refused"] == [] and r["flag"] is None
 
 
 def test_steady_line_frequency_and_sigma_of_a_known_tone():
@@ -424,6 +427,19 @@ def test_the_real_lifts_line_is_refused_by_the_real_barometer():
     found = find_rides(record(names))
     assert found.rides == () and len(found.refused) == 1
     assert found.refused[0]["vertical_speed_max_m_s"] > 0.6
+
+
+@needs_real
+def test_cli_rides_lists_the_lifts_line_as_refused(capsys):
+    """The guide's command: 20 s of ADVIO's lift, its line refused in ``--json`` with the reason, exit 0."""
+    args = ["rides", str(REAL / "advio-07" / "iphone"), "--segment", "36:56"]
+    assert main([*args, "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["rides"] == [] and len(out["refused"]) == 1
+    assert abs(out["refused"][0]["link_pass_hz"] - 3.547) < 0.01 and "a lift" in out["refused"][0]["why"]
+    assert main(args) == 0
+    captured = capsys.readouterr()
+    assert captured.out == "" and "refused: a steady line at 3.547 Hz" in captured.err
 
 
 @needs_real

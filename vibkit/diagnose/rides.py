@@ -199,7 +199,9 @@ def _fastest_climb(ds, t0, t1):
     sel = (t >= t0) & (t <= t1) & np.isfinite(zz)
     tt, z = t[sel][::5], zz[sel][::5]  # the barometer reads at about 1 Hz: 20 Hz of its interpolation is plenty
     best, at = 0.0, None
-    for a in np.arange(t0, t1 - _SLOPE_WINDOW_S + 1e-9, 1.0):
+    if tt.size < 3:
+        return None, None
+    for a in np.arange(tt[0], tt[-1] - _SLOPE_WINDOW_S + 1e-9, 1.0):  # whole windows only, within the record
         m = (tt >= a) & (tt <= a + _SLOPE_WINDOW_S)
         if m.sum() > 2:
             v = abs(_slope(tt[m], z[m]))
@@ -293,7 +295,7 @@ def find_rides(
         fast, at = _fastest_climb(recording, t0 - _LIFT_MARGIN_S, t1 + _LIFT_MARGIN_S)
         if fast is not None and fast > _ESCALATOR_VZ_MAX:
             why = (
-                f"a lift, not an escalator: the barometer's vertical speed reaches {fast:.2f} m/s (4 s about "
+                f"a lift, not an escalator: the barometer's vertical speed reaches {fast:.2f} m/s (over 4 s about "
                 f"{at:.0f} s, within {_LIFT_MARGIN_S:.0f} s of the still span), faster than any escalator climbs "
                 f"({_ESCALATOR_VZ_MAX:.2f} m/s; or a pressure wave: a train, a door)"
             )
