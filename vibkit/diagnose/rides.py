@@ -6,9 +6,12 @@ A ride leaves three marks in a phone's record: the walking band of ``|a|`` falls
 accelerometer's and gyroscope's axes (:func:`vibkit.signal.steadyline.steady_line`); the barometer climbs
 or falls steadily (0.2-0.4 m/s of vertical speed on an escalator).  :func:`find_rides` looks for still
 spans of at least ``min_ride_s``, trims ``trim_s`` at each end (stepping on and off), and calls a span a
-ride only where the line stands over the noise with false-alarm probability under ``p_fa``: standing in
-a lift, on a train, at a counter is still without that line, and says "no ride".  Walking up a moving
-escalator is not found (the gait hides the line).
+ride only where the line stands over the noise with false-alarm probability under ``p_fa``: standing on a
+train, at a counter is still without that line, and says "no ride".  A lift's car may hum steadily near a
+chain's link pass; its climb (0.5-0.9 m/s over 4 s in ADVIO's lift, faster than any escalator's 0.43 m/s)
+within the still span or 8 s of it refuses the line, said in ``RideSearch.refused``; a ride whose barometer
+shows no climb, or without a barometer, is kept and flagged (``Ride.flag``).  Walking up a moving escalator is
+not found (the gait hides the line).
 
 What a ride can say without a tachometer: the link-pass frequency with its sigma and, given the chain's
 nominal pitch, the chain's *actual* speed (pitch times frequency) and its deviation from the rated speed
