@@ -127,6 +127,9 @@ def test_cli_rides_json(capsys):
     r = out["rides"][0]
     for key in ("start_s", "end_s", "direction", "link_pass_hz", "link_pass_sigma_hz", "speed_m_s", "speed_sigma_m_s"):
         assert key in r
+    for key in ("vertical_speed_m_s", "vertical_speed_sigma_m_s", "rise_m", "rise_sigma_m", "incline_sigma_deg"):
+        assert r[key] is not None
+    assert out["refused"] == [] and r["flag"] is None
 
 
 def test_steady_line_frequency_and_sigma_of_a_known_tone():
@@ -265,9 +268,11 @@ def test_steady_line_takes_a_constant_channel():
     assert line.strongest_channel == 2
 
 
-def _walk_stand_walk(seed, line, fs=100.0, walk_s=10.0, stand_s=60.0):
+def _walk_stand_walk(seed, line, fs=100.0, walk_s=10.0, stand_s=60.0, altitude=None):
     """Walking (a 1.9 Hz gait of 2 m/s^2), standing ``stand_s`` with ``line(t)`` (t from the standing's start) added
-    to the accelerometer's x and z, walking again; white noise of 0.05 m/s^2 throughout."""
+    to the accelerometer's x and z, walking again; white noise of 0.05 m/s^2 throughout.  ``altitude(t)`` [m] (t
+    from the record's start), read at 1 Hz as a phone's barometer does and held between readings, gives the record
+    a barometer's relative altitude."""
     rng = np.random.default_rng(seed)
     n_w, n_s = int(walk_s * fs), int(stand_s * fs)
     t = np.arange(2 * n_w + n_s) / fs
@@ -279,11 +284,15 @@ def _walk_stand_walk(seed, line, fs=100.0, walk_s=10.0, stand_s=60.0):
     x[0, n_w : n_w + n_s] += line(ts)
     x[2, n_w : n_w + n_s] += 0.7 * line(ts + 0.05)
     attrs = {"units": "m/s^2", "quantity": "acceleration"}
-    return xr.Dataset(
+    ds = xr.Dataset(
         {f"acc_{a}": ("time", x[k], attrs) for k, a in enumerate("xyz")},
         coords={"time": t},
         attrs={"sample_rate_hz": fs, "source_file": "synthetic"},
     )
+    if altitude is not None:
+        tb = np.arange(0.0, t[-1] + 1.0, 1.0)
+        ds["altitude"] = ("time", np.interp(t, tb, altitude(tb)), {"units": "m", "native_rate_hz": 1.0})
+    return ds
 
 
 def test_a_weak_line_that_dips_inside_a_long_ride_keeps_the_whole_ride():
@@ -301,3 +310,150 @@ def test_a_weak_line_that_dips_inside_a_long_ride_keeps_the_whole_ride():
     # the standing is 10-70 s; the still span loses about a second to the walking band's window at each end
     assert ride.line_start_s < 14.0 and ride.line_end_s > 66.0
     assert abs(ride.link_pass_hz - f0) < 3 * ride.link_pass_sigma_hz
+
+
+def _tone(f0, amp=0.05):
+    return lambda t: amp * np.sin(2 * np.pi * f0 * t)
+
+
+def test_a_ride_whose_barometer_climbs_says_its_vertical_speed_rise_and_incline():
+    """A 40 s ride up at 0.25 m/s (a 133.33 mm chain at 3.75 Hz: 0.5 m/s, so 30 deg) under a barometer with 5 cm of
+    red noise (air moving): the vertical speed, the rise and the incline within their stated sigmas, over seeds."""
+    pitch, f0, vz, stand = 0.13333, 3.75, 0.25, 40.0
+    z = []
+    for seed in range(6):
+        noise = np.random.default_rng(100 + seed)
+        red = np.convolve(noise.normal(0, 0.05, 200), np.ones(4) / 2, mode="same")
+
+        def altitude(tb, red=red):
+            return vz * np.clip(tb - 10.0, 0.0, stand) + red[: tb.size]
+
+        found = find_rides(_walk_stand_walk(seed, _tone(f0), stand_s=stand, altitude=altitude), nominal_pitch=pitch)
+        assert len(found.rides) == 1 and not found.refused
+        r = found.rides[0]
+        assert r.direction == "up" and r.flag is None
+        z.append((r.vertical_speed_m_s - vz) / r.vertical_speed_sigma_m_s)
+        # the rise over the ride: its bounds are the still span's (a second inside the standing at each end)
+        assert abs(r.rise_m - vz * (r.end_s - r.start_s)) < 3 * r.rise_sigma_m
+        assert abs(r.rise_m - vz * stand) < 3 * r.rise_sigma_m
+        truth = np.degrees(np.arcsin(vz / (pitch * f0)))
+        assert abs(r.incline_deg - truth) < 3 * r.incline_sigma_deg
+        assert r.incline_sigma_deg < 3.0
+    assert np.all(np.abs(z) < 3) and np.mean(np.abs(z) < 2) >= 0.5, z
+
+
+def test_a_lifts_hum_is_refused_where_the_barometer_shows_its_climb():
+    """A steady line while standing in a lift: the car climbs at 1 m/s for 6 s, stops at a floor, and the line is on
+    while it stands (the pressure flat under the line).  A phone without a barometer cannot tell it from an
+    escalator: a ride, flagged; with the barometer the line is refused, with the reason, and no ride is made."""
+    f0 = 3.55
+
+    def line(t):
+        return 0.05 * np.sin(2 * np.pi * f0 * t) * (t > 12.0)
+
+    def lift(tb):
+        return 1.0 * np.clip(tb - 14.0, 0.0, 6.0)  # standing from 10 s: the car climbs 14-20 s, then stands
+
+    blind = find_rides(_walk_stand_walk(1, line, stand_s=40.0))
+    assert len(blind.rides) == 1 and blind.rides[0].direction == "unknown"
+    assert "no barometer" in blind.rides[0].flag
+    found = find_rides(_walk_stand_walk(1, line, stand_s=40.0, altitude=lift))
+    assert found.rides == () and len(found.refused) == 1
+    refused = found.refused[0]
+    assert abs(refused["link_pass_hz"] - f0) < 0.01
+    assert 0.8 < refused["vertical_speed_max_m_s"] <= 1.0 and "a lift" in refused["why"]
+    assert any(v.startswith("refused: ") for *_, v in found.still_spans)
+
+
+def test_a_lifts_climb_just_outside_the_still_span_refuses_its_line():
+    """The car's climb ends 3 s before the person stands still (people still shuffling as the car stops): the
+    barometer's walk before the line shows the lift."""
+    f0 = 3.55
+
+    def lift(tb):
+        return 1.0 * np.clip(tb - 2.0, 0.0, 5.0)  # 2-7 s, during the walking that ends at 10 s
+
+    found = find_rides(_walk_stand_walk(2, _tone(f0), stand_s=30.0, altitude=lift))
+    assert found.rides == () and len(found.refused) == 1
+
+
+def test_a_level_ride_is_kept_and_flagged():
+    """A level moving walk: the line with a flat barometer and no lift's climb near it is a ride, its direction level,
+    flagged as what the barometer cannot rule out (a machine standing still)."""
+    noise = np.random.default_rng(7).normal(0, 0.03, 200)
+    found = find_rides(
+        _walk_stand_walk(4, _tone(4.2), stand_s=30.0, altitude=lambda tb: noise[: tb.size]), nominal_pitch=0.13333
+    )
+    assert len(found.rides) == 1 and not found.refused
+    r = found.rides[0]
+    assert r.direction == "level" and "level moving walk" in r.flag
+    assert abs(r.vertical_speed_m_s) < 3 * r.vertical_speed_sigma_m_s
+    assert r.incline_deg < 3 * r.incline_sigma_deg + 1.0
+
+
+@needs_real
+def test_the_real_lifts_line_is_refused_by_the_real_barometer():
+    """ADVIO's lift (advio-07) hums at 3.547 Hz while it stands at a floor (40-52 s): cut 30 s of its ride, with
+    10 s of real walking (advio-02) before and after, the line passes the false-alarm test as a ride would; its
+    barometer shows the car's climbs (up to 0.9 m/s) and the line is refused."""
+    names = ("acc_x", "acc_y", "acc_z", "gyro_x", "gyro_y", "gyro_z", "altitude")
+    walk_ds = vibkit.read_recording(REAL / "advio-02" / "iphone")
+    lift_ds = vibkit.read_recording(REAL / "advio-07" / "iphone")
+    fs = float(walk_ds.attrs["sample_rate_hz"])
+
+    def cut(ds, t0, t1):
+        tu = np.arange(t0, t1, 1 / fs)
+        return np.stack([np.interp(tu, ds["time"].values, ds[n].values) for n in names])
+
+    pre, bed, post = cut(walk_ds, 10, 20), cut(lift_ds, 34, 64), cut(walk_ds, 20, 30)
+    bed[6] += pre[6, -1] - bed[6, 0]
+    post[6] += bed[6, -1] - post[6, 0]
+    x = np.concatenate([pre, bed, post], axis=1)
+    t = np.arange(x.shape[1]) / fs
+
+    def record(channels):
+        return xr.Dataset(
+            {
+                n: ("time", x[k], {"units": "m/s^2", "quantity": "acceleration"} if k < 3 else {})
+                for k, n in enumerate(names)
+                if n in channels
+            },
+            coords={"time": t},
+            attrs={"sample_rate_hz": fs, "source_file": "advio-02 + advio-07 + advio-02"},
+        )
+
+    blind = find_rides(record(names[:6]))
+    assert len(blind.rides) == 1 and abs(blind.rides[0].link_pass_hz - 3.547) < 0.01
+    found = find_rides(record(names))
+    assert found.rides == () and len(found.refused) == 1
+    assert found.refused[0]["vertical_speed_max_m_s"] > 0.6
+
+
+@needs_real
+def test_cli_rides_lists_the_lifts_line_as_refused(capsys):
+    """The guide's command: 20 s of ADVIO's lift, its line refused in ``--json`` with the reason, exit 0."""
+    args = ["rides", str(REAL / "advio-07" / "iphone"), "--segment", "36:56"]
+    assert main([*args, "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["rides"] == [] and len(out["refused"]) == 1
+    assert abs(out["refused"][0]["link_pass_hz"] - 3.547) < 0.01 and "a lift" in out["refused"][0]["why"]
+    assert main(args) == 0
+    captured = capsys.readouterr()
+    assert captured.out == "" and "refused: a steady line at 3.547 Hz" in captured.err
+
+
+@needs_real
+@pytest.mark.parametrize("seq", sorted(RIDES))
+def test_the_real_rides_barometer_agrees_with_the_malls_floors(seq):
+    """Each ride's rise (its barometric vertical speed times its length) against the barometer's step between the
+    floors' plateaus before and after it (the median altitude 3-8 s before the ride and 4-9 s after it, outside the
+    ride and the barometer's lag of 1-2 s), within 3 sigma; and the inclines, with a 133.33 mm pitch, alike up and
+    down (one mall) and within what escalators are built to (EN 115-1: at most 35 deg)."""
+    ds = vibkit.read_recording(REAL / seq / "iphone")
+    found = find_rides(ds, nominal_pitch=0.13333)
+    t, z = ds["time"].values, ds["altitude"].values
+    for r in found.rides:
+        before = np.median(z[(t > r.start_s - 8) & (t < r.start_s - 3)])
+        after = np.median(z[(t > r.end_s + 4) & (t < r.end_s + 9)])
+        assert abs(r.rise_m - (after - before)) < 3 * r.rise_sigma_m + 0.1, (r.start_s, r.rise_m, after - before)
+        assert 20.0 < r.incline_deg < 35.0 and r.incline_sigma_deg < 5.0

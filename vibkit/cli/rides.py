@@ -23,7 +23,8 @@ EPILOG = (
     "  vibkit rides accelerometer.csv --nominal-pitch 133.33mm --speed 0.5 --json\n"
     "a ride is a still span (walking stopped) that holds a steady line in the link-pass band; the line's\n"
     "frequency with its sigma, and with a nominal pitch the chain's actual speed (no elongation verdict:\n"
-    "a phone gives no speed to judge the pitch against). Exit 0 with rides or without."
+    "a phone gives no speed to judge the pitch against). A line where the barometer shows a lift's climb\n"
+    "(faster than any escalator's) is refused, with the reason. Exit 0 with rides or without."
 )
 
 
@@ -52,10 +53,6 @@ def add_parser(subparsers):
     return s
 
 
-def _fmt(v, spec, unit=""):
-    return "-" if v is None else f"{v:{spec}}{unit}"
-
-
 def run(a):
     from vibkit.diagnose.rides import find_rides
 
@@ -80,6 +77,7 @@ def run(a):
                 "rated_speed_m_s": rated,
                 "rides": rides,
                 "still_spans": [{"start_s": t0, "end_s": t1, "verdict": v} for t0, t1, v in found.still_spans],
+                "refused": [dict(x) for x in found.refused],
                 "notes": list(found.notes),
             },
         )
@@ -97,7 +95,7 @@ def run(a):
                 if r.speed_deviation_percent is None
                 else fmt_pm(r.speed_deviation_percent, r.speed_deviation_sigma_percent),
                 "-" if r.vertical_speed_m_s is None else fmt_pm(r.vertical_speed_m_s, r.vertical_speed_sigma_m_s),
-                _fmt(r.incline_deg, ".0f"),
+                "-" if r.incline_deg is None else fmt_pm(r.incline_deg, r.incline_sigma_deg),
                 r.channel,
             ]
         )
@@ -122,6 +120,9 @@ def run(a):
     for t0, t1, verdict in found.still_spans:
         if verdict != "ride":
             msg(f"  still {t0:.1f}-{t1:.1f} s: {verdict}")
+    for r in found.rides:
+        if r.flag:
+            msg(f"  ride {r.start_s:.1f}-{r.end_s:.1f} s: {r.flag}")
     for note in found.notes:
         msg(f"  {note}")
     return 0

@@ -6,9 +6,12 @@ A ride leaves three marks in a phone's record: the walking band of ``|a|`` falls
 accelerometer's and gyroscope's axes (:func:`vibkit.signal.steadyline.steady_line`); the barometer climbs
 or falls steadily (0.2-0.4 m/s of vertical speed on an escalator).  :func:`find_rides` looks for still
 spans of at least ``min_ride_s``, trims ``trim_s`` at each end (stepping on and off), and calls a span a
-ride only where the line stands over the noise with false-alarm probability under ``p_fa``: standing in
-a lift, on a train, at a counter is still without that line, and says "no ride".  Walking up a moving
-escalator is not found (the gait hides the line).
+ride only where the line stands over the noise with false-alarm probability under ``p_fa``: standing on a
+train, at a counter is still without that line, and says "no ride".  A lift's car may hum steadily near a
+chain's link pass; its climb (0.5-0.9 m/s over 4 s in ADVIO's lift, faster than any escalator's 0.43 m/s)
+within the still span or 8 s of it refuses the line, said in ``RideSearch.refused``; a ride whose barometer
+shows no climb, or without a barometer, is kept and flagged (``Ride.flag``).  Walking up a moving escalator is
+not found (the gait hides the line).
 
 What a ride can say without a tachometer: the link-pass frequency with its sigma and, given the chain's
 nominal pitch, the chain's *actual* speed (pitch times frequency) and its deviation from the rated speed
@@ -46,6 +49,14 @@ DEFAULT_BAND_HZ = (2.9, 9.0)
 _RHO_G = 1.2 * 9.81
 #: |vertical speed| under which a ride is called level [m/s]
 _LEVEL_VZ = 0.05
+#: the fastest an escalator climbs [m/s]: EN 115-1's 0.75 m/s on 35 deg is 0.43 m/s vertical (the eight ADVIO rides'
+#: 4 s slopes: at most 0.29; walking stairs: 0.30; ADVIO's lift: 0.89)
+_ESCALATOR_VZ_MAX = 0.45
+#: the barometer's slopes are read over windows of this length [s], stepped by a second
+_SLOPE_WINDOW_S = 4.0
+#: how far before and after a still span a lift's climb is looked for [s]: a lift's doors open and close and its
+#: passengers step in and out in about that (ADVIO's lift: 7-10 s at a floor between climbs of about 8 s)
+_LIFT_MARGIN_S = 8.0
 
 
 @dataclass(frozen=True)
@@ -76,6 +87,10 @@ class Ride:
     channels_db: dict = field(default_factory=dict)
     line_start_s: float | None = None  # the part of the ride analysed: the line clear of stepping on and off
     line_end_s: float | None = None
+    vertical_speed_max_m_s: float | None = None  # the barometer's fastest 4 s slope within the still span or near it
+    rise_sigma_m: float | None = None
+    incline_sigma_deg: float | None = None
+    flag: str | None = None  # what the barometer cannot rule out (a level ride, or no barometer)
 
     @property
     def duration_s(self) -> float:
@@ -97,6 +112,7 @@ class RideSearch:
     still_spans: tuple  # (start_s, end_s, verdict)
     channels: tuple
     notes: tuple = ()
+    refused: tuple = ()  # dicts: start_s, end_s, link_pass_hz, level_db, p_value, why (a line that is no ride)
 
 
 def _uniform(ds, names, fs):
@@ -126,27 +142,75 @@ def _acc_channels(ds):
     )
 
 
-def _vertical(ds, t0, t1):
-    """(vertical speed [m/s], its sigma, rise [m], source) over t0..t1 from the barometer, or Nones."""
+def _altitude(ds):
+    """(time [s], altitude [m], source) of the recording's barometer, or None without one."""
     t = np.asarray(ds["time"].values, dtype=float)
-    sel = (t >= t0) & (t <= t1)
     if "altitude" in ds.data_vars:
-        z, source = np.asarray(ds["altitude"].values, dtype=float)[sel], "barometer (phone's relative altitude)"
-    elif "pressure" in ds.data_vars:
-        z, source = -np.asarray(ds["pressure"].values, dtype=float)[sel] / _RHO_G, "barometer (pressure)"
-    else:
-        return None, None, None, None
+        return t, np.asarray(ds["altitude"].values, dtype=float), "barometer (phone's relative altitude)"
+    if "pressure" in ds.data_vars:
+        return t, -np.asarray(ds["pressure"].values, dtype=float) / _RHO_G, "barometer (pressure)"
+    return None
+
+
+def _slope(tt, z):
+    a = tt - tt.mean()
+    return float(np.dot(a, z - z.mean()) / np.dot(a, a))
+
+
+def _vertical(ds, t0, t1):
+    """(vertical speed [m/s], its sigma, rise [m], its sigma, source) over t0..t1 from the barometer, or Nones.
+
+    The speed is the least-squares slope; its sigma the larger of the formal one and the scatter of the slopes of
+    the span's 4 s parts (over the square root of their number): a barometer's noise is not white (air moves, the
+    phone's altitude is smoothed), and on the eight ADVIO rides its 4 s slopes scatter by 0.01-0.03 m/s where the
+    formal sigma is under 0.005.  The rise is the speed times the span, its sigma with the span's bounds known to a
+    second (stepping on and off)."""
+    alt = _altitude(ds)
+    if alt is None:
+        return None, None, None, None, None
+    t, zz, source = alt
+    sel = (t >= t0) & (t <= t1) & np.isfinite(zz)
     rate = float(ds["altitude" if "altitude" in ds.data_vars else "pressure"].attrs.get("native_rate_hz", 1.0))
-    tt = t[sel]
+    tt, z = t[sel], zz[sel]
     if tt.size < 3 or tt[-1] - tt[0] < 3:
-        return None, None, None, None
-    a = np.vstack([tt - tt.mean(), np.ones_like(tt)]).T
-    coef, *_ = np.linalg.lstsq(a, z, rcond=None)
-    resid = z - a @ coef
+        return None, None, None, None, None
+    vz = _slope(tt, z)
+    resid = z - z.mean() - vz * (tt - tt.mean())
     n_eff = max((tt[-1] - tt[0]) * min(rate, 1.0 / np.median(np.diff(tt))), 3.0)  # independent readings
-    s = float(np.std(resid, ddof=2)) if tt.size > 2 else 0.0
+    s = float(np.std(resid, ddof=2))
     sigma = s / math.sqrt(np.sum((tt - tt.mean()) ** 2) * n_eff / tt.size) if s > 0 else 0.0
-    return float(coef[0]), float(max(sigma, 0.005)), float(coef[0] * (t1 - t0)), source
+    k = int((tt[-1] - tt[0]) // _SLOPE_WINDOW_S)
+    if k >= 2:
+        edges = np.linspace(tt[0], tt[-1], k + 1)
+        parts = [
+            _slope(tt[m], z[m]) for m in ((tt >= a) & (tt <= b) for a, b in zip(edges[:-1], edges[1:])) if m.sum() > 2
+        ]
+        if len(parts) >= 2:
+            sigma = max(sigma, float(np.std(parts, ddof=1)) / math.sqrt(len(parts)))
+    sigma = max(sigma, 0.005)
+    rise = vz * (t1 - t0)
+    return vz, sigma, rise, math.hypot(sigma * (t1 - t0), vz * 1.0), source
+
+
+def _fastest_climb(ds, t0, t1):
+    """(the barometer's largest |vertical speed| [m/s] over 4 s windows stepped by a second within t0..t1, the time
+    [s] of that window's middle), or (None, None) without a barometer."""
+    alt = _altitude(ds)
+    if alt is None:
+        return None, None
+    t, zz, _ = alt
+    sel = (t >= t0) & (t <= t1) & np.isfinite(zz)
+    tt, z = t[sel][::5], zz[sel][::5]  # the barometer reads at about 1 Hz: 20 Hz of its interpolation is plenty
+    best, at = 0.0, None
+    if tt.size < 3:
+        return None, None
+    for a in np.arange(tt[0], tt[-1] - _SLOPE_WINDOW_S + 1e-9, 1.0):  # whole windows only, within the record
+        m = (tt >= a) & (tt <= a + _SLOPE_WINDOW_S)
+        if m.sum() > 2:
+            v = abs(_slope(tt[m], z[m]))
+            if v > best:
+                best, at = v, a + _SLOPE_WINDOW_S / 2
+    return (best, at) if at is not None else (None, None)
 
 
 def find_rides(
@@ -208,7 +272,7 @@ def find_rides(
     level = walking_level(x[:3], fs)
     level[~near] = np.inf
     spans = still_spans(level, fs, threshold=still_threshold, min_s=min_ride_s)
-    rides, verdicts, notes = [], [], []
+    rides, verdicts, notes, refused = [], [], [], []
     for a, b in spans:
         t0, t1 = float(tu[a]), float(tu[b - 1])
         i0, i1 = a + int(round(trim_s * fs)), b - int(round(trim_s * fs))
@@ -229,10 +293,36 @@ def find_rides(
         # walk off an escalator; the line of a step flattening into the landing fades before they do)
         start = t0 if j0 == 0 else max(t0, float(tu[i0 + j0]) - trim_s)
         i0, i1 = i0 + j0, i0 + j1
+        # a lift: its car may hum steadily near a chain's link pass, and a person stands still in it; its climb (about
+        # 1 m/s, faster than any escalator's) falls within the still span or just before or after it
+        fast, at = _fastest_climb(recording, t0 - _LIFT_MARGIN_S, t1 + _LIFT_MARGIN_S)
+        if fast is not None and fast > _ESCALATOR_VZ_MAX:
+            why = (
+                f"a lift, not an escalator: the barometer's vertical speed reaches {fast:.2f} m/s (over 4 s about "
+                f"{at:.0f} s, within {_LIFT_MARGIN_S:.0f} s of the still span), faster than any escalator climbs "
+                f"({_ESCALATOR_VZ_MAX:.2f} m/s; or a pressure wave: a train, a door)"
+            )
+            refused.append(
+                {
+                    "start_s": start,
+                    "end_s": t1,
+                    "link_pass_hz": line.frequency_hz,
+                    "level_db": line.level_db,
+                    "p_value": line.p_value,
+                    "vertical_speed_max_m_s": fast,
+                    "why": why,
+                }
+            )
+            verdicts.append((t0, t1, f"refused: a steady line at {line.frequency_hz:.3f} Hz, but {why}"))
+            continue
         ride = _ride(recording, line, names, start, t1, nominal_pitch, rated_speed)
-        rides.append(dataclasses.replace(ride, line_start_s=float(tu[i0]), line_end_s=float(tu[i1 - 1])))
+        rides.append(
+            dataclasses.replace(
+                ride, line_start_s=float(tu[i0]), line_end_s=float(tu[i1 - 1]), vertical_speed_max_m_s=fast
+            )
+        )
         verdicts.append((t0, t1, "ride"))
-    return RideSearch(tuple(rides), band, p_fa, tuple(verdicts), tuple(names), tuple(notes))
+    return RideSearch(tuple(rides), band, p_fa, tuple(verdicts), tuple(names), tuple(notes), tuple(refused))
 
 
 def _line_in(x, fs, band, p_fa):
@@ -296,15 +386,24 @@ def _where_the_line_is(seg, fs, freq, band, level_db, on_db=3.0):
     return a, b
 
 
+#: what a ride's flag says where the barometer cannot rule a lift out
+_FLAG_LEVEL = (
+    "level: the barometer shows no climb while the line is on and no lift's climb within {m:.0f} s of it: a level "
+    "moving walk, or a machine standing still (a lift at a floor whose climb the record does not hold)"
+)
+_FLAG_NO_BAROMETER = "no barometer: a lift standing at a floor cannot be told from an escalator without one"
+
+
 def _ride(ds, line, names, t0, t1, pitch, rated):
-    vz, vz_s, rise, source = _vertical(ds, t0, t1)
+    vz, vz_s, rise, rise_s, source = _vertical(ds, t0, t1)
+    flag = None
     if vz is None:
-        direction = "unknown"
+        direction, flag = "unknown", _FLAG_NO_BAROMETER
     elif abs(vz) < max(_LEVEL_VZ, 2 * vz_s):
-        direction = "level"
+        direction, flag = "level", _FLAG_LEVEL.format(m=_LIFT_MARGIN_S)
     else:
         direction = "up" if vz > 0 else "down"
-    speed = speed_s = dev = dev_s = incline = None
+    speed = speed_s = dev = dev_s = incline = incline_s = None
     if pitch is not None:
         speed = float(pitch) * line.frequency_hz
         speed_s = float(pitch) * line.sigma_hz
@@ -312,7 +411,10 @@ def _ride(ds, line, names, t0, t1, pitch, rated):
             dev = 100.0 * (speed / abs(float(rated)) - 1.0)
             dev_s = 100.0 * speed_s / abs(float(rated))
         if vz is not None and abs(vz) < speed:
-            incline = math.degrees(math.asin(abs(vz) / speed))
+            # asin(v_z / v): d/dv_z = 1 / (v cos), d/dv = -v_z / (v^2 cos)
+            th = math.asin(abs(vz) / speed)
+            incline = math.degrees(th)
+            incline_s = math.degrees(math.hypot(vz_s, abs(vz) * speed_s / speed) / (speed * math.cos(th)))
     return Ride(
         start_s=t0,
         end_s=t1,
@@ -329,8 +431,11 @@ def _ride(ds, line, names, t0, t1, pitch, rated):
         vertical_speed_m_s=vz,
         vertical_speed_sigma_m_s=vz_s,
         rise_m=rise,
+        rise_sigma_m=rise_s,
         rise_source=source,
         incline_deg=incline,
+        incline_sigma_deg=incline_s,
+        flag=flag,
         channels_db=dict(zip(names, line.channel_levels_db)),
     )
 

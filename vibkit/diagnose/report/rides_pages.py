@@ -117,6 +117,8 @@ def phone_ride_pages(doc, ctx) -> list:
                 else " (no barometer: up or down cannot be told)."
             ),
         ]
+        if ride.flag:
+            lines.append(f"Not ruled out: {ride.flag}.")
         if ride.speed_m_s is not None:
             lines.append(
                 f"Chain speed from the link pass and the nominal pitch: {fmt_pm(ride.speed_m_s, ride.speed_sigma_m_s)} m/s"
@@ -126,7 +128,11 @@ def phone_ride_pages(doc, ctx) -> list:
                     if ride.speed_deviation_percent is not None
                     else ""
                 )
-                + (f"; incline {ride.incline_deg:.0f} deg." if ride.incline_deg is not None else ".")
+                + (
+                    f"; incline {fmt_pm(ride.incline_deg, ride.incline_sigma_deg)} deg."
+                    if ride.incline_deg is not None
+                    else "."
+                )
             )
         else:
             lines.append("No nominal pitch: no speed (the profile's or --nominal-pitch gives one).")
