@@ -15,7 +15,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ...analyses.simulation import simulate
 from ...io import RecordingError, read_recording, source_name
 from ...io.channels import own_samples, with_component
 from ...model.profile_scene import geometry_note, link_count
@@ -25,6 +24,7 @@ from ...signal import hampel_events, link_pass_estimate
 from ...signal.bursts import uniform_bursts
 from ..channels import estimate_channels
 from ..comparison import compare
+from ..kept_simulation import simulate_kept
 from ..knock import ride_knock, step_rollers_of
 from ..links import TooFewLoops, find_worn_links, profile_scene_file
 from ..pitch import pick_channel
@@ -324,8 +324,9 @@ def analyse(
     result = None
     comparison_absent = "no scene given (--scene SCENE, or a scene of the unit: vibkit scene PROFILE)"
     if sc is not None:
-        # with the step's roller motion: the ride figure is then the one `vibkit ride SCENE` gives
-        result = simulate(with_ride_outputs(sc), duration=duration, progress=progress)
+        # with the step's roller motion: the ride figure is then the one `vibkit ride SCENE` gives; the run kept on
+        # disk where this scene was simulated before (vibkit.diagnose.kept_simulation)
+        result = simulate_kept(with_ride_outputs(sc), duration=duration, progress=progress)
         comparison_absent = "" if found else "no link pass found in the recording to compare with the simulation's"
         if found:  # no comparison of a link pass the recording does not carry
             try:
