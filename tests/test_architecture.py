@@ -221,6 +221,7 @@ def loaded_by(root, graph) -> set[str]:
 DEFERRED_ALLOWED = {
     "vibkit.signal.kernels": "numba's kernels, loaded where they run",
     "vibkit.diagnose.link_signature_runs": "the model's kernels, loaded where a kept signature run misses",
+    "vibkit.diagnose.fresh_simulation": "the model's kernels, loaded where a kept simulation misses",
 }
 
 

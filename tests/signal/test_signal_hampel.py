@@ -183,3 +183,28 @@ def test_a_threshold_found_once_is_kept_beside_the_kernels_and_read_back_exactly
     hp._n_sigma_for_rate.cache_clear()
     assert hampel_n_sigma_for_rate(6, 0.003) == found
     hp._n_sigma_for_rate.cache_clear()
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_the_numpy_path_of_a_short_record_is_the_kernels_to_the_last_bit(seed, monkeypatch):
+    """A short record without NaN is filtered by numpy (no kernel to load): the compiled kernel's numbers exactly,
+    ties and a zero MAD included, at every window the record's ends truncate."""
+    import importlib
+
+    H = importlib.import_module("vibkit.signal.hampel")  # the module (the package's name `hampel` is the function)
+
+    rng = np.random.default_rng(seed)
+    for _ in range(15):
+        n = int(rng.integers(3, 3000))
+        k = int(rng.integers(1, (n - 1) // 2 + 1))
+        x = rng.standard_normal(n) * 10 ** rng.uniform(-6, 3)
+        x[rng.random(n) < 0.03] *= 30.0
+        if seed % 2:
+            x = np.round(x, 1)  # ties and zero MAD
+        ns = float(rng.uniform(0, 5))
+        monkeypatch.setattr(H, "NUMPY_MAX_ELEMENTS", 10**12)
+        by_numpy = hampel(x, k, ns)
+        monkeypatch.setattr(H, "NUMPY_MAX_ELEMENTS", 0)
+        by_kernel = hampel(x, k, ns)
+        for a, b in zip(by_numpy, by_kernel, strict=True):
+            np.testing.assert_array_equal(a, b, strict=True)

@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 from vibkit.diagnose.rounding import fmt_pm, fmt_value
+from vibkit.runtime.report_options import ReportOptions
 
 from .options import (
     CHANNEL_EVERY,
@@ -36,11 +39,7 @@ def add_parser(subparsers):
     add_recording(s, channel_default=CHANNEL_EVERY)
     add_json(s)
     add_escalator(s)
-    s.add_argument(
-        "--scene",
-        help="scene describing the escalator and sensor (simulated and compared); default with --escalator: "
-        "the scene built from the profile",
-    )
+    _add_declared(s, "scene")
     s.add_argument("-o", "--output", required=True, help="PDF to write; a new path unless --force; '-': stdout")
     add_force_overwrite(s, "PDF")
     add_speed(
@@ -52,11 +51,47 @@ def add_parser(subparsers):
     add_marker(s)
     add_nominal_pitch(s, "the --escalator profile's, else the scene's")
     add_limits(s)
-    s.add_argument("--band", type=band, help="link-pass search band LOW:HIGH [Hz]")
-    s.add_argument("--duration", type=positive, help="simulated time [s] (default: the scene's)")
-    s.add_argument("--date", help="when the recording was made, ISO 8601 (default: the file's start time)")
+    for name in ("band", "duration", "date"):
+        _add_declared(s, name)
     s.set_defaults(func=run)
     return s
+
+
+def _add_declared(s, name):
+    """The flag of option ``name`` that the report declares itself (its field's ``help``; the others are flags every
+    command shares, :mod:`vibkit.cli.options`)."""
+    meta = {f.name: f.metadata for f in dataclasses.fields(ReportOptions)}[name]
+    s.add_argument(meta["flag"], type=_PARSE[meta["parse"]], help=meta["help"])
+
+
+#: how a flag the report declares is read (ReportOptions' ``parse``): None, the text as given
+_PARSE = {"band": band, "positive": positive, None: None}
+
+
+def options_of(a, profile) -> ReportOptions:
+    """The report's options from the parsed flags: each option that has a flag (``flag`` of its field), as
+    ``_FROM_FLAG`` reads it where it is not the flag's value as parsed; the reader's flags as ``read_options``."""
+    given = {}
+    for f in dataclasses.fields(ReportOptions):
+        flag = f.metadata["flag"]
+        if flag is not None and flag != "--sample-rate":  # the sample rate reaches the reader with its other flags
+            read = _FROM_FLAG.get(f.name)
+            given[f.name] = read(a, profile) if read else getattr(a, flag.lstrip("-").replace("-", "_"))
+    return ReportOptions(**given, read_options=reader_options(a), progress=True)
+
+
+def _speed_sigma(a, profile):
+    text = a.speed_uncertainty
+    return None if text is None else text if text.strip().endswith("%") else speed_sigma(text, 1.0)
+
+
+#: the options that a flag gives other than as its parsed value
+_FROM_FLAG = {
+    "scene": lambda a, profile: a.scene if a.scene or profile is None else profile.scene("forward", a.duration),
+    "speed_sigma": _speed_sigma,
+    "profile": lambda a, profile: profile,
+    "segment": lambda a, profile: segment_of(a),
+}
 
 
 #: summary keys whose value is rounded to their sigma's two significant digits
@@ -113,31 +148,12 @@ def _run(a, target):
     from vibkit.diagnose.report import write_report
 
     profile = _profile_of(a)
-    text = a.speed_uncertainty
-    sigma = None if text is None else text if text.strip().endswith("%") else speed_sigma(text, 1.0)
     if a.date is not None:  # before the recording is read: the date validator every command shares
         from vibkit.runtime.dates import parse_iso_date
 
         parse_iso_date(a.date, "--date")
-    rep = write_report(
-        a.recording,
-        target,
-        scene=a.scene if a.scene or profile is None else profile.scene("forward", a.duration),
-        speed=a.speed,
-        speed_sigma=sigma,
-        channel=a.channel,
-        nominal_pitch=a.nominal_pitch,
-        limits_percent=a.limits,
-        duration=a.duration,
-        band=a.band,
-        progress=True,
-        overwrite=a.force,
-        read_options=reader_options(a),
-        date=a.date,
-        profile=profile,
-        segment=segment_of(a),
-        marker_s=a.marker,
-    )
+    opts = options_of(a, profile)
+    rep = write_report(a.recording, target, overwrite=a.force, **opts.as_dict())
     if a.json:
         print_json(
             "report",

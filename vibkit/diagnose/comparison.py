@@ -22,7 +22,6 @@ from typing import TYPE_CHECKING
 import numpy as np
 import scipy.stats
 
-from ..analyses.simulation import simulate
 from ..io import read_recording
 from ..model.profile import Profile
 from ..model.scene import Scene
@@ -77,7 +76,10 @@ def as_result(result, *, duration=None, progress=False):
     if isinstance(result, (str, os.PathLike)) and find(result) is not None:
         result = find(result)  # a shipped scene by its name ("leon", "sim/leon.toml" outside a clone)
     if isinstance(result, Scene) or (isinstance(result, (str, os.PathLike)) and str(result).endswith(".toml")):
-        return simulate(result, duration=duration, progress=progress)
+        # the model (numba and its kernels) loaded only here: a report that compares a kept run loads neither
+        from .fresh_simulation import simulate_fresh
+
+        return simulate_fresh(result, duration=duration, progress=progress)
     if isinstance(result, (str, os.PathLike)):
         return read_recording(result)
     raise ValueError(

@@ -28,7 +28,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..model.escalator import EscalatorModel
 from ..model.profile_scene import roller_radius_of
 from ..signal.detect import detect_link_pass
 from ..signal.estimate import harmonic_ls
@@ -231,13 +230,12 @@ def step_rollers_of(scene=None, profile=None):
     (the middle roller of its ``step_accelerometer`` step) or an escalator profile's (its
     ``roller_radius``, else the reference 35 mm scaled with the pitch, as its scene is built); None
     without either."""
-    if scene is not None:
-        model = EscalatorModel(scene)
-        step = scene.outputs.get("step_accelerometer") or 1
-        roller = int(model.step_rollers(step)[1])
+    if scene is not None:  # as the model places a step (EscalatorModel.step_rollers), without building the model
         c = scene.chain
+        step = scene.outputs.get("step_accelerometer") or 1
+        roller = (c.links_per_step * (int(step) - 1) + 1) % c.n_rollers
         return (
-            float(model.radii[roller]),
+            float(c.radii()[roller]),
             float(c.link_pitch),
             int(c.links_per_step),
             f"roller {roller + 1} of the scene",

@@ -38,6 +38,11 @@ __all__ = [
 MAD_SCALE = 1.4826
 """Scale making the MAD a consistent estimator of a Gaussian standard deviation (MATLAB's value)."""
 
+NUMPY_MAX_ELEMENTS = 4_000_000
+"""A record without NaN whose samples times window length is at most this is filtered by numpy (the windows held at
+once: 32 MB), the same numbers to the last bit; a longer or gapped one by the compiled kernel (about 0.5 CPU-s to
+load numba and the kernel, then linear in the samples)."""
+
 
 class HampelResult(NamedTuple):
     """Result of :func:`hampel`, in MATLAB's output order.
@@ -120,7 +125,8 @@ def hampel(
     Notes
     -----
     Runs in ``O(n k)`` with a sorted sliding window (numba), exact to the last bit against the
-    direct definition (``numpy.median`` on each truncated window).
+    direct definition (``numpy.median`` on each truncated window); a short record without NaN
+    (:data:`NUMPY_MAX_ELEMENTS`) with that definition itself, on all windows at once (numpy).
 
     References
     ----------
@@ -149,14 +155,18 @@ def hampel(
     mask = np.empty(flat.shape, dtype=np.bool_)
     med = np.empty_like(flat)
     sig = np.empty_like(flat)
-    # Independent chunks (each primes its own window) run on numba's threads for long records; numba is
-    # imported here, on the first filter, not with the package (a command that never filters never loads it)
-    import numba
-
-    from .kernels import _hampel_core
-
-    n_chunks = 1 if n < 200_000 else 4 * numba.get_num_threads()
     for r in range(flat.shape[0]):
+        if n * (2 * k + 1) <= NUMPY_MAX_ELEMENTS and not np.isnan(flat[r]).any():
+            _hampel_numpy(flat[r], k, ns, y[r], mask[r], med[r], sig[r])
+            continue
+        # Independent chunks (each primes its own window) run on numba's threads for long records; numba is
+        # imported here, on the first filter that needs it, not with the package (a command that never filters a
+        # long or gapped record never loads it)
+        import numba
+
+        from .kernels import _hampel_core
+
+        n_chunks = 1 if n < 200_000 else 4 * numba.get_num_threads()
         _hampel_core(flat[r], k, ns, MAD_SCALE, bool(fill_nan), y[r], mask[r], med[r], sig[r], n_chunks)
     shape = moved.shape
 
@@ -164,6 +174,25 @@ def hampel(
         return np.moveaxis(a.reshape(shape), -1, axis)
 
     return HampelResult(back(y), back(mask), back(med), back(sig))
+
+
+def _hampel_numpy(x, k, n_sigma, y, outlier, med_out, sig_out):
+    """The compiled filter's numbers for a record without NaN, by numpy: the median and the MAD of every window at
+    once (the definition itself: ``numpy.median`` of each window truncated at the ends), for records short enough
+    (:data:`NUMPY_MAX_ELEMENTS`) that loading the compiled kernel would cost more than the work."""
+    n = x.shape[0]
+    if n > 2 * k:  # the whole windows, samples k .. n - k - 1
+        win = np.lib.stride_tricks.sliding_window_view(x, 2 * k + 1)
+        m = np.median(win, axis=1)
+        med_out[k : n - k] = m
+        sig_out[k : n - k] = MAD_SCALE * np.median(np.abs(win - m[:, None]), axis=1)
+    for i in (*range(min(k, n)), *range(max(k, n - k), n)):  # the windows the record's ends truncate
+        w = x[max(0, i - k) : i + k + 1]
+        m = np.median(w)
+        med_out[i] = m
+        sig_out[i] = MAD_SCALE * np.median(np.abs(w - m))
+    np.greater(np.abs(x - med_out), n_sigma * sig_out, out=outlier)
+    y[:] = np.where(outlier, med_out, x)
 
 
 @dataclass(frozen=True)

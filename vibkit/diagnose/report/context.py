@@ -15,16 +15,17 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ...analyses.simulation import simulate
 from ...io import RecordingError, read_recording, source_name
 from ...io.channels import own_samples, with_component
 from ...model.profile_scene import geometry_note, link_count
 from ...model.scene import Scene, SceneError, load_scene
 from ...runtime.dates import check_date, parse_iso_date
+from ...runtime.report_options import ReportOptions, takes_report_options
 from ...signal import hampel_events, link_pass_estimate
 from ...signal.bursts import uniform_bursts
 from ..channels import estimate_channels
 from ..comparison import compare
+from ..kept_simulation import simulate_kept
 from ..knock import ride_knock, step_rollers_of
 from ..links import TooFewLoops, find_worn_links, profile_scene_file
 from ..pitch import pick_channel
@@ -214,31 +215,21 @@ def measurement_date(rec, date=None):
     return d.astimezone(_dt.timezone.utc), source
 
 
-def analyse(
-    recording,
-    *,
-    scene=None,
-    speed=None,
-    speed_sigma=None,
-    channel=None,
-    nominal_pitch=None,
-    limits_percent=None,
-    sample_rate=None,
-    duration=None,
-    band=None,
-    hampel_half_window_s=0.1,
-    hampel_false_alarm_rate=1e-4,
-    progress=False,
-    read_options=None,
-    date=None,
-    profile=None,
-    segment=None,
-    marker_s=None,
-) -> ReportContext:
-    """Everything :func:`vibkit.diagnose.report.write_report` draws (same parameters, no output)."""
-    opts = dict(read_options or {})
-    if sample_rate is not None:
-        opts["sample_rate"] = sample_rate
+@takes_report_options
+def analyse(recording, **options) -> ReportContext:
+    """Everything :func:`vibkit.diagnose.report.write_report` draws (the same options, no output).
+
+    Parameters
+    ----------
+    recording : str or os.PathLike
+        Recording file (anything :func:`vibkit.read_recording` reads).
+    **options
+    """
+    o = ReportOptions.of("analyse", options)
+    scene, channel, profile, segment, duration = o.scene, o.channel, o.profile, o.segment, o.duration
+    opts = dict(o.read_options or {})
+    if o.sample_rate is not None:
+        opts["sample_rate"] = o.sample_rate
     try:  # every channel: the report's ride-quality page wants the three axes
         rec = read_recording(recording, **opts)
     except RecordingError:
@@ -248,7 +239,7 @@ def analyse(
     rec = with_component(rec, channel)
     whole = rec  # the ride's weighting filters run over the whole record, its segment the one asked for
     rec = cut_recording(rec, segment)  # every other page: the segment asked for, in the file's own time
-    measured, measured_source = measurement_date(rec, date)
+    measured, measured_source = measurement_date(rec, o.date)
     ch = pick_channel(rec, channel)
     sc = None
     if scene is not None:
@@ -259,11 +250,11 @@ def analyse(
     # the sensor of each channel
     settings = resolve_settings(
         rec,
-        speed=speed,
-        speed_sigma=speed_sigma,
-        nominal_pitch=nominal_pitch,
-        band=band,
-        limits=limits_percent,
+        speed=o.speed,
+        speed_sigma=o.speed_sigma,
+        nominal_pitch=o.nominal_pitch,
+        band=o.band,
+        limits=o.limits_percent,
         segment=segment,
         profile=profile,
         scene=sc,
@@ -324,8 +315,9 @@ def analyse(
     result = None
     comparison_absent = "no scene given (--scene SCENE, or a scene of the unit: vibkit scene PROFILE)"
     if sc is not None:
-        # with the step's roller motion: the ride figure is then the one `vibkit ride SCENE` gives
-        result = simulate(with_ride_outputs(sc), duration=duration, progress=progress)
+        # with the step's roller motion: the ride figure is then the one `vibkit ride SCENE` gives; the run kept on
+        # disk where this scene was simulated before (vibkit.diagnose.kept_simulation)
+        result = simulate_kept(with_ride_outputs(sc), duration=duration, progress=o.progress)
         comparison_absent = "" if found else "no link pass found in the recording to compare with the simulation's"
         if found:  # no comparison of a link pass the recording does not carry
             try:
@@ -364,17 +356,17 @@ def analyse(
     tested = 0  # samples the spike detector judged
     search = pitch.band_hz if pitch is not None else (band or (0.9 * f0, 1.1 * f0))
     for b in bursts:
-        hw = max(3, int(round(hampel_half_window_s * b.fs)))
+        hw = max(3, int(round(o.hampel_half_window_s * b.fs)))
         if b.x.size <= 2 * hw + 1:
             continue
         resid = b.x - _family_fit(b.x, b.fs, search)
         tested += b.x.size
         for e in hampel_events(
-            resid, b.fs, half_window=hw, false_alarm_rate=hampel_false_alarm_rate, t0=b.t0, max_gap=hw // 4
+            resid, b.fs, half_window=hw, false_alarm_rate=o.hampel_false_alarm_rate, t0=b.t0, max_gap=hw // 4
         ):
             events.append((e.time_s, float(b.x[e.index]), e))
     # what chance alone gives: the detector's false-alarm rate is per sample on Gaussian noise
-    spikes_expected = hampel_false_alarm_rate * tested
+    spikes_expected = o.hampel_false_alarm_rate * tested
     clip_n = held_extremes(x_all)
     clipped = clip_n > 4 and not _quantisation_explains_extremes(x_all, rec[ch].attrs.get("quantum"))
     date = report_date()
@@ -414,7 +406,7 @@ def analyse(
         )
     if comp is not None:
         summary.update(score=comp.score, pitch_consistent=comp.pitch_consistent)
-    links, links_note = _links(rec, ch, units, sc, speed, notes, profile, marker_s)
+    links, links_note = _links(rec, ch, units, sc, speed, notes, profile, o.marker_s)
     chain_links = _chain_links(profile, sc)
     if profile is not None and (assumed := geometry_note(profile)):  # n_links alone: an escalator of 30 deg
         notes.insert(0, assumed)
@@ -456,8 +448,8 @@ def analyse(
         limits=limits,
         band=band,
         duration=duration,
-        hampel_half_window_s=hampel_half_window_s,
-        hampel_false_alarm_rate=hampel_false_alarm_rate,
+        hampel_half_window_s=o.hampel_half_window_s,
+        hampel_false_alarm_rate=o.hampel_false_alarm_rate,
         bursts=bursts,
         pitch=pitch,
         f0=f0,

@@ -16,6 +16,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from ... import __version__
+from ...runtime.report_options import ReportOptions, takes_report_options
 from ...runtime.safe_output import check_output_path
 from .appendix import data_quality_page, glossary_page, parameters_page
 from .common import PageSink, Report, _pdf_in_memory, speed_value
@@ -94,29 +95,8 @@ def page_header(ctx) -> str:
     return f"{unit}  |  {name}  |  measured {measured}  |  chain speed {speed_value(ctx).split(',')[0]}"
 
 
-def write_report(
-    recording,
-    out_path,
-    *,
-    scene=None,
-    speed=None,
-    speed_sigma=None,
-    channel=None,
-    nominal_pitch=None,
-    limits_percent=None,
-    sample_rate=None,
-    duration=None,
-    band=None,
-    hampel_half_window_s=0.1,
-    hampel_false_alarm_rate=1e-4,
-    progress=False,
-    overwrite=False,
-    read_options=None,
-    date=None,
-    profile=None,
-    segment=None,
-    marker_s=None,
-) -> Report:
+@takes_report_options
+def write_report(recording, out_path, *, overwrite=False, **options) -> Report:
     """Write the PDF diagnostic report of a recording.
 
     Parameters
@@ -125,45 +105,10 @@ def write_report(
         Recording file (anything :func:`vibkit.read_recording` reads).
     out_path : str or os.PathLike
         PDF to write (atomically); never one of the inputs.
-    scene : str, os.PathLike or Scene, optional
-        Scene describing the escalator and sensor; simulated and compared with the recording.
-    speed : float, optional
-        Chain speed [m/s], the one speed of every page and of the comparison; default the profile's
-        rated speed, else the recording's ``chain_speed_m_s``, else the scene's.
-    speed_sigma : float or str, optional
-        Its standard deviation [m/s], or a percentage of it (``"0.05%"``); None: not stated (a profile's
-        rated speed then takes the profile's sigma).
-    channel : str, optional
-    nominal_pitch : float, optional
-        [m]; default the scene's link pitch.
-    limits_percent : (float, float, float), optional
-        Elongation limits [%] (default 1.5, 2, 3).
-    sample_rate : float, optional
-        For files without time. [Hz]
-    duration : float, optional
-        Simulated time [s] (default the scene's).
-    band : (float, float), optional
-        Link-pass search band. [Hz]
-    hampel_half_window_s : float
-        Half window of the spike detector [s] (longer than a spike: a knock lasts tens of ms).
-    hampel_false_alarm_rate : float
-        Per-sample false-alarm probability of the spike detector on Gaussian noise.
     overwrite : bool
         Replace an existing regular file ``out_path`` (default False: an existing file is refused; the
         CLI passes ``--force``).
-    read_options : dict, optional
-        More :func:`vibkit.read_recording` arguments (``time_unit``, ``units``, ``repair_time`` ...).
-    date : str or datetime.datetime, optional
-        When the recording was made (ISO 8601); default the file's start time, if it states one.
-    profile : Profile, optional
-        The escalator profile (:func:`vibkit.model.profile.load_profile`): page 1 names its unit; its rated
-        speed, nominal pitch and teeth are the defaults; a scene's simulated ride page is shown only when
-        the scene is this unit's.
-    segment : (float, float), optional
-        The recording's ride segment [s] (default: detected), for its ride-quality page.
-    marker_s : float, optional
-        When a marked link passed the sensor [s from the recording's start]: the links page numbers from it
-        (:func:`vibkit.diagnose.links.find_worn_links`).
+    **options
 
     Returns
     -------
@@ -175,6 +120,7 @@ def write_report(
         The output is one of the inputs or not a ``.pdf``; bad options; or the errors of
         :func:`vibkit.read_recording` and :func:`vibkit.load_scene`.
     """
+    opts = ReportOptions.of("write_report", options)
     import matplotlib
 
     matplotlib.use("Agg")
@@ -183,31 +129,13 @@ def write_report(
     out = os.fspath(out_path)
     if not out.lower().endswith(".pdf"):
         raise ValueError(f"output {out!r} must be a .pdf file")
+    scene = opts.scene
     inputs = [os.fspath(recording)] + ([os.fspath(scene)] if isinstance(scene, (str, os.PathLike)) else [])
     for p in inputs:
         if os.path.exists(out) and os.path.samefile(out, p):
             raise ValueError(f"output {out!r} is an input file; refusing to overwrite it")
     check_output_path(out, overwrite=overwrite, inputs=inputs)  # before any work
-    ctx = analyse(
-        recording,
-        scene=scene,
-        speed=speed,
-        speed_sigma=speed_sigma,
-        channel=channel,
-        nominal_pitch=nominal_pitch,
-        limits_percent=limits_percent,
-        sample_rate=sample_rate,
-        duration=duration,
-        band=band,
-        hampel_half_window_s=hampel_half_window_s,
-        hampel_false_alarm_rate=hampel_false_alarm_rate,
-        progress=progress,
-        read_options=read_options,
-        date=date,
-        profile=profile,
-        segment=segment,
-        marker_s=marker_s,
-    )
+    ctx = analyse(recording, **opts.as_dict())
     date, summary = ctx.date, ctx.summary
     meta = {
         "Title": f"vibkit report: {summary['file']}",

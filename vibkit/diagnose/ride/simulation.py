@@ -8,7 +8,6 @@ import dataclasses
 import math
 import os
 
-from ...analyses.simulation import simulate
 from ...model.scene import Scene, load_scene
 from ...signal.ride import NoIncline
 from ..speed import scene_speed
@@ -50,6 +49,9 @@ def simulate_ride(scene, *, duration=None, segment=None, weightings=None, progre
         raise ValueError(f"{sc.source}: ride quality needs an inverse or forward scene, not {sc.analysis}")
     if sc.outputs.get("step_accelerometer") is None:
         raise ValueError(f"{sc.source}: the scene names no step ('outputs.step_accelerometer'); add one")
+    # the model (numba and its kernels) loaded only here: the report, which imports this package, keeps its run
+    from ..fresh_simulation import simulate_fresh as simulate
+
     ds = simulate(with_ride_outputs(sc), duration=duration, progress=progress)
     try:
         return ride_quality_from_simulation(ds, segment=segment, weightings=weightings, source=sc.source)
