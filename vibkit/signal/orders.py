@@ -20,7 +20,7 @@ import scipy.signal
 import scipy.sparse
 import scipy.sparse.linalg
 
-from ._checks import as_signal, check_fs, check_positive_int, decimate_for_band, fill_nan
+from ._checks import as_signal, check_fs, check_positive_int, decimate_for_band, fill_nan, filter_with_zi, sosfiltfilt
 from .estimate import expj
 from .peaks import find_fundamental
 from .spectral import amplitude_spectrum, spectrogram
@@ -109,20 +109,18 @@ SPECTROGRAM_BLOCK_VALUES = 1 << 21
 
 @functools.lru_cache(maxsize=64)
 def _butter_low(order, cutoff, fs):
-    """The Butterworth low-pass's second-order sections (read-only): designed once per order, cutoff and rate,
-    where a record's harmonics and every record of a fleet ask for the same few (the design cost as much as
-    the filtering of a 30 s record)."""
-    sos = scipy.signal.butter(order, cutoff, btype="low", fs=fs, output="sos")
-    sos.flags.writeable = False
-    return sos
+    """The Butterworth low-pass's second-order sections and their initial conditions (read-only,
+    :func:`vibkit.signal._checks.filter_with_zi`): designed once per order, cutoff and rate, where a record's
+    harmonics and every record of a fleet ask for the same few (the design cost as much as the filtering of a 30 s
+    record)."""
+    return filter_with_zi(scipy.signal.butter(order, cutoff, btype="low", fs=fs, output="sos"))
 
 
 def _lowpass(y, fs, cutoff, order=4, padtype="even"):
-    sos = _butter_low(int(order), float(cutoff), float(fs)).copy()  # scipy's filter takes a writable one
     # Even (mirror) extension over three time constants: no start-up transient, and unlike the
     # default odd extension it does not hinge on the (noisy) end samples.
     padlen = min(y.size - 1, int(3.0 * fs / cutoff))
-    return scipy.signal.sosfiltfilt(sos, y, padtype=padtype, padlen=padlen)
+    return sosfiltfilt(_butter_low(int(order), float(cutoff), float(fs)), y, padtype=padtype, padlen=padlen)
 
 
 def track_phase(x, fs, *, band, n_harmonics=3, frame_s=None, bandwidth_hz=None, max_deviation=0.1, nan_policy="raise"):
