@@ -580,15 +580,14 @@ def _burst_power(b, freqs):
     n_rows = nfft // SNR_ROW_BINS
     for r, pr in padded_power_rows(y, nfft, SNR_ROW_BINS):
         # bins k = r + n_rows m: the floor band's kept, and those near each f looked at
-        k_first = r
-        m_a = max(0, -((k_first - k0) // n_rows))  # the row's first bin at or above k0
-        m_b = max(m_a, min(pr.size, -((k_first - k1) // n_rows)))  # ... and its first at or above k1
-        band[k_first + n_rows * m_a - k0 :: n_rows][: m_b - m_a] = pr[m_a:m_b]
+        m_a = max(0, -((r - k0) // n_rows))  # the row's first bin at or above k0
+        m_b = max(m_a, min(pr.size, -((r - k1) // n_rows)))  # ... and its first at or above k1
+        band[r + n_rows * m_a - k0 :: n_rows][: m_b - m_a] = pr[m_a:m_b]
         for i, ks in enumerate(near):
             if ks is not None:
                 mine = ks[(ks - r) % n_rows == 0]
                 if mine.size:
-                    peaks[i] = max(peaks[i], pr[(mine - k_first) // n_rows].max())
+                    peaks[i] = max(peaks[i], pr[(mine - r) // n_rows].max())
     peaks[[ks is None for ks in near]] = np.nan
     return peaks, np.median(band, overwrite_input=True) / np.log(2.0)
 
