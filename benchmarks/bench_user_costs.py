@@ -21,7 +21,8 @@ Rows (``--rows`` picks some):
 * ``pitch8h``: ``vibkit pitch`` of 8 h at 200 Hz (5.76 million rows; ``--quick``: 20 min) against
   ``pandas.read_csv`` of the same file (its process: import and read); peak memory against the samples' bytes,
   whole (the process's peak RSS) and over the interpreter with the command's imports (peak RSS minus that of a
-  process that only imports them and builds one small Dataset);
+  process that only imports them and builds one small Dataset), and the peak of reading the file alone
+  (``vibkit.io.read_recording``) over the same interpreter: where the command's peak is when it is the reader's;
 * ``report``: ``vibkit report`` of the Las Palmas recording with its scene, warm (kernels cached, its simulation
   kept on disk), against the 5 CPU-s a user should wait at most and against what any report imports (the readers'
   packages, one Dataset, matplotlib's PDF backend);
@@ -350,6 +351,7 @@ def main(argv=None):
                     ("pandas", f"import pandas\npandas.read_csv({str(path)!r})\n", None),
                     ("pitch", cli(["pitch", path, "--speed", SPEED, "--json"]), None),
                     ("imports", PITCH_IMPORTS, None),
+                    ("read", PITCH_IMPORTS + f"vibkit.io.read_recording({str(path)!r})\n", None),
                 ],
                 max(1, repeat - 1),
             )
@@ -368,7 +370,9 @@ def main(argv=None):
                     f"target {3 * b + 1:.1f} CPU-s; peak RSS {got['pitch']['rss']:.0f} MB = "
                     f"{got['pitch']['rss'] / samples_mb:.1f} x the samples' {samples_mb:.0f} MB (pandas "
                     f"{got['pandas']['rss']:.0f} MB); over the interpreter with the command's imports "
-                    f"({got['imports']['rss']:.0f} MB): {above:.0f} MB = {above / samples_mb:.1f} x, target <= 4 x",
+                    f"({got['imports']['rss']:.0f} MB): {above:.0f} MB = {above / samples_mb:.1f} x, target <= 4 x; "
+                    f"reading the file alone {got['read']['rss'] - got['imports']['rss']:.0f} MB over it "
+                    f"({got['read']['cpu']:.2f} CPU-s with its imports)",
                 )
             )
 

@@ -147,9 +147,10 @@ def test_vold_kalman_refuses_a_band_past_its_condition_limit():
     assert f"bandwidth_hz >= {bmin:.4g} Hz" in str(err.value)
 
 
-def test_track_phase_in_blocks_is_the_whole_spectrogram_track_bit_for_bit(monkeypatch):
+def test_track_phase_in_blocks_is_the_whole_spectrogram_track(monkeypatch):
     """The coarse ridge's spectrogram and the return to the record's rate run a block at a time (bounded memory on
-    a day-long record): blocks of 4,096 values give the one-block track exactly, and it follows the true tone."""
+    a day-long record): blocks of 4,096 values give the one-block track, bit for bit but for the phase's spline back
+    to the record's rate (within rounding: each block's spline has its own knots), and it follows the true tone."""
     import importlib
 
     orders = importlib.import_module("vibkit.signal.orders")
@@ -160,7 +161,31 @@ def test_track_phase_in_blocks_is_the_whole_spectrogram_track_bit_for_bit(monkey
     whole = orders.track_phase(x, fs, band=(2.5, 6.0))
     monkeypatch.setattr(orders, "SPECTROGRAM_BLOCK_VALUES", 4096)
     blocked = orders.track_phase(x, fs, band=(2.5, 6.0))
-    for name in ("phase_rad", "frequency_hz", "ridge_time_s", "ridge_hz"):
+    for name in ("frequency_hz", "ridge_time_s", "ridge_hz"):
         assert np.array_equal(getattr(blocked, name), getattr(whole, name)), name
+    np.testing.assert_allclose(blocked.phase_rad, whole.phase_rad, rtol=1e-12, atol=0)
     inner = slice(n // 10, -n // 10)  # away from the filters' end effects
     assert np.max(np.abs(blocked.frequency_hz[inner] - f)) < 0.01
+
+
+@pytest.mark.parametrize("q", [2, 3, 7])
+def test_the_spline_back_to_the_record_rate_in_blocks_is_the_whole_spline(q):
+    """Blocks of the output, each from its knots and 64 more each side, give the record-length not-a-knot spline
+    within 1e-12 relative (its end conditions reach a block from 64 knots away by 0.27^64), extrapolated ends
+    included; the linear interpolation in blocks is the whole one bit for bit."""
+    import scipy.interpolate
+
+    from vibkit.signal.orders import _interp_blocks, _spline_blocks
+
+    rng = np.random.default_rng(q)
+    fs_full, n_full = 200.0, 20_003
+    n = -(-n_full // q)  # the decimated samples: every q-th of the record's
+    t = np.arange(n) * q / fs_full
+    freq = 3.75 + 0.05 * np.cumsum(rng.standard_normal(n)) / np.sqrt(n)
+    phase = 2 * np.pi * np.cumsum(freq) * q / fs_full + 0.01 * rng.standard_normal(n)
+    t_full = np.arange(n_full) / fs_full
+    want = scipy.interpolate.CubicSpline(t, phase)(t_full)
+    for block in (1000, 4096, n_full, 10 * n_full):
+        got = _spline_blocks(t, phase, fs_full, n_full, block)
+        np.testing.assert_allclose(got, want, rtol=1e-12, atol=0)
+        assert np.array_equal(_interp_blocks(t, freq, fs_full, n_full, block), np.interp(t_full, t, freq))

@@ -2,7 +2,9 @@
 replace: the harmonic search's Welch spectrum transformed a block of segments at a time (bit for bit, whatever
 the record's length against the block's), the interpolated DFT's frequency without its tone fit (bit for bit),
 and ``exp(1j theta)`` from a cosine and a sine (bit for bit where numpy's cosine and sine are the C library's;
-within an ulp where numpy vectorises them)."""
+within an ulp where numpy vectorises them); scipy's ``sosfiltfilt`` with the filter's initial conditions designed once
+(bit for bit); the quantisation error's variance with its constant factors computed once (bit for bit); the harmonic searches'
+interpolation asked a harmonic at a time (bit for bit)."""
 
 import numpy as np
 import pytest
@@ -61,3 +63,45 @@ def test_expj_is_the_complex_exponential_of_an_imaginary_argument():
         got, ref = expj(theta), np.exp(1j * theta)
         assert got.dtype == ref.dtype and got.shape == ref.shape
         np.testing.assert_allclose(got.view(float), ref.view(float), rtol=0, atol=1e-15)
+
+
+@pytest.mark.parametrize("padtype", ["even", "odd"])
+@pytest.mark.parametrize("n, padlen", [(500, 0), (500, 37), (500, 499), (2, 1), (4097, 300)])
+def test_sosfiltfilt_with_its_initial_conditions_designed_once_is_scipys_bit_for_bit(padtype, n, padlen):
+    import scipy.signal
+
+    from vibkit.signal._checks import filter_with_zi, sosfiltfilt
+
+    x = np.random.default_rng(n + padlen).standard_normal(n).cumsum()
+    for sos in (
+        scipy.signal.butter(4, 7.5, btype="low", fs=200.0, output="sos"),
+        scipy.signal.butter(8, 0.3, btype="low", output="sos"),
+        scipy.signal.butter(2, 0.05, btype="low", output="sos"),
+    ):
+        filt = filter_with_zi(sos)
+        want = scipy.signal.sosfiltfilt(sos, x, padtype=padtype, padlen=padlen)
+        assert np.array_equal(sosfiltfilt(filt, x, padtype=padtype, padlen=padlen), want)
+        assert np.array_equal(sosfiltfilt(filt, x, padtype=padtype, padlen=padlen), want)  # the cached pair unchanged
+    with pytest.raises(ValueError, match="padlen=5 must lie in"):
+        sosfiltfilt(filt, x[:5], padtype="even", padlen=5)
+
+
+def test_the_quantisation_error_variance_with_its_factors_computed_once_is_the_formula_bit_for_bit():
+    from vibkit.signal.quantisation import correlated_error_variance
+
+    k = np.arange(1, 257, dtype=float)
+    for q, s in ((1.0, 0.0), (1.0, 0.3), (0.01, 0.004), (2.5e-6, 1e-7), (3.0, 10.0)):
+        z = (s / q) ** 2
+        terms = q * q / (2.0 * np.pi**2 * k**2) * np.exp(-4.0 * np.pi**2 * k**2 * z)
+        tail = q * q / (2.0 * np.pi**2 * k[-1]) if z == 0 else 0.0
+        assert correlated_error_variance(q, s) == float(terms.sum() + tail)
+
+
+def test_interpolation_a_harmonic_at_a_time_is_the_row_order_one_bit_for_bit():
+    f = np.fft.rfftfreq(4096, 1 / 200.0)
+    p = np.random.default_rng(3).exponential(size=f.size)
+    for cands, h in ((np.arange(2.5, 6.25, 0.004), 25), (np.array([3.75]), 7), (np.arange(0.1, 99.0, 0.37), 3)):
+        hf = cands[:, None] * np.arange(1, h + 1)[None, :]  # reaches past the last bin too (held at its value)
+        got = peaks.interp_by_harmonic(hf, f, p)
+        assert got.flags.c_contiguous and got.shape == hf.shape
+        assert np.array_equal(got, np.interp(hf.ravel(), f, p).reshape(hf.shape))

@@ -29,6 +29,7 @@ from ..signal.bursts import (
 from ..signal.detect import HARMONIC_SPAN, detect_link_pass
 from ..signal.meanfreq import mean_link_pass_frequency
 from ..signal.quantisation import quantisation_step
+from ..signal.spectral import padded_power_rows
 from .decision import DISAGREE_SIGMAS, LinkPassEvidence, nearest_catalogue
 from .speed import speed_part_too_large
 
@@ -63,6 +64,10 @@ SEEN_SNR_DB = 20.0
 SNR_FLOOR_BAND_HZ = (0.2, 50.0)
 #: zero padding of the hypotheses' spectrum (FFT length >= this many times the record)
 SNR_ZERO_PAD = 4
+#: the hypotheses' spectrum is transformed in rows of this many bins when it is longer
+#: (:func:`vibkit.signal.spectral.padded_power_rows`: the same bins within rounding, a few rows in memory instead of
+#: the padded record, its transform and their scratch)
+SNR_ROW_BINS = 1 << 20
 #: power and floor are kept above this in the SNR's logarithm (an empty spectrum is not -inf dB)
 TINY_POWER = 1e-300
 
@@ -532,25 +537,65 @@ class Hypothesis:
     reason: str
 
 
-def _burst_power(b):
-    """One burst's zero-padded Hann power spectrum, its bin spacing [Hz] and its median floor (what :func:`_snr_at`
-    looks up): a function of the burst alone, so computed once for every frequency asked about."""
+def _burst_power(b, freqs):
+    """One burst's zero-padded Hann power spectrum (FFT length :func:`_snr_nfft`) where :func:`_snr_at` looks: its
+    largest power within ``fs / n`` of each of ``freqs`` (NaN where the burst cannot say, as :func:`_snr_at` skips)
+    and its median floor over :data:`SNR_FLOOR_BAND_HZ`; ``(peaks, floor)``, the burst transformed once.
+
+    A spectrum of up to :data:`SNR_ROW_BINS` bins is numpy's ``rfft`` of the padded record, as it always was. A
+    longer one (a day at 200 Hz: 2^25 points, 768 MB for the padded copy, the transform and its scratch) is the
+    same transform taken as rows of the four-step FFT (:func:`vibkit.signal.spectral.padded_power_rows`): the same
+    bins, equal within rounding, one row of :data:`SNR_ROW_BINS` bins in memory at a time, and only the floor band's
+    powers kept.
+    """
     n = b.x.size
-    nfft = 1 << int(np.ceil(np.log2(SNR_ZERO_PAD * n)))
-    # in place where numpy allows it (the same numbers as ``abs(rfft((x - mean) * hann, nfft)) ** 2``): each
-    # temporary of the record's length is freed before the next (a day at 200 Hz: 2^25 points, 268 MB each)
+    nfft = _snr_nfft(n)
+    step = 1.0 / (nfft * (1.0 / b.fs))  # rfftfreq's spacing, as it computes it
+    df = b.fs / n
+    lo, hi = SNR_FLOOR_BAND_HZ
+    k0, k1 = _bins_between(step, nfft // 2 + 1, lo, min(b.fs / 2, hi))
+    # the bins within df of each f (rfftfreq's k * step for the few k near f, the same values it gives)
+    near = []
+    for f in freqs:
+        if f >= b.fs / 2 or n / b.fs * f < 1.0:
+            near.append(None)
+            continue
+        a0 = max(0, int(np.floor((f - df) / step)) - 2)
+        a1 = min(nfft // 2 + 1, int(np.ceil((f + df) / step)) + 3)
+        ks = np.arange(a0, a1)
+        near.append(ks[np.abs(ks * step - f) <= df])
+    # in place where numpy allows it (the same numbers as ``abs(rfft((x - mean) * hann, nfft)) ** 2``)
     y = b.x - b.x.mean()
     y *= np.hanning(n)
-    c = np.fft.rfft(y, nfft)
-    del y
-    p = np.abs(c)
-    del c
-    np.square(p, out=p)
-    step = 1.0 / (nfft * (1.0 / b.fs))  # rfftfreq's spacing, as it computes it
-    lo, hi = SNR_FLOOR_BAND_HZ
-    k0, k1 = _bins_between(step, p.size, lo, min(b.fs / 2, hi))
-    floor = np.median(p[k0:k1]) / np.log(2.0)
-    return p, step, floor
+    if nfft <= SNR_ROW_BINS:
+        c = np.fft.rfft(y, nfft)
+        del y
+        p = np.abs(c)
+        del c
+        np.square(p, out=p)
+        peaks = np.array([np.nan if ks is None else p[ks].max() for ks in near])
+        return peaks, np.median(p[k0:k1]) / np.log(2.0)
+    band = np.empty(k1 - k0)
+    peaks = np.full(len(near), -np.inf)
+    n_rows = nfft // SNR_ROW_BINS
+    for r, pr in padded_power_rows(y, nfft, SNR_ROW_BINS):
+        # bins k = r + n_rows m: the floor band's kept, and those near each f looked at
+        m_a = max(0, -((r - k0) // n_rows))  # the row's first bin at or above k0
+        m_b = max(m_a, min(pr.size, -((r - k1) // n_rows)))  # ... and its first at or above k1
+        band[r + n_rows * m_a - k0 :: n_rows][: m_b - m_a] = pr[m_a:m_b]
+        for i, ks in enumerate(near):
+            if ks is not None:
+                mine = ks[(ks - r) % n_rows == 0]
+                if mine.size:
+                    peaks[i] = max(peaks[i], pr[(mine - r) // n_rows].max())
+    peaks[[ks is None for ks in near]] = np.nan
+    return peaks, np.median(band, overwrite_input=True) / np.log(2.0)
+
+
+def _snr_nfft(n):
+    """The hypotheses' FFT length for a record of ``n`` samples: a power of two, zero padded :data:`SNR_ZERO_PAD`
+    times at least."""
+    return 1 << int(np.ceil(np.log2(SNR_ZERO_PAD * n)))
 
 
 def _bins_between(step, size, lo, hi):
@@ -568,44 +613,41 @@ def _bins_between(step, size, lo, hi):
     return k0, k1
 
 
-def _snr_at(bursts, f, spectra=None):
-    """Mean (over bursts) power near f over the median spectral floor (:data:`SNR_FLOOR_BAND_HZ`) [dB].
-
-    ``spectra``: a dict (burst index -> :func:`_burst_power`) filled and reused across calls on the same bursts, so
-    that asking about several frequencies transforms each burst once (the same numbers as without it).
-    """
-    spectra = {} if spectra is None else spectra
-    vals = []
-    for i, b in enumerate(bursts):
-        n = b.x.size
-        if f >= b.fs / 2 or n / b.fs * f < 1.0:
-            continue
-        if i not in spectra:
-            spectra[i] = _burst_power(b)
-        p, step, floor = spectra[i]
-        df = b.fs / n
-        # the bins within df of f (rfftfreq's k * step for the few k near f, the same values it gives)
-        k0 = max(0, int(np.floor((f - df) / step)) - 2)
-        k1 = min(p.size, int(np.ceil((f + df) / step)) + 3)
-        near = np.abs(np.arange(k0, k1) * step - f) <= df
-        vals.append(10 * np.log10(max(p[k0:k1][near].max(), TINY_POWER) / max(floor, TINY_POWER)))
-    return float(np.mean(vals)) if vals else float("nan")
+def _snr_at(bursts, freqs):
+    """Mean (over bursts) power near each f of ``freqs`` over the median spectral floor
+    (:data:`SNR_FLOOR_BAND_HZ`) [dB], a list; NaN where no burst can say.  Each burst is transformed once for every
+    frequency asked about (:func:`_burst_power`)."""
+    freqs = [float(f) for f in freqs]
+    vals = [[] for _ in freqs]
+    for b in bursts:
+        peaks, floor = _burst_power(b, freqs)
+        for i, pk in enumerate(peaks):
+            if not np.isnan(pk):
+                vals[i].append(10 * np.log10(max(pk, TINY_POWER) / max(floor, TINY_POWER)))
+    return [float(np.mean(v)) if v else float("nan") for v in vals]
 
 
 def hypotheses(bursts, f0, speed, teeth, pitch_range, links_per_step=3):
     """Readings of the chosen peak f and of the periodicities it implies, with the pitch each gives (the step
     pass is the link pass over ``links_per_step``)."""
     lo, hi = pitch_range
-    spectra = {}  # each burst's spectrum, transformed once for every frequency looked up below
-    snr_f = _snr_at(bursts, f0, spectra)
+    k = links_per_step
+    others = (
+        ("f is the 2nd link-pass harmonic", 0.5),
+        ("f is half the link pass", 2.0),
+        (f"f is the step pass ({links_per_step} links)", float(links_per_step)),
+        (f"f is the sprocket shaft (Z = {teeth})", teeth),
+    )
+    expected = ((f"step pass expected at f/{k}", f0 / k), (f"sprocket shaft expected at f/{teeth}", f0 / teeth))
+    # every frequency looked up below, each burst transformed once for all of them
+    snrs = iter(_snr_at(bursts, [f0, f0, *(f0 * factor for _n, factor in others), *(fe for _n, fe in expected)]))
+    snr_f = next(snrs)
     rows = []
 
     def row(name, f_link, chosen, reason):
         p = speed / f_link
         c, dev = nearest_catalogue(p)
-        return Hypothesis(
-            name, float(f_link), _snr_at(bursts, f_link, spectra), float(p), c, float(dev), chosen, reason
-        )
+        return Hypothesis(name, float(f_link), next(snrs), float(p), c, float(dev), chosen, reason)
 
     rows.append(
         row(
@@ -616,12 +658,6 @@ def hypotheses(bursts, f0, speed, teeth, pitch_range, links_per_step=3):
             f"search), {snr_f:z.0f} dB over the floor",
         )
     )
-    others = (
-        ("f is the 2nd link-pass harmonic", 0.5),
-        ("f is half the link pass", 2.0),
-        (f"f is the step pass ({links_per_step} links)", float(links_per_step)),
-        (f"f is the sprocket shaft (Z = {teeth})", teeth),
-    )
     for name, factor in others:
         fl = f0 * factor
         p = speed / fl
@@ -631,9 +667,8 @@ def hypotheses(bursts, f0, speed, teeth, pitch_range, links_per_step=3):
             why = "rejected: less harmonic evidence than f in the family search"
         rows.append(row(name, fl, False, why))
     # what the chosen reading predicts elsewhere in the spectrum
-    k = links_per_step
-    for name, fe in ((f"step pass expected at f/{k}", f0 / k), (f"sprocket shaft expected at f/{teeth}", f0 / teeth)):
-        snr = _snr_at(bursts, fe, spectra)
+    for name, fe in expected:
+        snr = next(snrs)
         seen = (
             "not resolved"
             if math.isnan(snr)

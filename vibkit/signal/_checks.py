@@ -122,14 +122,54 @@ def check_resolution(n: int, fs: float, resolution_hz: float, name: str = "x") -
 
 @functools.lru_cache(maxsize=32)
 def _decimation_sos(fs: float, q: int):
-    """The anti-alias low-pass of :func:`decimate_for_band` (read-only second-order sections), designed once per
-    rate and factor: its cutoff depends on nothing else, and every record of a fleet at one rate asks for the same
-    one (the design cost as much as filtering a 30 s record)."""
+    """The anti-alias low-pass of :func:`decimate_for_band` (read-only second-order sections and their
+    :func:`scipy.signal.sosfilt_zi`), designed once per rate and factor: its cutoff depends on nothing else, and every
+    record of a fleet at one rate asks for the same one (the design cost as much as filtering a 30 s record)."""
     import scipy.signal
 
-    sos = scipy.signal.butter(8, 0.8 * fs / (2.0 * q), btype="low", fs=fs, output="sos")
+    return filter_with_zi(scipy.signal.butter(8, 0.8 * fs / (2.0 * q), btype="low", fs=fs, output="sos"))
+
+
+def filter_with_zi(sos):
+    """``(sos, zi)``, both read-only: second-order sections and their steady-state initial conditions
+    (:func:`scipy.signal.sosfilt_zi`), for :func:`sosfiltfilt` (keep the pair in a cache of the filter's design:
+    ``sosfilt_zi`` solves a small linear system per section, which scipy's own ``sosfiltfilt`` does on every call)."""
+    import scipy.signal
+
+    sos = np.array(sos, dtype=float)
+    zi = scipy.signal.sosfilt_zi(sos)
     sos.flags.writeable = False
-    return sos
+    zi.flags.writeable = False
+    return sos, zi
+
+
+def _even_ext(x, n):
+    """scipy.signal's even extension of a 1-D ``x`` by ``n`` samples each side (the same values)."""
+    return np.concatenate((x[n:0:-1], x, x[-2 : -(n + 2) : -1]))
+
+
+def _odd_ext(x, n):
+    """scipy.signal's odd extension of a 1-D ``x`` by ``n`` samples each side (the same operations)."""
+    return np.concatenate((2 * x[0:1] - x[n:0:-1], x, 2 * x[-1:] - x[-2 : -(n + 2) : -1]))
+
+
+def sosfiltfilt(filt, x, *, padtype, padlen):
+    """:func:`scipy.signal.sosfiltfilt` of a 1-D ``x`` (``padtype`` "even" or "odd", ``padlen < x.size``) with the
+    filter's ``(sos, zi)`` from :func:`filter_with_zi`: scipy's steps (pad, forward from ``zi x[0]``, backward from
+    ``zi y[-1]``, trim) without its ``sosfilt_zi`` per call, so the same numbers bit for bit."""
+    import scipy.signal
+
+    sos, zi = filt
+    sos = sos.copy()  # scipy's filter takes a writable one
+    x = np.asarray(x, dtype=float)
+    if not 0 <= padlen < x.size:
+        raise ValueError(f"padlen={padlen} must lie in [0, {x.size}) for a record of {x.size} samples")
+    ext = (_even_ext if padtype == "even" else _odd_ext)(x, padlen) if padlen > 0 else x
+    zi = zi.reshape(sos.shape[0], 2)
+    y, _zf = scipy.signal.sosfilt(sos, ext, zi=zi * ext[:1])
+    y, _zf = scipy.signal.sosfilt(sos, y[::-1], zi=zi * y[-1:])
+    y = y[::-1]
+    return y[padlen:-padlen] if padlen > 0 else y
 
 
 def decimate_for_band(x, fs: float, f_keep: float, *, oversample: float = 5.0):
@@ -140,13 +180,11 @@ def decimate_for_band(x, fs: float, f_keep: float, *, oversample: float = 5.0):
     to ``f_keep``.  In white noise the Cramer-Rao bound of a frequency is unchanged (noise
     variance and sample count both drop by ``q``).
     """
-    import scipy.signal
 
     q = int(fs // (oversample * f_keep))
     if q < 2:
         return x, fs, 1
     cutoff = 0.8 * fs / (2.0 * q)
-    sos = _decimation_sos(float(fs), q).copy()  # scipy's filter takes a writable one
     padlen = min(x.size - 1, int(6.0 * fs / cutoff))
-    y = scipy.signal.sosfiltfilt(sos, x, padtype="even", padlen=padlen)[::q]
+    y = sosfiltfilt(_decimation_sos(float(fs), q), x, padtype="even", padlen=padlen)[::q]
     return np.ascontiguousarray(y), fs / q, q

@@ -108,12 +108,20 @@ def _score_table(x, fs, band, f_top, threshold_db, quantum=0.0, decimation=1.0):
     return f, pmax, p / noise, df, thr
 
 
+def interp_by_harmonic(hf, f, p):
+    """``np.interp(hf, f, p)`` of a (candidates x harmonics) grid ``hf`` whose columns ascend: numpy's search starts
+    from the previous point's bin, so the points are looked up a column (one harmonic of every candidate) at a time,
+    in ascending order, and the result returned in ``hf``'s (C) order: the same values, each independent of the
+    order asked in, at a third of the cost of row order (a jump across the spectrum at every point)."""
+    return np.ascontiguousarray(np.interp(hf.T.ravel(), f, p).reshape(hf.T.shape).T)
+
+
 def _scores(cands, f, pmax, f_top, thr):
     """Harmonic evidence: sum over multiples up to ``f_top`` of ``max(0, log(p / thr))``."""
     cands = np.asarray(cands, dtype=float)
     hmax = int(f_top // cands.min())
     hf = cands[:, None] * np.arange(1, hmax + 1)[None, :]
-    p = np.interp(hf.ravel(), f, pmax).reshape(hf.shape)
+    p = interp_by_harmonic(hf, f, pmax)
     ev = np.maximum(np.log(np.maximum(p, 1e-300) / thr), 0.0)
     ev[hf > f_top] = 0.0
     return ev.sum(axis=1)

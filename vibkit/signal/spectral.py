@@ -1,4 +1,5 @@
-"""Spectra: amplitude spectrum, the study's power definition, Welch PSD with confidence, spectrogram.
+"""Spectra: amplitude spectrum, the study's power definition, Welch PSD with confidence, spectrogram, and a long
+zero-padded power spectrum in rows of bounded memory.
 
 All functions follow scipy.signal conventions: an array, ``fs`` [Hz], keyword-only options and
 ``axis=-1``.  Output units are stated relative to the input units ``[x]``.
@@ -14,6 +15,7 @@ import scipy.stats
 from numpy.typing import ArrayLike
 
 from ._checks import as_signal, check_fs, check_positive_int, check_window_length, fill_nan
+from .estimate import expj
 
 __all__ = [
     "amplitude_spectrum",
@@ -22,6 +24,7 @@ __all__ = [
     "WelchResult",
     "spectrogram",
     "welch_dof",
+    "padded_power_rows",
 ]
 
 
@@ -364,3 +367,44 @@ def _segments(x, fs, nperseg, noverlap, nan_policy, axis):
     if isinstance(noverlap, bool) or not isinstance(noverlap, (int, np.integer)) or not 0 <= noverlap < nperseg:
         raise ValueError(f"Parameter noverlap={noverlap!r} must be an integer in [0, nperseg={nperseg}).")
     return fs, x, n, nperseg, noverlap
+
+
+def padded_power_rows(y, nfft: int, row_bins: int):
+    """The power ``|rfft(y, nfft)|^2`` of bins ``0 .. nfft / 2`` by rows of the four-step FFT (``nfft = P M``,
+    ``M = row_bins``; ``M`` dividing ``nfft``, ``y.size <= nfft``): for ``r = 0 .. P / 2``, the bins ``k = r + P m``
+    are one ``M``-point FFT of ``sum_l y_l exp(-2 pi i l r / P)`` (``y_l`` the record's ``l``-th block of ``M``
+    samples, zero padded) times ``exp(-2 pi i j r / nfft)`` (``j = 0 .. M - 1``): the DFT's sum split as
+    ``j + M l``; the same row read backwards holds the bins ``k = P - r + P m`` (``y`` is real: bin ``nfft - k`` is
+    bin ``k``'s conjugate).  Yields ``(s, power)`` with ``power[m]`` the bin ``s + P m``, for every residue ``s``
+    of ``P`` and the bins up to ``nfft / 2``; memory is a few rows of ``M`` values, whatever ``nfft``."""
+    y = np.asarray(y, dtype=float)
+    nfft, row_bins = int(nfft), int(row_bins)
+    if y.ndim != 1 or not (0 < row_bins < nfft and nfft % row_bins == 0 and y.size <= nfft):
+        raise ValueError(
+            f"padded_power_rows needs a 1-D record of at most nfft={nfft} samples and a row length dividing nfft "
+            f"(row_bins={row_bins}, record {y.shape})"
+        )
+    return _power_rows(y, nfft, row_bins)
+
+
+def _power_rows(y, nfft, row_bins):
+    """The generator of :func:`padded_power_rows` (its arguments checked)."""
+    n = y.size
+    p_rows = nfft // row_bins
+    blocks = [y[i : i + row_bins] for i in range(0, n, row_bins)]
+    j = np.arange(row_bins, dtype=float)
+    for r in range(p_rows // 2 + 1):
+        acc = np.zeros(row_bins, dtype=complex)
+        for ell, blk in enumerate(blocks):
+            w = complex(np.cos(2.0 * np.pi * ell * r / p_rows), -np.sin(2.0 * np.pi * ell * r / p_rows))
+            acc[: blk.size] += w * blk
+        acc *= expj((-2.0 * np.pi * r / nfft) * j)
+        c = np.fft.fft(acc)
+        del acc
+        pw = np.abs(c)
+        del c
+        np.square(pw, out=pw)
+        yield r, pw[: (nfft // 2 - r) // p_rows + 1]
+        if 0 < 2 * r < p_rows:  # bin P - r + P m is bin nfft - (P - r + P m) = r + P (M - 1 - m) conjugated
+            s = p_rows - r
+            yield s, pw[::-1][: (nfft // 2 - s) // p_rows + 1]
