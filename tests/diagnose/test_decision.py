@@ -41,7 +41,7 @@ def _rec(channels, fs=FS, attrs=None):
 
 
 def _issue_cases():
-    """The issue's chain-free records: 60 s at 200 Hz, 1e-4 noise."""
+    """Chain-free records: 60 s at 200 Hz, 1e-4 noise."""
     n = int(60 * FS)
     t = np.arange(n) / FS
     rng = np.random.default_rng(18)

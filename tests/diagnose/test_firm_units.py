@@ -1,6 +1,6 @@
 """A maintenance firm's own units, end to end through the command line: three profiles written from the docs alone
 (a down-running metro escalator of 101.6 mm chain, 4 links a step, 25 teeth and the drawings' 408 links; an
-inclined 12 deg pallet walk; a 40 m level walk at 0.75 m/s) and tensioner recordings made without vibkit's
+inclined 12 deg pallet walk; a 20 m level walk at 0.75 m/s) and tensioner recordings made without vibkit's
 simulator, from the chain's kinematics: the link pass at v / p and its second harmonic, one worn link's loop-period
 signature where `links` is to find it, white noise. `scene`, `simulate --check`, `pitch`, `links`, `report`,
 `fleet add/status/report` each give a result that matches the synthesised truth within its stated sigma, or a
@@ -49,9 +49,9 @@ kind = "tensioner"
 """
 
 LEVEL = """[escalator]
-unit = "W40"
+unit = "W20"
 site = "Airport, pier B"
-description = "horizontal pallet walk, 40 m"
+description = "horizontal pallet walk, 20 m"
 
 [drive]
 speed = 0.75
@@ -63,7 +63,7 @@ nominal_pitch = 0.13333
 links_per_step = 3          # links per pallet
 
 [geometry]
-length = 40.0               # [m] between the heads' axles
+length = 20.0               # [m] between the heads' axles
 incline_deg = 0
 
 [sensor]
@@ -100,7 +100,7 @@ EXCESS = 1e-3  # [m]: the worn link's excess pitch
 #: name: (profile, speed [m/s], nominal pitch [m], teeth, direction, the chain's true links, the worn link or None)
 UNITS = {
     "metro": (METRO, 0.65, 0.1016, 25, "down", 408, 100),
-    "level": (LEVEL, 0.75, 0.13333, 25, "up", 624, 200),  # 624: the whole pallets that close 40 m (the docs' walk)
+    "level": (LEVEL, 0.75, 0.13333, 25, "up", 324, 200),  # 43.34 m of loop: 325.1 links, 108 whole pallets of 3
     "inclined": (INCLINED, 0.5, 0.13333, 23, "up", 267, None),  # a healthy chain: nothing to flag
 }
 
@@ -132,7 +132,7 @@ def tensioner_csv(path, *, speed, pitch, n_links, teeth, direction, worn, loops,
 
 @pytest.fixture(scope="module")
 def units(tmp_path_factory):
-    """Each unit's profile and a recording of 3.2 loops (the level walk's loop is 112 s)."""
+    """Each unit's profile and a recording of 3.2 loops (the level walk's loop is 58 s)."""
     d = tmp_path_factory.mktemp("firm")
     out = {}
     for name, (text, speed, pitch, teeth, direction, n, worn) in UNITS.items():
@@ -167,7 +167,7 @@ def test_scene_builds_the_unit_the_drawings_describe(run, units, name):
     assert out.startswith("# The scene of " + ("escalator" if name == "metro" else "moving walk"))
     if name != "metro":
         # a walk: the heads' axles 'length' apart in plan
-        assert scene.guide.sprocket_centre[0] == pytest.approx(40.0 if name == "level" else 16.0, abs=1e-6)
+        assert scene.guide.sprocket_centre[0] == pytest.approx(20.0 if name == "level" else 16.0, abs=1e-6)
 
 
 def test_a_drawn_count_that_cannot_close_is_refused_naming_the_keys(run, units, tmp_path):
@@ -280,7 +280,7 @@ def test_fleet_of_the_firms_units(run, units, tmp_path):
     rc, out, err = run("fleet", "status", "--db", db, "--json")
     assert rc == 0, err
     units_ = {u["unit"]: u for u in json.loads(out)["units"]}
-    assert set(units_) == {"M7", "W40", "W12"}
+    assert set(units_) == {"M7", "W20", "W12"}
     m7 = units_["M7"]
     rate, sigma = m7["slope_percent_per_year"], m7["slope_sigma_percent_per_year"]
     assert m7["n_measurements"] == 4 and abs(rate - 0.5) < 2 * sigma

@@ -1,6 +1,6 @@
 """A phone on a step, or held by someone standing on one: read as phone apps export it, its ride placed where its
-link-pass line is, and no ride invented from the integral of its noise (issue 48's firm files: `ride` reported
-10.3 s at -0.069 m/s on an up escalator from noise)."""
+link-pass line is, and no ride invented from the integral of its noise (a firm's phone files, 120 s in phyphox's layout:
+`ride` once reported 10.3 s at -0.069 m/s on an up escalator from noise)."""
 
 import io
 import json
@@ -27,7 +27,7 @@ META = {
 
 def _phone_on_a_step(seed, *, f=3.75, duration=120.0, fs=100.0, noise=0.05):
     """A phone lying on a step for a whole ride of a unit (phyphox's layout; its clock jitters by 0.5 ms): the link
-    pass with a harmonic on x and z, weak on y, and no vertical motion at all, as the issue's firm files."""
+    pass with a harmonic on x and z, weak on y, and no vertical motion at all, as a firm's units' phone files have it."""
     rng = np.random.default_rng(seed)
     t = np.sort(np.arange(0.0, duration, 1.0 / fs) + rng.normal(0.0, 5e-4, int(duration * fs)))
     ph = 2 * np.pi * f * t
@@ -82,7 +82,7 @@ def test_a_raw_data_file_of_another_sensor_is_no_accelerometer(tmp_path):
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_ride_of_a_phone_on_a_step_is_where_its_line_is(tmp_path, capsys, seed):
-    """Three units' phone files with the link pass all through and no climb (the issue's firm files): the ride is
+    """Three units' phone files with the link pass all through and no climb (a firm's phone files): the ride is
     the line's span (all of the record but the second trimmed at each end), placed by the line and said so, with
     no vertical speed read from the integral of the noise (the old detector found 10.3 s at -0.069 m/s)."""
     z = _zip(tmp_path / f"unit{seed}.zip", {"Accelerometer.csv": _csv(PHYPHOX_ACC, _phone_on_a_step(seed)), **META})

@@ -81,7 +81,7 @@ def test_the_quantity_is_the_readers_never_the_spelling_of_a_unit():
 
 
 def test_each_channels_warning_is_its_own():
-    """The issue's unit: a tensioner LVDT and a phone.  The phone's estimate warns that a step's link pass reads off
+    """A unit with a tensioner LVDT and a phone.  The phone's estimate warns that a step's link pass reads off
     the chain's; the LVDT's does not (before, one [sensor] said "step" of every channel)."""
     rec = _unit_recording()
     settings = resolve_settings(rec, profile=parse_profile(BOTH))

@@ -285,7 +285,7 @@ def test_version_1_sqlite_file_is_upgraded_and_flagged(tmp_path):
         (tr,) = db.status()
     assert [m.quality for m in ms] == ["ok", "implausible", "implausible"]
     assert "physical window" in ms[2].quality_reason and not any(m.replaced for m in ms)
-    # the unit: no -112 %/year trend, the two impossible points flagged
+    # a unit with two impossible points: no -112 %/year trend, both flagged
     assert tr.slope_percent_per_year is None and tr.latest_elongation_percent == 3.8 and len(tr.flagged) == 2
     con = sqlite3.connect(p)
     assert con.execute("PRAGMA user_version").fetchone()[0] == 5

@@ -123,7 +123,7 @@ def test_the_preload_keeps_the_coasting_margin_where_the_driven_chain_is_slackes
     """Without resistance the preload is the coasting rule's (twice the strand's weight, at least 3.06 kN); with
     it, the tension entering the lower head, (preload - the head's resistance) / 2, less the slack strand's deficit,
     is at least the coasting rule's half: the margin is kept where the tension is least.  The coasting rule alone
-    would leave a 40 m level walk's slack strand in compression at the sprocket (the issue's walk)."""
+    would leave a 40 m level walk's slack strand in compression at the sprocket (the guide's walk)."""
     for name in UNITS:
         f = _Filled(_profile(name))
         a = math.radians(f.incline_deg)

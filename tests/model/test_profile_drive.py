@@ -1,4 +1,4 @@
-"""A profile's scene drives its chain as a real unit's drive does (issue 49, item 3): a running resistance, the
+"""A profile's scene drives its chain as a real unit's drive does: a running resistance, the
 profile's ``drive.no_load_power`` where it states one, else TfL's typical figure (2 kW of friction on a 15 m escalator
 at 0.75 m/s: 88.9 N per metre of loop), and a PI drive, so that once at speed the sprocket's teeth always carry the
 chain; the drive power the simulation gives (torque x angular speed) is the stated or typical one; the solver's

@@ -17,6 +17,7 @@ import argparse
 import errno
 import sys
 
+from vibkit.runtime.duck_arrays import no_dask_arrays
 from vibkit.runtime.reader_options import flag_spelling
 
 from . import bench, compare, datasets, fleet, links, pitch, report, ride, rides, scene, simulate, spectrum, sweep
@@ -27,6 +28,9 @@ __all__ = ["main"]
 
 # in the order ``vibkit --help`` lists them
 COMMANDS = (simulate, scene, spectrum, pitch, links, compare, report, sweep, ride, rides, fleet, datasets, bench)
+#: the commands that build xarray Datasets of numpy arrays only, never of dask arrays: xarray is told so
+#: (:func:`vibkit.runtime.duck_arrays.no_dask_arrays`) and does not import dask to find out
+NUMPY_ONLY = frozenset({"simulate", "spectrum", "pitch", "links", "compare", "report", "ride", "rides"})
 
 
 class _Parser(argparse.ArgumentParser):
@@ -96,6 +100,8 @@ def main(argv=None) -> int:
     try:
         # SIGTERM runs the same clean-up as Ctrl-C; the reader names its options as their flags
         with handle_termination(), flag_spelling():
+            if args.command in NUMPY_ONLY:
+                no_dask_arrays()
             status = int(args.func(args))
             if sys.stdout is not None:  # None: started with stdout closed (>&-)
                 sys.stdout.flush()  # a closed pipe is found here, not at the interpreter's exit
