@@ -138,3 +138,35 @@ def test_a_kernel_is_cached_when_its_index_is_in_the_modules_pycache(tmp_path, m
     st = os.stat(module)
     index.write_bytes(pickle.dumps("0.59.1") + pickle.dumps(((st.st_mtime, st.st_size), {})))
     assert kernel_cached(str(module), "rhs") and not kernel_cached(str(module), "table_delta")
+
+
+def test_a_kernel_numba_itself_cached_is_known_cached_and_an_edit_makes_it_cold(tmp_path, monkeypatch):
+    """Against numba's own index, whatever its stamp (a digest of the source from numba 0.68 on, its modification
+    time and size before): a kernel compiled with ``cache=True`` is cached; the source edited, it is not (numba would
+    compile again), so a command says "compiling" exactly when it will."""
+    import os
+    import subprocess
+    import sys
+    import textwrap
+
+    from vibkit.runtime import kernel_cache
+    from vibkit.runtime.kernel_cache import kernel_cached
+
+    monkeypatch.delenv("NUMBA_CACHE_DIR", raising=False)
+    monkeypatch.setitem(kernel_cache._STATE, "dir", None)
+    module = tmp_path / "tiny_kernel.py"
+    module.write_text("import numba\n\n\n@numba.njit(cache=True)\ndef kern(x):\n    return x + 1.0\n")
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
+    run = textwrap.dedent(
+        f"""
+        import sys
+        sys.path.insert(0, {str(tmp_path)!r})
+        import tiny_kernel
+        assert tiny_kernel.kern(1.0) == 2.0
+        """
+    )
+    assert not kernel_cached(str(module), "kern")
+    subprocess.run([sys.executable, "-c", run], check=True, env=env, cwd=tmp_path)
+    assert kernel_cached(str(module), "kern") and not kernel_cached(str(module), "other")
+    module.write_text(module.read_text() + "\n# edited\n")
+    assert not kernel_cached(str(module), "kern")

@@ -19,6 +19,7 @@ case needs it, so ``vibkit --version`` stays cheap.
 
 from __future__ import annotations
 
+import hashlib
 import os
 import pickle
 import stat
@@ -190,16 +191,20 @@ def cache_dir() -> str | None:
 
 
 def _index_current(index_path: str, source: str) -> bool:
-    """Whether numba's index file was written for the source as it is now: numba keeps an index whose stamp (the
-    source's modification time and size) differs from the file's as no cache at all, and compiles again."""
+    """Whether numba's index file was written for the source as it is now: numba keeps an index whose stamp differs
+    from the source's as no cache at all, and compiles again.  The stamp is the SHA-256 digest of the source's bytes
+    (numba 0.68 and later, numba pull request 10659), or its modification time and size (earlier numba)."""
     try:
         with open(index_path, "rb") as f:
             pickle.load(f)  # numba's version
             stamp, _overloads = pickle.loads(f.read())
+        if isinstance(stamp, bytes):
+            with open(source, "rb") as f:
+                return stamp == hashlib.sha256(f.read()).digest()
         st = os.stat(source)
+        return tuple(stamp) == (st.st_mtime, st.st_size)
     except Exception:  # an index numba itself could not read is no cache either
         return False
-    return tuple(stamp) == (st.st_mtime, st.st_size)
 
 
 def kernel_cached(module_file: str, qualname: str) -> bool:
