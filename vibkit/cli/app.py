@@ -20,14 +20,29 @@ import sys
 from vibkit.runtime.duck_arrays import no_dask_arrays
 from vibkit.runtime.reader_options import flag_spelling
 
-from . import bench, compare, datasets, fleet, links, pitch, report, ride, rides, scene, simulate, spectrum, sweep
+from . import (
+    bench,
+    compare,
+    datasets,
+    fleet,
+    links,
+    pitch,
+    report,
+    ride,
+    rides,
+    scene,
+    simulate,
+    spectrum,
+    sweep,
+    warm,
+)
 from .options import plain_message
 from .output import UsageError, color, msg
 
 __all__ = ["main"]
 
 # in the order ``vibkit --help`` lists them
-COMMANDS = (simulate, scene, spectrum, pitch, links, compare, report, sweep, ride, rides, fleet, datasets, bench)
+COMMANDS = (simulate, scene, spectrum, pitch, links, compare, report, sweep, ride, rides, fleet, datasets, warm, bench)
 #: the commands that build xarray Datasets of numpy arrays only, never of dask arrays: xarray is told so
 #: (:func:`vibkit.runtime.duck_arrays.no_dask_arrays`) and does not import dask to find out
 NUMPY_ONLY = frozenset({"simulate", "spectrum", "pitch", "links", "compare", "report", "ride", "rides"})
