@@ -377,6 +377,28 @@ def test_a_lifts_climb_just_outside_the_still_span_refuses_its_line():
     assert found.rides == () and len(found.refused) == 1
 
 
+def test_a_pressure_wave_beside_a_ride_that_climbs_as_an_escalator_keeps_the_ride():
+    """A 40 s ride up at 0.25 m/s, and 4 s after it a train's pressure wave (the barometer's altitude swings by 3 m
+    and back over 4 s: a 4 s slope of about 0.75 m/s).  The span itself climbs steadily as an escalator does and the
+    fast slope lies wholly outside it: a ride, not a lift.  The same wave beside a span that stands still (a lift's
+    car at a floor) still refuses its line."""
+    f0, vz, stand = 3.75, 0.25, 40.0
+
+    def wave(tb):
+        return 3.0 * np.clip(1.0 - np.abs(tb - 56.0) / 2.0, 0.0, None)  # 54-58 s: up 3 m and down again
+
+    def ride(tb):
+        return vz * np.clip(tb - 10.0, 0.0, stand) + wave(tb)
+
+    found = find_rides(_walk_stand_walk(3, _tone(f0), stand_s=stand, altitude=ride), nominal_pitch=0.13333)
+    assert len(found.rides) == 1 and not found.refused
+    r = found.rides[0]
+    assert r.direction == "up" and abs(r.vertical_speed_m_s - vz) < 3 * r.vertical_speed_sigma_m_s
+    assert r.vertical_speed_max_m_s > 0.45  # the wave was seen, and judged
+    standing = find_rides(_walk_stand_walk(3, _tone(f0), stand_s=stand, altitude=wave), nominal_pitch=0.13333)
+    assert standing.rides == () and len(standing.refused) == 1
+
+
 def test_a_level_ride_is_kept_and_flagged():
     """A level moving walk: the line with a flat barometer and no lift's climb near it is a ride, its direction level,
     flagged as what the barometer cannot rule out (a machine standing still)."""

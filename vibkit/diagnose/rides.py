@@ -192,6 +192,21 @@ def _vertical(ds, t0, t1):
     return vz, sigma, rise, math.hypot(sigma * (t1 - t0), vz * 1.0), source
 
 
+#: the least steady climb [m/s] that tells a ride from standing in a lift at a floor: the eight ADVIO rides climb
+#: 0.12-0.29 m/s, a lift standing at a floor climbs nothing (its still spans read under 0.05 m/s)
+_ESCALATOR_VZ_MIN = 0.1
+
+
+def _climbs_as_an_escalator(ds, t0, t1, fast_at):
+    """Whether the still span t0..t1 itself climbs as an escalator does (a steady 0.1-0.45 m/s, four sigmas from
+    standing) while the fast climb near it (its 4 s window about ``fast_at``) lies wholly outside it: a pressure wave
+    (a train, a door) beside a real ride, not a lift, whose car stands at a floor while its line is on."""
+    if fast_at is None or t0 - _SLOPE_WINDOW_S / 2 < fast_at < t1 + _SLOPE_WINDOW_S / 2:
+        return False
+    vz, vz_s, *_ = _vertical(ds, t0, t1)
+    return vz is not None and _ESCALATOR_VZ_MIN <= abs(vz) <= _ESCALATOR_VZ_MAX and abs(vz) > 4 * vz_s
+
+
 def _fastest_climb(ds, t0, t1):
     """(the barometer's largest |vertical speed| [m/s] over 4 s windows stepped by a second within t0..t1, the time
     [s] of that window's middle), or (None, None) without a barometer."""
@@ -296,7 +311,7 @@ def find_rides(
         # a lift: its car may hum steadily near a chain's link pass, and a person stands still in it; its climb (about
         # 1 m/s, faster than any escalator's) falls within the still span or just before or after it
         fast, at = _fastest_climb(recording, t0 - _LIFT_MARGIN_S, t1 + _LIFT_MARGIN_S)
-        if fast is not None and fast > _ESCALATOR_VZ_MAX:
+        if fast is not None and fast > _ESCALATOR_VZ_MAX and not _climbs_as_an_escalator(recording, start, t1, at):
             why = (
                 f"a lift, not an escalator: the barometer's vertical speed reaches {fast:.2f} m/s (over 4 s about "
                 f"{at:.0f} s, within {_LIFT_MARGIN_S:.0f} s of the still span), faster than any escalator climbs "
