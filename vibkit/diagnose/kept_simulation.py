@@ -23,13 +23,12 @@ import json
 import platform
 import sys
 from importlib import metadata
-from pathlib import Path
 
 import numpy as np
 import xarray as xr
 
 from .. import __version__
-from ..runtime.user_cache import MAX_BYTES, load_blob, private_folder, store_blob
+from ..runtime.user_cache import MAX_BYTES, code_fingerprint, load_blob, private_folder, store_blob
 
 __all__ = ["simulate_kept", "run_key"]
 
@@ -61,13 +60,8 @@ def simulate_kept(scene, *, duration=None, progress=False) -> xr.Dataset:
 
 @functools.cache
 def _code_fingerprint() -> str:
-    """SHA-256 of the sources a simulation depends on (:data:`CODE` and this module)."""
-    root = Path(__file__).resolve().parents[1]
-    h = hashlib.sha256()
-    files = [f for sub in CODE for f in sorted((root / sub).rglob("*.py"))] + [Path(__file__).resolve()]
-    for f in files:
-        h.update(str(f.relative_to(root)).encode() + b"\0" + f.read_bytes())
-    return h.hexdigest()
+    """The sources a simulation depends on (:data:`CODE` and this module)."""
+    return code_fingerprint(CODE, __file__)
 
 
 def _version(package: str) -> str:

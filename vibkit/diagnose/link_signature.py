@@ -21,7 +21,15 @@ import math
 import numpy as np
 
 from ..model.scene import load_scene
-from ..runtime.user_cache import load_blob, private_folder, private_temp_folder, read_checked, store_blob, write_atomic
+from ..runtime.user_cache import (
+    code_fingerprint,
+    load_blob,
+    private_folder,
+    private_temp_folder,
+    read_checked,
+    store_blob,
+    write_atomic,
+)
 from ..signal.linkmap import canonical_phase, link_map, link_pass_phase
 from .sensors import SIGNATURES
 
@@ -169,17 +177,9 @@ def _simulate_run_map(scene, sensor, speed, fs, samples_per_cycle, excess, loops
 
 @functools.cache
 def _code_fingerprint():
-    """SHA-256 of the sources a run's map depends on (the model, the analyses, the signal layer and this module):
-    a kept run is used only by the code that made it."""
-    import hashlib
-    from pathlib import Path
-
-    root = Path(__file__).resolve().parents[1]
-    h = hashlib.sha256()
-    for path in [*(sorted((root / sub).glob("*.py")) for sub in ("model", "analyses", "signal")), [Path(__file__)]]:
-        for f in path:
-            h.update(f.name.encode() + b"\0" + f.read_bytes())
-    return h.hexdigest()
+    """The sources a run's map depends on (the model, the analyses, the signal layer and this module): a kept run is
+    used only by the code that made it."""
+    return code_fingerprint(("model", "analyses", "signal"), __file__)
 
 
 def _run_key(scene, sensor, speed, fs, samples_per_cycle, excess, loops):

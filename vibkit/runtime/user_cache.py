@@ -28,6 +28,7 @@ from pathlib import Path
 
 __all__ = [
     "cache_root",
+    "code_fingerprint",
     "private_folder",
     "private_temp_folder",
     "read_checked",
@@ -172,3 +173,16 @@ def load_blob(folder: Path, key: str, suffix: str = ".bin") -> bytes | None:
         return None
     want = f"{hashlib.sha256(key.encode()).hexdigest()} {hashlib.sha256(payload).hexdigest()}".encode()
     return payload if head == want else None
+
+
+def code_fingerprint(subpackages, *files) -> str:
+    """SHA-256 of vibkit's sources that a kept result depends on: every module of ``subpackages`` (names under
+    ``vibkit/``, their sub-packages included) and ``files`` (paths), each with its path under ``vibkit/``.  A key that
+    carries it serves a kept result only to the code that made it."""
+    root = Path(__file__).resolve().parents[1]
+    paths = [f for sub in subpackages for f in sorted((root / sub).rglob("*.py"))]
+    paths += [Path(f).resolve() for f in files]
+    h = hashlib.sha256()
+    for f in paths:
+        h.update(str(f.relative_to(root)).encode() + b"\0" + f.read_bytes())
+    return h.hexdigest()
