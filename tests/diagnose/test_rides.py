@@ -479,3 +479,38 @@ def test_the_real_rides_barometer_agrees_with_the_malls_floors(seq):
         after = np.median(z[(t > r.end_s + 4) & (t < r.end_s + 9)])
         assert abs(r.rise_m - (after - before)) < 3 * r.rise_sigma_m + 0.1, (r.start_s, r.rise_m, after - before)
         assert 20.0 < r.incline_deg < 35.0 and r.incline_sigma_deg < 5.0
+
+
+@needs_real
+def test_a_sequence_folder_reads_its_phone_subfolder():
+    """ADVIO's sequence folder holds the phone's export in ``iphone/`` beside ``ground-truth/``: named as a stranger
+    names it, it reads as that export (it was refused as "a folder, expected a file")."""
+    ds = vibkit.read_recording(REAL / "advio-04")
+    ref = vibkit.read_recording(REAL / "advio-04" / "iphone")
+    np.testing.assert_array_equal(ds["acc_z"].values, ref["acc_z"].values)
+    assert "iphone/ read" in ds.attrs["history"]
+
+
+def test_a_folder_without_an_accelerometer_says_so_in_one_line(tmp_path, capsys):
+    """A folder that holds a gyroscope's and a barometer's files but no accelerometer's, an empty folder, and a
+    folder of two phones' exports: each refused with a one-line message naming what was expected, the CLI non-zero."""
+    t = np.arange(0, 20, 0.01)
+    (tmp_path / "nogyro").mkdir()
+    np.savetxt(tmp_path / "nogyro" / "gyro.csv", np.c_[t, 0 * t, 0 * t, 0 * t], delimiter=",")
+    np.savetxt(tmp_path / "nogyro" / "barometer.csv", np.c_[t[::100], 100 + 0 * t[::100]], delimiter=",")
+    (tmp_path / "empty").mkdir()
+    for phone in ("a", "b"):
+        (tmp_path / "two" / phone).mkdir(parents=True)
+        acc = np.c_[t, 0 * t, 0 * t, 9.81 + 0 * t]
+        np.savetxt(tmp_path / "two" / phone / "accelerometer.csv", acc, delimiter=",")
+    expected = {
+        "nogyro": "no accelerometer file (barometer.csv, gyro.csv); expected accelerometer.csv",
+        "empty": "no phone sensor files (empty); expected a recording file, or a phone export's folder",
+        "two": "is a folder of 2 phone exports (a, b): give one of them",
+    }
+    for name, message in expected.items():
+        with pytest.raises(RecordingError, match=message.replace("(", r"\(").replace(")", r"\)")):
+            vibkit.read_recording(tmp_path / name)
+        assert main(["rides", str(tmp_path / name)]) != 0
+        err = capsys.readouterr().err
+        assert message in err and len(err.strip().splitlines()) == 1 and "Traceback" not in err

@@ -33,7 +33,7 @@ from .channels import resolve_channel
 from .errors import RecordingError
 from .limits import _MAX_ENV, DEFAULT_MAX_RECORDING_BYTES, _gib, max_recording_bytes
 from .netcdf import write_result
-from .phone import is_phone_export, read_phone_export
+from .phone import phone_export_folder, read_phone_export
 from .registry import NETCDF_SUFFIXES, SEISMIC_SUFFIXES, detect_format, format_names, get_format
 
 if TYPE_CHECKING:  # for the annotations only: importing vibkit.io stays cheap
@@ -358,8 +358,22 @@ def read_recording(
     spath = os.fspath(path)
     if spath == STDIN:
         return _read_stdin(fmt, max_recording_bytes(max_bytes), options)
-    if os.path.isdir(spath) and is_phone_export(os.listdir(spath), head=lambda name: _head(spath, name)):
-        return read_phone_export(spath, options)
+    if os.path.isdir(spath):
+        folder = phone_export_folder(spath, _head)
+        if folder is None:
+            listed = ", ".join(sorted(os.listdir(spath))[:8]) or "empty"
+            raise RecordingError(
+                spath,
+                None,
+                f"is a folder with no phone sensor files ({listed}); expected a recording file, or a phone export's "
+                "folder or zip (accelerometer.csv, gyro.csv, barometer.csv ...)",
+            )
+        ds = read_phone_export(folder, options)
+        if folder != spath:
+            ds.attrs["history"] = f"folder {spath}: its phone export {os.path.basename(folder)}/ read\n" + str(
+                ds.attrs.get("history", "")
+            )
+        return ds
     data = _open_checked(spath, max_recording_bytes(max_bytes))
     if not data:
         raise RecordingError(spath, None, "file is empty (0 bytes); expected a recording")

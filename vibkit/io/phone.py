@@ -170,6 +170,36 @@ def _barometer(ds, label, history):
     return pressure, altitude
 
 
+def phone_export_folder(path, head):
+    """The folder of a phone export that ``path`` (a folder) names: itself where it holds phone sensor files, else its
+    one subfolder that holds an accelerometer's file (ADVIO's sequence folder: ``iphone/`` beside ``ground-truth/``,
+    ``pixel/`` and ``tango/``); None where neither does.  ``head(folder, name) -> bytes`` as for
+    :func:`phone_sensor_files`.  A folder with several such subfolders is refused, naming them."""
+    listing = os.listdir(path)
+    names = [n for n in listing if os.path.isfile(os.path.join(path, n))]
+    if phone_sensor_files(names, lambda name: head(path, name), phyphox=_is_phyphox(listing)):
+        return path
+    subs = []
+    for d in sorted(os.listdir(path)):
+        sub = os.path.join(path, d)
+        if os.path.isdir(sub) and not d.startswith("."):
+            try:
+                inner = os.listdir(sub)
+            except OSError:
+                continue
+            files = [n for n in inner if os.path.isfile(os.path.join(sub, n))]
+            found = phone_sensor_files(files, lambda name, sub=sub: head(sub, name), phyphox=_is_phyphox(inner))
+            if "accelerometer" in found:
+                subs.append(d)
+    if len(subs) > 1:
+        raise RecordingError(
+            path,
+            None,
+            f"is a folder of {len(subs)} phone exports ({', '.join(subs)}): give one of them as the recording",
+        )
+    return os.path.join(path, subs[0]) if subs else None
+
+
 def read_phone_export(path, options=None):
     """Read a folder or zip archive of phone sensor files as one recording (see the module's notes)."""
     options = dict(options or {})
