@@ -99,6 +99,8 @@ def test_every_ride_found_in_the_phone_folder(seq):
         # 0.5 m/s escalators (EN 115-1: within 5 %) at 133.33 mm
         assert 0.47 < ride.speed_m_s < 0.54
         assert 0.15 < abs(ride.vertical_speed_m_s) < 0.35
+        # one line in each of these rides (its harmonics are no other line)
+        assert ride.other_line_hz is None
 
 
 @needs_real
@@ -479,6 +481,21 @@ def test_the_real_rides_barometer_agrees_with_the_malls_floors(seq):
         after = np.median(z[(t > r.end_s + 4) & (t < r.end_s + 9)])
         assert abs(r.rise_m - (after - before)) < 3 * r.rise_sigma_m + 0.1, (r.start_s, r.rise_m, after - before)
         assert 20.0 < r.incline_deg < 35.0 and r.incline_sigma_deg < 5.0
+
+
+def test_another_steady_line_beside_the_reported_one_is_said():
+    """A ride holding two steady lines not harmonically related (3.9 Hz and 6.1 Hz, as a real down ride held its
+    link pass and another machine's line): one is reported, the other named beside it (a note and ``other_line_hz``),
+    since the record cannot tell which is the chain's; a line's own second harmonic is no other line."""
+    found = find_rides(_walk_stand_walk(5, lambda t: _tone(3.9)(t) + _tone(6.1, 0.04)(t), stand_s=30.0))
+    assert len(found.rides) == 1
+    r = found.rides[0]
+    lines = sorted([r.link_pass_hz, r.other_line_hz])
+    assert abs(lines[0] / 3.9 - 1) < 0.005 and abs(lines[1] / 6.1 - 1) < 0.005
+    assert any("another steady line" in n for n in found.notes)
+    found = find_rides(_walk_stand_walk(5, lambda t: _tone(3.9)(t) + _tone(7.8, 0.04)(t), stand_s=30.0))
+    assert len(found.rides) == 1 and found.rides[0].other_line_hz is None
+    assert not any("another steady line" in n for n in found.notes)
 
 
 @needs_real

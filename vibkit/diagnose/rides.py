@@ -91,6 +91,8 @@ class Ride:
     rise_sigma_m: float | None = None
     incline_sigma_deg: float | None = None
     flag: str | None = None  # what the barometer cannot rule out (a level ride, or no barometer)
+    other_line_hz: float | None = None  # another steady line in the band, not a harmonic of the link pass
+    other_line_db: float | None = None
 
     @property
     def duration_s(self) -> float:
@@ -307,6 +309,7 @@ def find_rides(
         # before stepping on: the line's first window less the second trimmed), and ends where walking resumes (people
         # walk off an escalator; the line of a step flattening into the landing fades before they do)
         start = t0 if j0 == 0 else max(t0, float(tu[i0 + j0]) - trim_s)
+        span = x[:, i0:i1]  # the still span less stepping on and off: where another line is looked for
         i0, i1 = i0 + j0, i0 + j1
         # a lift: its car may hum steadily near a chain's link pass, and a person stands still in it; its climb (about
         # 1 m/s, faster than any escalator's) falls within the still span or just before or after it
@@ -331,9 +334,23 @@ def find_rides(
             verdicts.append((t0, t1, f"refused: a steady line at {line.frequency_hz:.3f} Hz, but {why}"))
             continue
         ride = _ride(recording, line, names, start, t1, nominal_pitch, rated_speed)
+        other = _other_line(span, fs, band, line.frequency_hz, p_fa)
+        if other is not None:
+            notes.append(
+                f"ride {start:.1f}-{t1:.1f} s: another steady line at {other.frequency_hz:.3f} Hz "
+                f"({other.level_db:.1f} dB, p <= {other.p_value:.2g}) beside the one reported at {line.frequency_hz:.3f} Hz "
+                f"({line.level_db:.1f} dB), not a harmonic of it: which is the chain's link pass the record cannot tell "
+                "(another machine's line, a drive chain); give --nominal-pitch and --speed, or --band, to search near the "
+                "chain's"
+            )
         rides.append(
             dataclasses.replace(
-                ride, line_start_s=float(tu[i0]), line_end_s=float(tu[i1 - 1]), vertical_speed_max_m_s=fast
+                ride,
+                line_start_s=float(tu[i0]),
+                line_end_s=float(tu[i1 - 1]),
+                vertical_speed_max_m_s=fast,
+                other_line_hz=None if other is None else other.frequency_hz,
+                other_line_db=None if other is None else other.level_db,
             )
         )
         verdicts.append((t0, t1, "ride"))
@@ -365,6 +382,39 @@ def _line_in(x, fs, band, p_fa):
         part = x[:, j0:j1] - x[:, j0:j1].mean(axis=1, keepdims=True)
         line = steady_line(part, fs, band=band, p_fa=p_fa)
     return (line, j0, j1, "") if line.detected else (None, j0, j1, line.reason)
+
+
+#: how near a line (relative) another is taken for the same line or its harmonic: a Hann window's main lobe on a 10 s
+#: ride is +-0.2 Hz, 5 % of a 4 Hz line; a passenger moves the line 1-2 %
+_SAME_LINE = 0.06
+
+
+def _other_line(x, fs, band, freq, p_fa):
+    """Another steady line in ``band`` of the ride's channels ``x`` than the one at ``freq`` [Hz] and its harmonics and
+    half (within :data:`_SAME_LINE` of each), or None: the band's parts left by those are each tested for a steady line
+    with ``p_fa`` shared among them (the note's false-alarm bound is the ride's)."""
+    near = sorted(k * freq for k in (0.5, 1.0, 2.0, 3.0))
+    edges, lo = [], band[0]
+    for c in near:
+        a, b = c * (1 - _SAME_LINE), c * (1 + _SAME_LINE)
+        if b <= lo or a >= band[1]:
+            continue
+        if a > lo:
+            edges.append((lo, min(a, band[1])))
+        lo = max(lo, b)
+    if lo < band[1]:
+        edges.append((lo, band[1]))
+    n = x.shape[1]
+    edges = [(a, b) for a, b in edges if b - a >= 0.3 and n / fs * a >= 6]  # resolvable parts only
+    if not edges:
+        return None
+    seg = x - x.mean(axis=1, keepdims=True)
+    best = None
+    for a, b in edges:
+        line = steady_line(seg, fs, band=(a, b), p_fa=p_fa / len(edges))
+        if line.detected and (best is None or line.p_value < best.p_value):
+            best = line
+    return best
 
 
 def _where_the_line_is(seg, fs, freq, band, level_db, on_db=3.0):
