@@ -251,3 +251,28 @@ def test_link_pass_phase_in_heavy_noise_keeps_the_mean_frequency_start():
         err = (link_pass_phase(x, FS, F_LP, bandwidth_hz=F_LP / 40) - phase) / (2 * np.pi)
         err -= np.median(err[inner])
         assert np.max(np.abs(err[inner])) < 0.25
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_the_frequency_refined_on_the_grid_is_the_direct_sums(seed):
+    """The link pass's frequency is refined on 81 frequencies by phasors stepped from one frequency to the next:
+    the strongest is the one each frequency's own exponentials give (tones near the grid's points and between
+    them, in noise, records of 2,000 to 24,000 samples)."""
+    from vibkit.signal.linkmap import _strongest_on_grid
+
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(2_000, 24_000))
+    t = np.arange(n) / FS
+    f0 = F_LP * (1 + 0.01 * rng.standard_normal())
+    grid = 3 * (F_LP + np.linspace(-2.0, 2.0, 81) / t[-1])
+    x = np.cos(2 * np.pi * 3 * f0 * t + rng.uniform(0, 2 * np.pi)) + rng.normal(0, 2.0, n)
+    direct = np.abs(np.exp(-2j * np.pi * np.outer(grid, t)) @ x)
+    assert _strongest_on_grid(x, t, grid) == int(np.argmax(direct))
+
+
+def test_a_tone_on_the_grid_is_found_at_its_frequency():
+    from vibkit.signal.linkmap import _strongest_on_grid
+
+    t = np.arange(12_000) / FS
+    grid = F_LP + np.linspace(-2.0, 2.0, 81) / t[-1]
+    assert _strongest_on_grid(np.cos(2 * np.pi * grid[57] * t + 0.3), t, grid) == 57
