@@ -276,3 +276,18 @@ def test_a_tone_on_the_grid_is_found_at_its_frequency():
     t = np.arange(12_000) / FS
     grid = F_LP + np.linspace(-2.0, 2.0, 81) / t[-1]
     assert _strongest_on_grid(np.cos(2 * np.pi * grid[57] * t + 0.3), t, grid) == 57
+
+
+@pytest.mark.parametrize("cutoff", [0.05, 0.094, 0.9375, 7.5])
+def test_the_tracking_low_pass_is_scipys_bit_for_bit(cutoff):
+    """The tracking's low-pass, designed once per cutoff and rate, gives scipy's ``sosfiltfilt`` of the same
+    design to the last bit (twice: the design kept from the first call serves the second)."""
+    import scipy.signal
+
+    from vibkit.signal.linkmap import _lowpass
+
+    x = np.random.default_rng(3).standard_normal(9_001)
+    sos = scipy.signal.butter(2, cutoff, btype="low", fs=FS, output="sos")
+    want = scipy.signal.sosfiltfilt(sos, x, padtype="even", padlen=min(x.size - 1, int(3.0 * FS / cutoff)))
+    for _ in range(2):
+        assert np.array_equal(_lowpass(x, FS, cutoff), want)
