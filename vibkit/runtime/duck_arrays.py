@@ -1,11 +1,11 @@
 """A command-line process that never makes a dask array runs xarray as where dask is not installed.
 
 dask is installed for sweeps and fleet scans; where it is, xarray imports it to ask of every array it wraps
-whether it is a dask one (``dask.base`` from the first index it builds, with its configuration, yaml, toolz and
-more).  Measured 2026-12-07 on the project's 2-core machine (xarray 2026.9, dask 2026.8), CPU seconds of fresh
-processes, medians of 5 interleaved runs: ``import numpy, scipy.signal, pandas, xarray`` and one Dataset 3.75
-with dask importable, 3.19 with it not; the 10 s ``vibkit spectrum`` 3.70 against 3.60 with xarray's cache of
-array modules told that dask was absent, which still left ``dask.base`` imported.
+whether it is a dask one: ``dask.base`` from the first index it builds (with dask's configuration, yaml, toolz
+and more), ``dask.array`` for its table of array types.  Measured 2026-12-07 on the project's 2-core machine
+(xarray 2026.9, dask 2026.8), after ``import numpy, scipy.signal, pandas, xarray``: 0.13-0.21 CPU-s for
+``dask.base`` and 0.24-0.29 more for ``dask.array``, a tenth of those imports, which a 10 s ``vibkit spectrum``
+otherwise does not exceed by much.
 
 A process whose command reads recordings and analyses them with numpy never makes a dask array, so the command
 line marks ``dask`` as not importable (``sys.modules["dask"] = None``: Python's own way to stop an import, which
