@@ -4,8 +4,8 @@ dask is installed for sweeps and fleet scans; where it is, xarray imports it to 
 whether it is a dask one: ``dask.base`` from the first index it builds (with dask's configuration, yaml, toolz
 and more), ``dask.array`` for its table of array types.  Measured 2026-12-07 on the project's 2-core machine
 (xarray 2026.9, dask 2026.8), after ``import numpy, scipy.signal, pandas, xarray``: 0.13-0.21 CPU-s for
-``dask.base`` and 0.24-0.29 more for ``dask.array``, a tenth of those imports, which a 10 s ``vibkit spectrum``
-otherwise does not exceed by much.
+``dask.base`` and 0.24-0.29 more for ``dask.array``: together about a sixth of what those four imports cost,
+more than a 10 s ``vibkit spectrum`` spends on its own work.
 
 A process whose command reads recordings and analyses them with numpy never makes a dask array, so the command
 line marks ``dask`` as not importable (``sys.modules["dask"] = None``: Python's own way to stop an import, which
