@@ -18,9 +18,11 @@ HEAVY = ("numba", "matplotlib", "obspy", "dask", "scipy.stats")
 
 
 def _loaded_after(code, heavy=HEAVY):
-    """Which of ``heavy`` a fresh interpreter has imported after running ``code``."""
+    """Which of ``heavy`` a fresh interpreter has imported after running ``code`` (one marked not importable, None in
+    ``sys.modules``, is not)."""
     probe = (
-        textwrap.dedent(code) + f"\nimport json, sys\nprint(json.dumps({{m: m in sys.modules for m in {heavy!r}}}))\n"
+        textwrap.dedent(code)
+        + f"\nimport json, sys\nprint(json.dumps({{m: sys.modules.get(m) is not None for m in {heavy!r}}}))\n"
     )
     env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
     proc = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, env=env, cwd=ROOT)
@@ -50,46 +52,86 @@ def test_reading_a_recording_loads_no_numba_statistics_plots_or_seismic_reader(t
     assert loaded - {"dask"} == set()
 
 
-def test_the_spectrum_command_compiles_nothing_it_does_not_run(tmp_path):
-    """`vibkit spectrum` needs no compiled kernel: numba stays unloaded (the signal package imports its kernels
-    inside the functions that run them), and xarray is told there are no dask arrays, so dask.array (and the
-    modules it brings) stays unloaded; xarray still imports dask's base to ask whether a value is a dask collection,
-    and scipy.signal itself imports scipy.stats, so those two are not checked."""
-    path = _csv(tmp_path)
-    loaded = _loaded_after(
-        f"""
-        from vibkit.cli import main
-        assert main(["spectrum", {str(path)!r}, "--band", "2.5:6", "--json"]) in (0, 1, 3)
-        """,
-        heavy=(*HEAVY, "dask.array"),
-    )
-    assert loaded - {"dask", "scipy.stats"} == set()
+def _as_the_script(args):
+    """Code that runs ``vibkit ARGS`` as the ``vibkit`` script does: the process's own command line."""
+    return f"import sys\nsys.argv = ['vibkit', *{list(map(str, args))!r}]\nfrom vibkit.cli import main\nrc = main()\n"
 
 
-def test_a_numpy_only_command_gives_the_same_numbers_without_the_dask_probe(tmp_path):
-    """The probe's answer changes nothing but the import: `vibkit spectrum --json` of the same file, with xarray
-    told there are no dask arrays (the command line) and with its own probe (the library's `main` after dask is
-    imported), gives the same JSON."""
+def test_the_spectrum_command_imports_nothing_it_does_not_run(tmp_path):
+    """`vibkit spectrum` needs no compiled kernel, no plot, no seismic reader and no dask: numba stays unloaded (the
+    signal package imports its kernels inside the functions that run them), and the process, being the command's,
+    runs xarray as where dask is not installed, so that not even dask's base is imported to ask whether an array is
+    a dask one.  scipy.signal itself imports scipy.stats, so that one is not checked."""
     path = _csv(tmp_path)
+    heavy = (*HEAVY, "dask.base", "dask.array", "h5py", "netCDF4", "vibkit.analyses")
+    loaded = _loaded_after(_as_the_script(["spectrum", path, "--band", "2.5:6", "--json"]) + "assert rc == 0\n", heavy)
+    assert loaded - {"scipy.stats"} == set()
+
+
+def test_a_library_caller_keeps_dask(tmp_path):
+    """`main(argv)` called by a program (which may hold dask arrays) leaves dask importable, and xarray imports it as
+    it does anywhere; once xarray is imported the command line leaves dask alone (xarray has decided then whether
+    dask is there)."""
     code = f"""
-        import contextlib, io
-        {{}}
+        import contextlib, io, sys
         from vibkit.cli import main
-        out = io.StringIO()
-        with contextlib.redirect_stdout(out):
-            assert main(["spectrum", {str(path)!r}, "--band", "2.5:6", "--json"]) == 0
-        print(out.getvalue().replace(chr(10), " "))
+        with contextlib.redirect_stdout(io.StringIO()):
+            assert main(["spectrum", {str(_csv(tmp_path))!r}, "--band", "2.5:6"]) == 0
+        from vibkit.runtime.duck_arrays import without_dask
+        assert without_dask() is False
         """
+    assert _loaded_after(code, ("dask", "xarray")) == {"dask", "xarray"}
+
+
+def test_a_numpy_only_command_gives_the_same_numbers_without_dask(tmp_path):
+    """Whether dask is there changes nothing but the imports: `vibkit spectrum --json` of the same file, run as the
+    script (xarray without dask) and called by a program that uses dask arrays, gives the same JSON."""
+    path = _csv(tmp_path)
+    args = ["spectrum", path, "--band", "2.5:6", "--json"]
+    script = _as_the_script(args) + "assert rc == 0 and sys.modules['dask'] is None\n"
+    library = (
+        "import dask.array\nfrom vibkit.cli import main\nimport sys\n"
+        f"assert main({list(map(str, args))!r}) == 0 and sys.modules['dask'] is not None\n"
+    )
     env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
     outs = []
-    for first in ("pass", "import dask.array"):
-        probe = textwrap.dedent(code.format(first))
-        proc = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, env=env, cwd=ROOT)
+    for code in (script, library):
+        proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, cwd=ROOT)
         assert proc.returncode == 0, proc.stderr
-        outs.append(json.loads(proc.stdout.splitlines()[-1]))
+        outs.append(json.loads(proc.stdout))
     for d in outs:
         d.pop("elapsed_s", None)
     assert outs[0] == outs[1]
+
+
+def test_a_command_is_parsed_by_its_own_parser_as_by_the_whole_one():
+    """The command line builds only the named command's parser: its help, and what it makes of its arguments, are
+    the whole parser's; anything but a command's name first (``--help``, a misspelling) gets the whole parser."""
+    from vibkit.cli.app import COMMANDS, _named_command, _parser
+
+    whole = _parser()
+    names = [c.__name__.rpartition(".")[2] for c in COMMANDS]
+    for name in names:
+        own = _parser(name)
+        assert _subparser(own, name).format_help() == _subparser(whole, name).format_help()
+        assert list(_subparser(own, "").choices) == [name]
+    argv = ["spectrum", "x.csv", "--band", "2.5:6", "--harmonics", "3", "--json"]
+    assert vars(_parser("spectrum").parse_args(argv)) == vars(whole.parse_args(argv))
+    assert [_named_command(a) for a in (["pitch", "x"], ["--help"], ["pitchh"], [], ["fleet", "scan"])] == [
+        "pitch",
+        None,
+        None,
+        None,
+        "fleet",
+    ]
+
+
+def _subparser(parser, name):
+    """The subparsers' action of ``parser`` (``name`` empty), or the parser of command ``name``."""
+    import argparse
+
+    action = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    return action if not name else action.choices[name]
 
 
 def test_loading_a_scene_loads_no_compiler():

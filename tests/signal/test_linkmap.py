@@ -251,3 +251,43 @@ def test_link_pass_phase_in_heavy_noise_keeps_the_mean_frequency_start():
         err = (link_pass_phase(x, FS, F_LP, bandwidth_hz=F_LP / 40) - phase) / (2 * np.pi)
         err -= np.median(err[inner])
         assert np.max(np.abs(err[inner])) < 0.25
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_the_frequency_refined_on_the_grid_is_the_direct_sums(seed):
+    """The link pass's frequency is refined on 81 frequencies by phasors stepped from one frequency to the next:
+    the strongest is the one each frequency's own exponentials give (tones near the grid's points and between
+    them, in noise, records of 2,000 to 24,000 samples)."""
+    from vibkit.signal.linkmap import _strongest_on_grid
+
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(2_000, 24_000))
+    t = np.arange(n) / FS
+    f0 = F_LP * (1 + 0.01 * rng.standard_normal())
+    grid = 3 * (F_LP + np.linspace(-2.0, 2.0, 81) / t[-1])
+    x = np.cos(2 * np.pi * 3 * f0 * t + rng.uniform(0, 2 * np.pi)) + rng.normal(0, 2.0, n)
+    direct = np.abs(np.exp(-2j * np.pi * np.outer(grid, t)) @ x)
+    assert _strongest_on_grid(x, t, grid) == int(np.argmax(direct))
+
+
+def test_a_tone_on_the_grid_is_found_at_its_frequency():
+    from vibkit.signal.linkmap import _strongest_on_grid
+
+    t = np.arange(12_000) / FS
+    grid = F_LP + np.linspace(-2.0, 2.0, 81) / t[-1]
+    assert _strongest_on_grid(np.cos(2 * np.pi * grid[57] * t + 0.3), t, grid) == 57
+
+
+@pytest.mark.parametrize("cutoff", [0.05, 0.094, 0.9375, 7.5])
+def test_the_tracking_low_pass_is_scipys_bit_for_bit(cutoff):
+    """The tracking's low-pass, designed once per cutoff and rate, gives scipy's ``sosfiltfilt`` of the same
+    design to the last bit (twice: the design kept from the first call serves the second)."""
+    import scipy.signal
+
+    from vibkit.signal.linkmap import _lowpass
+
+    x = np.random.default_rng(3).standard_normal(9_001)
+    sos = scipy.signal.butter(2, cutoff, btype="low", fs=FS, output="sos")
+    want = scipy.signal.sosfiltfilt(sos, x, padtype="even", padlen=min(x.size - 1, int(3.0 * FS / cutoff)))
+    for _ in range(2):
+        assert np.array_equal(_lowpass(x, FS, cutoff), want)

@@ -17,7 +17,7 @@ import argparse
 import errno
 import sys
 
-from vibkit.runtime.duck_arrays import no_dask_arrays
+from vibkit.runtime.duck_arrays import without_dask
 from vibkit.runtime.reader_options import flag_spelling
 
 from . import (
@@ -43,8 +43,9 @@ __all__ = ["main"]
 
 # in the order ``vibkit --help`` lists them
 COMMANDS = (simulate, scene, spectrum, pitch, links, compare, report, sweep, ride, rides, fleet, datasets, warm, bench)
-#: the commands that build xarray Datasets of numpy arrays only, never of dask arrays: xarray is told so
-#: (:func:`vibkit.runtime.duck_arrays.no_dask_arrays`) and does not import dask to find out
+#: the commands that build xarray Datasets of numpy arrays only, never of dask arrays: run as the process's own
+#: command line, xarray runs as where dask is not installed (:func:`vibkit.runtime.duck_arrays.without_dask`) and
+#: does not import dask to ask of each array whether it is one
 NUMPY_ONLY = frozenset({"simulate", "spectrum", "pitch", "links", "compare", "report", "ride", "rides"})
 
 
@@ -76,7 +77,9 @@ class _Parser(argparse.ArgumentParser):
 _LEFT_BY = "_vibkit_unrecognized_by"
 
 
-def _parser():
+def _parser(only=None):
+    """The command line's parser: every command's (``--help`` lists them), or with ``only`` (a command's name) that
+    command's alone, which parses its arguments as the whole parser does."""
     import vibkit
 
     p = _Parser(
@@ -90,8 +93,16 @@ def _parser():
     p.add_argument("--version", action="version", version=f"vibkit {vibkit.__version__}")
     sub = p.add_subparsers(dest="command", metavar="COMMAND", required=True)
     for command in COMMANDS:
-        command.add_parser(sub)
+        if only is None or command.__name__.rpartition(".")[2] == only:  # each module is named after its command
+            command.add_parser(sub)
     return p
+
+
+def _named_command(argv):
+    """The command that ``argv`` names first (``vibkit spectrum ...``), else None (``--help``, ``--version``, a
+    misspelt name: the whole parser answers those)."""
+    first = argv[0] if argv else None
+    return first if any(c.__name__.rpartition(".")[2] == first for c in COMMANDS) else None
 
 
 def main(argv=None) -> int:
@@ -100,10 +111,14 @@ def main(argv=None) -> int:
     Parameters
     ----------
     argv : list of str, optional
-        Arguments (default ``sys.argv[1:]``).
+        Arguments (default ``sys.argv[1:]``: the process's own command line, as the ``vibkit`` script runs it; the
+        process is then the command's, and one that never makes a dask array runs xarray without dask).
     """
     # parse first: --help and --version import nothing heavy and compile nothing
-    args = _parser().parse_args(argv)
+    # only the named command's parser is built: the other thirteen (200 options) cost about 0.04 CPU-s a start
+    args = _parser(_named_command(sys.argv[1:] if argv is None else argv)).parse_args(argv)
+    if argv is None and args.command in NUMPY_ONLY:  # the process is this command's: before xarray is imported
+        without_dask()
     args.argv = list(sys.argv[1:] if argv is None else argv)  # the command as typed (e.g. a sweep's to resume it)
     from vibkit.runtime.safe_output import Interrupted, handle_termination
 
@@ -115,8 +130,6 @@ def main(argv=None) -> int:
     try:
         # SIGTERM runs the same clean-up as Ctrl-C; the reader names its options as their flags
         with handle_termination(), flag_spelling():
-            if args.command in NUMPY_ONLY:
-                no_dask_arrays()
             status = int(args.func(args))
             if sys.stdout is not None:  # None: started with stdout closed (>&-)
                 sys.stdout.flush()  # a closed pipe is found here, not at the interpreter's exit

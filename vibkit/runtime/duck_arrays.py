@@ -1,36 +1,34 @@
-"""xarray without its dask probe, in the command-line processes that never make a dask array.
+"""A command-line process that never makes a dask array runs xarray as where dask is not installed.
 
-xarray asks of every array it wraps whether it is a dask array, and to know it imports dask (and ``dask.array``)
-the first time, whether or not the process ever makes one (measured 2026-12-07 on the project's 2-core machine with
-xarray 2026.9 and dask 2026.8: `vibkit spectrum` of a 10 s file 3.62 CPU-s with the probe, 3.42 without, means of
-5 interleaved pairs; xarray still imports ``dask.base`` to ask whether a value is a dask collection).  A command that reads recordings and analyses them with numpy never makes a dask array:
-:func:`no_dask_arrays` gives xarray the answer it gives itself where dask is not installed ("no dask array type"),
-if dask is not imported yet.  Only the command line calls it, and only for such commands (not `sweep`, which reads
-and writes Zarr through dask, nor `fleet`, whose scans may start a Dask cluster): a library user's process, which
-may hold dask arrays, keeps xarray's own probe.
+dask is installed for sweeps and fleet scans; where it is, xarray imports it to ask of every array it wraps
+whether it is a dask one: ``dask.base`` from the first index it builds (with dask's configuration, yaml, toolz
+and more), ``dask.array`` for its table of array types.  Measured 2026-12-07 on the project's 2-core machine
+(xarray 2026.9, dask 2026.8), after ``import numpy, scipy.signal, pandas, xarray``: 0.13-0.21 CPU-s for
+``dask.base`` and 0.24-0.29 more for ``dask.array``: together about a sixth of what those four imports cost,
+more than a 10 s ``vibkit spectrum`` spends on its own work.
+
+A process whose command reads recordings and analyses them with numpy never makes a dask array, so the command
+line marks ``dask`` as not importable (``sys.modules["dask"] = None``: Python's own way to stop an import, which
+raises ``ModuleNotFoundError`` and makes ``importlib.util.find_spec`` answer None) before anything imports xarray.
+xarray then takes the path it takes without dask, a configuration it supports and tests; nothing of xarray's is
+changed.  Only :func:`vibkit.cli.main` does this, only for such commands, and only where it runs the process's
+own command line (no ``argv`` given: the ``vibkit`` script, ``python -m vibkit``), never in a library user's
+process (which may hold dask arrays), nor once xarray or dask is imported.
 """
 
 from __future__ import annotations
 
 import sys
 
-__all__ = ["no_dask_arrays"]
+__all__ = ["without_dask"]
 
 
-def no_dask_arrays() -> bool:
-    """Tell xarray that this process has no dask arrays (unless dask is imported already); True where it took.
+def without_dask() -> bool:
+    """Mark dask as not importable in this process, unless xarray or dask is imported already; True where it took.
 
-    Uses xarray's cache of array modules (``xarray.namedarray.pycompat``); where that is not there (another xarray),
-    nothing is changed and xarray probes as before."""
-    if "dask" in sys.modules:
+    xarray decides once, when it is imported, whether dask is installed: once it is loaded the answer is its own
+    and is left alone."""
+    if any(name == "dask" or name.startswith(("dask.", "xarray")) for name in list(sys.modules)):
         return False
-    try:
-        from xarray.namedarray import pycompat
-
-        cache = pycompat._cached_duck_array_modules
-        module = object.__new__(pycompat.DuckArrayModule)
-        module.module, module.version, module.type, module.available = None, pycompat.Version("0.0.0"), (), False
-    except (ImportError, AttributeError, TypeError):
-        return False
-    cache.setdefault("dask", module)
-    return cache["dask"] is module
+    sys.modules["dask"] = None  # type: ignore[assignment]
+    return True

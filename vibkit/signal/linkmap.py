@@ -17,13 +17,14 @@ The decision, with a stated false-alarm probability: :mod:`vibkit.signal.linksca
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
 import numpy as np
 import scipy.signal
 
-from ._checks import as_signal, check_fs, check_positive_int
+from ._checks import as_signal, check_fs, check_positive_int, filter_with_zi, sosfiltfilt
 from .orders import resample_to_angle
 
 __all__ = [
@@ -215,10 +216,18 @@ def _loop_mean(a, n):
     return (c[lo + n] - c[lo]) / n
 
 
+@functools.lru_cache(maxsize=32)
+def _lowpass_filter(cutoff, fs):
+    """The second-order Butterworth low-pass at ``cutoff`` [Hz] with its ``sosfilt_zi``, designed once per cutoff and
+    rate: the tracking asks the same one of every harmonic, part and pass (17 designs and 34 ``sosfilt_zi`` a
+    10-loop recording, where scipy's ``sosfiltfilt`` solves it on every call)."""
+    return filter_with_zi(scipy.signal.butter(2, cutoff, btype="low", fs=fs, output="sos"))
+
+
 def _lowpass(y, fs, cutoff, padtype="even"):
-    sos = scipy.signal.butter(2, float(cutoff), btype="low", fs=fs, output="sos")
+    """Zero-phase second-order low-pass (:func:`scipy.signal.sosfiltfilt`'s numbers, bit for bit)."""
     padlen = min(y.size - 1, int(3.0 * fs / float(cutoff)))
-    return scipy.signal.sosfiltfilt(sos, y, padtype=padtype, padlen=padlen)
+    return sosfiltfilt(_lowpass_filter(float(cutoff), float(fs)), y, padtype=padtype, padlen=padlen)
 
 
 def link_pass_phase(x, fs, f0, *, bandwidth_hz, n_harmonics=4):
@@ -257,8 +266,8 @@ def link_pass_phase(x, fs, f0, *, bandwidth_hz, n_harmonics=4):
     hs = int(np.argmax(amps)) + 1
     # refine the frequency on the strongest harmonic: the peak within +-2 bins
     grid = f0 + np.linspace(-2.0, 2.0, 81) / (t[-1] * hs)
-    e = np.exp(-2j * np.pi * hs * np.outer(grid, t[:: max(1, x.size // 20000)]))
-    f = float(grid[int(np.argmax(np.abs(e @ x[:: max(1, x.size // 20000)])))])
+    every = max(1, x.size // 20000)
+    f = float(grid[_strongest_on_grid(x[::every], t[::every], hs * grid)])
     # harmonics weaker than a tenth of the strongest add noise and unwrapping slips, not information
     used = [h for h in range(1, kmax + 1) if amps[h - 1] >= 0.1 * max(amps)]
     # the passes start from the mean frequency's straight line, and again from the strongest harmonic's own phase
@@ -284,6 +293,20 @@ def link_pass_phase(x, fs, f0, *, bandwidth_hz, n_harmonics=4):
             "that changes faster than the tracking bandwidth)"
         )
     return phase
+
+
+def _strongest_on_grid(x, t, grid):
+    """The index of the frequency of the evenly spaced ``grid`` [Hz] where ``|sum x exp(-2 pi j f t)|`` is largest.
+
+    Each frequency's phasors are the last one's times one step's, ``exp(-2 pi j df t)``: two exponentials a sample
+    for the whole grid instead of one a sample and frequency (81 x 20,000 for a long record)."""
+    z = x * np.exp(-2j * np.pi * grid[0] * t)
+    step = np.exp(-2j * np.pi * (grid[1] - grid[0]) * t)
+    power = np.empty(grid.size)
+    for k in range(grid.size):
+        power[k] = abs(z.sum())
+        z *= step
+    return int(np.argmax(power))
 
 
 def _refine(x, fs, phase, used, bandwidth_hz):
@@ -312,6 +335,4 @@ def smooth_phase(phase, fs, bandwidth_hz):
     fs = check_fs(fs)
     t = np.arange(ph.size) / fs
     line = np.polyval(np.polyfit(t, ph, 1), t)
-    sos = scipy.signal.butter(2, float(bandwidth_hz), btype="low", fs=fs, output="sos")
-    padlen = min(ph.size - 1, int(3.0 * fs / float(bandwidth_hz)))
-    return line + scipy.signal.sosfiltfilt(sos, ph - line, padtype="even", padlen=padlen)
+    return line + _lowpass(ph - line, fs, bandwidth_hz)
