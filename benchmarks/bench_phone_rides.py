@@ -147,7 +147,7 @@ def main(quick=False):
                     a = int((h.line_start_s - t0) * fs)
                     b = int((h.line_end_s - t0) * fs)
                     truth = float(np.mean(freq[max(a, 0) : max(min(b, freq.size), a + 1)]))
-                    if abs(h.link_pass_hz / truth - 1) < 0.01:
+                    if h.link_pass_hz is not None and abs(h.link_pass_hz / truth - 1) < 0.01:
                         found += 1
                         zs.append((h.link_pass_hz - truth) / h.link_pass_sigma_hz)
             p, s = _binom(found, reps)
@@ -173,7 +173,7 @@ def main(quick=False):
             syn_refused += len(with_baro.refused)
             syn_hours += (length + 20) / 3600
             invented += [
-                f"{x.link_pass_hz:.3f} Hz, {x.level_db:.1f} dB, p {x.p_value:.1g} ({length} s record on {BEDS[bed][0]})"
+                f"{x.link_pass_hz if x.link_pass_hz is not None else x.lines_hz[0]:.3f} Hz, {x.level_db:.1f} dB, p {x.p_value:.1g} ({length} s record on {BEDS[bed][0]})"
                 for x in found
             ]
             refused += [

@@ -100,7 +100,7 @@ def test_every_ride_found_in_the_phone_folder(seq):
         assert 0.47 < ride.speed_m_s < 0.54
         assert 0.15 < abs(ride.vertical_speed_m_s) < 0.35
         # one line in each of these rides (its harmonics are no other line)
-        assert ride.other_line_hz is None
+        assert ride.lines_hz == ()
 
 
 @needs_real
@@ -483,19 +483,28 @@ def test_the_real_rides_barometer_agrees_with_the_malls_floors(seq):
         assert 20.0 < r.incline_deg < 35.0 and r.incline_sigma_deg < 5.0
 
 
-def test_another_steady_line_beside_the_reported_one_is_said():
+def test_two_steady_lines_give_no_link_pass_and_a_prior_band_tells_them_apart():
     """A ride holding two steady lines not harmonically related (3.9 Hz and 6.1 Hz, as a real down ride held its
-    link pass and another machine's line): one is reported, the other named beside it (a note and ``other_line_hz``),
-    since the record cannot tell which is the chain's; a line's own second harmonic is no other line."""
-    found = find_rides(_walk_stand_walk(5, lambda t: _tone(3.9)(t) + _tone(6.1, 0.04)(t), stand_s=30.0))
+    link pass and another machine's line as strong): the record cannot tell which is the chain's, so the ride is
+    listed with both lines and no link pass, no speed (a number called a link pass must be the chain's). The
+    chain's rated speed and pitch (0.52 m/s, 133.33 mm: 3.9 Hz +-10 %) tell them apart; a line's own second
+    harmonic is no other line."""
+    walk = _walk_stand_walk(5, lambda t: _tone(3.9)(t) + _tone(6.1, 0.04)(t), stand_s=30.0)
+    found = find_rides(walk, nominal_pitch=0.13333)
     assert len(found.rides) == 1
     r = found.rides[0]
-    lines = sorted([r.link_pass_hz, r.other_line_hz])
+    assert r.link_pass_hz is None and r.link_pass_sigma_hz is None and r.speed_m_s is None
+    lines = sorted(r.lines_hz)
     assert abs(lines[0] / 3.9 - 1) < 0.005 and abs(lines[1] / 6.1 - 1) < 0.005
-    assert any("another steady line" in n for n in found.notes)
+    assert r.lines_db[0] >= r.lines_db[1]
+    assert any("two steady lines" in n and "none is given" in n for n in found.notes)
+    told = find_rides(walk, nominal_pitch=0.13333, rated_speed=0.52)
+    assert len(told.rides) == 1 and told.rides[0].lines_hz == ()
+    assert abs(told.rides[0].link_pass_hz / 3.9 - 1) < 0.005 and told.rides[0].speed_m_s is not None
     found = find_rides(_walk_stand_walk(5, lambda t: _tone(3.9)(t) + _tone(7.8, 0.04)(t), stand_s=30.0))
-    assert len(found.rides) == 1 and found.rides[0].other_line_hz is None
-    assert not any("another steady line" in n for n in found.notes)
+    assert len(found.rides) == 1 and found.rides[0].lines_hz == ()
+    assert abs(found.rides[0].link_pass_hz / 3.9 - 1) < 0.005
+    assert not any("two steady lines" in n for n in found.notes)
 
 
 @needs_real

@@ -88,7 +88,9 @@ def run(a):
             [
                 f"{r.start_s:.1f}-{r.end_s:.1f}",
                 r.direction,
-                fmt_pm(r.link_pass_hz, r.link_pass_sigma_hz),
+                fmt_pm(r.link_pass_hz, r.link_pass_sigma_hz)
+                if r.link_pass_hz is not None
+                else "not told: " + " or ".join(f"{f:.2f}" for f in r.lines_hz),
                 f"{r.level_db:.1f}",
                 "-" if r.speed_m_s is None else fmt_pm(r.speed_m_s, r.speed_sigma_m_s),
                 "-"

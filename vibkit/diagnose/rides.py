@@ -70,8 +70,8 @@ class Ride:
     start_s: float
     end_s: float
     direction: str  # "up", "down", "level" or "unknown"
-    link_pass_hz: float
-    link_pass_sigma_hz: float
+    link_pass_hz: float | None  # None: two steady lines, and the record cannot tell which is the chain's (``lines_hz``)
+    link_pass_sigma_hz: float | None
     level_db: float
     p_value: float
     channel: str  # the channel with the most evidence
@@ -91,8 +91,10 @@ class Ride:
     rise_sigma_m: float | None = None
     incline_sigma_deg: float | None = None
     flag: str | None = None  # what the barometer cannot rule out (a level ride, or no barometer)
-    other_line_hz: float | None = None  # another steady line in the band, not a harmonic of the link pass
-    other_line_db: float | None = None
+    # where the ride holds two steady lines, neither a harmonic of the other: both [Hz] and their levels [dB], the
+    # stronger first; the link pass (and the speed from it) is then not told
+    lines_hz: tuple = ()
+    lines_db: tuple = ()
 
     @property
     def duration_s(self) -> float:
@@ -335,13 +337,27 @@ def find_rides(
             continue
         ride = _ride(recording, line, names, start, t1, nominal_pitch, rated_speed)
         other = _other_line(span, fs, band, line.frequency_hz, p_fa)
+        untold = {}
         if other is not None:
+            pair = sorted([line, other], key=lambda x: -x.level_db)
+            untold = dict(
+                link_pass_hz=None,
+                link_pass_sigma_hz=None,
+                speed_m_s=None,
+                speed_sigma_m_s=None,
+                speed_deviation_percent=None,
+                speed_deviation_sigma_percent=None,
+                incline_deg=None,
+                incline_sigma_deg=None,
+                lines_hz=tuple(float(x.frequency_hz) for x in pair),
+                lines_db=tuple(float(x.level_db) for x in pair),
+            )
             notes.append(
-                f"ride {start:.1f}-{t1:.1f} s: another steady line at {other.frequency_hz:.3f} Hz "
-                f"({other.level_db:.1f} dB, p <= {other.p_value:.2g}) beside the one reported at {line.frequency_hz:.3f} Hz "
-                f"({line.level_db:.1f} dB), not a harmonic of it: which is the chain's link pass the record cannot tell "
-                "(another machine's line, a drive chain); give --nominal-pitch and --speed, or --band, to search near the "
-                "chain's"
+                f"ride {start:.1f}-{t1:.1f} s: two steady lines, {line.frequency_hz:.3f} Hz ({line.level_db:.1f} dB) and "
+                f"{other.frequency_hz:.3f} Hz ({other.level_db:.1f} dB, p <= {other.p_value:.2g}), neither a harmonic of "
+                "the other: which is the chain's link pass the record cannot tell (another machine's line, a drive "
+                "chain), so none is given; give --nominal-pitch and --speed (or --escalator), or --band, to search "
+                "near the chain's"
             )
         rides.append(
             dataclasses.replace(
@@ -349,8 +365,7 @@ def find_rides(
                 line_start_s=float(tu[i0]),
                 line_end_s=float(tu[i1 - 1]),
                 vertical_speed_max_m_s=fast,
-                other_line_hz=None if other is None else other.frequency_hz,
-                other_line_db=None if other is None else other.level_db,
+                **untold,
             )
         )
         verdicts.append((t0, t1, "ride"))
@@ -525,7 +540,8 @@ def ride_evidence(recording, ride, search):
     f, t = normalised_spectrum(seg, fs)
     a2, b2 = np.searchsorted(tu, [ride.start_s, ride.end_s])
     span = x[:, a2:b2] - x[:, a2:b2].mean(axis=1, keepdims=True)
-    c, lv = line_level(span, fs, ride.link_pass_hz, window_s=4.0)
+    freq = ride.link_pass_hz if ride.link_pass_hz is not None else ride.lines_hz[0]
+    c, lv = line_level(span, fs, freq, window_s=4.0)
     return {
         "f": f,
         "level_db": 10 * np.log10(np.maximum(t, 1e-300)),
@@ -599,7 +615,12 @@ def ride_in_walk(recording, axes, t0, notes, source):
         start_s=max(ride.line_start_s - float(t0), 0.0),
         end_s=ride.line_end_s - float(t0),
         method=method,
-        note=f"link pass {ride.link_pass_hz:.3f} Hz, direction {ride.direction}",
+        note=(
+            f"link pass {ride.link_pass_hz:.3f} Hz"
+            if ride.link_pass_hz is not None
+            else "two steady lines (" + ", ".join(f"{f:.3f}" for f in ride.lines_hz) + " Hz), the link pass not told"
+        )
+        + f", direction {ride.direction}",
     )
 
 

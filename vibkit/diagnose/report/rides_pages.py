@@ -59,10 +59,12 @@ def phone_rides_summary(ctx) -> list:
     out = []
     for k, r in enumerate(search.rides, 1):
         speed = "" if r.speed_m_s is None else f", chain speed {fmt_pm(r.speed_m_s, r.speed_sigma_m_s)} m/s"
-        out.append(
-            f"ride {k}: {r.start_s:.1f}-{r.end_s:.1f} s, {r.direction}: link pass "
-            f"{fmt_pm(r.link_pass_hz, r.link_pass_sigma_hz)} Hz{speed}"
+        told = (
+            f"link pass {fmt_pm(r.link_pass_hz, r.link_pass_sigma_hz)} Hz"
+            if r.link_pass_hz is not None
+            else "two steady lines (" + " and ".join(f"{f:.3f}" for f in r.lines_hz) + " Hz): the link pass not told"
         )
+        out.append(f"ride {k}: {r.start_s:.1f}-{r.end_s:.1f} s, {r.direction}: {told}{speed}")
     return out
 
 
@@ -91,7 +93,12 @@ def phone_ride_pages(doc, ctx) -> list:
         sel = (f >= 0.5) & (f <= min(12.0, f[-1]))
         ax.plot(f[sel], lv[sel], lw=0.7, color="0.2")
         ax.axvspan(*search.band_hz, color="tab:blue", alpha=0.07, label="band searched")
-        ax.axvline(ride.link_pass_hz, color="tab:red", lw=0.8, ls="--", label=f"link pass {ride.link_pass_hz:.3f} Hz")
+        if ride.link_pass_hz is not None:
+            ax.axvline(
+                ride.link_pass_hz, color="tab:red", lw=0.8, ls="--", label=f"link pass {ride.link_pass_hz:.3f} Hz"
+            )
+        for f_line, style in zip(ride.lines_hz, ("--", ":")):
+            ax.axvline(f_line, color="tab:orange", lw=0.8, ls=style, label=f"steady line {f_line:.3f} Hz")
         ax.set_xlabel("frequency [Hz]")
         ax.set_ylabel("level over the floor [dB]\n(all axes together)")
         ax.set_title("Spectrum of the ride: the axes' mean periodogram over its running-median floor", fontsize=9)
@@ -106,9 +113,17 @@ def phone_ride_pages(doc, ctx) -> list:
         ax2.set_title("The line's level in 4 s windows across the still span", fontsize=9)
         ax2.grid(alpha=0.3)
         ax2.legend(fontsize=7, loc="lower center")
-        lines = [
+        told = (
             f"Link pass {fmt_pm(ride.link_pass_hz, ride.link_pass_sigma_hz)} Hz, {ride.level_db:.1f} dB over the floor "
-            f"(false-alarm bound {search.p_fa:g}: p <= {ride.p_value:.1g}); the most evidence on {ride.channel}.",
+            if ride.link_pass_hz is not None
+            else "Two steady lines, "
+            + " and ".join(f"{f:.3f} Hz ({d:.1f} dB)" for f, d in zip(ride.lines_hz, ride.lines_db))
+            + ", neither a harmonic of the other: which is the chain's link pass the record cannot tell, so none is "
+            "given "
+        )
+        lines = [
+            told
+            + f"(false-alarm bound {search.p_fa:g}: p <= {ride.p_value:.1g}); the most evidence on {ride.channel}.",
             f"Direction: {ride.direction}"
             + (
                 f" (vertical speed {fmt_pm(ride.vertical_speed_m_s, ride.vertical_speed_sigma_m_s)} m/s, "
