@@ -103,45 +103,48 @@ def _placed_rate(tab, p0, s_target, s0, delta):
     return -(tab[k, CUMD] + lmd + 2.0 * loops) / sig
 
 
-@kernel(inline="always")
-def _point_rates(tab, p0, s0, k, x, z, delta):
-    """dr/ds0 and dr/ddelta (rs_x, rs_z, rd_x, rd_z) of a point (x, z) of a walk at s0 on segment k, as
-    :func:`vibkit.model.guide.point_partials` has them, with an arc's tangent from the point's radius
-    (t = kappa (-(z - c_z), x - c_x) for the centre c) instead of the sine and cosine of its angle."""
-    kap = tab[k, KAPPA]
-    tx, tz = tab[k, COS0], tab[k, SIN0]
-    if kap != 0.0:
-        cx = tab[k, AX] + tab[k, BX] * delta - tz / kap
-        cz = tab[k, AZ] + tab[k, BZ] * delta + tx / kap
-        tx, tz = -kap * (z - cz), kap * (x - cx)
-    ls, ld = 1.0, 0.0
-    if tab[k, SIGP] != 0.0:
-        s0loc = s0 - p0 * math.floor(s0 / p0) - tab[k, S0]
-        if s0loc < -1e-9:  # point found a hair before its segment's start across the wrap
-            s0loc += p0
-        _, ls, ld, _, _ = local_map(tab, k, s0loc, delta)
-    return ls * tx, ls * tz, tab[k, BX] + ld * tx, tab[k, BZ] + ld * tz
-
-
 @kernel()
 def _closure_slope(tab, p0, s_target, s0, kk, xs, zs, delta, n):
     """dh/ddelta of the ghost residual h of the walk just made (points ``s0``, ``kk``, ``xs``, ``zs``, n links)
     with roller 1 placed at ``s_target`` on the guide that delta deforms: the sensitivity recursion of
-    :func:`vibkit.model.chain.sensitivity` (alpha = d s0_i / d s0_1, beta = d s0_i / d delta) in one pass,
-    no partials stored, then h = s0_ghost - s0_1 - P0 along roller 1's placement:
+    :func:`vibkit.model.chain.sensitivity` (alpha = d s0_i / d s0_1, beta = d s0_i / d delta) in one pass with
+    no partials stored, each point's dr/ds0 and dr/ddelta as :func:`vibkit.model.guide.point_partials` has
+    them but an arc's tangent from the point's radius (t = kappa (-(z - c_z), x - c_x), c its centre) instead of
+    the sine and cosine of its angle; then h = s0_ghost - s0_1 - P0 along roller 1's placement:
     dh/ddelta = beta_ghost + (alpha_ghost - 1) d s0_1 / d delta."""
     alpha, beta = 1.0, 0.0
-    rsx, rsz, rdx, rdz = _point_rates(tab, p0, s0[0], kk[0], xs[0], zs[0], delta)
-    for i in range(n):
-        nsx, nsz, ndx, ndz = _point_rates(tab, p0, s0[i + 1], kk[i + 1], xs[i + 1], zs[i + 1], delta)
-        ux = xs[i + 1] - xs[i]
-        uz = zs[i + 1] - zs[i]
-        us_i = ux * rsx + uz * rsz
-        us_j = ux * nsx + uz * nsz
-        ud = ux * (rdx - ndx) + uz * (rdz - ndz)
-        alpha = us_i * alpha / us_j
-        beta = (us_i * beta + ud) / us_j
-        rsx, rsz, rdx, rdz = nsx, nsz, ndx, ndz
+    seg = -1  # the segment whose constants are below
+    kap = tx0 = tz0 = bx = bz = cx = cz = 0.0
+    tele = False
+    psx = psz = pdx = pdz = 0.0
+    for i in range(n + 1):
+        k = kk[i]
+        if k != seg:
+            seg = k
+            kap, tx0, tz0, bx, bz = tab[k, KAPPA], tab[k, COS0], tab[k, SIN0], tab[k, BX], tab[k, BZ]
+            tele = tab[k, SIGP] != 0.0
+            if kap != 0.0:
+                cx = tab[k, AX] + bx * delta - tz0 / kap
+                cz = tab[k, AZ] + bz * delta + tx0 / kap
+        tx, tz = tx0, tz0
+        if kap != 0.0:
+            tx, tz = -kap * (zs[i] - cz), kap * (xs[i] - cx)
+        ls, ld = 1.0, 0.0
+        if tele:
+            s0loc = s0[i] - p0 * math.floor(s0[i] / p0) - tab[k, S0]
+            if s0loc < -1e-9:  # point found a hair before its segment's start across the wrap
+                s0loc += p0
+            _, ls, ld, _, _ = local_map(tab, k, s0loc, delta)
+        rsx, rsz, rdx, rdz = ls * tx, ls * tz, bx + ld * tx, bz + ld * tz
+        if i > 0:
+            ux = xs[i] - xs[i - 1]
+            uz = zs[i] - zs[i - 1]
+            inv = 1.0 / (ux * rsx + uz * rsz)
+            ratio = (ux * psx + uz * psz) * inv  # d s0_i+1 / d s0_i along the link
+            rise = (ux * (pdx - rdx) + uz * (pdz - rdz)) * inv  # d s0_i+1 / d delta at fixed s0_i
+            alpha = ratio * alpha
+            beta = ratio * beta + rise
+        psx, psz, pdx, pdz = rsx, rsz, rdx, rdz
     return beta + (alpha - 1.0) * _placed_rate(tab, p0, s_target, s0[0], delta)
 
 
