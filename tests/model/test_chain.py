@@ -161,7 +161,7 @@ def test_walk_ghost_and_run_s0_are_the_walk(chain, s0_1):
     s0, lam, xs, zs, kk = whole
     h = walk(g.table, g.p0, s0_1, delta, chain.pitches, n, s0, kk, lam, xs, zs)
     s0g, lamg, xsg, zsg, kkg = ghost
-    hg = walk_ghost(g.table, g.p0, s0_1, delta, chain.pitches, n, s0g, kkg, lamg, xsg, zsg, False)
+    hg = walk_ghost(g.table, g.p0, s0_1, delta, chain.pitches, n, s0g, kkg, lamg, xsg, zsg, 0.0)
     assert hg == h and abs(h) < 1e-9
     for a, b in ((lam, lamg), (xs, xsg), (zs, zsg), (kk, kkg)):
         assert np.array_equal(a, b)

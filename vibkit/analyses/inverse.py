@@ -214,7 +214,7 @@ def inverse_positions(
             if whole:
                 h = walk(tab, p0, s0, delta, pitches, n, sw, kk, lam, xs, zs)
             else:
-                h = walk_ghost(tab, p0, s0, delta, pitches, n, sw, kk, lam, xs, zs, False)
+                h = walk_ghost(tab, p0, s0, delta, pitches, n, sw, kk, lam, xs, zs, 0.0)
             if math.isnan(h):
                 return j, s0_j, delta_j
             if abs(h) <= tol:

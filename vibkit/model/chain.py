@@ -77,14 +77,14 @@ def walk(tab, p0, s0_1, delta, pitches, n, s0, kk, lam, xs, zs):
     roller 1). Returns the ghost residual h = s0[n] - (s0_1 + P0) [m], or NaN when a link finds no
     guide point at its pitch (delta outside what the guide allows).
     """
-    return walk_ghost(tab, p0, s0_1, delta, pitches, n, s0, kk, lam, xs, zs, True)
+    return walk_ghost(tab, p0, s0_1, delta, pitches, n, s0, kk, lam, xs, zs, 1.0)
 
 
 @kernel()
 def walk_ghost(tab, p0, s0_1, delta, pitches, n, s0, kk, lam, xs, zs, runs):
-    """:func:`walk`; ``runs`` False leaves the s0 of a roller that follows the one before along a telescopic run
-    at ``wraps P0 + s0_k`` (its run's inverse map, a Newton solve, is about a tenth of the walk) for :func:`run_s0`:
-    the same h and points. The roller before and its segment's constants are carried in locals."""
+    """:func:`walk`; ``runs`` 0.0 leaves the s0 of a roller after another on a telescopic run at wraps P0 + s0_k for
+    :func:`run_s0` (the run's inverse map is a tenth of the walk): the same h and points. A float flag: numba compiles
+    a body for each bool constant, one for any float. Locals carry the roller before and its segment's constants."""
     wraps = math.floor(s0_1 / p0)
     s = s0_1 - wraps * p0
     k = locate(tab, s)
@@ -113,7 +113,7 @@ def walk_ghost(tab, p0, s0_1, delta, pitches, n, s0, kk, lam, xs, zs, runs):
             if on:
                 if tab[k, SIGP] == 0.0:
                     sq = sq + pitch
-                elif runs or i == n:
+                elif runs != 0.0 or i == n:
                     sq = wraps * p0 + tab[k, S0] + local_inverse(tab, k, found, delta)
                 else:
                     sq = wraps * p0 + tab[k, S0]  # run_s0 adds the run's inverse map
