@@ -148,23 +148,27 @@ def test_crossing_table_puts_a_roller_on_a_breakpoint(worn):
 
 
 @pytest.mark.parametrize("s0_1", [0.0, 0.05, 0.3, 7.77, 20.9, 21.2, 21.275, 30.0])
-def test_walk_ghost_and_run_s0_are_the_walk(chain, s0_1):
-    """The ghost walk (the telescopic runs' s0 left at their start, as the inverse run's closing walks take it)
-    has the walk's ghost residual and positions, and completed by run_s0 its s0 too, all to the bit; roller 1 on
-    a run, near and across the wrap, past a loop. Some of its s0 were left (else the test shows nothing)."""
-    from vibkit.model.chain import run_s0, walk, walk_ghost
+def test_the_ghost_walk_is_the_walk(chain, s0_1):
+    """The ghost walk (the telescopic runs' s0 left out, as the inverse run's closing walks take it) has the walk's
+    ghost residual and points to the bit, and with ``runs`` 1.0 its s0 too; roller 1 on a run, near and across
+    the wrap, past a loop. Only s0 on the runs differ (some do, else the test shows nothing)."""
+    from vibkit.model.chain import walk, walk_ghost
+    from vibkit.model.guide import SIGP
 
     g, n = chain.guide, chain.n
     delta = chain.configure(s0_1 % g.p0).delta
-    whole = [np.empty(n + 1) for _ in range(4)] + [np.empty(n + 1, dtype=np.int64)]
-    ghost = [np.empty(n + 1) for _ in range(4)] + [np.empty(n + 1, dtype=np.int64)]
-    s0, lam, xs, zs, kk = whole
-    h = walk(g.table, g.p0, s0_1, delta, chain.pitches, n, s0, kk, lam, xs, zs)
-    s0g, lamg, xsg, zsg, kkg = ghost
-    hg = walk_ghost(g.table, g.p0, s0_1, delta, chain.pitches, n, s0g, kkg, lamg, xsg, zsg, 0.0)
-    assert hg == h and abs(h) < 1e-9
-    for a, b in ((lam, lamg), (xs, xsg), (zs, zsg), (kk, kkg)):
-        assert np.array_equal(a, b)
-    assert np.count_nonzero(s0g != s0) >= 1  # rollers along a run
-    run_s0(g.table, delta, n, s0g, kkg, lamg)
-    assert np.array_equal(s0g, s0)
+    runs = {}
+    for flag in (None, 1.0, 0.0):
+        s0, lam, xs, zs, kk = [np.empty(n + 1) for _ in range(4)] + [np.empty(n + 1, dtype=np.int64)]
+        args = (g.table, g.p0, s0_1, delta, chain.pitches, n, s0, kk, lam, xs, zs)
+        h = walk(*args) if flag is None else walk_ghost(*args, flag)
+        runs[flag] = (h, s0, lam, xs, zs, kk)
+    h, s0, lam, xs, zs, kk = runs[None]
+    assert abs(h) < 1e-9
+    for flag in (1.0, 0.0):
+        assert runs[flag][0] == h
+        for a, b in zip((lam, xs, zs, kk), runs[flag][2:]):
+            assert np.array_equal(a, b)
+    assert np.array_equal(runs[1.0][1], s0)
+    left = runs[0.0][1] != s0
+    assert left.any() and np.all(g.table[kk[left], SIGP] != 0.0)

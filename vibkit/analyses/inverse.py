@@ -16,7 +16,7 @@ import math
 
 import numpy as np
 
-from ..model.chain import fill_partials, run_s0, sensitivity, walk, walk_ghost
+from ..model.chain import fill_partials, sensitivity, walk_ghost
 from ..model.dynamics import link_multipliers
 from ..model.flat_roller import add_flats
 from ..model.guide import AX, AZ, BX, BZ, COS0, CUMD, KAPPA, S0, SIGP, SIN0, local_map, locate
@@ -185,8 +185,8 @@ def inverse_positions(
     placement (:func:`_closure_slope`: one pass, no trigonometry, under half a walk), any further step along the
     secant of h. A sample takes two walks where the Python loop's Newton steps take six walks and three sets of
     partial derivatives (a slope carried from the sample before, off by about 1e-4 of itself, took three); the
-    walks after the first leave the telescopic runs' s0 to :func:`vibkit.model.chain.run_s0`, called only where
-    they are read (the rollers ``ridx``, the partials).
+    walks after the first leave out the telescopic runs' s0 (:func:`vibkit.model.chain.walk_ghost`) unless rollers
+    ``ridx`` are asked for.
     The numbers differ from the Python loop's within those tolerances (the iterations end elsewhere inside
     them).
 
@@ -203,18 +203,16 @@ def inverse_positions(
         if j >= j0 + 3:  # on the parabola through the last three
             s0 = 3.0 * (s0_1[j - 1] - s0_1[j - 2]) + s0_1[j - 3]
             delta = 3.0 * (deltas[j - 1] - deltas[j - 2]) + deltas[j - 3]
-        ok = whole = False
+        ok = False
         g_prev = h_prev = 0.0
         for it in range(30):
             s0, placed = _place(tab, p0, s_target, s0, delta)
             if not placed:
                 return j, s0_j, delta_j
-            # the first walk whole (the slope's pass reads its runs' s0), the others for h and the positions
-            whole = it == 0
-            if whole:
-                h = walk(tab, p0, s0, delta, pitches, n, sw, kk, lam, xs, zs)
-            else:
-                h = walk_ghost(tab, p0, s0, delta, pitches, n, sw, kk, lam, xs, zs, 0.0)
+            # the first walk whole (the slope's pass reads its runs' s0), the others for h and the positions (and the
+            # s0 of the rollers asked for)
+            whole = it == 0 or ridx.size > 0
+            h = walk_ghost(tab, p0, s0, delta, pitches, n, sw, kk, lam, xs, zs, 1.0 if whole else 0.0)
             if math.isnan(h):
                 return j, s0_j, delta_j
             if abs(h) <= tol:
@@ -227,9 +225,8 @@ def inverse_positions(
                 if 0.25 * slope < sec < 4.0 * slope:
                     slope = sec
             if not slope > 0.0 or it == 10:
-                if not whole:
-                    run_s0(tab, delta, n, sw, kk, lam)
-                    whole = True
+                if not whole:  # the same walk again, its runs' s0 too
+                    walk_ghost(tab, p0, s0, delta, pitches, n, sw, kk, lam, xs, zs, 1.0)
                 fill_partials(tab, p0, sw, kk, lam, delta, n + 1, part)
                 sensitivity(part, xs, zs, n + 1, alpha, beta)
                 slope = beta[n]
@@ -246,8 +243,6 @@ def inverse_positions(
         s0_1[j] = s0
         deltas[j] = delta
         resid[j] = _closure_residual(xs, zs, n, pitches)
-        if ridx.size and not whole:
-            run_s0(tab, delta, n, sw, kk, lam)
         for i in range(ridx.size):
             r = ridx[i]
             rpos[j, i, 0] = xs[r]

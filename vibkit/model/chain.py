@@ -82,9 +82,9 @@ def walk(tab, p0, s0_1, delta, pitches, n, s0, kk, lam, xs, zs):
 
 @kernel()
 def walk_ghost(tab, p0, s0_1, delta, pitches, n, s0, kk, lam, xs, zs, runs):
-    """:func:`walk`; ``runs`` 0.0 leaves the s0 of a roller after another on a telescopic run at wraps P0 + s0_k for
-    :func:`run_s0` (the run's inverse map is a tenth of the walk): the same h and points. A float flag: numba compiles
-    a body for each bool constant, one for any float. Locals carry the roller before and its segment's constants."""
+    """:func:`walk`; ``runs`` 0.0 leaves the s0 of a roller after another on a telescopic run at wraps P0 + s0_k (the
+    run's inverse map is a tenth of the walk): the same h and points. A float flag: numba compiles a body for each
+    bool constant, one for any float. Locals carry the roller before and its segment's constants."""
     wraps = math.floor(s0_1 / p0)
     s = s0_1 - wraps * p0
     k = locate(tab, s)
@@ -116,7 +116,7 @@ def walk_ghost(tab, p0, s0_1, delta, pitches, n, s0, kk, lam, xs, zs, runs):
                 elif runs != 0.0 or i == n:
                     sq = wraps * p0 + tab[k, S0] + local_inverse(tab, k, found, delta)
                 else:
-                    sq = wraps * p0 + tab[k, S0]  # run_s0 adds the run's inverse map
+                    sq = wraps * p0 + tab[k, S0]  # (not the run's inverse map)
                 qx, qz = qx + pitch * c0, qz + pitch * s0c
         else:
             if pitch != last_pitch or rho != last_rho:
@@ -143,16 +143,6 @@ def walk_ghost(tab, p0, s0_1, delta, pitches, n, s0, kk, lam, xs, zs, runs):
         lo = found
         kk[i], lam[i], s0[i], xs[i], zs[i] = k, lo, sq, qx, qz
     return sq - (s0_1 + p0)
-
-
-@kernel()
-def run_s0(tab, delta, n, s0, kk, lam):
-    """Complete the s0 that :func:`walk_ghost` left: rollers 1 to n - 1 on a telescopic run whose roller before is
-    on the same segment (hit_next always moves on to another). The same sum as :func:`walk`'s, to the bit."""
-    for i in range(1, n):
-        k = kk[i]
-        if k == kk[i - 1] and tab[k, SIGP] != 0.0:
-            s0[i] = s0[i] + local_inverse(tab, k, lam[i], delta)
 
 
 @kernel()
