@@ -198,3 +198,38 @@ def test_compiled_positions_hand_samples_to_the_python_loop(monkeypatch):
     assert len(calls) > 20  # the Python loop did every sixth sample
     monkeypatch.undo()
     _check_same_positions(handed, _positions_run(scene, 1.0, False))
+
+
+@pytest.mark.parametrize("s_target", [0.05, 0.38, 1.3, 6.9, 12.6, 14.0, 20.9, 23.5])
+def test_closure_slope_is_the_ghost_residuals_finite_difference(s_target):
+    """dh/ddelta with which the compiled loop takes each sample's first step (one pass of the sensitivities, an
+    arc's tangent from its radius, roller 1's placement included) equals the central difference of the ghost
+    residual of two walks at delta +- 1 um, roller 1 placed on the guide each deforms, to 1e-7 of itself (the
+    difference's rounding: 1e-14 m over 2 um, its placement 1e-13 m). Roller 1 on the lower tensioner run, the
+    landing, a transition, the incline, the return run, the lower head, and past one loop. The slope at fixed
+    roller 1 (the sensitivities' beta alone) is off by 1.5e-5 to 1.5e-3 of it here: the placement matters."""
+    from vibkit.analyses.inverse import _closure_slope, _place
+    from vibkit.model.chain import fill_partials, sensitivity, walk
+    from vibkit.model.escalator import EscalatorModel
+
+    chain = EscalatorModel(load_scene(SIM / "leon.toml")).chain
+    tab, p0, n = chain.guide.table, chain.guide.p0, chain.n
+    s0w, lam, xs, zs, alpha, beta = (np.empty(n + 1) for _ in range(6))
+    kk = np.empty(n + 1, dtype=np.int64)
+    s0_guess = float(chain.guide.s_to_s0(s_target % p0, 0.0))
+    delta = chain.configure(s0_guess).delta  # a delta near the chain's, roller 1 placed on its guide below
+    s0, placed = _place(tab, p0, s_target, s0_guess, delta)
+    assert placed
+    walk(tab, p0, s0, delta, chain.pitches, n, s0w, kk, lam, xs, zs)
+    slope = _closure_slope(tab, p0, s_target, s0w, kk, xs, zs, delta, n)
+    part = np.empty((n + 1, 12))
+    fill_partials(tab, p0, s0w, kk, lam, delta, n + 1, part)
+    sensitivity(part, xs, zs, n + 1, alpha, beta)
+    eps, h = 1e-6, []
+    for d in (delta + eps, delta - eps):
+        s0d, placed = _place(tab, p0, s_target, s0, d)
+        assert placed
+        h.append(walk(tab, p0, s0d, d, chain.pitches, n, s0w, kk, lam, xs, zs))
+    fd = (h[0] - h[1]) / (2.0 * eps)
+    assert slope == pytest.approx(fd, rel=1e-7)
+    assert abs(beta[n] - fd) > 1e-5 * fd

@@ -145,3 +145,30 @@ def test_crossing_table_puts_a_roller_on_a_breakpoint(worn):
     for a, b in zip(cross[100:110], cross[101:111]):
         segs = [chain.configure(float(x)).segment for x in np.linspace(a, b, 5)[1:-1]]
         assert all(np.array_equal(segs[0], s) for s in segs[1:])
+
+
+@pytest.mark.parametrize("s0_1", [0.0, 0.05, 0.3, 7.77, 20.9, 21.2, 21.275, 30.0])
+def test_the_ghost_walk_is_the_walk(chain, s0_1):
+    """The ghost walk (the telescopic runs' s0 left out, as the inverse run's closing walks take it) has the walk's
+    ghost residual and points to the bit, and with ``runs`` 1.0 its s0 too; roller 1 on a run, near and across
+    the wrap, past a loop. Only s0 on the runs differ (some do, else the test shows nothing)."""
+    from vibkit.model.chain import walk, walk_ghost
+    from vibkit.model.guide import SIGP
+
+    g, n = chain.guide, chain.n
+    delta = chain.configure(s0_1 % g.p0).delta
+    runs = {}
+    for flag in (None, 1.0, 0.0):
+        s0, lam, xs, zs, kk = [np.empty(n + 1) for _ in range(4)] + [np.empty(n + 1, dtype=np.int64)]
+        args = (g.table, g.p0, s0_1, delta, chain.pitches, n, s0, kk, lam, xs, zs)
+        h = walk(*args) if flag is None else walk_ghost(*args, flag)
+        runs[flag] = (h, s0, lam, xs, zs, kk)
+    h, s0, lam, xs, zs, kk = runs[None]
+    assert abs(h) < 1e-9
+    for flag in (1.0, 0.0):
+        assert runs[flag][0] == h
+        for a, b in zip((lam, xs, zs, kk), runs[flag][2:]):
+            assert np.array_equal(a, b)
+    assert np.array_equal(runs[1.0][1], s0)
+    left = runs[0.0][1] != s0
+    assert left.any() and np.all(g.table[kk[left], SIGP] != 0.0)

@@ -16,10 +16,10 @@ import math
 
 import numpy as np
 
-from ..model.chain import fill_partials, sensitivity, walk
+from ..model.chain import fill_partials, sensitivity, walk_ghost
 from ..model.dynamics import link_multipliers
 from ..model.flat_roller import add_flats
-from ..model.guide import CUMD, S0, local_map, locate
+from ..model.guide import AX, AZ, BX, BZ, COS0, CUMD, KAPPA, S0, SIGP, SIN0, local_map, locate
 from ..model.schema import TensionerOptions, effect_options, gravity_of
 from ..runtime.kernel import kernel
 from ..runtime.progress import Progress
@@ -91,6 +91,64 @@ def _place(tab, p0, s_target, s0, delta):
 
 
 @kernel()
+def _placed_rate(tab, p0, s_target, s0, delta):
+    """d s0_1 / d delta of roller 1 placed by :func:`_place` (its arc length on the deformed guide held at
+    ``s_target`` mod the loop P0 - 2 delta while delta moves), at roller 1's ``s0``."""
+    s0w = s0 - p0 * math.floor(s0 / p0)
+    k = locate(tab, s0w)
+    lm, sig, lmd, _, _ = local_map(tab, k, s0w - tab[k, S0], delta)
+    per = p0 - 2.0 * delta
+    gap = tab[k, S0] + tab[k, CUMD] * delta + lm - s_target
+    loops = round((gap - _ieee_remainder(gap, per)) / per)  # the loops between s_target and roller 1
+    return -(tab[k, CUMD] + lmd + 2.0 * loops) / sig
+
+
+@kernel()
+def _closure_slope(tab, p0, s_target, s0, kk, xs, zs, delta, n):
+    """dh/ddelta of the ghost residual h of the walk just made (points ``s0``, ``kk``, ``xs``, ``zs``, n links)
+    with roller 1 placed at ``s_target`` on the guide that delta deforms: the sensitivity recursion of
+    :func:`vibkit.model.chain.sensitivity` (alpha = d s0_i / d s0_1, beta = d s0_i / d delta) in one pass with
+    no partials stored, each point's dr/ds0 and dr/ddelta as :func:`vibkit.model.guide.point_partials` has
+    them but an arc's tangent from the point's radius (t = kappa (-(z - c_z), x - c_x), c its centre) instead of
+    the sine and cosine of its angle; then h = s0_ghost - s0_1 - P0 along roller 1's placement:
+    dh/ddelta = beta_ghost + (alpha_ghost - 1) d s0_1 / d delta."""
+    alpha, beta = 1.0, 0.0
+    seg = -1  # the segment whose constants are below
+    kap = tx0 = tz0 = bx = bz = cx = cz = 0.0
+    tele = False
+    psx = psz = pdx = pdz = 0.0
+    for i in range(n + 1):
+        k = kk[i]
+        if k != seg:
+            seg = k
+            kap, tx0, tz0, bx, bz = tab[k, KAPPA], tab[k, COS0], tab[k, SIN0], tab[k, BX], tab[k, BZ]
+            tele = tab[k, SIGP] != 0.0
+            if kap != 0.0:
+                cx = tab[k, AX] + bx * delta - tz0 / kap
+                cz = tab[k, AZ] + bz * delta + tx0 / kap
+        tx, tz = tx0, tz0
+        if kap != 0.0:
+            tx, tz = -kap * (zs[i] - cz), kap * (xs[i] - cx)
+        ls, ld = 1.0, 0.0
+        if tele:
+            s0loc = s0[i] - p0 * math.floor(s0[i] / p0) - tab[k, S0]
+            if s0loc < -1e-9:  # point found a hair before its segment's start across the wrap
+                s0loc += p0
+            _, ls, ld, _, _ = local_map(tab, k, s0loc, delta)
+        rsx, rsz, rdx, rdz = ls * tx, ls * tz, bx + ld * tx, bz + ld * tz
+        if i > 0:
+            ux = xs[i] - xs[i - 1]
+            uz = zs[i] - zs[i - 1]
+            inv = 1.0 / (ux * rsx + uz * rsz)
+            ratio = (ux * psx + uz * psz) * inv  # d s0_i+1 / d s0_i along the link
+            rise = (ux * (pdx - rdx) + uz * (pdz - rdz)) * inv  # d s0_i+1 / d delta at fixed s0_i
+            alpha = ratio * alpha
+            beta = ratio * beta + rise
+        psx, psz, pdx, pdz = rsx, rsz, rdx, rdz
+    return beta + (alpha - 1.0) * _placed_rate(tab, p0, s_target, s0[0], delta)
+
+
+@kernel()
 def inverse_positions(
     tab,
     p0,
@@ -122,18 +180,22 @@ def inverse_positions(
     ``start + speed t`` on the deformed guide (|f| < 1e-13 m), and the chain closed (the ghost residual
     |h| <= tol, or a step below delta's rounding with |h| < 1e3 tol, as solve_closure takes it). They are
     solved the other way round: for a trial delta roller 1 is placed on the guide that delta deforms (the guide's
-    local map only: :func:`_place`), and one walk of the chain from there gives h; delta steps along the
-    secant of h (its first slope dh/ddelta from the sensitivities). Each sample starts on the parabola
-    through the last three, so that a sample takes two or three walks where the Python loop's Newton steps
-    take six walks and three sets of partial derivatives. The numbers differ from the Python loop's within
-    those tolerances (the iterations end elsewhere inside them).
+    local map only: :func:`_place`), and one walk of the chain from there gives h. Each sample starts on the
+    parabola through the last three; its first step is Newton's, with dh/ddelta of that walk along roller 1's
+    placement (:func:`_closure_slope`: one pass, no trigonometry, under half a walk), any further step along the
+    secant of h. A sample takes two walks where the Python loop's Newton steps take six walks and three sets of
+    partial derivatives (a slope carried from the sample before, off by about 1e-4 of itself, took three); the
+    walks after the first leave out the telescopic runs' s0 (:func:`vibkit.model.chain.walk_ghost`) unless rollers
+    ``ridx`` are asked for.
+    The numbers differ from the Python loop's within those tolerances (the iterations end elsewhere inside
+    them).
 
     Fills ``s0_1``, ``deltas``, ``resid`` and, for the rollers ``ridx`` (from 0), ``rpos`` and ``rs0``;
     ``scratch`` (6, n + 1), ``kk`` (n + 1,), ``part`` (n + 1, 12) are work arrays. Returns (the first sample
     not done, roller 1's s0 and the closure's guess there): a sample whose placement or closure fails here
     is left to the Python loop, which takes it up from there and says why."""
     sw, lam, xs, zs, alpha, beta = scratch[0], scratch[1], scratch[2], scratch[3], scratch[4], scratch[5]
-    slope = 0.0  # dh/ddelta along the placed roller 1: unknown
+    slope = 0.0  # dh/ddelta along the placed roller 1
     eps8 = 8.0 * 2.220446049250313e-16
     for j in range(j0, t.size):
         s_target = start + speed * t[j]
@@ -147,17 +209,24 @@ def inverse_positions(
             s0, placed = _place(tab, p0, s_target, s0, delta)
             if not placed:
                 return j, s0_j, delta_j
-            h = walk(tab, p0, s0, delta, pitches, n, sw, kk, lam, xs, zs)
+            # the first walk whole (the slope's pass reads its runs' s0), the others for h and the positions (and the
+            # s0 of the rollers asked for)
+            whole = it == 0 or ridx.size > 0
+            h = walk_ghost(tab, p0, s0, delta, pitches, n, sw, kk, lam, xs, zs, 1.0 if whole else 0.0)
             if math.isnan(h):
                 return j, s0_j, delta_j
             if abs(h) <= tol:
                 ok = True
                 break
-            if it > 0 and abs(h - h_prev) > 1e3 * tol:
+            if it == 0:
+                slope = _closure_slope(tab, p0, s_target, sw, kk, xs, zs, delta, n)
+            elif abs(h - h_prev) > 1e3 * tol:
                 sec = (h - h_prev) / (delta - g_prev)  # where h changed by well over its rounding
                 if 0.25 * slope < sec < 4.0 * slope:
                     slope = sec
-            if slope <= 0.0 or it == 10:
+            if not slope > 0.0 or it == 10:
+                if not whole:  # the same walk again, its runs' s0 too
+                    walk_ghost(tab, p0, s0, delta, pitches, n, sw, kk, lam, xs, zs, 1.0)
                 fill_partials(tab, p0, sw, kk, lam, delta, n + 1, part)
                 sensitivity(part, xs, zs, n + 1, alpha, beta)
                 slope = beta[n]
@@ -303,6 +372,8 @@ def inverse_dynamics(
             # positions only: the samples from here in one compiled loop, to the end or to one it leaves to this loop
             done, s0 = compiled.run(j, s0)
             bar.update(done)
+            if done == nt:
+                break  # every sample done (not 1.5 ms of skipping the rest one by one)
             if j < done:
                 continue
         s_target = start + speed * tj

@@ -77,44 +77,48 @@ def walk(tab, p0, s0_1, delta, pitches, n, s0, kk, lam, xs, zs):
     roller 1). Returns the ghost residual h = s0[n] - (s0_1 + P0) [m], or NaN when a link finds no
     guide point at its pitch (delta outside what the guide allows).
     """
+    return walk_ghost(tab, p0, s0_1, delta, pitches, n, s0, kk, lam, xs, zs, 1.0)
+
+
+@kernel()
+def walk_ghost(tab, p0, s0_1, delta, pitches, n, s0, kk, lam, xs, zs, runs):
+    """:func:`walk`; ``runs`` 0.0 leaves the s0 of a roller after another on a telescopic run at wraps P0 + s0_k (the
+    run's inverse map is a tenth of the walk): the same h and points. A float flag: numba compiles a body for each
+    bool constant, one for any float. Locals carry the roller before and its segment's constants."""
     wraps = math.floor(s0_1 / p0)
     s = s0_1 - wraps * p0
     k = locate(tab, s)
-    lam0 = local_map(tab, k, s - tab[k, S0], delta)[0]
-    x, z, _, _ = local_frame(tab, k, lam0, delta)
-    s0[0] = s0_1
-    kk[0] = k
-    lam[0] = lam0
-    xs[0] = x
-    zs[0] = z
-    # chord angle on the current arc, recomputed only when the pitch or the radius changes
-    last_pitch = -1.0
-    last_rho = -1.0
-    cd, sd = 1.0, 0.0
-    step = 0.0
+    lo = local_map(tab, k, s - tab[k, S0], delta)[0]
+    qx, qz, _, _ = local_frame(tab, k, lo, delta)
+    sq = s0[0] = s0_1
+    kk[0], lam[0], xs[0], zs[0] = k, lo, qx, qz
+    last_pitch = last_rho = -1.0  # the chord angle on the current arc: recomputed when pitch or radius change
+    cd, sd, step = 1.0, 0.0, 0.0
+    seg = -1  # the segment whose constants are below
+    kap = length = c0 = s0c = rho = cx = cz = 0.0
     for i in range(1, n + 1):
-        qx, qz = xs[i - 1], zs[i - 1]
-        k = kk[i - 1]
-        lo = lam[i - 1]
         pitch = pitches[i - 1]
+        if k != seg:
+            seg, kap, length, c0, s0c = k, tab[k, KAPPA], seg_length(tab, k, delta), tab[k, COS0], tab[k, SIN0]
+            if kap != 0.0:
+                rho = 1.0 / abs(kap)
+                # centre of the arc (it moves with delta only through the segment's start point)
+                cx = tab[k, AX] + tab[k, BX] * delta - s0c / kap
+                cz = tab[k, AZ] + tab[k, BZ] * delta + c0 / kap
         # the usual case first, in closed form and without trigonometry: the next roller on the
         # same line (one pitch further on) or the same arc (the previous one rotated by the chord angle)
-        kap = tab[k, KAPPA]
-        length = seg_length(tab, k, delta)
         if kap == 0.0:
             found = lo + pitch
-            if found <= length:
-                kk[i] = k
-                lam[i] = found
+            on = found <= length
+            if on:
                 if tab[k, SIGP] == 0.0:
-                    s0[i] = s0[i - 1] + pitch
+                    sq = sq + pitch
+                elif runs != 0.0 or i == n:
+                    sq = wraps * p0 + tab[k, S0] + local_inverse(tab, k, found, delta)
                 else:
-                    s0[i] = wraps * p0 + tab[k, S0] + local_inverse(tab, k, found, delta)
-                xs[i] = qx + pitch * tab[k, COS0]
-                zs[i] = qz + pitch * tab[k, SIN0]
-                continue
+                    sq = wraps * p0 + tab[k, S0]  # (not the run's inverse map)
+                qx, qz = qx + pitch * c0, qz + pitch * s0c
         else:
-            rho = 1.0 / abs(kap)
             if pitch != last_pitch or rho != last_rho:
                 last_pitch, last_rho = pitch, rho
                 if pitch < 2.0 * rho:
@@ -124,28 +128,21 @@ def walk(tab, p0, s0_1, delta, pitches, n, s0, kk, lam, xs, zs):
                 else:
                     step = math.inf
             found = lo + step
-            if found <= length:
-                # centre of the arc (it moves with delta only through the segment's start point)
-                cx = tab[k, AX] + tab[k, BX] * delta - tab[k, SIN0] / kap
-                cz = tab[k, AZ] + tab[k, BZ] * delta + tab[k, COS0] / kap
+            on = found <= length
+            if on:
                 rx, rz = qx - cx, qz - cz
                 sg = sd if kap > 0.0 else -sd
-                kk[i] = k
-                lam[i] = found
-                s0[i] = s0[i - 1] + step
-                xs[i] = cx + cd * rx - sg * rz
-                zs[i] = cz + sg * rx + cd * rz
-                continue
-        k, found, wraps, _, _ = hit_next(tab, delta, k, qx, qz, pitch, wraps)
-        if k < 0:
-            return math.nan
-        kk[i] = k
-        lam[i] = found
-        s0[i] = wraps * p0 + tab[k, S0] + local_inverse(tab, k, found, delta)
-        x, z, _, _ = local_frame(tab, k, found, delta)
-        xs[i] = x
-        zs[i] = z
-    return s0[n] - (s0_1 + p0)
+                sq = sq + step
+                qx, qz = cx + cd * rx - sg * rz, cz + sg * rx + cd * rz
+        if not on:
+            k, found, wraps, _, _ = hit_next(tab, delta, k, qx, qz, pitch, wraps)
+            if k < 0:
+                return math.nan
+            sq = wraps * p0 + tab[k, S0] + (found if tab[k, SIGP] == 0.0 else local_inverse(tab, k, found, delta))
+            qx, qz, _, _ = local_frame(tab, k, found, delta)
+        lo = found
+        kk[i], lam[i], s0[i], xs[i], zs[i] = k, lo, sq, qx, qz
+    return sq - (s0_1 + p0)
 
 
 @kernel()
