@@ -97,12 +97,38 @@ def installed(tmp_path_factory):
         timeout=600,
     )
     Path(site, "test-dependencies.pth").write_text(sysconfig.get_paths()["purelib"] + "\n")
+    _copy_model_kernels(Path(site) / "vibkit")
     work = top / "work"  # outside the clone: nothing of the repository is reachable from here
     work.mkdir()
     shutil.copy(ROOT / "data" / "field" / "las-palmas-accelerometer.csv", work / "rec.csv")
     env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "VIRTUAL_ENV")}
     env.update(PATH=f"{venv / 'bin'}{os.pathsep}{env.get('PATH', '')}", MPLBACKEND="Agg")
     return {"venv": venv, "work": work, "env": env}
+
+
+#: the subpackages whose compiled kernels the installed copy is given from the clone's cache; the signal layer's
+#: it compiles and caches itself, beside its installed modules (checked by the README's test)
+GIVEN_KERNELS = ("model", "analyses")
+
+
+def _copy_model_kernels(installed_pkg):
+    """The model's compiled kernels, as this clone's numba cache holds them, copied beside the installed modules.
+
+    numba keys a cached kernel by the digest of its module's source and of its bytecode (numba >= 0.68), not by
+    the path: the installed modules are the clone's files, so the copies are exactly what the installed copy would
+    compile (a minute or two of CPU that every other test of the suite has already paid once). A fresh install
+    compiling them is what every fresh clone does first and what ``vibkit warm``'s test checks."""
+    from vibkit.analyses.warm_up import warm_up
+    from vibkit.runtime.kernel_cache import cache_dir
+
+    warm_up()  # compiled here (or loaded) first: the cache to copy is whole
+    if cache_dir() is not None:  # the clone's package is not writable: its cache lives elsewhere, keyed by path
+        return
+    for sub in GIVEN_KERNELS:
+        for f in (ROOT / "vibkit" / sub / "__pycache__").glob("*.nb[ic]"):
+            target = installed_pkg / sub / "__pycache__"
+            target.mkdir(exist_ok=True)
+            shutil.copy2(f, target / f.name)
 
 
 def _shell(inst, command, timeout=900):
@@ -208,5 +234,8 @@ def test_every_command_of_the_readme_and_getting_started_runs_from_the_wheel(ins
         ROOT / "data" / "field" / "leon-tensioner.csv"
     ).read_bytes()
     if page.name == "README.md":
+        # the installed copy caches the kernels it compiled itself beside its modules (the signal layer's)
+        site_pkg = Path(installed["venv"].glob("lib/python*/site-packages/vibkit").__next__())
+        assert list((site_pkg / "signal" / "__pycache__").glob("*.nbi")), "no kernel cached beside the installed copy"
         assert (work / "out" / "fleet.pdf").read_bytes()[:5] == b"%PDF-"
         assert (work / "out" / "las-palmas.pdf").read_bytes()[:5] == b"%PDF-"
