@@ -33,10 +33,11 @@ Rows (``--rows`` picks some):
   second, against ``pandas.read_csv`` of the same files in one process;
 * ``simulate``: ``vibkit.simulate`` of the shipped ``leon`` scene with its shipped outputs, in one process after a
   warm-up: simulated seconds per CPU second (x real time).
-* ``sweep``: ``vibkit.sweep`` of 16 runs of 10 s (the no-load forward scene from 0.5 m/s, delta only;
-  ``--quick``: 4 runs of 1 s) on a fresh local cluster of 2 workers against 1 (wall time: the target), and the
-  default sweep (runs in the process unless a cluster pays) against a plain Python loop of ``vibkit.simulate`` over
-  the same varied scenes (CPU time).
+* ``sweep``: ``vibkit.sweep`` of 16 runs of 10 s and of 16 runs of 120 s (the no-load forward scene from 0.5 m/s,
+  delta only; ``--quick``: 4 runs of 1 s and of 2 s) on a fresh local cluster of 2 workers against 1 (wall time: the
+  target), and the default sweep (runs in the process unless a cluster pays; the row says which it chose) against a
+  plain Python loop of ``vibkit.simulate`` over the same varied scenes (CPU time). The short sweep is a cluster's
+  start-up and little else; the long one is where the runs outweigh it.
 
 Writes benchmarks/results/user_costs.md (``--quick``: user_costs_quick.md); ``--merge`` keeps the rows of the table
 already there that this run does not measure (several people regenerate different rows).
@@ -505,24 +506,26 @@ def main(argv=None):
             )
 
         if "sweep" in wanted:
-            rows += sweep_rows(tmp, a.quick, repeat)
+            rows += sweep_rows(tmp, *((4, 1.0) if a.quick else (16, 10.0)), repeat)
+            # a sweep whose runs outweigh a cluster's start-up (about 2 s of simulation a run)
+            rows += sweep_rows(tmp, *((4, 2.0) if a.quick else (16, 120.0)), repeat)
 
     print(flush(rows, a.quick, repeat, load0, a.merge))
     return 0
 
 
-def sweep_rows(tmp, quick, repeat):
-    """Row ``sweep``: 2 workers against 1 on fresh local clusters (wall), the default sweep against a plain loop
-    of ``vibkit.simulate`` (CPU); every case a fresh process, interleaved."""
+def sweep_rows(tmp, n, duration, repeat):
+    """Row ``sweep``: ``n`` runs of ``duration`` [s] of the study's forward scene, 2 workers against 1 on fresh
+    local clusters (wall), the default sweep against a plain loop of ``vibkit.simulate`` (CPU); every case a fresh
+    process, interleaved."""
     import tomllib
 
     from vibkit.sweep.plan import to_toml
 
-    n, duration = (4, 1.0) if quick else (16, 10.0)
     data = tomllib.loads((ROOT / "sim" / "thesis-forward.toml").read_text())
     data["run"].update(duration=duration, initial_speed=0.5)
     data["outputs"] = {"variables": ["delta"]}
-    scene = tmp / "sweep-scene.toml"
+    scene = tmp / f"sweep-scene-{duration:g}.toml"
     scene.write_text(to_toml(data))
     vary = {"effects.contact.stiffness": f"5e5:2e6:{n}"}
     head = f"import vibkit\nscene, vary = {str(scene)!r}, {vary!r}\n"
@@ -538,7 +541,10 @@ def sweep_rows(tmp, quick, repeat):
         ),
         (
             "default",
-            head + f"ds = vibkit.sweep(scene, vary, progress=False)\nassert int(ds.attrs['runs_ok']) == {n}\n",
+            head
+            + guard
+            + f"    ds = vibkit.sweep(scene, vary, progress=False)\n    assert int(ds.attrs['runs_ok']) == {n}\n"
+            + "    import sys\n    print('on a local Dask cluster' if 'distributed' in sys.modules else 'in process')\n",
             None,
         ),
     ]
@@ -569,7 +575,7 @@ def sweep_rows(tmp, quick, repeat):
             f"ratio of wall times: {d2['wall']:.1f} s against {d1['wall']:.1f} s; CPU in the CPU columns",
         ),
         row(
-            what + ", as it chooses (here: in process)",
+            what + f", as it chooses (here: {auto['out'].strip().splitlines()[-1]})",
             "vibkit.sweep default",
             "a plain Python loop of vibkit.simulate",
             auto["cpu"],
