@@ -17,14 +17,13 @@ The decision, with a stated false-alarm probability: :mod:`vibkit.signal.linksca
 
 from __future__ import annotations
 
-import functools
 import math
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.signal
 
-from ._checks import as_signal, check_fs, check_positive_int, filter_with_zi, sosfiltfilt
+from ._checks import as_signal, check_fs, check_positive_int
+from .orders import _lowpass as _orders_lowpass
 from .orders import resample_to_angle
 
 __all__ = [
@@ -216,18 +215,10 @@ def _loop_mean(a, n):
     return (c[lo + n] - c[lo]) / n
 
 
-@functools.lru_cache(maxsize=32)
-def _lowpass_filter(cutoff, fs):
-    """The second-order Butterworth low-pass at ``cutoff`` [Hz] with its ``sosfilt_zi``, designed once per cutoff and
-    rate: the tracking asks the same one of every harmonic, part and pass (17 designs and 34 ``sosfilt_zi`` a
-    10-loop recording, where scipy's ``sosfiltfilt`` solves it on every call)."""
-    return filter_with_zi(scipy.signal.butter(2, cutoff, btype="low", fs=fs, output="sos"))
-
-
 def _lowpass(y, fs, cutoff, padtype="even"):
-    """Zero-phase second-order low-pass (:func:`scipy.signal.sosfiltfilt`'s numbers, bit for bit)."""
-    padlen = min(y.size - 1, int(3.0 * fs / float(cutoff)))
-    return sosfiltfilt(_lowpass_filter(float(cutoff), float(fs)), y, padtype=padtype, padlen=padlen)
+    """Zero-phase second-order low-pass: :mod:`.orders`' (its design kept per cutoff and rate; scipy's
+    ``sosfiltfilt`` numbers, bit for bit)."""
+    return _orders_lowpass(y, fs, float(cutoff), order=2, padtype=padtype)
 
 
 def link_pass_phase(x, fs, f0, *, bandwidth_hz, n_harmonics=4):
