@@ -180,7 +180,7 @@ def phone_export_folder(path, head):
     if phone_sensor_files(names, lambda name: head(path, name), phyphox=_is_phyphox(listing)):
         return path
     subs = []
-    for d in sorted(os.listdir(path)):
+    for d in sorted(listing):
         sub = os.path.join(path, d)
         if os.path.isdir(sub) and not d.startswith("."):
             try:
