@@ -10,6 +10,7 @@ import textwrap
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 import vibkit
 
@@ -66,6 +67,17 @@ def test_the_spectrum_command_imports_nothing_it_does_not_run(tmp_path):
     heavy = (*HEAVY, "dask.base", "dask.array", "h5py", "netCDF4", "vibkit.analyses")
     loaded = _loaded_after(_as_the_script(["spectrum", path, "--band", "2.5:6", "--json"]) + "assert rc == 0\n", heavy)
     assert loaded - {"scipy.stats"} == set()
+
+
+@pytest.mark.slow
+def test_the_report_command_imports_no_dask(tmp_path):
+    """`vibkit report` run as its own process needs no dask: xarray runs as where dask is not installed (not even
+    dask's base imported to ask whether an array is a dask one), and its PDF is written."""
+    out = tmp_path / "r.pdf"
+    code = _as_the_script(["report", _csv(tmp_path), "-o", out, "--speed", "0.5"]) + "assert rc == 0\n"
+    loaded = _loaded_after(code, ("dask", "dask.base", "dask.array", "obspy"))
+    assert loaded == set()
+    assert out.read_bytes().startswith(b"%PDF")
 
 
 def test_a_library_caller_keeps_dask(tmp_path):

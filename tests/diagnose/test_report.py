@@ -61,6 +61,28 @@ def test_pages_and_text(leon_report):
 
 
 @pytest.mark.slow
+@pytest.mark.slow
+def test_every_text_drawn_on_a_page_can_be_extracted_from_the_pdf(leon_report):
+    """The PDF's text is searchable: every line of every text a page records (tables, notes, axis labels) is in
+    what a PDF reader (pdfium) extracts from that page, whitespace aside and matplotlib's minus sign read as '-'."""
+    pdfium = pytest.importorskip("pypdfium2")
+
+    def norm(text):
+        return re.sub(r"\s+", " ", text.replace("\u2212", "-")).strip()
+
+    pdf = pdfium.PdfDocument(leon_report.path)
+    checked = 0
+    for (title, texts), page in zip(leon_report.pages, pdf, strict=True):
+        extracted = norm(page.get_textpage().get_text_range())
+        lines = [norm(line) for t in texts for line in t.splitlines() if norm(line) and "$" not in line]
+        assert lines, title
+        missing = [line for line in lines if line not in extracted]
+        assert not missing, (title, missing[:3])
+        checked += len(lines)
+    pdf.close()
+    assert checked > 200  # every page's texts, not a few
+
+
 def test_reproducible_bytes(tmp_path, monkeypatch):
     monkeypatch.setenv("SOURCE_DATE_EPOCH", "1700000000")
     a, b = tmp_path / "a.pdf", tmp_path / "b.pdf"

@@ -208,3 +208,29 @@ def test_the_numpy_path_of_a_short_record_is_the_kernels_to_the_last_bit(seed, m
         by_kernel = hampel(x, k, ns)
         for a, b in zip(by_numpy, by_kernel, strict=True):
             np.testing.assert_array_equal(a, b, strict=True)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_the_windows_the_ends_truncate_are_numpys_medians_to_the_last_bit(seed, monkeypatch):
+    """The numpy path takes the windows the record's ends truncate all at once: each window's median and MAD are
+    ``numpy.median``'s of that window to the last bit (odd and even lengths, ties, a zero MAD)."""
+    import importlib
+
+    H = importlib.import_module("vibkit.signal.hampel")
+    monkeypatch.setattr(H, "NUMPY_MAX_ELEMENTS", 10**12)
+    rng = np.random.default_rng(seed)
+    for trial in range(40):
+        n = int(rng.integers(3, 600))
+        k = int(rng.integers(1, (n - 1) // 2 + 1))
+        x = rng.standard_normal(n) * 10 ** rng.uniform(-6, 3)
+        if trial % 2:
+            x = np.round(x, 1)  # ties and zero MAD
+        got = hampel(x, k, 3.0)
+        med = np.empty(n)
+        sig = np.empty(n)
+        for i in range(n):  # the definition, window by window
+            w = x[max(0, i - k) : i + k + 1]
+            med[i] = np.median(w)
+            sig[i] = H.MAD_SCALE * np.median(np.abs(w - med[i]))
+        np.testing.assert_array_equal(got.median, med, strict=True)
+        np.testing.assert_array_equal(got.sigma, sig, strict=True)

@@ -186,13 +186,34 @@ def _hampel_numpy(x, k, n_sigma, y, outlier, med_out, sig_out):
         m = np.median(win, axis=1)
         med_out[k : n - k] = m
         sig_out[k : n - k] = MAD_SCALE * np.median(np.abs(win - m[:, None]), axis=1)
-    for i in (*range(min(k, n)), *range(max(k, n - k), n)):  # the windows the record's ends truncate
-        w = x[max(0, i - k) : i + k + 1]
-        m = np.median(w)
-        med_out[i] = m
-        sig_out[i] = MAD_SCALE * np.median(np.abs(w - m))
+    ends = np.array([*range(min(k, n)), *range(max(k, n - k), n)], dtype=np.intp)  # the windows the ends truncate
+    if ends.size:
+        med_out[ends], sig_out[ends] = _truncated_windows(x, ends, k)
     np.greater(np.abs(x - med_out), n_sigma * sig_out, out=outlier)
     y[:] = np.where(outlier, med_out, x)
+
+
+def _middle(rows, lengths):
+    """``numpy.median`` of each row's first ``lengths`` values, the rows sorted (the rest +inf): its middle value,
+    or the mean of its two middle values, as ``numpy.median`` computes them."""
+    at = np.arange(rows.shape[0])
+    lo, hi = rows[at, (lengths - 1) // 2], rows[at, lengths // 2]
+    return np.where(lengths % 2 == 1, lo, (lo + hi) / 2)
+
+
+def _truncated_windows(x, ends, k):
+    """(median, MAD sigma) of the windows ``x[max(0, i - k) : i + k + 1]`` of the samples ``ends``, which the
+    record's ends truncate, all at once: each window a row padded with +inf and sorted, so that its order
+    statistics are those ``numpy.median`` partitions for.  ``x`` finite (:func:`hampel` refuses infinite samples
+    and sends a record with NaN to the compiled kernel)."""
+    start = np.maximum(ends - k, 0)
+    lengths = np.minimum(ends + k + 1, x.size) - start
+    cols = np.arange(int(lengths.max()))
+    inside = cols < lengths[:, None]
+    win = np.where(inside, x[np.minimum(start[:, None] + cols, x.size - 1)], np.inf)
+    med = _middle(np.sort(win, axis=1), lengths)
+    dev = np.where(inside, np.abs(win - med[:, None]), np.inf)
+    return med, MAD_SCALE * _middle(np.sort(dev, axis=1), lengths)
 
 
 @dataclass(frozen=True)
