@@ -10,7 +10,7 @@ import pytest
 
 from vibkit.diagnose import pitch_long, pitch_steps
 from vibkit.diagnose.pitch import estimate_pitch
-from vibkit.signal._checks import decimated_noise_fraction
+from vibkit.signal._checks import decimate_for_band, decimated_noise_fraction
 
 from support import chain
 from support.recording import recording
@@ -47,8 +47,6 @@ def test_short_records_keep_their_bursts_untouched():
 def test_noise_fraction_of_the_decimation_is_what_white_noise_keeps():
     """The fraction against the variance of decimated white noise, over the new band's: 2 M samples give it to
     about 0.2 % (its relative standard deviation is sqrt(2 q / n) ~ 0.2 %); q = 1 leaves everything."""
-    from vibkit.signal._checks import decimate_for_band
-
     rng = np.random.default_rng(3)
     w = rng.standard_normal(2_000_000)
     for q in (2, 3, 6):
