@@ -369,7 +369,9 @@ def estimate_pitch(
     if not det.detected:
         dec = decide(LinkPassEvidence(detected=False, detection_reason=det.reason))
         return _refusal(common, det, dec, [det.reason, *prep.warnings], [], "none", "no link-pass family detected")
-    ests, skipped = steps.estimate_bursts(prep, name=name, band=req.band, n_harmonics=n_harmonics)
+    ests, skipped = steps.estimate_bursts(
+        prep, name=name, band=req.band, n_harmonics=n_harmonics, f0=float(det.frequency_hz)
+    )
     ests = steps.choose_methods(ests)
     comb = steps.combine(ests, name=name)
     parts, sigma = check_parts(ests, comb, n_links=_loop_links(sensor, n_links))
@@ -407,7 +409,7 @@ def estimate_pitch(
         harmonics=steps.harmonic_rows(ests, comb, prep.scale),
         per_burst=steps.burst_rows(ests),
         hypotheses=steps.hypotheses(
-            [be.burst for be in ests], comb.f0, req.speed, int(teeth), req.pitch_range, int(links_per_step)
+            [be.scaled for be in ests], comb.f0, req.speed, int(teeth), req.pitch_range, int(links_per_step)
         ),
         warnings=warnings,
         notes=notes,

@@ -138,7 +138,7 @@ def _part_estimate(x, fs, be, f0):
         return None
     if not (math.isfinite(f) and math.isfinite(s) and s > 0 and abs(f / f0 - 1) < 0.5):
         return None
-    return float(f), float(s)
+    return float(f), float(s * be.sigma_factor)  # a long record's decimated parts: their burst's factor
 
 
 def _split(ests, f0):

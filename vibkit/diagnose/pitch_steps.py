@@ -31,6 +31,7 @@ from ..signal.meanfreq import mean_link_pass_frequency
 from ..signal.quantisation import quantisation_step
 from ..signal.spectral import padded_power_rows
 from .decision import DISAGREE_SIGMAS, LinkPassEvidence, nearest_catalogue
+from .pitch_long import at_recorded_rate, long_record_bursts
 from .speed import speed_part_too_large
 
 #: samples (from the start) whose levels give the recorder's quantisation step
@@ -105,7 +106,11 @@ class PreparedBursts:
 @dataclass(frozen=True)
 class BurstEstimate:
     """One burst's spectral estimate (:class:`vibkit.signal.LinkPassEstimate`), its mean-phase estimate
-    (None when too short to track), and the method chosen (:func:`choose_methods`) with its frequency."""
+    (None when too short to track), and the method chosen (:func:`choose_methods`) with its frequency.
+
+    A long record's (:mod:`vibkit.diagnose.pitch_long`) was estimated on a decimated copy, ``burst``: ``full_rate``
+    is the burst it came from, ``sigma_factor`` what the fits' sigmas were multiplied by (the parts check's too).
+    """
 
     burst: Burst
     spectral: object
@@ -114,6 +119,14 @@ class BurstEstimate:
     reason: str = ""
     frequency_hz: float = float("nan")
     sigma_hz: float = float("nan")
+    full_rate: Burst | None = None
+    sigma_factor: float = 1.0
+
+    @property
+    def scaled(self) -> Burst:
+        """The burst at the rate of :func:`prepare_bursts` (the hypotheses' spectrum, the rows' rate and length):
+        ``burst``, or the one a long record's estimates were decimated from (``full_rate``)."""
+        return self.burst if self.full_rate is None else self.full_rate
 
 
 @dataclass(frozen=True)
@@ -196,8 +209,11 @@ def detect(prep, *, band, n_harmonics, p_fa, name="x"):
     )
 
 
-def estimate_bursts(prep, *, name, band, n_harmonics):
-    """Spectral and mean-phase estimates of each burst, never bridged; ``(estimates, warnings)``.
+def estimate_bursts(prep, *, name, band, n_harmonics, f0=float("nan")):
+    """Spectral and mean-phase estimates of each burst, never bridged; ``(estimates, warnings)``.  A burst longer
+    than :data:`vibkit.diagnose.pitch_long.LONG_BURST_S` is estimated on a decimated copy
+    (:func:`vibkit.diagnose.pitch_long.long_record_bursts`, with ``f0`` the detected
+    fundamental [Hz]; NaN: every burst at its rate).
 
     Raises
     ------
@@ -205,7 +221,7 @@ def estimate_bursts(prep, *, name, band, n_harmonics):
         No burst is long enough for an estimate.
     """
     ests, skipped = [], []
-    for b, b_raw in zip(prep.bursts, prep.raw):
+    for (b, full, q, fraction), b_raw in zip(long_record_bursts(prep, f0, n_harmonics), prep.raw):
         try:
             e = link_pass_estimate(
                 b.x, b.fs, band=band, n_harmonics=n_harmonics, quantum=prep.quantum, decimation=b_raw.fs / b.fs
@@ -213,7 +229,10 @@ def estimate_bursts(prep, *, name, band, n_harmonics):
         except ValueError as exc:
             skipped.append(f"burst {b.segment}: {exc}")
             continue
-        ests.append(BurstEstimate(b, e, _burst_mean_phase(b, e)))
+        mp, factor = _burst_mean_phase(b, e), 1.0
+        if full is not None:
+            e, mp, factor = at_recorded_rate(e, mp, b.x.size, q, fraction)
+        ests.append(BurstEstimate(b, e, mp, full_rate=full, sigma_factor=factor))
     if not ests:
         raise ValueError(
             f"channel {name!r}: no burst long enough to estimate a link-pass frequency in "
@@ -248,7 +267,7 @@ def choose_methods(ests):
             f, s = be.mean_phase.frequency_hz, be.mean_phase.sigma_hz
         else:
             f, s = be.spectral.fundamental_hz, be.spectral.fundamental_sigma_hz
-        out.append(BurstEstimate(be.burst, be.spectral, be.mean_phase, m, why, f, s))
+        out.append(BurstEstimate(be.burst, be.spectral, be.mean_phase, m, why, f, s, be.full_rate, be.sigma_factor))
     return out
 
 
@@ -333,7 +352,7 @@ def jitter_effect(recording, name, ests, band, n_harmonics):
     x_all = np.asarray(recording[name].values, dtype=float)
     seg = segment_numbers(recording)
     for be in ests:
-        b = be.burst
+        b = be.scaled  # the burst at its recorded grid (a long record's estimates used a decimated copy)
         if not b.resampled:
             continue
         grid = b.t0 + np.arange(b.x.size) / b.fs
@@ -443,7 +462,7 @@ def burst_rows(ests):
     """One row per burst: its estimates, the method used, and the mean-phase tracking when there is one."""
     per = []
     for be in ests:
-        b, e, mp = be.burst, be.spectral, be.mean_phase
+        b, e, mp = be.scaled, be.spectral, be.mean_phase
         row = {
             "segment": b.segment,
             "t0_s": b.t0,

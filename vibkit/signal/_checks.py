@@ -188,3 +188,23 @@ def decimate_for_band(x, fs: float, f_keep: float, *, oversample: float = 5.0):
     padlen = min(x.size - 1, int(6.0 * fs / cutoff))
     y = sosfiltfilt(_decimation_sos(float(fs), q), x, padtype="even", padlen=padlen)[::q]
     return np.ascontiguousarray(y), fs / q, q
+
+
+@functools.lru_cache(maxsize=32)
+def decimated_noise_fraction(fs: float, q: int) -> float:
+    """What :func:`decimate_for_band` leaves of white noise, as a fraction of the decimated band: the variance of
+    white noise after the zero-phase low-pass, over the variance of white noise of the same density filling
+    ``0 .. fs / (2 q)`` (1 for ``q = 1``; about 0.79 otherwise: the low-pass cuts at 0.8 of the new Nyquist
+    frequency).
+
+    A fit that takes its noise density from its residual's variance (``var / (fs_new / 2)``) reads the density at
+    the harmonics this fraction low after a decimation: its Cramer-Rao sigma is ``sqrt(fraction)`` too small, and
+    ``sigma / sqrt(fraction)`` is the one white noise of the recorded density gives.
+    """
+    if q < 2:
+        return 1.0
+    import scipy.signal
+
+    sos, _zi = _decimation_sos(float(fs), int(q))
+    _w, h = scipy.signal.sosfreqz(sos, worN=1 << 14, fs=float(fs))
+    return float(q * np.mean(np.abs(h) ** 4))  # |H|^2 twice (forward and backward), averaged over 0 .. fs/2

@@ -1,0 +1,77 @@
+"""A long record's estimates, made on a copy decimated to what its harmonics need.
+
+:func:`vibkit.diagnose.pitch.estimate_pitch` detects the link pass on the record at the rate its detection needs
+(ten times the band's top); the estimates after it (harmonic least squares, the phase tracking of the mean-phase
+estimate, the parts check's fits) need only the harmonics fitted.  A burst longer than :data:`LONG_BURST_S` (a
+day's recording; every shipped scene, fleet file and phone ride is minutes at most and keeps its rate, bit for
+bit) is estimated on a copy decimated to :data:`LONG_OVERSAMPLE` times its highest harmonic fitted
+(:func:`long_record_bursts`: a third of the samples of 8 h at 200 Hz), its fits' sigmas and noise stated as the
+recorded rate states them (:func:`at_recorded_rate`).  The hypotheses' spectrum and the rows of the result keep
+the burst at its rate.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+from ..signal._checks import decimate_for_band, decimated_noise_fraction
+from ..signal.bursts import Burst
+
+#: a burst longer than this is a long record [s]: after the detection, its estimates (spectral, mean-phase, the
+#: parts check) are made on a copy decimated to what the harmonics fitted need (:func:`long_record_bursts`), every
+#: shipped scene, fleet file and phone ride (minutes at most) is far shorter and keeps the full rate, bit for bit
+LONG_BURST_S = 1800.0
+#: ... decimated to at least this many times the highest harmonic fitted, ``(n_harmonics + 0.5)`` times the
+#: detected fundamental (the low-pass at 0.8 of the new Nyquist frequency passes it flat; the oversampling of the
+#: detection's own decimation, :data:`vibkit.diagnose.pitch_steps.DECIMATION_OVERSAMPLE`)
+LONG_OVERSAMPLE = 2.5
+
+
+def long_record_bursts(prep, f0, n_harmonics):
+    """The bursts the estimates are made on: ``[(burst, full-rate burst or None, decimation q, noise fraction)]``.
+
+    A burst of :data:`LONG_BURST_S` or less is itself (``None``, 1, 1.0): every shipped record, bit for bit.  A longer
+    one (a day at 200 Hz: 5.76 million samples) is decimated to at least :data:`LONG_OVERSAMPLE` times its highest
+    harmonic fitted, ``(n_harmonics + 0.5) f0`` with ``f0`` the detected fundamental
+    (:func:`vibkit.signal._checks.decimate_for_band`: 3 times at 200 Hz for 3.75 Hz), so that the harmonic fits,
+    the phase tracking and the parts' fits work on a third of the samples or fewer.  The decimation's low-pass
+    leaves about 0.76 of the white noise a band of the new rate would hold
+    (:func:`vibkit.signal._checks.decimated_noise_fraction`): fits reading their noise density from their residual
+    would state sigmas ``sqrt(0.76)`` too small; :func:`at_recorded_rate` states them as the recorded rate would.
+    """
+    out = []
+    for b in prep.bursts:
+        if b.x.size / b.fs <= LONG_BURST_S or not (math.isfinite(f0) and f0 > 0):
+            out.append((b, None, 1, 1.0))
+            continue
+        x, fs, q = decimate_for_band(b.x, b.fs, (n_harmonics + 0.5) * f0, oversample=LONG_OVERSAMPLE)
+        if q < 2:
+            out.append((b, None, 1, 1.0))
+            continue
+        out.append((Burst(b.segment, b.t0, fs, x, b.resampled, b.invalid), b, q, decimated_noise_fraction(b.fs, q)))
+    return out
+
+
+def at_recorded_rate(e, mp, n, q, fraction):
+    """A decimated copy's estimates ``(spectral, mean-phase)`` stated as the burst at its recorded rate states them
+    (:func:`long_record_bursts`): the frequencies' sigmas (and the noise-alone spread of the tracked frequency) over
+    ``sqrt(fraction)``, and the noise the spectral fit read as white noise of the same density over the recorded
+    band: its standard deviation times ``sqrt(q / fraction)``, the SNR over it ``10 log10(fraction / q)`` dB lower,
+    a harmonic detected above three standard deviations of its amplitude (``noise sqrt(2 / N)`` at the recorded
+    rate, ``N`` its ``q n`` samples; the copy's ``n`` samples are fitted as they are: at :data:`LONG_OVERSAMPLE`
+    times its highest harmonic, :func:`vibkit.signal.link_pass_estimate` decimates no further)."""
+    factor = 1.0 / math.sqrt(fraction)
+    noise = e.noise_std * math.sqrt(q / fraction)
+    amp_sd = noise * math.sqrt(2.0 / (q * n))
+    harmonics = [replace(h, detected=bool(h.amplitude > 3.0 * amp_sd)) for h in e.harmonics]
+    e = replace(
+        e,
+        fundamental_sigma_hz=e.fundamental_sigma_hz * factor,
+        noise_std=noise,
+        snr_db=e.snr_db + 10.0 * math.log10(fraction / q),
+        harmonics=harmonics,
+    )
+    if mp is not None:
+        mp = replace(mp, sigma_hz=mp.sigma_hz * factor, noise_spread_hz=mp.noise_spread_hz * factor)
+    return e, mp, factor
