@@ -161,3 +161,24 @@ def test_mean_link_pass_frequency_fit_in_blocks_is_the_whole_matrix_fit(monkeypa
     assert blocked.frequency_hz == pytest.approx(whole.frequency_hz, rel=1e-12)
     assert blocked.sigma_hz == pytest.approx(whole.sigma_hz, rel=1e-12)
     assert abs(blocked.frequency_hz - f) < 4 * blocked.sigma_hz
+
+
+@pytest.mark.parametrize("fs", [200.0, 1000.0])
+def test_link_pass_sigma_is_the_recorded_noise_s_bound_whether_or_not_the_fit_decimates(fs):
+    """A fast recorder's record is decimated for the fit (1 kHz: q = 9; 200 Hz with 4 harmonics: q = 2), and the
+    anti-alias low-pass keeps about 0.8 of the new band's white noise.  The stated sigma must still be the
+    Cramer-Rao bound of the noise as recorded (read from the fit's residual, so within a few per cent), not
+    sqrt(0.8) = 0.89 of it, and the harmonics' detection flags must use the same noise."""
+    f0, amps, noise, seconds = 3.75, np.array([1.0, 0.5, 0.3, 0.2]), 3.0, 60
+    t = np.arange(int(seconds * fs)) / fs
+    ratios = []
+    for seed in range(4):
+        rng = np.random.default_rng(seed)
+        ph = rng.uniform(0, 2 * np.pi, amps.size)
+        x = sum(a * np.cos(2 * np.pi * (k + 1) * f0 * t + p) for k, (a, p) in enumerate(zip(amps, ph)))
+        x = x + rng.normal(0.0, noise, t.size)
+        r = link_pass_estimate(x, fs, band=(2.5, 6.0), n_harmonics=4)
+        fitted = np.array([h.amplitude for h in r.harmonics])
+        ratios.append(r.fundamental_sigma_hz / crb_harmonic(t.size, fs, fitted, noise))
+    assert np.median(ratios) == pytest.approx(1.0, abs=0.05)
+    assert max(ratios) < 1.08 and min(ratios) > 0.92

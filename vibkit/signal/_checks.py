@@ -178,7 +178,8 @@ def decimate_for_band(x, fs: float, f_keep: float, *, oversample: float = 5.0):
     Returns ``(y, fs / q, q)``; ``q = 1`` (no copy) when no reduction is possible.  The low-pass
     is a zero-phase 8th-order Butterworth at ``0.8 * fs / (2 q)``, flat to better than 1e-3 up
     to ``f_keep``.  In white noise the Cramer-Rao bound of a frequency is unchanged (noise
-    variance and sample count both drop by ``q``).
+    variance and sample count both drop by ``q``), but a fit that reads the noise from its residual
+    reads it low by :func:`decimated_noise_fraction` (the low-pass cuts part of the new band).
     """
 
     q = int(fs // (oversample * f_keep))

@@ -19,7 +19,15 @@ import numpy as np
 import scipy.ndimage
 from numpy.typing import ArrayLike
 
-from ._checks import as_signal, check_band, check_fs, check_positive_int, decimate_for_band, fill_nan
+from ._checks import (
+    as_signal,
+    check_band,
+    check_fs,
+    check_positive_int,
+    decimate_for_band,
+    decimated_noise_fraction,
+    fill_nan,
+)
 from .estimate import FrequencyEstimate, harmonic_ls, interpolated_dft, interpolated_frequency
 from .quantisation import quantisation_floor, quantisation_step
 
@@ -257,7 +265,9 @@ class LinkPassEstimate:
     fundamental_hz : float
         Link-pass frequency. [Hz]
     fundamental_sigma_hz : float
-        Its standard deviation (Cramer-Rao bound with fitted amplitudes and noise). [Hz]
+        Its standard deviation (Cramer-Rao bound with fitted amplitudes and noise, the noise density as recorded:
+        where the record was decimated for the fit, the part of the white noise its low-pass removed is restated).
+        [Hz]
     harmonics : list of Harmonic
     noise_std : float
         Residual standard deviation of the analysed signal (after decimation to about five times
@@ -331,8 +341,12 @@ def link_pass_estimate(
     kmax = check_positive_int(n_harmonics, "n_harmonics")
     fund = find_fundamental(x, fs, band=band, quantum=quantum, decimation=decimation)
     warnings = []
-    # Only the harmonics matter: decimate long, fast-sampled records (the CRB is unchanged).
-    x, fs, _q = decimate_for_band(x, fs, (kmax + 0.5) * fund.frequency_hz)
+    # Only the harmonics matter: decimate long, fast-sampled records.  The anti-alias low-pass keeps only part of
+    # the decimated band's white noise, so a fit that reads its noise density from its residual states a sigma
+    # sqrt(fraction) too small: restated below as the recorded rate's (the same fit without the decimation).
+    fs_recorded = fs
+    x, fs, q = decimate_for_band(x, fs, (kmax + 0.5) * fund.frequency_hz)
+    restate = 1.0 / np.sqrt(decimated_noise_fraction(fs_recorded, q))
     k_fit = min(kmax, int((fs / 2.0 * 0.999) // fund.frequency_hz))
     if k_fit < kmax:
         warnings.append(f"only {k_fit} of n_harmonics={kmax} lie below Nyquist ({fs / 2:g} Hz)")
@@ -367,8 +381,9 @@ def link_pass_estimate(
         fit = harmonic_ls(x, fs, f_guess=f0, n_harmonics=k_fit, max_iter=1)
         amps, phases = fit.amplitudes, fit.phases
     warnings += list(est.warnings)
+    sig *= restate
     n = np.size(x)
-    amp_sd = est.noise_std * np.sqrt(2.0 / n)
+    amp_sd = restate * est.noise_std * np.sqrt(2.0 / n)
     harmonics = [
         Harmonic(k + 1, (k + 1) * f0, float(amps[k]), float(phases[k]), bool(amps[k] > 3.0 * amp_sd))
         for k in range(k_fit)
