@@ -570,3 +570,24 @@ def test_the_benchmarks_line_stands_at_its_level_over_each_channels_own_floor():
             floor = np.median(p_still[(f > 1.5) & (f < 10)])
             got = 10 * np.log10(p_line[k] / floor)
             assert abs(got - want) < 1.0, (names[c], weights, got, want)
+
+
+def test_a_passenger_shifting_mid_ride_does_not_cut_the_ride():
+    """A 24 s ride (4.2 Hz line at 0.03 m/s^2 on x and z in 0.05 m/s^2 of noise) in which the passenger shifts for 3 s
+    (a 1.2 Hz sway of 0.45 m/s^2 on the vertical axis: the walking band at about 0.3 m/s^2, over the still level and
+    under walking's): one ride over the whole standing, not two halves of 10 s each."""
+    f0 = 4.2
+
+    def line(t):
+        return 0.03 * np.sin(2 * np.pi * f0 * t)
+
+    ds = _walk_stand_walk(5, line, stand_s=24.0)
+    t = ds["time"].values
+    shift = (t > 20.0) & (t < 23.0)
+    ds["acc_z"].values[shift] += 0.45 * np.sin(2 * np.pi * 1.2 * t[shift])
+    found = find_rides(ds)
+    assert len(found.rides) == 1, found.still_spans
+    ride = found.rides[0]
+    # the standing is 10-34 s; the still span loses about a second to the walking band's window at each end
+    assert ride.start_s < 12.0 and ride.end_s > 32.0
+    assert abs(ride.link_pass_hz - f0) < 3 * ride.link_pass_sigma_hz
