@@ -10,12 +10,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 import xarray as xr
+from scipy import signal
 
 import vibkit
 from vibkit.cli import main
 from vibkit.diagnose.rides import find_rides
 from vibkit.io import RecordingError
 from vibkit.signal.steadyline import steady_line
+
+import support
 
 REAL = Path(__file__).resolve().parents[2] / ".." / "shared" / "realworld"
 needs_real = pytest.mark.skipif(
@@ -540,3 +543,51 @@ def test_a_folder_without_an_accelerometer_says_so_in_one_line(tmp_path, capsys)
         assert main(["rides", str(tmp_path / name)]) != 0
         err = capsys.readouterr().err
         assert message in err and len(err.strip().splitlines()) == 1 and "Traceback" not in err
+
+
+@needs_real
+def test_the_benchmarks_line_stands_at_its_level_over_each_channels_own_floor():
+    """The benchmark's line (``support.phone.add_line``) on real standing (advio-07's lift, 13-87 s): each channel's
+    line alone (what was added) peaks in an 8 s Welch spectrum, over the
+    channel's own 1.5-10 Hz median is the stated level less its weight's ratio to the largest, within 1 dB,
+    whichever sensor holds the largest weight.  A phone's axes have floors up to 23 dB apart (accelerometer in m/s^2,
+    gyroscope in rad/s): amplitudes shared in one unit put a gyroscope's share 10-20 dB over its stated level where
+    an accelerometer's axis holds the largest weight, and the accelerometer's under it where a gyroscope's does."""
+    ds = vibkit.read_recording(REAL / "advio-07" / "iphone")
+    fs = float(ds.attrs["sample_rate_hz"])
+    t = ds["time"].values
+    tu = np.arange(13.0, 87.0, 1 / fs)
+    names = ("acc_x", "acc_y", "acc_z", "gyro_x", "gyro_y", "gyro_z")
+    still = np.stack([np.interp(tu, t, ds[n].values) for n in names])
+    phase = 2 * np.pi * 3.875 * np.arange(tu.size) / fs
+    for weights in ([0.5, 0.2, 0.1, 0.1, 0.05, 0.05], [0.05, 0.05, 0.1, 0.1, 0.2, 0.5]):
+        x = support.phone.add_line(still, fs, phase, np.asarray(weights), 16.0, np.random.default_rng(1))
+        for c, w in enumerate(weights):
+            want = 16.0 + 10 * np.log10(w / max(weights))
+            f, p_line = signal.welch(x[c] - still[c], fs, nperseg=int(8 * fs))
+            _, p_still = signal.welch(still[c] - still[c].mean(), fs, nperseg=int(8 * fs))
+            k = int(np.argmin(np.abs(f - 3.875)))  # on a bin: no scalloping
+            floor = np.median(p_still[(f > 1.5) & (f < 10)])
+            got = 10 * np.log10(p_line[k] / floor)
+            assert abs(got - want) < 1.0, (names[c], weights, got, want)
+
+
+def test_a_passenger_shifting_mid_ride_does_not_cut_the_ride():
+    """A 24 s ride (4.2 Hz line at 0.03 m/s^2 on x and z in 0.05 m/s^2 of noise) in which the passenger shifts for 3 s
+    (a 1.2 Hz sway of 0.45 m/s^2 on the vertical axis: the walking band at about 0.3 m/s^2, over the still level and
+    under walking's): one ride over the whole standing, not two halves of 10 s each."""
+    f0 = 4.2
+
+    def line(t):
+        return 0.03 * np.sin(2 * np.pi * f0 * t)
+
+    ds = _walk_stand_walk(5, line, stand_s=24.0)
+    t = ds["time"].values
+    shift = (t > 20.0) & (t < 23.0)
+    ds["acc_z"].values[shift] += 0.45 * np.sin(2 * np.pi * 1.2 * t[shift])
+    found = find_rides(ds)
+    assert len(found.rides) == 1, found.still_spans
+    ride = found.rides[0]
+    # the standing is 10-34 s; the still span loses about a second to the walking band's window at each end
+    assert ride.start_s < 12.0 and ride.end_s > 32.0
+    assert abs(ride.link_pass_hz - f0) < 3 * ride.link_pass_sigma_hz

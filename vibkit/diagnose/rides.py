@@ -30,7 +30,7 @@ import numpy as np
 
 from ..signal.ride import RideSegment
 from ..signal.steadyline import line_level, normalised_spectrum, steady_line
-from ..signal.stillness import STILL_THRESHOLD, still_spans, walking_level
+from ..signal.stillness import LEAVE_THRESHOLD, STILL_THRESHOLD, still_spans, walking_level
 
 __all__ = [
     "DEFAULT_BAND_HZ",
@@ -264,7 +264,8 @@ def find_rides(
     trim_s : float
         Left out at each end of a still span: stepping on and off [s] (default 1).
     still_threshold : float
-        Walking-band r.m.s. under which the person stands still [m/s^2].
+        Walking-band r.m.s. under which the person stands still [m/s^2]; a still span ends only where the band
+        stays over :data:`~vibkit.signal.stillness.LEAVE_THRESHOLD` (or this, if higher) for a step.
 
     Returns
     -------
@@ -290,7 +291,10 @@ def find_rides(
     x[:3] *= scale
     level = walking_level(x[:3], fs)
     level[~near] = np.inf
-    spans = still_spans(level, fs, threshold=still_threshold, min_s=min_ride_s)
+    # hysteresis: still where the walking band falls under the still level, a ride's span left only where walking
+    # resumes for a step (a passenger shifting on a step does not end the ride)
+    leave = max(LEAVE_THRESHOLD, still_threshold)
+    spans = still_spans(level, fs, threshold=still_threshold, leave=leave, min_s=min_ride_s)
     rides, verdicts, notes, refused = [], [], [], []
     for a, b in spans:
         t0, t1 = float(tu[a]), float(tu[b - 1])

@@ -2,8 +2,9 @@
 
 Walking puts 1-3 m/s^2 r.m.s. into 0.5-3 Hz of ``|a|`` (the step frequency, about 2 Hz, and its
 harmonic); standing, also on a moving escalator, leaves 0.03-0.1 m/s^2 (the phone in the hand sways).
-The magnitude does not depend on how the phone is held.  A span is *still* where the walking band's
-r.m.s. over ``window_s`` stays under ``threshold`` for at least ``min_s`` seconds.
+The magnitude does not depend on how the phone is held.  A span is *still* from where the walking band's
+r.m.s. over ``window_s`` falls under ``threshold`` to where it rises over the higher ``leave`` and stays there
+for a step or more (hysteresis: a passenger shifting on a step does not end a ride), at least ``min_s`` long.
 """
 
 from __future__ import annotations
@@ -13,13 +14,18 @@ from scipy import ndimage, signal
 
 from ._checks import check_fs
 
-__all__ = ["WALKING_BAND_HZ", "STILL_THRESHOLD", "walking_level", "still_spans"]
+__all__ = ["WALKING_BAND_HZ", "STILL_THRESHOLD", "LEAVE_THRESHOLD", "STEP_PERIOD_S", "walking_level", "still_spans"]
 
 #: the band of |a| that walking fills [Hz]
 WALKING_BAND_HZ = (0.5, 3.0)
 #: walking band r.m.s. under which a person stands still [m/s^2]: measured on the ADVIO phone walks,
 #: standing 0.03-0.13, walking 0.9-1.6, stepping on or off 0.2-0.6
 STILL_THRESHOLD = 0.25
+#: walking band r.m.s. over which, held for a step period, the person walks again [m/s^2]: the ADVIO development
+#: walks between rides hold a median of 0.41-0.75 and reach 0.7-1.1; a passenger shifting on a step reaches 0.3-0.35
+LEAVE_THRESHOLD = 0.4
+#: how long the walking band must stay over :data:`LEAVE_THRESHOLD` to end a still span [s]: one step (about 2 Hz)
+STEP_PERIOD_S = 0.5
 
 
 def walking_level(acc, fs, *, band=WALKING_BAND_HZ, window_s=2.0):
@@ -50,11 +56,27 @@ def walking_level(acc, fs, *, band=WALKING_BAND_HZ, window_s=2.0):
     return np.sqrt(ndimage.uniform_filter1d(y**2, w, mode="nearest"))
 
 
-def still_spans(level, fs, *, threshold=STILL_THRESHOLD, min_s=8.0):
-    """Spans ``(start, stop)`` (sample indices, stop exclusive) where ``level`` stays under ``threshold`` for at
-    least ``min_s`` seconds."""
+def still_spans(level, fs, *, threshold=STILL_THRESHOLD, leave=LEAVE_THRESHOLD, dwell_s=STEP_PERIOD_S, min_s=8.0):
+    """Spans ``(start, stop)`` (sample indices, stop exclusive) of at least ``min_s`` seconds in which the person
+    stands still: entered where ``level`` falls under ``threshold``, left only where it stands over ``leave`` for
+    ``dwell_s`` or longer (walking resumes; the span ends where that run starts).  A passenger who shifts on a step
+    (the level over ``threshold`` but under ``leave``, or over it for less than a step) does not cut the span;
+    samples that are not finite (a gap) always end it.  ``leave=threshold, dwell_s=0`` is a single threshold."""
     fs = check_fs(fs)
-    quiet = np.asarray(level) < threshold
-    d = np.diff(np.concatenate(([0], quiet.astype(np.int8), [0])))
-    starts, stops = np.flatnonzero(d == 1), np.flatnonzero(d == -1)
-    return [(int(a), int(b)) for a, b in zip(starts, stops) if (b - a) / fs >= min_s]
+    level = np.asarray(level, dtype=float)
+    if leave < threshold:
+        raise ValueError(f"leave {leave:g} is under threshold {threshold:g}; expected leave >= threshold")
+    over = ~(level <= leave)  # NaN and inf count as over
+    d = np.diff(np.concatenate(([0], over.astype(np.int8), [0])))
+    dwell = max(int(round(dwell_s * fs)), 1)
+    walking = ~np.isfinite(level)
+    for a, b in zip(np.flatnonzero(d == 1), np.flatnonzero(d == -1)):
+        if b - a >= dwell:
+            walking[a:b] = True
+    d = np.diff(np.concatenate(([1], walking.astype(np.int8), [1])))
+    out = []
+    for a, b in zip(np.flatnonzero(d == -1), np.flatnonzero(d == 1)):
+        quiet = np.flatnonzero(level[a:b] < threshold)
+        if quiet.size and (b - (a + quiet[0])) / fs >= min_s:
+            out.append((int(a + quiet[0]), int(b)))
+    return out
