@@ -138,7 +138,7 @@ def _decode(path, data: bytes, encoding):
         except UnicodeDecodeError:
             text, notes = data.decode("latin-1"), ["encoding latin-1 (the file is neither UTF-8 nor cp1252)"]
     sample = text[:65536]
-    ctrl = len(_CONTROL.findall(sample))
+    ctrl = len(_CONTROL.findall(sample)) if _CONTROL.search(sample) else 0
     if sample and ctrl > max(2, 0.01 * len(sample)):
         raise RecordingError(
             path,
@@ -167,8 +167,10 @@ def _decode_head(path, data, encoding):
     return text, notes, codec, data, False
 
 
-def _sniff(lines, delimiter, decimal):
-    """Choose delimiter, decimal mark, field count and numeric columns from the end of the file."""
+def _sniff(lines, delimiter, decimal, text=None):
+    """Choose delimiter, decimal mark, field count and numeric columns from the end of the file.
+
+    ``text`` is the text the lines were split from (a delimiter it does not hold is tried once for all)."""
     tail = []
     for ln in reversed(lines):  # the last 200 lines that may hold data
         if ln.strip() and not ln.lstrip().startswith(_COMMENT):
@@ -180,16 +182,26 @@ def _sniff(lines, delimiter, decimal):
         return None
     delims = DELIMITERS if delimiter is None else (delimiter,)
     found = []
+    # a row's kinds by its cells and decimal mark: a line without a delimiter splits into the same one cell
+    # for every delimiter, so each is classified once ((cells, dec) -> kinds, or None when not mostly numbers)
+    seen = {}
+    absent = None  # the first of ';', tab, '|' found nowhere in the text
     for order, d in enumerate(delims):
+        if text is not None and d in ";\t|" and d not in text:
+            # a delimiter found nowhere splits every line as any other such one does: the same reading,
+            # which loses to the earlier delimiter on the tie
+            if absent is not None:
+                continue
+            absent = d
         trailing = d != " " and sum(ln.rstrip().endswith(d) for ln in tail) >= 0.9 * len(tail)
         split = _Splitter(d, trailing)
-        rows = [split(ln) for ln in tail if not _is_comment(ln, d)]
+        rows = [tuple(split(ln)) for ln in tail if not _is_comment(ln, d)]
         if not rows:
             continue
         decs = (decimal,) if decimal is not None else ((".",) if d == "," else (".", ","))
         for dec in decs:
-            kinds = [[_kind(c, dec) for c in r] for r in rows]
-            kinds = [k for k in kinds if _mostly_numbers(k)]  # not headers, notes or metadata
+            kinds = [_row_kinds(r, dec, seen) for r in rows]
+            kinds = [k for k in kinds if k is not None]  # not headers, notes or metadata
             if not kinds:
                 continue
             freq, n = max((f, k) for k, f in Counter(len(k) for k in kinds).items())
@@ -210,6 +222,16 @@ def _sniff(lines, delimiter, decimal):
     # splits like the data ("0,49" under a one-column header is a decimal comma), then more numbers
     best = max(found, key=lambda f: (2 * f[0] >= most, f[1], f[0], f[2], f[3], f[4]))
     return best[5]
+
+
+def _row_kinds(cells: tuple, dec: str, seen: dict):
+    """The kinds of a row's cells, or None when the row is not mostly numbers; remembered in ``seen``."""
+    key = (cells, dec)
+    kinds = seen.get(key, False)
+    if kinds is False:
+        kinds = [_kind(c, dec) for c in cells]
+        kinds = seen[key] = kinds if _mostly_numbers(kinds) else None
+    return kinds
 
 
 def _header_matches(lines, split, n, dec, d, numcols) -> bool:
@@ -251,14 +273,14 @@ def _read_layout(path, text: str, delimiter, decimal, complete: bool, history: l
     ``complete`` is False when ``text`` holds only the first MiB of the file:
     a layout that cannot be told from it raises :class:`_Fallback`.
     """
-    lines = re.split(r"\r\n|\r|\n", text)
+    lines = text.split("\n") if "\r" not in text else re.split(r"\r\n|\r|\n", text)
     if lines and lines[-1] == "":
         lines.pop()
     if not any(ln.strip() for ln in lines):
         raise RecordingError(path, None, "file holds only blank lines; expected a header and rows of numbers")
     _check_width(path, lines)
 
-    sniff = _sniff(lines, delimiter, decimal)
+    sniff = _sniff(lines, delimiter, decimal, text)
     if sniff is None and not complete:
         raise _Fallback("the first MiB cannot be laid out alone")
     if sniff is None:
