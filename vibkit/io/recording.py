@@ -18,6 +18,8 @@ from dataclasses import dataclass, field
 import numpy as np
 import xarray as xr
 
+from .largefile import LargeFile
+
 __all__ = ["Channel", "build_recording", "sha256_of", "safe_name", "metadata_attrs", "RESERVED_ATTRS"]
 
 RESERVED_ATTRS = ("source_file", "sha256", "reader", "sample_rate_hz", "history")
@@ -52,8 +54,10 @@ class Channel:
     attrs: dict = field(default_factory=dict)
 
 
-def sha256_of(data: bytes) -> str:
-    """Hex SHA-256 of the file's bytes."""
+def sha256_of(data) -> str:
+    """Hex SHA-256 of the file's bytes (or of a streamed :class:`~vibkit.io.largefile.LargeFile`'s)."""
+    if isinstance(data, LargeFile):
+        return data.sha256()
     return hashlib.sha256(data).hexdigest()
 
 

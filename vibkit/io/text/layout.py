@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 from ...runtime.reader_options import spell
 from ..errors import RecordingError
+from ..largefile import LargeFile
 from .cells import (
     _COMMENT,
     _DELIM_NAMES,
@@ -28,7 +29,7 @@ from .fastpath import _HEAD_BYTES, _Fallback
 from .metadata import _header_from_meta, _metadata
 from .units import is_time_name, parse_time_unit, parse_unit
 
-__all__ = ["MAX_COLUMNS", "utf16_without_bom"]
+__all__ = ["MAX_COLUMNS", "utf16_without_bom", "streamable_text"]
 
 #: columns a text recording may have (a row per sample, a column per channel); a wider line is refused before
 #: the layout is worked out, which looks at every cell of the last 200 lines
@@ -149,8 +150,23 @@ def _decode(path, data: bytes, encoding):
     return text, notes
 
 
+def streamable_text(head: bytes) -> bool:
+    """Whether a text file with this head can be parsed from its bytes as they are (no transcoding first)."""
+    return not head.startswith(tuple(b for b, _ in _BOMS)) and utf16_without_bom(head) is None
+
+
 def _decode_head(path, data, encoding):
-    """(text of the first complete lines, notes, codec for the rest, bytes to parse) for the fast path."""
+    """(text of the first complete lines, notes, codec for the rest, bytes to parse) for the fast path.
+
+    ``data`` is the file's bytes, or a :class:`~vibkit.io.largefile.LargeFile` (streamed; its head needs no
+    transcoding and no encoding is forced)."""
+    if isinstance(data, LargeFile):
+        head = data.head[: data.head.rfind(b"\n") + 1]
+        if not head:
+            raise _Fallback("no complete line in the first MiB")
+        text, notes = _decode(path, head, None)
+        codec = "utf-8" if not notes else notes[0].split()[1]
+        return text, notes, codec, data, False
     if encoding is not None or data.startswith(tuple(b for b, _ in _BOMS)) or utf16_without_bom(data):
         text, notes = _decode(path, data, encoding)  # transcoded whole: pandas reads the UTF-8 bytes
         return text, notes, "utf-8", text.encode("utf-8"), True
