@@ -18,6 +18,7 @@ from .cells import (
     _COMMENT,
     _DELIM_NAMES,
     _MISSING,
+    _NUM,
     DELIMITERS,
     _data_like,
     _is_comment,
@@ -183,6 +184,15 @@ def _decode_head(path, data, encoding):
     return text, notes, codec, data, False
 
 
+#: a line of numbers (no spaces, no quotes) and delimiters, by (delimiter, decimal mark): its cells are numbers
+_NUMBERS_ROW = {
+    (d, dec): re.compile(f"{_NUM[dec].pattern}(?:{re.escape(d)}{_NUM[dec].pattern})*")
+    for d in ",;\t|"
+    for dec in ".,"
+    if d != dec
+}
+
+
 def _sniff(lines, delimiter, decimal, text=None):
     """Choose delimiter, decimal mark, field count and numeric columns from the end of the file.
 
@@ -211,12 +221,22 @@ def _sniff(lines, delimiter, decimal, text=None):
             absent = d
         trailing = d != " " and sum(ln.rstrip().endswith(d) for ln in tail) >= 0.9 * len(tail)
         split = _Splitter(d, trailing)
-        rows = [tuple(split(ln)) for ln in tail if not _is_comment(ln, d)]
-        if not rows:
+        body = [ln for ln in tail if not _is_comment(ln, d)]
+        if not body:
             continue
+        cells = {}  # the line's cells, split once for both decimal marks
         decs = (decimal,) if decimal is not None else ((".",) if d == "," else (".", ","))
         for dec in decs:
-            kinds = [_row_kinds(r, dec, seen) for r in rows]
+            whole = _NUMBERS_ROW.get((d, dec))
+            kinds = []
+            for ln in body:
+                if whole is not None and whole.fullmatch(ln):  # numbers and delimiters only: no split needed
+                    kinds.append(["num"] * (ln.count(d) + 1))
+                    continue
+                r = cells.get(ln)
+                if r is None:
+                    r = cells[ln] = tuple(split(ln))
+                kinds.append(_row_kinds(r, dec, seen))
             kinds = [k for k in kinds if k is not None]  # not headers, notes or metadata
             if not kinds:
                 continue
