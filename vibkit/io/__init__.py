@@ -29,12 +29,16 @@ import stat
 from typing import TYPE_CHECKING
 
 from ..runtime.reader_options import READER_OPTIONS, ReaderOptionError, either
+from . import largefile
 from .channels import resolve_channel
 from .errors import RecordingError
+from .largefile import LargeFile
 from .limits import _MAX_ENV, DEFAULT_MAX_RECORDING_BYTES, _gib, max_recording_bytes
 from .netcdf import write_result
 from .phone import phone_export_folder, read_phone_export
 from .registry import NETCDF_SUFFIXES, SEISMIC_SUFFIXES, detect_format, format_names, get_format
+from .text.fastpath import _HEAD_BYTES
+from .text.layout import streamable_text
 
 if TYPE_CHECKING:  # for the annotations only: importing vibkit.io stays cheap
     import xarray
@@ -95,8 +99,11 @@ def _gib_or_kib(n: int) -> str:
     return f"{n // 1024} KiB" if n % 1024 == 0 else f"{n} bytes"
 
 
-def _open_checked(spath: str, limit: int):
-    """Open a regular file for reading, refusing anything else before it is opened."""
+def _open_checked(spath: str, limit: int, stream: bool = False):
+    """Open a regular file for reading, refusing anything else before it is opened.
+
+    Returns its bytes, or with ``stream`` a :class:`~vibkit.io.largefile.LargeFile` (its head) for a file
+    over :data:`vibkit.io.largefile.STREAM_BYTES`."""
     if not os.path.lexists(spath):
         raise RecordingError(spath, None, "file not found")
     try:
@@ -137,6 +144,8 @@ def _open_checked(spath: str, limit: int):
         with os.fdopen(fd, "rb", closefd=False) as f:
             check_head(spath, f.read(HEAD_BYTES))
             f.seek(0)
+            if stream and st2.st_size > largefile.STREAM_BYTES:  # the head only: the text reader streams the rest
+                return LargeFile(spath, st2.st_size, f.read(_HEAD_BYTES), limit)
             data = read_bounded(f, st2.st_size, limit)
     except OSError as exc:
         raise RecordingError(spath, None, f"cannot be read: {exc.strerror or exc}") from None
@@ -374,7 +383,12 @@ def read_recording(
                 ds.attrs.get("history", "")
             )
         return ds
-    data = _open_checked(spath, max_recording_bytes(max_bytes))
+    data = _open_checked(spath, max_recording_bytes(max_bytes), stream=True)
+    if isinstance(data, LargeFile):
+        entry = detect_format(spath, data.head, encoding) if fmt is None else fmt
+        if entry.name == "text" and encoding is None and streamable_text(data.head):
+            return entry.read(spath, data, options)  # streamed in bounded memory
+        data = data.read_all()
     if not data:
         raise RecordingError(spath, None, "file is empty (0 bytes); expected a recording")
     entry = detect_format(spath, data, encoding) if fmt is None else fmt

@@ -55,7 +55,10 @@ def is_status(name, values) -> bool:
         v = np.asarray(values, dtype=float).ravel()
     except (TypeError, ValueError):  # text or stamps: not a signal vibkit analyses anyway
         return False
-    v = v[np.isfinite(v)]
+    finite = np.isfinite(v)
+    if not finite.all():  # a copy only when some values are missing
+        v = v[finite]
+    del finite
     if v.size < 2:
         return False
     if np.all(v == v[0]):

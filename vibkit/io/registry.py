@@ -2,7 +2,9 @@
 
 :func:`vibkit.io.read_recording` checks the path and the options, reads the file's bytes once, and
 hands them to the first entry of :data:`FORMATS` whose sniffer claims them, or to the entry the user
-names with ``format=``.  The order of :data:`FORMATS` is the priority, and it is fixed:
+names with ``format=``; a text file over :data:`vibkit.io.largefile.STREAM_BYTES` is handed to the ``text``
+entry as a :class:`~vibkit.io.largefile.LargeFile` (its head; the reader streams the rest), and to any other
+entry as its bytes.  The order of :data:`FORMATS` is the priority, and it is fixed:
 
 1. ``matlab`` and ``hdf5``: MATLAB MAT-files (a ``MATLAB 5.0``/``MATLAB 7.3 MAT-file`` header, or the
    ``.mat`` suffix; :mod:`vibkit.io.matlab`), plain HDF5 (signature ``\\x89HDF`` without netCDF-4's

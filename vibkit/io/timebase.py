@@ -96,9 +96,7 @@ def check_order(t, lines, *, path, column, repair):
     if bad.size:
         i = bad[0]
         raise RecordingError(path, line_of(i), f"time in column '{column}' is not a finite number")
-    dt = np.diff(t)
-    back = np.flatnonzero(dt < 0)
-    dup = np.flatnonzero(dt == 0)
+    back, dup = _backward_and_repeated(t)
     if not back.size and dup.size == 1 and dup[0] == 0 and n > 2:
         # one repeated stamp on the first two rows: phyphox writes its first sample twice at t = 0
         return (
@@ -114,7 +112,7 @@ def check_order(t, lines, *, path, column, repair):
     if not repair:
         if back.size and (not dup.size or back[0] < dup[0]):
             i = back[0] + 1
-            jump = _clock_jump(dt, back[0])
+            jump = _clock_jump(np.diff(t), back[0])
             hint = "" if jump is None else f"; a clock {jump[1]}?"
             raise RecordingError(
                 path,
@@ -132,6 +130,7 @@ def check_order(t, lines, *, path, column, repair):
             )
         return np.arange(n), [], t
     notes = []
+    dt = np.diff(t)
     if back.size:
         t = t.copy()
         for i in back:
@@ -154,6 +153,27 @@ def check_order(t, lines, *, path, column, repair):
     if not first.all():
         notes.append(f"time repaired: {int((~first).sum())} repeated stamp(s) dropped, first kept")
     return order[first], notes, t
+
+
+#: samples whose steps are worked out at a time by the checks of long records (bounded temporaries)
+_BLOCK = 1 << 20
+
+
+def _backward_and_repeated(t):
+    """(indices i of the steps t[i+1] - t[i] < 0, of those == 0), step by step in blocks of :data:`_BLOCK`."""
+    back, dup = [], []
+    for i in range(0, max(t.size - 1, 0), _BLOCK):
+        dt = np.diff(t[i : i + _BLOCK + 1])
+        back.append(np.flatnonzero(dt < 0) + i)
+        dup.append(np.flatnonzero(dt == 0) + i)
+    if not back:
+        return np.empty(0, dtype=np.intp), np.empty(0, dtype=np.intp)
+    return np.concatenate(back), np.concatenate(dup)
+
+
+def _count_changes(v):
+    """How many steps v[i+1] != v[i] (NaN != NaN counts), in blocks of :data:`_BLOCK`."""
+    return sum(int(np.count_nonzero(np.diff(v[i : i + _BLOCK + 1]))) for i in range(0, max(v.size - 1, 0), _BLOCK))
 
 
 def _clock_jump(dt, i, reference=None):
@@ -189,7 +209,8 @@ def diagnose(t, *, gap_factor=5.0) -> TimeDiagnosis:
     """
     t = np.asarray(t, dtype=float)
     dt = np.diff(t)
-    t0 = float(np.median(dt))
+    t0 = float(np.median(dt, overwrite_input=True))  # no copy of a day of steps: they are taken again
+    np.subtract(t[1:], t[:-1], out=dt)
     gap = dt > gap_factor * t0
     segment = np.zeros(t.size, dtype=np.int32)
     if gap.any():
@@ -197,12 +218,14 @@ def diagnose(t, *, gap_factor=5.0) -> TimeDiagnosis:
         np.cumsum(gap, dtype=np.int32, out=segment[1:])
     else:  # one segment: no copies (long recordings)
         inside = dt
+    gaps_s = dt[gap].astype(float)
     period = float(np.mean(inside))  # = segment durations / steps: immune to rounding of the stamps
-    dev = inside - period  # in place from here: a day at 2 kHz is 170 M steps
+    dev = inside  # in place from here (the steps are no longer needed): a day at 2 kHz is 170 M steps
+    dev -= period
     dev /= period
     jitter_max = float(max(abs(dev.max()), abs(dev.min())))
     jitter_rms = float(np.sqrt(np.dot(dev, dev) / dev.size))
-    return TimeDiagnosis(period, jitter_rms, jitter_max, segment, dt[gap].astype(float))
+    return TimeDiagnosis(period, jitter_rms, jitter_max, segment, gaps_s)
 
 
 def held_update_rate(t, values, *, held_fraction=0.3):
@@ -232,6 +255,9 @@ def held_update_rate(t, values, *, held_fraction=0.3):
     v = np.asarray(values, dtype=float)
     if v.size < 3 or quantum(v) is not None:  # a quantised signal repeats values it was never held at
         return None
+    n_change = _count_changes(v)  # counted first: most channels change on every row (no temporaries)
+    if n_change < 2 or 1 - n_change / (v.size - 1) <= held_fraction:
+        return None
     change = np.flatnonzero(np.diff(v) != 0) + 1  # rows that bring a new value (NaN != NaN: counted)
     if change.size < 2 or 1 - change.size / (v.size - 1) <= held_fraction:
         return None
@@ -253,7 +279,15 @@ def quantum(values, *, tolerance=1e-3):
         ``q`` in the channel's units, or None when the repeats are not quantisation (or nothing repeats).
     """
     v = np.asarray(values, dtype=float)
-    d = np.diff(v[np.isfinite(v)])
+    finite = np.isfinite(v)
+    if finite.all():
+        del finite
+        # changes counted first: most channels change on every row, and need no copies to say so
+        if _count_changes(v) > 0.95 * (v.size - 1):
+            return None
+        d = np.diff(v)
+    else:
+        d = np.diff(v[finite])
     nz = np.abs(d[d != 0])
     if nz.size < 8 or nz.size > 0.95 * d.size:
         return None

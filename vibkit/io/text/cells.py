@@ -32,18 +32,22 @@ _STAMP_ISO = re.compile(
 _STAMP_DMY = re.compile(r"[0-9]{1,2}[/.-][0-9]{1,2}[/.-][0-9]{4}[ T][0-9]{1,2}:[0-9]{2}(?::[0-9]{2}(?:[.,][0-9]+)?)?")
 _STAMP_TOD = re.compile(r"[0-9]{1,2}:[0-9]{2}:[0-9]{2}(?:[.,:][0-9]+)?")
 _COMMENT = ("#", "%", "//", "!")
+#: the longest of the missing and infinite words: a longer cell is neither
+_LONGEST_WORD = max(len(w) for w in _MISSING | _INFINITE)
 
 
 def _kind(cell: str, dec: str) -> str:
     """'num', 'missing', 'stamp' or 'text'."""
     if _NUM[dec].fullmatch(cell):  # the common case first: a number is none of the missing or infinite words
         return "num"
-    low = cell.lower()
-    if low in _MISSING:
-        return "missing"
-    if low in _INFINITE:
-        return "num"
-    if _STAMP_ISO.fullmatch(cell) or _STAMP_DMY.fullmatch(cell) or _STAMP_TOD.fullmatch(cell):
+    if len(cell) <= _LONGEST_WORD:
+        low = cell.lower()
+        if low in _MISSING:
+            return "missing"
+        if low in _INFINITE:
+            return "num"
+    # every stamp holds a ':' (hours:minutes)
+    if ":" in cell and (_STAMP_ISO.fullmatch(cell) or _STAMP_DMY.fullmatch(cell) or _STAMP_TOD.fullmatch(cell)):
         return "stamp"
     return "text"
 

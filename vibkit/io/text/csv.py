@@ -33,6 +33,7 @@ import numpy as np
 from ...runtime.reader_options import spell
 from ..channels import mark_status
 from ..errors import RecordingError
+from ..largefile import LargeFile
 from ..recording import build_recording, metadata_attrs
 from ..timebase import check_order, diagnose, held_update_rate, quantum, resample_linear
 from .cells import _MAYBE_COMMENT, DELIMITERS, _is_comment
@@ -108,6 +109,8 @@ def read_csv(
     try:
         return _read_csv(path, data, fast=True, **kw)
     except _Fallback as why:
+        if isinstance(data, LargeFile):  # the line-by-line reader reads the file whole
+            data = data.read_all()
         try:
             return _read_csv(path, data, fast=False, **kw)
         except MemoryError:
@@ -194,6 +197,7 @@ def _read_csv(
     channels = _build_channels(
         path, cols, rownums, dec, chan_idx, explicit, override, colnames, scale_meta, header_line, history
     )
+    del cols  # the cells as parsed: the channels hold what they need of them
     mark_status(channels, history)
     t, fs, segment = _time_base(
         path,
@@ -364,10 +368,11 @@ def _time_base(
     else:
         keep, notes, t = check_order(t, rownums, path=path, column=tname, repair=repair_time)
         history += notes
-        if keep.size != t.size or np.any(keep != np.arange(t.size)):  # repaired, or phyphox's repeated first stamp
+        if not _every_row(keep, t.size):  # repaired, or phyphox's repeated first stamp
             t = t[keep]
             for ch in channels:
                 ch.values = ch.values[keep]
+        del keep
         if t.size < 2:
             raise RecordingError(
                 path, int(rownums[0]), "only one sample left after repairing time; expected at least 2"
@@ -414,6 +419,14 @@ def _time_base(
     return t, fs, segment
 
 
+def _every_row(keep, n) -> bool:
+    """Whether ``keep`` is 0, 1 ... n - 1 (compared in blocks: no record-long temporaries)."""
+    block = 1 << 20
+    return keep.size == n and all(
+        np.array_equal(keep[i : i + block], np.arange(i, min(i + block, n))) for i in range(0, n, block)
+    )
+
+
 def _held_samples(t, channels, row_rate, history, extra_attrs):
     """Mark channels whose values are held between updates (multi-sensor phone exports) with their true rate."""
     rates, steps = {}, {}
@@ -456,14 +469,18 @@ def _sparse_channels(t, channels, history):
     ``own_samples`` and ``own_rate_hz``.
     """
     notes = []
-    filled = np.zeros(t.size, dtype=int)
-    for ch in channels:
-        filled += np.isfinite(ch.values)
+    filled = None  # how many channels hold a value in each row: counted only when a channel may be sparse
     for ch in channels:
         ok = np.isfinite(ch.values)
         n = int(ok.sum())
+        if n < 2 or n > 0.9 * ok.size:
+            continue
+        if filled is None:
+            filled = np.zeros(t.size, dtype=int)
+            for other in channels:
+                filled += np.isfinite(other.values)
         # at least a tenth of the rows empty, and those rows hold another sensor's value
-        if n >= 2 and n <= 0.9 * ok.size and np.all(filled[~ok] > 0):
+        if np.all(filled[~ok] > 0):
             tt = t[ok]
             ch.attrs.update({"sparse": 1, "own_samples": n, "own_rate_hz": float((n - 1) / (tt[-1] - tt[0]))})
             notes.append(f"{ch.name} {n} samples ({ch.attrs['own_rate_hz']:.4g} Hz)")

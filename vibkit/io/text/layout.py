@@ -13,10 +13,12 @@ from dataclasses import dataclass
 
 from ...runtime.reader_options import spell
 from ..errors import RecordingError
+from ..largefile import LargeFile
 from .cells import (
     _COMMENT,
     _DELIM_NAMES,
     _MISSING,
+    _NUM,
     DELIMITERS,
     _data_like,
     _is_comment,
@@ -28,7 +30,7 @@ from .fastpath import _HEAD_BYTES, _Fallback
 from .metadata import _header_from_meta, _metadata
 from .units import is_time_name, parse_time_unit, parse_unit
 
-__all__ = ["MAX_COLUMNS", "utf16_without_bom"]
+__all__ = ["MAX_COLUMNS", "utf16_without_bom", "streamable_text"]
 
 #: columns a text recording may have (a row per sample, a column per channel); a wider line is refused before
 #: the layout is worked out, which looks at every cell of the last 200 lines
@@ -138,7 +140,7 @@ def _decode(path, data: bytes, encoding):
         except UnicodeDecodeError:
             text, notes = data.decode("latin-1"), ["encoding latin-1 (the file is neither UTF-8 nor cp1252)"]
     sample = text[:65536]
-    ctrl = len(_CONTROL.findall(sample))
+    ctrl = len(_CONTROL.findall(sample)) if _CONTROL.search(sample) else 0
     if sample and ctrl > max(2, 0.01 * len(sample)):
         raise RecordingError(
             path,
@@ -149,8 +151,23 @@ def _decode(path, data: bytes, encoding):
     return text, notes
 
 
+def streamable_text(head: bytes) -> bool:
+    """Whether a text file with this head can be parsed from its bytes as they are (no transcoding first)."""
+    return not head.startswith(tuple(b for b, _ in _BOMS)) and utf16_without_bom(head) is None
+
+
 def _decode_head(path, data, encoding):
-    """(text of the first complete lines, notes, codec for the rest, bytes to parse) for the fast path."""
+    """(text of the first complete lines, notes, codec for the rest, bytes to parse) for the fast path.
+
+    ``data`` is the file's bytes, or a :class:`~vibkit.io.largefile.LargeFile` (streamed; its head needs no
+    transcoding and no encoding is forced)."""
+    if isinstance(data, LargeFile):
+        head = data.head[: data.head.rfind(b"\n") + 1]
+        if not head:
+            raise _Fallback("no complete line in the first MiB")
+        text, notes = _decode(path, head, None)
+        codec = "utf-8" if not notes else notes[0].split()[1]
+        return text, notes, codec, data, False
     if encoding is not None or data.startswith(tuple(b for b, _ in _BOMS)) or utf16_without_bom(data):
         text, notes = _decode(path, data, encoding)  # transcoded whole: pandas reads the UTF-8 bytes
         return text, notes, "utf-8", text.encode("utf-8"), True
@@ -167,8 +184,19 @@ def _decode_head(path, data, encoding):
     return text, notes, codec, data, False
 
 
-def _sniff(lines, delimiter, decimal):
-    """Choose delimiter, decimal mark, field count and numeric columns from the end of the file."""
+#: a line of numbers (no spaces, no quotes) and delimiters, by (delimiter, decimal mark): its cells are numbers
+_NUMBERS_ROW = {
+    (d, dec): re.compile(f"{_NUM[dec].pattern}(?:{re.escape(d)}{_NUM[dec].pattern})*")
+    for d in ",;\t|"
+    for dec in ".,"
+    if d != dec
+}
+
+
+def _sniff(lines, delimiter, decimal, text=None):
+    """Choose delimiter, decimal mark, field count and numeric columns from the end of the file.
+
+    ``text`` is the text the lines were split from (a delimiter it does not hold is tried once for all)."""
     tail = []
     for ln in reversed(lines):  # the last 200 lines that may hold data
         if ln.strip() and not ln.lstrip().startswith(_COMMENT):
@@ -180,16 +208,36 @@ def _sniff(lines, delimiter, decimal):
         return None
     delims = DELIMITERS if delimiter is None else (delimiter,)
     found = []
+    # a row's kinds by its cells and decimal mark: a line without a delimiter splits into the same one cell
+    # for every delimiter, so each is classified once ((cells, dec) -> kinds, or None when not mostly numbers)
+    seen = {}
+    absent = None  # the first of ';', tab, '|' found nowhere in the text
     for order, d in enumerate(delims):
+        if text is not None and d in ";\t|" and d not in text:
+            # a delimiter found nowhere splits every line as any other such one does: the same reading,
+            # which loses to the earlier delimiter on the tie
+            if absent is not None:
+                continue
+            absent = d
         trailing = d != " " and sum(ln.rstrip().endswith(d) for ln in tail) >= 0.9 * len(tail)
         split = _Splitter(d, trailing)
-        rows = [split(ln) for ln in tail if not _is_comment(ln, d)]
-        if not rows:
+        body = [ln for ln in tail if not _is_comment(ln, d)]
+        if not body:
             continue
+        cells = {}  # the line's cells, split once for both decimal marks
         decs = (decimal,) if decimal is not None else ((".",) if d == "," else (".", ","))
         for dec in decs:
-            kinds = [[_kind(c, dec) for c in r] for r in rows]
-            kinds = [k for k in kinds if _mostly_numbers(k)]  # not headers, notes or metadata
+            whole = _NUMBERS_ROW.get((d, dec))
+            kinds = []
+            for ln in body:
+                if whole is not None and whole.fullmatch(ln):  # numbers and delimiters only: no split needed
+                    kinds.append(["num"] * (ln.count(d) + 1))
+                    continue
+                r = cells.get(ln)
+                if r is None:
+                    r = cells[ln] = tuple(split(ln))
+                kinds.append(_row_kinds(r, dec, seen))
+            kinds = [k for k in kinds if k is not None]  # not headers, notes or metadata
             if not kinds:
                 continue
             freq, n = max((f, k) for k, f in Counter(len(k) for k in kinds).items())
@@ -210,6 +258,16 @@ def _sniff(lines, delimiter, decimal):
     # splits like the data ("0,49" under a one-column header is a decimal comma), then more numbers
     best = max(found, key=lambda f: (2 * f[0] >= most, f[1], f[0], f[2], f[3], f[4]))
     return best[5]
+
+
+def _row_kinds(cells: tuple, dec: str, seen: dict):
+    """The kinds of a row's cells, or None when the row is not mostly numbers; remembered in ``seen``."""
+    key = (cells, dec)
+    kinds = seen.get(key, False)
+    if kinds is False:
+        kinds = [_kind(c, dec) for c in cells]
+        kinds = seen[key] = kinds if _mostly_numbers(kinds) else None
+    return kinds
 
 
 def _header_matches(lines, split, n, dec, d, numcols) -> bool:
@@ -251,14 +309,14 @@ def _read_layout(path, text: str, delimiter, decimal, complete: bool, history: l
     ``complete`` is False when ``text`` holds only the first MiB of the file:
     a layout that cannot be told from it raises :class:`_Fallback`.
     """
-    lines = re.split(r"\r\n|\r|\n", text)
+    lines = text.split("\n") if "\r" not in text else re.split(r"\r\n|\r|\n", text)
     if lines and lines[-1] == "":
         lines.pop()
     if not any(ln.strip() for ln in lines):
         raise RecordingError(path, None, "file holds only blank lines; expected a header and rows of numbers")
     _check_width(path, lines)
 
-    sniff = _sniff(lines, delimiter, decimal)
+    sniff = _sniff(lines, delimiter, decimal, text)
     if sniff is None and not complete:
         raise _Fallback("the first MiB cannot be laid out alone")
     if sniff is None:
