@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from vibkit.diagnose.pitch import elongation_verdict, estimate_pitch
+from vibkit.signal import crb_harmonic
 
 from support.chain import family as _family
 from support.recording import recording
@@ -180,3 +181,22 @@ def test_a_sensor_riding_a_step_is_warned_that_its_sigma_does_not_cover_its_bias
     step = recording({"accel_step": _family(t, 3.75)}, 200.0)
     assert STEP_WARNING in estimate_pitch(step, speed=0.5).warnings
     assert STEP_WARNING not in estimate_pitch(step, speed=0.5, on_step=False).warnings
+
+
+def test_a_fast_recorder_states_the_recorded_noise_s_sigma():
+    """A 1 kHz record is decimated for the detection and the fits (by 6 for a 2.5-6 Hz band); the low-pass keeps
+    about 0.8 of the new band's white noise, which the fits read as their noise.  The spectral sigma must still be
+    the Cramer-Rao bound of the noise as recorded (the 200 Hz record of the same signal, not decimated, states it),
+    not sqrt(0.8) = 0.89 of it (0.82-0.86 before)."""
+    ratios = {200.0: [], 1000.0: []}
+    amps = [1.0, 0.5, 0.3, 0.2]
+    for fs in ratios:
+        t = np.arange(int(60 * fs)) / fs
+        for seed in range(3):
+            rng = np.random.default_rng(seed)
+            x = _family(t, 3.75, amps) + 3.0 * rng.standard_normal(t.size)
+            est = estimate_pitch(_rec(t, x), speed=0.5)
+            (row,) = est.per_burst
+            ratios[fs].append(row["spectral_sigma_hz"] / crb_harmonic(t.size, fs, amps, 3.0))
+    for fs, r in ratios.items():
+        assert np.median(r) == pytest.approx(1.0, abs=0.08), (fs, r)

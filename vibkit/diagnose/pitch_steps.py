@@ -31,7 +31,7 @@ from ..signal.meanfreq import mean_link_pass_frequency
 from ..signal.quantisation import quantisation_step
 from ..signal.spectral import padded_power_rows
 from .decision import DISAGREE_SIGMAS, LinkPassEvidence, nearest_catalogue
-from .pitch_long import at_recorded_rate, long_record_bursts
+from .pitch_long import at_recorded_rate, fast_recorder_at_recorded_rate, long_record_bursts
 from .speed import speed_part_too_large
 
 #: samples (from the start) whose levels give the recorder's quantisation step
@@ -221,7 +221,7 @@ def estimate_bursts(prep, *, name, band, n_harmonics, f0=float("nan")):
         No burst is long enough for an estimate.
     """
     ests, skipped = [], []
-    for (b, full, q, fraction), b_raw in zip(long_record_bursts(prep, f0, n_harmonics), prep.raw):
+    for (b, full, q, fraction), b_raw, b_prep in zip(long_record_bursts(prep, f0, n_harmonics), prep.raw, prep.bursts):
         try:
             e = link_pass_estimate(
                 b.x, b.fs, band=band, n_harmonics=n_harmonics, quantum=prep.quantum, decimation=b_raw.fs / b.fs
@@ -232,6 +232,7 @@ def estimate_bursts(prep, *, name, band, n_harmonics, f0=float("nan")):
         mp, factor = _burst_mean_phase(b, e), 1.0
         if full is not None:
             e, mp, factor = at_recorded_rate(e, mp, b.x.size, q, fraction)
+        e, mp, factor = fast_recorder_at_recorded_rate(e, mp, factor, b_raw.fs, b_prep.fs)
         ests.append(BurstEstimate(b, e, mp, full_rate=full, sigma_factor=factor))
     if not ests:
         raise ValueError(
