@@ -97,6 +97,25 @@ def test_the_quantisation_error_variance_with_its_factors_computed_once_is_the_f
         assert correlated_error_variance(q, s) == float(terms.sum() + tail)
 
 
+def test_the_quantisation_error_variance_without_its_underflowing_terms_is_the_sum_of_all_256_bit_for_bit():
+    """The sum keeps only the terms whose exponential can be nonzero (whole rows of numpy's pairwise sum): over noise
+    from 1e-4 to 20 steps (every count of kept terms, 8 to 256) it is the 256-term formula exactly."""
+    from vibkit.signal.quantisation import _terms_kept, correlated_error_variance
+
+    k = np.arange(1, 257, dtype=float)
+    kept = set()
+    rng = np.random.default_rng(5)
+    for q in (1.0, 0.0123, 3.7e-5):
+        for r in np.concatenate([np.geomspace(1e-4, 20.0, 1500), rng.uniform(0.05, 3.0, 500)]):
+            s = r * q
+            z = (s / q) ** 2
+            terms = q * q / (2.0 * np.pi**2 * k**2) * np.exp(-4.0 * np.pi**2 * k**2 * z)
+            assert not np.any(terms[_terms_kept(z) :]), (q, s)  # what is left out is exactly zero
+            assert correlated_error_variance(q, s) == float(terms.sum()), (q, s)
+            kept.add(_terms_kept(z))
+    assert {8, 16, 64, 128, 256} <= kept  # every path taken, the full sum included
+
+
 def test_interpolation_a_harmonic_at_a_time_is_the_row_order_one_bit_for_bit():
     f = np.fft.rfftfreq(4096, 1 / 200.0)
     p = np.random.default_rng(3).exponential(size=f.size)
