@@ -4,7 +4,8 @@ the record's length against the block's), the interpolated DFT's frequency witho
 and ``exp(1j theta)`` from a cosine and a sine (bit for bit where numpy's cosine and sine are the C library's;
 within an ulp where numpy vectorises them); scipy's ``sosfiltfilt`` with the filter's initial conditions designed once
 (bit for bit); the quantisation error's variance with its constant factors computed once (bit for bit); the harmonic searches'
-interpolation asked a harmonic at a time (bit for bit)."""
+interpolation asked a harmonic at a time (bit for bit); the quantisation variance without its exponentials that underflow
+(bit for bit); the split-half tests with each half's floor computed once (exactly)."""
 
 import numpy as np
 import pytest
@@ -97,6 +98,25 @@ def test_the_quantisation_error_variance_with_its_factors_computed_once_is_the_f
         assert correlated_error_variance(q, s) == float(terms.sum() + tail)
 
 
+def test_the_quantisation_error_variance_without_its_underflowing_terms_is_the_sum_of_all_256_bit_for_bit():
+    """The sum keeps only the terms whose exponential can be nonzero (whole rows of numpy's pairwise sum): over noise
+    from 1e-4 to 20 steps (every count of kept terms, 8 to 256) it is the 256-term formula exactly."""
+    from vibkit.signal.quantisation import _terms_kept, correlated_error_variance
+
+    k = np.arange(1, 257, dtype=float)
+    kept = set()
+    rng = np.random.default_rng(5)
+    for q in (1.0, 0.0123, 3.7e-5):
+        for r in np.concatenate([np.geomspace(1e-4, 20.0, 1500), rng.uniform(0.05, 3.0, 500)]):
+            s = r * q
+            z = (s / q) ** 2
+            terms = q * q / (2.0 * np.pi**2 * k**2) * np.exp(-4.0 * np.pi**2 * k**2 * z)
+            assert not np.any(terms[_terms_kept(z) :]), (q, s)  # what is left out is exactly zero
+            assert correlated_error_variance(q, s) == float(terms.sum()), (q, s)
+            kept.add(_terms_kept(z))
+    assert {8, 16, 64, 128, 256} <= kept  # every path taken, the full sum included
+
+
 def test_interpolation_a_harmonic_at_a_time_is_the_row_order_one_bit_for_bit():
     f = np.fft.rfftfreq(4096, 1 / 200.0)
     p = np.random.default_rng(3).exponential(size=f.size)
@@ -105,3 +125,40 @@ def test_interpolation_a_harmonic_at_a_time_is_the_row_order_one_bit_for_bit():
         got = peaks.interp_by_harmonic(hf, f, p)
         assert got.flags.c_contiguous and got.shape == hf.shape
         assert np.array_equal(got, np.interp(hf.ravel(), f, p).reshape(hf.shape))
+
+
+def test_the_split_half_tests_with_each_halfs_floor_computed_once_are_the_four_floor_ones_exactly():
+    """Each half's spectrum normalised once for its search and its (clipped) test: the tests the loop that normalised
+    it for every use gives, with and without excluded lines and a clip, on a family in noise and on noise alone."""
+    import dataclasses
+
+    from vibkit.signal import detect
+
+    def four_floors(sp, n_h):
+        ia, ib = np.arange(0, sp.k, 2), np.arange(1, sp.k, 2)
+        out = []
+        for s_idx, t_idx in ((ia, ib), (ib, ia)):
+            r_s = detect._normalised(sp.pw[s_idx], sp.half, sp.quant, sp.w, sp.mask)
+            r_t = detect._normalised(sp.pw[t_idx], sp.half, sp.quant, sp.w, sp.mask, sp.clip)
+            fc, _ = detect._search(r_s, sp.f, sp.df, sp.fmin, sp.fmax, sp.f_top)
+            kb = detect._harmonic_bins(fc, sp.df, n_h, sp.f.size)
+            if kb.size == 0:
+                continue
+            t = float(r_t[kb].sum())
+            s_t = detect._floor_rel_sd(t_idx.size, 2 * sp.half + 1)
+            pv = float(detect.harmonic_sum_pvalue(t, kb.size, t_idx.size, s_t))
+            out.append((pv, t, detect.harmonic_sum_threshold(sp.p_fa / 2.0, kb.size, t_idx.size, s_t), fc, kb.size))
+        return out
+
+    fs, rng = 200.0, np.random.default_rng(11)
+    t = np.arange(int(60 * fs)) / fs
+    family = sum(a * np.sin(2 * np.pi * h * 3.61 * t + h) for h, a in ((1, 0.05), (2, 0.03), (3, 0.02)))
+    for x in (family + 0.1 * rng.standard_normal(t.size), 0.1 * rng.standard_normal(t.size)):
+        x = np.round(x / 1e-3) * 1e-3  # a recorder's step: the floors' quantisation bound takes part
+        sp = detect._spectra([x], fs, 2.5, 6.25, 45.0, 1e-3, 1e-3, 1.0)
+        assert sp.split
+        off = np.abs(sp.f - 1.0 * np.round(sp.f / 1.0))
+        for cur in (sp, dataclasses.replace(sp, mask=(off <= 1.5 * sp.df) & (sp.f >= 0.9), clip=4.0)):
+            got, want = detect._split_half_tests(cur, 5), four_floors(cur, 5)
+            assert len(got) == len(want) == 2
+            assert got == want

@@ -574,14 +574,14 @@ def _split_half_tests(sp, n_h):
     """The split-half tests: the candidate searched on one half of the segments, tested on the other, both
     ways round; a list of ``(p, statistic, threshold, f, harmonics)``."""
     ia, ib = np.arange(0, sp.k, 2), np.arange(1, sp.k, 2)
+    # each half normalised by its own floor: a transient (a step, an impulse) that lies in one half
+    # only raises that half's whole spectrum, which a floor shared with the other half would read
+    # as excess power at every harmonic; each half's floor computed once, for its search and its test
+    r_half = [_normalised(sp.pw[idx], sp.half, sp.quant, sp.w, sp.mask) for idx in (ia, ib)]
     tests = []
-    for search_idx, test_idx in ((ia, ib), (ib, ia)):
-        # each half normalised by its own floor: a transient (a step, an impulse) that lies in one half
-        # only raises that half's whole spectrum, which a floor shared with the other half would read
-        # as excess power at every harmonic
+    for r_s, r_test, test_idx in ((r_half[0], r_half[1], ib), (r_half[1], r_half[0], ia)):
         # the candidate searched on the full spectrum, tested on the clipped one
-        r_s = _normalised(sp.pw[search_idx], sp.half, sp.quant, sp.w, sp.mask)
-        r_t = _normalised(sp.pw[test_idx], sp.half, sp.quant, sp.w, sp.mask, sp.clip)
+        r_t = _masked(r_test, None, sp.clip)
         fc, _ = _search(r_s, sp.f, sp.df, sp.fmin, sp.fmax, sp.f_top)
         kb = _harmonic_bins(fc, sp.df, n_h, sp.f.size)
         hh = kb.size
