@@ -26,8 +26,8 @@ floor's own estimation error is integrated out by its exact law: a bin that stan
 ``2 h + 1``-bin window leaves the median to the ``h + 1``-th smallest of the ``2 h`` others, an order statistic of
 exponentials whose Laplace transform is a finite product (Renyi's representation), so ``E[exp(-a floor)]`` and
 with it the mixture's tail are exact.  The window's bins are correlated (a Hann window's neighbours share 4/9 of
-their power): its law is taken as that of :data:`FLOOR_CORRELATION` times fewer independent bins, times half the
-channels' effective number for their mean.  Over the band's ``M = (f_hi - f_lo) * duration`` independent
+their power): its law is taken as that of :data:`FLOOR_CORRELATION` times fewer independent bins, times two thirds
+of the channels' effective number for their mean.  Over the band's ``M = (f_hi - f_lo) * duration`` independent
 frequencies the chance that noise alone reaches ``T`` anywhere is at most ``M`` times that (union bound), times
 :data:`GRID_FACTOR` for the maximum taken over the zero-padded grid.  Both constants are measured against a Monte
 Carlo of Gaussian noise (``benchmarks/bench_steadyline_null.py``: the bound holds at 8-30 s and is 1.4-3 times the
@@ -384,13 +384,13 @@ def _floor_half(n, fs, pad, floor_halfwidth_hz):
 
 def _floor_law(half, eig):
     """The floor's law as that of the median of ``2 h + 1`` independent Exp(1) bins: ``h``, the running median's
-    half-width divided by :data:`FLOOR_CORRELATION` and, for the channels' mean, multiplied by half their effective
-    number ``(sum eig)**2 / sum eig**2`` (their floors' errors are independent, not one common factor; the full
-    effective number understates the mean's tail 2-fold at 7 dB on six independent channels, half of it overstates
-    it 4-6-fold: ``benchmarks/bench_steadyline_null.py``)."""
+    half-width divided by :data:`FLOOR_CORRELATION` and, for the channels' mean, multiplied by two thirds of their
+    effective number ``(sum eig)**2 / sum eig**2`` (their floors' errors are independent, not one common factor: the
+    full effective number understates the band maximum's rate at 7 dB on six independent channels 2-fold, two thirds
+    of it overstate it 2-4-fold, measured against a Monte Carlo of Gaussian noise)."""
     eig = np.clip(np.asarray(eig, dtype=float), 0.0, None)
     c_eff = float(np.sum(eig) ** 2 / max(np.sum(eig**2), 1e-300))
-    return max(int(half * max(c_eff / 2.0, 1.0) / FLOOR_CORRELATION), 2)
+    return max(int(half * max(c_eff / 1.5, 1.0) / FLOOR_CORRELATION), 2)
 
 
 def _laplace_floor(a, h):
