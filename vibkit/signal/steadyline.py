@@ -30,8 +30,8 @@ their power): its law is taken as that of :data:`FLOOR_CORRELATION` times fewer 
 of the channels' effective number for their mean.  Over the band's ``M = (f_hi - f_lo) * duration`` independent
 frequencies the chance that noise alone reaches ``T`` anywhere is at most ``M`` times that (union bound), times
 :data:`GRID_FACTOR` for the maximum taken over the zero-padded grid.  Both constants are measured against a Monte
-Carlo of Gaussian noise (``benchmarks/bench_steadyline_null.py``: the bound holds at 8-30 s and is 1.4-3 times the
-measured rate at 12-14 dB; the Gaussian law of the floor's error it replaces stated 5-30 times it, 2-3.5 dB of
+Carlo of Gaussian noise (``benchmarks/bench_steadyline_null.py``: the bound holds at 8-30 s and is 1.7-5 times the
+measured rate at 12-13 dB; the Gaussian law of the floor's error it replaces stated 2-80 times it, 2-3.5 dB of
 threshold on one channel at 10-20 s).  A line that only one or two axes of six carry is diluted in the mean, so the
 strongest single channel is tested as well (at most ``C`` times one channel's tail per frequency), and the two
 tests share ``p_fa`` (Bonferroni).
@@ -386,7 +386,7 @@ def _floor_law(half, eig):
     """The floor's law as that of the median of ``2 h + 1`` independent Exp(1) bins: ``h``, the running median's
     half-width divided by :data:`FLOOR_CORRELATION` and, for the channels' mean, multiplied by two thirds of their
     effective number ``(sum eig)**2 / sum eig**2`` (their floors' errors are independent, not one common factor: the
-    full effective number understates the band maximum's rate at 7 dB on six independent channels 2-fold, two thirds
+    full effective number understates the band maximum's rate at 7 dB on six independent channels 1.7-3-fold, two thirds
     of it overstate it 2-4-fold, measured against a Monte Carlo of Gaussian noise)."""
     eig = np.clip(np.asarray(eig, dtype=float), 0.0, None)
     c_eff = float(np.sum(eig) ** 2 / max(np.sum(eig**2), 1e-300))
