@@ -6,8 +6,8 @@ estimate, the parts check's fits) need only the harmonics fitted.  A burst longe
 day's recording; every shipped scene, fleet file and phone ride is minutes at most and keeps its rate, bit for
 bit) is estimated on a copy decimated to :data:`LONG_OVERSAMPLE` times its highest harmonic fitted
 (:func:`long_record_bursts`: a third of the samples of 8 h at 200 Hz), its fits' sigmas and noise stated as the
-recorded rate states them (:func:`at_recorded_rate`); a fast recorder's bursts, which the detection's own
-decimation shortened, are restated the same way (:func:`fast_recorder_at_recorded_rate`).  The hypotheses'
+recorded rate states them (:func:`at_recorded_rate`); a fast recorder's bursts that are not, which the
+detection's own decimation shortened, are restated the same way (:func:`fast_recorder_at_recorded_rate`).  The hypotheses'
 spectrum and the rows of the result keep the burst at its rate.
 """
 
@@ -78,18 +78,25 @@ def at_recorded_rate(e, mp, n, q, fraction):
     return e, mp, factor
 
 
-def fast_recorder_at_recorded_rate(e, mp, factor, fs_recorded, fs_burst):
+def fast_recorder_at_recorded_rate(e, mp, factor, fs_recorded, fs_burst, fs_fitted):
     """The estimates of a burst that :func:`vibkit.diagnose.pitch_steps._scaled` decimated (a recorder faster than
     the detection needs: over ``DECIMATION_OVERSAMPLE HARMONIC_SPAN`` times the band's top, e.g. 500 Hz for a
     2.5-6 Hz band), their sigmas stated for the noise as recorded: the decimation's low-pass keeps only
     :func:`vibkit.signal._checks.decimated_noise_fraction` of the new band's white noise, which the fits read as
-    their noise, so their sigmas (the spectral, the mean-phase, the parts': ``factor``) are divided by its square
-    root.  A burst at its recorded rate (every 200 Hz record) is returned as it is."""
+    their noise, so their sigmas (the mean-phase, the parts': ``factor``) are divided by its square root.
+
+    Only the last decimation before a fit shapes the noise in the band it fits (an earlier one's low-pass lies
+    beyond it): the spectral fit is restated here only where :func:`vibkit.signal.link_pass_estimate` fitted the
+    burst as it came (``e.decimation`` 1; where it decimated further it restated its own sigma), and nothing where
+    the fits ran on a long record's copy (``fs_fitted``, the rate fitted, not ``fs_burst``:
+    :func:`long_record_bursts`, restated by :func:`at_recorded_rate`).  A burst at its recorded rate (every 200 Hz
+    record) is returned as it is."""
     q = round(fs_recorded / fs_burst)
-    if q < 2:
+    if q < 2 or fs_fitted != fs_burst:
         return e, mp, factor
     restate = 1.0 / math.sqrt(decimated_noise_fraction(fs_recorded, q))
-    e = replace(e, fundamental_sigma_hz=e.fundamental_sigma_hz * restate)
+    if e.decimation < 2:
+        e = replace(e, fundamental_sigma_hz=e.fundamental_sigma_hz * restate)
     if mp is not None:
         mp = replace(mp, sigma_hz=mp.sigma_hz * restate, noise_spread_hz=mp.noise_spread_hz * restate)
     return e, mp, factor * restate

@@ -232,7 +232,7 @@ def estimate_bursts(prep, *, name, band, n_harmonics, f0=float("nan")):
         mp, factor = _burst_mean_phase(b, e), 1.0
         if full is not None:
             e, mp, factor = at_recorded_rate(e, mp, b.x.size, q, fraction)
-        e, mp, factor = fast_recorder_at_recorded_rate(e, mp, factor, b_raw.fs, b_prep.fs)
+        e, mp, factor = fast_recorder_at_recorded_rate(e, mp, factor, b_raw.fs, b_prep.fs, b.fs)
         ests.append(BurstEstimate(b, e, mp, full_rate=full, sigma_factor=factor))
     if not ests:
         raise ValueError(

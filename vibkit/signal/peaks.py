@@ -278,6 +278,8 @@ class LinkPassEstimate:
     warnings : list of str
     estimate : FrequencyEstimate
         The underlying estimator result.
+    decimation : int
+        The factor the record was decimated by for the fit (1: fitted at its rate); the sigma is restated for it.
     """
 
     fundamental_hz: float
@@ -288,6 +290,7 @@ class LinkPassEstimate:
     method: str
     warnings: list = field(default_factory=list)
     estimate: FrequencyEstimate | None = None
+    decimation: int = 1
 
 
 def link_pass_estimate(
@@ -390,4 +393,4 @@ def link_pass_estimate(
     ]
     if not harmonics[0].detected:
         warnings.append("the fundamental itself is not detected; the family was identified by its harmonics")
-    return LinkPassEstimate(f0, float(sig), harmonics, est.noise_std, est.snr_db, method, warnings, est)
+    return LinkPassEstimate(f0, float(sig), harmonics, est.noise_std, est.snr_db, method, warnings, est, q)
