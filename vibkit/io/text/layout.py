@@ -193,6 +193,13 @@ _NUMBERS_ROW = {
 }
 
 
+def _one_cell(body, d) -> bool:
+    """Whether every line of ``body`` splits at ``d`` into one cell, the line stripped: no line holds the delimiter
+    (whitespace aside) or a quote. The sniff then takes each line as that cell without splitting it (a small file's
+    200 lines were split for each delimiter it does not use)."""
+    return d != " " and not any(d in ln or '"' in ln for ln in body)
+
+
 def _sniff(lines, delimiter, decimal, text=None):
     """Choose delimiter, decimal mark, field count and numeric columns from the end of the file.
 
@@ -225,11 +232,12 @@ def _sniff(lines, delimiter, decimal, text=None):
         if not body:
             continue
         cells = {}  # the line's cells, split once for both decimal marks
+        one_cell = _one_cell(body, d)
         decs = (decimal,) if decimal is not None else ((".",) if d == "," else (".", ","))
         for dec in decs:
             whole = _NUMBERS_ROW.get((d, dec))
-            kinds = []
-            for ln in body:
+            kinds = [_row_kinds((ln.strip(),), dec, seen) for ln in body] if one_cell else []
+            for ln in () if one_cell else body:
                 if whole is not None and whole.fullmatch(ln):  # numbers and delimiters only: no split needed
                     kinds.append(["num"] * (ln.count(d) + 1))
                     continue
