@@ -117,6 +117,26 @@ def test_the_quantisation_error_variance_without_its_underflowing_terms_is_the_s
     assert {8, 16, 64, 128, 256} <= kept  # every path taken, the full sum included
 
 
+def test_the_quantisation_error_variance_past_every_exponentials_underflow_is_the_formulas_zero():
+    """Past about 4.4 steps of noise every term's exponential is exactly 0 and the variance is returned as 0 without
+    them: across that edge (dense), far past it (a finely quantised record's noise bisection) and at infinite noise,
+    the 256-term formula exactly, and the edge really crossed (the formula nonzero just below it)."""
+    from vibkit.signal.quantisation import correlated_error_variance
+
+    k = np.arange(1, 257, dtype=float)
+    below = 0
+    for q in (1.0, 0.0123, 1e-6):
+        edge = np.sqrt(745.2 / (4.0 * np.pi**2)) * q
+        for s in np.concatenate([np.linspace(0.98 * edge, 1.02 * edge, 4001), [3.0 * edge, 1e4 * q, 1e9 * q, np.inf]]):
+            z = (s / q) ** 2
+            with np.errstate(invalid="ignore"):
+                terms = q * q / (2.0 * np.pi**2 * k**2) * np.exp(-4.0 * np.pi**2 * k**2 * z)
+            want = float(terms.sum())
+            assert correlated_error_variance(q, s) == want, (q, s)
+            below += want > 0
+    assert below > 0
+
+
 def test_interpolation_a_harmonic_at_a_time_is_the_row_order_one_bit_for_bit():
     f = np.fft.rfftfreq(4096, 1 / 200.0)
     p = np.random.default_rng(3).exponential(size=f.size)

@@ -135,6 +135,10 @@ def correlated_error_variance(step, noise_sd):
     if not q > 0:
         return 0.0
     z = (float(noise_sd) / q) ** 2
+    if _MINUS_FOUR_PI2_K2[0] * z < _EXP_ZERO_BELOW:
+        # every exponential is exactly 0 (the first term's is the largest): the sum of exact zeros, without them
+        # (noise of more than 4.4 steps: nearly every step of the noise bisection on a finely quantised record)
+        return 0.0
     n = _K.size if not z > 0 else _terms_kept(z)
     terms = q * q / _TWO_PI2_K2[:n] * np.exp(_MINUS_FOUR_PI2_K2[:n] * z)
     tail = q * q / (2.0 * np.pi**2 * _K[-1]) if z == 0 else 0.0
