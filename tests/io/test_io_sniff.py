@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 from vibkit.io.text import layout
 from vibkit.io.text.cells import _Splitter
 
-CHARS = st.sampled_from(list("0123456789.,;\t|-+eE: \"#anifAN\u00a0\x0b") + ["nan", "inf", "-Inf", "1e-3", "12:00:01"])
+CHARS = st.sampled_from(list('0123456789.,;\t|-+eE: "#anifAN\u00a0\x0b') + ["nan", "inf", "-Inf", "1e-3", "12:00:01"])
 LINES = st.lists(CHARS, max_size=12).map("".join)
 
 
