@@ -182,3 +182,19 @@ def test_the_split_half_tests_with_each_halfs_floor_computed_once_are_the_four_f
             got, want = detect._split_half_tests(cur, 5), four_floors(cur, 5)
             assert len(got) == len(want) == 2
             assert got == want
+
+
+def test_the_harmonic_evidence_logged_where_it_is_positive_is_the_whole_grids_bit_for_bit():
+    """The search's evidence ``max(0, log(max(p, 1e-300) / thr))`` with the log taken only where the ratio is over 1
+    (or NaN): noise grids of every shape and threshold, ratios at and around 1, zeros, infinities and NaN."""
+    rng = np.random.default_rng(11)
+    grids = [rng.exponential(size=shape) for shape in ((1501, 25), (201, 7), (1, 1), (3, 1000), (37_525,))]
+    edge = np.array([0.0, 1e-320, 1e-300, 4.0, np.nextafter(4.0, 0), np.nextafter(4.0, 9), 8.0, np.inf, np.nan, 1e300])
+    grids.append(np.tile(edge, 7))
+    for p in grids:
+        for thr in (4.0, 1.0, 0.37, 123.0):
+            want = np.maximum(np.log(np.maximum(p, 1e-300) / thr), 0.0)
+            got = peaks.log_evidence(p, thr)
+            assert got.shape == want.shape and got.dtype == want.dtype
+            np.testing.assert_array_equal(got, want)
+            assert not np.signbit(got[got == 0]).any()  # +0 where the old form gave +0

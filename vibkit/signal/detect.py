@@ -64,7 +64,7 @@ import scipy.stats
 
 from ._checks import check_fs
 from .bursts import ABSURD_FACTOR, FILL_THRESHOLD, InvalidSamples, flag_invalid
-from .peaks import climb_from_subharmonic, interp_by_harmonic
+from .peaks import climb_from_subharmonic, interp_by_harmonic, log_evidence
 from .quantisation import quantisation_floor, quantisation_step
 
 __all__ = [
@@ -278,7 +278,7 @@ def _search(r, f, df, fmin, fmax, f_top):
     cands = np.arange(fmin, fmax + df / (4 * h_max), df / (2.0 * h_max))
     hf = cands[:, None] * np.arange(1, h_max + 1)[None, :]
     p = interp_by_harmonic(hf, f, pmax)
-    ev = np.maximum(np.log(np.maximum(p, 1e-300) / thr), 0.0)
+    ev = log_evidence(p, thr)
     ev[hf > f_top] = 0.0
     sc = ev.sum(axis=1)
     i = climb_from_subharmonic(cands, sc, df)

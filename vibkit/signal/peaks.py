@@ -124,13 +124,25 @@ def interp_by_harmonic(hf, f, p):
     return np.ascontiguousarray(np.interp(hf.T.ravel(), f, p).reshape(hf.T.shape).T)
 
 
+def log_evidence(p, thr):
+    """``np.maximum(np.log(np.maximum(p, 1e-300) / thr), 0.0)``, the log taken only where it is not 0: a ratio over
+    1 (or NaN), a few percent of a search grid's points (the log of the whole grid was a third of a search's time);
+    the same values bit for bit."""
+    r = np.maximum(p, 1e-300)
+    r /= thr
+    ev = np.zeros_like(r)
+    keep = ~(r <= 1.0)
+    ev[keep] = np.log(r[keep])
+    return ev
+
+
 def _scores(cands, f, pmax, f_top, thr):
     """Harmonic evidence: sum over multiples up to ``f_top`` of ``max(0, log(p / thr))``."""
     cands = np.asarray(cands, dtype=float)
     hmax = int(f_top // cands.min())
     hf = cands[:, None] * np.arange(1, hmax + 1)[None, :]
     p = interp_by_harmonic(hf, f, pmax)
-    ev = np.maximum(np.log(np.maximum(p, 1e-300) / thr), 0.0)
+    ev = log_evidence(p, thr)
     ev[hf > f_top] = 0.0
     return ev.sum(axis=1)
 
