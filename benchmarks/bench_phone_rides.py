@@ -338,7 +338,8 @@ script's docstring.  {reps} records a cell; +- is the binomial standard error.
 ## Probability that the ride's link pass is found (within 1 % of the truth, one ride)
 
 Level: the line's peak in an 8 s Welch spectrum of its strongest axis over that axis' median of 1.5-10 Hz (the
-real rides: 8-24 dB); the other axes carry it at their weight's share of that level over their own floors.  Default band 2.9-9 Hz (no profile), false-alarm bound 0.001 per still span.
+development rides: {levels_held} dB, below); the other axes carry it at a real ride's shares of that level over their
+own floors.  Default band 2.9-9 Hz (no profile), false-alarm bound 0.001 per still span.
 
 {table}
 
@@ -401,6 +402,14 @@ Of the {z.size} link passes found: {cov2:.2f} +- {cov2_s:.2f} within 2 sigma of 
                 capsize=3,
                 label=f"{length} s ride",
             )
+        ax.scatter(
+            [r["level_db"] for r in real],
+            [1.0 if r["verdict"].startswith("found") else 0.0 for r in real],
+            marker="x",
+            color="k",
+            zorder=3,
+            label="real rides (found 1, missed 0)",
+        )
         ax.set_xlabel("line level over the floor [dB] (8 s Welch, strongest axis)")
         ax.set_ylabel("P(link pass found)")
         ax.set_ylim(-0.05, 1.05)
