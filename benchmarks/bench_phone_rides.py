@@ -1,9 +1,12 @@
 """A phone on an escalator: how often `vibkit rides` finds a ride's link pass, how often it invents one, and
 whether its stated sigma holds, on real phone noise with a line of known truth.
 
-Run:  python benchmarks/bench_phone_rides.py [--quick]
+Run:  python benchmarks/bench_phone_rides.py [--quick] [--advio-root DIR]
 
-Writes ``benchmarks/results/phone_rides{,_quick}.{md,csv,png}``.
+Writes ``benchmarks/results/phone_rides{,_quick}.{md,csv,png}`` and ``phone_rides_real{,_quick}.csv`` (the real
+rides' table).  With ``--advio-root DIR`` (or ``VIBKIT_ADVIO_ROOT``), the rides of the ADVIO sequences the project
+does not hold (advio-08, advio-09: ``bench_advio_unseen.py``'s truth) join that table, measured only, never used to
+draw the synthetic lines; without it the table holds the development rides alone.
 
 The records are made of real phone data (the ADVIO walks in ``../shared/realworld``, CC BY-NC 4.0, read in
 place): 10 s of walking (advio-02, a mall) before and after a still span cut from the rides-free sequences'
@@ -33,6 +36,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import time
 from pathlib import Path
 
@@ -432,9 +436,9 @@ if __name__ == "__main__":
     ap.add_argument(
         "--advio-root",
         type=Path,
-        default=None,
+        default=os.environ.get("VIBKIT_ADVIO_ROOT") or None,
         help="folder of the ADVIO sequences the project does not hold (advio-08, advio-09): their rides join the real "
-        "rides' table (CC BY-NC 4.0: keep the data out of this repository)",
+        "rides' table (CC BY-NC 4.0: keep the data out of this repository); default: $VIBKIT_ADVIO_ROOT, else none",
     )
     args = ap.parse_args()
     main(args.quick, args.advio_root)
