@@ -593,3 +593,27 @@ def test_a_passenger_shifting_mid_ride_does_not_cut_the_ride():
     # the standing is 10-34 s; the still span loses about a second to the walking band's window at each end
     assert ride.start_s < 12.0 and ride.end_s > 32.0
     assert abs(ride.link_pass_hz - f0) < 3 * ride.link_pass_sigma_hz
+
+
+@needs_real
+def test_a_measured_lines_pattern_is_given_back_by_the_benchmarks_line():
+    """``support.phone.shares`` inverts the benchmark's line: a line put on real standing (advio-07's lift, 13-87 s) at
+    a known pattern, measured per axis (``welch_level``, the benchmark's scale), turned into shares and put on the
+    standing again, stands at the same level on every axis that carries it 6 dB or more over its floor, within 1.5 dB
+    (a Welch peak's own scatter with the noise in its bin: about 1 dB at 6-10 dB).  The benchmark draws its records' patterns from the real rides this way."""
+    ds = vibkit.read_recording(REAL / "advio-07" / "iphone")
+    fs = float(ds.attrs["sample_rate_hz"])
+    t = ds["time"].values
+    tu = np.arange(13.0, 87.0, 1 / fs)
+    names = ("acc_x", "acc_y", "acc_z", "gyro_x", "gyro_y", "gyro_z")
+    still = np.stack([np.interp(tu, t, ds[n].values) for n in names])
+    phase = 2 * np.pi * 3.875 * np.arange(tu.size) / fs
+    weights = np.array([0.05, 0.6, 1.0, 0.7, 0.02, 0.4])
+    x = support.phone.add_line(still, fs, phase, weights, 18.0, np.random.default_rng(1))
+    levels = [support.phone.welch_level(x[c], fs, 3.875) for c in range(6)]
+    again = support.phone.add_line(still, fs, phase, support.phone.shares(levels), 18.0, np.random.default_rng(1))
+    for c in range(6):
+        if levels[c] >= 6.0:
+            assert abs(support.phone.welch_level(again[c], fs, 3.875) - levels[c]) < 1.5, (names[c], levels)
+    with pytest.raises(ValueError, match="no channel's level stands over its floor"):
+        support.phone.shares([-1.0, -3.0])

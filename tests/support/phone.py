@@ -12,7 +12,7 @@ import math
 import numpy as np
 from scipy import signal
 
-__all__ = ["welch_level", "add_line", "floor_at_line_db"]
+__all__ = ["welch_level", "add_line", "floor_at_line_db", "shares"]
 
 #: the level's reference band [Hz]: the median of an 8 s Welch spectrum over it is the floor
 FLOOR_BAND_HZ = (1.5, 10.0)
@@ -59,3 +59,14 @@ def add_line(still, fs, phase, weights, level_db, rng):
         amp = math.sqrt(floor * 10 ** (level_db / 10) * weights[c] / top / gain)
         still[c] += amp * np.sin(phase + rng.uniform(0, 2 * np.pi))
     return still
+
+
+def shares(levels_db):
+    """The weights that :func:`add_line` needs to reproduce a line measured at ``levels_db`` (each channel's
+    :func:`welch_level`): each channel's excess over its floor (the peak less the noise in its bin, ``10**(L/10) - 1``,
+    none where the peak is at the floor) over the strongest channel's."""
+    excess = np.clip(10.0 ** (np.asarray(levels_db, dtype=float) / 10.0) - 1.0, 0.0, None)
+    top = float(excess.max())
+    if not top > 0:
+        raise ValueError("no channel's level stands over its floor: no line to take a pattern from")
+    return excess / top
