@@ -4,6 +4,8 @@ exports write ``time,z,y,x``; a phone's clock repeats a stamp."""
 
 from __future__ import annotations
 
+import zipfile
+
 import numpy as np
 import pytest
 
@@ -129,3 +131,52 @@ def test_a_repeated_stamp_in_one_sensor_file_is_repaired_when_asked(tmp_path):
     ds = vibkit.read_recording(folder, repair_time=True)
     assert ds.sizes["time"] == t.size
     assert ds["gyro_x"].values == pytest.approx(0.01)
+
+
+def _phyphox_rows(t, total, sep, dec):
+    def num(v):
+        return f"{v:.9E}".replace(".", dec)
+
+    return "\n".join(sep.join(num(v) for v in (ti, *row)) for ti, row in zip(t, total.T)) + "\n"
+
+
+@pytest.mark.parametrize(
+    "data_file, header, sep, dec",
+    [
+        (
+            "Rohdaten.csv",
+            '"Zeit (s)";"Beschleunigung x (m/s^2)";"Beschleunigung y (m/s^2)";"Beschleunigung z (m/s^2)"',
+            ";",
+            ",",
+        ),
+        (
+            "Données brutes.csv",
+            '"Temps (s)","Accélération x (m/s^2)","Accélération y (m/s^2)","Accélération z (m/s^2)"',
+            ",",
+            ".",
+        ),
+        (
+            "Dados brutos.csv",
+            '"Tempo (s)";"Aceleração x (m/s^2)";"Aceleração y (m/s^2)";"Aceleração z (m/s^2)"',
+            ";",
+            ",",
+        ),
+        (
+            "Raw Data.csv",
+            '"Time (s)","Acceleration x (m/s^2)","Acceleration y (m/s^2)","Acceleration z (m/s^2)"',
+            ",",
+            ".",
+        ),
+    ],
+)
+def test_a_phyphox_export_in_the_phones_language_reads_as_its_accelerometer(tmp_path, data_file, header, sep, dec):
+    """phyphox names its data file after the export set in the phone's language and writes its header in it; the
+    zip (beside ``meta/``) is the recording, its one data file sorted by the header's word for acceleration."""
+    t, free, gravity = _walk()
+    z = tmp_path / "Beschleunigung mit g 2024-05-01 10-00-00.zip"
+    with zipfile.ZipFile(z, "w") as zf:
+        zf.writestr(data_file, header + "\n" + _phyphox_rows(t, free + gravity, sep, dec))
+        zf.writestr("meta/device.csv", f'"property"{sep}"value"\n"deviceModel"{sep}"Pixel 7"\n')
+    ds = vibkit.read_recording(z)
+    np.testing.assert_allclose(_acc(ds), free + gravity, rtol=1e-8, atol=1e-8)
+    assert f"accelerometer {data_file}" in ds.attrs["history"]

@@ -36,6 +36,7 @@ from __future__ import annotations
 import io
 import os
 import re
+import unicodedata
 import zipfile
 
 import numpy as np
@@ -73,9 +74,31 @@ def _stem(name: str) -> str:
     return re.sub(r"[^a-z0-9]", "", base.lower())
 
 
-#: phyphox names the one file of a single-sensor experiment "Raw Data.csv"; its header says which sensor
-_RAW_DATA = "rawdata"
-_RAW_HEADERS = (("acceleration", "accelerometer"), ("gyroscope", "gyroscope"), ("pressure", "barometer"))
+#: phyphox names the one file of a single-sensor experiment after its export set ("Raw Data.csv" in English,
+#: "Rohdaten.csv" in German ...); its header says which sensor, in the language of the phone: the word for each
+#: sensor's quantity in English, German, French, Spanish, Italian, Portuguese, Dutch and Polish (accents dropped)
+_RAW_HEADERS = (
+    (
+        (
+            "acceleration",
+            "beschleunigung",
+            "accelerazione",
+            "aceleracion",
+            "aceleracao",
+            "versnelling",
+            "przyspieszenie",
+        ),
+        "accelerometer",
+    ),
+    (("gyroscope", "gyroskop", "giroscopio", "gyroscoop", "zyroskop", "rotation rate", "drehrate"), "gyroscope"),
+    (("pressure", "druck", "druk", "pression", "presion", "pressione", "pressao", "cisnienie"), "barometer"),
+)
+
+
+def _header_words(head: bytes) -> str:
+    """The first line of a file's head in lower case, accents dropped (``Accélération`` -> ``acceleration``)."""
+    line = head[:512].decode("utf-8", "replace").splitlines()[0] if head else ""
+    return unicodedata.normalize("NFKD", line.lower()).encode("ascii", "ignore").decode()
 
 
 def _is_phyphox(names) -> bool:
@@ -87,8 +110,9 @@ def _is_phyphox(names) -> bool:
 def phone_sensor_files(names, head=None, phyphox=None):
     """{sensor: name} for the names (paths or zip members) that hold a phone sensor; others left out.
 
-    ``head(name) -> bytes`` (the file's first bytes) sorts phyphox's ``Raw Data.csv`` by its header (acceleration,
-    gyroscope, pressure) where the export carries phyphox's ``meta/`` folder (``phyphox``: whether it does; default:
+    ``head(name) -> bytes`` (the file's first bytes) sorts phyphox's data file (``Raw Data.csv``, ``Rohdaten.csv``
+    ...: any name that is no sensor's) by its header (acceleration, gyroscope, pressure, in the phone's language)
+    where the export carries phyphox's ``meta/`` folder (``phyphox``: whether it does; default:
     read from the names)."""
     found = {}
     phyphox = head is not None and (_is_phyphox(names) if phyphox is None else phyphox)
@@ -96,9 +120,10 @@ def phone_sensor_files(names, head=None, phyphox=None):
         if not name.lower().endswith(_SUFFIXES) or "__macosx" in name.lower():
             continue
         stem = _stem(name)
-        if stem == _RAW_DATA and phyphox:
-            first = head(name)[:512].decode("utf-8", "replace").lower()
-            stem = next((s for word, s in _RAW_HEADERS if word in first), stem)
+        known = any(stem in stems for stems in PHONE_SENSORS.values())
+        if phyphox and not known and "meta" not in re.split(r"[\\/]", name.lower()):
+            first = _header_words(head(name))
+            stem = next((PHONE_SENSORS[s][0] for words, s in _RAW_HEADERS if any(w in first for w in words)), stem)
         for sensor, stems in PHONE_SENSORS.items():
             if stem in stems and sensor not in found:
                 found[sensor] = name
