@@ -265,6 +265,24 @@ def _spectrum_verdict(path):
     return f"{data.get('status', '?')}: {str(data.get('reason', ''))[:120]}"
 
 
+def _verdict(read, rides, spectrum):
+    """None of the real exports holds an escalator: right is no ride and no link pass, or a one-line refusal."""
+    if read.startswith("refused"):
+        return "refused in one line"
+    if read.startswith("not under"):
+        return "-"
+    wrong = []
+    if rides.startswith("exit"):
+        wrong.append("rides fails")
+    elif not rides.startswith("0 ride"):
+        wrong.append("a ride invented")
+    if spectrum.startswith("exit"):
+        wrong.append("spectrum fails")
+    elif spectrum.startswith("link pass"):
+        wrong.append("spectrum gives a link pass")
+    return "WRONG: " + ", ".join(wrong) if wrong else "right: no ride, no link pass"
+
+
 def real_exports(root):
     rows = []
     for rel, app, phone, what, source, licence in EXPORTS:
@@ -279,6 +297,7 @@ def real_exports(root):
         rows.append(
             {
                 "export": rel,
+                "verdict": _verdict(read, rides, spectrum),
                 "app and layout": app,
                 "phone": phone,
                 "recorded": what,
@@ -290,6 +309,11 @@ def real_exports(root):
             }
         )
     return rows
+
+
+def _tally_real(rows):
+    n = {v: sum(r["verdict"].startswith(v) for r in rows) for v in ("right", "refused", "WRONG")}
+    return f"Right {n['right']}, refused in one line {n['refused']}, wrong {n['WRONG']} (the verdict column says how)."
 
 
 def advio_layouts(advio):
@@ -378,7 +402,7 @@ def main(argv=None):
             "",
             "Each read as it comes (`vibkit rides EXPORT --json`, `vibkit spectrum EXPORT --json`, no options). None",
             "of them holds an escalator: the right answer is no ride and no link pass, or a one-line refusal that says",
-            "what to do.",
+            "what to do. " + _tally_real(real),
             "",
             markdown_table(real),
             "",
