@@ -129,6 +129,7 @@ def test_order_is_fixed_and_the_last_entry_claims_everything():
         "hdf5",
         "netcdf",
         "gzip",
+        "spreadsheet",
         "zip",
         "witmotion",
         "wav",

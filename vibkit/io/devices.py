@@ -11,6 +11,8 @@ Each layout is read from what its header states; every decision goes into the da
 * Containers: gzip (``.gz``) and zip holding exactly one recording are unpacked, and the recording
   inside is read by the entry of :data:`vibkit.io.registry.FORMATS` that claims it.
 * WitMotion WT901 SD-card logs (binary ``0x55`` packets): named, with what reads them, and refused.
+* Spreadsheet workbooks (Excel ``.xls``/``.xlsx``, OpenDocument ``.ods``, Apple ``.numbers``; phyphox exports
+  one as "Excel"): named and refused, asking for the CSV export (reading them would need a dependency each).
 
 The LabVIEW ``.lvm`` reader is :mod:`vibkit.io.lvm`.
 """
@@ -45,6 +47,8 @@ __all__ = [
     "read_zip",
     "sniff_witmotion",
     "read_witmotion",
+    "sniff_spreadsheet",
+    "read_spreadsheet",
 ]
 
 # ----------------------------------------------------------------------------------------- Empatica E4
@@ -386,6 +390,39 @@ def read_witmotion(path, data, options):
         None,
         "WitMotion WT901 binary log (0x55 packets: " + ", ".join(kinds) + "), which vibkit does not read; "
         "export it to CSV with WitMotion's own software (WitMotion PC software or the WitMotion app) and read that CSV",
+    )
+
+
+# ----------------------------------------------------------------------------------------- spreadsheets
+_SPREADSHEET_SUFFIXES = (".xls", ".xlsx", ".xlsm", ".ods", ".numbers")
+_OLE2 = b"\xd0\xcf\x11\xe0\xa1\xb1\x1a\xe1"  # the compound file of .xls (and of other Office 97 files)
+
+
+def _spreadsheet_kind(head: bytes, suffix: str):
+    """What spreadsheet the first bytes ``head`` of a file with suffix ``suffix`` (``.xls``) make, or None."""
+    if head[:8] == _OLE2:
+        return "an Excel 97-2003 workbook (.xls: an OLE2 compound file)"
+    if head[:4] == b"PK\x03\x04":
+        if b"application/vnd.oasis.opendocument.spreadsheet" in head[:200]:
+            return "an OpenDocument spreadsheet (.ods)"
+        if b"xl/" in head or (b"[Content_Types].xml" in head[:100] and suffix in _SPREADSHEET_SUFFIXES):
+            return "an Excel workbook (.xlsx)"
+    if suffix in _SPREADSHEET_SUFFIXES:
+        return f"a spreadsheet workbook ({suffix})"
+    return None
+
+
+def sniff_spreadsheet(probe) -> bool:
+    return _spreadsheet_kind(probe.head, probe.suffix) is not None
+
+
+def read_spreadsheet(path, data, options):
+    kind = _spreadsheet_kind(bytes(data[:65536]), os.path.splitext(os.fspath(path))[1].lower())
+    raise RecordingError(
+        path,
+        None,
+        f"{kind or 'a spreadsheet workbook'}, which vibkit does not read; expected CSV: export or save the data as CSV "
+        "(phyphox: 'CSV (Comma, decimal point)'; a spreadsheet program: one sheet as CSV)",
     )
 
 

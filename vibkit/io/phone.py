@@ -18,7 +18,15 @@ gyroscope          gyro, gyroscope, rotationrate                          ``gyro
                                                                           velocity, rad/s
 barometer          barometer, pressure                                    ``pressure`` [Pa] and
                                                                           ``altitude`` [m] where given
+gravity            gravity                                                added to an accelerometer that
+                                                                          has gravity removed
 =================  ====================================================  ==============================
+
+Gravity is the steady part of an accelerometer's reading (a 2 s running mean near 9.81 m/s^2 or 1 g that
+carries most of the magnitude).  Where it is missing (Sensor Logger's ``Accelerometer.csv`` and phyphox's
+"Linear Acceleration" have it removed) and the export holds the phone's gravity estimate (``Gravity.csv``),
+the two are added: what a phone with gravity would have read, which the walking test of a phone's rides
+(``vibkit.signal.stillness``) is made for; said in ``history``.
 
 Other files (magnetometer, location, ground truth) are listed in ``history`` and left out.
 """
@@ -28,9 +36,11 @@ from __future__ import annotations
 import io
 import os
 import re
+import unicodedata
 import zipfile
 
 import numpy as np
+from scipy import ndimage
 
 from .errors import RecordingError
 from .recording import Channel, build_recording
@@ -50,6 +60,7 @@ PHONE_SENSORS = {
     ),
     "gyroscope": ("gyro", "gyroscope", "rotationrate", "gyroscopeuncalibrated"),
     "barometer": ("barometer", "pressure"),
+    "gravity": ("gravity",),
 }
 _SUFFIXES = (".csv", ".txt", ".tsv")
 _G = 9.80665
@@ -63,9 +74,31 @@ def _stem(name: str) -> str:
     return re.sub(r"[^a-z0-9]", "", base.lower())
 
 
-#: phyphox names the one file of a single-sensor experiment "Raw Data.csv"; its header says which sensor
-_RAW_DATA = "rawdata"
-_RAW_HEADERS = (("acceleration", "accelerometer"), ("gyroscope", "gyroscope"), ("pressure", "barometer"))
+#: phyphox names the one file of a single-sensor experiment after its export set ("Raw Data.csv" in English,
+#: "Rohdaten.csv" in German ...); its header says which sensor, in the language of the phone: the word for each
+#: sensor's quantity in English, German, French, Spanish, Italian, Portuguese, Dutch and Polish (accents dropped)
+_RAW_HEADERS = (
+    (
+        (
+            "acceleration",
+            "beschleunigung",
+            "accelerazione",
+            "aceleracion",
+            "aceleracao",
+            "versnelling",
+            "przyspieszenie",
+        ),
+        "accelerometer",
+    ),
+    (("gyroscope", "gyroskop", "giroscopio", "gyroscoop", "zyroskop", "rotation rate", "drehrate"), "gyroscope"),
+    (("pressure", "druck", "druk", "pression", "presion", "pressione", "pressao", "cisnienie"), "barometer"),
+)
+
+
+def _header_words(head: bytes) -> str:
+    """The first line of a file's head in lower case, accents dropped (``Accélération`` -> ``acceleration``)."""
+    line = head[:512].decode("utf-8", "replace").splitlines()[0] if head else ""
+    return unicodedata.normalize("NFKD", line.lower()).encode("ascii", "ignore").decode()
 
 
 def _is_phyphox(names) -> bool:
@@ -77,8 +110,9 @@ def _is_phyphox(names) -> bool:
 def phone_sensor_files(names, head=None, phyphox=None):
     """{sensor: name} for the names (paths or zip members) that hold a phone sensor; others left out.
 
-    ``head(name) -> bytes`` (the file's first bytes) sorts phyphox's ``Raw Data.csv`` by its header (acceleration,
-    gyroscope, pressure) where the export carries phyphox's ``meta/`` folder (``phyphox``: whether it does; default:
+    ``head(name) -> bytes`` (the file's first bytes) sorts phyphox's data file (``Raw Data.csv``, ``Rohdaten.csv``
+    ...: any name that is no sensor's) by its header (acceleration, gyroscope, pressure, in the phone's language)
+    where the export carries phyphox's ``meta/`` folder (``phyphox``: whether it does; default:
     read from the names)."""
     found = {}
     phyphox = head is not None and (_is_phyphox(names) if phyphox is None else phyphox)
@@ -86,9 +120,10 @@ def phone_sensor_files(names, head=None, phyphox=None):
         if not name.lower().endswith(_SUFFIXES) or "__macosx" in name.lower():
             continue
         stem = _stem(name)
-        if stem == _RAW_DATA and phyphox:
-            first = head(name)[:512].decode("utf-8", "replace").lower()
-            stem = next((s for word, s in _RAW_HEADERS if word in first), stem)
+        known = any(stem in stems for stems in PHONE_SENSORS.values())
+        if phyphox and not known and "meta" not in re.split(r"[\\/]", name.lower()):
+            first = _header_words(head(name))
+            stem = next((PHONE_SENSORS[s][0] for words, s in _RAW_HEADERS if any(w in first for w in words)), stem)
         for sensor, stems in PHONE_SENSORS.items():
             if stem in stems and sensor not in found:
                 found[sensor] = name
@@ -102,10 +137,52 @@ def is_phone_export(names, head=None) -> bool:
     return "accelerometer" in found and (len(found) >= 2 or _is_phyphox(names))
 
 
+#: the reader options that apply to every sensor file of an export alike (the others name one file's columns)
+_PER_FILE_OPTIONS = ("encoding", "delimiter", "decimal", "repair_time", "time_unit", "gap_factor", "date_order")
+
+
 def _read_one(label, data, options):
     """One sensor file's bytes, read by the text reader (each phone app writes text)."""
-    kw = {k: v for k, v in options.items() if k in ("encoding", "delimiter", "decimal")}
+    kw = {k: v for k, v in options.items() if k in _PER_FILE_OPTIONS and v is not None}
     return read_csv(label, data, **kw)
+
+
+#: the running mean that gravity, and nothing a person does with a phone, holds steady [s]
+_STEADY_S = 2.0
+
+
+def _steady(vals, t):
+    """(median magnitude of the running mean over :data:`_STEADY_S`, median ``|a|``) of the three axes ``vals``."""
+    a = np.vstack(vals)
+    ok = np.all(np.isfinite(a), axis=0)
+    if ok.sum() < 3:
+        return 0.0, 0.0
+    a = a[:, ok]
+    dt = np.diff(np.asarray(t, dtype=float)[ok])
+    step = float(np.median(dt)) if dt.size else 0.0
+    w = max(int(round(_STEADY_S / step)), 1) if step > 0 else 1
+    steady = float(np.median(np.sqrt(np.sum(ndimage.uniform_filter1d(a, w, axis=1, mode="nearest") ** 2, axis=0))))
+    return steady, float(np.median(np.sqrt(np.sum(a**2, axis=0))))
+
+
+def _gravity_in(vals, t):
+    """How the three axes ``vals`` carry gravity: "m/s^2" or "g" (the unit its magnitude tells), "removed", or None
+    (a steady part that is no gravity in either unit).
+
+    Gravity is the steady part of the reading: the running mean over :data:`_STEADY_S` carries most of the magnitude
+    (its median at least 0.7 of ``|a|``'s) and reads 7-12.5 (m/s^2) or 0.7-1.3 (g).  With gravity removed the
+    running mean is what the phone's motion and the sensor's bias leave: under half of ``|a|``, or under 0.5
+    (on the Sensor Logger walks tried, 0.12-0.25 of ``|a|``; a phone in a pocket: 1.0 m/s^2 of 3.95; lying still:
+    0.014 of 0.03 m/s^2)."""
+    steady, mag = _steady(vals, t)
+    if mag > 0 and steady >= 0.7 * mag:
+        if 7.0 <= steady <= 12.5:
+            return "m/s^2"
+        if 0.7 <= steady <= 1.3:
+            return "g"
+    if steady < 0.5 * mag or steady < 0.5:
+        return "removed"
+    return None
 
 
 def _axes(ds, label, what):
@@ -123,29 +200,40 @@ def _axes(ds, label, what):
 
 
 def _si(ds, names, label, quantity, history):
-    """The three axes in SI: their units as the file states them, else guessed from gravity (accelerometer)."""
+    """The three axes in SI: their units as the file states them, else from gravity (accelerometer).
+
+    Returns ``(values, unit, gravity)``: ``gravity`` False for an accelerometer whose reading has gravity removed
+    (see :func:`_gravity_in`), True otherwise."""
     vals = [np.asarray(ds[v].values, dtype=float) for v in names]
     units = [ds[v].attrs.get("units", "unknown") for v in names]
     if quantity == "acceleration":
+        t = np.asarray(ds["time"].values, dtype=float)
         if all(ds[v].attrs.get("quantity") == "acceleration" for v in names):
-            return vals, "m/s^2"
+            return vals, "m/s^2", _gravity_in(vals, t) != "removed"
         mag = float(np.nanmedian(np.sqrt(sum(x**2 for x in vals))))
-        if 7.0 <= mag <= 12.5:
-            history.append(f"{label}: no units; |a| reads {mag:.3g}, so m/s^2")
-            return vals, "m/s^2"
-        if 0.7 <= mag <= 1.3:
-            history.append(f"{label}: no units; |a| reads {mag:.3g}, so g (scaled to m/s^2)")
-            return [x * _G for x in vals], "m/s^2"
-        if mag < 0.5 and all(u in ("unknown", "m/s^2") for u in units):
-            history.append(f"{label}: |a| reads {mag:.3g}: acceleration without gravity, taken as m/s^2")
-            return vals, "m/s^2"
+        how = _gravity_in(vals, t) if all(u in ("unknown", "m/s^2") for u in units) else None
+        if how == "m/s^2":
+            history.append(f"{label}: no units; |a| reads {mag:.3g}, gravity its steady part, so m/s^2")
+            return vals, "m/s^2", True
+        if how == "g":
+            history.append(f"{label}: no units; |a| reads {mag:.3g}, gravity its steady part, so g (scaled to m/s^2)")
+            return [x * _G for x in vals], "m/s^2", True
+        if how == "removed" and mag < 30.0:
+            history.append(
+                f"{label}: no units and no steady part (|a| reads {mag:.3g}): acceleration with gravity removed, "
+                "taken as m/s^2"
+            )
+            return vals, "m/s^2", False
         raise RecordingError(
-            label, None, f"|a| reads {mag:.3g} in units {units[0]!r}; expected an accelerometer in m/s^2 or g"
+            label,
+            None,
+            f"|a| reads {mag:.3g} in units {units[0]!r}, its steady part no gravity; expected an accelerometer in "
+            "m/s^2 or g",
         )
     if all(u in ("rad/s", "unknown") for u in units):
         if "unknown" in units:
             history.append(f"{label}: no units; read as rad/s")
-        return vals, "rad/s"
+        return vals, "rad/s", True
     raise RecordingError(label, None, f"units {units[0]!r}; expected a gyroscope in rad/s")
 
 
@@ -256,12 +344,8 @@ def read_phone_export(path, options=None):
     acc, acc_label = load("accelerometer")
     t = np.asarray(acc["time"].values, dtype=float)
     channels = []
-    vals, unit = _si(acc, _axes(acc, acc_label, "accelerometer"), acc_label, "acceleration", history)
+    vals, unit, with_gravity = _si(acc, _axes(acc, acc_label, "accelerometer"), acc_label, "acceleration", history)
     rate_acc = float(acc.attrs.get("sample_rate_hz", np.nan))
-    for ax, x in zip("xyz", vals):
-        channels.append(Channel(f"acc_{ax}", x, unit, f"accelerometer {ax}", "acceleration"))
-    natives = {f"acc_{ax}": rate_acc for ax in "xyz"}
-
     held = set()
 
     def joined(ds, label, x):
@@ -274,9 +358,33 @@ def read_phone_export(path, options=None):
             )
         return np.interp(t, ts, x)
 
+    if not with_gravity and "gravity" in found:
+        grav, label = load("gravity")
+        gnames = _axes(grav, label, "gravity sensor")
+        gvals = [np.asarray(grav[v].values, dtype=float) for v in gnames]
+        gunit = _gravity_in(gvals, np.asarray(grav["time"].values, dtype=float))
+        if gunit not in ("m/s^2", "g"):
+            raise RecordingError(
+                label, None, "no steady magnitude near 9.81 m/s^2 or 1 g; expected the phone's gravity"
+            )
+        scale = _G if gunit == "g" else 1.0
+        vals = [x + scale * joined(grav, label, g) for x, g in zip(vals, gvals)]
+        history.append(
+            f"{acc_label}: gravity removed; {os.path.basename(label)} (in {gunit}) added back, laid on its time stamps, "
+            "as a phone with gravity reads"
+        )
+    elif not with_gravity:
+        history.append(
+            f"{acc_label}: gravity removed and no gravity file beside it: |a| holds no gravity, and walking's step "
+            "shows at twice its rate in it"
+        )
+    for ax, x in zip("xyz", vals):
+        channels.append(Channel(f"acc_{ax}", x, unit, f"accelerometer {ax}", "acceleration"))
+    natives = {f"acc_{ax}": rate_acc for ax in "xyz"}
+
     if "gyroscope" in found:
         gyr, label = load("gyroscope")
-        gvals, gunit = _si(gyr, _axes(gyr, label, "gyroscope"), label, "angular_velocity", history)
+        gvals, gunit, _ = _si(gyr, _axes(gyr, label, "gyroscope"), label, "angular_velocity", history)
         for ax, x in zip("xyz", gvals):
             channels.append(Channel(f"gyro_{ax}", joined(gyr, label, x), gunit, f"gyroscope {ax}", "other"))
             natives[f"gyro_{ax}"] = float(gyr.attrs.get("sample_rate_hz", np.nan))

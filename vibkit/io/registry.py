@@ -14,7 +14,9 @@ entry as its bytes.  The order of :data:`FORMATS` is the priority, and it is fix
    content, or a suffix of :data:`NETCDF_SUFFIXES` whatever the content (vibkit's own results,
    read by :mod:`vibkit.io.netcdf`);
 3. ``gzip`` and ``zip``: containers by signature (``\\x1f\\x8b``, ``PK\\x03\\x04``), unpacked, the one
-   recording inside read by the entry that claims it (:mod:`vibkit.io.devices`);
+   recording inside read by the entry that claims it (:mod:`vibkit.io.devices`); before ``zip``,
+   ``spreadsheet``: Excel and OpenDocument workbooks (the OLE2 signature, an ``.xlsx`` zip's ``xl/`` members,
+   or the suffix) named and refused, asking for CSV;
 4. ``witmotion``: WitMotion WT901 SD-card logs (valid ``0x55`` packets): named and refused, saying
    what reads them;
 5. ``wav``, ``tdms``, ``uff``: WAV (``RIFF....WAVE``), NI TDMS (``TDSm`` or ``.tdms``, read by npTDMS,
@@ -242,6 +244,12 @@ FORMATS: tuple[Format, ...] = (
         "gzip files (.gz) holding one recording, unpacked and read",
         devices.sniff_gzip,
         _container(devices.read_gzip),
+    ),
+    Format(
+        "spreadsheet",
+        "spreadsheet workbooks (Excel .xls/.xlsx, OpenDocument .ods): named and refused, asking for CSV",
+        devices.sniff_spreadsheet,
+        devices.read_spreadsheet,
     ),
     Format(
         "zip",

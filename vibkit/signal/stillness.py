@@ -2,7 +2,10 @@
 
 Walking puts 1-3 m/s^2 r.m.s. into 0.5-3 Hz of ``|a|`` (the step frequency, about 2 Hz, and its
 harmonic); standing, also on a moving escalator, leaves 0.03-0.1 m/s^2 (the phone in the hand sways).
-The magnitude does not depend on how the phone is held.  A span is *still* from where the walking band's
+The magnitude does not depend on how the phone is held.  Where the reading has gravity removed (a phone app's
+"linear acceleration": no steady part, see :func:`gravity_removed`), ``|a|`` rectifies the step, which then shows
+at twice its rate, out of the band, and a walk would read as standing: there the level is the walking band of the
+three axes together (the step's whole acceleration, not only its part along gravity).  A span is *still* from where the walking band's
 r.m.s. over ``window_s`` falls under ``threshold`` to where it rises over the higher ``leave`` and stays there
 for a step or more (hysteresis: a passenger shifting on a step does not end a ride), at least ``min_s`` long.
 """
@@ -14,7 +17,15 @@ from scipy import ndimage, signal
 
 from ._checks import check_fs
 
-__all__ = ["WALKING_BAND_HZ", "STILL_THRESHOLD", "LEAVE_THRESHOLD", "STEP_PERIOD_S", "walking_level", "still_spans"]
+__all__ = [
+    "WALKING_BAND_HZ",
+    "STILL_THRESHOLD",
+    "LEAVE_THRESHOLD",
+    "STEP_PERIOD_S",
+    "gravity_removed",
+    "walking_level",
+    "still_spans",
+]
 
 #: the band of |a| that walking fills [Hz]
 WALKING_BAND_HZ = (0.5, 3.0)
@@ -26,6 +37,24 @@ STILL_THRESHOLD = 0.25
 LEAVE_THRESHOLD = 0.4
 #: how long the walking band must stay over :data:`LEAVE_THRESHOLD` to end a still span [s]: one step (about 2 Hz)
 STEP_PERIOD_S = 0.5
+
+
+def gravity_removed(acc, fs, *, window_s=2.0) -> bool:
+    """Whether the accelerometer's three axes ``acc`` (shape (3, N), m/s^2, at ``fs``) have gravity removed.
+
+    Gravity is the reading's steady part: its running mean over ``window_s`` keeps about 9.81 m/s^2 and most of
+    ``|a|``.  With gravity removed the running mean is what motion and the sensor's bias leave: under half of the
+    median ``|a|``, or under 0.5 m/s^2 (on the Sensor Logger walks tried, 0.12-0.25 of ``|a|``; a phone lying
+    still: 0.014 of 0.03 m/s^2)."""
+    acc = np.asarray(acc, dtype=float)
+    ok = np.all(np.isfinite(acc), axis=0)
+    if ok.sum() < 3:
+        return False
+    a = acc[:, ok]
+    w = max(int(round(window_s * check_fs(fs))), 1)
+    steady = float(np.median(np.sqrt(np.sum(ndimage.uniform_filter1d(a, w, axis=1, mode="nearest") ** 2, axis=0))))
+    mag = float(np.median(np.sqrt(np.sum(a**2, axis=0))))
+    return steady < 0.5 * mag or steady < 0.5
 
 
 def walking_level(acc, fs, *, band=WALKING_BAND_HZ, window_s=2.0):
@@ -51,9 +80,12 @@ def walking_level(acc, fs, *, band=WALKING_BAND_HZ, window_s=2.0):
     sos = signal.butter(4, [band[0], hi], "bandpass", fs=fs, output="sos")
     if mag.size <= 3 * 2 * sos.shape[0] * 3:
         return np.full(mag.size, np.nan)
-    y = signal.sosfiltfilt(sos, mag)
+    if gravity_removed(acc, fs):  # |a| would rectify the step: the band of the three axes together
+        y2 = np.sum(signal.sosfiltfilt(sos, acc, axis=1) ** 2, axis=0)
+    else:
+        y2 = signal.sosfiltfilt(sos, mag) ** 2
     w = max(int(round(window_s * fs)), 1)
-    return np.sqrt(ndimage.uniform_filter1d(y**2, w, mode="nearest"))
+    return np.sqrt(ndimage.uniform_filter1d(y2, w, mode="nearest"))
 
 
 def still_spans(level, fs, *, threshold=STILL_THRESHOLD, leave=LEAVE_THRESHOLD, dwell_s=STEP_PERIOD_S, min_s=8.0):

@@ -93,7 +93,8 @@ _SENSOR_LOGGER_FILES = (  # file name (lower case, no separators) -> (unit of x,
 
 
 def _is_sensor_logger(path, low, free_text):
-    return low[:2] == ["time", "seconds_elapsed"] and {"x", "y", "z"} <= set(low)
+    # its exports lead with 'time,seconds_elapsed'; earlier ones (Metadata.csv version 2, 2021) wrote 'time,z,y,x'
+    return (low[:2] == ["time", "seconds_elapsed"] and {"x", "y", "z"} <= set(low)) or low == ["time", "z", "y", "x"]
 
 
 def _sensor_logger_platform(path):
@@ -129,12 +130,12 @@ def _sensor_logger_units(path, names, low, units, history):
     for key, unit, app_name in _SENSOR_LOGGER_FILES:
         if key in base:
             history.append(
-                f"Sensor Logger export ('time,seconds_elapsed,...'): x, y, z in {unit}, as the app "
+                f"Sensor Logger export ('time,...,z,y,x'): x, y, z in {unit}, as the app "
                 f"documents for {app_name} (file name); pass {spell('units')} to override"
             )
             return {j: unit for j, n in enumerate(low) if n in ("x", "y", "z") and units[j] is None}
     history.append(
-        "Sensor Logger export ('time,seconds_elapsed,...'): the file name does not say the "
+        "Sensor Logger export ('time,...,z,y,x'): the file name does not say the "
         f"sensor, so x, y, z keep no unit; pass {spell('units')} (e.g. m/s^2 for the accelerometer)"
     )
     return {}
@@ -230,8 +231,8 @@ PROFILES: tuple[LoggerProfile, ...] = (
         "Kelvin Choi, Sensor Logger for Android/iOS: export documentation, one CSV per sensor",
         recognise=_is_sensor_logger,
         column_units=_sensor_logger_units,
-        facts="header 'time,seconds_elapsed,z,y,x': time is Unix epoch in ns (UTC, not since boot), "
-        "seconds_elapsed a second clock; the axes carry no unit, which the app documents per sensor file: "
+        facts="header 'time,seconds_elapsed,z,y,x' ('time,z,y,x' in its earlier exports): time is Unix epoch in ns (UTC, not "
+        "since boot), seconds_elapsed a second clock; the axes carry no unit, which the app documents per sensor file: "
         "Accelerometer.csv (gravity removed), TotalAcceleration.csv, Gravity.csv in m/s^2, Gyroscope.csv in "
         "rad/s; AccelerometerUncalibrated.csv in g on iOS and m/s^2 on Android (Metadata.csv's platform)",
     ),
