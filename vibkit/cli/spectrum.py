@@ -104,11 +104,43 @@ def _common_line(a, res, line, rec):
     return 0
 
 
+def _a_walk(a, rec):
+    """A phone's walk (its walking band up over a fifth of it): refused, no number; a line over a walk is the
+    gait's or another machine's, and a ride in it is found by `vibkit rides` and analysed with --segment."""
+    from vibkit.diagnose.rides import WALK_FRACTION, walking_fraction
+
+    w = walking_fraction(rec)
+    if w is None or w < WALK_FRACTION:
+        return None
+    reason = (
+        f"a walk, not a ride: the phone walks over {100 * w:.0f} % of it (a ride's span: under {100 * WALK_FRACTION:.0f} "
+        "%), and a line over a walk is its gait's or another machine's; `vibkit rides` finds the rides in it, then "
+        "give one as --segment START:END"
+    )
+    if a.json:
+        print_json(
+            "spectrum",
+            {
+                "status": "no link-pass found",
+                "reason": reason,
+                "exit_code": 1,
+                "file": shown(a.recording),
+                "walking_fraction": w,
+            },
+        )
+    msg(f"vibkit spectrum: {shown(a.recording)}: no link-pass found: {reason}")
+    return 1
+
+
 def run(a):
     from vibkit.diagnose.channels import estimate_channels
-    from vibkit.diagnose.rides import common_line, is_phone_recording
+    from vibkit.diagnose.rides import common_line, is_phone_recording, unconfirmed_line
 
     rec = read_recording(a)
+    if a.channel is None:  # every channel: a phone's walk is no ride
+        walk = _a_walk(a, rec)
+        if walk is not None:
+            return walk
     profile = escalator_profile(a)
     # with a speed the same settings as `vibkit pitch` (its speed and sigma, nominal pitch, band, teeth); without
     # one the band of a step chain's link pass
@@ -138,19 +170,24 @@ def run(a):
         raise in_file(a.recording, exc) from None
     # a phone's axes together (a phone export, or three axes none of which shows a family alone): the ride's one
     # line, clear of stepping on and off, as `vibkit rides` reads it; never over channels that disagree
+    not_a_ride = None
     if not speed and (is_phone_recording(rec) or (res.best is None and res.status == "no link-pass found")):
-        line = common_line(rec, tuple(res.estimates[0].band_hz))
+        try:
+            line = common_line(rec, tuple(res.estimates[0].band_hz))
+        except ValueError as exc:  # the signal's words, with the file named
+            raise in_file(a.recording, exc) from None
         if line is not None and line.detected:
-            return _common_line(a, res, line, rec)
+            why = unconfirmed_line(rec, line.frequency_hz, line.band) if is_phone_recording(rec) else None
+            if why is None:
+                return _common_line(a, res, line, rec)
+            not_a_ride = f"a steady line at {fmt_pm(line.frequency_hz, line.sigma_hz)} Hz on the axes together: {why}"
     if res.best is None:
         e0 = res.estimates[0]
-        return refused(
-            "spectrum",
-            a,
-            res,
-            {"file": shown(a.recording), "units": e0.extra.get("units", "1"), "band_hz": list(e0.band_hz)},
-            speed_known=bool(speed),
-        )
+        extra = {"file": shown(a.recording), "units": e0.extra.get("units", "1"), "band_hz": list(e0.band_hz)}
+        if not_a_ride:
+            extra["not_a_ride"] = not_a_ride
+            msg(textwrap.fill(f"note: {not_a_ride}", 100, subsequent_indent="  "))
+        return refused("spectrum", a, res, extra, speed_known=bool(speed))
     est = res.best
     ch, units = est.channel, est.extra.get("units", "1")
     peaks = [

@@ -30,7 +30,7 @@ import numpy as np
 
 from ..signal.ride import RideSegment
 from ..signal.steadyline import line_level, normalised_spectrum, steady_line
-from ..signal.stillness import LEAVE_THRESHOLD, STILL_THRESHOLD, still_spans, walking_level
+from ..signal.stillness import LEAVE_THRESHOLD, STILL_THRESHOLD, gravity_removed, still_spans, walking_level
 
 __all__ = [
     "DEFAULT_BAND_HZ",
@@ -41,6 +41,9 @@ __all__ = [
     "find_rides",
     "ride_evidence",
     "ride_in_walk",
+    "unconfirmed_line",
+    "walking_fraction",
+    "WALK_FRACTION",
 ]
 
 #: where a chain's link pass may be without a profile [Hz]: 0.4-0.9 m/s over 101.6-135 mm pitches
@@ -57,6 +60,14 @@ _SLOPE_WINDOW_S = 4.0
 #: how far before and after a still span a lift's climb is looked for [s]: a lift's doors open and close and its
 #: passengers step in and out in about that (ADVIO's lift: 7-10 s at a floor between climbs of about 8 s)
 _LIFT_MARGIN_S = 8.0
+#: a lift's car starting or stopping, where no barometer says so [m/s^2]: the acceleration's magnitude held this far
+#: off gravity for :data:`_CAR_HOLD_S` within a still span (low-passed at :data:`_CAR_LOWPASS_HZ`).  Measured
+#: 2026-12-08 on phones held still: ADVIO's rides 0.01-0.17 (advio-08's missed up ride 0.32), its lifts 0.49-0.78
+#: (advio-07, -14, -18), two phyphox/Science Journal lifts 0.83-0.85.  Lifts accelerate at 0.5-1.2 m/s^2 for
+#: comfort; a hydraulic lift's gentler start can stay under it
+_CAR_ACCELERATION = 0.4
+_CAR_HOLD_S = 1.0
+_CAR_LOWPASS_HZ = 0.5
 
 
 @dataclass(frozen=True)
@@ -119,27 +130,50 @@ class RideSearch:
     refused: tuple = ()  # dicts: start_s, end_s, link_pass_hz, level_db, p_value, why (a line that is no ride)
 
 
+def _interp_finite(tu, t, v):
+    """``v`` at ``tu`` from its finite samples only (an app that writes one sensor a row leaves the others empty)."""
+    ok = np.isfinite(v)
+    if ok.all() or np.count_nonzero(ok) < 2:
+        return np.interp(tu, t, v)
+    return np.interp(tu, t[ok], v[ok])
+
+
 def _uniform(ds, names, fs):
     t = np.asarray(ds["time"].values, dtype=float)
     tu = np.arange(t[0], t[-1], 1.0 / fs)
-    x = np.stack([np.interp(tu, t, np.asarray(ds[n].values, dtype=float)) for n in names])
+    x = np.stack([_interp_finite(tu, t, np.asarray(ds[n].values, dtype=float)) for n in names])
     # samples farther than five periods from a stamp are a gap: never still, never analysed
     k = np.clip(np.searchsorted(t, tu), 1, t.size - 1)
     near = np.minimum(np.abs(tu - t[k - 1]), np.abs(t[k] - tu)) <= 5.0 / fs
     return tu, x, near
 
 
+def _by_axis(names):
+    """Three channels named by their axes (x, y, z last: an app's AccX, AccY, AccZ beside its magnitude's column),
+    else the first three."""
+    named = [next((v for v in names if v.lower().endswith(ax)), None) for ax in "xyz"]
+    return named if None not in named and len(set(named)) == 3 else list(names[:3])
+
+
 def _acc_channels(ds):
     acc = [v for v in ds.data_vars if ds[v].attrs.get("quantity") == "acceleration"]
     if len(acc) >= 3:
-        return acc[:3], 1.0
+        return _by_axis(acc), 1.0
     cand = [v for v in ds.data_vars if v != "segment" and ds[v].dims == ("time",)]
-    if len(cand) >= 3:
-        mag = float(np.nanmedian(np.sqrt(sum(np.asarray(ds[v].values, dtype=float) ** 2 for v in cand[:3]))))
+    axes = _by_axis(cand)
+    if len(axes) >= 3:
+        cols = [np.asarray(ds[v].values, dtype=float) for v in axes]
+        both = np.all(np.isfinite(cols), axis=0)
+        # rows where all three hold a value; sparse rows (one sensor a row): each axis' own median
+        mag = (
+            float(np.median(np.sqrt(sum(c[both] ** 2 for c in cols))))
+            if np.count_nonzero(both) > 10
+            else float(np.sqrt(sum(np.nanmedian(c) ** 2 for c in cols)))
+        )
         if 7.0 <= mag <= 12.5:
-            return cand[:3], 1.0
+            return axes, 1.0
         if 0.7 <= mag <= 1.3:
-            return cand[:3], 9.80665
+            return axes, 9.80665
     raise ValueError(
         f"{ds.attrs.get('source_file', 'the recording')}: no accelerometer's three axes (channels: "
         f"{', '.join(cand) or 'none'}); expected x, y, z of a phone's accelerometer in m/s^2 or g"
@@ -209,6 +243,24 @@ def _climbs_as_an_escalator(ds, t0, t1, fast_at):
         return False
     vz, vz_s, *_ = _vertical(ds, t0, t1)
     return vz is not None and _ESCALATOR_VZ_MIN <= abs(vz) <= _ESCALATOR_VZ_MAX and abs(vz) > 4 * vz_s
+
+
+def _car_acceleration(acc, fs):
+    """The acceleration a lift's car gives a person standing still in it [m/s^2]: the largest magnitude held for
+    :data:`_CAR_HOLD_S` by the three axes' low-passed vector less its median (gravity, where the phone keeps it:
+    a vertical acceleration adds to ``|g|``; a turn of the phone in the hand does not change it)."""
+    from scipy import ndimage, signal
+
+    hold = max(int(round(_CAR_HOLD_S * fs)), 1)
+    sos = signal.butter(2, min(_CAR_LOWPASS_HZ, 0.4 * fs), fs=fs, output="sos")
+    if acc.shape[1] <= max(3 * 2 * sos.shape[0] * 3, hold):
+        return 0.0
+    if gravity_removed(acc, fs):
+        off = np.sqrt(np.sum(signal.sosfiltfilt(sos, acc - np.median(acc, axis=1, keepdims=True), axis=1) ** 2, axis=0))
+    else:
+        mag = np.sqrt(np.sum(acc**2, axis=0))
+        off = np.abs(signal.sosfiltfilt(sos, mag - np.median(mag)))
+    return float(np.max(ndimage.minimum_filter1d(off, hold)))
 
 
 def _fastest_climb(ds, t0, t1):
@@ -286,7 +338,11 @@ def find_rides(
     if not fs > 0:
         fs = 1.0 / float(np.median(np.diff(t_raw)))
     if band[1] >= 0.45 * fs:
-        raise ValueError(f"band {band[0]:g}-{band[1]:g} Hz reaches past 0.45 x the sample rate {fs:.4g} Hz")
+        raise ValueError(
+            f"{recording.attrs.get('source_file', 'the recording')}: the link pass's band {band[0]:g}-{band[1]:g} Hz "
+            f"reaches past 0.45 x the sample rate {fs:.4g} Hz: record at {band[1] / 0.45:.0f} Hz or faster (the app's "
+            "fastest rate), or give a narrower --band"
+        )
     tu, x, near = _uniform(recording, names, fs)
     x[:3] *= scale
     level = walking_level(x[:3], fs)
@@ -316,16 +372,27 @@ def find_rides(
         # walk off an escalator; the line of a step flattening into the landing fades before they do)
         start = t0 if j0 == 0 else max(t0, float(tu[i0 + j0]) - trim_s)
         span = x[:, i0:i1]  # the still span less stepping on and off: where another line is looked for
+        span_i0, span_i1 = i0, i1
         i0, i1 = i0 + j0, i0 + j1
         # a lift: its car may hum steadily near a chain's link pass, and a person stands still in it; its climb (about
         # 1 m/s, faster than any escalator's) falls within the still span or just before or after it
         fast, at = _fastest_climb(recording, t0 - _LIFT_MARGIN_S, t1 + _LIFT_MARGIN_S)
+        # without a barometer, the car's start or stop: the still span's acceleration off gravity
+        car = _car_acceleration(x[:3, span_i0:span_i1], fs) if fast is None else None
+        why = None
         if fast is not None and fast > _ESCALATOR_VZ_MAX and not _climbs_as_an_escalator(recording, start, t1, at):
             why = (
                 f"a lift, not an escalator: the barometer's vertical speed reaches {fast:.2f} m/s (over 4 s about "
                 f"{at:.0f} s, within {_LIFT_MARGIN_S:.0f} s of the still span), faster than any escalator climbs "
                 f"({_ESCALATOR_VZ_MAX:.2f} m/s; or a pressure wave: a train, a door)"
             )
+        elif car is not None and car >= _CAR_ACCELERATION:
+            why = (
+                f"a lift, not an escalator: with no barometer, the acceleration stands {car:.2f} m/s^2 off gravity for "
+                f"{_CAR_HOLD_S:g} s while the person stands still (a car starting or stopping; a rider standing on an "
+                f"escalator stays under {_CAR_ACCELERATION:g} m/s^2)"
+            )
+        if why is not None:
             refused.append(
                 {
                     "start_s": start,
@@ -334,6 +401,7 @@ def find_rides(
                     "level_db": line.level_db,
                     "p_value": line.p_value,
                     "vertical_speed_max_m_s": fast,
+                    "car_acceleration_m_s2": car,
                     "why": why,
                 }
             )
@@ -475,7 +543,10 @@ _FLAG_LEVEL = (
     "level: the barometer shows no climb while the line is on and no lift's climb within {m:.0f} s of it: a level "
     "moving walk, or a machine standing still (a lift at a floor whose climb the record does not hold)"
 )
-_FLAG_NO_BAROMETER = "no barometer: a lift standing at a floor cannot be told from an escalator without one"
+_FLAG_NO_BAROMETER = (
+    "no barometer: a lift standing at a floor cannot be told from an escalator without one (a car's start or stop "
+    "within the still span would have refused it)"
+)
 
 
 def _ride(ds, line, names, t0, t1, pitch, rated):
@@ -628,6 +699,32 @@ def ride_in_walk(recording, axes, t0, notes, source):
     )
 
 
+#: the share of a phone's recording in its walking band over :data:`~vibkit.signal.stillness.STILL_THRESHOLD` from
+#: which it is a walk, not a ride (a ride's span, stepping on and off included, holds far less)
+WALK_FRACTION = 0.2
+
+
+def walking_fraction(recording, *, trim_s=1.0):
+    """The share of a phone's recording (``trim_s`` left out at each end) in which its walking band stands over
+    :data:`~vibkit.signal.stillness.STILL_THRESHOLD`, or None where it has no three accelerometer axes or is too
+    short to tell (under 10 s).  Over :data:`WALK_FRACTION` it is a walk: a steady line over the whole of it is the
+    gait's or another machine's, not a ride's link pass (a walk's rides: :func:`find_rides`)."""
+    try:
+        acc, scale = _acc_channels(recording)
+    except ValueError:
+        return None
+    t = np.asarray(recording["time"].values, dtype=float)
+    if t.size < 2 or t[-1] - t[0] < 10.0 + 2 * trim_s:
+        return None
+    fs = float(recording.attrs.get("sample_rate_hz") or 0.0) or 1.0 / float(np.median(np.diff(t)))
+    _, x, near = _uniform(recording, acc, fs)
+    level = walking_level(x[:3] * scale, fs)
+    k = int(round(trim_s * fs))
+    level, near = level[k : level.size - k], near[k : near.size - k]
+    level = level[near & np.isfinite(level)]
+    return float(np.mean(level > STILL_THRESHOLD)) if level.size else None
+
+
 def common_line(recording, band, *, p_fa=1e-3, trim_s=1.0):
     """One steady line common to a phone's axes in ``band`` [Hz] (:func:`~vibkit.signal.steadyline.steady_line` over
     its accelerometer's and gyroscope's channels, ``trim_s`` left out at each end: stepping on and off), or None
@@ -651,6 +748,27 @@ def common_line(recording, band, *, p_fa=1e-3, trim_s=1.0):
     x[:3] *= scale
     line, _, _, _ = _line_in(x, fs, band, p_fa)
     return line if line is not None else steady_line(x - x.mean(axis=1, keepdims=True), fs, band=band, p_fa=p_fa)
+
+
+def unconfirmed_line(recording, freq, band, *, tolerance=0.01):
+    """Why a phone's common line at ``freq`` [Hz] (:func:`common_line` over the whole recording) is no ride's link
+    pass, or None where it is one: :func:`find_rides` over the recording in ``band`` must find a ride (a still span
+    whose line passes its false-alarm bound and is not a lift's climb) whose line, or one of its two, lies within
+    ``tolerance`` of it.  A line over a recording's walking parts, or a lift's, fails that."""
+    found = find_rides(recording, band=band)
+    for r in found.rides:
+        lines = [r.link_pass_hz] if r.link_pass_hz is not None else list(r.lines_hz)
+        if any(abs(f / freq - 1.0) <= tolerance for f in lines):
+            return None
+    if found.rides:
+        return (
+            "the ride(s) found in it carry other lines ("
+            + ", ".join(f"{r.start_s:.1f}-{r.end_s:.1f} s" for r in found.rides)
+            + "): give one as --segment START:END"
+        )
+    spans = "; ".join(f"{a:.1f}-{b:.1f} s: {v}" for a, b, v in found.still_spans) or "no still span to test"
+    refused = "; ".join(f"{d['start_s']:.1f}-{d['end_s']:.1f} s: {d['why']}" for d in found.refused)
+    return "no ride found in it (" + spans + (f"; refused: {refused}" if refused else "") + ")"
 
 
 def common_line_names(recording) -> list:
