@@ -409,7 +409,13 @@ def estimate_pitch(
         harmonics=steps.harmonic_rows(ests, comb, prep.scale),
         per_burst=steps.burst_rows(ests),
         hypotheses=steps.hypotheses(
-            [be.scaled for be in ests], comb.f0, req.speed, int(teeth), req.pitch_range, int(links_per_step)
+            [be.scaled for be in ests],
+            comb.f0,
+            req.speed,
+            int(teeth),
+            req.pitch_range,
+            int(links_per_step),
+            copies=[None if be.full_rate is None else be.burst for be in ests],
         ),
         warnings=warnings,
         notes=notes,
