@@ -23,7 +23,6 @@ from ..signal.bursts import (
     Burst,
     dropped_samples,
     flag_invalid,
-    segment_numbers,
     uniform_bursts,
 )
 from ..signal.detect import HARMONIC_SPAN, detect_link_pass
@@ -97,8 +96,9 @@ class Request:
 
 @dataclass(frozen=True)
 class PreparedBursts:
-    """The bursts of one channel (:func:`prepare_bursts`): as read (``raw``) and scaled and decimated for
-    the spectrum (``bursts``, ``x_raw = scale x``), with the recorder's quantisation step in the scaled
+    """The bursts of one channel (:func:`prepare_bursts`): as read (``raw``: their rates, lengths and invalid-sample
+    counts; their samples were centred and scaled in place, no second copy of the record) and scaled and decimated
+    for the spectrum (``bursts``, ``x_raw = scale x + median``), with the recorder's quantisation step in the scaled
     units, the invalid-sample counts and the warnings they give."""
 
     raw: list
@@ -186,18 +186,21 @@ def prepare_bursts(recording, name, band):
 def _scaled(bursts, band):
     """Bursts scaled to unit size (no overflow or underflow in squares) and decimated to what the
     harmonics need (``HARMONIC_SPAN band[1]`` kept, the span the detection searches); returns ``(bursts, scale)`` with ``x_original = scale x``."""
-    # each burst about its median once (the largest deviation a block at a time): no record-long temporaries beside
-    # the centred copies, which are then scaled in place (the same numbers as ``(x - median) / scale``)
-    centred = [b.x - np.median(b.x) for b in bursts]
+    # each burst's own samples (uniform_bursts' copies) centred on its median and scaled in place, the largest
+    # deviation found a block at a time: the same numbers as ``(x - median) / scale`` without a second copy of the
+    # record (the bursts as read keep their rates, lengths and counts; their samples become the scaled ones)
+    for b in bursts:
+        x = b.x  # (a frozen Burst's array, changed in place)
+        x -= np.median(x)
     scale = max(
-        max(float(np.max(np.abs(d[i : i + QUANTUM_SAMPLES]))) for i in range(0, d.size, QUANTUM_SAMPLES))
-        for d in centred
+        max(float(np.max(np.abs(b.x[i : i + QUANTUM_SAMPLES]))) for i in range(0, b.x.size, QUANTUM_SAMPLES))
+        for b in bursts
     )
     if not (scale > 0 and math.isfinite(scale)):
         scale = 1.0
     out = []
     for b in bursts:
-        x = centred.pop(0)
+        x = b.x
         x /= scale
         x, fs, _q = decimate_for_band(x, b.fs, HARMONIC_SPAN * band[1], oversample=DECIMATION_OVERSAMPLE)
         out.append(Burst(b.segment, b.t0, fs, x, b.resampled, b.invalid))
@@ -355,43 +358,6 @@ def combine(ests, name="x"):
             "sigma widened accordingly"
         )
     return Combination(f0, sf, chi2, w, method, method_reason, warnings)
-
-
-def jitter_effect(recording, name, ests, band, n_harmonics):
-    """``(warnings, notes)`` on irregular time stamps.  A burst with irregular stamps was resampled linearly to
-    a uniform grid; it is resampled again with a cubic spline and estimated again: a warning only when the two
-    frequencies differ by more than the burst's sigma (the handling of the stamps then changes the estimate),
-    else a note."""
-    from scipy.interpolate import CubicSpline
-
-    warnings, notes = [], []
-    t_all = np.asarray(recording["time"].values, dtype=float)
-    x_all = np.asarray(recording[name].values, dtype=float)
-    seg = segment_numbers(recording)
-    for be in ests:
-        b = be.scaled  # the burst at its recorded grid (a long record's estimates used a decimated copy)
-        if not b.resampled:
-            continue
-        grid = b.t0 + np.arange(b.x.size) / b.fs
-        keep = (t_all >= grid[0]) & (t_all <= grid[-1]) & np.isfinite(x_all)
-        if seg is not None:
-            keep &= np.asarray(seg) == b.segment
-        t, idx = np.unique(t_all[keep], return_index=True)
-        if t.size < 16:
-            continue
-        try:
-            xs = CubicSpline(t, x_all[keep][idx])(np.clip(grid, t[0], t[-1]))
-            alt = link_pass_estimate(xs, b.fs, band=band, n_harmonics=n_harmonics)
-        except ValueError:
-            continue
-        f, sf = be.spectral.fundamental_hz, be.spectral.fundamental_sigma_hz
-        delta = abs(alt.fundamental_hz - f)
-        text = (
-            f"burst {b.segment}: irregular time stamps, resampled to a uniform grid; resampled with a cubic spline "
-            f"instead, the link pass moves by {delta:.2g} Hz against its sigma {sf:.2g} Hz"
-        )
-        (warnings if delta > sf else notes).append(text + (": the stamps are too irregular" if delta > sf else ""))
-    return warnings, notes
 
 
 def pitch_from(comb, req):

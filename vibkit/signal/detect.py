@@ -90,6 +90,9 @@ SEGMENT_PERIODS = 20.0
 MIN_SEGMENT_S = 8.0
 #: shortest segment in samples, whatever the rate: below 16 samples (9 spectral bins) there is no spectrum to test
 MIN_SEGMENT_SAMPLES = 16
+#: segments of more values than this (a day at 200 Hz: 5.76 M) are detrended and transformed by blocks of rows of at
+#: most this many (the record and three copies of it were held whole: 264 MB for a day)
+DETECT_BLOCK_VALUES = 1 << 20
 #: harmonics up to this many times the band's top count in the search: room for the default five harmonics
 #: of any fundamental in the band (the pitch estimate decimates to keep the same span)
 HARMONIC_SPAN = 10.0
@@ -267,22 +270,6 @@ def _segments(pieces, fs, fmin):
             return None, nseg, False
     rows = [p[i * nseg : (i + 1) * nseg] for p in pieces for i in range(p.size // nseg)]
     return np.array(rows, dtype=float), nseg, split
-
-
-#: a record's segments of more values than this (a day at 200 Hz: 5.76 million) are detrended and transformed a
-#: block of rows of about this many values at a time (:func:`_row_blocks`): the record, its detrended copy, the
-#: windowed copy and the complex transform were each held whole (264 MB at the peak for a day); a record of one block
-#: (every shipped one) is transformed whole as it always was
-DETECT_BLOCK_VALUES = 1 << 22
-
-
-def _row_blocks(segs):
-    """Slices of the rows of ``segs`` of about :data:`DETECT_BLOCK_VALUES` values each (one slice: all rows)."""
-    k, nseg = segs.shape
-    if segs.size <= DETECT_BLOCK_VALUES:
-        return [slice(0, k)]
-    rows = max(1, (DETECT_BLOCK_VALUES >> 2) // nseg)
-    return [slice(i, min(k, i + rows)) for i in range(0, k, rows)]
 
 
 def _search(r, f, df, fmin, fmax, f_top):
@@ -539,15 +526,14 @@ def _spectra(pieces, fs, fmin, fmax, f_top, p_fa, quantum, decimation):
     k_all, seg_s = segs.shape[0], nseg / fs
     blank = _Spectra(*(None,) * 8, k_all, seg_s, 0.0, split, fmin, fmax, f_top, p_fa)
     # scale first: huge or tiny values must not overflow or underflow in the squares
-    blocks = _row_blocks(segs)
+    # by blocks of segments, in place (each segment's line is its own; :data:`DETECT_BLOCK_VALUES`)
+    rows = max(1, DETECT_BLOCK_VALUES // nseg) if segs.size > DETECT_BLOCK_VALUES else k_all
+    blocks = [slice(i, i + rows) for i in range(0, k_all, rows)]
     level = max(float(np.max(np.abs(segs[blk]))) for blk in blocks)
     if not level > 0:
         return _nothing(blank, "the record is constant (every sample equal, or all zeros): no vibration at all")
-    if len(blocks) == 1:
-        segs = scipy.signal.detrend(segs / level, axis=1, type="linear")
-    else:  # in place, a block of segments at a time (each segment's line is its own)
-        for blk in blocks:
-            segs[blk] = scipy.signal.detrend(segs[blk] / level, axis=1, type="linear")
+    for blk in blocks:
+        segs[blk] = scipy.signal.detrend(segs[blk] / level, axis=1, type="linear")
     scale = max(float(np.max(np.abs(segs[blk]))) for blk in blocks)
     if not scale > ROUNDING_LEVEL:
         # what is left after the straight lines is rounding: nothing was measured
@@ -558,19 +544,11 @@ def _spectra(pieces, fs, fmin, fmax, f_top, p_fa, quantum, decimation):
         quantum = quantisation_step(np.concatenate(pieces))
     w = scipy.signal.windows.hann(nseg, sym=False)
     quant = (float(quantum) / (level * scale), float(decimation))
-    if len(blocks) == 1:
-        segs /= scale
-        pw = np.abs(np.fft.rfft(segs * w, axis=1)) ** 2
-    else:
-        pw = np.empty((k_all, nseg // 2 + 1))
-        for blk in blocks:
-            y = segs[blk] / scale
-            y *= w
-            c = np.fft.rfft(y, axis=1)
-            del y
-            pw[blk] = np.abs(c) ** 2
-            del c
-    del segs
+    pw = np.empty((k_all, nseg // 2 + 1))
+    for blk in blocks:
+        y = segs[blk] / scale
+        y *= w
+        pw[blk] = np.abs(np.fft.rfft(y, axis=1)) ** 2
     f = np.fft.rfftfreq(nseg, 1.0 / fs)
     df = fs / nseg
     p_all = pw.mean(axis=0)
