@@ -119,15 +119,15 @@ def _traced_peak(rec, speed):
 
 def test_long_record_memory_grows_as_a_small_multiple_of_its_samples():
     """Memory in proportion to the record: 40 min and 160 min (the long path both) differ in the analysis' traced
-    peak by at most 8.5 times the samples' bytes they differ by (7.6 measured; fixed-size spectra and blocks cancel
-    out of the difference); 9.1 before a clean record's burst was taken from views of its columns and its samples
-    checked without gathered copies (signal.bursts)."""
+    peak by at most 7.5 times the samples' bytes they differ by (6.6 measured; fixed-size spectra and blocks cancel
+    out of the difference); 9.1 before a clean record's burst came from views of its columns, was checked without
+    gathered copies and scaled in place."""
     peaks, sizes = [], []
     for minutes in (40, 160):
         rec, v, _f = _record(minutes / 60, 1)
         peaks.append(_traced_peak(rec, v))
         sizes.append(rec["x"].values.nbytes)
-    assert peaks[1] - peaks[0] <= 8.5 * (sizes[1] - sizes[0])
+    assert peaks[1] - peaks[0] <= 7.5 * (sizes[1] - sizes[0])
 
 
 def test_spectrum_burst_takes_the_copy_only_where_it_holds_every_frequency():
