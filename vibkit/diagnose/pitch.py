@@ -45,6 +45,7 @@ from .decision import (
     elongation_verdict,
 )
 from .html import result_table_html
+from .pitch_jitter import jitter_effect
 from .pitch_parts import check_parts
 from .pitch_steps import Hypothesis
 from .rounding import SPEED_SIGMA_NOT_STATED, fmt_pm
@@ -376,7 +377,7 @@ def estimate_pitch(
     comb = steps.combine(ests, name=name)
     parts, sigma = check_parts(ests, comb, n_links=_loop_links(sensor, n_links))
     comb = replace(comb, sigma=sigma)
-    jitter_warnings, jitter_notes = steps.jitter_effect(recording, name, ests, req.band, n_harmonics)
+    jitter_warnings, jitter_notes = jitter_effect(recording, name, ests, req.band, n_harmonics)
     # a widened sigma is a note: the uncertainty stated is then the honest one; a wander too large for a
     # chain is the decision's (inconclusive), not a warning beside a verdict
     warnings = [*prep.warnings, *jitter_warnings, *skipped, *comb.warnings]
@@ -409,7 +410,13 @@ def estimate_pitch(
         harmonics=steps.harmonic_rows(ests, comb, prep.scale),
         per_burst=steps.burst_rows(ests),
         hypotheses=steps.hypotheses(
-            [be.scaled for be in ests], comb.f0, req.speed, int(teeth), req.pitch_range, int(links_per_step)
+            [be.scaled for be in ests],
+            comb.f0,
+            req.speed,
+            int(teeth),
+            req.pitch_range,
+            int(links_per_step),
+            copies=[None if be.full_rate is None else be.burst for be in ests],
         ),
         warnings=warnings,
         notes=notes,

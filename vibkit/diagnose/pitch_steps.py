@@ -23,7 +23,6 @@ from ..signal.bursts import (
     Burst,
     dropped_samples,
     flag_invalid,
-    segment_numbers,
     uniform_bursts,
 )
 from ..signal.detect import HARMONIC_SPAN, detect_link_pass
@@ -31,7 +30,13 @@ from ..signal.meanfreq import mean_link_pass_frequency
 from ..signal.quantisation import quantisation_step
 from ..signal.spectral import padded_power_rows
 from .decision import DISAGREE_SIGMAS, LinkPassEvidence, nearest_catalogue
-from .pitch_long import at_recorded_rate, fast_recorder_at_recorded_rate, long_record_bursts
+from .pitch_long import (
+    at_recorded_rate,
+    fast_recorder_at_recorded_rate,
+    long_record_bursts,
+    mean_phase_burst,
+    spectrum_burst,
+)
 from .speed import speed_part_too_large
 
 #: samples (from the start) whose levels give the recorder's quantisation step
@@ -91,8 +96,9 @@ class Request:
 
 @dataclass(frozen=True)
 class PreparedBursts:
-    """The bursts of one channel (:func:`prepare_bursts`): as read (``raw``) and scaled and decimated for
-    the spectrum (``bursts``, ``x_raw = scale x``), with the recorder's quantisation step in the scaled
+    """The bursts of one channel (:func:`prepare_bursts`): as read (``raw``: their rates, lengths and invalid-sample
+    counts; their samples were centred and scaled in place, no second copy of the record) and scaled and decimated
+    for the spectrum (``bursts``, ``x_raw = scale x + median``), with the recorder's quantisation step in the scaled
     units, the invalid-sample counts and the warnings they give."""
 
     raw: list
@@ -180,12 +186,22 @@ def prepare_bursts(recording, name, band):
 def _scaled(bursts, band):
     """Bursts scaled to unit size (no overflow or underflow in squares) and decimated to what the
     harmonics need (``HARMONIC_SPAN band[1]`` kept, the span the detection searches); returns ``(bursts, scale)`` with ``x_original = scale x``."""
-    scale = max(float(np.max(np.abs(b.x - np.median(b.x)))) for b in bursts)
+    # each burst's own samples (uniform_bursts' copies) centred on its median and scaled in place, the largest
+    # deviation found a block at a time: the same numbers as ``(x - median) / scale`` without a second copy of the
+    # record (the bursts as read keep their rates, lengths and counts; their samples become the scaled ones)
+    for b in bursts:
+        x = b.x  # (a frozen Burst's array, changed in place)
+        x -= np.median(x)
+    scale = max(
+        max(float(np.max(np.abs(b.x[i : i + QUANTUM_SAMPLES]))) for i in range(0, b.x.size, QUANTUM_SAMPLES))
+        for b in bursts
+    )
     if not (scale > 0 and math.isfinite(scale)):
         scale = 1.0
     out = []
     for b in bursts:
-        x = (b.x - np.median(b.x)) / scale
+        x = b.x
+        x /= scale
         x, fs, _q = decimate_for_band(x, b.fs, HARMONIC_SPAN * band[1], oversample=DECIMATION_OVERSAMPLE)
         out.append(Burst(b.segment, b.t0, fs, x, b.resampled, b.invalid))
     return out, scale
@@ -229,9 +245,12 @@ def estimate_bursts(prep, *, name, band, n_harmonics, f0=float("nan")):
         except ValueError as exc:
             skipped.append(f"burst {b.segment}: {exc}")
             continue
-        mp, factor = _burst_mean_phase(b, e), 1.0
-        if full is not None:
-            e, mp, factor = at_recorded_rate(e, mp, b.x.size, q, fraction)
+        if full is None:
+            mp, factor = _burst_mean_phase(b, e), 1.0
+        else:  # tracked on a copy decimated to what the tracked harmonics need
+            b_mp, _q_mp, fraction_mp = mean_phase_burst(b, e.fundamental_hz, TRACK_HARMONICS)
+            mp = _burst_mean_phase(b_mp, e)
+            e, mp, factor = at_recorded_rate(e, mp, b.x.size, q, fraction, mp_fraction=fraction_mp)
         e, mp, factor = fast_recorder_at_recorded_rate(e, mp, factor, b_raw.fs, b_prep.fs, b.fs)
         ests.append(BurstEstimate(b, e, mp, full_rate=full, sigma_factor=factor))
     if not ests:
@@ -339,43 +358,6 @@ def combine(ests, name="x"):
             "sigma widened accordingly"
         )
     return Combination(f0, sf, chi2, w, method, method_reason, warnings)
-
-
-def jitter_effect(recording, name, ests, band, n_harmonics):
-    """``(warnings, notes)`` on irregular time stamps.  A burst with irregular stamps was resampled linearly to
-    a uniform grid; it is resampled again with a cubic spline and estimated again: a warning only when the two
-    frequencies differ by more than the burst's sigma (the handling of the stamps then changes the estimate),
-    else a note."""
-    from scipy.interpolate import CubicSpline
-
-    warnings, notes = [], []
-    t_all = np.asarray(recording["time"].values, dtype=float)
-    x_all = np.asarray(recording[name].values, dtype=float)
-    seg = segment_numbers(recording)
-    for be in ests:
-        b = be.scaled  # the burst at its recorded grid (a long record's estimates used a decimated copy)
-        if not b.resampled:
-            continue
-        grid = b.t0 + np.arange(b.x.size) / b.fs
-        keep = (t_all >= grid[0]) & (t_all <= grid[-1]) & np.isfinite(x_all)
-        if seg is not None:
-            keep &= np.asarray(seg) == b.segment
-        t, idx = np.unique(t_all[keep], return_index=True)
-        if t.size < 16:
-            continue
-        try:
-            xs = CubicSpline(t, x_all[keep][idx])(np.clip(grid, t[0], t[-1]))
-            alt = link_pass_estimate(xs, b.fs, band=band, n_harmonics=n_harmonics)
-        except ValueError:
-            continue
-        f, sf = be.spectral.fundamental_hz, be.spectral.fundamental_sigma_hz
-        delta = abs(alt.fundamental_hz - f)
-        text = (
-            f"burst {b.segment}: irregular time stamps, resampled to a uniform grid; resampled with a cubic spline "
-            f"instead, the link pass moves by {delta:.2g} Hz against its sigma {sf:.2g} Hz"
-        )
-        (warnings if delta > sf else notes).append(text + (": the stamps are too irregular" if delta > sf else ""))
-    return warnings, notes
 
 
 def pitch_from(comb, req):
@@ -557,7 +539,7 @@ class Hypothesis:
     reason: str
 
 
-def _burst_power(b, freqs):
+def _burst_power(b, freqs, top=None):
     """One burst's zero-padded Hann power spectrum (FFT length :func:`_snr_nfft`) where :func:`_snr_at` looks: its
     largest power within ``fs / n`` of each of ``freqs`` (NaN where the burst cannot say, as :func:`_snr_at` skips)
     and its median floor over :data:`SNR_FLOOR_BAND_HZ`; ``(peaks, floor)``, the burst transformed once.
@@ -567,13 +549,16 @@ def _burst_power(b, freqs):
     same transform taken as rows of the four-step FFT (:func:`vibkit.signal.spectral.padded_power_rows`): the same
     bins, equal within rounding, one row of :data:`SNR_ROW_BINS` bins in memory at a time, and only the floor band's
     powers kept.
+
+    ``top`` [Hz]: the highest frequency the burst's spectrum holds as recorded (a long record's decimated copy,
+    :func:`vibkit.diagnose.pitch_long.spectrum_burst`): the floor band ends there; default the Nyquist frequency.
     """
     n = b.x.size
     nfft = _snr_nfft(n)
     step = 1.0 / (nfft * (1.0 / b.fs))  # rfftfreq's spacing, as it computes it
     df = b.fs / n
     lo, hi = SNR_FLOOR_BAND_HZ
-    k0, k1 = _bins_between(step, nfft // 2 + 1, lo, min(b.fs / 2, hi))
+    k0, k1 = _bins_between(step, nfft // 2 + 1, lo, min(b.fs / 2 if top is None else top, hi))
     # the bins within df of each f (rfftfreq's k * step for the few k near f, the same values it gives)
     near = []
     for f in freqs:
@@ -633,23 +618,27 @@ def _bins_between(step, size, lo, hi):
     return k0, k1
 
 
-def _snr_at(bursts, freqs):
+def _snr_at(bursts, freqs, copies=None):
     """Mean (over bursts) power near each f of ``freqs`` over the median spectral floor
     (:data:`SNR_FLOOR_BAND_HZ`) [dB], a list; NaN where no burst can say.  Each burst is transformed once for every
-    frequency asked about (:func:`_burst_power`)."""
+    frequency asked about (:func:`_burst_power`).  ``copies``: per burst, a long record's decimated copy or None
+    (:func:`vibkit.diagnose.pitch_long.spectrum_burst`: the copy is transformed instead where it holds every
+    frequency asked about)."""
     freqs = [float(f) for f in freqs]
     vals = [[] for _ in freqs]
-    for b in bursts:
-        peaks, floor = _burst_power(b, freqs)
+    for b, copy in zip(bursts, copies or [None] * len(bursts)):
+        b, top = spectrum_burst(b, copy, freqs)
+        peaks, floor = _burst_power(b, freqs, top)
         for i, pk in enumerate(peaks):
             if not np.isnan(pk):
                 vals[i].append(10 * np.log10(max(pk, TINY_POWER) / max(floor, TINY_POWER)))
     return [float(np.mean(v)) if v else float("nan") for v in vals]
 
 
-def hypotheses(bursts, f0, speed, teeth, pitch_range, links_per_step=3):
+def hypotheses(bursts, f0, speed, teeth, pitch_range, links_per_step=3, copies=None):
     """Readings of the chosen peak f and of the periodicities it implies, with the pitch each gives (the step
-    pass is the link pass over ``links_per_step``)."""
+    pass is the link pass over ``links_per_step``).  ``copies``: per burst, a long record's decimated copy or None
+    (:func:`_snr_at`)."""
     lo, hi = pitch_range
     k = links_per_step
     others = (
@@ -660,7 +649,8 @@ def hypotheses(bursts, f0, speed, teeth, pitch_range, links_per_step=3):
     )
     expected = ((f"step pass expected at f/{k}", f0 / k), (f"sprocket shaft expected at f/{teeth}", f0 / teeth))
     # every frequency looked up below, each burst transformed once for all of them
-    snrs = iter(_snr_at(bursts, [f0, f0, *(f0 * factor for _n, factor in others), *(fe for _n, fe in expected)]))
+    asked = [f0, f0, *(f0 * factor for _n, factor in others), *(fe for _n, fe in expected)]
+    snrs = iter(_snr_at(bursts, asked, copies))
     snr_f = next(snrs)
     rows = []
 

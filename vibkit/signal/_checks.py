@@ -217,8 +217,49 @@ def decimate_for_band(x, fs: float, f_keep: float, *, oversample: float = 5.0):
         return x, fs, 1
     cutoff = 0.8 * fs / (2.0 * q)
     padlen = min(x.size - 1, int(6.0 * fs / cutoff))
+    if x.size > FILTER_BLOCK:
+        return _decimated_by_blocks(_decimation_sos(float(fs), q), np.asarray(x, dtype=float), padlen, q), fs / q, q
     y = sosfiltfilt(_decimation_sos(float(fs), q), x, padtype="even", padlen=padlen)[::q]
     return np.ascontiguousarray(y), fs / q, q
+
+
+#: a record longer than this is low-passed and decimated by :func:`_decimated_by_blocks` (samples)
+FILTER_BLOCK = 1 << 20
+
+
+def _decimated_by_blocks(filt, x, padlen, q):
+    """``sosfiltfilt(filt, x, padtype="even", padlen=padlen)[::q]`` (:func:`sosfiltfilt`), the same numbers bit for
+    bit, holding one forward-filtered copy of the record instead of three (its extension, the forward and the
+    backward pass): each pass runs :data:`FILTER_BLOCK` samples at a time, its sections' state carried from block to
+    block (the recursion the whole-record call runs, sample after sample), the backward pass keeping every ``q``-th
+    sample only (a day at 200 Hz: 44 MB held instead of 132)."""
+    import scipy.signal
+
+    sos, zi = filt
+    sos = sos.copy()  # scipy's filter takes a writable one
+    zi = zi.reshape(sos.shape[0], 2)
+    n = x.size
+    n_ext = n + 2 * padlen
+    # the even extension's three pieces, in order, without the extended copy
+    pieces = [x[padlen:0:-1], x, x[-2 : -(padlen + 2) : -1]] if padlen > 0 else [x]
+    fwd = np.empty(n_ext)
+    z, at = zi * x[padlen if padlen > 0 else 0], 0
+    for piece in pieces:
+        for i in range(0, piece.size, FILTER_BLOCK):
+            blk = piece[i : i + FILTER_BLOCK]
+            fwd[at : at + blk.size], z = scipy.signal.sosfilt(sos, blk, zi=z)
+            at += blk.size
+    # backward over fwd reversed: its output's sample j is the result's sample n_ext - 1 - j; kept where that lies
+    # in the record (after the padding) at a multiple of q
+    out = np.empty((n + q - 1) // q)
+    z = zi * fwd[-1:]
+    for a in range(0, n_ext, FILTER_BLOCK):
+        b = min(n_ext, a + FILTER_BLOCK)
+        y, z = scipy.signal.sosfilt(sos, fwd[n_ext - 1 - a : (n_ext - 1 - b if b < n_ext else None) : -1], zi=z)
+        idx = n_ext - 1 - np.arange(a, b) - padlen  # the result's index of each output sample
+        keep = (idx >= 0) & (idx < n) & (idx % q == 0)
+        out[idx[keep] // q] = y[keep]
+    return out
 
 
 @functools.lru_cache(maxsize=32)

@@ -90,6 +90,9 @@ SEGMENT_PERIODS = 20.0
 MIN_SEGMENT_S = 8.0
 #: shortest segment in samples, whatever the rate: below 16 samples (9 spectral bins) there is no spectrum to test
 MIN_SEGMENT_SAMPLES = 16
+#: segments of more values than this (a day at 200 Hz: 5.76 M) are detrended and transformed by blocks of rows of at
+#: most this many (the record and three copies of it were held whole: 264 MB for a day)
+DETECT_BLOCK_VALUES = 1 << 20
 #: harmonics up to this many times the band's top count in the search: room for the default five harmonics
 #: of any fundamental in the band (the pitch estimate decimates to keep the same span)
 HARMONIC_SPAN = 10.0
@@ -523,22 +526,29 @@ def _spectra(pieces, fs, fmin, fmax, f_top, p_fa, quantum, decimation):
     k_all, seg_s = segs.shape[0], nseg / fs
     blank = _Spectra(*(None,) * 8, k_all, seg_s, 0.0, split, fmin, fmax, f_top, p_fa)
     # scale first: huge or tiny values must not overflow or underflow in the squares
-    level = float(np.max(np.abs(segs)))
+    # by blocks of segments, in place (each segment's line is its own; :data:`DETECT_BLOCK_VALUES`)
+    rows = max(1, DETECT_BLOCK_VALUES // nseg) if segs.size > DETECT_BLOCK_VALUES else k_all
+    blocks = [slice(i, i + rows) for i in range(0, k_all, rows)]
+    level = max(float(np.max(np.abs(segs[blk]))) for blk in blocks)
     if not level > 0:
         return _nothing(blank, "the record is constant (every sample equal, or all zeros): no vibration at all")
-    segs = scipy.signal.detrend(segs / level, axis=1, type="linear")
-    scale = float(np.max(np.abs(segs)))
+    for blk in blocks:
+        segs[blk] = scipy.signal.detrend(segs[blk] / level, axis=1, type="linear")
+    scale = max(float(np.max(np.abs(segs[blk]))) for blk in blocks)
     if not scale > ROUNDING_LEVEL:
         # what is left after the straight lines is rounding: nothing was measured
         return _nothing(
             blank, "the record is constant (or a straight line) within each segment, to rounding: no vibration"
         )
-    segs /= scale
     if quantum is None:
         quantum = quantisation_step(np.concatenate(pieces))
     w = scipy.signal.windows.hann(nseg, sym=False)
     quant = (float(quantum) / (level * scale), float(decimation))
-    pw = np.abs(np.fft.rfft(segs * w, axis=1)) ** 2
+    pw = np.empty((k_all, nseg // 2 + 1))
+    for blk in blocks:
+        y = segs[blk] / scale
+        y *= w
+        pw[blk] = np.abs(np.fft.rfft(y, axis=1)) ** 2
     f = np.fft.rfftfreq(nseg, 1.0 / fs)
     df = fs / nseg
     p_all = pw.mean(axis=0)

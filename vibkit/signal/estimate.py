@@ -284,13 +284,19 @@ def interpolated_dft(x, fs, *, band=None, f_guess=None, iterations=3, nan_policy
 #: samples: 16 k rows of 12 columns are 1.5 MB, whatever the record's length; 64 k-row blocks woke BLAS's threads,
 #: which cost 3 times the products' own time on a busy 2-core machine)
 LS_BLOCK_ROWS = 1 << 14
+#: a record of up to this many samples keeps its blocks' ``exp(1j omega t)`` between :func:`harmonic_ls`'s two passes
+#: over them at one frequency (the same values, not taken twice: the cosines and sines were most of a pass; 64 MB
+#: complex at most)
+LS_KEEP_FUNDAMENTAL = 1 << 22
 
 
-def _harmonic_basis(t, omega, n_harmonics, extra=0):
-    """Columns ``1, cos(k w t), sin(k w t)`` (k = 1..K) in a Fortran array, plus ``extra`` spare."""
+def _harmonic_basis(t, omega, n_harmonics, extra=0, z1=None):
+    """Columns ``1, cos(k w t), sin(k w t)`` (k = 1..K) in a Fortran array, plus ``extra`` spare; ``z1``: the
+    fundamental's ``exp(1j omega t)`` where the caller has it (the same values: not taken again)."""
     m = np.empty((t.size, 2 * n_harmonics + 1 + extra), order="F")
     m[:, 0] = 1.0
-    z1 = expj((1j * omega).imag * t)  # exp(1j omega t)
+    if z1 is None:
+        z1 = expj((1j * omega).imag * t)  # exp(1j omega t)
     z = z1.copy()
     for k in range(n_harmonics):
         if k:
@@ -374,16 +380,21 @@ def harmonic_ls(x, fs, *, f_guess, n_harmonics=5, max_iter=20, nan_policy="raise
     blocks = [(i, min(n, i + LS_BLOCK_ROWS)) for i in range(0, n, LS_BLOCK_ROWS)]
     n_col = 2 * kmax + 1
 
-    def basis(i, j, omega):
+    def basis(i, j, omega, z1=None, keep=None):
         t = (np.arange(i, j) - (n - 1) / 2.0) / fs  # elementwise as np.arange(n)[i:j] would give
-        return t, _harmonic_basis(t, omega, kmax, extra=1)
+        if keep is not None:  # exp(1j omega t) kept for the second pass (:data:`LS_KEEP_FUNDAMENTAL`)
+            keep.append(expj((1j * omega).imag * t))
+            z1 = keep[-1]
+        return t, _harmonic_basis(t, omega, kmax, extra=1, z1=z1)
+
+    keep_z1 = 1 < len(blocks) and n <= LS_KEEP_FUNDAMENTAL
 
     def fit_at(omega):
         """Linear fit at omega: its coefficients and cost, and the Gauss-Newton sums J^T J and J^T r there (the
         columns of the basis and d model / d omega), from a second pass over the blocks once the fit is known."""
-        g, rhs, kept = np.zeros((n_col, n_col)), np.zeros(n_col), None
+        g, rhs, kept, z1 = np.zeros((n_col, n_col)), np.zeros(n_col), None, [] if keep_z1 else None
         for i, j in blocks:
-            t, full = basis(i, j, omega)
+            t, full = basis(i, j, omega, keep=z1)
             m = full[:, :-1]
             g += m.T @ m
             rhs += m.T @ x[i:j]
@@ -399,8 +410,8 @@ def harmonic_ls(x, fs, *, f_guess, n_harmonics=5, max_iter=20, nan_policy="raise
             )
         a, b = coef[1 : kmax + 1], coef[kmax + 1 :]
         cost, gj, jtr, last = 0.0, np.zeros((n_col + 1, n_col + 1)), np.zeros(n_col + 1), None
-        for i, j in blocks:
-            t, jac = kept if kept is not None else basis(i, j, omega)
+        for ib, (i, j) in enumerate(blocks):
+            t, jac = kept if kept is not None else basis(i, j, omega, None if z1 is None else z1[ib])
             m = jac[:, :-1]
             r = x[i:j] - m @ coef
             # one block: r @ r as the whole-matrix form; several: numpy's pairwise sum (BLAS's threaded dot costs
