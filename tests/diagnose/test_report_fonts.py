@@ -12,7 +12,7 @@ from vibkit.diagnose.report.common import PageSink, standard_fonts_show
 HELVETICA_AFM = Path("fonts", "pdfcorefonts", "Helvetica.afm")
 
 
-def _pdf_of(pages, header=None):
+def _pdf_of(pages, header=None, size=10):
     """The PDF bytes of ``pages`` (lists of texts, one figure each) saved through a PageSink."""
     import matplotlib
 
@@ -26,7 +26,7 @@ def _pdf_of(pages, header=None):
         for i, texts in enumerate(pages):
             fig = plt.figure(figsize=(6, 4))
             for j, text in enumerate(texts):
-                fig.text(0.1, 0.8 - 0.3 * j, text, fontsize=10, va="top", linespacing=1.2)
+                fig.text(0.1, 0.8 - 0.3 * j, text, fontsize=size, va="top", linespacing=1.2)
             sink.emit(fig, f"page {i}")
         if header is not None:
             sink.close()
@@ -86,3 +86,26 @@ def test_a_paragraph_in_helvetica_has_its_lines_evenly_spaced():
     gaps = [a - b for a, b in zip(baselines, baselines[1:])]
     doc.close()
     assert gaps == pytest.approx([step] * len(gaps), abs=0.25), (gaps, step)
+
+
+def test_the_standard_fonts_weight_is_not_warned_about_and_other_warnings_pass(caplog):
+    """Helvetica's AFM file calls its regular weight Medium: matplotlib warns once per font that it used it for
+    'normal'; the report keeps that off the terminal while saving, and nothing else."""
+    import logging
+
+    from vibkit.diagnose.report.common import standard_fonts
+
+    caplog.set_level(logging.WARNING)
+    # a size never used before, so that matplotlib looks the font up again (it warns once per lookup)
+    pdf, _ = _pdf_of([["weights: normal"]], size=13.7)
+    assert _base_fonts(pdf) == {b"Helvetica"}
+    assert not [r for r in caplog.records if "Failed to find font weight" in r.getMessage()]
+    log = logging.getLogger("matplotlib.font_manager")
+    with standard_fonts(True):
+        log.warning("findfont: Failed to find font weight %s for %s, now using %s.", "normal", "Helvetica", "medium")
+        log.warning("findfont: Failed to find font weight %s for %s, now using %s.", "bold", "Helvetica", "medium")
+    log.warning("findfont: Failed to find font weight %s for %s, now using %s.", "normal", "Helvetica", "medium")
+    assert [r.getMessage() for r in caplog.records] == [
+        "findfont: Failed to find font weight bold for Helvetica, now using medium.",
+        "findfont: Failed to find font weight normal for Helvetica, now using medium.",
+    ]

@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import contextlib
 import datetime as _dt
+import functools
+import logging
 import math
 import os
 import textwrap
@@ -120,10 +122,25 @@ class _pdf_in_memory:
         return False
 
 
-def _texts(fig):
+def _text_artists(artist):
+    """Every text artist under ``artist``, in ``findobj``'s order, without making the ticks of an axis that is
+    not drawn (a table's axes are switched off): they would be made for nothing, about a millisecond each."""
+    import matplotlib.axis
     import matplotlib.text
 
-    out = [t.get_text() for t in fig.findobj(matplotlib.text.Text) if t.get_text() and t.get_visible()]
+    out = []
+    for child in artist.get_children():
+        if isinstance(child, matplotlib.axis.Axis) and not (child.axes.axison and child.get_visible()):
+            out += [*_text_artists(child.label), child.label, *_text_artists(child.offsetText), child.offsetText]
+            continue
+        out += _text_artists(child)
+    if isinstance(artist, matplotlib.text.Text):
+        out.append(artist)
+    return out
+
+
+def _texts(fig):
+    out = [t.get_text() for t in _text_artists(fig) if t.get_text() and t.get_visible()]
     for ax in fig.axes:
         for tab in ax.tables:
             out += [c.get_text().get_text() for _, c in sorted(tab.get_celld().items()) if c.get_text().get_text()]
@@ -146,6 +163,42 @@ def standard_fonts_show(texts) -> bool:
     return True
 
 
+def _medium_is_normal(record) -> bool:
+    """False for matplotlib's warning that a normal weight was not found and "medium" was used: the standard
+    fonts' AFM files call their regular weight Medium, so every text in Helvetica or Courier would warn."""
+    return not (
+        record.msg == "findfont: Failed to find font weight %s for %s, now using %s."
+        and isinstance(record.args, tuple)
+        and len(record.args) == 3
+        and (str(record.args[0]), str(record.args[2])) == ("normal", "medium")
+    )
+
+
+@contextlib.contextmanager
+def _quiet_medium_is_normal(on: bool):
+    """While the standard fonts are used (``on``), no warning that their Medium weight is used for normal."""
+    if not on:
+        yield
+        return
+    log = logging.getLogger("matplotlib.font_manager")
+    log.addFilter(_medium_is_normal)
+    try:
+        yield
+    finally:
+        log.removeFilter(_medium_is_normal)
+
+
+@functools.cache
+def _afm_tops_misread() -> bool:
+    """Whether matplotlib measures an apostrophe in Helvetica as rising more than an em (see :func:`standard_fonts`)."""
+    import matplotlib
+    from matplotlib._afm import AFM
+
+    with open(os.path.join(matplotlib.get_data_path(), "fonts", "pdfcorefonts", "Helvetica.afm"), "rb") as fh:
+        _, bottom, _, height, _ = AFM(fh).get_str_bbox_and_descent("'")
+    return bottom + height > 1000
+
+
 @contextlib.contextmanager
 def standard_fonts(on: bool):
     """Save figures in the PDF's standard fonts (``on``; see :func:`standard_fonts_show`) with each line's
@@ -161,18 +214,16 @@ def standard_fonts(on: bool):
     """
     import matplotlib
 
-    with matplotlib.rc_context({"pdf.use14corefonts": on}):
+    with matplotlib.rc_context({"pdf.use14corefonts": on}), _quiet_medium_is_normal(on):
         if not on:
             yield
             return
         from matplotlib._afm import AFM
 
-        measure = AFM.get_str_bbox_and_descent
-        with open(os.path.join(matplotlib.get_data_path(), "fonts", "pdfcorefonts", "Helvetica.afm"), "rb") as fh:
-            _, bottom, _, height, _ = measure(AFM(fh), "'")
-        if bottom + height <= 1000:  # read right: nothing to do
+        if not _afm_tops_misread():
             yield
             return
+        measure = AFM.get_str_bbox_and_descent
 
         def read_right(afm, s):
             left, bottom, width, _, descent = measure(afm, s)
