@@ -225,10 +225,17 @@ def standard_fonts(on: bool):
             return
         measure = AFM.get_str_bbox_and_descent
 
+        tops = {}  # (font, glyph): its top
+
+        def top(afm, c):
+            key = (id(afm), c)
+            if key not in tops:
+                tops[key] = measure(afm, c)[3]
+            return tops[key]
+
         def read_right(afm, s):
             left, bottom, width, _, descent = measure(afm, s)
-            top = max((measure(afm, c)[3] for c in set(s) if c != "\n"), default=0)
-            return left, bottom, width, top - bottom, descent
+            return left, bottom, width, max((top(afm, c) for c in set(s) if c != "\n"), default=0) - bottom, descent
 
         AFM.get_str_bbox_and_descent = read_right
         try:
