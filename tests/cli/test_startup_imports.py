@@ -95,6 +95,23 @@ def test_a_library_caller_keeps_dask(tmp_path):
     assert _loaded_after(code, ("dask", "xarray")) == {"dask", "xarray"}
 
 
+def test_the_script_leaves_what_it_holds_to_the_exit_and_a_library_caller_keeps_its_collector(tmp_path):
+    """`vibkit` run as its own process freezes its objects once the command is done and its output flushed, so that
+    the interpreter's exit frees them without walking them all; `main(argv)` called by a program, which goes on,
+    leaves its garbage collector as it was."""
+    args = ["spectrum", _csv(tmp_path), "--band", "2.5:6", "--json"]
+    script = _as_the_script(args) + "import gc\nassert rc == 0 and gc.get_freeze_count() > 0, gc.get_freeze_count()\n"
+    assert _loaded_after(script, ()) == set()  # (the asserts ran: the probe ran after them)
+    library = f"""
+        import contextlib, gc, io
+        from vibkit.cli import main
+        with contextlib.redirect_stdout(io.StringIO()):
+            assert main({list(map(str, args))!r}) == 0
+        assert gc.get_freeze_count() == 0, gc.get_freeze_count()
+        """
+    assert _loaded_after(library, ()) == set()
+
+
 def test_a_numpy_only_command_gives_the_same_numbers_without_dask(tmp_path):
     """Whether dask is there changes nothing but the imports: `vibkit spectrum --json` of the same file, run as the
     script (xarray without dask) and called by a program that uses dask arrays, gives the same JSON."""

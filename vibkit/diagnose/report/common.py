@@ -6,7 +6,10 @@ No heavy import at module level: matplotlib is imported by the functions that dr
 
 from __future__ import annotations
 
+import contextlib
 import datetime as _dt
+import functools
+import logging
 import math
 import os
 import textwrap
@@ -119,14 +122,126 @@ class _pdf_in_memory:
         return False
 
 
-def _texts(fig):
+def _text_artists(artist):
+    """Every text artist under ``artist``, in ``findobj``'s order, without making the ticks of an axis that is
+    not drawn (a table's axes are switched off): they would be made for nothing, about a millisecond each."""
+    import matplotlib.axis
     import matplotlib.text
 
-    out = [t.get_text() for t in fig.findobj(matplotlib.text.Text) if t.get_text() and t.get_visible()]
+    out = []
+    for child in artist.get_children():
+        if isinstance(child, matplotlib.axis.Axis) and not (child.axes.axison and child.get_visible()):
+            out += [*_text_artists(child.label), child.label, *_text_artists(child.offsetText), child.offsetText]
+            continue
+        out += _text_artists(child)
+    if isinstance(artist, matplotlib.text.Text):
+        out.append(artist)
+    return out
+
+
+def _texts(fig):
+    out = [t.get_text() for t in _text_artists(fig) if t.get_text() and t.get_visible()]
     for ax in fig.axes:
         for tab in ax.tables:
             out += [c.get_text().get_text() for _, c in sorted(tab.get_celld().items()) if c.get_text().get_text()]
     return out
+
+
+def standard_fonts_show(texts) -> bool:
+    """Whether the PDF's standard fonts (Helvetica, Courier; matplotlib's ``pdf.use14corefonts``) show every
+    one of ``texts``: they are written in Windows-1252, and a character outside it would print as ``?``.
+
+    A page in the standard fonts is saved without laying out, subsetting and embedding a TrueType font glyph
+    by glyph (about two thirds of the time the report's pages took to save); a page with any other character
+    keeps matplotlib's embedded DejaVu fonts. Mathematical text (the log axes' ``10^-2``) is drawn in DejaVu either way.
+    """
+    try:
+        for text in texts:
+            text.encode("cp1252")
+    except UnicodeEncodeError:
+        return False
+    return True
+
+
+def _medium_is_normal(record) -> bool:
+    """False for matplotlib's warning that a normal weight was not found and "medium" was used: the standard
+    fonts' AFM files call their regular weight Medium, so every text in Helvetica or Courier would warn."""
+    return not (
+        record.msg == "findfont: Failed to find font weight %s for %s, now using %s."
+        and isinstance(record.args, tuple)
+        and len(record.args) == 3
+        and (str(record.args[0]), str(record.args[2])) == ("normal", "medium")
+    )
+
+
+@contextlib.contextmanager
+def _quiet_medium_is_normal(on: bool):
+    """While the standard fonts are used (``on``), no warning that their Medium weight is used for normal."""
+    if not on:
+        yield
+        return
+    log = logging.getLogger("matplotlib.font_manager")
+    log.addFilter(_medium_is_normal)
+    try:
+        yield
+    finally:
+        log.removeFilter(_medium_is_normal)
+
+
+@functools.cache
+def _afm_tops_misread() -> bool:
+    """Whether matplotlib measures an apostrophe in Helvetica as rising more than an em (see :func:`standard_fonts`)."""
+    import matplotlib
+    from matplotlib._afm import AFM
+
+    with open(os.path.join(matplotlib.get_data_path(), "fonts", "pdfcorefonts", "Helvetica.afm"), "rb") as fh:
+        _, bottom, _, height, _ = AFM(fh).get_str_bbox_and_descent("'")
+    return bottom + height > 1000
+
+
+@contextlib.contextmanager
+def standard_fonts(on: bool):
+    """Save figures in the PDF's standard fonts (``on``; see :func:`standard_fonts_show`) with each line's
+    height read right.
+
+    matplotlib 3.11 reads a glyph's box in an AFM file, (left, bottom, right, top), as (left, bottom, width,
+    height) when it measures a string (``AFM.get_str_bbox_and_descent``): the top of a glyph that does not
+    sit on the baseline is taken as its bottom plus its top, so a line with an apostrophe, a quote or ``^``
+    is measured up to half an em too tall, and a wrapped paragraph's lines are spaced unevenly, some
+    touching. Where that reading is found (an apostrophe measured as rising more than an em), a string's
+    top is taken, while saving, as its highest glyph's top: each glyph measured alone, whose height
+    matplotlib gives as its top. Nothing else of matplotlib is changed, and nothing outside the save.
+    """
+    import matplotlib
+
+    with matplotlib.rc_context({"pdf.use14corefonts": on}), _quiet_medium_is_normal(on):
+        if not on:
+            yield
+            return
+        from matplotlib._afm import AFM
+
+        if not _afm_tops_misread():
+            yield
+            return
+        measure = AFM.get_str_bbox_and_descent
+
+        tops = {}  # (font, glyph): its top
+
+        def top(afm, c):
+            key = (id(afm), c)
+            if key not in tops:
+                tops[key] = measure(afm, c)[3]
+            return tops[key]
+
+        def read_right(afm, s):
+            left, bottom, width, _, descent = measure(afm, s)
+            return left, bottom, width, max((top(afm, c) for c in set(s) if c != "\n"), default=0) - bottom, descent
+
+        AFM.get_str_bbox_and_descent = read_right
+        try:
+            yield
+        finally:
+            AFM.get_str_bbox_and_descent = measure
 
 
 def pitch_figure(pitch) -> str:
@@ -275,7 +390,8 @@ class PageSink:
 
         if self.header is None:
             self.pages.append((title, _texts(fig)))
-            self.pdf.savefig(fig)
+            with standard_fonts(standard_fonts_show(self.pages[-1][1])):
+                self.pdf.savefig(fig)
             plt.close(fig)
             return
         w_in, h_in = fig.get_size_inches()
@@ -286,13 +402,18 @@ class PageSink:
         self._held.append((fig, number))
 
     def close(self):
-        """Number the held pages ("page n of N"), record their texts and save them in order."""
+        """Number the held pages ("page n of N"), record their texts and save them in order: all in the PDF's
+        standard fonts where they show every text of every page (:func:`standard_fonts_show`), else all in
+        the embedded DejaVu fonts."""
         import matplotlib.pyplot as plt
 
         n = len(self._held)
         for i, (fig, number) in enumerate(self._held):
             number.set_text(f"page {i + 1} of {n}")
             self.pages[i] = (self.pages[i][0], _texts(fig))
-            self.pdf.savefig(fig)
-            plt.close(fig)
+        standard = standard_fonts_show(text for _, texts in self.pages for text in texts)
+        with standard_fonts(standard):
+            for fig, _ in self._held:
+                self.pdf.savefig(fig)
+                plt.close(fig)
         self._held = []

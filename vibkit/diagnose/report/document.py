@@ -146,7 +146,14 @@ def write_report(recording, out_path, *, overwrite=False, **options) -> Report:
         "ModDate": date,
     }
     with matplotlib.rc_context(
-        {"pdf.compression": 6, "font.size": 9, "axes.titlesize": 10, "svg.hashsalt": "vibkit", "path.simplify": True}
+        {
+            "pdf.compression": 6,
+            "font.size": 9,
+            "axes.titlesize": 10,
+            "svg.hashsalt": "vibkit",
+            "path.simplify": True,
+            "axes.unicode_minus": False,
+        }
     ):
         with _pdf_in_memory(out, overwrite=overwrite, inputs=inputs) as buf, PdfPages(buf, metadata=meta) as pdf:
             doc = PageSink(pdf, header=page_header(ctx))

@@ -457,7 +457,14 @@ def write_fleet_report(
         "ModDate": date,
     }
     with matplotlib.rc_context(
-        {"pdf.compression": 6, "font.size": 7, "axes.titlesize": 8, "svg.hashsalt": "vibkit", "path.simplify": True}
+        {
+            "pdf.compression": 6,
+            "font.size": 7,
+            "axes.titlesize": 8,
+            "svg.hashsalt": "vibkit",
+            "path.simplify": True,
+            "axes.unicode_minus": False,
+        }
     ):
         with atomic_path(out, ".pdf") as tmp, PdfPages(tmp, metadata=meta) as pdf:
             doc = PageSink(pdf)
