@@ -9,6 +9,10 @@ time and the 1-minute load average are recorded too). Cases and their baselines 
 ``--repeat`` runs is kept. Peak memory is the child's own peak resident set (``VmHWM``: ``ru_maxrss`` keeps
 the parent's peak across fork and exec; it is the fallback where there is no ``/proc``).
 
+A vibkit command run as its own process freezes its objects once its output is flushed (``gc.freeze``: the
+interpreter's exit then does not collect them); every baseline a command is set against, an import or pandas' read,
+does the same (:data:`FROZEN`), so that a ratio is of the work.
+
 Rows (``--rows`` picks some):
 
 * ``first``: the first command after install (``vibkit simulate leon`` of 2 s, every kernel it needs compiled
@@ -65,6 +69,10 @@ SPEED = 0.5  # [m/s]
 PITCH = 0.1333  # [m]
 ROWS = ("first", "import", "spectrum", "pitch8h", "report", "links", "fleet", "simulate", "sweep")
 BASE_IMPORT = "import numpy, scipy.signal, pandas, xarray"
+#: what a vibkit command run as its own process does once its output is flushed (``cli.app.main``): its objects
+#: frozen, so that the interpreter's exit does not collect them; every import baseline a command is set against does
+#: the same, so that the ratio is of the work, not of that saving
+FROZEN = "import gc\ngc.freeze()\n"
 #: the interpreter with what ``vibkit pitch`` imports before it reads (xarray's dask included, which its first
 #: Dataset imports): the baseline of the command's peak memory
 #: what any report imports before its work: the readers' packages, one Dataset and matplotlib's PDF backend; dask
@@ -74,8 +82,7 @@ REPORT_IMPORTS = (
     "import sys\nsys.modules['dask'] = None\n"
     "import numpy, scipy.signal, pandas, xarray, matplotlib\nmatplotlib.use('Agg')\n"
     "import matplotlib.pyplot\nfrom matplotlib.backends import backend_pdf\n"
-    "xarray.Dataset({'x': ('time', numpy.zeros(3))}, coords={'time': numpy.arange(3.0)})\n"
-    "import gc\ngc.freeze()\n"
+    "xarray.Dataset({'x': ('time', numpy.zeros(3))}, coords={'time': numpy.arange(3.0)})\n" + FROZEN
 )
 PITCH_IMPORTS = (
     "import numpy, xarray, vibkit.cli.app, vibkit.io, vibkit.diagnose.channels\n"
@@ -263,7 +270,8 @@ def links_rows(tmp, loops, repeat):
     code = cli(["links", rec, "--escalator", profile, "--json"])
     first = child(code, env)
     got = side_by_side(
-        [("base", BASE_IMPORT + "\n", None), ("numpy", "import numpy\n", None), ("links", code, env)], repeat
+        [("base", BASE_IMPORT + "\n" + FROZEN, None), ("numpy", "import numpy\n" + FROZEN, None), ("links", code, env)],
+        repeat,
     )
     c, b, n = got["links"]["cpu"], got["base"]["cpu"], got["numpy"]["cpu"]
     what = f"vibkit links --escalator of {loops} loops (90 links), after the first call"
@@ -321,16 +329,17 @@ def main(argv=None):
             ten = tmp / "ten-seconds.csv"
             write_recording(ten, 10.0, 200.0)
             cases = [
-                ("base", BASE_IMPORT + "\n", None),
+                ("base", BASE_IMPORT + "\n" + FROZEN, None),
                 (
                     "base+dataset",
                     BASE_IMPORT
-                    + "\nxarray.Dataset({'x': ('time', numpy.zeros(3))}, coords={'time': numpy.arange(3.0)})\n",
+                    + "\nxarray.Dataset({'x': ('time', numpy.zeros(3))}, coords={'time': numpy.arange(3.0)})\n"
+                    + FROZEN,
                     None,
                 ),
             ]
             if "import" in wanted:
-                cases.append(("import", "import vibkit.cli.app, vibkit.io, vibkit.signal\n", None))
+                cases.append(("import", "import vibkit.cli.app, vibkit.io, vibkit.signal\n" + FROZEN, None))
             if "spectrum" in wanted:
                 cases.append(("spectrum", cli(["spectrum", ten, "--band", "2.5:6"]), None))
             got = side_by_side(cases, repeat)
@@ -367,7 +376,7 @@ def main(argv=None):
             print(f"{n} rows written in {time.perf_counter() - t0:.0f} s", file=sys.stderr)
             got = side_by_side(
                 [
-                    ("pandas", f"import pandas\npandas.read_csv({str(path)!r})\n", None),
+                    ("pandas", f"import pandas\npandas.read_csv({str(path)!r})\n" + FROZEN, None),
                     ("pitch", cli(["pitch", path, "--speed", SPEED, "--json"]), None),
                     ("imports", PITCH_IMPORTS, None),
                     ("read", PITCH_IMPORTS + f"vibkit.io.read_recording({str(path)!r})\n", None),
