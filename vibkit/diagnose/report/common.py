@@ -192,10 +192,14 @@ def _quiet_medium_is_normal(on: bool):
 def _afm_tops_misread() -> bool:
     """Whether matplotlib measures an apostrophe in Helvetica as rising more than an em (see :func:`standard_fonts`)."""
     import matplotlib
-    from matplotlib._afm import AFM
 
-    with open(os.path.join(matplotlib.get_data_path(), "fonts", "pdfcorefonts", "Helvetica.afm"), "rb") as fh:
-        _, bottom, _, height, _ = AFM(fh).get_str_bbox_and_descent("'")
+    try:  # a private module: a matplotlib that moved or changed it is taken as reading right
+        from matplotlib._afm import AFM
+
+        with open(os.path.join(matplotlib.get_data_path(), "fonts", "pdfcorefonts", "Helvetica.afm"), "rb") as fh:
+            _, bottom, _, height, _ = AFM(fh).get_str_bbox_and_descent("'")
+    except (ImportError, AttributeError, OSError, TypeError, ValueError):
+        return False
     return bottom + height > 1000
 
 
@@ -218,11 +222,10 @@ def standard_fonts(on: bool):
         if not on:
             yield
             return
-        from matplotlib._afm import AFM
-
         if not _afm_tops_misread():
             yield
             return
+        from matplotlib._afm import AFM
         measure = AFM.get_str_bbox_and_descent
 
         tops = {}  # (font, glyph): its top
