@@ -177,7 +177,7 @@ def run(a):
         except ValueError as exc:  # the signal's words, with the file named
             raise in_file(a.recording, exc) from None
         if line is not None and line.detected:
-            why = unconfirmed_line(rec, line.frequency_hz, line.band) if is_phone_recording(rec) else None
+            why = unconfirmed_line(rec, line.frequency_hz, line.band)  # a phone, or any three axes of acceleration
             if why is None:
                 return _common_line(a, res, line, rec)
             not_a_ride = f"a steady line at {fmt_pm(line.frequency_hz, line.sigma_hz)} Hz on the axes together: {why}"

@@ -767,8 +767,7 @@ def unconfirmed_line(recording, freq, band, *, tolerance=0.01):
             + "): give one as --segment START:END"
         )
     spans = "; ".join(f"{a:.1f}-{b:.1f} s: {v}" for a, b, v in found.still_spans) or "no still span to test"
-    refused = "; ".join(f"{d['start_s']:.1f}-{d['end_s']:.1f} s: {d['why']}" for d in found.refused)
-    return "no ride found in it (" + spans + (f"; refused: {refused}" if refused else "") + ")"
+    return "no ride found in it (" + spans + ")"
 
 
 def common_line_names(recording) -> list:
