@@ -13,7 +13,7 @@ The data path: scene -> model -> analyses -> Dataset -> signal -> diagnose -> re
 Everything is SI inside: metres, kilograms, seconds, radians, newtons.
 """
 
-__version__ = "0.11.0"
+__version__ = "0.12.0"
 
 __all__ = ["__version__", "load_scene", "simulate", "read_recording", "compare", "sweep", "signal", "io"]
 
