@@ -581,13 +581,7 @@ def test_the_benchmarks_line_stands_at_its_level_over_each_channels_own_floor():
     whichever sensor holds the largest weight.  A phone's axes have floors up to 23 dB apart (accelerometer in m/s^2,
     gyroscope in rad/s): amplitudes shared in one unit put a gyroscope's share 10-20 dB over its stated level where
     an accelerometer's axis holds the largest weight, and the accelerometer's under it where a gyroscope's does."""
-    ds = vibkit.read_recording(REAL / "advio-07" / "iphone")
-    fs = float(ds.attrs["sample_rate_hz"])
-    t = ds["time"].values
-    tu = np.arange(13.0, 87.0, 1 / fs)
-    names = ("acc_x", "acc_y", "acc_z", "gyro_x", "gyro_y", "gyro_z")
-    still = np.stack([np.interp(tu, t, ds[n].values) for n in names])
-    phase = 2 * np.pi * 3.875 * np.arange(tu.size) / fs
+    fs, names, still, phase = _lift_standing()
     for weights in ([0.5, 0.2, 0.1, 0.1, 0.05, 0.05], [0.05, 0.05, 0.1, 0.1, 0.2, 0.5]):
         x = support.phone.add_line(still, fs, phase, np.asarray(weights), 16.0, np.random.default_rng(1))
         for c, w in enumerate(weights):
@@ -598,6 +592,18 @@ def test_the_benchmarks_line_stands_at_its_level_over_each_channels_own_floor():
             floor = np.median(p_still[(f > 1.5) & (f < 10)])
             got = 10 * np.log10(p_line[k] / floor)
             assert abs(got - want) < 1.0, (names[c], weights, got, want)
+
+
+def _lift_standing():
+    """The benchmark's largest still bed, real standing in advio-07's lift (13-87 s) on a uniform grid, with a line's
+    phase at 3.875 Hz: (fs, the six channels' names, their samples, the phase)."""
+    ds = vibkit.read_recording(REAL / "advio-07" / "iphone")
+    fs = float(ds.attrs["sample_rate_hz"])
+    t = ds["time"].values
+    tu = np.arange(13.0, 87.0, 1 / fs)
+    names = ("acc_x", "acc_y", "acc_z", "gyro_x", "gyro_y", "gyro_z")
+    still = np.stack([np.interp(tu, t, ds[n].values) for n in names])
+    return fs, names, still, 2 * np.pi * 3.875 * np.arange(tu.size) / fs
 
 
 def test_a_passenger_shifting_mid_ride_does_not_cut_the_ride():
@@ -627,13 +633,7 @@ def test_a_measured_lines_pattern_is_given_back_by_the_benchmarks_line():
     a known pattern, measured per axis (``welch_level``, the benchmark's scale), turned into shares and put on the
     standing again, stands at the same level on every axis that carries it 6 dB or more over its floor, within 1.5 dB
     (a Welch peak's own scatter with the noise in its bin: about 1 dB at 6-10 dB).  The benchmark draws its records' patterns from the real rides this way."""
-    ds = vibkit.read_recording(REAL / "advio-07" / "iphone")
-    fs = float(ds.attrs["sample_rate_hz"])
-    t = ds["time"].values
-    tu = np.arange(13.0, 87.0, 1 / fs)
-    names = ("acc_x", "acc_y", "acc_z", "gyro_x", "gyro_y", "gyro_z")
-    still = np.stack([np.interp(tu, t, ds[n].values) for n in names])
-    phase = 2 * np.pi * 3.875 * np.arange(tu.size) / fs
+    fs, names, still, phase = _lift_standing()
     weights = np.array([0.05, 0.6, 1.0, 0.7, 0.02, 0.4])
     x = support.phone.add_line(still, fs, phase, weights, 18.0, np.random.default_rng(1))
     levels = [support.phone.welch_level(x[c], fs, 3.875) for c in range(6)]
