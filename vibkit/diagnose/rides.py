@@ -30,7 +30,18 @@ import numpy as np
 
 from ..signal.ride import RideSegment
 from ..signal.steadyline import line_level, normalised_spectrum, steady_line
-from ..signal.stillness import LEAVE_THRESHOLD, STILL_THRESHOLD, gravity_removed, still_spans, walking_level
+from ..signal.stillness import LEAVE_THRESHOLD, STILL_THRESHOLD, still_spans, walking_level
+from .climb import (
+    CAR_ACCELERATION,
+    CAR_HOLD_S,
+    ESCALATOR_VZ_MAX,
+    LEVEL_VZ,
+    LIFT_MARGIN_S,
+    car_acceleration,
+    climbs_as_an_escalator,
+    fastest_climb,
+    vertical_speed,
+)
 
 __all__ = [
     "DEFAULT_BAND_HZ",
@@ -48,26 +59,6 @@ __all__ = [
 
 #: where a chain's link pass may be without a profile [Hz]: 0.4-0.9 m/s over 101.6-135 mm pitches
 DEFAULT_BAND_HZ = (2.9, 9.0)
-#: air density times gravity near sea level [Pa/m]: the barometric pressure gradient
-_RHO_G = 1.2 * 9.81
-#: |vertical speed| under which a ride is called level [m/s]
-_LEVEL_VZ = 0.05
-#: the fastest an escalator climbs [m/s]: EN 115-1's 0.75 m/s on 35 deg is 0.43 m/s vertical (the eight ADVIO rides'
-#: 4 s slopes: at most 0.29; walking stairs: 0.30; ADVIO's lift: 0.89)
-_ESCALATOR_VZ_MAX = 0.45
-#: the barometer's slopes are read over windows of this length [s], stepped by a second
-_SLOPE_WINDOW_S = 4.0
-#: how far before and after a still span a lift's climb is looked for [s]: a lift's doors open and close and its
-#: passengers step in and out in about that (ADVIO's lift: 7-10 s at a floor between climbs of about 8 s)
-_LIFT_MARGIN_S = 8.0
-#: a lift's car starting or stopping, where no barometer says so [m/s^2]: the acceleration's magnitude held this far
-#: off gravity for :data:`_CAR_HOLD_S` within a still span (low-passed at :data:`_CAR_LOWPASS_HZ`).  Measured
-#: 2026-12-08 on phones held still: ADVIO's rides 0.01-0.17 (advio-08's missed up ride 0.32), its lifts 0.49-0.78
-#: (advio-07, -14, -18), two phyphox/Science Journal lifts 0.83-0.85.  Lifts accelerate at 0.5-1.2 m/s^2 for
-#: comfort; a hydraulic lift's gentler start can stay under it
-_CAR_ACCELERATION = 0.4
-_CAR_HOLD_S = 1.0
-_CAR_LOWPASS_HZ = 0.5
 
 
 @dataclass(frozen=True)
@@ -180,110 +171,6 @@ def _acc_channels(ds):
     )
 
 
-def _altitude(ds):
-    """(time [s], altitude [m], source) of the recording's barometer, or None without one."""
-    t = np.asarray(ds["time"].values, dtype=float)
-    if "altitude" in ds.data_vars:
-        return t, np.asarray(ds["altitude"].values, dtype=float), "barometer (phone's relative altitude)"
-    if "pressure" in ds.data_vars:
-        return t, -np.asarray(ds["pressure"].values, dtype=float) / _RHO_G, "barometer (pressure)"
-    return None
-
-
-def _slope(tt, z):
-    a = tt - tt.mean()
-    return float(np.dot(a, z - z.mean()) / np.dot(a, a))
-
-
-def _vertical(ds, t0, t1):
-    """(vertical speed [m/s], its sigma, rise [m], its sigma, source) over t0..t1 from the barometer, or Nones.
-
-    The speed is the least-squares slope; its sigma the larger of the formal one and the scatter of the slopes of
-    the span's 4 s parts (over the square root of their number): a barometer's noise is not white (air moves, the
-    phone's altitude is smoothed), and on the eight ADVIO rides its 4 s slopes scatter by 0.01-0.03 m/s where the
-    formal sigma is under 0.005.  The rise is the speed times the span, its sigma with the span's bounds known to a
-    second (stepping on and off)."""
-    alt = _altitude(ds)
-    if alt is None:
-        return None, None, None, None, None
-    t, zz, source = alt
-    sel = (t >= t0) & (t <= t1) & np.isfinite(zz)
-    rate = float(ds["altitude" if "altitude" in ds.data_vars else "pressure"].attrs.get("native_rate_hz", 1.0))
-    tt, z = t[sel], zz[sel]
-    if tt.size < 3 or tt[-1] - tt[0] < 3:
-        return None, None, None, None, None
-    vz = _slope(tt, z)
-    resid = z - z.mean() - vz * (tt - tt.mean())
-    n_eff = max((tt[-1] - tt[0]) * min(rate, 1.0 / np.median(np.diff(tt))), 3.0)  # independent readings
-    s = float(np.std(resid, ddof=2))
-    sigma = s / math.sqrt(np.sum((tt - tt.mean()) ** 2) * n_eff / tt.size) if s > 0 else 0.0
-    k = int((tt[-1] - tt[0]) // _SLOPE_WINDOW_S)
-    if k >= 2:
-        edges = np.linspace(tt[0], tt[-1], k + 1)
-        parts = [
-            _slope(tt[m], z[m]) for m in ((tt >= a) & (tt <= b) for a, b in zip(edges[:-1], edges[1:])) if m.sum() > 2
-        ]
-        if len(parts) >= 2:
-            sigma = max(sigma, float(np.std(parts, ddof=1)) / math.sqrt(len(parts)))
-    sigma = max(sigma, 0.005)
-    rise = vz * (t1 - t0)
-    return vz, sigma, rise, math.hypot(sigma * (t1 - t0), vz * 1.0), source
-
-
-#: the least steady climb [m/s] that tells a ride from standing in a lift at a floor: the eight ADVIO rides climb
-#: 0.12-0.29 m/s, a lift standing at a floor climbs nothing (its still spans read under 0.05 m/s)
-_ESCALATOR_VZ_MIN = 0.1
-
-
-def _climbs_as_an_escalator(ds, t0, t1, fast_at):
-    """Whether the still span t0..t1 itself climbs as an escalator does (a steady 0.1-0.45 m/s, four sigmas from
-    standing) while the fast climb near it (its 4 s window about ``fast_at``) lies wholly outside it: a pressure wave
-    (a train, a door) beside a real ride, not a lift, whose car stands at a floor while its line is on."""
-    if fast_at is None or t0 - _SLOPE_WINDOW_S / 2 < fast_at < t1 + _SLOPE_WINDOW_S / 2:
-        return False
-    vz, vz_s, *_ = _vertical(ds, t0, t1)
-    return vz is not None and _ESCALATOR_VZ_MIN <= abs(vz) <= _ESCALATOR_VZ_MAX and abs(vz) > 4 * vz_s
-
-
-def _car_acceleration(acc, fs):
-    """The acceleration a lift's car gives a person standing still in it [m/s^2]: the largest magnitude held for
-    :data:`_CAR_HOLD_S` by the three axes' low-passed vector less its median (gravity, where the phone keeps it:
-    a vertical acceleration adds to ``|g|``; a turn of the phone in the hand does not change it)."""
-    from scipy import ndimage, signal
-
-    hold = max(int(round(_CAR_HOLD_S * fs)), 1)
-    sos = signal.butter(2, min(_CAR_LOWPASS_HZ, 0.4 * fs), fs=fs, output="sos")
-    if acc.shape[1] <= max(3 * 2 * sos.shape[0] * 3, hold):
-        return 0.0
-    if gravity_removed(acc, fs):
-        off = np.sqrt(np.sum(signal.sosfiltfilt(sos, acc - np.median(acc, axis=1, keepdims=True), axis=1) ** 2, axis=0))
-    else:
-        mag = np.sqrt(np.sum(acc**2, axis=0))
-        off = np.abs(signal.sosfiltfilt(sos, mag - np.median(mag)))
-    return float(np.max(ndimage.minimum_filter1d(off, hold)))
-
-
-def _fastest_climb(ds, t0, t1):
-    """(the barometer's largest |vertical speed| [m/s] over 4 s windows stepped by a second within t0..t1, the time
-    [s] of that window's middle), or (None, None) without a barometer."""
-    alt = _altitude(ds)
-    if alt is None:
-        return None, None
-    t, zz, _ = alt
-    sel = (t >= t0) & (t <= t1) & np.isfinite(zz)
-    tt, z = t[sel][::5], zz[sel][::5]  # the barometer reads at about 1 Hz: 20 Hz of its interpolation is plenty
-    best, at = 0.0, None
-    if tt.size < 3:
-        return None, None
-    for a in np.arange(tt[0], tt[-1] - _SLOPE_WINDOW_S + 1e-9, 1.0):  # whole windows only, within the record
-        m = (tt >= a) & (tt <= a + _SLOPE_WINDOW_S)
-        if m.sum() > 2:
-            v = abs(_slope(tt[m], z[m]))
-            if v > best:
-                best, at = v, a + _SLOPE_WINDOW_S / 2
-    return (best, at) if at is not None else (None, None)
-
-
 def find_rides(
     recording,
     *,
@@ -376,21 +263,21 @@ def find_rides(
         i0, i1 = i0 + j0, i0 + j1
         # a lift: its car may hum steadily near a chain's link pass, and a person stands still in it; its climb (about
         # 1 m/s, faster than any escalator's) falls within the still span or just before or after it
-        fast, at = _fastest_climb(recording, t0 - _LIFT_MARGIN_S, t1 + _LIFT_MARGIN_S)
+        fast, at = fastest_climb(recording, t0 - LIFT_MARGIN_S, t1 + LIFT_MARGIN_S)
         # without a barometer, the car's start or stop: the still span's acceleration off gravity
-        car = _car_acceleration(x[:3, span_i0:span_i1], fs) if fast is None else None
+        car = car_acceleration(x[:3, span_i0:span_i1], fs) if fast is None else None
         why = None
-        if fast is not None and fast > _ESCALATOR_VZ_MAX and not _climbs_as_an_escalator(recording, start, t1, at):
+        if fast is not None and fast > ESCALATOR_VZ_MAX and not climbs_as_an_escalator(recording, start, t1, at):
             why = (
                 f"a lift, not an escalator: the barometer's vertical speed reaches {fast:.2f} m/s (over 4 s about "
-                f"{at:.0f} s, within {_LIFT_MARGIN_S:.0f} s of the still span), faster than any escalator climbs "
-                f"({_ESCALATOR_VZ_MAX:.2f} m/s; or a pressure wave: a train, a door)"
+                f"{at:.0f} s, within {LIFT_MARGIN_S:.0f} s of the still span), faster than any escalator climbs "
+                f"({ESCALATOR_VZ_MAX:.2f} m/s; or a pressure wave: a train, a door)"
             )
-        elif car is not None and car >= _CAR_ACCELERATION:
+        elif car is not None and car >= CAR_ACCELERATION:
             why = (
                 f"a lift, not an escalator: with no barometer, the acceleration stands {car:.2f} m/s^2 off gravity for "
-                f"{_CAR_HOLD_S:g} s while the person stands still (a car starting or stopping; a rider standing on an "
-                f"escalator stays under {_CAR_ACCELERATION:g} m/s^2)"
+                f"{CAR_HOLD_S:g} s while the person stands still (a car starting or stopping; a rider standing on an "
+                f"escalator stays under {CAR_ACCELERATION:g} m/s^2)"
             )
         if why is not None:
             refused.append(
@@ -550,12 +437,12 @@ _FLAG_NO_BAROMETER = (
 
 
 def _ride(ds, line, names, t0, t1, pitch, rated):
-    vz, vz_s, rise, rise_s, source = _vertical(ds, t0, t1)
+    vz, vz_s, rise, rise_s, source = vertical_speed(ds, t0, t1)
     flag = None
     if vz is None:
         direction, flag = "unknown", _FLAG_NO_BAROMETER
-    elif abs(vz) < max(_LEVEL_VZ, 2 * vz_s):
-        direction, flag = "level", _FLAG_LEVEL.format(m=_LIFT_MARGIN_S)
+    elif abs(vz) < max(LEVEL_VZ, 2 * vz_s):
+        direction, flag = "level", _FLAG_LEVEL.format(m=LIFT_MARGIN_S)
     else:
         direction = "up" if vz > 0 else "down"
     speed = speed_s = dev = dev_s = incline = incline_s = None

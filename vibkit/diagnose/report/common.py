@@ -226,6 +226,7 @@ def standard_fonts(on: bool):
             yield
             return
         from matplotlib._afm import AFM
+
         measure = AFM.get_str_bbox_and_descent
 
         tops = {}  # (font, glyph): its top
