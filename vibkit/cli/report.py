@@ -28,6 +28,11 @@ from .options import (
 )
 from .output import check_output, is_stdout, msg, output_path, print_json, table
 
+#: what ``run`` imports: run as the process's own command line, imported before it with the collector paused and
+#: then frozen (:func:`vibkit.runtime.frozen_imports.import_frozen`); matplotlib's PDF backend is what the pages are
+#: saved with
+LIBRARY = ("vibkit.diagnose.report", "matplotlib.pyplot", "matplotlib.backends.backend_pdf")
+
 EPILOG = (
     "example:\n  vibkit report data/field/leon-tensioner.csv --scene sim/leon.toml --date 2020-02-14 \\\n"
     "      -o out/leon.pdf"
