@@ -185,3 +185,13 @@ def test_what_the_report_command_imports_ahead_is_what_it_imports_anyway(tmp_pat
             assert main({list(map(str, args))!r}) == 0
         """
     assert _loaded_after(library, report.LIBRARY) == set(report.LIBRARY)
+
+
+def test_a_refused_report_imports_no_plotting(tmp_path):
+    """`vibkit report` run as its own process checks its output before it imports its libraries: an output that
+    exists, without --force, is refused before matplotlib is loaded (and so at once)."""
+    out = tmp_path / "r.pdf"
+    out.write_bytes(b"%PDF-1.4 kept")
+    code = _as_the_script(["report", _csv(tmp_path), "-o", out, "--speed", "0.5"]) + "assert rc != 0, rc\n"
+    assert _loaded_after(code, ("matplotlib", "vibkit.diagnose.report")) == set()
+    assert out.read_bytes() == b"%PDF-1.4 kept"

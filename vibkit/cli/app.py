@@ -19,7 +19,6 @@ import gc
 import sys
 
 from vibkit.runtime.duck_arrays import without_dask
-from vibkit.runtime.frozen_imports import import_frozen
 from vibkit.runtime.reader_options import flag_spelling
 
 from . import (
@@ -45,8 +44,6 @@ __all__ = ["main"]
 
 # in the order ``vibkit --help`` lists them
 COMMANDS = (simulate, scene, spectrum, pitch, links, compare, report, sweep, ride, rides, fleet, datasets, warm, bench)
-#: each command's module by its name (each module is named after its command)
-_COMMAND_OF = {c.__name__.rpartition(".")[2]: c for c in COMMANDS}
 #: the commands that build xarray Datasets of numpy arrays only, never of dask arrays: run as the process's own
 #: command line, xarray runs as where dask is not installed (:func:`vibkit.runtime.duck_arrays.without_dask`) and
 #: does not import dask to ask of each array whether it is one
@@ -123,8 +120,9 @@ def main(argv=None) -> int:
     args = _parser(_named_command(sys.argv[1:] if argv is None else argv)).parse_args(argv)
     if argv is None and args.command in NUMPY_ONLY:  # the process is this command's: before xarray is imported
         without_dask()
-    if argv is None:  # the process is this command's: its libraries imported without collecting, then frozen
-        import_frozen(getattr(_COMMAND_OF[args.command], "LIBRARY", ()))
+    # the process is this command's (the script's own command line): a command may import its libraries without
+    # collecting and freeze them (vibkit.runtime.frozen_imports), which a program calling main([...]) keeps from
+    args.own_process = argv is None
     args.argv = list(sys.argv[1:] if argv is None else argv)  # the command as typed (e.g. a sweep's to resume it)
     from vibkit.runtime.safe_output import Interrupted, handle_termination
 

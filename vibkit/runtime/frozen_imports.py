@@ -8,9 +8,10 @@ command's own work walks them again.  None of it frees anything: a module's obje
 during its imports and 0.13 during its work, 0.05-0.07 with the imports frozen.
 
 :func:`import_frozen` imports the named modules with the collector off and moves what they made into the
-permanent generation (:func:`gc.freeze`), where no collection looks.  Only :func:`vibkit.cli.main` calls it, only
-where it runs the process's own command line (a library user's process keeps its collector as it set it), with
-the modules that the command's ``run`` imports anyway (a command module's ``LIBRARY``).  Garbage the imports leave
+permanent generation (:func:`gc.freeze`), where no collection looks.  Only a command's ``run`` calls it (the
+report's), with the modules it imports anyway (its module's ``LIBRARY``), once its arguments are checked, and only
+where :func:`vibkit.cli.main` runs the process's own command line (``args.own_process``): a library user's
+process keeps its collector as it set it.  Garbage the imports leave
 in cycles (a few objects) is frozen with them and freed at the process's exit.
 """
 
