@@ -166,3 +166,32 @@ def _subparser(parser, name):
 def test_loading_a_scene_loads_no_compiler():
     """A scene's checks (its chain closing within the tensioner's travel) need the guide's constants, not its kernels."""
     assert _loaded_after("import vibkit\nvibkit.load_scene('leon')") == set()
+
+
+@pytest.mark.slow
+def test_what_the_report_command_imports_ahead_is_what_it_imports_anyway(tmp_path):
+    """Run as its own process, `vibkit report` imports its libraries (its module's ``LIBRARY``) before it runs, with
+    the collector paused; called by a program, which imports them only as the command runs, it loads every one of
+    them too: importing them ahead adds no module a report does not use."""
+    from vibkit.cli import report
+
+    assert report.LIBRARY
+    out = tmp_path / "r.pdf"
+    args = ["report", _csv(tmp_path), "-o", out, "--speed", "0.5"]
+    library = f"""
+        import contextlib, io
+        from vibkit.cli import main
+        with contextlib.redirect_stdout(io.StringIO()):
+            assert main({list(map(str, args))!r}) == 0
+        """
+    assert _loaded_after(library, report.LIBRARY) == set(report.LIBRARY)
+
+
+def test_a_refused_report_imports_no_plotting(tmp_path):
+    """`vibkit report` run as its own process checks its output before it imports its libraries: an output that
+    exists, without --force, is refused before matplotlib is loaded (and so at once)."""
+    out = tmp_path / "r.pdf"
+    out.write_bytes(b"%PDF-1.4 kept")
+    code = _as_the_script(["report", _csv(tmp_path), "-o", out, "--speed", "0.5"]) + "assert rc != 0, rc\n"
+    assert _loaded_after(code, ("matplotlib", "vibkit.diagnose.report")) == set()
+    assert out.read_bytes() == b"%PDF-1.4 kept"

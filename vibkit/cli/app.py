@@ -120,6 +120,9 @@ def main(argv=None) -> int:
     args = _parser(_named_command(sys.argv[1:] if argv is None else argv)).parse_args(argv)
     if argv is None and args.command in NUMPY_ONLY:  # the process is this command's: before xarray is imported
         without_dask()
+    # the process is this command's (the script's own command line): a command may import its libraries without
+    # collecting and freeze them (vibkit.runtime.frozen_imports), which a program calling main([...]) keeps from
+    args.own_process = argv is None
     args.argv = list(sys.argv[1:] if argv is None else argv)  # the command as typed (e.g. a sweep's to resume it)
     from vibkit.runtime.safe_output import Interrupted, handle_termination
 

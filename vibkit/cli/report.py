@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 
 from vibkit.diagnose.rounding import fmt_pm, fmt_value
+from vibkit.runtime.frozen_imports import import_frozen
 from vibkit.runtime.report_options import ReportOptions
 
 from .options import (
@@ -27,6 +28,11 @@ from .options import (
     speed_sigma,
 )
 from .output import check_output, is_stdout, msg, output_path, print_json, table
+
+#: what ``run`` imports once its arguments are checked: where the process is the command's, imported with the
+#: collector paused and then frozen (:func:`vibkit.runtime.frozen_imports.import_frozen`); matplotlib's PDF backend is
+#: what the pages are saved with
+LIBRARY = ("vibkit.diagnose.report", "matplotlib.pyplot", "matplotlib.backends.backend_pdf")
 
 EPILOG = (
     "example:\n  vibkit report data/field/leon-tensioner.csv --scene sim/leon.toml --date 2020-02-14 \\\n"
@@ -145,6 +151,8 @@ def run(a):
 
 
 def _run(a, target):
+    if getattr(a, "own_process", False):
+        import_frozen(LIBRARY)
     from vibkit.diagnose.report import write_report
 
     profile = _profile_of(a)
