@@ -105,8 +105,10 @@ def _common_line(a, res, line, rec):
 
 
 def _a_walk(a, rec):
-    """A phone's walk (its walking band up over a fifth of it): refused, no number; a line over a walk is the
-    gait's or another machine's, and a ride in it is found by `vibkit rides` and analysed with --segment."""
+    """A phone export's walk (its walking band up over a fifth of it): refused, no number; a line over a walk is the
+    gait's or another machine's, and a ride in it is found by `vibkit rides` and analysed with --segment.  Other
+    three-axis files (a wrist's logger, a machine's accelerometer) go on to the channels' own verdicts; a line common
+    to their axes is given only where `find_rides` confirms it (:func:`~vibkit.diagnose.rides.unconfirmed_line`)."""
     from vibkit.diagnose.rides import WALK_FRACTION, walking_fraction
 
     w = walking_fraction(rec)
@@ -137,7 +139,7 @@ def run(a):
     from vibkit.diagnose.rides import common_line, is_phone_recording, unconfirmed_line
 
     rec = read_recording(a)
-    if a.channel is None:  # every channel: a phone's walk is no ride
+    if a.channel is None and is_phone_recording(rec):  # every channel of a phone's export: a walk is no ride
         walk = _a_walk(a, rec)
         if walk is not None:
             return walk
