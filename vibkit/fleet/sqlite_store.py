@@ -11,6 +11,7 @@ from __future__ import annotations
 import contextlib
 import os
 import sqlite3
+import time
 import urllib.parse
 
 from .errors import FleetError
@@ -209,6 +210,20 @@ class SQLiteStore(Store):
         if res != ["ok"]:
             raise sqlite_error(self.path, f"database disk image is malformed: {'; '.join(res)[:200]}")
 
+    def _wal(self, con):
+        """Put the database in WAL mode and say the mode it is in.  Changing the journal mode takes the database's
+        exclusive lock, and SQLite answers "database is locked" at once, without its busy handler, while another
+        process holds any lock (several processes adding to a store none of them has made yet: each makes it on its
+        first write); so the change is tried again for as long as a write would wait."""
+        deadline = time.monotonic() + self._timeout_ms / 1000.0
+        while True:
+            try:
+                return con.execute("PRAGMA journal_mode=WAL").fetchone()[0]
+            except sqlite3.OperationalError as exc:
+                if "locked" not in str(exc).lower() or time.monotonic() > deadline:
+                    raise
+                time.sleep(0.02)
+
     def _prepare(self):
         con = self._con
         self._check_sound()
@@ -242,7 +257,7 @@ class SQLiteStore(Store):
         if self._pending:  # nothing at the path yet: an empty fleet database in memory answers until the first write
             self._create_or_upgrade()
             return
-        mode = con.execute("PRAGMA journal_mode=WAL").fetchone()[0]
+        mode = self._wal(con)
         if str(mode).lower() != "wal":  # pragma: no cover - file systems without shared memory
             raise FleetError(f"{self.path}: SQLite cannot use its WAL journal here (mode {mode!r})")
         con.execute("PRAGMA synchronous=FULL")
